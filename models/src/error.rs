@@ -1,0 +1,84 @@
+//! Typed errors of model loading and validation.
+
+use thiserror::Error;
+
+/// Why a model could not be built: each variant names the field and the offending value.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ModelError {
+    /// A numeric field is NaN, infinite, or outside its admissible range.
+    #[error("invalid value for `{field}`: {value} ({reason})")]
+    InvalidValue {
+        /// Dotted path of the field, e.g. `joints[3].limits.v_max`.
+        field: String,
+        /// The offending value.
+        value: f64,
+        /// What was expected.
+        reason: &'static str,
+    },
+    /// Two lists that must have equal lengths do not.
+    #[error("length mismatch for `{field}`: expected {expected}, found {found}")]
+    LengthMismatch {
+        /// Dotted path of the field.
+        field: String,
+        /// Required length.
+        expected: usize,
+        /// Actual length.
+        found: usize,
+    },
+    /// A name refers to something that does not exist.
+    #[error("unknown {kind} `{name}` in `{field}`")]
+    UnknownName {
+        /// What kind of name (keypoint, body part, link, robot, ...).
+        kind: &'static str,
+        /// The unknown name.
+        name: String,
+        /// Where it was referenced.
+        field: String,
+    },
+    /// A name is used twice where names must be unique.
+    #[error("duplicate {kind} `{name}`")]
+    DuplicateName {
+        /// What kind of name.
+        kind: &'static str,
+        /// The repeated name.
+        name: String,
+    },
+    /// A structural problem that is not a single value (empty chain, bad index...).
+    #[error("invalid model: {0}")]
+    Invalid(String),
+    /// The text could not be parsed.
+    #[error("cannot parse {format}: {message}")]
+    Parse {
+        /// "JSON", "TOML" or "URDF".
+        format: &'static str,
+        /// Parser message (with line/column where the parser gives one).
+        message: String,
+    },
+}
+
+/// Check that `value` is finite, naming `field` otherwise.
+pub(crate) fn finite(field: impl FnOnce() -> String, value: f64) -> Result<f64, ModelError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite" })
+    }
+}
+
+/// Check that `value` is finite and `>= 0`.
+pub(crate) fn non_negative(field: impl FnOnce() -> String, value: f64) -> Result<f64, ModelError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite and >= 0" })
+    }
+}
+
+/// Check that `value` is finite and `> 0`.
+pub(crate) fn positive(field: impl FnOnce() -> String, value: f64) -> Result<f64, ModelError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite and > 0" })
+    }
+}

@@ -1,0 +1,17 @@
+//! # pacs-reach
+//!
+//! Sound reachability: every set here contains what it claims to contain, under outward rounding.
+//! - [`rounding`]: directed-rounding scalar helpers and rigorous sin/cos enclosures;
+//! - [`zonotope`]: zonotopes and reachability of linear time-invariant systems;
+//! - [`geometry`]: conservative capsule/sphere/zonotope intersection and distance bounds;
+//! - [`human`]: human reachable occupancies (SaRA-style pos/vel/acc/combined models);
+//! - [`robot`]: robot reachable occupancies for joint boxes (interval forward kinematics).
+
+pub mod geometry;
+pub mod human;
+pub mod lti;
+pub mod robot;
+pub mod rounding;
+pub mod zonotope;
+
+pub use inari::Interval;

@@ -1,0 +1,111 @@
+//! The `pacs` command line: one module per subcommand, shared error type and JSON I/O helpers.
+
+pub mod fk;
+pub mod reach;
+pub mod show;
+pub mod trajectory;
+
+use std::path::Path;
+
+/// Exit code for invalid input (bad file, bad JSON, invalid model or values).
+pub const EXIT_INVALID_INPUT: i32 = 3;
+/// Exit code for an internal failure (a bug: please report).
+pub const EXIT_INTERNAL: i32 = 70;
+
+/// A CLI failure with the exit code it maps to.
+#[derive(Debug)]
+pub enum CliError {
+    /// Invalid input: exit 3.
+    Input(String),
+    /// Anything else: exit 70.
+    Internal(String),
+}
+
+impl CliError {
+    /// Exit code of this error.
+    pub fn code(&self) -> i32 {
+        match self {
+            CliError::Input(_) => EXIT_INVALID_INPUT,
+            CliError::Internal(_) => EXIT_INTERNAL,
+        }
+    }
+    /// Human-readable message.
+    pub fn message(&self) -> &str {
+        match self {
+            CliError::Input(m) | CliError::Internal(m) => m,
+        }
+    }
+}
+
+impl From<pacs_models::ModelError> for CliError {
+    fn from(e: pacs_models::ModelError) -> Self {
+        CliError::Input(e.to_string())
+    }
+}
+
+/// Read a whole input file, naming it in the error.
+pub fn read_file(path: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(path).map_err(|e| CliError::Input(format!("cannot read {}: {e}", path.display())))
+}
+
+/// Parse JSON input into `T`, naming the file, line and column on error.
+pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, CliError> {
+    serde_json::from_str(text).map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
+}
+
+/// Read and parse a JSON input file.
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
+    let text = read_file(path)?;
+    parse_json(path, &text)
+}
+
+/// A robot given by built-in name (`"fr3"`) or as an inline model object.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(untagged)]
+pub enum RobotRef {
+    /// Built-in name.
+    Name(String),
+    /// Inline spec.
+    Spec(Box<pacs_models::RobotSpec>),
+}
+
+impl RobotRef {
+    /// Resolve to a validated model.
+    pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
+        Ok(match self {
+            RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
+            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone()).map_err(|e| CliError::Input(format!("robot: {e}")))?,
+        })
+    }
+}
+
+/// A human model given by built-in name (`"default"`) or inline.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(untagged)]
+pub enum HumanRef {
+    /// Built-in name.
+    Name(String),
+    /// Inline spec.
+    Spec(Box<pacs_models::HumanSpec>),
+}
+
+impl HumanRef {
+    /// Resolve to a validated model.
+    pub fn load(&self) -> Result<pacs_models::HumanModel, CliError> {
+        Ok(match self {
+            HumanRef::Name(n) => pacs_models::HumanModel::builtin(n)?,
+            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone()).map_err(|e| CliError::Input(format!("human: {e}")))?,
+        })
+    }
+}
+
+/// Check that a vector has the expected length and finite entries.
+pub fn check_vec(field: &str, v: &[f64], n: usize) -> Result<(), CliError> {
+    if v.len() != n {
+        return Err(CliError::Input(format!("{field}: expected {n} values, found {}", v.len())));
+    }
+    if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(CliError::Input(format!("{field}[{i}]: value {x} is not finite")));
+    }
+    Ok(())
+}

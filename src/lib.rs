@@ -1,0 +1,4 @@
+//! pacs: path-consistent safety filtering for action-chunking robot policies.
+pub use pacs_models as models;
+pub use pacs_reach as reach;
+pub use pacs_verify as verify;
