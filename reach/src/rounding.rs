@@ -75,7 +75,10 @@ pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
 #[inline]
 pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
-    sqrt_down(add_down(add_down(mul_down(x, x), mul_down(y, y)), mul_down(z, z)))
+    sqrt_down(add_down(
+        add_down(mul_down(x, x), mul_down(y, y)),
+        mul_down(z, z),
+    ))
 }
 
 /// Upper bound of the distance between two points.
@@ -143,7 +146,9 @@ mod tests {
         const HI: f64 = 1.570_796_326_734_125_614_17;
         const TAIL: f64 = 6.077_100_506_506_192_249_32e-11;
         let tail = interval!(TAIL.next_down(), TAIL.next_up()).unwrap();
-        assert!((Interval::PI / interval!(2.0, 2.0).unwrap()).subset(interval!(HI, HI).unwrap() + tail));
+        assert!(
+            (Interval::PI / interval!(2.0, 2.0).unwrap()).subset(interval!(HI, HI).unwrap() + tail)
+        );
         let k = (x / std::f64::consts::FRAC_PI_2).round();
         let ki = interval!(k, k).unwrap();
         let r = interval!(x, x).unwrap() - ki * interval!(HI, HI).unwrap() - ki * tail;
@@ -179,10 +184,19 @@ mod tests {
             let (s, c) = taylor_sin_cos(x);
             let (sl, cl) = x.sin_cos();
             // The enclosure is tight enough for the check to mean something...
-            assert!(s.wid() < 4e-15 && c.wid() < 4e-15, "taylor enclosure too wide at {x}");
+            assert!(
+                s.wid() < 4e-15 && c.wid() < 4e-15,
+                "taylor enclosure too wide at {x}"
+            );
             // ...and every exact value in it is within TRIG_PAD of libm.
-            assert!(s.sup() - TRIG_PAD <= sl && sl <= s.inf() + TRIG_PAD, "sin({x}) = {sl} vs {s:?}");
-            assert!(c.sup() - TRIG_PAD <= cl && cl <= c.inf() + TRIG_PAD, "cos({x}) = {cl} vs {c:?}");
+            assert!(
+                s.sup() - TRIG_PAD <= sl && sl <= s.inf() + TRIG_PAD,
+                "sin({x}) = {sl} vs {s:?}"
+            );
+            assert!(
+                c.sup() - TRIG_PAD <= cl && cl <= c.inf() + TRIG_PAD,
+                "cos({x}) = {cl} vs {c:?}"
+            );
         }
     }
 

@@ -45,12 +45,14 @@ impl From<pacs_models::ModelError> for CliError {
 
 /// Read a whole input file, naming it in the error.
 pub fn read_file(path: &Path) -> Result<String, CliError> {
-    std::fs::read_to_string(path).map_err(|e| CliError::Input(format!("cannot read {}: {e}", path.display())))
+    std::fs::read_to_string(path)
+        .map_err(|e| CliError::Input(format!("cannot read {}: {e}", path.display())))
 }
 
 /// Parse JSON input into `T`, naming the file, line and column on error.
 pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, CliError> {
-    serde_json::from_str(text).map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
+    serde_json::from_str(text)
+        .map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
 }
 
 /// Read and parse a JSON input file.
@@ -74,7 +76,8 @@ impl RobotRef {
     pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
         Ok(match self {
             RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
-            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone()).map_err(|e| CliError::Input(format!("robot: {e}")))?,
+            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone())
+                .map_err(|e| CliError::Input(format!("robot: {e}")))?,
         })
     }
 }
@@ -94,7 +97,8 @@ impl HumanRef {
     pub fn load(&self) -> Result<pacs_models::HumanModel, CliError> {
         Ok(match self {
             HumanRef::Name(n) => pacs_models::HumanModel::builtin(n)?,
-            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone()).map_err(|e| CliError::Input(format!("human: {e}")))?,
+            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone())
+                .map_err(|e| CliError::Input(format!("human: {e}")))?,
         })
     }
 }
@@ -102,10 +106,15 @@ impl HumanRef {
 /// Check that a vector has the expected length and finite entries.
 pub fn check_vec(field: &str, v: &[f64], n: usize) -> Result<(), CliError> {
     if v.len() != n {
-        return Err(CliError::Input(format!("{field}: expected {n} values, found {}", v.len())));
+        return Err(CliError::Input(format!(
+            "{field}: expected {n} values, found {}",
+            v.len()
+        )));
     }
     if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-        return Err(CliError::Input(format!("{field}[{i}]: value {x} is not finite")));
+        return Err(CliError::Input(format!(
+            "{field}[{i}]: value {x} is not finite"
+        )));
     }
     Ok(())
 }
