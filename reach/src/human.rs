@@ -25,8 +25,8 @@
 //! combination of points within r₁ of c₁ and r₂ of c₂). All radii are rounded up; centres computed
 //! in floating point have their rounding error bounded and added to the radius.
 
+use crate::interval::Interval;
 use crate::rounding::{add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
-use inari::{Interval, interval};
 use nalgebra::{Point3, Vector3};
 use pacs_models::{Capsule, HumanModel};
 use serde::{Deserialize, Serialize};
@@ -186,7 +186,7 @@ fn ball_around_box(c: [Interval; 3], radius: f64) -> Ball {
     let mut mid = [0.0; 3];
     for i in 0..3 {
         mid[i] = c[i].mid();
-        half[i] = sub_up(c[i].sup(), mid[i]).max(sub_up(mid[i], c[i].inf()));
+        half[i] = sub_up(c[i].hi(), mid[i]).max(sub_up(mid[i], c[i].lo()));
     }
     Ball {
         centre: Point3::from(mid),
@@ -196,7 +196,7 @@ fn ball_around_box(c: [Interval; 3], radius: f64) -> Ball {
 
 #[inline]
 fn pt(x: f64) -> Interval {
-    interval!(x, x).unwrap_or(Interval::ENTIRE)
+    Interval::point(x)
 }
 
 /// Human occupancy computer: reusable buffers, no allocation per query.
@@ -280,7 +280,7 @@ impl HumanReach {
         let r = pt(self.model.measurement_error_pos())
             + pt(self.model.measurement_error_vel()) * ti
             + pt(0.5) * pt(self.model.a_max()[k]) * ti * ti;
-        ball_around_box(c, r.sup())
+        ball_around_box(c, r.hi())
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {

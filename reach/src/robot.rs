@@ -2,10 +2,11 @@
 //! a joint box `[q_lo, q_hi]` (plus a Cartesian tracking-error margin).
 //!
 //! Two rigorous enclosures are computed per capsule endpoint and the tighter one is used:
-//! - **interval forward kinematics** over the box: each frame's rotation and origin as interval
-//!   matrices (sin/cos enclosed by [`crate::rounding::sin_cos_interval`], products and sums by
-//!   inari's outward rounding); an endpoint's interval box is enclosed by the ball around its
-//!   midpoint through the farthest corner;
+//! - **interval forward kinematics** over the box in midpoint-radius form: each frame's rotation
+//!   and origin as a float matrix plus an elementwise radius (sin/cos enclosed by
+//!   [`crate::rounding::sin_cos_interval`]; products bound their rounding error by Higham's γ₄ and
+//!   every radius is inflated by 1e-13 relative to cover its own rounding); an endpoint's box is
+//!   enclosed by the ball around its midpoint through the farthest corner;
 //! - **mean-value form**: the endpoint at the box centre q_c (interval FK of the point box) plus
 //!   Σ_j δ_j · sup‖p − o_j‖, where δ_j is the half-width of joint j's range and sup‖p − o_j‖ (over the
 //!   box, from the interval FK) bounds ‖∂p/∂q_j‖ = ‖z_j × (p − o_j)‖ on the whole box (mean value
@@ -17,8 +18,7 @@
 //! difference to the quaternion form used by nominal kinematics (≤ 1e-14 m over the FR3 chain) is
 //! covered by [`MODEL_PAD`].
 
-use crate::rounding::{add_up, norm3_up, sin_cos_interval, sub_up};
-use inari::{Interval, interval};
+use crate::rounding::{add_up, mul_up, norm3_up, sin_cos_interval, sub_up};
 use nalgebra::{Matrix3, Point3, Vector3};
 use pacs_models::{Capsule, MAX_DOF, RobotModel};
 
@@ -26,76 +26,106 @@ use pacs_models::{Capsule, MAX_DOF, RobotModel};
 /// model's fixed transforms (documented bound ≤ 1e-14 m; padded a hundredfold).
 pub const MODEL_PAD: f64 = 1e-12;
 
-type IMat = [[Interval; 3]; 3];
-type IVec = [Interval; 3];
+/// Relative bound on the rounding error of a dot product of length ≤ 4 computed in f64:
+/// γ₄ = 4u/(1−4u) < 4.45e-16 (Higham, *Accuracy and Stability*, Thm 3.1), doubled for margin.
+const GAMMA: f64 = 1e-15;
+/// Relative inflation applied to every radius computed as a sum of ≤ 16 non-negative products:
+/// round-to-nearest loses at most a factor (1 − u)^16 > 1 − 2e-15 of the exact value.
+const RAD_UP: f64 = 1.0 + 1e-13;
+/// Absolute slack per element for underflow (each operation loses < 2⁻¹⁰⁷⁴ absolutely).
+const TINY: f64 = 1e-290;
 
-#[inline(always)]
-fn pt(x: f64) -> Interval {
-    interval!(x, x).unwrap_or(Interval::ENTIRE)
+/// A 3×3 matrix known up to an elementwise radius: every exact matrix M with
+/// |M − mid| ≤ rad (elementwise) is represented.
+#[derive(Debug, Clone, Copy)]
+struct MatMR {
+    mid: Matrix3<f64>,
+    rad: Matrix3<f64>,
 }
 
-fn imat(m: &Matrix3<f64>) -> IMat {
-    let mut r = [[pt(0.0); 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = pt(m[(i, j)]);
-        }
+/// A 3-vector known up to an elementwise radius.
+#[derive(Debug, Clone, Copy)]
+struct VecMR {
+    mid: Vector3<f64>,
+    rad: Vector3<f64>,
+}
+
+#[inline(always)]
+fn inflate_m(m: Matrix3<f64>) -> Matrix3<f64> {
+    m.map(|x| x * RAD_UP + TINY)
+}
+
+#[inline(always)]
+fn inflate_v(v: Vector3<f64>) -> Vector3<f64> {
+    v.map(|x| x * RAD_UP + TINY)
+}
+
+/// A·B: mid = fl(Aₘ·Bₘ); rad ≥ |Aₘ|·B_r + A_r·|Bₘ| + A_r·B_r + γ·|Aₘ|·|Bₘ|
+/// (the last term bounds the rounding error of the midpoint product).
+#[inline(always)]
+fn mat_mul(a: &MatMR, b: &MatMR) -> MatMR {
+    let aa = a.mid.abs();
+    let ba = b.mid.abs();
+    let mid = a.mid * b.mid;
+    let rad = aa * b.rad + a.rad * (ba + b.rad) + (aa * ba) * GAMMA;
+    MatMR {
+        mid,
+        rad: inflate_m(rad),
     }
-    r
 }
 
+/// A·v + t for an exact vector v (capsule endpoints, joint offsets).
 #[inline(always)]
-fn mat_mul(a: &IMat, b: &IMat) -> IMat {
-    let mut r = [[pt(0.0); 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = a[i][0].mul_add(b[0][j], a[i][1].mul_add(b[1][j], a[i][2] * b[2][j]));
-        }
+fn affine_point(r: &MatMR, t: &VecMR, v: &Vector3<f64>) -> VecMR {
+    let va = v.abs();
+    let rv = r.mid * v;
+    let mid = rv + t.mid;
+    let rad = r.rad * va + t.rad + (r.mid.abs() * va + t.mid.abs()) * GAMMA;
+    VecMR {
+        mid,
+        rad: inflate_v(rad),
     }
-    r
 }
 
+/// Upper bound of sup ‖x‖ over a midpoint-radius vector.
 #[inline(always)]
-fn mat_vec(a: &IMat, v: &IVec) -> IVec {
-    let mut r = [pt(0.0); 3];
-    for i in 0..3 {
-        r[i] = a[i][0].mul_add(v[0], a[i][1].mul_add(v[1], a[i][2] * v[2]));
-    }
-    r
+fn mag_up(v: &VecMR) -> f64 {
+    let m = v.mid.abs() + v.rad;
+    norm3_up(m.x * RAD_UP, m.y * RAD_UP, m.z * RAD_UP)
 }
 
+/// Upper bound of sup ‖x − y‖ for x, y in two midpoint-radius vectors.
 #[inline(always)]
-fn vec_add(a: &IVec, b: &IVec) -> IVec {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+fn dist_sup_up(a: &VecMR, b: &VecMR) -> f64 {
+    let d = (a.mid - b.mid).abs() * (1.0 + GAMMA) + a.rad + b.rad;
+    norm3_up(
+        d.x * RAD_UP + TINY,
+        d.y * RAD_UP + TINY,
+        d.z * RAD_UP + TINY,
+    )
 }
 
-/// Upper bound of sup ‖x‖ over an interval vector.
+/// Midpoint and an upper bound of the distance from it to any represented point.
 #[inline(always)]
-fn mag_up(v: &IVec) -> f64 {
-    norm3_up(v[0].mag(), v[1].mag(), v[2].mag())
-}
-
-/// Midpoint and an upper bound of the distance from it to any point of the box.
-#[inline(always)]
-fn mid_radius(v: &IVec) -> (Point3<f64>, f64) {
-    let mut m = [0.0; 3];
-    let mut h = [0.0; 3];
-    for i in 0..3 {
-        m[i] = v[i].mid();
-        h[i] = sub_up(v[i].sup(), m[i]).max(sub_up(m[i], v[i].inf()));
-    }
-    (Point3::from(m), norm3_up(h[0], h[1], h[2]))
+fn mid_radius(v: &VecMR) -> (Point3<f64>, f64) {
+    (
+        Point3::from(v.mid),
+        mag_up(&VecMR {
+            mid: Vector3::zeros(),
+            rad: v.rad,
+        }),
+    )
 }
 
 #[derive(Debug, Clone)]
 struct JointData {
     /// Origin rotation (f64 matrix, taken as exact).
-    r0: IMat,
-    /// Origin translation.
-    t0: IVec,
+    r0: Matrix3<f64>,
+    /// Origin translation (exact).
+    t0: Vector3<f64>,
     /// Cross-product matrix K of the unit axis and K² (Rodrigues: R = I + sK + (1−c)K²).
-    k: IMat,
-    k2: IMat,
+    k: Matrix3<f64>,
+    k2: Matrix3<f64>,
     /// Axis is +z (fast path).
     z_axis: bool,
 }
@@ -103,8 +133,8 @@ struct JointData {
 #[derive(Debug, Clone)]
 struct CapsuleData {
     frame: usize,
-    p1: IVec,
-    p2: IVec,
+    p1: Vector3<f64>,
+    p2: Vector3<f64>,
     radius: f64,
 }
 
@@ -112,8 +142,8 @@ struct CapsuleData {
 #[derive(Debug, Clone)]
 pub struct RobotReach {
     dof: usize,
-    base_r: IMat,
-    base_t: IVec,
+    base_r: Matrix3<f64>,
+    base_t: Vector3<f64>,
     joints: Vec<JointData>,
     capsules: Vec<CapsuleData>,
     /// For each link: range of its capsules in `capsules`.
@@ -121,10 +151,27 @@ pub struct RobotReach {
     tracking_error: f64,
 }
 
-/// Interval frames: rotation and origin for frames 0..=n.
+/// Enclosed frames: rotation and origin for frames 0..=n.
 struct Frames {
-    r: [IMat; MAX_DOF + 1],
-    t: [IVec; MAX_DOF + 1],
+    r: [MatMR; MAX_DOF + 1],
+    t: [VecMR; MAX_DOF + 1],
+}
+
+impl Frames {
+    fn new() -> Self {
+        let zm = MatMR {
+            mid: Matrix3::zeros(),
+            rad: Matrix3::zeros(),
+        };
+        let zv = VecMR {
+            mid: Vector3::zeros(),
+            rad: Vector3::zeros(),
+        };
+        Self {
+            r: [zm; MAX_DOF + 1],
+            t: [zv; MAX_DOF + 1],
+        }
+    }
 }
 
 impl RobotReach {
@@ -147,24 +194,19 @@ impl RobotReach {
                 "tracking_error: value {tracking_error} must be finite and >= 0"
             )));
         }
-        let iso_r =
-            |iso: &nalgebra::Isometry3<f64>| imat(iso.rotation.to_rotation_matrix().matrix());
-        let iso_t = |iso: &nalgebra::Isometry3<f64>| {
-            let t = iso.translation.vector;
-            [pt(t.x), pt(t.y), pt(t.z)]
-        };
+        let iso_r = |iso: &nalgebra::Isometry3<f64>| *iso.rotation.to_rotation_matrix().matrix();
+        let iso_t = |iso: &nalgebra::Isometry3<f64>| iso.translation.vector;
         let joints = model
             .joints()
             .iter()
             .map(|j| {
                 let a: Vector3<f64> = j.axis.into_inner();
                 let k = Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
-                let ki = imat(&k);
                 JointData {
                     r0: iso_r(&j.origin),
                     t0: iso_t(&j.origin),
-                    k: ki,
-                    k2: mat_mul(&ki, &ki),
+                    k,
+                    k2: k * k,
                     z_axis: a.x == 0.0 && a.y == 0.0 && a.z == 1.0,
                 }
             })
@@ -174,11 +216,10 @@ impl RobotReach {
         for l in model.links() {
             let start = capsules.len();
             for c in &l.capsules {
-                let v = |p: Point3<f64>| [pt(p.x), pt(p.y), pt(p.z)];
                 capsules.push(CapsuleData {
                     frame: l.frame,
-                    p1: v(c.p1()),
-                    p2: v(c.p2()),
+                    p1: c.p1().coords,
+                    p2: c.p2().coords,
                     radius: c.radius(),
                 });
             }
@@ -216,27 +257,52 @@ impl RobotReach {
     }
 
     fn frames(&self, lo: &[f64], hi: &[f64], f: &mut Frames) {
-        f.r[0] = self.base_r;
-        f.t[0] = self.base_t;
-        let one = pt(1.0);
-        let zero = pt(0.0);
+        f.r[0] = MatMR {
+            mid: self.base_r,
+            rad: Matrix3::zeros(),
+        };
+        f.t[0] = VecMR {
+            mid: self.base_t,
+            rad: Vector3::zeros(),
+        };
         for (j, jd) in self.joints.iter().enumerate() {
             let (s, c) = sin_cos_interval(lo[j], hi[j]);
-            let rot: IMat = if jd.z_axis {
-                [[c, -s, zero], [s, c, zero], [zero, zero, one]]
-            } else {
-                let omc = one - c;
-                let mut r = [[zero; 3]; 3];
-                for a in 0..3 {
-                    for b in 0..3 {
-                        let id = if a == b { one } else { zero };
-                        r[a][b] = id + s * jd.k[a][b] + omc * jd.k2[a][b];
-                    }
+            let (sm, sr) = (s.mid(), s.rad_up());
+            let (cm, cr) = (c.mid(), c.rad_up());
+            // Local transform R0·Rot(θ) in midpoint-radius form (R0 exact).
+            let local = if jd.z_axis {
+                // Columns: R0·(c, s, 0), R0·(−s, c, 0), R0·(0, 0, 1).
+                let (a, b) = (jd.r0.column(0), jd.r0.column(1));
+                let (aa, ba) = (a.abs(), b.abs());
+                let c0 = a * cm + b * sm;
+                let c1 = b * cm - a * sm;
+                let r0 = aa * cr + ba * sr + (aa * cm.abs() + ba * sm.abs()) * GAMMA;
+                let r1 = ba * cr + aa * sr + (ba * cm.abs() + aa * sm.abs()) * GAMMA;
+                MatMR {
+                    mid: Matrix3::from_columns(&[c0, c1, jd.r0.column(2).into_owned()]),
+                    rad: inflate_m(Matrix3::from_columns(&[r0, r1, Vector3::zeros()])),
                 }
-                r
+            } else {
+                // R = I + sK + (1−c)K²: elementwise, mid and radius of each term.
+                let omc = 1.0 - cm;
+                let mid = Matrix3::identity() + jd.k * sm + jd.k2 * omc;
+                let rad = jd.k.abs() * sr
+                    + jd.k2.abs() * cr
+                    + (jd.k.abs() * sm.abs() + jd.k2.abs() * omc.abs() + Matrix3::identity())
+                        * GAMMA;
+                let rot = MatMR {
+                    mid,
+                    rad: inflate_m(rad),
+                };
+                mat_mul(
+                    &MatMR {
+                        mid: jd.r0,
+                        rad: Matrix3::zeros(),
+                    },
+                    &rot,
+                )
             };
-            let local = mat_mul(&jd.r0, &rot);
-            f.t[j + 1] = vec_add(&f.t[j], &mat_vec(&f.r[j], &jd.t0));
+            f.t[j + 1] = affine_point(&f.r[j], &f.t[j], &jd.t0);
             f.r[j + 1] = mat_mul(&f.r[j], &local);
         }
     }
@@ -284,14 +350,8 @@ impl RobotReach {
             qc[i] = qc[i].clamp(q_lo[i], q_hi[i]);
             delta[i] = sub_up(q_hi[i], qc[i]).max(sub_up(qc[i], q_lo[i]));
         }
-        let mut boxf = Frames {
-            r: [[[pt(0.0); 3]; 3]; MAX_DOF + 1],
-            t: [[pt(0.0); 3]; MAX_DOF + 1],
-        };
-        let mut cent = Frames {
-            r: [[[pt(0.0); 3]; 3]; MAX_DOF + 1],
-            t: [[pt(0.0); 3]; MAX_DOF + 1],
-        };
+        let mut boxf = Frames::new();
+        let mut cent = Frames::new();
         self.frames(q_lo, q_hi, &mut boxf);
         self.frames(&qc[..n], &qc[..n], &mut cent);
         let margin = add_up(self.tracking_error, MODEL_PAD);
@@ -299,18 +359,16 @@ impl RobotReach {
             let k = c.frame;
             let mut ends = [(Point3::origin(), 0.0); 2];
             for (e, p) in [&c.p1, &c.p2].into_iter().enumerate() {
-                let pb = vec_add(&boxf.t[k], &mat_vec(&boxf.r[k], p));
+                let pb = affine_point(&boxf.r[k], &boxf.t[k], p);
                 let (ca, ea) = mid_radius(&pb);
                 // Mean-value form around the centre configuration.
-                let pc = vec_add(&cent.t[k], &mat_vec(&cent.r[k], p));
+                let pc = affine_point(&cent.r[k], &cent.t[k], p);
                 let (cb, mut eb) = mid_radius(&pc);
                 for j in 0..k.min(n) {
                     if delta[j] == 0.0 {
                         continue;
                     }
-                    let o = &boxf.t[j + 1];
-                    let d = [pb[0] - o[0], pb[1] - o[1], pb[2] - o[2]];
-                    eb = add_up(eb, crate::rounding::mul_up(delta[j], mag_up(&d)));
+                    eb = add_up(eb, mul_up(delta[j], dist_sup_up(&pb, &boxf.t[j + 1])));
                 }
                 ends[e] = if eb < ea { (cb, eb) } else { (ca, ea) };
             }

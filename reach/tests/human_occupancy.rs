@@ -13,7 +13,6 @@ use pacs_reach::geometry::capsule_contains_point;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use proptest::prelude::*;
 use proptest::test_runner::TestRng;
-use rand::Rng;
 
 /// One keypoint's exact trajectory: pieces of constant acceleration.
 #[derive(Clone, Debug)]

@@ -7,7 +7,6 @@ use pacs_reach::geometry::capsule_contains_point;
 use pacs_reach::robot::RobotReach;
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, TestRng};
-use rand::Rng;
 
 fn rand_in_ball(rng: &mut TestRng, r: f64) -> Vector3<f64> {
     loop {
