@@ -29,9 +29,13 @@
 //!   per-joint `[joints.NAME]` first, then the uniform `a_max` / `j_max`. A missing value is an error.
 
 use crate::error::ModelError;
-use crate::robot::{InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec, RobotModel, RobotSpec};
+use crate::robot::{
+    InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec, RobotModel, RobotSpec,
+};
 use crate::shape::CapsuleSpec;
-use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3,
+};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -117,9 +121,13 @@ pub fn load_urdf(urdf_text: &str, side: &SideFile) -> Result<RobotModel, ModelEr
 }
 
 /// Load a robot from a URDF file and an optional side file (JSON or TOML).
-pub fn load_urdf_files(urdf_path: &Path, side_path: Option<&Path>) -> Result<RobotModel, ModelError> {
+pub fn load_urdf_files(
+    urdf_path: &Path,
+    side_path: Option<&Path>,
+) -> Result<RobotModel, ModelError> {
     let read = |p: &Path| {
-        std::fs::read_to_string(p).map_err(|e| ModelError::Invalid(format!("cannot read `{}`: {e}", p.display())))
+        std::fs::read_to_string(p)
+            .map_err(|e| ModelError::Invalid(format!("cannot read `{}`: {e}", p.display())))
     };
     let urdf = read(urdf_path)?;
     let side = match side_path {
@@ -131,8 +139,10 @@ pub fn load_urdf_files(urdf_path: &Path, side_path: Option<&Path>) -> Result<Rob
 
 /// Convert URDF text plus a side file into a (not yet validated) [`RobotSpec`].
 pub fn urdf_to_spec(urdf_text: &str, side: &SideFile) -> Result<RobotSpec, ModelError> {
-    let robot =
-        urdf_rs::read_from_string(urdf_text).map_err(|e| ModelError::Parse { format: "URDF", message: e.to_string() })?;
+    let robot = urdf_rs::read_from_string(urdf_text).map_err(|e| ModelError::Parse {
+        format: "URDF",
+        message: e.to_string(),
+    })?;
     Tree::new(&robot, side)?.to_spec(side)
 }
 
@@ -151,7 +161,10 @@ impl<'a> Tree<'a> {
         let mut link_index = HashMap::new();
         for (i, l) in robot.links.iter().enumerate() {
             if link_index.insert(l.name.as_str(), i).is_some() {
-                return Err(ModelError::DuplicateName { kind: "URDF link", name: l.name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "URDF link",
+                    name: l.name.clone(),
+                });
             }
         }
         if robot.links.is_empty() {
@@ -162,14 +175,20 @@ impl<'a> Tree<'a> {
         let mut child_joints = vec![Vec::new(); robot.links.len()];
         for (ji, j) in robot.joints.iter().enumerate() {
             if joint_names.insert(j.name.as_str(), ji).is_some() {
-                return Err(ModelError::DuplicateName { kind: "URDF joint", name: j.name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "URDF joint",
+                    name: j.name.clone(),
+                });
             }
             let find = |name: &str, what: &str| {
-                link_index.get(name).copied().ok_or_else(|| ModelError::UnknownName {
-                    kind: "link",
-                    name: name.into(),
-                    field: format!("joint `{}` {what}", j.name),
-                })
+                link_index
+                    .get(name)
+                    .copied()
+                    .ok_or_else(|| ModelError::UnknownName {
+                        kind: "link",
+                        name: name.into(),
+                        field: format!("joint `{}` {what}", j.name),
+                    })
             };
             let p = find(&j.parent.link, "parent")?;
             let c = find(&j.child.link, "child")?;
@@ -182,9 +201,14 @@ impl<'a> Tree<'a> {
             parent_joint[c] = Some(ji);
             child_joints[p].push(ji);
         }
-        let roots: Vec<usize> = (0..robot.links.len()).filter(|&i| parent_joint[i].is_none()).collect();
+        let roots: Vec<usize> = (0..robot.links.len())
+            .filter(|&i| parent_joint[i].is_none())
+            .collect();
         if roots.len() != 1 {
-            let names: Vec<&str> = roots.iter().map(|&i| robot.links[i].name.as_str()).collect();
+            let names: Vec<&str> = roots
+                .iter()
+                .map(|&i| robot.links[i].name.as_str())
+                .collect();
             return Err(ModelError::Invalid(format!(
                 "URDF must have exactly one root link (a link that is no joint's child); found {names:?}"
             )));
@@ -195,7 +219,11 @@ impl<'a> Tree<'a> {
         let mut stack = vec![root];
         while let Some(l) = stack.pop() {
             seen[l] = true;
-            stack.extend(child_joints[l].iter().map(|&j| link_index[robot.joints[j].child.link.as_str()]));
+            stack.extend(
+                child_joints[l]
+                    .iter()
+                    .map(|&j| link_index[robot.joints[j].child.link.as_str()]),
+            );
         }
         if let Some(i) = seen.iter().position(|s| !s) {
             return Err(ModelError::Invalid(format!(
@@ -205,24 +233,39 @@ impl<'a> Tree<'a> {
         }
         for name in side.joints.keys() {
             if !joint_names.contains_key(name.as_str()) {
-                return Err(ModelError::UnknownName { kind: "URDF joint", name: name.clone(), field: "joints".into() });
+                return Err(ModelError::UnknownName {
+                    kind: "URDF joint",
+                    name: name.clone(),
+                    field: "joints".into(),
+                });
             }
         }
         for name in side.links.keys() {
             if !link_index.contains_key(name.as_str()) {
-                return Err(ModelError::UnknownName { kind: "URDF link", name: name.clone(), field: "links".into() });
+                return Err(ModelError::UnknownName {
+                    kind: "URDF link",
+                    name: name.clone(),
+                    field: "links".into(),
+                });
             }
         }
         let tip = match &side.tip {
-            Some(t) => *link_index.get(t.as_str()).ok_or_else(|| ModelError::UnknownName {
-                kind: "URDF link",
-                name: t.clone(),
-                field: "tip".into(),
-            })?,
+            Some(t) => *link_index
+                .get(t.as_str())
+                .ok_or_else(|| ModelError::UnknownName {
+                    kind: "URDF link",
+                    name: t.clone(),
+                    field: "tip".into(),
+                })?,
             None => {
-                let leaves: Vec<usize> = (0..robot.links.len()).filter(|&i| child_joints[i].is_empty()).collect();
+                let leaves: Vec<usize> = (0..robot.links.len())
+                    .filter(|&i| child_joints[i].is_empty())
+                    .collect();
                 if leaves.len() != 1 {
-                    let names: Vec<&str> = leaves.iter().map(|&i| robot.links[i].name.as_str()).collect();
+                    let names: Vec<&str> = leaves
+                        .iter()
+                        .map(|&i| robot.links[i].name.as_str())
+                        .collect();
                     return Err(ModelError::Invalid(format!(
                         "URDF has {} leaf links {names:?}; name the chain's last link with `tip` in the side file",
                         leaves.len()
@@ -237,7 +280,13 @@ impl<'a> Tree<'a> {
             on_path[j] = true;
             l = link_index[robot.joints[j].parent.link.as_str()];
         }
-        Ok(Self { robot, link_index, child_joints, root, on_path })
+        Ok(Self {
+            robot,
+            link_index,
+            child_joints,
+            root,
+            on_path,
+        })
     }
 
     fn to_spec(&self, side: &SideFile) -> Result<RobotSpec, ModelError> {
@@ -245,7 +294,8 @@ impl<'a> Tree<'a> {
         let mut joints = Vec::new();
         let mut links = Vec::new();
         // (link, carrying frame name, pose of the link frame in the carrying frame, identity?)
-        let mut stack: Vec<(usize, String, Option<Isometry3<f64>>)> = vec![(self.root, "base".into(), None)];
+        let mut stack: Vec<(usize, String, Option<Isometry3<f64>>)> =
+            vec![(self.root, "base".into(), None)];
         while let Some((li, carrier, acc)) = stack.pop() {
             links.push(self.link_spec(li, &carrier, acc, side)?);
             // Push children in reverse so that they are visited in URDF order.
@@ -265,7 +315,10 @@ impl<'a> Tree<'a> {
                                 )));
                             }
                             let pose = match acc {
-                                None => PoseSpec { xyz: *j.origin.xyz, rpy: *j.origin.rpy },
+                                None => PoseSpec {
+                                    xyz: *j.origin.xyz,
+                                    rpy: *j.origin.rpy,
+                                },
                                 Some(_) => iso_to_pose(&to_joint),
                             };
                             joints.push(JointSpec {
@@ -337,7 +390,11 @@ impl<'a> Tree<'a> {
     }
 }
 
-fn chain_limits(j: &urdf_rs::Joint, ov: &JointOverride, side: &SideFile) -> Result<JointLimitSpec, ModelError> {
+fn chain_limits(
+    j: &urdf_rs::Joint,
+    ov: &JointOverride,
+    side: &SideFile,
+) -> Result<JointLimitSpec, ModelError> {
     let l = &j.limit;
     // urdf-rs gives an all-zero limit when `<limit>` is absent (URDF < 1.2).
     let has_limit = !(l.lower == 0.0 && l.upper == 0.0 && l.velocity == 0.0 && l.effort == 0.0);
@@ -364,16 +421,38 @@ fn chain_limits(j: &urdf_rs::Joint, ov: &JointOverride, side: &SideFile) -> Resu
     })?;
     let urdf_pos_rate = |v: f64| (has_limit && v.is_finite() && v > 0.0).then_some(v);
     let v_max = ov.v_max.or(urdf_pos_rate(l.velocity)).ok_or_else(|| {
-        missing("v_max", l.velocity, "URDF velocity limit missing or not > 0; set v_max in the side file")
+        missing(
+            "v_max",
+            l.velocity,
+            "URDF velocity limit missing or not > 0; set v_max in the side file",
+        )
     })?;
     let urdf_acc = urdf_pos_rate(l.acceleration.min(l.deceleration));
     let a_max = ov.a_max.or(side.a_max).or(urdf_acc).ok_or_else(|| {
-        missing("a_max", l.acceleration, "no acceleration limit; set a_max (uniform or per joint) in the side file")
+        missing(
+            "a_max",
+            l.acceleration,
+            "no acceleration limit; set a_max (uniform or per joint) in the side file",
+        )
     })?;
-    let j_max = ov.j_max.or(side.j_max).or(urdf_pos_rate(l.jerk)).ok_or_else(|| {
-        missing("j_max", l.jerk, "no jerk limit; set j_max (uniform or per joint) in the side file")
-    })?;
-    Ok(JointLimitSpec { q_min, q_max, v_max, a_max, j_max })
+    let j_max = ov
+        .j_max
+        .or(side.j_max)
+        .or(urdf_pos_rate(l.jerk))
+        .ok_or_else(|| {
+            missing(
+                "j_max",
+                l.jerk,
+                "no jerk limit; set j_max (uniform or per joint) in the side file",
+            )
+        })?;
+    Ok(JointLimitSpec {
+        q_min,
+        q_max,
+        v_max,
+        a_max,
+        j_max,
+    })
 }
 
 /// Transform child-joint frame → frozen child frame of an off-chain joint.
@@ -415,10 +494,14 @@ fn frozen_motion(j: &urdf_rs::Joint, frozen_at: Option<f64>) -> Result<Isometry3
     };
     match j.joint_type {
         JointType::Fixed => Ok(Isometry3::identity()),
-        JointType::Revolute | JointType::Continuous => {
-            Ok(Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&axis()?, x)))
-        }
-        JointType::Prismatic => Ok(Isometry3::from_parts(Translation3::from(axis()?.into_inner() * x), UnitQuaternion::identity())),
+        JointType::Revolute | JointType::Continuous => Ok(Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_axis_angle(&axis()?, x),
+        )),
+        JointType::Prismatic => Ok(Isometry3::from_parts(
+            Translation3::from(axis()?.into_inner() * x),
+            UnitQuaternion::identity(),
+        )),
         ref t => Err(ModelError::Invalid(format!(
             "URDF joint `{}` of type {t:?} is not supported (only revolute, continuous, prismatic and fixed)",
             j.name
@@ -426,7 +509,10 @@ fn frozen_motion(j: &urdf_rs::Joint, frozen_at: Option<f64>) -> Result<Isometry3
     }
 }
 
-fn urdf_pose_iso(p: &urdf_rs::Pose, field: impl Fn() -> String) -> Result<Isometry3<f64>, ModelError> {
+fn urdf_pose_iso(
+    p: &urdf_rs::Pose,
+    field: impl Fn() -> String,
+) -> Result<Isometry3<f64>, ModelError> {
     for (i, v) in p.xyz.iter().chain(p.rpy.iter()).enumerate() {
         if !v.is_finite() {
             let which = if i < 3 { "xyz" } else { "rpy" };
@@ -437,7 +523,11 @@ fn urdf_pose_iso(p: &urdf_rs::Pose, field: impl Fn() -> String) -> Result<Isomet
             });
         }
     }
-    Ok(PoseSpec { xyz: *p.xyz, rpy: *p.rpy }.to_isometry())
+    Ok(PoseSpec {
+        xyz: *p.xyz,
+        rpy: *p.rpy,
+    }
+    .to_isometry())
 }
 
 /// Roll-pitch-yaw (R = Rz(yaw)·Ry(pitch)·Rx(roll)) of a rotation, accurate also near pitch = ±π/2:
@@ -453,7 +543,10 @@ pub fn rpy_of(r: &Rotation3<f64>) -> [f64; 3] {
 }
 
 fn iso_to_pose(iso: &Isometry3<f64>) -> PoseSpec {
-    PoseSpec { xyz: iso.translation.vector.into(), rpy: rpy_of(&iso.rotation.to_rotation_matrix()) }
+    PoseSpec {
+        xyz: iso.translation.vector.into(),
+        rpy: rpy_of(&iso.rotation.to_rotation_matrix()),
+    }
 }
 
 fn collision_capsules(link: &urdf_rs::Link) -> Result<Vec<CapsuleSpec>, ModelError> {
@@ -462,7 +555,7 @@ fn collision_capsules(link: &urdf_rs::Link) -> Result<Vec<CapsuleSpec>, ModelErr
         let field = || format!("link `{}` collision[{ci}]", link.name);
         let t = urdf_pose_iso(&c.origin, || format!("{} origin", field()))?;
         let seg = |half: Vector3<f64>, radius: f64| -> Result<CapsuleSpec, ModelError> {
-            if !(radius.is_finite() && radius >= 0.0) || !half.iter().all(|v| v.is_finite()) {
+            if !(radius.is_finite() && radius >= 0.0 && half.iter().all(|v| v.is_finite())) {
                 return Err(ModelError::InvalidValue {
                     field: field(),
                     value: radius,
@@ -471,11 +564,16 @@ fn collision_capsules(link: &urdf_rs::Link) -> Result<Vec<CapsuleSpec>, ModelErr
             }
             let p1 = t * Point3::from(-half);
             let p2 = t * Point3::from(half);
-            Ok(CapsuleSpec { p1: p1.coords.into(), p2: p2.coords.into(), radius })
+            Ok(CapsuleSpec {
+                p1: p1.coords.into(),
+                p2: p2.coords.into(),
+                radius,
+            })
         };
         match &c.geometry {
             urdf_rs::Geometry::Sphere { radius } => out.push(seg(Vector3::zeros(), *radius)?),
-            urdf_rs::Geometry::Cylinder { radius, length } | urdf_rs::Geometry::Capsule { radius, length } => {
+            urdf_rs::Geometry::Cylinder { radius, length }
+            | urdf_rs::Geometry::Capsule { radius, length } => {
                 out.push(seg(Vector3::new(0.0, 0.0, length / 2.0), *radius)?)
             }
             urdf_rs::Geometry::Box { size } => {
@@ -507,24 +605,51 @@ fn urdf_inertial(link: &urdf_rs::Link) -> Result<Option<InertialSpec>, ModelErro
     if i.mass.value == 0.0 && vals.iter().all(|v| *v == 0.0) {
         return Ok(None);
     }
-    let iso = urdf_pose_iso(&i.origin, || format!("link `{}` inertial origin", link.name))?;
-    let m = Matrix3::new(t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz);
+    let iso = urdf_pose_iso(&i.origin, || {
+        format!("link `{}` inertial origin", link.name)
+    })?;
+    let m = Matrix3::new(
+        t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
+    );
     let inertia = if i.origin.rpy.iter().all(|v| *v == 0.0) {
         vals
     } else {
         let r = iso.rotation.to_rotation_matrix();
         let ml = r.matrix() * m * r.matrix().transpose();
-        [ml[(0, 0)], ml[(0, 1)], ml[(0, 2)], ml[(1, 1)], ml[(1, 2)], ml[(2, 2)]]
+        [
+            ml[(0, 0)],
+            ml[(0, 1)],
+            ml[(0, 2)],
+            ml[(1, 1)],
+            ml[(1, 2)],
+            ml[(2, 2)],
+        ]
     };
-    Ok(Some(InertialSpec { mass: i.mass.value, com: *i.origin.xyz, inertia }))
+    Ok(Some(InertialSpec {
+        mass: i.mass.value,
+        com: *i.origin.xyz,
+        inertia,
+    }))
 }
 
 /// Add the URDF joint/link name to a validation error's `joints[i]` / `links[i]` field.
 fn with_names(e: ModelError, spec: &RobotSpec) -> ModelError {
     let rename = |field: String| -> String {
         for (prefix, names) in [
-            ("joints[", spec.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>()),
-            ("links[", spec.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>()),
+            (
+                "joints[",
+                spec.joints
+                    .iter()
+                    .map(|j| j.name.as_str())
+                    .collect::<Vec<_>>(),
+            ),
+            (
+                "links[",
+                spec.links
+                    .iter()
+                    .map(|l| l.name.as_str())
+                    .collect::<Vec<_>>(),
+            ),
         ] {
             if let Some(rest) = field.strip_prefix(prefix)
                 && let Some(end) = rest.find(']')
@@ -537,11 +662,29 @@ fn with_names(e: ModelError, spec: &RobotSpec) -> ModelError {
         field
     };
     match e {
-        ModelError::InvalidValue { field, value, reason } => ModelError::InvalidValue { field: rename(field), value, reason },
-        ModelError::UnknownName { kind, name, field } => ModelError::UnknownName { kind, name, field: rename(field) },
-        ModelError::LengthMismatch { field, expected, found } => {
-            ModelError::LengthMismatch { field: rename(field), expected, found }
-        }
+        ModelError::InvalidValue {
+            field,
+            value,
+            reason,
+        } => ModelError::InvalidValue {
+            field: rename(field),
+            value,
+            reason,
+        },
+        ModelError::UnknownName { kind, name, field } => ModelError::UnknownName {
+            kind,
+            name,
+            field: rename(field),
+        },
+        ModelError::LengthMismatch {
+            field,
+            expected,
+            found,
+        } => ModelError::LengthMismatch {
+            field: rename(field),
+            expected,
+            found,
+        },
         other => other,
     }
 }
@@ -568,7 +711,13 @@ mod tests {
                 _ => half_pi * rnd(),
             };
             let r = Rotation3::from_euler_angles(3.0 * rnd(), pitch, 3.0 * rnd());
-            let back = PoseSpec { xyz: [0.0; 3], rpy: rpy_of(&r) }.to_isometry().rotation.to_rotation_matrix();
+            let back = PoseSpec {
+                xyz: [0.0; 3],
+                rpy: rpy_of(&r),
+            }
+            .to_isometry()
+            .rotation
+            .to_rotation_matrix();
             let err = (back.matrix() - r.matrix()).abs().max();
             assert!(err < 1e-14, "k={k} err={err}");
         }
@@ -577,9 +726,15 @@ mod tests {
     #[test]
     fn error_fields_get_urdf_names() {
         let spec = crate::fr3::fr3().spec().clone();
-        let e = ModelError::InvalidValue { field: "joints[2].limits.v_max".into(), value: -1.0, reason: "x" };
+        let e = ModelError::InvalidValue {
+            field: "joints[2].limits.v_max".into(),
+            value: -1.0,
+            reason: "x",
+        };
         match with_names(e, &spec) {
-            ModelError::InvalidValue { field, .. } => assert_eq!(field, "joints[2]{fr3_joint3}.limits.v_max"),
+            ModelError::InvalidValue { field, .. } => {
+                assert_eq!(field, "joints[2]{fr3_joint3}.limits.v_max")
+            }
             other => panic!("{other:?}"),
         }
     }

@@ -26,7 +26,11 @@ fn blocks() -> Vec<(String, String)> {
 }
 
 fn of(kind: &str) -> Vec<String> {
-    blocks().into_iter().filter(|(i, _)| i.ends_with(kind)).map(|(_, b)| b).collect()
+    blocks()
+        .into_iter()
+        .filter(|(i, _)| i.ends_with(kind))
+        .map(|(_, b)| b)
+        .collect()
 }
 
 #[test]
@@ -44,12 +48,19 @@ fn urdf_and_side_examples() {
     let u = of(" urdf");
     let s = of(" side");
     assert_eq!((u.len(), s.len()), (1, 2));
-    let (st, sj) = (SideFile::parse(&s[0]).unwrap(), SideFile::parse(&s[1]).unwrap());
+    let (st, sj) = (
+        SideFile::parse(&s[0]).unwrap(),
+        SideFile::parse(&s[1]).unwrap(),
+    );
     assert_eq!(st, sj);
     let r = load_urdf(&u[0], &st).unwrap();
     assert_eq!(r.dof(), 2);
     assert_eq!(r.limits().j_max(), &[100.0, 50.0]);
-    assert_eq!(r.capsule_count(), 2, "cylinder of `upper` + side capsule of `fore` (mesh ignored)");
+    assert_eq!(
+        r.capsule_count(),
+        2,
+        "cylinder of `upper` + side capsule of `fore` (mesh ignored)"
+    );
 }
 
 #[test]

@@ -38,23 +38,43 @@ fn presets_round_trip_through_json_and_toml() {
     for name in ["ssm", "sorting", "handover", "feeding"] {
         let c = ConstraintSpec::builtin(name).unwrap();
         let json = serde_json::to_string(&c).unwrap();
-        assert_eq!(serde_json::from_str::<ConstraintSpec>(&json).unwrap(), c, "{name} JSON");
+        assert_eq!(
+            serde_json::from_str::<ConstraintSpec>(&json).unwrap(),
+            c,
+            "{name} JSON"
+        );
         let toml_text = toml::to_string(&c).unwrap();
-        assert_eq!(toml::from_str::<ConstraintSpec>(&toml_text).unwrap(), c, "{name} TOML");
+        assert_eq!(
+            toml::from_str::<ConstraintSpec>(&toml_text).unwrap(),
+            c,
+            "{name} TOML"
+        );
     }
 }
 
 #[test]
 fn unknown_fields_are_rejected() {
-    let json = serde_json::to_string(fr3().spec()).unwrap().replacen("\"name\"", "\"nmae\"", 1);
-    assert!(matches!(RobotModel::from_json(&json), Err(ModelError::Parse { format: "JSON", .. })));
+    let json = serde_json::to_string(fr3().spec())
+        .unwrap()
+        .replacen("\"name\"", "\"nmae\"", 1);
+    assert!(matches!(
+        RobotModel::from_json(&json),
+        Err(ModelError::Parse { format: "JSON", .. })
+    ));
     let mut v: serde_json::Value = serde_json::to_value(default_human().spec()).unwrap();
     v["speed"] = 2.0.into();
-    assert!(matches!(HumanModel::from_json(&v.to_string()), Err(ModelError::Parse { format: "JSON", .. })));
+    assert!(matches!(
+        HumanModel::from_json(&v.to_string()),
+        Err(ModelError::Parse { format: "JSON", .. })
+    ));
 }
 
 fn resolved(name: &str) -> Vec<Constraint> {
-    ConstraintSpec::preset(name).unwrap().resolve(&default_human()).unwrap().per_part
+    ConstraintSpec::preset(name)
+        .unwrap()
+        .resolve(&default_human())
+        .unwrap()
+        .per_part
 }
 
 #[test]
@@ -73,16 +93,51 @@ fn presets_resolve_with_documented_thresholds() {
         assert_eq!(p[idx(hand)].threshold(false), 0.265);
         assert_eq!(p[idx(hand)].threshold(true), 0.014);
     }
-    assert_eq!(p[idx("lUpperArm")], Constraint::Pfl { unconstrained: 1.5, constrained: 0.01 });
-    assert_eq!(p[idx("rLowerArm")], Constraint::Pfl { unconstrained: 1.3, constrained: 0.01 });
-    assert_eq!(p[idx("torso")], Constraint::Pfl { unconstrained: 1.6, constrained: 0.01 });
-    assert_eq!(p[idx("head")], Constraint::Pfl { unconstrained: 0.11, constrained: 0.01 });
+    assert_eq!(
+        p[idx("lUpperArm")],
+        Constraint::Pfl {
+            unconstrained: 1.5,
+            constrained: 0.01
+        }
+    );
+    assert_eq!(
+        p[idx("rLowerArm")],
+        Constraint::Pfl {
+            unconstrained: 1.3,
+            constrained: 0.01
+        }
+    );
+    assert_eq!(
+        p[idx("torso")],
+        Constraint::Pfl {
+            unconstrained: 1.6,
+            constrained: 0.01
+        }
+    );
+    assert_eq!(
+        p[idx("head")],
+        Constraint::Pfl {
+            unconstrained: 0.11,
+            constrained: 0.01
+        }
+    );
     // Feeding: head 0.001 J both; hands 0.49 / 0.01.
     let p = resolved("feeding");
     assert_eq!(p[idx("head")].threshold(false), 0.001);
     assert_eq!(p[idx("head")].threshold(true), 0.001);
-    assert_eq!(p[idx("rHand")], Constraint::Pfl { unconstrained: 0.49, constrained: 0.01 });
-    assert!(!resolved("feeding").iter().any(|c| matches!(c, Constraint::Ssm)), "every default-human part is in a region");
+    assert_eq!(
+        p[idx("rHand")],
+        Constraint::Pfl {
+            unconstrained: 0.49,
+            constrained: 0.01
+        }
+    );
+    assert!(
+        !resolved("feeding")
+            .iter()
+            .any(|c| matches!(c, Constraint::Ssm)),
+        "every default-human part is in a region"
+    );
     assert!(ConstraintSpec::preset("unknown").is_none());
 }
 
@@ -97,6 +152,9 @@ fn human_spec_minimal_toml_uses_defaults() {
     let h = HumanModel::from_toml(text).unwrap();
     let s: &HumanSpec = h.spec();
     assert_eq!(s.name, "custom");
-    assert_eq!((s.measurement_error_pos, s.measurement_error_vel, s.delay), (0.0, 0.0, 0.0));
+    assert_eq!(
+        (s.measurement_error_pos, s.measurement_error_vel, s.delay),
+        (0.0, 0.0, 0.0)
+    );
     assert!(!h.clampable(0, 0));
 }

@@ -18,10 +18,16 @@ fn fk_check_values_from_facts_file() {
     let p0 = flange(&[0.0; 7]);
     assert!((p0 - Point3::new(0.088, 0.0, 0.926)).norm() < 1e-12, "{p0}");
     let pr = flange(&Q_READY);
-    assert!((pr - Point3::new(0.3069, 0.0, 0.5903)).abs().max() < 1e-4, "{pr}");
+    assert!(
+        (pr - Point3::new(0.3069, 0.0, 0.5903)).abs().max() < 1e-4,
+        "{pr}"
+    );
     let tcp = fr3().frames(&Q_READY)[7] * tcp_in_joint7();
     let t = tcp.translation.vector;
-    assert!((t - Vector3::new(0.3069, 0.0, 0.4869)).abs().max() < 1e-4, "{t}");
+    assert!(
+        (t - Vector3::new(0.3069, 0.0, 0.4869)).abs().max() < 1e-4,
+        "{t}"
+    );
     // At q_ready the TCP z axis points straight down.
     let z = tcp.rotation * Vector3::z();
     assert!((z - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-12, "{z}");
@@ -61,7 +67,11 @@ fn point_jacobian_matches_central_differences() {
         let q = rng.config(&r);
         let f = r.frames(&q);
         for frame in 1..=7 {
-            let local = Point3::new(rng.range(-0.2, 0.2), rng.range(-0.2, 0.2), rng.range(-0.2, 0.2));
+            let local = Point3::new(
+                rng.range(-0.2, 0.2),
+                rng.range(-0.2, 0.2),
+                rng.range(-0.2, 0.2),
+            );
             let p = f[frame] * local;
             let jac = r.point_jacobian(&f, frame, &p);
             for j in 0..7 {
@@ -71,7 +81,10 @@ fn point_jacobian_matches_central_differences() {
                 qm[j] -= h;
                 let d = (r.frames(&qp)[frame] * local - r.frames(&qm)[frame] * local) / (2.0 * h);
                 let col = jac.column(j);
-                assert!((col - d).norm() < 1e-6, "frame {frame} joint {j}: {col} vs {d}");
+                assert!(
+                    (col - d).norm() < 1e-6,
+                    "frame {frame} joint {j}: {col} vs {d}"
+                );
                 if j >= frame {
                     assert_eq!(col.norm(), 0.0, "joint {j} cannot move frame {frame}");
                 }
@@ -110,7 +123,11 @@ fn kinetic_energy_equals_quadratic_form_of_mass_matrix() {
         assert_eq!(sub[7], e);
         for k in 1..=7 {
             let ek = quad(&r.mass_matrix_upto(&q, k), &dq);
-            assert!((sub[k] - ek).abs() <= 1e-10 * ek.max(1e-12), "k={k}: {} vs {ek}", sub[k]);
+            assert!(
+                (sub[k] - ek).abs() <= 1e-10 * ek.max(1e-12),
+                "k={k}: {} vs {ek}",
+                sub[k]
+            );
             assert!(sub[k] >= sub[k - 1], "energies not monotone at k={k}");
         }
     }
@@ -145,7 +162,10 @@ fn single_joint_rotation_energy_by_parallel_axis_theorem() {
         dq[0] = w;
         let expect = 0.5 * w * w * sum;
         let e = r.kinetic_energy(&q, &dq);
-        assert!((e - expect).abs() <= 1e-12 * expect.max(1e-12), "{e} vs {expect}");
+        assert!(
+            (e - expect).abs() <= 1e-12 * expect.max(1e-12),
+            "{e} vs {expect}"
+        );
     }
 }
 

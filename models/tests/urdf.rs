@@ -21,12 +21,24 @@ fn fr3_urdf_structure_and_limits() {
     assert_eq!(u.name(), "fr3");
     assert_eq!(u.dof(), 7);
     let names: Vec<&str> = u.joints().iter().map(|j| j.name.as_str()).collect();
-    assert_eq!(names, (1..=7).map(|i| format!("fr3_joint{i}")).collect::<Vec<_>>());
-    assert_eq!(u.limits(), b.limits(), "q from URDF, v from URDF, a = 10 and j = 5000 from the side file");
+    assert_eq!(
+        names,
+        (1..=7).map(|i| format!("fr3_joint{i}")).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        u.limits(),
+        b.limits(),
+        "q from URDF, v from URDF, a = 10 and j = 5000 from the side file"
+    );
     // Fixed links are carried by the last chain joint; fingers are frozen (closed) onto the hand.
-    for (name, frame) in
-        [("fr3_link0", 0), ("fr3_link7", 7), ("fr3_link8", 7), ("fr3_hand", 7), ("fr3_hand_tcp", 7), ("fr3_leftfinger", 7)]
-    {
+    for (name, frame) in [
+        ("fr3_link0", 0),
+        ("fr3_link7", 7),
+        ("fr3_link8", 7),
+        ("fr3_hand", 7),
+        ("fr3_hand_tcp", 7),
+        ("fr3_leftfinger", 7),
+    ] {
         let l = &u.links()[u.link_index(name).unwrap_or_else(|| panic!("{name}"))];
         assert_eq!(l.frame, frame, "{name}");
     }
@@ -42,20 +54,44 @@ fn fr3_urdf_fk_equals_builtin_for_random_configurations() {
         let q = rng.config(&b);
         let (fu, fb) = (u.frames(&q), b.frames(&q));
         for k in 0..=7 {
-            assert!((fu[k].to_homogeneous() - fb[k].to_homogeneous()).abs().max() < 1e-12, "frame {k}");
+            assert!(
+                (fu[k].to_homogeneous() - fb[k].to_homogeneous())
+                    .abs()
+                    .max()
+                    < 1e-12,
+                "frame {k}"
+            );
         }
         let (cu, cb) = (u.capsules_world(&q), b.capsules_world(&q));
         let mut compared = 0;
         for (bi, bl) in b.links().iter().enumerate() {
             let Some(ui) = u.link_index(&bl.name) else {
-                assert!(bl.capsules.is_empty(), "built-in link {} with capsules missing in URDF model", bl.name);
+                assert!(
+                    bl.capsules.is_empty(),
+                    "built-in link {} with capsules missing in URDF model",
+                    bl.name
+                );
                 continue;
             };
-            let a: Vec<_> = cu.iter().filter(|(li, _)| *li == ui).map(|(_, c)| *c).collect();
-            let e: Vec<_> = cb.iter().filter(|(li, _)| *li == bi).map(|(_, c)| *c).collect();
+            let a: Vec<_> = cu
+                .iter()
+                .filter(|(li, _)| *li == ui)
+                .map(|(_, c)| *c)
+                .collect();
+            let e: Vec<_> = cb
+                .iter()
+                .filter(|(li, _)| *li == bi)
+                .map(|(_, c)| *c)
+                .collect();
             assert_eq!(a.len(), e.len(), "{}", bl.name);
             for (x, y) in a.iter().zip(&e) {
-                assert!((x.p1() - y.p1()).norm() < 1e-12, "{} p1 {} vs {}", bl.name, x.p1(), y.p1());
+                assert!(
+                    (x.p1() - y.p1()).norm() < 1e-12,
+                    "{} p1 {} vs {}",
+                    bl.name,
+                    x.p1(),
+                    y.p1()
+                );
                 assert!((x.p2() - y.p2()).norm() < 1e-12, "{} p2", bl.name);
                 assert_eq!(x.radius(), y.radius());
                 compared += 1;
@@ -71,15 +107,28 @@ fn fr3_urdf_mass_properties_equal_builtin() {
     // matrices and energies must still agree, which also checks the built-in lumping.
     let u = fr3_from_urdf();
     let b = fr3();
-    let total = |r: &pacs_models::RobotModel| r.links().iter().filter_map(|l| l.inertial).map(|i| i.mass).sum::<f64>();
+    let total = |r: &pacs_models::RobotModel| {
+        r.links()
+            .iter()
+            .filter_map(|l| l.inertial)
+            .map(|i| i.mass)
+            .sum::<f64>()
+    };
     assert!((total(&u) - total(&b)).abs() < 1e-12);
-    assert!((total(&u) - (17.8914 + 0.7126)).abs() < 1e-4, "facts §3 sums");
+    assert!(
+        (total(&u) - (17.8914 + 0.7126)).abs() < 1e-4,
+        "facts §3 sums"
+    );
     let mut rng = Rng::new(43);
     for _ in 0..100 {
         let q = rng.config(&b);
         let dq = rng.velocity(&b);
         let (mu, mb) = (u.mass_matrix(&q), b.mass_matrix(&q));
-        assert!((&mu - &mb).abs().max() < 1e-12, "{}", (&mu - &mb).abs().max());
+        assert!(
+            (&mu - &mb).abs().max() < 1e-12,
+            "{}",
+            (&mu - &mb).abs().max()
+        );
         let (eu, eb) = (u.kinetic_energy(&q, &dq), b.kinetic_energy(&q, &dq));
         assert!((eu - eb).abs() <= 1e-12 * eb, "{eu} vs {eb}");
         assert!((eu - quad(&mu, &dq)).abs() <= 1e-10 * eu);
@@ -101,11 +150,18 @@ fn planar_fk_hand_computed() {
         ([0.0, 0.0], [1.8, 0.0, 0.5]),
         ([FRAC_PI_6, FRAC_PI_3], [0.8660254037844386, 1.3, 0.5]),
         ([FRAC_PI_2, -FRAC_PI_2], [0.8, 1.0, 0.5]),
-        ([-FRAC_PI_2, 3.0], [0.8 * 3.0f64.sin(), -1.0 - 0.8 * 3.0f64.cos(), 0.5]),
+        (
+            [-FRAC_PI_2, 3.0],
+            [0.8 * 3.0f64.sin(), -1.0 - 0.8 * 3.0f64.cos(), 0.5],
+        ),
     ] {
         let caps = r.capsules_world(&q);
         let (_, c) = caps.iter().find(|(li, _)| *li == tool).unwrap();
-        assert!((c.p1() - Point3::from(e)).norm() < 1e-12, "q={q:?}: {}", c.p1());
+        assert!(
+            (c.p1() - Point3::from(e)).norm() < 1e-12,
+            "q={q:?}: {}",
+            c.p1()
+        );
         assert_eq!(c.p1(), c.p2());
         assert_eq!(c.radius(), 0.02);
     }
@@ -123,14 +179,21 @@ fn planar_limits_from_urdf_and_side_file() {
 
 #[test]
 fn planar_collision_primitives_become_capsules() {
-    let spec = urdf_to_spec(&read("planar2.urdf"), &SideFile::parse(&read("planar2_side.json")).unwrap()).unwrap();
+    let spec = urdf_to_spec(
+        &read("planar2.urdf"),
+        &SideFile::parse(&read("planar2_side.json")).unwrap(),
+    )
+    .unwrap();
     let link = |n: &str| spec.links.iter().find(|l| l.name == n).unwrap();
     // Cylinder r = 0.05, L = 1 along x from 0 to 1 (origin x 0.5, pitch π/2).
     let up = &link("upper").capsules;
     assert_eq!(up.len(), 1);
     let (a, b) = (Vector3::from(up[0].p1), Vector3::from(up[0].p2));
     let (lo, hi) = if a.x < b.x { (a, b) } else { (b, a) };
-    assert!((lo - Vector3::zeros()).norm() < 1e-15 && (hi - Vector3::x()).norm() < 1e-15, "{lo} {hi}");
+    assert!(
+        (lo - Vector3::zeros()).norm() < 1e-15 && (hi - Vector3::x()).norm() < 1e-15,
+        "{lo} {hi}"
+    );
     assert_eq!(up[0].radius, 0.05);
     // Sphere → ball; box 0.2 × 0.1 × 0.4 → segment ±0.2 on z, radius ½·√(0.2² + 0.1²); mesh → nothing.
     let fore = &link("fore").capsules;
@@ -145,8 +208,12 @@ fn planar_collision_primitives_become_capsules() {
     for sx in [-0.1, 0.1] {
         for sy in [-0.05, 0.05] {
             for sz in [-0.2, 0.2] {
-                let d = (sx * sx + sy * sy as f64).sqrt();
-                assert!(d <= fore[1].radius + 1e-15, "corner ({sx},{sy},{sz})");
+                // Distance from the corner (box centre at x = 0.3) to the capsule's segment.
+                let p = Vector3::new(0.3 + sx, sy, sz);
+                let (a, b) = (Vector3::from(fore[1].p1), Vector3::from(fore[1].p2));
+                let t = ((p - a).dot(&(b - a)) / (b - a).norm_squared()).clamp(0.0, 1.0);
+                let d = (p - (a + t * (b - a))).norm();
+                assert!(d <= fore[1].radius + 1e-15, "corner ({sx},{sy},{sz}): {d}");
             }
         }
     }
@@ -160,8 +227,18 @@ fn planar_collision_primitives_become_capsules() {
 
 #[test]
 fn planar_inertial_origin_rotates_inertia() {
-    let spec = urdf_to_spec(&read("planar2.urdf"), &SideFile::parse(&read("planar2_side.json")).unwrap()).unwrap();
-    let fore = spec.links.iter().find(|l| l.name == "fore").unwrap().inertial.unwrap();
+    let spec = urdf_to_spec(
+        &read("planar2.urdf"),
+        &SideFile::parse(&read("planar2_side.json")).unwrap(),
+    )
+    .unwrap();
+    let fore = spec
+        .links
+        .iter()
+        .find(|l| l.name == "fore")
+        .unwrap()
+        .inertial
+        .unwrap();
     assert_eq!(fore.mass, 1.0);
     assert_eq!(fore.com, [0.4, 0.0, 0.0]);
     // rpy (0,0,π/6), I' = diag(0.04, 0.001, 0.05): I = R I' Rᵀ with R = Rz(π/6):
@@ -170,9 +247,23 @@ fn planar_inertial_origin_rotates_inertia() {
     for (a, e) in fore.inertia.iter().zip(expect) {
         assert!((a - e).abs() < 1e-15, "{:?}", fore.inertia);
     }
-    let up = spec.links.iter().find(|l| l.name == "upper").unwrap().inertial.unwrap();
+    let up = spec
+        .links
+        .iter()
+        .find(|l| l.name == "upper")
+        .unwrap()
+        .inertial
+        .unwrap();
     assert_eq!(up.inertia, [0.01, 0.0, 0.0, 0.1, 0.0, 0.1]);
-    assert!(spec.links.iter().find(|l| l.name == "tool").unwrap().inertial.is_none(), "no <inertial> = massless");
+    assert!(
+        spec.links
+            .iter()
+            .find(|l| l.name == "tool")
+            .unwrap()
+            .inertial
+            .is_none(),
+        "no <inertial> = massless"
+    );
 }
 
 #[test]
@@ -186,7 +277,11 @@ fn planar_energy_hand_computed() {
     let expect = [[2.21, 0.41], [0.41, 0.21]];
     for i in 0..2 {
         for j in 0..2 {
-            assert!((m[(i, j)] - expect[i][j]).abs() < 1e-12, "M[{i}{j}] = {}", m[(i, j)]);
+            assert!(
+                (m[(i, j)] - expect[i][j]).abs() < 1e-12,
+                "M[{i}{j}] = {}",
+                m[(i, j)]
+            );
         }
     }
     // dq = (1, 2): E = ½(2.21 + 2·0.41·2 + 0.21·4) = 2.345; upper arm alone: ½·0.6·1 = 0.3.
@@ -200,12 +295,26 @@ fn planar_energy_hand_computed() {
 fn leaf_and_tip_selection() {
     // FR3 URDF has three leaves (tcp and two fingers): without a tip it is ambiguous.
     let urdf = read("fr3.urdf");
-    match load_urdf(&urdf, &SideFile { a_max: Some(10.0), j_max: Some(5000.0), ..Default::default() }) {
-        Err(ModelError::Invalid(m)) => assert!(m.contains("leaf") && m.contains("fr3_hand_tcp"), "{m}"),
+    match load_urdf(
+        &urdf,
+        &SideFile {
+            a_max: Some(10.0),
+            j_max: Some(5000.0),
+            ..Default::default()
+        },
+    ) {
+        Err(ModelError::Invalid(m)) => {
+            assert!(m.contains("leaf") && m.contains("fr3_hand_tcp"), "{m}")
+        }
         other => panic!("{other:?}"),
     }
     // Tip = link4: 4 joints; links beyond are frozen at 0 (clamped into limits) onto joint 4.
-    let side = SideFile { tip: Some("fr3_link4".into()), a_max: Some(10.0), j_max: Some(5000.0), ..Default::default() };
+    let side = SideFile {
+        tip: Some("fr3_link4".into()),
+        a_max: Some(10.0),
+        j_max: Some(5000.0),
+        ..Default::default()
+    };
     let r = load_urdf(&urdf, &side).unwrap();
     assert_eq!(r.dof(), 4);
     let l7 = &r.links()[r.link_index("fr3_link7").unwrap()];
@@ -220,11 +329,21 @@ fn leaf_and_tip_selection() {
         }
     }
     let pose = r.frames(&q4)[4] * spec_l7.unwrap();
-    assert!((pose.to_homogeneous() - full[7].to_homogeneous()).abs().max() < 1e-12);
+    assert!(
+        (pose.to_homogeneous() - full[7].to_homogeneous())
+            .abs()
+            .max()
+            < 1e-12
+    );
     // Unknown tip.
-    let side = SideFile { tip: Some("nope".into()), ..Default::default() };
+    let side = SideFile {
+        tip: Some("nope".into()),
+        ..Default::default()
+    };
     match load_urdf(&urdf, &side) {
-        Err(ModelError::UnknownName { name, field, .. }) => assert_eq!((name.as_str(), field.as_str()), ("nope", "tip")),
+        Err(ModelError::UnknownName { name, field, .. }) => {
+            assert_eq!((name.as_str(), field.as_str()), ("nope", "tip"))
+        }
         other => panic!("{other:?}"),
     }
 }
@@ -241,14 +360,23 @@ fn two(jt: &str, lim: &str) -> String {
 }
 
 fn uniform() -> SideFile {
-    SideFile { a_max: Some(1.0), j_max: Some(1.0), ..Default::default() }
+    SideFile {
+        a_max: Some(1.0),
+        j_max: Some(1.0),
+        ..Default::default()
+    }
 }
 
 #[test]
 fn prismatic_on_chain_is_rejected() {
-    let u = two("prismatic", r#"<limit lower="0" upper="1" effort="1" velocity="1"/>"#);
+    let u = two(
+        "prismatic",
+        r#"<limit lower="0" upper="1" effort="1" velocity="1"/>"#,
+    );
     match load_urdf(&u, &uniform()) {
-        Err(ModelError::Invalid(m)) => assert!(m.contains("`j1`") && m.contains("Prismatic"), "{m}"),
+        Err(ModelError::Invalid(m)) => {
+            assert!(m.contains("`j1`") && m.contains("Prismatic"), "{m}")
+        }
         other => panic!("{other:?}"),
     }
 }
@@ -261,14 +389,24 @@ fn continuous_without_side_limits_is_rejected() {
         other => panic!("{other:?}"),
     }
     let mut side = uniform();
-    side.joints.insert("j1".into(), pacs_models::urdf::JointOverride { q_min: Some(-4.0), q_max: Some(4.0), ..Default::default() });
+    side.joints.insert(
+        "j1".into(),
+        pacs_models::urdf::JointOverride {
+            q_min: Some(-4.0),
+            q_max: Some(4.0),
+            ..Default::default()
+        },
+    );
     let r = load_urdf(&u, &side).unwrap();
     assert_eq!(r.limits().q_min(), &[-4.0, -1.0]);
 }
 
 #[test]
 fn missing_acc_jerk_and_velocity_are_rejected() {
-    let u = two("revolute", r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#);
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    );
     match load_urdf(&u, &SideFile::default()) {
         Err(ModelError::InvalidValue { field, value, .. }) => {
             assert_eq!(field, "joint `j1` a_max");
@@ -289,16 +427,31 @@ fn urdf_1_2_acceleration_and_jerk_are_used() {
         .replace(r#"<robot name="t">"#, r#"<robot name="t" version="1.2">"#)
         .replace(r#"velocity="1"/></joint>"#, r#"velocity="1" acceleration="3" jerk="30"/></joint>"#);
     let r = load_urdf(&u, &SideFile::default()).unwrap();
-    assert_eq!(r.limits().a_max(), &[6.0, 3.0], "min of acceleration and deceleration");
+    assert_eq!(
+        r.limits().a_max(),
+        &[6.0, 3.0],
+        "min of acceleration and deceleration"
+    );
     assert_eq!(r.limits().j_max(), &[90.0, 30.0]);
     // The side file overrides URDF values.
-    let r = load_urdf(&u, &SideFile { a_max: Some(2.0), ..Default::default() }).unwrap();
+    let r = load_urdf(
+        &u,
+        &SideFile {
+            a_max: Some(2.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(r.limits().a_max(), &[2.0, 2.0]);
 }
 
 #[test]
 fn validation_errors_name_the_urdf_joint() {
-    let u = two("revolute", r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#).replace(
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    )
+    .replace(
         r#"<axis xyz="0 0 1"/>LIM1"#.replace("LIM1", "").as_str(),
         r#"<axis xyz="0 0 0"/>"#,
     );
@@ -310,8 +463,17 @@ fn validation_errors_name_the_urdf_joint() {
         other => panic!("{other:?}"),
     }
     let mut side = uniform();
-    side.joints.insert("j2".into(), pacs_models::urdf::JointOverride { v_max: Some(-1.0), ..Default::default() });
-    let u = two("revolute", r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#);
+    side.joints.insert(
+        "j2".into(),
+        pacs_models::urdf::JointOverride {
+            v_max: Some(-1.0),
+            ..Default::default()
+        },
+    );
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    );
     match load_urdf(&u, &side) {
         Err(ModelError::InvalidValue { field, value, .. }) => {
             assert_eq!(field, "joints[1]{j2}.limits.v_max");
@@ -323,24 +485,39 @@ fn validation_errors_name_the_urdf_joint() {
 
 #[test]
 fn side_file_errors() {
-    let u = two("revolute", r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#);
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    );
     // Unknown fields are parse errors (TOML and JSON).
-    assert!(matches!(SideFile::parse("amax = 3.0"), Err(ModelError::Parse { format: "TOML", .. })));
-    assert!(matches!(SideFile::parse(r#"{"links": {"a": {"capsule": []}}}"#), Err(ModelError::Parse { format: "JSON", .. })));
+    assert!(matches!(
+        SideFile::parse("amax = 3.0"),
+        Err(ModelError::Parse { format: "TOML", .. })
+    ));
+    assert!(matches!(
+        SideFile::parse(r#"{"links": {"a": {"capsule": []}}}"#),
+        Err(ModelError::Parse { format: "JSON", .. })
+    ));
     // Unknown joint / link names.
     let side = SideFile::parse("a_max = 1.0\nj_max = 1.0\n[joints.jx]\nv_max = 1.0\n").unwrap();
     match load_urdf(&u, &side) {
-        Err(ModelError::UnknownName { name, field, .. }) => assert_eq!((name.as_str(), field.as_str()), ("jx", "joints")),
+        Err(ModelError::UnknownName { name, field, .. }) => {
+            assert_eq!((name.as_str(), field.as_str()), ("jx", "joints"))
+        }
         other => panic!("{other:?}"),
     }
     let side = SideFile::parse("a_max = 1.0\nj_max = 1.0\n[links.zz]\ncapsules = []\n").unwrap();
     match load_urdf(&u, &side) {
-        Err(ModelError::UnknownName { name, field, .. }) => assert_eq!((name.as_str(), field.as_str()), ("zz", "links")),
+        Err(ModelError::UnknownName { name, field, .. }) => {
+            assert_eq!((name.as_str(), field.as_str()), ("zz", "links"))
+        }
         other => panic!("{other:?}"),
     }
     // A negative side-file capsule radius is caught by validation with the link named.
-    let side =
-        SideFile::parse("a_max = 1.0\nj_max = 1.0\n[links.c]\ncapsules = [{p1=[0,0,0], p2=[0,0,0], radius=-0.1}]\n").unwrap();
+    let side = SideFile::parse(
+        "a_max = 1.0\nj_max = 1.0\n[links.c]\ncapsules = [{p1=[0,0,0], p2=[0,0,0], radius=-0.1}]\n",
+    )
+    .unwrap();
     match load_urdf(&u, &side) {
         Err(ModelError::InvalidValue { field, value, .. }) => {
             assert_eq!(field, "links[2]{c}.capsules[0].radius");
@@ -349,7 +526,10 @@ fn side_file_errors() {
         other => panic!("{other:?}"),
     }
     // Malformed URDF.
-    assert!(matches!(load_urdf("<robot", &uniform()), Err(ModelError::Parse { format: "URDF", .. })));
+    assert!(matches!(
+        load_urdf("<robot", &uniform()),
+        Err(ModelError::Parse { format: "URDF", .. })
+    ));
 }
 
 #[test]
@@ -359,7 +539,11 @@ fn tree_structure_errors() {
         Err(ModelError::Invalid(m)) => assert!(m.contains("root"), "{m}"),
         other => panic!("{other:?}"),
     }
-    let u = two("revolute", r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#).replace(r#"<child link="c"/>"#, r#"<child link="d"/>"#);
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    )
+    .replace(r#"<child link="c"/>"#, r#"<child link="d"/>"#);
     match load_urdf(&u, &uniform()) {
         Err(ModelError::UnknownName { name, field, .. }) => {
             assert_eq!(name, "d");
@@ -369,7 +553,9 @@ fn tree_structure_errors() {
     }
     // Only fixed joints: no chain joint.
     let u = two("fixed", "").replace(r#"type="revolute""#, r#"type="fixed""#);
-    assert!(matches!(load_urdf(&u, &uniform()), Err(ModelError::Invalid(m)) if m.contains("joint count 0")));
+    assert!(
+        matches!(load_urdf(&u, &uniform()), Err(ModelError::Invalid(m)) if m.contains("joint count 0"))
+    );
 }
 
 #[test]
@@ -401,13 +587,22 @@ fn side_inertial_and_frozen_at_override() {
     let caps = r.capsules_world(&[0.0]);
     let d = r.link_index("d").unwrap();
     let (_, c) = caps.iter().find(|(li, _)| *li == d).unwrap();
-    assert!((c.p1() - Point3::new(0.0, 2.0, 0.0)).norm() < 1e-12, "{}", c.p1());
+    assert!(
+        (c.p1() - Point3::new(0.0, 2.0, 0.0)).norm() < 1e-12,
+        "{}",
+        c.p1()
+    );
     // Energy of the point mass 2 kg at radius 2 spinning at ω = 1: ½·2·4 = 4 J.
     assert!((r.kinetic_energy(&[0.0], &[1.0]) - 4.0).abs() < 1e-12);
     // frozen_at on a chain joint and limits on an off-chain joint are errors.
-    let bad = SideFile::parse("tip = \"c\"\na_max = 1.0\nj_max = 1.0\n[joints.j1]\nfrozen_at = 0.0\n").unwrap();
-    assert!(matches!(load_urdf(u, &bad), Err(ModelError::Invalid(m)) if m.contains("joints.j1.frozen_at")));
-    let bad = SideFile::parse("tip = \"c\"\na_max = 1.0\nj_max = 1.0\n[joints.j3]\nv_max = 1.0\n").unwrap();
+    let bad =
+        SideFile::parse("tip = \"c\"\na_max = 1.0\nj_max = 1.0\n[joints.j1]\nfrozen_at = 0.0\n")
+            .unwrap();
+    assert!(
+        matches!(load_urdf(u, &bad), Err(ModelError::Invalid(m)) if m.contains("joints.j1.frozen_at"))
+    );
+    let bad = SideFile::parse("tip = \"c\"\na_max = 1.0\nj_max = 1.0\n[joints.j3]\nv_max = 1.0\n")
+        .unwrap();
     assert!(matches!(load_urdf(u, &bad), Err(ModelError::Invalid(m)) if m.contains("joints.j3")));
 }
 

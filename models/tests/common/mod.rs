@@ -26,17 +26,24 @@ impl Rng {
     /// A configuration uniformly inside the joint limits.
     pub fn config(&mut self, robot: &RobotModel) -> Vec<f64> {
         let l = robot.limits();
-        (0..robot.dof()).map(|i| self.range(l.q_min()[i], l.q_max()[i])).collect()
+        (0..robot.dof())
+            .map(|i| self.range(l.q_min()[i], l.q_max()[i]))
+            .collect()
     }
     /// A velocity uniformly inside the velocity limits.
     pub fn velocity(&mut self, robot: &RobotModel) -> Vec<f64> {
         let l = robot.limits();
-        (0..robot.dof()).map(|i| self.range(-l.v_max()[i], l.v_max()[i])).collect()
+        (0..robot.dof())
+            .map(|i| self.range(-l.v_max()[i], l.v_max()[i]))
+            .collect()
     }
 }
 
 pub fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests").join("data").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join("data")
+        .join(name)
 }
 
 pub fn read(name: &str) -> String {
