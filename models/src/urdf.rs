@@ -10,7 +10,7 @@
 //!   (side file `tip`; default: the single leaf link, an error if there are several);
 //! - revolute and continuous joints on that path become chain joints; fixed joints on it are merged
 //!   (their child links become [`LinkSpec`]s carried by the last chain joint, or `"base"`);
-//!   prismatic, floating, planar and spherical joints on it are rejected;
+//!   prismatic, floating, planar and spherical joints and `<mimic>` joints on it are rejected;
 //! - joints off the path (gripper fingers, links beyond the tip) are frozen: fixed joints as they
 //!   are, revolute/continuous/prismatic joints at `frozen_at` from the side file, default 0 clamped
 //!   into their URDF position limits (so a Franka gripper is "closed"); their links keep their
@@ -312,6 +312,12 @@ impl<'a> Tree<'a> {
                                 return Err(ModelError::Invalid(format!(
                                     "side file `joints.{}.frozen_at`: joint is on the chain, only off-chain joints can be frozen",
                                     j.name
+                                )));
+                            }
+                            if let Some(m) = &j.mimic {
+                                return Err(ModelError::Invalid(format!(
+                                    "URDF joint `{}` on the chain mimics `{}`; coupled (mimic) chain joints are not supported",
+                                    j.name, m.joint
                                 )));
                             }
                             let pose = match acc {

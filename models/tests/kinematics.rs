@@ -186,3 +186,20 @@ fn world_capsules_follow_their_frames() {
     }
     assert_eq!(r.capsule_count(), 12);
 }
+
+#[test]
+fn pose_rpy_convention_is_urdf_fixed_axis_xyz() {
+    // R = Rz(yaw)·Ry(pitch)·Rx(roll), built here from explicit matrices.
+    let (r, p, y) = (0.3_f64, -0.7_f64, 1.1_f64);
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, r.cos(), -r.sin(), 0.0, r.sin(), r.cos());
+    let ry = Matrix3::new(p.cos(), 0.0, p.sin(), 0.0, 1.0, 0.0, -p.sin(), 0.0, p.cos());
+    let rz = Matrix3::new(y.cos(), -y.sin(), 0.0, y.sin(), y.cos(), 0.0, 0.0, 0.0, 1.0);
+    let pose = pacs_models::robot::PoseSpec {
+        xyz: [1.0, 2.0, 3.0],
+        rpy: [r, p, y],
+    }
+    .to_isometry();
+    let m = pose.rotation.to_rotation_matrix();
+    assert!((m.matrix() - rz * ry * rx).abs().max() < 1e-15);
+    assert_eq!(pose.translation.vector, Vector3::new(1.0, 2.0, 3.0));
+}

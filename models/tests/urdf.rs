@@ -616,3 +616,34 @@ fn side_file_json_and_toml_round_trip() {
     let toml = toml::to_string(&side).unwrap();
     assert_eq!(SideFile::parse(&toml).unwrap(), side);
 }
+
+#[test]
+fn mimic_joint_on_chain_is_rejected() {
+    let u = two(
+        "revolute",
+        r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#,
+    )
+    .replace(
+        r#"<origin xyz="1 0 0"/>"#,
+        r#"<origin xyz="1 0 0"/><mimic joint="j1"/>"#,
+    );
+    match load_urdf(&u, &uniform()) {
+        Err(ModelError::Invalid(m)) => assert!(m.contains("`j2`") && m.contains("mimic"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn missing_files_are_errors_not_panics() {
+    let missing = data("does-not-exist.urdf");
+    assert!(
+        matches!(load_urdf_files(&missing, None), Err(ModelError::Invalid(m)) if m.contains("does-not-exist"))
+    );
+    let r = load_urdf_files(&data("planar2.urdf"), Some(&data("nope.toml")));
+    assert!(matches!(r, Err(ModelError::Invalid(m)) if m.contains("nope.toml")));
+    // Without a side file the planar arm lacks a_max (and the elbow's position limits).
+    assert!(matches!(
+        load_urdf_files(&data("planar2.urdf"), None),
+        Err(ModelError::InvalidValue { field, .. }) if field == "joint `shoulder` a_max"
+    ));
+}
