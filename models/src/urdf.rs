@@ -293,7 +293,7 @@ impl<'a> Tree<'a> {
         let robot = self.robot;
         let mut joints = Vec::new();
         let mut links = Vec::new();
-        // (link, carrying frame name, pose of the link frame in the carrying frame, identity?)
+        // (link, carrying frame name, pose of the link frame in the carrying frame; None = identity)
         let mut stack: Vec<(usize, String, Option<Isometry3<f64>>)> =
             vec![(self.root, "base".into(), None)];
         while let Some((li, carrier, acc)) = stack.pop() {
