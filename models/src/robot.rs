@@ -330,11 +330,12 @@ impl RobotModel {
                 finite(|| format!("joints[{i}].axis[{k}]"), *v)?;
             }
             let norm = axis.norm();
-            if !(norm > 1e-9) {
+            // `norm` overflows to +inf for huge components; normalising would then give a degenerate axis.
+            if !norm.is_finite() || norm <= 1e-9 {
                 return Err(ModelError::InvalidValue {
                     field: format!("joints[{i}].axis"),
                     value: norm,
-                    reason: "axis must have non-zero length",
+                    reason: "axis must have non-zero finite length",
                 });
             }
             joints.push(Joint {
