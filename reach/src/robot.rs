@@ -128,6 +128,17 @@ struct JointData {
     k2: Matrix3<f64>,
     /// Axis is +z (fast path).
     z_axis: bool,
+    /// Unit axis in the joint frame (exact f64 values).
+    axis: Vector3<f64>,
+}
+
+#[derive(Debug, Clone)]
+struct InertialData {
+    frame: usize,
+    mass: f64,
+    com: Vector3<f64>,
+    /// Upper bound of the largest principal moment (Gershgorin, rounded up), kg·m².
+    lambda_max: f64,
 }
 
 #[derive(Debug, Clone)]
@@ -149,6 +160,7 @@ pub struct RobotReach {
     /// For each link: range of its capsules in `capsules`.
     link_ranges: Vec<(usize, usize)>,
     tracking_error: f64,
+    inertials: Vec<InertialData>,
 }
 
 /// Enclosed frames: rotation and origin for frames 0..=n.
@@ -208,6 +220,7 @@ impl RobotReach {
                     k,
                     k2: k * k,
                     z_axis: a.x == 0.0 && a.y == 0.0 && a.z == 1.0,
+                    axis: a,
                 }
             })
             .collect();
@@ -225,6 +238,30 @@ impl RobotReach {
             }
             link_ranges.push((start, capsules.len()));
         }
+        let inertials = model
+            .links()
+            .iter()
+            .filter(|l| l.frame > 0)
+            .filter_map(|l| {
+                let i = l.inertial?;
+                let m = &i.inertia;
+                let lambda_max = (0..3)
+                    .map(|r| {
+                        let off = (0..3)
+                            .filter(|&c| c != r)
+                            .fold(0.0, |acc, c| add_up(acc, m[(r, c)].abs()));
+                        add_up(m[(r, r)], off)
+                    })
+                    .fold(0.0, f64::max);
+                // 1e-12 relative covers the rounding of the model's frame rotation of the tensor.
+                Some(InertialData {
+                    frame: l.frame,
+                    mass: i.mass,
+                    com: i.com.coords,
+                    lambda_max: lambda_max * (1.0 + 1e-12),
+                })
+            })
+            .collect();
         Ok(Self {
             dof: model.dof(),
             base_r: iso_r(model.base()),
@@ -233,6 +270,7 @@ impl RobotReach {
             capsules,
             link_ranges,
             tracking_error,
+            inertials,
         })
     }
 
@@ -374,6 +412,124 @@ impl RobotReach {
             }
             let r = add_up(add_up(ends[0].1.max(ends[1].1), c.radius), margin);
             out[ci] = Capsule::new_unchecked(ends[0].0, ends[1].0, r);
+        }
+        Ok(())
+    }
+
+    /// Upper bounds (J) of the kinetic energy ½ q̇ᵀ M_k(q) q̇ of the links carried by frames
+    /// `1..=k`, for k = 0..=n, valid for every `q ∈ [q_lo, q_hi]` and `q̇ ∈ [dq_lo, dq_hi]`
+    /// (rad, rad/s). `out.len()` must be `dof + 1`; `out[0] = 0`. Allocates nothing.
+    ///
+    /// Per link: ½·m·sup‖v_c‖² + ½·λ̄·sup‖ω‖², with v_c = Σ_j (z_j × (c − o_j))·q̇_j and
+    /// ω = Σ_j z_j·q̇_j evaluated in interval arithmetic over the box frames, and λ̄ ≥ the largest
+    /// principal moment of inertia (Gershgorin), since ωᵀ R I Rᵀ ω ≤ λ_max(I)‖ω‖².
+    pub fn subchain_energy_bounds_into(
+        &self,
+        q_lo: &[f64],
+        q_hi: &[f64],
+        dq_lo: &[f64],
+        dq_hi: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), crate::human::ReachError> {
+        use crate::human::ReachError;
+        use crate::interval::Interval;
+        let n = self.dof;
+        self.check_box(q_lo, q_hi)?;
+        self.check_box(dq_lo, dq_hi)
+            .map_err(|e| ReachError::Input(format!("velocity {e}")))?;
+        if out.len() != n + 1 {
+            return Err(ReachError::Input(format!(
+                "output buffer holds {}, need {}",
+                out.len(),
+                n + 1
+            )));
+        }
+        let mut boxf = Frames::new();
+        self.frames(q_lo, q_hi, &mut boxf);
+        let to_iv = |v: &VecMR| -> [Interval; 3] {
+            let w = |i: usize| {
+                Interval::point(v.mid[i])
+                    + Interval::new(-v.rad[i], v.rad[i]).unwrap_or(Interval::ENTIRE)
+            };
+            [w(0), w(1), w(2)]
+        };
+        let zero = VecMR {
+            mid: Vector3::zeros(),
+            rad: Vector3::zeros(),
+        };
+        let mut z = [[Interval::ZERO; 3]; MAX_DOF];
+        let mut o = [[Interval::ZERO; 3]; MAX_DOF];
+        let mut dq = [Interval::ZERO; MAX_DOF];
+        for j in 0..n {
+            z[j] = to_iv(&affine_point(&boxf.r[j + 1], &zero, &self.joints[j].axis));
+            o[j] = to_iv(&boxf.t[j + 1]);
+            dq[j] = Interval::new(dq_lo[j], dq_hi[j]).unwrap_or(Interval::ENTIRE);
+        }
+        let norm2_up =
+            |v: &[Interval; 3]| add_up(add_up(v[0].sqr().hi(), v[1].sqr().hi()), v[2].sqr().hi());
+        let mut per_frame = [0.0; MAX_DOF + 1];
+        for l in &self.inertials {
+            let k = l.frame;
+            let c = to_iv(&affine_point(&boxf.r[k], &boxf.t[k], &l.com));
+            let mut v = [Interval::ZERO; 3];
+            let mut w = [Interval::ZERO; 3];
+            for j in 0..k.min(n) {
+                let r = [c[0] - o[j][0], c[1] - o[j][1], c[2] - o[j][2]];
+                let zj = &z[j];
+                let cross = [
+                    zj[1] * r[2] - zj[2] * r[1],
+                    zj[2] * r[0] - zj[0] * r[2],
+                    zj[0] * r[1] - zj[1] * r[0],
+                ];
+                for i in 0..3 {
+                    v[i] = v[i] + cross[i] * dq[j];
+                    w[i] = w[i] + zj[i] * dq[j];
+                }
+            }
+            let e = add_up(
+                mul_up(0.5 * l.mass, norm2_up(&v)),
+                mul_up(0.5 * l.lambda_max, norm2_up(&w)),
+            );
+            per_frame[k] = add_up(per_frame[k], e);
+        }
+        out[0] = 0.0;
+        for k in 1..=n {
+            out[k] = add_up(out[k - 1], per_frame[k]);
+        }
+        Ok(())
+    }
+
+    /// Upper bound (J) of the whole robot's kinetic energy over the boxes (see
+    /// [`Self::subchain_energy_bounds_into`]).
+    pub fn energy_bound(
+        &self,
+        q_lo: &[f64],
+        q_hi: &[f64],
+        dq_lo: &[f64],
+        dq_hi: &[f64],
+    ) -> Result<f64, crate::human::ReachError> {
+        let mut out = [0.0; MAX_DOF + 1];
+        self.subchain_energy_bounds_into(q_lo, q_hi, dq_lo, dq_hi, &mut out[..=self.dof])?;
+        Ok(out[self.dof])
+    }
+
+    fn check_box(&self, lo: &[f64], hi: &[f64]) -> Result<(), crate::human::ReachError> {
+        use crate::human::ReachError;
+        let n = self.dof;
+        if lo.len() != n || hi.len() != n {
+            return Err(ReachError::Input(format!(
+                "box: expected {n} values in lower and upper bounds, found {} and {}",
+                lo.len(),
+                hi.len()
+            )));
+        }
+        for i in 0..n {
+            if !(lo[i].is_finite() && hi[i].is_finite()) || lo[i] > hi[i] {
+                return Err(ReachError::Input(format!(
+                    "box: joint {i}: need finite lo <= hi, got [{}, {}]",
+                    lo[i], hi[i]
+                )));
+            }
         }
         Ok(())
     }
