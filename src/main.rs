@@ -52,20 +52,24 @@ enum Command {
 enum ReachCommand {
     /// Capsules enclosing every link for every configuration in each joint box.
     ///
-    /// Input: {"robot": "fr3", "boxes": [{"q_lo": [...], "q_hi": [...]}], "tracking_error": 0.0}.
+    /// Input: {"robot": "fr3", "boxes": [{"q_lo": [...], "q_hi": [...]}], "tracking_error": 0.0}
+    /// (rad, m). Without --input: the built-in example (a ±0.01 rad box around the FR3 ready pose,
+    /// examples/robot.json).
     Robot {
-        /// Input JSON file.
+        /// Input JSON file (default: built-in example).
         #[arg(long, value_name = "FILE")]
-        input: PathBuf,
+        input: Option<PathBuf>,
     },
     /// Capsules enclosing every body part over each time interval after a measurement.
     ///
     /// Input: {"human": "default", "model": "combined"|"pos"|"vel"|"acc", "measurement": {"time": t,
-    /// "positions": [[x,y,z], ...], "velocities": [[x,y,z], ...]}, "intervals": [[t_a, t_b], ...]}.
+    /// "positions": [[x,y,z], ...], "velocities": [[x,y,z], ...]}, "intervals": [[t_a, t_b], ...]}
+    /// (m, m/s, s; absolute times). Without --input: the built-in example (default human in front
+    /// of the robot, three intervals, examples/human.json).
     Human {
-        /// Input JSON file.
+        /// Input JSON file (default: built-in example).
         #[arg(long, value_name = "FILE")]
-        input: PathBuf,
+        input: Option<PathBuf>,
     },
 }
 
@@ -82,8 +86,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Fk { input } => cli::fk::run(&input),
-        Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(&input),
-        Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(&input),
+        Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(input.as_deref()),
+        Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(input.as_deref()),
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),

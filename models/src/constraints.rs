@@ -26,7 +26,10 @@ impl Constraint {
     pub fn threshold(&self, constrained: bool) -> f64 {
         match *self {
             Constraint::Ssm => 0.0,
-            Constraint::Pfl { unconstrained, constrained: c } => {
+            Constraint::Pfl {
+                unconstrained,
+                constrained: c,
+            } => {
                 if constrained {
                     c
                 } else {
@@ -80,7 +83,10 @@ impl ConstraintSpec {
     /// - `feeding`: PFL head 0.001 J (both contact types); other parts as in `handover`'s defaults
     ///   with hands at SaRA's link value 0.49 J / 0.01 J.
     pub fn preset(name: &str) -> Option<Self> {
-        let pfl = |u: f64, c: f64| Constraint::Pfl { unconstrained: u, constrained: c };
+        let pfl = |u: f64, c: f64| Constraint::Pfl {
+            unconstrained: u,
+            constrained: c,
+        };
         let region = |name: &str, parts: &[&str], constraint| RegionSpec {
             name: name.into(),
             body_parts: parts.iter().map(|s| s.to_string()).collect(),
@@ -95,16 +101,28 @@ impl ConstraintSpec {
             ]
         };
         match name {
-            "ssm" | "sorting" => Some(Self { name: name.into(), default: Constraint::Ssm, regions: vec![] }),
+            "ssm" | "sorting" => Some(Self {
+                name: name.into(),
+                default: Constraint::Ssm,
+                regions: vec![],
+            }),
             "handover" => {
                 let mut regions = arms(pfl(0.265, 0.014));
                 regions.push(region("head", &["head"], pfl(0.11, 0.01)));
-                Some(Self { name: name.into(), default: Constraint::Ssm, regions })
+                Some(Self {
+                    name: name.into(),
+                    default: Constraint::Ssm,
+                    regions,
+                })
             }
             "feeding" => {
                 let mut regions = arms(pfl(0.49, 0.01));
                 regions.push(region("head", &["head"], pfl(0.001, 0.001)));
-                Some(Self { name: name.into(), default: Constraint::Ssm, regions })
+                Some(Self {
+                    name: name.into(),
+                    default: Constraint::Ssm,
+                    regions,
+                })
             }
             _ => None,
         }
@@ -114,7 +132,11 @@ impl ConstraintSpec {
     /// Unknown body-part names, parts in two regions, or negative/non-finite thresholds are errors.
     pub fn resolve(&self, human: &HumanModel) -> Result<TaskConstraints, ModelError> {
         let check = |c: &Constraint, field: String| -> Result<(), ModelError> {
-            if let Constraint::Pfl { unconstrained, constrained } = c {
+            if let Constraint::Pfl {
+                unconstrained,
+                constrained,
+            } = c
+            {
                 non_negative(|| format!("{field}.unconstrained"), *unconstrained)?;
                 non_negative(|| format!("{field}.constrained"), *constrained)?;
             }
@@ -127,19 +149,27 @@ impl ConstraintSpec {
         for (ri, r) in self.regions.iter().enumerate() {
             check(&r.constraint, format!("regions[{ri}].constraint"))?;
             for (pi, p) in r.body_parts.iter().enumerate() {
-                let idx = human.body_part_index(p).ok_or_else(|| ModelError::UnknownName {
-                    kind: "body part",
-                    name: p.clone(),
-                    field: format!("regions[{ri}].body_parts[{pi}]"),
-                })?;
+                let idx = human
+                    .body_part_index(p)
+                    .ok_or_else(|| ModelError::UnknownName {
+                        kind: "body part",
+                        name: p.clone(),
+                        field: format!("regions[{ri}].body_parts[{pi}]"),
+                    })?;
                 if assigned[idx] {
-                    return Err(ModelError::DuplicateName { kind: "body part in regions", name: p.clone() });
+                    return Err(ModelError::DuplicateName {
+                        kind: "body part in regions",
+                        name: p.clone(),
+                    });
                 }
                 assigned[idx] = true;
                 per_part[idx] = r.constraint;
             }
         }
-        Ok(TaskConstraints { name: self.name.clone(), per_part })
+        Ok(TaskConstraints {
+            name: self.name.clone(),
+            per_part,
+        })
     }
 }
 

@@ -61,7 +61,11 @@ pub(crate) fn finite(field: impl FnOnce() -> String, value: f64) -> Result<f64, 
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite" })
+        Err(ModelError::InvalidValue {
+            field: field(),
+            value,
+            reason: "must be finite",
+        })
     }
 }
 
@@ -70,7 +74,11 @@ pub(crate) fn non_negative(field: impl FnOnce() -> String, value: f64) -> Result
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
-        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite and >= 0" })
+        Err(ModelError::InvalidValue {
+            field: field(),
+            value,
+            reason: "must be finite and >= 0",
+        })
     }
 }
 
@@ -79,6 +87,10 @@ pub(crate) fn positive(field: impl FnOnce() -> String, value: f64) -> Result<f64
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(ModelError::InvalidValue { field: field(), value, reason: "must be finite and > 0" })
+        Err(ModelError::InvalidValue {
+            field: field(),
+            value,
+            reason: "must be finite and > 0",
+        })
     }
 }

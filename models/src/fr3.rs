@@ -6,7 +6,9 @@
 //! The two gripper fingers are lumped into one rigid body at the closed position (fingers' total
 //! mass 0.058 kg); the gripper opening is not a joint of this model.
 
-use crate::robot::{InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec, RobotModel, RobotSpec};
+use crate::robot::{
+    InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec, RobotModel, RobotSpec,
+};
 use crate::shape::CapsuleSpec;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
@@ -31,41 +33,94 @@ const ORIGINS: [([f64; 3], [f64; 3]); 7] = [
 
 /// (mass, com, [ixx, ixy, ixz, iyy, iyz, izz]) of link0..link7.
 const INERTIALS: [(f64, [f64; 3], [f64; 6]); 8] = [
-    (2.3966, [-0.0172, 0.0004, 0.0745], [0.009, 0.0, 0.002, 0.0115, 0.0, 0.0085]),
+    (
+        2.3966,
+        [-0.0172, 0.0004, 0.0745],
+        [0.009, 0.0, 0.002, 0.0115, 0.0, 0.0085],
+    ),
     (
         2.9274653454,
         [0.0000004128, -0.0181251324, -0.0386035970],
-        [0.0239273, 1.33179e-05, -0.000114048, 0.0224822, -0.00199503, 0.0063501],
+        [
+            0.0239273,
+            1.33179e-05,
+            -0.000114048,
+            0.0224822,
+            -0.00199503,
+            0.0063501,
+        ],
     ),
     (
         2.9355370338,
         [0.0031828864, -0.0743221644, 0.0088146084],
-        [0.0419389, 0.000202573, 0.00407778, 0.0251451, -0.00422522, 0.0617021],
+        [
+            0.0419389,
+            0.000202573,
+            0.00407778,
+            0.0251451,
+            -0.00422522,
+            0.0617021,
+        ],
     ),
     (
         2.2449013699,
         [0.0407015686, -0.0048200565, -0.0289730823],
-        [0.0241014, 0.00240469, -0.00285627, 0.0197405, -0.00210421, 0.0190445],
+        [
+            0.0241014,
+            0.00240469,
+            -0.00285627,
+            0.0197405,
+            -0.00210421,
+            0.0190445,
+        ],
     ),
     (
         2.6155955791,
         [-0.0459100965, 0.0630492960, -0.0085187868],
-        [0.03453, 0.0132255, 0.0101514, 0.0288816, -0.000976283, 0.0412547],
+        [
+            0.03453,
+            0.0132255,
+            0.0101514,
+            0.0288816,
+            -0.000976283,
+            0.0412547,
+        ],
     ),
     (
         2.3271207594,
         [-0.0016039605, 0.0292536262, -0.0972965990],
-        [0.0516103, -0.00571517, -0.00356732, 0.0478773, 0.010674, 0.0164236],
+        [
+            0.0516103,
+            -0.00571517,
+            -0.00356732,
+            0.0478773,
+            0.010674,
+            0.0164236,
+        ],
     ),
     (
         1.8170376524,
         [0.0597131221, -0.0410294666, -0.0101692726],
-        [0.00541233, 0.00619346, 0.00142193, 0.0140583, -0.00131408, 0.0160808],
+        [
+            0.00541233,
+            0.00619346,
+            0.00142193,
+            0.0140583,
+            -0.00131408,
+            0.0160808,
+        ],
     ),
     (
         0.6271432862,
         [0.0045225817, 0.0086261921, -0.0161633251],
-        [0.000210924, -2.4333e-05, 4.56448e-05, 0.000177186, 8.74407e-05, 5.99319e-05],
+        [
+            0.000210924,
+            -2.4333e-05,
+            4.56448e-05,
+            0.000177186,
+            8.74407e-05,
+            5.99319e-05,
+        ],
     ),
 ];
 
@@ -87,7 +142,10 @@ fn capsules(link: usize) -> Vec<CapsuleSpec> {
             // (b) is given in link7_sc = link7 rotated +π/4 about z: (0.055..0.065, 0, 0.082).
             let (s, co) = FRAC_PI_4.sin_cos();
             let rot = |x: f64| [co * x, s * x, 0.082];
-            vec![c([0.0, 0.0, -0.06], [0.0, 0.0, 0.08], 0.07), c(rot(0.055), rot(0.065), 0.06)]
+            vec![
+                c([0.0, 0.0, -0.06], [0.0, 0.0, 0.08], 0.07),
+                c(rot(0.055), rot(0.065), 0.06),
+            ]
         }
         _ => vec![],
     }
@@ -99,29 +157,57 @@ pub fn fr3() -> RobotModel {
     let joints = (0..7)
         .map(|i| JointSpec {
             name: format!("fr3_joint{}", i + 1),
-            origin: PoseSpec { xyz: ORIGINS[i].0, rpy: ORIGINS[i].1 },
+            origin: PoseSpec {
+                xyz: ORIGINS[i].0,
+                rpy: ORIGINS[i].1,
+            },
             axis: [0.0, 0.0, 1.0],
-            limits: JointLimitSpec { q_min: Q_MIN[i], q_max: Q_MAX[i], v_max: V_MAX[i], a_max: A_MAX, j_max: J_MAX },
+            limits: JointLimitSpec {
+                q_min: Q_MIN[i],
+                q_max: Q_MAX[i],
+                v_max: V_MAX[i],
+                a_max: A_MAX,
+                j_max: J_MAX,
+            },
         })
         .collect();
     let mut links: Vec<LinkSpec> = (0..8)
         .map(|i| LinkSpec {
             name: format!("fr3_link{i}"),
-            parent: if i == 0 { "base".into() } else { format!("fr3_joint{i}") },
+            parent: if i == 0 {
+                "base".into()
+            } else {
+                format!("fr3_joint{i}")
+            },
             origin: PoseSpec::default(),
             capsules: capsules(i),
-            inertial: Some(InertialSpec { mass: INERTIALS[i].0, com: INERTIALS[i].1, inertia: INERTIALS[i].2 }),
+            inertial: Some(InertialSpec {
+                mass: INERTIALS[i].0,
+                com: INERTIALS[i].1,
+                inertia: INERTIALS[i].2,
+            }),
         })
         .collect();
     // Flange (link8) is 0.107 m along z of link7; the hand is rotated −π/4 about z.
-    let hand_origin = PoseSpec { xyz: [0.0, 0.0, 0.107], rpy: [0.0, 0.0, -FRAC_PI_4] };
+    let hand_origin = PoseSpec {
+        xyz: [0.0, 0.0, 0.107],
+        rpy: [0.0, 0.0, -FRAC_PI_4],
+    };
     links.push(LinkSpec {
         name: "fr3_hand".into(),
         parent: "fr3_joint7".into(),
         origin: hand_origin,
         capsules: vec![
-            CapsuleSpec { p1: [0.0, -0.05, 0.04], p2: [0.0, 0.05, 0.04], radius: 0.07 },
-            CapsuleSpec { p1: [0.0, -0.05, 0.10], p2: [0.0, 0.05, 0.10], radius: 0.05 },
+            CapsuleSpec {
+                p1: [0.0, -0.05, 0.04],
+                p2: [0.0, 0.05, 0.04],
+                radius: 0.07,
+            },
+            CapsuleSpec {
+                p1: [0.0, -0.05, 0.10],
+                p2: [0.0, 0.05, 0.10],
+                radius: 0.05,
+            },
         ],
         inertial: Some(InertialSpec {
             mass: 0.6544,
@@ -141,15 +227,35 @@ pub fn fr3() -> RobotModel {
         inertial: Some(InertialSpec {
             mass: 2.0 * m_f,
             com: [0.0, 0.0, 0.0584 + 0.0219675],
-            inertia: [2.0 * 8.49e-06 + par, 0.0, 0.0, 2.0 * 8.53e-06, 0.0, 2.0 * 1.77e-06 + par],
+            inertia: [
+                2.0 * 8.49e-06 + par,
+                0.0,
+                0.0,
+                2.0 * 8.53e-06,
+                0.0,
+                2.0 * 1.77e-06 + par,
+            ],
         }),
     });
-    let spec = RobotSpec { name: "fr3".into(), base: PoseSpec::default(), joints, links };
+    let spec = RobotSpec {
+        name: "fr3".into(),
+        base: PoseSpec::default(),
+        joints,
+        links,
+    };
     RobotModel::new(spec).expect("built-in FR3 model is valid")
 }
 
 /// FR3 "ready" configuration (rad): (0, −π/4, 0, −3π/4, 0, π/2, π/4).
-pub const Q_READY: [f64; 7] = [0.0, -FRAC_PI_4, 0.0, -3.0 * FRAC_PI_4, 0.0, FRAC_PI_2, FRAC_PI_4];
+pub const Q_READY: [f64; 7] = [
+    0.0,
+    -FRAC_PI_4,
+    0.0,
+    -3.0 * FRAC_PI_4,
+    0.0,
+    FRAC_PI_2,
+    FRAC_PI_4,
+];
 
 /// Pose of the tool centre point (between the fingertips) in the frame of joint 7.
 pub fn tcp_in_joint7() -> nalgebra::Isometry3<f64> {

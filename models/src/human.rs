@@ -120,26 +120,42 @@ impl HumanModel {
         }
         for (i, name) in spec.keypoints.iter().enumerate() {
             if spec.keypoints[..i].contains(name) {
-                return Err(ModelError::DuplicateName { kind: "keypoint", name: name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "keypoint",
+                    name: name.clone(),
+                });
             }
         }
         for (field, v) in [("v_max", &spec.v_max), ("a_max", &spec.a_max)] {
             if v.len() != k {
-                return Err(ModelError::LengthMismatch { field: field.into(), expected: k, found: v.len() });
+                return Err(ModelError::LengthMismatch {
+                    field: field.into(),
+                    expected: k,
+                    found: v.len(),
+                });
             }
             for (i, x) in v.iter().enumerate() {
                 positive(|| format!("{field}[{i}]"), *x)?;
             }
         }
-        non_negative(|| "measurement_error_pos".into(), spec.measurement_error_pos)?;
-        non_negative(|| "measurement_error_vel".into(), spec.measurement_error_vel)?;
+        non_negative(
+            || "measurement_error_pos".into(),
+            spec.measurement_error_pos,
+        )?;
+        non_negative(
+            || "measurement_error_vel".into(),
+            spec.measurement_error_vel,
+        )?;
         non_negative(|| "delay".into(), spec.delay)?;
         let kp = |name: &str, field: String| {
-            spec.keypoints.iter().position(|n| n == name).ok_or_else(|| ModelError::UnknownName {
-                kind: "keypoint",
-                name: name.into(),
-                field,
-            })
+            spec.keypoints
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| ModelError::UnknownName {
+                    kind: "keypoint",
+                    name: name.into(),
+                    field,
+                })
         };
         if spec.body_parts.is_empty() {
             return Err(ModelError::Invalid("human model has no body parts".into()));
@@ -147,7 +163,10 @@ impl HumanModel {
         let mut body_parts = Vec::with_capacity(spec.body_parts.len());
         for (i, b) in spec.body_parts.iter().enumerate() {
             if spec.body_parts[..i].iter().any(|o| o.name == b.name) {
-                return Err(ModelError::DuplicateName { kind: "body part", name: b.name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "body part",
+                    name: b.name.clone(),
+                });
             }
             body_parts.push(BodyPart {
                 name: b.name.clone(),
@@ -157,11 +176,14 @@ impl HumanModel {
             });
         }
         let part = |name: &str, field: String| {
-            spec.body_parts.iter().position(|b| b.name == name).ok_or_else(|| ModelError::UnknownName {
-                kind: "body part",
-                name: name.into(),
-                field,
-            })
+            spec.body_parts
+                .iter()
+                .position(|b| b.name == name)
+                .ok_or_else(|| ModelError::UnknownName {
+                    kind: "body part",
+                    name: name.into(),
+                    field,
+                })
         };
         let mut extremities = Vec::with_capacity(spec.extremities.len());
         for (i, e) in spec.extremities.iter().enumerate() {
@@ -185,20 +207,29 @@ impl HumanModel {
             clampable[ia * n + ib] = true;
             clampable[ib * n + ia] = true;
         }
-        Ok(Self { spec, body_parts, extremities, clampable })
+        Ok(Self {
+            spec,
+            body_parts,
+            extremities,
+            clampable,
+        })
     }
 
     /// Parse and validate JSON.
     pub fn from_json(text: &str) -> Result<Self, ModelError> {
-        let spec: HumanSpec =
-            serde_json::from_str(text).map_err(|e| ModelError::Parse { format: "JSON", message: e.to_string() })?;
+        let spec: HumanSpec = serde_json::from_str(text).map_err(|e| ModelError::Parse {
+            format: "JSON",
+            message: e.to_string(),
+        })?;
         Self::new(spec)
     }
 
     /// Parse and validate TOML.
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let spec: HumanSpec =
-            toml::from_str(text).map_err(|e| ModelError::Parse { format: "TOML", message: e.to_string() })?;
+        let spec: HumanSpec = toml::from_str(text).map_err(|e| ModelError::Parse {
+            format: "TOML",
+            message: e.to_string(),
+        })?;
         Self::new(spec)
     }
 
@@ -206,7 +237,11 @@ impl HumanModel {
     pub fn builtin(name: &str) -> Result<Self, ModelError> {
         match name {
             "default" | "tum-lab" => Ok(default_human()),
-            other => Err(ModelError::UnknownName { kind: "human model", name: other.into(), field: "human".into() }),
+            other => Err(ModelError::UnknownName {
+                kind: "human model",
+                name: other.into(),
+                field: "human".into(),
+            }),
         }
     }
 
@@ -287,7 +322,9 @@ impl HumanModel {
 /// shoulders; clamping between the arms (both directions).
 pub fn default_human() -> HumanModel {
     let s = |x: &str| x.to_string();
-    let kps = ["lShldr", "lForeArm", "lHand", "rShldr", "rForeArm", "rHand", "neck", "hip", "head"];
+    let kps = [
+        "lShldr", "lForeArm", "lHand", "rShldr", "rForeArm", "rHand", "neck", "hip", "head",
+    ];
     let part = |name: &str, from: &str, to: &str, thickness: f64| BodyPartSpec {
         name: s(name),
         from: s(from),

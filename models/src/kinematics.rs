@@ -38,13 +38,22 @@ impl RobotModel {
         self.links()
             .iter()
             .enumerate()
-            .flat_map(|(li, l)| l.capsules.iter().map(move |c| (li, c.transformed(&f[l.frame]))))
+            .flat_map(|(li, l)| {
+                l.capsules
+                    .iter()
+                    .map(move |c| (li, c.transformed(&f[l.frame])))
+            })
             .collect()
     }
 
     /// Linear-velocity Jacobian (3 × n) of a world point `p` rigidly attached to `frame`, given
     /// the world frames from [`Self::frames_into`]. Columns of joints after `frame` are zero.
-    pub fn point_jacobian(&self, frames: &[Isometry3<f64>], frame: usize, p: &Point3<f64>) -> nalgebra::Matrix3xX<f64> {
+    pub fn point_jacobian(
+        &self,
+        frames: &[Isometry3<f64>],
+        frame: usize,
+        p: &Point3<f64>,
+    ) -> nalgebra::Matrix3xX<f64> {
         let n = self.dof();
         let mut jac = nalgebra::Matrix3xX::zeros(n);
         for j in 0..frame.min(n) {
@@ -112,7 +121,8 @@ impl RobotModel {
             let c_rel = r * inr.com.coords;
             let vc = v[k] + w[k].cross(&c_rel);
             let w_local = r.inverse() * w[k];
-            per_frame[k] += 0.5 * inr.mass * vc.norm_squared() + 0.5 * w_local.dot(&(inr.inertia * w_local));
+            per_frame[k] +=
+                0.5 * inr.mass * vc.norm_squared() + 0.5 * w_local.dot(&(inr.inertia * w_local));
         }
         out[0] = 0.0;
         for k in 1..=n {

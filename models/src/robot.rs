@@ -147,9 +147,16 @@ impl JointLimits {
     ) -> Result<Self, ModelError> {
         let n = q_min.len();
         if n == 0 || n > MAX_DOF {
-            return Err(ModelError::Invalid(format!("joint count {n} not in 1..={MAX_DOF}")));
+            return Err(ModelError::Invalid(format!(
+                "joint count {n} not in 1..={MAX_DOF}"
+            )));
         }
-        for (name, v) in [("q_max", &q_max), ("v_max", &v_max), ("a_max", &a_max), ("j_max", &j_max)] {
+        for (name, v) in [
+            ("q_max", &q_max),
+            ("v_max", &v_max),
+            ("a_max", &a_max),
+            ("j_max", &j_max),
+        ] {
             if v.len() != n {
                 return Err(ModelError::LengthMismatch {
                     field: format!("limits.{name}"),
@@ -172,7 +179,13 @@ impl JointLimits {
             positive(|| format!("limits.a_max[{i}]"), a_max[i])?;
             positive(|| format!("limits.j_max[{i}]"), j_max[i])?;
         }
-        Ok(Self { q_min, q_max, v_max, a_max, j_max })
+        Ok(Self {
+            q_min,
+            q_max,
+            v_max,
+            a_max,
+            j_max,
+        })
     }
 
     /// Number of joints.
@@ -241,7 +254,9 @@ impl JointLimits {
     /// True iff every `q[i]` lies within `[q_min[i], q_max[i]]`.
     pub fn contains(&self, q: &[f64]) -> bool {
         q.len() == self.dof()
-            && q.iter().zip(self.q_min.iter().zip(&self.q_max)).all(|(x, (lo, hi))| *lo <= *x && *x <= *hi)
+            && q.iter()
+                .zip(self.q_min.iter().zip(&self.q_max))
+                .all(|(x, (lo, hi))| *lo <= *x && *x <= *hi)
     }
 }
 
@@ -297,12 +312,17 @@ impl RobotModel {
         let base = spec.base.validate("base")?;
         let n = spec.joints.len();
         if n == 0 || n > MAX_DOF {
-            return Err(ModelError::Invalid(format!("joint count {n} not in 1..={MAX_DOF}")));
+            return Err(ModelError::Invalid(format!(
+                "joint count {n} not in 1..={MAX_DOF}"
+            )));
         }
         let mut joints = Vec::with_capacity(n);
         for (i, j) in spec.joints.iter().enumerate() {
             if spec.joints[..i].iter().any(|o| o.name == j.name) {
-                return Err(ModelError::DuplicateName { kind: "joint", name: j.name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "joint",
+                    name: j.name.clone(),
+                });
             }
             let origin = j.origin.validate(&format!("joints[{i}].origin"))?;
             let axis = Vector3::from(j.axis);
@@ -310,14 +330,19 @@ impl RobotModel {
                 finite(|| format!("joints[{i}].axis[{k}]"), *v)?;
             }
             let norm = axis.norm();
-            if !(norm > 1e-9) {
+            // `norm` overflows to +inf for huge components; normalising would then give a degenerate axis.
+            if !norm.is_finite() || norm <= 1e-9 {
                 return Err(ModelError::InvalidValue {
                     field: format!("joints[{i}].axis"),
                     value: norm,
-                    reason: "axis must have non-zero length",
+                    reason: "axis must have non-zero finite length",
                 });
             }
-            joints.push(Joint { name: j.name.clone(), origin, axis: Unit::new_normalize(axis) });
+            joints.push(Joint {
+                name: j.name.clone(),
+                origin,
+                axis: Unit::new_normalize(axis),
+            });
         }
         for (i, j) in spec.joints.iter().enumerate() {
             let l = &j.limits;
@@ -334,7 +359,9 @@ impl RobotModel {
             positive(|| format!("joints[{i}].limits.a_max"), l.a_max)?;
             positive(|| format!("joints[{i}].limits.j_max"), l.j_max)?;
         }
-        let lim = |f: fn(&JointLimitSpec) -> f64| spec.joints.iter().map(|j| f(&j.limits)).collect::<Vec<_>>();
+        let lim = |f: fn(&JointLimitSpec) -> f64| {
+            spec.joints.iter().map(|j| f(&j.limits)).collect::<Vec<_>>()
+        };
         let limits = JointLimits::new(
             lim(|l| l.q_min),
             lim(|l| l.q_max),
@@ -345,43 +372,70 @@ impl RobotModel {
         let mut links = Vec::with_capacity(spec.links.len());
         for (li, l) in spec.links.iter().enumerate() {
             if spec.links[..li].iter().any(|o| o.name == l.name) {
-                return Err(ModelError::DuplicateName { kind: "link", name: l.name.clone() });
+                return Err(ModelError::DuplicateName {
+                    kind: "link",
+                    name: l.name.clone(),
+                });
             }
             let frame = if l.parent == "base" {
                 0
             } else {
-                1 + spec.joints.iter().position(|j| j.name == l.parent).ok_or_else(|| ModelError::UnknownName {
-                    kind: "joint",
-                    name: l.parent.clone(),
-                    field: format!("links[{li}].parent"),
-                })?
+                1 + spec
+                    .joints
+                    .iter()
+                    .position(|j| j.name == l.parent)
+                    .ok_or_else(|| ModelError::UnknownName {
+                        kind: "joint",
+                        name: l.parent.clone(),
+                        field: format!("links[{li}].parent"),
+                    })?
             };
             let origin = l.origin.validate(&format!("links[{li}].origin"))?;
             let mut capsules = Vec::with_capacity(l.capsules.len());
             for (ci, c) in l.capsules.iter().enumerate() {
-                let cap = Capsule::try_from(*c).map_err(|e| prefix(e, &format!("links[{li}].capsules[{ci}].")))?;
+                let cap = Capsule::try_from(*c)
+                    .map_err(|e| prefix(e, &format!("links[{li}].capsules[{ci}].")))?;
                 capsules.push(cap.transformed(&origin));
             }
             let inertial = match &l.inertial {
                 None => None,
-                Some(s) => Some(validate_inertial(s, &origin, &format!("links[{li}].inertial"))?),
+                Some(s) => Some(validate_inertial(
+                    s,
+                    &origin,
+                    &format!("links[{li}].inertial"),
+                )?),
             };
-            links.push(Link { name: l.name.clone(), frame, capsules, inertial });
+            links.push(Link {
+                name: l.name.clone(),
+                frame,
+                capsules,
+                inertial,
+            });
         }
-        Ok(Self { spec, base, joints, links, limits })
+        Ok(Self {
+            spec,
+            base,
+            joints,
+            links,
+            limits,
+        })
     }
 
     /// Parse a JSON robot spec and validate it.
     pub fn from_json(text: &str) -> Result<Self, ModelError> {
-        let spec: RobotSpec =
-            serde_json::from_str(text).map_err(|e| ModelError::Parse { format: "JSON", message: e.to_string() })?;
+        let spec: RobotSpec = serde_json::from_str(text).map_err(|e| ModelError::Parse {
+            format: "JSON",
+            message: e.to_string(),
+        })?;
         Self::new(spec)
     }
 
     /// Parse a TOML robot spec and validate it.
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let spec: RobotSpec =
-            toml::from_str(text).map_err(|e| ModelError::Parse { format: "TOML", message: e.to_string() })?;
+        let spec: RobotSpec = toml::from_str(text).map_err(|e| ModelError::Parse {
+            format: "TOML",
+            message: e.to_string(),
+        })?;
         Self::new(spec)
     }
 
@@ -389,7 +443,11 @@ impl RobotModel {
     pub fn builtin(name: &str) -> Result<Self, ModelError> {
         match name {
             "fr3" | "FR3" => Ok(crate::fr3::fr3()),
-            other => Err(ModelError::UnknownName { kind: "robot", name: other.into(), field: "robot".into() }),
+            other => Err(ModelError::UnknownName {
+                kind: "robot",
+                name: other.into(),
+                field: "robot".into(),
+            }),
         }
     }
 
@@ -438,14 +496,24 @@ impl RobotModel {
 
 fn prefix(e: ModelError, p: &str) -> ModelError {
     match e {
-        ModelError::InvalidValue { field, value, reason } => {
-            ModelError::InvalidValue { field: format!("{p}{field}"), value, reason }
-        }
+        ModelError::InvalidValue {
+            field,
+            value,
+            reason,
+        } => ModelError::InvalidValue {
+            field: format!("{p}{field}"),
+            value,
+            reason,
+        },
         other => other,
     }
 }
 
-fn validate_inertial(s: &InertialSpec, origin: &Isometry3<f64>, field: &str) -> Result<Inertial, ModelError> {
+fn validate_inertial(
+    s: &InertialSpec,
+    origin: &Isometry3<f64>,
+    field: &str,
+) -> Result<Inertial, ModelError> {
     non_negative(|| format!("{field}.mass"), s.mass)?;
     for (i, v) in s.com.iter().enumerate() {
         finite(|| format!("{field}.com[{i}]"), *v)?;

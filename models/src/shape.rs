@@ -74,12 +74,20 @@ impl Capsule {
 
     /// The capsule moved by a rigid transform (rounded to nearest; not an outer bound).
     pub fn transformed(&self, iso: &Isometry3<f64>) -> Self {
-        Self { p1: iso * self.p1, p2: iso * self.p2, radius: self.radius }
+        Self {
+            p1: iso * self.p1,
+            p2: iso * self.p2,
+            radius: self.radius,
+        }
     }
 
     /// The serde form.
     pub fn to_spec(&self) -> CapsuleSpec {
-        CapsuleSpec { p1: self.p1.coords.into(), p2: self.p2.coords.into(), radius: self.radius }
+        CapsuleSpec {
+            p1: self.p1.coords.into(),
+            p2: self.p2.coords.into(),
+            radius: self.radius,
+        }
     }
 }
 

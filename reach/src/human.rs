@@ -1,1 +1,394 @@
-//! (in progress)
+//! Human reachable occupancies over a time interval after a measurement (SaRA-style models).
+//!
+//! Semantics (what every function here guarantees): let a measurement stamped `time` give keypoint
+//! positions `p_k` (and optionally velocities `v_k`). For every true motion of the keypoints such
+//! that, at `time − delay`, each keypoint was within `measurement_error_pos` of `p_k` (and its
+//! velocity within `measurement_error_vel` of `v_k`, when velocities are used), and afterwards each
+//! keypoint's speed stays ≤ `v_max[k]` (models `vel`, `pos`, `combined`) and its acceleration ≤
+//! `a_max[k]` (models `acc`, `combined`) — and, for `pos`, every point of an extremity's body parts
+//! stays within `length + thickness/2` of its base keypoint — every point of every body part
+//! (its segment swept by `thickness/2`) at every time `t ∈ [t_a, t_b]` lies in the reported capsule.
+//!
+//! Keypoint sets, with elapsed time T = t − time + delay ≥ 0, e_p, e_v the error bounds:
+//! - `vel`: Ball(p, e_p + v_max·T) — concentric and growing, so the ball at T_b covers [T_a, T_b];
+//! - `acc`: Ball(p + v·T, e_p + e_v·T + ½·a_max·T²) — centre linear and radius convex in T, so the
+//!   smallest ball enclosing the balls at T_a and T_b contains every ball in between (each is a
+//!   convex combination of the two);
+//! - `combined`: both bounds hold for the true motion, so the keypoint is in the `vel` set and in
+//!   the `acc` set: we report the smaller of the two (SaRA's combined closed form is tighter; we do
+//!   not use it until it has a proof here). Without measured velocities it equals `vel`;
+//! - `pos`: body parts of an extremity: Ball(p_base, e_p + v_max,base·T + length + thickness/2);
+//!   parts not covered by an extremity use `vel`.
+//!
+//! A body part between keypoints with sets Ball(c₁, r₁), Ball(c₂, r₂) lies in the capsule
+//! [c₁, c₂] with radius max(r₁, r₂) + thickness/2 (each point of the true segment is a convex
+//! combination of points within r₁ of c₁ and r₂ of c₂). All radii are rounded up; centres computed
+//! in floating point have their rounding error bounded and added to the radius.
+
+use crate::interval::Interval;
+use crate::rounding::{add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
+use nalgebra::{Point3, Vector3};
+use pacs_models::{Capsule, HumanModel};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Which bounds of the human model to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HumanReachModel {
+    /// Extremity reach around base keypoints (bounded position), `vel` elsewhere.
+    Pos,
+    /// Bounded speed.
+    Vel,
+    /// Bounded acceleration (needs measured velocities).
+    Acc,
+    /// Bounded speed and acceleration (the tighter of `vel` and `acc` per keypoint).
+    Combined,
+}
+
+impl std::str::FromStr for HumanReachModel {
+    type Err = ReachError;
+    fn from_str(s: &str) -> Result<Self, ReachError> {
+        match s {
+            "pos" => Ok(Self::Pos),
+            "vel" => Ok(Self::Vel),
+            "acc" => Ok(Self::Acc),
+            "combined" => Ok(Self::Combined),
+            other => Err(ReachError::Input(format!(
+                "unknown human reach model `{other}` (pos, vel, acc, combined)"
+            ))),
+        }
+    }
+}
+
+/// Errors of reachability queries (invalid measurements or intervals).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ReachError {
+    /// The input is invalid; the message names the field and value.
+    #[error("{0}")]
+    Input(String),
+}
+
+/// A validated measurement of all keypoints: finite values, one entry per keypoint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanMeasurement {
+    time: f64,
+    positions: Vec<Point3<f64>>,
+    velocities: Option<Vec<Vector3<f64>>>,
+}
+
+impl HumanMeasurement {
+    /// Validate against the model's keypoint count; every value must be finite.
+    pub fn new(
+        model: &HumanModel,
+        time: f64,
+        positions: &[[f64; 3]],
+        velocities: Option<&[[f64; 3]]>,
+    ) -> Result<Self, ReachError> {
+        if !time.is_finite() {
+            return Err(ReachError::Input(format!(
+                "measurement.time: value {time} is not finite"
+            )));
+        }
+        let n = model.keypoint_count();
+        let check = |field: &str, v: &[[f64; 3]]| -> Result<(), ReachError> {
+            if v.len() != n {
+                return Err(ReachError::Input(format!(
+                    "measurement.{field}: expected {n} keypoints ({}), found {}",
+                    model.keypoints().join(", "),
+                    v.len()
+                )));
+            }
+            for (i, p) in v.iter().enumerate() {
+                if let Some(j) = p.iter().position(|x| !x.is_finite()) {
+                    return Err(ReachError::Input(format!(
+                        "measurement.{field}[{i}][{j}] ({}): value {} is not finite",
+                        model.keypoints()[i],
+                        p[j]
+                    )));
+                }
+            }
+            Ok(())
+        };
+        check("positions", positions)?;
+        if let Some(v) = velocities {
+            check("velocities", v)?;
+        }
+        Ok(Self {
+            time,
+            positions: positions.iter().map(|p| Point3::from(*p)).collect(),
+            velocities: velocities.map(|v| v.iter().map(|p| Vector3::from(*p)).collect()),
+        })
+    }
+
+    /// Time stamp (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// Measured positions (m).
+    pub fn positions(&self) -> &[Point3<f64>] {
+        &self.positions
+    }
+    /// Measured velocities (m/s), if any.
+    pub fn velocities(&self) -> Option<&[Vector3<f64>]> {
+        self.velocities.as_deref()
+    }
+}
+
+/// A closed ball (centre in m, radius in m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ball {
+    /// Centre.
+    pub centre: Point3<f64>,
+    /// Radius, ≥ 0.
+    pub radius: f64,
+}
+
+impl Ball {
+    /// A ball containing both balls (and so their convex hull), radius rounded up.
+    pub fn enclose(a: &Ball, b: &Ball) -> Ball {
+        let d = dist3_up(&a.centre.coords.into(), &b.centre.coords.into());
+        if add_up(d, b.radius) <= a.radius {
+            return *a;
+        }
+        if add_up(d, a.radius) <= b.radius {
+            return *b;
+        }
+        // Nominal minimal enclosing centre; the radius below is sound for any centre.
+        let (big, small) = if a.radius >= b.radius { (a, b) } else { (b, a) };
+        let diff = big.centre - small.centre;
+        let n = diff.norm();
+        let centre = if n > 0.0 {
+            nalgebra::center(&big.centre, &small.centre)
+                + diff * ((big.radius - small.radius) / (2.0 * n))
+        } else {
+            big.centre
+        };
+        let ra = add_up(
+            dist3_up(&centre.coords.into(), &a.centre.coords.into()),
+            a.radius,
+        );
+        let rb = add_up(
+            dist3_up(&centre.coords.into(), &b.centre.coords.into()),
+            b.radius,
+        );
+        Ball {
+            centre,
+            radius: ra.max(rb),
+        }
+    }
+}
+
+/// Ball whose centre is only known to lie in an interval box: centre = box midpoint, radius
+/// enlarged by the distance to the farthest box corner (rounded up).
+fn ball_around_box(c: [Interval; 3], radius: f64) -> Ball {
+    let mut half = [0.0; 3];
+    let mut mid = [0.0; 3];
+    for i in 0..3 {
+        mid[i] = c[i].mid();
+        half[i] = sub_up(c[i].hi(), mid[i]).max(sub_up(mid[i], c[i].lo()));
+    }
+    Ball {
+        centre: Point3::from(mid),
+        radius: add_up(radius, crate::rounding::norm3_up(half[0], half[1], half[2])),
+    }
+}
+
+#[inline]
+fn pt(x: f64) -> Interval {
+    Interval::point(x)
+}
+
+/// Human occupancy computer: reusable buffers, no allocation per query.
+#[derive(Debug, Clone)]
+pub struct HumanReach {
+    model: HumanModel,
+    kind: HumanReachModel,
+    balls: Vec<Ball>,
+}
+
+impl HumanReach {
+    /// Occupancy computer for a human model and a reach model.
+    pub fn new(model: HumanModel, kind: HumanReachModel) -> Self {
+        let n = model.keypoint_count();
+        Self {
+            model,
+            kind,
+            balls: vec![
+                Ball {
+                    centre: Point3::origin(),
+                    radius: 0.0
+                };
+                n
+            ],
+        }
+    }
+
+    /// The human model.
+    pub fn model(&self) -> &HumanModel {
+        &self.model
+    }
+    /// The reach model.
+    pub fn kind(&self) -> HumanReachModel {
+        self.kind
+    }
+
+    /// Elapsed-time bounds [T_a, T_b] since the measured true state, and an extra radius covering
+    /// a start an ulp-scale before that state (speed-bounded). Errors if the interval is invalid.
+    fn elapsed(
+        &self,
+        m: &HumanMeasurement,
+        t_a: f64,
+        t_b: f64,
+    ) -> Result<(f64, f64, f64), ReachError> {
+        if !(t_a.is_finite() && t_b.is_finite()) || t_a > t_b {
+            return Err(ReachError::Input(format!(
+                "interval [{t_a}, {t_b}]: need finite t_a <= t_b"
+            )));
+        }
+        let delay = self.model.delay();
+        let lo = add_down(sub_down(t_a, m.time), delay);
+        let hi = add_up(sub_up(t_b, m.time), delay);
+        if lo < -1e-9 {
+            return Err(ReachError::Input(format!(
+                "interval [{t_a}, {t_b}] starts before the measured state (time {} - delay {delay})",
+                m.time
+            )));
+        }
+        let back = if lo < 0.0 { -lo } else { 0.0 };
+        Ok((lo.max(0.0), hi, back))
+    }
+
+    fn vel_ball(&self, m: &HumanMeasurement, k: usize, t_hi: f64) -> Ball {
+        let r = add_up(
+            self.model.measurement_error_pos(),
+            mul_up(self.model.v_max()[k], t_hi),
+        );
+        Ball {
+            centre: m.positions[k],
+            radius: r,
+        }
+    }
+
+    fn acc_ball_at(&self, p: &Point3<f64>, v: &Vector3<f64>, k: usize, t: f64) -> Ball {
+        let ti = pt(t);
+        let c = [
+            pt(p.x) + pt(v.x) * ti,
+            pt(p.y) + pt(v.y) * ti,
+            pt(p.z) + pt(v.z) * ti,
+        ];
+        let r = pt(self.model.measurement_error_pos())
+            + pt(self.model.measurement_error_vel()) * ti
+            + pt(0.5) * pt(self.model.a_max()[k]) * ti * ti;
+        ball_around_box(c, r.hi())
+    }
+
+    fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {
+        let v = m.velocities.as_ref()?[k];
+        let p = m.positions[k];
+        Some(Ball::enclose(
+            &self.acc_ball_at(&p, &v, k, t_lo),
+            &self.acc_ball_at(&p, &v, k, t_hi),
+        ))
+    }
+
+    /// Capsules (one per body part, model order) containing every body part over [t_a, t_b]
+    /// (absolute times, s, same clock as the measurement). `out.len()` must equal the number of
+    /// body parts. Allocates nothing.
+    pub fn occupancy_into(
+        &mut self,
+        m: &HumanMeasurement,
+        t_a: f64,
+        t_b: f64,
+        out: &mut [Capsule],
+    ) -> Result<(), ReachError> {
+        let parts = self.model.body_parts().len();
+        if out.len() != parts {
+            return Err(ReachError::Input(format!(
+                "output buffer holds {} capsules, need {parts}",
+                out.len()
+            )));
+        }
+        if m.positions.len() != self.model.keypoint_count() {
+            return Err(ReachError::Input(
+                "measurement does not match the human model".into(),
+            ));
+        }
+        if self.kind == HumanReachModel::Acc && m.velocities.is_none() {
+            return Err(ReachError::Input(
+                "model `acc` needs measured velocities (measurement.velocities)".into(),
+            ));
+        }
+        let (t_lo, t_hi, back) = self.elapsed(m, t_a, t_b)?;
+        for k in 0..self.model.keypoint_count() {
+            let mut ball = match self.kind {
+                HumanReachModel::Vel | HumanReachModel::Pos => self.vel_ball(m, k, t_hi),
+                HumanReachModel::Acc => {
+                    self.acc_ball(m, k, t_lo, t_hi).expect("velocities checked")
+                }
+                HumanReachModel::Combined => {
+                    let v = self.vel_ball(m, k, t_hi);
+                    match self.acc_ball(m, k, t_lo, t_hi) {
+                        Some(a) if a.radius < v.radius => a,
+                        _ => v,
+                    }
+                }
+            };
+            if back > 0.0 {
+                // The interval may start up to `back` (< 1e-9 s) before the measured state: any
+                // admissible motion moves at most (speed bound)·back in that time.
+                let mut speed = self.model.v_max()[k];
+                if let Some(v) = &m.velocities {
+                    let vm = crate::rounding::norm3_up(v[k].x, v[k].y, v[k].z);
+                    speed = speed.max(add_up(
+                        add_up(vm, self.model.measurement_error_vel()),
+                        mul_up(self.model.a_max()[k], 1e-9),
+                    ));
+                }
+                ball.radius = add_up(ball.radius, mul_up(speed, back));
+            }
+            self.balls[k] = ball;
+        }
+        for (i, bp) in self.model.body_parts().iter().enumerate() {
+            let b1 = self.balls[bp.from];
+            let b2 = self.balls[bp.to];
+            let r = add_up(b1.radius.max(b2.radius), bp.thickness * 0.5);
+            out[i] = Capsule::new_unchecked(b1.centre, b2.centre, r);
+        }
+        if self.kind == HumanReachModel::Pos {
+            // Parts covered by an extremity (the first one listing them) get its reach ball.
+            for (p, cap) in out.iter_mut().enumerate() {
+                if let Some(e) = self
+                    .model
+                    .extremities()
+                    .iter()
+                    .find(|e| e.body_parts.contains(&p))
+                {
+                    let c = m.positions[e.base];
+                    let travel = mul_up(self.model.v_max()[e.base], add_up(t_hi, back));
+                    let r = add_up(
+                        add_up(self.model.measurement_error_pos(), travel),
+                        add_up(e.length, e.thickness * 0.5),
+                    );
+                    *cap = Capsule::new_unchecked(c, c, r);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Allocating convenience form of [`Self::occupancy_into`].
+    pub fn occupancy(
+        &mut self,
+        m: &HumanMeasurement,
+        t_a: f64,
+        t_b: f64,
+    ) -> Result<Vec<Capsule>, ReachError> {
+        let mut out = vec![
+            Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
+            self.model.body_parts().len()
+        ];
+        self.occupancy_into(m, t_a, t_b, &mut out)?;
+        Ok(out)
+    }
+}

@@ -2,6 +2,7 @@
 //!
 //! Sound reachability: every set here contains what it claims to contain, under outward rounding.
 //! - [`rounding`]: directed-rounding scalar helpers and rigorous sin/cos enclosures;
+//! - [`interval`]: a fast outward-rounded interval type (checked against `inari` in tests);
 //! - [`zonotope`]: zonotopes and reachability of linear time-invariant systems;
 //! - [`geometry`]: conservative capsule/sphere/zonotope intersection and distance bounds;
 //! - [`human`]: human reachable occupancies (SaRA-style pos/vel/acc/combined models);
@@ -9,9 +10,10 @@
 
 pub mod geometry;
 pub mod human;
+pub mod interval;
 pub mod lti;
 pub mod robot;
 pub mod rounding;
 pub mod zonotope;
 
-pub use inari::Interval;
+pub use interval::Interval;

@@ -10,7 +10,7 @@
 //! [-1, 1], i.e. ≤ 1.12e-16) by a factor of about a hundred (1e-14 m is far below any geometric tolerance here). A test compares libm against a rigorous
 //! Taylor enclosure on 10⁵ arguments.
 
-use inari::{Interval, interval};
+use crate::interval::Interval;
 
 /// Absolute padding applied to libm `sin`/`cos` values (see module docs).
 pub const TRIG_PAD: f64 = 1e-14;
@@ -75,7 +75,10 @@ pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
 #[inline]
 pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
-    sqrt_down(add_down(add_down(mul_down(x, x), mul_down(y, y)), mul_down(z, z)))
+    sqrt_down(add_down(
+        add_down(mul_down(x, x), mul_down(y, y)),
+        mul_down(z, z),
+    ))
 }
 
 /// Upper bound of the distance between two points.
@@ -96,26 +99,36 @@ pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 /// `kπ/2` may lie inside (decided with an interval enclosure of π, so borderline cases include it).
 pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
     debug_assert!(lo <= hi, "sin_cos_interval({lo}, {hi})");
-    if !(lo.is_finite() && hi.is_finite()) || hi - lo >= 6.0 {
-        let full = interval!(-1.0, 1.0).unwrap();
+    let full = Interval::new(-1.0, 1.0).expect("valid");
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi) || hi - lo >= 6.0 {
         return (full, full);
     }
     let (s_lo, c_lo) = lo.sin_cos();
+    if lo == hi {
+        let s =
+            Interval::new((s_lo - TRIG_PAD).max(-1.0), (s_lo + TRIG_PAD).min(1.0)).unwrap_or(full);
+        let c =
+            Interval::new((c_lo - TRIG_PAD).max(-1.0), (c_lo + TRIG_PAD).min(1.0)).unwrap_or(full);
+        return (s, c);
+    }
     let (s_hi, c_hi) = hi.sin_cos();
     let mut s_min = s_lo.min(s_hi) - TRIG_PAD;
     let mut s_max = s_lo.max(s_hi) + TRIG_PAD;
     let mut c_min = c_lo.min(c_hi) - TRIG_PAD;
     let mut c_max = c_lo.max(c_hi) + TRIG_PAD;
-    // Critical points x = kπ/2: k ≡ 0 (mod 4): cos max; 1: sin max; 2: cos min; 3: sin min.
-    let half_pi = Interval::PI / interval!(2.0, 2.0).unwrap();
-    let x = interval!(lo, hi).unwrap();
-    let k = x / half_pi; // encloses every x/(π/2)
-    let k_lo = k.inf().floor() as i64;
-    let k_hi = k.sup().ceil() as i64;
+    // Critical points x = kπ/2 (k ≡ 0 mod 4: cos max; 1: sin max; 2: cos min; 3: sin min).
+    // Candidates k are taken one wider than the nominal range; each is then tested against an
+    // enclosure of kπ/2 (π/2 lies between the neighbours of its correctly rounded f64 value).
+    let half_pi = Interval::new(
+        std::f64::consts::FRAC_PI_2.next_down(),
+        std::f64::consts::FRAC_PI_2.next_up(),
+    )
+    .expect("valid");
+    let k_lo = (lo / std::f64::consts::FRAC_PI_2).floor() as i64 - 1;
+    let k_hi = (hi / std::f64::consts::FRAC_PI_2).ceil() as i64 + 1;
     for kk in k_lo..=k_hi {
-        // Could x = kk·π/2 lie in [lo, hi]? Test with the interval enclosure of kk·π/2.
-        let p = half_pi * interval!(kk as f64, kk as f64).unwrap();
-        if p.sup() < lo || p.inf() > hi {
+        let p = half_pi.scale(kk as f64);
+        if p.hi() < lo || p.lo() > hi {
             continue;
         }
         match kk.rem_euclid(4) {
@@ -125,25 +138,29 @@ pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
             _ => s_min = -1.0,
         }
     }
-    let clamp = |a: f64, b: f64| interval!(a.max(-1.0), b.min(1.0)).unwrap();
+    let clamp = |a: f64, b: f64| Interval::new(a.max(-1.0), b.min(1.0)).unwrap_or(full);
     (clamp(s_min, s_max), clamp(c_min, c_max))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use inari::{Interval as IInterval, interval};
     use proptest::prelude::*;
 
     /// Rigorous sin/cos enclosure: argument reduction by kπ/2 with an interval π, then a Taylor
     /// series in interval arithmetic on the reduced argument (|r| <= 0.8).
-    fn taylor_sin_cos(x: f64) -> (Interval, Interval) {
+    fn taylor_sin_cos(x: f64) -> (IInterval, IInterval) {
         let one = interval!(1.0, 1.0).unwrap();
         // Cody–Waite split of π/2: HI has 33 significant bits (k·HI exact), TAIL = π/2 − HI
         // correctly rounded (fdlibm's pio2_1, pio2_1t), enclosed by one ulp either side.
         const HI: f64 = 1.570_796_326_734_125_614_17;
         const TAIL: f64 = 6.077_100_506_506_192_249_32e-11;
         let tail = interval!(TAIL.next_down(), TAIL.next_up()).unwrap();
-        assert!((Interval::PI / interval!(2.0, 2.0).unwrap()).subset(interval!(HI, HI).unwrap() + tail));
+        assert!(
+            (IInterval::PI / interval!(2.0, 2.0).unwrap())
+                .subset(interval!(HI, HI).unwrap() + tail)
+        );
         let k = (x / std::f64::consts::FRAC_PI_2).round();
         let ki = interval!(k, k).unwrap();
         let r = interval!(x, x).unwrap() - ki * interval!(HI, HI).unwrap() - ki * tail;
@@ -179,10 +196,19 @@ mod tests {
             let (s, c) = taylor_sin_cos(x);
             let (sl, cl) = x.sin_cos();
             // The enclosure is tight enough for the check to mean something...
-            assert!(s.wid() < 4e-15 && c.wid() < 4e-15, "taylor enclosure too wide at {x}");
+            assert!(
+                s.wid() < 4e-15 && c.wid() < 4e-15,
+                "taylor enclosure too wide at {x}"
+            );
             // ...and every exact value in it is within TRIG_PAD of libm.
-            assert!(s.sup() - TRIG_PAD <= sl && sl <= s.inf() + TRIG_PAD, "sin({x}) = {sl} vs {s:?}");
-            assert!(c.sup() - TRIG_PAD <= cl && cl <= c.inf() + TRIG_PAD, "cos({x}) = {cl} vs {c:?}");
+            assert!(
+                s.sup() - TRIG_PAD <= sl && sl <= s.inf() + TRIG_PAD,
+                "sin({x}) = {sl} vs {s:?}"
+            );
+            assert!(
+                c.sup() - TRIG_PAD <= cl && cl <= c.inf() + TRIG_PAD,
+                "cos({x}) = {cl} vs {c:?}"
+            );
         }
     }
 
@@ -195,8 +221,8 @@ mod tests {
             let x = a + t * (hi - a);
             let x = x.clamp(a, hi);
             let (ts, tc) = taylor_sin_cos(x);
-            prop_assert!(s.inf() <= ts.inf() && ts.sup() <= s.sup(), "sin {x} in [{a},{hi}]: {s:?} vs {ts:?}");
-            prop_assert!(c.inf() <= tc.inf() && tc.sup() <= c.sup(), "cos {x} in [{a},{hi}]: {c:?} vs {tc:?}");
+            prop_assert!(s.lo() <= ts.inf() && ts.sup() <= s.hi(), "sin {x} in [{a},{hi}]: {s:?} vs {ts:?}");
+            prop_assert!(c.lo() <= tc.inf() && tc.sup() <= c.hi(), "cos {x} in [{a},{hi}]: {c:?} vs {tc:?}");
         }
 
         #[test]

@@ -45,12 +45,14 @@ impl From<pacs_models::ModelError> for CliError {
 
 /// Read a whole input file, naming it in the error.
 pub fn read_file(path: &Path) -> Result<String, CliError> {
-    std::fs::read_to_string(path).map_err(|e| CliError::Input(format!("cannot read {}: {e}", path.display())))
+    std::fs::read_to_string(path)
+        .map_err(|e| CliError::Input(format!("cannot read {}: {e}", path.display())))
 }
 
 /// Parse JSON input into `T`, naming the file, line and column on error.
 pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, CliError> {
-    serde_json::from_str(text).map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
+    serde_json::from_str(text)
+        .map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
 }
 
 /// Read and parse a JSON input file.
@@ -59,12 +61,22 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliEr
     parse_json(path, &text)
 }
 
-/// A robot given by built-in name (`"fr3"`) or as an inline model object.
+/// A robot given by built-in name (`"fr3"`), as a URDF file plus optional side file
+/// (`{"urdf": "arm.urdf", "side": "arm.toml"}`, paths relative to the working directory), or as
+/// an inline model object (the format `pacs robot show` prints).
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(untagged)]
 pub enum RobotRef {
     /// Built-in name.
     Name(String),
+    /// URDF file plus side file.
+    Urdf {
+        /// URDF path.
+        urdf: std::path::PathBuf,
+        /// Side file (JSON or TOML) with capsules and acceleration/jerk limits.
+        #[serde(default)]
+        side: Option<std::path::PathBuf>,
+    },
     /// Inline spec.
     Spec(Box<pacs_models::RobotSpec>),
 }
@@ -74,7 +86,10 @@ impl RobotRef {
     pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
         Ok(match self {
             RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
-            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone()).map_err(|e| CliError::Input(format!("robot: {e}")))?,
+            RobotRef::Urdf { urdf, side } => pacs_models::urdf::load_urdf_files(urdf, side.as_deref())
+                .map_err(|e| CliError::Input(format!("robot {}: {e}", urdf.display())))?,
+            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone())
+                .map_err(|e| CliError::Input(format!("robot: {e}")))?,
         })
     }
 }
@@ -94,7 +109,8 @@ impl HumanRef {
     pub fn load(&self) -> Result<pacs_models::HumanModel, CliError> {
         Ok(match self {
             HumanRef::Name(n) => pacs_models::HumanModel::builtin(n)?,
-            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone()).map_err(|e| CliError::Input(format!("human: {e}")))?,
+            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone())
+                .map_err(|e| CliError::Input(format!("human: {e}")))?,
         })
     }
 }
@@ -102,10 +118,15 @@ impl HumanRef {
 /// Check that a vector has the expected length and finite entries.
 pub fn check_vec(field: &str, v: &[f64], n: usize) -> Result<(), CliError> {
     if v.len() != n {
-        return Err(CliError::Input(format!("{field}: expected {n} values, found {}", v.len())));
+        return Err(CliError::Input(format!(
+            "{field}: expected {n} values, found {}",
+            v.len()
+        )));
     }
     if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-        return Err(CliError::Input(format!("{field}[{i}]: value {x} is not finite")));
+        return Err(CliError::Input(format!(
+            "{field}[{i}]: value {x} is not finite"
+        )));
     }
     Ok(())
 }

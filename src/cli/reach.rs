@@ -1,15 +1,125 @@
 //! `pacs reach robot` and `pacs reach human`.
 
-use super::CliError;
-use serde_json::Value;
+use super::{CliError, HumanRef, RobotRef, check_vec, parse_json, read_json};
+use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::robot::RobotReach;
+use serde::Deserialize;
+use serde_json::{Value, json};
 use std::path::Path;
 
-/// Run `pacs reach robot --input F`.
-pub fn run_robot(_path: &Path) -> Result<Value, CliError> {
-    Err(CliError::Internal("pacs reach robot: not built yet".into()))
+fn capsule_json(c: &pacs_models::Capsule) -> Value {
+    json!({"p1": c.p1().coords.as_slice(), "p2": c.p2().coords.as_slice(), "radius": c.radius()})
 }
 
-/// Run `pacs reach human --input F`.
-pub fn run_human(_path: &Path) -> Result<Value, CliError> {
-    Err(CliError::Internal("pacs reach human: not built yet".into()))
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointBox {
+    q_lo: Vec<f64>,
+    q_hi: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotInput {
+    robot: RobotRef,
+    boxes: Vec<JointBox>,
+    #[serde(default)]
+    tracking_error: f64,
+}
+
+/// Built-in example input of `pacs reach robot`.
+const ROBOT_EXAMPLE: &str = include_str!("../../examples/robot.json");
+/// Built-in example input of `pacs reach human`.
+const HUMAN_EXAMPLE: &str = include_str!("../../examples/human.json");
+
+/// Read the input file, or parse the built-in example when no file is given.
+fn input_or_example<T: serde::de::DeserializeOwned>(path: Option<&Path>, example: &str) -> Result<T, CliError> {
+    match path {
+        Some(p) => read_json(p),
+        None => parse_json(Path::new("<built-in example>"), example),
+    }
+}
+
+/// Run `pacs reach robot [--input F]`.
+pub fn run_robot(path: Option<&Path>) -> Result<Value, CliError> {
+    let input: RobotInput = input_or_example(path, ROBOT_EXAMPLE)?;
+    let robot = input.robot.load()?;
+    let reach = RobotReach::try_new(&robot, input.tracking_error)
+        .map_err(|e| CliError::Input(e.to_string()))?;
+    let mut boxes = Vec::with_capacity(input.boxes.len());
+    let mut caps =
+        vec![
+            pacs_models::Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+            reach.capsule_count()
+        ];
+    for (i, b) in input.boxes.iter().enumerate() {
+        check_vec(&format!("boxes[{i}].q_lo"), &b.q_lo, robot.dof())?;
+        check_vec(&format!("boxes[{i}].q_hi"), &b.q_hi, robot.dof())?;
+        reach
+            .occupancy_into(&b.q_lo, &b.q_hi, &mut caps)
+            .map_err(|e| CliError::Input(format!("boxes[{i}]: {e}")))?;
+        let links: Vec<Value> = robot
+            .links()
+            .iter()
+            .zip(reach.link_ranges())
+            .map(|(l, &(s, e))| json!({"name": l.name, "capsules": caps[s..e].iter().map(capsule_json).collect::<Vec<_>>()}))
+            .collect();
+        boxes.push(json!({"links": links}));
+    }
+    Ok(json!({"boxes": boxes}))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeasurementInput {
+    time: f64,
+    positions: Vec<[f64; 3]>,
+    #[serde(default)]
+    velocities: Option<Vec<[f64; 3]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HumanInput {
+    human: HumanRef,
+    #[serde(default = "default_model")]
+    model: String,
+    measurement: MeasurementInput,
+    intervals: Vec<[f64; 2]>,
+}
+
+fn default_model() -> String {
+    "combined".into()
+}
+
+/// Run `pacs reach human [--input F]`.
+pub fn run_human(path: Option<&Path>) -> Result<Value, CliError> {
+    let input: HumanInput = input_or_example(path, HUMAN_EXAMPLE)?;
+    let human = input.human.load()?;
+    let kind: HumanReachModel = input
+        .model
+        .parse()
+        .map_err(|e: pacs_reach::human::ReachError| CliError::Input(format!("model: {e}")))?;
+    let m = HumanMeasurement::new(
+        &human,
+        input.measurement.time,
+        &input.measurement.positions,
+        input.measurement.velocities.as_deref(),
+    )
+    .map_err(|e| CliError::Input(e.to_string()))?;
+    let names: Vec<String> = human.body_parts().iter().map(|b| b.name.clone()).collect();
+    let mut reach = HumanReach::new(human, kind);
+    let mut out = Vec::with_capacity(input.intervals.len());
+    for (i, [t_a, t_b]) in input.intervals.iter().enumerate() {
+        let caps = reach
+            .occupancy(&m, *t_a, *t_b)
+            .map_err(|e| CliError::Input(format!("intervals[{i}]: {e}")))?;
+        let parts: Vec<Value> = names
+            .iter()
+            .zip(&caps)
+            .map(|(n, c)| json!({"name": n, "p1": c.p1().coords.as_slice(), "p2": c.p2().coords.as_slice(), "radius": c.radius()}))
+            .collect();
+        out.push(json!({"t": [t_a, t_b], "body_parts": parts}));
+    }
+    Ok(json!({"intervals": out}))
 }

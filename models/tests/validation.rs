@@ -1,0 +1,315 @@
+//! Validation errors name the field and the offending value.
+
+use pacs_models::constraints::{Constraint, ConstraintSpec, RegionSpec};
+use pacs_models::fr3::fr3;
+use pacs_models::{HumanModel, ModelError, RobotModel, RobotSpec, default_human};
+
+fn spec() -> RobotSpec {
+    fr3().spec().clone()
+}
+
+#[track_caller]
+fn invalid_value(r: Result<impl std::fmt::Debug, ModelError>, field: &str) -> f64 {
+    match r {
+        Err(ModelError::InvalidValue {
+            field: f, value, ..
+        }) => {
+            assert_eq!(f, field);
+            value
+        }
+        other => panic!("expected InvalidValue at {field}, got {other:?}"),
+    }
+}
+
+#[test]
+fn builtin_spec_is_valid() {
+    assert!(RobotModel::new(spec()).is_ok());
+}
+
+#[test]
+fn negative_v_max() {
+    let mut s = spec();
+    s.joints[2].limits.v_max = -1.0;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "joints[2].limits.v_max"),
+        -1.0
+    );
+}
+
+#[test]
+fn zero_a_max_and_j_max() {
+    let mut s = spec();
+    s.joints[4].limits.a_max = 0.0;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "joints[4].limits.a_max"),
+        0.0
+    );
+    let mut s = spec();
+    s.joints[6].limits.j_max = f64::INFINITY;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "joints[6].limits.j_max"),
+        f64::INFINITY
+    );
+}
+
+#[test]
+fn nan_q_min() {
+    let mut s = spec();
+    s.joints[0].limits.q_min = f64::NAN;
+    assert!(invalid_value(RobotModel::new(s), "joints[0].limits.q_min").is_nan());
+}
+
+#[test]
+fn q_min_above_q_max() {
+    let mut s = spec();
+    s.joints[1].limits.q_min = 1.0;
+    s.joints[1].limits.q_max = 0.5;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "joints[1].limits.q_max"),
+        0.5
+    );
+}
+
+#[test]
+fn zero_axis() {
+    let mut s = spec();
+    s.joints[3].axis = [0.0, 0.0, 0.0];
+    assert_eq!(invalid_value(RobotModel::new(s), "joints[3].axis"), 0.0);
+}
+
+#[test]
+fn non_finite_origin() {
+    let mut s = spec();
+    s.joints[5].origin.rpy[1] = f64::NAN;
+    assert!(invalid_value(RobotModel::new(s), "joints[5].origin.rpy[1]").is_nan());
+}
+
+#[test]
+fn non_psd_inertia() {
+    let mut s = spec();
+    s.links[2].inertial.as_mut().unwrap().inertia = [1.0, 0.0, 0.0, -0.5, 0.0, 1.0];
+    let v = invalid_value(RobotModel::new(s), "links[2].inertial.inertia");
+    assert_eq!(v, -0.5, "value = smallest eigenvalue");
+    // Off-diagonal terms too large: eigenvalues of [[1,2],[2,1]] are 3 and −1.
+    let mut s = spec();
+    s.links[1].inertial.as_mut().unwrap().inertia = [1.0, 2.0, 0.0, 1.0, 0.0, 1.0];
+    let v = invalid_value(RobotModel::new(s), "links[1].inertial.inertia");
+    assert!((v + 1.0).abs() < 1e-12, "{v}");
+}
+
+#[test]
+fn negative_mass_and_radius() {
+    let mut s = spec();
+    s.links[3].inertial.as_mut().unwrap().mass = -2.0;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "links[3].inertial.mass"),
+        -2.0
+    );
+    let mut s = spec();
+    s.links[5].capsules[1].radius = -0.01;
+    assert_eq!(
+        invalid_value(RobotModel::new(s), "links[5].capsules[1].radius"),
+        -0.01
+    );
+}
+
+#[test]
+fn duplicate_names() {
+    let mut s = spec();
+    s.joints[1].name = s.joints[0].name.clone();
+    assert_eq!(
+        RobotModel::new(s).unwrap_err(),
+        ModelError::DuplicateName {
+            kind: "joint",
+            name: "fr3_joint1".into()
+        }
+    );
+    let mut s = spec();
+    s.links[4].name = "fr3_link2".into();
+    assert_eq!(
+        RobotModel::new(s).unwrap_err(),
+        ModelError::DuplicateName {
+            kind: "link",
+            name: "fr3_link2".into()
+        }
+    );
+}
+
+#[test]
+fn unknown_parent() {
+    let mut s = spec();
+    s.links[3].parent = "elbow".into();
+    assert_eq!(
+        RobotModel::new(s).unwrap_err(),
+        ModelError::UnknownName {
+            kind: "joint",
+            name: "elbow".into(),
+            field: "links[3].parent".into()
+        }
+    );
+}
+
+#[test]
+fn no_joints() {
+    let mut s = spec();
+    s.joints.clear();
+    s.links.retain(|l| l.parent == "base");
+    assert!(
+        matches!(RobotModel::new(s), Err(ModelError::Invalid(m)) if m.contains("joint count 0"))
+    );
+}
+
+#[test]
+fn unknown_builtin_names() {
+    assert!(
+        matches!(RobotModel::builtin("ur5"), Err(ModelError::UnknownName { name, .. }) if name == "ur5")
+    );
+    assert!(
+        matches!(HumanModel::builtin("x"), Err(ModelError::UnknownName { name, .. }) if name == "x")
+    );
+    assert!(
+        matches!(ConstraintSpec::builtin("y"), Err(ModelError::UnknownName { name, .. }) if name == "y")
+    );
+}
+
+#[test]
+fn human_v_max_count_mismatch() {
+    let mut s = default_human().spec().clone();
+    s.v_max.pop();
+    assert_eq!(
+        HumanModel::new(s).unwrap_err(),
+        ModelError::LengthMismatch {
+            field: "v_max".into(),
+            expected: 9,
+            found: 8
+        }
+    );
+}
+
+#[test]
+fn human_value_errors() {
+    let mut s = default_human().spec().clone();
+    s.a_max[6] = 0.0;
+    assert_eq!(invalid_value(HumanModel::new(s), "a_max[6]"), 0.0);
+    let mut s = default_human().spec().clone();
+    s.delay = -0.01;
+    assert_eq!(invalid_value(HumanModel::new(s), "delay"), -0.01);
+    let mut s = default_human().spec().clone();
+    s.body_parts[6].thickness = f64::NAN;
+    assert!(invalid_value(HumanModel::new(s), "body_parts[6].thickness").is_nan());
+    let mut s = default_human().spec().clone();
+    s.keypoints[3] = "lShldr".into();
+    assert_eq!(
+        HumanModel::new(s).unwrap_err(),
+        ModelError::DuplicateName {
+            kind: "keypoint",
+            name: "lShldr".into()
+        }
+    );
+}
+
+#[test]
+fn unknown_keypoint_in_body_part() {
+    let mut s = default_human().spec().clone();
+    s.body_parts[4].to = "rWrist".into();
+    assert_eq!(
+        HumanModel::new(s).unwrap_err(),
+        ModelError::UnknownName {
+            kind: "keypoint",
+            name: "rWrist".into(),
+            field: "body_parts[4].to".into()
+        }
+    );
+}
+
+#[test]
+fn unknown_body_part_in_extremity_and_clamping_pair() {
+    let mut s = default_human().spec().clone();
+    s.extremities[1].body_parts[2] = "rFinger".into();
+    assert_eq!(
+        HumanModel::new(s).unwrap_err(),
+        ModelError::UnknownName {
+            kind: "body part",
+            name: "rFinger".into(),
+            field: "extremities[1].body_parts[2]".into()
+        }
+    );
+    let mut s = default_human().spec().clone();
+    s.clamping_pairs[0][1] = "leg".into();
+    assert_eq!(
+        HumanModel::new(s).unwrap_err(),
+        ModelError::UnknownName {
+            kind: "body part",
+            name: "leg".into(),
+            field: "clamping_pairs[0][1]".into()
+        }
+    );
+}
+
+#[test]
+fn unknown_body_part_in_region() {
+    let mut c = ConstraintSpec::preset("handover").unwrap();
+    c.regions[2].body_parts[1] = "rPalm".into();
+    assert_eq!(
+        c.resolve(&default_human()).unwrap_err(),
+        ModelError::UnknownName {
+            kind: "body part",
+            name: "rPalm".into(),
+            field: "regions[2].body_parts[1]".into()
+        }
+    );
+}
+
+#[test]
+fn negative_threshold() {
+    let mut c = ConstraintSpec::preset("feeding").unwrap();
+    c.regions[4].constraint = Constraint::Pfl {
+        unconstrained: 0.1,
+        constrained: -0.001,
+    };
+    assert_eq!(
+        invalid_value(
+            c.resolve(&default_human()),
+            "regions[4].constraint.constrained"
+        ),
+        -0.001
+    );
+    let c = ConstraintSpec {
+        name: "x".into(),
+        default: Constraint::Pfl {
+            unconstrained: -1.0,
+            constrained: 0.0,
+        },
+        regions: vec![],
+    };
+    assert_eq!(
+        invalid_value(c.resolve(&default_human()), "default.unconstrained"),
+        -1.0
+    );
+}
+
+#[test]
+fn body_part_in_two_regions() {
+    let mut c = ConstraintSpec::preset("handover").unwrap();
+    c.regions.push(RegionSpec {
+        name: "again".into(),
+        body_parts: vec!["torso".into()],
+        constraint: Constraint::Ssm,
+    });
+    assert_eq!(
+        c.resolve(&default_human()).unwrap_err(),
+        ModelError::DuplicateName {
+            kind: "body part in regions",
+            name: "torso".into()
+        }
+    );
+}
+
+#[test]
+fn huge_axis_whose_norm_overflows_is_rejected() {
+    // |axis| overflows to +inf: normalising would give a NaN axis (and NaN FK) if accepted.
+    let mut s = spec();
+    s.joints[0].axis = [1e200, 1e200, 0.0];
+    let v = invalid_value(RobotModel::new(s), "joints[0].axis");
+    assert!(v.is_infinite());
+}

@@ -1,0 +1,232 @@
+//! A lightweight outward-rounded interval type for hot paths.
+//!
+//! Each bound of `+ − ×` is computed in round-to-nearest and stepped one ulp outward
+//! (`next_down` / `next_up`), which encloses the exact result because IEEE 754 operations are
+//! correctly rounded (see [`crate::rounding`]). This avoids switching the FPU rounding mode and is
+//! an order of magnitude faster than `inari` here; property tests check every operation against
+//! `inari` (the result must contain inari's rigorous result). A NaN anywhere yields the whole
+//! real line, never a too-small set.
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+/// A closed interval `[lo, hi]` of reals (`lo <= hi`, possibly infinite ends).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    lo: f64,
+    hi: f64,
+}
+
+impl Interval {
+    /// The whole real line.
+    pub const ENTIRE: Interval = Interval {
+        lo: f64::NEG_INFINITY,
+        hi: f64::INFINITY,
+    };
+    /// The point 0.
+    pub const ZERO: Interval = Interval { lo: 0.0, hi: 0.0 };
+    /// The point 1.
+    pub const ONE: Interval = Interval { lo: 1.0, hi: 1.0 };
+
+    /// `[lo, hi]`; `None` if `lo > hi` or either is NaN.
+    #[inline]
+    pub fn new(lo: f64, hi: f64) -> Option<Self> {
+        (lo <= hi).then_some(Self { lo, hi })
+    }
+
+    /// The point interval `[x, x]` (NaN gives [`Self::ENTIRE`]).
+    #[inline(always)]
+    pub fn point(x: f64) -> Self {
+        if x.is_nan() {
+            Self::ENTIRE
+        } else {
+            Self { lo: x, hi: x }
+        }
+    }
+
+    #[inline(always)]
+    fn checked(lo: f64, hi: f64) -> Self {
+        if lo <= hi {
+            Self { lo, hi }
+        } else {
+            Self::ENTIRE
+        }
+    }
+
+    /// Lower bound.
+    #[inline(always)]
+    pub fn lo(&self) -> f64 {
+        self.lo
+    }
+    /// Upper bound.
+    #[inline(always)]
+    pub fn hi(&self) -> f64 {
+        self.hi
+    }
+    /// A point inside the interval (the midpoint, rounded to nearest).
+    #[inline(always)]
+    pub fn mid(&self) -> f64 {
+        if self.lo == self.hi {
+            return self.lo;
+        }
+        let m = 0.5 * self.lo + 0.5 * self.hi;
+        if m.is_finite() {
+            m.clamp(self.lo, self.hi)
+        } else {
+            0.0f64.clamp(self.lo, self.hi)
+        }
+    }
+    /// Upper bound of `max |x|` over the interval.
+    #[inline(always)]
+    pub fn mag(&self) -> f64 {
+        self.lo.abs().max(self.hi.abs())
+    }
+    /// Upper bound of the distance from [`Self::mid`] to either end.
+    #[inline(always)]
+    pub fn rad_up(&self) -> f64 {
+        let m = self.mid();
+        (self.hi - m).next_up().max((m - self.lo).next_up())
+    }
+    /// Whether `x` lies in the interval.
+    #[inline]
+    pub fn contains(&self, x: f64) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+    /// Whether `other` is a subset.
+    #[inline]
+    pub fn contains_interval(&self, other: &Interval) -> bool {
+        self.lo <= other.lo && other.hi <= self.hi
+    }
+    /// Smallest interval containing both.
+    #[inline]
+    pub fn hull(&self, other: &Interval) -> Interval {
+        Interval {
+            lo: self.lo.min(other.lo),
+            hi: self.hi.max(other.hi),
+        }
+    }
+    /// Multiply by a scalar (outward rounded).
+    #[inline(always)]
+    pub fn scale(self, x: f64) -> Interval {
+        let a = self.lo * x;
+        let b = self.hi * x;
+        if a.is_nan() || b.is_nan() {
+            return Self::ENTIRE;
+        }
+        Self::checked(a.min(b).next_down(), a.max(b).next_up())
+    }
+    /// Square (tighter than `x * x` when the interval straddles 0).
+    #[inline]
+    pub fn sqr(self) -> Interval {
+        if self.lo >= 0.0 {
+            Self::checked(
+                (self.lo * self.lo).next_down().max(0.0),
+                (self.hi * self.hi).next_up(),
+            )
+        } else if self.hi <= 0.0 {
+            Self::checked(
+                (self.hi * self.hi).next_down().max(0.0),
+                (self.lo * self.lo).next_up(),
+            )
+        } else {
+            let m = self.mag();
+            Self::checked(0.0, (m * m).next_up())
+        }
+    }
+}
+
+impl Add for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn add(self, o: Interval) -> Interval {
+        Interval::checked((self.lo + o.lo).next_down(), (self.hi + o.hi).next_up())
+    }
+}
+
+impl Sub for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn sub(self, o: Interval) -> Interval {
+        Interval::checked((self.lo - o.hi).next_down(), (self.hi - o.lo).next_up())
+    }
+}
+
+impl Neg for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn neg(self) -> Interval {
+        Interval {
+            lo: -self.hi,
+            hi: -self.lo,
+        }
+    }
+}
+
+impl Mul for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn mul(self, o: Interval) -> Interval {
+        if self.lo == self.hi {
+            return o.scale(self.lo);
+        }
+        if o.lo == o.hi {
+            return self.scale(o.lo);
+        }
+        let a = self.lo * o.lo;
+        let b = self.lo * o.hi;
+        let c = self.hi * o.lo;
+        let d = self.hi * o.hi;
+        if a.is_nan() || b.is_nan() || c.is_nan() || d.is_nan() {
+            return Interval::ENTIRE;
+        }
+        Interval::checked(
+            a.min(b).min(c.min(d)).next_down(),
+            a.max(b).max(c.max(d)).next_up(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inari::interval;
+    use proptest::prelude::*;
+
+    fn iv() -> impl Strategy<Value = Interval> {
+        prop_oneof![
+            (-1e3f64..1e3).prop_map(Interval::point),
+            (-1e3f64..1e3, 0.0f64..10.0).prop_map(|(a, w)| Interval::new(a, a + w).unwrap()),
+            (-1e-3f64..1e-3, 0.0f64..1e-3).prop_map(|(a, w)| Interval::new(a, a + w).unwrap()),
+        ]
+    }
+
+    fn inari_of(x: Interval) -> inari::Interval {
+        interval!(x.lo(), x.hi()).unwrap()
+    }
+
+    fn encloses(ours: Interval, exact: inari::Interval) -> bool {
+        ours.lo() <= exact.inf() && exact.sup() <= ours.hi()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(10_000))]
+        #[test]
+        fn ops_enclose_inari(a in iv(), b in iv(), s in -1e3f64..1e3) {
+            let (ia, ib) = (inari_of(a), inari_of(b));
+            prop_assert!(encloses(a + b, ia + ib));
+            prop_assert!(encloses(a - b, ia - ib));
+            prop_assert!(encloses(a * b, ia * ib));
+            prop_assert!(encloses(-a, -ia));
+            prop_assert!(encloses(a.scale(s), ia * interval!(s, s).unwrap()));
+            prop_assert!(encloses(a.sqr(), ia.sqr()));
+            prop_assert!(a.contains(a.mid()));
+            prop_assert!(a.hi() - a.mid() <= a.rad_up() && a.mid() - a.lo() <= a.rad_up());
+        }
+    }
+
+    #[test]
+    fn nan_gives_entire() {
+        let inf = Interval::new(0.0, f64::INFINITY).unwrap();
+        assert_eq!(inf * Interval::ZERO, Interval::ENTIRE);
+        assert_eq!(Interval::point(f64::NAN), Interval::ENTIRE);
+    }
+}
