@@ -17,6 +17,8 @@ pub mod failsafe;
 pub mod intended;
 pub mod monitored;
 pub mod profile;
+pub mod scaling;
+pub mod shield;
 pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
