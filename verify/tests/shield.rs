@@ -6,7 +6,7 @@ use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
 use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_reach::human::HumanMeasurement;
 use pacs_verify::chunk::{ActionKind, Chunk};
-use pacs_verify::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_verify::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
 
 const Q0: [f64; 7] = fr3::Q_READY;
 
@@ -92,6 +92,8 @@ fn run(mode: FilterMode, spec: &str, steps: usize, every: usize, delta: [f64; 7]
 }
 
 const DELTA: [f64; 7] = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+/// Faster actions for the PFL scenarios (joint 1 reaches ~1 rad/s): OFF exceeds the thresholds.
+const FAST: [f64; 7] = [0.08, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 
 #[test]
 fn free_motion_completes_without_a_human_nearby() {
@@ -141,4 +143,102 @@ fn person_walks_in_and_leaves_robot_resumes_on_the_same_path() {
             assert!((w[1][i] - Q0[i]).abs() < 1e-9, "joint {i} left the path: {}", w[1][i]);
         }
     }
+}
+
+/// Moving contacts of a PFL run, with the nominal energy of the whole moving robot at contact.
+fn pfl_contacts(
+    spec: &str,
+    script: &dyn Fn(f64) -> Vec<[f64; 3]>,
+    mode: FilterMode,
+    steps: usize,
+    env: Vec<EnvShape>,
+    clamped: bool,
+) -> (usize, f64, f64) {
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let cs = ConstraintSpec::builtin(spec).unwrap();
+    let tc = cs.resolve(&human).unwrap();
+    let cfg = ShieldConfig { mode, ..ShieldConfig::default() };
+    let mut sh = Shield::new(robot.clone(), Some((human.clone(), &cs)), env, cfg).unwrap();
+    sh.start(0.0, &Q0).unwrap();
+    let (mut contacts, mut worst_ratio, mut progress) = (0, 0.0f64, 0.0);
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 400 == 0 {
+            let _ = sh.set_chunk(&chunk(FAST, 8));
+        }
+        let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
+        let cmd = sh.step(t, Some(&m));
+        let q = &cmd.state.q[..7];
+        let dq = &cmd.state.dq[..7];
+        progress = q[0] - Q0[0];
+        // Ground truth: any body part in contact with a moving link?
+        let kp = script(cmd.t);
+        let caps = robot.capsules_world(q);
+        let mut e = [0.0; 8];
+        robot.subchain_energies_into(q, dq, &mut e);
+        for (b, bp) in human.body_parts().iter().enumerate() {
+            let (a, bb) = (Point3::from(kp[bp.from]), Point3::from(kp[bp.to]));
+            for (li, c) in &caps {
+                let frame = robot.links()[*li].frame;
+                if frame == 0 {
+                    continue;
+                }
+                let d = segment_distance_lower_bound(&a, &bb, &c.p1(), &c.p2()) - c.radius() - bp.thickness / 2.0;
+                if d <= 0.0 && e[frame] > 0.0 {
+                    contacts += 1;
+                    // Ground truth contact type is known by construction of the scenario.
+                    let thr = tc.per_part[b].threshold(clamped).max(1e-12);
+                    worst_ratio = worst_ratio.max(e[frame] / thr);
+                }
+            }
+        }
+    }
+    (contacts, worst_ratio, progress)
+}
+
+#[test]
+fn handover_pfl_contact_energy_stays_below_threshold() {
+    // The right hand comes to the gripper's path and stays there.
+    let script = |t: f64| {
+        let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
+        let hand = [1.2 - w * (1.2 - 0.33), 0.1, 1.0 - w * (1.0 - 0.45)];
+        human_at(1.4, 0.2, hand)
+    };
+    let (contacts, ratio, progress) = pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![], false);
+    assert!(ratio <= 1.0, "PACS: contact energy {ratio}× the unconstrained threshold");
+    let (off_contacts, off_ratio, _) = pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![], false);
+    assert!(off_contacts > 0 && off_ratio > 1.0, "OFF should exceed the threshold: {off_contacts} contacts, {off_ratio}×");
+    // PFL lets the robot keep moving slowly near the hand instead of stopping far away.
+    assert!(progress > 0.0, "no progress at all ({contacts} contacts)");
+}
+
+#[test]
+fn feeding_pfl_head_approach_is_safe() {
+    // The head leans toward the tool (fork) at 0.3 m/s.
+    let script = |t: f64| {
+        let w = ((t - 0.1) / 1.0).clamp(0.0, 1.0);
+        let x = 1.0 - 0.45 * w;
+        let mut kp = human_at(x + 0.1, 0.0, [x, -0.3, 1.0]);
+        kp[8] = [x - 0.05, 0.05, 0.62]; // head low, in front of the robot
+        kp[6] = [x + 0.05, 0.0, 0.75];
+        kp
+    };
+    let (_, ratio, _) = pfl_contacts("feeding", &script, FilterMode::Pacs, 2000, vec![], false);
+    assert!(ratio <= 1.0, "PACS: head contact energy {ratio}× threshold");
+}
+
+#[test]
+fn hand_resting_on_the_table_gets_the_constrained_threshold() {
+    // The hand lies on a table top (z = 0.36 m) under the gripper's path: clamping is possible.
+    let table = EnvShape::Box { min: [0.1, -0.6, 0.0], max: [1.0, 0.6, 0.36] };
+    let script = |t: f64| {
+        let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
+        let hand = [1.2 - w * (1.2 - 0.33), 0.1, 0.45];
+        human_at(1.4, 0.2, hand)
+    };
+    let (_, ratio, _) = pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![table], true);
+    assert!(ratio <= 1.0, "PACS: clamped contact energy {ratio}× the constrained threshold");
+    let (_, off_ratio, _) = pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![table], true);
+    assert!(off_ratio > 1.0, "OFF should exceed the constrained threshold ({off_ratio}×)");
 }
