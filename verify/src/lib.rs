@@ -18,6 +18,7 @@ pub mod intended;
 pub mod monitored;
 pub mod profile;
 pub mod scaling;
+pub mod bench;
 pub mod shield;
 pub mod trajectory;
 

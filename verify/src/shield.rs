@@ -26,7 +26,7 @@ use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel, TaskConstraints};
 use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
-use pacs_reach::robot::RobotReach;
+use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_reach::rounding::{add_up, mul_up};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -266,6 +266,49 @@ pub struct Shield {
     energies: Vec<f64>,
     /// Per robot capsule: its link index.
     capsule_link: Vec<usize>,
+    /// Axis-aligned boxes of the robot capsules of the current interval (broad phase).
+    robot_aabb: Vec<Aabb>,
+    scratch: ReachScratch,
+}
+
+/// An axis-aligned box containing a capsule (bounds rounded outward).
+#[derive(Debug, Clone, Copy, Default)]
+struct Aabb {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Aabb {
+    #[inline]
+    fn of(c: &Capsule) -> Self {
+        let (a, b, r) = (c.p1(), c.p2(), c.radius());
+        let mut bx = Aabb::default();
+        for k in 0..3 {
+            // |x ± r| rounding error ≤ u·|result|: pad relatively (plus a tiny absolute term).
+            let lo = a[k].min(b[k]) - r;
+            let hi = a[k].max(b[k]) + r;
+            bx.lo[k] = lo - lo.abs() * 1e-15 - 1e-300;
+            bx.hi[k] = hi + hi.abs() * 1e-15 + 1e-300;
+        }
+        bx
+    }
+    /// Lower bound of the distance between two boxes (0 if they overlap).
+    #[inline]
+    fn distance_lb(&self, o: &Aabb) -> f64 {
+        let mut d2 = 0.0;
+        for k in 0..3 {
+            let g = (o.lo[k] - self.hi[k]).max(self.lo[k] - o.hi[k]).next_down();
+            if g > 0.0 {
+                d2 += g * g;
+            }
+        }
+        // Rounded down: the products and sum of positive terms lose at most a few ulps.
+        (d2 * (1.0 - 1e-12)).sqrt()
+    }
+    #[inline]
+    fn overlaps(&self, o: &Aabb) -> bool {
+        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
+    }
 }
 
 impl std::fmt::Debug for Shield {
@@ -344,6 +387,8 @@ impl Shield {
             robot_caps: vec![Capsule::new_unchecked(Default::default(), Default::default(), 0.0); reach.capsule_count()],
             human_caps: vec![Capsule::new_unchecked(Default::default(), Default::default(), 0.0); parts],
             energies: vec![0.0; dof + 1],
+            robot_aabb: vec![Aabb::default(); reach.capsule_count()],
+            scratch: ReachScratch::default(),
             capsule_link,
             reach,
             human,
@@ -633,7 +678,7 @@ impl Shield {
             v_lo[i] = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
             v_hi[i] = c.iter().copied().fold(f64::NEG_INFINITY, f64::max).next_up();
         }
-        if self.reach.occupancy_into(&q_lo[..n], &q_hi[..n], &mut self.robot_caps).is_err() {
+        if self.reach.occupancy_with(&mut self.scratch, &q_lo[..n], &q_hi[..n], &mut self.robot_caps).is_err() {
             return false;
         }
         let Some((hr, tc)) = self.human.as_mut() else { return true };
@@ -644,27 +689,44 @@ impl Shield {
         let moving = sd_hi > 0.0 && (0..n).any(|i| v_lo[i] != 0.0 || v_hi[i] != 0.0);
         let mut energies_done = false;
         let parts = self.human_caps.len();
+        // Broad phase: boxes around the robot's capsules and their union.
+        let mut all = Aabb { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] };
+        for (bx, rc) in self.robot_aabb.iter_mut().zip(&self.robot_caps) {
+            *bx = Aabb::of(rc);
+            for k in 0..3 {
+                all.lo[k] = all.lo[k].min(bx.lo[k]);
+                all.hi[k] = all.hi[k].max(bx.hi[k]);
+            }
+        }
         for b in 0..parts {
             let hc = self.human_caps[b];
-            if k == 0 {
-                for rc in &self.robot_caps {
-                    diag.min_separation = diag.min_separation.min(capsule_distance_lower_bound(rc, &hc));
+            let hb = Aabb::of(&hc);
+            if k == 0 && all.distance_lb(&hb) < diag.min_separation {
+                // Separation lower bound; a pair whose boxes are farther apart than the best so
+                // far cannot lower it.
+                let mut best = diag.min_separation;
+                for (rc, rb) in self.robot_caps.iter().zip(&self.robot_aabb) {
+                    if rb.distance_lb(&hb) < best {
+                        best = best.min(capsule_distance_lower_bound(rc, &hc));
+                    }
                 }
+                diag.min_separation = best;
+            }
+            if !all.overlaps(&hb) {
+                continue;
             }
             // Robot capsules that may touch this part.
-            let mut touching = 0usize;
             let mut first_frame = usize::MAX;
             let mut nonadjacent = false;
             let mut worst: Option<(usize, usize)> = None; // (capsule, frame) with the largest frame
             for (ci, rc) in self.robot_caps.iter().enumerate() {
-                if !capsules_may_intersect(rc, &hc) {
+                if !self.robot_aabb[ci].overlaps(&hb) || !capsules_may_intersect(rc, &hc) {
                     continue;
                 }
                 let frame = self.reach.capsule_frame(ci);
                 if frame == 0 {
                     continue; // the base never moves
                 }
-                touching += 1;
                 if first_frame == usize::MAX {
                     first_frame = frame;
                 } else if first_frame.abs_diff(frame) >= 2 {
@@ -703,7 +765,6 @@ impl Shield {
                                 && hr.model().clampable(b, o)
                                 && self.robot_caps.iter().any(|rc| capsules_may_intersect(rc, &self.human_caps[o]))
                         });
-                    let _ = touching;
                     let threshold = c.threshold(constrained);
                     let energy = self.energies[frame];
                     if energy > diag.contact_energy {
