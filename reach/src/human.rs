@@ -74,7 +74,9 @@ pub enum ReachError {
 pub struct HumanMeasurement {
     time: f64,
     positions: Vec<Point3<f64>>,
-    velocities: Option<Vec<Vector3<f64>>>,
+    /// Velocity buffer (kept allocated); meaningful only when `has_velocities`.
+    velocities: Vec<Vector3<f64>>,
+    has_velocities: bool,
 }
 
 impl HumanMeasurement {
@@ -117,8 +119,21 @@ impl HumanMeasurement {
         Ok(Self {
             time,
             positions: positions.iter().map(|p| Point3::from(*p)).collect(),
-            velocities: velocities.map(|v| v.iter().map(|p| Vector3::from(*p)).collect()),
+            velocities: match velocities {
+                Some(v) => v.iter().map(|p| Vector3::from(*p)).collect(),
+                None => vec![Vector3::zeros(); n],
+            },
+            has_velocities: velocities.is_some(),
         })
+    }
+
+    /// Overwrite with `other`, reusing this measurement's buffers (no allocation when the
+    /// keypoint counts match and velocity presence is unchanged).
+    pub fn assign_from(&mut self, other: &HumanMeasurement) {
+        self.time = other.time;
+        self.positions.clone_from(&other.positions);
+        self.velocities.clone_from(&other.velocities);
+        self.has_velocities = other.has_velocities;
     }
 
     /// Time stamp (s).
@@ -131,7 +146,7 @@ impl HumanMeasurement {
     }
     /// Measured velocities (m/s), if any.
     pub fn velocities(&self) -> Option<&[Vector3<f64>]> {
-        self.velocities.as_deref()
+        self.has_velocities.then_some(self.velocities.as_slice())
     }
 }
 
@@ -284,7 +299,7 @@ impl HumanReach {
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {
-        let v = m.velocities.as_ref()?[k];
+        let v = *m.velocities()?.get(k)?;
         let p = m.positions[k];
         Some(Ball::enclose(
             &self.acc_ball_at(&p, &v, k, t_lo),
@@ -314,7 +329,7 @@ impl HumanReach {
                 "measurement does not match the human model".into(),
             ));
         }
-        if self.kind == HumanReachModel::Acc && m.velocities.is_none() {
+        if self.kind == HumanReachModel::Acc && !m.has_velocities {
             return Err(ReachError::Input(
                 "model `acc` needs measured velocities (measurement.velocities)".into(),
             ));
@@ -338,7 +353,7 @@ impl HumanReach {
                 // The interval may start up to `back` (< 1e-9 s) before the measured state: any
                 // admissible motion moves at most (speed bound)·back in that time.
                 let mut speed = self.model.v_max()[k];
-                if let Some(v) = &m.velocities {
+                if let Some(v) = m.velocities() {
                     let vm = crate::rounding::norm3_up(v[k].x, v[k].y, v[k].z);
                     speed = speed.max(add_up(
                         add_up(vm, self.model.measurement_error_vel()),

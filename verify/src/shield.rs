@@ -259,7 +259,9 @@ pub struct Shield {
     /// Slot of a chunk planned from the current state (not yet verified).
     fresh: Option<usize>,
     failsafe: Option<VerifiedFailsafe>,
+    /// Latest measurement (buffer allocated at construction; valid when `has_meas`).
     meas: Option<HumanMeasurement>,
+    has_meas: bool,
     // Scratch buffers (allocated once).
     robot_caps: Vec<Capsule>,
     human_caps: Vec<Capsule>,
@@ -366,10 +368,13 @@ impl Shield {
         }
         let planner = Planner::new(plan, PlannerConfig { end: EndCondition::AtRest, ..PlannerConfig::default() });
         let reach = RobotReach::try_new(&robot, c.tracking_error).map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let mut meas_buffer = None;
         let human = match human {
             None => None,
             Some((h, spec)) => {
                 let tc = spec.resolve(&h).map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
+                let zeros = vec![[0.0; 3]; h.keypoint_count()];
+                meas_buffer = Some(HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros)).map_err(|e| ShieldError::Invalid(e.to_string()))?);
                 Some((HumanReach::new(h, c.human_model), tc))
             }
         };
@@ -402,7 +407,8 @@ impl Shield {
             started: false,
             fresh: None,
             failsafe: None,
-            meas: None,
+            meas: meas_buffer,
+            has_meas: false,
         })
     }
 
@@ -489,9 +495,12 @@ impl Shield {
             return; // from the future: ignore
         }
         match &mut self.meas {
-            Some(cur) if cur.time() >= m.time() => {}
-            Some(cur) => cur.clone_from(m),
-            None => self.meas = Some(m.clone()),
+            Some(cur) if self.has_meas && cur.time() >= m.time() => {}
+            Some(cur) => {
+                cur.assign_from(m);
+                self.has_meas = true;
+            }
+            None => {}
         }
     }
 
@@ -589,6 +598,10 @@ impl Shield {
         let stop = alpha + brake.settle_time();
         if self.human.is_none() {
             return true;
+        }
+        if !self.has_meas {
+            diag.binding = Binding::NoMeasurement;
+            return false;
         }
         let Some(meas) = self.meas.take() else {
             diag.binding = Binding::NoMeasurement;
