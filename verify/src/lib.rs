@@ -19,6 +19,7 @@ pub mod monitored;
 pub mod profile;
 pub mod scaling;
 pub mod bench;
+pub mod cbf;
 pub mod shield;
 pub mod trajectory;
 

@@ -182,6 +182,11 @@ pub enum Binding {
         /// Occupancy interval index.
         interval: usize,
     },
+    /// CBF baseline: barrier constraints were active this step.
+    Barrier {
+        /// Number of active barrier rows.
+        active: usize,
+    },
     /// PFL: energy bound above the threshold where contact is possible.
     Pfl {
         /// Robot link index.

@@ -242,3 +242,43 @@ fn hand_resting_on_the_table_gets_the_constrained_threshold() {
     let (_, off_ratio, _) = pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![table], true);
     assert!(off_ratio > 1.0, "OFF should exceed the constrained threshold ({off_ratio}×)");
 }
+
+#[test]
+fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
+    use pacs_verify::cbf::{CbfConfig, CbfFilter};
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let run_cbf = |script: &dyn Fn(f64) -> Vec<[f64; 3]>| {
+        let mut f = CbfFilter::new(robot.clone(), Some(human.clone()), CbfConfig::default()).unwrap();
+        f.start(0.0, &Q0).unwrap();
+        let mut off_path = 0.0f64;
+        let mut contacts = 0;
+        for k in 0..1500 {
+            let t = k as f64 * 0.001;
+            if k % 400 == 0 {
+                let _ = f.set_chunk(t, &chunk(DELTA, 8)); // a rejected chunk keeps the old reference
+            }
+            let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
+            let cmd = f.step(t, Some(&m));
+            let q = &cmd.state.q[..7];
+            if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
+                eprintln!("cbf t={t:.2} q1={:.4} q2={:.4} sep={:.3} bind={:?} ok={}", q[0], q[1], cmd.diag.min_separation, cmd.diag.binding, cmd.diag.verified);
+            }
+            for i in 1..7 {
+                off_path = off_path.max((q[i] - Q0[i]).abs());
+            }
+            if true_separation(&robot, &human, q, &script(cmd.t)) <= 0.0 && cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-9) {
+                contacts += 1;
+            }
+        }
+        (f.q()[0] - Q0[0], off_path, contacts)
+    };
+    let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let (progress, off_path, _) = run_cbf(&far);
+    assert!(progress > 0.2, "CBF should track the reference without a human: {progress}");
+    assert!(off_path < 1e-3, "no reason to leave the path: {off_path}");
+    // The hand waits on the robot's upcoming path (joint 1 turns the tool toward +y).
+    let close = |_t: f64| human_at(0.9, 0.6, [0.28, 0.32, 0.5]);
+    let (_, off_path, _) = run_cbf(&close);
+    assert!(off_path > 1e-3, "the barrier should push the robot off its path ({off_path} rad)");
+}
