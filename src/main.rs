@@ -36,6 +36,9 @@ enum Command {
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
+    /// Measure speed (use a release build: `cargo run --release -- bench shield`).
+    #[command(subcommand)]
+    Bench(BenchCommand),
     /// Time-parameterize an action chunk into a jerk-limited intended trajectory (optionally with a
     /// path-consistent failsafe).
     Trajectory {
@@ -45,6 +48,17 @@ enum Command {
         /// Also compute the failsafe (braking along the path) started at this time (s).
         #[arg(long, value_name = "T")]
         brake_at: Option<f64>,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Time the shield step (PACS-SSM, PACS-PFL) and the CBF baseline on a fixed FR3 + walking
+    /// human scenario; prints median, p90, p99 and max per step in microseconds.
+    Shield {
+        /// Number of 1 ms safety steps per filter (the CBF runs at most 20000).
+        #[arg(long, default_value_t = 100_000)]
+        steps: usize,
     },
 }
 
@@ -91,6 +105,10 @@ fn main() -> ExitCode {
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
+        Command::Bench(BenchCommand::Shield { steps }) => {
+            use std::io::IsTerminal;
+            cli::bench::shield(steps, std::io::stderr().is_terminal())
+        }
     };
     match result {
         Ok(value) => {

@@ -183,7 +183,10 @@ impl std::fmt::Debug for ReachScratch {
 
 impl Default for ReachScratch {
     fn default() -> Self {
-        Self { boxf: Frames::new(), cent: Frames::new() }
+        Self {
+            boxf: Frames::new(),
+            cent: Frames::new(),
+        }
     }
 }
 

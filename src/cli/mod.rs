@@ -1,5 +1,6 @@
 //! The `pacs` command line: one module per subcommand, shared error type and JSON I/O helpers.
 
+pub mod bench;
 pub mod fk;
 pub mod reach;
 pub mod show;
@@ -86,8 +87,10 @@ impl RobotRef {
     pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
         Ok(match self {
             RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
-            RobotRef::Urdf { urdf, side } => pacs_models::urdf::load_urdf_files(urdf, side.as_deref())
-                .map_err(|e| CliError::Input(format!("robot {}: {e}", urdf.display())))?,
+            RobotRef::Urdf { urdf, side } => {
+                pacs_models::urdf::load_urdf_files(urdf, side.as_deref())
+                    .map_err(|e| CliError::Input(format!("robot {}: {e}", urdf.display())))?
+            }
             RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone())
                 .map_err(|e| CliError::Input(format!("robot: {e}")))?,
         })

@@ -33,7 +33,10 @@ const ROBOT_EXAMPLE: &str = include_str!("../../examples/robot.json");
 const HUMAN_EXAMPLE: &str = include_str!("../../examples/human.json");
 
 /// Read the input file, or parse the built-in example when no file is given.
-fn input_or_example<T: serde::de::DeserializeOwned>(path: Option<&Path>, example: &str) -> Result<T, CliError> {
+fn input_or_example<T: serde::de::DeserializeOwned>(
+    path: Option<&Path>,
+    example: &str,
+) -> Result<T, CliError> {
     match path {
         Some(p) => read_json(p),
         None => parse_json(Path::new("<built-in example>"), example),

@@ -33,7 +33,13 @@ pub struct StepStats {
 fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> StepStats {
     v.sort_by(f64::total_cmp);
     chunks.sort_by(f64::total_cmp);
-    let q = |v: &[f64], p: f64| if v.is_empty() { 0.0 } else { v[((v.len() - 1) as f64 * p).round() as usize] };
+    let q = |v: &[f64], p: f64| {
+        if v.is_empty() {
+            0.0
+        } else {
+            v[((v.len() - 1) as f64 * p).round() as usize]
+        }
+    };
     StepStats {
         scenario: name.into(),
         steps: v.len(),
@@ -47,44 +53,100 @@ fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> 
     }
 }
 
+fn walking_human(t: f64) -> [[f64; 3]; 9] {
+    let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
+    [
+        [d, 0.2, 1.4],
+        [d - 0.1, 0.25, 1.15],
+        [d - 0.2, 0.25, 0.95],
+        [d, -0.2, 1.4],
+        [d - 0.1, -0.25, 1.15],
+        [d - 0.2, -0.25, 0.95],
+        [d, 0.0, 1.5],
+        [d, 0.0, 1.0],
+        [d, 0.0, 1.65],
+    ]
+}
+
+fn back_and_forth(sign: f64) -> Chunk {
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![
+            vec![
+                0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                -0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                0.0
+            ];
+            16
+        ],
+        execute: 8,
+        gripper: None,
+    }
+}
+
+/// The same scenario as [`shield_scenario`] with the control-barrier-function baseline.
+pub fn cbf_scenario(steps: usize) -> StepStats {
+    use crate::cbf::{CbfConfig, CbfFilter};
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
+    let cfg = CbfConfig::default();
+    let mut f = CbfFilter::new(fr3::fr3(), Some(human.clone()), cfg).expect("valid");
+    f.start(0.0, &fr3::Q_READY).expect("start");
+    let (mut times, mut chunk_times, mut verified, mut sign) =
+        (Vec::with_capacity(steps), Vec::new(), 0, 1.0);
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 200 == 0 {
+            let t0 = Instant::now();
+            let _ = f.set_chunk(t, &back_and_forth(sign));
+            chunk_times.push(t0.elapsed().as_secs_f64());
+            sign = -sign;
+        }
+        let m =
+            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
+        let t0 = Instant::now();
+        let cmd = f.step(t, Some(&m));
+        times.push(t0.elapsed().as_secs_f64());
+        verified += cmd.diag.verified as usize;
+    }
+    stats("cbf", times, verified, chunk_times)
+}
+
 /// FR3 moving back and forth (chunks of 8 × 0.02 rad on six joints, alternating direction every
 /// chunk, a new chunk every 200 ms), the default human walking between 1.5 m and 1.0 m in front
 /// of the robot (0.5 Hz), measured every step; `spec` = "sorting" (SSM) or "handover" (PFL).
 pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats {
     let robot = fr3::fr3();
-    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).expect("valid");
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
     let cs = ConstraintSpec::builtin(spec).expect("preset");
-    let cfg = ShieldConfig { mode, ..ShieldConfig::default() };
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
     let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
     sh.start(0.0, &fr3::Q_READY).expect("start");
     let mut times = Vec::with_capacity(steps);
     let mut chunk_times = Vec::new();
     let mut verified = 0;
-    let mut kp = vec![[0.0; 3]; 9];
-    let chunk = |sign: f64| Chunk {
-        kind: ActionKind::Delta,
-        actions: vec![vec![0.02 * sign, 0.02 * sign, 0.02 * sign, -0.02 * sign, 0.02 * sign, 0.02 * sign, 0.0]; 16],
-        execute: 8,
-        gripper: None,
-    };
     let mut sign = 1.0;
     for k in 0..steps {
         let t = k as f64 * cfg.safety_step;
         if k % 200 == 0 {
-            let c = chunk(sign);
+            let c = back_and_forth(sign);
             sign = -sign;
             let t0 = Instant::now();
             let _ = sh.set_chunk(&c);
             chunk_times.push(t0.elapsed().as_secs_f64());
         }
-        let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
-        let body = [
-            [d, 0.2, 1.4], [d - 0.1, 0.25, 1.15], [d - 0.2, 0.25, 0.95],
-            [d, -0.2, 1.4], [d - 0.1, -0.25, 1.15], [d - 0.2, -0.25, 0.95],
-            [d, 0.0, 1.5], [d, 0.0, 1.0], [d, 0.0, 1.65],
-        ];
-        kp.copy_from_slice(&body);
-        let m = HumanMeasurement::new(&human, t, &kp, None).expect("valid measurement");
+        let m =
+            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
         let t0 = Instant::now();
         let cmd = sh.step(t, Some(&m));
         times.push(t0.elapsed().as_secs_f64());

@@ -14,7 +14,9 @@ use crate::intended::{Planner, PlannerConfig};
 use crate::shield::{Binding, Command, Diagnostics, ShieldError};
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+};
 use nalgebra::Point3;
 use pacs_models::{Capsule, HumanModel, MAX_DOF, RobotModel};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_closest_points};
@@ -71,15 +73,23 @@ pub struct CbfFilter {
 
 impl std::fmt::Debug for CbfFilter {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("CbfFilter").field("config", &self.config).finish()
+        f.debug_struct("CbfFilter")
+            .field("config", &self.config)
+            .finish()
     }
 }
 
 impl CbfFilter {
     /// Build for a robot and an optional human model (combined reach model over one step).
-    pub fn new(robot: RobotModel, human: Option<HumanModel>, config: CbfConfig) -> Result<Self, ShieldError> {
+    pub fn new(
+        robot: RobotModel,
+        human: Option<HumanModel>,
+        config: CbfConfig,
+    ) -> Result<Self, ShieldError> {
         if !(config.safety_step > 0.0 && config.gamma > 0.0 && config.kp >= 0.0) {
-            return Err(ShieldError::Invalid("cbf config: safety_step and gamma must be > 0, kp >= 0".into()));
+            return Err(ShieldError::Invalid(
+                "cbf config: safety_step and gamma must be > 0, kp >= 0".into(),
+            ));
         }
         let hw = Limits::from_joint_limits(robot.limits());
         let mut plan = hw;
@@ -88,7 +98,13 @@ impl CbfFilter {
             plan.j[i] = plan.j[i].min(config.intended_jerk);
         }
         Ok(Self {
-            planner: Planner::new(plan, PlannerConfig { end: EndCondition::AtRest, ..PlannerConfig::default() }),
+            planner: Planner::new(
+                plan,
+                PlannerConfig {
+                    end: EndCondition::AtRest,
+                    ..PlannerConfig::default()
+                },
+            ),
             hw,
             human: human.map(|h| HumanReach::new(h, HumanReachModel::Combined)),
             robot,
@@ -107,7 +123,9 @@ impl CbfFilter {
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
         let n = self.robot.dof();
         if q.len() != n || !self.robot.limits().contains(q) {
-            return Err(ShieldError::Invalid("cbf start: configuration invalid or outside limits".into()));
+            return Err(ShieldError::Invalid(
+                "cbf start: configuration invalid or outside limits".into(),
+            ));
         }
         self.q = [0.0; MAX_DOF];
         self.q[..n].copy_from_slice(q);
@@ -133,7 +151,11 @@ impl CbfFilter {
             dq[i] = self.dq[i].clamp(-lim.v[i], lim.v[i]);
         }
         let start = JointState::new(&self.q[..n], &dq[..n], &[0.0; MAX_DOF][..n]);
-        let wp = chunk.waypoints(&self.q[..n], self.robot.limits(), crate::chunk::OutOfLimits::Reject)?;
+        let wp = chunk.waypoints(
+            &self.q[..n],
+            self.robot.limits(),
+            crate::chunk::OutOfLimits::Reject,
+        )?;
         self.reference = Some(self.planner.plan(&start, &wp)?);
         self.ref_t0 = t;
         Ok(())
@@ -186,14 +208,19 @@ impl CbfFilter {
                                 if d > self.config.activation {
                                     continue;
                                 }
-                                let (pr, ph) = segment_closest_points(&w.p1(), &w.p2(), &hc.p1(), &hc.p2());
+                                let (pr, ph) =
+                                    segment_closest_points(&w.p1(), &w.p2(), &hc.p1(), &hc.p2());
                                 let dir = pr - ph;
                                 let len = dir.norm();
                                 if len < 1e-12 {
                                     continue;
                                 }
                                 let nrm = dir / len;
-                                let jac = self.robot.point_jacobian(&frames, l.frame, &Point3::from(pr.coords));
+                                let jac = self.robot.point_jacobian(
+                                    &frames,
+                                    l.frame,
+                                    &Point3::from(pr.coords),
+                                );
                                 let mut g = [0.0; MAX_DOF];
                                 for (j, gj) in g.iter_mut().enumerate().take(n) {
                                     *gj = nrm.dot(&jac.column(j));
@@ -214,7 +241,11 @@ impl CbfFilter {
             let mut v = [0.0; MAX_DOF];
             for i in 0..n {
                 let dv = self.hw.a[i] * alpha;
-                v[i] = if self.dq[i] > 0.0 { (self.dq[i] - dv).max(0.0) } else { (self.dq[i] + dv).min(0.0) };
+                v[i] = if self.dq[i] > 0.0 {
+                    (self.dq[i] - dv).max(0.0)
+                } else {
+                    (self.dq[i] + dv).min(0.0)
+                };
             }
             v
         });
@@ -228,14 +259,20 @@ impl CbfFilter {
         }
         let state = JointState::new(&self.q[..n], &self.dq[..n], &self.ddq[..n]);
         diag.path_speed = 0.0;
-        Command { t: t + alpha, state, dof: n, diag }
+        Command {
+            t: t + alpha,
+            state,
+            dof: n,
+            diag,
+        }
     }
 
     fn solve(&self, des: &[f64], rows: &[([f64; MAX_DOF], f64)]) -> Option<[f64; MAX_DOF]> {
         let n = des.len();
         let alpha = self.config.safety_step;
         // P = 2I, q = −2·des.
-        let p = CscMatrix::new_from_triplets(n, n, (0..n).collect(), (0..n).collect(), vec![2.0; n]);
+        let p =
+            CscMatrix::new_from_triplets(n, n, (0..n).collect(), (0..n).collect(), vec![2.0; n]);
         let qv: Vec<f64> = des.iter().map(|d| -2.0 * d).collect();
         let (mut ri, mut ci, mut vv, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (k, (g, gh)) in rows.iter().enumerate() {
@@ -252,8 +289,12 @@ impl CbfFilter {
         let lim = self.robot.limits();
         for j in 0..n {
             let dv = self.hw.a[j] * alpha;
-            let hi = self.hw.v[j].min(self.dq[j] + dv).min((lim.q_max()[j] - self.q[j]) / alpha);
-            let lo = (-self.hw.v[j]).max(self.dq[j] - dv).max((lim.q_min()[j] - self.q[j]) / alpha);
+            let hi = self.hw.v[j]
+                .min(self.dq[j] + dv)
+                .min((lim.q_max()[j] - self.q[j]) / alpha);
+            let lo = (-self.hw.v[j])
+                .max(self.dq[j] - dv)
+                .max((lim.q_min()[j] - self.q[j]) / alpha);
             ri.push(m0 + 2 * j);
             ci.push(j);
             vv.push(1.0);
@@ -265,10 +306,17 @@ impl CbfFilter {
         }
         let m = m0 + 2 * n;
         let a = CscMatrix::new_from_triplets(m, n, ri, ci, vv);
-        let settings = DefaultSettingsBuilder::default().verbose(false).build().ok()?;
-        let mut solver = DefaultSolver::new(&p, &qv, &a, &b, &[NonnegativeConeT(m)], settings).ok()?;
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .build()
+            .ok()?;
+        let mut solver =
+            DefaultSolver::new(&p, &qv, &a, &b, &[NonnegativeConeT(m)], settings).ok()?;
         solver.solve();
-        if !matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved) {
+        if !matches!(
+            solver.solution.status,
+            SolverStatus::Solved | SolverStatus::AlmostSolved
+        ) {
             return None;
         }
         let mut out = [0.0; MAX_DOF];
@@ -284,5 +332,9 @@ impl CbfFilter {
 
 /// Capsules of the robot at `q` (world frame), for diagnostics and tests.
 pub fn robot_capsules(robot: &RobotModel, q: &[f64]) -> Vec<Capsule> {
-    robot.capsules_world(q).into_iter().map(|(_, c)| c).collect()
+    robot
+        .capsules_world(q)
+        .into_iter()
+        .map(|(_, c)| c)
+        .collect()
 }

@@ -23,7 +23,11 @@ pub struct PlannerConfig {
 
 impl Default for PlannerConfig {
     fn default() -> Self {
-        Self { end: EndCondition::AtRest, sweeps: 3, velocity_gain: 1.0 }
+        Self {
+            end: EndCondition::AtRest,
+            sweeps: 3,
+            velocity_gain: 1.0,
+        }
     }
 }
 
@@ -42,7 +46,10 @@ pub struct Planner {
 
 impl std::fmt::Debug for Planner {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Planner").field("limits", &self.limits).field("config", &self.config).finish()
+        f.debug_struct("Planner")
+            .field("limits", &self.limits)
+            .field("config", &self.config)
+            .finish()
     }
 }
 
@@ -84,47 +91,100 @@ impl Planner {
     /// Intended trajectory from `start` through q̂_1 … q̂_h of `wp` (q̂_0 must equal `start.q`),
     /// passing every waypoint exactly, within every limit at every instant (checked), and
     /// continuous in q, q̇, q̈ with `start`. The shortest of the candidates tried is returned.
-    pub fn plan(&mut self, start: &JointState, wp: &Waypoints) -> Result<Trajectory, TrajectoryError> {
+    pub fn plan(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+    ) -> Result<Trajectory, TrajectoryError> {
         let sweeps = self.config.sweeps;
         self.plan_with(start, wp, sweeps, self.config.end)
     }
 
     /// The paper's single-action baseline: each waypoint as its own time-optimal, synchronized
     /// stop-at-target (rest-to-rest) motion.
-    pub fn plan_single_action(&mut self, start: &JointState, wp: &Waypoints) -> Result<Trajectory, TrajectoryError> {
+    pub fn plan_single_action(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+    ) -> Result<Trajectory, TrajectoryError> {
         self.plan_with(start, wp, 0, EndCondition::AtRest)
     }
 
     fn validate(&self, start: &JointState, wp: &Waypoints) -> Result<(), TrajectoryError> {
         let n = self.limits.dof;
         if wp.dof() != n {
-            return Err(TrajectoryError::Length { what: "waypoints".into(), expected: n, found: wp.dof() });
+            return Err(TrajectoryError::Length {
+                what: "waypoints".into(),
+                expected: n,
+                found: wp.dof(),
+            });
         }
         let l = &self.limits;
         let tol = 1.0 + LIMIT_REL_TOL;
         for i in 0..n {
-            for (what, x) in [("state.q", start.q[i]), ("state.dq", start.dq[i]), ("state.ddq", start.ddq[i])] {
+            for (what, x) in [
+                ("state.q", start.q[i]),
+                ("state.dq", start.dq[i]),
+                ("state.ddq", start.ddq[i]),
+            ] {
                 if !x.is_finite() {
-                    return Err(TrajectoryError::NotFinite { what: what.into(), index: i, value: x });
+                    return Err(TrajectoryError::NotFinite {
+                        what: what.into(),
+                        index: i,
+                        value: x,
+                    });
                 }
             }
             if start.q[i] < l.q_min[i] - 1e-9 || start.q[i] > l.q_max[i] + 1e-9 {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "q", value: start.q[i], limit: if start.q[i] < l.q_min[i] { l.q_min[i] } else { l.q_max[i] } });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "q",
+                    value: start.q[i],
+                    limit: if start.q[i] < l.q_min[i] {
+                        l.q_min[i]
+                    } else {
+                        l.q_max[i]
+                    },
+                });
             }
             if start.dq[i].abs() > l.v[i] * tol {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "dq", value: start.dq[i], limit: l.v[i] });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "dq",
+                    value: start.dq[i],
+                    limit: l.v[i],
+                });
             }
             if start.ddq[i].abs() > l.a[i] * tol {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "ddq", value: start.ddq[i], limit: l.a[i] });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "ddq",
+                    value: start.ddq[i],
+                    limit: l.a[i],
+                });
             }
             if (wp.row(0)[i] - start.q[i]).abs() > 1e-9 {
-                return Err(TrajectoryError::Infeasible { segment: 0, joint: i, reason: format!("waypoint 0 ({}) differs from the start position ({})", wp.row(0)[i], start.q[i]) });
+                return Err(TrajectoryError::Infeasible {
+                    segment: 0,
+                    joint: i,
+                    reason: format!(
+                        "waypoint 0 ({}) differs from the start position ({})",
+                        wp.row(0)[i],
+                        start.q[i]
+                    ),
+                });
             }
         }
         Ok(())
     }
 
-    fn plan_with(&mut self, start: &JointState, wp: &Waypoints, sweeps: usize, end: EndCondition) -> Result<Trajectory, TrajectoryError> {
+    fn plan_with(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        sweeps: usize,
+        end: EndCondition,
+    ) -> Result<Trajectory, TrajectoryError> {
         self.validate(start, wp)?;
         let n = self.limits.dof;
         let h = wp.segments();
@@ -169,7 +229,11 @@ impl Planner {
                 Err(e) => last_err = Some(e),
             }
         }
-        Err(last_err.unwrap_or(TrajectoryError::Infeasible { segment: 1, joint: 0, reason: "no candidate".into() }))
+        Err(last_err.unwrap_or(TrajectoryError::Infeasible {
+            segment: 1,
+            joint: 0,
+            reason: "no candidate".into(),
+        }))
     }
 
     /// Waypoint velocities for the next candidate from the segment durations of candidate `from`:
@@ -184,7 +248,11 @@ impl Planner {
                 let d1 = wp.row(k)[i] - wp.row(k - 1)[i];
                 let v = if k < h {
                     let d2 = wp.row(k + 1)[i] - wp.row(k)[i];
-                    if d1 * d2 <= 0.0 { 0.0 } else { g * (d1 + d2) / (dur[k - 1] + dur[k]) }
+                    if d1 * d2 <= 0.0 {
+                        0.0
+                    } else {
+                        g * (d1 + d2) / (dur[k - 1] + dur[k])
+                    }
                 } else {
                     match end {
                         EndCondition::AtRest => 0.0,
@@ -197,7 +265,12 @@ impl Planner {
         }
     }
 
-    fn solve_candidate(&mut self, start: &JointState, wp: &Waypoints, c: usize) -> Result<(), TrajectoryError> {
+    fn solve_candidate(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        c: usize,
+    ) -> Result<(), TrajectoryError> {
         let n = self.limits.dof;
         let h = wp.segments();
         let mut profs = std::mem::take(&mut self.cand[c]);
@@ -223,7 +296,10 @@ impl Planner {
             match self.otg.calculate(&self.input, &mut self.out) {
                 Ok(_) => {}
                 Err(e) => {
-                    result = Err(TrajectoryError::Solver { segment: k, message: e.to_string() });
+                    result = Err(TrajectoryError::Solver {
+                        segment: k,
+                        message: e.to_string(),
+                    });
                     break;
                 }
             }
@@ -260,7 +336,13 @@ impl Planner {
                 if p.brake.duration > 0.0 {
                     for b in 0..2 {
                         if p.brake.t[b] > 0.0 {
-                            pieces.push(Piece { t: seg_start + off, q: p.brake.p[b], v: p.brake.v[b], a: p.brake.a[b], j: p.brake.j[b] });
+                            pieces.push(Piece {
+                                t: seg_start + off,
+                                q: p.brake.p[b],
+                                v: p.brake.v[b],
+                                a: p.brake.a[b],
+                                j: p.brake.j[b],
+                            });
                             off += p.brake.t[b];
                         }
                     }
@@ -269,18 +351,40 @@ impl Planner {
                 let mut acc = 0.0;
                 for ph in 0..7 {
                     if p.t[ph] > 0.0 {
-                        pieces.push(Piece { t: seg_start + off + acc, q: p.p[ph], v: p.v[ph], a: p.a[ph], j: p.j[ph] });
+                        pieces.push(Piece {
+                            t: seg_start + off + acc,
+                            q: p.p[ph],
+                            v: p.v[ph],
+                            a: p.a[ph],
+                            j: p.j[ph],
+                        });
                     }
                     acc += p.t[ph];
                 }
                 if off + acc < durs[k] - 1e-12 {
-                    pieces.push(Piece { t: seg_start + off + acc, q: p.p[7], v: p.v[7], a: p.a[7], j: 0.0 });
+                    pieces.push(Piece {
+                        t: seg_start + off + acc,
+                        q: p.p[7],
+                        v: p.v[7],
+                        a: p.a[7],
+                        j: 0.0,
+                    });
                 }
                 seg_start = times[k];
             }
             // Terminal piece: exactly at the last waypoint with its target velocity.
-            let v_end = if end == EndCondition::AtRest { 0.0 } else { self.vel[h * n + i] };
-            pieces.push(Piece { t: seg_start, q: wp.row(h)[i], v: v_end, a: 0.0, j: 0.0 });
+            let v_end = if end == EndCondition::AtRest {
+                0.0
+            } else {
+                self.vel[h * n + i]
+            };
+            pieces.push(Piece {
+                t: seg_start,
+                q: wp.row(h)[i],
+                v: v_end,
+                a: 0.0,
+                j: 0.0,
+            });
         }
         offsets[n] = pieces.len();
         Trajectory::from_parts(n, pieces, offsets, t0, times, end)

@@ -11,6 +11,8 @@
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, seconds.
 
+pub mod bench;
+pub mod cbf;
 pub mod chunk;
 pub mod error;
 pub mod failsafe;
@@ -18,8 +20,6 @@ pub mod intended;
 pub mod monitored;
 pub mod profile;
 pub mod scaling;
-pub mod bench;
-pub mod cbf;
 pub mod shield;
 pub mod trajectory;
 

@@ -30,11 +30,19 @@ pub struct PathState {
 impl PathState {
     /// On the intended timing at `s` (ṡ = 1, s̈ = 0).
     pub fn intended(s: f64) -> Self {
-        Self { s, sd: 1.0, sdd: 0.0 }
+        Self {
+            s,
+            sd: 1.0,
+            sdd: 0.0,
+        }
     }
     /// At rest at `s`.
     pub fn rest(s: f64) -> Self {
-        Self { s, sd: 0.0, sdd: 0.0 }
+        Self {
+            s,
+            sd: 0.0,
+            sdd: 0.0,
+        }
     }
     /// Whether the path speed and acceleration are exactly those of the intended timing.
     pub fn is_intended(&self) -> bool {
@@ -84,7 +92,13 @@ impl SpeedProfile {
         let mut phases = [Phase::default(); 4];
         let mut n = 0;
         let mut t = 0.0;
-        let mut cur = Phase { t0: 0.0, s: start.s, sd: v0, sdd: a0, jerk: 0.0 };
+        let mut cur = Phase {
+            t0: 0.0,
+            s: start.s,
+            sd: v0,
+            sdd: a0,
+            jerk: 0.0,
+        };
         let mut push = |cur: &mut Phase, jerk: f64, dur: f64, t: &mut f64| {
             if dur <= 0.0 {
                 return;
@@ -94,7 +108,13 @@ impl SpeedProfile {
             n += 1;
             let e = cur.eval(*t + dur);
             *t += dur;
-            *cur = Phase { t0: *t, s: e.s, sd: e.sd, sdd: e.sdd, jerk: 0.0 };
+            *cur = Phase {
+                t0: *t,
+                s: e.s,
+                sd: e.sd,
+                sdd: e.sdd,
+                jerk: 0.0,
+            };
         };
         if jerk > 0.0 && acc > 0.0 {
             // Speed reached by bringing s̈ to zero right away.
@@ -125,7 +145,14 @@ impl SpeedProfile {
         cur.jerk = 0.0;
         phases[n] = cur;
         n += 1;
-        Self { phases, n, settle: t, target, acc, jerk }
+        Self {
+            phases,
+            n,
+            settle: t,
+            target,
+            acc,
+            jerk,
+        }
     }
 
     /// State at time `tau` (s) after the profile start (τ ≥ 0; constant target speed after settling).
@@ -182,7 +209,11 @@ impl SpeedProfile {
         let mut sdd = a.sdd.abs().max(b.sdd.abs());
         for k in 0..self.n {
             let p = &self.phases[k];
-            let end = if k + 1 < self.n { self.phases[k + 1].t0 } else { f64::INFINITY };
+            let end = if k + 1 < self.n {
+                self.phases[k + 1].t0
+            } else {
+                f64::INFINITY
+            };
             if end < ta || p.t0 > tb {
                 continue;
             }
@@ -208,7 +239,13 @@ impl SpeedProfile {
         let pad = |x: f64| x.abs() * 1e-12 + 1e-15;
         let s_lo = a.s - pad(a.s);
         let s_hi = b.s + pad(b.s);
-        (s_lo, s_hi, sd_lo - pad(sd_lo), sd_hi + pad(sd_hi), sdd + pad(sdd))
+        (
+            s_lo,
+            s_hi,
+            sd_lo - pad(sd_lo),
+            sd_hi + pad(sd_hi),
+            sdd + pad(sdd),
+        )
     }
 }
 
@@ -221,7 +258,11 @@ struct Window {
 }
 
 fn window(traj: &Trajectory, s_a: f64, s_b: f64) -> Window {
-    let mut w = Window { q1: [0.0; MAX_DOF], q2: [0.0; MAX_DOF], q3: [0.0; MAX_DOF] };
+    let mut w = Window {
+        q1: [0.0; MAX_DOF],
+        q2: [0.0; MAX_DOF],
+        q3: [0.0; MAX_DOF],
+    };
     for i in 0..traj.dof() {
         let d = traj.joint_derivs(i, s_a, s_b);
         w.q1[i] = d.r[1].abs_max();
@@ -239,7 +280,13 @@ fn within_limits(w: &Window, lim: &Limits, sd_max: f64, sdd_max: f64, jerk: f64)
     (0..lim.dof).all(|i| {
         let v = mul_up(w.q1[i], sd_max);
         let a = add_up(mul_up(w.q1[i], sdd_max), mul_up(w.q2[i], s2));
-        let j = add_up(add_up(mul_up(w.q3[i], s3), mul_up(3.0, mul_up(mul_up(w.q2[i], sd_max), sdd_max))), mul_up(w.q1[i], jerk));
+        let j = add_up(
+            add_up(
+                mul_up(w.q3[i], s3),
+                mul_up(3.0, mul_up(mul_up(w.q2[i], sd_max), sdd_max)),
+            ),
+            mul_up(w.q1[i], jerk),
+        );
         v <= lim.v[i] && a <= lim.a[i] && j <= lim.j[i]
     })
 }
@@ -252,7 +299,13 @@ const JERK_CAP: f64 = 1.0e5;
 /// verified over the time range [0, `horizon`] of the profile (`None`: until it settles).
 /// Returns `None` if no admissible path acceleration exists (e.g. a joint already at its
 /// acceleration limit with no margin).
-pub fn admissible(traj: &Trajectory, lim: &Limits, start: PathState, target: f64, horizon: Option<f64>) -> Option<SpeedProfile> {
+pub fn admissible(
+    traj: &Trajectory,
+    lim: &Limits,
+    start: PathState,
+    target: f64,
+    horizon: Option<f64>,
+) -> Option<SpeedProfile> {
     let n = traj.dof();
     let sd_max0 = start.sd.max(target);
     let mut wlen = 0.01_f64.max(start.sd * 0.01);
@@ -266,7 +319,8 @@ pub fn admissible(traj: &Trajectory, lim: &Limits, start: PathState, target: f64
             }
             if w.q2[i] > 0.0 && sd_max > 0.0 {
                 // Leave at least half of the jerk margin for the path jerk.
-                acc = acc.min(0.5 * (lim.j[i] - w.q3[i] * sd_max.powi(3)) / (3.0 * w.q2[i] * sd_max));
+                acc =
+                    acc.min(0.5 * (lim.j[i] - w.q3[i] * sd_max.powi(3)) / (3.0 * w.q2[i] * sd_max));
             }
         }
         acc *= SAFETY;
@@ -275,7 +329,8 @@ pub fn admissible(traj: &Trajectory, lim: &Limits, start: PathState, target: f64
         for i in 0..n {
             if w.q1[i] > 0.0 {
                 jerk = jerk.min(
-                    (lim.j[i] - w.q3[i] * sd_max.powi(3) - 3.0 * w.q2[i] * sd_max * sdd_max) / w.q1[i],
+                    (lim.j[i] - w.q3[i] * sd_max.powi(3) - 3.0 * w.q2[i] * sd_max * sdd_max)
+                        / w.q1[i],
                 );
             }
         }

@@ -320,14 +320,26 @@ impl Aabb {
 
 impl std::fmt::Debug for Shield {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Shield").field("config", &self.config).field("time", &self.time).finish()
+        f.debug_struct("Shield")
+            .field("config", &self.config)
+            .field("time", &self.time)
+            .finish()
     }
 }
 
 fn hold(q: &[f64]) -> Trajectory {
     let n = q.len();
     let mut offsets = [0usize; MAX_DOF + 1];
-    let pieces: Vec<Piece> = q.iter().map(|&x| Piece { t: 0.0, q: x, v: 0.0, a: 0.0, j: 0.0 }).collect();
+    let pieces: Vec<Piece> = q
+        .iter()
+        .map(|&x| Piece {
+            t: 0.0,
+            q: x,
+            v: 0.0,
+            a: 0.0,
+            j: 0.0,
+        })
+        .collect();
     for (i, o) in offsets.iter_mut().enumerate().take(n + 1) {
         *o = i;
     }
@@ -344,7 +356,9 @@ impl Shield {
         config: ShieldConfig,
     ) -> Result<Self, ShieldError> {
         let c = &config;
-        let bad = |f: &str, v: f64| ShieldError::Invalid(format!("shield config `{f}`: invalid value {v}"));
+        let bad = |f: &str, v: f64| {
+            ShieldError::Invalid(format!("shield config `{f}`: invalid value {v}"))
+        };
         if !(c.safety_step > 0.0 && c.safety_step.is_finite()) {
             return Err(bad("safety_step", c.safety_step));
         }
@@ -352,7 +366,10 @@ impl Shield {
             return Err(bad("tracking_error", c.tracking_error));
         }
         if !(c.intended_acc_fraction > 0.0 && c.intended_acc_fraction < 1.0) {
-            return Err(bad("intended_acc_fraction (must be in (0, 1): braking reserve)", c.intended_acc_fraction));
+            return Err(bad(
+                "intended_acc_fraction (must be in (0, 1): braking reserve)",
+                c.intended_acc_fraction,
+            ));
         }
         if !(c.intended_jerk > 0.0 && c.intended_jerk.is_finite()) {
             return Err(bad("intended_jerk", c.intended_jerk));
@@ -371,19 +388,33 @@ impl Shield {
             plan.a[i] *= c.intended_acc_fraction;
             plan.j[i] = plan.j[i].min(c.intended_jerk);
         }
-        let planner = Planner::new(plan, PlannerConfig { end: EndCondition::AtRest, ..PlannerConfig::default() });
-        let reach = RobotReach::try_new(&robot, c.tracking_error).map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let planner = Planner::new(
+            plan,
+            PlannerConfig {
+                end: EndCondition::AtRest,
+                ..PlannerConfig::default()
+            },
+        );
+        let reach = RobotReach::try_new(&robot, c.tracking_error)
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
         let mut meas_buffer = None;
         let human = match human {
             None => None,
             Some((h, spec)) => {
-                let tc = spec.resolve(&h).map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
+                let tc = spec
+                    .resolve(&h)
+                    .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
                 let zeros = vec![[0.0; 3]; h.keypoint_count()];
-                meas_buffer = Some(HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros)).map_err(|e| ShieldError::Invalid(e.to_string()))?);
+                meas_buffer = Some(
+                    HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
+                        .map_err(|e| ShieldError::Invalid(e.to_string()))?,
+                );
                 Some((HumanReach::new(h, c.human_model), tc))
             }
         };
-        let parts = human.as_ref().map_or(0, |(h, _)| h.model().body_parts().len());
+        let parts = human
+            .as_ref()
+            .map_or(0, |(h, _)| h.model().body_parts().len());
         let mut capsule_link = vec![0; reach.capsule_count()];
         for (li, &(s, e)) in reach.link_ranges().iter().enumerate() {
             for cl in capsule_link.iter_mut().take(e).skip(s) {
@@ -394,8 +425,14 @@ impl Shield {
             dof,
             hw,
             planner,
-            robot_caps: vec![Capsule::new_unchecked(Default::default(), Default::default(), 0.0); reach.capsule_count()],
-            human_caps: vec![Capsule::new_unchecked(Default::default(), Default::default(), 0.0); parts],
+            robot_caps: vec![
+                Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+                reach.capsule_count()
+            ],
+            human_caps: vec![
+                Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+                parts
+            ],
             energies: vec![0.0; dof + 1],
             robot_aabb: vec![Aabb::default(); reach.capsule_count()],
             scratch: ReachScratch::default(),
@@ -433,10 +470,15 @@ impl Shield {
     /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
         if q.len() != self.dof || q.iter().any(|x| !x.is_finite()) || !t.is_finite() {
-            return Err(ShieldError::Invalid(format!("start: need {} finite joint values and a finite time", self.dof)));
+            return Err(ShieldError::Invalid(format!(
+                "start: need {} finite joint values and a finite time",
+                self.dof
+            )));
         }
         if !self.robot.limits().contains(q) {
-            return Err(ShieldError::Invalid("start: configuration outside the joint position limits".into()));
+            return Err(ShieldError::Invalid(
+                "start: configuration outside the joint position limits".into(),
+            ));
         }
         self.trajs = [Some(hold(q)), None];
         self.slot = 0;
@@ -445,7 +487,11 @@ impl Shield {
         self.started = true;
         self.fresh = None;
         // Standing still is the first verified failsafe.
-        self.failsafe = Some(VerifiedFailsafe { slot: 0, profile: SpeedProfile::plan(self.path, 0.0, 1.0, 1.0), t0: t });
+        self.failsafe = Some(VerifiedFailsafe {
+            slot: 0,
+            profile: SpeedProfile::plan(self.path, 0.0, 1.0, 1.0),
+            t0: t,
+        });
         Ok(())
     }
 
@@ -479,7 +525,11 @@ impl Shield {
             return Err(ShieldError::NotStarted);
         }
         let start = self.state();
-        let wp = chunk.waypoints(&start.q[..self.dof], self.robot.limits(), self.config.out_of_limits)?;
+        let wp = chunk.waypoints(
+            &start.q[..self.dof],
+            self.robot.limits(),
+            self.config.out_of_limits,
+        )?;
         let traj = if self.config.single_action {
             self.planner.plan_single_action(&start, &wp)?
         } else {
@@ -541,7 +591,11 @@ impl Shield {
             Some((go, brake, ok)) if ok || self.config.mode == FilterMode::Off => {
                 self.slot = cand_slot;
                 self.path = go.eval(alpha);
-                self.failsafe = Some(VerifiedFailsafe { slot: cand_slot, profile: brake, t0: t + alpha });
+                self.failsafe = Some(VerifiedFailsafe {
+                    slot: cand_slot,
+                    profile: brake,
+                    t0: t + alpha,
+                });
                 diag.stop_time = t + alpha + brake.settle_time();
                 true
             }
@@ -553,7 +607,9 @@ impl Shield {
         };
         if !verified {
             // Continue the last verified failsafe.
-            let f = self.failsafe.expect("a verified failsafe exists once started");
+            let f = self
+                .failsafe
+                .expect("a verified failsafe exists once started");
             self.slot = f.slot;
             self.path = f.profile.eval(t + alpha - f.t0);
             diag.on_failsafe = true;
@@ -562,7 +618,12 @@ impl Shield {
         diag.verified = verified;
         diag.path_speed = self.path.sd;
         self.time = t + alpha;
-        Command { t: t + alpha, state: self.state(), dof: self.dof, diag }
+        Command {
+            t: t + alpha,
+            state: self.state(),
+            dof: self.dof,
+            diag,
+        }
     }
 
     fn hold_command(&self, t: f64, binding: Binding) -> Command {
@@ -576,7 +637,12 @@ impl Shield {
             path_speed: 0.0,
             stop_time: t,
         };
-        Command { t, state: JointState::default(), dof: self.dof, diag }
+        Command {
+            t,
+            state: JointState::default(),
+            dof: self.dof,
+            diag,
+        }
     }
 
     /// The go-profile (toward ṡ = 1 for one step) and the brake profile after it, both admissible.
@@ -598,7 +664,14 @@ impl Shield {
     }
 
     /// Verify the monitored trajectory (go for α_s from t, then brake) against the human.
-    fn verify(&mut self, slot: usize, go: &SpeedProfile, brake: &SpeedProfile, t: f64, diag: &mut Diagnostics) -> bool {
+    fn verify(
+        &mut self,
+        slot: usize,
+        go: &SpeedProfile,
+        brake: &SpeedProfile,
+        t: f64,
+        diag: &mut Diagnostics,
+    ) -> bool {
         let alpha = self.config.safety_step;
         let stop = alpha + brake.settle_time();
         if self.human.is_none() {
@@ -645,7 +718,13 @@ impl Shield {
     }
 
     /// Path and speed ranges of the monitored trajectory over relative time [ta, tb].
-    fn path_ranges(go: &SpeedProfile, brake: &SpeedProfile, alpha: f64, ta: f64, tb: f64) -> (f64, f64, f64, f64) {
+    fn path_ranges(
+        go: &SpeedProfile,
+        brake: &SpeedProfile,
+        alpha: f64,
+        ta: f64,
+        tb: f64,
+    ) -> (f64, f64, f64, f64) {
         let mut s_lo = f64::INFINITY;
         let mut s_hi = f64::NEG_INFINITY;
         let mut sd_lo = f64::INFINITY;
@@ -694,13 +773,31 @@ impl Shield {
             let (a, b) = (d.r[1].lo, d.r[1].hi);
             let c = [a * sd_lo, a * sd_hi, b * sd_lo, b * sd_hi];
             v_lo[i] = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
-            v_hi[i] = c.iter().copied().fold(f64::NEG_INFINITY, f64::max).next_up();
+            v_hi[i] = c
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max)
+                .next_up();
         }
-        if self.reach.occupancy_with(&mut self.scratch, &q_lo[..n], &q_hi[..n], &mut self.robot_caps).is_err() {
+        if self
+            .reach
+            .occupancy_with(
+                &mut self.scratch,
+                &q_lo[..n],
+                &q_hi[..n],
+                &mut self.robot_caps,
+            )
+            .is_err()
+        {
             return false;
         }
-        let Some((hr, tc)) = self.human.as_mut() else { return true };
-        if hr.occupancy_into(meas, t + ta, t + tb, &mut self.human_caps).is_err() {
+        let Some((hr, tc)) = self.human.as_mut() else {
+            return true;
+        };
+        if hr
+            .occupancy_into(meas, t + ta, t + tb, &mut self.human_caps)
+            .is_err()
+        {
             diag.binding = Binding::NoMeasurement;
             return false;
         }
@@ -708,7 +805,10 @@ impl Shield {
         let mut energies_done = false;
         let parts = self.human_caps.len();
         // Broad phase: boxes around the robot's capsules and their union.
-        let mut all = Aabb { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] };
+        let mut all = Aabb {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        };
         for (bx, rc) in self.robot_aabb.iter_mut().zip(&self.robot_caps) {
             *bx = Aabb::of(rc);
             for k in 0..3 {
@@ -760,7 +860,11 @@ impl Shield {
                 pacs_models::Constraint::Ssm => {
                     if moving {
                         if matches!(diag.binding, Binding::None) {
-                            diag.binding = Binding::Ssm { link, body_part: b, interval: k };
+                            diag.binding = Binding::Ssm {
+                                link,
+                                body_part: b,
+                                interval: k,
+                            };
                         }
                         return false;
                     }
@@ -769,7 +873,13 @@ impl Shield {
                     if !energies_done {
                         if self
                             .reach
-                            .subchain_energy_bounds_into(&q_lo[..n], &q_hi[..n], &v_lo[..n], &v_hi[..n], &mut self.energies)
+                            .subchain_energy_bounds_into(
+                                &q_lo[..n],
+                                &q_hi[..n],
+                                &v_lo[..n],
+                                &v_hi[..n],
+                                &mut self.energies,
+                            )
                             .is_err()
                         {
                             return false;
@@ -781,7 +891,10 @@ impl Shield {
                         || (0..parts).any(|o| {
                             o != b
                                 && hr.model().clampable(b, o)
-                                && self.robot_caps.iter().any(|rc| capsules_may_intersect(rc, &self.human_caps[o]))
+                                && self
+                                    .robot_caps
+                                    .iter()
+                                    .any(|rc| capsules_may_intersect(rc, &self.human_caps[o]))
                         });
                     let threshold = c.threshold(constrained);
                     let energy = self.energies[frame];
@@ -791,7 +904,13 @@ impl Shield {
                     }
                     if energy > threshold {
                         if matches!(diag.binding, Binding::None) {
-                            diag.binding = Binding::Pfl { link, body_part: b, energy, threshold, constrained };
+                            diag.binding = Binding::Pfl {
+                                link,
+                                body_part: b,
+                                energy,
+                                threshold,
+                                constrained,
+                            };
                         }
                         return false;
                     }

@@ -17,7 +17,11 @@ fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
         [x, y + 0.25, 1.15],
         [x, y + 0.25, 0.9],
         [x, y - 0.2, 1.4],
-        [0.5 * (x + hand[0]), 0.5 * (y - 0.2 + hand[1]), 0.5 * (1.4 + hand[2])],
+        [
+            0.5 * (x + hand[0]),
+            0.5 * (y - 0.2 + hand[1]),
+            0.5 * (1.4 + hand[2]),
+        ],
         hand,
         [x, y, 1.5],
         [x, y, 1.0],
@@ -26,7 +30,12 @@ fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
 }
 
 /// Minimum exact distance between the robot's moving capsules at `q` and the true body parts.
-fn true_separation(robot: &pacs_models::RobotModel, human: &HumanModel, q: &[f64], kp: &[[f64; 3]]) -> f64 {
+fn true_separation(
+    robot: &pacs_models::RobotModel,
+    human: &HumanModel,
+    q: &[f64],
+    kp: &[[f64; 3]],
+) -> f64 {
     let caps = robot.capsules_world(q);
     let mut d = f64::INFINITY;
     for bp in human.body_parts() {
@@ -36,7 +45,9 @@ fn true_separation(robot: &pacs_models::RobotModel, human: &HumanModel, q: &[f64
             if robot.links()[*li].frame == 0 {
                 continue;
             }
-            let s = segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2()) - c.radius() - bp.thickness / 2.0;
+            let s = segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2())
+                - c.radius()
+                - bp.thickness / 2.0;
             d = d.min(s);
         }
     }
@@ -44,7 +55,12 @@ fn true_separation(robot: &pacs_models::RobotModel, human: &HumanModel, q: &[f64
 }
 
 fn chunk(delta: [f64; 7], h: usize) -> Chunk {
-    Chunk { kind: ActionKind::Delta, actions: vec![delta.to_vec(); 16], execute: h, gripper: None }
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![delta.to_vec(); 16],
+        execute: h,
+        gripper: None,
+    }
 }
 
 struct Run {
@@ -55,15 +71,30 @@ struct Run {
 }
 
 /// Run `steps` safety steps; a new chunk every `every` steps; the human from `script(t)`.
-fn run(mode: FilterMode, spec: &str, steps: usize, every: usize, delta: [f64; 7], script: &dyn Fn(f64) -> Vec<[f64; 3]>) -> Run {
+fn run(
+    mode: FilterMode,
+    spec: &str,
+    steps: usize,
+    every: usize,
+    delta: [f64; 7],
+    script: &dyn Fn(f64) -> Vec<[f64; 3]>,
+) -> Run {
     let robot = fr3::fr3();
     let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
     let spec = ConstraintSpec::builtin(spec).unwrap();
-    let cfg = ShieldConfig { mode, ..ShieldConfig::default() };
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
     let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
     sh.start(0.0, &Q0).unwrap();
     let dt = cfg.safety_step;
-    let mut out = Run { qs: vec![], moving_contact: 0, verified: 0, steps };
+    let mut out = Run {
+        qs: vec![],
+        moving_contact: 0,
+        verified: 0,
+        steps,
+    };
     for k in 0..steps {
         let t = k as f64 * dt;
         if k % every == 0 {
@@ -84,7 +115,16 @@ fn run(mode: FilterMode, spec: &str, steps: usize, every: usize, delta: [f64; 7]
             out.verified += 1;
         }
         if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
-            eprintln!("t={t:.3} q1={:.4} sd={:.3} verified={} fs={} bind={:?} sep_lb={:.3} true_sep={sep:.3} stop={:.3}", q[0], cmd.diag.path_speed, cmd.diag.verified, cmd.diag.on_failsafe, cmd.diag.binding, cmd.diag.min_separation, cmd.diag.stop_time);
+            eprintln!(
+                "t={t:.3} q1={:.4} sd={:.3} verified={} fs={} bind={:?} sep_lb={:.3} true_sep={sep:.3} stop={:.3}",
+                q[0],
+                cmd.diag.path_speed,
+                cmd.diag.verified,
+                cmd.diag.on_failsafe,
+                cmd.diag.binding,
+                cmd.diag.min_separation,
+                cmd.diag.stop_time
+            );
         }
         out.qs.push(q);
     }
@@ -100,7 +140,12 @@ fn free_motion_completes_without_a_human_nearby() {
     let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
     let r = run(FilterMode::Pacs, "sorting", 1500, 400, DELTA, &far);
     assert_eq!(r.moving_contact, 0);
-    assert!(r.verified > r.steps * 9 / 10, "verified {} of {}", r.verified, r.steps);
+    assert!(
+        r.verified > r.steps * 9 / 10,
+        "verified {} of {}",
+        r.verified,
+        r.steps
+    );
     let moved = r.qs.last().unwrap()[0] - Q0[0];
     assert!(moved > 0.2, "joint 1 moved only {moved} rad");
 }
@@ -111,7 +156,10 @@ fn ssm_never_moves_into_a_person_standing_at_the_tool() {
     let r = run(FilterMode::Pacs, "sorting", 1000, 400, DELTA, &close);
     assert_eq!(r.moving_contact, 0, "robot moved while in contact");
     let off = run(FilterMode::Off, "sorting", 1000, 400, DELTA, &close);
-    assert!(off.moving_contact > 0, "OFF should collide in this scenario");
+    assert!(
+        off.moving_contact > 0,
+        "OFF should collide in this scenario"
+    );
 }
 
 #[test]
@@ -130,17 +178,30 @@ fn person_walks_in_and_leaves_robot_resumes_on_the_same_path() {
         } else {
             0.0
         };
-        let hand = [far[0] + w * (near[0] - far[0]), far[1] + w * (near[1] - far[1]), far[2] + w * (near[2] - far[2])];
+        let hand = [
+            far[0] + w * (near[0] - far[0]),
+            far[1] + w * (near[1] - far[1]),
+            far[2] + w * (near[2] - far[2]),
+        ];
         human_at(1.4 - 0.3 * w, 0.2, hand)
     };
     let r = run(FilterMode::Pacs, "sorting", 3000, 400, DELTA, &script);
     assert_eq!(r.moving_contact, 0);
     let q_at = |k: usize| r.qs[k][0];
-    assert!(q_at(2999) > q_at(2150) + 0.01, "no progress after the person left: {} -> {}", q_at(2150), q_at(2999));
+    assert!(
+        q_at(2999) > q_at(2150) + 0.01,
+        "no progress after the person left: {} -> {}",
+        q_at(2150),
+        q_at(2999)
+    );
     for w in r.qs.windows(2) {
         assert!(w[1][0] >= w[0][0] - 1e-12, "moved backwards on the path");
         for i in 1..7 {
-            assert!((w[1][i] - Q0[i]).abs() < 1e-9, "joint {i} left the path: {}", w[1][i]);
+            assert!(
+                (w[1][i] - Q0[i]).abs() < 1e-9,
+                "joint {i} left the path: {}",
+                w[1][i]
+            );
         }
     }
 }
@@ -158,7 +219,10 @@ fn pfl_contacts(
     let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
     let cs = ConstraintSpec::builtin(spec).unwrap();
     let tc = cs.resolve(&human).unwrap();
-    let cfg = ShieldConfig { mode, ..ShieldConfig::default() };
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
     let mut sh = Shield::new(robot.clone(), Some((human.clone(), &cs)), env, cfg).unwrap();
     sh.start(0.0, &Q0).unwrap();
     let (mut contacts, mut worst_ratio, mut progress) = (0, 0.0f64, 0.0);
@@ -184,7 +248,9 @@ fn pfl_contacts(
                 if frame == 0 {
                     continue;
                 }
-                let d = segment_distance_lower_bound(&a, &bb, &c.p1(), &c.p2()) - c.radius() - bp.thickness / 2.0;
+                let d = segment_distance_lower_bound(&a, &bb, &c.p1(), &c.p2())
+                    - c.radius()
+                    - bp.thickness / 2.0;
                 if d <= 0.0 && e[frame] > 0.0 {
                     contacts += 1;
                     // Ground truth contact type is known by construction of the scenario.
@@ -205,10 +271,18 @@ fn handover_pfl_contact_energy_stays_below_threshold() {
         let hand = [1.2 - w * (1.2 - 0.33), 0.1, 1.0 - w * (1.0 - 0.45)];
         human_at(1.4, 0.2, hand)
     };
-    let (contacts, ratio, progress) = pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![], false);
-    assert!(ratio <= 1.0, "PACS: contact energy {ratio}× the unconstrained threshold");
-    let (off_contacts, off_ratio, _) = pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![], false);
-    assert!(off_contacts > 0 && off_ratio > 1.0, "OFF should exceed the threshold: {off_contacts} contacts, {off_ratio}×");
+    let (contacts, ratio, progress) =
+        pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![], false);
+    assert!(
+        ratio <= 1.0,
+        "PACS: contact energy {ratio}× the unconstrained threshold"
+    );
+    let (off_contacts, off_ratio, _) =
+        pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![], false);
+    assert!(
+        off_contacts > 0 && off_ratio > 1.0,
+        "OFF should exceed the threshold: {off_contacts} contacts, {off_ratio}×"
+    );
     // PFL lets the robot keep moving slowly near the hand instead of stopping far away.
     assert!(progress > 0.0, "no progress at all ({contacts} contacts)");
 }
@@ -231,16 +305,39 @@ fn feeding_pfl_head_approach_is_safe() {
 #[test]
 fn hand_resting_on_the_table_gets_the_constrained_threshold() {
     // The hand lies on a table top (z = 0.36 m) under the gripper's path: clamping is possible.
-    let table = EnvShape::Box { min: [0.1, -0.6, 0.0], max: [1.0, 0.6, 0.36] };
+    let table = EnvShape::Box {
+        min: [0.1, -0.6, 0.0],
+        max: [1.0, 0.6, 0.36],
+    };
     let script = |t: f64| {
         let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
         let hand = [1.2 - w * (1.2 - 0.33), 0.1, 0.45];
         human_at(1.4, 0.2, hand)
     };
-    let (_, ratio, _) = pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![table], true);
-    assert!(ratio <= 1.0, "PACS: clamped contact energy {ratio}× the constrained threshold");
-    let (_, off_ratio, _) = pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![table], true);
-    assert!(off_ratio > 1.0, "OFF should exceed the constrained threshold ({off_ratio}×)");
+    let (_, ratio, _) = pfl_contacts(
+        "handover",
+        &script,
+        FilterMode::Pacs,
+        2000,
+        vec![table],
+        true,
+    );
+    assert!(
+        ratio <= 1.0,
+        "PACS: clamped contact energy {ratio}× the constrained threshold"
+    );
+    let (_, off_ratio, _) = pfl_contacts(
+        "handover",
+        &script,
+        FilterMode::Off,
+        2000,
+        vec![table],
+        true,
+    );
+    assert!(
+        off_ratio > 1.0,
+        "OFF should exceed the constrained threshold ({off_ratio}×)"
+    );
 }
 
 #[test]
@@ -249,7 +346,8 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
     let robot = fr3::fr3();
     let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
     let run_cbf = |script: &dyn Fn(f64) -> Vec<[f64; 3]>| {
-        let mut f = CbfFilter::new(robot.clone(), Some(human.clone()), CbfConfig::default()).unwrap();
+        let mut f =
+            CbfFilter::new(robot.clone(), Some(human.clone()), CbfConfig::default()).unwrap();
         f.start(0.0, &Q0).unwrap();
         let mut off_path = 0.0f64;
         let mut contacts = 0;
@@ -262,12 +360,17 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
             let cmd = f.step(t, Some(&m));
             let q = &cmd.state.q[..7];
             if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
-                eprintln!("cbf t={t:.2} q1={:.4} q2={:.4} sep={:.3} bind={:?} ok={}", q[0], q[1], cmd.diag.min_separation, cmd.diag.binding, cmd.diag.verified);
+                eprintln!(
+                    "cbf t={t:.2} q1={:.4} q2={:.4} sep={:.3} bind={:?} ok={}",
+                    q[0], q[1], cmd.diag.min_separation, cmd.diag.binding, cmd.diag.verified
+                );
             }
             for i in 1..7 {
                 off_path = off_path.max((q[i] - Q0[i]).abs());
             }
-            if true_separation(&robot, &human, q, &script(cmd.t)) <= 0.0 && cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-9) {
+            if true_separation(&robot, &human, q, &script(cmd.t)) <= 0.0
+                && cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-9)
+            {
                 contacts += 1;
             }
         }
@@ -275,10 +378,16 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
     };
     let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
     let (progress, off_path, _) = run_cbf(&far);
-    assert!(progress > 0.2, "CBF should track the reference without a human: {progress}");
+    assert!(
+        progress > 0.2,
+        "CBF should track the reference without a human: {progress}"
+    );
     assert!(off_path < 1e-3, "no reason to leave the path: {off_path}");
     // The hand waits on the robot's upcoming path (joint 1 turns the tool toward +y).
     let close = |_t: f64| human_at(0.9, 0.6, [0.28, 0.32, 0.5]);
     let (_, off_path, _) = run_cbf(&close);
-    assert!(off_path > 1e-3, "the barrier should push the robot off its path ({off_path} rad)");
+    assert!(
+        off_path > 1e-3,
+        "the barrier should push the robot off its path ({off_path} rad)"
+    );
 }

@@ -37,15 +37,34 @@ fn step_allocates_nothing() {
     for spec in ["sorting", "handover"] {
         let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
         let cs = ConstraintSpec::builtin(spec).unwrap();
-        let mut sh = Shield::new(fr3::fr3(), Some((human.clone(), &cs)), vec![], ShieldConfig::default()).unwrap();
+        let mut sh = Shield::new(
+            fr3::fr3(),
+            Some((human.clone(), &cs)),
+            vec![],
+            ShieldConfig::default(),
+        )
+        .unwrap();
         sh.start(0.0, &fr3::Q_READY).unwrap();
-        let chunk = Chunk { kind: ActionKind::Delta, actions: vec![vec![0.02; 7]; 16], execute: 8, gripper: None };
+        let chunk = Chunk {
+            kind: ActionKind::Delta,
+            actions: vec![vec![0.02; 7]; 16],
+            execute: 8,
+            gripper: None,
+        };
         // Human walking toward the robot and back: steps verify, brake, resume.
         let meas: Vec<HumanMeasurement> = (0..2000)
             .map(|k| {
                 let t = k as f64 * 0.001;
                 let d = 0.55 + 0.45 * (3.0 * t).cos();
-                let kp: Vec<[f64; 3]> = (0..9).map(|i| [d + 0.02 * i as f64, 0.1 * i as f64 - 0.4, 0.8 + 0.1 * i as f64]).collect();
+                let kp: Vec<[f64; 3]> = (0..9)
+                    .map(|i| {
+                        [
+                            d + 0.02 * i as f64,
+                            0.1 * i as f64 - 0.4,
+                            0.8 + 0.1 * i as f64,
+                        ]
+                    })
+                    .collect();
                 HumanMeasurement::new(&human, t, &kp, None).unwrap()
             })
             .collect();
@@ -61,8 +80,15 @@ fn step_allocates_nothing() {
             verified += cmd.diag.verified as usize;
             failsafe += cmd.diag.on_failsafe as usize;
         }
-        assert_eq!(COUNT.load(Ordering::SeqCst), 0, "{spec}: the step allocated");
+        assert_eq!(
+            COUNT.load(Ordering::SeqCst),
+            0,
+            "{spec}: the step allocated"
+        );
         // The scenario exercised both branches.
-        assert!(verified > 0 && failsafe > 0, "{spec}: verified {verified}, failsafe {failsafe}");
+        assert!(
+            verified > 0 && failsafe > 0,
+            "{spec}: verified {verified}, failsafe {failsafe}"
+        );
     }
 }
