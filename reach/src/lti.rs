@@ -58,11 +58,21 @@ pub struct IntervalMatrix {
 impl IntervalMatrix {
     /// The zero matrix.
     pub fn zeros(rows: usize, cols: usize) -> Self {
-        Self { rows, cols, v: vec![IZERO; rows * cols] }
+        Self {
+            rows,
+            cols,
+            v: vec![IZERO; rows * cols],
+        }
     }
     /// Point intervals of `m`.
     pub fn from_matrix(m: &DMatrix<f64>) -> Self {
-        Self { rows: m.nrows(), cols: m.ncols(), v: (0..m.nrows() * m.ncols()).map(|k| pt(m[(k / m.ncols(), k % m.ncols())])).collect() }
+        Self {
+            rows: m.nrows(),
+            cols: m.ncols(),
+            v: (0..m.nrows() * m.ncols())
+                .map(|k| pt(m[(k / m.ncols(), k % m.ncols())]))
+                .collect(),
+        }
     }
     /// The identity.
     pub fn identity(n: usize) -> Self {
@@ -89,7 +99,7 @@ impl IntervalMatrix {
             for j in 0..rhs.cols {
                 let mut acc = IZERO;
                 for k in 0..self.cols {
-                    acc = acc + self.get(i, k) * rhs.get(k, j);
+                    acc += self.get(i, k) * rhs.get(k, j);
                 }
                 out.set(i, j, acc);
             }
@@ -98,20 +108,28 @@ impl IntervalMatrix {
     }
     /// Enclosure of `self · s` for the interval scalar `s`.
     pub fn scale(&self, s: Interval) -> IntervalMatrix {
-        Self { rows: self.rows, cols: self.cols, v: self.v.iter().map(|&x| x * s).collect() }
+        Self {
+            rows: self.rows,
+            cols: self.cols,
+            v: self.v.iter().map(|&x| x * s).collect(),
+        }
     }
     /// Enclosure of the sum.
     pub fn add(&self, rhs: &IntervalMatrix) -> IntervalMatrix {
         assert_eq!((self.rows, self.cols), (rhs.rows, rhs.cols));
-        Self { rows: self.rows, cols: self.cols, v: self.v.iter().zip(&rhs.v).map(|(&a, &b)| a + b).collect() }
+        Self {
+            rows: self.rows,
+            cols: self.cols,
+            v: self.v.iter().zip(&rhs.v).map(|(&a, &b)| a + b).collect(),
+        }
     }
     /// Adds `[-w_i, w_i]` to every entry of row `i`.
     fn widen_rows(&mut self, w: &[f64]) {
-        for i in 0..self.rows {
-            if w[i] > 0.0 {
-                let iv = Interval::try_from((-w[i], w[i])).expect("finite");
+        for (i, &wi) in w.iter().enumerate().take(self.rows) {
+            if wi > 0.0 {
+                let iv = Interval::try_from((-wi, wi)).expect("finite");
                 for j in 0..self.cols {
-                    self.v[i * self.cols + j] = self.v[i * self.cols + j] + iv;
+                    self.v[i * self.cols + j] += iv;
                 }
             }
         }
@@ -159,13 +177,13 @@ fn kappa(i: usize) -> f64 {
     let s = pt(s0);
     let mut p = pt(1.0);
     for _ in 0..i - 1 {
-        p = p * s;
+        p *= s;
     }
     let f = p * s - s; // s0^i − s0
     let df = pt(i as f64) * p - pt(1.0); // i s0^{i−1} − 1
     let at0 = f - df * s;
     let at1 = f + df * (pt(1.0) - s);
-    at0.inf().min(at1.inf()).min(0.0).max(-1.0)
+    at0.inf().min(at1.inf()).clamp(-1.0, 0.0)
 }
 
 /// A linear time-invariant system `ẋ = A x + B u`.
@@ -179,7 +197,12 @@ impl LtiSystem {
     /// `A` (n × n) and `B` (n × p), finite entries.
     pub fn new(a: DMatrix<f64>, b: DMatrix<f64>) -> Result<Self, ReachError> {
         if !a.is_square() || a.nrows() != b.nrows() {
-            return Err(ZonotopeError::DimensionMismatch { what: "A/B rows", expected: a.nrows(), got: b.nrows() }.into());
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "A/B rows",
+                expected: a.nrows(),
+                got: b.nrows(),
+            }
+            .into());
         }
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err(ZonotopeError::NonFinite("A/B").into());
@@ -217,7 +240,10 @@ pub struct ReachOptions {
 
 impl Default for ReachOptions {
     fn default() -> Self {
-        Self { taylor_terms: 8, max_order: 20 }
+        Self {
+            taylor_terms: 8,
+            max_order: 20,
+        }
     }
 }
 
@@ -241,16 +267,32 @@ pub struct LtiReach {
 
 impl LtiReach {
     /// Precompute `e^{Ar}`, `Γ(r)`, `F`, `F_u` and the input solutions for step `r ≥ 0` (s).
-    pub fn new(sys: &LtiSystem, u: &Zonotope, r: f64, opts: ReachOptions) -> Result<Self, ReachError> {
+    pub fn new(
+        sys: &LtiSystem,
+        u: &Zonotope,
+        r: f64,
+        opts: ReachOptions,
+    ) -> Result<Self, ReachError> {
         let n = sys.a.nrows();
         if u.dim() != sys.b.ncols() {
-            return Err(ZonotopeError::DimensionMismatch { what: "input set", expected: sys.b.ncols(), got: u.dim() }.into());
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "input set",
+                expected: sys.b.ncols(),
+                got: u.dim(),
+            }
+            .into());
         }
         if !(r.is_finite() && r >= 0.0) {
-            return Err(ReachError::Invalid { what: "time step", reason: "must be finite and >= 0" });
+            return Err(ReachError::Invalid {
+                what: "time step",
+                reason: "must be finite and >= 0",
+            });
         }
         if opts.taylor_terms == 0 || opts.max_order == 0 {
-            return Err(ReachError::Invalid { what: "options", reason: "taylor_terms and max_order must be >= 1" });
+            return Err(ReachError::Invalid {
+                what: "options",
+                reason: "taylor_terms and max_order must be >= 1",
+            });
         }
         let eta = opts.taylor_terms;
         let ri = pt(r);
@@ -283,7 +325,11 @@ impl LtiReach {
             }
             let eps = div_up(eps_num, eta as f64 + 2.0);
             if eps >= 1.0 {
-                return Err(ReachError::StepTooLarge { step: r, terms: eta, norm: eps_num });
+                return Err(ReachError::StepTooLarge {
+                    step: r,
+                    terms: eta,
+                    norm: eps_num,
+                });
             }
             let w = abs_pow.scale(pt(1.0) / fact[eta + 1]);
             for (i, er) in e_row.iter_mut().enumerate() {
@@ -324,7 +370,11 @@ impl LtiReach {
         // Input: Ũ = B U = ũ_c ⊕ Ũ₀.
         let ut = u.linear_map(&sys.b)?;
         let uc = ut.center().clone();
-        let u0 = Zonotope::with_error_box(DVector::zeros(n), ut.generators().clone(), ut.error_box().clone())?;
+        let u0 = Zonotope::with_error_box(
+            DVector::zeros(n),
+            ut.generators().clone(),
+            ut.error_box().clone(),
+        )?;
         // P̂₀ = ⊕_{i=0}^{η} (r P_i/(i+1)!) Ũ₀ ⊕ box(r E |Ũ₀|).
         let mut p0 = Zonotope::point(DVector::zeros(n))?;
         for (i, p) in pw.iter().enumerate() {
@@ -343,7 +393,7 @@ impl LtiReach {
         for i in 0..n {
             let mut acc = IZERO;
             for j in 0..n {
-                acc = acc + gam.get(i, j) * pt(uc[j]);
+                acc += gam.get(i, j) * pt(uc[j]);
             }
             v_mid[i] = acc.mid();
             v_rad[i] = acc.rad();
@@ -357,7 +407,18 @@ impl LtiReach {
         p_full.add_box(&v_rad);
         let p0 = p0.reduce_girard(opts.max_order)?;
         let p_full = p_full.reduce_girard(opts.max_order)?;
-        Ok(Self { n, r, opts, phi_mid, phi_rad, f_mag: f.mag(), input_box, v_mid, p0, p_full })
+        Ok(Self {
+            n,
+            r,
+            opts,
+            phi_mid,
+            phi_rad,
+            f_mag: f.mag(),
+            input_box,
+            v_mid,
+            p0,
+            p_full,
+        })
     }
 
     /// Step length `r` (s).
@@ -403,14 +464,22 @@ impl LtiReach {
                 acc += g[(i, j)].abs() + g[(i, m + 1 + j)].abs();
             }
             let acc_up = crate::zonotope::nonneg_sum_up(2 * m + 2, acc);
-            e = add_up(e, add_up(mul_up(f64::EPSILON, acc_up), (2 * m + 2) as f64 * f64::from_bits(1)));
+            e = add_up(
+                e,
+                add_up(
+                    mul_up(f64::EPSILON, acc_up),
+                    (2 * m + 2) as f64 * f64::from_bits(1),
+                ),
+            );
             err[i] = e;
         }
         let mut h = Zonotope::with_error_box(c, g, err)?;
         let xabs = x0.abs_bound();
         let b1 = mat_vec_up(&self.phi_rad, &xabs);
         let b2 = mat_vec_up(&self.f_mag, &xabs);
-        h.add_box(&DVector::from_fn(n, |i, _| add_up(add_up(b1[i], b2[i]), self.input_box[i])));
+        h.add_box(&DVector::from_fn(n, |i, _| {
+            add_up(add_up(b1[i], b2[i]), self.input_box[i])
+        }));
         let h = h.minkowski_sum(&self.p0)?;
         Ok(h.reduce_girard(self.opts.max_order)?)
     }
@@ -431,7 +500,12 @@ impl LtiReach {
 
     fn check_dim(&self, x: &Zonotope) -> Result<(), ReachError> {
         if x.dim() != self.n {
-            return Err(ZonotopeError::DimensionMismatch { what: "state set", expected: self.n, got: x.dim() }.into());
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "state set",
+                expected: self.n,
+                got: x.dim(),
+            }
+            .into());
         }
         Ok(())
     }
@@ -474,29 +548,57 @@ impl DynamicObject {
         vel_error: f64,
         approx: BallApprox,
     ) -> Result<Self, ReachError> {
-        for v in [radius, max_acc, delay, pos_error, vel_error].into_iter().chain(max_speed) {
+        for v in [radius, max_acc, delay, pos_error, vel_error]
+            .into_iter()
+            .chain(max_speed)
+        {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(ReachError::Invalid { what: "object parameter", reason: "must be finite and >= 0" });
+                return Err(ReachError::Invalid {
+                    what: "object parameter",
+                    reason: "must be finite and >= 0",
+                });
             }
         }
-        Ok(Self { radius, max_acc, max_speed, delay, pos_error, vel_error, approx })
+        Ok(Self {
+            radius,
+            max_acc,
+            max_speed,
+            delay,
+            pos_error,
+            vel_error,
+            approx,
+        })
     }
 
     /// Occupancy over `[t_a, t_b]` (s) after measurement `meas`: contains every point of the sphere
     /// for every admissible motion consistent with the measurement. Requires `t_m − δ ≤ t_a ≤ t_b`.
-    pub fn occupancy(&self, meas: &ObjectMeasurement, t_a: f64, t_b: f64) -> Result<ObjectOccupancy, ReachError> {
+    pub fn occupancy(
+        &self,
+        meas: &ObjectMeasurement,
+        t_a: f64,
+        t_b: f64,
+    ) -> Result<ObjectOccupancy, ReachError> {
         if !(t_a.is_finite() && t_b.is_finite() && meas.time.is_finite() && t_a <= t_b) {
-            return Err(ReachError::Invalid { what: "time interval", reason: "need finite t_a <= t_b" });
+            return Err(ReachError::Invalid {
+                what: "time interval",
+                reason: "need finite t_a <= t_b",
+            });
         }
         // Elapsed time since the true state, enclosed outward.
         let tau_a = add_down(sub_down(t_a, meas.time), self.delay);
         let tau_b = add_up(sub_up(t_b, meas.time), self.delay);
         if t_a - meas.time + self.delay < 0.0 {
-            return Err(ReachError::Invalid { what: "t_a", reason: "before the measured state (t_m - delay)" });
+            return Err(ReachError::Invalid {
+                what: "t_a",
+                reason: "before the measured state (t_m - delay)",
+            });
         }
         let tau_a = tau_a.max(0.0);
         let sys = LtiSystem::double_integrator_3d();
-        let opts = ReachOptions { taylor_terms: 2, max_order: 12 };
+        let opts = ReachOptions {
+            taylor_terms: 2,
+            max_order: 12,
+        };
         let u = ball_zonotope([0.0; 3], self.max_acc, self.approx)?;
         let bp = ball_zonotope([0.0; 3], self.pos_error, self.approx)?;
         let bv = ball_zonotope([0.0; 3], self.vel_error, self.approx)?;
@@ -514,7 +616,11 @@ impl DynamicObject {
             }
         }
         let x0 = Zonotope::new(c, g)?;
-        let xa = if tau_a > 0.0 { LtiReach::new(&sys, &u, tau_a, opts)?.point_set(&x0)? } else { x0 };
+        let xa = if tau_a > 0.0 {
+            LtiReach::new(&sys, &u, tau_a, opts)?.point_set(&x0)?
+        } else {
+            x0
+        };
         let r = sub_up(tau_b, tau_a).max(0.0);
         let xi = LtiReach::new(&sys, &u, r, opts)?.first_interval(&xa)?;
         let pos = xi.project(&[0, 1, 2])?;
@@ -526,7 +632,13 @@ impl DynamicObject {
             }
             None => None,
         };
-        Ok(ObjectOccupancy { centres, radius: self.radius, speed_ball, t_a, t_b })
+        Ok(ObjectOccupancy {
+            centres,
+            radius: self.radius,
+            speed_ball,
+            t_a,
+            t_b,
+        })
     }
 }
 

@@ -60,7 +60,10 @@ const TINY: f64 = f64::from_bits(1);
 /// (`ε = 2u`), plus one subnormal per product for underflow.
 #[inline]
 pub(crate) fn rnd_err(depth: usize, products: usize, s: f64) -> f64 {
-    add_up(mul_up((depth as f64 + 1.0) * f64::EPSILON, s), (products as f64 + 1.0) * TINY)
+    add_up(
+        mul_up((depth as f64 + 1.0) * f64::EPSILON, s),
+        (products as f64 + 1.0) * TINY,
+    )
 }
 
 /// Upper bound of a plainly computed sum `s` of `k` non-negative terms.
@@ -69,8 +72,15 @@ pub(crate) fn nonneg_sum_up(k: usize, s: f64) -> f64 {
     add_up(s, rnd_err(k, k, s))
 }
 
-fn check_finite<'a>(what: &'static str, it: impl IntoIterator<Item = &'a f64>) -> Result<(), ZonotopeError> {
-    if it.into_iter().all(|v| v.is_finite()) { Ok(()) } else { Err(ZonotopeError::NonFinite(what)) }
+fn check_finite<'a>(
+    what: &'static str,
+    it: impl IntoIterator<Item = &'a f64>,
+) -> Result<(), ZonotopeError> {
+    if it.into_iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(ZonotopeError::NonFinite(what))
+    }
 }
 
 /// Result of a conservative point-containment query.
@@ -96,23 +106,42 @@ impl Zonotope {
     /// A zonotope with centre `c` and generators as the columns of `g` (no error box).
     pub fn new(c: DVector<f64>, g: DMatrix<f64>) -> Result<Self, ZonotopeError> {
         if g.nrows() != c.len() {
-            return Err(ZonotopeError::DimensionMismatch { what: "generator rows", expected: c.len(), got: g.nrows() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "generator rows",
+                expected: c.len(),
+                got: g.nrows(),
+            });
         }
         check_finite("centre", c.iter())?;
         check_finite("generators", g.iter())?;
         let n = c.len();
-        Ok(Self { c, g, e: DVector::zeros(n) })
+        Ok(Self {
+            c,
+            g,
+            e: DVector::zeros(n),
+        })
     }
 
     /// A zonotope with an explicit non-negative error box radius `e` (exactly `c ⊕ G[-1,1]^m ⊕ box(e)`).
-    pub fn with_error_box(c: DVector<f64>, g: DMatrix<f64>, e: DVector<f64>) -> Result<Self, ZonotopeError> {
+    pub fn with_error_box(
+        c: DVector<f64>,
+        g: DMatrix<f64>,
+        e: DVector<f64>,
+    ) -> Result<Self, ZonotopeError> {
         let mut z = Self::new(c, g)?;
         if e.len() != z.dim() {
-            return Err(ZonotopeError::DimensionMismatch { what: "error box", expected: z.dim(), got: e.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "error box",
+                expected: z.dim(),
+                got: e.len(),
+            });
         }
         check_finite("error box", e.iter())?;
         if e.iter().any(|&v| v < 0.0) {
-            return Err(ZonotopeError::Invalid { what: "error box", reason: "radii must be >= 0" });
+            return Err(ZonotopeError::Invalid {
+                what: "error box",
+                reason: "radii must be >= 0",
+            });
         }
         z.e = e;
         Ok(z)
@@ -127,16 +156,27 @@ impl Zonotope {
     /// A zonotope containing the box `[lo, hi]` (centre rounded, radii rounded up so the box is inside).
     pub fn from_interval(lo: &DVector<f64>, hi: &DVector<f64>) -> Result<Self, ZonotopeError> {
         if lo.len() != hi.len() {
-            return Err(ZonotopeError::DimensionMismatch { what: "box bounds", expected: lo.len(), got: hi.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "box bounds",
+                expected: lo.len(),
+                got: hi.len(),
+            });
         }
         check_finite("box bounds", lo.iter().chain(hi.iter()))?;
         if lo.iter().zip(hi.iter()).any(|(a, b)| a > b) {
-            return Err(ZonotopeError::Invalid { what: "box", reason: "lo > hi" });
+            return Err(ZonotopeError::Invalid {
+                what: "box",
+                reason: "lo > hi",
+            });
         }
         let n = lo.len();
         let c = DVector::from_fn(n, |i, _| 0.5 * lo[i] + 0.5 * hi[i]);
         // [c - r, c + r] ⊇ [lo, hi] with r rounded up from both sides.
-        let r = DVector::from_fn(n, |i, _| crate::rounding::sub_up(hi[i], c[i]).max(crate::rounding::sub_up(c[i], lo[i])).max(0.0));
+        let r = DVector::from_fn(n, |i, _| {
+            crate::rounding::sub_up(hi[i], c[i])
+                .max(crate::rounding::sub_up(c[i], lo[i]))
+                .max(0.0)
+        });
         Self::new(c, DMatrix::from_diagonal(&r))
     }
 
@@ -180,23 +220,39 @@ impl Zonotope {
         for (k, &i) in extra.iter().enumerate() {
             g[(i, m + k)] = self.e[i];
         }
-        Zonotope { c: self.c.clone(), g, e: DVector::zeros(n) }
+        Zonotope {
+            c: self.c.clone(),
+            g,
+            e: DVector::zeros(n),
+        }
     }
 
     /// The same set without all-zero generators.
     pub fn compact(&self) -> Zonotope {
-        let keep: Vec<usize> = (0..self.num_generators()).filter(|&j| self.g.column(j).iter().any(|&v| v != 0.0)).collect();
+        let keep: Vec<usize> = (0..self.num_generators())
+            .filter(|&j| self.g.column(j).iter().any(|&v| v != 0.0))
+            .collect();
         let g = DMatrix::from_fn(self.dim(), keep.len(), |i, k| self.g[(i, keep[k])]);
-        Zonotope { c: self.c.clone(), g, e: self.e.clone() }
+        Zonotope {
+            c: self.c.clone(),
+            g,
+            e: self.e.clone(),
+        }
     }
 
     /// Exact projection onto the coordinates `rows` (in that order).
     pub fn project(&self, rows: &[usize]) -> Result<Zonotope, ZonotopeError> {
         if let Some(&bad) = rows.iter().find(|&&r| r >= self.dim()) {
-            return Err(ZonotopeError::DimensionMismatch { what: "projection row", expected: self.dim(), got: bad });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "projection row",
+                expected: self.dim(),
+                got: bad,
+            });
         }
         let c = DVector::from_fn(rows.len(), |i, _| self.c[rows[i]]);
-        let g = DMatrix::from_fn(rows.len(), self.num_generators(), |i, j| self.g[(rows[i], j)]);
+        let g = DMatrix::from_fn(rows.len(), self.num_generators(), |i, j| {
+            self.g[(rows[i], j)]
+        });
         let e = DVector::from_fn(rows.len(), |i, _| self.e[rows[i]]);
         Ok(Zonotope { c, g, e })
     }
@@ -205,7 +261,11 @@ impl Zonotope {
     pub fn minkowski_sum(&self, other: &Zonotope) -> Result<Zonotope, ZonotopeError> {
         let n = self.dim();
         if other.dim() != n {
-            return Err(ZonotopeError::DimensionMismatch { what: "Minkowski sum operand", expected: n, got: other.dim() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "Minkowski sum operand",
+                expected: n,
+                got: other.dim(),
+            });
         }
         let (m1, m2) = (self.num_generators(), other.num_generators());
         let mut g = DMatrix::zeros(n, m1 + m2);
@@ -216,7 +276,10 @@ impl Zonotope {
         for i in 0..n {
             c[i] = self.c[i] + other.c[i];
             // |fl(a+b) - (a+b)| ≤ u|a+b| ≤ ε|fl(a+b)| (addition never underflows inexactly).
-            e[i] = add_up(add_up(self.e[i], other.e[i]), mul_up(f64::EPSILON, c[i].abs()));
+            e[i] = add_up(
+                add_up(self.e[i], other.e[i]),
+                mul_up(f64::EPSILON, c[i].abs()),
+            );
         }
         check_finite("Minkowski sum", c.iter())?;
         Ok(Zonotope { c, g, e })
@@ -239,7 +302,11 @@ impl Zonotope {
     pub fn linear_map(&self, m: &DMatrix<f64>) -> Result<Zonotope, ZonotopeError> {
         let n = self.dim();
         if m.ncols() != n {
-            return Err(ZonotopeError::DimensionMismatch { what: "linear map columns", expected: n, got: m.ncols() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "linear map columns",
+                expected: n,
+                got: m.ncols(),
+            });
         }
         check_finite("linear map", m.iter())?;
         let p = m.nrows();
@@ -276,7 +343,10 @@ impl Zonotope {
             // error of the total with depth n + k + 1 (covers the plain summation of `s_abs`).
             e[i] = add_up(me_up, rnd_err(n + k + 1, n * (k + 1), s_abs));
         }
-        check_finite("linear map result", c.iter().chain(g.iter()).chain(e.iter()))?;
+        check_finite(
+            "linear map result",
+            c.iter().chain(g.iter()).chain(e.iter()),
+        )?;
         Ok(Zonotope { c, g, e })
     }
 
@@ -310,7 +380,10 @@ impl Zonotope {
     /// by their interval hull (axis-aligned generators, sums rounded up). `order ≥ 1`.
     pub fn reduce_girard(&self, order: usize) -> Result<Zonotope, ZonotopeError> {
         if order == 0 {
-            return Err(ZonotopeError::Invalid { what: "order", reason: "must be >= 1" });
+            return Err(ZonotopeError::Invalid {
+                what: "order",
+                reason: "must be >= 1",
+            });
         }
         let n = self.dim();
         let m = self.num_generators();
@@ -342,14 +415,22 @@ impl Zonotope {
         for (k, &i) in box_axes.iter().enumerate() {
             g[(i, keep + k)] = nonneg_sum_up(nb, boxr[i]);
         }
-        Ok(Zonotope { c: self.c.clone(), g, e: self.e.clone() })
+        Ok(Zonotope {
+            c: self.c.clone(),
+            g,
+            e: self.e.clone(),
+        })
     }
 
     /// Support function upper bound: `≥ max_{z ∈ Z} d·z` (rigorous).
     pub fn support_up(&self, d: &DVector<f64>) -> Result<f64, ZonotopeError> {
         let n = self.dim();
         if d.len() != n {
-            return Err(ZonotopeError::DimensionMismatch { what: "direction", expected: n, got: d.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "direction",
+                expected: n,
+                got: d.len(),
+            });
         }
         let m = self.num_generators();
         let (mut s, mut a) = (0.0, 0.0);
@@ -389,7 +470,11 @@ impl Zonotope {
     pub fn contains(&self, x: &DVector<f64>) -> Result<Containment, ZonotopeError> {
         let n = self.dim();
         if x.len() != n {
-            return Err(ZonotopeError::DimensionMismatch { what: "point", expected: n, got: x.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "point",
+                expected: n,
+                got: x.len(),
+            });
         }
         check_finite("point", x.iter())?;
         // Cheap outside test: interval hull.
@@ -400,7 +485,11 @@ impl Zonotope {
         let zf = self.with_error_as_generators();
         let m = zf.num_generators();
         if m == 0 {
-            return Ok(if (0..n).all(|i| x[i] == zf.c[i]) { Containment::Inside } else { Containment::Outside });
+            return Ok(if (0..n).all(|i| x[i] == zf.c[i]) {
+                Containment::Inside
+            } else {
+                Containment::Outside
+            });
         }
         let Some((_t, beta, y)) = zf.solve_norm_lp(x)? else {
             return Ok(Containment::Unknown);
@@ -413,7 +502,7 @@ impl Zonotope {
             }
             let mut dx = Interval::try_from((0.0, 0.0)).unwrap();
             for i in 0..n {
-                dx = dx + pt(d[i]) * pt(x[i]);
+                dx += pt(d[i]) * pt(x[i]);
             }
             if dx.inf() > self.support_up(&d)? {
                 return Ok(Containment::Outside);
@@ -429,7 +518,7 @@ impl Zonotope {
         for i in 0..n {
             let mut r = pt(x[i]) - pt(zf.c[i]);
             for j in 0..m {
-                r = r - pt(zf.g[(i, j)]) * pt(beta[j]);
+                r -= pt(zf.g[(i, j)]) * pt(beta[j]);
             }
             res = res.max(r.mag());
         }
@@ -455,7 +544,7 @@ impl Zonotope {
             for j in 0..n {
                 let mut acc = pt(if i == j { 1.0 } else { 0.0 });
                 for l in 0..n {
-                    acc = acc - pt(k[(i, l)]) * pt(gs[(l, j)]);
+                    acc -= pt(k[(i, l)]) * pt(gs[(l, j)]);
                 }
                 row_q = add_up(row_q, acc.mag());
                 row_k = add_up(row_k, k[(i, j)].abs());
@@ -469,18 +558,32 @@ impl Zonotope {
         // ‖G_S⁻¹‖∞ ≤ ‖K‖∞ / (1 - q).
         let inv_norm = crate::rounding::div_up(kn, sub_down(1.0, q));
         let need = add_up(bmax, mul_up(inv_norm, res));
-        Ok(if need <= 1.0 { Containment::Inside } else { Containment::Unknown })
+        Ok(if need <= 1.0 {
+            Containment::Inside
+        } else {
+            Containment::Unknown
+        })
     }
 
     /// LP `min t s.t. G β = x - c, |β_i| ≤ t`: returns `(t, β, dual of the equalities)`.
-    fn solve_norm_lp(&self, x: &DVector<f64>) -> Result<Option<(f64, DVector<f64>, DVector<f64>)>, ZonotopeError> {
+    fn solve_norm_lp(&self, x: &DVector<f64>) -> Result<Option<LpSolution>, ZonotopeError> {
         use clarabel::algebra::CscMatrix;
-        use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
-        let zf = if self.e.iter().any(|&v| v > 0.0) { self.with_error_as_generators() } else { self.clone() };
+        use clarabel::solver::{
+            DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+        };
+        let zf = if self.e.iter().any(|&v| v > 0.0) {
+            self.with_error_as_generators()
+        } else {
+            self.clone()
+        };
         let n = zf.dim();
         let m = zf.num_generators();
         if x.len() != n {
-            return Err(ZonotopeError::DimensionMismatch { what: "point", expected: n, got: x.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "point",
+                expected: n,
+                got: x.len(),
+            });
         }
         let nv = m + 1;
         let (mut ri, mut ci, mut vv) = (Vec::new(), Vec::new(), Vec::new());
@@ -507,14 +610,17 @@ impl Zonotope {
         for i in 0..n {
             b[i] = x[i] - zf.c[i];
         }
-        let cones = [SupportedConeT::ZeroConeT(n), SupportedConeT::NonnegativeConeT(2 * m)];
+        let cones = [
+            SupportedConeT::ZeroConeT(n),
+            SupportedConeT::NonnegativeConeT(2 * m),
+        ];
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .max_iter(100)
             .build()
             .map_err(|e| ZonotopeError::Solver(format!("{e:?}")))?;
-        let mut solver =
-            DefaultSolver::new(&p, &q, &a, &b, &cones, settings).map_err(|e| ZonotopeError::Solver(format!("{e:?}")))?;
+        let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
+            .map_err(|e| ZonotopeError::Solver(format!("{e:?}")))?;
         solver.solve();
         let sol = &solver.solution;
         match sol.status {
@@ -528,6 +634,9 @@ impl Zonotope {
         }
     }
 }
+
+/// `(t*, β*, equality duals)` of the zonotope-norm LP.
+type LpSolution = (f64, DVector<f64>, DVector<f64>);
 
 #[inline]
 fn pt(x: f64) -> Interval {
@@ -608,11 +717,18 @@ impl BallApprox {
 /// for some pair, so the inradius is `min_{i<j} h(n_ij)/‖n_ij‖`; `n_ij` is enclosed in intervals.
 pub fn inradius_lower_3d(gens: &[[f64; 3]]) -> f64 {
     let mut best = f64::INFINITY;
-    let iv: Vec<[Interval; 3]> = gens.iter().map(|g| [pt(g[0]), pt(g[1]), pt(g[2])]).collect();
+    let iv: Vec<[Interval; 3]> = gens
+        .iter()
+        .map(|g| [pt(g[0]), pt(g[1]), pt(g[2])])
+        .collect();
     for i in 0..gens.len() {
         for j in (i + 1)..gens.len() {
             let (a, b) = (&iv[i], &iv[j]);
-            let n = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+            let n = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
             let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
             if nn.inf() <= 0.0 {
                 if nn.sup() > 0.0 {
@@ -634,9 +750,16 @@ pub fn inradius_lower_3d(gens: &[[f64; 3]]) -> f64 {
 
 /// A 3-D zonotope (centre `centre`) ⊇ the Euclidean ball of `radius` (m), with rigorously
 /// certified inradius ≥ `radius`.
-pub fn ball_zonotope(centre: [f64; 3], radius: f64, approx: BallApprox) -> Result<Zonotope, ZonotopeError> {
+pub fn ball_zonotope(
+    centre: [f64; 3],
+    radius: f64,
+    approx: BallApprox,
+) -> Result<Zonotope, ZonotopeError> {
     if !(radius.is_finite() && radius >= 0.0) {
-        return Err(ZonotopeError::Invalid { what: "ball radius", reason: "must be finite and >= 0" });
+        return Err(ZonotopeError::Invalid {
+            what: "ball radius",
+            reason: "must be finite and >= 0",
+        });
     }
     let dirs = approx.directions();
     let units: Vec<[f64; 3]> = dirs
@@ -655,14 +778,20 @@ pub fn ball_zonotope(centre: [f64; 3], radius: f64, approx: BallApprox) -> Resul
     let r0 = inradius_lower_3d(&units);
     let mut s = radius / r0 * (1.0 + 1e-12);
     for _ in 0..64 {
-        let gens: Vec<[f64; 3]> = units.iter().map(|u| [u[0] * s, u[1] * s, u[2] * s]).collect();
+        let gens: Vec<[f64; 3]> = units
+            .iter()
+            .map(|u| [u[0] * s, u[1] * s, u[2] * s])
+            .collect();
         if inradius_lower_3d(&gens) >= radius {
             let g = DMatrix::from_fn(3, m, |i, j| gens[j][i]);
             return Zonotope::new(c, g);
         }
         s *= 1.0 + 1e-9;
     }
-    Err(ZonotopeError::Invalid { what: "ball radius", reason: "could not certify enclosure" })
+    Err(ZonotopeError::Invalid {
+        what: "ball radius",
+        reason: "could not certify enclosure",
+    })
 }
 
 /// Capacity of [`Zonotope3`] generator storage.
@@ -683,11 +812,21 @@ impl Zonotope3 {
     /// Build from centre, generators (at most [`MAX_GENERATORS_3D`]) and error box radius `e ≥ 0`.
     pub fn new(c: [f64; 3], gens: &[[f64; 3]], e: [f64; 3]) -> Result<Self, ZonotopeError> {
         if gens.len() > MAX_GENERATORS_3D {
-            return Err(ZonotopeError::DimensionMismatch { what: "Zonotope3 generators", expected: MAX_GENERATORS_3D, got: gens.len() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "Zonotope3 generators",
+                expected: MAX_GENERATORS_3D,
+                got: gens.len(),
+            });
         }
-        check_finite("Zonotope3", c.iter().chain(gens.iter().flatten()).chain(e.iter()))?;
+        check_finite(
+            "Zonotope3",
+            c.iter().chain(gens.iter().flatten()).chain(e.iter()),
+        )?;
         if e.iter().any(|&v| v < 0.0) {
-            return Err(ZonotopeError::Invalid { what: "error box", reason: "radii must be >= 0" });
+            return Err(ZonotopeError::Invalid {
+                what: "error box",
+                reason: "radii must be >= 0",
+            });
         }
         let mut g = [[0.0; 3]; MAX_GENERATORS_3D];
         g[..gens.len()].copy_from_slice(gens);
@@ -697,17 +836,33 @@ impl Zonotope3 {
                 abs_sum[i] += gk[i].abs();
             }
         }
-        Ok(Self { c, g, len: gens.len(), e, abs_sum })
+        Ok(Self {
+            c,
+            g,
+            len: gens.len(),
+            e,
+            abs_sum,
+        })
     }
 
     /// Convert a 3-D [`Zonotope`], Girard-reducing first if it has too many generators (⊇ input).
     pub fn from_zonotope(z: &Zonotope) -> Result<Self, ZonotopeError> {
         if z.dim() != 3 {
-            return Err(ZonotopeError::DimensionMismatch { what: "Zonotope3 dimension", expected: 3, got: z.dim() });
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "Zonotope3 dimension",
+                expected: 3,
+                got: z.dim(),
+            });
         }
         let z = z.compact();
-        let z = if z.num_generators() > MAX_GENERATORS_3D { z.reduce_girard(MAX_GENERATORS_3D / 3)? } else { z };
-        let gens: Vec<[f64; 3]> = (0..z.num_generators()).map(|j| [z.g[(0, j)], z.g[(1, j)], z.g[(2, j)]]).collect();
+        let z = if z.num_generators() > MAX_GENERATORS_3D {
+            z.reduce_girard(MAX_GENERATORS_3D / 3)?
+        } else {
+            z
+        };
+        let gens: Vec<[f64; 3]> = (0..z.num_generators())
+            .map(|j| [z.g[(0, j)], z.g[(1, j)], z.g[(2, j)]])
+            .collect();
         Self::new([z.c[0], z.c[1], z.c[2]], &gens, [z.e[0], z.e[1], z.e[2]])
     }
 
@@ -715,7 +870,11 @@ impl Zonotope3 {
     pub fn to_zonotope(&self) -> Zonotope {
         let c = DVector::from_column_slice(&self.c);
         let g = DMatrix::from_fn(3, self.len, |i, j| self.g[j][i]);
-        Zonotope { c, g, e: DVector::from_column_slice(&self.e) }
+        Zonotope {
+            c,
+            g,
+            e: DVector::from_column_slice(&self.e),
+        }
     }
 
     /// Centre (m).
@@ -790,7 +949,7 @@ impl Zonotope3 {
         let p2 = capsule.p2();
         let smax = dot3_up(n, [p1.x, p1.y, p1.z]).max(dot3_up(n, [p2.x, p2.y, p2.z]));
         let gap = sub_down(zmin, smax);
-        if !(gap > 0.0) {
+        if gap.is_nan() || gap <= 0.0 {
             return 0.0;
         }
         let d = sub_down(sub_down(div_down(gap, nn), inflate), capsule.radius());
@@ -825,17 +984,25 @@ impl Zonotope3 {
             let ps = if dot3(d, a) <= dot3(d, b) { a } else { b };
             sub3(pz, ps)
         };
-        let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])];
+        let mid = [
+            0.5 * (a[0] + b[0]),
+            0.5 * (a[1] + b[1]),
+            0.5 * (a[2] + b[2]),
+        ];
         let mut v = sub3(self.c, mid);
         if dot3(v, v) == 0.0 {
             v = [1.0, 0.0, 0.0];
         }
-        let mut simplex = Simplex { p: [[0.0; 3]; 4], len: 0 };
+        let mut simplex = Simplex {
+            p: [[0.0; 3]; 4],
+            len: 0,
+        };
         let w0 = sup(neg3(v));
         simplex.p[0] = w0;
         simplex.len = 1;
         v = w0;
-        let scale = dot3(self.abs_sum, [1.0; 3]) + dot3(sub3(a, b), sub3(a, b)).sqrt() + dot3(v, v).sqrt();
+        let scale =
+            dot3(self.abs_sum, [1.0; 3]) + dot3(sub3(a, b), sub3(a, b)).sqrt() + dot3(v, v).sqrt();
         for _ in 0..64 {
             let vv = dot3(v, v);
             if vv <= (1e-14 * scale) * (1e-14 * scale) {
@@ -882,7 +1049,11 @@ fn neg3(a: [f64; 3]) -> [f64; 3] {
 }
 #[inline]
 fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 #[inline]
 fn add_scaled(a: [f64; 3], s: f64, d: [f64; 3]) -> [f64; 3] {
@@ -913,7 +1084,12 @@ impl Simplex {
             }
             _ => {
                 let [a, b, c, d] = self.p;
-                let faces = [([0, 1, 2], 3), ([0, 2, 3], 1), ([0, 3, 1], 2), ([1, 3, 2], 0)];
+                let faces = [
+                    ([0, 1, 2], 3),
+                    ([0, 2, 3], 1),
+                    ([0, 3, 1], 2),
+                    ([1, 3, 2], 0),
+                ];
                 let mut best: Option<([f64; 3], [usize; 3], usize)> = None;
                 let pts = [a, b, c, d];
                 for (f, opp) in faces {
@@ -925,7 +1101,10 @@ impl Simplex {
                         let (v, keep) = closest_triangle(x, y, z);
                         let map = [f[keep[0]], f[keep[1]], f[keep[2]]];
                         let nk = keep[3];
-                        if best.as_ref().is_none_or(|bst| dot3(v, v) < dot3(bst.0, bst.0)) {
+                        if best
+                            .as_ref()
+                            .is_none_or(|bst| dot3(v, v) < dot3(bst.0, bst.0))
+                        {
                             best = Some((v, map, nk));
                         }
                     }
@@ -1005,7 +1184,11 @@ fn closest_triangle(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], [usize;
     let den = va + vb + vc;
     if den == 0.0 || !den.is_finite() {
         // Degenerate triangle: fall back to the best edge.
-        let cands = [closest_segment(a, b), closest_segment(a, c), closest_segment(b, c)];
+        let cands = [
+            closest_segment(a, b),
+            closest_segment(a, c),
+            closest_segment(b, c),
+        ];
         let maps = [[0, 1], [0, 2], [1, 2]];
         let mut bi = 0;
         for i in 1..3 {
@@ -1022,5 +1205,12 @@ fn closest_triangle(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], [usize;
     }
     let v = vb / den;
     let w = vc / den;
-    ([a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w], [0, 1, 2, 3])
+    (
+        [
+            a[0] + ab[0] * v + ac[0] * w,
+            a[1] + ab[1] * v + ac[1] * w,
+            a[2] + ab[2] * v + ac[2] * w,
+        ],
+        [0, 1, 2, 3],
+    )
 }

@@ -3,7 +3,9 @@
 
 use nalgebra::{DMatrix, DVector, Point3};
 use pacs_models::shape::Capsule;
-use pacs_reach::lti::{DynamicObject, LtiReach, LtiSystem, ObjectMeasurement, ReachError, ReachOptions};
+use pacs_reach::lti::{
+    DynamicObject, LtiReach, LtiSystem, ObjectMeasurement, ReachError, ReachOptions,
+};
 use pacs_reach::zonotope::{BallApprox, Zonotope};
 use proptest::collection::vec;
 use proptest::prelude::*;
@@ -34,7 +36,13 @@ fn check_in(z: &Zonotope, x: &DVector<f64>, dirs: &[Vec<f64>]) -> Result<(), Tes
     let (lo, hi) = z.interval_hull();
     let tol = |s: f64| 1e-9 * (1.0 + s);
     for i in 0..n {
-        prop_assert!(x[i] >= lo[i] - tol(x[i].abs()) && x[i] <= hi[i] + tol(x[i].abs()), "axis {i}: {} vs [{}, {}]", x[i], lo[i], hi[i]);
+        prop_assert!(
+            x[i] >= lo[i] - tol(x[i].abs()) && x[i] <= hi[i] + tol(x[i].abs()),
+            "axis {i}: {} vs [{}, {}]",
+            x[i],
+            lo[i],
+            hi[i]
+        );
     }
     for d in dirs {
         let d = DVector::from_column_slice(&d[..n]);
@@ -78,18 +86,28 @@ fn lti_case() -> impl Strategy<Value = LtiCase> {
             0.0..=1.0f64,
             vec(vec(-1.0..1.0f64, n), 4),
         )
-            .prop_map(move |(a, b, uc, ug, xc, xg, r, beta0, inputs, k, theta, dirs)| LtiCase {
-                a: DMatrix::from_row_slice(n, n, &a),
-                b: DMatrix::from_row_slice(n, p, &b),
-                u: Zonotope::new(DVector::from_vec(uc), DMatrix::from_column_slice(p, mu, &ug)).unwrap(),
-                x0: Zonotope::new(DVector::from_vec(xc), DMatrix::from_column_slice(n, mx, &xg)).unwrap(),
-                r,
-                beta0,
-                inputs,
-                k,
-                theta,
-                dirs,
-            })
+            .prop_map(
+                move |(a, b, uc, ug, xc, xg, r, beta0, inputs, k, theta, dirs)| LtiCase {
+                    a: DMatrix::from_row_slice(n, n, &a),
+                    b: DMatrix::from_row_slice(n, p, &b),
+                    u: Zonotope::new(
+                        DVector::from_vec(uc),
+                        DMatrix::from_column_slice(p, mu, &ug),
+                    )
+                    .unwrap(),
+                    x0: Zonotope::new(
+                        DVector::from_vec(xc),
+                        DMatrix::from_column_slice(n, mx, &xg),
+                    )
+                    .unwrap(),
+                    r,
+                    beta0,
+                    inputs,
+                    k,
+                    theta,
+                    dirs,
+                },
+            )
     })
 }
 
@@ -127,43 +145,101 @@ proptest! {
 #[test]
 fn double_integrator_series_is_exact() {
     // x = (p, v): after r = 0.5 with zero input, (1, 2) ↦ (2, 2) exactly; no remainder term.
-    let sys = LtiSystem::new(DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]), DMatrix::from_row_slice(2, 1, &[0.0, 1.0])).unwrap();
+    let sys = LtiSystem::new(
+        DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]),
+        DMatrix::from_row_slice(2, 1, &[0.0, 1.0]),
+    )
+    .unwrap();
     let u = Zonotope::point(DVector::from_vec(vec![0.0])).unwrap();
     let x0 = Zonotope::point(DVector::from_vec(vec![1.0, 2.0])).unwrap();
     for terms in [1, 2, 5] {
-        let reach = LtiReach::new(&sys, &u, 0.5, ReachOptions { taylor_terms: terms, max_order: 4 }).unwrap();
+        let reach = LtiReach::new(
+            &sys,
+            &u,
+            0.5,
+            ReachOptions {
+                taylor_terms: terms,
+                max_order: 4,
+            },
+        )
+        .unwrap();
         let x1 = reach.point_set(&x0).unwrap();
         assert_eq!(x1.center().as_slice(), &[2.0, 2.0]);
         // No Taylor remainder: only the O(ε) bounds of floating-point rounding remain.
-        assert!(x1.num_generators() == 0 && x1.error_box().iter().all(|&e| e < 1e-14), "error box {:?}", x1.error_box());
+        assert!(
+            x1.num_generators() == 0 && x1.error_box().iter().all(|&e| e < 1e-14),
+            "error box {:?}",
+            x1.error_box()
+        );
         // the interval set is the exact segment from (1,2) to (2,2), up to O(ε) rounding bounds
         let xi = reach.first_interval(&x0).unwrap();
         let (lo, hi) = xi.interval_hull();
-        assert!((lo[0] - 1.0).abs() < 1e-13 && (hi[0] - 2.0).abs() < 1e-13, "{lo} {hi}");
-        assert!((lo[1] - 2.0).abs() < 1e-13 && (hi[1] - 2.0).abs() < 1e-13, "{lo} {hi}");
+        assert!(
+            (lo[0] - 1.0).abs() < 1e-13 && (hi[0] - 2.0).abs() < 1e-13,
+            "{lo} {hi}"
+        );
+        assert!(
+            (lo[1] - 2.0).abs() < 1e-13 && (hi[1] - 2.0).abs() < 1e-13,
+            "{lo} {hi}"
+        );
     }
     // With a constant input 1: p(r) = 1 + 2 r + r²/2 = 2.125 at r = 0.5, v = 2.5.
     let u = Zonotope::point(DVector::from_vec(vec![1.0])).unwrap();
-    let reach = LtiReach::new(&sys, &u, 0.5, ReachOptions { taylor_terms: 1, max_order: 4 }).unwrap();
+    let reach = LtiReach::new(
+        &sys,
+        &u,
+        0.5,
+        ReachOptions {
+            taylor_terms: 1,
+            max_order: 4,
+        },
+    )
+    .unwrap();
     let x1 = reach.point_set(&x0).unwrap();
     let (lo, hi) = x1.interval_hull();
-    assert!(lo[0] <= 2.125 && 2.125 <= hi[0] && hi[0] - lo[0] < 1e-14, "{lo} {hi}");
-    assert!(lo[1] <= 2.5 && 2.5 <= hi[1] && hi[1] - lo[1] < 1e-14, "{lo} {hi}");
+    assert!(
+        lo[0] <= 2.125 && 2.125 <= hi[0] && hi[0] - lo[0] < 1e-14,
+        "{lo} {hi}"
+    );
+    assert!(
+        lo[1] <= 2.5 && 2.5 <= hi[1] && hi[1] - lo[1] < 1e-14,
+        "{lo} {hi}"
+    );
 }
 
 #[test]
 fn step_too_large_is_reported() {
-    let sys = LtiSystem::new(DMatrix::from_row_slice(1, 1, &[-50.0]), DMatrix::from_row_slice(1, 1, &[1.0])).unwrap();
+    let sys = LtiSystem::new(
+        DMatrix::from_row_slice(1, 1, &[-50.0]),
+        DMatrix::from_row_slice(1, 1, &[1.0]),
+    )
+    .unwrap();
     let u = Zonotope::point(DVector::from_vec(vec![0.0])).unwrap();
-    let r = LtiReach::new(&sys, &u, 1.0, ReachOptions { taylor_terms: 4, max_order: 4 });
+    let r = LtiReach::new(
+        &sys,
+        &u,
+        1.0,
+        ReachOptions {
+            taylor_terms: 4,
+            max_order: 4,
+        },
+    );
     assert!(matches!(r, Err(ReachError::StepTooLarge { .. })));
 }
 
 #[test]
 fn stable_system_reach_is_not_absurdly_wide() {
     // ẋ = −x + u, u ∈ [−1, 1], x0 = 1: R([0, 0.1]) ⊆ [e^{-0.1} − 0.1, 1 + 0.1] roughly.
-    let sys = LtiSystem::new(DMatrix::from_row_slice(1, 1, &[-1.0]), DMatrix::from_row_slice(1, 1, &[1.0])).unwrap();
-    let u = Zonotope::new(DVector::from_vec(vec![0.0]), DMatrix::from_row_slice(1, 1, &[1.0])).unwrap();
+    let sys = LtiSystem::new(
+        DMatrix::from_row_slice(1, 1, &[-1.0]),
+        DMatrix::from_row_slice(1, 1, &[1.0]),
+    )
+    .unwrap();
+    let u = Zonotope::new(
+        DVector::from_vec(vec![0.0]),
+        DMatrix::from_row_slice(1, 1, &[1.0]),
+    )
+    .unwrap();
     let x0 = Zonotope::point(DVector::from_vec(vec![1.0])).unwrap();
     let reach = LtiReach::new(&sys, &u, 0.1, ReachOptions::default()).unwrap();
     let sets = reach.reach(&x0, 10).unwrap();
@@ -203,7 +279,11 @@ const ACC_PIECE: f64 = 0.02;
 
 fn unit(v: &[f64]) -> [f64; 3] {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if n < 1e-9 { [1.0, 0.0, 0.0] } else { [v[0] / n, v[1] / n, v[2] / n] }
+    if n < 1e-9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [v[0] / n, v[1] / n, v[2] / n]
+    }
 }
 
 fn scale01() -> impl Strategy<Value = f64> {
@@ -212,35 +292,67 @@ fn scale01() -> impl Strategy<Value = f64> {
 
 fn obj_case() -> impl Strategy<Value = ObjCase> {
     (
-        (0.0..0.2f64, 0.0..6.0f64, 0.0..0.1f64, 0.0..0.05f64, 0.0..0.2f64),
-        prop_oneof![Just(BallApprox::Box), Just(BallApprox::Seven), Just(BallApprox::Thirteen)],
-        (vec(-1.0..1.0f64, 3), vec(-1.5..1.5f64, 3), -10.0..10.0f64, 0.0..0.4f64, 0.0..0.1f64, 0.0..=1.0f64),
-        (vec(-1.0..1.0f64, 3), scale01(), vec(-1.0..1.0f64, 3), scale01()),
+        (
+            0.0..0.2f64,
+            0.0..6.0f64,
+            0.0..0.1f64,
+            0.0..0.05f64,
+            0.0..0.2f64,
+        ),
+        prop_oneof![
+            Just(BallApprox::Box),
+            Just(BallApprox::Seven),
+            Just(BallApprox::Thirteen)
+        ],
+        (
+            vec(-1.0..1.0f64, 3),
+            vec(-1.5..1.5f64, 3),
+            -10.0..10.0f64,
+            0.0..0.4f64,
+            0.0..0.1f64,
+            0.0..=1.0f64,
+        ),
+        (
+            vec(-1.0..1.0f64, 3),
+            scale01(),
+            vec(-1.0..1.0f64, 3),
+            scale01(),
+        ),
         vec((vec(-1.0..1.0f64, 3), scale01()), 30),
         vec(-1.0..1.0f64, 3),
         prop::bool::ANY,
     )
-        .prop_map(|((radius, a_max, delay, e_p, e_v), approx, (mp, mv, t_m, dt_a, width, theta), (epd, eps, evd, evs), acc, surface, use_speed)| ObjCase {
-            radius,
-            a_max,
-            delay,
-            e_p,
-            e_v,
-            approx,
-            meas_p: [mp[0], mp[1], mp[2]],
-            meas_v: [mv[0], mv[1], mv[2]],
-            t_m,
-            dt_a,
-            width,
-            theta,
-            ep_dir: epd,
-            ep_s: eps,
-            ev_dir: evd,
-            ev_s: evs,
-            acc,
-            surface,
-            use_speed,
-        })
+        .prop_map(
+            |(
+                (radius, a_max, delay, e_p, e_v),
+                approx,
+                (mp, mv, t_m, dt_a, width, theta),
+                (epd, eps, evd, evs),
+                acc,
+                surface,
+                use_speed,
+            )| ObjCase {
+                radius,
+                a_max,
+                delay,
+                e_p,
+                e_v,
+                approx,
+                meas_p: [mp[0], mp[1], mp[2]],
+                meas_v: [mv[0], mv[1], mv[2]],
+                t_m,
+                dt_a,
+                width,
+                theta,
+                ep_dir: epd,
+                ep_s: eps,
+                ev_dir: evd,
+                ev_s: evs,
+                acc,
+                surface,
+                use_speed,
+            },
+        )
 }
 
 /// Centre position at time `t` and the maximal speed over `[t_m − δ, t]`.
@@ -312,11 +424,20 @@ fn object_occupancy_is_reasonably_tight() {
     // Standing still, exact measurement, no delay: the occupancy over [0, 0.1] s with 2 m/s² is
     // within a 1 cm (a t²/2) ball inflated by the ball approximation.
     let obj = DynamicObject::new(0.05, 2.0, None, 0.0, 0.0, 0.0, BallApprox::Thirteen).unwrap();
-    let meas = ObjectMeasurement { time: 0.0, position: [0.5, 0.0, 0.2], velocity: [0.0; 3] };
+    let meas = ObjectMeasurement {
+        time: 0.0,
+        position: [0.5, 0.0, 0.2],
+        velocity: [0.0; 3],
+    };
     let occ = obj.occupancy(&meas, 0.0, 0.1).unwrap();
     let (lo, hi) = occ.centres().interval_hull();
     for i in 0..3 {
-        assert!(hi[i] - lo[i] < 2.0 * 0.01 * 1.25, "axis {i}: [{}, {}]", lo[i], hi[i]);
+        assert!(
+            hi[i] - lo[i] < 2.0 * 0.01 * 1.25,
+            "axis {i}: [{}, {}]",
+            lo[i],
+            hi[i]
+        );
     }
     // A capsule axis 20 cm away is proven disjoint, with a bound close to 20 − 5 − 5 − 1 = 9 cm.
     let cap = Capsule::new(Point3::new(0.5, 0.0, 0.4), Point3::new(0.5, 0.3, 0.4), 0.05).unwrap();

@@ -6,9 +6,11 @@
 use inari::Interval;
 use nalgebra::{DMatrix, DVector, Point3};
 use pacs_models::shape::Capsule;
-use pacs_reach::zonotope::{BallApprox, Containment, Zonotope, Zonotope3, ball_zonotope, inradius_lower_3d};
-use proptest::prelude::*;
+use pacs_reach::zonotope::{
+    BallApprox, Containment, Zonotope, Zonotope3, ball_zonotope, inradius_lower_3d,
+};
 use proptest::collection::vec;
+use proptest::prelude::*;
 
 const CASES: u32 = 10_000;
 
@@ -23,7 +25,7 @@ fn point_iv(z: &Zonotope, beta: &[f64], gamma: &[f64]) -> Vec<Interval> {
         .map(|i| {
             let mut acc = pt(z.center()[i]);
             for (j, b) in beta.iter().enumerate() {
-                acc = acc + pt(z.generators()[(i, j)]) * pt(*b);
+                acc += pt(z.generators()[(i, j)]) * pt(*b);
             }
             acc + pt(z.error_box()[i]) * pt(gamma[i])
         })
@@ -38,13 +40,19 @@ fn mid(v: &[Interval]) -> DVector<f64> {
 fn check_in(z: &Zonotope, x: &[Interval], dirs: &[Vec<f64>]) -> Result<(), TestCaseError> {
     let (lo, hi) = z.interval_hull();
     for i in 0..z.dim() {
-        prop_assert!(x[i].sup() >= lo[i] && x[i].inf() <= hi[i], "axis {i}: {:?} vs [{}, {}]", x[i], lo[i], hi[i]);
+        prop_assert!(
+            x[i].sup() >= lo[i] && x[i].inf() <= hi[i],
+            "axis {i}: {:?} vs [{}, {}]",
+            x[i],
+            lo[i],
+            hi[i]
+        );
     }
     for d in dirs {
         let d = DVector::from_column_slice(&d[..z.dim()]);
         let mut dx = pt(0.0);
         for i in 0..z.dim() {
-            dx = dx + pt(d[i]) * x[i];
+            dx += pt(d[i]) * x[i];
         }
         let h = z.support_up(&d).unwrap();
         prop_assert!(dx.inf() <= h, "d·x = {:?} > h = {h}", dx);
@@ -110,7 +118,7 @@ proptest! {
         let x = point_iv(&z, &b, &g);
         let mx: Vec<Interval> = (0..p).map(|i| {
             let mut acc = pt(0.0);
-            for j in 0..n { acc = acc + pt(m[(i, j)]) * x[j]; }
+            for j in 0..n { acc += pt(m[(i, j)]) * x[j]; }
             acc
         }).collect();
         check_in(&y, &mx, &ds)?;
@@ -259,7 +267,13 @@ fn contains_certifies_most_interior_points() {
         }
         // Beyond the support point in a random direction d: provably outside.
         let d = DVector::from_fn(n, |_, _| next());
-        let beta = DVector::from_fn(m, |j, _| if d.dot(&z.generators().column(j)) >= 0.0 { 1.05 } else { -1.05 });
+        let beta = DVector::from_fn(m, |j, _| {
+            if d.dot(&z.generators().column(j)) >= 0.0 {
+                1.05
+            } else {
+                -1.05
+            }
+        });
         let y = z.center() + z.generators() * &beta;
         if z.contains(&y).unwrap() == Containment::Outside {
             outside += 1;
@@ -271,17 +285,28 @@ fn contains_certifies_most_interior_points() {
 
 // ---------- 3-D zonotope vs capsule ----------
 
-fn z3_strategy(mmin: usize, mmax: usize, with_err: bool) -> impl Strategy<Value = (Zonotope3, Vec<f64>)> {
+fn z3_strategy(
+    mmin: usize,
+    mmax: usize,
+    with_err: bool,
+) -> impl Strategy<Value = (Zonotope3, Vec<f64>)> {
     (mmin..=mmax).prop_flat_map(move |m| {
         (
             vec(-1.0..1.0f64, 3),
             vec(-0.4..0.4f64, 3 * m),
-            if with_err { vec(0.0..0.01f64, 3).boxed() } else { Just(vec![0.0; 3]).boxed() },
+            if with_err {
+                vec(0.0..0.01f64, 3).boxed()
+            } else {
+                Just(vec![0.0; 3]).boxed()
+            },
             vec(coef(), m + 3),
         )
             .prop_map(move |(c, g, e, b)| {
                 let gens: Vec<[f64; 3]> = g.chunks(3).map(|s| [s[0], s[1], s[2]]).collect();
-                (Zonotope3::new([c[0], c[1], c[2]], &gens, [e[0], e[1], e[2]]).unwrap(), b)
+                (
+                    Zonotope3::new([c[0], c[1], c[2]], &gens, [e[0], e[1], e[2]]).unwrap(),
+                    b,
+                )
             })
     })
 }
@@ -291,11 +316,11 @@ fn z3_point(z: &Zonotope3, b: &[f64]) -> [Interval; 3] {
     let m = z.generators().len();
     for (j, g) in z.generators().iter().enumerate() {
         for i in 0..3 {
-            x[i] = x[i] + pt(g[i]) * pt(b[j]);
+            x[i] += pt(g[i]) * pt(b[j]);
         }
     }
     for i in 0..3 {
-        x[i] = x[i] + pt(z.error_box()[i]) * pt(b[m + i]);
+        x[i] += pt(z.error_box()[i]) * pt(b[m + i]);
     }
     x
 }
@@ -318,17 +343,31 @@ fn parry_distance(z: &Zonotope3, inflate: f64, cap: &Capsule) -> Option<f64> {
     }
     let poly = ConvexPolyhedron::from_convex_hull(&pts)?;
     let (a, b) = (cap.p1(), cap.p2());
-    let pc = PCapsule::new(Vector::new(a.x, a.y, a.z), Vector::new(b.x, b.y, b.z), cap.radius() + inflate);
+    let pc = PCapsule::new(
+        Vector::new(a.x, a.y, a.z),
+        Vector::new(b.x, b.y, b.z),
+        cap.radius() + inflate,
+    );
     let d = parry3d_f64::query::distance(&Pose::IDENTITY, &poly, &Pose::IDENTITY, &pc).ok()?;
     Some(d.distance)
 }
 
 fn capsule_strategy() -> impl Strategy<Value = Capsule> {
-    (vec(-2.0..2.0f64, 3), vec(-0.8..0.8f64, 3), 0.0..0.3f64, prop::bool::weighted(0.2)).prop_map(|(p, d, r, sphere)| {
-        let p1 = Point3::new(p[0], p[1], p[2]);
-        let p2 = if sphere { p1 } else { Point3::new(p[0] + d[0], p[1] + d[1], p[2] + d[2]) };
-        Capsule::new(p1, p2, r).unwrap()
-    })
+    (
+        vec(-2.0..2.0f64, 3),
+        vec(-0.8..0.8f64, 3),
+        0.0..0.3f64,
+        prop::bool::weighted(0.2),
+    )
+        .prop_map(|(p, d, r, sphere)| {
+            let p1 = Point3::new(p[0], p[1], p[2]);
+            let p2 = if sphere {
+                p1
+            } else {
+                Point3::new(p[0] + d[0], p[1] + d[1], p[2] + d[2])
+            };
+            Capsule::new(p1, p2, r).unwrap()
+        })
 }
 
 proptest! {
