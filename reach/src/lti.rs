@@ -367,6 +367,16 @@ impl LtiReach {
         f.widen_rows(&e_row);
         fu.widen_rows(&r_e);
         let (phi_mid, phi_rad) = phi.mid_rad();
+        if phi_mid
+            .iter()
+            .chain(phi_rad.iter())
+            .chain(f.mag().iter())
+            .chain(fu.mag().iter())
+            .chain(gam.mag().iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(ZonotopeError::NonFinite("matrix series").into());
+        }
         // Input: Ũ = B U = ũ_c ⊕ Ũ₀.
         let ut = u.linear_map(&sys.b)?;
         let uc = ut.center().clone();

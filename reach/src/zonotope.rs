@@ -494,6 +494,9 @@ impl Zonotope {
         let Some((_t, beta, y)) = zf.solve_norm_lp(x)? else {
             return Ok(Containment::Unknown);
         };
+        if beta.iter().chain(y.iter()).any(|v| !v.is_finite()) {
+            return Ok(Containment::Unknown);
+        }
         // Outside certificate from the dual direction (either sign convention).
         for sgn in [1.0, -1.0] {
             let d = &y * sgn;

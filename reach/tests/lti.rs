@@ -142,6 +142,31 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    /// Point initial state and point (constant) input: the first-interval set must contain the
+    /// curved trajectory, not only the chord — exercises the correction terms `F` and `F_u`.
+    #[test]
+    fn lti_first_interval_contains_curved_trajectory(
+        (a, b, uc, x0, r, theta, dirs) in (1usize..=3).prop_flat_map(|n| (
+            vec(-3.0..3.0f64, n * n), vec(-1.0..1.0f64, n), -2.0..2.0f64, vec(-5.0..5.0f64, n),
+            0.05..0.3f64, 0.0..=1.0f64, vec(vec(-1.0..1.0f64, n), 4)))
+    ) {
+        let n = x0.len();
+        let a = DMatrix::from_row_slice(n, n, &a);
+        let b = DMatrix::from_column_slice(n, 1, &b);
+        let sys = LtiSystem::new(a.clone(), b.clone()).unwrap();
+        let u = Zonotope::point(DVector::from_vec(vec![uc])).unwrap();
+        let x0 = DVector::from_vec(x0);
+        let reach = LtiReach::new(&sys, &u, r, ReachOptions { taylor_terms: 10, max_order: 8 }).unwrap();
+        let set = reach.first_interval(&Zonotope::point(x0.clone()).unwrap()).unwrap();
+        let (e, g) = exp_and_gamma(&a, theta * r);
+        let x = &e * &x0 + &g * (&b * uc);
+        check_in(&set, &x, &dirs)?;
+    }
+}
+
 #[test]
 fn double_integrator_series_is_exact() {
     // x = (p, v): after r = 0.5 with zero input, (1, 2) ↦ (2, 2) exactly; no remainder term.
