@@ -652,6 +652,21 @@ impl DynamicObject {
     }
 }
 
+impl DynamicObject {
+    /// Occupancies over the consecutive intervals `[times[k], times[k+1]]` (s, non-decreasing),
+    /// each as in [`DynamicObject::occupancy`].
+    pub fn occupancy_sequence(
+        &self,
+        meas: &ObjectMeasurement,
+        times: &[f64],
+    ) -> Result<Vec<ObjectOccupancy>, ReachError> {
+        times
+            .windows(2)
+            .map(|w| self.occupancy(meas, w[0], w[1]))
+            .collect()
+    }
+}
+
 /// Occupancy of a dynamic object over `[t_a, t_b]`: `(centres ⊕ B(radius)) ∩ (speed ball ⊕ B(radius))`
 /// (the second set only with a speed bound). Both sets contain every possible sphere point.
 #[derive(Debug, Clone, PartialEq)]

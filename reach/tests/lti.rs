@@ -471,4 +471,17 @@ fn object_occupancy_is_reasonably_tight() {
     assert!(lb > 0.085 && lb <= 0.1, "lb = {lb}");
     // Invalid window.
     assert!(obj.occupancy(&meas, -1.0, 0.0).is_err());
+    // Point in time (zero-length interval) and a sequence of windows; hulls grow monotonically.
+    let occ0 = obj.occupancy(&meas, 0.0, 0.0).unwrap();
+    let (lo, hi) = occ0.centres().interval_hull();
+    assert!((0..3).all(|i| hi[i] - lo[i] < 1e-12), "{lo:?} {hi:?}");
+    let seq = obj
+        .occupancy_sequence(&meas, &[0.0, 0.05, 0.1, 0.15])
+        .unwrap();
+    assert_eq!(seq.len(), 3);
+    let w = |o: &pacs_reach::lti::ObjectOccupancy| {
+        let (lo, hi) = o.centres().interval_hull();
+        hi[0] - lo[0]
+    };
+    assert!(w(&seq[0]) < w(&seq[1]) && w(&seq[1]) < w(&seq[2]));
 }
