@@ -47,6 +47,11 @@ fn pt(x: f64) -> Interval {
 }
 const IZERO: Interval = inari::const_interval!(0.0, 0.0);
 
+#[inline]
+fn is_zero(x: Interval) -> bool {
+    x.inf() == 0.0 && x.sup() == 0.0
+}
+
 /// A dense interval matrix (row-major).
 #[derive(Debug, Clone, PartialEq)]
 pub struct IntervalMatrix {
@@ -99,7 +104,12 @@ impl IntervalMatrix {
             for j in 0..rhs.cols {
                 let mut acc = IZERO;
                 for k in 0..self.cols {
-                    acc += self.get(i, k) * rhs.get(k, j);
+                    let (a, b) = (self.get(i, k), rhs.get(k, j));
+                    // [0,0]·x = [0,0] exactly: skipping it changes nothing (sparse A is common).
+                    if is_zero(a) || is_zero(b) {
+                        continue;
+                    }
+                    acc += a * b;
                 }
                 out.set(i, j, acc);
             }
@@ -136,7 +146,7 @@ impl IntervalMatrix {
     }
     /// `true` if every entry is exactly `[0, 0]`.
     pub fn is_zero(&self) -> bool {
-        self.v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0)
+        self.v.iter().all(|&x| is_zero(x))
     }
     /// `(mid, rad)` with `[mid − rad, mid + rad] ⊇` each entry (rad rounded up).
     pub fn mid_rad(&self) -> (DMatrix<f64>, DMatrix<f64>) {

@@ -764,37 +764,56 @@ pub fn ball_zonotope(
             reason: "must be finite and >= 0",
         });
     }
-    let dirs = approx.directions();
-    let units: Vec<[f64; 3]> = dirs
-        .iter()
-        .map(|d| {
-            let nrm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            [d[0] / nrm, d[1] / nrm, d[2] / nrm]
-        })
-        .collect();
-    let m = units.len();
     let c = DVector::from_column_slice(&centre);
     check_finite("ball centre", c.iter())?;
     if radius == 0.0 {
         return Zonotope::new(c, DMatrix::zeros(3, 0));
     }
-    let r0 = inradius_lower_3d(&units);
-    let mut s = radius / r0 * (1.0 + 1e-12);
-    for _ in 0..64 {
-        let gens: Vec<[f64; 3]> = units
+    let (unit, gsum) = unit_ball_generators(approx);
+    // Generators fl(R'·g_k) with R' ≥ R(1 + 1e-12): the exact R'·Z_unit has inradius ≥ R', and
+    // rounding moves each generator by ≤ u‖R' g_k‖, which lowers the inradius by at most
+    // u R' Σ‖g_k‖ = u R' gsum ≪ 1e-12 R'. Tiny radii are raised to 1e-280 (no underflow).
+    debug_assert!(gsum * f64::EPSILON < 1e-13);
+    let rp = mul_up(radius.max(1e-280), 1.0 + 1e-12);
+    let g = DMatrix::from_fn(3, unit.len(), |i, j| unit[j][i] * rp);
+    Zonotope::new(c, g)
+}
+
+/// Unit-ball generator sets with certified inradius ≥ 1, and `Σ_k ‖g_k‖` (upper bound), cached.
+fn unit_ball_generators(approx: BallApprox) -> (&'static [[f64; 3]], f64) {
+    use std::sync::OnceLock;
+    static CACHE: [OnceLock<(Vec<[f64; 3]>, f64)>; 3] =
+        [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    let k = match approx {
+        BallApprox::Box => 0,
+        BallApprox::Seven => 1,
+        BallApprox::Thirteen => 2,
+    };
+    let (g, s) = CACHE[k].get_or_init(|| {
+        let units: Vec<[f64; 3]> = approx
+            .directions()
             .iter()
-            .map(|u| [u[0] * s, u[1] * s, u[2] * s])
+            .map(|d| {
+                let nrm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                [d[0] / nrm, d[1] / nrm, d[2] / nrm]
+            })
             .collect();
-        if inradius_lower_3d(&gens) >= radius {
-            let g = DMatrix::from_fn(3, m, |i, j| gens[j][i]);
-            return Zonotope::new(c, g);
+        let mut s = 1.0 / inradius_lower_3d(&units) * (1.0 + 1e-12);
+        loop {
+            let gens: Vec<[f64; 3]> = units
+                .iter()
+                .map(|u| [u[0] * s, u[1] * s, u[2] * s])
+                .collect();
+            if inradius_lower_3d(&gens) >= 1.0 {
+                let sum = gens
+                    .iter()
+                    .fold(0.0, |a, g| add_up(a, norm3_up(g[0], g[1], g[2])));
+                return (gens, sum);
+            }
+            s *= 1.0 + 1e-9;
         }
-        s *= 1.0 + 1e-9;
-    }
-    Err(ZonotopeError::Invalid {
-        what: "ball radius",
-        reason: "could not certify enclosure",
-    })
+    });
+    (g.as_slice(), *s)
 }
 
 /// Capacity of [`Zonotope3`] generator storage.
