@@ -409,6 +409,25 @@ proptest! {
         prop_assert!(lb >= dp - 1e-4 * (1.0 + dp), "bound {lb} much below parry {dp}");
     }
 
+    /// The inline 3-D support function bounds every sampled point (interval-enclosed, no tolerance)
+    /// and agrees with the general-dimension one.
+    #[test]
+    fn zonotope3_support_bounds_samples(
+        (zb, d) in (z3_strategy(0, 48, true), vec(-1.0..1.0f64, 3))
+    ) {
+        let (z, b) = zb;
+        let x = z3_point(&z, &b);
+        let h = z.support_up([d[0], d[1], d[2]]);
+        let dx = pt(d[0]) * x[0] + pt(d[1]) * x[1] + pt(d[2]) * x[2];
+        prop_assert!(dx.inf() <= h, "d·x = {dx:?} > h = {h}");
+        let hz = z.to_zonotope().support_up(&DVector::from_column_slice(&d)).unwrap();
+        prop_assert!((h - hz).abs() <= 1e-12 * (1.0 + hz.abs()), "{h} vs {hz}");
+        let (lo, hi) = z.interval_hull();
+        for i in 0..3 {
+            prop_assert!(x[i].sup() >= lo[i] && x[i].inf() <= hi[i]);
+        }
+    }
+
     /// Any direction gives a valid (possibly weak) bound.
     #[test]
     fn capsule_bound_along_any_direction_is_valid(
