@@ -428,6 +428,19 @@ proptest! {
         }
     }
 
+    /// GJK picks a near-optimal direction also for large generator counts: its bound is not worse
+    /// than the best of 64 random directions (up to 1e-6 m).
+    #[test]
+    fn capsule_gjk_direction_beats_random_directions(
+        (zb, inflate, cap, dirs) in (z3_strategy(6, 48, true), 0.0..0.2f64, capsule_strategy(),
+            vec(vec(-1.0..1.0f64, 3), 64))
+    ) {
+        let (z, _) = zb;
+        let lb = z.distance_lower_bound(inflate, &cap);
+        let best = dirs.iter().map(|n| z.distance_bound_along(inflate, &cap, [n[0], n[1], n[2]])).fold(0.0, f64::max);
+        prop_assert!(lb >= best - 1e-6, "gjk {lb} < random best {best}");
+    }
+
     /// Any direction gives a valid (possibly weak) bound.
     #[test]
     fn capsule_bound_along_any_direction_is_valid(
