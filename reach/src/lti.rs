@@ -124,6 +124,15 @@ impl IntervalMatrix {
             v: self.v.iter().map(|&x| x * s).collect(),
         }
     }
+    /// `self += rhs · s` (enclosure; exact-zero entries of `rhs` are skipped, which is exact).
+    pub fn add_scaled(&mut self, rhs: &IntervalMatrix, s: Interval) {
+        assert_eq!((self.rows, self.cols), (rhs.rows, rhs.cols));
+        for (a, &b) in self.v.iter_mut().zip(&rhs.v) {
+            if !is_zero(b) {
+                *a += b * s;
+            }
+        }
+    }
     /// Enclosure of the sum.
     pub fn add(&self, rhs: &IntervalMatrix) -> IntervalMatrix {
         assert_eq!((self.rows, self.cols), (rhs.rows, rhs.cols));
@@ -150,8 +159,22 @@ impl IntervalMatrix {
     }
     /// `(mid, rad)` with `[mid − rad, mid + rad] ⊇` each entry (rad rounded up).
     pub fn mid_rad(&self) -> (DMatrix<f64>, DMatrix<f64>) {
-        let mid = DMatrix::from_fn(self.rows, self.cols, |i, j| self.get(i, j).mid());
-        let rad = DMatrix::from_fn(self.rows, self.cols, |i, j| self.get(i, j).rad());
+        let mut mid = DMatrix::zeros(self.rows, self.cols);
+        let mut rad = DMatrix::zeros(self.rows, self.cols);
+        for i in 0..self.rows {
+            for j in 0..self.cols {
+                let x = self.get(i, j);
+                let (lo, hi) = (x.inf(), x.sup());
+                if lo == hi {
+                    mid[(i, j)] = lo; // point interval: exact, radius 0
+                } else {
+                    let m = x.mid();
+                    mid[(i, j)] = m;
+                    // [m − r, m + r] ⊇ [lo, hi] with both differences rounded up.
+                    rad[(i, j)] = sub_up(hi, m).max(sub_up(m, lo));
+                }
+            }
+        }
         (mid, rad)
     }
     /// Entrywise magnitude `max |x|` (exact upper bounds).
@@ -355,8 +378,8 @@ impl LtiReach {
         let mut phi = IntervalMatrix::zeros(n, n);
         let mut gam = IntervalMatrix::zeros(n, n);
         for i in 0..=eta {
-            phi = phi.add(&pw[i].scale(pt(1.0) / fact[i]));
-            gam = gam.add(&pw[i].scale(ri / fact[i + 1]));
+            phi.add_scaled(&pw[i], pt(1.0) / fact[i]);
+            gam.add_scaled(&pw[i], ri / fact[i + 1]);
         }
         phi.widen_rows(&e_row);
         gam.widen_rows(&r_e);
@@ -369,10 +392,10 @@ impl LtiReach {
             }
             if i >= 2 {
                 let k = Interval::try_from((kappa(i), 0.0)).expect("kappa");
-                f = f.add(&pw[i].scale(k / fact[i]));
+                f.add_scaled(&pw[i], k / fact[i]);
             }
             let k1 = Interval::try_from((kappa(i + 1), 0.0)).expect("kappa");
-            fu = fu.add(&pw[i].scale(k1 * ri / fact[i + 1]));
+            fu.add_scaled(&pw[i], k1 * ri / fact[i + 1]);
         }
         f.widen_rows(&e_row);
         fu.widen_rows(&r_e);
