@@ -491,7 +491,8 @@ impl Zonotope {
                 Containment::Outside
             });
         }
-        let Some((_t, beta, y)) = zf.solve_norm_lp(x)? else {
+        // Infeasible LP (x − c outside the range of G') or solver failure: no certificate either way.
+        let Ok(Some((_t, beta, y))) = zf.solve_norm_lp(x) else {
             return Ok(Containment::Unknown);
         };
         if beta.iter().chain(y.iter()).any(|v| !v.is_finite()) {
