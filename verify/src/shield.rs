@@ -237,12 +237,131 @@ pub struct Command {
     pub diag: Diagnostics,
 }
 
-#[derive(Debug, Clone, Copy)]
-struct VerifiedFailsafe {
-    slot: usize,
-    profile: SpeedProfile,
+/// The last verified failsafe: braking profile `profile` on trajectory slot `slot`, started at
+/// absolute time `t0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerifiedFailsafe {
+    /// Trajectory slot the failsafe lives on.
+    pub slot: usize,
+    /// Braking path-speed profile (ṡ → 0).
+    pub profile: SpeedProfile,
     /// Absolute time of the profile start.
-    t0: f64,
+    pub t0: f64,
+}
+
+/// A candidate of one shield step: the go-profile for α_s, then `brake`, on `slot`, and whether
+/// the monitored trajectory was verified.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Trajectory slot of the candidate.
+    pub slot: usize,
+    /// Intended step (ṡ → 1) for α_s.
+    pub go: SpeedProfile,
+    /// Failsafe after the step (ṡ → 0).
+    pub brake: SpeedProfile,
+    /// The monitored trajectory (go, then brake) was verified.
+    pub verified: bool,
+}
+
+/// The outcome of [`decide`]: the executed slot and path state at `t + α_s` and the (possibly
+/// new) last verified failsafe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decision {
+    /// Slot of the executed command.
+    pub slot: usize,
+    /// Executed path state at `t + α_s`.
+    pub path: PathState,
+    /// The last verified failsafe after this step.
+    pub failsafe: VerifiedFailsafe,
+    /// The candidate was adopted (verified, or OFF mode).
+    pub adopted: bool,
+}
+
+/// The pure decision of one shield step (paper Algorithm 1), as used by [`Shield::step`]: a
+/// verified candidate (or any candidate in OFF mode) is executed for α_s and its brake profile
+/// becomes the stored failsafe (starting at `t + α_s`); otherwise (no candidate, or not verified)
+/// the stored failsafe is continued to `t + α_s`.
+pub fn decide(
+    stored: VerifiedFailsafe,
+    candidate: Option<Candidate>,
+    mode: FilterMode,
+    t: f64,
+    alpha: f64,
+) -> Decision {
+    match candidate {
+        Some(c) if c.verified || mode == FilterMode::Off => Decision {
+            slot: c.slot,
+            path: c.go.eval(alpha),
+            failsafe: VerifiedFailsafe {
+                slot: c.slot,
+                profile: c.brake,
+                t0: t + alpha,
+            },
+            adopted: true,
+        },
+        _ => Decision {
+            slot: stored.slot,
+            path: stored.profile.eval(t + alpha - stored.t0),
+            failsafe: stored,
+            adopted: false,
+        },
+    }
+}
+
+/// The occupancy time intervals of a monitored trajectory, as used by the shield's verification:
+/// items `(k, t_a, t_b)` relative to the step start: `[0, α_s]` (k = 0), then durations
+/// `first·2^(k−1)` until `stop`, the interval `max_intervals − 1` extending to `stop`. For finite
+/// `0 < α_s ≤ stop`, `first > 0`, the intervals are contiguous and cover `[0, stop]`.
+#[derive(Debug, Clone, Copy)]
+pub struct OccupancyIntervals {
+    alpha: f64,
+    stop: f64,
+    max: usize,
+    ta: f64,
+    k: usize,
+    dur: f64,
+    done: bool,
+}
+
+impl OccupancyIntervals {
+    /// Intervals for step `alpha`, standstill at `stop`, first duration `first`, at most `max`.
+    pub fn new(alpha: f64, stop: f64, first: f64, max: usize) -> Self {
+        Self {
+            alpha,
+            stop,
+            max,
+            ta: 0.0,
+            k: 0,
+            dur: first,
+            done: false,
+        }
+    }
+}
+
+impl Iterator for OccupancyIntervals {
+    type Item = (usize, f64, f64);
+    fn next(&mut self) -> Option<(usize, f64, f64)> {
+        if self.done || !(self.ta < self.stop || self.k == 0) {
+            return None;
+        }
+        let (k, ta, stop) = (self.k, self.ta, self.stop);
+        let tb = if k == 0 {
+            self.alpha.min(stop.max(self.alpha))
+        } else if k + 1 >= self.max {
+            stop
+        } else {
+            (ta + self.dur).min(stop)
+        };
+        if k > 0 {
+            self.dur *= 2.0;
+        }
+        self.k += 1;
+        self.ta = tb;
+        if tb >= stop {
+            self.done = true;
+        }
+        Some((k, ta, tb))
+    }
 }
 
 /// The PACS shield (also OFF and single-action, by configuration).
@@ -499,6 +618,18 @@ impl Shield {
         self.trajs[slot].as_ref().expect("slot holds a trajectory")
     }
 
+    /// The last verified failsafe (after `start`).
+    pub fn verified_failsafe(&self) -> Option<VerifiedFailsafe> {
+        self.failsafe
+    }
+
+    /// The joint state of the last verified failsafe at absolute time `t` (after `start`).
+    pub fn failsafe_state_at(&self, t: f64) -> Option<JointState> {
+        let f = self.failsafe?;
+        self.trajs[f.slot].as_ref()?;
+        Some(self.joint_state(f.slot, &f.profile.eval(t - f.t0)))
+    }
+
     /// Current commanded joint state.
     pub fn state(&self) -> JointState {
         self.joint_state(self.slot, &self.path)
@@ -587,34 +718,25 @@ impl Shield {
             let result = self.verify(cand_slot, &go, &brake, t, &mut diag);
             (go, brake, result)
         });
-        let verified = match outcome {
-            Some((go, brake, ok)) if ok || self.config.mode == FilterMode::Off => {
-                self.slot = cand_slot;
-                self.path = go.eval(alpha);
-                self.failsafe = Some(VerifiedFailsafe {
-                    slot: cand_slot,
-                    profile: brake,
-                    t0: t + alpha,
-                });
-                diag.stop_time = t + alpha + brake.settle_time();
-                true
-            }
-            Some(_) => false,
-            None => {
-                diag.binding = Binding::NoProfile;
-                false
-            }
-        };
-        if !verified {
-            // Continue the last verified failsafe.
-            let f = self
-                .failsafe
-                .expect("a verified failsafe exists once started");
-            self.slot = f.slot;
-            self.path = f.profile.eval(t + alpha - f.t0);
-            diag.on_failsafe = true;
-            diag.stop_time = f.t0 + f.profile.settle_time();
+        if outcome.is_none() {
+            diag.binding = Binding::NoProfile;
         }
+        let stored = self
+            .failsafe
+            .expect("a verified failsafe exists once started");
+        let cand = outcome.map(|(go, brake, ok)| Candidate {
+            slot: cand_slot,
+            go,
+            brake,
+            verified: ok,
+        });
+        let next = decide(stored, cand, self.config.mode, t, alpha);
+        self.slot = next.slot;
+        self.path = next.path;
+        self.failsafe = Some(next.failsafe);
+        let verified = next.adopted;
+        diag.on_failsafe = !verified;
+        diag.stop_time = next.failsafe.t0 + next.failsafe.profile.settle_time();
         diag.verified = verified;
         diag.path_speed = self.path.sd;
         self.time = t + alpha;
@@ -686,31 +808,18 @@ impl Shield {
             return false;
         };
         let mut ok = true;
-        // Intervals: [0, α], then durations first_interval·2^k until standstill.
-        let mut ta = 0.0;
-        let mut k = 0;
-        let mut dur = self.config.first_interval;
-        while ta < stop || k == 0 {
-            let tb = if k == 0 {
-                alpha.min(stop.max(alpha))
-            } else if k + 1 >= self.config.max_intervals {
-                stop
-            } else {
-                (ta + dur).min(stop)
-            };
-            if k > 0 {
-                dur *= 2.0;
-            }
+        let intervals = OccupancyIntervals::new(
+            alpha,
+            stop,
+            self.config.first_interval,
+            self.config.max_intervals,
+        );
+        for (k, ta, tb) in intervals {
             if !self.check_interval(slot, go, brake, t, ta, tb, k, &meas, diag) {
                 ok = false;
                 if self.config.mode == FilterMode::Pacs {
                     break;
                 }
-            }
-            k += 1;
-            ta = tb;
-            if tb >= stop {
-                break;
             }
         }
         self.meas = Some(meas);
