@@ -1,0 +1,110 @@
+//! (b) Segment–segment distance bounds and capsule / zonotope intersection tests are
+//! conservative.
+
+use crate::exact::dist3_le;
+use crate::{Source, harness};
+use nalgebra::{DVector, Point3};
+use pacs_models::Capsule;
+use pacs_reach::Interval;
+use pacs_reach::geometry::{
+    capsule_distance_lower_bound, capsules_disjoint, segment_distance_lower_bound,
+};
+use pacs_reach::rounding::{add_down, norm3_up};
+use pacs_reach::zonotope::{Containment, Zonotope};
+
+/// A point with coordinates in [-2, 2] (0 or magnitude ≥ 1e-100).
+fn point<S: Source>(s: &mut S) -> Option<Point3<f64>> {
+    let v = s.vec3(-2.0, 2.0);
+    s.assume(v.iter().all(|c| crate::exact::tame(*c)))
+        .then(|| Point3::from(v))
+}
+
+/// Enclosure of the exact point `a + t (b − a)` (interval arithmetic, checked by (a)).
+fn on_segment(a: &Point3<f64>, b: &Point3<f64>, t: f64) -> [Interval; 3] {
+    std::array::from_fn(|i| {
+        Interval::point(a[i]) + (Interval::point(b[i]) - Interval::point(a[i])).scale(t)
+    })
+}
+
+/// Upper bound of the exact distance between two enclosed points.
+fn dist_up(p: &[Interval; 3], q: &[Interval; 3]) -> f64 {
+    let d: [f64; 3] = std::array::from_fn(|i| (p[i] - q[i]).mag());
+    norm3_up(d[0], d[1], d[2])
+}
+
+/// Segments `a0a1`, `b0b1` (either possibly degenerate) and points on them.
+#[allow(clippy::type_complexity)]
+fn segments<S: Source>(
+    s: &mut S,
+) -> Option<([Point3<f64>; 4], [Interval; 3], [Interval; 3])> {
+    let a0 = point(s)?;
+    let a1 = if s.bool() { point(s)? } else { a0 };
+    let b0 = point(s)?;
+    let b1 = if s.bool() { point(s)? } else { b0 };
+    let (t, u) = (s.f64_in(0.0, 1.0), s.f64_in(0.0, 1.0));
+    Some(([a0, a1, b0, b1], on_segment(&a0, &a1, t), on_segment(&b0, &b1, u)))
+}
+
+/// The separating-axis lower bound never exceeds the distance of any two points of the segments
+/// (so never the exact segment distance).
+fn segment_lb<S: Source>(s: &mut S) {
+    let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
+        return;
+    };
+    let lb = segment_distance_lower_bound(&a0, &a1, &b0, &b1);
+    assert!(lb >= 0.0);
+    let ub = dist_up(&p, &q);
+    assert!(lb <= ub, "lb {lb} > |p - q| ≤ {ub}");
+    // Endpoints are exact points: compare with the exact distance directly.
+    let (a, b) = ([a0.x, a0.y, a0.z], [b0.x, b0.y, b0.z]);
+    if a0 == a1 && b0 == b1 {
+        // A proof of |a − b| ≤ pred(lb) < lb would be a violation.
+        assert!(lb == 0.0 || !dist3_le(&a, &b, lb.next_down()), "point lb {lb} too large");
+    }
+}
+harness!(b1_segment_distance_lower_bound, unwind = 25, cases = crate::DEFAULT_CASES, segment_lb);
+
+/// Capsules that share a point are never reported disjoint, and the capsule distance bound is
+/// at most the distance of any two axis points minus the radii. Radii are drawn so that the
+/// capsules often exactly touch.
+fn capsules<S: Source>(s: &mut S) {
+    let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
+        return;
+    };
+    let ub = dist_up(&p, &q);
+    let ra = s.f64_in(0.0, 1.0);
+    let rb = if s.bool() {
+        s.f64_in(0.0, 1.0)
+    } else {
+        // Touching (or overlapping by rounding): ra + rb ≥ ub ≥ |p − q|.
+        (ub - ra).max(0.0).next_up()
+    };
+    let ca = Capsule::new_unchecked(a0, a1, ra);
+    let cb = Capsule::new_unchecked(b0, b1, rb);
+    let lb = capsule_distance_lower_bound(&ca, &cb);
+    assert!(lb >= 0.0);
+    // |p − q| ≤ ub ≤ ra + rb (exactly, as add_down(ra, rb) ≤ ra + rb) ⇒ the capsules intersect.
+    if ub <= add_down(ra, rb) {
+        assert!(!capsules_disjoint(&ca, &cb), "touching capsules reported disjoint");
+        assert!(lb == 0.0);
+    }
+    assert!(lb <= (ub - ra - rb).max(0.0) * (1.0 + 1e-12) + 1e-300);
+}
+harness!(b2_capsule_intersection_conservative, unwind = 25, cases = crate::DEFAULT_CASES, capsules);
+
+/// A box zonotope is never reported `Outside` for one of its points (boundary points included:
+/// the endpoint bias of the input source puts many on the boundary).
+fn zonotope_box<S: Source>(s: &mut S) {
+    let (lo0, lo1) = (s.f64_in(-2.0, 2.0), s.f64_in(-2.0, 2.0));
+    let (w0, w1) = (s.f64_in(0.0, 1.0), s.f64_in(0.0, 1.0));
+    let (hi0, hi1) = (lo0 + w0, lo1 + w1);
+    let x = DVector::from_vec(vec![s.f64_in(lo0, hi0), s.f64_in(lo1, hi1)]);
+    let z = Zonotope::from_interval(
+        &DVector::from_vec(vec![lo0, lo1]),
+        &DVector::from_vec(vec![hi0, hi1]),
+    )
+    .expect("valid box");
+    let c = z.contains(&x).expect("valid point");
+    assert!(c != Containment::Outside, "{x:?} in [{lo0}, {hi0}]×[{lo1}, {hi1}] reported outside");
+}
+harness!(b3_zonotope_contains_conservative, unwind = 8, cases = crate::DEFAULT_CASES, zonotope_box);

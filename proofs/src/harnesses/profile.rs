@@ -1,0 +1,67 @@
+//! (e) The braking profile decreases ṡ monotonically to 0 within the reported time and respects
+//! its acceleration and jerk bounds; the path position never decreases.
+//!
+//! Monotonicity holds from the moment s̈ ≤ 0; a start with s̈₀ > 0 first ramps s̈ down to 0 at
+//! jerk −J (ṡ still rises by at most s̈₀²/(2J)), which the harness checks as the bound on ṡ.
+
+use crate::{Source, harness};
+use pacs_verify::scaling::{PathState, SpeedProfile};
+
+/// Relative slack for the float evaluation of the cubic phases (the verification uses the sound
+/// `ranges`, padded by 1e-12 relative; this harness checks the profile's own semantics).
+const EPS: f64 = 1e-9;
+
+fn braking<S: Source>(s: &mut S) {
+    let acc = s.f64_in(0.05, 50.0);
+    let jerk = s.f64_in(0.05, 500.0);
+    let start = PathState {
+        s: s.f64_in(0.0, 10.0),
+        sd: s.f64_in(0.0, 1.5),
+        sdd: s.f64_in(-acc, acc),
+    };
+    // Consistent start: a decelerating state can bring s̈ to 0 before ṡ reaches 0. Others make
+    // `plan` undershoot (raw ṡ < 0, s decreasing); `admissible` rejects those (`sd_lo < -1e-9`),
+    // so the shield never executes them.
+    if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
+        return;
+    }
+    let p = SpeedProfile::plan(start, 0.0, acc, jerk);
+    let settle = p.settle_time();
+    assert!(settle.is_finite() && settle >= 0.0);
+    // At rest from the settle time on, at a fixed position.
+    let rest = p.eval(settle);
+    assert!(rest.sd == 0.0 && rest.sdd == 0.0, "not at rest at settle {settle}: {rest:?}");
+    let later = p.eval(settle + s.f64_in(0.0, 100.0));
+    assert!(later.sd == 0.0 && later.sdd == 0.0 && later.s == rest.s);
+    assert!(p.settle_s() == rest.s);
+    // Two times in [0, settle].
+    let t1 = s.f64_in(0.0, settle);
+    let t2 = s.f64_in(t1, settle);
+    let (a, b) = (p.eval(t1), p.eval(t2));
+    let scale = 1.0 + start.sd + acc + start.sdd.abs();
+    let peak = start.sd + start.sdd.max(0.0).powi(2) / (2.0 * jerk);
+    for e in [a, b] {
+        assert!(e.sd >= 0.0 && e.sd <= peak + EPS * scale, "ṡ {} outside [0, {peak}]", e.sd);
+        assert!(e.sdd.abs() <= acc.max(start.sdd.abs()) * (1.0 + EPS), "|s̈| {} > {acc}", e.sdd);
+    }
+    // s never decreases.
+    assert!(
+        b.s >= a.s - EPS * (1.0 + a.s.abs()),
+        "s decreased: {} → {} ({t1} → {t2}, settle {settle}) from {start:?}, acc {acc}, jerk {jerk}: {p:?}",
+        a.s,
+        b.s
+    );
+    // ṡ non-increasing once s̈ ≤ 0 (always after the first jerk ramp).
+    if a.sdd <= 0.0 {
+        assert!(b.sd <= a.sd + EPS * scale, "ṡ rose while braking: {} → {} ({t1} → {t2})", a.sd, b.sd);
+    }
+    // Jerk bound: |Δs̈| ≤ J·Δτ.
+    assert!(
+        (b.sdd - a.sdd).abs() <= jerk * (t2 - t1) * (1.0 + EPS) + EPS * scale,
+        "jerk above {jerk}: s̈ {} → {} over {}",
+        a.sdd,
+        b.sdd,
+        t2 - t1
+    );
+}
+harness!(e1_braking_profile, unwind = 6, cases = crate::DEFAULT_CASES, braking);

@@ -1,0 +1,122 @@
+//! (a) Every rounding helper and interval operation encloses the exact result.
+
+use crate::exact::{
+    cmp_prod, cmp_quot, cmp_sqrt, cmp_sum, dist3_le, norm3_ge, norm3_le, tame,
+};
+use crate::{Source, harness};
+use pacs_reach::Interval;
+use pacs_reach::rounding::*;
+use std::cmp::Ordering::{Greater, Less};
+
+/// A tame float in [-1e6, 1e6] (0 or magnitude ≥ 1e-100: see [`crate::exact`]).
+fn num<S: Source>(s: &mut S, m: f64) -> Option<f64> {
+    let x = s.f64_in(-m, m);
+    s.assume(tame(x)).then_some(x)
+}
+
+/// add/sub up/down bound the exact sum and difference.
+fn add_sub<S: Source>(s: &mut S) {
+    let (Some(x), Some(y)) = (num(s, 1e6), num(s, 1e6)) else {
+        return;
+    };
+    assert!(cmp_sum(x, y, add_up(x, y)) != Greater, "add_up({x}, {y})");
+    assert!(cmp_sum(x, y, add_down(x, y)) != Less, "add_down({x}, {y})");
+    assert!(cmp_sum(x, -y, sub_up(x, y)) != Greater, "sub_up({x}, {y})");
+    assert!(cmp_sum(x, -y, sub_down(x, y)) != Less, "sub_down({x}, {y})");
+}
+harness!(a1_add_sub_enclose, unwind = 2, cases = crate::DEFAULT_CASES, add_sub);
+
+/// mul/div/sqrt up/down bound the exact product, quotient and square root.
+fn mul_div_sqrt<S: Source>(s: &mut S) {
+    let (Some(x), Some(y)) = (num(s, 1e6), num(s, 1e6)) else {
+        return;
+    };
+    assert!(cmp_prod(x, y, mul_up(x, y)) != Greater, "mul_up({x}, {y})");
+    assert!(cmp_prod(x, y, mul_down(x, y)) != Less, "mul_down({x}, {y})");
+    if y != 0.0 {
+        assert!(cmp_quot(x, y, div_up(x, y)) != Greater, "div_up({x}, {y})");
+        assert!(cmp_quot(x, y, div_down(x, y)) != Less, "div_down({x}, {y})");
+    }
+    let a = x.abs();
+    assert!(cmp_sqrt(a, sqrt_up(a)) != Greater, "sqrt_up({a})");
+    assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
+}
+harness!(a2_mul_div_sqrt_enclose, unwind = 2, cases = crate::DEFAULT_CASES, mul_div_sqrt);
+
+/// norm3_up / norm3_down / dist3_up bound the exact Euclidean norm and distance.
+fn norms<S: Source>(s: &mut S) {
+    let (Some(x), Some(y), Some(z)) = (num(s, 1e6), num(s, 1e6), num(s, 1e6)) else {
+        return;
+    };
+    assert!(norm3_le(x, y, z, norm3_up(x, y, z)), "norm3_up({x}, {y}, {z})");
+    assert!(norm3_ge(x, y, z, norm3_down(x, y, z)), "norm3_down({x}, {y}, {z})");
+    let (Some(u), Some(v), Some(w)) = (num(s, 1e3), num(s, 1e3), num(s, 1e3)) else {
+        return;
+    };
+    let (a, b) = ([x * 1e-3, y * 1e-3, z * 1e-3], [u, v, w]);
+    if a.iter().all(|c| tame(*c)) {
+        assert!(dist3_le(&a, &b, dist3_up(&a, &b)), "dist3_up({a:?}, {b:?})");
+    }
+}
+harness!(a3_norm_dist_enclose, unwind = 25, cases = crate::DEFAULT_CASES, norms);
+
+/// An interval `[lo, lo + w]` with `w ∈ [0, wmax]` (a point interval when `w = 0`).
+pub(crate) fn interval<S: Source>(s: &mut S, m: f64, wmax: f64) -> Option<Interval> {
+    let lo = num(s, m)?;
+    let w = s.f64_in(0.0, wmax);
+    let hi = lo + w;
+    s.assume(tame(hi) && tame(w)).then_some(())?;
+    Interval::new(lo, hi)
+}
+
+/// Interval `+ − × scale sqr` contain the exact result for every pair of members; `mid` is a
+/// member and `rad_up` bounds the distance from it to either end.
+fn interval_ops<S: Source>(s: &mut S) {
+    let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0)) else {
+        return;
+    };
+    let x = s.f64_in(a.lo(), a.hi());
+    let y = s.f64_in(b.lo(), b.hi());
+    let Some(k) = num(s, 1e3) else { return };
+    if !s.assume(tame(x) && tame(y)) {
+        return;
+    }
+    let inside_sum = |r: Interval, x: f64, y: f64| {
+        cmp_sum(x, y, r.lo()) != Less && cmp_sum(x, y, r.hi()) != Greater
+    };
+    let inside_prod = |r: Interval, x: f64, y: f64| {
+        cmp_prod(x, y, r.lo()) != Less && cmp_prod(x, y, r.hi()) != Greater
+    };
+    assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
+    assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
+    assert!(inside_prod(a * b, x, y), "{a:?} * {b:?} ∌ {x} * {y}");
+    assert!(inside_prod(a.scale(k), x, k), "{a:?}.scale({k}) ∌ {x} * {k}");
+    assert!(inside_prod(a.sqr(), x, x), "{a:?}.sqr() ∌ {x}²");
+    assert!((-a).contains(-x));
+    let m = a.mid();
+    assert!(a.contains(m), "mid {m} ∉ {a:?}");
+    let r = a.rad_up();
+    assert!(cmp_sum(a.hi(), -m, r) != Greater && cmp_sum(m, -a.lo(), r) != Greater);
+}
+harness!(a4_interval_ops_enclose, unwind = 2, cases = crate::DEFAULT_CASES, interval_ops);
+
+/// Documented bound of libm `sin`/`cos` error (1 ulp on [-1, 1] ≤ 1.12e-16; see
+/// `reach::rounding`, whose test checks libm against a rigorous Taylor enclosure).
+const LIBM_ERR: f64 = 1.12e-16;
+
+/// `sin_cos_interval(lo, hi)` contains sin x and cos x for every x in [lo, hi].
+fn sin_cos<S: Source>(s: &mut S) {
+    let lo = s.f64_in(-7.0, 7.0);
+    let w = s.f64_in(0.0, 7.0);
+    let hi = lo + w;
+    let x = s.f64_in(lo, hi);
+    let (si, ci) = sin_cos_interval(lo, hi);
+    let (sx, cx) = x.sin_cos();
+    for (iv, v, what) in [(si, sx, "sin"), (ci, cx, "cos")] {
+        assert!(
+            iv.lo() <= (v - LIBM_ERR).max(-1.0) && (v + LIBM_ERR).min(1.0) <= iv.hi(),
+            "{what}({x}) = {v} ∉ {iv:?} for [{lo}, {hi}]"
+        );
+    }
+}
+harness!(a5_sin_cos_interval_encloses, unwind = 8, cases = crate::DEFAULT_CASES, sin_cos);

@@ -1,0 +1,222 @@
+//! (f) The shield state machine.
+//!
+//! - `f1` (pure, model-checkable): [`decide`], the decision `Shield::step` applies, over any
+//!   sequence of candidates (fresh chunk or current path, any profile limits) and verification
+//!   outcomes: every executed state lies on the last verified monitored trajectory, the stored
+//!   failsafe changes only when a new candidate is verified, and if verification then fails
+//!   forever the executed state is at rest (ṡ = s̈ = 0, fixed s) from the failsafe's settle time on.
+//! - `f2` (pure): the occupancy intervals the verification checks are contiguous and cover the
+//!   whole monitored trajectory `[0, stop]` (the last one ends at standstill).
+//! - `f3` (twin only: the real `Shield` is far too big for a model checker): random chunks and
+//!   random measurements (none, stale, from the future, far away, on the robot) drive the real
+//!   shield; every command equals the state of the shield's stored verified failsafe at its time,
+//!   the failsafe changes only on verified steps, and once verification fails forever the robot
+//!   is at rest by the reported stop time and stays there.
+
+use crate::{Source, harness};
+use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_reach::human::HumanMeasurement;
+use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_verify::scaling::{PathState, SpeedProfile};
+use pacs_verify::shield::{
+    Candidate, FilterMode, OccupancyIntervals, Shield, ShieldConfig, VerifiedFailsafe, decide,
+};
+
+/// Steps of the symbolic sequence in `f1` (the property is inductive; see README).
+const STEPS: usize = 3;
+
+fn decide_induction<S: Source>(s: &mut S) {
+    let alpha = s.f64_in(1e-4, 0.01);
+    let (acc, jerk) = (s.f64_in(0.5, 20.0), s.f64_in(1.0, 500.0));
+    let mut t = s.f64_in(0.0, 100.0);
+    // `Shield::start`: at rest, standing still is the first verified failsafe.
+    let mut stored = VerifiedFailsafe {
+        slot: 0,
+        profile: SpeedProfile::plan(PathState::rest(0.0), 0.0, 1.0, 1.0),
+        t0: t,
+    };
+    let mut slot = 0;
+    let mut path = PathState::rest(0.0);
+    for _ in 0..STEPS {
+        let candidate = if s.bool() {
+            // A fresh chunk (other slot, from its start on the intended timing) or the current path.
+            let (cslot, start) = if s.bool() {
+                (1 - stored.slot, PathState::intended(0.0))
+            } else {
+                (slot, path)
+            };
+            let go = if start.is_intended() {
+                SpeedProfile::plan(start, 1.0, 0.0, 0.0)
+            } else {
+                SpeedProfile::plan(start, 1.0, acc, jerk)
+            };
+            let brake = SpeedProfile::plan(go.eval(alpha), 0.0, acc, jerk);
+            Some(Candidate {
+                slot: cslot,
+                go,
+                brake,
+                verified: s.bool(),
+            })
+        } else {
+            None
+        };
+        let d = decide(stored, candidate, FilterMode::Pacs, t, alpha);
+        if d.adopted {
+            // Executed: the verified monitored trajectory (go for α, then brake from t + α).
+            let c = candidate.expect("adopted a candidate");
+            assert!(c.verified, "adopted an unverified candidate");
+            assert_eq!(d.slot, c.slot);
+            assert_eq!(d.path, c.go.eval(alpha));
+            assert_eq!(d.failsafe, VerifiedFailsafe { slot: c.slot, profile: c.brake, t0: t + alpha });
+            // The stored failsafe starts where the executed state is.
+            let b0 = d.failsafe.profile.eval(0.0);
+            assert_eq!(b0.s, d.path.s);
+            assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
+        } else {
+            // Not verified (or no candidate): the stored failsafe is kept and continued.
+            assert_eq!(d.failsafe, stored, "failsafe abandoned without verification");
+            assert_eq!(d.slot, stored.slot);
+            assert_eq!(d.path, stored.profile.eval(t + alpha - stored.t0));
+        }
+        stored = d.failsafe;
+        slot = d.slot;
+        path = d.path;
+        t += alpha;
+    }
+    // Verification fails from now on: every later step continues `stored` (shown above), so
+    // the executed state at any time after the settle time is the rest state.
+    let settle_t = stored.t0 + stored.profile.settle_time();
+    let later = s.f64_in(0.0, 10.0);
+    let t_x = (settle_t - alpha).max(t) + later;
+    // (Float rounding of the times: keep t_x with t_x + α − t0 ≥ settle time.)
+    if !s.assume(t_x + alpha - stored.t0 >= stored.profile.settle_time()) {
+        return;
+    }
+    let d = decide(stored, None, FilterMode::Pacs, t_x, alpha);
+    assert_eq!(d.failsafe, stored);
+    assert!(d.path.sd == 0.0 && d.path.sdd == 0.0, "not at rest after settling: {:?}", d.path);
+    assert_eq!(d.path.s, stored.profile.settle_s());
+}
+harness!(f1_shield_decision_induction, unwind = 6, cases = crate::DEFAULT_CASES, decide_induction);
+
+fn intervals_cover<S: Source>(s: &mut S) {
+    let alpha = s.f64_in(1e-4, 0.01);
+    let stop = alpha + s.f64_in(0.0, 5.0);
+    let first = s.f64_in(1e-4, 0.1);
+    let max = 1 + s.index(12);
+    let mut next_ta = 0.0;
+    let mut count = 0;
+    let mut last_tb = f64::NAN;
+    for (k, ta, tb) in OccupancyIntervals::new(alpha, stop, first, max) {
+        assert_eq!(k, count, "interval index");
+        assert_eq!(ta, next_ta, "gap or overlap before interval {k}");
+        assert!(ta <= tb, "empty interval {k}");
+        if k == 0 {
+            assert_eq!(tb, alpha, "first interval is the intended step");
+        }
+        count += 1;
+        // Interval 0 is the intended step; at most max(max_intervals, 2) in all.
+        assert!(count <= max.max(2), "more than max_intervals");
+        next_ta = tb;
+        last_tb = tb;
+    }
+    assert!(count >= 1);
+    assert!(last_tb >= stop, "intervals end at {last_tb} before standstill {stop}");
+}
+harness!(f2_occupancy_intervals_cover, unwind = 14, cases = crate::DEFAULT_CASES, intervals_cover);
+
+/// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
+fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
+    vec![
+        [x, y + 0.2, 1.4],
+        [x, y + 0.25, 1.15],
+        [x, y + 0.25, 0.9],
+        [x, y - 0.2, 1.4],
+        [0.5 * (x + hand[0]), 0.5 * (y - 0.2 + hand[1]), 0.5 * (1.4 + hand[2])],
+        hand,
+        [x, y, 1.5],
+        [x, y, 1.0],
+        [x, y, 1.65],
+    ]
+}
+
+/// Random steps of the real shield, then verification failing forever.
+fn real_shield<S: Source>(s: &mut S) {
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).expect("valid");
+    let spec = ConstraintSpec::builtin("ssm").expect("preset");
+    let cfg = ShieldConfig {
+        safety_step: [0.001, 0.002, 0.004][s.index(3)],
+        ..ShieldConfig::default()
+    };
+    let alpha = cfg.safety_step;
+    let mut sh = Shield::new(robot, Some((human.clone(), &spec)), vec![], cfg).expect("valid");
+    let q0 = fr3::Q_READY;
+    sh.start(0.0, &q0).expect("at rest in limits");
+    let far = human_at(3.0, 0.0, [2.8, -0.3, 1.2]);
+    let near = human_at(0.6, 0.0, [0.45, 0.0, 0.6]);
+    let mut t = 0.0;
+    let random_steps = 3 + s.index(12);
+    let mut fail_forever = false;
+    let mut at_rest_since: Option<[f64; 7]> = None;
+    for step in 0..4000 {
+        if step == random_steps {
+            fail_forever = true;
+        }
+        if !fail_forever && s.index(3) == 0 {
+            let delta: Vec<f64> = (0..7).map(|_| s.f64_in(-0.02, 0.02)).collect();
+            let _ = sh.set_chunk(&Chunk {
+                kind: ActionKind::Delta,
+                actions: vec![delta; 8],
+                execute: 1 + s.index(8),
+                gripper: None,
+            });
+        }
+        let kp = if fail_forever || s.bool() { &near } else { &far };
+        let stamp = match if fail_forever { 0 } else { s.index(4) } {
+            0 => Some(t),
+            1 => Some(t - 0.05),
+            2 => Some(t + 0.01), // from the future: ignored
+            _ => None,
+        };
+        let m = stamp.map(|st| HumanMeasurement::new(&human, st, kp, None).expect("finite"));
+        let before = sh.verified_failsafe().expect("started");
+        let cmd = sh.step(t, m.as_ref());
+        let after = sh.verified_failsafe().expect("started");
+        // The failsafe is only abandoned for a newly verified one.
+        if after != before {
+            assert!(cmd.diag.verified, "failsafe changed on an unverified step");
+            assert_eq!(after.t0, cmd.t);
+        }
+        if fail_forever {
+            assert!(!cmd.diag.verified, "verified with the human on the robot");
+        }
+        // The command lies on the stored verified failsafe (the last verified monitored
+        // trajectory; at its start the go-step and the brake meet).
+        let on = sh.failsafe_state_at(cmd.t).expect("started");
+        for i in 0..7 {
+            assert!((cmd.state.q[i] - on.q[i]).abs() <= 1e-12, "q off the verified failsafe");
+            assert!((cmd.state.dq[i] - on.dq[i]).abs() <= 1e-9, "q̇ off the verified failsafe");
+        }
+        // Failing forever: at rest after the reported stop time, and it stays there.
+        if fail_forever && cmd.t >= cmd.diag.stop_time + alpha {
+            assert!(cmd.state.dq[..7].iter().all(|v| *v == 0.0), "moving after stop time");
+            let q: [f64; 7] = std::array::from_fn(|i| cmd.state.q[i]);
+            match at_rest_since {
+                None => at_rest_since = Some(q),
+                Some(q_rest) => {
+                    assert_eq!(q, q_rest, "moved after reaching rest");
+                    return;
+                }
+            }
+        }
+        t += alpha;
+    }
+    panic!("did not reach rest within 4000 steps");
+}
+
+#[cfg(test)]
+#[test]
+fn f3_real_shield_commands_on_verified_failsafe() {
+    crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, |s| real_shield(s));
+}

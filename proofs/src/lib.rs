@@ -1,0 +1,209 @@
+//! # pacs-proofs
+//!
+//! Proof harnesses for the safety argument of pacs (see `proofs/README.md`).
+//!
+//! Every harness is a body generic over an input [`Source`]. The [`harness!`] macro emits it twice:
+//! - `#[cfg(kani)] #[kani::proof] #[kani::unwind(N)]`: the body over [`KaniSource`]
+//!   (`kani::any()` + `kani::assume`), for `cargo kani -p pacs-proofs`;
+//! - `#[cfg(test)] #[test]`: the body over [`RandomSource`] (seeded SplitMix64, biased toward
+//!   interval endpoints, neighbours of endpoints and extreme magnitudes), run for
+//!   [`DEFAULT_CASES`] accepted cases (or `PACS_PROOFS_CASES`), for `cargo test -p pacs-proofs`.
+//!
+//! [`exact`] holds the exact-arithmetic oracles the harnesses compare against (error-free
+//! transformations and fused multiply-add, no interval library), usable under Kani.
+
+pub mod exact;
+
+#[cfg(any(test, kani))]
+mod harnesses;
+
+/// Accepted cases per harness twin under `cargo test` (override with `PACS_PROOFS_CASES`).
+pub const DEFAULT_CASES: usize = 10_000;
+
+/// A source of harness inputs: symbolic under Kani, seeded pseudo-random under `cargo test`.
+pub trait Source {
+    /// A value in `[lo, hi]` (`lo <= hi`, finite).
+    fn f64_in(&mut self, lo: f64, hi: f64) -> f64;
+    /// Any boolean.
+    fn bool(&mut self) -> bool;
+    /// A value in `0..n` (`n >= 1`).
+    fn index(&mut self, n: usize) -> usize;
+    /// Restrict to inputs with `cond`; returns `cond` (a harness returns early when it is false).
+    fn assume(&mut self, cond: bool) -> bool;
+
+    /// A vector with each coordinate in `[lo, hi]`.
+    fn vec3(&mut self, lo: f64, hi: f64) -> [f64; 3] {
+        [
+            self.f64_in(lo, hi),
+            self.f64_in(lo, hi),
+            self.f64_in(lo, hi),
+        ]
+    }
+    /// A vector of Euclidean length at most `r * (1 - 1e-9)` (`r >= 0`), any direction, length
+    /// biased toward `r` by the endpoint bias of [`Self::f64_in`].
+    fn in_ball(&mut self, r: f64) -> [f64; 3] {
+        let d = self.vec3(-1.0, 1.0);
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let len = self.f64_in(0.0, 1.0) * r * (1.0 - 1e-9);
+        if n < 1e-3 {
+            return [0.0; 3];
+        }
+        // |d / n| ≤ 1 + 2u; the 1e-9 shrink above absorbs it.
+        [d[0] / n * len, d[1] / n * len, d[2] / n * len]
+    }
+}
+
+/// Kani's nondeterministic inputs.
+#[cfg(kani)]
+pub struct KaniSource;
+
+#[cfg(kani)]
+impl Source for KaniSource {
+    fn f64_in(&mut self, lo: f64, hi: f64) -> f64 {
+        let x: f64 = kani::any();
+        kani::assume(x >= lo && x <= hi);
+        x
+    }
+    fn bool(&mut self) -> bool {
+        kani::any()
+    }
+    fn index(&mut self, n: usize) -> usize {
+        let i: usize = kani::any();
+        kani::assume(i < n);
+        i
+    }
+    fn assume(&mut self, cond: bool) -> bool {
+        kani::assume(cond);
+        cond
+    }
+}
+
+/// Seeded pseudo-random inputs (SplitMix64) with a bias toward boundary values.
+#[derive(Debug, Clone)]
+pub struct RandomSource {
+    state: u64,
+    rejected: bool,
+}
+
+impl RandomSource {
+    /// A source for case `case` of the harness named `name` (reproducible).
+    pub fn new(name: &str, case: u64) -> Self {
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        for b in name.bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+        let mut s = Self {
+            state: h ^ case.wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            rejected: false,
+        };
+        s.next_u64();
+        s
+    }
+
+    /// Next raw 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Whether an `assume` of this case failed.
+    pub fn rejected(&self) -> bool {
+        self.rejected
+    }
+}
+
+impl Source for RandomSource {
+    fn f64_in(&mut self, lo: f64, hi: f64) -> f64 {
+        assert!(lo <= hi && lo.is_finite() && hi.is_finite(), "f64_in({lo}, {hi})");
+        if lo == hi {
+            return lo;
+        }
+        let x = match self.next_u64() % 16 {
+            0 => lo,
+            1 => hi,
+            2 => lo.next_up(),
+            3 => hi.next_down(),
+            4 if lo <= 0.0 && 0.0 <= hi => 0.0,
+            5 | 6 => {
+                // Any magnitude 2^-60 … 2^60, either sign.
+                let e = (self.next_u64() % 121) as i32 - 60;
+                let m = 1.0 + self.unit();
+                let v = m * 2f64.powi(e);
+                if self.next_u64() & 1 == 0 { v } else { -v }
+            }
+            _ => lo + self.unit() * (hi - lo),
+        };
+        if x.is_finite() && lo <= x && x <= hi {
+            x
+        } else {
+            lo + self.unit() * (hi - lo)
+        }
+        .clamp(lo, hi)
+    }
+    fn bool(&mut self) -> bool {
+        self.next_u64() & 1 == 1
+    }
+    fn index(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+    fn assume(&mut self, cond: bool) -> bool {
+        if !cond {
+            self.rejected = true;
+        }
+        cond
+    }
+}
+
+/// Run `body` on seeded random sources until `cases` cases were accepted (not rejected by an
+/// `assume`); panics if fewer than `cases` are accepted within `20 * cases` attempts. The case
+/// count can be overridden with `PACS_PROOFS_CASES`. Returns the number of attempts.
+pub fn run_cases(name: &str, cases: usize, mut body: impl FnMut(&mut RandomSource)) -> usize {
+    let cases = std::env::var("PACS_PROOFS_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(cases);
+    let mut accepted = 0;
+    let mut attempt = 0u64;
+    while accepted < cases {
+        assert!(
+            attempt < 20 * cases as u64 + 100,
+            "{name}: only {accepted} of {cases} cases accepted in {attempt} attempts"
+        );
+        let mut src = RandomSource::new(name, attempt);
+        body(&mut src);
+        if !src.rejected() {
+            accepted += 1;
+        }
+        attempt += 1;
+    }
+    attempt as usize
+}
+
+/// Emit a harness twice: a Kani proof (`cfg(kani)`) and a seeded property test (`cfg(test)`).
+///
+/// `harness!(name, unwind = N, cases = C, body)` where `body` is a generic function
+/// `fn body<S: Source>(s: &mut S)`.
+#[macro_export]
+macro_rules! harness {
+    ($name:ident, unwind = $n:literal, cases = $cases:expr, $body:path) => {
+        #[cfg(kani)]
+        #[kani::proof]
+        #[kani::unwind($n)]
+        pub fn $name() {
+            $body(&mut $crate::KaniSource);
+        }
+
+        #[cfg(test)]
+        #[test]
+        fn $name() {
+            $crate::run_cases(stringify!($name), $cases, |s| $body(s));
+        }
+    };
+}
