@@ -15,7 +15,7 @@
 pub mod exact;
 
 #[cfg(any(test, kani))]
-mod harnesses;
+pub mod harnesses;
 
 /// Accepted cases per harness twin under `cargo test` (override with `PACS_PROOFS_CASES`).
 pub const DEFAULT_CASES: usize = 10_000;
@@ -189,10 +189,12 @@ pub fn run_cases(name: &str, cases: usize, mut body: impl FnMut(&mut RandomSourc
 /// Emit a harness twice: a Kani proof (`cfg(kani)`) and a seeded property test (`cfg(test)`).
 ///
 /// `harness!(name, unwind = N, cases = C, body)` where `body` is a generic function
-/// `fn body<S: Source>(s: &mut S)`.
+/// `fn body<S: Source>(s: &mut S)` in the same module. The proof is the function `name`; the
+/// property test is `name::property_test` (a module, so both can coexist under
+/// `cargo kani --tests`).
 #[macro_export]
 macro_rules! harness {
-    ($name:ident, unwind = $n:literal, cases = $cases:expr, $body:path) => {
+    ($name:ident, unwind = $n:literal, cases = $cases:expr, $body:ident) => {
         #[cfg(kani)]
         #[kani::proof]
         #[kani::unwind($n)]
@@ -201,9 +203,11 @@ macro_rules! harness {
         }
 
         #[cfg(test)]
-        #[test]
-        fn $name() {
-            $crate::run_cases(stringify!($name), $cases, |s| $body(s));
+        mod $name {
+            #[test]
+            fn property_test() {
+                $crate::run_cases(stringify!($name), $cases, |s| super::$body(s));
+            }
         }
     };
 }

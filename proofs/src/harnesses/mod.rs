@@ -1,9 +1,9 @@
 //! The harnesses, grouped by claim (see `proofs/README.md`).
 
-mod energy;
-mod geometry;
-mod human;
-mod profile;
-mod robot;
-mod rounding;
-mod shield;
+pub mod energy;
+pub mod geometry;
+pub mod human;
+pub mod profile;
+pub mod robot;
+pub mod rounding;
+pub mod shield;

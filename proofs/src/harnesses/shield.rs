@@ -140,6 +140,16 @@ fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
     ]
 }
 
+/// Counters of the `f3` twin (steps, verified steps, failsafe changes): the test asserts that
+/// both outcomes occur, so the invariants are exercised on verified and unverified steps.
+#[cfg(test)]
+static F3_STATS: [std::sync::atomic::AtomicUsize; 3] = [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
+
+fn count(_i: usize) {
+    #[cfg(test)]
+    F3_STATS[_i].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// Random steps of the real shield, then verification failing forever.
 fn real_shield<S: Source>(s: &mut S) {
     let robot = fr3::fr3();
@@ -183,6 +193,13 @@ fn real_shield<S: Source>(s: &mut S) {
         let before = sh.verified_failsafe().expect("started");
         let cmd = sh.step(t, m.as_ref());
         let after = sh.verified_failsafe().expect("started");
+        count(0);
+        if cmd.diag.verified {
+            count(1);
+        }
+        if after != before {
+            count(2);
+        }
         // The failsafe is only abandoned for a newly verified one.
         if after != before {
             assert!(cmd.diag.verified, "failsafe changed on an unverified step");
@@ -219,4 +236,7 @@ fn real_shield<S: Source>(s: &mut S) {
 #[test]
 fn f3_real_shield_commands_on_verified_failsafe() {
     crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, |s| real_shield(s));
+    let [steps, verified, changes] = F3_STATS.each_ref().map(|c| c.load(std::sync::atomic::Ordering::Relaxed));
+    eprintln!("f3: {steps} steps, {verified} verified, {changes} failsafe changes");
+    assert!(verified * 20 >= steps / 10 && verified < steps, "f3 must exercise both outcomes");
 }
