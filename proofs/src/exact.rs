@@ -100,6 +100,9 @@ pub fn sq_terms(x: f64, y: f64, z: f64, r: f64) -> [f64; 8] {
 
 /// True only if the exact Euclidean norm of `(x, y, z)` is `≤ r` (proven).
 pub fn norm3_le(x: f64, y: f64, z: f64, r: f64) -> bool {
+    if x == 0.0 && y == 0.0 && z == 0.0 {
+        return r >= 0.0;
+    }
     r >= 0.0 && sum_le_zero(&sq_terms(x, y, z, r))
 }
 
@@ -117,6 +120,9 @@ pub fn norm3_ge(x: f64, y: f64, z: f64, r: f64) -> bool {
 pub fn dist3_le(a: &[f64; 3], b: &[f64; 3], r: f64) -> bool {
     if r < 0.0 {
         return false;
+    }
+    if a == b {
+        return true;
     }
     let mut terms = [0.0; 20];
     for i in 0..3 {

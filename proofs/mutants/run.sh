@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Mutation evidence for pacs-proofs: apply each known bug (proofs/mutants/*.patch) to a scratch
+# copy of the tree, run the harness twins (`cargo test -p pacs-proofs`), record which harnesses
+# fail (= catch the mutant), revert, and print a Markdown table. Exit status 1 if any mutant
+# survives or a patch no longer applies.
+#
+# Usage: proofs/mutants/run.sh [name-filter]
+# Env:   MUTANT_WORKDIR     scratch copy of the tree   (default /tmp/pacs-mutants)
+#        CARGO_TARGET_DIR   build dir for the mutants   (default /work/target-proofs-mutants)
+#        PACS_PROOFS_CASES  cases per harness twin      (default 10000, as in CI)
+set -uo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+work=${MUTANT_WORKDIR:-/tmp/pacs-mutants}
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target-proofs-mutants}
+export PACS_PROOFS_CASES=${PACS_PROOFS_CASES:-10000}
+filter=${1:-}
+
+rm -rf "$work" && mkdir -p "$work"
+tar -C "$root" --exclude=./.git --exclude=./target -cf - . | tar -C "$work" -xf -
+cd "$work" || exit 2
+
+# Baseline: every harness must pass on the unmutated tree.
+if ! cargo test -q -p pacs-proofs --lib >"$work/baseline.log" 2>&1; then
+    echo "baseline fails; see $work/baseline.log" >&2
+    exit 2
+fi
+
+status=0
+printf '| mutant | caught by (failing harness twins) |\n|---|---|\n'
+for patch in "$root"/proofs/mutants/*.patch; do
+    name=$(basename "$patch" .patch)
+    [[ -n "$filter" && "$name" != *"$filter"* ]] && continue
+    if ! patch -s -p1 <"$patch"; then
+        printf '| %s | PATCH DOES NOT APPLY |\n' "$name"
+        status=1
+        continue
+    fi
+    log="$work/$name.log"
+    cargo test -p pacs-proofs --lib --no-fail-fast >"$log" 2>&1
+    caught=$(sed -n 's/^test \(.*\) \.\.\. FAILED$/\1/p' "$log" |
+        sed 's/^harnesses::[a-z_]*:://; s/::property_test$//' | sort | paste -sd, - | sed 's/,/, /g')
+    if grep -q '^error\(\[E[0-9]*\]\)\?:' "$log" && [[ -z "$caught" ]]; then
+        caught="BUILD FAILED"
+        status=1
+    elif [[ -z "$caught" ]]; then
+        caught="**SURVIVED**"
+        status=1
+    fi
+    printf '| %s | %s |\n' "$name" "$caught"
+    patch -s -R -p1 <"$patch"
+done
+exit $status
