@@ -11,6 +11,9 @@
 //! Configurations always lie on the path (s only moves forward: ṡ ≥ 0): path consistency holds by
 //! construction, never by clamping joint values.
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::trajectory::{Limits, Trajectory};
 use pacs_models::MAX_DOF;
 use pacs_reach::rounding::{add_up, mul_up};

@@ -18,6 +18,9 @@
 //! it starts at rest. No valid measurement, an unplannable chunk or an unverifiable candidate only
 //! ever lead to following the last verified failsafe. The step allocates nothing.
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::chunk::{Chunk, OutOfLimits};
 use crate::intended::{Planner, PlannerConfig};
 use crate::profile::Piece;
