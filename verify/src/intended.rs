@@ -19,11 +19,14 @@ pub struct PlannerConfig {
     pub sweeps: usize,
     /// Intermediate waypoint velocities: fraction of the neighbouring segments' mean velocity.
     pub velocity_gain: f64,
+    /// Intermediate waypoint accelerations: fraction of the central-difference acceleration
+    /// (0: pass every waypoint with zero acceleration).
+    pub acceleration_gain: f64,
 }
 
 impl Default for PlannerConfig {
     fn default() -> Self {
-        Self { end: EndCondition::AtRest, sweeps: 3, velocity_gain: 1.0 }
+        Self { end: EndCondition::AtRest, sweeps: 3, velocity_gain: 1.0, acceleration_gain: 0.0 }
     }
 }
 
@@ -31,13 +34,12 @@ impl Default for PlannerConfig {
 pub struct Planner {
     limits: Limits,
     config: PlannerConfig,
-    otg: Ruckig<0, ThrowErrorHandler>,
-    input: InputParameter<0>,
-    out: rsruckig::trajectory::Trajectory<0>,
+    engine: Engine,
     /// Candidate profiles: [candidate][segment][joint].
     cand: Vec<Vec<Profile>>,
     cand_dur: Vec<Vec<f64>>,
     vel: Vec<f64>,
+    acc: Vec<f64>,
 }
 
 impl std::fmt::Debug for Planner {
@@ -50,21 +52,15 @@ impl Planner {
     /// A planner for the given (planning) limits.
     pub fn new(limits: Limits, config: PlannerConfig) -> Self {
         let n = limits.dof;
-        let mut input = InputParameter::<0>::new(Some(n));
-        for i in 0..n {
-            input.max_velocity[i] = limits.v[i];
-            input.max_acceleration[i] = limits.a[i];
-            input.max_jerk[i] = limits.j[i];
-        }
+        let engine = if n == 7 { Engine::Seven(Box::new(Eng::new(&limits))) } else { Engine::Dyn(Box::new(Eng::new(&limits))) };
         Self {
             limits,
             config,
-            otg: Ruckig::<0, ThrowErrorHandler>::new(Some(n), 0.001),
-            input,
-            out: rsruckig::trajectory::Trajectory::<0>::new(Some(n)),
+            engine,
             cand: Vec::new(),
             cand_dur: Vec::new(),
             vel: Vec::new(),
+            acc: Vec::new(),
         }
     }
 
@@ -133,14 +129,21 @@ impl Planner {
         self.cand_dur.resize_with(ncand, Vec::new);
         self.vel.clear();
         self.vel.resize((h + 1) * n, 0.0);
+        self.acc.clear();
+        self.acc.resize((h + 1) * n, 0.0);
+        self.vel[..n].copy_from_slice(&start.dq[..n]);
         let mut errors: Option<TrajectoryError> = None;
         let mut valid = [false; 64];
+        let mut base = 0;
         for c in 0..ncand.min(64) {
             if c > 0 {
-                self.choose_velocities(wp, c - 1, end);
+                self.choose_velocities(wp, base, end);
             }
             match self.solve_candidate(start, wp, c) {
-                Ok(()) => valid[c] = true,
+                Ok(()) => {
+                    valid[c] = true;
+                    base = c;
+                }
                 Err(e) => {
                     if c == 0 {
                         return Err(e);
@@ -148,7 +151,6 @@ impl Planner {
                     errors.get_or_insert(e);
                 }
             }
-            // Later sweeps start from the best so far.
         }
         // Try candidates shortest first; return the first that passes our checks.
         let mut order: [usize; 64] = [0; 64];
@@ -163,7 +165,7 @@ impl Planner {
         order[..m].sort_by(|&a, &b| total(&self.cand_dur[a]).total_cmp(&total(&self.cand_dur[b])));
         let mut last_err = errors;
         for &c in &order[..m] {
-            let traj = self.assemble(wp, c, end);
+            let mut traj = self.assemble(wp, c, end);
             match traj.check(&self.limits) {
                 Ok(()) => return Ok(traj),
                 Err(e) => last_err = Some(e),
@@ -195,6 +197,21 @@ impl Planner {
                 self.vel[k * n + i] = v.clamp(-vmax, vmax);
             }
         }
+        let ga = self.config.acceleration_gain;
+        for k in 1..h {
+            for i in 0..n {
+                let v_prev = self.vel[(k - 1) * n + i];
+                let a = ga * (self.vel[(k + 1) * n + i] - v_prev) / (dur[k - 1] + dur[k]);
+                let amax = 0.9 * self.limits.a[i];
+                let mut a = a.clamp(-amax, amax);
+                // Keep the target state reachable within the velocity limit: |v + a|a|/(2j)| ≤ v_max.
+                let v = self.vel[k * n + i];
+                if (v + a * a.abs() / (2.0 * self.limits.j[i])).abs() > 0.99 * self.limits.v[i] {
+                    a = 0.0;
+                }
+                self.acc[k * n + i] = a;
+            }
+        }
     }
 
     fn solve_candidate(&mut self, start: &JointState, wp: &Waypoints, c: usize) -> Result<(), TrajectoryError> {
@@ -205,33 +222,34 @@ impl Planner {
         profs.clear();
         durs.clear();
         let mut result = Ok(());
+        let mut cur = [[0.0; MAX_DOF]; 3];
+        let mut tgt = [[0.0; MAX_DOF]; 3];
         for k in 1..=h {
             for i in 0..n {
                 if k == 1 {
-                    self.input.current_position[i] = start.q[i];
-                    self.input.current_velocity[i] = start.dq[i];
-                    self.input.current_acceleration[i] = start.ddq[i];
+                    cur[0][i] = start.q[i];
+                    cur[1][i] = start.dq[i];
+                    cur[2][i] = start.ddq[i];
                 } else {
-                    self.input.current_position[i] = wp.row(k - 1)[i];
-                    self.input.current_velocity[i] = self.vel[(k - 1) * n + i];
-                    self.input.current_acceleration[i] = 0.0;
+                    cur[0][i] = wp.row(k - 1)[i];
+                    cur[1][i] = self.vel[(k - 1) * n + i];
+                    cur[2][i] = self.acc[(k - 1) * n + i];
                 }
-                self.input.target_position[i] = wp.row(k)[i];
-                self.input.target_velocity[i] = self.vel[k * n + i];
-                self.input.target_acceleration[i] = 0.0;
+                tgt[0][i] = wp.row(k)[i];
+                tgt[1][i] = self.vel[k * n + i];
+                tgt[2][i] = self.acc[k * n + i];
             }
-            match self.otg.calculate(&self.input, &mut self.out) {
-                Ok(_) => {}
-                Err(e) => {
-                    result = Err(TrajectoryError::Solver { segment: k, message: e.to_string() });
+            let r = match &mut self.engine {
+                Engine::Seven(e) => e.solve(n, &cur, &tgt, &mut profs),
+                Engine::Dyn(e) => e.solve(n, &cur, &tgt, &mut profs),
+            };
+            match r {
+                Ok(d) => durs.push(d),
+                Err(message) => {
+                    result = Err(TrajectoryError::Solver { segment: k, message });
                     break;
                 }
             }
-            let ps = &self.out.profiles[0];
-            for i in 0..n {
-                profs.push(ps[i]);
-            }
-            durs.push(self.out.duration);
         }
         self.cand[c] = profs;
         self.cand_dur[c] = durs;
@@ -284,5 +302,49 @@ impl Planner {
         }
         offsets[n] = pieces.len();
         Trajectory::from_parts(n, pieces, offsets, t0, times, end)
+    }
+}
+
+/// The segment solver: rsruckig single target with stack storage for 7 joints, heap otherwise.
+enum Engine {
+    Seven(Box<Eng<7>>),
+    Dyn(Box<Eng<0>>),
+}
+
+struct Eng<const N: usize> {
+    otg: Ruckig<N, ThrowErrorHandler>,
+    input: InputParameter<N>,
+    out: rsruckig::trajectory::Trajectory<N>,
+}
+
+impl<const N: usize> Eng<N> {
+    fn new(l: &Limits) -> Self {
+        let dofs = if N == 0 { Some(l.dof) } else { None };
+        let mut input = InputParameter::<N>::new(dofs);
+        for i in 0..l.dof {
+            input.max_velocity[i] = l.v[i];
+            input.max_acceleration[i] = l.a[i];
+            input.max_jerk[i] = l.j[i];
+        }
+        Self { otg: Ruckig::<N, ThrowErrorHandler>::new(dofs, 0.001), input, out: rsruckig::trajectory::Trajectory::<N>::new(dofs) }
+    }
+
+    /// Time-synchronized jerk-limited motion from `cur` to `tgt` ((q, q̇, q̈) per joint); pushes
+    /// one profile per joint and returns the duration (s).
+    fn solve(&mut self, n: usize, cur: &[[f64; MAX_DOF]; 3], tgt: &[[f64; MAX_DOF]; 3], out: &mut Vec<Profile>) -> Result<f64, String> {
+        for i in 0..n {
+            self.input.current_position[i] = cur[0][i];
+            self.input.current_velocity[i] = cur[1][i];
+            self.input.current_acceleration[i] = cur[2][i];
+            self.input.target_position[i] = tgt[0][i];
+            self.input.target_velocity[i] = tgt[1][i];
+            self.input.target_acceleration[i] = tgt[2][i];
+        }
+        self.otg.calculate(&self.input, &mut self.out).map_err(|e| e.to_string())?;
+        let ps = &self.out.profiles[0];
+        for i in 0..n {
+            out.push(ps[i]);
+        }
+        Ok(self.out.duration)
     }
 }

@@ -16,6 +16,7 @@ pub mod error;
 pub mod failsafe;
 pub mod intended;
 pub mod monitored;
+pub mod problems;
 pub mod profile;
 pub mod trajectory;
 

@@ -139,12 +139,13 @@ pub struct Trajectory {
     duration: f64,
     waypoint_times: Vec<f64>,
     end: EndCondition,
+    peak: [[f64; 3]; MAX_DOF],
 }
 
 impl Trajectory {
     /// Assemble from per-joint piece lists (each non-empty, sorted, first at t = 0, last extending to +∞).
     pub(crate) fn from_parts(dof: usize, pieces: Vec<Piece>, offsets: [usize; MAX_DOF + 1], duration: f64, waypoint_times: Vec<f64>, end: EndCondition) -> Self {
-        Self { dof, pieces, offsets, duration, waypoint_times, end }
+        Self { dof, pieces, offsets, duration, waypoint_times, end, peak: [[f64::INFINITY; 3]; MAX_DOF] }
     }
     /// Number of joints.
     #[inline]
@@ -240,8 +241,10 @@ impl Trajectory {
     /// Check every limit over the whole trajectory by exact piecewise extrema (tolerance
     /// [`LIMIT_REL_TOL`] relative, positions 1e-9 rad) and continuity of q, q̇, q̈ at every piece
     /// boundary (1e-9 relative to the limits). Names the joint, time and value on failure.
-    pub fn check(&self, lim: &Limits) -> Result<(), TrajectoryError> {
+    /// On success the peaks of |q̇|, |q̈|, |q⃛| per joint are recorded (see [`Trajectory::peaks`]).
+    pub fn check(&mut self, lim: &Limits) -> Result<(), TrajectoryError> {
         let tol = LIMIT_REL_TOL;
+        let mut peak = [[0.0f64; 3]; MAX_DOF];
         for i in 0..self.dof {
             let ps = self.pieces(i);
             for (k, p) in ps.iter().enumerate() {
@@ -259,6 +262,9 @@ impl Trajectory {
                 if r[2].abs_max() > lim.a[i] * (1.0 + tol) {
                     return fail(format!("|acceleration| {} rad/s² > {} after t = {} s", r[2].abs_max(), lim.a[i], p.t));
                 }
+                peak[i][0] = peak[i][0].max(r[1].abs_max());
+                peak[i][1] = peak[i][1].max(r[2].abs_max());
+                peak[i][2] = peak[i][2].max(p.j.abs());
                 if p.j.abs() > lim.j[i] * (1.0 + tol) {
                     return fail(format!("|jerk| {} rad/s³ > {} after t = {} s", p.j.abs(), lim.j[i], p.t));
                 }
@@ -271,7 +277,15 @@ impl Trajectory {
                 }
             }
         }
+        self.peak = peak;
         Ok(())
+    }
+
+    /// Sound peaks of |q̇| (rad/s), |q̈| (rad/s²), |q⃛| (rad/s³) of joint `i` over [0, T] as
+    /// recorded by the last successful [`Trajectory::check`] (+∞ if never checked).
+    #[inline]
+    pub fn peaks(&self, i: usize) -> [f64; 3] {
+        self.peak[i]
     }
 
     fn segment_of(&self, t: f64) -> usize {
@@ -280,6 +294,13 @@ impl Trajectory {
 }
 
 impl Trajectory {
+    /// Start time of joint `i`'s next piece strictly after `s` (s), if any.
+    #[inline]
+    pub fn next_joint_breakpoint(&self, i: usize, s: f64) -> Option<f64> {
+        let k = self.locate(i, s) + 1;
+        (k < self.offsets[i + 1]).then(|| self.pieces[k].t).filter(|&t| t > s)
+    }
+
     /// Earliest piece start time of any joint strictly after `s` (s), if any.
     #[inline]
     pub fn next_breakpoint(&self, s: f64) -> Option<f64> {
