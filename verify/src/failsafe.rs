@@ -374,7 +374,7 @@ impl Failsafe {
                 b.dq[i].union(d.r[1].mul(sd_r));
                 b.ddq[i].union(d.r[1].mul(sdd_r).add(d.r[2].mul(sd_r.mul(sd_r))));
             }
-            if end >= tb || k + 1 >= self.nphases {
+            if end > tb || k + 1 >= self.nphases {
                 break;
             }
             k += 1;

@@ -168,7 +168,12 @@ impl Planner {
             let mut traj = self.assemble(wp, c, end);
             match traj.check(&self.limits) {
                 Ok(()) => return Ok(traj),
-                Err(e) => last_err = Some(e),
+                Err(e) => {
+                    if std::env::var("PACS_DEBUG").is_ok() {
+                        eprintln!("candidate {c} rejected: {e}");
+                    }
+                    last_err = Some(e)
+                }
             }
         }
         Err(last_err.unwrap_or(TrajectoryError::Infeasible { segment: 1, joint: 0, reason: "no candidate".into() }))
@@ -274,30 +279,12 @@ impl Planner {
             let mut seg_start = 0.0;
             for k in 0..h {
                 let p = &profs[k * n + i];
-                let mut off = 0.0;
-                if p.brake.duration > 0.0 {
-                    for b in 0..2 {
-                        if p.brake.t[b] > 0.0 {
-                            pieces.push(Piece { t: seg_start + off, q: p.brake.p[b], v: p.brake.v[b], a: p.brake.a[b], j: p.brake.j[b] });
-                            off += p.brake.t[b];
-                        }
-                    }
-                    off = p.brake.duration;
-                }
-                let mut acc = 0.0;
-                for ph in 0..7 {
-                    if p.t[ph] > 0.0 {
-                        pieces.push(Piece { t: seg_start + off + acc, q: p.p[ph], v: p.v[ph], a: p.a[ph], j: p.j[ph] });
-                    }
-                    acc += p.t[ph];
-                }
-                if off + acc < durs[k] - 1e-12 {
-                    pieces.push(Piece { t: seg_start + off + acc, q: p.p[7], v: p.v[7], a: p.a[7], j: 0.0 });
-                }
+                let target = [wp.row(k + 1)[i], p.vf, p.af];
+                push_corrected(p, seg_start, durs[k], target, &mut pieces);
                 seg_start = times[k];
             }
             // Terminal piece: exactly at the last waypoint with its target velocity.
-            let v_end = if end == EndCondition::AtRest { 0.0 } else { self.vel[h * n + i] };
+            let v_end = if end == EndCondition::AtRest { 0.0 } else { profs[(h - 1) * n + i].vf };
             pieces.push(Piece { t: seg_start, q: wp.row(h)[i], v: v_end, a: 0.0, j: 0.0 });
         }
         offsets[n] = pieces.len();
@@ -322,9 +309,9 @@ impl<const N: usize> Eng<N> {
         let dofs = if N == 0 { Some(l.dof) } else { None };
         let mut input = InputParameter::<N>::new(dofs);
         for i in 0..l.dof {
-            input.max_velocity[i] = l.v[i];
-            input.max_acceleration[i] = l.a[i];
-            input.max_jerk[i] = l.j[i];
+            input.max_velocity[i] = l.v[i] * (1.0 - SOLVER_MARGIN);
+            input.max_acceleration[i] = l.a[i] * (1.0 - SOLVER_MARGIN);
+            input.max_jerk[i] = l.j[i] * (1.0 - SOLVER_MARGIN);
         }
         Self { otg: Ruckig::<N, ThrowErrorHandler>::new(dofs, 0.001), input, out: rsruckig::trajectory::Trajectory::<N>::new(dofs) }
     }
@@ -347,4 +334,110 @@ impl<const N: usize> Eng<N> {
         }
         Ok(self.out.duration)
     }
+}
+
+/// Relative margin below the limits given to the segment solver, room for the exactness
+/// correction of [`push_corrected`].
+const SOLVER_MARGIN: f64 = 1e-6;
+
+/// Append the pieces of one segment profile, with the phase jerks corrected (minimum-norm) so
+/// that re-integration from the profile's start state ends exactly at `target` (q, q̇, q̈): the
+/// solver ends within ~1e-8 rad of its target, we need the waypoint within 1e-9. The correction
+/// is tiny (≈ error/T³ in jerk) and the result is re-checked against the limits by the caller.
+fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], out: &mut Vec<Piece>) {
+    // Phases: (duration, jerk).
+    let mut ph = [(0.0f64, 0.0f64); 10];
+    let mut m = 0;
+    let (q0, v0, a0) = if p.brake.duration > 0.0 { (p.brake.p[0], p.brake.v[0], p.brake.a[0]) } else { (p.p[0], p.v[0], p.a[0]) };
+    if p.brake.duration > 0.0 {
+        for b in 0..2 {
+            if p.brake.t[b] > 0.0 {
+                ph[m] = (p.brake.t[b], p.brake.j[b]);
+                m += 1;
+            }
+        }
+    }
+    let mut total = 0.0;
+    for b in 0..m {
+        total += ph[b].0;
+    }
+    for k in 0..7 {
+        if p.t[k] > 0.0 {
+            ph[m] = (p.t[k], p.j[k]);
+            m += 1;
+            total += p.t[k];
+        }
+    }
+    if total < dur - 1e-12 {
+        ph[m] = (dur - total, 0.0);
+        m += 1;
+    }
+    let integrate = |ph: &[(f64, f64)]| {
+        let (mut q, mut v, mut a) = (q0, v0, a0);
+        for &(t, j) in ph {
+            q += t * (v + t * (0.5 * a + t * j / 6.0));
+            v += t * (a + 0.5 * t * j);
+            a += t * j;
+        }
+        (q, v, a)
+    };
+    let (qe, ve, ae) = integrate(&ph[..m]);
+    let e = [target[0] - qe, target[1] - ve, target[2] - ae];
+    if e.iter().any(|x| *x != 0.0) && m > 0 {
+        // Sensitivities of the end state to each phase jerk.
+        let mut sens = [[0.0f64; 3]; 10];
+        let mut rest = dur.max(total);
+        for k in 0..m {
+            let t = ph[k].0;
+            rest -= t;
+            let r = rest.max(0.0);
+            sens[k] = [t * t * t / 6.0 + t * t * r / 2.0 + t * r * r / 2.0, t * t / 2.0 + t * r, t];
+        }
+        let mut g = [[0.0f64; 3]; 3];
+        for s in &sens[..m] {
+            for r in 0..3 {
+                for c in 0..3 {
+                    g[r][c] += s[r] * s[c];
+                }
+            }
+        }
+        let tr = g[0][0] + g[1][1] + g[2][2];
+        for (r, row) in g.iter_mut().enumerate() {
+            row[r] += 1e-14 * tr + f64::MIN_POSITIVE;
+        }
+        if let Some(y) = solve3(&g, &e) {
+            for k in 0..m {
+                ph[k].1 += sens[k][0] * y[0] + sens[k][1] * y[1] + sens[k][2] * y[2];
+            }
+        }
+    }
+    let (mut q, mut v, mut a) = (q0, v0, a0);
+    let mut t = t0;
+    for &(d, j) in &ph[..m] {
+        out.push(Piece { t, q, v, a, j });
+        q += d * (v + d * (0.5 * a + d * j / 6.0));
+        v += d * (a + 0.5 * d * j);
+        a += d * j;
+        t += d;
+    }
+}
+
+/// Solve a 3×3 linear system by Cramer's rule (None if singular).
+fn solve3(g: &[[f64; 3]; 3], e: &[f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(g);
+    if d == 0.0 || !d.is_finite() {
+        return None;
+    }
+    let mut y = [0.0; 3];
+    for (c, yc) in y.iter_mut().enumerate() {
+        let mut m = *g;
+        for r in 0..3 {
+            m[r][c] = e[r];
+        }
+        *yc = det(&m) / d;
+    }
+    Some(y)
 }

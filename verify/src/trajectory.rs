@@ -218,7 +218,8 @@ impl Trajectory {
             let d1 = tb.min(next_t) - p.t;
             p.extend_bounds(d0, d1, &mut r);
             jr.union(Range::point(p.j));
-            if next_t >= tb || k + 1 >= end {
+            // At tb == next_t the next piece is included too (state queries are right-continuous).
+            if next_t > tb || k + 1 >= end {
                 break;
             }
             k += 1;
