@@ -35,6 +35,9 @@ pub struct Planner {
     limits: Limits,
     config: PlannerConfig,
     engine: Engine,
+    /// Same solver with a larger margin below the limits, used when no candidate of the
+    /// primary one passes the checks after the exactness correction.
+    fallback: Engine,
     /// Candidate profiles: [candidate][segment][joint].
     cand: Vec<Vec<Profile>>,
     cand_dur: Vec<Vec<f64>>,
@@ -52,11 +55,14 @@ impl Planner {
     /// A planner for the given (planning) limits.
     pub fn new(limits: Limits, config: PlannerConfig) -> Self {
         let n = limits.dof;
-        let engine = if n == 7 { Engine::Seven(Box::new(Eng::new(&limits))) } else { Engine::Dyn(Box::new(Eng::new(&limits))) };
+        let make = |margin: f64| if n == 7 { Engine::Seven(Box::new(Eng::new(&limits, margin))) } else { Engine::Dyn(Box::new(Eng::new(&limits, margin))) };
+        let engine = make(SOLVER_MARGIN);
+        let fallback = make(FALLBACK_MARGIN);
         Self {
             limits,
             config,
             engine,
+            fallback,
             cand: Vec::new(),
             cand_dur: Vec::new(),
             vel: Vec::new(),
@@ -122,6 +128,18 @@ impl Planner {
 
     fn plan_with(&mut self, start: &JointState, wp: &Waypoints, sweeps: usize, end: EndCondition) -> Result<Trajectory, TrajectoryError> {
         self.validate(start, wp)?;
+        match self.plan_candidates(start, wp, sweeps, end) {
+            Ok(t) => Ok(t),
+            Err(_) => {
+                std::mem::swap(&mut self.engine, &mut self.fallback);
+                let r = self.plan_candidates(start, wp, sweeps, end);
+                std::mem::swap(&mut self.engine, &mut self.fallback);
+                r
+            }
+        }
+    }
+
+    fn plan_candidates(&mut self, start: &JointState, wp: &Waypoints, sweeps: usize, end: EndCondition) -> Result<Trajectory, TrajectoryError> {
         let n = self.limits.dof;
         let h = wp.segments();
         let ncand = sweeps + 1;
@@ -280,7 +298,7 @@ impl Planner {
             for k in 0..h {
                 let p = &profs[k * n + i];
                 let target = [wp.row(k + 1)[i], p.vf, p.af];
-                push_corrected(p, seg_start, durs[k], target, &mut pieces);
+                push_corrected(p, seg_start, durs[k], target, self.limits.j[i], &mut pieces);
                 seg_start = times[k];
             }
             // Terminal piece: exactly at the last waypoint with its target velocity.
@@ -305,13 +323,13 @@ struct Eng<const N: usize> {
 }
 
 impl<const N: usize> Eng<N> {
-    fn new(l: &Limits) -> Self {
+    fn new(l: &Limits, margin: f64) -> Self {
         let dofs = if N == 0 { Some(l.dof) } else { None };
         let mut input = InputParameter::<N>::new(dofs);
         for i in 0..l.dof {
-            input.max_velocity[i] = l.v[i] * (1.0 - SOLVER_MARGIN);
-            input.max_acceleration[i] = l.a[i] * (1.0 - SOLVER_MARGIN);
-            input.max_jerk[i] = l.j[i] * (1.0 - SOLVER_MARGIN);
+            input.max_velocity[i] = l.v[i] * (1.0 - margin);
+            input.max_acceleration[i] = l.a[i] * (1.0 - margin);
+            input.max_jerk[i] = l.j[i] * (1.0 - margin);
         }
         Self { otg: Ruckig::<N, ThrowErrorHandler>::new(dofs, 0.001), input, out: rsruckig::trajectory::Trajectory::<N>::new(dofs) }
     }
@@ -338,13 +356,16 @@ impl<const N: usize> Eng<N> {
 
 /// Relative margin below the limits given to the segment solver, room for the exactness
 /// correction of [`push_corrected`].
-const SOLVER_MARGIN: f64 = 1e-6;
+const SOLVER_MARGIN: f64 = 1e-7;
+/// Margin of the fallback solver (durations grow by about this fraction).
+const FALLBACK_MARGIN: f64 = 1e-4;
 
 /// Append the pieces of one segment profile, with the phase jerks corrected (minimum-norm) so
 /// that re-integration from the profile's start state ends exactly at `target` (q, q̇, q̈): the
 /// solver ends within ~1e-8 rad of its target, we need the waypoint within 1e-9. The correction
-/// is tiny (≈ error/T³ in jerk) and the result is re-checked against the limits by the caller.
-fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], out: &mut Vec<Piece>) {
+/// is tiny (≈ error/T³ in jerk), weighted away from phases whose jerk is at the limit, and the
+/// result is re-checked against the limits by the caller.
+fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], j_max: f64, out: &mut Vec<Piece>) {
     // Phases: (duration, jerk).
     let mut ph = [(0.0f64, 0.0f64); 10];
     let mut m = 0;
@@ -381,23 +402,34 @@ fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], out: &mut Ve
         }
         (q, v, a)
     };
-    let (qe, ve, ae) = integrate(&ph[..m]);
-    let e = [target[0] - qe, target[1] - ve, target[2] - ae];
-    if e.iter().any(|x| *x != 0.0) && m > 0 {
-        // Sensitivities of the end state to each phase jerk.
-        let mut sens = [[0.0f64; 3]; 10];
-        let mut rest = dur.max(total);
-        for k in 0..m {
-            let t = ph[k].0;
-            rest -= t;
-            let r = rest.max(0.0);
-            sens[k] = [t * t * t / 6.0 + t * t * r / 2.0 + t * r * r / 2.0, t * t / 2.0 + t * r, t];
+    // Sensitivities of the end state to each phase jerk.
+    let mut sens = [[0.0f64; 3]; 10];
+    let mut w = [1.0f64; 10];
+    let mut rest = dur.max(total);
+    for k in 0..m {
+        let t = ph[k].0;
+        rest -= t;
+        let r = rest.max(0.0);
+        sens[k] = [t * t * t / 6.0 + t * t * r / 2.0 + t * r * r / 2.0, t * t / 2.0 + t * r, t];
+        if ph[k].1.abs() > 0.9 * j_max {
+            w[k] = 1e-6;
+        }
+    }
+    // Weighted minimum-norm correction with iterative refinement; uniform weights after 3 rounds.
+    for round in 0..6 {
+        let (qe, ve, ae) = integrate(&ph[..m]);
+        let e = [target[0] - qe, target[1] - ve, target[2] - ae];
+        if m == 0 || (e[0].abs() <= 1e-13 && e[1].abs() <= 1e-13 && e[2].abs() <= 1e-12) {
+            break;
+        }
+        if round == 3 {
+            w = [1.0; 10];
         }
         let mut g = [[0.0f64; 3]; 3];
-        for s in &sens[..m] {
+        for (s, wk) in sens[..m].iter().zip(&w) {
             for r in 0..3 {
                 for c in 0..3 {
-                    g[r][c] += s[r] * s[c];
+                    g[r][c] += wk * s[r] * s[c];
                 }
             }
         }
@@ -405,10 +437,13 @@ fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], out: &mut Ve
         for (r, row) in g.iter_mut().enumerate() {
             row[r] += 1e-14 * tr + f64::MIN_POSITIVE;
         }
-        if let Some(y) = solve3(&g, &e) {
-            for k in 0..m {
-                ph[k].1 += sens[k][0] * y[0] + sens[k][1] * y[1] + sens[k][2] * y[2];
+        match solve3(&g, &e) {
+            Some(y) => {
+                for k in 0..m {
+                    ph[k].1 += w[k] * (sens[k][0] * y[0] + sens[k][1] * y[1] + sens[k][2] * y[2]);
+                }
             }
+            None => break,
         }
     }
     let (mut q, mut v, mut a) = (q0, v0, a0);
