@@ -186,12 +186,7 @@ impl Planner {
             let mut traj = self.assemble(wp, c, end);
             match traj.check(&self.limits) {
                 Ok(()) => return Ok(traj),
-                Err(e) => {
-                    if std::env::var("PACS_DEBUG").is_ok() {
-                        eprintln!("candidate {c} rejected: {e}");
-                    }
-                    last_err = Some(e)
-                }
+                Err(e) => last_err = Some(e),
             }
         }
         Err(last_err.unwrap_or(TrajectoryError::Infeasible { segment: 1, joint: 0, reason: "no candidate".into() }))
