@@ -152,21 +152,25 @@ impl Planner {
         self.vel[..n].copy_from_slice(&start.dq[..n]);
         let mut errors: Option<TrajectoryError> = None;
         let mut valid = [false; 64];
-        let mut base = 0;
-        for c in 0..ncand.min(64) {
-            if c > 0 {
+        let ncand = ncand.min(64);
+        if sweeps == 0 {
+            self.solve_candidate(start, wp, 0)?;
+            valid[0] = true;
+        } else {
+            // Candidate 0's durations by closed form (rest-to-rest, synchronized to the slowest
+            // joint): the same numbers the solver would give, at no solver cost.
+            self.estimate_rest_to_rest(wp, 0);
+            let mut base = 0;
+            for c in 1..ncand {
                 self.choose_velocities(wp, base, end);
-            }
-            match self.solve_candidate(start, wp, c) {
-                Ok(()) => {
-                    valid[c] = true;
-                    base = c;
-                }
-                Err(e) => {
-                    if c == 0 {
-                        return Err(e);
+                match self.solve_candidate(start, wp, c) {
+                    Ok(()) => {
+                        valid[c] = true;
+                        base = c;
                     }
-                    errors.get_or_insert(e);
+                    Err(e) => {
+                        errors.get_or_insert(e);
+                    }
                 }
             }
         }
@@ -189,7 +193,33 @@ impl Planner {
                 Err(e) => last_err = Some(e),
             }
         }
+        if sweeps > 0 {
+            // Fallback: stop at every waypoint (always solvable from rest-to-rest states).
+            for x in &mut self.vel[n..] {
+                *x = 0.0;
+            }
+            for x in &mut self.acc[n..] {
+                *x = 0.0;
+            }
+            self.solve_candidate(start, wp, 0)?;
+            let mut traj = self.assemble(wp, 0, end);
+            match traj.check(&self.limits) {
+                Ok(()) => return Ok(traj),
+                Err(e) => last_err = Some(e),
+            }
+        }
         Err(last_err.unwrap_or(TrajectoryError::Infeasible { segment: 1, joint: 0, reason: "no candidate".into() }))
+    }
+
+    /// Closed-form synchronized rest-to-rest segment durations into candidate `c`'s durations.
+    fn estimate_rest_to_rest(&mut self, wp: &Waypoints, c: usize) {
+        let n = self.limits.dof;
+        let l = self.limits;
+        let d = &mut self.cand_dur[c];
+        d.clear();
+        for k in 1..=wp.segments() {
+            d.push((0..n).map(|i| rest_to_rest_time((wp.row(k)[i] - wp.row(k - 1)[i]).abs(), l.v[i], l.a[i], l.j[i])).fold(0.0, f64::max));
+        }
     }
 
     /// Waypoint velocities for the next candidate from the segment durations of candidate `from`:
@@ -351,7 +381,7 @@ impl<const N: usize> Eng<N> {
 
 /// Relative margin below the limits given to the segment solver, room for the exactness
 /// correction of [`push_corrected`].
-const SOLVER_MARGIN: f64 = 1e-7;
+const SOLVER_MARGIN: f64 = 1e-6;
 /// Margin of the fallback solver (durations grow by about this fraction).
 const FALLBACK_MARGIN: f64 = 1e-4;
 
@@ -470,4 +500,27 @@ fn solve3(g: &[[f64; 3]; 3], e: &[f64; 3]) -> Option<[f64; 3]> {
         *yc = det(&m) / d;
     }
     Some(y)
+}
+
+/// Time-optimal rest-to-rest duration (s) of one joint moving `d` ≥ 0 rad under limits v, a, j.
+pub fn rest_to_rest_time(d: f64, v: f64, a: f64, j: f64) -> f64 {
+    if d <= 0.0 {
+        return 0.0;
+    }
+    // Without a velocity plateau.
+    let t1 = (d / (2.0 * j)).cbrt();
+    let (t, v_peak) = if j * t1 <= a {
+        (4.0 * t1, j * t1 * t1)
+    } else {
+        let t1 = a / j;
+        let t2 = 0.5 * (-3.0 * t1 + (t1 * t1 + 4.0 * d / a).sqrt());
+        (2.0 * (2.0 * t1 + t2), a * (t1 + t2))
+    };
+    if v_peak <= v {
+        return t;
+    }
+    // With a velocity plateau at v.
+    let (t1, t2) = if v * j <= a * a { ((v / j).sqrt(), 0.0) } else { (a / j, v / a - a / j) };
+    let ta = 2.0 * t1 + t2;
+    2.0 * ta + (d - v * ta) / v
 }
