@@ -6,6 +6,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
 use pacs_verify::problems::{anchor_set, lower_bound};
+use pacs_verify::failsafe::{Failsafe, FailsafeKind};
 use pacs_verify::{JointState, Limits, Monitored, OutOfLimits, Planner, PlannerConfig};
 use std::hint::black_box;
 
@@ -23,40 +24,50 @@ fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
 
 fn quality() {
     let (hw, plan, set) = setup();
-    let gains: Vec<f64> = std::env::var("GAINS").ok().map(|g| g.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![1.0]);
-    for &velocity_gain in &gains {
-    for sweeps in [0usize, 2, 3, 4, 6] {
-        let acceleration_gain: f64 = std::env::var("AGAIN").ok().map(|g| g.parse().unwrap()).unwrap_or(1.0);
-        let mut planner = Planner::new(plan, PlannerConfig { sweeps, velocity_gain, acceleration_gain, ..Default::default() });
-        let mut lsum = 0.0;
-        let mut lsum_sa = 0.0;
-        let mut fs_delay = 0usize;
-        let mut fs_follow = 0usize;
-        let mut fs_n = 0usize;
+    for sweeps in [0usize, 1, 2, 3, 4, 6] {
+        let mut planner = Planner::new(plan, PlannerConfig { sweeps, ..Default::default() });
+        let mut lsum = [0.0; 2];
+        let mut lsum_sa = [0.0; 2];
+        let mut count = [0usize; 2];
+        let (mut fs_n, mut fs_delay, mut fs_follow, mut fs_stop) = (0usize, 0usize, 0usize, 0.0);
         for (s, wp) in &set {
             let lb = lower_bound(wp, &plan.v[..plan.dof]);
             let t = planner.plan(s, wp).expect("plan");
             let sa = planner.plan_single_action(s, wp).expect("single");
-            lsum += (t.duration() / lb).ln();
-            lsum_sa += (sa.duration() / lb).ln();
-            for k in 0..20 {
-                let t0 = t.duration() * k as f64 / 20.0;
-                let m = Monitored::new(&t, t0, 0.001, &hw).expect("monitored");
-                fs_n += 1;
-                match m.failsafe().kind() {
-                    pacs_verify::failsafe::FailsafeKind::FollowToEnd => fs_follow += 1,
-                    _ if m.failsafe().delay() > 0.0 => fs_delay += 1,
-                    _ => {}
+            let g = if wp.segments() == 8 { 0 } else { 1 };
+            lsum[g] += (t.duration() / lb).ln();
+            lsum_sa[g] += (sa.duration() / lb).ln();
+            count[g] += 1;
+            if sweeps == 3 {
+                for k in 0..20 {
+                    let t0 = t.duration() * k as f64 / 20.0;
+                    let m = Monitored::new(&t, t0, 0.001, &hw).expect("monitored");
+                    fs_n += 1;
+                    fs_stop += m.stop_time() - m.switch_time();
+                    match m.failsafe().kind() {
+                        FailsafeKind::FollowToEnd => fs_follow += 1,
+                        _ if m.failsafe().delay() > 0.0 => fs_delay += 1,
+                        _ => {}
+                    }
                 }
             }
         }
-        let n = set.len() as f64;
+        let all = ((lsum[0] + lsum[1]) / (count[0] + count[1]) as f64).exp();
+        let all_sa = ((lsum_sa[0] + lsum_sa[1]) / (count[0] + count[1]) as f64).exp();
         println!(
-            "quality gain={velocity_gain} sweeps={sweeps}: chunk duration/LB geomean {:.3}, single-action {:.3}; failsafes: {fs_n} built, {fs_delay} delayed, {fs_follow} follow-to-end",
-            (lsum / n).exp(),
-            (lsum_sa / n).exp()
+            "quality sweeps={sweeps}: duration/LB geomean chunk {all:.2} (h=8 {:.2}, h=6 {:.2}); single-action {all_sa:.2} (h=8 {:.2}, h=6 {:.2})",
+            (lsum[0] / count[0] as f64).exp(),
+            (lsum[1] / count[1] as f64).exp(),
+            (lsum_sa[0] / count[0] as f64).exp(),
+            (lsum_sa[1] / count[1] as f64).exp(),
         );
-    }
+        if fs_n > 0 {
+            println!(
+                "failsafes (sweeps=3, hardware limits a=10, j=5000): {fs_n} built, {} immediate braking, {fs_delay} delayed braking, {fs_follow} follow-to-end; mean stop time {:.1} ms",
+                fs_n - fs_delay - fs_follow,
+                1e3 * fs_stop / fs_n as f64
+            );
+        }
     }
 }
 
@@ -72,6 +83,38 @@ fn benches(c: &mut Criterion) {
             black_box(planner.plan(s, wp).expect("plan"))
         })
     });
+    let mut planner1 = Planner::new(plan, PlannerConfig { sweeps: 1, ..Default::default() });
+    c.bench_function("intended_trajectory_chunk_1_sweep", |b| {
+        b.iter(|| {
+            let (s, wp) = &set[k % set.len()];
+            k += 1;
+            black_box(planner1.plan(s, wp).expect("plan"))
+        })
+    });
+    // Replanning while moving: the next chunk arrives Δt = 33 ms or 100 ms into the previous one.
+    let robot = RobotModel::builtin("fr3").expect("fr3");
+    for dt in [0.033, 0.1] {
+        let starts: Vec<_> = set
+            .windows(2)
+            .map(|w| {
+                let t = planner.plan(&w[0].0, &w[0].1).expect("plan");
+                let s = t.state_at(dt.min(t.duration()));
+                let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
+                    .map(|k| (0..7).map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i]).collect())
+                    .collect();
+                let wp = pacs_verify::Waypoints::from_rows(&rows).expect("rows");
+                assert!((1..rows.len()).all(|k| robot.limits().contains(&rows[k])));
+                (s, wp)
+            })
+            .collect();
+        c.bench_function(&format!("replan_moving_dt_{}ms", (dt * 1e3).round()), |b| {
+            b.iter(|| {
+                let (s, wp) = &starts[k % starts.len()];
+                k += 1;
+                black_box(planner.plan(s, wp).expect("plan"))
+            })
+        });
+    }
     c.bench_function("single_action_chunk", |b| {
         b.iter(|| {
             let (s, wp) = &set[k % set.len()];
@@ -86,6 +129,14 @@ fn benches(c: &mut Criterion) {
             let t0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
             k += 1;
             black_box(Monitored::new(t, t0, 0.001, &hw).expect("fs").stop_time())
+        })
+    });
+    c.bench_function("failsafe_build", |b| {
+        b.iter(|| {
+            let t = &trajs[k % trajs.len()];
+            let s0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
+            k += 1;
+            black_box(Failsafe::new(t, s0, &hw).expect("fs").stop_time())
         })
     });
     c.bench_function("state_at", |b| {

@@ -177,7 +177,25 @@ impl Failsafe {
     fn try_brake(traj: &Trajectory, lim: &Limits, s0: f64, sb: f64, n: usize, max_brake: f64) -> Result<Self, Option<usize>> {
         let big_t = traj.duration();
         let moving = traj.end() == EndCondition::Moving;
-        let mut wlen = 0.005_f64;
+        // Initial window from the point values at sb (cheap estimate of the braking distance);
+        // a joint without acceleration margin at sb already rejects this start (the window
+        // contains sb, so the window check would reject it too).
+        let mut wlen = {
+            let mut a0 = A_CAP;
+            let mut j0 = J_CAP;
+            for i in 0..n {
+                let (_, v, a) = traj.joint_at(i, sb);
+                if a.abs() >= lim.a[i] && v != 0.0 {
+                    return Err(Some(i));
+                }
+                if v != 0.0 {
+                    a0 = a0.min(((lim.a[i] - a.abs()) / v.abs()).max(1e-3));
+                    j0 = j0.min((0.5 * lim.j[i] / v.abs()).max(1e-3));
+                }
+            }
+            let (t1, t2) = if a0 * a0 >= j0 { (1.0 / j0.sqrt(), 0.0) } else { (a0 / j0, 1.0 / a0 - a0 / j0) };
+            (0.5 * (2.0 * t1 + t2) * 1.25).clamp(1e-4, 0.5)
+        };
         for _ in 0..5 {
             if moving && sb + wlen > big_t {
                 wlen = big_t - sb;

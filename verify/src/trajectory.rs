@@ -140,12 +140,21 @@ pub struct Trajectory {
     waypoint_times: Vec<f64>,
     end: EndCondition,
     peak: [[f64; 3]; MAX_DOF],
+    /// Sound q, q̇, q̈ ranges of each whole piece (terminal pieces: their start state only).
+    full: Vec<[Range; 3]>,
 }
 
 impl Trajectory {
     /// Assemble from per-joint piece lists (each non-empty, sorted, first at t = 0, last extending to +∞).
     pub(crate) fn from_parts(dof: usize, pieces: Vec<Piece>, offsets: [usize; MAX_DOF + 1], duration: f64, waypoint_times: Vec<f64>, end: EndCondition) -> Self {
-        Self { dof, pieces, offsets, duration, waypoint_times, end, peak: [[f64::INFINITY; 3]; MAX_DOF] }
+        let mut full = vec![[Range::EMPTY; 3]; pieces.len()];
+        for i in 0..dof {
+            for k in offsets[i]..offsets[i + 1] {
+                let d1 = if k + 1 < offsets[i + 1] { pieces[k + 1].t - pieces[k].t } else { 0.0 };
+                pieces[k].extend_bounds(0.0, d1, &mut full[k]);
+            }
+        }
+        Self { dof, pieces, offsets, duration, waypoint_times, end, peak: [[f64::INFINITY; 3]; MAX_DOF], full }
     }
     /// Number of joints.
     #[inline]
@@ -214,9 +223,16 @@ impl Trajectory {
         loop {
             let p = &self.pieces[k];
             let next_t = if k + 1 < end { self.pieces[k + 1].t } else { f64::INFINITY };
-            let d0 = ta.max(p.t) - p.t;
-            let d1 = tb.min(next_t) - p.t;
-            p.extend_bounds(d0, d1, &mut r);
+            if ta <= p.t && next_t <= tb {
+                let f = &self.full[k];
+                r[0].union(f[0]);
+                r[1].union(f[1]);
+                r[2].union(f[2]);
+            } else {
+                let d0 = ta.max(p.t) - p.t;
+                let d1 = tb.min(next_t) - p.t;
+                p.extend_bounds(d0, d1, &mut r);
+            }
             jr.union(Range::point(p.j));
             // At tb == next_t the next piece is included too (state queries are right-continuous).
             if next_t > tb || k + 1 >= end {
