@@ -7,7 +7,11 @@ fn run(input: &Value, brake_at: Option<f64>) -> (i32, Value, String) {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     (input.to_string(), brake_at.map(f64::to_bits)).hash(&mut h);
-    let dir = std::env::temp_dir().join(format!("pacs-cli-traj-{}-{}", std::process::id(), h.finish()));
+    let dir = std::env::temp_dir().join(format!(
+        "pacs-cli-traj-{}-{}",
+        std::process::id(),
+        h.finish()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("in.json");
     std::fs::write(&path, serde_json::to_string(input).unwrap()).unwrap();
@@ -18,7 +22,11 @@ fn run(input: &Value, brake_at: Option<f64>) -> (i32, Value, String) {
     }
     let out = cmd.output().unwrap();
     let stdout: Value = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
-    (out.status.code().unwrap_or(-1), stdout, String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.code().unwrap_or(-1),
+        stdout,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 fn input(mode: &str) -> Value {
@@ -35,7 +43,11 @@ fn input(mode: &str) -> Value {
 }
 
 fn vec(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 #[test]

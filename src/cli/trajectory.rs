@@ -3,7 +3,9 @@
 
 use super::{CliError, RobotRef, check_vec, read_json};
 use pacs_verify::failsafe::FailsafeKind;
-use pacs_verify::{Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory};
+use pacs_verify::{
+    Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory,
+};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::Path;
@@ -64,7 +66,9 @@ struct Input {
 
 fn positive(field: &str, x: Option<f64>) -> Result<(), CliError> {
     match x {
-        Some(v) if !(v.is_finite() && v > 0.0) => Err(CliError::Input(format!("{field}: value {v} must be finite and > 0"))),
+        Some(v) if !(v.is_finite() && v > 0.0) => Err(CliError::Input(format!(
+            "{field}: value {v} must be finite and > 0"
+        ))),
         _ => Ok(()),
     }
 }
@@ -72,7 +76,9 @@ fn positive(field: &str, x: Option<f64>) -> Result<(), CliError> {
 fn sample_count(field: &str, span: f64, dt: f64) -> Result<usize, CliError> {
     let n = (span / dt).ceil();
     if n > MAX_SAMPLES {
-        return Err(CliError::Input(format!("{field}: {n} samples exceed the maximum {MAX_SAMPLES}; raise sample_dt")));
+        return Err(CliError::Input(format!(
+            "{field}: {n} samples exceed the maximum {MAX_SAMPLES}; raise sample_dt"
+        )));
     }
     Ok(n.max(0.0) as usize)
 }
@@ -96,7 +102,10 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
     check_vec("state.dq", &dq, n)?;
     check_vec("state.ddq", &ddq, n)?;
     if !(input.sample_dt.is_finite() && input.sample_dt > 0.0) {
-        return Err(CliError::Input(format!("sample_dt: value {} must be finite and > 0", input.sample_dt)));
+        return Err(CliError::Input(format!(
+            "sample_dt: value {} must be finite and > 0",
+            input.sample_dt
+        )));
     }
     positive("max_acc", input.max_acc)?;
     positive("max_jerk", input.max_jerk)?;
@@ -106,11 +115,22 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
         return Err(CliError::Input(format!("sweeps: value {s} must be <= 32")));
     }
     let hw = Limits::from_joint_limits(robot.limits());
-    let mut plan_limits = hw.scaled(input.limit_scale).map_err(|e| CliError::Input(e.to_string()))?;
-    plan_limits = plan_limits.with_uniform_acc_jerk(input.max_acc.unwrap_or(f64::INFINITY), input.max_jerk.unwrap_or(f64::INFINITY));
-    let wp = input.chunk.waypoints(&input.state.q, robot.limits(), input.out_of_limits).map_err(|e| CliError::Input(e.to_string()))?;
+    let mut plan_limits = hw
+        .scaled(input.limit_scale)
+        .map_err(|e| CliError::Input(e.to_string()))?;
+    plan_limits = plan_limits.with_uniform_acc_jerk(
+        input.max_acc.unwrap_or(f64::INFINITY),
+        input.max_jerk.unwrap_or(f64::INFINITY),
+    );
+    let wp = input
+        .chunk
+        .waypoints(&input.state.q, robot.limits(), input.out_of_limits)
+        .map_err(|e| CliError::Input(e.to_string()))?;
     let start = JointState::new(&input.state.q, &dq, &ddq);
-    let mut config = PlannerConfig { end: input.end, ..PlannerConfig::default() };
+    let mut config = PlannerConfig {
+        end: input.end,
+        ..PlannerConfig::default()
+    };
     if let Some(s) = input.sweeps {
         config.sweeps = s;
     }
@@ -122,7 +142,9 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
     .map_err(|e| CliError::Input(e.to_string()))?;
     let dt = input.sample_dt;
     let count = sample_count("samples", traj.duration(), dt)?;
-    let samples: Vec<Value> = times(0.0, traj.duration(), dt, count).map(|t| state_json(t, &traj.state_at(t), n)).collect();
+    let samples: Vec<Value> = times(0.0, traj.duration(), dt, count)
+        .map(|t| state_json(t, &traj.state_at(t), n))
+        .collect();
     let waypoints: Vec<&[f64]> = (0..=wp.segments()).map(|k| wp.row(k)).collect();
     let mut out = json!({
         "duration": traj.duration(),
@@ -136,9 +158,12 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
     if let Some(tb) = brake_at {
         let t_end = traj.duration();
         if !(tb.is_finite() && tb >= 0.0 && tb <= t_end) {
-            return Err(CliError::Input(format!("--brake-at: value {tb} must lie in [0, {t_end}] s")));
+            return Err(CliError::Input(format!(
+                "--brake-at: value {tb} must lie in [0, {t_end}] s"
+            )));
         }
-        let fs = pacs_verify::Failsafe::new(&traj, tb, &hw).map_err(|e| CliError::Input(e.to_string()))?;
+        let fs = pacs_verify::Failsafe::new(&traj, tb, &hw)
+            .map_err(|e| CliError::Input(e.to_string()))?;
         let count = sample_count("failsafe samples", fs.stop_time(), dt)?;
         let fsamples: Vec<Value> = times(0.0, fs.stop_time(), dt, count)
             .map(|tau| {

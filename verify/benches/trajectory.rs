@@ -2,11 +2,12 @@
 //! anchor problem set (FR3, H = 16, h = 8 / 6, a = 10 rad/s², j = 400 rad/s³), plus a printed
 //! quality table (duration / lower bound, geometric mean) for the chunk planner and the
 //! single-action baseline.
+#![allow(clippy::needless_range_loop)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
-use pacs_verify::problems::{anchor_set, lower_bound};
 use pacs_verify::failsafe::{Failsafe, FailsafeKind};
+use pacs_verify::problems::{anchor_set, lower_bound};
 use pacs_verify::{JointState, Limits, Monitored, OutOfLimits, Planner, PlannerConfig};
 use std::hint::black_box;
 
@@ -17,7 +18,14 @@ fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
     let probs = anchor_set(robot.limits(), 200, 7);
     let set = probs
         .iter()
-        .map(|p| (JointState::at_rest(&p.q0), p.chunk.waypoints(&p.q0, robot.limits(), OutOfLimits::Reject).expect("waypoints")))
+        .map(|p| {
+            (
+                JointState::at_rest(&p.q0),
+                p.chunk
+                    .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+                    .expect("waypoints"),
+            )
+        })
         .collect();
     (hw, plan, set)
 }
@@ -25,7 +33,13 @@ fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
 fn quality() {
     let (hw, plan, set) = setup();
     for sweeps in [0usize, 1, 2, 3, 4, 6] {
-        let mut planner = Planner::new(plan, PlannerConfig { sweeps, ..Default::default() });
+        let mut planner = Planner::new(
+            plan,
+            PlannerConfig {
+                sweeps,
+                ..Default::default()
+            },
+        );
         let mut lsum = [0.0; 2];
         let mut lsum_sa = [0.0; 2];
         let mut count = [0usize; 2];
@@ -83,7 +97,13 @@ fn benches(c: &mut Criterion) {
             black_box(planner.plan(s, wp).expect("plan"))
         })
     });
-    let mut planner1 = Planner::new(plan, PlannerConfig { sweeps: 1, ..Default::default() });
+    let mut planner1 = Planner::new(
+        plan,
+        PlannerConfig {
+            sweeps: 1,
+            ..Default::default()
+        },
+    );
     c.bench_function("intended_trajectory_chunk_1_sweep", |b| {
         b.iter(|| {
             let (s, wp) = &set[k % set.len()];
@@ -93,14 +113,18 @@ fn benches(c: &mut Criterion) {
     });
     // Replanning while moving: the next chunk arrives Δt = 33 ms or 100 ms into the previous one.
     let robot = RobotModel::builtin("fr3").expect("fr3");
-    for dt in [0.033, 0.1] {
+    for dt in [0.033f64, 0.1] {
         let starts: Vec<_> = set
             .windows(2)
             .map(|w| {
                 let t = planner.plan(&w[0].0, &w[0].1).expect("plan");
                 let s = t.state_at(dt.min(t.duration()));
                 let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
-                    .map(|k| (0..7).map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i]).collect())
+                    .map(|k| {
+                        (0..7)
+                            .map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i])
+                            .collect()
+                    })
                     .collect();
                 let wp = pacs_verify::Waypoints::from_rows(&rows).expect("rows");
                 assert!((1..rows.len()).all(|k| robot.limits().contains(&rows[k])));
@@ -122,7 +146,10 @@ fn benches(c: &mut Criterion) {
             black_box(planner.plan_single_action(s, wp).expect("plan"))
         })
     });
-    let trajs: Vec<_> = set.iter().map(|(s, wp)| planner.plan(s, wp).expect("plan")).collect();
+    let trajs: Vec<_> = set
+        .iter()
+        .map(|(s, wp)| planner.plan(s, wp).expect("plan"))
+        .collect();
     c.bench_function("monitored_failsafe_build", |b| {
         b.iter(|| {
             let t = &trajs[k % trajs.len()];

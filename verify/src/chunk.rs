@@ -55,17 +55,28 @@ impl Waypoints {
     pub fn from_rows(rows: &[Vec<f64>]) -> Result<Self, TrajectoryError> {
         let dof = rows.first().map_or(0, Vec::len);
         if dof == 0 || dof > MAX_DOF {
-            return Err(TrajectoryError::Length { what: "waypoints[0]".into(), expected: MAX_DOF.min(dof.max(1)), found: dof });
+            return Err(TrajectoryError::Length {
+                what: "waypoints[0]".into(),
+                expected: MAX_DOF.min(dof.max(1)),
+                found: dof,
+            });
         }
         if rows.len() < 2 {
-            return Err(TrajectoryError::Execute { execute: rows.len().saturating_sub(1), available: rows.len().saturating_sub(1) });
+            return Err(TrajectoryError::Execute {
+                execute: rows.len().saturating_sub(1),
+                available: rows.len().saturating_sub(1),
+            });
         }
         let mut flat = Vec::with_capacity(rows.len() * dof);
         for (k, r) in rows.iter().enumerate() {
             check(&format!("waypoints[{k}]"), r, dof)?;
             flat.extend_from_slice(r);
         }
-        Ok(Self { dof, rows: flat, gripper: None })
+        Ok(Self {
+            dof,
+            rows: flat,
+            gripper: None,
+        })
     }
 
     /// Number of joints.
@@ -88,10 +99,18 @@ impl Waypoints {
 
 fn check(what: &str, v: &[f64], n: usize) -> Result<(), TrajectoryError> {
     if v.len() != n {
-        return Err(TrajectoryError::Length { what: what.into(), expected: n, found: v.len() });
+        return Err(TrajectoryError::Length {
+            what: what.into(),
+            expected: n,
+            found: v.len(),
+        });
     }
     if let Some((index, &value)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-        return Err(TrajectoryError::NotFinite { what: what.into(), index, value });
+        return Err(TrajectoryError::NotFinite {
+            what: what.into(),
+            index,
+            value,
+        });
     }
     Ok(())
 }
@@ -99,12 +118,20 @@ fn check(what: &str, v: &[f64], n: usize) -> Result<(), TrajectoryError> {
 impl Chunk {
     /// Waypoints q̂_0 = `q0`, q̂_1 … q̂_h from the first h actions; every waypoint is inside the
     /// position limits on success (rejected or projected per `policy`).
-    pub fn waypoints(&self, q0: &[f64], limits: &JointLimits, policy: OutOfLimits) -> Result<Waypoints, TrajectoryError> {
+    pub fn waypoints(
+        &self,
+        q0: &[f64],
+        limits: &JointLimits,
+        policy: OutOfLimits,
+    ) -> Result<Waypoints, TrajectoryError> {
         let n = limits.dof();
         check("state.q", q0, n)?;
         let h = self.execute;
         if h == 0 || h > self.actions.len() {
-            return Err(TrajectoryError::Execute { execute: h, available: self.actions.len() });
+            return Err(TrajectoryError::Execute {
+                execute: h,
+                available: self.actions.len(),
+            });
         }
         let mut rows = Vec::with_capacity((h + 1) * n);
         rows.extend_from_slice(q0);
@@ -119,12 +146,22 @@ impl Chunk {
                 };
                 let (lo, hi) = (limits.q_min()[i], limits.q_max()[i]);
                 if !x.is_finite() {
-                    return Err(TrajectoryError::NotFinite { what: format!("waypoint {}", k + 1), index: i, value: x });
+                    return Err(TrajectoryError::NotFinite {
+                        what: format!("waypoint {}", k + 1),
+                        index: i,
+                        value: x,
+                    });
                 }
                 if x < lo || x > hi {
                     match policy {
                         OutOfLimits::Reject => {
-                            return Err(TrajectoryError::WaypointOutsideLimits { waypoint: k + 1, joint: i, value: x, lo, hi });
+                            return Err(TrajectoryError::WaypointOutsideLimits {
+                                waypoint: k + 1,
+                                joint: i,
+                                value: x,
+                                lo,
+                                hi,
+                            });
                         }
                         OutOfLimits::Project => x = x.clamp(lo, hi),
                     }
@@ -139,6 +176,10 @@ impl Chunk {
                 Some(g[..h].to_vec())
             }
         };
-        Ok(Waypoints { dof: n, rows, gripper })
+        Ok(Waypoints {
+            dof: n,
+            rows,
+            gripper,
+        })
     }
 }

@@ -83,8 +83,11 @@ impl Failsafe {
     pub fn new(traj: &Trajectory, s0: f64, lim: &Limits) -> Result<Self, FailsafeError> {
         let big_t = traj.duration();
         let at_rest = traj.end() == EndCondition::AtRest;
-        if !(s0 >= 0.0) || (s0 > big_t && !at_rest) || !s0.is_finite() {
-            return Err(FailsafeError::StartOutsideTrajectory { s0, duration: big_t });
+        if !s0.is_finite() || s0 < 0.0 || (s0 > big_t && !at_rest) {
+            return Err(FailsafeError::StartOutsideTrajectory {
+                s0,
+                duration: big_t,
+            });
         }
         let n = traj.dof();
         // Is following the intended timing admissible by the intended trajectory's own check?
@@ -121,7 +124,9 @@ impl Failsafe {
                 }
             }
             let next = match blocking {
-                Some(i) => traj.next_joint_breakpoint(i, sb).or_else(|| traj.next_breakpoint(sb)),
+                Some(i) => traj
+                    .next_joint_breakpoint(i, sb)
+                    .or_else(|| traj.next_breakpoint(sb)),
                 None => traj.next_breakpoint(sb),
             };
             match next {
@@ -139,15 +144,29 @@ impl Failsafe {
         let tol = 1.0 + LIMIT_REL_TOL;
         (0..traj.dof()).all(|i| {
             let d = traj.joint_derivs(i, sa, sb);
-            d.r[1].abs_max() <= lim.v[i] * tol && d.r[2].abs_max() <= lim.a[i] * tol && d.r[3].abs_max() <= lim.j[i] * tol
+            d.r[1].abs_max() <= lim.v[i] * tol
+                && d.r[2].abs_max() <= lim.a[i] * tol
+                && d.r[3].abs_max() <= lim.j[i] * tol
         })
     }
 
     fn follow_to_end(traj: &Trajectory, s0: f64) -> Self {
         let t = traj.duration().max(s0);
         let mut phases = [Phase::default(); 5];
-        phases[0] = Phase { tau: 0.0, s: s0, sd: 1.0, sdd: 0.0, sddd: 0.0 };
-        phases[1] = Phase { tau: t - s0, s: t, sd: 0.0, sdd: 0.0, sddd: 0.0 };
+        phases[0] = Phase {
+            tau: 0.0,
+            s: s0,
+            sd: 1.0,
+            sdd: 0.0,
+            sddd: 0.0,
+        };
+        phases[1] = Phase {
+            tau: t - s0,
+            s: t,
+            sd: 0.0,
+            sdd: 0.0,
+            sddd: 0.0,
+        };
         Self {
             kind: FailsafeKind::FollowToEnd,
             s0,
@@ -163,7 +182,11 @@ impl Failsafe {
     }
 
     fn window(traj: &Trajectory, sa: f64, sb: f64, n: usize) -> Window {
-        let mut w = Window { q1: [0.0; MAX_DOF], q2: [0.0; MAX_DOF], q3: [0.0; MAX_DOF] };
+        let mut w = Window {
+            q1: [0.0; MAX_DOF],
+            q2: [0.0; MAX_DOF],
+            q3: [0.0; MAX_DOF],
+        };
         for i in 0..n {
             let d = traj.joint_derivs(i, sa, sb);
             w.q1[i] = d.r[1].abs_max();
@@ -174,7 +197,14 @@ impl Failsafe {
     }
 
     /// A verified braking from `sb`, or the joint whose margin blocked it (if one did).
-    fn try_brake(traj: &Trajectory, lim: &Limits, s0: f64, sb: f64, n: usize, max_brake: f64) -> Result<Self, Option<usize>> {
+    fn try_brake(
+        traj: &Trajectory,
+        lim: &Limits,
+        s0: f64,
+        sb: f64,
+        n: usize,
+        max_brake: f64,
+    ) -> Result<Self, Option<usize>> {
         let big_t = traj.duration();
         let moving = traj.end() == EndCondition::Moving;
         // Initial window from the point values at sb (cheap estimate of the braking distance);
@@ -193,7 +223,11 @@ impl Failsafe {
                     j0 = j0.min((0.5 * lim.j[i] / v.abs()).max(1e-3));
                 }
             }
-            let (t1, t2) = if a0 * a0 >= j0 { (1.0 / j0.sqrt(), 0.0) } else { (a0 / j0, 1.0 / a0 - a0 / j0) };
+            let (t1, t2) = if a0 * a0 >= j0 {
+                (1.0 / j0.sqrt(), 0.0)
+            } else {
+                (a0 / j0, 1.0 / a0 - a0 / j0)
+            };
             (0.5 * (2.0 * t1 + t2) * 1.25).clamp(1e-4, 0.5)
         };
         for _ in 0..5 {
@@ -242,7 +276,11 @@ impl Failsafe {
             }
             if need <= wlen {
                 // Sound re-check in outward-rounded interval arithmetic over the window.
-                return if Self::verify(&w, lim, a_s, j_s, n) { Ok(f) } else { Err(None) };
+                return if Self::verify(&w, lim, a_s, j_s, n) {
+                    Ok(f)
+                } else {
+                    Err(None)
+                };
             }
             if moving && sb + need > big_t {
                 return Err(None);
@@ -257,13 +295,27 @@ impl Failsafe {
         let sdd = Range { lo: -a_s, hi: 0.0 };
         let sddd = Range { lo: -j_s, hi: j_s };
         (0..n).all(|i| {
-            let q1 = Range { lo: -w.q1[i], hi: w.q1[i] };
-            let q2 = Range { lo: -w.q2[i], hi: w.q2[i] };
-            let q3 = Range { lo: -w.q3[i], hi: w.q3[i] };
-            let v = q1.mul(sd);
-            let a = q1.mul(sdd).add(q2.mul(sd.mul(sd)));
-            let j = q3.mul(sd.mul(sd).mul(sd)).add(q2.mul(sd).mul(sdd).scale(3.0)).add(q1.mul(sddd));
-            v.abs_max() <= lim.v[i] * (1.0 + LIMIT_REL_TOL) && a.abs_max() <= lim.a[i] && j.abs_max() <= lim.j[i]
+            let q1 = Range {
+                lo: -w.q1[i],
+                hi: w.q1[i],
+            };
+            let q2 = Range {
+                lo: -w.q2[i],
+                hi: w.q2[i],
+            };
+            let q3 = Range {
+                lo: -w.q3[i],
+                hi: w.q3[i],
+            };
+            let v = q1.times(sd);
+            let a = q1.times(sdd).plus(q2.times(sd.times(sd)));
+            let j = q3
+                .times(sd.times(sd).times(sd))
+                .plus(q2.times(sd).times(sdd).scale(3.0))
+                .plus(q1.times(sddd));
+            v.abs_max() <= lim.v[i] * (1.0 + LIMIT_REL_TOL)
+                && a.abs_max() <= lim.a[i]
+                && j.abs_max() <= lim.j[i]
         })
     }
 
@@ -277,15 +329,45 @@ impl Failsafe {
         };
         let delay = sb - s0;
         let mut phases = [Phase::default(); 5];
-        phases[0] = Phase { tau: 0.0, s: s0, sd: 1.0, sdd: 0.0, sddd: 0.0 };
-        phases[1] = Phase { tau: delay, s: sb, sd: 1.0, sdd: 0.0, sddd: -j_s };
+        phases[0] = Phase {
+            tau: 0.0,
+            s: s0,
+            sd: 1.0,
+            sdd: 0.0,
+            sddd: 0.0,
+        };
+        phases[1] = Phase {
+            tau: delay,
+            s: sb,
+            sd: 1.0,
+            sdd: 0.0,
+            sddd: -j_s,
+        };
         let (s, sd, _) = phases[1].eval(t1);
-        phases[2] = Phase { tau: delay + t1, s, sd, sdd: -a_eff, sddd: 0.0 };
+        phases[2] = Phase {
+            tau: delay + t1,
+            s,
+            sd,
+            sdd: -a_eff,
+            sddd: 0.0,
+        };
         let (s, sd, _) = phases[2].eval(t2);
-        phases[3] = Phase { tau: delay + t1 + t2, s, sd, sdd: -a_eff, sddd: j_s };
+        phases[3] = Phase {
+            tau: delay + t1 + t2,
+            s,
+            sd,
+            sdd: -a_eff,
+            sddd: j_s,
+        };
         let brake = 2.0 * t1 + t2;
         let s_stop = sb + 0.5 * brake;
-        phases[4] = Phase { tau: delay + brake, s: s_stop, sd: 0.0, sdd: 0.0, sddd: 0.0 };
+        phases[4] = Phase {
+            tau: delay + brake,
+            s: s_stop,
+            sd: 0.0,
+            sdd: 0.0,
+            sddd: 0.0,
+        };
         Self {
             kind: FailsafeKind::Brake,
             s0,
@@ -372,25 +454,44 @@ impl Failsafe {
     }
 
     /// Widen `b` by sound ranges of q, q̇, q̈ over relative [τa, τb] (s).
-    pub fn extend_bounds(&self, traj: &Trajectory, ta: f64, tb: f64, b: &mut crate::trajectory::Bounds) {
+    pub fn extend_bounds(
+        &self,
+        traj: &Trajectory,
+        ta: f64,
+        tb: f64,
+        b: &mut crate::trajectory::Bounds,
+    ) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
         let mut k = self.phase_index(ta);
         loop {
             let p = &self.phases[k];
-            let end = if k + 1 < self.nphases { self.phases[k + 1].tau } else { f64::INFINITY };
+            let end = if k + 1 < self.nphases {
+                self.phases[k + 1].tau
+            } else {
+                f64::INFINITY
+            };
             let (da, db) = (ta.max(p.tau) - p.tau, tb.min(end) - p.tau);
             let (s_a, sd_a, sdd_a) = p.eval(da);
             let (s_b, sd_b, sdd_b) = p.eval(db);
             let pad = |x: f64| 8.0 * f64::EPSILON * (x.abs() + 1.0) + 1e-15;
-            let s_r = Range { lo: s_a.min(s_b) - pad(s_a), hi: s_a.max(s_b) + pad(s_b) };
-            let sd_r = Range { lo: sd_a.min(sd_b) - pad(1.0), hi: sd_a.max(sd_b) + pad(1.0) };
-            let sdd_r = Range { lo: sdd_a.min(sdd_b) - pad(sdd_a), hi: sdd_a.max(sdd_b) + pad(sdd_b) };
+            let s_r = Range {
+                lo: s_a.min(s_b) - pad(s_a),
+                hi: s_a.max(s_b) + pad(s_b),
+            };
+            let sd_r = Range {
+                lo: sd_a.min(sd_b) - pad(1.0),
+                hi: sd_a.max(sd_b) + pad(1.0),
+            };
+            let sdd_r = Range {
+                lo: sdd_a.min(sdd_b) - pad(sdd_a),
+                hi: sdd_a.max(sdd_b) + pad(sdd_b),
+            };
             for i in 0..self.dof {
                 let d = traj.joint_derivs(i, s_r.lo, s_r.hi);
                 b.q[i].union(d.r[0]);
-                b.dq[i].union(d.r[1].mul(sd_r));
-                b.ddq[i].union(d.r[1].mul(sdd_r).add(d.r[2].mul(sd_r.mul(sd_r))));
+                b.dq[i].union(d.r[1].times(sd_r));
+                b.ddq[i].union(d.r[1].times(sdd_r).plus(d.r[2].times(sd_r.times(sd_r))));
             }
             if end > tb || k + 1 >= self.nphases {
                 break;

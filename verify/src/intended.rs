@@ -26,7 +26,12 @@ pub struct PlannerConfig {
 
 impl Default for PlannerConfig {
     fn default() -> Self {
-        Self { end: EndCondition::AtRest, sweeps: 3, velocity_gain: 1.0, acceleration_gain: 0.0 }
+        Self {
+            end: EndCondition::AtRest,
+            sweeps: 3,
+            velocity_gain: 1.0,
+            acceleration_gain: 0.0,
+        }
     }
 }
 
@@ -47,7 +52,10 @@ pub struct Planner {
 
 impl std::fmt::Debug for Planner {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Planner").field("limits", &self.limits).field("config", &self.config).finish()
+        f.debug_struct("Planner")
+            .field("limits", &self.limits)
+            .field("config", &self.config)
+            .finish()
     }
 }
 
@@ -55,7 +63,13 @@ impl Planner {
     /// A planner for the given (planning) limits.
     pub fn new(limits: Limits, config: PlannerConfig) -> Self {
         let n = limits.dof;
-        let make = |margin: f64| if n == 7 { Engine::Seven(Box::new(Eng::new(&limits, margin))) } else { Engine::Dyn(Box::new(Eng::new(&limits, margin))) };
+        let make = |margin: f64| {
+            if n == 7 {
+                Engine::Seven(Box::new(Eng::new(&limits, margin)))
+            } else {
+                Engine::Dyn(Box::new(Eng::new(&limits, margin)))
+            }
+        };
         let engine = make(SOLVER_MARGIN);
         let fallback = make(FALLBACK_MARGIN);
         Self {
@@ -86,47 +100,100 @@ impl Planner {
     /// Intended trajectory from `start` through q̂_1 … q̂_h of `wp` (q̂_0 must equal `start.q`),
     /// passing every waypoint exactly, within every limit at every instant (checked), and
     /// continuous in q, q̇, q̈ with `start`. The shortest of the candidates tried is returned.
-    pub fn plan(&mut self, start: &JointState, wp: &Waypoints) -> Result<Trajectory, TrajectoryError> {
+    pub fn plan(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+    ) -> Result<Trajectory, TrajectoryError> {
         let sweeps = self.config.sweeps;
         self.plan_with(start, wp, sweeps, self.config.end)
     }
 
     /// The paper's single-action baseline: each waypoint as its own time-optimal, synchronized
     /// stop-at-target (rest-to-rest) motion.
-    pub fn plan_single_action(&mut self, start: &JointState, wp: &Waypoints) -> Result<Trajectory, TrajectoryError> {
+    pub fn plan_single_action(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+    ) -> Result<Trajectory, TrajectoryError> {
         self.plan_with(start, wp, 0, EndCondition::AtRest)
     }
 
     fn validate(&self, start: &JointState, wp: &Waypoints) -> Result<(), TrajectoryError> {
         let n = self.limits.dof;
         if wp.dof() != n {
-            return Err(TrajectoryError::Length { what: "waypoints".into(), expected: n, found: wp.dof() });
+            return Err(TrajectoryError::Length {
+                what: "waypoints".into(),
+                expected: n,
+                found: wp.dof(),
+            });
         }
         let l = &self.limits;
         let tol = 1.0 + LIMIT_REL_TOL;
         for i in 0..n {
-            for (what, x) in [("state.q", start.q[i]), ("state.dq", start.dq[i]), ("state.ddq", start.ddq[i])] {
+            for (what, x) in [
+                ("state.q", start.q[i]),
+                ("state.dq", start.dq[i]),
+                ("state.ddq", start.ddq[i]),
+            ] {
                 if !x.is_finite() {
-                    return Err(TrajectoryError::NotFinite { what: what.into(), index: i, value: x });
+                    return Err(TrajectoryError::NotFinite {
+                        what: what.into(),
+                        index: i,
+                        value: x,
+                    });
                 }
             }
             if start.q[i] < l.q_min[i] - 1e-9 || start.q[i] > l.q_max[i] + 1e-9 {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "q", value: start.q[i], limit: if start.q[i] < l.q_min[i] { l.q_min[i] } else { l.q_max[i] } });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "q",
+                    value: start.q[i],
+                    limit: if start.q[i] < l.q_min[i] {
+                        l.q_min[i]
+                    } else {
+                        l.q_max[i]
+                    },
+                });
             }
             if start.dq[i].abs() > l.v[i] * tol {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "dq", value: start.dq[i], limit: l.v[i] });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "dq",
+                    value: start.dq[i],
+                    limit: l.v[i],
+                });
             }
             if start.ddq[i].abs() > l.a[i] * tol {
-                return Err(TrajectoryError::StartOutsideLimits { joint: i, quantity: "ddq", value: start.ddq[i], limit: l.a[i] });
+                return Err(TrajectoryError::StartOutsideLimits {
+                    joint: i,
+                    quantity: "ddq",
+                    value: start.ddq[i],
+                    limit: l.a[i],
+                });
             }
             if (wp.row(0)[i] - start.q[i]).abs() > 1e-9 {
-                return Err(TrajectoryError::Infeasible { segment: 0, joint: i, reason: format!("waypoint 0 ({}) differs from the start position ({})", wp.row(0)[i], start.q[i]) });
+                return Err(TrajectoryError::Infeasible {
+                    segment: 0,
+                    joint: i,
+                    reason: format!(
+                        "waypoint 0 ({}) differs from the start position ({})",
+                        wp.row(0)[i],
+                        start.q[i]
+                    ),
+                });
             }
         }
         Ok(())
     }
 
-    fn plan_with(&mut self, start: &JointState, wp: &Waypoints, sweeps: usize, end: EndCondition) -> Result<Trajectory, TrajectoryError> {
+    fn plan_with(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        sweeps: usize,
+        end: EndCondition,
+    ) -> Result<Trajectory, TrajectoryError> {
         self.validate(start, wp)?;
         match self.plan_candidates(start, wp, sweeps, end) {
             Ok(t) => Ok(t),
@@ -139,7 +206,13 @@ impl Planner {
         }
     }
 
-    fn plan_candidates(&mut self, start: &JointState, wp: &Waypoints, sweeps: usize, end: EndCondition) -> Result<Trajectory, TrajectoryError> {
+    fn plan_candidates(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        sweeps: usize,
+        end: EndCondition,
+    ) -> Result<Trajectory, TrajectoryError> {
         let n = self.limits.dof;
         let h = wp.segments();
         let ncand = sweeps + 1;
@@ -208,7 +281,11 @@ impl Planner {
                 Err(e) => last_err = Some(e),
             }
         }
-        Err(last_err.unwrap_or(TrajectoryError::Infeasible { segment: 1, joint: 0, reason: "no candidate".into() }))
+        Err(last_err.unwrap_or(TrajectoryError::Infeasible {
+            segment: 1,
+            joint: 0,
+            reason: "no candidate".into(),
+        }))
     }
 
     /// Closed-form synchronized rest-to-rest segment durations into candidate `c`'s durations.
@@ -218,7 +295,18 @@ impl Planner {
         let d = &mut self.cand_dur[c];
         d.clear();
         for k in 1..=wp.segments() {
-            d.push((0..n).map(|i| rest_to_rest_time((wp.row(k)[i] - wp.row(k - 1)[i]).abs(), l.v[i], l.a[i], l.j[i])).fold(0.0, f64::max));
+            d.push(
+                (0..n)
+                    .map(|i| {
+                        rest_to_rest_time(
+                            (wp.row(k)[i] - wp.row(k - 1)[i]).abs(),
+                            l.v[i],
+                            l.a[i],
+                            l.j[i],
+                        )
+                    })
+                    .fold(0.0, f64::max),
+            );
         }
     }
 
@@ -234,7 +322,11 @@ impl Planner {
                 let d1 = wp.row(k)[i] - wp.row(k - 1)[i];
                 let v = if k < h {
                     let d2 = wp.row(k + 1)[i] - wp.row(k)[i];
-                    if d1 * d2 <= 0.0 { 0.0 } else { g * (d1 + d2) / (dur[k - 1] + dur[k]) }
+                    if d1 * d2 <= 0.0 {
+                        0.0
+                    } else {
+                        g * (d1 + d2) / (dur[k - 1] + dur[k])
+                    }
                 } else {
                     match end {
                         EndCondition::AtRest => 0.0,
@@ -262,7 +354,12 @@ impl Planner {
         }
     }
 
-    fn solve_candidate(&mut self, start: &JointState, wp: &Waypoints, c: usize) -> Result<(), TrajectoryError> {
+    fn solve_candidate(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        c: usize,
+    ) -> Result<(), TrajectoryError> {
         let n = self.limits.dof;
         let h = wp.segments();
         let mut profs = std::mem::take(&mut self.cand[c]);
@@ -294,7 +391,10 @@ impl Planner {
             match r {
                 Ok(d) => durs.push(d),
                 Err(message) => {
-                    result = Err(TrajectoryError::Solver { segment: k, message });
+                    result = Err(TrajectoryError::Solver {
+                        segment: k,
+                        message,
+                    });
                     break;
                 }
             }
@@ -327,8 +427,18 @@ impl Planner {
                 seg_start = times[k];
             }
             // Terminal piece: exactly at the last waypoint with its target velocity.
-            let v_end = if end == EndCondition::AtRest { 0.0 } else { profs[(h - 1) * n + i].vf };
-            pieces.push(Piece { t: seg_start, q: wp.row(h)[i], v: v_end, a: 0.0, j: 0.0 });
+            let v_end = if end == EndCondition::AtRest {
+                0.0
+            } else {
+                profs[(h - 1) * n + i].vf
+            };
+            pieces.push(Piece {
+                t: seg_start,
+                q: wp.row(h)[i],
+                v: v_end,
+                a: 0.0,
+                j: 0.0,
+            });
         }
         offsets[n] = pieces.len();
         Trajectory::from_parts(n, pieces, offsets, t0, times, end)
@@ -356,12 +466,22 @@ impl<const N: usize> Eng<N> {
             input.max_acceleration[i] = l.a[i] * (1.0 - margin);
             input.max_jerk[i] = l.j[i] * (1.0 - margin);
         }
-        Self { otg: Ruckig::<N, ThrowErrorHandler>::new(dofs, 0.001), input, out: rsruckig::trajectory::Trajectory::<N>::new(dofs) }
+        Self {
+            otg: Ruckig::<N, ThrowErrorHandler>::new(dofs, 0.001),
+            input,
+            out: rsruckig::trajectory::Trajectory::<N>::new(dofs),
+        }
     }
 
     /// Time-synchronized jerk-limited motion from `cur` to `tgt` ((q, q̇, q̈) per joint); pushes
     /// one profile per joint and returns the duration (s).
-    fn solve(&mut self, n: usize, cur: &[[f64; MAX_DOF]; 3], tgt: &[[f64; MAX_DOF]; 3], out: &mut Vec<Profile>) -> Result<f64, String> {
+    fn solve(
+        &mut self,
+        n: usize,
+        cur: &[[f64; MAX_DOF]; 3],
+        tgt: &[[f64; MAX_DOF]; 3],
+        out: &mut Vec<Profile>,
+    ) -> Result<f64, String> {
         for i in 0..n {
             self.input.current_position[i] = cur[0][i];
             self.input.current_velocity[i] = cur[1][i];
@@ -370,7 +490,9 @@ impl<const N: usize> Eng<N> {
             self.input.target_velocity[i] = tgt[1][i];
             self.input.target_acceleration[i] = tgt[2][i];
         }
-        self.otg.calculate(&self.input, &mut self.out).map_err(|e| e.to_string())?;
+        self.otg
+            .calculate(&self.input, &mut self.out)
+            .map_err(|e| e.to_string())?;
         let ps = &self.out.profiles[0];
         for i in 0..n {
             out.push(ps[i]);
@@ -390,11 +512,22 @@ const FALLBACK_MARGIN: f64 = 1e-4;
 /// solver ends within ~1e-8 rad of its target, we need the waypoint within 1e-9. The correction
 /// is tiny (≈ error/T³ in jerk), weighted away from phases whose jerk is at the limit, and the
 /// result is re-checked against the limits by the caller.
-fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], j_max: f64, out: &mut Vec<Piece>) {
+fn push_corrected(
+    p: &Profile,
+    t0: f64,
+    dur: f64,
+    target: [f64; 3],
+    j_max: f64,
+    out: &mut Vec<Piece>,
+) {
     // Phases: (duration, jerk).
     let mut ph = [(0.0f64, 0.0f64); 10];
     let mut m = 0;
-    let (q0, v0, a0) = if p.brake.duration > 0.0 { (p.brake.p[0], p.brake.v[0], p.brake.a[0]) } else { (p.p[0], p.v[0], p.a[0]) };
+    let (q0, v0, a0) = if p.brake.duration > 0.0 {
+        (p.brake.p[0], p.brake.v[0], p.brake.a[0])
+    } else {
+        (p.p[0], p.v[0], p.a[0])
+    };
     if p.brake.duration > 0.0 {
         for b in 0..2 {
             if p.brake.t[b] > 0.0 {
@@ -435,7 +568,11 @@ fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], j_max: f64, 
         let t = ph[k].0;
         rest -= t;
         let r = rest.max(0.0);
-        sens[k] = [t * t * t / 6.0 + t * t * r / 2.0 + t * r * r / 2.0, t * t / 2.0 + t * r, t];
+        sens[k] = [
+            t * t * t / 6.0 + t * t * r / 2.0 + t * r * r / 2.0,
+            t * t / 2.0 + t * r,
+            t,
+        ];
         if ph[k].1.abs() > 0.9 * j_max {
             w[k] = 1e-6;
         }
@@ -485,7 +622,9 @@ fn push_corrected(p: &Profile, t0: f64, dur: f64, target: [f64; 3], j_max: f64, 
 /// Solve a 3×3 linear system by Cramer's rule (None if singular).
 fn solve3(g: &[[f64; 3]; 3], e: &[f64; 3]) -> Option<[f64; 3]> {
     let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
     };
     let d = det(g);
     if d == 0.0 || !d.is_finite() {
@@ -520,7 +659,11 @@ pub fn rest_to_rest_time(d: f64, v: f64, a: f64, j: f64) -> f64 {
         return t;
     }
     // With a velocity plateau at v.
-    let (t1, t2) = if v * j <= a * a { ((v / j).sqrt(), 0.0) } else { (a / j, v / a - a / j) };
+    let (t1, t2) = if v * j <= a * a {
+        ((v / j).sqrt(), 0.0)
+    } else {
+        (a / j, v / a - a / j)
+    };
     let ta = 2.0 * t1 + t2;
     2.0 * ta + (d - v * ta) / v
 }

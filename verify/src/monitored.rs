@@ -21,10 +21,20 @@ pub struct Monitored<'a> {
 impl<'a> Monitored<'a> {
     /// Build from the intended trajectory at time `t0` (s) with safety step `alpha` (s), the
     /// failsafe verified against `lim` (normally the robot's hardware limits).
-    pub fn new(traj: &'a Trajectory, t0: f64, alpha: f64, lim: &Limits) -> Result<Self, FailsafeError> {
+    pub fn new(
+        traj: &'a Trajectory,
+        t0: f64,
+        alpha: f64,
+        lim: &Limits,
+    ) -> Result<Self, FailsafeError> {
         let t_switch = t0 + alpha.max(0.0);
         let failsafe = Failsafe::new(traj, t_switch, lim)?;
-        Ok(Self { traj, t0, t_switch, failsafe })
+        Ok(Self {
+            traj,
+            t0,
+            t_switch,
+            failsafe,
+        })
     }
     /// Start time t0 (s).
     pub fn start_time(&self) -> f64 {
@@ -48,7 +58,11 @@ impl<'a> Monitored<'a> {
     }
     /// Exact state at absolute time `t` (s): intended before the switch, failsafe after.
     pub fn state_at(&self, t: f64) -> JointState {
-        if t <= self.t_switch { self.traj.state_at(t) } else { self.failsafe.state_at(self.traj, t - self.t_switch) }
+        if t <= self.t_switch {
+            self.traj.state_at(t)
+        } else {
+            self.failsafe.state_at(self.traj, t - self.t_switch)
+        }
     }
     /// Sound ranges of q, q̇, q̈ per joint over absolute [ta, tb] (s).
     pub fn bounds(&self, ta: f64, tb: f64) -> Bounds {
@@ -58,7 +72,12 @@ impl<'a> Monitored<'a> {
             b = self.traj.bounds(ta, tb.min(self.t_switch));
         }
         if tb > self.t_switch {
-            self.failsafe.extend_bounds(self.traj, ta.max(self.t_switch) - self.t_switch, tb - self.t_switch, &mut b);
+            self.failsafe.extend_bounds(
+                self.traj,
+                ta.max(self.t_switch) - self.t_switch,
+                tb - self.t_switch,
+                &mut b,
+            );
         }
         b
     }
@@ -66,7 +85,11 @@ impl<'a> Monitored<'a> {
     /// [t0, stop time]; empty for dt ≤ 0.
     pub fn intervals(&self, dt: f64) -> impl Iterator<Item = (f64, f64)> + use<> {
         let (t0, t1) = (self.t0, self.stop_time());
-        let n = if dt > 0.0 && t1 > t0 { ((t1 - t0) / dt).ceil() as usize } else { 0 };
+        let n = if dt > 0.0 && t1 > t0 {
+            ((t1 - t0) / dt).ceil() as usize
+        } else {
+            0
+        };
         (0..n).map(move |k| (t0 + k as f64 * dt, (t0 + (k + 1) as f64 * dt).min(t1)))
     }
 }

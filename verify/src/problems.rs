@@ -49,7 +49,9 @@ pub fn anchor_set(limits: &JointLimits, count: usize, seed: u64) -> Vec<Problem>
     let mut rng = Rng::new(seed);
     (0..count)
         .map(|c| {
-            let q0: Vec<f64> = (0..n).map(|i| rng.uniform(limits.q_min()[i] + 0.6, limits.q_max()[i] - 0.6)).collect();
+            let q0: Vec<f64> = (0..n)
+                .map(|i| rng.uniform(limits.q_min()[i] + 0.6, limits.q_max()[i] - 0.6))
+                .collect();
             let step = rng.uniform(0.005, 0.04);
             let mut d: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
             let actions = (0..16)
@@ -60,7 +62,15 @@ pub fn anchor_set(limits: &JointLimits, count: usize, seed: u64) -> Vec<Problem>
                     d.iter().map(|x| step * x).collect()
                 })
                 .collect();
-            Problem { q0, chunk: Chunk { kind: ActionKind::Delta, actions, execute: if c % 2 == 0 { 8 } else { 6 }, gripper: None } }
+            Problem {
+                q0,
+                chunk: Chunk {
+                    kind: ActionKind::Delta,
+                    actions,
+                    execute: if c % 2 == 0 { 8 } else { 6 },
+                    gripper: None,
+                },
+            }
         })
         .collect()
 }
@@ -68,6 +78,10 @@ pub fn anchor_set(limits: &JointLimits, count: usize, seed: u64) -> Vec<Problem>
 /// Lower bound on any trajectory through the waypoints: Σ_k max_i |Δq̂_ki| / v_max,i (s).
 pub fn lower_bound(wp: &crate::chunk::Waypoints, v_max: &[f64]) -> f64 {
     (1..=wp.segments())
-        .map(|k| (0..wp.dof()).map(|i| (wp.row(k)[i] - wp.row(k - 1)[i]).abs() / v_max[i]).fold(0.0, f64::max))
+        .map(|k| {
+            (0..wp.dof())
+                .map(|i| (wp.row(k)[i] - wp.row(k - 1)[i]).abs() / v_max[i])
+                .fold(0.0, f64::max)
+        })
         .sum()
 }

@@ -82,7 +82,8 @@ impl Piece {
     fn extend_at(&self, d: f64, r: &mut [Range; 3]) {
         let (q, v, a) = self.eval(d);
         let ad = d.abs();
-        let tq = self.q.abs() + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
+        let tq = self.q.abs()
+            + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
         let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
         let ta = self.a.abs() + ad * self.j.abs();
         r[0].include_padded(q, PAD_REL * tq + PAD_ABS);
@@ -102,7 +103,10 @@ pub struct Range {
 
 impl Range {
     /// The empty interval.
-    pub const EMPTY: Range = Range { lo: f64::INFINITY, hi: f64::NEG_INFINITY };
+    pub const EMPTY: Range = Range {
+        lo: f64::INFINITY,
+        hi: f64::NEG_INFINITY,
+    };
 
     /// The interval [x, x].
     #[inline]
@@ -128,13 +132,21 @@ impl Range {
     }
     /// Outward-rounded interval sum.
     #[inline]
-    pub fn add(self, o: Range) -> Range {
-        pad_out(Range { lo: self.lo + o.lo, hi: self.hi + o.hi })
+    pub fn plus(self, o: Range) -> Range {
+        pad_out(Range {
+            lo: self.lo + o.lo,
+            hi: self.hi + o.hi,
+        })
     }
     /// Outward-rounded interval product.
     #[inline]
-    pub fn mul(self, o: Range) -> Range {
-        let p = [self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi];
+    pub fn times(self, o: Range) -> Range {
+        let p = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
         let lo = p[0].min(p[1]).min(p[2]).min(p[3]);
         let hi = p[0].max(p[1]).max(p[2]).max(p[3]);
         pad_out(Range { lo, hi })
@@ -142,12 +154,15 @@ impl Range {
     /// Interval scaled by a constant (outward-rounded).
     #[inline]
     pub fn scale(self, c: f64) -> Range {
-        self.mul(Range::point(c))
+        self.times(Range::point(c))
     }
 }
 
 /// Widen an interval by one ulp-scale step on each side (covers one rounding of each end).
 #[inline]
 fn pad_out(r: Range) -> Range {
-    Range { lo: r.lo - (r.lo.abs() * f64::EPSILON + f64::MIN_POSITIVE), hi: r.hi + (r.hi.abs() * f64::EPSILON + f64::MIN_POSITIVE) }
+    Range {
+        lo: r.lo - (r.lo.abs() * f64::EPSILON + f64::MIN_POSITIVE),
+        hi: r.hi + (r.hi.abs() * f64::EPSILON + f64::MIN_POSITIVE),
+    }
 }

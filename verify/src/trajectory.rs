@@ -20,7 +20,12 @@ pub struct JointState {
 
 impl Default for JointState {
     fn default() -> Self {
-        Self { q: [0.0; MAX_DOF], dq: [0.0; MAX_DOF], ddq: [0.0; MAX_DOF], dddq: [0.0; MAX_DOF] }
+        Self {
+            q: [0.0; MAX_DOF],
+            dq: [0.0; MAX_DOF],
+            ddq: [0.0; MAX_DOF],
+            dddq: [0.0; MAX_DOF],
+        }
     }
 }
 
@@ -56,7 +61,11 @@ pub struct Bounds {
 
 impl Default for Bounds {
     fn default() -> Self {
-        Self { q: [Range::EMPTY; MAX_DOF], dq: [Range::EMPTY; MAX_DOF], ddq: [Range::EMPTY; MAX_DOF] }
+        Self {
+            q: [Range::EMPTY; MAX_DOF],
+            dq: [Range::EMPTY; MAX_DOF],
+            ddq: [Range::EMPTY; MAX_DOF],
+        }
     }
 }
 
@@ -88,7 +97,14 @@ impl Limits {
     /// Copy of a model's limits.
     pub fn from_joint_limits(l: &JointLimits) -> Self {
         let n = l.dof().min(MAX_DOF);
-        let mut s = Self { dof: n, q_min: [0.0; MAX_DOF], q_max: [0.0; MAX_DOF], v: [0.0; MAX_DOF], a: [0.0; MAX_DOF], j: [0.0; MAX_DOF] };
+        let mut s = Self {
+            dof: n,
+            q_min: [0.0; MAX_DOF],
+            q_max: [0.0; MAX_DOF],
+            v: [0.0; MAX_DOF],
+            a: [0.0; MAX_DOF],
+            j: [0.0; MAX_DOF],
+        };
         s.q_min[..n].copy_from_slice(&l.q_min()[..n]);
         s.q_max[..n].copy_from_slice(&l.q_max()[..n]);
         s.v[..n].copy_from_slice(&l.v_max()[..n]);
@@ -146,15 +162,35 @@ pub struct Trajectory {
 
 impl Trajectory {
     /// Assemble from per-joint piece lists (each non-empty, sorted, first at t = 0, last extending to +∞).
-    pub(crate) fn from_parts(dof: usize, pieces: Vec<Piece>, offsets: [usize; MAX_DOF + 1], duration: f64, waypoint_times: Vec<f64>, end: EndCondition) -> Self {
+    pub(crate) fn from_parts(
+        dof: usize,
+        pieces: Vec<Piece>,
+        offsets: [usize; MAX_DOF + 1],
+        duration: f64,
+        waypoint_times: Vec<f64>,
+        end: EndCondition,
+    ) -> Self {
         let mut full = vec![[Range::EMPTY; 3]; pieces.len()];
         for i in 0..dof {
             for k in offsets[i]..offsets[i + 1] {
-                let d1 = if k + 1 < offsets[i + 1] { pieces[k + 1].t - pieces[k].t } else { 0.0 };
+                let d1 = if k + 1 < offsets[i + 1] {
+                    pieces[k + 1].t - pieces[k].t
+                } else {
+                    0.0
+                };
                 pieces[k].extend_bounds(0.0, d1, &mut full[k]);
             }
         }
-        Self { dof, pieces, offsets, duration, waypoint_times, end, peak: [[f64::INFINITY; 3]; MAX_DOF], full }
+        Self {
+            dof,
+            pieces,
+            offsets,
+            duration,
+            waypoint_times,
+            end,
+            peak: [[f64::INFINITY; 3]; MAX_DOF],
+            full,
+        }
     }
     /// Number of joints.
     #[inline]
@@ -222,7 +258,11 @@ impl Trajectory {
         let mut k = self.locate(i, ta);
         loop {
             let p = &self.pieces[k];
-            let next_t = if k + 1 < end { self.pieces[k + 1].t } else { f64::INFINITY };
+            let next_t = if k + 1 < end {
+                self.pieces[k + 1].t
+            } else {
+                f64::INFINITY
+            };
             if ta <= p.t && next_t <= tb {
                 let f = &self.full[k];
                 r[0].union(f[0]);
@@ -240,7 +280,9 @@ impl Trajectory {
             }
             k += 1;
         }
-        Derivs { r: [r[0], r[1], r[2], jr] }
+        Derivs {
+            r: [r[0], r[1], r[2], jr],
+        }
     }
 
     /// Sound ranges of q, q̇, q̈ for every joint over [ta, tb] (s).
@@ -265,31 +307,65 @@ impl Trajectory {
         for i in 0..self.dof {
             let ps = self.pieces(i);
             for (k, p) in ps.iter().enumerate() {
-                let t1 = if k + 1 < ps.len() { ps[k + 1].t } else { self.duration.max(p.t) };
+                let t1 = if k + 1 < ps.len() {
+                    ps[k + 1].t
+                } else {
+                    self.duration.max(p.t)
+                };
                 let mut r = [Range::EMPTY; 3];
                 p.extend_bounds(0.0, t1 - p.t, &mut r);
                 let seg = self.segment_of(p.t);
-                let fail = |reason: String| Err(TrajectoryError::Infeasible { segment: seg, joint: i, reason });
+                let fail = |reason: String| {
+                    Err(TrajectoryError::Infeasible {
+                        segment: seg,
+                        joint: i,
+                        reason,
+                    })
+                };
                 if r[0].lo < lim.q_min[i] - 1e-9 || r[0].hi > lim.q_max[i] + 1e-9 {
-                    return fail(format!("position range [{}, {}] rad leaves [{}, {}] after t = {} s", r[0].lo, r[0].hi, lim.q_min[i], lim.q_max[i], p.t));
+                    return fail(format!(
+                        "position range [{}, {}] rad leaves [{}, {}] after t = {} s",
+                        r[0].lo, r[0].hi, lim.q_min[i], lim.q_max[i], p.t
+                    ));
                 }
                 if r[1].abs_max() > lim.v[i] * (1.0 + tol) {
-                    return fail(format!("|velocity| {} rad/s > {} after t = {} s", r[1].abs_max(), lim.v[i], p.t));
+                    return fail(format!(
+                        "|velocity| {} rad/s > {} after t = {} s",
+                        r[1].abs_max(),
+                        lim.v[i],
+                        p.t
+                    ));
                 }
                 if r[2].abs_max() > lim.a[i] * (1.0 + tol) {
-                    return fail(format!("|acceleration| {} rad/s² > {} after t = {} s", r[2].abs_max(), lim.a[i], p.t));
+                    return fail(format!(
+                        "|acceleration| {} rad/s² > {} after t = {} s",
+                        r[2].abs_max(),
+                        lim.a[i],
+                        p.t
+                    ));
                 }
                 peak[i][0] = peak[i][0].max(r[1].abs_max());
                 peak[i][1] = peak[i][1].max(r[2].abs_max());
                 peak[i][2] = peak[i][2].max(p.j.abs());
                 if p.j.abs() > lim.j[i] * (1.0 + tol) {
-                    return fail(format!("|jerk| {} rad/s³ > {} after t = {} s", p.j.abs(), lim.j[i], p.t));
+                    return fail(format!(
+                        "|jerk| {} rad/s³ > {} after t = {} s",
+                        p.j.abs(),
+                        lim.j[i],
+                        p.t
+                    ));
                 }
                 if k + 1 < ps.len() {
                     let n = &ps[k + 1];
                     let (q, v, a) = p.eval(n.t - p.t);
-                    if (q - n.q).abs() > 1e-9 || (v - n.v).abs() > 1e-9 * lim.v[i] || (a - n.a).abs() > 1e-9 * lim.a[i] {
-                        return fail(format!("discontinuity at t = {} s: (q, dq, ddq) ({q}, {v}, {a}) vs ({}, {}, {})", n.t, n.q, n.v, n.a));
+                    if (q - n.q).abs() > 1e-9
+                        || (v - n.v).abs() > 1e-9 * lim.v[i]
+                        || (a - n.a).abs() > 1e-9 * lim.a[i]
+                    {
+                        return fail(format!(
+                            "discontinuity at t = {} s: (q, dq, ddq) ({q}, {v}, {a}) vs ({}, {}, {})",
+                            n.t, n.q, n.v, n.a
+                        ));
                     }
                 }
             }
@@ -315,7 +391,9 @@ impl Trajectory {
     #[inline]
     pub fn next_joint_breakpoint(&self, i: usize, s: f64) -> Option<f64> {
         let k = self.locate(i, s) + 1;
-        (k < self.offsets[i + 1]).then(|| self.pieces[k].t).filter(|&t| t > s)
+        (k < self.offsets[i + 1])
+            .then(|| self.pieces[k].t)
+            .filter(|&t| t > s)
     }
 
     /// Earliest piece start time of any joint strictly after `s` (s), if any.

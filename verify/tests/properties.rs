@@ -1,4 +1,5 @@
 //! Property tests (10^4 cases each) over random chunks, start states, limit scales and failsafe starts.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -14,20 +15,38 @@ fn random_problem(seed: u64) -> (Limits, Limits, JointState, Waypoints, Trajecto
     let plan = plan0.scaled(scale).unwrap();
     let h = 1 + (rng.next_u64() % 8) as usize;
     let step = rng.uniform(0.001, 0.08);
-    let q0: Vec<f64> = (0..7).map(|i| rng.uniform(plan.q_min[i] + 0.5, plan.q_max[i] - 0.5)).collect();
+    let q0: Vec<f64> = (0..7)
+        .map(|i| rng.uniform(plan.q_min[i] + 0.5, plan.q_max[i] - 0.5))
+        .collect();
     // Start state: at rest, or a moving state taken from a previous plan (replanning).
-    let mut pl = Planner::new(plan, PlannerConfig { sweeps: 2, ..Default::default() });
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            sweeps: 2,
+            ..Default::default()
+        },
+    );
     let start = if rng.uniform(0.0, 1.0) < 0.5 {
         JointState::at_rest(&q0)
     } else {
         let q1: Vec<f64> = q0.iter().map(|x| x + rng.uniform(-0.1, 0.1)).collect();
-        let pre = pl.plan(&JointState::at_rest(&q0), &Waypoints::from_rows(&[q0.clone(), q1]).unwrap()).unwrap();
+        let pre = pl
+            .plan(
+                &JointState::at_rest(&q0),
+                &Waypoints::from_rows(&[q0.clone(), q1]).unwrap(),
+            )
+            .unwrap();
         pre.state_at(rng.uniform(0.0, pre.duration()))
     };
     let mut rows = vec![start.q[..7].to_vec()];
     for _ in 0..h {
         let last = rows.last().unwrap().clone();
-        rows.push(last.iter().enumerate().map(|(i, x)| (x + step * rng.normal()).clamp(plan.q_min[i], plan.q_max[i])).collect());
+        rows.push(
+            last.iter()
+                .enumerate()
+                .map(|(i, x)| (x + step * rng.normal()).clamp(plan.q_min[i], plan.q_max[i]))
+                .collect(),
+        );
     }
     let wp = Waypoints::from_rows(&rows).unwrap();
     let t = pl.plan(&start, &wp).unwrap();

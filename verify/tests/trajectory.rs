@@ -1,4 +1,5 @@
 //! Intended trajectories: waypoints, limits, bounds, replanning continuity, single-target optimality.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -11,8 +12,17 @@ fn plan_anchor(k: usize, sweeps: usize) -> (Waypoints, Trajectory) {
     let robot = fr3();
     let (_, plan) = limits();
     let p = &anchor_set(robot.limits(), k + 1, 11)[k];
-    let wp = p.chunk.waypoints(&p.q0, robot.limits(), OutOfLimits::Reject).unwrap();
-    let mut pl = Planner::new(plan, PlannerConfig { sweeps, ..Default::default() });
+    let wp = p
+        .chunk
+        .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            sweeps,
+            ..Default::default()
+        },
+    );
     let t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
     (wp, t)
 }
@@ -26,7 +36,11 @@ fn every_waypoint_is_passed_within_1e_9_from_both_sides() {
             for i in 0..wp.dof() {
                 let (ql, _, _) = left_limit(&t, i, tk);
                 let qr = t.state_at(tk).q[i];
-                assert!((ql - wp.row(m + 1)[i]).abs() <= 1e-9, "chunk {k} wp {} joint {i}: {ql}", m + 1);
+                assert!(
+                    (ql - wp.row(m + 1)[i]).abs() <= 1e-9,
+                    "chunk {k} wp {} joint {i}: {ql}",
+                    m + 1
+                );
                 assert!((qr - wp.row(m + 1)[i]).abs() <= 1e-9);
             }
         }
@@ -62,9 +76,14 @@ fn the_checker_rejects_a_trajectory_planned_with_higher_limits() {
     let (_, plan) = limits();
     let (_, mut t) = plan_anchor(0, 3);
     let tight = plan.with_uniform_acc_jerk(5.0, 400.0);
-    let peak = (0..7).map(|i| t.bounds(0.0, t.duration()).ddq[i].abs_max()).fold(0.0, f64::max);
+    let peak = (0..7)
+        .map(|i| t.bounds(0.0, t.duration()).ddq[i].abs_max())
+        .fold(0.0, f64::max);
     assert!(peak > 5.0, "anchor chunk 0 peaks at {peak} rad/s²");
-    assert!(matches!(t.check(&tight), Err(TrajectoryError::Infeasible { .. })));
+    assert!(matches!(
+        t.check(&tight),
+        Err(TrajectoryError::Infeasible { .. })
+    ));
 }
 
 #[test]
@@ -88,7 +107,10 @@ fn bounds_enclose_dense_samples_and_are_tight() {
         }
         // Tightness: the velocity bound exceeds the sampled range by little (exact extrema).
         for i in 0..7 {
-            assert!(b.dq[i].hi - seen[i][1] < 1e-3 && seen[i][0] - b.dq[i].lo < 1e-3, "loose bound joint {i}");
+            assert!(
+                b.dq[i].hi - seen[i][1] < 1e-3 && seen[i][0] - b.dq[i].lo < 1e-3,
+                "loose bound joint {i}"
+            );
         }
     }
 }
@@ -99,13 +121,21 @@ fn chunk_trajectory_is_shorter_than_single_action_and_above_the_lower_bound() {
     let (_, plan) = limits();
     let mut pl = Planner::new(plan, PlannerConfig::default());
     for p in anchor_set(robot.limits(), 20, 3) {
-        let wp = p.chunk.waypoints(&p.q0, robot.limits(), OutOfLimits::Reject).unwrap();
+        let wp = p
+            .chunk
+            .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
         let s = JointState::at_rest(&p.q0);
         let t = pl.plan(&s, &wp).unwrap();
         let sa = pl.plan_single_action(&s, &wp).unwrap();
         let lb = lower_bound(&wp, &plan.v[..7]);
         assert!(t.duration() >= lb && sa.duration() >= lb);
-        assert!(t.duration() <= sa.duration() + 1e-12, "{} > {}", t.duration(), sa.duration());
+        assert!(
+            t.duration() <= sa.duration() + 1e-12,
+            "{} > {}",
+            t.duration(),
+            sa.duration()
+        );
         // Single action: at rest at every waypoint.
         for &tk in sa.waypoint_times() {
             let st = sa.state_at(tk);
@@ -142,7 +172,11 @@ fn single_target_durations_are_time_optimal() {
         let wp = Waypoints::from_rows(&[q0.to_vec(), q1.to_vec()]).unwrap();
         let t = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
         let expect = rest_to_rest(d, plan.v[i], plan.a[i], plan.j[i]);
-        assert!((t.duration() - expect).abs() < 1e-6, "joint {i} d {d}: {} vs {expect}", t.duration());
+        assert!(
+            (t.duration() - expect).abs() < 1e-6,
+            "joint {i} d {d}: {} vs {expect}",
+            t.duration()
+        );
     }
     // Several joints: rsruckig single target without waypoints.
     let mut rng = problems::Rng::new(9);
@@ -172,12 +206,18 @@ fn replanning_from_a_moving_state_is_continuous() {
     let mut pl = Planner::new(plan, PlannerConfig::default());
     let set = anchor_set(robot.limits(), 20, 21);
     for w in set.windows(2) {
-        let wp = w[0].chunk.waypoints(&w[0].q0, robot.limits(), OutOfLimits::Reject).unwrap();
+        let wp = w[0]
+            .chunk
+            .waypoints(&w[0].q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
         let t1 = pl.plan(&JointState::at_rest(&w[0].q0), &wp).unwrap();
         for frac in [0.1, 0.33, 0.6] {
             let tc = t1.duration() * frac;
             let s = t1.state_at(tc);
-            let wp2 = w[1].chunk.waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject).unwrap();
+            let wp2 = w[1]
+                .chunk
+                .waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject)
+                .unwrap();
             let mut t2 = pl.plan(&s, &wp2).unwrap();
             let s2 = t2.state_at(0.0);
             for i in 0..7 {
@@ -195,9 +235,18 @@ fn replanning_from_a_moving_state_is_continuous() {
 fn moving_end_keeps_velocity_toward_the_next_chunk() {
     let robot = fr3();
     let (_, plan) = limits();
-    let mut pl = Planner::new(plan, PlannerConfig { end: EndCondition::Moving, ..Default::default() });
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::Moving,
+            ..Default::default()
+        },
+    );
     let p = &anchor_set(robot.limits(), 1, 4)[0];
-    let wp = p.chunk.waypoints(&p.q0, robot.limits(), OutOfLimits::Reject).unwrap();
+    let wp = p
+        .chunk
+        .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
     let mut t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
     t.check(&plan).unwrap();
     let s = t.state_at(t.duration());
@@ -223,25 +272,77 @@ fn chunks_convert_to_waypoints_and_limits_are_explicit() {
     let robot = fr3();
     let l = robot.limits();
     let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
-    let c = Chunk { kind: ActionKind::Delta, actions: vec![vec![0.1; 7], vec![0.2; 7], vec![9.0; 7]], execute: 2, gripper: Some(vec![0.0, 1.0, 0.5]) };
+    let c = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 7], vec![0.2; 7], vec![9.0; 7]],
+        execute: 2,
+        gripper: Some(vec![0.0, 1.0, 0.5]),
+    };
     let wp = c.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
     assert_eq!(wp.segments(), 2);
     assert!((wp.row(2)[0] - 0.3).abs() < 1e-15);
     assert_eq!(wp.gripper(), Some(&[0.0, 1.0][..]));
     let target: Vec<f64> = q0.iter().map(|x| x + 0.05).collect();
-    let abs = Chunk { kind: ActionKind::Absolute, actions: vec![target.clone()], execute: 1, gripper: None };
-    assert_eq!(abs.waypoints(&q0, l, OutOfLimits::Reject).unwrap().row(1), &target[..]);
-    let far = Chunk { kind: ActionKind::Delta, actions: vec![vec![9.0; 7]], execute: 1, gripper: None };
-    assert!(matches!(far.waypoints(&q0, l, OutOfLimits::Reject), Err(TrajectoryError::WaypointOutsideLimits { waypoint: 1, joint: 0, .. })));
+    let abs = Chunk {
+        kind: ActionKind::Absolute,
+        actions: vec![target.clone()],
+        execute: 1,
+        gripper: None,
+    };
+    assert_eq!(
+        abs.waypoints(&q0, l, OutOfLimits::Reject).unwrap().row(1),
+        &target[..]
+    );
+    let far = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![9.0; 7]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        far.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::WaypointOutsideLimits {
+            waypoint: 1,
+            joint: 0,
+            ..
+        })
+    ));
     let proj = far.waypoints(&q0, l, OutOfLimits::Project).unwrap();
     assert!(l.contains(proj.row(1)));
     assert_eq!(proj.row(1)[0], l.q_max()[0]);
-    let bad = Chunk { kind: ActionKind::Delta, actions: vec![vec![0.1; 7]], execute: 2, gripper: None };
-    assert!(matches!(bad.waypoints(&q0, l, OutOfLimits::Reject), Err(TrajectoryError::Execute { execute: 2, available: 1 })));
-    let nan = Chunk { kind: ActionKind::Delta, actions: vec![vec![f64::NAN; 7]], execute: 1, gripper: None };
-    assert!(matches!(nan.waypoints(&q0, l, OutOfLimits::Reject), Err(TrajectoryError::NotFinite { .. })));
-    let short = Chunk { kind: ActionKind::Delta, actions: vec![vec![0.1; 6]], execute: 1, gripper: None };
-    assert!(matches!(short.waypoints(&q0, l, OutOfLimits::Reject), Err(TrajectoryError::Length { .. })));
+    let bad = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 7]],
+        execute: 2,
+        gripper: None,
+    };
+    assert!(matches!(
+        bad.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::Execute {
+            execute: 2,
+            available: 1
+        })
+    ));
+    let nan = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![f64::NAN; 7]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        nan.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::NotFinite { .. })
+    ));
+    let short = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 6]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        short.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::Length { .. })
+    ));
 }
 
 #[test]
@@ -252,8 +353,18 @@ fn start_states_outside_limits_are_rejected() {
     let wp = Waypoints::from_rows(&[q0.to_vec(), q0.iter().map(|x| x + 0.01).collect()]).unwrap();
     let mut s = JointState::at_rest(&q0);
     s.dq[2] = 100.0;
-    assert!(matches!(pl.plan(&s, &wp), Err(TrajectoryError::StartOutsideLimits { joint: 2, quantity: "dq", .. })));
+    assert!(matches!(
+        pl.plan(&s, &wp),
+        Err(TrajectoryError::StartOutsideLimits {
+            joint: 2,
+            quantity: "dq",
+            ..
+        })
+    ));
     let mut s = JointState::at_rest(&q0);
     s.ddq[0] = f64::NAN;
-    assert!(matches!(pl.plan(&s, &wp), Err(TrajectoryError::NotFinite { .. })));
+    assert!(matches!(
+        pl.plan(&s, &wp),
+        Err(TrajectoryError::NotFinite { .. })
+    ));
 }

@@ -45,7 +45,11 @@ pub fn assert_limits_at_samples(traj: &Trajectory, lim: &Limits, n: usize) {
     for t in sample_times(traj, n) {
         let s: JointState = traj.state_at(t);
         for i in 0..traj.dof() {
-            assert!(s.q[i] >= lim.q_min[i] - 1e-9 && s.q[i] <= lim.q_max[i] + 1e-9, "q[{i}] = {} at t = {t}", s.q[i]);
+            assert!(
+                s.q[i] >= lim.q_min[i] - 1e-9 && s.q[i] <= lim.q_max[i] + 1e-9,
+                "q[{i}] = {} at t = {t}",
+                s.q[i]
+            );
             within(s.dq[i], lim.v[i], &format!("dq[{i}] at t = {t}"));
             within(s.ddq[i], lim.a[i], &format!("ddq[{i}] at t = {t}"));
             within(s.dddq[i], lim.j[i], &format!("dddq[{i}] at t = {t}"));
