@@ -368,3 +368,29 @@ fn start_states_outside_limits_are_rejected() {
         Err(TrajectoryError::NotFinite { .. })
     ));
 }
+
+#[test]
+fn zero_and_repeated_actions_are_handled() {
+    let (hw, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    let q1: Vec<f64> = q0.iter().map(|x| x + 0.02).collect();
+    // All-zero chunk: duration 0, at rest, failsafe stops at once.
+    let still = Waypoints::from_rows(&[q0.clone(), q0.clone(), q0.clone()]).unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&q0), &still).unwrap();
+    t.check(&plan).unwrap();
+    assert_eq!(t.duration(), 0.0);
+    let f = Failsafe::new(&t, 0.0, &hw).unwrap();
+    assert_eq!(f.stop_time(), 0.0);
+    // A repeated waypoint in the middle: the robot must pass it (at rest there).
+    let rep = Waypoints::from_rows(&[q0.clone(), q1.clone(), q1.clone(), q0.clone()]).unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&q0), &rep).unwrap();
+    t.check(&plan).unwrap();
+    let w = t.waypoint_times();
+    assert!((w[0] - w[1]).abs() < 1e-12);
+    for i in 0..7 {
+        assert!((left_limit(&t, i, w[0]).0 - q1[i]).abs() <= 1e-9);
+        assert!((t.state_at(t.duration()).q[i] - q0[i]).abs() <= 1e-9);
+    }
+    assert_limits_at_samples(&t, &plan, 200);
+}
