@@ -40,8 +40,9 @@ pub struct Planner {
     limits: Limits,
     config: PlannerConfig,
     engine: Engine,
-    /// Same solver with a larger margin below the limits, used when no candidate of the
-    /// primary one passes the checks after the exactness correction.
+    /// Same solver with a larger margin below the limits: used for candidates with non-zero
+    /// waypoint velocities (their solver error is larger), and swapped in for a second attempt
+    /// if nothing passes the checks.
     fallback: Engine,
     /// Candidate profiles: [candidate][segment][joint].
     cand: Vec<Vec<Profile>>,
@@ -195,6 +196,12 @@ impl Planner {
         end: EndCondition,
     ) -> Result<Trajectory, TrajectoryError> {
         self.validate(start, wp)?;
+        // One segment ending at rest: nothing to choose, one rest-to-rest solve.
+        let sweeps = if wp.segments() == 1 && end == EndCondition::AtRest {
+            0
+        } else {
+            sweeps
+        };
         match self.plan_candidates(start, wp, sweeps, end) {
             Ok(t) => Ok(t),
             Err(_) => {
@@ -362,6 +369,8 @@ impl Planner {
     ) -> Result<(), TrajectoryError> {
         let n = self.limits.dof;
         let h = wp.segments();
+        let exact = c == 0
+            || (self.vel[n..].iter().all(|&v| v == 0.0) && self.acc[n..].iter().all(|&a| a == 0.0));
         let mut profs = std::mem::take(&mut self.cand[c]);
         let mut durs = std::mem::take(&mut self.cand_dur[c]);
         profs.clear();
@@ -384,7 +393,14 @@ impl Planner {
                 tgt[1][i] = self.vel[k * n + i];
                 tgt[2][i] = self.acc[k * n + i];
             }
-            let r = match &mut self.engine {
+            // Rest-to-rest (candidate 0) uses the near-exact solver; candidates with waypoint
+            // velocities use the larger margin, whose room the exactness correction needs.
+            let engine = if exact {
+                &mut self.engine
+            } else {
+                &mut self.fallback
+            };
+            let r = match engine {
                 Engine::Seven(e) => e.solve(n, &cur, &tgt, &mut profs),
                 Engine::Dyn(e) => e.solve(n, &cur, &tgt, &mut profs),
             };
@@ -504,7 +520,8 @@ impl<const N: usize> Eng<N> {
 /// Relative margin below the limits given to the segment solver, room for the exactness
 /// correction of [`push_corrected`].
 const SOLVER_MARGIN: f64 = 1e-6;
-/// Margin of the fallback solver (durations grow by about this fraction).
+/// Margin of the solver for candidates with waypoint velocities (durations grow by less than
+/// this fraction).
 const FALLBACK_MARGIN: f64 = 1e-4;
 
 /// Append the pieces of one segment profile, with the phase jerks corrected (minimum-norm) so
