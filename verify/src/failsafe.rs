@@ -101,6 +101,8 @@ impl Failsafe {
             best = Some(Self::follow_to_end(traj, s0));
         }
         let mut sb = s0;
+        // Piece-search hints per joint: candidate start times only increase.
+        let mut hints = [usize::MAX; MAX_DOF];
         for _ in 0..MAX_DELAY_CANDIDATES {
             if let Some(b) = &best
                 && sb - s0 >= b.stop_time
@@ -113,7 +115,7 @@ impl Failsafe {
             let mut blocking = None;
             if follow_ok || Self::intended_within(traj, lim, s0, sb) {
                 let max_brake = best.map_or(f64::INFINITY, |b| b.stop_time - (sb - s0));
-                match Self::try_brake(traj, lim, s0, sb, n, max_brake) {
+                match Self::try_brake(traj, lim, s0, sb, n, max_brake, &mut hints) {
                     Ok(f) => {
                         if best.is_none_or(|b| f.stop_time < b.stop_time) {
                             best = Some(f);
@@ -181,14 +183,20 @@ impl Failsafe {
         }
     }
 
-    fn window(traj: &Trajectory, sa: f64, sb: f64, n: usize) -> Window {
+    fn window(
+        traj: &Trajectory,
+        sa: f64,
+        sb: f64,
+        n: usize,
+        hints: &mut [usize; MAX_DOF],
+    ) -> Window {
         let mut w = Window {
             q1: [0.0; MAX_DOF],
             q2: [0.0; MAX_DOF],
             q3: [0.0; MAX_DOF],
         };
         for i in 0..n {
-            let d = traj.joint_derivs(i, sa, sb);
+            let d = traj.joint_derivs_hint(i, &mut hints[i], sa, sb);
             w.q1[i] = d.r[1].abs_max();
             w.q2[i] = d.r[2].abs_max();
             w.q3[i] = d.r[3].abs_max();
@@ -204,6 +212,7 @@ impl Failsafe {
         sb: f64,
         n: usize,
         max_brake: f64,
+        hints: &mut [usize; MAX_DOF],
     ) -> Result<Self, Option<usize>> {
         let big_t = traj.duration();
         let moving = traj.end() == EndCondition::Moving;
@@ -214,7 +223,7 @@ impl Failsafe {
             let mut a0 = A_CAP;
             let mut j0 = J_CAP;
             for i in 0..n {
-                let (_, v, a) = traj.joint_at(i, sb);
+                let (_, v, a) = traj.joint_at_hint(i, &mut hints[i], sb);
                 if a.abs() >= lim.a[i] && v != 0.0 {
                     return Err(Some(i));
                 }
@@ -237,7 +246,7 @@ impl Failsafe {
                     return Err(None);
                 }
             }
-            let w = Self::window(traj, sb, sb + wlen, n);
+            let w = Self::window(traj, sb, sb + wlen, n, hints);
             let mut a_s = A_CAP;
             for i in 0..n {
                 if w.q1[i] > lim.v[i] * (1.0 + LIMIT_REL_TOL) {

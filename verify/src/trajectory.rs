@@ -238,6 +238,37 @@ impl Trajectory {
         s
     }
 
+    /// Piece index of joint `i` at time `t`, searching forward from `*hint` (a previous result for
+    /// an earlier time) and updating it; falls back to binary search.
+    #[inline]
+    pub(crate) fn locate_hint(&self, i: usize, hint: &mut usize, t: f64) -> usize {
+        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        let mut k = *hint;
+        if k < lo || k >= hi || self.pieces[k].t > t {
+            k = self.locate(i, t);
+        } else {
+            let mut steps = 0;
+            while k + 1 < hi && self.pieces[k + 1].t <= t {
+                k += 1;
+                steps += 1;
+                if steps > 8 {
+                    k = self.locate(i, t);
+                    break;
+                }
+            }
+        }
+        *hint = k;
+        k
+    }
+
+    /// [`Trajectory::joint_at`] with a search hint (see `locate_hint`).
+    #[inline]
+    pub(crate) fn joint_at_hint(&self, i: usize, hint: &mut usize, t: f64) -> (f64, f64, f64) {
+        let t = t.max(0.0);
+        let p = &self.pieces[self.locate_hint(i, hint, t)];
+        p.eval(t - p.t)
+    }
+
     /// Position, velocity and acceleration of joint `i` at time `t` (s; clamped to ≥ 0).
     #[inline]
     pub fn joint_at(&self, i: usize, t: f64) -> (f64, f64, f64) {
@@ -250,12 +281,19 @@ impl Trajectory {
     /// extrema padded outward (see [`crate::profile`]).
     #[inline]
     pub fn joint_derivs(&self, i: usize, ta: f64, tb: f64) -> Derivs {
+        let mut hint = usize::MAX;
+        self.joint_derivs_hint(i, &mut hint, ta, tb)
+    }
+
+    /// [`Trajectory::joint_derivs`] with a search hint for `ta` (see `locate_hint`).
+    #[inline]
+    pub(crate) fn joint_derivs_hint(&self, i: usize, hint: &mut usize, ta: f64, tb: f64) -> Derivs {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
         let mut r = [Range::EMPTY; 3];
         let mut jr = Range::EMPTY;
         let end = self.offsets[i + 1];
-        let mut k = self.locate(i, ta);
+        let mut k = self.locate_hint(i, hint, ta);
         loop {
             let p = &self.pieces[k];
             let next_t = if k + 1 < end {
