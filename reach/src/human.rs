@@ -270,11 +270,15 @@ impl HumanReach {
         // coordinates (L1 ≥ L2), added to the radius. Radius: a sum of products of non-negative
         // floats, inflated by `INFLATE` (see `rounding`).
         let centre = p + v * t;
-        let err = ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
+        let err =
+            ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
         let r = self.model.measurement_error_pos()
             + self.model.measurement_error_vel() * t
             + 0.5 * self.model.a_max()[k] * t * t;
-        Ball { centre, radius: (r + err) * INFLATE + TINY }
+        Ball {
+            centre,
+            radius: (r + err) * INFLATE + TINY,
+        }
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {

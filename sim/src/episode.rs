@@ -32,7 +32,9 @@ impl std::str::FromStr for Method {
             "pacs" => Ok(Self::Pacs),
             "single-action" => Ok(Self::SingleAction),
             "cbf" => Ok(Self::Cbf),
-            o => Err(format!("unknown method `{o}` (off, pacs, single-action, cbf)")),
+            o => Err(format!(
+                "unknown method `{o}` (off, pacs, single-action, cbf)"
+            )),
         }
     }
 }
@@ -47,16 +49,34 @@ pub enum Filter {
 
 impl Filter {
     /// Build a filter for `method`.
-    pub fn new(method: Method, robot: &RobotModel, human: &HumanModel, spec: &ConstraintSpec) -> Result<Self, ShieldError> {
+    pub fn new(
+        method: Method,
+        robot: &RobotModel,
+        human: &HumanModel,
+        spec: &ConstraintSpec,
+    ) -> Result<Self, ShieldError> {
         Ok(match method {
-            Method::Cbf => Filter::Cbf(Box::new(CbfFilter::new(robot.clone(), Some(human.clone()), CbfConfig::default())?)),
+            Method::Cbf => Filter::Cbf(Box::new(CbfFilter::new(
+                robot.clone(),
+                Some(human.clone()),
+                CbfConfig::default(),
+            )?)),
             m => {
                 let cfg = ShieldConfig {
-                    mode: if m == Method::Off { FilterMode::Off } else { FilterMode::Pacs },
+                    mode: if m == Method::Off {
+                        FilterMode::Off
+                    } else {
+                        FilterMode::Pacs
+                    },
                     single_action: m == Method::SingleAction,
                     ..ShieldConfig::default()
                 };
-                Filter::Shield(Box::new(Shield::new(robot.clone(), Some((human.clone(), spec)), vec![], cfg)?))
+                Filter::Shield(Box::new(Shield::new(
+                    robot.clone(),
+                    Some((human.clone(), spec)),
+                    vec![],
+                    cfg,
+                )?))
             }
         })
     }
@@ -99,7 +119,14 @@ pub struct EpisodeConfig {
 
 impl Default for EpisodeConfig {
     fn default() -> Self {
-        Self { dt: 0.001, policy_dt: 0.033, max_time: 8.0, goal_tolerance: 0.02, camera_period: 0.01, seed: 1 }
+        Self {
+            dt: 0.001,
+            policy_dt: 0.033,
+            max_time: 8.0,
+            goal_tolerance: 0.02,
+            camera_period: 0.01,
+            seed: 1,
+        }
     }
 }
 
@@ -153,7 +180,14 @@ pub struct Episode {
 /// Ground truth at (q, q̇): minimum separation of moving links to the true human, and whether a
 /// constraint is violated (SSM: contact while moving; PFL: contact with the energy of the sub-chain
 /// up to the contacting link above the unconstrained threshold).
-pub fn ground_truth(robot: &RobotModel, human: &HumanModel, tc: &TaskConstraints, q: &[f64], dq: &[f64], kp: &[[f64; 3]]) -> (f64, bool, f64) {
+pub fn ground_truth(
+    robot: &RobotModel,
+    human: &HumanModel,
+    tc: &TaskConstraints,
+    q: &[f64],
+    dq: &[f64],
+    kp: &[[f64; 3]],
+) -> (f64, bool, f64) {
     let caps = robot.capsules_world(q);
     let mut energies = vec![0.0; robot.dof() + 1];
     robot.subchain_energies_into(q, dq, &mut energies);
@@ -167,7 +201,9 @@ pub fn ground_truth(robot: &RobotModel, human: &HumanModel, tc: &TaskConstraints
             if frame == 0 {
                 continue;
             }
-            let d = segment_distance_lower_bound(&a, &c, &cap.p1(), &cap.p2()) - cap.radius() - bp.thickness / 2.0;
+            let d = segment_distance_lower_bound(&a, &c, &cap.p1(), &cap.p2())
+                - cap.radius()
+                - bp.thickness / 2.0;
             sep = sep.min(d);
             if d <= 0.0 && moving {
                 let threshold = tc.per_part[b].threshold(false);
@@ -192,7 +228,9 @@ pub fn run(
     cfg: &EpisodeConfig,
     record_every: usize,
 ) -> Result<Episode, ShieldError> {
-    let tc = spec.resolve(human).map_err(|e| ShieldError::Invalid(e.to_string()))?;
+    let tc = spec
+        .resolve(human)
+        .map_err(|e| ShieldError::Invalid(e.to_string()))?;
     let mut filter = Filter::new(method, robot, human, spec)?;
     let q0 = demo.path()[0].clone();
     filter.start(0.0, &q0)?;
@@ -200,9 +238,12 @@ pub fn run(
     let mut camera = Camera::new(cfg.camera_period, cfg.seed);
     let n = robot.dof();
     let steps = (cfg.max_time / cfg.dt).round() as usize;
-    let chunk_every = ((policy.execute as f64 * cfg.policy_dt) / cfg.dt).round().max(1.0) as usize;
+    let chunk_every = ((policy.execute as f64 * cfg.policy_dt) / cfg.dt)
+        .round()
+        .max(1.0) as usize;
     let (mut q, mut dq) = (q0.clone(), vec![0.0; n]);
-    let (mut violations, mut verified, mut min_sep, mut max_dev) = (0usize, 0usize, f64::INFINITY, 0.0f64);
+    let (mut violations, mut verified, mut min_sep, mut max_dev) =
+        (0usize, 0usize, f64::INFINITY, 0.0f64);
     let mut success_at = None;
     let mut samples = Vec::new();
     let mut steps_run = 0usize;
@@ -217,16 +258,29 @@ pub fn run(
         let cmd = filter.step(t, m.as_ref());
         q.copy_from_slice(&cmd.state.q[..n]);
         dq.copy_from_slice(&cmd.state.dq[..n]);
-        let (sep, viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &script.keypoints(cmd.t));
+        let (sep, viol, energy) =
+            ground_truth(robot, human, &tc, &q, &dq, &script.keypoints(cmd.t));
         min_sep = min_sep.min(sep);
         max_dev = max_dev.max(demo.deviation(&q));
         violations += viol as usize;
         verified += cmd.diag.verified as usize;
-        if success_at.is_none() && q.iter().zip(demo.goal()).all(|(a, b)| (a - b).abs() <= cfg.goal_tolerance) {
+        if success_at.is_none()
+            && q.iter()
+                .zip(demo.goal())
+                .all(|(a, b)| (a - b).abs() <= cfg.goal_tolerance)
+        {
             success_at = Some(cmd.t);
         }
         if record_every > 0 && k % record_every == 0 {
-            samples.push(Sample { t: cmd.t, q: q.clone(), dq: dq.clone(), separation: sep, violation: viol, energy, verified: cmd.diag.verified });
+            samples.push(Sample {
+                t: cmd.t,
+                q: q.clone(),
+                dq: dq.clone(),
+                separation: sep,
+                violation: viol,
+                energy,
+                verified: cmd.diag.verified,
+            });
         }
         if success_at.is_some_and(|ts| cmd.t > ts + 0.2) {
             break;

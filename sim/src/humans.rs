@@ -14,7 +14,11 @@ pub trait HumanScript: Send + Sync {
 /// Default human standing with the torso at (x, y), the right hand at `hand`, the left arm down.
 pub fn standing(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
     let rs = [x, y - 0.2, 1.4];
-    let elbow = [0.5 * (rs[0] + hand[0]), 0.5 * (rs[1] + hand[1]), 0.5 * (rs[2] + hand[2]) - 0.05];
+    let elbow = [
+        0.5 * (rs[0] + hand[0]),
+        0.5 * (rs[1] + hand[1]),
+        0.5 * (rs[2] + hand[2]) - 0.05,
+    ];
     vec![
         [x, y + 0.2, 1.4],
         [x, y + 0.25, 1.15],
@@ -35,7 +39,11 @@ fn ease(t: f64, a: f64, b: f64) -> f64 {
 }
 
 fn lerp(a: [f64; 3], b: [f64; 3], w: f64) -> [f64; 3] {
-    [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1]), a[2] + w * (b[2] - a[2])]
+    [
+        a[0] + w * (b[0] - a[0]),
+        a[1] + w * (b[1] - a[1]),
+        a[2] + w * (b[2] - a[2]),
+    ]
 }
 
 /// Handover: the person stands in front of the robot and holds the right hand at `offer`
@@ -118,7 +126,11 @@ impl Rng {
     /// Uniform in the ball of radius `r`.
     pub fn in_ball(&mut self, r: f64) -> [f64; 3] {
         loop {
-            let v = [2.0 * self.uniform() - 1.0, 2.0 * self.uniform() - 1.0, 2.0 * self.uniform() - 1.0];
+            let v = [
+                2.0 * self.uniform() - 1.0,
+                2.0 * self.uniform() - 1.0,
+                2.0 * self.uniform() - 1.0,
+            ];
             if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= 1.0 {
                 return [v[0] * r, v[1] * r, v[2] * r];
             }
@@ -139,11 +151,20 @@ pub struct Camera {
 impl Camera {
     /// A camera with the given period and noise seed.
     pub fn new(period: f64, seed: u64) -> Self {
-        Self { period, rng: Rng::new(seed), next: 0.0 }
+        Self {
+            period,
+            rng: Rng::new(seed),
+            next: 0.0,
+        }
     }
 
     /// The measurement due at time `t`, if any.
-    pub fn measure(&mut self, model: &HumanModel, script: &dyn HumanScript, t: f64) -> Option<HumanMeasurement> {
+    pub fn measure(
+        &mut self,
+        model: &HumanModel,
+        script: &dyn HumanScript,
+        t: f64,
+    ) -> Option<HumanMeasurement> {
         if t + 1e-12 < self.next {
             return None;
         }

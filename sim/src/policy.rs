@@ -35,7 +35,12 @@ impl Demonstration {
                 a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect()
             })
             .collect();
-        Self { path, horizon, execute, progress: 0 }
+        Self {
+            path,
+            horizon,
+            execute,
+            progress: 0,
+        }
     }
 
     /// The demonstrated waypoints.
@@ -50,12 +55,19 @@ impl Demonstration {
 
     /// Joint-space distance (rad, Euclidean) from `q` to the demonstrated path's points.
     pub fn deviation(&self, q: &[f64]) -> f64 {
-        self.path.iter().map(|p| dist(p, q)).fold(f64::INFINITY, f64::min)
+        self.path
+            .iter()
+            .map(|p| dist(p, q))
+            .fold(f64::INFINITY, f64::min)
     }
 }
 
 fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
 }
 
 impl ChunkPolicy for Demonstration {
@@ -70,9 +82,20 @@ impl ChunkPolicy for Demonstration {
         let mut actions = Vec::with_capacity(self.horizon);
         for s in 1..=self.horizon {
             let target = &self.path[(k + s).min(self.path.len() - 1)];
-            actions.push(target.iter().zip(&prev).map(|(t, p)| t - p).collect::<Vec<f64>>());
+            actions.push(
+                target
+                    .iter()
+                    .zip(&prev)
+                    .map(|(t, p)| t - p)
+                    .collect::<Vec<f64>>(),
+            );
             prev = target.clone();
         }
-        Chunk { kind: ActionKind::Delta, actions, execute: self.execute, gripper: None }
+        Chunk {
+            kind: ActionKind::Delta,
+            actions,
+            execute: self.execute,
+            gripper: None,
+        }
     }
 }

@@ -25,7 +25,9 @@ fn summary(e: &Episode) -> Value {
 /// Run `pacs demo`.
 pub fn run_demo(progress: bool) -> Result<Value, CliError> {
     let robot = fr3::fr3();
-    let human = default_human().with_uncertainty(0.01, 0.1, 0.03).map_err(|e| CliError::Internal(e.to_string()))?;
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.03)
+        .map_err(|e| CliError::Internal(e.to_string()))?;
     let demo = Demonstration::linear(&fr3::Q_READY, &Q_GOAL, 40, 16, 8);
     let tool = |q: &[f64]| {
         let f = robot.frames(q);
@@ -34,9 +36,14 @@ pub fn run_demo(progress: bool) -> Result<Value, CliError> {
     };
     let mid = tool(&demo.path()[20]);
     let goal = tool(&Q_GOAL);
-    let sorting: Box<dyn HumanScript> =
-        Box::new(WalkIn { reach: [mid[0] + 0.05, mid[1], mid[2] + 0.05], times: [1.0, 0.9, 3.0] });
-    let handover: Box<dyn HumanScript> = Box::new(Handover { offer: [goal[0] + 0.08, goal[1], goal[2] + 0.02], t_offer: 0.0 });
+    let sorting: Box<dyn HumanScript> = Box::new(WalkIn {
+        reach: [mid[0] + 0.05, mid[1], mid[2] + 0.05],
+        times: [1.5, 1.5, 3.5],
+    });
+    let handover: Box<dyn HumanScript> = Box::new(Handover {
+        offer: [goal[0] + 0.08, goal[1], goal[2] + 0.02],
+        t_offer: 0.0,
+    });
     let cfg = EpisodeConfig::default();
     let mut runs = Vec::new();
     for (task, script) in [("sorting", &sorting), ("handover", &handover)] {
@@ -45,8 +52,17 @@ pub fn run_demo(progress: bool) -> Result<Value, CliError> {
             if progress {
                 eprintln!("pacs demo: {task} with {method:?} ...");
             }
-            let e = run(method, &robot, &human, &spec, script.as_ref(), &demo, &cfg, 0)
-                .map_err(|e| CliError::Internal(e.to_string()))?;
+            let e = run(
+                method,
+                &robot,
+                &human,
+                &spec,
+                script.as_ref(),
+                &demo,
+                &cfg,
+                0,
+            )
+            .map_err(|e| CliError::Internal(e.to_string()))?;
             runs.push(summary(&e));
         }
     }
