@@ -36,6 +36,8 @@ enum Command {
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
+    /// Run the built-in handover demo with PACS and with the filter OFF; print a summary.
+    Demo,
     /// Measure speed (use a release build: `cargo run --release -- bench shield`).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -105,6 +107,10 @@ fn main() -> ExitCode {
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
+        Command::Demo => {
+            use std::io::IsTerminal;
+            cli::demo::run_demo(std::io::stderr().is_terminal())
+        }
         Command::Bench(BenchCommand::Shield { steps }) => {
             use std::io::IsTerminal;
             cli::bench::shield(steps, std::io::stderr().is_terminal())

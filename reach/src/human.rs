@@ -25,8 +25,7 @@
 //! combination of points within r₁ of c₁ and r₂ of c₂). All radii are rounded up; centres computed
 //! in floating point have their rounding error bounded and added to the radius.
 
-use crate::interval::Interval;
-use crate::rounding::{add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
+use crate::rounding::{INFLATE, TINY, add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
 use nalgebra::{Point3, Vector3};
 use pacs_models::{Capsule, HumanModel};
 use serde::{Deserialize, Serialize};
@@ -194,26 +193,6 @@ impl Ball {
     }
 }
 
-/// Ball whose centre is only known to lie in an interval box: centre = box midpoint, radius
-/// enlarged by the distance to the farthest box corner (rounded up).
-fn ball_around_box(c: [Interval; 3], radius: f64) -> Ball {
-    let mut half = [0.0; 3];
-    let mut mid = [0.0; 3];
-    for i in 0..3 {
-        mid[i] = c[i].mid();
-        half[i] = sub_up(c[i].hi(), mid[i]).max(sub_up(mid[i], c[i].lo()));
-    }
-    Ball {
-        centre: Point3::from(mid),
-        radius: add_up(radius, crate::rounding::norm3_up(half[0], half[1], half[2])),
-    }
-}
-
-#[inline]
-fn pt(x: f64) -> Interval {
-    Interval::point(x)
-}
-
 /// Human occupancy computer: reusable buffers, no allocation per query.
 #[derive(Debug, Clone)]
 pub struct HumanReach {
@@ -286,16 +265,20 @@ impl HumanReach {
     }
 
     fn acc_ball_at(&self, p: &Point3<f64>, v: &Vector3<f64>, k: usize, t: f64) -> Ball {
-        let ti = pt(t);
-        let c = [
-            pt(p.x) + pt(v.x) * ti,
-            pt(p.y) + pt(v.y) * ti,
-            pt(p.z) + pt(v.z) * ti,
-        ];
-        let r = pt(self.model.measurement_error_pos())
-            + pt(self.model.measurement_error_vel()) * ti
-            + pt(0.5) * pt(self.model.a_max()[k]) * ti * ti;
-        ball_around_box(c, r.hi())
+        // Centre p + v·t in floating point: per coordinate the rounding error is at most
+        // 2u(|p| + |v·t|)(1 + u) < 3u(|p| + |v|·t); the vector error is at most the sum over
+        // coordinates (L1 ≥ L2), added to the radius. Radius: a sum of products of non-negative
+        // floats, inflated by `INFLATE` (see `rounding`).
+        let centre = p + v * t;
+        let err =
+            ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
+        let r = self.model.measurement_error_pos()
+            + self.model.measurement_error_vel() * t
+            + 0.5 * self.model.a_max()[k] * t * t;
+        Ball {
+            centre,
+            radius: (r + err) * INFLATE + TINY,
+        }
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {

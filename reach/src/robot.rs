@@ -434,11 +434,11 @@ impl RobotReach {
                 // Mean-value form around the centre configuration.
                 let pc = affine_point(&cent.r[k], &cent.t[k], p);
                 let (cb, mut eb) = mid_radius(&pc);
-                for j in 0..k.min(n) {
-                    if delta[j] == 0.0 {
+                for (j, &dj) in delta.iter().enumerate().take(k.min(n)) {
+                    if dj == 0.0 {
                         continue;
                     }
-                    eb = add_up(eb, mul_up(delta[j], dist_sup_up(&pb, &boxf.t[j + 1])));
+                    eb = add_up(eb, mul_up(dj, dist_sup_up(&pb, &boxf.t[j + 1])));
                 }
                 ends[e] = if eb < ea { (cb, eb) } else { (ca, ea) };
             }

@@ -162,8 +162,8 @@ mod tests {
         let one = interval!(1.0, 1.0).unwrap();
         // Cody–Waite split of π/2: HI has 33 significant bits (k·HI exact), TAIL = π/2 − HI
         // correctly rounded (fdlibm's pio2_1, pio2_1t), enclosed by one ulp either side.
-        const HI: f64 = 1.570_796_326_734_125_614_17;
-        const TAIL: f64 = 6.077_100_506_506_192_249_32e-11;
+        const HI: f64 = f64::from_bits(0x3ff9_21fb_5440_0000); // 1.5707963267341256
+        const TAIL: f64 = f64::from_bits(0x3dd0_b461_1a62_6331); // 6.077100506506192e-11
         let tail = interval!(TAIL.next_down(), TAIL.next_up()).unwrap();
         assert!(
             (IInterval::PI / interval!(2.0, 2.0).unwrap())

@@ -1,6 +1,7 @@
 //! The `pacs` command line: one module per subcommand, shared error type and JSON I/O helpers.
 
 pub mod bench;
+pub mod demo;
 pub mod fk;
 pub mod reach;
 pub mod show;

@@ -1,6 +1,9 @@
 //! Reproducible timing scenarios for `pacs bench` (wall-clock statistics are measured by the
 //! caller; nothing here asserts on time).
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::chunk::{ActionKind, Chunk};
 use crate::shield::{FilterMode, Shield, ShieldConfig};
 use pacs_models::{ConstraintSpec, default_human, fr3};

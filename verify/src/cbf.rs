@@ -9,6 +9,9 @@
 //! guarantee (the barrier ignores future human motion beyond one step) and pushes the robot off
 //! the intended path. Allocates per step (QP setup).
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::chunk::Chunk;
 use crate::intended::{Planner, PlannerConfig};
 use crate::shield::{Binding, Command, Diagnostics, ShieldError};

@@ -50,7 +50,7 @@ impl Phase {
 }
 
 /// Maximum number of delay candidates tried before falling back to following to the end.
-pub const MAX_DELAY_CANDIDATES: usize = 24;
+pub const MAX_DELAY_CANDIDATES: usize = 6;
 const SAFETY: f64 = 0.98;
 const A_CAP: f64 = 1.0e3;
 const J_CAP: f64 = 1.0e6;
@@ -67,7 +67,6 @@ pub struct Failsafe {
     s_stop: f64,
     phases: [Phase; 5],
     nphases: usize,
-    q_range: [Range; MAX_DOF],
     dof: usize,
 }
 
@@ -84,7 +83,7 @@ impl Failsafe {
     pub fn new(traj: &Trajectory, s0: f64, lim: &Limits) -> Result<Self, FailsafeError> {
         let big_t = traj.duration();
         let at_rest = traj.end() == EndCondition::AtRest;
-        if !(s0 >= 0.0) || (s0 > big_t && !at_rest) || !s0.is_finite() {
+        if !s0.is_finite() || s0 < 0.0 || (s0 > big_t && !at_rest) {
             return Err(FailsafeError::StartOutsideTrajectory {
                 s0,
                 duration: big_t,
@@ -92,12 +91,18 @@ impl Failsafe {
         }
         let n = traj.dof();
         // Is following the intended timing admissible by the intended trajectory's own check?
-        let follow_ok = Self::intended_within(traj, lim, s0, big_t.max(s0));
+        let tol = 1.0 + LIMIT_REL_TOL;
+        let follow_ok = (0..n).all(|i| {
+            let p = traj.peaks(i);
+            p[0] <= lim.v[i] * tol && p[1] <= lim.a[i] * tol && p[2] <= lim.j[i] * tol
+        }) || Self::intended_within(traj, lim, s0, big_t.max(s0));
         let mut best: Option<Failsafe> = None;
         if at_rest && follow_ok {
             best = Some(Self::follow_to_end(traj, s0));
         }
         let mut sb = s0;
+        // Piece-search hints per joint: candidate start times only increase.
+        let mut hints = [usize::MAX; MAX_DOF];
         for _ in 0..MAX_DELAY_CANDIDATES {
             if let Some(b) = &best
                 && sb - s0 >= b.stop_time
@@ -107,25 +112,31 @@ impl Failsafe {
             if sb >= big_t && at_rest {
                 break;
             }
-            if (follow_ok || Self::intended_within(traj, lim, s0, sb))
-                && let Some(f) = Self::try_brake(traj, lim, s0, sb, n)
-            {
-                if best.is_none_or(|b| f.stop_time < b.stop_time) {
-                    best = Some(f);
+            let mut blocking = None;
+            if follow_ok || Self::intended_within(traj, lim, s0, sb) {
+                let max_brake = best.map_or(f64::INFINITY, |b| b.stop_time - (sb - s0));
+                match Self::try_brake(traj, lim, s0, sb, n, max_brake, &mut hints) {
+                    Ok(f) => {
+                        if best.is_none_or(|b| f.stop_time < b.stop_time) {
+                            best = Some(f);
+                        }
+                        break;
+                    }
+                    Err(j) => blocking = j,
                 }
-                break;
             }
-            match traj.next_breakpoint(sb) {
+            let next = match blocking {
+                Some(i) => traj
+                    .next_joint_breakpoint(i, sb)
+                    .or_else(|| traj.next_breakpoint(sb)),
+                None => traj.next_breakpoint(sb),
+            };
+            match next {
                 Some(t) if t < big_t || at_rest => sb = t,
                 _ => break,
             }
         }
-        let mut f = best.ok_or(FailsafeError::NoAdmissibleBraking { s0 })?;
-        for i in 0..n {
-            let d = traj.joint_derivs(i, s0, f.s_stop);
-            f.q_range[i] = d.r[0];
-        }
-        Ok(f)
+        best.ok_or(FailsafeError::NoAdmissibleBraking { s0 })
     }
 
     fn intended_within(traj: &Trajectory, lim: &Limits, sa: f64, sb: f64) -> bool {
@@ -168,19 +179,24 @@ impl Failsafe {
             s_stop: t,
             phases,
             nphases: 2,
-            q_range: [Range::EMPTY; MAX_DOF],
             dof: traj.dof(),
         }
     }
 
-    fn window(traj: &Trajectory, sa: f64, sb: f64, n: usize) -> Window {
+    fn window(
+        traj: &Trajectory,
+        sa: f64,
+        sb: f64,
+        n: usize,
+        hints: &mut [usize; MAX_DOF],
+    ) -> Window {
         let mut w = Window {
             q1: [0.0; MAX_DOF],
             q2: [0.0; MAX_DOF],
             q3: [0.0; MAX_DOF],
         };
         for i in 0..n {
-            let d = traj.joint_derivs(i, sa, sb);
+            let d = traj.joint_derivs_hint(i, &mut hints[i], sa, sb);
             w.q1[i] = d.r[1].abs_max();
             w.q2[i] = d.r[2].abs_max();
             w.q3[i] = d.r[3].abs_max();
@@ -188,26 +204,57 @@ impl Failsafe {
         w
     }
 
-    fn try_brake(traj: &Trajectory, lim: &Limits, s0: f64, sb: f64, n: usize) -> Option<Self> {
+    /// A verified braking from `sb`, or the joint whose margin blocked it (if one did).
+    fn try_brake(
+        traj: &Trajectory,
+        lim: &Limits,
+        s0: f64,
+        sb: f64,
+        n: usize,
+        max_brake: f64,
+        hints: &mut [usize; MAX_DOF],
+    ) -> Result<Self, Option<usize>> {
         let big_t = traj.duration();
         let moving = traj.end() == EndCondition::Moving;
-        let mut wlen = 0.02_f64;
+        // Initial window from the point values at sb (cheap estimate of the braking distance);
+        // a joint without acceleration margin at sb already rejects this start (the window
+        // contains sb, so the window check would reject it too).
+        let mut wlen = {
+            let mut a0 = A_CAP;
+            let mut j0 = J_CAP;
+            for i in 0..n {
+                let (_, v, a) = traj.joint_at_hint(i, &mut hints[i], sb);
+                if a.abs() >= lim.a[i] && v != 0.0 {
+                    return Err(Some(i));
+                }
+                if v != 0.0 {
+                    a0 = a0.min(((lim.a[i] - a.abs()) / v.abs()).max(1e-3));
+                    j0 = j0.min((0.5 * lim.j[i] / v.abs()).max(1e-3));
+                }
+            }
+            let (t1, t2) = if a0 * a0 >= j0 {
+                (1.0 / j0.sqrt(), 0.0)
+            } else {
+                (a0 / j0, 1.0 / a0 - a0 / j0)
+            };
+            (0.5 * (2.0 * t1 + t2) * 1.25).clamp(1e-4, 0.5)
+        };
         for _ in 0..5 {
             if moving && sb + wlen > big_t {
                 wlen = big_t - sb;
                 if wlen <= 0.0 {
-                    return None;
+                    return Err(None);
                 }
             }
-            let w = Self::window(traj, sb, sb + wlen, n);
+            let w = Self::window(traj, sb, sb + wlen, n, hints);
             let mut a_s = A_CAP;
             for i in 0..n {
                 if w.q1[i] > lim.v[i] * (1.0 + LIMIT_REL_TOL) {
-                    return None;
+                    return Err(Some(i));
                 }
                 let margin = lim.a[i] - w.q2[i];
                 if margin <= 0.0 {
-                    return None;
+                    return Err(Some(i));
                 }
                 if w.q1[i] > 0.0 {
                     a_s = a_s.min(SAFETY * margin / w.q1[i]);
@@ -215,7 +262,7 @@ impl Failsafe {
                 // Leave at least half the jerk margin for J.
                 let jm = lim.j[i] - w.q3[i];
                 if jm <= 0.0 {
-                    return None;
+                    return Err(Some(i));
                 }
                 if w.q2[i] > 0.0 {
                     a_s = a_s.min(0.5 * jm / (3.0 * w.q2[i]));
@@ -228,20 +275,28 @@ impl Failsafe {
                 }
             }
             if !(a_s > 0.0 && j_s > 0.0) {
-                return None;
+                return Err(None);
             }
             let f = Self::braking(s0, sb, a_s, j_s, n);
             let need = f.s_stop - sb;
+            if 2.0 * need >= max_brake {
+                // Not shorter than the best candidate so far (e.g. following to the end).
+                return Err(None);
+            }
             if need <= wlen {
                 // Sound re-check in outward-rounded interval arithmetic over the window.
-                return Self::verify(&w, lim, a_s, j_s, n).then_some(f);
+                return if Self::verify(&w, lim, a_s, j_s, n) {
+                    Ok(f)
+                } else {
+                    Err(None)
+                };
             }
             if moving && sb + need > big_t {
-                return None;
+                return Err(None);
             }
             wlen = need * 1.25;
         }
-        None
+        Err(None)
     }
 
     fn verify(w: &Window, lim: &Limits, a_s: f64, j_s: f64, n: usize) -> bool {
@@ -261,12 +316,12 @@ impl Failsafe {
                 lo: -w.q3[i],
                 hi: w.q3[i],
             };
-            let v = q1.mul(sd);
-            let a = q1.mul(sdd).add(q2.mul(sd.mul(sd)));
+            let v = q1.times(sd);
+            let a = q1.times(sdd).plus(q2.times(sd.times(sd)));
             let j = q3
-                .mul(sd.mul(sd).mul(sd))
-                .add(q2.mul(sd).mul(sdd).scale(3.0))
-                .add(q1.mul(sddd));
+                .times(sd.times(sd).times(sd))
+                .plus(q2.times(sd).times(sdd).scale(3.0))
+                .plus(q1.times(sddd));
             v.abs_max() <= lim.v[i] * (1.0 + LIMIT_REL_TOL)
                 && a.abs_max() <= lim.a[i]
                 && j.abs_max() <= lim.j[i]
@@ -332,7 +387,6 @@ impl Failsafe {
             s_stop,
             phases,
             nphases: 5,
-            q_range: [Range::EMPTY; MAX_DOF],
             dof: n,
         }
     }
@@ -361,16 +415,16 @@ impl Failsafe {
     pub fn s_stop(&self) -> f64 {
         self.s_stop
     }
-    /// Sound range of each joint's position over the whole failsafe (rad).
-    pub fn q_range(&self, i: usize) -> Range {
-        self.q_range[i]
+    /// Sound range of joint `i`'s position over the whole failsafe (rad): the intended path's
+    /// range over [s0, s_stop].
+    pub fn q_range(&self, traj: &Trajectory, i: usize) -> Range {
+        traj.joint_derivs(i, self.s0, self.s_stop).r[0]
     }
     /// Sound bound on the distance joint `i` travels from its start position (rad).
     pub fn distance_bound(&self, traj: &Trajectory, i: usize) -> f64 {
         let (q0, _, _) = traj.joint_at(i, self.s0);
-        (self.q_range[i].hi - q0)
-            .max(q0 - self.q_range[i].lo)
-            .max(0.0)
+        let r = self.q_range(traj, i);
+        (r.hi - q0).max(q0 - r.lo).max(0.0)
     }
 
     #[inline]
@@ -445,10 +499,10 @@ impl Failsafe {
             for i in 0..self.dof {
                 let d = traj.joint_derivs(i, s_r.lo, s_r.hi);
                 b.q[i].union(d.r[0]);
-                b.dq[i].union(d.r[1].mul(sd_r));
-                b.ddq[i].union(d.r[1].mul(sdd_r).add(d.r[2].mul(sd_r.mul(sd_r))));
+                b.dq[i].union(d.r[1].times(sd_r));
+                b.ddq[i].union(d.r[1].times(sdd_r).plus(d.r[2].times(sd_r.times(sd_r))));
             }
-            if end >= tb || k + 1 >= self.nphases {
+            if end > tb || k + 1 >= self.nphases {
                 break;
             }
             k += 1;

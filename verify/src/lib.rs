@@ -7,9 +7,16 @@
 //!   [`intended::Planner::plan_single_action`] is the paper's single-action baseline;
 //! - [`failsafe`]: braking along the same path by a jerk-limited time scaling, verified by interval bounds;
 //! - [`monitored`]: intended motion for one safety step, then the failsafe; queryable state and bounds;
-//! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic.
+//! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic;
+//! - [`scaling`]: path-speed profiles from any path state (braking and resuming along the path);
+//! - [`shield`]: the PACS online safety shield (OFF and single-action by configuration);
+//! - [`cbf`]: the control-barrier-function baseline;
+//! - [`bench`]: reproducible timing scenarios for `pacs bench`.
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, seconds.
+
+// Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bench;
 pub mod cbf;
@@ -18,6 +25,7 @@ pub mod error;
 pub mod failsafe;
 pub mod intended;
 pub mod monitored;
+pub mod problems;
 pub mod profile;
 pub mod scaling;
 pub mod shield;

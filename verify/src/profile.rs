@@ -132,7 +132,7 @@ impl Range {
     }
     /// Outward-rounded interval sum.
     #[inline]
-    pub fn add(self, o: Range) -> Range {
+    pub fn plus(self, o: Range) -> Range {
         pad_out(Range {
             lo: self.lo + o.lo,
             hi: self.hi + o.hi,
@@ -140,7 +140,7 @@ impl Range {
     }
     /// Outward-rounded interval product.
     #[inline]
-    pub fn mul(self, o: Range) -> Range {
+    pub fn times(self, o: Range) -> Range {
         let p = [
             self.lo * o.lo,
             self.lo * o.hi,
@@ -154,7 +154,7 @@ impl Range {
     /// Interval scaled by a constant (outward-rounded).
     #[inline]
     pub fn scale(self, c: f64) -> Range {
-        self.mul(Range::point(c))
+        self.times(Range::point(c))
     }
 }
 

@@ -11,6 +11,9 @@
 //! Configurations always lie on the path (s only moves forward: ṡ ≥ 0): path consistency holds by
 //! construction, never by clamping joint values.
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::trajectory::{Limits, Trajectory};
 use pacs_models::MAX_DOF;
 use pacs_reach::rounding::{add_up, mul_up};
@@ -292,8 +295,11 @@ fn within_limits(w: &Window, lim: &Limits, sd_max: f64, sdd_max: f64, jerk: f64)
 }
 
 const SAFETY: f64 = 0.98;
-const ACC_CAP: f64 = 1.0e3;
-const JERK_CAP: f64 = 1.0e5;
+/// Cap on path acceleration |s̈| (1/s): ṡ from 1 to 0 in no less than 0.1 s. Without a cap, states
+/// near a trajectory's start (q′ ≈ 0) would take huge s̈ that later windows cannot continue.
+pub const ACC_CAP: f64 = 10.0;
+/// Cap on path jerk |s⃛| (1/s²).
+pub const JERK_CAP: f64 = 500.0;
 
 /// The fastest admissible profile from `start` to `target` speed over `traj` against `lim`,
 /// verified over the time range [0, `horizon`] of the profile (`None`: until it settles).

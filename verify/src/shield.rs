@@ -18,6 +18,9 @@
 //! it starts at rest. No valid measurement, an unplannable chunk or an unverifiable candidate only
 //! ever lead to following the last verified failsafe. The step allocates nothing.
 
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use crate::chunk::{Chunk, OutOfLimits};
 use crate::intended::{Planner, PlannerConfig};
 use crate::profile::Piece;
@@ -701,6 +704,14 @@ impl Shield {
         self.time = t;
         // Candidate: a fresh chunk starting at the current state, else the current path.
         let (cand_slot, cand_start) = match self.fresh.take() {
+            Some(s) if self.at_rest() => {
+                // At rest the robot is at the new trajectory's start q(0), where q′ = 0: it can
+                // adopt the new path at path speed 0 (standing still is verified on either path)
+                // and accelerate along it as fast as verification allows.
+                self.slot = s;
+                self.path = PathState::rest(0.0);
+                (s, PathState::rest(0.0))
+            }
             Some(s) => (s, PathState::intended(0.0)),
             None => (self.slot, self.path),
         };
@@ -746,6 +757,15 @@ impl Shield {
             dof: self.dof,
             diag,
         }
+    }
+
+    /// Whether the commanded joint velocity and acceleration are exactly zero.
+    fn at_rest(&self) -> bool {
+        let st = self.state();
+        st.dq[..self.dof]
+            .iter()
+            .chain(&st.ddq[..self.dof])
+            .all(|&x| x == 0.0)
     }
 
     fn hold_command(&self, t: f64, binding: Binding) -> Command {

@@ -155,6 +155,9 @@ pub struct Trajectory {
     duration: f64,
     waypoint_times: Vec<f64>,
     end: EndCondition,
+    peak: [[f64; 3]; MAX_DOF],
+    /// Sound q, q̇, q̈ ranges of each whole piece (terminal pieces: their start state only).
+    full: Vec<[Range; 3]>,
 }
 
 impl Trajectory {
@@ -167,6 +170,17 @@ impl Trajectory {
         waypoint_times: Vec<f64>,
         end: EndCondition,
     ) -> Self {
+        let mut full = vec![[Range::EMPTY; 3]; pieces.len()];
+        for i in 0..dof {
+            for k in offsets[i]..offsets[i + 1] {
+                let d1 = if k + 1 < offsets[i + 1] {
+                    pieces[k + 1].t - pieces[k].t
+                } else {
+                    0.0
+                };
+                pieces[k].extend_bounds(0.0, d1, &mut full[k]);
+            }
+        }
         Self {
             dof,
             pieces,
@@ -174,6 +188,8 @@ impl Trajectory {
             duration,
             waypoint_times,
             end,
+            peak: [[f64::INFINITY; 3]; MAX_DOF],
+            full,
         }
     }
     /// Number of joints.
@@ -222,6 +238,37 @@ impl Trajectory {
         s
     }
 
+    /// Piece index of joint `i` at time `t`, searching forward from `*hint` (a previous result for
+    /// an earlier time) and updating it; falls back to binary search.
+    #[inline]
+    pub(crate) fn locate_hint(&self, i: usize, hint: &mut usize, t: f64) -> usize {
+        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        let mut k = *hint;
+        if k < lo || k >= hi || self.pieces[k].t > t {
+            k = self.locate(i, t);
+        } else {
+            let mut steps = 0;
+            while k + 1 < hi && self.pieces[k + 1].t <= t {
+                k += 1;
+                steps += 1;
+                if steps > 8 {
+                    k = self.locate(i, t);
+                    break;
+                }
+            }
+        }
+        *hint = k;
+        k
+    }
+
+    /// [`Trajectory::joint_at`] with a search hint (see `locate_hint`).
+    #[inline]
+    pub(crate) fn joint_at_hint(&self, i: usize, hint: &mut usize, t: f64) -> (f64, f64, f64) {
+        let t = t.max(0.0);
+        let p = &self.pieces[self.locate_hint(i, hint, t)];
+        p.eval(t - p.t)
+    }
+
     /// Position, velocity and acceleration of joint `i` at time `t` (s; clamped to ≥ 0).
     #[inline]
     pub fn joint_at(&self, i: usize, t: f64) -> (f64, f64, f64) {
@@ -234,12 +281,19 @@ impl Trajectory {
     /// extrema padded outward (see [`crate::profile`]).
     #[inline]
     pub fn joint_derivs(&self, i: usize, ta: f64, tb: f64) -> Derivs {
+        let mut hint = usize::MAX;
+        self.joint_derivs_hint(i, &mut hint, ta, tb)
+    }
+
+    /// [`Trajectory::joint_derivs`] with a search hint for `ta` (see `locate_hint`).
+    #[inline]
+    pub(crate) fn joint_derivs_hint(&self, i: usize, hint: &mut usize, ta: f64, tb: f64) -> Derivs {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
         let mut r = [Range::EMPTY; 3];
         let mut jr = Range::EMPTY;
         let end = self.offsets[i + 1];
-        let mut k = self.locate(i, ta);
+        let mut k = self.locate_hint(i, hint, ta);
         loop {
             let p = &self.pieces[k];
             let next_t = if k + 1 < end {
@@ -247,11 +301,19 @@ impl Trajectory {
             } else {
                 f64::INFINITY
             };
-            let d0 = ta.max(p.t) - p.t;
-            let d1 = tb.min(next_t) - p.t;
-            p.extend_bounds(d0, d1, &mut r);
+            if ta <= p.t && next_t <= tb {
+                let f = &self.full[k];
+                r[0].union(f[0]);
+                r[1].union(f[1]);
+                r[2].union(f[2]);
+            } else {
+                let d0 = ta.max(p.t) - p.t;
+                let d1 = tb.min(next_t) - p.t;
+                p.extend_bounds(d0, d1, &mut r);
+            }
             jr.union(Range::point(p.j));
-            if next_t >= tb || k + 1 >= end {
+            // At tb == next_t the next piece is included too (state queries are right-continuous).
+            if next_t > tb || k + 1 >= end {
                 break;
             }
             k += 1;
@@ -276,8 +338,10 @@ impl Trajectory {
     /// Check every limit over the whole trajectory by exact piecewise extrema (tolerance
     /// [`LIMIT_REL_TOL`] relative, positions 1e-9 rad) and continuity of q, q̇, q̈ at every piece
     /// boundary (1e-9 relative to the limits). Names the joint, time and value on failure.
-    pub fn check(&self, lim: &Limits) -> Result<(), TrajectoryError> {
+    /// On success the peaks of |q̇|, |q̈|, |q⃛| per joint are recorded (see [`Trajectory::peaks`]).
+    pub fn check(&mut self, lim: &Limits) -> Result<(), TrajectoryError> {
         let tol = LIMIT_REL_TOL;
+        let mut peak = [[0.0f64; 3]; MAX_DOF];
         for i in 0..self.dof {
             let ps = self.pieces(i);
             for (k, p) in ps.iter().enumerate() {
@@ -318,6 +382,9 @@ impl Trajectory {
                         p.t
                     ));
                 }
+                peak[i][0] = peak[i][0].max(r[1].abs_max());
+                peak[i][1] = peak[i][1].max(r[2].abs_max());
+                peak[i][2] = peak[i][2].max(p.j.abs());
                 if p.j.abs() > lim.j[i] * (1.0 + tol) {
                     return fail(format!(
                         "|jerk| {} rad/s³ > {} after t = {} s",
@@ -341,7 +408,15 @@ impl Trajectory {
                 }
             }
         }
+        self.peak = peak;
         Ok(())
+    }
+
+    /// Sound peaks of |q̇| (rad/s), |q̈| (rad/s²), |q⃛| (rad/s³) of joint `i` over [0, T] as
+    /// recorded by the last successful [`Trajectory::check`] (+∞ if never checked).
+    #[inline]
+    pub fn peaks(&self, i: usize) -> [f64; 3] {
+        self.peak[i]
     }
 
     fn segment_of(&self, t: f64) -> usize {
@@ -350,6 +425,15 @@ impl Trajectory {
 }
 
 impl Trajectory {
+    /// Start time of joint `i`'s next piece strictly after `s` (s), if any.
+    #[inline]
+    pub fn next_joint_breakpoint(&self, i: usize, s: f64) -> Option<f64> {
+        let k = self.locate(i, s) + 1;
+        (k < self.offsets[i + 1])
+            .then(|| self.pieces[k].t)
+            .filter(|&t| t > s)
+    }
+
     /// Earliest piece start time of any joint strictly after `s` (s), if any.
     #[inline]
     pub fn next_breakpoint(&self, s: f64) -> Option<f64> {
