@@ -57,4 +57,4 @@ fn link_enlargement<S: Source>(s: &mut S) {
         }
     }
 }
-harness!(d1_robot_link_enlargement, unwind = 8, cases = crate::DEFAULT_CASES, link_enlargement);
+harness!(d1_robot_link_enlargement, unwind = 20, cases = crate::DEFAULT_CASES, link_enlargement);
