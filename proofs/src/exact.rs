@@ -60,7 +60,10 @@ pub fn cmp_sqrt(x: f64, r: f64) -> Ordering {
     if r < 0.0 {
         return Ordering::Greater;
     }
-    r.mul_add(r, -x).partial_cmp(&0.0).expect("finite").reverse()
+    r.mul_add(r, -x)
+        .partial_cmp(&0.0)
+        .expect("finite")
+        .reverse()
 }
 
 /// Sum of floats in double-double: `(value, err)` with `|Σ terms − value| ≤ err`.
@@ -152,6 +155,10 @@ mod tests {
         assert!(norm3_le(3.0, 4.0, 0.0, 5.000001) && norm3_ge(3.0, 4.0, 0.0, 4.999999));
         assert!(!norm3_le(3.0, 4.0, 0.0, 5f64.next_down()));
         assert!(dist3_le(&[0.0; 3], &[3.0, 4.0, 0.0], 5.000001));
-        assert!(!dist3_le(&[0.1, 0.0, 0.0], &[0.0, 0.0, 0.0], 0.1f64.next_down()));
+        assert!(!dist3_le(
+            &[0.1, 0.0, 0.0],
+            &[0.0, 0.0, 0.0],
+            0.1f64.next_down()
+        ));
     }
 }

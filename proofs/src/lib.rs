@@ -121,7 +121,10 @@ impl RandomSource {
 
 impl Source for RandomSource {
     fn f64_in(&mut self, lo: f64, hi: f64) -> f64 {
-        assert!(lo <= hi && lo.is_finite() && hi.is_finite(), "f64_in({lo}, {hi})");
+        assert!(
+            lo <= hi && lo.is_finite() && hi.is_finite(),
+            "f64_in({lo}, {hi})"
+        );
         if lo == hi {
             return lo;
         }

@@ -48,4 +48,9 @@ fn energy<S: Source>(s: &mut S) {
         bound[n]
     );
 }
-harness!(g1_energy_bound_dominates, unwind = 20, cases = crate::DEFAULT_CASES, energy);
+harness!(
+    g1_energy_bound_dominates,
+    unwind = 20,
+    cases = crate::DEFAULT_CASES,
+    energy
+);

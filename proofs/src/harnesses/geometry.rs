@@ -34,15 +34,17 @@ fn dist_up(p: &[Interval; 3], q: &[Interval; 3]) -> f64 {
 
 /// Segments `a0a1`, `b0b1` (either possibly degenerate) and points on them.
 #[allow(clippy::type_complexity)]
-fn segments<S: Source>(
-    s: &mut S,
-) -> Option<([Point3<f64>; 4], [Interval; 3], [Interval; 3])> {
+fn segments<S: Source>(s: &mut S) -> Option<([Point3<f64>; 4], [Interval; 3], [Interval; 3])> {
     let a0 = point(s)?;
     let a1 = if s.bool() { point(s)? } else { a0 };
     let b0 = point(s)?;
     let b1 = if s.bool() { point(s)? } else { b0 };
     let (t, u) = (s.f64_in(0.0, 1.0), s.f64_in(0.0, 1.0));
-    Some(([a0, a1, b0, b1], on_segment(&a0, &a1, t), on_segment(&b0, &b1, u)))
+    Some((
+        [a0, a1, b0, b1],
+        on_segment(&a0, &a1, t),
+        on_segment(&b0, &b1, u),
+    ))
 }
 
 /// The separating-axis lower bound never exceeds the distance of any two points of the segments
@@ -59,10 +61,18 @@ fn segment_lb<S: Source>(s: &mut S) {
     let (a, b) = ([a0.x, a0.y, a0.z], [b0.x, b0.y, b0.z]);
     if a0 == a1 && b0 == b1 {
         // A proof of |a − b| ≤ pred(lb) < lb would be a violation.
-        assert!(lb == 0.0 || !dist3_le(&a, &b, lb.next_down()), "point lb {lb} too large");
+        assert!(
+            lb == 0.0 || !dist3_le(&a, &b, lb.next_down()),
+            "point lb {lb} too large"
+        );
     }
 }
-harness!(b1_segment_distance_lower_bound, unwind = 25, cases = crate::DEFAULT_CASES, segment_lb);
+harness!(
+    b1_segment_distance_lower_bound,
+    unwind = 25,
+    cases = crate::DEFAULT_CASES,
+    segment_lb
+);
 
 /// Capsules that share a point are never reported disjoint, and the capsule distance bound is
 /// at most the distance of any two axis points minus the radii. Radii are drawn so that the
@@ -85,12 +95,20 @@ fn capsules<S: Source>(s: &mut S) {
     assert!(lb >= 0.0);
     // |p − q| ≤ ub ≤ ra + rb (exactly, as add_down(ra, rb) ≤ ra + rb) ⇒ the capsules intersect.
     if ub <= add_down(ra, rb) {
-        assert!(!capsules_disjoint(&ca, &cb), "touching capsules reported disjoint");
+        assert!(
+            !capsules_disjoint(&ca, &cb),
+            "touching capsules reported disjoint"
+        );
         assert!(lb == 0.0);
     }
     assert!(lb <= (ub - ra - rb).max(0.0) * (1.0 + 1e-12) + 1e-300);
 }
-harness!(b2_capsule_intersection_conservative, unwind = 25, cases = crate::DEFAULT_CASES, capsules);
+harness!(
+    b2_capsule_intersection_conservative,
+    unwind = 25,
+    cases = crate::DEFAULT_CASES,
+    capsules
+);
 
 /// A box zonotope is never reported `Outside` for one of its points (boundary points included:
 /// the endpoint bias of the input source puts many on the boundary).
@@ -105,6 +123,14 @@ fn zonotope_box<S: Source>(s: &mut S) {
     )
     .expect("valid box");
     let c = z.contains(&x).expect("valid point");
-    assert!(c != Containment::Outside, "{x:?} in [{lo0}, {hi0}]×[{lo1}, {hi1}] reported outside");
+    assert!(
+        c != Containment::Outside,
+        "{x:?} in [{lo0}, {hi0}]×[{lo1}, {hi1}] reported outside"
+    );
 }
-harness!(b3_zonotope_contains_conservative, unwind = 8, cases = crate::DEFAULT_CASES, zonotope_box);
+harness!(
+    b3_zonotope_contains_conservative,
+    unwind = 8,
+    cases = crate::DEFAULT_CASES,
+    zonotope_box
+);

@@ -57,7 +57,10 @@ fn occupancy<S: Source>(s: &mut S) {
     // Elapsed time of the true motion at t (rounded down: never more motion than admissible).
     let elapsed = ((t - m_time) + delay).max(0.0) * (1.0 - 1e-12);
     let mut reach = HumanReach::new(model.clone(), kind);
-    let mut caps = vec![Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0); model.body_parts().len()];
+    let mut caps = vec![
+        Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
+        model.body_parts().len()
+    ];
     reach
         .occupancy_into(&meas, t_a, t_b, &mut caps)
         .expect("valid query");
@@ -90,7 +93,10 @@ fn occupancy<S: Source>(s: &mut S) {
         s.in_ball(0.5 * bp.thickness),
     );
     if kind == HumanReachModel::Pos
-        && let Some(e) = model.extremities().iter().find(|e| e.body_parts.contains(&part))
+        && let Some(e) = model
+            .extremities()
+            .iter()
+            .find(|e| e.body_parts.contains(&part))
     {
         // Any point within length + thickness/2 of the (admissibly moving) base keypoint.
         let b = e.base;
@@ -102,7 +108,10 @@ fn occupancy<S: Source>(s: &mut S) {
         let base = if b == bp.from || b == bp.to {
             base
         } else {
-            add(add(base, s.in_ball(e_p)), s.in_ball(model.v_max()[b] * elapsed))
+            add(
+                add(base, s.in_ball(e_p)),
+                s.in_ball(model.v_max()[b] * elapsed),
+            )
         };
         point = add(base, s.in_ball(e.length + 0.5 * e.thickness));
     }
@@ -113,4 +122,9 @@ fn occupancy<S: Source>(s: &mut S) {
         caps[part]
     );
 }
-harness!(c1_human_occupancy_contains_motion, unwind = 10, cases = crate::DEFAULT_CASES, occupancy);
+harness!(
+    c1_human_occupancy_contains_motion,
+    unwind = 10,
+    cases = crate::DEFAULT_CASES,
+    occupancy
+);

@@ -30,7 +30,10 @@ fn braking<S: Source>(s: &mut S) {
     assert!(settle.is_finite() && settle >= 0.0);
     // At rest from the settle time on, at a fixed position.
     let rest = p.eval(settle);
-    assert!(rest.sd == 0.0 && rest.sdd == 0.0, "not at rest at settle {settle}: {rest:?}");
+    assert!(
+        rest.sd == 0.0 && rest.sdd == 0.0,
+        "not at rest at settle {settle}: {rest:?}"
+    );
     let later = p.eval(settle + s.f64_in(0.0, 100.0));
     assert!(later.sd == 0.0 && later.sdd == 0.0 && later.s == rest.s);
     assert!(p.settle_s() == rest.s);
@@ -41,8 +44,16 @@ fn braking<S: Source>(s: &mut S) {
     let scale = 1.0 + start.sd + acc + start.sdd.abs();
     let peak = start.sd + start.sdd.max(0.0).powi(2) / (2.0 * jerk);
     for e in [a, b] {
-        assert!(e.sd >= 0.0 && e.sd <= peak + EPS * scale, "ṡ {} outside [0, {peak}]", e.sd);
-        assert!(e.sdd.abs() <= acc.max(start.sdd.abs()) * (1.0 + EPS), "|s̈| {} > {acc}", e.sdd);
+        assert!(
+            e.sd >= 0.0 && e.sd <= peak + EPS * scale,
+            "ṡ {} outside [0, {peak}]",
+            e.sd
+        );
+        assert!(
+            e.sdd.abs() <= acc.max(start.sdd.abs()) * (1.0 + EPS),
+            "|s̈| {} > {acc}",
+            e.sdd
+        );
     }
     // s never decreases.
     assert!(
@@ -53,7 +64,12 @@ fn braking<S: Source>(s: &mut S) {
     );
     // ṡ non-increasing once s̈ ≤ 0 (always after the first jerk ramp).
     if a.sdd <= 0.0 {
-        assert!(b.sd <= a.sd + EPS * scale, "ṡ rose while braking: {} → {} ({t1} → {t2})", a.sd, b.sd);
+        assert!(
+            b.sd <= a.sd + EPS * scale,
+            "ṡ rose while braking: {} → {} ({t1} → {t2})",
+            a.sd,
+            b.sd
+        );
     }
     // Jerk bound: |Δs̈| ≤ J·Δτ.
     assert!(
@@ -64,4 +80,9 @@ fn braking<S: Source>(s: &mut S) {
         t2 - t1
     );
 }
-harness!(e1_braking_profile, unwind = 6, cases = crate::DEFAULT_CASES, braking);
+harness!(
+    e1_braking_profile,
+    unwind = 6,
+    cases = crate::DEFAULT_CASES,
+    braking
+);

@@ -40,7 +40,10 @@ fn link_enlargement<S: Source>(s: &mut S) {
     let model = fr3();
     let reach = RobotReach::new(&model, 0.0);
     let (lo, hi, q) = joint_box(s, &model, 0.5);
-    let mut occ = vec![Capsule::new_unchecked(Default::default(), Default::default(), 0.0); reach.capsule_count()];
+    let mut occ = vec![
+        Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+        reach.capsule_count()
+    ];
     reach.occupancy_into(&lo, &hi, &mut occ).expect("valid box");
     let nominal = model.capsules_world(&q);
     assert_eq!(nominal.len(), occ.len());
@@ -57,4 +60,9 @@ fn link_enlargement<S: Source>(s: &mut S) {
         }
     }
 }
-harness!(d1_robot_link_enlargement, unwind = 20, cases = crate::DEFAULT_CASES, link_enlargement);
+harness!(
+    d1_robot_link_enlargement,
+    unwind = 20,
+    cases = crate::DEFAULT_CASES,
+    link_enlargement
+);

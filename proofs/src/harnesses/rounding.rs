@@ -1,8 +1,6 @@
 //! (a) Every rounding helper and interval operation encloses the exact result.
 
-use crate::exact::{
-    cmp_prod, cmp_quot, cmp_sqrt, cmp_sum, dist3_le, norm3_ge, norm3_le, tame,
-};
+use crate::exact::{cmp_prod, cmp_quot, cmp_sqrt, cmp_sum, dist3_le, norm3_ge, norm3_le, tame};
 use crate::{Source, harness};
 use pacs_reach::Interval;
 use pacs_reach::rounding::*;
@@ -24,7 +22,12 @@ fn add_sub<S: Source>(s: &mut S) {
     assert!(cmp_sum(x, -y, sub_up(x, y)) != Greater, "sub_up({x}, {y})");
     assert!(cmp_sum(x, -y, sub_down(x, y)) != Less, "sub_down({x}, {y})");
 }
-harness!(a1_add_sub_enclose, unwind = 2, cases = crate::DEFAULT_CASES, add_sub);
+harness!(
+    a1_add_sub_enclose,
+    unwind = 2,
+    cases = crate::DEFAULT_CASES,
+    add_sub
+);
 
 /// mul/div/sqrt up/down bound the exact product, quotient and square root.
 fn mul_div_sqrt<S: Source>(s: &mut S) {
@@ -41,15 +44,26 @@ fn mul_div_sqrt<S: Source>(s: &mut S) {
     assert!(cmp_sqrt(a, sqrt_up(a)) != Greater, "sqrt_up({a})");
     assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
 }
-harness!(a2_mul_div_sqrt_enclose, unwind = 2, cases = crate::DEFAULT_CASES, mul_div_sqrt);
+harness!(
+    a2_mul_div_sqrt_enclose,
+    unwind = 2,
+    cases = crate::DEFAULT_CASES,
+    mul_div_sqrt
+);
 
 /// norm3_up / norm3_down / dist3_up bound the exact Euclidean norm and distance.
 fn norms<S: Source>(s: &mut S) {
     let (Some(x), Some(y), Some(z)) = (num(s, 1e6), num(s, 1e6), num(s, 1e6)) else {
         return;
     };
-    assert!(norm3_le(x, y, z, norm3_up(x, y, z)), "norm3_up({x}, {y}, {z})");
-    assert!(norm3_ge(x, y, z, norm3_down(x, y, z)), "norm3_down({x}, {y}, {z})");
+    assert!(
+        norm3_le(x, y, z, norm3_up(x, y, z)),
+        "norm3_up({x}, {y}, {z})"
+    );
+    assert!(
+        norm3_ge(x, y, z, norm3_down(x, y, z)),
+        "norm3_down({x}, {y}, {z})"
+    );
     let (Some(u), Some(v), Some(w)) = (num(s, 1e3), num(s, 1e3), num(s, 1e3)) else {
         return;
     };
@@ -58,7 +72,12 @@ fn norms<S: Source>(s: &mut S) {
         assert!(dist3_le(&a, &b, dist3_up(&a, &b)), "dist3_up({a:?}, {b:?})");
     }
 }
-harness!(a3_norm_dist_enclose, unwind = 25, cases = crate::DEFAULT_CASES, norms);
+harness!(
+    a3_norm_dist_enclose,
+    unwind = 25,
+    cases = crate::DEFAULT_CASES,
+    norms
+);
 
 /// An interval `[lo, lo + w]` with `w ∈ [0, wmax]` (a point interval when `w = 0`).
 pub(crate) fn interval<S: Source>(s: &mut S, m: f64, wmax: f64) -> Option<Interval> {
@@ -90,7 +109,10 @@ fn interval_ops<S: Source>(s: &mut S) {
     assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
     assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
     assert!(inside_prod(a * b, x, y), "{a:?} * {b:?} ∌ {x} * {y}");
-    assert!(inside_prod(a.scale(k), x, k), "{a:?}.scale({k}) ∌ {x} * {k}");
+    assert!(
+        inside_prod(a.scale(k), x, k),
+        "{a:?}.scale({k}) ∌ {x} * {k}"
+    );
     assert!(inside_prod(a.sqr(), x, x), "{a:?}.sqr() ∌ {x}²");
     assert!((-a).contains(-x));
     let m = a.mid();
@@ -98,7 +120,12 @@ fn interval_ops<S: Source>(s: &mut S) {
     let r = a.rad_up();
     assert!(cmp_sum(a.hi(), -m, r) != Greater && cmp_sum(m, -a.lo(), r) != Greater);
 }
-harness!(a4_interval_ops_enclose, unwind = 2, cases = crate::DEFAULT_CASES, interval_ops);
+harness!(
+    a4_interval_ops_enclose,
+    unwind = 2,
+    cases = crate::DEFAULT_CASES,
+    interval_ops
+);
 
 /// Documented bound of libm `sin`/`cos` error (1 ulp on [-1, 1] ≤ 1.12e-16; see
 /// `reach::rounding`, whose test checks libm against a rigorous Taylor enclosure).
@@ -119,4 +146,9 @@ fn sin_cos<S: Source>(s: &mut S) {
         );
     }
 }
-harness!(a5_sin_cos_interval_encloses, unwind = 8, cases = crate::DEFAULT_CASES, sin_cos);
+harness!(
+    a5_sin_cos_interval_encloses,
+    unwind = 8,
+    cases = crate::DEFAULT_CASES,
+    sin_cos
+);

@@ -67,14 +67,24 @@ fn decide_induction<S: Source>(s: &mut S) {
             assert!(c.verified, "adopted an unverified candidate");
             assert_eq!(d.slot, c.slot);
             assert_eq!(d.path, c.go.eval(alpha));
-            assert_eq!(d.failsafe, VerifiedFailsafe { slot: c.slot, profile: c.brake, t0: t + alpha });
+            assert_eq!(
+                d.failsafe,
+                VerifiedFailsafe {
+                    slot: c.slot,
+                    profile: c.brake,
+                    t0: t + alpha
+                }
+            );
             // The stored failsafe starts where the executed state is.
             let b0 = d.failsafe.profile.eval(0.0);
             assert_eq!(b0.s, d.path.s);
             assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
         } else {
             // Not verified (or no candidate): the stored failsafe is kept and continued.
-            assert_eq!(d.failsafe, stored, "failsafe abandoned without verification");
+            assert_eq!(
+                d.failsafe, stored,
+                "failsafe abandoned without verification"
+            );
             assert_eq!(d.slot, stored.slot);
             assert_eq!(d.path, stored.profile.eval(t + alpha - stored.t0));
         }
@@ -94,10 +104,19 @@ fn decide_induction<S: Source>(s: &mut S) {
     }
     let d = decide(stored, None, FilterMode::Pacs, t_x, alpha);
     assert_eq!(d.failsafe, stored);
-    assert!(d.path.sd == 0.0 && d.path.sdd == 0.0, "not at rest after settling: {:?}", d.path);
+    assert!(
+        d.path.sd == 0.0 && d.path.sdd == 0.0,
+        "not at rest after settling: {:?}",
+        d.path
+    );
     assert_eq!(d.path.s, stored.profile.settle_s());
 }
-harness!(f1_shield_decision_induction, unwind = 6, cases = crate::DEFAULT_CASES, decide_induction);
+harness!(
+    f1_shield_decision_induction,
+    unwind = 6,
+    cases = crate::DEFAULT_CASES,
+    decide_induction
+);
 
 fn intervals_cover<S: Source>(s: &mut S) {
     let alpha = s.f64_in(1e-4, 0.01);
@@ -121,9 +140,17 @@ fn intervals_cover<S: Source>(s: &mut S) {
         last_tb = tb;
     }
     assert!(count >= 1);
-    assert!(last_tb >= stop, "intervals end at {last_tb} before standstill {stop}");
+    assert!(
+        last_tb >= stop,
+        "intervals end at {last_tb} before standstill {stop}"
+    );
 }
-harness!(f2_occupancy_intervals_cover, unwind = 14, cases = crate::DEFAULT_CASES, intervals_cover);
+harness!(
+    f2_occupancy_intervals_cover,
+    unwind = 14,
+    cases = crate::DEFAULT_CASES,
+    intervals_cover
+);
 
 /// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
 fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
@@ -132,7 +159,11 @@ fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
         [x, y + 0.25, 1.15],
         [x, y + 0.25, 0.9],
         [x, y - 0.2, 1.4],
-        [0.5 * (x + hand[0]), 0.5 * (y - 0.2 + hand[1]), 0.5 * (1.4 + hand[2])],
+        [
+            0.5 * (x + hand[0]),
+            0.5 * (y - 0.2 + hand[1]),
+            0.5 * (1.4 + hand[2]),
+        ],
         hand,
         [x, y, 1.5],
         [x, y, 1.0],
@@ -143,7 +174,8 @@ fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
 /// Counters of the `f3` twin (steps, verified steps, failsafe changes): the test asserts that
 /// both outcomes occur, so the invariants are exercised on verified and unverified steps.
 #[cfg(test)]
-static F3_STATS: [std::sync::atomic::AtomicUsize; 3] = [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
+static F3_STATS: [std::sync::atomic::AtomicUsize; 3] =
+    [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
 
 fn count(_i: usize) {
     #[cfg(test)]
@@ -153,7 +185,9 @@ fn count(_i: usize) {
 /// Random steps of the real shield, then verification failing forever.
 fn real_shield<S: Source>(s: &mut S) {
     let robot = fr3::fr3();
-    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).expect("valid");
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
     let spec = ConstraintSpec::builtin("ssm").expect("preset");
     let cfg = ShieldConfig {
         safety_step: [0.001, 0.002, 0.004][s.index(3)],
@@ -182,7 +216,11 @@ fn real_shield<S: Source>(s: &mut S) {
                 gripper: None,
             });
         }
-        let kp = if fail_forever || s.bool() { &near } else { &far };
+        let kp = if fail_forever || s.bool() {
+            &near
+        } else {
+            &far
+        };
         let stamp = match if fail_forever { 0 } else { s.index(4) } {
             0 => Some(t),
             1 => Some(t - 0.05),
@@ -212,12 +250,21 @@ fn real_shield<S: Source>(s: &mut S) {
         // trajectory; at its start the go-step and the brake meet).
         let on = sh.failsafe_state_at(cmd.t).expect("started");
         for i in 0..7 {
-            assert!((cmd.state.q[i] - on.q[i]).abs() <= 1e-12, "q off the verified failsafe");
-            assert!((cmd.state.dq[i] - on.dq[i]).abs() <= 1e-9, "q̇ off the verified failsafe");
+            assert!(
+                (cmd.state.q[i] - on.q[i]).abs() <= 1e-12,
+                "q off the verified failsafe"
+            );
+            assert!(
+                (cmd.state.dq[i] - on.dq[i]).abs() <= 1e-9,
+                "q̇ off the verified failsafe"
+            );
         }
         // Failing forever: at rest after the reported stop time, and it stays there.
         if fail_forever && cmd.t >= cmd.diag.stop_time + alpha {
-            assert!(cmd.state.dq[..7].iter().all(|v| *v == 0.0), "moving after stop time");
+            assert!(
+                cmd.state.dq[..7].iter().all(|v| *v == 0.0),
+                "moving after stop time"
+            );
             let q: [f64; 7] = std::array::from_fn(|i| cmd.state.q[i]);
             match at_rest_since {
                 None => at_rest_since = Some(q),
@@ -235,8 +282,13 @@ fn real_shield<S: Source>(s: &mut S) {
 #[cfg(test)]
 #[test]
 fn f3_real_shield_commands_on_verified_failsafe() {
-    crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, |s| real_shield(s));
-    let [steps, verified, changes] = F3_STATS.each_ref().map(|c| c.load(std::sync::atomic::Ordering::Relaxed));
+    crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, real_shield);
+    let [steps, verified, changes] = F3_STATS
+        .each_ref()
+        .map(|c| c.load(std::sync::atomic::Ordering::Relaxed));
     eprintln!("f3: {steps} steps, {verified} verified, {changes} failsafe changes");
-    assert!(verified * 20 >= steps / 10 && verified < steps, "f3 must exercise both outcomes");
+    assert!(
+        verified * 20 >= steps / 10 && verified < steps,
+        "f3 must exercise both outcomes"
+    );
 }
