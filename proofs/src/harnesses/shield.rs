@@ -14,13 +14,8 @@
 //!   is at rest by the reported stop time and stays there.
 
 use crate::{Source, harness};
-use pacs_models::{ConstraintSpec, default_human, fr3};
-use pacs_reach::human::HumanMeasurement;
-use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::scaling::{PathState, SpeedProfile};
-use pacs_verify::shield::{
-    Candidate, FilterMode, OccupancyIntervals, Shield, ShieldConfig, VerifiedFailsafe, decide,
-};
+use pacs_verify::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
 
 /// Steps of the symbolic sequence in `f1` (the property is inductive; see README).
 const STEPS: usize = 3;
@@ -152,143 +147,150 @@ harness!(
     intervals_cover
 );
 
-/// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
-fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
-    vec![
-        [x, y + 0.2, 1.4],
-        [x, y + 0.25, 1.15],
-        [x, y + 0.25, 0.9],
-        [x, y - 0.2, 1.4],
-        [
-            0.5 * (x + hand[0]),
-            0.5 * (y - 0.2 + hand[1]),
-            0.5 * (1.4 + hand[2]),
-        ],
-        hand,
-        [x, y, 1.5],
-        [x, y, 1.0],
-        [x, y, 1.65],
-    ]
-}
-
-/// Counters of the `f3` twin (steps, verified steps, failsafe changes): the test asserts that
-/// both outcomes occur, so the invariants are exercised on verified and unverified steps.
+/// `f3`: the real shield (property test only).
 #[cfg(test)]
-static F3_STATS: [std::sync::atomic::AtomicUsize; 3] =
-    [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
+mod real {
+    use crate::Source;
+    use pacs_models::{ConstraintSpec, default_human, fr3};
+    use pacs_reach::human::HumanMeasurement;
+    use pacs_verify::chunk::{ActionKind, Chunk};
+    use pacs_verify::shield::{Shield, ShieldConfig};
 
-fn count(_i: usize) {
-    #[cfg(test)]
-    F3_STATS[_i].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-}
+    /// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
+    fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
+        vec![
+            [x, y + 0.2, 1.4],
+            [x, y + 0.25, 1.15],
+            [x, y + 0.25, 0.9],
+            [x, y - 0.2, 1.4],
+            [
+                0.5 * (x + hand[0]),
+                0.5 * (y - 0.2 + hand[1]),
+                0.5 * (1.4 + hand[2]),
+            ],
+            hand,
+            [x, y, 1.5],
+            [x, y, 1.0],
+            [x, y, 1.65],
+        ]
+    }
 
-/// Random steps of the real shield, then verification failing forever.
-fn real_shield<S: Source>(s: &mut S) {
-    let robot = fr3::fr3();
-    let human = default_human()
-        .with_uncertainty(0.01, 0.1, 0.02)
-        .expect("valid");
-    let spec = ConstraintSpec::builtin("ssm").expect("preset");
-    let cfg = ShieldConfig {
-        safety_step: [0.001, 0.002, 0.004][s.index(3)],
-        ..ShieldConfig::default()
-    };
-    let alpha = cfg.safety_step;
-    let mut sh = Shield::new(robot, Some((human.clone(), &spec)), vec![], cfg).expect("valid");
-    let q0 = fr3::Q_READY;
-    sh.start(0.0, &q0).expect("at rest in limits");
-    let far = human_at(3.0, 0.0, [2.8, -0.3, 1.2]);
-    let near = human_at(0.6, 0.0, [0.45, 0.0, 0.6]);
-    let mut t = 0.0;
-    let random_steps = 3 + s.index(12);
-    let mut fail_forever = false;
-    let mut at_rest_since: Option<[f64; 7]> = None;
-    for step in 0..4000 {
-        if step == random_steps {
-            fail_forever = true;
-        }
-        if !fail_forever && s.index(3) == 0 {
-            let delta: Vec<f64> = (0..7).map(|_| s.f64_in(-0.02, 0.02)).collect();
-            let _ = sh.set_chunk(&Chunk {
-                kind: ActionKind::Delta,
-                actions: vec![delta; 8],
-                execute: 1 + s.index(8),
-                gripper: None,
-            });
-        }
-        let kp = if fail_forever || s.bool() {
-            &near
-        } else {
-            &far
+    /// Counters of the `f3` twin (steps, verified steps, failsafe changes): the test asserts that
+    /// both outcomes occur, so the invariants are exercised on verified and unverified steps.
+    static F3_STATS: [std::sync::atomic::AtomicUsize; 3] =
+        [const { std::sync::atomic::AtomicUsize::new(0) }; 3];
+
+    fn count(i: usize) {
+        F3_STATS[i].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Random steps of the real shield, then verification failing forever.
+    fn real_shield<S: Source>(s: &mut S) {
+        let robot = fr3::fr3();
+        let human = default_human()
+            .with_uncertainty(0.01, 0.1, 0.02)
+            .expect("valid");
+        let spec = ConstraintSpec::builtin("ssm").expect("preset");
+        let cfg = ShieldConfig {
+            safety_step: [0.001, 0.002, 0.004][s.index(3)],
+            ..ShieldConfig::default()
         };
-        let stamp = match if fail_forever { 0 } else { s.index(4) } {
-            0 => Some(t),
-            1 => Some(t - 0.05),
-            2 => Some(t + 0.01), // from the future: ignored
-            _ => None,
-        };
-        let m = stamp.map(|st| HumanMeasurement::new(&human, st, kp, None).expect("finite"));
-        let before = sh.verified_failsafe().expect("started");
-        let cmd = sh.step(t, m.as_ref());
-        let after = sh.verified_failsafe().expect("started");
-        count(0);
-        if cmd.diag.verified {
-            count(1);
-        }
-        if after != before {
-            count(2);
-        }
-        // The failsafe is only abandoned for a newly verified one.
-        if after != before {
-            assert!(cmd.diag.verified, "failsafe changed on an unverified step");
-            assert_eq!(after.t0, cmd.t);
-        }
-        if fail_forever {
-            assert!(!cmd.diag.verified, "verified with the human on the robot");
-        }
-        // The command lies on the stored verified failsafe (the last verified monitored
-        // trajectory; at its start the go-step and the brake meet).
-        let on = sh.failsafe_state_at(cmd.t).expect("started");
-        for i in 0..7 {
-            assert!(
-                (cmd.state.q[i] - on.q[i]).abs() <= 1e-12,
-                "q off the verified failsafe"
-            );
-            assert!(
-                (cmd.state.dq[i] - on.dq[i]).abs() <= 1e-9,
-                "q̇ off the verified failsafe"
-            );
-        }
-        // Failing forever: at rest after the reported stop time, and it stays there.
-        if fail_forever && cmd.t >= cmd.diag.stop_time + alpha {
-            assert!(
-                cmd.state.dq[..7].iter().all(|v| *v == 0.0),
-                "moving after stop time"
-            );
-            let q: [f64; 7] = std::array::from_fn(|i| cmd.state.q[i]);
-            match at_rest_since {
-                None => at_rest_since = Some(q),
-                Some(q_rest) => {
-                    assert_eq!(q, q_rest, "moved after reaching rest");
-                    return;
+        let alpha = cfg.safety_step;
+        let mut sh = Shield::new(robot, Some((human.clone(), &spec)), vec![], cfg).expect("valid");
+        let q0 = fr3::Q_READY;
+        sh.start(0.0, &q0).expect("at rest in limits");
+        let far = human_at(3.0, 0.0, [2.8, -0.3, 1.2]);
+        let near = human_at(0.6, 0.0, [0.45, 0.0, 0.6]);
+        let mut t = 0.0;
+        let random_steps = 3 + s.index(12);
+        let mut fail_forever = false;
+        let mut at_rest_since: Option<[f64; 7]> = None;
+        for step in 0..4000 {
+            if step == random_steps {
+                fail_forever = true;
+            }
+            if !fail_forever && s.index(3) == 0 {
+                let delta: Vec<f64> = (0..7).map(|_| s.f64_in(-0.02, 0.02)).collect();
+                let _ = sh.set_chunk(&Chunk {
+                    kind: ActionKind::Delta,
+                    actions: vec![delta; 8],
+                    execute: 1 + s.index(8),
+                    gripper: None,
+                });
+            }
+            let kp = if fail_forever || s.bool() {
+                &near
+            } else {
+                &far
+            };
+            let stamp = match if fail_forever { 0 } else { s.index(4) } {
+                0 => Some(t),
+                1 => Some(t - 0.05),
+                2 => Some(t + 0.01), // from the future: ignored
+                _ => None,
+            };
+            let m = stamp.map(|st| HumanMeasurement::new(&human, st, kp, None).expect("finite"));
+            let before = sh.verified_failsafe().expect("started");
+            let cmd = sh.step(t, m.as_ref());
+            let after = sh.verified_failsafe().expect("started");
+            count(0);
+            if cmd.diag.verified {
+                count(1);
+            }
+            if after != before {
+                count(2);
+            }
+            // The failsafe is only abandoned for a newly verified one.
+            if after != before {
+                assert!(cmd.diag.verified, "failsafe changed on an unverified step");
+                assert_eq!(after.t0, cmd.t);
+            }
+            if fail_forever {
+                assert!(!cmd.diag.verified, "verified with the human on the robot");
+            }
+            // The command lies on the stored verified failsafe (the last verified monitored
+            // trajectory; at its start the go-step and the brake meet).
+            let on = sh.failsafe_state_at(cmd.t).expect("started");
+            for i in 0..7 {
+                assert!(
+                    (cmd.state.q[i] - on.q[i]).abs() <= 1e-12,
+                    "q off the verified failsafe"
+                );
+                assert!(
+                    (cmd.state.dq[i] - on.dq[i]).abs() <= 1e-9,
+                    "q̇ off the verified failsafe"
+                );
+            }
+            // Failing forever: at rest after the reported stop time, and it stays there.
+            if fail_forever && cmd.t >= cmd.diag.stop_time + alpha {
+                assert!(
+                    cmd.state.dq[..7].iter().all(|v| *v == 0.0),
+                    "moving after stop time"
+                );
+                let q: [f64; 7] = std::array::from_fn(|i| cmd.state.q[i]);
+                match at_rest_since {
+                    None => at_rest_since = Some(q),
+                    Some(q_rest) => {
+                        assert_eq!(q, q_rest, "moved after reaching rest");
+                        return;
+                    }
                 }
             }
+            t += alpha;
         }
-        t += alpha;
+        panic!("did not reach rest within 4000 steps");
     }
-    panic!("did not reach rest within 4000 steps");
-}
 
-#[cfg(test)]
-#[test]
-fn f3_real_shield_commands_on_verified_failsafe() {
-    crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, real_shield);
-    let [steps, verified, changes] = F3_STATS
-        .each_ref()
-        .map(|c| c.load(std::sync::atomic::Ordering::Relaxed));
-    eprintln!("f3: {steps} steps, {verified} verified, {changes} failsafe changes");
-    assert!(
-        verified * 20 >= steps / 10 && verified < steps,
-        "f3 must exercise both outcomes"
-    );
+    #[test]
+    fn f3_real_shield_commands_on_verified_failsafe() {
+        crate::run_cases("f3_real_shield", crate::DEFAULT_CASES, real_shield);
+        let [steps, verified, changes] = F3_STATS
+            .each_ref()
+            .map(|c| c.load(std::sync::atomic::Ordering::Relaxed));
+        eprintln!("f3: {steps} steps, {verified} verified, {changes} failsafe changes");
+        assert!(
+            verified * 20 >= steps / 10 && verified < steps,
+            "f3 must exercise both outcomes"
+        );
+    }
 }
