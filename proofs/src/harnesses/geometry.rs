@@ -10,7 +10,7 @@ use pacs_reach::geometry::{
     capsule_distance_lower_bound, capsules_disjoint, segment_distance_lower_bound,
 };
 use pacs_reach::rounding::{add_down, norm3_up};
-use pacs_reach::zonotope::{Containment, Zonotope};
+use pacs_reach::zonotope::{Containment, Zonotope, Zonotope3};
 
 /// A point with coordinates in [-2, 2] (0 or magnitude ≥ 1e-100).
 fn point<S: Source>(s: &mut S) -> Option<Point3<f64>> {
@@ -133,4 +133,43 @@ harness!(
     unwind = 8,
     cases = crate::DEFAULT_CASES,
     zonotope_box
+);
+
+/// `Zonotope3 ⊕ Ball(inflate)` and a capsule that contains one of its points are never reported
+/// disjoint, and their distance lower bound is 0 (dynamic-object occupancy vs robot capsule).
+fn zonotope_capsule<S: Source>(s: &mut S) {
+    let c = s.vec3(-2.0, 2.0);
+    let m = 1 + s.index(3);
+    let gens: Vec<[f64; 3]> = (0..m).map(|_| s.vec3(-1.0, 1.0)).collect();
+    let e = s.vec3(0.0, 0.1);
+    let inflate = s.f64_in(0.0, 0.2);
+    let z = Zonotope3::new(c, &gens, e).expect("valid zonotope");
+    // A point of Z ⊕ B(inflate): c + Σ β_k g_k + diag(e) γ + w, |β|, |γ| ≤ 1, |w| ≤ inflate.
+    let mut p = c;
+    for g in &gens {
+        let b = s.f64_in(-1.0, 1.0);
+        for i in 0..3 {
+            p[i] += b * g[i];
+        }
+    }
+    let w = s.in_ball(inflate);
+    for i in 0..3 {
+        p[i] += s.f64_in(-1.0, 1.0) * e[i] + w[i];
+    }
+    // The capsule contains the exact point: its axis starts at the computed point, whose
+    // rounding error (≤ 1e-14 m here) is below the radius.
+    let r = s.f64_in(1e-9, 0.5);
+    let p2 = if s.bool() { p } else { s.vec3(-3.0, 3.0) };
+    let cap = Capsule::new_unchecked(Point3::from(p), Point3::from(p2), r);
+    assert!(
+        !z.is_disjoint(inflate, &cap),
+        "{z:?} ⊕ B({inflate}) reported disjoint from {cap:?} containing {p:?}"
+    );
+    assert_eq!(z.distance_lower_bound(inflate, &cap), 0.0);
+}
+harness!(
+    b4_zonotope_capsule_conservative,
+    unwind = 8,
+    cases = crate::DEFAULT_CASES,
+    zonotope_capsule
 );
