@@ -43,6 +43,12 @@ pub trait Source {
     /// biased toward `r` by the endpoint bias of [`Self::f64_in`].
     fn in_ball(&mut self, r: f64) -> [f64; 3] {
         let d = self.vec3(-1.0, 1.0);
+        self.in_ball_along(d, r)
+    }
+    /// A vector of length at most `r * (1 - 1e-9)` along `d` (any non-zero `d`; 0 if `|d|` is
+    /// below 1e-3), length biased toward `r`. Sums of such vectors along one direction reach
+    /// the boundary of a sum of balls.
+    fn in_ball_along(&mut self, d: [f64; 3], r: f64) -> [f64; 3] {
         let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let len = self.f64_in(0.0, 1.0) * r * (1.0 - 1e-9);
         if n < 1e-3 {

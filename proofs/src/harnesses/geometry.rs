@@ -37,7 +37,13 @@ fn dist_up(p: &[Interval; 3], q: &[Interval; 3]) -> f64 {
 fn segments<S: Source>(s: &mut S) -> Option<([Point3<f64>; 4], [Interval; 3], [Interval; 3])> {
     let a0 = point(s)?;
     let a1 = if s.bool() { point(s)? } else { a0 };
-    let b0 = point(s)?;
+    // Often very close to a0 (where the dot products' rounding matters most).
+    let b0 = if s.bool() {
+        point(s)?
+    } else {
+        let d = s.vec3(-1e-6, 1e-6);
+        Point3::new(a0.x + d[0], a0.y + d[1], a0.z + d[2])
+    };
     let b1 = if s.bool() { point(s)? } else { b0 };
     let (t, u) = (s.f64_in(0.0, 1.0), s.f64_in(0.0, 1.0));
     Some((

@@ -66,12 +66,23 @@ fn occupancy<S: Source>(s: &mut S) {
         .expect("valid query");
     // True keypoint positions at t.
     let mut truth = [[0.0; 3]; 2];
+    // Either independent directions per error term, or one common direction (which reaches
+    // the boundary of the sum of the balls).
+    let aligned = s.bool();
+    let dir = s.vec3(-1.0, 1.0);
+    let ball = |s: &mut S, r: f64| {
+        if aligned {
+            s.in_ball_along(dir, r)
+        } else {
+            s.in_ball(r)
+        }
+    };
     for (slot, k) in [bp.from, bp.to].into_iter().enumerate() {
-        let start = add(pos[k], s.in_ball(e_p));
-        let vel_pos = add(start, s.in_ball(model.v_max()[k] * elapsed));
+        let start = add(pos[k], ball(s, e_p));
+        let vel_pos = add(start, ball(s, model.v_max()[k] * elapsed));
         let acc_pos = add(
-            add(start, scale(add(vel[k], s.in_ball(e_v)), elapsed)),
-            s.in_ball(0.5 * model.a_max()[k] * elapsed * elapsed),
+            add(start, scale(add(vel[k], ball(s, e_v)), elapsed)),
+            ball(s, 0.5 * model.a_max()[k] * elapsed * elapsed),
         );
         truth[slot] = match kind {
             HumanReachModel::Vel | HumanReachModel::Pos => vel_pos,
@@ -90,7 +101,7 @@ fn occupancy<S: Source>(s: &mut S) {
     let lambda = s.f64_in(0.0, 1.0);
     let mut point = add(
         add(scale(truth[0], 1.0 - lambda), scale(truth[1], lambda)),
-        s.in_ball(0.5 * bp.thickness),
+        ball(s, 0.5 * bp.thickness),
     );
     if kind == HumanReachModel::Pos
         && let Some(e) = model
@@ -108,12 +119,9 @@ fn occupancy<S: Source>(s: &mut S) {
         let base = if b == bp.from || b == bp.to {
             base
         } else {
-            add(
-                add(base, s.in_ball(e_p)),
-                s.in_ball(model.v_max()[b] * elapsed),
-            )
+            add(add(base, ball(s, e_p)), ball(s, model.v_max()[b] * elapsed))
         };
-        point = add(base, s.in_ball(e.length + 0.5 * e.thickness));
+        point = add(base, ball(s, e.length + 0.5 * e.thickness));
     }
     let p = Point3::from(point);
     assert!(
