@@ -18,6 +18,9 @@ filter=${1:-}
 rm -rf "$work" && mkdir -p "$work"
 tar -C "$root" --exclude=./.git --exclude=./target -cf - . | tar -C "$work" -xf -
 cd "$work" || exit 2
+# Newer than any artifact in the target dir (which may hold a previous run's mutant builds):
+# cargo must rebuild from these sources, not trust copied modification times.
+find . -name '*.rs' -exec touch {} +
 
 # Baseline: every harness must pass on the unmutated tree.
 if ! cargo test -q -p pacs-proofs --lib >"$work/baseline.log" 2>&1; then
