@@ -65,7 +65,7 @@ fn shield(c: &mut Criterion) {
             b.iter_batched(
                 || {
                     let kk = k.get();
-                    if kk % 200 == 0 {
+                    if kk.is_multiple_of(200) {
                         let _ = sh.borrow_mut().set_chunk(&chunk(sign)); // planning is not part of the step
                         sign = -sign;
                     }
@@ -89,7 +89,7 @@ fn shield(c: &mut Criterion) {
             |m| {
                 let kk = k.get();
                 let t = kk as f64 * 0.001;
-                if kk % 200 == 0 {
+                if kk.is_multiple_of(200) {
                     let _ = f.set_chunk(t, &chunk(1.0));
                 }
                 k.set(kk + 1);
