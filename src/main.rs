@@ -46,6 +46,9 @@ enum Command {
         #[arg(long, value_name = "T")]
         brake_at: Option<f64>,
     },
+    /// Offline audit of logs against SSM/PFL: exit 0 all pass, 1 any fail, 2 any inconclusive
+    /// (none fail), 3 invalid input. See docs/audit.md.
+    Audit(cli::audit::AuditArgs),
 }
 
 #[derive(Subcommand)]
@@ -87,6 +90,7 @@ fn main() -> ExitCode {
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
+        Command::Audit(args) => return cli::audit::main(args),
     };
     match result {
         Ok(value) => {
