@@ -337,6 +337,9 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         let kind = b
             .kind
             .ok_or_else(|| err("record has no `type` field".into()))?;
+        if kind == Kind::Header {
+            return Err(err("a second header record".into()));
+        }
         let t = b
             .t
             .ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
@@ -345,8 +348,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
             Kind::Human => &["t_meas", "positions"],
             Kind::Event => &["name"],
             Kind::Shield => &["t_meas", "q", "dq", "positions", "name"],
-            Kind::Header => return Err(err("a second header record".into())),
-            Kind::Unknown => {
+            Kind::Unknown | Kind::Header => {
                 return Err(err(format!("unknown record type `{}`", b.kind_name)));
             }
         };
