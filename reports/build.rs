@@ -23,9 +23,8 @@ fn main() {
     if let Ok(head) = std::process::Command::new("git")
         .args(["rev-parse", "--git-path", "HEAD"])
         .output()
+        && let Ok(p) = String::from_utf8(head.stdout)
     {
-        if let Ok(p) = String::from_utf8(head.stdout) {
-            println!("cargo:rerun-if-changed={}", p.trim());
-        }
+        println!("cargo:rerun-if-changed={}", p.trim());
     }
 }

@@ -74,8 +74,20 @@ fn logs(name: &str) -> Logs {
     let fail = dir.join("fail.jsonl");
     let inc = dir.join("inconclusive.jsonl");
     let bad = dir.join("bad.jsonl");
-    write_log(&pass, 2.5, true, &[("task", "sorting"), ("policy", "act"), ("filter", "pacs")], "success");
-    write_log(&fail, 0.3, true, &[("task", "sorting"), ("policy", "act"), ("filter", "none")], "success");
+    write_log(
+        &pass,
+        2.5,
+        true,
+        &[("task", "sorting"), ("policy", "act"), ("filter", "pacs")],
+        "success",
+    );
+    write_log(
+        &fail,
+        0.3,
+        true,
+        &[("task", "sorting"), ("policy", "act"), ("filter", "none")],
+        "success",
+    );
     write_log(&inc, 2.5, false, &[], "failure");
     let mut text = std::fs::read_to_string(&pass).unwrap();
     text.push_str("{\"type\":\"robot\",\"t\":0.1,\"q\":[0,0,0,0,0,0,0]}\n");
@@ -91,7 +103,10 @@ fn logs(name: &str) -> Logs {
 
 fn json(o: &Output) -> Value {
     serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
-        panic!("stdout is not JSON ({e}): {}", String::from_utf8_lossy(&o.stdout))
+        panic!(
+            "stdout is not JSON ({e}): {}",
+            String::from_utf8_lossy(&o.stdout)
+        )
     })
 }
 
@@ -99,7 +114,12 @@ fn json(o: &Output) -> Value {
 fn exit_codes_and_json_output() {
     let l = logs("codes");
     let o = pacs(&["audit", "--json", &l.pass]);
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let v = json(&o);
     assert_eq!(v["runs"][0]["verdict"], "pass");
     assert_eq!(v["runs"][0]["log"], l.pass.as_str());
@@ -116,8 +136,15 @@ fn exit_codes_and_json_output() {
     assert!(run["metrics"]["violation_fraction"].as_f64().unwrap() > 0.0);
     let viol = &run["violations"][0];
     for k in [
-        "t_start", "t_end", "constraint", "body_part", "link", "min_separation", "energy",
-        "threshold", "certain",
+        "t_start",
+        "t_end",
+        "constraint",
+        "body_part",
+        "link",
+        "min_separation",
+        "energy",
+        "threshold",
+        "certain",
     ] {
         assert!(viol.get(k).is_some(), "violation field {k} missing: {viol}");
     }
@@ -128,12 +155,23 @@ fn exit_codes_and_json_output() {
     assert_eq!(json(&o)["runs"][0]["verdict"], "inconclusive");
 
     // Combinations: any fail → 1; inconclusive and no fail → 2; invalid input → 3.
-    assert_eq!(pacs(&["audit", &l.pass, &l.fail, &l.inconclusive]).status.code(), Some(1));
-    assert_eq!(pacs(&["audit", &l.pass, &l.inconclusive]).status.code(), Some(2));
+    assert_eq!(
+        pacs(&["audit", &l.pass, &l.fail, &l.inconclusive])
+            .status
+            .code(),
+        Some(1)
+    );
+    assert_eq!(
+        pacs(&["audit", &l.pass, &l.inconclusive]).status.code(),
+        Some(2)
+    );
     let o = pacs(&["audit", &l.pass, &l.bad]);
     assert_eq!(o.status.code(), Some(3));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains(&l.bad) && err.contains("line ") && err.contains("time goes backwards"), "{err}");
+    assert!(
+        err.contains(&l.bad) && err.contains("line ") && err.contains("time goes backwards"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&l.dir);
 }
 
@@ -150,10 +188,20 @@ fn invalid_files_and_config_exit_3() {
     assert_eq!(o.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&o.stderr).contains("max_gap"));
     std::fs::write(&cfg, "no_such_setting = 1\n").unwrap();
-    assert_eq!(pacs(&["audit", "--config", &s(&cfg), &l.pass]).status.code(), Some(3));
+    assert_eq!(
+        pacs(&["audit", "--config", &s(&cfg), &l.pass])
+            .status
+            .code(),
+        Some(3)
+    );
     // A config that widens the allowed gap is applied.
     std::fs::write(&cfg, "max_gap = 0.5\nrest_speed = 0.01\n").unwrap();
-    assert_eq!(pacs(&["audit", "--config", &s(&cfg), &l.pass]).status.code(), Some(0));
+    assert_eq!(
+        pacs(&["audit", "--config", &s(&cfg), &l.pass])
+            .status
+            .code(),
+        Some(0)
+    );
     let _ = std::fs::remove_dir_all(&l.dir);
 }
 
@@ -163,18 +211,37 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
     let out = l.dir.join("out");
     let cfg = l.dir.join("task.toml");
     std::fs::write(&cfg, "max_gap = 0.05\n").unwrap();
-    let o = pacs(&["audit", "--config", &s(&cfg), "--out", &s(&out), &l.pass, &l.fail]);
-    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = pacs(&[
+        "audit",
+        "--config",
+        &s(&cfg),
+        "--out",
+        &s(&out),
+        &l.pass,
+        &l.fail,
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.starts_with("<!DOCTYPE html>"));
     assert_eq!(html.matches("<svg").count(), 4, "two plots per log");
     assert!(html.contains("class=\"separation\""));
     assert!(html.contains("class=\"energy-nominal\""));
-    assert!(html.contains("class=\"violation\""), "violation spans shaded");
+    assert!(
+        html.contains("class=\"violation\""),
+        "violation spans shaded"
+    );
     assert!(!html.contains("<script"), "self-contained, no scripts");
     assert!(html.contains("Safety Viol."));
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("| sorting | act | pacs | 1 |") && md.contains("| sorting | act | none | 1 |"), "{md}");
+    assert!(
+        md.contains("| sorting | act | pacs | 1 |") && md.contains("| sorting | act | none | 1 |"),
+        "{md}"
+    );
     let rep: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(rep["verdict"], "fail");
@@ -188,7 +255,9 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
         && o.status.success()
     {
         let text = String::from_utf8_lossy(&o.stdout).to_string();
-        let mut it = text.lines().map(|line| line.split_whitespace().next().unwrap().to_string());
+        let mut it = text
+            .lines()
+            .map(|line| line.split_whitespace().next().unwrap().to_string());
         assert_eq!(logs_in[0]["sha256"], it.next().unwrap());
         assert_eq!(rep["inputs"]["config"]["sha256"], it.next().unwrap());
     }

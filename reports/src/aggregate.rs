@@ -50,7 +50,11 @@ pub fn mean_std(xs: &[f64]) -> Option<(f64, f64)> {
 pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
     let mut keys: Vec<(String, String, String)> = Vec::new();
     for r in runs {
-        let k = (meta_str(r, "task"), meta_str(r, "policy"), meta_str(r, "filter"));
+        let k = (
+            meta_str(r, "task"),
+            meta_str(r, "policy"),
+            meta_str(r, "filter"),
+        );
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -60,11 +64,18 @@ pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
             let group: Vec<&RunResult> = runs
                 .iter()
                 .filter(|r| {
-                    (meta_str(r, "task"), meta_str(r, "policy"), meta_str(r, "filter")) == k
+                    (
+                        meta_str(r, "task"),
+                        meta_str(r, "policy"),
+                        meta_str(r, "filter"),
+                    ) == k
                 })
                 .collect();
             let b = |x: bool| if x { 1.0 } else { 0.0 };
-            let succ: Vec<f64> = group.iter().filter_map(|r| r.metrics.success.map(b)).collect();
+            let succ: Vec<f64> = group
+                .iter()
+                .filter_map(|r| r.metrics.success.map(b))
+                .collect();
             let safe: Vec<f64> = group
                 .iter()
                 .filter_map(|r| r.metrics.safe_success.map(b))

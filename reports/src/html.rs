@@ -1,6 +1,8 @@
 //! `report.html`: one self-contained file (inline CSS and SVG, no scripts), readable when printed.
 
-use crate::{GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg};
+use crate::{
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg,
+};
 use pacs_verify::audit::Verdict;
 use std::fmt::Write;
 
@@ -21,7 +23,8 @@ fn verdict_cell(v: Verdict) -> String {
 }
 
 fn opt(v: Option<f64>, unit: &str) -> String {
-    v.map(|x| format!("{x:.4} {unit}")).unwrap_or_else(|| "n/a".into())
+    v.map(|x| format!("{x:.4} {unit}"))
+        .unwrap_or_else(|| "n/a".into())
 }
 
 /// The HTML report.
@@ -47,7 +50,11 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
         input
             .config
             .as_ref()
-            .map(|c| format!("<code>{}</code> (SHA-256 <code>{}</code>)", esc(&c.path), c.sha256))
+            .map(|c| format!(
+                "<code>{}</code> (SHA-256 <code>{}</code>)",
+                esc(&c.path),
+                c.sha256
+            ))
             .unwrap_or_else(|| "defaults".into()),
         esc(&serde_json::to_string(&input.settings).unwrap_or_default())
     );
@@ -67,7 +74,9 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
             opt(m.min_separation, "m"),
             r.violations.len(),
             m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
-            m.safe_success.map(|b| b.to_string()).unwrap_or("n/a".into()),
+            m.safe_success
+                .map(|b| b.to_string())
+                .unwrap_or("n/a".into()),
         );
     }
     s.push_str("</table>");

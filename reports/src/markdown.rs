@@ -4,7 +4,8 @@ use crate::{GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, ove
 use std::fmt::Write;
 
 fn opt(v: Option<f64>, unit: &str) -> String {
-    v.map(|x| format!("{x:.4} {unit}")).unwrap_or_else(|| "n/a".into())
+    v.map(|x| format!("{x:.4} {unit}"))
+        .unwrap_or_else(|| "n/a".into())
 }
 
 /// The Markdown report.
@@ -46,7 +47,9 @@ pub fn report(input: &ReportInput) -> String {
             opt(m.min_separation, "m"),
             r.violations.len(),
             m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
-            m.safe_success.map(|b| b.to_string()).unwrap_or("n/a".into()),
+            m.safe_success
+                .map(|b| b.to_string())
+                .unwrap_or("n/a".into()),
         );
     }
     if input.runs.len() > 1 {

@@ -29,7 +29,9 @@ impl Frame {
 }
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 fn axes(out: &mut String, f: &Frame, title: &str, ylabel: &str) {
@@ -99,20 +101,35 @@ fn shading(out: &mut String, f: &Frame, s: &[SeriesPoint]) {
         let _ = write!(
             out,
             r#"<rect class="{}" x="{a:.2}" y="{MT}" width="{:.2}" height="{}" fill="{colour}" fill-opacity="0.3"/>"#,
-            if p.violation { "violation" } else { "inconclusive" },
+            if p.violation {
+                "violation"
+            } else {
+                "inconclusive"
+            },
             (b - a).max(0.8),
             H - MT - MB
         );
     }
 }
 
-fn polyline(out: &mut String, f: &Frame, pts: impl Iterator<Item = (f64, Option<f64>)>, style: &str) {
+fn polyline(
+    out: &mut String,
+    f: &Frame,
+    pts: impl Iterator<Item = (f64, Option<f64>)>,
+    style: &str,
+) {
     let mut d = String::new();
     let mut pen = false;
     for (t, v) in pts {
         match v {
             Some(v) if v.is_finite() => {
-                let _ = write!(d, "{}{:.2},{:.2} ", if pen { "L" } else { "M" }, f.x(t), f.y(v));
+                let _ = write!(
+                    d,
+                    "{}{:.2},{:.2} ",
+                    if pen { "L" } else { "M" },
+                    f.x(t),
+                    f.y(v)
+                );
                 pen = true;
             }
             _ => pen = false,
@@ -161,7 +178,11 @@ pub fn separation_plot(s: &[SeriesPoint]) -> String {
     );
     legend(
         &mut out,
-        &[("separation", "#1565c0"), ("violation", "#e5393580"), ("inconclusive", "#9e9e9e80")],
+        &[
+            ("separation", "#1565c0"),
+            ("violation", "#e5393580"),
+            ("inconclusive", "#9e9e9e80"),
+        ],
     );
     out.push_str("</svg>");
     out

@@ -35,7 +35,8 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Str
         None => Ok((AuditConfig::default(), None)),
         Some(p) => {
             let name = p.display().to_string();
-            let text = std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
+            let text =
+                std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
             let cfg = audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
             let hash = InputFile::hash(p).map_err(|e| e.to_string())?;
             Ok((cfg, Some(hash)))
@@ -106,7 +107,8 @@ pub fn main(args: AuditArgs) -> ExitCode {
         return ExitCode::from(74);
     }
     if let Some(dir) = &args.out {
-        let logs: Result<Vec<InputFile>, _> = args.logs.iter().map(|p| InputFile::hash(p)).collect();
+        let logs: Result<Vec<InputFile>, _> =
+            args.logs.iter().map(|p| InputFile::hash(p)).collect();
         let logs = match logs {
             Ok(l) => l,
             Err(e) => {

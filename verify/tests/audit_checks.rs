@@ -78,7 +78,10 @@ fn clean_log_passes_and_min_separation_is_a_lower_bound() {
         true_min = true_min.min(min_gap(&robot, &q, &h, &far));
         log.robot(t, &q, Some(&[0.4 * t.cos(), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
     }
-    assert!(true_min > 0.5, "premise: human far from the robot ({true_min})");
+    assert!(
+        true_min > 0.5,
+        "premise: human far from the robot ({true_min})"
+    );
     let r = run(&log.text(), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Pass, "{r:#?}");
     assert!(r.violations.is_empty() && r.inconclusive.is_empty());
@@ -86,7 +89,10 @@ fn clean_log_passes_and_min_separation_is_a_lower_bound() {
     assert_eq!(r.metrics.violation_fraction, 0.0);
     assert!((r.metrics.duration - 0.5).abs() < 1e-12);
     let lb = r.metrics.min_separation.unwrap();
-    assert!(lb > 0.0 && lb <= true_min, "lower bound {lb} vs exact {true_min}");
+    assert!(
+        lb > 0.0 && lb <= true_min,
+        "lower bound {lb} vs exact {true_min}"
+    );
 }
 
 #[test]
@@ -96,7 +102,10 @@ fn violation_at_the_first_sample_is_caught_and_certain() {
     let w = 0.5;
     let q0 = q_at(0.0);
     let touching = reaching(hand_contact(&q0, 0.02));
-    assert!(min_gap(&robot, &q0, &h, &touching) < 0.0, "premise: contact at t = 0");
+    assert!(
+        min_gap(&robot, &q0, &h, &touching) < 0.0,
+        "premise: contact at t = 0"
+    );
     let far = standing(2.5, 0.0);
     let mut log = Log::new(ssm());
     log.human(0.0, &touching);
@@ -109,8 +118,16 @@ fn violation_at_the_first_sample_is_caught_and_certain() {
     }
     let r = run(&log.text(), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Fail);
-    assert!(r.violations.iter().all(|v| v.t_start == 0.0 && v.t_end == 0.001));
-    let v = r.violations.iter().find(|v| v.body_part == "rHand").unwrap();
+    assert!(
+        r.violations
+            .iter()
+            .all(|v| v.t_start == 0.0 && v.t_end == 0.001)
+    );
+    let v = r
+        .violations
+        .iter()
+        .find(|v| v.body_part == "rHand")
+        .unwrap();
     assert!(v.certain && v.constraint == ConstraintKind::Ssm);
     assert!(v.min_separation < 0.0);
     assert_eq!(r.metrics.violating_samples, 1);
@@ -137,7 +154,10 @@ fn violation_at_the_last_sample_is_caught_and_certain() {
         log.robot(t, &q, Some(&[w, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
     }
     let first = first_contact.unwrap();
-    assert!(first > 0 && first < n, "premise: contact only near the end ({first})");
+    assert!(
+        first > 0 && first < n,
+        "premise: contact only near the end ({first})"
+    );
     let r = run(&log.text(), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Fail);
     let v = r
@@ -173,7 +193,11 @@ fn one_sample_human_spike_is_caught() {
     for v in &r.violations {
         assert_eq!((v.t_start, v.t_end), (tk, tk + 1e-3));
     }
-    assert!(r.violations.iter().any(|v| v.body_part == "rHand" && v.certain));
+    assert!(
+        r.violations
+            .iter()
+            .any(|v| v.body_part == "rHand" && v.certain)
+    );
     assert_eq!(r.metrics.violating_samples, 1);
 }
 
@@ -208,7 +232,10 @@ fn violation_only_between_samples_is_caught() {
     let ga = min_gap(&robot, &qa, &h, &kp);
     let gb = min_gap(&robot, &qb, &h, &kp);
     let gm = min_gap(&robot, &qm, &h, &kp);
-    assert!(ga > 0.02 && gb > 0.02, "premise: samples clear ({ga}, {gb})");
+    assert!(
+        ga > 0.02 && gb > 0.02,
+        "premise: samples clear ({ga}, {gb})"
+    );
     assert!(gm < 0.0, "premise: midway configuration in contact ({gm})");
     // The midway configuration is reachable: joint 1 needs 2θ/Δt ≤ v_max.
     assert!(2.0 * theta / dt <= robot.limits().v_max()[0]);
@@ -222,7 +249,11 @@ fn violation_only_between_samples_is_caught() {
     };
     let r = run(&log.text(), &cfg).unwrap();
     assert_eq!(r.verdict, Verdict::Fail);
-    let v = r.violations.iter().find(|v| v.body_part == "rHand").unwrap();
+    let v = r
+        .violations
+        .iter()
+        .find(|v| v.body_part == "rHand")
+        .unwrap();
     assert!(!v.certain, "not at a recorded sample");
     assert!(r.violations.iter().all(|v| !v.certain));
 }
@@ -274,7 +305,9 @@ fn pfl_log(task: ConstraintSpec, w: f64, left_on_right: bool) -> String {
 fn pfl_energy_just_above_and_below_threshold() {
     let w = 0.8;
     let dq = [w, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    let e: Vec<f64> = (0..3).map(|i| energy(&q_at(w * i as f64 * 1e-3), &dq)).collect();
+    let e: Vec<f64> = (0..3)
+        .map(|i| energy(&q_at(w * i as f64 * 1e-3), &dq))
+        .collect();
     let (e_min, e_max) = (
         e.iter().cloned().fold(f64::INFINITY, f64::min),
         e.iter().cloned().fold(0.0, f64::max),
@@ -282,7 +315,11 @@ fn pfl_energy_just_above_and_below_threshold() {
     let kp = reaching(hand_contact(&q_at(0.0), 0.01));
     assert!(gap_part(&q_at(0.0), &kp, "rHand") < 0.0, "premise: contact");
     // Just above: 0.5 % below the exact energy at every sample → certain PFL violation.
-    let r = run(&pfl_log(pfl_task(0.995 * e_min, 0.0), w, false), &AuditConfig::default()).unwrap();
+    let r = run(
+        &pfl_log(pfl_task(0.995 * e_min, 0.0), w, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
     assert_eq!(r.verdict, Verdict::Fail);
     let v = r
         .violations
@@ -296,11 +333,23 @@ fn pfl_energy_just_above_and_below_threshold() {
     );
     assert!(v.energy >= e_max, "bound {} below exact {e_max}", v.energy);
     // Just below: 0.5 % above the exact energy → never a certain violation.
-    let r = run(&pfl_log(pfl_task(1.005 * e_max, 0.0), w, false), &AuditConfig::default()).unwrap();
-    assert!(r.violations.iter().all(|v| !v.certain), "{:?}", r.violations);
+    let r = run(
+        &pfl_log(pfl_task(1.005 * e_max, 0.0), w, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert!(
+        r.violations.iter().all(|v| !v.certain),
+        "{:?}",
+        r.violations
+    );
     // Above the bound's slack (measured ≈ 24 % here: interval dependency and the Gershgorin
     // inertia bound): pass.
-    let r = run(&pfl_log(pfl_task(1.30 * e_max, 0.0), w, false), &AuditConfig::default()).unwrap();
+    let r = run(
+        &pfl_log(pfl_task(1.30 * e_max, 0.0), w, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.violations);
 }
 
@@ -341,7 +390,8 @@ fn environment_shape_makes_contact_constrained() {
     let hand = hand_contact(&q_at(0.0), 0.01);
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let mut header: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
-    header["environment"] = serde_json::json!([{"p1": hand, "p2": [hand[0], hand[1], hand[2] + 0.5], "radius": 0.05}]);
+    header["environment"] =
+        serde_json::json!([{"p1": hand, "p2": [hand[0], hand[1], hand[2] + 0.5], "radius": 0.05}]);
     lines[0] = header.to_string();
     let r = run(&(lines.join("\n") + "\n"), &AuditConfig::default()).unwrap();
     let v = r
@@ -368,11 +418,15 @@ fn gaps_missing_human_and_limit_violations_are_inconclusive() {
     let r = run(&log.text(), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Inconclusive);
     assert_eq!(r.inconclusive[0].reason, "gap");
-    assert_eq!((r.inconclusive[0].t_start, r.inconclusive[0].t_end), (0.0, 0.5));
+    assert_eq!(
+        (r.inconclusive[0].t_start, r.inconclusive[0].t_end),
+        (0.0, 0.5)
+    );
     // Samples moving faster than v_max.
     let mut log = Log::new(ssm());
     log.human(0.0, &far);
-    log.robot(0.0, &q_at(0.0), None).robot(0.001, &q_at(0.1), None);
+    log.robot(0.0, &q_at(0.0), None)
+        .robot(0.001, &q_at(0.1), None);
     let r = run(&log.text(), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Inconclusive);
     assert_eq!(r.inconclusive[0].reason, "exceeds_limits");

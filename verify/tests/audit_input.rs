@@ -34,7 +34,11 @@ fn expect_error(text: &str, line: Option<u64>, what: &str) {
 
 #[test]
 fn valid_baseline_passes() {
-    let r = run(&lines(&[HEADER, HUMAN, ROBOT0, ROBOT1]), &AuditConfig::default()).unwrap();
+    let r = run(
+        &lines(&[HEADER, HUMAN, ROBOT0, ROBOT1]),
+        &AuditConfig::default(),
+    )
+    .unwrap();
     assert_eq!(r.verdict, pacs_verify::audit::Verdict::Pass);
 }
 
@@ -51,16 +55,32 @@ fn truncated_last_line() {
 
 #[test]
 fn non_json_line() {
-    expect_error(&lines(&[HEADER, HUMAN, "hello", ROBOT1]), Some(3), "invalid JSON");
-    expect_error(&lines(&[HEADER, HUMAN, r#"{"type":"robot","t":0.0,"q":[1,2"#, ROBOT1]), Some(3), "invalid JSON");
+    expect_error(
+        &lines(&[HEADER, HUMAN, "hello", ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
+    expect_error(
+        &lines(&[HEADER, HUMAN, r#"{"type":"robot","t":0.0,"q":[1,2"#, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
 }
 
 #[test]
 fn nan_and_infinity() {
     let nan = r#"{"type":"robot","t":0.0,"q":[NaN,-0.785,0,-2.356,0,1.571,0.785]}"#;
-    expect_error(&lines(&[HEADER, HUMAN, nan, ROBOT1]), Some(3), "invalid JSON");
+    expect_error(
+        &lines(&[HEADER, HUMAN, nan, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
     let inf = r#"{"type":"robot","t":0.0,"q":[1e999,-0.785,0,-2.356,0,1.571,0.785]}"#;
-    expect_error(&lines(&[HEADER, HUMAN, inf, ROBOT1]), Some(3), "invalid JSON");
+    expect_error(
+        &lines(&[HEADER, HUMAN, inf, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
     let inf_t = r#"{"type":"human","t":1e400,"positions":[]}"#;
     expect_error(&lines(&[HEADER, inf_t]), Some(2), "invalid JSON");
 }
@@ -68,15 +88,27 @@ fn nan_and_infinity() {
 #[test]
 fn time_going_backwards() {
     let back = r#"{"type":"robot","t":-0.5,"q":[0,-0.785,0,-2.356,0,1.571,0.785]}"#;
-    expect_error(&lines(&[HEADER, HUMAN, ROBOT0, back]), Some(4), "time goes backwards");
+    expect_error(
+        &lines(&[HEADER, HUMAN, ROBOT0, back]),
+        Some(4),
+        "time goes backwards",
+    );
 }
 
 #[test]
 fn wrong_joint_and_keypoint_counts() {
     let six = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571]}"#;
-    expect_error(&lines(&[HEADER, HUMAN, six]), Some(3), "expected 7 joint positions");
+    expect_error(
+        &lines(&[HEADER, HUMAN, six]),
+        Some(3),
+        "expected 7 joint positions",
+    );
     let dq = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571,0.785],"dq":[0]}"#;
-    expect_error(&lines(&[HEADER, HUMAN, dq]), Some(3), "expected 7 joint velocities");
+    expect_error(
+        &lines(&[HEADER, HUMAN, dq]),
+        Some(3),
+        "expected 7 joint velocities",
+    );
     let kp = r#"{"type":"human","t":0.0,"positions":[[2,0,1]]}"#;
     expect_error(&lines(&[HEADER, kp]), Some(2), "expected 9 keypoints");
 }
@@ -94,7 +126,11 @@ fn missing_or_bad_header() {
 
 #[test]
 fn unknown_record_type_and_fields() {
-    expect_error(&lines(&[HEADER, r#"{"type":"lidar","t":0.0}"#]), Some(2), "unknown record type `lidar`");
+    expect_error(
+        &lines(&[HEADER, r#"{"type":"lidar","t":0.0}"#]),
+        Some(2),
+        "unknown record type `lidar`",
+    );
     expect_error(&lines(&[HEADER, r#"{"t":0.0}"#]), Some(2), "no `type`");
     let extra = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571,0.785],"qq":1}"#;
     expect_error(&lines(&[HEADER, extra]), Some(2), "unknown field `qq`");
@@ -102,7 +138,13 @@ fn unknown_record_type_and_fields() {
     expect_error(&lines(&[HEADER, no_t]), Some(2), "no `t`");
     // Shield diagnostics may carry anything.
     let shield = r#"{"type":"shield","t":0.0,"anything":{"x":[1,2]}}"#;
-    assert!(run(&lines(&[HEADER, HUMAN, shield, ROBOT0, ROBOT1]), &AuditConfig::default()).is_ok());
+    assert!(
+        run(
+            &lines(&[HEADER, HUMAN, shield, ROBOT0, ROBOT1]),
+            &AuditConfig::default()
+        )
+        .is_ok()
+    );
 }
 
 #[test]
@@ -121,8 +163,14 @@ fn writer_rejects_what_the_reader_would_reject() {
         ssm(),
     );
     w.write_header(&h).unwrap();
-    assert!(matches!(w.write_robot(f64::NAN, &[0.0], None), Err(WriteError::NotFinite { .. })));
-    assert!(matches!(w.write_robot(1.0, &[f64::INFINITY], None), Err(WriteError::NotFinite { .. })));
+    assert!(matches!(
+        w.write_robot(f64::NAN, &[0.0], None),
+        Err(WriteError::NotFinite { .. })
+    ));
+    assert!(matches!(
+        w.write_robot(1.0, &[f64::INFINITY], None),
+        Err(WriteError::NotFinite { .. })
+    ));
     w.write_robot(1.0, &[0.0], None).unwrap();
     assert!(w.write_robot(0.5, &[0.0], None).is_err(), "time backwards");
 }

@@ -6,6 +6,9 @@
 //! violation is *possible* if the enclosures admit one, *certain* if it holds at a recorded sample
 //! with the measured keypoints taken at face value. See `docs/audit.md` for the exact semantics.
 
+// Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 use super::log::LogModels;
 use super::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, SeriesPoint, Verdict,
@@ -83,7 +86,9 @@ impl AuditConfig {
             }
         }
         if self.human_model == HumanReachModel::Acc {
-            return Err("human_model: `acc` needs measured velocities, which logs do not carry".into());
+            return Err(
+                "human_model: `acc` needs measured velocities, which logs do not carry".into(),
+            );
         }
         Ok(())
     }
@@ -309,8 +314,7 @@ fn bounding_sphere(caps: &[Capsule]) -> Capsule {
 
 /// Signed separation lower bound (m) of two capsules: negative values bound the overlap depth.
 fn signed_separation(a: &Capsule, b: &Capsule) -> f64 {
-    let d =
-        pacs_reach::geometry::segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
+    let d = pacs_reach::geometry::segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
     sub_down(d, add_up(a.radius(), b.radius()))
 }
 
@@ -687,8 +691,7 @@ impl Auditor {
         }
         // Broad phase 1: the sphere around every configuration within the joint limits.
         let lim = self.robot.limits();
-        let within_limits =
-            (0..n).all(|j| q_lo[j] >= lim.q_min()[j] && q_hi[j] <= lim.q_max()[j]);
+        let within_limits = (0..n).all(|j| q_lo[j] >= lim.q_min()[j] && q_hi[j] <= lim.q_max()[j]);
         let mut sep = f64::INFINITY;
         if within_limits {
             let mut all_clear = true;
@@ -749,7 +752,8 @@ impl Auditor {
             return;
         }
         // Narrow phase: constraints of the parts that may be touched.
-        let at_rest = (0..n).all(|j| dq_lo[j] >= -self.cfg.rest_speed && dq_hi[j] <= self.cfg.rest_speed);
+        let at_rest =
+            (0..n).all(|j| dq_lo[j] >= -self.cfg.rest_speed && dq_hi[j] <= self.cfg.rest_speed);
         if self
             .rreach
             .subchain_energy_bounds_into(
@@ -820,7 +824,8 @@ impl Auditor {
         for k in 0..self.hits.len() {
             let h = self.hits[k];
             let key = h.part * self.links + h.link;
-            let extend = matches!(&self.open[key], Some(o) if o.last_span + 1 == idx && o.kind == h.kind);
+            let extend =
+                matches!(&self.open[key], Some(o) if o.last_span + 1 == idx && o.kind == h.kind);
             if extend {
                 let Some(o) = self.open[key].as_mut() else {
                     continue;
@@ -963,14 +968,21 @@ impl Auditor {
     }
 
     /// Close the audit: the verdict, intervals and metrics.
-    pub fn finish(mut self, log: &str, meta: serde_json::Map<String, serde_json::Value>) -> RunResult {
+    pub fn finish(
+        mut self,
+        log: &str,
+        meta: serde_json::Map<String, serde_json::Value>,
+    ) -> RunResult {
         for key in 0..self.open.len() {
             if let Some(o) = self.open[key].take() {
                 self.close(key, o);
             }
         }
-        self.violations
-            .sort_by(|a, b| a.t_start.total_cmp(&b.t_start).then(a.body_part.cmp(&b.body_part)));
+        self.violations.sort_by(|a, b| {
+            a.t_start
+                .total_cmp(&b.t_start)
+                .then(a.body_part.cmp(&b.body_part))
+        });
         if self.samples >= 2 && self.last_span_violated {
             self.violating_samples += 1;
         }

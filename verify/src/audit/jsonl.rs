@@ -305,7 +305,12 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
     fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
         loop {
             self.line.clear();
-            let n = read_line(&self.file, &mut self.input, &mut self.line, self.line_no + 1)?;
+            let n = read_line(
+                &self.file,
+                &mut self.input,
+                &mut self.line,
+                self.line_no + 1,
+            )?;
             if n == 0 {
                 return Ok(None);
             }
@@ -321,7 +326,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
             // The last line of a file must be complete: a writer killed mid-line leaves a prefix
             // that may still parse (e.g. a shortened number), so an unterminated line is rejected.
             return Err(err(
-                "truncated line (no newline at the end of the file)".into(),
+                "truncated line (no newline at the end of the file)".into()
             ));
         }
         let b = &mut self.bufs;
@@ -340,9 +345,8 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         if kind == Kind::Header {
             return Err(err("a second header record".into()));
         }
-        let t = b
-            .t
-            .ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
+        let t =
+            b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
         let allowed: &[&str] = match kind {
             Kind::Robot => &["q", "dq"],
             Kind::Human => &["t_meas", "positions"],
@@ -367,7 +371,10 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                 ("name", b.has_name),
             ];
             if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
-                return Err(err(format!("unknown field `{f}` in a {} record", b.kind_name)));
+                return Err(err(format!(
+                    "unknown field `{f}` in a {} record",
+                    b.kind_name
+                )));
             }
         }
         Ok(Some(match kind {

@@ -68,10 +68,16 @@ impl Header {
     /// Check `type`, `format` and `version`; returns the problem otherwise.
     pub fn check(&self) -> Result<(), String> {
         if self.kind != "header" {
-            return Err(format!("first record: type `{}`, expected `header`", self.kind));
+            return Err(format!(
+                "first record: type `{}`, expected `header`",
+                self.kind
+            ));
         }
         if self.format != FORMAT {
-            return Err(format!("header.format: `{}`, expected `{FORMAT}`", self.format));
+            return Err(format!(
+                "header.format: `{}`, expected `{FORMAT}`",
+                self.format
+            ));
         }
         if self.version != VERSION {
             return Err(format!(
@@ -119,9 +125,8 @@ impl LogModels {
             .map_err(|e| format!("header.constraints: {e}"))?;
         let mut environment = Vec::with_capacity(h.environment.len());
         for (i, c) in h.environment.iter().enumerate() {
-            environment.push(
-                Capsule::try_from(*c).map_err(|e| format!("header.environment[{i}]: {e}"))?,
-            );
+            environment
+                .push(Capsule::try_from(*c).map_err(|e| format!("header.environment[{i}]: {e}"))?);
         }
         Ok(Self {
             robot,

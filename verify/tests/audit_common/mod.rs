@@ -25,7 +25,12 @@ pub fn point_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
 
 /// Exact distance between segments by ternary search over the first segment's parameter
 /// (the distance to a segment is convex along a line).
-pub fn segment_segment(a0: &Point3<f64>, a1: &Point3<f64>, b0: &Point3<f64>, b1: &Point3<f64>) -> f64 {
+pub fn segment_segment(
+    a0: &Point3<f64>,
+    a1: &Point3<f64>,
+    b0: &Point3<f64>,
+    b1: &Point3<f64>,
+) -> f64 {
     let f = |s: f64| point_segment(&(a0 + (a1 - a0) * s), b0, b1);
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     for _ in 0..200 {
@@ -62,8 +67,12 @@ pub fn human_capsules(human: &HumanModel, kp: &[[f64; 3]]) -> Vec<(String, Capsu
         .map(|b| {
             (
                 b.name.clone(),
-                Capsule::new(Point3::from(kp[b.from]), Point3::from(kp[b.to]), b.thickness / 2.0)
-                    .unwrap(),
+                Capsule::new(
+                    Point3::from(kp[b.from]),
+                    Point3::from(kp[b.to]),
+                    b.thickness / 2.0,
+                )
+                .unwrap(),
             )
         })
         .collect()
