@@ -401,6 +401,12 @@ impl Auditor {
             robot: models.robot.name().to_string(),
             human: models.human.spec().name.clone(),
             constraints: tc.name.clone(),
+            robot_v_max: models.robot.limits().v_max().to_vec(),
+            robot_a_max: models.robot.limits().a_max().to_vec(),
+            human_v_max: models.human.v_max().to_vec(),
+            human_measurement_error_pos: models.human.measurement_error_pos(),
+            human_delay: models.human.delay(),
+            environment_shapes: models.environment.len(),
         };
         let links = models.robot.links().len();
         Ok(Self {

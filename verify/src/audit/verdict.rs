@@ -167,4 +167,16 @@ pub struct ModelNames {
     pub human: String,
     /// Task constraints name.
     pub constraints: String,
+    /// Robot joint velocity limits (rad/s) the span boxes use.
+    pub robot_v_max: Vec<f64>,
+    /// Robot joint acceleration limits (rad/s²) the velocity boxes use.
+    pub robot_a_max: Vec<f64>,
+    /// Human keypoint speed bounds (m/s).
+    pub human_v_max: Vec<f64>,
+    /// Human position measurement error bound (m).
+    pub human_measurement_error_pos: f64,
+    /// Human sensor delay (s).
+    pub human_delay: f64,
+    /// Number of static environment capsules.
+    pub environment_shapes: usize,
 }
