@@ -1,7 +1,7 @@
 //! Offline audit of logged runs against SSM and PFL (issue 5).
 //!
 //! - [`log`]: log format v1 (header, records) and the JSON Lines [`log::LogWriter`];
-//! - [`jsonl`]: the streaming JSON Lines reader;
+//! - [`jsonl`]: the streaming JSON Lines reader; [`csv`]: the CSV form;
 //! - [`check`]: the sound span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
 //! - [`verdict`]: verdicts, violation intervals, metrics;
 //! - [`error`]: typed input errors naming file, line and problem.
@@ -9,6 +9,7 @@
 //! Entry points: [`audit_file`] and [`audit_reader`]. Semantics: `docs/audit.md`.
 
 pub mod check;
+pub mod csv;
 pub mod error;
 pub mod jsonl;
 pub mod log;
@@ -86,8 +87,8 @@ pub fn audit_reader(
     Ok(auditor.finish(&file, header.meta))
 }
 
-/// Audit one log file (JSON Lines: any extension except `.csv`). `name` is used in messages and
-/// the result (usually the path as given).
+/// Audit one log file: CSV form if the name ends in `.csv`, JSON Lines otherwise. The path as
+/// given names the log in messages and in the result.
 pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, AuditError> {
     let name = path.display().to_string();
     let f = std::fs::File::open(path).map_err(|e| AuditError::Io {
@@ -95,6 +96,14 @@ pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, AuditErro
         source: e,
     })?;
     let input = std::io::BufReader::with_capacity(1 << 16, f);
-    let mut reader = jsonl::JsonlReader::new(&name, input)?;
-    audit_reader(&mut reader, cfg)
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        let mut reader = csv::CsvReader::new(&name, input)?;
+        audit_reader(&mut reader, cfg)
+    } else {
+        let mut reader = jsonl::JsonlReader::new(&name, input)?;
+        audit_reader(&mut reader, cfg)
+    }
 }
