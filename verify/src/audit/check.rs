@@ -892,6 +892,10 @@ impl Auditor {
             return;
         };
         let Some(m) = self.humans[slot].as_ref() else {
+            // Unreachable by construction; never let an unchecked span pass.
+            self.mark_inconclusive(t0, t1, Reason::NoHuman);
+            self.inconclusive_duration += dt;
+            finish_span(self, false, false);
             return;
         };
         if t1 - m.time() > self.cfg.max_human_age {
