@@ -36,6 +36,11 @@ enum Command {
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
+    /// Run the built-in handover demo with PACS and with the filter OFF; print a summary.
+    Demo,
+    /// Measure speed (use a release build: `cargo run --release -- bench shield`).
+    #[command(subcommand)]
+    Bench(BenchCommand),
     /// Time-parameterize an action chunk into a jerk-limited intended trajectory (optionally with a
     /// path-consistent failsafe).
     Trajectory {
@@ -52,23 +57,38 @@ enum Command {
 }
 
 #[derive(Subcommand)]
+enum BenchCommand {
+    /// Time the shield step (PACS-SSM, PACS-PFL) and the CBF baseline on a fixed FR3 + walking
+    /// human scenario; prints median, p90, p99 and max per step in microseconds.
+    Shield {
+        /// Number of 1 ms safety steps per filter (the CBF runs at most 20000).
+        #[arg(long, default_value_t = 100_000)]
+        steps: usize,
+    },
+}
+
+#[derive(Subcommand)]
 enum ReachCommand {
     /// Capsules enclosing every link for every configuration in each joint box.
     ///
-    /// Input: {"robot": "fr3", "boxes": [{"q_lo": [...], "q_hi": [...]}], "tracking_error": 0.0}.
+    /// Input: {"robot": "fr3", "boxes": [{"q_lo": [...], "q_hi": [...]}], "tracking_error": 0.0}
+    /// (rad, m). Without --input: the built-in example (a ±0.01 rad box around the FR3 ready pose,
+    /// examples/robot.json).
     Robot {
-        /// Input JSON file.
+        /// Input JSON file (default: built-in example).
         #[arg(long, value_name = "FILE")]
-        input: PathBuf,
+        input: Option<PathBuf>,
     },
     /// Capsules enclosing every body part over each time interval after a measurement.
     ///
     /// Input: {"human": "default", "model": "combined"|"pos"|"vel"|"acc", "measurement": {"time": t,
-    /// "positions": [[x,y,z], ...], "velocities": [[x,y,z], ...]}, "intervals": [[t_a, t_b], ...]}.
+    /// "positions": [[x,y,z], ...], "velocities": [[x,y,z], ...]}, "intervals": [[t_a, t_b], ...]}
+    /// (m, m/s, s; absolute times). Without --input: the built-in example (default human in front
+    /// of the robot, three intervals, examples/human.json).
     Human {
-        /// Input JSON file.
+        /// Input JSON file (default: built-in example).
         #[arg(long, value_name = "FILE")]
-        input: PathBuf,
+        input: Option<PathBuf>,
     },
 }
 
@@ -85,11 +105,19 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Fk { input } => cli::fk::run(&input),
-        Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(&input),
-        Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(&input),
+        Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(input.as_deref()),
+        Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(input.as_deref()),
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
+        Command::Demo => {
+            use std::io::IsTerminal;
+            cli::demo::run_demo(std::io::stderr().is_terminal())
+        }
+        Command::Bench(BenchCommand::Shield { steps }) => {
+            use std::io::IsTerminal;
+            cli::bench::shield(steps, std::io::stderr().is_terminal())
+        }
         Command::Audit(args) => return cli::audit::main(args),
     };
     match result {

@@ -297,3 +297,66 @@ fn invalid_inputs_exit_3_with_a_message() {
         "cannot read",
     );
 }
+
+#[test]
+fn fk_accepts_a_urdf_robot() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/models/tests/data");
+    let urdf = json!({"urdf": format!("{dir}/fr3.urdf"), "side": format!("{dir}/fr3_side.toml")});
+    let a = ok_json(with_input(&["fk"], &json!({"robot": urdf, "q": [Q_READY]})));
+    let b = ok_json(with_input(
+        &["fk"],
+        &json!({"robot": "fr3", "q": [Q_READY]}),
+    ));
+    let caps = |v: &Value| -> Vec<f64> {
+        v["configurations"][0]["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|l| l["capsules"].as_array().unwrap().clone())
+            .flat_map(|c| {
+                let mut x: Vec<f64> = c["p1"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_f64().unwrap())
+                    .collect();
+                x.extend(
+                    c["p2"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|v| v.as_f64().unwrap()),
+                );
+                x.push(c["radius"].as_f64().unwrap());
+                x
+            })
+            .collect()
+    };
+    let (ca, cb) = (caps(&a), caps(&b));
+    assert_eq!(ca.len(), cb.len());
+    for (x, y) in ca.iter().zip(&cb) {
+        assert!((x - y).abs() < 1e-12, "{x} vs {y}");
+    }
+    invalid(
+        with_input(
+            &["fk"],
+            &json!({"robot": {"urdf": "/nonexistent.urdf"}, "q": [Q_READY]}),
+        ),
+        "nonexistent",
+    );
+}
+
+#[test]
+fn builtin_examples_run_without_input() {
+    let v = ok_json(pacs(&["reach", "human"]));
+    assert_eq!(v["intervals"].as_array().unwrap().len(), 3);
+    // Occupancies grow with the interval's end: the torso's radius increases.
+    let r = |i: usize| {
+        v["intervals"][i]["body_parts"][6]["radius"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(r(0) < r(1) && r(1) < r(2));
+    let v = ok_json(pacs(&["reach", "robot"]));
+    assert_eq!(v["boxes"][0]["links"].as_array().unwrap().len(), 10);
+}

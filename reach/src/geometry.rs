@@ -71,6 +71,18 @@ fn closest_params(
     (s, t)
 }
 
+/// Nominal (round-to-nearest) closest points of segments `a0a1` and `b0b1`: for controllers and
+/// diagnostics, not a bound.
+pub fn segment_closest_points(
+    a0: &Point3<f64>,
+    a1: &Point3<f64>,
+    b0: &Point3<f64>,
+    b1: &Point3<f64>,
+) -> (Point3<f64>, Point3<f64>) {
+    let (s, t) = closest_params(a0, a1, b0, b1);
+    (a0 + (a1 - a0) * s, b0 + (b1 - b0) * t)
+}
+
 /// A lower bound (m, ≥ 0) of the exact Euclidean distance between segments `a0a1` and `b0b1`.
 #[inline]
 pub fn segment_distance_lower_bound(

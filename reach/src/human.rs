@@ -25,8 +25,7 @@
 //! combination of points within r₁ of c₁ and r₂ of c₂). All radii are rounded up; centres computed
 //! in floating point have their rounding error bounded and added to the radius.
 
-use crate::interval::Interval;
-use crate::rounding::{add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
+use crate::rounding::{INFLATE, TINY, add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
 use nalgebra::{Point3, Vector3};
 use pacs_models::{Capsule, HumanModel};
 use serde::{Deserialize, Serialize};
@@ -74,7 +73,9 @@ pub enum ReachError {
 pub struct HumanMeasurement {
     time: f64,
     positions: Vec<Point3<f64>>,
-    velocities: Option<Vec<Vector3<f64>>>,
+    /// Velocity buffer (kept allocated); meaningful only when `has_velocities`.
+    velocities: Vec<Vector3<f64>>,
+    has_velocities: bool,
 }
 
 impl HumanMeasurement {
@@ -117,8 +118,21 @@ impl HumanMeasurement {
         Ok(Self {
             time,
             positions: positions.iter().map(|p| Point3::from(*p)).collect(),
-            velocities: velocities.map(|v| v.iter().map(|p| Vector3::from(*p)).collect()),
+            velocities: match velocities {
+                Some(v) => v.iter().map(|p| Vector3::from(*p)).collect(),
+                None => vec![Vector3::zeros(); n],
+            },
+            has_velocities: velocities.is_some(),
         })
+    }
+
+    /// Overwrite with `other`, reusing this measurement's buffers (no allocation when the
+    /// keypoint counts match and velocity presence is unchanged).
+    pub fn assign_from(&mut self, other: &HumanMeasurement) {
+        self.time = other.time;
+        self.positions.clone_from(&other.positions);
+        self.velocities.clone_from(&other.velocities);
+        self.has_velocities = other.has_velocities;
     }
 
     /// Time stamp (s).
@@ -131,7 +145,7 @@ impl HumanMeasurement {
     }
     /// Measured velocities (m/s), if any.
     pub fn velocities(&self) -> Option<&[Vector3<f64>]> {
-        self.velocities.as_deref()
+        self.has_velocities.then_some(self.velocities.as_slice())
     }
 }
 
@@ -177,26 +191,6 @@ impl Ball {
             radius: ra.max(rb),
         }
     }
-}
-
-/// Ball whose centre is only known to lie in an interval box: centre = box midpoint, radius
-/// enlarged by the distance to the farthest box corner (rounded up).
-fn ball_around_box(c: [Interval; 3], radius: f64) -> Ball {
-    let mut half = [0.0; 3];
-    let mut mid = [0.0; 3];
-    for i in 0..3 {
-        mid[i] = c[i].mid();
-        half[i] = sub_up(c[i].hi(), mid[i]).max(sub_up(mid[i], c[i].lo()));
-    }
-    Ball {
-        centre: Point3::from(mid),
-        radius: add_up(radius, crate::rounding::norm3_up(half[0], half[1], half[2])),
-    }
-}
-
-#[inline]
-fn pt(x: f64) -> Interval {
-    Interval::point(x)
 }
 
 /// Human occupancy computer: reusable buffers, no allocation per query.
@@ -271,20 +265,20 @@ impl HumanReach {
     }
 
     fn acc_ball_at(&self, p: &Point3<f64>, v: &Vector3<f64>, k: usize, t: f64) -> Ball {
-        let ti = pt(t);
-        let c = [
-            pt(p.x) + pt(v.x) * ti,
-            pt(p.y) + pt(v.y) * ti,
-            pt(p.z) + pt(v.z) * ti,
-        ];
-        let r = pt(self.model.measurement_error_pos())
-            + pt(self.model.measurement_error_vel()) * ti
-            + pt(0.5) * pt(self.model.a_max()[k]) * ti * ti;
-        ball_around_box(c, r.hi())
+        // Centre p + v·t in floating point: per coordinate the rounding error is at most
+        // 2u(|p| + |v·t|)(1 + u) < 3u(|p| + |v|·t); the vector error is at most the sum over
+        // coordinates (L1 ≥ L2), added to the radius. Radius: a sum of products of non-negative
+        // floats, inflated by `INFLATE` (see `rounding`).
+        let centre = p + v * t;
+        let err = ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
+        let r = self.model.measurement_error_pos()
+            + self.model.measurement_error_vel() * t
+            + 0.5 * self.model.a_max()[k] * t * t;
+        Ball { centre, radius: (r + err) * INFLATE + TINY }
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {
-        let v = m.velocities.as_ref()?[k];
+        let v = *m.velocities()?.get(k)?;
         let p = m.positions[k];
         Some(Ball::enclose(
             &self.acc_ball_at(&p, &v, k, t_lo),
@@ -314,7 +308,7 @@ impl HumanReach {
                 "measurement does not match the human model".into(),
             ));
         }
-        if self.kind == HumanReachModel::Acc && m.velocities.is_none() {
+        if self.kind == HumanReachModel::Acc && !m.has_velocities {
             return Err(ReachError::Input(
                 "model `acc` needs measured velocities (measurement.velocities)".into(),
             ));
@@ -338,7 +332,7 @@ impl HumanReach {
                 // The interval may start up to `back` (< 1e-9 s) before the measured state: any
                 // admissible motion moves at most (speed bound)·back in that time.
                 let mut speed = self.model.v_max()[k];
-                if let Some(v) = &m.velocities {
+                if let Some(v) = m.velocities() {
                     let vm = crate::rounding::norm3_up(v[k].x, v[k].y, v[k].z);
                     speed = speed.max(add_up(
                         add_up(vm, self.model.measurement_error_vel()),

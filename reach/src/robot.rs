@@ -169,6 +169,27 @@ struct Frames {
     t: [VecMR; MAX_DOF + 1],
 }
 
+/// Reusable scratch space for [`RobotReach`] queries (avoids re-initialising frame buffers).
+pub struct ReachScratch {
+    boxf: Frames,
+    cent: Frames,
+}
+
+impl std::fmt::Debug for ReachScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ReachScratch")
+    }
+}
+
+impl Default for ReachScratch {
+    fn default() -> Self {
+        Self {
+            boxf: Frames::new(),
+            cent: Frames::new(),
+        }
+    }
+}
+
 impl Frames {
     fn new() -> Self {
         let zm = MatMR {
@@ -357,6 +378,18 @@ impl RobotReach {
         q_hi: &[f64],
         out: &mut [Capsule],
     ) -> Result<(), crate::human::ReachError> {
+        self.occupancy_with(&mut ReachScratch::default(), q_lo, q_hi, out)
+    }
+
+    /// [`Self::occupancy_into`] with caller-provided scratch space (the hot-path form: nothing is
+    /// initialised or allocated per call).
+    pub fn occupancy_with(
+        &self,
+        scratch: &mut ReachScratch,
+        q_lo: &[f64],
+        q_hi: &[f64],
+        out: &mut [Capsule],
+    ) -> Result<(), crate::human::ReachError> {
         use crate::human::ReachError;
         let n = self.dof;
         if q_lo.len() != n || q_hi.len() != n {
@@ -388,10 +421,9 @@ impl RobotReach {
             qc[i] = qc[i].clamp(q_lo[i], q_hi[i]);
             delta[i] = sub_up(q_hi[i], qc[i]).max(sub_up(qc[i], q_lo[i]));
         }
-        let mut boxf = Frames::new();
-        let mut cent = Frames::new();
-        self.frames(q_lo, q_hi, &mut boxf);
-        self.frames(&qc[..n], &qc[..n], &mut cent);
+        let ReachScratch { boxf, cent } = scratch;
+        self.frames(q_lo, q_hi, boxf);
+        self.frames(&qc[..n], &qc[..n], cent);
         let margin = add_up(self.tracking_error, MODEL_PAD);
         for (ci, c) in self.capsules.iter().enumerate() {
             let k = c.frame;
@@ -402,11 +434,11 @@ impl RobotReach {
                 // Mean-value form around the centre configuration.
                 let pc = affine_point(&cent.r[k], &cent.t[k], p);
                 let (cb, mut eb) = mid_radius(&pc);
-                for j in 0..k.min(n) {
-                    if delta[j] == 0.0 {
+                for (j, &dj) in delta.iter().enumerate().take(k.min(n)) {
+                    if dj == 0.0 {
                         continue;
                     }
-                    eb = add_up(eb, mul_up(delta[j], dist_sup_up(&pb, &boxf.t[j + 1])));
+                    eb = add_up(eb, mul_up(dj, dist_sup_up(&pb, &boxf.t[j + 1])));
                 }
                 ends[e] = if eb < ea { (cb, eb) } else { (ca, ea) };
             }

@@ -66,10 +66,18 @@ pub fn sqrt_down(x: f64) -> f64 {
     x.max(0.0).sqrt().next_down().max(0.0)
 }
 
-/// Upper bound of the Euclidean norm of `(x, y, z)`.
+/// Relative inflation that bounds the rounding error of a short expression of non-negative terms:
+/// an expression of k ≤ 16 correctly rounded `+ × √` operations on non-negative floats is at most
+/// a factor (1 − u)^−k < 1 + 2e-15 below its exact value (u = 2⁻⁵³, no overflow), so multiplying
+/// by 1 + 1e-14 (itself rounded, losing < u) and adding [`TINY`] for underflow bounds it from above.
+pub const INFLATE: f64 = 1.0 + 1e-14;
+/// Absolute slack covering underflow in [`INFLATE`]-bounded expressions.
+pub const TINY: f64 = 1e-300;
+
+/// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`]).
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
-    sqrt_up(add_up(add_up(mul_up(x, x), mul_up(y, y)), mul_up(z, z)))
+    (x * x + y * y + z * z).sqrt() * INFLATE + TINY
 }
 
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
@@ -154,8 +162,8 @@ mod tests {
         let one = interval!(1.0, 1.0).unwrap();
         // Cody–Waite split of π/2: HI has 33 significant bits (k·HI exact), TAIL = π/2 − HI
         // correctly rounded (fdlibm's pio2_1, pio2_1t), enclosed by one ulp either side.
-        const HI: f64 = 1.570_796_326_734_125_614_17;
-        const TAIL: f64 = 6.077_100_506_506_192_249_32e-11;
+        const HI: f64 = f64::from_bits(0x3ff9_21fb_5440_0000); // 1.5707963267341256
+        const TAIL: f64 = f64::from_bits(0x3dd0_b461_1a62_6331); // 6.077100506506192e-11
         let tail = interval!(TAIL.next_down(), TAIL.next_up()).unwrap();
         assert!(
             (IInterval::PI / interval!(2.0, 2.0).unwrap())
@@ -223,6 +231,14 @@ mod tests {
             let (ts, tc) = taylor_sin_cos(x);
             prop_assert!(s.lo() <= ts.inf() && ts.sup() <= s.hi(), "sin {x} in [{a},{hi}]: {s:?} vs {ts:?}");
             prop_assert!(c.lo() <= tc.inf() && tc.sup() <= c.hi(), "cos {x} in [{a},{hi}]: {c:?} vs {tc:?}");
+        }
+
+        #[test]
+        fn norm3_up_bounds_exact(x in -1e6f64..1e6, y in -1e-3f64..1e3, z in -1e3f64..1e3) {
+            let (xi, yi, zi) = (interval!(x, x).unwrap(), interval!(y, y).unwrap(), interval!(z, z).unwrap());
+            let exact = (xi.sqr() + yi.sqr() + zi.sqr()).sqrt();
+            prop_assert!(exact.sup() <= norm3_up(x, y, z));
+            prop_assert!(norm3_down(x, y, z) <= exact.inf());
         }
 
         #[test]

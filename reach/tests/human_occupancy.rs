@@ -14,11 +14,13 @@ use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use proptest::prelude::*;
 use proptest::test_runner::TestRng;
 
+/// (start time, position, velocity, acceleration) of a constant-acceleration piece.
+type Piece = (f64, Point3<f64>, Vector3<f64>, Vector3<f64>);
+
 /// One keypoint's exact trajectory: pieces of constant acceleration.
 #[derive(Clone, Debug)]
 struct Track {
-    /// (start time, position, velocity, acceleration) per piece.
-    pieces: Vec<(f64, Point3<f64>, Vector3<f64>, Vector3<f64>)>,
+    pieces: Vec<Piece>,
 }
 
 impl Track {

@@ -1,6 +1,8 @@
 //! The `pacs` command line: one module per subcommand, shared error type and JSON I/O helpers.
 
 pub mod audit;
+pub mod bench;
+pub mod demo;
 pub mod fk;
 pub mod reach;
 pub mod show;
@@ -62,12 +64,22 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliEr
     parse_json(path, &text)
 }
 
-/// A robot given by built-in name (`"fr3"`) or as an inline model object.
+/// A robot given by built-in name (`"fr3"`), as a URDF file plus optional side file
+/// (`{"urdf": "arm.urdf", "side": "arm.toml"}`, paths relative to the working directory), or as
+/// an inline model object (the format `pacs robot show` prints).
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(untagged)]
 pub enum RobotRef {
     /// Built-in name.
     Name(String),
+    /// URDF file plus side file.
+    Urdf {
+        /// URDF path.
+        urdf: std::path::PathBuf,
+        /// Side file (JSON or TOML) with capsules and acceleration/jerk limits.
+        #[serde(default)]
+        side: Option<std::path::PathBuf>,
+    },
     /// Inline spec.
     Spec(Box<pacs_models::RobotSpec>),
 }
@@ -77,6 +89,10 @@ impl RobotRef {
     pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
         Ok(match self {
             RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
+            RobotRef::Urdf { urdf, side } => {
+                pacs_models::urdf::load_urdf_files(urdf, side.as_deref())
+                    .map_err(|e| CliError::Input(format!("robot {}: {e}", urdf.display())))?
+            }
             RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone())
                 .map_err(|e| CliError::Input(format!("robot: {e}")))?,
         })

@@ -1,6 +1,6 @@
 //! `pacs reach robot` and `pacs reach human`.
 
-use super::{CliError, HumanRef, RobotRef, check_vec, read_json};
+use super::{CliError, HumanRef, RobotRef, check_vec, parse_json, read_json};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::RobotReach;
 use serde::Deserialize;
@@ -27,9 +27,25 @@ struct RobotInput {
     tracking_error: f64,
 }
 
-/// Run `pacs reach robot --input F`.
-pub fn run_robot(path: &Path) -> Result<Value, CliError> {
-    let input: RobotInput = read_json(path)?;
+/// Built-in example input of `pacs reach robot`.
+const ROBOT_EXAMPLE: &str = include_str!("../../examples/robot.json");
+/// Built-in example input of `pacs reach human`.
+const HUMAN_EXAMPLE: &str = include_str!("../../examples/human.json");
+
+/// Read the input file, or parse the built-in example when no file is given.
+fn input_or_example<T: serde::de::DeserializeOwned>(
+    path: Option<&Path>,
+    example: &str,
+) -> Result<T, CliError> {
+    match path {
+        Some(p) => read_json(p),
+        None => parse_json(Path::new("<built-in example>"), example),
+    }
+}
+
+/// Run `pacs reach robot [--input F]`.
+pub fn run_robot(path: Option<&Path>) -> Result<Value, CliError> {
+    let input: RobotInput = input_or_example(path, ROBOT_EXAMPLE)?;
     let robot = input.robot.load()?;
     let reach = RobotReach::try_new(&robot, input.tracking_error)
         .map_err(|e| CliError::Input(e.to_string()))?;
@@ -79,9 +95,9 @@ fn default_model() -> String {
     "combined".into()
 }
 
-/// Run `pacs reach human --input F`.
-pub fn run_human(path: &Path) -> Result<Value, CliError> {
-    let input: HumanInput = read_json(path)?;
+/// Run `pacs reach human [--input F]`.
+pub fn run_human(path: Option<&Path>) -> Result<Value, CliError> {
+    let input: HumanInput = input_or_example(path, HUMAN_EXAMPLE)?;
     let human = input.human.load()?;
     let kind: HumanReachModel = input
         .model

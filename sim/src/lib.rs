@@ -1,0 +1,16 @@
+//! # pacs-sim
+//!
+//! A kinematic simulation of the paper's evaluation, used by `pacs demo` and the evaluation:
+//! - [`humans`]: scripted human keypoint motions within the default model's limits, and a
+//!   measurement model with delay and bounded noise;
+//! - [`policy`]: the [`policy::ChunkPolicy`] trait and a nearest-neighbour demonstration policy that
+//!   emits chunks of joint deltas from the current joint angles only;
+//! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy and a human,
+//!   with ground-truth safety metrics (exact geometry against the true human).
+//!
+//! The robot follows the filter's commands exactly (the occupancy's tracking-error margin covers
+//! a real controller's error).
+
+pub mod episode;
+pub mod humans;
+pub mod policy;

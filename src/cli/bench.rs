@@ -1,0 +1,38 @@
+//! `pacs bench shield`: step-time statistics of the shield and the CBF baseline on a fixed scenario.
+
+use super::CliError;
+use pacs_verify::bench::{StepStats, cbf_scenario, shield_scenario};
+use pacs_verify::shield::FilterMode;
+use serde_json::{Value, json};
+
+fn us(s: &StepStats) -> Value {
+    json!({
+        "scenario": s.scenario, "steps": s.steps,
+        "median_us": s.median * 1e6, "p90_us": s.p90 * 1e6, "p99_us": s.p99 * 1e6, "max_us": s.max * 1e6,
+        "verified_fraction": s.verified_fraction,
+        "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_max_us": s.chunk_max * 1e6,
+    })
+}
+
+/// Run `pacs bench shield --steps N`.
+pub fn shield(steps: usize, progress: bool) -> Result<Value, CliError> {
+    if steps == 0 {
+        return Err(CliError::Input("--steps must be at least 1".into()));
+    }
+    let mut runs = Vec::new();
+    for (label, spec) in [("PACS-SSM", "sorting"), ("PACS-PFL", "handover")] {
+        if progress {
+            eprintln!("pacs bench: {label}: {steps} steps ...");
+        }
+        runs.push(us(&shield_scenario(spec, FilterMode::Pacs, steps)));
+    }
+    let cbf_steps = steps.min(20_000);
+    if progress {
+        eprintln!("pacs bench: CBF: {cbf_steps} steps ...");
+    }
+    runs.push(us(&cbf_scenario(cbf_steps)));
+    Ok(json!({
+        "scenario": "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step",
+        "runs": runs,
+    }))
+}

@@ -1,0 +1,162 @@
+//! Reproducible timing scenarios for `pacs bench` (wall-clock statistics are measured by the
+//! caller; nothing here asserts on time).
+
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+use crate::chunk::{ActionKind, Chunk};
+use crate::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_reach::human::HumanMeasurement;
+use std::time::Instant;
+
+/// Timing statistics of a run (seconds per step).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct StepStats {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of timed steps.
+    pub steps: usize,
+    /// Median step time (s).
+    pub median: f64,
+    /// 90th percentile (s).
+    pub p90: f64,
+    /// 99th percentile (s).
+    pub p99: f64,
+    /// Maximum (s).
+    pub max: f64,
+    /// Fraction of steps whose intended motion was verified.
+    pub verified_fraction: f64,
+    /// Median time of `set_chunk` (trajectory planning), s.
+    pub chunk_median: f64,
+    /// Maximum time of `set_chunk`, s.
+    pub chunk_max: f64,
+}
+
+fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> StepStats {
+    v.sort_by(f64::total_cmp);
+    chunks.sort_by(f64::total_cmp);
+    let q = |v: &[f64], p: f64| {
+        if v.is_empty() {
+            0.0
+        } else {
+            v[((v.len() - 1) as f64 * p).round() as usize]
+        }
+    };
+    StepStats {
+        scenario: name.into(),
+        steps: v.len(),
+        median: q(&v, 0.5),
+        p90: q(&v, 0.9),
+        p99: q(&v, 0.99),
+        max: v.last().copied().unwrap_or(0.0),
+        verified_fraction: verified as f64 / v.len().max(1) as f64,
+        chunk_median: q(&chunks, 0.5),
+        chunk_max: chunks.last().copied().unwrap_or(0.0),
+    }
+}
+
+fn walking_human(t: f64) -> [[f64; 3]; 9] {
+    let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
+    [
+        [d, 0.2, 1.4],
+        [d - 0.1, 0.25, 1.15],
+        [d - 0.2, 0.25, 0.95],
+        [d, -0.2, 1.4],
+        [d - 0.1, -0.25, 1.15],
+        [d - 0.2, -0.25, 0.95],
+        [d, 0.0, 1.5],
+        [d, 0.0, 1.0],
+        [d, 0.0, 1.65],
+    ]
+}
+
+fn back_and_forth(sign: f64) -> Chunk {
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![
+            vec![
+                0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                -0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                0.0
+            ];
+            16
+        ],
+        execute: 8,
+        gripper: None,
+    }
+}
+
+/// The same scenario as [`shield_scenario`] with the control-barrier-function baseline.
+pub fn cbf_scenario(steps: usize) -> StepStats {
+    use crate::cbf::{CbfConfig, CbfFilter};
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
+    let cfg = CbfConfig::default();
+    let mut f = CbfFilter::new(fr3::fr3(), Some(human.clone()), cfg).expect("valid");
+    f.start(0.0, &fr3::Q_READY).expect("start");
+    let (mut times, mut chunk_times, mut verified, mut sign) =
+        (Vec::with_capacity(steps), Vec::new(), 0, 1.0);
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 200 == 0 {
+            let t0 = Instant::now();
+            let _ = f.set_chunk(t, &back_and_forth(sign));
+            chunk_times.push(t0.elapsed().as_secs_f64());
+            sign = -sign;
+        }
+        let m =
+            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
+        let t0 = Instant::now();
+        let cmd = f.step(t, Some(&m));
+        times.push(t0.elapsed().as_secs_f64());
+        verified += cmd.diag.verified as usize;
+    }
+    stats("cbf", times, verified, chunk_times)
+}
+
+/// FR3 moving back and forth (chunks of 8 × 0.02 rad on six joints, alternating direction every
+/// chunk, a new chunk every 200 ms), the default human walking between 1.5 m and 1.0 m in front
+/// of the robot (0.5 Hz), measured every step; `spec` = "sorting" (SSM) or "handover" (PFL).
+pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats {
+    let robot = fr3::fr3();
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
+    let cs = ConstraintSpec::builtin(spec).expect("preset");
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
+    let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
+    sh.start(0.0, &fr3::Q_READY).expect("start");
+    let mut times = Vec::with_capacity(steps);
+    let mut chunk_times = Vec::new();
+    let mut verified = 0;
+    let mut sign = 1.0;
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 200 == 0 {
+            let c = back_and_forth(sign);
+            sign = -sign;
+            let t0 = Instant::now();
+            let _ = sh.set_chunk(&c);
+            chunk_times.push(t0.elapsed().as_secs_f64());
+        }
+        let m =
+            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
+        let t0 = Instant::now();
+        let cmd = sh.step(t, Some(&m));
+        times.push(t0.elapsed().as_secs_f64());
+        if cmd.diag.verified {
+            verified += 1;
+        }
+    }
+    let name = format!("{spec} ({mode:?})");
+    stats(&name, times, verified, chunk_times)
+}

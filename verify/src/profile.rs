@@ -1,0 +1,168 @@
+//! Constant-jerk polynomial pieces: exact evaluation and sound (outward-padded) extrema.
+//!
+//! Soundness of the extrema: a cubic piece q(d) = q + v d + a d²/2 + j d³/6 is evaluated in
+//! Horner form; the floating-point error of each evaluation is below γ₆·Σ|terms| (γ₆ ≈ 6ε), so
+//! every computed value is padded outward by `8ε·Σ|terms|` plus [`PAD_ABS`]. Interior extrema
+//! (q at roots of q̇, q̇ at the root of q̈) are evaluated at a computed root d̃; at the true
+//! root d* the first derivative vanishes, so |f(d̃) − f(d*)| ≤ max|f″|·|d̃ − d*|²/2, which for
+//! the stable root formula (|d̃ − d*| ≲ 1e-14·(1 + |d*|) s) and |f″| ≤ 1e6 is far below [`PAD_ABS`].
+
+/// Absolute outward padding of every computed bound (rad, rad/s or rad/s²).
+pub const PAD_ABS: f64 = 1e-12;
+
+/// Relative tolerance of the limit checks (a limit L holds if the padded bound ≤ L·(1 + tol)).
+pub const LIMIT_REL_TOL: f64 = 1e-9;
+
+const PAD_REL: f64 = 8.0 * f64::EPSILON;
+
+/// One constant-jerk piece of one joint, valid from absolute time `t` (s) until the next piece.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Piece {
+    /// Start time (s).
+    pub t: f64,
+    /// Position at `t` (rad).
+    pub q: f64,
+    /// Velocity at `t` (rad/s).
+    pub v: f64,
+    /// Acceleration at `t` (rad/s²).
+    pub a: f64,
+    /// Constant jerk (rad/s³).
+    pub j: f64,
+}
+
+impl Piece {
+    /// Exact polynomial state (q, q̇, q̈) at local time `d` = t − start (s).
+    #[inline]
+    pub fn eval(&self, d: f64) -> (f64, f64, f64) {
+        (
+            self.q + d * (self.v + d * (self.a * 0.5 + d * (self.j / 6.0))),
+            self.v + d * (self.a + d * (self.j * 0.5)),
+            self.a + d * self.j,
+        )
+    }
+
+    /// Widen `r` (q, q̇, q̈ ranges) by the exact extrema of this piece over local `[d0, d1]`, padded outward.
+    #[inline]
+    pub fn extend_bounds(&self, d0: f64, d1: f64, r: &mut [Range; 3]) {
+        self.extend_at(d0, r);
+        self.extend_at(d1, r);
+        // q̇ extremum where q̈ = 0.
+        if self.j != 0.0 {
+            let d = -self.a / self.j;
+            if d > d0 && d < d1 {
+                self.extend_at(d, r);
+            }
+        }
+        // q extrema where q̇ = 0: v + a d + j d²/2 = 0.
+        let (c2, c1, c0) = (0.5 * self.j, self.a, self.v);
+        if c2 == 0.0 {
+            if c1 != 0.0 {
+                let d = -c0 / c1;
+                if d > d0 && d < d1 {
+                    self.extend_at(d, r);
+                }
+            }
+        } else {
+            let disc = c1 * c1 - 4.0 * c2 * c0;
+            if disc >= 0.0 {
+                let s = disc.sqrt();
+                let qq = -0.5 * (c1 + if c1 >= 0.0 { s } else { -s });
+                let r1 = qq / c2;
+                let r2 = if qq != 0.0 { c0 / qq } else { r1 };
+                for d in [r1, r2] {
+                    if d > d0 && d < d1 {
+                        self.extend_at(d, r);
+                    }
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn extend_at(&self, d: f64, r: &mut [Range; 3]) {
+        let (q, v, a) = self.eval(d);
+        let ad = d.abs();
+        let tq = self.q.abs()
+            + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
+        let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
+        let ta = self.a.abs() + ad * self.j.abs();
+        r[0].include_padded(q, PAD_REL * tq + PAD_ABS);
+        r[1].include_padded(v, PAD_REL * tv + PAD_ABS);
+        r[2].include_padded(a, PAD_REL * ta + PAD_ABS);
+    }
+}
+
+/// A closed interval [lo, hi]; `EMPTY` has lo = +∞, hi = −∞.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+}
+
+impl Range {
+    /// The empty interval.
+    pub const EMPTY: Range = Range {
+        lo: f64::INFINITY,
+        hi: f64::NEG_INFINITY,
+    };
+
+    /// The interval [x, x].
+    #[inline]
+    pub fn point(x: f64) -> Self {
+        Range { lo: x, hi: x }
+    }
+    /// Widen to contain [x − pad, x + pad].
+    #[inline]
+    pub fn include_padded(&mut self, x: f64, pad: f64) {
+        self.lo = self.lo.min(x - pad);
+        self.hi = self.hi.max(x + pad);
+    }
+    /// Widen to contain `o`.
+    #[inline]
+    pub fn union(&mut self, o: Range) {
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
+    }
+    /// Largest absolute value in the interval.
+    #[inline]
+    pub fn abs_max(&self) -> f64 {
+        self.lo.abs().max(self.hi.abs())
+    }
+    /// Outward-rounded interval sum.
+    #[inline]
+    pub fn plus(self, o: Range) -> Range {
+        pad_out(Range {
+            lo: self.lo + o.lo,
+            hi: self.hi + o.hi,
+        })
+    }
+    /// Outward-rounded interval product.
+    #[inline]
+    pub fn times(self, o: Range) -> Range {
+        let p = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
+        let lo = p[0].min(p[1]).min(p[2]).min(p[3]);
+        let hi = p[0].max(p[1]).max(p[2]).max(p[3]);
+        pad_out(Range { lo, hi })
+    }
+    /// Interval scaled by a constant (outward-rounded).
+    #[inline]
+    pub fn scale(self, c: f64) -> Range {
+        self.times(Range::point(c))
+    }
+}
+
+/// Widen an interval by one ulp-scale step on each side (covers one rounding of each end).
+#[inline]
+fn pad_out(r: Range) -> Range {
+    Range {
+        lo: r.lo - (r.lo.abs() * f64::EPSILON + f64::MIN_POSITIVE),
+        hi: r.hi + (r.hi.abs() * f64::EPSILON + f64::MIN_POSITIVE),
+    }
+}

@@ -1,0 +1,398 @@
+//! Path-speed profiles: jerk-limited time scalings s(τ) of a trajectory, from **any** path state
+//! (s, ṡ, s̈) toward a target path speed — 0 to brake along the path, 1 to resume the intended
+//! timing — and their verification against joint limits.
+//!
+//! A trajectory q(s) is followed at path speed ṡ (ṡ = 1: the intended timing). By the chain rule
+//! q̇ = q′ṡ, q̈ = q′s̈ + q″ṡ², q⃛ = q‴ṡ³ + 3q″ṡs̈ + q′s⃛. Over a path window with per-joint sound
+//! bounds Q1 ≥ |q′|, Q2 ≥ |q″|, Q3 ≥ |q‴| and over a profile with ṡ ≤ σ, |s̈| ≤ α, |s⃛| ≤ J:
+//! |q̇| ≤ Q1·σ, |q̈| ≤ Q1·α + Q2·σ², |q⃛| ≤ Q3·σ³ + 3·Q2·σ·α + Q1·J. [`admissible`] picks the
+//! largest α, J (times a 0.98 safety factor) that satisfy these with the given limits, grows the
+//! window until it covers the profile, and re-checks the final inequalities with outward rounding.
+//! Configurations always lie on the path (s only moves forward: ṡ ≥ 0): path consistency holds by
+//! construction, never by clamping joint values.
+
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+use crate::trajectory::{Limits, Trajectory};
+use pacs_models::MAX_DOF;
+use pacs_reach::rounding::{add_up, mul_up};
+
+/// A point of a time scaling: path position s (s of intended time), speed ṡ (1), acceleration
+/// s̈ (1/s).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PathState {
+    /// Path position (intended-trajectory time, s).
+    pub s: f64,
+    /// Path speed (dimensionless, ≥ 0; 1 = intended timing).
+    pub sd: f64,
+    /// Path acceleration (1/s).
+    pub sdd: f64,
+}
+
+impl PathState {
+    /// On the intended timing at `s` (ṡ = 1, s̈ = 0).
+    pub fn intended(s: f64) -> Self {
+        Self {
+            s,
+            sd: 1.0,
+            sdd: 0.0,
+        }
+    }
+    /// At rest at `s`.
+    pub fn rest(s: f64) -> Self {
+        Self {
+            s,
+            sd: 0.0,
+            sdd: 0.0,
+        }
+    }
+    /// Whether the path speed and acceleration are exactly those of the intended timing.
+    pub fn is_intended(&self) -> bool {
+        self.sd == 1.0 && self.sdd == 0.0
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Phase {
+    /// Start time relative to the profile start (s).
+    t0: f64,
+    s: f64,
+    sd: f64,
+    sdd: f64,
+    jerk: f64,
+}
+
+impl Phase {
+    #[inline]
+    fn eval(&self, tau: f64) -> PathState {
+        let d = tau - self.t0;
+        PathState {
+            s: self.s + d * (self.sd + d * (0.5 * self.sdd + d * self.jerk / 6.0)),
+            sd: self.sd + d * (self.sdd + 0.5 * d * self.jerk),
+            sdd: self.sdd + d * self.jerk,
+        }
+    }
+}
+
+/// A jerk-limited path-speed profile from a start state to a constant target speed (at most
+/// three constant-jerk phases, then constant speed). Copy, allocation-free.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpeedProfile {
+    phases: [Phase; 4],
+    n: usize,
+    settle: f64,
+    target: f64,
+    acc: f64,
+    jerk: f64,
+}
+
+impl SpeedProfile {
+    /// Plan the time-optimal jerk-limited change of path speed from `start` to `target`
+    /// (ending with s̈ = 0) with |s̈| ≤ max(`acc`, |s̈₀|) and |s⃛| = `jerk` during ramps.
+    pub fn plan(start: PathState, target: f64, acc: f64, jerk: f64) -> Self {
+        let (a0, v0) = (start.sdd, start.sd);
+        let mut phases = [Phase::default(); 4];
+        let mut n = 0;
+        let mut t = 0.0;
+        let mut cur = Phase {
+            t0: 0.0,
+            s: start.s,
+            sd: v0,
+            sdd: a0,
+            jerk: 0.0,
+        };
+        let mut push = |cur: &mut Phase, jerk: f64, dur: f64, t: &mut f64| {
+            if dur <= 0.0 {
+                return;
+            }
+            cur.jerk = jerk;
+            phases[n] = *cur;
+            n += 1;
+            let e = cur.eval(*t + dur);
+            *t += dur;
+            *cur = Phase {
+                t0: *t,
+                s: e.s,
+                sd: e.sd,
+                sdd: e.sdd,
+                jerk: 0.0,
+            };
+        };
+        if jerk > 0.0 && acc > 0.0 {
+            // Speed reached by bringing s̈ to zero right away.
+            let v_reach = v0 + a0 * a0.abs() / (2.0 * jerk);
+            let diff = target - v_reach;
+            if diff.abs() <= 1e-15 {
+                push(&mut cur, -a0.signum() * jerk, a0.abs() / jerk, &mut t);
+            } else {
+                let d = diff.signum();
+                let u0 = d * a0;
+                let dist = d * (target - v0);
+                let up_free = (jerk * dist + 0.5 * u0 * u0).max(0.0).sqrt();
+                let cap = acc.max(u0);
+                let (up, plateau) = if up_free <= cap {
+                    (up_free, 0.0)
+                } else {
+                    let dv_ramps = (cap * cap - u0 * u0) / (2.0 * jerk) + cap * cap / (2.0 * jerk);
+                    (cap, ((dist - dv_ramps) / cap).max(0.0))
+                };
+                push(&mut cur, d * jerk, (up - u0) / jerk, &mut t);
+                push(&mut cur, 0.0, plateau, &mut t);
+                push(&mut cur, -d * jerk, up / jerk, &mut t);
+            }
+        }
+        // Final constant-speed phase at exactly the target speed.
+        cur.sd = target;
+        cur.sdd = 0.0;
+        cur.jerk = 0.0;
+        phases[n] = cur;
+        n += 1;
+        Self {
+            phases,
+            n,
+            settle: t,
+            target,
+            acc,
+            jerk,
+        }
+    }
+
+    /// State at time `tau` (s) after the profile start (τ ≥ 0; constant target speed after settling).
+    #[inline]
+    pub fn eval(&self, tau: f64) -> PathState {
+        let mut p = self.eval_raw(tau);
+        // Rounding must not make the path run backwards.
+        p.sd = p.sd.max(0.0);
+        p
+    }
+
+    #[inline]
+    fn eval_raw(&self, tau: f64) -> PathState {
+        let tau = tau.max(0.0);
+        let mut k = 0;
+        while k + 1 < self.n && self.phases[k + 1].t0 <= tau {
+            k += 1;
+        }
+        let mut p = self.phases[k].eval(tau);
+        if k + 1 == self.n {
+            p.sd = self.target;
+            p.sdd = 0.0;
+        }
+        p
+    }
+
+    /// Time (s, relative) at which the target speed is reached.
+    #[inline]
+    pub fn settle_time(&self) -> f64 {
+        self.settle
+    }
+    /// Target path speed.
+    #[inline]
+    pub fn target(&self) -> f64 {
+        self.target
+    }
+    /// Path position where the target speed is reached.
+    #[inline]
+    pub fn settle_s(&self) -> f64 {
+        self.phases[self.n - 1].s
+    }
+    /// The path-acceleration and path-jerk limits the profile was planned with.
+    pub fn limits(&self) -> (f64, f64) {
+        (self.acc, self.jerk)
+    }
+
+    /// Sound ranges over τ ∈ [ta, tb] (relative s): (s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|).
+    pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
+        let ta = ta.max(0.0);
+        let tb = tb.max(ta);
+        let a = self.eval_raw(ta);
+        let b = self.eval_raw(tb);
+        let (mut sd_lo, mut sd_hi) = (a.sd.min(b.sd), a.sd.max(b.sd));
+        let mut sdd = a.sdd.abs().max(b.sdd.abs());
+        for k in 0..self.n {
+            let p = &self.phases[k];
+            let end = if k + 1 < self.n {
+                self.phases[k + 1].t0
+            } else {
+                f64::INFINITY
+            };
+            if end < ta || p.t0 > tb {
+                continue;
+            }
+            let lo = ta.max(p.t0);
+            let hi = tb.min(end);
+            for tau in [lo, hi] {
+                let e = self.eval_raw(tau);
+                sd_lo = sd_lo.min(e.sd);
+                sd_hi = sd_hi.max(e.sd);
+                sdd = sdd.max(e.sdd.abs());
+            }
+            // Interior extremum of ṡ where s̈ = 0.
+            if p.jerk != 0.0 {
+                let tz = p.t0 - p.sdd / p.jerk;
+                if tz > lo && tz < hi {
+                    let e = p.eval(tz);
+                    sd_lo = sd_lo.min(e.sd);
+                    sd_hi = sd_hi.max(e.sd);
+                }
+            }
+        }
+        // Relative padding for the float evaluation of the polynomials.
+        let pad = |x: f64| x.abs() * 1e-12 + 1e-15;
+        let s_lo = a.s - pad(a.s);
+        let s_hi = b.s + pad(b.s);
+        (
+            s_lo,
+            s_hi,
+            sd_lo - pad(sd_lo),
+            sd_hi + pad(sd_hi),
+            sdd + pad(sdd),
+        )
+    }
+}
+
+/// Per-joint bounds of |q′|, |q″|, |q‴| over a path window.
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    q1: [f64; MAX_DOF],
+    q2: [f64; MAX_DOF],
+    q3: [f64; MAX_DOF],
+}
+
+fn window(traj: &Trajectory, s_a: f64, s_b: f64) -> Window {
+    let mut w = Window {
+        q1: [0.0; MAX_DOF],
+        q2: [0.0; MAX_DOF],
+        q3: [0.0; MAX_DOF],
+    };
+    for i in 0..traj.dof() {
+        let d = traj.joint_derivs(i, s_a, s_b);
+        w.q1[i] = d.r[1].abs_max();
+        w.q2[i] = d.r[2].abs_max();
+        w.q3[i] = d.r[3].abs_max();
+    }
+    w
+}
+
+/// Sound check of the chain-rule bounds (outward rounded) for speed ≤ `sd_max`, |s̈| ≤ `sdd_max`,
+/// |s⃛| ≤ `jerk` over window `w`.
+fn within_limits(w: &Window, lim: &Limits, sd_max: f64, sdd_max: f64, jerk: f64) -> bool {
+    let s2 = mul_up(sd_max, sd_max);
+    let s3 = mul_up(s2, sd_max);
+    (0..lim.dof).all(|i| {
+        let v = mul_up(w.q1[i], sd_max);
+        let a = add_up(mul_up(w.q1[i], sdd_max), mul_up(w.q2[i], s2));
+        let j = add_up(
+            add_up(
+                mul_up(w.q3[i], s3),
+                mul_up(3.0, mul_up(mul_up(w.q2[i], sd_max), sdd_max)),
+            ),
+            mul_up(w.q1[i], jerk),
+        );
+        v <= lim.v[i] && a <= lim.a[i] && j <= lim.j[i]
+    })
+}
+
+const SAFETY: f64 = 0.98;
+const ACC_CAP: f64 = 1.0e3;
+const JERK_CAP: f64 = 1.0e5;
+
+/// The fastest admissible profile from `start` to `target` speed over `traj` against `lim`,
+/// verified over the time range [0, `horizon`] of the profile (`None`: until it settles).
+/// Returns `None` if no admissible path acceleration exists (e.g. a joint already at its
+/// acceleration limit with no margin).
+pub fn admissible(
+    traj: &Trajectory,
+    lim: &Limits,
+    start: PathState,
+    target: f64,
+    horizon: Option<f64>,
+) -> Option<SpeedProfile> {
+    let n = traj.dof();
+    let sd_max0 = start.sd.max(target);
+    let mut wlen = 0.01_f64.max(start.sd * 0.01);
+    for _ in 0..8 {
+        let w = window(traj, start.s, start.s + wlen);
+        let sd_max = sd_max0 * (1.0 + 1e-9);
+        let mut acc = ACC_CAP;
+        for i in 0..n {
+            if w.q1[i] > 0.0 {
+                acc = acc.min((lim.a[i] - w.q2[i] * sd_max * sd_max) / w.q1[i]);
+            }
+            if w.q2[i] > 0.0 && sd_max > 0.0 {
+                // Leave at least half of the jerk margin for the path jerk.
+                acc =
+                    acc.min(0.5 * (lim.j[i] - w.q3[i] * sd_max.powi(3)) / (3.0 * w.q2[i] * sd_max));
+            }
+        }
+        acc *= SAFETY;
+        let sdd_max = acc.max(start.sdd.abs());
+        let mut jerk = JERK_CAP;
+        for i in 0..n {
+            if w.q1[i] > 0.0 {
+                jerk = jerk.min(
+                    (lim.j[i] - w.q3[i] * sd_max.powi(3) - 3.0 * w.q2[i] * sd_max * sdd_max)
+                        / w.q1[i],
+                );
+            }
+        }
+        jerk *= SAFETY;
+        if !(acc > 0.0 && jerk > 0.0 && acc.is_finite() && jerk.is_finite()) {
+            return None;
+        }
+        let p = SpeedProfile::plan(start, target, acc, jerk);
+        let t_end = horizon.unwrap_or(p.settle_time()).max(0.0);
+        let (_, s_hi, sd_lo, sd_hi, sdd_hi) = p.ranges(0.0, t_end);
+        if sd_lo < -1e-9 {
+            // The path would have to run backwards (start state inconsistent with this jerk).
+            return None;
+        }
+        let need = s_hi - start.s;
+        if need <= wlen {
+            // Final sound re-check with the profile's actual ranges.
+            return within_limits(&w, lim, sd_hi.max(sd_max), sdd_hi, jerk).then_some(p);
+        }
+        wlen = need * 1.25;
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(10_000))]
+        #[test]
+        fn profile_reaches_target_with_bounded_acc_and_jerk(
+            sd0 in 0.0f64..1.2, sdd0 in -5.0f64..5.0, target in prop_oneof![Just(0.0), Just(1.0)],
+            acc in 0.5f64..20.0, jerk in 1.0f64..500.0,
+        ) {
+            let sdd0 = sdd0.clamp(-acc, acc);
+            // Consistent start: a decelerating state can still reach s̈ = 0 with ṡ ≥ 0.
+            let sd0 = if sdd0 < 0.0 { sd0.max(sdd0 * sdd0 / (2.0 * jerk)) } else { sd0 };
+            let p = SpeedProfile::plan(PathState { s: 0.3, sd: sd0, sdd: sdd0 }, target, acc, jerk);
+            let end = p.eval(p.settle_time() + 1.0);
+            prop_assert_eq!(end.sd, target);
+            prop_assert_eq!(end.sdd, 0.0);
+            // Continuity at the settle time and bounded path acceleration along the way.
+            let e = p.phases[p.n - 1];
+            prop_assert!((e.sd - target).abs() < 1e-9 * (1.0 + sd0 + sdd0.abs()), "ṡ at settle {} vs {target}", e.sd);
+            prop_assert!(e.sdd.abs() < 1e-9 * (1.0 + sdd0.abs()), "s̈ at settle {}", e.sdd);
+            let k = 200;
+            let mut prev = p.eval(0.0);
+            for i in 1..=k {
+                let tau = p.settle_time() * i as f64 / k as f64;
+                let x = p.eval(tau);
+                prop_assert!(x.sdd.abs() <= acc.max(sdd0.abs()) * (1.0 + 1e-9) + 1e-12);
+                prop_assert!(x.s >= prev.s - 1e-12, "path runs backwards");
+                // Jerk bound between samples.
+                let dt = p.settle_time() / k as f64;
+                prop_assert!((x.sdd - prev.sdd).abs() <= jerk * dt * (1.0 + 1e-6) + 1e-9);
+                prev = x;
+            }
+        }
+    }
+}

@@ -1,0 +1,926 @@
+//! The PACS online safety shield (paper Algorithm 1) and its OFF and single-action variants.
+//!
+//! Every safety step α_s the shield builds a **monitored trajectory** from the robot's current
+//! commanded state: one step of intended motion (ṡ → 1 along the current path; exactly the
+//! intended timing when already on it), then a **failsafe** braking along the same path
+//! (ṡ → 0; [`crate::scaling`]). It encloses the robot over a sequence of time intervals covering
+//! the monitored trajectory until standstill (joint boxes from sound path bounds →
+//! [`RobotReach`] capsules) and the human over the same intervals from the latest measurement
+//! (its age, delay and errors included → [`HumanReach`]), then checks per body part:
+//! - SSM: no robot capsule may intersect the body part while the robot may move;
+//! - PFL: wherever contact is possible, a sound upper bound of the kinetic energy of the sub-chain
+//!   up to the contacting link (over the interval's position and velocity boxes) is at most the
+//!   body part's threshold — the constrained one if the part may be clamped (it may also touch
+//!   the environment, a clampable body part that may touch the robot, or two non-adjacent links).
+//!
+//! Verified → execute the intended step and remember this failsafe. Not verified → continue the
+//! last verified failsafe. By induction the robot is always on a verified monitored trajectory;
+//! it starts at rest. No valid measurement, an unplannable chunk or an unverifiable candidate only
+//! ever lead to following the last verified failsafe. The step allocates nothing.
+
+// Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
+use crate::chunk::{Chunk, OutOfLimits};
+use crate::intended::{Planner, PlannerConfig};
+use crate::profile::Piece;
+use crate::scaling::{PathState, SpeedProfile, admissible};
+use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
+use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel, TaskConstraints};
+use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
+use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::robot::{ReachScratch, RobotReach};
+use pacs_reach::rounding::{add_up, mul_up};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Which filter runs behind the shield interface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum FilterMode {
+    /// PACS: verify every step, brake along the path when needed.
+    #[default]
+    Pacs,
+    /// OFF: follow the intended trajectory, never brake (diagnostics are still computed).
+    Off,
+}
+
+/// Shield settings (units: s, m, rad/s², rad/s³).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShieldConfig {
+    /// Safety step α_s (s).
+    pub safety_step: f64,
+    /// Cartesian tracking error of the low-level controller (m), added to every robot capsule.
+    pub tracking_error: f64,
+    /// Human reachability model.
+    pub human_model: HumanReachModel,
+    /// Acceleration limit of intended trajectories as a fraction of the robot's (0, 1): the rest
+    /// is the braking reserve the failsafe needs when the intended motion is at its limit.
+    pub intended_acc_fraction: f64,
+    /// Jerk limit of intended trajectories (rad/s³; the paper uses 400), capped by the robot's.
+    pub intended_jerk: f64,
+    /// Velocity limit scale of intended trajectories, in (0, 1].
+    pub intended_vel_scale: f64,
+    /// Plan each action as its own stop-at-target motion (the paper's single-action baseline).
+    pub single_action: bool,
+    /// PACS or OFF.
+    pub mode: FilterMode,
+    /// Waypoints outside the position limits: reject the chunk or project them.
+    pub out_of_limits: OutOfLimits,
+    /// Length of the first occupancy interval after the intended step (s); each next one doubles.
+    pub first_interval: f64,
+    /// Maximum number of occupancy intervals (the last one extends to standstill).
+    pub max_intervals: usize,
+}
+
+impl Default for ShieldConfig {
+    fn default() -> Self {
+        Self {
+            safety_step: 0.001,
+            tracking_error: 0.005,
+            human_model: HumanReachModel::Combined,
+            intended_acc_fraction: 0.8,
+            intended_jerk: 400.0,
+            intended_vel_scale: 1.0,
+            single_action: false,
+            mode: FilterMode::Pacs,
+            out_of_limits: OutOfLimits::Reject,
+            first_interval: 0.002,
+            max_intervals: 12,
+        }
+    }
+}
+
+/// A static environment shape (for clamping decisions): a capsule or an axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum EnvShape {
+    /// Capsule (a sphere when p1 = p2).
+    Capsule {
+        /// First endpoint (m).
+        p1: [f64; 3],
+        /// Second endpoint (m).
+        p2: [f64; 3],
+        /// Radius (m).
+        radius: f64,
+    },
+    /// Axis-aligned box.
+    Box {
+        /// Minimum corner (m).
+        min: [f64; 3],
+        /// Maximum corner (m).
+        max: [f64; 3],
+    },
+}
+
+impl EnvShape {
+    /// True unless the capsule provably does not touch the shape.
+    pub fn may_touch(&self, c: &Capsule) -> bool {
+        match *self {
+            EnvShape::Capsule { p1, p2, radius } => {
+                let e = Capsule::new_unchecked(p1.into(), p2.into(), radius);
+                capsules_may_intersect(&e, c)
+            }
+            EnvShape::Box { min, max } => {
+                // The capsule is within the box inflated by its radius iff its segment meets it;
+                // slab test on the inflated box, with a small outward tolerance.
+                let r = c.radius() * (1.0 + 1e-12) + 1e-9;
+                let (a, b) = (c.p1(), c.p2());
+                let (mut t0, mut t1) = (0.0f64, 1.0f64);
+                for k in 0..3 {
+                    let (lo, hi) = (min[k] - r, max[k] + r);
+                    let d = b[k] - a[k];
+                    if d.abs() < 1e-300 {
+                        if a[k] < lo || a[k] > hi {
+                            return false;
+                        }
+                    } else {
+                        let (mut u, mut v) = ((lo - a[k]) / d, (hi - a[k]) / d);
+                        if u > v {
+                            std::mem::swap(&mut u, &mut v);
+                        }
+                        t0 = t0.max(u - 1e-12);
+                        t1 = t1.min(v + 1e-12);
+                        if t0 > t1 {
+                            return false;
+                        }
+                    }
+                }
+                true
+            }
+        }
+    }
+}
+
+/// Errors of shield construction and chunk handling.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ShieldError {
+    /// Invalid configuration or model (names the field and value).
+    #[error("{0}")]
+    Invalid(String),
+    /// The shield must be started (at rest) first.
+    #[error("shield not started: call start(t, q) with the robot at rest")]
+    NotStarted,
+    /// The chunk could not be planned; it is ignored and the robot keeps its verified motion.
+    #[error("chunk ignored: {0}")]
+    Chunk(#[from] crate::error::TrajectoryError),
+}
+
+/// What decided a step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Binding {
+    /// Nothing bound: the intended step was verified.
+    None,
+    /// No valid human measurement yet.
+    NoMeasurement,
+    /// No admissible path-speed profile (limits leave no margin).
+    NoProfile,
+    /// SSM: contact possible while moving.
+    Ssm {
+        /// Robot link index.
+        link: usize,
+        /// Body part index.
+        body_part: usize,
+        /// Occupancy interval index.
+        interval: usize,
+    },
+    /// CBF baseline: barrier constraints were active this step.
+    Barrier {
+        /// Number of active barrier rows.
+        active: usize,
+    },
+    /// PFL: energy bound above the threshold where contact is possible.
+    Pfl {
+        /// Robot link index.
+        link: usize,
+        /// Body part index.
+        body_part: usize,
+        /// Energy upper bound (J).
+        energy: f64,
+        /// Threshold (J).
+        threshold: f64,
+        /// Constrained (clamping) contact.
+        constrained: bool,
+    },
+}
+
+/// Per-step diagnostics.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// The intended step was verified (and executed).
+    pub verified: bool,
+    /// The robot follows a failsafe (braking) this step.
+    pub on_failsafe: bool,
+    /// What decided the step.
+    pub binding: Binding,
+    /// Lower bound of the separation between robot and human occupancies over the first interval
+    /// (m; +∞ without human).
+    pub min_separation: f64,
+    /// Largest energy bound where contact was possible (J; 0 if none).
+    pub contact_energy: f64,
+    /// Threshold belonging to `contact_energy` (J).
+    pub contact_threshold: f64,
+    /// Path speed ṡ after the step (1 = intended timing, 0 = stopped).
+    pub path_speed: f64,
+    /// Time (s) at which the monitored trajectory reaches standstill.
+    pub stop_time: f64,
+}
+
+/// The command for the low-level controller at time `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Command {
+    /// Time the command is for (s).
+    pub t: f64,
+    /// Joint state (entries beyond dof are 0).
+    pub state: JointState,
+    /// Number of joints.
+    pub dof: usize,
+    /// Diagnostics.
+    pub diag: Diagnostics,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct VerifiedFailsafe {
+    slot: usize,
+    profile: SpeedProfile,
+    /// Absolute time of the profile start.
+    t0: f64,
+}
+
+/// The PACS shield (also OFF and single-action, by configuration).
+pub struct Shield {
+    robot: RobotModel,
+    dof: usize,
+    hw: Limits,
+    planner: Planner,
+    reach: RobotReach,
+    human: Option<(HumanReach, TaskConstraints)>,
+    env: Vec<EnvShape>,
+    config: ShieldConfig,
+    trajs: [Option<Trajectory>; 2],
+    /// Current slot and path state at `time`.
+    slot: usize,
+    path: PathState,
+    time: f64,
+    started: bool,
+    /// Slot of a chunk planned from the current state (not yet verified).
+    fresh: Option<usize>,
+    failsafe: Option<VerifiedFailsafe>,
+    /// Latest measurement (buffer allocated at construction; valid when `has_meas`).
+    meas: Option<HumanMeasurement>,
+    has_meas: bool,
+    // Scratch buffers (allocated once).
+    robot_caps: Vec<Capsule>,
+    human_caps: Vec<Capsule>,
+    energies: Vec<f64>,
+    /// Per robot capsule: its link index.
+    capsule_link: Vec<usize>,
+    /// Axis-aligned boxes of the robot capsules of the current interval (broad phase).
+    robot_aabb: Vec<Aabb>,
+    scratch: ReachScratch,
+}
+
+/// An axis-aligned box containing a capsule (bounds rounded outward).
+#[derive(Debug, Clone, Copy, Default)]
+struct Aabb {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Aabb {
+    #[inline]
+    fn of(c: &Capsule) -> Self {
+        let (a, b, r) = (c.p1(), c.p2(), c.radius());
+        let mut bx = Aabb::default();
+        for k in 0..3 {
+            // |x ± r| rounding error ≤ u·|result|: pad relatively (plus a tiny absolute term).
+            let lo = a[k].min(b[k]) - r;
+            let hi = a[k].max(b[k]) + r;
+            bx.lo[k] = lo - lo.abs() * 1e-15 - 1e-300;
+            bx.hi[k] = hi + hi.abs() * 1e-15 + 1e-300;
+        }
+        bx
+    }
+    /// Lower bound of the distance between two boxes (0 if they overlap).
+    #[inline]
+    fn distance_lb(&self, o: &Aabb) -> f64 {
+        let mut d2 = 0.0;
+        for k in 0..3 {
+            let g = (o.lo[k] - self.hi[k]).max(self.lo[k] - o.hi[k]).next_down();
+            if g > 0.0 {
+                d2 += g * g;
+            }
+        }
+        // Rounded down: the products and sum of positive terms lose at most a few ulps.
+        (d2 * (1.0 - 1e-12)).sqrt()
+    }
+    #[inline]
+    fn overlaps(&self, o: &Aabb) -> bool {
+        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
+    }
+}
+
+impl std::fmt::Debug for Shield {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Shield")
+            .field("config", &self.config)
+            .field("time", &self.time)
+            .finish()
+    }
+}
+
+fn hold(q: &[f64]) -> Trajectory {
+    let n = q.len();
+    let mut offsets = [0usize; MAX_DOF + 1];
+    let pieces: Vec<Piece> = q
+        .iter()
+        .map(|&x| Piece {
+            t: 0.0,
+            q: x,
+            v: 0.0,
+            a: 0.0,
+            j: 0.0,
+        })
+        .collect();
+    for (i, o) in offsets.iter_mut().enumerate().take(n + 1) {
+        *o = i;
+    }
+    Trajectory::from_parts(n, pieces, offsets, 0.0, vec![0.0], EndCondition::AtRest)
+}
+
+impl Shield {
+    /// Build a shield for a robot, an optional human with a task constraint spec, and static
+    /// environment shapes.
+    pub fn new(
+        robot: RobotModel,
+        human: Option<(HumanModel, &ConstraintSpec)>,
+        env: Vec<EnvShape>,
+        config: ShieldConfig,
+    ) -> Result<Self, ShieldError> {
+        let c = &config;
+        let bad = |f: &str, v: f64| {
+            ShieldError::Invalid(format!("shield config `{f}`: invalid value {v}"))
+        };
+        if !(c.safety_step > 0.0 && c.safety_step.is_finite()) {
+            return Err(bad("safety_step", c.safety_step));
+        }
+        if !(c.tracking_error >= 0.0 && c.tracking_error.is_finite()) {
+            return Err(bad("tracking_error", c.tracking_error));
+        }
+        if !(c.intended_acc_fraction > 0.0 && c.intended_acc_fraction < 1.0) {
+            return Err(bad(
+                "intended_acc_fraction (must be in (0, 1): braking reserve)",
+                c.intended_acc_fraction,
+            ));
+        }
+        if !(c.intended_jerk > 0.0 && c.intended_jerk.is_finite()) {
+            return Err(bad("intended_jerk", c.intended_jerk));
+        }
+        if !(c.intended_vel_scale > 0.0 && c.intended_vel_scale <= 1.0) {
+            return Err(bad("intended_vel_scale", c.intended_vel_scale));
+        }
+        if !(c.first_interval > 0.0 && c.first_interval.is_finite()) || c.max_intervals < 1 {
+            return Err(bad("first_interval/max_intervals", c.first_interval));
+        }
+        let dof = robot.dof();
+        let hw = Limits::from_joint_limits(robot.limits());
+        let mut plan = hw;
+        for i in 0..dof {
+            plan.v[i] *= c.intended_vel_scale;
+            plan.a[i] *= c.intended_acc_fraction;
+            plan.j[i] = plan.j[i].min(c.intended_jerk);
+        }
+        let planner = Planner::new(
+            plan,
+            PlannerConfig {
+                end: EndCondition::AtRest,
+                ..PlannerConfig::default()
+            },
+        );
+        let reach = RobotReach::try_new(&robot, c.tracking_error)
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let mut meas_buffer = None;
+        let human = match human {
+            None => None,
+            Some((h, spec)) => {
+                let tc = spec
+                    .resolve(&h)
+                    .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
+                let zeros = vec![[0.0; 3]; h.keypoint_count()];
+                meas_buffer = Some(
+                    HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
+                        .map_err(|e| ShieldError::Invalid(e.to_string()))?,
+                );
+                Some((HumanReach::new(h, c.human_model), tc))
+            }
+        };
+        let parts = human
+            .as_ref()
+            .map_or(0, |(h, _)| h.model().body_parts().len());
+        let mut capsule_link = vec![0; reach.capsule_count()];
+        for (li, &(s, e)) in reach.link_ranges().iter().enumerate() {
+            for cl in capsule_link.iter_mut().take(e).skip(s) {
+                *cl = li;
+            }
+        }
+        Ok(Self {
+            dof,
+            hw,
+            planner,
+            robot_caps: vec![
+                Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+                reach.capsule_count()
+            ],
+            human_caps: vec![
+                Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+                parts
+            ],
+            energies: vec![0.0; dof + 1],
+            robot_aabb: vec![Aabb::default(); reach.capsule_count()],
+            scratch: ReachScratch::default(),
+            capsule_link,
+            reach,
+            human,
+            env,
+            config,
+            robot,
+            trajs: [None, None],
+            slot: 0,
+            path: PathState::rest(0.0),
+            time: 0.0,
+            started: false,
+            fresh: None,
+            failsafe: None,
+            meas: meas_buffer,
+            has_meas: false,
+        })
+    }
+
+    /// The robot model.
+    pub fn robot(&self) -> &RobotModel {
+        &self.robot
+    }
+    /// The configuration.
+    pub fn config(&self) -> &ShieldConfig {
+        &self.config
+    }
+    /// The human model, if any.
+    pub fn human_model(&self) -> Option<&HumanModel> {
+        self.human.as_ref().map(|(h, _)| h.model())
+    }
+
+    /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.
+    pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
+        if q.len() != self.dof || q.iter().any(|x| !x.is_finite()) || !t.is_finite() {
+            return Err(ShieldError::Invalid(format!(
+                "start: need {} finite joint values and a finite time",
+                self.dof
+            )));
+        }
+        if !self.robot.limits().contains(q) {
+            return Err(ShieldError::Invalid(
+                "start: configuration outside the joint position limits".into(),
+            ));
+        }
+        self.trajs = [Some(hold(q)), None];
+        self.slot = 0;
+        self.path = PathState::rest(0.0);
+        self.time = t;
+        self.started = true;
+        self.fresh = None;
+        // Standing still is the first verified failsafe.
+        self.failsafe = Some(VerifiedFailsafe {
+            slot: 0,
+            profile: SpeedProfile::plan(self.path, 0.0, 1.0, 1.0),
+            t0: t,
+        });
+        Ok(())
+    }
+
+    fn traj(&self, slot: usize) -> &Trajectory {
+        self.trajs[slot].as_ref().expect("slot holds a trajectory")
+    }
+
+    /// Current commanded joint state.
+    pub fn state(&self) -> JointState {
+        self.joint_state(self.slot, &self.path)
+    }
+
+    fn joint_state(&self, slot: usize, p: &PathState) -> JointState {
+        let tr = self.traj(slot);
+        let d = tr.state_at(p.s);
+        let mut out = JointState::default();
+        for i in 0..self.dof {
+            out.q[i] = d.q[i];
+            out.dq[i] = d.dq[i] * p.sd;
+            out.ddq[i] = d.dq[i] * p.sdd + d.ddq[i] * p.sd * p.sd;
+            out.dddq[i] = d.dddq[i] * p.sd * p.sd * p.sd;
+        }
+        out
+    }
+
+    /// Hand a new action chunk to the shield: planned from the current commanded state into a new
+    /// intended trajectory, which takes over as soon as one of its steps is verified. A chunk that
+    /// cannot be planned is ignored (error returned; the robot keeps its verified motion).
+    pub fn set_chunk(&mut self, chunk: &Chunk) -> Result<(), ShieldError> {
+        if !self.started {
+            return Err(ShieldError::NotStarted);
+        }
+        let start = self.state();
+        let wp = chunk.waypoints(
+            &start.q[..self.dof],
+            self.robot.limits(),
+            self.config.out_of_limits,
+        )?;
+        let traj = if self.config.single_action {
+            self.planner.plan_single_action(&start, &wp)?
+        } else {
+            self.planner.plan(&start, &wp)?
+        };
+        // Use the slot the verified failsafe does not live on.
+        let keep = self.failsafe.map(|f| f.slot).unwrap_or(self.slot);
+        let slot = if keep == 0 { 1 } else { 0 };
+        self.trajs[slot] = Some(traj);
+        self.fresh = Some(slot);
+        Ok(())
+    }
+
+    /// Replace the latest human measurement if `m` is newer (older or equal-time ones are ignored).
+    fn take_measurement(&mut self, m: Option<&HumanMeasurement>, t: f64) {
+        let Some(m) = m else { return };
+        if m.time() > t {
+            return; // from the future: ignore
+        }
+        match &mut self.meas {
+            Some(cur) if self.has_meas && cur.time() >= m.time() => {}
+            Some(cur) => {
+                cur.assign_from(m);
+                self.has_meas = true;
+            }
+            None => {}
+        }
+    }
+
+    /// One safety step at time `t` (s; must follow the previous step by α_s) with the latest
+    /// human measurement, if any. Returns the command for time t + α_s.
+    pub fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+        let alpha = self.config.safety_step;
+        if !self.started {
+            return self.hold_command(t + alpha, Binding::NoProfile);
+        }
+        self.take_measurement(measurement, t);
+        self.time = t;
+        // Candidate: a fresh chunk starting at the current state, else the current path.
+        let (cand_slot, cand_start) = match self.fresh.take() {
+            Some(s) => (s, PathState::intended(0.0)),
+            None => (self.slot, self.path),
+        };
+        let mut diag = Diagnostics {
+            verified: false,
+            on_failsafe: false,
+            binding: Binding::None,
+            min_separation: f64::INFINITY,
+            contact_energy: 0.0,
+            contact_threshold: 0.0,
+            path_speed: 0.0,
+            stop_time: t,
+        };
+        let outcome = self.candidate(cand_slot, cand_start).map(|(go, brake)| {
+            let result = self.verify(cand_slot, &go, &brake, t, &mut diag);
+            (go, brake, result)
+        });
+        let verified = match outcome {
+            Some((go, brake, ok)) if ok || self.config.mode == FilterMode::Off => {
+                self.slot = cand_slot;
+                self.path = go.eval(alpha);
+                self.failsafe = Some(VerifiedFailsafe {
+                    slot: cand_slot,
+                    profile: brake,
+                    t0: t + alpha,
+                });
+                diag.stop_time = t + alpha + brake.settle_time();
+                true
+            }
+            Some(_) => false,
+            None => {
+                diag.binding = Binding::NoProfile;
+                false
+            }
+        };
+        if !verified {
+            // Continue the last verified failsafe.
+            let f = self
+                .failsafe
+                .expect("a verified failsafe exists once started");
+            self.slot = f.slot;
+            self.path = f.profile.eval(t + alpha - f.t0);
+            diag.on_failsafe = true;
+            diag.stop_time = f.t0 + f.profile.settle_time();
+        }
+        diag.verified = verified;
+        diag.path_speed = self.path.sd;
+        self.time = t + alpha;
+        Command {
+            t: t + alpha,
+            state: self.state(),
+            dof: self.dof,
+            diag,
+        }
+    }
+
+    fn hold_command(&self, t: f64, binding: Binding) -> Command {
+        let diag = Diagnostics {
+            verified: false,
+            on_failsafe: true,
+            binding,
+            min_separation: f64::INFINITY,
+            contact_energy: 0.0,
+            contact_threshold: 0.0,
+            path_speed: 0.0,
+            stop_time: t,
+        };
+        Command {
+            t,
+            state: JointState::default(),
+            dof: self.dof,
+            diag,
+        }
+    }
+
+    /// The go-profile (toward ṡ = 1 for one step) and the brake profile after it, both admissible.
+    fn candidate(&self, slot: usize, start: PathState) -> Option<(SpeedProfile, SpeedProfile)> {
+        let tr = self.traj(slot);
+        let alpha = self.config.safety_step;
+        let go = if start.is_intended() {
+            SpeedProfile::plan(start, 1.0, 0.0, 0.0)
+        } else {
+            admissible(tr, &self.hw, start, 1.0, Some(alpha))?
+        };
+        let after = go.eval(alpha);
+        let brake = if after.sd == 0.0 && after.sdd == 0.0 {
+            SpeedProfile::plan(after, 0.0, 0.0, 0.0)
+        } else {
+            admissible(tr, &self.hw, after, 0.0, None)?
+        };
+        Some((go, brake))
+    }
+
+    /// Verify the monitored trajectory (go for α_s from t, then brake) against the human.
+    fn verify(
+        &mut self,
+        slot: usize,
+        go: &SpeedProfile,
+        brake: &SpeedProfile,
+        t: f64,
+        diag: &mut Diagnostics,
+    ) -> bool {
+        let alpha = self.config.safety_step;
+        let stop = alpha + brake.settle_time();
+        if self.human.is_none() {
+            return true;
+        }
+        if !self.has_meas {
+            diag.binding = Binding::NoMeasurement;
+            return false;
+        }
+        let Some(meas) = self.meas.take() else {
+            diag.binding = Binding::NoMeasurement;
+            return false;
+        };
+        let mut ok = true;
+        // Intervals: [0, α], then durations first_interval·2^k until standstill.
+        let mut ta = 0.0;
+        let mut k = 0;
+        let mut dur = self.config.first_interval;
+        while ta < stop || k == 0 {
+            let tb = if k == 0 {
+                alpha.min(stop.max(alpha))
+            } else if k + 1 >= self.config.max_intervals {
+                stop
+            } else {
+                (ta + dur).min(stop)
+            };
+            if k > 0 {
+                dur *= 2.0;
+            }
+            if !self.check_interval(slot, go, brake, t, ta, tb, k, &meas, diag) {
+                ok = false;
+                if self.config.mode == FilterMode::Pacs {
+                    break;
+                }
+            }
+            k += 1;
+            ta = tb;
+            if tb >= stop {
+                break;
+            }
+        }
+        self.meas = Some(meas);
+        ok
+    }
+
+    /// Path and speed ranges of the monitored trajectory over relative time [ta, tb].
+    fn path_ranges(
+        go: &SpeedProfile,
+        brake: &SpeedProfile,
+        alpha: f64,
+        ta: f64,
+        tb: f64,
+    ) -> (f64, f64, f64, f64) {
+        let mut s_lo = f64::INFINITY;
+        let mut s_hi = f64::NEG_INFINITY;
+        let mut sd_lo = f64::INFINITY;
+        let mut sd_hi = f64::NEG_INFINITY;
+        let mut add = |r: (f64, f64, f64, f64, f64)| {
+            s_lo = s_lo.min(r.0);
+            s_hi = s_hi.max(r.1);
+            sd_lo = sd_lo.min(r.2);
+            sd_hi = sd_hi.max(r.3);
+        };
+        if ta < alpha {
+            add(go.ranges(ta, tb.min(alpha)));
+        }
+        if tb > alpha {
+            add(brake.ranges(ta.max(alpha) - alpha, tb - alpha));
+        }
+        (s_lo, s_hi, sd_lo.max(0.0), sd_hi)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn check_interval(
+        &mut self,
+        slot: usize,
+        go: &SpeedProfile,
+        brake: &SpeedProfile,
+        t: f64,
+        ta: f64,
+        tb: f64,
+        k: usize,
+        meas: &HumanMeasurement,
+        diag: &mut Diagnostics,
+    ) -> bool {
+        let alpha = self.config.safety_step;
+        let n = self.dof;
+        let (s_lo, s_hi, sd_lo, sd_hi) = Self::path_ranges(go, brake, alpha, ta, tb);
+        let tr = self.trajs[slot].as_ref().expect("slot holds a trajectory");
+        let mut q_lo = [0.0; MAX_DOF];
+        let mut q_hi = [0.0; MAX_DOF];
+        let mut v_lo = [0.0; MAX_DOF];
+        let mut v_hi = [0.0; MAX_DOF];
+        for i in 0..n {
+            let d = tr.joint_derivs(i, s_lo, s_hi);
+            q_lo[i] = d.r[0].lo;
+            q_hi[i] = d.r[0].hi;
+            // q̇ = q′·ṡ with ṡ ∈ [sd_lo, sd_hi] ⊂ [0, ∞): interval product, rounded outward.
+            let (a, b) = (d.r[1].lo, d.r[1].hi);
+            let c = [a * sd_lo, a * sd_hi, b * sd_lo, b * sd_hi];
+            v_lo[i] = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
+            v_hi[i] = c
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max)
+                .next_up();
+        }
+        if self
+            .reach
+            .occupancy_with(
+                &mut self.scratch,
+                &q_lo[..n],
+                &q_hi[..n],
+                &mut self.robot_caps,
+            )
+            .is_err()
+        {
+            return false;
+        }
+        let Some((hr, tc)) = self.human.as_mut() else {
+            return true;
+        };
+        if hr
+            .occupancy_into(meas, t + ta, t + tb, &mut self.human_caps)
+            .is_err()
+        {
+            diag.binding = Binding::NoMeasurement;
+            return false;
+        }
+        let moving = sd_hi > 0.0 && (0..n).any(|i| v_lo[i] != 0.0 || v_hi[i] != 0.0);
+        let mut energies_done = false;
+        let parts = self.human_caps.len();
+        // Broad phase: boxes around the robot's capsules and their union.
+        let mut all = Aabb {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        };
+        for (bx, rc) in self.robot_aabb.iter_mut().zip(&self.robot_caps) {
+            *bx = Aabb::of(rc);
+            for k in 0..3 {
+                all.lo[k] = all.lo[k].min(bx.lo[k]);
+                all.hi[k] = all.hi[k].max(bx.hi[k]);
+            }
+        }
+        for b in 0..parts {
+            let hc = self.human_caps[b];
+            let hb = Aabb::of(&hc);
+            if k == 0 && all.distance_lb(&hb) < diag.min_separation {
+                // Separation lower bound; a pair whose boxes are farther apart than the best so
+                // far cannot lower it.
+                let mut best = diag.min_separation;
+                for (rc, rb) in self.robot_caps.iter().zip(&self.robot_aabb) {
+                    if rb.distance_lb(&hb) < best {
+                        best = best.min(capsule_distance_lower_bound(rc, &hc));
+                    }
+                }
+                diag.min_separation = best;
+            }
+            if !all.overlaps(&hb) {
+                continue;
+            }
+            // Robot capsules that may touch this part.
+            let mut first_frame = usize::MAX;
+            let mut nonadjacent = false;
+            let mut worst: Option<(usize, usize)> = None; // (capsule, frame) with the largest frame
+            for (ci, rc) in self.robot_caps.iter().enumerate() {
+                if !self.robot_aabb[ci].overlaps(&hb) || !capsules_may_intersect(rc, &hc) {
+                    continue;
+                }
+                let frame = self.reach.capsule_frame(ci);
+                if frame == 0 {
+                    continue; // the base never moves
+                }
+                if first_frame == usize::MAX {
+                    first_frame = frame;
+                } else if first_frame.abs_diff(frame) >= 2 {
+                    nonadjacent = true;
+                }
+                if worst.is_none_or(|(_, f)| frame > f) {
+                    worst = Some((ci, frame));
+                }
+            }
+            let Some((ci, frame)) = worst else { continue };
+            let link = self.capsule_link[ci];
+            match tc.per_part[b] {
+                pacs_models::Constraint::Ssm => {
+                    if moving {
+                        if matches!(diag.binding, Binding::None) {
+                            diag.binding = Binding::Ssm {
+                                link,
+                                body_part: b,
+                                interval: k,
+                            };
+                        }
+                        return false;
+                    }
+                }
+                c @ pacs_models::Constraint::Pfl { .. } => {
+                    if !energies_done {
+                        if self
+                            .reach
+                            .subchain_energy_bounds_into(
+                                &q_lo[..n],
+                                &q_hi[..n],
+                                &v_lo[..n],
+                                &v_hi[..n],
+                                &mut self.energies,
+                            )
+                            .is_err()
+                        {
+                            return false;
+                        }
+                        energies_done = true;
+                    }
+                    let constrained = nonadjacent
+                        || self.env.iter().any(|e| e.may_touch(&hc))
+                        || (0..parts).any(|o| {
+                            o != b
+                                && hr.model().clampable(b, o)
+                                && self
+                                    .robot_caps
+                                    .iter()
+                                    .any(|rc| capsules_may_intersect(rc, &self.human_caps[o]))
+                        });
+                    let threshold = c.threshold(constrained);
+                    let energy = self.energies[frame];
+                    if energy > diag.contact_energy {
+                        diag.contact_energy = energy;
+                        diag.contact_threshold = threshold;
+                    }
+                    if energy > threshold {
+                        if matches!(diag.binding, Binding::None) {
+                            diag.binding = Binding::Pfl {
+                                link,
+                                body_part: b,
+                                energy,
+                                threshold,
+                                constrained,
+                            };
+                        }
+                        return false;
+                    }
+                }
+            }
+        }
+        let _ = (add_up(0.0, 0.0), mul_up(0.0, 0.0));
+        true
+    }
+}

@@ -1,0 +1,393 @@
+//! Shield scenarios with scripted humans: safety against the ground-truth human motion, path
+//! consistency, progress when the human leaves, and the OFF baseline's violations.
+
+use nalgebra::Point3;
+use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
+use pacs_reach::geometry::segment_distance_lower_bound;
+use pacs_reach::human::HumanMeasurement;
+use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_verify::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
+
+const Q0: [f64; 7] = fr3::Q_READY;
+
+/// Default human standing upright with the body centred at (x, y), right hand reaching to `hand`.
+fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
+    vec![
+        [x, y + 0.2, 1.4],
+        [x, y + 0.25, 1.15],
+        [x, y + 0.25, 0.9],
+        [x, y - 0.2, 1.4],
+        [
+            0.5 * (x + hand[0]),
+            0.5 * (y - 0.2 + hand[1]),
+            0.5 * (1.4 + hand[2]),
+        ],
+        hand,
+        [x, y, 1.5],
+        [x, y, 1.0],
+        [x, y, 1.65],
+    ]
+}
+
+/// Minimum exact distance between the robot's moving capsules at `q` and the true body parts.
+fn true_separation(
+    robot: &pacs_models::RobotModel,
+    human: &HumanModel,
+    q: &[f64],
+    kp: &[[f64; 3]],
+) -> f64 {
+    let caps = robot.capsules_world(q);
+    let mut d = f64::INFINITY;
+    for bp in human.body_parts() {
+        let a = Point3::from(kp[bp.from]);
+        let b = Point3::from(kp[bp.to]);
+        for (li, c) in &caps {
+            if robot.links()[*li].frame == 0 {
+                continue;
+            }
+            let s = segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2())
+                - c.radius()
+                - bp.thickness / 2.0;
+            d = d.min(s);
+        }
+    }
+    d
+}
+
+fn chunk(delta: [f64; 7], h: usize) -> Chunk {
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![delta.to_vec(); 16],
+        execute: h,
+        gripper: None,
+    }
+}
+
+struct Run {
+    qs: Vec<[f64; 7]>,
+    moving_contact: usize,
+    verified: usize,
+    steps: usize,
+}
+
+/// Run `steps` safety steps; a new chunk every `every` steps; the human from `script(t)`.
+fn run(
+    mode: FilterMode,
+    spec: &str,
+    steps: usize,
+    every: usize,
+    delta: [f64; 7],
+    script: &dyn Fn(f64) -> Vec<[f64; 3]>,
+) -> Run {
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let spec = ConstraintSpec::builtin(spec).unwrap();
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
+    let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+    sh.start(0.0, &Q0).unwrap();
+    let dt = cfg.safety_step;
+    let mut out = Run {
+        qs: vec![],
+        moving_contact: 0,
+        verified: 0,
+        steps,
+    };
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        if k % every == 0 {
+            let _ = sh.set_chunk(&chunk(delta, 8));
+        }
+        // Camera: the true state at t - delay, stamped t (no noise here).
+        let truth_then = script(t - human.delay());
+        let m = HumanMeasurement::new(&human, t, &truth_then, None).unwrap();
+        let cmd = sh.step(t, Some(&m));
+        let mut q = [0.0; 7];
+        q.copy_from_slice(&cmd.state.q[..7]);
+        let moving = cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-12);
+        let sep = true_separation(&robot, &human, &q, &script(cmd.t));
+        if moving && sep <= 0.0 {
+            out.moving_contact += 1;
+        }
+        if cmd.diag.verified {
+            out.verified += 1;
+        }
+        if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
+            eprintln!(
+                "t={t:.3} q1={:.4} sd={:.3} verified={} fs={} bind={:?} sep_lb={:.3} true_sep={sep:.3} stop={:.3}",
+                q[0],
+                cmd.diag.path_speed,
+                cmd.diag.verified,
+                cmd.diag.on_failsafe,
+                cmd.diag.binding,
+                cmd.diag.min_separation,
+                cmd.diag.stop_time
+            );
+        }
+        out.qs.push(q);
+    }
+    out
+}
+
+const DELTA: [f64; 7] = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+/// Faster actions for the PFL scenarios (joint 1 reaches ~1 rad/s): OFF exceeds the thresholds.
+const FAST: [f64; 7] = [0.08, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+
+#[test]
+fn free_motion_completes_without_a_human_nearby() {
+    let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let r = run(FilterMode::Pacs, "sorting", 1500, 400, DELTA, &far);
+    assert_eq!(r.moving_contact, 0);
+    assert!(
+        r.verified > r.steps * 9 / 10,
+        "verified {} of {}",
+        r.verified,
+        r.steps
+    );
+    let moved = r.qs.last().unwrap()[0] - Q0[0];
+    assert!(moved > 0.2, "joint 1 moved only {moved} rad");
+}
+
+#[test]
+fn ssm_never_moves_into_a_person_standing_at_the_tool() {
+    let close = |_t: f64| human_at(0.9, 0.3, [0.32, 0.12, 0.45]);
+    let r = run(FilterMode::Pacs, "sorting", 1000, 400, DELTA, &close);
+    assert_eq!(r.moving_contact, 0, "robot moved while in contact");
+    let off = run(FilterMode::Off, "sorting", 1000, 400, DELTA, &close);
+    assert!(
+        off.moving_contact > 0,
+        "OFF should collide in this scenario"
+    );
+}
+
+#[test]
+fn person_walks_in_and_leaves_robot_resumes_on_the_same_path() {
+    let script = |t: f64| {
+        let far = [1.6, 0.2, 1.0];
+        let near = [0.45, 0.15, 0.5];
+        let w = if t < 0.3 {
+            0.0
+        } else if t < 0.8 {
+            (t - 0.3) / 0.5
+        } else if t < 1.6 {
+            1.0
+        } else if t < 2.1 {
+            1.0 - (t - 1.6) / 0.5
+        } else {
+            0.0
+        };
+        let hand = [
+            far[0] + w * (near[0] - far[0]),
+            far[1] + w * (near[1] - far[1]),
+            far[2] + w * (near[2] - far[2]),
+        ];
+        human_at(1.4 - 0.3 * w, 0.2, hand)
+    };
+    let r = run(FilterMode::Pacs, "sorting", 3000, 400, DELTA, &script);
+    assert_eq!(r.moving_contact, 0);
+    let q_at = |k: usize| r.qs[k][0];
+    assert!(
+        q_at(2999) > q_at(2150) + 0.01,
+        "no progress after the person left: {} -> {}",
+        q_at(2150),
+        q_at(2999)
+    );
+    for w in r.qs.windows(2) {
+        assert!(w[1][0] >= w[0][0] - 1e-12, "moved backwards on the path");
+        for i in 1..7 {
+            assert!(
+                (w[1][i] - Q0[i]).abs() < 1e-9,
+                "joint {i} left the path: {}",
+                w[1][i]
+            );
+        }
+    }
+}
+
+/// Moving contacts of a PFL run, with the nominal energy of the whole moving robot at contact.
+fn pfl_contacts(
+    spec: &str,
+    script: &dyn Fn(f64) -> Vec<[f64; 3]>,
+    mode: FilterMode,
+    steps: usize,
+    env: Vec<EnvShape>,
+    clamped: bool,
+) -> (usize, f64, f64) {
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let cs = ConstraintSpec::builtin(spec).unwrap();
+    let tc = cs.resolve(&human).unwrap();
+    let cfg = ShieldConfig {
+        mode,
+        ..ShieldConfig::default()
+    };
+    let mut sh = Shield::new(robot.clone(), Some((human.clone(), &cs)), env, cfg).unwrap();
+    sh.start(0.0, &Q0).unwrap();
+    let (mut contacts, mut worst_ratio, mut progress) = (0, 0.0f64, 0.0);
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 400 == 0 {
+            let _ = sh.set_chunk(&chunk(FAST, 8));
+        }
+        let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
+        let cmd = sh.step(t, Some(&m));
+        let q = &cmd.state.q[..7];
+        let dq = &cmd.state.dq[..7];
+        progress = q[0] - Q0[0];
+        // Ground truth: any body part in contact with a moving link?
+        let kp = script(cmd.t);
+        let caps = robot.capsules_world(q);
+        let mut e = [0.0; 8];
+        robot.subchain_energies_into(q, dq, &mut e);
+        for (b, bp) in human.body_parts().iter().enumerate() {
+            let (a, bb) = (Point3::from(kp[bp.from]), Point3::from(kp[bp.to]));
+            for (li, c) in &caps {
+                let frame = robot.links()[*li].frame;
+                if frame == 0 {
+                    continue;
+                }
+                let d = segment_distance_lower_bound(&a, &bb, &c.p1(), &c.p2())
+                    - c.radius()
+                    - bp.thickness / 2.0;
+                if d <= 0.0 && e[frame] > 0.0 {
+                    contacts += 1;
+                    // Ground truth contact type is known by construction of the scenario.
+                    let thr = tc.per_part[b].threshold(clamped).max(1e-12);
+                    worst_ratio = worst_ratio.max(e[frame] / thr);
+                }
+            }
+        }
+    }
+    (contacts, worst_ratio, progress)
+}
+
+#[test]
+fn handover_pfl_contact_energy_stays_below_threshold() {
+    // The right hand comes to the gripper's path and stays there.
+    let script = |t: f64| {
+        let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
+        let hand = [1.2 - w * (1.2 - 0.33), 0.1, 1.0 - w * (1.0 - 0.45)];
+        human_at(1.4, 0.2, hand)
+    };
+    let (contacts, ratio, progress) =
+        pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![], false);
+    assert!(
+        ratio <= 1.0,
+        "PACS: contact energy {ratio}× the unconstrained threshold"
+    );
+    let (off_contacts, off_ratio, _) =
+        pfl_contacts("handover", &script, FilterMode::Off, 2000, vec![], false);
+    assert!(
+        off_contacts > 0 && off_ratio > 1.0,
+        "OFF should exceed the threshold: {off_contacts} contacts, {off_ratio}×"
+    );
+    // PFL lets the robot keep moving slowly near the hand instead of stopping far away.
+    assert!(progress > 0.0, "no progress at all ({contacts} contacts)");
+}
+
+#[test]
+fn feeding_pfl_head_approach_is_safe() {
+    // The head leans toward the tool (fork) at 0.3 m/s.
+    let script = |t: f64| {
+        let w = ((t - 0.1) / 1.0).clamp(0.0, 1.0);
+        let x = 1.0 - 0.45 * w;
+        let mut kp = human_at(x + 0.1, 0.0, [x, -0.3, 1.0]);
+        kp[8] = [x - 0.05, 0.05, 0.62]; // head low, in front of the robot
+        kp[6] = [x + 0.05, 0.0, 0.75];
+        kp
+    };
+    let (_, ratio, _) = pfl_contacts("feeding", &script, FilterMode::Pacs, 2000, vec![], false);
+    assert!(ratio <= 1.0, "PACS: head contact energy {ratio}× threshold");
+}
+
+#[test]
+fn hand_resting_on_the_table_gets_the_constrained_threshold() {
+    // The hand lies on a table top (z = 0.36 m) under the gripper's path: clamping is possible.
+    let table = EnvShape::Box {
+        min: [0.1, -0.6, 0.0],
+        max: [1.0, 0.6, 0.36],
+    };
+    let script = |t: f64| {
+        let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
+        let hand = [1.2 - w * (1.2 - 0.33), 0.1, 0.45];
+        human_at(1.4, 0.2, hand)
+    };
+    let (_, ratio, _) = pfl_contacts(
+        "handover",
+        &script,
+        FilterMode::Pacs,
+        2000,
+        vec![table],
+        true,
+    );
+    assert!(
+        ratio <= 1.0,
+        "PACS: clamped contact energy {ratio}× the constrained threshold"
+    );
+    let (_, off_ratio, _) = pfl_contacts(
+        "handover",
+        &script,
+        FilterMode::Off,
+        2000,
+        vec![table],
+        true,
+    );
+    assert!(
+        off_ratio > 1.0,
+        "OFF should exceed the constrained threshold ({off_ratio}×)"
+    );
+}
+
+#[test]
+fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
+    use pacs_verify::cbf::{CbfConfig, CbfFilter};
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let run_cbf = |script: &dyn Fn(f64) -> Vec<[f64; 3]>| {
+        let mut f =
+            CbfFilter::new(robot.clone(), Some(human.clone()), CbfConfig::default()).unwrap();
+        f.start(0.0, &Q0).unwrap();
+        let mut off_path = 0.0f64;
+        let mut contacts = 0;
+        for k in 0..1500 {
+            let t = k as f64 * 0.001;
+            if k % 400 == 0 {
+                let _ = f.set_chunk(t, &chunk(DELTA, 8)); // a rejected chunk keeps the old reference
+            }
+            let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
+            let cmd = f.step(t, Some(&m));
+            let q = &cmd.state.q[..7];
+            if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
+                eprintln!(
+                    "cbf t={t:.2} q1={:.4} q2={:.4} sep={:.3} bind={:?} ok={}",
+                    q[0], q[1], cmd.diag.min_separation, cmd.diag.binding, cmd.diag.verified
+                );
+            }
+            for i in 1..7 {
+                off_path = off_path.max((q[i] - Q0[i]).abs());
+            }
+            if true_separation(&robot, &human, q, &script(cmd.t)) <= 0.0
+                && cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-9)
+            {
+                contacts += 1;
+            }
+        }
+        (f.q()[0] - Q0[0], off_path, contacts)
+    };
+    let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let (progress, off_path, _) = run_cbf(&far);
+    assert!(
+        progress > 0.2,
+        "CBF should track the reference without a human: {progress}"
+    );
+    assert!(off_path < 1e-3, "no reason to leave the path: {off_path}");
+    // The hand waits on the robot's upcoming path (joint 1 turns the tool toward +y).
+    let close = |_t: f64| human_at(0.9, 0.6, [0.28, 0.32, 0.5]);
+    let (_, off_path, _) = run_cbf(&close);
+    assert!(
+        off_path > 1e-3,
+        "the barrier should push the robot off its path ({off_path} rad)"
+    );
+}

@@ -1,0 +1,94 @@
+//! The shield step performs no heap allocation (counting global allocator).
+
+use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_reach::human::HumanMeasurement;
+use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_verify::shield::{Shield, ShieldConfig};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+struct Counting;
+static COUNT: AtomicUsize = AtomicUsize::new(0);
+static ARMED: AtomicBool = AtomicBool::new(false);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        if ARMED.load(Ordering::SeqCst) {
+            COUNT.fetch_add(1, Ordering::SeqCst);
+        }
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        if ARMED.load(Ordering::SeqCst) {
+            COUNT.fetch_add(1, Ordering::SeqCst);
+        }
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static A: Counting = Counting;
+
+#[test]
+fn step_allocates_nothing() {
+    for spec in ["sorting", "handover"] {
+        let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+        let cs = ConstraintSpec::builtin(spec).unwrap();
+        let mut sh = Shield::new(
+            fr3::fr3(),
+            Some((human.clone(), &cs)),
+            vec![],
+            ShieldConfig::default(),
+        )
+        .unwrap();
+        sh.start(0.0, &fr3::Q_READY).unwrap();
+        let chunk = Chunk {
+            kind: ActionKind::Delta,
+            actions: vec![vec![0.02; 7]; 16],
+            execute: 8,
+            gripper: None,
+        };
+        // Human walking toward the robot and back: steps verify, brake, resume.
+        let meas: Vec<HumanMeasurement> = (0..2000)
+            .map(|k| {
+                let t = k as f64 * 0.001;
+                let d = 0.55 + 0.45 * (3.0 * t).cos();
+                let kp: Vec<[f64; 3]> = (0..9)
+                    .map(|i| {
+                        [
+                            d + 0.02 * i as f64,
+                            0.1 * i as f64 - 0.4,
+                            0.8 + 0.1 * i as f64,
+                        ]
+                    })
+                    .collect();
+                HumanMeasurement::new(&human, t, &kp, None).unwrap()
+            })
+            .collect();
+        let mut verified = 0;
+        let mut failsafe = 0;
+        for (k, m) in meas.iter().enumerate() {
+            if k % 300 == 0 {
+                sh.set_chunk(&chunk).ok(); // planning may allocate: not part of the step
+            }
+            ARMED.store(true, Ordering::SeqCst);
+            let cmd = sh.step(k as f64 * 0.001, Some(m));
+            ARMED.store(false, Ordering::SeqCst);
+            verified += cmd.diag.verified as usize;
+            failsafe += cmd.diag.on_failsafe as usize;
+        }
+        assert_eq!(
+            COUNT.load(Ordering::SeqCst),
+            0,
+            "{spec}: the step allocated"
+        );
+        // The scenario exercised both branches.
+        assert!(
+            verified > 0 && failsafe > 0,
+            "{spec}: verified {verified}, failsafe {failsafe}"
+        );
+    }
+}

@@ -1,0 +1,396 @@
+//! Intended trajectories: waypoints, limits, bounds, replanning continuity, single-target optimality.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::*;
+use pacs_verify::problems::{anchor_set, lower_bound};
+use pacs_verify::*;
+use rsruckig::prelude::{InputParameter, Ruckig, ThrowErrorHandler};
+
+fn plan_anchor(k: usize, sweeps: usize) -> (Waypoints, Trajectory) {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let p = &anchor_set(robot.limits(), k + 1, 11)[k];
+    let wp = p
+        .chunk
+        .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            sweeps,
+            ..Default::default()
+        },
+    );
+    let t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
+    (wp, t)
+}
+
+#[test]
+fn every_waypoint_is_passed_within_1e_9_from_both_sides() {
+    for k in 0..20 {
+        let (wp, t) = plan_anchor(k, 3);
+        assert_eq!(t.waypoint_times().len(), wp.segments());
+        for (m, &tk) in t.waypoint_times().iter().enumerate() {
+            for i in 0..wp.dof() {
+                let (ql, _, _) = left_limit(&t, i, tk);
+                let qr = t.state_at(tk).q[i];
+                assert!(
+                    (ql - wp.row(m + 1)[i]).abs() <= 1e-9,
+                    "chunk {k} wp {} joint {i}: {ql}",
+                    m + 1
+                );
+                assert!((qr - wp.row(m + 1)[i]).abs() <= 1e-9);
+            }
+        }
+        // Ends at rest at the last waypoint and stays there.
+        let s = t.state_at(t.duration() + 1.0);
+        for i in 0..wp.dof() {
+            assert_eq!(s.dq[i], 0.0);
+            assert_eq!(s.ddq[i], 0.0);
+            assert!((s.q[i] - wp.row(wp.segments())[i]).abs() <= 1e-9);
+        }
+    }
+}
+
+#[test]
+fn limits_hold_at_dense_samples_and_by_the_analytic_bound() {
+    let (_, plan) = limits();
+    for k in 0..20 {
+        let (_, mut t) = plan_anchor(k, 3);
+        assert_limits_at_samples(&t, &plan, 400);
+        t.check(&plan).unwrap();
+        let b = t.bounds(0.0, t.duration());
+        for i in 0..t.dof() {
+            within(b.dq[i].abs_max(), plan.v[i], "bound dq");
+            within(b.ddq[i].abs_max(), plan.a[i], "bound ddq");
+            assert!(b.q[i].lo >= plan.q_min[i] - 1e-9 && b.q[i].hi <= plan.q_max[i] + 1e-9);
+        }
+    }
+}
+
+#[test]
+fn the_checker_rejects_a_trajectory_planned_with_higher_limits() {
+    // A trajectory planned with a = 10 must fail a check against a = 5: the checker is not vacuous.
+    let (_, plan) = limits();
+    let (_, mut t) = plan_anchor(0, 3);
+    let tight = plan.with_uniform_acc_jerk(5.0, 400.0);
+    let peak = (0..7)
+        .map(|i| t.bounds(0.0, t.duration()).ddq[i].abs_max())
+        .fold(0.0, f64::max);
+    assert!(peak > 5.0, "anchor chunk 0 peaks at {peak} rad/s²");
+    assert!(matches!(
+        t.check(&tight),
+        Err(TrajectoryError::Infeasible { .. })
+    ));
+}
+
+#[test]
+fn bounds_enclose_dense_samples_and_are_tight() {
+    let (_, t) = plan_anchor(3, 3);
+    let mut rng = problems::Rng::new(5);
+    for _ in 0..200 {
+        let ta = rng.uniform(0.0, t.duration());
+        let tb = ta + rng.uniform(0.0, 0.05);
+        let b = t.bounds(ta, tb);
+        let mut seen = [[f64::INFINITY, f64::NEG_INFINITY]; 7];
+        for m in 0..=200 {
+            let s = t.state_at(ta + (tb - ta) * m as f64 / 200.0);
+            for i in 0..7 {
+                assert!(b.q[i].lo <= s.q[i] && s.q[i] <= b.q[i].hi);
+                assert!(b.dq[i].lo <= s.dq[i] && s.dq[i] <= b.dq[i].hi);
+                assert!(b.ddq[i].lo <= s.ddq[i] && s.ddq[i] <= b.ddq[i].hi);
+                seen[i][0] = seen[i][0].min(s.dq[i]);
+                seen[i][1] = seen[i][1].max(s.dq[i]);
+            }
+        }
+        // Tightness: the velocity bound exceeds the sampled range by little (exact extrema).
+        for i in 0..7 {
+            assert!(
+                b.dq[i].hi - seen[i][1] < 1e-3 && seen[i][0] - b.dq[i].lo < 1e-3,
+                "loose bound joint {i}"
+            );
+        }
+    }
+}
+
+#[test]
+fn chunk_trajectory_is_shorter_than_single_action_and_above_the_lower_bound() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    for p in anchor_set(robot.limits(), 20, 3) {
+        let wp = p
+            .chunk
+            .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let s = JointState::at_rest(&p.q0);
+        let t = pl.plan(&s, &wp).unwrap();
+        let sa = pl.plan_single_action(&s, &wp).unwrap();
+        let lb = lower_bound(&wp, &plan.v[..7]);
+        assert!(t.duration() >= lb && sa.duration() >= lb);
+        assert!(
+            t.duration() <= sa.duration() + 1e-12,
+            "{} > {}",
+            t.duration(),
+            sa.duration()
+        );
+        // Single action: at rest at every waypoint.
+        for &tk in sa.waypoint_times() {
+            let st = sa.state_at(tk);
+            for i in 0..7 {
+                assert!(st.dq[i].abs() < 1e-9 && st.ddq[i].abs() < 1e-9);
+            }
+        }
+    }
+}
+
+/// Time-optimal rest-to-rest duration of one joint moving `d` with limits (v, a, j), when the
+/// velocity limit is not reached (checked).
+fn rest_to_rest(d: f64, v: f64, a: f64, j: f64) -> f64 {
+    let t1 = (d / (2.0 * j)).cbrt();
+    if j * t1 <= a {
+        assert!(j * t1 * t1 < v);
+        return 4.0 * t1;
+    }
+    let t1 = a / j;
+    let t2 = (-3.0 * t1 + (t1 * t1 + 4.0 * d / a).sqrt()) / 2.0;
+    assert!(a * (t1 + t2) < v);
+    2.0 * (2.0 * t1 + t2)
+}
+
+#[test]
+fn single_target_durations_are_time_optimal() {
+    let (_, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let q0 = [0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    // One joint moving: closed form.
+    for (i, d) in [(0usize, 0.01), (1, 0.1), (3, 0.3), (6, 0.02), (4, 0.2)] {
+        let mut q1 = q0;
+        q1[i] += d;
+        let wp = Waypoints::from_rows(&[q0.to_vec(), q1.to_vec()]).unwrap();
+        let t = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
+        let expect = rest_to_rest(d, plan.v[i], plan.a[i], plan.j[i]);
+        assert!(
+            (t.duration() - expect).abs() < 1e-6,
+            "joint {i} d {d}: {} vs {expect}",
+            t.duration()
+        );
+    }
+    // Several joints: rsruckig single target without waypoints.
+    let mut rng = problems::Rng::new(9);
+    for _ in 0..20 {
+        let q1: Vec<f64> = q0.iter().map(|x| x + rng.uniform(-0.3, 0.3)).collect();
+        let wp = Waypoints::from_rows(&[q0.to_vec(), q1.clone()]).unwrap();
+        let t = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
+        let mut otg = Ruckig::<7, ThrowErrorHandler>::new(None, 0.001);
+        let mut inp = InputParameter::<7>::new(None);
+        let mut out = rsruckig::trajectory::Trajectory::<7>::new(None);
+        for i in 0..7 {
+            inp.current_position[i] = q0[i];
+            inp.target_position[i] = q1[i];
+            inp.max_velocity[i] = plan.v[i];
+            inp.max_acceleration[i] = plan.a[i];
+            inp.max_jerk[i] = plan.j[i];
+        }
+        otg.calculate(&inp, &mut out).unwrap();
+        assert!((t.duration() - out.duration).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn replanning_from_a_moving_state_is_continuous() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let set = anchor_set(robot.limits(), 20, 21);
+    for w in set.windows(2) {
+        let wp = w[0]
+            .chunk
+            .waypoints(&w[0].q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let t1 = pl.plan(&JointState::at_rest(&w[0].q0), &wp).unwrap();
+        for frac in [0.1, 0.33, 0.6] {
+            let tc = t1.duration() * frac;
+            let s = t1.state_at(tc);
+            let wp2 = w[1]
+                .chunk
+                .waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject)
+                .unwrap();
+            let mut t2 = pl.plan(&s, &wp2).unwrap();
+            let s2 = t2.state_at(0.0);
+            for i in 0..7 {
+                assert!((s2.q[i] - s.q[i]).abs() <= 1e-12);
+                assert!((s2.dq[i] - s.dq[i]).abs() <= 1e-12);
+                assert!((s2.ddq[i] - s.ddq[i]).abs() <= 1e-12);
+            }
+            t2.check(&plan).unwrap();
+            assert_limits_at_samples(&t2, &plan, 100);
+        }
+    }
+}
+
+#[test]
+fn moving_end_keeps_velocity_toward_the_next_chunk() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::Moving,
+            ..Default::default()
+        },
+    );
+    let p = &anchor_set(robot.limits(), 1, 4)[0];
+    let wp = p
+        .chunk
+        .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
+    t.check(&plan).unwrap();
+    let s = t.state_at(t.duration());
+    eprintln!("{:?} {:?}", t.waypoint_times(), &s.dq[..7]);
+    assert!((0..7).any(|i| s.dq[i].abs() > 1e-3), "should not stop");
+}
+
+#[test]
+fn scaled_limits_slow_execution() {
+    let (_, plan) = limits();
+    let (wp, t) = plan_anchor(2, 3);
+    let slow = plan.scaled(0.5).unwrap();
+    let mut pl = Planner::new(slow, PlannerConfig::default());
+    let mut ts = pl.plan(&JointState::at_rest(wp.row(0)), &wp).unwrap();
+    ts.check(&slow).unwrap();
+    assert!(ts.duration() > t.duration());
+    assert!(matches!(plan.scaled(0.0), Err(TrajectoryError::Scale(_))));
+    assert!(matches!(plan.scaled(1.5), Err(TrajectoryError::Scale(_))));
+}
+
+#[test]
+fn chunks_convert_to_waypoints_and_limits_are_explicit() {
+    let robot = fr3();
+    let l = robot.limits();
+    let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    let c = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 7], vec![0.2; 7], vec![9.0; 7]],
+        execute: 2,
+        gripper: Some(vec![0.0, 1.0, 0.5]),
+    };
+    let wp = c.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
+    assert_eq!(wp.segments(), 2);
+    assert!((wp.row(2)[0] - 0.3).abs() < 1e-15);
+    assert_eq!(wp.gripper(), Some(&[0.0, 1.0][..]));
+    let target: Vec<f64> = q0.iter().map(|x| x + 0.05).collect();
+    let abs = Chunk {
+        kind: ActionKind::Absolute,
+        actions: vec![target.clone()],
+        execute: 1,
+        gripper: None,
+    };
+    assert_eq!(
+        abs.waypoints(&q0, l, OutOfLimits::Reject).unwrap().row(1),
+        &target[..]
+    );
+    let far = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![9.0; 7]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        far.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::WaypointOutsideLimits {
+            waypoint: 1,
+            joint: 0,
+            ..
+        })
+    ));
+    let proj = far.waypoints(&q0, l, OutOfLimits::Project).unwrap();
+    assert!(l.contains(proj.row(1)));
+    assert_eq!(proj.row(1)[0], l.q_max()[0]);
+    let bad = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 7]],
+        execute: 2,
+        gripper: None,
+    };
+    assert!(matches!(
+        bad.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::Execute {
+            execute: 2,
+            available: 1
+        })
+    ));
+    let nan = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![f64::NAN; 7]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        nan.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::NotFinite { .. })
+    ));
+    let short = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.1; 6]],
+        execute: 1,
+        gripper: None,
+    };
+    assert!(matches!(
+        short.waypoints(&q0, l, OutOfLimits::Reject),
+        Err(TrajectoryError::Length { .. })
+    ));
+}
+
+#[test]
+fn start_states_outside_limits_are_rejected() {
+    let (_, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let q0 = [0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    let wp = Waypoints::from_rows(&[q0.to_vec(), q0.iter().map(|x| x + 0.01).collect()]).unwrap();
+    let mut s = JointState::at_rest(&q0);
+    s.dq[2] = 100.0;
+    assert!(matches!(
+        pl.plan(&s, &wp),
+        Err(TrajectoryError::StartOutsideLimits {
+            joint: 2,
+            quantity: "dq",
+            ..
+        })
+    ));
+    let mut s = JointState::at_rest(&q0);
+    s.ddq[0] = f64::NAN;
+    assert!(matches!(
+        pl.plan(&s, &wp),
+        Err(TrajectoryError::NotFinite { .. })
+    ));
+}
+
+#[test]
+fn zero_and_repeated_actions_are_handled() {
+    let (hw, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    let q1: Vec<f64> = q0.iter().map(|x| x + 0.02).collect();
+    // All-zero chunk: duration 0, at rest, failsafe stops at once.
+    let still = Waypoints::from_rows(&[q0.clone(), q0.clone(), q0.clone()]).unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&q0), &still).unwrap();
+    t.check(&plan).unwrap();
+    assert_eq!(t.duration(), 0.0);
+    let f = Failsafe::new(&t, 0.0, &hw).unwrap();
+    assert_eq!(f.stop_time(), 0.0);
+    // A repeated waypoint in the middle: the robot must pass it (at rest there).
+    let rep = Waypoints::from_rows(&[q0.clone(), q1.clone(), q1.clone(), q0.clone()]).unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&q0), &rep).unwrap();
+    t.check(&plan).unwrap();
+    let w = t.waypoint_times();
+    assert!((w[0] - w[1]).abs() < 1e-12);
+    for i in 0..7 {
+        assert!((left_limit(&t, i, w[0]).0 - q1[i]).abs() <= 1e-9);
+        assert!((t.state_at(t.duration()).q[i] - q0[i]).abs() <= 1e-9);
+    }
+    assert_limits_at_samples(&t, &plan, 200);
+}
