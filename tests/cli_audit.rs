@@ -263,3 +263,35 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
     }
     let _ = std::fs::remove_dir_all(&l.dir);
 }
+
+#[test]
+fn csv_logs_are_audited_by_extension() {
+    let dir = tmpdir("csv");
+    let header = r#"#{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm"}"#;
+    let human = "human,0,0,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1";
+    let good = dir.join("good.csv");
+    std::fs::write(
+        &good,
+        format!("{header}\n{human}\nrobot,0,7,0,-0.785,0,-2.356,0,1.571,0.785\nrobot,0.001,7,0,-0.785,0,-2.356,0,1.571,0.785\n"),
+    )
+    .unwrap();
+    let o = pacs(&["audit", "--json", &s(&good)]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(json(&o)["runs"][0]["metrics"]["samples"], 2);
+    let bad = dir.join("bad.csv");
+    std::fs::write(
+        &bad,
+        format!("{header}\n{human}\nrobot,0,7,NaN,-0.785,0,-2.356,0,1.571,0.785\n"),
+    )
+    .unwrap();
+    let o = pacs(&["audit", &s(&bad)]);
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv: line 3: q[0]"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
