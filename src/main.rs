@@ -51,6 +51,9 @@ enum Command {
         #[arg(long, value_name = "T")]
         brake_at: Option<f64>,
     },
+    /// Offline audit of logs against SSM/PFL: exit 0 all pass, 1 any fail, 2 any inconclusive
+    /// (none fail), 3 invalid input. See docs/audit.md.
+    Audit(cli::audit::AuditArgs),
 }
 
 #[derive(Subcommand)]
@@ -115,6 +118,7 @@ fn main() -> ExitCode {
             use std::io::IsTerminal;
             cli::bench::shield(steps, std::io::stderr().is_terminal())
         }
+        Command::Audit(args) => return cli::audit::main(args),
     };
     match result {
         Ok(value) => {

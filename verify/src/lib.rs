@@ -18,6 +18,7 @@
 // Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
 #![allow(clippy::needless_range_loop)]
 
+pub mod audit;
 pub mod bench;
 pub mod cbf;
 pub mod chunk;
