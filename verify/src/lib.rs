@@ -30,6 +30,7 @@ pub mod problems;
 pub mod profile;
 pub mod scaling;
 pub mod shield;
+pub mod shield_log;
 pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
