@@ -36,8 +36,13 @@ enum Command {
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
-    /// Run the built-in handover demo with PACS and with the filter OFF; print a summary.
-    Demo,
+    /// Run the built-in scenarios (Sorting/SSM, Handover/PFL) with PACS and with the filter OFF,
+    /// audit the logs and write the certification report; print a summary.
+    Demo {
+        /// Output directory for logs and reports.
+        #[arg(long, value_name = "DIR", default_value = "pacs-out")]
+        out: PathBuf,
+    },
     /// Measure speed (use a release build: `cargo run --release -- bench shield`).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -51,6 +56,9 @@ enum Command {
         #[arg(long, value_name = "T")]
         brake_at: Option<f64>,
     },
+    /// Offline audit of logs against SSM/PFL: exit 0 all pass, 1 any fail, 2 any inconclusive
+    /// (none fail), 3 invalid input. See docs/audit.md.
+    Audit(cli::audit::AuditArgs),
 }
 
 #[derive(Subcommand)]
@@ -107,14 +115,15 @@ fn main() -> ExitCode {
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
-        Command::Demo => {
+        Command::Demo { out } => {
             use std::io::IsTerminal;
-            cli::demo::run_demo(std::io::stderr().is_terminal())
+            cli::demo::run_demo(std::io::stderr().is_terminal(), &out)
         }
         Command::Bench(BenchCommand::Shield { steps }) => {
             use std::io::IsTerminal;
             cli::bench::shield(steps, std::io::stderr().is_terminal())
         }
+        Command::Audit(args) => return cli::audit::main(args),
     };
     match result {
         Ok(value) => {

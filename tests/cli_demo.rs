@@ -1,11 +1,14 @@
-//! `pacs demo` end to end: runs, prints JSON, PACS is safe in both scenarios, OFF violates SSM.
+//! `pacs demo` end to end: simulates, logs, audits and reports. PACS runs are safe against the
+//! ground truth and their logs audit `pass`; the OFF sorting run violates SSM and audits `fail`.
 
 use std::process::Command;
 
 #[test]
-fn demo_runs_and_pacs_is_safe() {
+fn demo_runs_audits_and_reports() {
+    let out_dir = std::env::temp_dir().join(format!("pacs-demo-test-{}", std::process::id()));
     let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
-        .arg("demo")
+        .args(["demo", "--out"])
+        .arg(&out_dir)
         .output()
         .unwrap();
     assert!(
@@ -20,6 +23,9 @@ fn demo_runs_and_pacs_is_safe() {
         if r["method"] == "pacs" {
             assert_eq!(r["safety_violation_fraction"].as_f64(), Some(0.0), "{r}");
             assert_eq!(r["success"], true, "{r}");
+            assert_eq!(r["audit_verdict"], "pass", "{r}");
+        } else {
+            assert_eq!(r["audit_verdict"], "fail", "{r}");
         }
     }
     let off_sorting = runs
@@ -27,4 +33,16 @@ fn demo_runs_and_pacs_is_safe() {
         .find(|r| r["method"] == "off" && r["task"] == "sorting")
         .unwrap();
     assert!(off_sorting["safety_violation_fraction"].as_f64().unwrap() > 0.0);
+    for f in [
+        "report.html",
+        "report.json",
+        "report.md",
+        "sorting-pacs.jsonl",
+        "handover-off.jsonl",
+    ] {
+        assert!(out_dir.join(f).is_file(), "{f} missing");
+    }
+    let html = std::fs::read_to_string(out_dir.join("report.html")).unwrap();
+    assert!(html.contains("<svg"), "report has plots");
+    let _ = std::fs::remove_dir_all(&out_dir);
 }

@@ -78,14 +78,15 @@ fn invalid(out: Output, needle: &str) {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 const Q_READY: [f64; 7] = [
     0.0,
-    -0.7853981633974483,
+    -FRAC_PI_4,
     0.0,
-    -2.356194490192345,
+    -3.0 * FRAC_PI_4,
     0.0,
-    1.5707963267948966,
-    0.7853981633974483,
+    FRAC_PI_2,
+    FRAC_PI_4,
 ];
 
 #[test]
@@ -192,7 +193,7 @@ fn reach_human_default_vel_hand_computed() {
     assert_eq!(parts.len(), 8);
     let head = parts.iter().find(|p| p["name"] == "head").unwrap();
     let r = head["radius"].as_f64().unwrap();
-    assert!(r >= 0.417 && r < 0.417 + 1e-12, "{r}");
+    assert!((0.417..0.417 + 1e-12).contains(&r), "{r}");
     assert_eq!(v["intervals"][0]["t"], json!([0.0, 0.1]));
 }
 

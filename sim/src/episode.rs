@@ -6,8 +6,10 @@ use crate::policy::{ChunkPolicy, Demonstration};
 use nalgebra::Point3;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
 use pacs_reach::geometry::segment_distance_lower_bound;
+use pacs_verify::audit::log::{Header, ModelRef};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
 use pacs_verify::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
+use pacs_verify::shield_log::ShieldLog;
 use serde::Serialize;
 
 /// Which safety filter runs.
@@ -216,7 +218,7 @@ pub fn ground_truth(
     (sep, violation, energies[robot.dof()])
 }
 
-/// Run one episode from `q0` at rest.
+/// Run one episode from the demonstration's start at rest.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     method: Method,
@@ -228,6 +230,66 @@ pub fn run(
     cfg: &EpisodeConfig,
     record_every: usize,
 ) -> Result<Episode, ShieldError> {
+    run_logged(
+        method,
+        robot,
+        human,
+        spec,
+        script,
+        demo,
+        cfg,
+        record_every,
+        None,
+    )
+}
+
+/// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).
+pub fn log_header(
+    method: Method,
+    robot: &RobotModel,
+    human: &HumanModel,
+    spec: &ConstraintSpec,
+    script: &dyn HumanScript,
+) -> Header {
+    let mut h = Header::new(
+        ModelRef::Spec(Box::new(robot.spec().clone())),
+        ModelRef::Spec(Box::new(human.spec().clone())),
+        ModelRef::Spec(Box::new(spec.clone())),
+    );
+    h.meta.insert("task".into(), spec.name.clone().into());
+    h.meta.insert("policy".into(), "nn-demonstration".into());
+    h.meta.insert(
+        "filter".into(),
+        serde_json::to_value(method).unwrap_or_default(),
+    );
+    h.meta.insert("human".into(), script.name().into());
+    h
+}
+
+/// [`run`], also writing the run as an audit log (format v1) to `log` when given.
+#[allow(clippy::too_many_arguments)]
+pub fn run_logged(
+    method: Method,
+    robot: &RobotModel,
+    human: &HumanModel,
+    spec: &ConstraintSpec,
+    script: &dyn HumanScript,
+    demo: &Demonstration,
+    cfg: &EpisodeConfig,
+    record_every: usize,
+    log: Option<&mut dyn std::io::Write>,
+) -> Result<Episode, ShieldError> {
+    let mut log = match log {
+        Some(w) => {
+            let h = log_header(method, robot, human, spec, script);
+            let mut l = ShieldLog::new(w, &h, 0.0, &demo.path()[0])
+                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+            l.event(0.0, "episode_start")
+                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+            Some(l)
+        }
+        None => None,
+    };
     let tc = spec
         .resolve(human)
         .map_err(|e| ShieldError::Invalid(e.to_string()))?;
@@ -256,6 +318,10 @@ pub fn run(
         }
         let m = camera.measure(human, script, t);
         let cmd = filter.step(t, m.as_ref());
+        if let Some(l) = log.as_mut() {
+            l.record(t, m.as_ref(), &cmd)
+                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        }
         q.copy_from_slice(&cmd.state.q[..n]);
         dq.copy_from_slice(&cmd.state.dq[..n]);
         let (sep, viol, energy) =
@@ -288,6 +354,13 @@ pub fn run(
     }
     let steps_run = steps_run.max(1) as f64;
     let success = success_at.is_some();
+    if let Some(mut l) = log {
+        let t_end = steps_run * cfg.dt;
+        l.event(t_end, if success { "success" } else { "failure" })
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        l.finish()
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+    }
     Ok(Episode {
         method,
         human: script.name().into(),

@@ -3,10 +3,13 @@
 
 use super::CliError;
 use pacs_models::{ConstraintSpec, default_human, fr3};
-use pacs_sim::episode::{Episode, EpisodeConfig, Method, run};
+use pacs_reports::{InputFile, ReportInput};
+use pacs_sim::episode::{Episode, EpisodeConfig, Method, run_logged};
 use pacs_sim::humans::{Handover, HumanScript, WalkIn};
 use pacs_sim::policy::Demonstration;
+use pacs_verify::audit::{self, AuditConfig};
 use serde_json::{Value, json};
+use std::path::Path;
 
 /// Goal configuration of the built-in demonstration (rad): the tool moves forward and down to the
 /// handover point.
@@ -22,8 +25,10 @@ fn summary(e: &Episode) -> Value {
     })
 }
 
-/// Run `pacs demo`.
-pub fn run_demo(progress: bool) -> Result<Value, CliError> {
+/// Run `pacs demo`: simulate, log, audit the logs, write the certification report to `out`.
+pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| CliError::Input(format!("cannot create {}: {e}", out.display())))?;
     let robot = fr3::fr3();
     let human = default_human()
         .with_uncertainty(0.01, 0.1, 0.03)
@@ -45,14 +50,19 @@ pub fn run_demo(progress: bool) -> Result<Value, CliError> {
         t_offer: 0.0,
     });
     let cfg = EpisodeConfig::default();
-    let mut runs = Vec::new();
+    let audit_cfg = AuditConfig::default();
+    let (mut runs, mut logs, mut audits) = (Vec::new(), Vec::new(), Vec::new());
     for (task, script) in [("sorting", &sorting), ("handover", &handover)] {
         let spec = ConstraintSpec::builtin(task).map_err(|e| CliError::Internal(e.to_string()))?;
         for method in [Method::Pacs, Method::Off] {
             if progress {
                 eprintln!("pacs demo: {task} with {method:?} ...");
             }
-            let e = run(
+            let path = out.join(format!("{task}-{}.jsonl", method_name(method)));
+            let file = std::fs::File::create(&path)
+                .map_err(|e| CliError::Input(format!("cannot write {}: {e}", path.display())))?;
+            let mut w = std::io::BufWriter::new(file);
+            let e = run_logged(
                 method,
                 &robot,
                 &human,
@@ -61,13 +71,41 @@ pub fn run_demo(progress: bool) -> Result<Value, CliError> {
                 &demo,
                 &cfg,
                 0,
+                Some(&mut w),
             )
             .map_err(|e| CliError::Internal(e.to_string()))?;
-            runs.push(summary(&e));
+            drop(w);
+            let audited = audit::audit_file(&path, &audit_cfg)
+                .map_err(|e| CliError::Internal(format!("audit of {}: {e}", path.display())))?;
+            let mut v = summary(&e);
+            v["log"] = json!(path.display().to_string());
+            v["audit_verdict"] = serde_json::to_value(audited.verdict).unwrap_or_default();
+            v["audit_violation_fraction"] = json!(audited.metrics.violation_fraction);
+            runs.push(v);
+            logs.push(path);
+            audits.push(audited);
         }
     }
+    let hashed: Result<Vec<InputFile>, _> = logs.iter().map(|p| InputFile::hash(p)).collect();
+    let input = ReportInput {
+        runs: &audits,
+        logs: hashed.map_err(|e| CliError::Internal(e.to_string()))?,
+        config: None,
+        settings: serde_json::to_value(&audit_cfg).unwrap_or_default(),
+    };
+    pacs_reports::write_reports(out, &input).map_err(|e| CliError::Internal(e.to_string()))?;
     Ok(json!({
-        "scenario": "FR3 follows a demonstration with a nearest-neighbour chunk policy (H=16, h=8, Δt=33 ms). Sorting (SSM): a person walks up and reaches across the robot's path. Handover (PFL, hand 0.265 J free / 0.014 J clamped): a person offers a block at the goal. Camera 100 Hz, 30 ms delay, 1 cm noise; metrics against the true human motion.",
+        "scenario": "FR3 follows a demonstration with a nearest-neighbour chunk policy (H=16, h=8, Δt=33 ms). Sorting (SSM): a person walks up and reaches across the robot's path. Handover (PFL, hand 0.265 J free / 0.014 J clamped): a person offers a block at the goal. Camera 100 Hz, 30 ms delay, 1 cm noise; metrics against the true human motion; each run is logged, audited offline (audit_verdict) and reported (report).",
         "runs": runs,
+        "report": out.join("report.html").display().to_string(),
     }))
+}
+
+fn method_name(m: Method) -> &'static str {
+    match m {
+        Method::Off => "off",
+        Method::Pacs => "pacs",
+        Method::SingleAction => "single-action",
+        Method::Cbf => "cbf",
+    }
 }

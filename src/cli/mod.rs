@@ -1,5 +1,6 @@
 //! The `pacs` command line: one module per subcommand, shared error type and JSON I/O helpers.
 
+pub mod audit;
 pub mod bench;
 pub mod demo;
 pub mod fk;

@@ -18,6 +18,7 @@
 // Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
 #![allow(clippy::needless_range_loop)]
 
+pub mod audit;
 pub mod bench;
 pub mod cbf;
 pub mod chunk;
@@ -29,6 +30,7 @@ pub mod problems;
 pub mod profile;
 pub mod scaling;
 pub mod shield;
+pub mod shield_log;
 pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};

@@ -107,6 +107,7 @@ fn run(
         mode,
         ..ShieldConfig::default()
     };
+    assert_admissible(&human, script, steps as f64 * cfg.safety_step);
     let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
     sh.start(0.0, &Q0).unwrap();
     let dt = cfg.safety_step;
@@ -255,6 +256,7 @@ fn pfl_contacts(
         mode,
         ..ShieldConfig::default()
     };
+    assert_admissible(&human, script, steps as f64 * cfg.safety_step);
     let mut sh = Shield::new(robot.clone(), Some((human.clone(), &cs)), env, cfg).unwrap();
     sh.start(0.0, &Q0).unwrap();
     let (mut contacts, mut worst_ratio, mut progress) = (0, 0.0f64, 0.0);

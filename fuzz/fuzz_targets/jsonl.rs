@@ -1,0 +1,18 @@
+//! Fuzz the JSON Lines reader and the audit behind it: any input must give a result or a typed
+//! error, never a panic; and a `pass` only for input that parsed completely.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use pacs_verify::audit::{AuditConfig, Verdict, audit_reader, jsonl::JsonlReader};
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(mut r) = JsonlReader::new("fuzz.jsonl", std::io::Cursor::new(data)) else {
+        return;
+    };
+    if let Ok(run) = audit_reader(&mut r, &AuditConfig::default()) {
+        if run.verdict == Verdict::Pass {
+            assert!(run.metrics.samples >= 2);
+            assert!(run.inconclusive.is_empty());
+        }
+    }
+});

@@ -1,0 +1,103 @@
+//! Aggregate table over several logs, grouped by `meta.task`, `meta.policy`, `meta.filter` (the
+//! paper's "Impact of safeguarding"): Success, Safe Success, Safety Viol. as mean ± std.
+
+use pacs_verify::audit::RunResult;
+use serde::Serialize;
+
+/// One group of runs with equal (task, policy, filter).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Row {
+    /// `meta.task` (or "-").
+    pub task: String,
+    /// `meta.policy` (or "-").
+    pub policy: String,
+    /// `meta.filter` (or "-").
+    pub filter: String,
+    /// Number of logs.
+    pub runs: usize,
+    /// Mean and sample std of success (0/1) over logs with an outcome (None if none).
+    pub success: Option<(f64, f64)>,
+    /// Mean and std of safe success (0/1) over logs with an outcome.
+    pub safe_success: Option<(f64, f64)>,
+    /// Mean and std of the violation fraction over all logs.
+    pub safety_violation: (f64, f64),
+}
+
+fn meta_str(r: &RunResult, k: &str) -> String {
+    match r.meta.get(k) {
+        Some(serde_json::Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => "-".into(),
+    }
+}
+
+/// Mean and sample standard deviation (0 for a single value); None if empty.
+pub fn mean_std(xs: &[f64]) -> Option<(f64, f64)> {
+    if xs.is_empty() {
+        return None;
+    }
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = if xs.len() > 1 {
+        xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    Some((mean, var.sqrt()))
+}
+
+/// Rows in order of first appearance.
+pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
+    let mut keys: Vec<(String, String, String)> = Vec::new();
+    for r in runs {
+        let k = (
+            meta_str(r, "task"),
+            meta_str(r, "policy"),
+            meta_str(r, "filter"),
+        );
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .map(|k| {
+            let group: Vec<&RunResult> = runs
+                .iter()
+                .filter(|r| {
+                    (
+                        meta_str(r, "task"),
+                        meta_str(r, "policy"),
+                        meta_str(r, "filter"),
+                    ) == k
+                })
+                .collect();
+            let b = |x: bool| if x { 1.0 } else { 0.0 };
+            let succ: Vec<f64> = group
+                .iter()
+                .filter_map(|r| r.metrics.success.map(b))
+                .collect();
+            let safe: Vec<f64> = group
+                .iter()
+                .filter_map(|r| r.metrics.safe_success.map(b))
+                .collect();
+            let viol: Vec<f64> = group.iter().map(|r| r.metrics.violation_fraction).collect();
+            Row {
+                task: k.0,
+                policy: k.1,
+                filter: k.2,
+                runs: group.len(),
+                success: mean_std(&succ),
+                safe_success: mean_std(&safe),
+                safety_violation: mean_std(&viol).unwrap_or((0.0, 0.0)),
+            }
+        })
+        .collect()
+}
+
+/// "m ± s" with percentages.
+pub fn pct(v: Option<(f64, f64)>) -> String {
+    match v {
+        Some((m, s)) => format!("{:.1} ± {:.1} %", 100.0 * m, 100.0 * s),
+        None => "n/a".into(),
+    }
+}

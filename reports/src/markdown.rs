@@ -1,0 +1,121 @@
+//! `report.md`: the same content as the HTML report, without plots.
+
+use crate::{GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, overall};
+use std::fmt::Write;
+
+fn opt(v: Option<f64>, unit: &str) -> String {
+    v.map(|x| format!("{x:.4} {unit}"))
+        .unwrap_or_else(|| "n/a".into())
+}
+
+/// The Markdown report.
+pub fn report(input: &ReportInput) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# pacs audit certification report\n");
+    let _ = writeln!(
+        s,
+        "- Tool: pacs {TOOL_VERSION} (git {GIT_REVISION})\n- Overall verdict: **{:?}**",
+        overall(input.runs)
+    );
+    if let Some(c) = &input.config {
+        let _ = writeln!(s, "- Config: `{}` (SHA-256 `{}`)", c.path, c.sha256);
+    } else {
+        let _ = writeln!(s, "- Config: defaults");
+    }
+    let _ = writeln!(
+        s,
+        "- Settings: `{}`\n",
+        serde_json::to_string(&input.settings).unwrap_or_default()
+    );
+    let _ = writeln!(s, "## Summary\n");
+    let _ = writeln!(
+        s,
+        "| log | SHA-256 | task | verdict | samples | duration (s) | violation fraction | min separation | violations | success | safe success |\n|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for (r, f) in input.runs.iter().zip(&input.logs) {
+        let m = &r.metrics;
+        let _ = writeln!(
+            s,
+            "| `{}` | `{}…` | {} | **{:?}** | {} | {:.3} | {:.4} | {} | {} | {} | {} |",
+            r.log,
+            &f.sha256[..16.min(f.sha256.len())],
+            r.models.constraints,
+            r.verdict,
+            m.samples,
+            m.duration,
+            m.violation_fraction,
+            opt(m.min_separation, "m"),
+            r.violations.len(),
+            m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
+            m.safe_success
+                .map(|b| b.to_string())
+                .unwrap_or("n/a".into()),
+        );
+    }
+    if input.runs.len() > 1 {
+        let _ = writeln!(
+            s,
+            "\n## Aggregate (impact of safeguarding)\n\n| task | policy | filter | logs | Success | Safe Success | Safety Viol. |\n|---|---|---|---|---|---|---|"
+        );
+        for row in aggregate::aggregate(input.runs) {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} | {} | {} |",
+                row.task,
+                row.policy,
+                row.filter,
+                row.runs,
+                aggregate::pct(row.success),
+                aggregate::pct(row.safe_success),
+                aggregate::pct(Some(row.safety_violation))
+            );
+        }
+    }
+    for r in input.runs {
+        let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);
+        let _ = writeln!(
+            s,
+            "Models: robot `{}`, human `{}`, constraints `{}`.\n",
+            r.models.robot, r.models.human, r.models.constraints
+        );
+        if r.violations.is_empty() {
+            let _ = writeln!(s, "No violations.");
+        } else {
+            let _ = writeln!(
+                s,
+                "| t_start (s) | t_end (s) | constraint | body part | link | min separation (m) | energy (J) | threshold (J) | constrained | certain |\n|---|---|---|---|---|---|---|---|---|---|"
+            );
+            for v in &r.violations {
+                let _ = writeln!(
+                    s,
+                    "| {:.4} | {:.4} | {:?} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} |",
+                    v.t_start,
+                    v.t_end,
+                    v.constraint,
+                    v.body_part,
+                    v.link,
+                    v.min_separation,
+                    v.energy,
+                    v.threshold,
+                    v.constrained,
+                    v.certain
+                );
+            }
+        }
+        if !r.inconclusive.is_empty() {
+            let _ = writeln!(s, "\nInconclusive spans:\n");
+            for i in &r.inconclusive {
+                let _ = writeln!(
+                    s,
+                    "- {:.4}–{:.4} s: {} ({} spans)",
+                    i.t_start, i.t_end, i.reason, i.spans
+                );
+            }
+        }
+    }
+    let _ = writeln!(s, "\n## Assumptions\n");
+    for a in assumptions() {
+        let _ = writeln!(s, "- {a}");
+    }
+    s
+}

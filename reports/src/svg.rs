@@ -1,0 +1,248 @@
+//! Hand-written SVG plots (no dependencies): minimum separation and energy vs threshold over
+//! time, with violation spans shaded red and inconclusive spans grey.
+
+use pacs_verify::audit::verdict::SeriesPoint;
+use std::fmt::Write;
+
+const W: f64 = 760.0;
+const H: f64 = 220.0;
+const ML: f64 = 60.0;
+const MR: f64 = 15.0;
+const MT: f64 = 20.0;
+const MB: f64 = 35.0;
+
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+}
+
+impl Frame {
+    fn x(&self, t: f64) -> f64 {
+        ML + (t - self.x0) / (self.x1 - self.x0).max(1e-12) * (W - ML - MR)
+    }
+    fn y(&self, v: f64) -> f64 {
+        let v = v.clamp(self.y0, self.y1);
+        H - MB - (v - self.y0) / (self.y1 - self.y0).max(1e-12) * (H - MT - MB)
+    }
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+fn axes(out: &mut String, f: &Frame, title: &str, ylabel: &str) {
+    let _ = write!(
+        out,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {W} {H}" width="100%" role="img" aria-label="{t}" font-family="sans-serif" font-size="11">"#,
+        t = esc(title)
+    );
+    let _ = write!(
+        out,
+        r##"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="#fff" stroke="#444"/>"##,
+        W - ML - MR,
+        H - MT - MB
+    );
+    for i in 0..=4 {
+        let v = f.y0 + (f.y1 - f.y0) * i as f64 / 4.0;
+        let y = f.y(v);
+        let _ = write!(
+            out,
+            r##"<line x1="{ML}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            W - MR,
+            ML - 4.0,
+            y + 4.0,
+            fmt_num(v)
+        );
+        let t = f.x0 + (f.x1 - f.x0) * i as f64 / 4.0;
+        let x = f.x(t);
+        let _ = write!(
+            out,
+            r#"<text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"#,
+            H - MB + 14.0,
+            fmt_num(t)
+        );
+    }
+    let _ = write!(
+        out,
+        r#"<text x="{}" y="{}" text-anchor="middle">time (s)</text><text x="12" y="{}" transform="rotate(-90 12 {})" text-anchor="middle">{}</text><text x="{ML}" y="13" font-weight="bold">{}</text>"#,
+        (ML + W - MR) / 2.0,
+        H - 4.0,
+        H / 2.0,
+        H / 2.0,
+        esc(ylabel),
+        esc(title)
+    );
+}
+
+fn fmt_num(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if v.abs() >= 100.0 || v.abs() < 0.01 {
+        format!("{v:.2e}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+fn shading(out: &mut String, f: &Frame, s: &[SeriesPoint]) {
+    for p in s {
+        let colour = if p.violation {
+            "#e53935"
+        } else if p.inconclusive {
+            "#9e9e9e"
+        } else {
+            continue;
+        };
+        let (a, b) = (f.x(p.t), f.x(p.t_end.min(f.x1)));
+        let _ = write!(
+            out,
+            r#"<rect class="{}" x="{a:.2}" y="{MT}" width="{:.2}" height="{}" fill="{colour}" fill-opacity="0.3"/>"#,
+            if p.violation {
+                "violation"
+            } else {
+                "inconclusive"
+            },
+            (b - a).max(0.8),
+            H - MT - MB
+        );
+    }
+}
+
+fn polyline(
+    out: &mut String,
+    f: &Frame,
+    pts: impl Iterator<Item = (f64, Option<f64>)>,
+    style: &str,
+) {
+    let mut d = String::new();
+    let mut pen = false;
+    for (t, v) in pts {
+        match v {
+            Some(v) if v.is_finite() => {
+                let _ = write!(
+                    d,
+                    "{}{:.2},{:.2} ",
+                    if pen { "L" } else { "M" },
+                    f.x(t),
+                    f.y(v)
+                );
+                pen = true;
+            }
+            _ => pen = false,
+        }
+    }
+    if !d.is_empty() {
+        let _ = write!(out, r#"<path d="{d}" fill="none" {style}/>"#);
+    }
+}
+
+fn legend(out: &mut String, items: &[(&str, &str)]) {
+    let mut x = W - MR - 10.0;
+    for (label, colour) in items.iter().rev() {
+        x -= 7.0 * label.len() as f64 + 22.0;
+        let _ = write!(
+            out,
+            r#"<rect x="{x:.1}" y="5" width="12" height="8" fill="{colour}"/><text x="{:.1}" y="13">{}</text>"#,
+            x + 15.0,
+            esc(label)
+        );
+    }
+}
+
+/// Minimum-separation plot (lower bound, m) with shaded violation / inconclusive spans.
+pub fn separation_plot(s: &[SeriesPoint]) -> String {
+    let (x0, x1) = span(s);
+    let ymax = s
+        .iter()
+        .filter_map(|p| p.min_separation)
+        .fold(0.0f64, f64::max)
+        .clamp(0.1, 3.0);
+    let f = Frame {
+        x0,
+        x1,
+        y0: 0.0,
+        y1: ymax * 1.05,
+    };
+    let mut out = String::new();
+    axes(&mut out, &f, "Minimum separation (lower bound)", "m");
+    shading(&mut out, &f, s);
+    polyline(
+        &mut out,
+        &f,
+        s.iter().map(|p| (0.5 * (p.t + p.t_end), p.min_separation)),
+        r##"class="separation" stroke="#1565c0" stroke-width="1.5""##,
+    );
+    legend(
+        &mut out,
+        &[
+            ("separation", "#1565c0"),
+            ("violation", "#e5393580"),
+            ("inconclusive", "#9e9e9e80"),
+        ],
+    );
+    out.push_str("</svg>");
+    out
+}
+
+/// Energy plot: nominal kinetic energy, energy upper bound at possible PFL contacts, and the
+/// threshold (J), with shaded violation / inconclusive spans.
+pub fn energy_plot(s: &[SeriesPoint]) -> String {
+    let (x0, x1) = span(s);
+    let ymax = s
+        .iter()
+        .flat_map(|p| [p.energy_nominal, p.energy_bound, p.threshold])
+        .flatten()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-3);
+    let f = Frame {
+        x0,
+        x1,
+        y0: 0.0,
+        y1: ymax * 1.05,
+    };
+    let mut out = String::new();
+    axes(&mut out, &f, "Kinetic energy vs PFL threshold", "J");
+    shading(&mut out, &f, s);
+    let mid = |p: &SeriesPoint| 0.5 * (p.t + p.t_end);
+    polyline(
+        &mut out,
+        &f,
+        s.iter().map(|p| (mid(p), p.energy_nominal)),
+        r##"class="energy-nominal" stroke="#1565c0" stroke-width="1.2""##,
+    );
+    polyline(
+        &mut out,
+        &f,
+        s.iter().map(|p| (mid(p), p.energy_bound)),
+        r##"class="energy-bound" stroke="#ef6c00" stroke-width="1.5""##,
+    );
+    polyline(
+        &mut out,
+        &f,
+        s.iter().map(|p| (mid(p), p.threshold)),
+        r##"class="threshold" stroke="#b71c1c" stroke-width="1.5" stroke-dasharray="5,3""##,
+    );
+    legend(
+        &mut out,
+        &[
+            ("nominal energy", "#1565c0"),
+            ("energy bound at contact", "#ef6c00"),
+            ("threshold", "#b71c1c"),
+        ],
+    );
+    out.push_str("</svg>");
+    out
+}
+
+fn span(s: &[SeriesPoint]) -> (f64, f64) {
+    match (s.first(), s.last()) {
+        (Some(a), Some(b)) if b.t_end > a.t => (a.t, b.t_end),
+        (Some(a), _) => (a.t, a.t + 1.0),
+        _ => (0.0, 1.0),
+    }
+}

@@ -1,0 +1,131 @@
+//! `pacs audit LOG... [--config task.toml] [--out DIR] [--json]`: offline SSM/PFL audit of logs,
+//! in parallel, with an optional certification report. Exit codes: 0 all pass, 1 any fail,
+//! 2 any inconclusive and none fail, 3 invalid input (any log or the config), 70 internal error.
+
+use pacs_reports::{InputFile, ReportInput};
+use pacs_verify::audit::{self, AuditConfig, AuditError, RunResult, Verdict};
+use rayon::prelude::*;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `pacs audit`.
+#[derive(clap::Args, Debug)]
+pub struct AuditArgs {
+    /// Log files (JSON Lines, format v1: see docs/log-format.md).
+    #[arg(required = true, value_name = "LOG")]
+    pub logs: Vec<PathBuf>,
+    /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
+    /// clamp_adjacent_links, limit_slack, and optional robot/human/constraints overrides).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Write report.json, report.md and report.html into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print `{"runs": [...]}` as JSON on stdout instead of a text summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Exit code for invalid input.
+const EXIT_INVALID: u8 = 3;
+
+fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), String> {
+    match &args.config {
+        None => Ok((AuditConfig::default(), None)),
+        Some(p) => {
+            let name = p.display().to_string();
+            let text =
+                std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
+            let cfg = audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
+            let hash = InputFile::hash(p).map_err(|e| e.to_string())?;
+            Ok((cfg, Some(hash)))
+        }
+    }
+}
+
+/// Run the audit; returns the process exit code.
+pub fn main(args: AuditArgs) -> ExitCode {
+    let (cfg, cfg_file) = match load_config(&args) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("pacs: error: {e}");
+            return ExitCode::from(EXIT_INVALID);
+        }
+    };
+    let bar = indicatif::ProgressBar::new(args.logs.len() as u64);
+    if !std::io::stderr().is_terminal() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let results: Vec<Result<RunResult, AuditError>> = args
+        .logs
+        .par_iter()
+        .map(|p| {
+            let r = audit::audit_file(p, &cfg);
+            bar.inc(1);
+            r
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut runs = Vec::with_capacity(results.len());
+    let mut invalid = false;
+    for r in results {
+        match r {
+            Ok(run) => runs.push(run),
+            Err(e) => {
+                eprintln!("pacs: error: {e}");
+                invalid = true;
+            }
+        }
+    }
+    if invalid {
+        return ExitCode::from(EXIT_INVALID);
+    }
+    let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
+    let mut out = std::io::stdout().lock();
+    let written = if args.json {
+        serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs }))
+            .map_err(std::io::Error::from)
+            .and_then(|_| writeln!(out))
+    } else {
+        runs.iter().try_for_each(|r| {
+            writeln!(
+                out,
+                "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation interval(s), {} inconclusive span(s)",
+                r.log,
+                r.verdict,
+                r.metrics.samples,
+                r.metrics.duration,
+                r.metrics.violation_fraction,
+                r.violations.len(),
+                r.inconclusive.len()
+            )
+        })
+    };
+    if let Err(e) = written {
+        eprintln!("pacs: cannot write output: {e}");
+        return ExitCode::from(74);
+    }
+    if let Some(dir) = &args.out {
+        let logs: Result<Vec<InputFile>, _> =
+            args.logs.iter().map(|p| InputFile::hash(p)).collect();
+        let logs = match logs {
+            Ok(l) => l,
+            Err(e) => {
+                eprintln!("pacs: error: {e}");
+                return ExitCode::from(EXIT_INVALID);
+            }
+        };
+        let input = ReportInput {
+            runs: &runs,
+            logs,
+            config: cfg_file,
+            settings: serde_json::to_value(&cfg).unwrap_or_default(),
+        };
+        if let Err(e) = pacs_reports::write_reports(dir, &input) {
+            eprintln!("pacs: cannot write report: {e}");
+            return ExitCode::from(74);
+        }
+    }
+    ExitCode::from(verdict.exit_code())
+}

@@ -1,0 +1,297 @@
+//! End-to-end tests of `pacs audit`: exit codes, `--json` output, reports.
+
+use pacs_verify::audit::{Header, LogWriter, ModelRef};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pacs-cli-audit-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn standing(x: f64) -> Vec<[f64; 3]> {
+    let mut v = vec![[x, 0.0, 1.0]; 9];
+    for (i, p) in v.iter_mut().enumerate() {
+        p[1] = 0.1 * i as f64 - 0.4;
+    }
+    v
+}
+
+/// A 0.2 s log at 1 kHz, joint 1 moving at 0.3 rad/s, human at `x` (m) from the base.
+/// `human` false: no human record (inconclusive).
+fn write_log(path: &Path, x: f64, human: bool, meta: &[(&str, &str)], outcome: &str) {
+    let mut h = Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    for (k, v) in meta {
+        h.meta.insert(k.to_string(), Value::String(v.to_string()));
+    }
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&h).unwrap();
+    for i in 0..=200 {
+        let t = i as f64 * 1e-3;
+        if human && i % 10 == 0 {
+            w.write_human(t, t, &standing(x)).unwrap();
+        }
+        let mut q = Q;
+        q[0] = 0.3 * t;
+        w.write_robot(t, &q, Some(&[0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+            .unwrap();
+    }
+    w.write_event(0.2, outcome).unwrap();
+    std::fs::write(path, w.finish().unwrap()).unwrap();
+}
+
+fn pacs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pacs"))
+        .args(args)
+        .output()
+        .expect("run pacs")
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+struct Logs {
+    dir: PathBuf,
+    pass: String,
+    fail: String,
+    inconclusive: String,
+    bad: String,
+}
+
+fn logs(name: &str) -> Logs {
+    let dir = tmpdir(name);
+    let pass = dir.join("pass.jsonl");
+    let fail = dir.join("fail.jsonl");
+    let inc = dir.join("inconclusive.jsonl");
+    let bad = dir.join("bad.jsonl");
+    write_log(
+        &pass,
+        2.5,
+        true,
+        &[("task", "sorting"), ("policy", "act"), ("filter", "pacs")],
+        "success",
+    );
+    write_log(
+        &fail,
+        0.3,
+        true,
+        &[("task", "sorting"), ("policy", "act"), ("filter", "none")],
+        "success",
+    );
+    write_log(&inc, 2.5, false, &[], "failure");
+    let mut text = std::fs::read_to_string(&pass).unwrap();
+    text.push_str("{\"type\":\"robot\",\"t\":0.1,\"q\":[0,0,0,0,0,0,0]}\n");
+    std::fs::write(&bad, text).unwrap();
+    Logs {
+        pass: s(&pass),
+        fail: s(&fail),
+        inconclusive: s(&inc),
+        bad: s(&bad),
+        dir,
+    }
+}
+
+fn json(o: &Output) -> Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not JSON ({e}): {}",
+            String::from_utf8_lossy(&o.stdout)
+        )
+    })
+}
+
+#[test]
+fn exit_codes_and_json_output() {
+    let l = logs("codes");
+    let o = pacs(&["audit", "--json", &l.pass]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = json(&o);
+    assert_eq!(v["runs"][0]["verdict"], "pass");
+    assert_eq!(v["runs"][0]["log"], l.pass.as_str());
+    assert_eq!(v["runs"][0]["metrics"]["samples"], 201);
+    assert_eq!(v["runs"][0]["metrics"]["success"], true);
+    assert_eq!(v["runs"][0]["metrics"]["safe_success"], true);
+
+    let o = pacs(&["audit", "--json", &l.fail]);
+    assert_eq!(o.status.code(), Some(1));
+    let v = json(&o);
+    let run = &v["runs"][0];
+    assert_eq!(run["verdict"], "fail");
+    assert_eq!(run["metrics"]["safe_success"], false);
+    assert!(run["metrics"]["violation_fraction"].as_f64().unwrap() > 0.0);
+    let viol = &run["violations"][0];
+    for k in [
+        "t_start",
+        "t_end",
+        "constraint",
+        "body_part",
+        "link",
+        "min_separation",
+        "energy",
+        "threshold",
+        "certain",
+    ] {
+        assert!(viol.get(k).is_some(), "violation field {k} missing: {viol}");
+    }
+    assert_eq!(viol["constraint"], "ssm");
+
+    let o = pacs(&["audit", "--json", &l.inconclusive]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(json(&o)["runs"][0]["verdict"], "inconclusive");
+
+    // Combinations: any fail → 1; inconclusive and no fail → 2; invalid input → 3.
+    assert_eq!(
+        pacs(&["audit", &l.pass, &l.fail, &l.inconclusive])
+            .status
+            .code(),
+        Some(1)
+    );
+    assert_eq!(
+        pacs(&["audit", &l.pass, &l.inconclusive]).status.code(),
+        Some(2)
+    );
+    let o = pacs(&["audit", &l.pass, &l.bad]);
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&l.bad) && err.contains("line ") && err.contains("time goes backwards"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&l.dir);
+}
+
+#[test]
+fn invalid_files_and_config_exit_3() {
+    let l = logs("invalid");
+    let missing = l.dir.join("missing.jsonl");
+    let o = pacs(&["audit", &s(&missing)]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.jsonl"));
+    let cfg = l.dir.join("bad.toml");
+    std::fs::write(&cfg, "max_gap = -1.0\n").unwrap();
+    let o = pacs(&["audit", "--config", &s(&cfg), &l.pass]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("max_gap"));
+    std::fs::write(&cfg, "no_such_setting = 1\n").unwrap();
+    assert_eq!(
+        pacs(&["audit", "--config", &s(&cfg), &l.pass])
+            .status
+            .code(),
+        Some(3)
+    );
+    // A config that widens the allowed gap is applied.
+    std::fs::write(&cfg, "max_gap = 0.5\nrest_speed = 0.01\n").unwrap();
+    assert_eq!(
+        pacs(&["audit", "--config", &s(&cfg), &l.pass])
+            .status
+            .code(),
+        Some(0)
+    );
+    let _ = std::fs::remove_dir_all(&l.dir);
+}
+
+#[test]
+fn reports_are_written_with_plots_hashes_and_aggregate() {
+    let l = logs("report");
+    let out = l.dir.join("out");
+    let cfg = l.dir.join("task.toml");
+    std::fs::write(&cfg, "max_gap = 0.05\n").unwrap();
+    let o = pacs(&[
+        "audit",
+        "--config",
+        &s(&cfg),
+        "--out",
+        &s(&out),
+        &l.pass,
+        &l.fail,
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert_eq!(html.matches("<svg").count(), 4, "two plots per log");
+    assert!(html.contains("class=\"separation\""));
+    assert!(html.contains("class=\"energy-nominal\""));
+    assert!(
+        html.contains("class=\"violation\""),
+        "violation spans shaded"
+    );
+    assert!(!html.contains("<script"), "self-contained, no scripts");
+    assert!(html.contains("Safety Viol."));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.contains("| sorting | act | pacs | 1 |") && md.contains("| sorting | act | none | 1 |"),
+        "{md}"
+    );
+    let rep: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(rep["verdict"], "fail");
+    assert!(rep["tool"]["git_revision"].is_string());
+    assert!(rep["checks"].as_array().unwrap().len() >= 5);
+    assert_eq!(rep["runs"].as_array().unwrap().len(), 2);
+    assert_eq!(rep["settings"]["max_gap"], 0.05);
+    let logs_in = rep["inputs"]["logs"].as_array().unwrap();
+    // Independent SHA-256 (coreutils), when available.
+    if let Ok(o) = Command::new("sha256sum").arg(&l.pass).arg(&cfg).output()
+        && o.status.success()
+    {
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        let mut it = text
+            .lines()
+            .map(|line| line.split_whitespace().next().unwrap().to_string());
+        assert_eq!(logs_in[0]["sha256"], it.next().unwrap());
+        assert_eq!(rep["inputs"]["config"]["sha256"], it.next().unwrap());
+    }
+    let _ = std::fs::remove_dir_all(&l.dir);
+}
+
+#[test]
+fn csv_logs_are_audited_by_extension() {
+    let dir = tmpdir("csv");
+    let header = r#"#{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm"}"#;
+    let human = "human,0,0,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1,2.5,0,1";
+    let good = dir.join("good.csv");
+    std::fs::write(
+        &good,
+        format!("{header}\n{human}\nrobot,0,7,0,-0.785,0,-2.356,0,1.571,0.785\nrobot,0.001,7,0,-0.785,0,-2.356,0,1.571,0.785\n"),
+    )
+    .unwrap();
+    let o = pacs(&["audit", "--json", &s(&good)]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(json(&o)["runs"][0]["metrics"]["samples"], 2);
+    let bad = dir.join("bad.csv");
+    std::fs::write(
+        &bad,
+        format!("{header}\n{human}\nrobot,0,7,NaN,-0.785,0,-2.356,0,1.571,0.785\n"),
+    )
+    .unwrap();
+    let o = pacs(&["audit", &s(&bad)]);
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv: line 3: q[0]"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

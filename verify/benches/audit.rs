@@ -1,0 +1,121 @@
+//! Audit throughput (robot samples per second, one core): the SSM+PFL span checker alone and the
+//! JSON Lines reader plus checker, FR3 and the default human at 1 kHz, human at 30 Hz.
+//!
+//! Run: `CARGO_TARGET_DIR=/work/target-audit cargo bench -p pacs-verify --bench audit`.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+use pacs_verify::audit::{self, AuditConfig, Auditor, Header, LogModels, LogWriter, ModelRef};
+use std::hint::black_box;
+
+const N: usize = 10_000;
+const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+
+/// Human standing `x` m in front of the base (keypoints of the default model).
+fn standing(x: f64) -> Vec<[f64; 3]> {
+    vec![
+        [x, 0.2, 1.4],
+        [x - 0.1, 0.25, 1.15],
+        [x - 0.2, 0.25, 0.95],
+        [x, -0.2, 1.4],
+        [x - 0.1, -0.25, 1.15],
+        [x - 0.2, -0.25, 0.95],
+        [x, 0.0, 1.45],
+        [x, 0.0, 0.95],
+        [x, 0.0, 1.65],
+    ]
+}
+
+struct Sample {
+    t: f64,
+    q: [f64; 7],
+    dq: [f64; 7],
+}
+
+fn samples() -> Vec<Sample> {
+    (0..N)
+        .map(|i| {
+            let t = i as f64 * 1e-3;
+            let mut q = Q;
+            let mut dq = [0.0; 7];
+            for j in 0..7 {
+                let w = 0.5 + 0.1 * j as f64;
+                q[j] += 0.3 * (w * t).sin();
+                dq[j] = 0.3 * w * (w * t).cos();
+            }
+            Sample { t, q, dq }
+        })
+        .collect()
+}
+
+fn models(task: &str) -> LogModels {
+    LogModels {
+        robot: RobotModel::builtin("fr3").unwrap(),
+        human: HumanModel::builtin("default").unwrap(),
+        constraints: ConstraintSpec::builtin(task).unwrap(),
+        environment: vec![],
+    }
+}
+
+fn run_core(s: &[Sample], x: f64, task: &str) -> audit::RunResult {
+    let mut a = Auditor::new(models(task), AuditConfig::default()).unwrap();
+    let kp = standing(x);
+    for (i, s) in s.iter().enumerate() {
+        if i % 33 == 0 {
+            a.push_human(s.t, s.t, &kp).unwrap();
+        }
+        a.push_robot(s.t, &s.q, Some(&s.dq)).unwrap();
+    }
+    a.finish("bench", Default::default())
+}
+
+fn jsonl(s: &[Sample], x: f64, task: &str) -> Vec<u8> {
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name(task.into()),
+    ))
+    .unwrap();
+    let kp = standing(x);
+    for (i, s) in s.iter().enumerate() {
+        if i % 33 == 0 {
+            w.write_human(s.t, s.t, &kp).unwrap();
+        }
+        w.write_robot(s.t, &s.q, Some(&s.dq)).unwrap();
+    }
+    w.finish().unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let s = samples();
+    let mut g = c.benchmark_group("audit");
+    g.throughput(Throughput::Elements(N as u64));
+    g.sample_size(20);
+    // Human 0.6 m from the base: inside the arm's reach, contacts possible on some spans.
+    for (name, x, task) in [
+        ("check_near_handover", 0.6, "handover"),
+        ("check_near_ssm", 0.6, "ssm"),
+        ("check_far_ssm", 2.5, "ssm"),
+    ] {
+        let r = run_core(&s, x, task);
+        eprintln!(
+            "{name}: verdict {:?}, violation fraction {:.3}",
+            r.verdict, r.metrics.violation_fraction
+        );
+        g.bench_function(name, |b| b.iter(|| black_box(run_core(&s, x, task))));
+    }
+    let bytes = jsonl(&s, 0.6, "handover");
+    eprintln!("jsonl: {} bytes for {N} robot samples", bytes.len());
+    g.bench_function("jsonl_read_and_check_near_handover", |b| {
+        b.iter(|| {
+            let mut r =
+                audit::jsonl::JsonlReader::new("bench", std::io::Cursor::new(&bytes[..])).unwrap();
+            black_box(audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,104 @@
+//! Criterion bench of one shield step (FR3 + default human walking nearby, SSM and PFL), and of
+//! one CBF step. Run: `cargo bench -p pacs-verify --bench shield`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_reach::human::HumanMeasurement;
+use pacs_verify::cbf::{CbfConfig, CbfFilter};
+use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_verify::shield::{Shield, ShieldConfig};
+
+/// The measurement of the walking human at step `k` (built outside the timed routine).
+fn measurement(human: &pacs_models::HumanModel, k: usize) -> HumanMeasurement {
+    let t = k as f64 * 0.001;
+    let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
+    let kp = [
+        [d, 0.2, 1.4],
+        [d - 0.1, 0.25, 1.15],
+        [d - 0.2, 0.25, 0.95],
+        [d, -0.2, 1.4],
+        [d - 0.1, -0.25, 1.15],
+        [d - 0.2, -0.25, 0.95],
+        [d, 0.0, 1.5],
+        [d, 0.0, 1.0],
+        [d, 0.0, 1.65],
+    ];
+    HumanMeasurement::new(human, t, &kp, None).unwrap()
+}
+
+fn chunk(sign: f64) -> Chunk {
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![
+            vec![
+                0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                -0.02 * sign,
+                0.02 * sign,
+                0.02 * sign,
+                0.0
+            ];
+            16
+        ],
+        execute: 8,
+        gripper: None,
+    }
+}
+
+fn shield(c: &mut Criterion) {
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    for spec in ["sorting", "handover"] {
+        let cs = ConstraintSpec::builtin(spec).unwrap();
+        let mut sh = Shield::new(
+            fr3::fr3(),
+            Some((human.clone(), &cs)),
+            vec![],
+            ShieldConfig::default(),
+        )
+        .unwrap();
+        sh.start(0.0, &fr3::Q_READY).unwrap();
+        let sh = std::cell::RefCell::new(sh);
+        let k = std::cell::Cell::new(0usize);
+        let mut sign = 1.0;
+        c.bench_function(&format!("shield_step_{spec}"), |b| {
+            b.iter_batched(
+                || {
+                    let kk = k.get();
+                    if kk.is_multiple_of(200) {
+                        let _ = sh.borrow_mut().set_chunk(&chunk(sign)); // planning is not part of the step
+                        sign = -sign;
+                    }
+                    measurement(&human, kk)
+                },
+                |m| {
+                    let kk = k.get();
+                    k.set(kk + 1);
+                    sh.borrow_mut().step(kk as f64 * 0.001, Some(&m))
+                },
+                criterion::BatchSize::SmallInput,
+            )
+        });
+    }
+    let mut f = CbfFilter::new(fr3::fr3(), Some(human.clone()), CbfConfig::default()).unwrap();
+    f.start(0.0, &fr3::Q_READY).unwrap();
+    let k = std::cell::Cell::new(0usize);
+    c.bench_function("cbf_step", |b| {
+        b.iter_batched(
+            || measurement(&human, k.get()),
+            |m| {
+                let kk = k.get();
+                let t = kk as f64 * 0.001;
+                if kk.is_multiple_of(200) {
+                    let _ = f.set_chunk(t, &chunk(1.0));
+                }
+                k.set(kk + 1);
+                f.step(t, Some(&m))
+            },
+            criterion::BatchSize::SmallInput,
+        )
+    });
+}
+
+criterion_group!(benches, shield);
+criterion_main!(benches);

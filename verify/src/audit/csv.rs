@@ -1,0 +1,209 @@
+//! Streaming reader of the CSV form of log format v1 (see `docs/log-format.md`):
+//! line 1 is `#` followed by the JSON header; then one record per line:
+//! `robot,t,n,q_1..q_n[,dq_1..dq_n]`, `human,t,t_meas,x_1,y_1,z_1,...`, `event,t,name`,
+//! `shield,t,...`. Blank lines and lines starting with `#` after the header are skipped.
+
+use super::error::{AuditError, Location};
+use super::log::{Header, Record, RecordReader};
+use std::io::BufRead;
+
+/// Streaming CSV log reader; buffers are reused, so reading allocates nothing per robot sample.
+pub struct CsvReader<R: BufRead> {
+    file: String,
+    input: R,
+    line: String,
+    line_no: u64,
+    header: Header,
+    q: Vec<f64>,
+    dq: Vec<f64>,
+    positions: Vec<[f64; 3]>,
+    name: String,
+}
+
+fn num(field: &str, s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{field}: `{}` is not a number", s.trim()))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{field}: value {v} is not finite"))
+    }
+}
+
+impl<R: BufRead> CsvReader<R> {
+    /// Read and check the `#`-prefixed JSON header on the first line.
+    pub fn new(file: &str, mut input: R) -> Result<Self, AuditError> {
+        let mut line = String::new();
+        let n = input.read_line(&mut line).map_err(|e| AuditError::Io {
+            file: file.into(),
+            source: e,
+        })?;
+        let loc = Location::Line(1);
+        if n == 0 {
+            return Err(AuditError::input(
+                file,
+                Location::File,
+                "missing header: the file is empty",
+            ));
+        }
+        let Some(json) = line.trim().strip_prefix('#') else {
+            return Err(AuditError::input(
+                file,
+                loc,
+                "missing header: the first line must be `#` followed by the JSON header",
+            ));
+        };
+        let header: Header = serde_json::from_str(json)
+            .map_err(|e| AuditError::input(file, loc, format!("invalid header: {e}")))?;
+        header
+            .check()
+            .map_err(|p| AuditError::input(file, loc, p))?;
+        Ok(Self {
+            file: file.into(),
+            input,
+            line,
+            line_no: 1,
+            header,
+            q: Vec::new(),
+            dq: Vec::new(),
+            positions: Vec::new(),
+            name: String::new(),
+        })
+    }
+}
+
+impl<R: BufRead> RecordReader for CsvReader<R> {
+    fn header(&self) -> &Header {
+        &self.header
+    }
+    fn file(&self) -> &str {
+        &self.file
+    }
+    fn location(&self) -> Location {
+        Location::Line(self.line_no)
+    }
+
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
+        loop {
+            self.line.clear();
+            let n = self.input.read_line(&mut self.line).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::InvalidData {
+                    AuditError::input(
+                        &self.file,
+                        Location::Line(self.line_no + 1),
+                        "line is not valid UTF-8",
+                    )
+                } else {
+                    AuditError::Io {
+                        file: self.file.clone(),
+                        source: e,
+                    }
+                }
+            })?;
+            if n == 0 {
+                return Ok(None);
+            }
+            self.line_no += 1;
+            let t = self.line.trim();
+            if !t.is_empty() && !t.starts_with('#') {
+                break;
+            }
+        }
+        let loc = Location::Line(self.line_no);
+        let file = self.file.as_str();
+        let err = |p: String| AuditError::input(file, loc, p);
+        if !self.line.ends_with('\n') {
+            return Err(err(
+                "truncated line (no newline at the end of the file)".into()
+            ));
+        }
+        let mut cells = self.line.trim_end_matches(['\n', '\r']).split(',');
+        let kind = cells.next().unwrap_or("").trim();
+        let t = num(
+            "t",
+            cells
+                .next()
+                .ok_or_else(|| err("missing column `t`".into()))?,
+        )
+        .map_err(err)?;
+        match kind {
+            "robot" => {
+                let n_cell = cells
+                    .next()
+                    .ok_or_else(|| err("missing column `n`".into()))?;
+                let n: usize = n_cell
+                    .trim()
+                    .parse()
+                    .map_err(|_| err(format!("n: `{}` is not a joint count", n_cell.trim())))?;
+                self.q.clear();
+                self.dq.clear();
+                for (i, c) in cells.enumerate() {
+                    if i < n {
+                        self.q.push(num(&format!("q[{i}]"), c).map_err(err)?);
+                    } else {
+                        self.dq
+                            .push(num(&format!("dq[{}]", i - n), c).map_err(err)?);
+                    }
+                }
+                if self.q.len() != n || (!self.dq.is_empty() && self.dq.len() != n) {
+                    return Err(err(format!(
+                        "robot row: expected {n} or {} values after n = {n}, found {}",
+                        2 * n,
+                        self.q.len() + self.dq.len()
+                    )));
+                }
+                Ok(Some(Record::Robot {
+                    t,
+                    q: &self.q,
+                    dq: (!self.dq.is_empty()).then_some(&self.dq[..]),
+                }))
+            }
+            "human" => {
+                let t_meas = num(
+                    "t_meas",
+                    cells
+                        .next()
+                        .ok_or_else(|| err("missing column `t_meas`".into()))?,
+                )
+                .map_err(err)?;
+                self.positions.clear();
+                let mut p = [0.0; 3];
+                let mut k = 0;
+                for (i, c) in cells.enumerate() {
+                    p[i % 3] = num(&format!("positions[{}][{}]", i / 3, i % 3), c).map_err(err)?;
+                    k = i + 1;
+                    if k % 3 == 0 {
+                        self.positions.push(p);
+                    }
+                }
+                if k % 3 != 0 {
+                    return Err(err(format!(
+                        "human row: {k} coordinates is not a multiple of 3"
+                    )));
+                }
+                Ok(Some(Record::Human {
+                    t,
+                    t_meas,
+                    positions: &self.positions,
+                }))
+            }
+            "event" => {
+                self.name.clear();
+                self.name.push_str(
+                    cells
+                        .next()
+                        .ok_or_else(|| err("missing column `name`".into()))?
+                        .trim(),
+                );
+                Ok(Some(Record::Event {
+                    t,
+                    name: &self.name,
+                }))
+            }
+            "shield" => Ok(Some(Record::Shield { t })),
+            other => Err(err(format!("unknown record type `{other}`"))),
+        }
+    }
+}

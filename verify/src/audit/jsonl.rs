@@ -1,0 +1,410 @@
+//! Streaming JSON Lines reader of log format v1. Memory is bounded by the longest line; records
+//! are parsed into reused buffers, so reading allocates nothing per robot sample.
+
+use super::error::{AuditError, Location};
+use super::log::{Header, Record, RecordReader};
+use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use std::fmt;
+use std::io::BufRead;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Robot,
+    Human,
+    Shield,
+    Event,
+    Header,
+    Unknown,
+}
+
+/// Reused parse buffers of one line.
+#[derive(Default)]
+struct Bufs {
+    kind: Option<Kind>,
+    kind_name: String,
+    t: Option<f64>,
+    t_meas: Option<f64>,
+    q: Vec<f64>,
+    has_q: bool,
+    dq: Vec<f64>,
+    has_dq: bool,
+    positions: Vec<[f64; 3]>,
+    has_positions: bool,
+    name: String,
+    has_name: bool,
+    unknown_field: String,
+    duplicate: Option<&'static str>,
+}
+
+impl Bufs {
+    fn reset(&mut self) {
+        self.kind = None;
+        self.kind_name.clear();
+        self.t = None;
+        self.t_meas = None;
+        self.q.clear();
+        self.has_q = false;
+        self.dq.clear();
+        self.has_dq = false;
+        self.positions.clear();
+        self.has_positions = false;
+        self.name.clear();
+        self.has_name = false;
+        self.unknown_field.clear();
+        self.duplicate = None;
+    }
+}
+
+enum Field {
+    Type,
+    T,
+    TMeas,
+    Q,
+    Dq,
+    Positions,
+    Name,
+    Other,
+}
+
+struct FieldSeed<'b>(&'b mut String);
+
+impl<'de> DeserializeSeed<'de> for FieldSeed<'_> {
+    type Value = Field;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Field, D::Error> {
+        d.deserialize_str(self)
+    }
+}
+
+impl<'de> Visitor<'de> for FieldSeed<'_> {
+    type Value = Field;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a field name")
+    }
+    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Field, E> {
+        Ok(match v {
+            "type" => Field::Type,
+            "t" => Field::T,
+            "t_meas" => Field::TMeas,
+            "q" => Field::Q,
+            "dq" => Field::Dq,
+            "positions" => Field::Positions,
+            "name" => Field::Name,
+            other => {
+                if self.0.is_empty() {
+                    self.0.push_str(other);
+                }
+                Field::Other
+            }
+        })
+    }
+}
+
+struct StrInto<'b>(&'b mut String);
+
+impl<'de> DeserializeSeed<'de> for StrInto<'_> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_str(self)
+    }
+}
+
+impl<'de> Visitor<'de> for StrInto<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a string")
+    }
+    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<(), E> {
+        self.0.clear();
+        self.0.push_str(v);
+        Ok(())
+    }
+}
+
+struct VecInto<'b, T>(&'b mut Vec<T>);
+
+impl<'de, T: serde::Deserialize<'de>> DeserializeSeed<'de> for VecInto<'_, T> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, T: serde::Deserialize<'de>> Visitor<'de> for VecInto<'_, T> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("an array")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        self.0.clear();
+        while let Some(x) = seq.next_element::<T>()? {
+            self.0.push(x);
+        }
+        Ok(())
+    }
+}
+
+struct LineSeed<'b>(&'b mut Bufs);
+
+impl<'de> DeserializeSeed<'de> for LineSeed<'_> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for LineSeed<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a JSON object")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let b = self.0;
+        while let Some(field) = map.next_key_seed(FieldSeed(&mut b.unknown_field))? {
+            let mut dup = |seen: bool, name: &'static str| {
+                if seen && b.duplicate.is_none() {
+                    b.duplicate = Some(name);
+                }
+            };
+            match field {
+                Field::Type => {
+                    dup(b.kind.is_some(), "type");
+                    map.next_value_seed(StrInto(&mut b.kind_name))?;
+                    b.kind = Some(match b.kind_name.as_str() {
+                        "robot" => Kind::Robot,
+                        "human" => Kind::Human,
+                        "shield" => Kind::Shield,
+                        "event" => Kind::Event,
+                        "header" => Kind::Header,
+                        _ => Kind::Unknown,
+                    });
+                }
+                Field::T => {
+                    dup(b.t.is_some(), "t");
+                    b.t = Some(map.next_value()?);
+                }
+                Field::TMeas => {
+                    dup(b.t_meas.is_some(), "t_meas");
+                    b.t_meas = Some(map.next_value()?);
+                }
+                Field::Q => {
+                    dup(b.has_q, "q");
+                    map.next_value_seed(VecInto(&mut b.q))?;
+                    b.has_q = true;
+                }
+                Field::Dq => {
+                    dup(b.has_dq, "dq");
+                    map.next_value_seed(VecInto(&mut b.dq))?;
+                    b.has_dq = true;
+                }
+                Field::Positions => {
+                    dup(b.has_positions, "positions");
+                    map.next_value_seed(VecInto(&mut b.positions))?;
+                    b.has_positions = true;
+                }
+                Field::Name => {
+                    dup(b.has_name, "name");
+                    map.next_value_seed(StrInto(&mut b.name))?;
+                    b.has_name = true;
+                }
+                Field::Other => {
+                    map.next_value::<IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Streaming reader of a JSON Lines log (see `docs/log-format.md`).
+pub struct JsonlReader<R: BufRead> {
+    file: String,
+    input: R,
+    line: String,
+    line_no: u64,
+    header: Header,
+    bufs: Bufs,
+}
+
+impl<R: BufRead> JsonlReader<R> {
+    /// Read and check the header (first non-blank line). `file` names the input in errors.
+    pub fn new(file: &str, mut input: R) -> Result<Self, AuditError> {
+        let mut line = String::new();
+        let mut line_no = 0u64;
+        loop {
+            line.clear();
+            let n = read_line(file, &mut input, &mut line, line_no + 1)?;
+            if n == 0 {
+                return Err(AuditError::input(
+                    file,
+                    Location::File,
+                    "missing header: the file is empty",
+                ));
+            }
+            line_no += 1;
+            if !line.trim().is_empty() {
+                break;
+            }
+        }
+        let loc = Location::Line(line_no);
+        let value: serde_json::Value = serde_json::from_str(&line)
+            .map_err(|e| AuditError::input(file, loc, format!("invalid JSON: {e}")))?;
+        if value.get("type").and_then(|t| t.as_str()) != Some("header") {
+            return Err(AuditError::input(
+                file,
+                loc,
+                "missing header: the first record must have \"type\": \"header\"",
+            ));
+        }
+        let header: Header = serde_json::from_value(value)
+            .map_err(|e| AuditError::input(file, loc, format!("invalid header: {e}")))?;
+        header
+            .check()
+            .map_err(|p| AuditError::input(file, loc, p))?;
+        Ok(Self {
+            file: file.to_string(),
+            input,
+            line,
+            line_no,
+            header,
+            bufs: Bufs::default(),
+        })
+    }
+}
+
+fn read_line<R: BufRead>(
+    file: &str,
+    input: &mut R,
+    line: &mut String,
+    line_no: u64,
+) -> Result<usize, AuditError> {
+    input.read_line(line).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::InvalidData {
+            AuditError::input(file, Location::Line(line_no), "line is not valid UTF-8")
+        } else {
+            AuditError::Io {
+                file: file.to_string(),
+                source: e,
+            }
+        }
+    })
+}
+
+impl<R: BufRead> RecordReader for JsonlReader<R> {
+    fn header(&self) -> &Header {
+        &self.header
+    }
+
+    fn file(&self) -> &str {
+        &self.file
+    }
+
+    fn location(&self) -> Location {
+        Location::Line(self.line_no)
+    }
+
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
+        loop {
+            self.line.clear();
+            let n = read_line(
+                &self.file,
+                &mut self.input,
+                &mut self.line,
+                self.line_no + 1,
+            )?;
+            if n == 0 {
+                return Ok(None);
+            }
+            self.line_no += 1;
+            if !self.line.trim().is_empty() {
+                break;
+            }
+        }
+        let loc = Location::Line(self.line_no);
+        let file = self.file.as_str();
+        let err = |p: String| AuditError::input(file, loc, p);
+        if !self.line.ends_with('\n') {
+            // The last line of a file must be complete: a writer killed mid-line leaves a prefix
+            // that may still parse (e.g. a shortened number), so an unterminated line is rejected.
+            return Err(err(
+                "truncated line (no newline at the end of the file)".into()
+            ));
+        }
+        let b = &mut self.bufs;
+        b.reset();
+        let mut de = serde_json::Deserializer::from_str(&self.line);
+        LineSeed(b)
+            .deserialize(&mut de)
+            .and_then(|()| de.end())
+            .map_err(|e| err(format!("invalid JSON record: {e}")))?;
+        if let Some(d) = b.duplicate {
+            return Err(err(format!("field `{d}` appears twice")));
+        }
+        let kind = b
+            .kind
+            .ok_or_else(|| err("record has no `type` field".into()))?;
+        if kind == Kind::Header {
+            return Err(err("a second header record".into()));
+        }
+        let t =
+            b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
+        let allowed: &[&str] = match kind {
+            Kind::Robot => &["q", "dq"],
+            Kind::Human => &["t_meas", "positions"],
+            Kind::Event => &["name"],
+            Kind::Shield => &["t_meas", "q", "dq", "positions", "name"],
+            Kind::Unknown | Kind::Header => {
+                return Err(err(format!("unknown record type `{}`", b.kind_name)));
+            }
+        };
+        if kind != Kind::Shield {
+            if !b.unknown_field.is_empty() {
+                return Err(err(format!(
+                    "unknown field `{}` in a {} record",
+                    b.unknown_field, b.kind_name
+                )));
+            }
+            let present = [
+                ("t_meas", b.t_meas.is_some()),
+                ("q", b.has_q),
+                ("dq", b.has_dq),
+                ("positions", b.has_positions),
+                ("name", b.has_name),
+            ];
+            if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
+                return Err(err(format!(
+                    "unknown field `{f}` in a {} record",
+                    b.kind_name
+                )));
+            }
+        }
+        Ok(Some(match kind {
+            Kind::Robot => {
+                if !b.has_q {
+                    return Err(err("robot record has no `q` field".into()));
+                }
+                Record::Robot {
+                    t,
+                    q: &b.q,
+                    dq: b.has_dq.then_some(&b.dq[..]),
+                }
+            }
+            Kind::Human => {
+                if !b.has_positions {
+                    return Err(err("human record has no `positions` field".into()));
+                }
+                Record::Human {
+                    t,
+                    t_meas: b.t_meas.unwrap_or(t),
+                    positions: &b.positions,
+                }
+            }
+            Kind::Event => {
+                if !b.has_name {
+                    return Err(err("event record has no `name` field".into()));
+                }
+                Record::Event { t, name: &b.name }
+            }
+            _ => Record::Shield { t },
+        }))
+    }
+}

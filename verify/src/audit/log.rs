@@ -1,0 +1,356 @@
+//! Log format v1 (see `docs/log-format.md`): the header, the record view shared by all readers, and
+//! the JSON Lines writer the shield uses.
+
+use pacs_models::shape::CapsuleSpec;
+use pacs_models::{Capsule, ConstraintSpec, HumanModel, HumanSpec, RobotModel, RobotSpec};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+
+/// The value of the header's `format` field.
+pub const FORMAT: &str = "pacs-log";
+/// The only supported format version.
+pub const VERSION: u32 = 1;
+
+/// A model given by built-in name or as an inline spec (the JSON forms the model loaders accept).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ModelRef<T> {
+    /// Built-in name (`"fr3"`, `"default"`, `"ssm"`, ...).
+    Name(String),
+    /// Inline spec.
+    Spec(Box<T>),
+}
+
+/// The first record of every log: models, constraints, static environment and free-form metadata.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    /// Always `"header"`.
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Always [`VERSION`].
+    pub version: u32,
+    /// Robot model (name or spec).
+    pub robot: ModelRef<RobotSpec>,
+    /// Human model (name or spec).
+    pub human: ModelRef<HumanSpec>,
+    /// Task constraints (preset name or spec).
+    pub constraints: ModelRef<ConstraintSpec>,
+    /// Static environment shapes (capsules, m) a body part can be clamped against.
+    #[serde(default)]
+    pub environment: Vec<CapsuleSpec>,
+    /// Free-form metadata (`task`, `policy`, `filter`, ... group the aggregate report).
+    #[serde(default)]
+    pub meta: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Header {
+    /// A v1 header for the given models.
+    pub fn new(
+        robot: ModelRef<RobotSpec>,
+        human: ModelRef<HumanSpec>,
+        constraints: ModelRef<ConstraintSpec>,
+    ) -> Self {
+        Self {
+            kind: "header".into(),
+            format: FORMAT.into(),
+            version: VERSION,
+            robot,
+            human,
+            constraints,
+            environment: vec![],
+            meta: Default::default(),
+        }
+    }
+
+    /// Check `type`, `format` and `version`; returns the problem otherwise.
+    pub fn check(&self) -> Result<(), String> {
+        if self.kind != "header" {
+            return Err(format!(
+                "first record: type `{}`, expected `header`",
+                self.kind
+            ));
+        }
+        if self.format != FORMAT {
+            return Err(format!(
+                "header.format: `{}`, expected `{FORMAT}`",
+                self.format
+            ));
+        }
+        if self.version != VERSION {
+            return Err(format!(
+                "header.version: {} is not supported (expected {VERSION})",
+                self.version
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The models a log refers to, validated.
+#[derive(Debug, Clone)]
+pub struct LogModels {
+    /// Robot model.
+    pub robot: RobotModel,
+    /// Human model.
+    pub human: HumanModel,
+    /// Constraint spec (resolved against `human` by the checker).
+    pub constraints: ConstraintSpec,
+    /// Static environment capsules (m).
+    pub environment: Vec<Capsule>,
+}
+
+impl LogModels {
+    /// Load and validate the header's models; the error names the header field.
+    pub fn from_header(h: &Header) -> Result<Self, String> {
+        let robot = match &h.robot {
+            ModelRef::Name(n) => RobotModel::builtin(n),
+            ModelRef::Spec(s) => RobotModel::new((**s).clone()),
+        }
+        .map_err(|e| format!("header.robot: {e}"))?;
+        let human = match &h.human {
+            ModelRef::Name(n) => HumanModel::builtin(n),
+            ModelRef::Spec(s) => HumanModel::new((**s).clone()),
+        }
+        .map_err(|e| format!("header.human: {e}"))?;
+        let constraints = match &h.constraints {
+            ModelRef::Name(n) => ConstraintSpec::builtin(n),
+            ModelRef::Spec(s) => Ok((**s).clone()),
+        }
+        .map_err(|e| format!("header.constraints: {e}"))?;
+        constraints
+            .resolve(&human)
+            .map_err(|e| format!("header.constraints: {e}"))?;
+        let mut environment = Vec::with_capacity(h.environment.len());
+        for (i, c) in h.environment.iter().enumerate() {
+            environment
+                .push(Capsule::try_from(*c).map_err(|e| format!("header.environment[{i}]: {e}"))?);
+        }
+        Ok(Self {
+            robot,
+            human,
+            constraints,
+            environment,
+        })
+    }
+}
+
+/// One record after the header, borrowing the reader's buffers (no allocation per record).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Record<'a> {
+    /// A robot sample at `t` (s): joint positions (rad) and, if logged, velocities (rad/s).
+    Robot {
+        /// Time (s).
+        t: f64,
+        /// Joint positions (rad).
+        q: &'a [f64],
+        /// Joint velocities (rad/s), if logged.
+        dq: Option<&'a [f64]>,
+    },
+    /// A human measurement logged at `t`, taken at `t_meas ≤ t` (s); keypoints in model order (m).
+    Human {
+        /// Log time (s).
+        t: f64,
+        /// Measurement time stamp (s).
+        t_meas: f64,
+        /// Keypoint positions (m).
+        positions: &'a [[f64; 3]],
+    },
+    /// Shield diagnostics (ignored by the verdict).
+    Shield {
+        /// Time (s).
+        t: f64,
+    },
+    /// A named event (`episode_start`, `success`, `failure`, or any other name).
+    Event {
+        /// Time (s).
+        t: f64,
+        /// Event name.
+        name: &'a str,
+    },
+}
+
+impl Record<'_> {
+    /// The record's time (s).
+    pub fn t(&self) -> f64 {
+        match *self {
+            Record::Robot { t, .. }
+            | Record::Human { t, .. }
+            | Record::Shield { t }
+            | Record::Event { t, .. } => t,
+        }
+    }
+}
+
+/// A streaming source of records: the header first, then records in file order.
+pub trait RecordReader {
+    /// The file's header (already read and checked for type, format and version).
+    fn header(&self) -> &Header;
+    /// The next record, `None` at a clean end of file. Errors name the file and location.
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, crate::audit::AuditError>;
+    /// Where the last returned record was found (for errors detected downstream).
+    fn location(&self) -> crate::audit::Location;
+    /// The file name used in errors.
+    fn file(&self) -> &str;
+}
+
+/// Errors of [`LogWriter`].
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// A value is NaN or infinite (the format only holds finite numbers).
+    #[error("{field}: value {value} is not finite")]
+    NotFinite {
+        /// Field name.
+        field: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// Time went backwards.
+    #[error("t = {t} s is before the previous record's t = {previous} s")]
+    Backwards {
+        /// This record's time (s).
+        t: f64,
+        /// Previous time (s).
+        previous: f64,
+    },
+    /// The header was not written first, or written twice.
+    #[error("{0}")]
+    Order(&'static str),
+    /// Serialization or I/O failed.
+    #[error("write failed: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// Writes a v1 JSON Lines log. Guarantees: header first, finite numbers only, non-decreasing `t`;
+/// floats are written in shortest round-trip form, so a reader gets back the exact values.
+pub struct LogWriter<W: Write> {
+    out: W,
+    header_written: bool,
+    last_t: f64,
+}
+
+fn finite(field: &'static str, v: f64) -> Result<(), WriteError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(WriteError::NotFinite { field, value: v })
+    }
+}
+
+fn write_list<W: Write>(out: &mut W, field: &'static str, v: &[f64]) -> Result<(), WriteError> {
+    out.write_all(b"[")?;
+    for (i, x) in v.iter().enumerate() {
+        finite(field, *x)?;
+        if i > 0 {
+            out.write_all(b",")?;
+        }
+        write!(out, "{x:?}")?;
+    }
+    out.write_all(b"]")?;
+    Ok(())
+}
+
+impl<W: Write> LogWriter<W> {
+    /// A writer on `out` (wrap files in a `BufWriter`).
+    pub fn new(out: W) -> Self {
+        Self {
+            out,
+            header_written: false,
+            last_t: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Write the header line (must be first).
+    pub fn write_header(&mut self, h: &Header) -> Result<(), WriteError> {
+        if self.header_written {
+            return Err(WriteError::Order("header written twice"));
+        }
+        serde_json::to_writer(&mut self.out, h).map_err(std::io::Error::from)?;
+        self.out.write_all(b"\n")?;
+        self.header_written = true;
+        Ok(())
+    }
+
+    fn begin(&mut self, t: f64) -> Result<(), WriteError> {
+        if !self.header_written {
+            return Err(WriteError::Order("write_header must come first"));
+        }
+        finite("t", t)?;
+        if t < self.last_t {
+            return Err(WriteError::Backwards {
+                t,
+                previous: self.last_t,
+            });
+        }
+        self.last_t = t;
+        Ok(())
+    }
+
+    /// A robot sample: time (s), joint positions (rad), optional velocities (rad/s).
+    pub fn write_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), WriteError> {
+        self.begin(t)?;
+        write!(self.out, "{{\"type\":\"robot\",\"t\":{t:?},\"q\":")?;
+        write_list(&mut self.out, "q", q)?;
+        if let Some(dq) = dq {
+            self.out.write_all(b",\"dq\":")?;
+            write_list(&mut self.out, "dq", dq)?;
+        }
+        self.out.write_all(b"}\n")?;
+        Ok(())
+    }
+
+    /// A human measurement: log time `t`, measurement time `t_meas` (s), keypoints (m).
+    pub fn write_human(
+        &mut self,
+        t: f64,
+        t_meas: f64,
+        positions: &[[f64; 3]],
+    ) -> Result<(), WriteError> {
+        finite("t_meas", t_meas)?;
+        self.begin(t)?;
+        write!(
+            self.out,
+            "{{\"type\":\"human\",\"t\":{t:?},\"t_meas\":{t_meas:?},\"positions\":["
+        )?;
+        for (i, p) in positions.iter().enumerate() {
+            if i > 0 {
+                self.out.write_all(b",")?;
+            }
+            write_list(&mut self.out, "positions", p)?;
+        }
+        self.out.write_all(b"]}\n")?;
+        Ok(())
+    }
+
+    /// A named event at `t` (s).
+    pub fn write_event(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
+        self.begin(t)?;
+        write!(self.out, "{{\"type\":\"event\",\"t\":{t:?},\"name\":")?;
+        serde_json::to_writer(&mut self.out, name).map_err(std::io::Error::from)?;
+        self.out.write_all(b"}\n")?;
+        Ok(())
+    }
+
+    /// Shield diagnostics at `t` (s): `fields` (a JSON object) is merged into the record.
+    pub fn write_shield(
+        &mut self,
+        t: f64,
+        fields: &serde_json::Map<String, serde_json::Value>,
+    ) -> Result<(), WriteError> {
+        self.begin(t)?;
+        let mut m = fields.clone();
+        m.insert("type".into(), "shield".into());
+        m.insert("t".into(), t.into());
+        serde_json::to_writer(&mut self.out, &m).map_err(std::io::Error::from)?;
+        self.out.write_all(b"\n")?;
+        Ok(())
+    }
+
+    /// Flush and return the inner writer.
+    pub fn finish(mut self) -> Result<W, WriteError> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}

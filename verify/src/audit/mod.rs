@@ -1,0 +1,109 @@
+//! Offline audit of logged runs against SSM and PFL (issue 5).
+//!
+//! - [`log`]: log format v1 (header, records) and the JSON Lines [`log::LogWriter`];
+//! - [`jsonl`]: the streaming JSON Lines reader; [`csv`]: the CSV form;
+//! - [`check`]: the sound span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
+//! - [`verdict`]: verdicts, violation intervals, metrics;
+//! - [`error`]: typed input errors naming file, line and problem.
+//!
+//! Entry points: [`audit_file`] and [`audit_reader`]. Semantics: `docs/audit.md`.
+
+pub mod check;
+pub mod csv;
+pub mod error;
+pub mod jsonl;
+pub mod log;
+pub mod verdict;
+
+pub use check::{AuditConfig, Auditor};
+pub use error::{AuditError, Location};
+pub use log::{Header, LogModels, LogWriter, ModelRef, Record, RecordReader};
+pub use verdict::{ConstraintKind, Metrics, RunResult, Verdict, Violation};
+
+use std::path::Path;
+
+/// Load an audit config from TOML text; errors name the file and the problem.
+pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, AuditError> {
+    let cfg: AuditConfig = toml::from_str(text)
+        .map_err(|e| AuditError::input(file, Location::File, format!("invalid config: {e}")))?;
+    cfg.validate()
+        .map_err(|p| AuditError::input(file, Location::File, format!("invalid config: {p}")))?;
+    Ok(cfg)
+}
+
+/// Audit every record of `reader` with `cfg`. Never returns `pass` unless every span between the
+/// first and last robot sample was checked. Errors name the file and line/offset.
+pub fn audit_reader(
+    reader: &mut dyn RecordReader,
+    cfg: &AuditConfig,
+) -> Result<RunResult, AuditError> {
+    let file = reader.file().to_string();
+    let mut header = reader.header().clone();
+    if let Some(r) = &cfg.robot {
+        header.robot = r.clone();
+    }
+    if let Some(h) = &cfg.human {
+        header.human = h.clone();
+    }
+    if let Some(c) = &cfg.constraints {
+        header.constraints = c.clone();
+    }
+    let header_loc = Location::Line(1);
+    let models =
+        LogModels::from_header(&header).map_err(|p| AuditError::input(&file, header_loc, p))?;
+    let mut auditor =
+        Auditor::new(models, cfg.clone()).map_err(|p| AuditError::input(&file, header_loc, p))?;
+    let mut last_t = f64::NEG_INFINITY;
+    loop {
+        let rec = reader.next_record()?;
+        let Some(rec) = rec else { break };
+        let t = rec.t();
+        let problem = if !t.is_finite() {
+            Some(format!("t: value {t} is not finite"))
+        } else if t < last_t {
+            Some(format!(
+                "time goes backwards: t = {t} s after t = {last_t} s"
+            ))
+        } else {
+            last_t = t;
+            match rec {
+                Record::Robot { t, q, dq } => auditor.push_robot(t, q, dq).err(),
+                Record::Human {
+                    t,
+                    t_meas,
+                    positions,
+                } => auditor.push_human(t, t_meas, positions).err(),
+                Record::Event { name, .. } => {
+                    auditor.push_event(name);
+                    None
+                }
+                Record::Shield { .. } => None,
+            }
+        };
+        if let Some(p) = problem {
+            return Err(AuditError::input(&file, reader.location(), p));
+        }
+    }
+    Ok(auditor.finish(&file, header.meta))
+}
+
+/// Audit one log file: CSV form if the name ends in `.csv`, JSON Lines otherwise. The path as
+/// given names the log in messages and in the result.
+pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, AuditError> {
+    let name = path.display().to_string();
+    let f = std::fs::File::open(path).map_err(|e| AuditError::Io {
+        file: name.clone(),
+        source: e,
+    })?;
+    let input = std::io::BufReader::with_capacity(1 << 16, f);
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        let mut reader = csv::CsvReader::new(&name, input)?;
+        audit_reader(&mut reader, cfg)
+    } else {
+        let mut reader = jsonl::JsonlReader::new(&name, input)?;
+        audit_reader(&mut reader, cfg)
+    }
+}

@@ -1,0 +1,182 @@
+//! Audit results: verdicts, violation intervals, inconclusive spans, metrics and plot series.
+
+use serde::{Deserialize, Serialize};
+
+/// Outcome of auditing one log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    /// Every covered time was checked and no violation is possible.
+    Pass,
+    /// A violation is possible (or certain) somewhere.
+    Fail,
+    /// No violation was found, but part of the log could not be checked.
+    Inconclusive,
+}
+
+impl Verdict {
+    /// The CLI exit code of this verdict alone (0 pass, 1 fail, 2 inconclusive).
+    pub fn exit_code(self) -> u8 {
+        match self {
+            Verdict::Pass => 0,
+            Verdict::Fail => 1,
+            Verdict::Inconclusive => 2,
+        }
+    }
+    /// Combined verdict of several logs: fail if any fails, else inconclusive if any is, else pass.
+    pub fn combine(verdicts: impl IntoIterator<Item = Verdict>) -> Verdict {
+        let mut out = Verdict::Pass;
+        for v in verdicts {
+            match v {
+                Verdict::Fail => return Verdict::Fail,
+                Verdict::Inconclusive => out = Verdict::Inconclusive,
+                Verdict::Pass => {}
+            }
+        }
+        out
+    }
+}
+
+/// Which kind of constraint was violated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ConstraintKind {
+    /// Speed and separation monitoring.
+    Ssm,
+    /// Power and force limiting.
+    Pfl,
+}
+
+/// A maximal run of consecutive checked spans in which one (body part, link) pair violates its
+/// constraint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Violation {
+    /// Start of the first violating span (s).
+    pub t_start: f64,
+    /// End of the last violating span (s).
+    pub t_end: f64,
+    /// SSM or PFL.
+    pub constraint: ConstraintKind,
+    /// Body part name (human model).
+    pub body_part: String,
+    /// Robot link name.
+    pub link: String,
+    /// Smallest signed separation (m) between the link's capsules and the body part as measured,
+    /// at the recorded robot samples of the interval (negative: overlap depth).
+    pub min_separation: f64,
+    /// Largest sound upper bound (J) of the kinetic energy of the sub-chain up to the link.
+    pub energy: f64,
+    /// Smallest energy threshold (J) that applied (0 for SSM).
+    pub threshold: f64,
+    /// Whether the constrained (clamping) threshold applied at some span.
+    pub constrained: bool,
+    /// True if the violation holds at a recorded robot sample with the measured human keypoints
+    /// taken at face value (no uncertainty): it certainly happened.
+    pub certain: bool,
+    /// Number of spans in the interval.
+    pub spans: u64,
+}
+
+/// A maximal run of consecutive spans that could not be checked, for one reason.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InconclusiveSpan {
+    /// Start (s).
+    pub t_start: f64,
+    /// End (s).
+    pub t_end: f64,
+    /// Why (e.g. `gap`, `no_human`, `stale_human`, `exceeds_limits`).
+    pub reason: String,
+    /// Number of spans.
+    pub spans: u64,
+}
+
+/// Per-log metrics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Robot samples.
+    pub samples: u64,
+    /// Human records.
+    pub human_records: u64,
+    /// Time from the first to the last robot sample (s).
+    pub duration: f64,
+    /// Robot samples in violation / samples (the paper's "Safety Viol.").
+    pub violation_fraction: f64,
+    /// Robot samples in violation.
+    pub violating_samples: u64,
+    /// Robot samples in a certain violation.
+    pub certain_violating_samples: u64,
+    /// Total length of inconclusive spans (s).
+    pub inconclusive_duration: f64,
+    /// Lower bound (m) of the robot–human separation over all checked spans (None if none).
+    pub min_separation: Option<f64>,
+    /// Task outcome from the last `success` / `failure` event (None if none was logged).
+    pub success: Option<bool>,
+    /// `success` and verdict `pass` (None if no outcome was logged).
+    pub safe_success: Option<bool>,
+}
+
+/// One bucket of the plot series (time-decimated, at most a fixed number of buckets per log).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SeriesPoint {
+    /// Bucket start (s).
+    pub t: f64,
+    /// Bucket end (s).
+    pub t_end: f64,
+    /// Lower bound (m) of the separation over the bucket's checked spans (None if none).
+    pub min_separation: Option<f64>,
+    /// Nominal whole-robot kinetic energy (J) at the bucket's first sample.
+    pub energy_nominal: Option<f64>,
+    /// Largest sub-chain energy bound (J) over possible PFL contacts in the bucket.
+    pub energy_bound: Option<f64>,
+    /// Smallest PFL threshold (J) of those contacts.
+    pub threshold: Option<f64>,
+    /// A violation is possible in the bucket.
+    pub violation: bool,
+    /// Part of the bucket is inconclusive.
+    pub inconclusive: bool,
+}
+
+/// The audit of one log.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunResult {
+    /// Log file name as given.
+    pub log: String,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Violation intervals, by start time.
+    pub violations: Vec<Violation>,
+    /// Unchecked spans, by start time.
+    pub inconclusive: Vec<InconclusiveSpan>,
+    /// Metrics.
+    pub metrics: Metrics,
+    /// The header's `meta` object.
+    pub meta: serde_json::Map<String, serde_json::Value>,
+    /// Robot, human and task names, for the report.
+    pub models: ModelNames,
+    /// Plot series (reports only; not part of `pacs audit --json`).
+    #[serde(skip_serializing, default)]
+    pub series: Vec<SeriesPoint>,
+}
+
+/// Names of the models a run was audited with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelNames {
+    /// Robot name.
+    pub robot: String,
+    /// Human model name.
+    pub human: String,
+    /// Task constraints name.
+    pub constraints: String,
+    /// Robot joint velocity limits (rad/s) the span boxes use.
+    pub robot_v_max: Vec<f64>,
+    /// Robot joint acceleration limits (rad/s²) the velocity boxes use.
+    pub robot_a_max: Vec<f64>,
+    /// Human keypoint speed bounds (m/s).
+    pub human_v_max: Vec<f64>,
+    /// Human position measurement error bound (m).
+    pub human_measurement_error_pos: f64,
+    /// Human sensor delay (s).
+    pub human_delay: f64,
+    /// Number of static environment capsules.
+    pub environment_shapes: usize,
+}

@@ -1,0 +1,94 @@
+//! Writing a shield run as an audit log (format v1, [`crate::audit::log`]): the robot's commanded
+//! samples, the human measurements the shield received, and the shield's diagnostics, so that
+//! `pacs audit` can check the run offline.
+
+use crate::audit::log::{Header, LogWriter, WriteError};
+use crate::shield::Command;
+use pacs_reach::human::HumanMeasurement;
+use std::io::Write;
+
+/// A JSON Lines log of one shield run.
+pub struct ShieldLog<W: Write> {
+    w: LogWriter<W>,
+    last_meas: f64,
+    last_t: f64,
+    positions: Vec<[f64; 3]>,
+    /// The initial robot sample, written after the first measurement so that the first span
+    /// already has a human record.
+    pending: Option<Vec<f64>>,
+}
+
+impl<W: Write> ShieldLog<W> {
+    /// Start a log with `header`; the robot is at rest at `q0` (rad) at time `t0` (s) (written
+    /// with the first step, after its measurement).
+    pub fn new(out: W, header: &Header, t0: f64, q0: &[f64]) -> Result<Self, WriteError> {
+        let mut w = LogWriter::new(out);
+        w.write_header(header)?;
+        Ok(Self {
+            w,
+            last_meas: f64::NEG_INFINITY,
+            last_t: t0,
+            positions: Vec::new(),
+            pending: Some(q0.to_vec()),
+        })
+    }
+
+    /// Record one step at time `t`: the measurement the shield received (if new), then the
+    /// commanded sample at `cmd.t` and its diagnostics.
+    pub fn record(
+        &mut self,
+        t: f64,
+        meas: Option<&HumanMeasurement>,
+        cmd: &Command,
+    ) -> Result<(), WriteError> {
+        if let Some(m) = meas
+            && m.time() > self.last_meas
+        {
+            self.last_meas = m.time();
+            self.positions.clear();
+            self.positions
+                .extend(m.positions().iter().map(|p| [p.x, p.y, p.z]));
+            // Step times k·α and command times t + α may differ by rounding: keep t monotone.
+            self.w
+                .write_human(t.max(self.last_t), m.time(), &self.positions)?;
+        }
+        if let Some(q0) = self.pending.take() {
+            let t0 = self.last_t;
+            self.w.write_robot(t0, &q0, Some(&vec![0.0; q0.len()]))?;
+        }
+        let n = cmd.dof;
+        let tc = cmd.t.max(self.last_t);
+        self.last_t = tc;
+        self.w
+            .write_robot(tc, &cmd.state.q[..n], Some(&cmd.state.dq[..n]))?;
+        let d = &cmd.diag;
+        let mut fields = serde_json::Map::new();
+        fields.insert("verified".into(), d.verified.into());
+        fields.insert("on_failsafe".into(), d.on_failsafe.into());
+        fields.insert("path_speed".into(), d.path_speed.into());
+        if d.min_separation.is_finite() {
+            fields.insert("min_separation".into(), d.min_separation.into());
+        }
+        fields.insert("contact_energy".into(), d.contact_energy.into());
+        fields.insert("contact_threshold".into(), d.contact_threshold.into());
+        if let Ok(b) = serde_json::to_value(d.binding) {
+            fields.insert("binding".into(), b);
+        }
+        self.w.write_shield(tc, &fields)
+    }
+
+    /// A named event (`episode_start`, `success`, `failure`, ...).
+    pub fn event(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
+        self.last_t = t.max(self.last_t);
+        self.w.write_event(self.last_t, name)
+    }
+
+    /// Flush and return the writer.
+    pub fn finish(mut self) -> Result<W, WriteError> {
+        if let Some(q0) = self.pending.take() {
+            let t0 = self.last_t;
+            self.w.write_robot(t0, &q0, Some(&vec![0.0; q0.len()]))?;
+        }
+        self.w.finish()
+    }
+}

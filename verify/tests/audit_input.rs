@@ -1,0 +1,176 @@
+//! Bad input: every case is an error naming the file, the line and the problem; never a pass.
+
+mod audit_common;
+
+use audit_common::*;
+use pacs_verify::audit::log::WriteError;
+use pacs_verify::audit::{AuditConfig, AuditError, Location, LogWriter};
+
+const HEADER: &str = r#"{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm"}"#;
+const HUMAN: &str = r#"{"type":"human","t":0.0,"positions":[[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1]]}"#;
+const ROBOT0: &str = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571,0.785]}"#;
+const ROBOT1: &str = r#"{"type":"robot","t":0.001,"q":[0,-0.785,0,-2.356,0,1.571,0.785]}"#;
+
+fn lines(ls: &[&str]) -> String {
+    ls.iter().map(|l| format!("{l}\n")).collect()
+}
+
+/// The error for `text`, asserting it is an input error at `line` whose message contains `what`.
+fn expect_error(text: &str, line: Option<u64>, what: &str) {
+    let e = run(text, &AuditConfig::default()).expect_err("must be rejected");
+    let msg = e.to_string();
+    match &e {
+        AuditError::Input { file, location, .. } => {
+            assert_eq!(file, "test.jsonl");
+            if let Some(l) = line {
+                assert_eq!(*location, Location::Line(l), "{msg}");
+            }
+        }
+        other => panic!("unexpected error {other:?}"),
+    }
+    assert!(msg.starts_with("test.jsonl: "), "{msg}");
+    assert!(msg.contains(what), "`{msg}` should mention `{what}`");
+}
+
+#[test]
+fn valid_baseline_passes() {
+    let r = run(
+        &lines(&[HEADER, HUMAN, ROBOT0, ROBOT1]),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, pacs_verify::audit::Verdict::Pass);
+}
+
+#[test]
+fn truncated_last_line() {
+    let mut text = lines(&[HEADER, HUMAN, ROBOT0]);
+    text.push_str(&ROBOT1[..ROBOT1.len() - 10]);
+    expect_error(&text, Some(4), "truncated line");
+    // A complete-looking last line without its newline is also rejected.
+    let mut text = lines(&[HEADER, HUMAN, ROBOT0]);
+    text.push_str(ROBOT1);
+    expect_error(&text, Some(4), "truncated line");
+}
+
+#[test]
+fn non_json_line() {
+    expect_error(
+        &lines(&[HEADER, HUMAN, "hello", ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
+    expect_error(
+        &lines(&[HEADER, HUMAN, r#"{"type":"robot","t":0.0,"q":[1,2"#, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
+}
+
+#[test]
+fn nan_and_infinity() {
+    let nan = r#"{"type":"robot","t":0.0,"q":[NaN,-0.785,0,-2.356,0,1.571,0.785]}"#;
+    expect_error(
+        &lines(&[HEADER, HUMAN, nan, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
+    let inf = r#"{"type":"robot","t":0.0,"q":[1e999,-0.785,0,-2.356,0,1.571,0.785]}"#;
+    expect_error(
+        &lines(&[HEADER, HUMAN, inf, ROBOT1]),
+        Some(3),
+        "invalid JSON",
+    );
+    let inf_t = r#"{"type":"human","t":1e400,"positions":[]}"#;
+    expect_error(&lines(&[HEADER, inf_t]), Some(2), "invalid JSON");
+}
+
+#[test]
+fn time_going_backwards() {
+    let back = r#"{"type":"robot","t":-0.5,"q":[0,-0.785,0,-2.356,0,1.571,0.785]}"#;
+    expect_error(
+        &lines(&[HEADER, HUMAN, ROBOT0, back]),
+        Some(4),
+        "time goes backwards",
+    );
+}
+
+#[test]
+fn wrong_joint_and_keypoint_counts() {
+    let six = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571]}"#;
+    expect_error(
+        &lines(&[HEADER, HUMAN, six]),
+        Some(3),
+        "expected 7 joint positions",
+    );
+    let dq = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571,0.785],"dq":[0]}"#;
+    expect_error(
+        &lines(&[HEADER, HUMAN, dq]),
+        Some(3),
+        "expected 7 joint velocities",
+    );
+    let kp = r#"{"type":"human","t":0.0,"positions":[[2,0,1]]}"#;
+    expect_error(&lines(&[HEADER, kp]), Some(2), "expected 9 keypoints");
+}
+
+#[test]
+fn missing_or_bad_header() {
+    expect_error(&lines(&[HUMAN, ROBOT0]), Some(1), "missing header");
+    expect_error("", None, "missing header");
+    let v2 = HEADER.replace("\"version\":1", "\"version\":2");
+    expect_error(&lines(&[&v2, HUMAN]), Some(1), "version");
+    let robot = HEADER.replace("\"fr3\"", "\"ur5\"");
+    expect_error(&lines(&[&robot, HUMAN]), Some(1), "header.robot");
+    expect_error(&lines(&[HEADER, HUMAN, HEADER]), Some(3), "second header");
+}
+
+#[test]
+fn unknown_record_type_and_fields() {
+    expect_error(
+        &lines(&[HEADER, r#"{"type":"lidar","t":0.0}"#]),
+        Some(2),
+        "unknown record type `lidar`",
+    );
+    expect_error(&lines(&[HEADER, r#"{"t":0.0}"#]), Some(2), "no `type`");
+    let extra = r#"{"type":"robot","t":0.0,"q":[0,-0.785,0,-2.356,0,1.571,0.785],"qq":1}"#;
+    expect_error(&lines(&[HEADER, extra]), Some(2), "unknown field `qq`");
+    let no_t = r#"{"type":"robot","q":[0,-0.785,0,-2.356,0,1.571,0.785]}"#;
+    expect_error(&lines(&[HEADER, no_t]), Some(2), "no `t`");
+    // Shield diagnostics may carry anything.
+    let shield = r#"{"type":"shield","t":0.0,"anything":{"x":[1,2]}}"#;
+    assert!(
+        run(
+            &lines(&[HEADER, HUMAN, shield, ROBOT0, ROBOT1]),
+            &AuditConfig::default()
+        )
+        .is_ok()
+    );
+}
+
+#[test]
+fn measurement_from_the_future() {
+    let fut = r#"{"type":"human","t":0.0,"t_meas":0.1,"positions":[[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1]]}"#;
+    expect_error(&lines(&[HEADER, fut]), Some(2), "t_meas");
+}
+
+#[test]
+fn writer_rejects_what_the_reader_would_reject() {
+    let mut w = LogWriter::new(Vec::new());
+    assert!(w.write_robot(0.0, &[0.0], None).is_err(), "header first");
+    let h = pacs_verify::audit::Header::new(
+        pacs_verify::audit::ModelRef::Name("fr3".into()),
+        pacs_verify::audit::ModelRef::Name("default".into()),
+        ssm(),
+    );
+    w.write_header(&h).unwrap();
+    assert!(matches!(
+        w.write_robot(f64::NAN, &[0.0], None),
+        Err(WriteError::NotFinite { .. })
+    ));
+    assert!(matches!(
+        w.write_robot(1.0, &[f64::INFINITY], None),
+        Err(WriteError::NotFinite { .. })
+    ));
+    w.write_robot(1.0, &[0.0], None).unwrap();
+    assert!(w.write_robot(0.5, &[0.0], None).is_err(), "time backwards");
+}
