@@ -1,5 +1,6 @@
 //! The harnesses, grouped by claim (see `proofs/README.md`).
 
+pub mod audit;
 pub mod energy;
 pub mod geometry;
 pub mod human;

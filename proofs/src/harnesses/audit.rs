@@ -1,0 +1,104 @@
+//! (h) The offline audit never returns `pass` when a recorded sample violates the constraint.
+//!
+//! A short log (FR3, default human, SSM everywhere) with random robot samples; at one sample the
+//! robot moves (a joint speed above the rest threshold) while the human — standing still, measured
+//! from the start (and optionally again at that sample) — has every keypoint on a point of a
+//! moving link's capsule at that configuration: a recorded SSM violation by an admissible human.
+//! The verdict must not be `pass`. (The human must be admissible: the audit's semantics assume
+//! the human model, and a human record that teleports onto the robot at the *last* robot sample
+//! covers no span — see README, "doubtful".)
+
+use crate::{Source, harness};
+use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+use pacs_verify::audit::{AuditConfig, Auditor, LogModels, Verdict};
+
+/// Audit one random violating log; the verdict.
+fn violating_log<S: Source>(s: &mut S) -> Verdict {
+    let robot = RobotModel::builtin("fr3").expect("builtin");
+    let human = HumanModel::builtin("default").expect("builtin");
+    let models = LogModels {
+        robot: robot.clone(),
+        human: human.clone(),
+        constraints: ConstraintSpec::builtin("ssm").expect("preset"),
+        environment: vec![],
+    };
+    let cfg = AuditConfig::default();
+    let mut auditor = Auditor::new(models, cfg.clone()).expect("valid models");
+    let n = robot.dof();
+    let samples = 2 + s.index(4);
+    let k = s.index(samples); // the violating sample
+    let dt = s.f64_in(0.001, 0.05);
+    let lim = robot.limits();
+    // Robot samples first (small motions consistent with the limits).
+    let mut qs = vec![
+        (0..n)
+            .map(|i| s.f64_in(lim.q_min()[i] + 0.1, lim.q_max()[i] - 0.1))
+            .collect::<Vec<f64>>(),
+    ];
+    let mut dqs = Vec::new();
+    for i in 0..samples {
+        let mut dq: Vec<f64> = (0..n).map(|_| s.f64_in(-0.5, 0.5)).collect();
+        if i == k {
+            // Moving at the violating sample: joint 0 clearly above the rest speed.
+            dq[0] = if s.bool() { 1.0 } else { -1.0 } * s.f64_in(10.0 * cfg.rest_speed, 1.0);
+        }
+        let next: Vec<f64> = qs[i].iter().zip(&dq).map(|(q, v)| q + v * dt).collect();
+        dqs.push(dq);
+        qs.push(next);
+    }
+    // The human stands still with every keypoint on a point of a moving link capsule at q_k
+    // (an admissible motion: measured at 0 and, optionally, again at t_k).
+    let caps = robot.capsules_world(&qs[k]);
+    let moving: Vec<_> = caps
+        .iter()
+        .filter(|(li, _)| robot.links()[*li].frame > 0)
+        .map(|(_, c)| *c)
+        .collect();
+    let c = moving[s.index(moving.len())];
+    let lambda = s.f64_in(0.0, 1.0);
+    let p = c.p1() + (c.p2() - c.p1()) * lambda;
+    let on_robot = vec![[p.x, p.y, p.z]; human.keypoint_count()];
+    auditor.push_human(0.0, 0.0, &on_robot).expect("valid");
+    let remeasure = s.bool();
+    let with_dq = s.bool();
+    for i in 0..samples {
+        let t = i as f64 * dt;
+        if i == k && remeasure {
+            auditor.push_human(t, t, &on_robot).expect("valid");
+        }
+        let dq = (with_dq || i == k).then_some(&dqs[i][..]);
+        auditor.push_robot(t, &qs[i], dq).expect("valid sample");
+    }
+    auditor.finish("harness", Default::default()).verdict
+}
+
+fn audit_violation<S: Source>(s: &mut S) {
+    let verdict = violating_log(s);
+    assert!(
+        verdict != Verdict::Pass,
+        "audit passed a log with a violating sample"
+    );
+}
+
+/// Not vacuous: at least 90 % of the violating logs are judged `fail` (not just `inconclusive`).
+#[cfg(test)]
+#[test]
+fn h1_violating_logs_mostly_fail() {
+    let cases = 2000;
+    let mut fails = 0;
+    crate::run_cases("h1_violating_logs_mostly_fail", cases, |s| {
+        if violating_log(s) == Verdict::Fail {
+            fails += 1;
+        }
+    });
+    assert!(
+        fails * 10 >= cases * 9,
+        "only {fails} of {cases} violating logs judged fail"
+    );
+}
+harness!(
+    h1_audit_never_passes_violation,
+    unwind = 10,
+    cases = crate::DEFAULT_CASES,
+    audit_violation
+);
