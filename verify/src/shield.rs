@@ -827,6 +827,17 @@ impl Shield {
             diag.binding = Binding::NoMeasurement;
             return false;
         };
+        // Coarse check first: the whole monitored trajectory as one interval (its occupancy
+        // contains that of every sub-interval, so passing it verifies the step). Usually decides
+        // when the human is far; otherwise the fine intervals below decide.
+        if self.config.mode == FilterMode::Pacs && stop > alpha {
+            let mut coarse = *diag;
+            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &meas, &mut coarse) {
+                *diag = coarse;
+                self.meas = Some(meas);
+                return true;
+            }
+        }
         let mut ok = true;
         let intervals = OccupancyIntervals::new(
             alpha,
