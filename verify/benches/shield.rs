@@ -4,46 +4,19 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_reach::human::HumanMeasurement;
+use pacs_verify::bench::{back_and_forth, walking_human};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
-use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_verify::chunk::Chunk;
 use pacs_verify::shield::{Shield, ShieldConfig};
 
 /// The measurement of the walking human at step `k` (built outside the timed routine).
 fn measurement(human: &pacs_models::HumanModel, k: usize) -> HumanMeasurement {
     let t = k as f64 * 0.001;
-    let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
-    let kp = [
-        [d, 0.2, 1.4],
-        [d - 0.1, 0.25, 1.15],
-        [d - 0.2, 0.25, 0.95],
-        [d, -0.2, 1.4],
-        [d - 0.1, -0.25, 1.15],
-        [d - 0.2, -0.25, 0.95],
-        [d, 0.0, 1.5],
-        [d, 0.0, 1.0],
-        [d, 0.0, 1.65],
-    ];
-    HumanMeasurement::new(human, t, &kp, None).unwrap()
+    HumanMeasurement::new(human, t, &walking_human(t), None).unwrap()
 }
 
 fn chunk(sign: f64) -> Chunk {
-    Chunk {
-        kind: ActionKind::Delta,
-        actions: vec![
-            vec![
-                0.02 * sign,
-                0.02 * sign,
-                0.02 * sign,
-                -0.02 * sign,
-                0.02 * sign,
-                0.02 * sign,
-                0.0
-            ];
-            16
-        ],
-        execute: 8,
-        gripper: None,
-    }
+    back_and_forth(sign)
 }
 
 fn shield(c: &mut Criterion) {

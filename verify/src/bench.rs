@@ -56,7 +56,8 @@ fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> 
     }
 }
 
-fn walking_human(t: f64) -> [[f64; 3]; 9] {
+/// Keypoints of the default human walking between 1.5 m and 1.0 m in front of the robot at time `t` (s).
+pub fn walking_human(t: f64) -> [[f64; 3]; 9] {
     let d = 1.25 + 0.25 * (std::f64::consts::PI * t).sin();
     [
         [d, 0.2, 1.4],
@@ -71,7 +72,8 @@ fn walking_human(t: f64) -> [[f64; 3]; 9] {
     ]
 }
 
-fn back_and_forth(sign: f64) -> Chunk {
+/// A chunk of 8 executed × 0.02 rad deltas on six joints, in direction `sign` (±1).
+pub fn back_and_forth(sign: f64) -> Chunk {
     Chunk {
         kind: ActionKind::Delta,
         actions: vec![

@@ -450,3 +450,42 @@ fn success_events_give_safe_success() {
     assert_eq!(r.metrics.success, Some(true));
     assert_eq!(r.metrics.safe_success, Some(true));
 }
+
+#[test]
+fn human_record_after_the_last_robot_sample_is_never_pass() {
+    // The human is far for the whole log, then a record stamped at the last sample's time (but
+    // written after it) puts the hand on the tool: no span covers it, so the log must not pass.
+    let w = 1.0;
+    let n = 100;
+    let t_end = n as f64 * 1e-3;
+    let far = standing(2.0, 0.0);
+    let mut log = Log::new(ssm());
+    for i in 0..=n {
+        let t = i as f64 * 1e-3;
+        if i % 10 == 0 {
+            log.human(t, &far);
+        }
+        log.robot(t, &q_at(w * t), Some(&[w, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+    }
+    let kp = reaching(hand_contact(&q_at(w * t_end), 0.002));
+    assert!(
+        gap_part(&q_at(w * t_end), &kp, "rHand") < 0.0,
+        "premise: contact at the last sample"
+    );
+    log.human(t_end, &kp);
+    let r = run(&log.text(), &AuditConfig::default()).unwrap();
+    assert_ne!(r.verdict, Verdict::Pass, "{r:#?}");
+    // Without the late record the same log passes (the test is not vacuous).
+    let mut clean = Log::new(ssm());
+    for i in 0..=n {
+        let t = i as f64 * 1e-3;
+        if i % 10 == 0 {
+            clean.human(t, &far);
+        }
+        clean.robot(t, &q_at(w * t), Some(&[w, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+    }
+    assert_eq!(
+        run(&clean.text(), &AuditConfig::default()).unwrap().verdict,
+        Verdict::Pass
+    );
+}

@@ -280,6 +280,9 @@ pub struct Auditor {
     inconclusive: Vec<(InconclusiveSpan, Reason, u64)>,
     samples: u64,
     human_records: u64,
+    /// Measurement time of a human record that arrived after the last robot sample (not yet
+    /// covered by any span).
+    unused_human_t_meas: Option<f64>,
     t_first: f64,
     t_last: f64,
     violating_samples: u64,
@@ -440,6 +443,7 @@ impl Auditor {
             inconclusive: Vec::new(),
             samples: 0,
             human_records: 0,
+            unused_human_t_meas: None,
             t_first: f64::NAN,
             t_last: f64::NAN,
             violating_samples: 0,
@@ -494,6 +498,7 @@ impl Auditor {
         self.humans[slot] = Some(m);
         self.latest_human = Some(slot);
         self.human_records += 1;
+        self.unused_human_t_meas = Some(t_meas);
         Ok(())
     }
 
@@ -510,6 +515,7 @@ impl Auditor {
     /// from the previous sample. Errors (wrong length, non-finite value) name the field.
     pub fn push_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), String> {
         let n = self.n;
+        self.unused_human_t_meas = None;
         if q.len() != n {
             return Err(format!(
                 "q: expected {n} joint positions for robot `{}`, found {}",
@@ -1229,6 +1235,19 @@ impl Auditor {
         }
         let mut inconclusive: Vec<InconclusiveSpan> =
             self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
+        // A human record after the last robot sample that describes a state within the logged
+        // robot time is covered by no span: it was not checked, so the log cannot pass.
+        if let Some(tm) = self.unused_human_t_meas
+            && self.samples >= 1
+            && tm - self.human.delay() <= self.t_last
+        {
+            inconclusive.push(InconclusiveSpan {
+                t_start: self.t_last,
+                t_end: self.t_last,
+                reason: "human_record_after_last_robot_sample".into(),
+                spans: 0,
+            });
+        }
         if self.samples < 2 {
             inconclusive.push(InconclusiveSpan {
                 t_start: if self.samples == 1 { self.t_first } else { 0.0 },
