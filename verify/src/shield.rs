@@ -234,7 +234,8 @@ pub struct Command {
     pub t: f64,
     /// Joint state (entries beyond dof are 0).
     pub state: JointState,
-    /// Number of joints.
+    /// Number of joints carrying targets in `state`; **0 when the shield was not started**: such a
+    /// command holds no valid target and must not be sent to the controller.
     pub dof: usize,
     /// Diagnostics.
     pub diag: Diagnostics,
@@ -768,6 +769,7 @@ impl Shield {
             .all(|&x| x == 0.0)
     }
 
+    /// The command of a shield that was not started: no joint targets (`dof = 0`).
     fn hold_command(&self, t: f64, binding: Binding) -> Command {
         let diag = Diagnostics {
             verified: false,
@@ -782,7 +784,7 @@ impl Shield {
         Command {
             t,
             state: JointState::default(),
-            dof: self.dof,
+            dof: 0,
             diag,
         }
     }

@@ -425,3 +425,23 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
         "the barrier should push the robot off its path ({off_path} rad)"
     );
 }
+
+#[test]
+fn step_before_start_carries_no_joint_targets() {
+    let human = default_human();
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let mut sh = Shield::new(
+        fr3::fr3(),
+        Some((human, &spec)),
+        vec![],
+        ShieldConfig::default(),
+    )
+    .unwrap();
+    let cmd = sh.step(0.0, None);
+    assert_eq!(
+        cmd.dof, 0,
+        "a not-started shield must not hand out joint targets"
+    );
+    assert!(!cmd.diag.verified);
+    assert!(sh.set_chunk(&chunk(DELTA, 8)).is_err());
+}
