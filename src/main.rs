@@ -59,6 +59,9 @@ enum Command {
     /// Offline audit of logs against SSM/PFL: exit 0 all pass, 1 any fail, 2 any inconclusive
     /// (none fail), 3 invalid input. See docs/audit.md.
     Audit(cli::audit::AuditArgs),
+    /// Simulate the paper's evaluation: tasks × methods × rollouts in parallel, each rollout
+    /// logged in the audit format and scored against the true human; tables and SVG plots.
+    Simulate(cli::simulate::SimulateArgs),
 }
 
 #[derive(Subcommand)]
@@ -124,6 +127,7 @@ fn main() -> ExitCode {
             cli::bench::shield(steps, std::io::stderr().is_terminal())
         }
         Command::Audit(args) => return cli::audit::main(args),
+        Command::Simulate(args) => cli::simulate::run(&args),
     };
     match result {
         Ok(value) => {

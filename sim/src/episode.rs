@@ -2,11 +2,14 @@
 //! exact geometry against the true human (not the measurements).
 
 use crate::humans::{Camera, HumanScript};
-use crate::policy::{ChunkPolicy, Demonstration};
+use crate::policy::{ChunkPolicy, DemoSet, Demonstration};
+use crate::task::{ToolGoal, tool_point};
 use nalgebra::Point3;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
 use pacs_reach::geometry::segment_distance_lower_bound;
-use pacs_verify::audit::log::{Header, ModelRef};
+use pacs_verify::audit::log::{Header, LogModels, ModelRef};
+use pacs_verify::audit::{AuditConfig, Auditor};
+use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
 use pacs_verify::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_verify::shield_log::ShieldLog;
@@ -24,6 +27,10 @@ pub enum Method {
     SingleAction,
     /// Control barrier function.
     Cbf,
+    /// The standard policy setup without time parameterisation (the paper's H4 baseline): each
+    /// action is sent as a position target every Δt to a jerk-limited low-level controller that
+    /// moves to it from its current state (no safety filter).
+    Direct,
 }
 
 impl std::str::FromStr for Method {
@@ -34,8 +41,9 @@ impl std::str::FromStr for Method {
             "pacs" => Ok(Self::Pacs),
             "single-action" => Ok(Self::SingleAction),
             "cbf" => Ok(Self::Cbf),
+            "direct" => Ok(Self::Direct),
             o => Err(format!(
-                "unknown method `{o}` (off, pacs, single-action, cbf)"
+                "unknown method `{o}` (off, pacs, single-action, cbf, direct)"
             )),
         }
     }
@@ -65,7 +73,7 @@ impl Filter {
             )?)),
             m => {
                 let cfg = ShieldConfig {
-                    mode: if m == Method::Off {
+                    mode: if matches!(m, Method::Off | Method::Direct) {
                         FilterMode::Off
                     } else {
                         FilterMode::Pacs
@@ -149,6 +157,10 @@ pub struct Sample {
     pub energy: f64,
     /// Filter verified its intended step.
     pub verified: bool,
+    /// Tool centre point (m).
+    pub tool: [f64; 3],
+    /// Tool speed (m/s, finite difference over the recording period).
+    pub tool_speed: f64,
 }
 
 /// Result of one episode.
@@ -156,6 +168,8 @@ pub struct Sample {
 pub struct Episode {
     /// Method.
     pub method: Method,
+    /// Method label as given (e.g. `pacs-pfl`).
+    pub variant: String,
     /// Human script name.
     pub human: String,
     /// Task constraint preset.
@@ -164,8 +178,16 @@ pub struct Episode {
     pub success: bool,
     /// Success and no ground-truth violation.
     pub safe_success: bool,
-    /// Fraction of steps with a ground-truth violation (the paper's "Safety Viol.").
+    /// Fraction of steps with a ground-truth violation at the sampled states (exact geometry
+    /// against the true human).
     pub violation_fraction: f64,
+    /// Offline audit of the rollout against the ground-truth human (the paper's "Safety Viol."),
+    /// when requested.
+    pub truth_audit: Option<TruthAudit>,
+    /// Sub-goals reached, in order.
+    pub goals_reached: usize,
+    /// Chunks the policy produced out of its training distribution.
+    pub ood_chunks: usize,
     /// Time to reach the goal (s), or the time limit.
     pub duration: f64,
     /// Smallest true separation (m).
@@ -174,9 +196,88 @@ pub struct Episode {
     pub max_deviation: f64,
     /// Fraction of steps where the filter verified its intended step.
     pub verified_fraction: f64,
+    /// Mean tool speed while moving toward the goals (m/s): tool path length / duration.
+    pub mean_tool_speed: f64,
     /// Recorded steps (every `record_every`-th).
     #[serde(skip)]
     pub samples: Vec<Sample>,
+}
+
+/// The offline audit of a rollout against the true human motion (sampled every safety step,
+/// no measurement error, no delay). `certain_fraction` is the paper's "Safety Viol." (steps whose
+/// recorded state violates); `violation_fraction` adds the steps where the audit cannot exclude
+/// a violation between samples (its bound assumes only the joint limits between 1 ms samples).
+#[derive(Debug, Clone, Serialize)]
+pub struct TruthAudit {
+    /// Verdict.
+    pub verdict: pacs_verify::audit::Verdict,
+    /// Robot samples in violation / samples.
+    pub violation_fraction: f64,
+    /// Robot samples in a certain violation / samples.
+    pub certain_fraction: f64,
+}
+
+/// A success sub-goal of an episode.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Goal {
+    /// Every joint within `tolerance` (rad) of `q`.
+    Joint {
+        /// Target (rad).
+        q: Vec<f64>,
+        /// Tolerance (rad).
+        tolerance: f64,
+    },
+    /// The tool centre point within the goal's tolerance.
+    Tool(ToolGoal),
+}
+
+impl Goal {
+    fn reached(&self, q: &[f64], tool: &[f64; 3]) -> bool {
+        match self {
+            Goal::Joint { q: g, tolerance } => {
+                q.iter().zip(g).all(|(a, b)| (a - b).abs() <= *tolerance)
+            }
+            Goal::Tool(g) => {
+                let d = (0..3).map(|i| (tool[i] - g.point[i]).powi(2)).sum::<f64>();
+                d.sqrt() <= g.tolerance
+            }
+        }
+    }
+}
+
+/// What an episode runs: models, ground truth, policy and goals (borrowed).
+pub struct Setup<'a> {
+    /// Robot.
+    pub robot: &'a RobotModel,
+    /// Human (or object) model used by the filter.
+    pub human: &'a HumanModel,
+    /// Constraints the filter enforces (and the ground truth is scored against).
+    pub spec: &'a ConstraintSpec,
+    /// Ground-truth motion.
+    pub script: &'a dyn HumanScript,
+    /// The policy.
+    pub policy: &'a mut DemoSet,
+    /// Sub-goals in order; success when all are reached.
+    pub goals: &'a [Goal],
+    /// Start configuration at rest (rad).
+    pub start: &'a [f64],
+    /// Method label (e.g. `pacs-pfl`).
+    pub label: &'a str,
+    /// Task name.
+    pub task: &'a str,
+    /// Time limit (s).
+    pub max_time: f64,
+}
+
+/// Optional outputs of an episode.
+#[derive(Default)]
+pub struct Outputs<'a> {
+    /// Write the run as an audit log (format v1, the measurements the filter received).
+    pub log: Option<&'a mut dyn std::io::Write>,
+    /// Keep every n-th step in [`Episode::samples`] (0: none).
+    pub record_every: usize,
+    /// Audit the run against the ground-truth human ([`Episode::truth_audit`]).
+    pub truth_audit: bool,
 }
 
 /// Ground truth at (q, q̇): minimum separation of moving links to the true human, and whether a
@@ -218,7 +319,29 @@ pub fn ground_truth(
     (sep, violation, energies[robot.dof()])
 }
 
-/// Run one episode from the demonstration's start at rest.
+
+/// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).
+pub fn log_header(
+    label: &str,
+    robot: &RobotModel,
+    human: &HumanModel,
+    spec: &ConstraintSpec,
+    script: &dyn HumanScript,
+) -> Header {
+    let mut h = Header::new(
+        ModelRef::Spec(Box::new(robot.spec().clone())),
+        ModelRef::Spec(Box::new(human.spec().clone())),
+        ModelRef::Spec(Box::new(spec.clone())),
+    );
+    h.meta.insert("task".into(), spec.name.clone().into());
+    h.meta.insert("policy".into(), "nn-demonstration".into());
+    h.meta.insert("filter".into(), label.into());
+    h.meta.insert("human".into(), script.name().into());
+    h
+}
+
+/// Run one episode from the demonstration's start at rest (single-demonstration policy, success
+/// at the demonstration's last configuration within `cfg.goal_tolerance`).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     method: Method,
@@ -243,29 +366,6 @@ pub fn run(
     )
 }
 
-/// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).
-pub fn log_header(
-    method: Method,
-    robot: &RobotModel,
-    human: &HumanModel,
-    spec: &ConstraintSpec,
-    script: &dyn HumanScript,
-) -> Header {
-    let mut h = Header::new(
-        ModelRef::Spec(Box::new(robot.spec().clone())),
-        ModelRef::Spec(Box::new(human.spec().clone())),
-        ModelRef::Spec(Box::new(spec.clone())),
-    );
-    h.meta.insert("task".into(), spec.name.clone().into());
-    h.meta.insert("policy".into(), "nn-demonstration".into());
-    h.meta.insert(
-        "filter".into(),
-        serde_json::to_value(method).unwrap_or_default(),
-    );
-    h.meta.insert("human".into(), script.name().into());
-    h
-}
-
 /// [`run`], also writing the run as an audit log (format v1) to `log` when given.
 #[allow(clippy::too_many_arguments)]
 pub fn run_logged(
@@ -279,65 +379,181 @@ pub fn run_logged(
     record_every: usize,
     log: Option<&mut dyn std::io::Write>,
 ) -> Result<Episode, ShieldError> {
+    let mut policy = DemoSet::from_demonstration(demo);
+    let goals = [Goal::Joint {
+        q: demo.goal().to_vec(),
+        tolerance: cfg.goal_tolerance,
+    }];
+    let label = serde_json::to_value(method)
+        .ok()
+        .and_then(|v| v.as_str().map(String::from))
+        .unwrap_or_default();
+    let setup = Setup {
+        robot,
+        human,
+        spec,
+        script,
+        policy: &mut policy,
+        goals: &goals,
+        start: &demo.path()[0],
+        label: &label,
+        task: &spec.name,
+        max_time: cfg.max_time,
+    };
+    run_setup(
+        method,
+        setup,
+        cfg,
+        Outputs {
+            log,
+            record_every,
+            truth_audit: false,
+        },
+    )
+}
+
+fn invalid(e: impl std::fmt::Display) -> ShieldError {
+    ShieldError::Invalid(e.to_string())
+}
+
+/// Run one episode of `setup` with `method` (Algorithm 1: a chunk every h·Δt, a safety step
+/// every `cfg.dt`; [`Method::Direct`] sends each action as a target every Δt instead).
+pub fn run_setup(
+    method: Method,
+    setup: Setup<'_>,
+    cfg: &EpisodeConfig,
+    out: Outputs<'_>,
+) -> Result<Episode, ShieldError> {
+    let Setup {
+        robot,
+        human,
+        spec,
+        script,
+        policy,
+        goals,
+        start,
+        label,
+        task,
+        max_time,
+    } = setup;
+    let Outputs {
+        log,
+        record_every,
+        truth_audit,
+    } = out;
     let mut log = match log {
         Some(w) => {
-            let h = log_header(method, robot, human, spec, script);
-            let mut l = ShieldLog::new(w, &h, 0.0, &demo.path()[0])
-                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-            l.event(0.0, "episode_start")
-                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+            let h = log_header(label, robot, human, spec, script);
+            let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
+            l.event(0.0, "episode_start").map_err(invalid)?;
             Some(l)
         }
         None => None,
     };
-    let tc = spec
-        .resolve(human)
-        .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+    let mut auditor = if truth_audit {
+        let models = LogModels {
+            robot: robot.clone(),
+            human: human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?,
+            constraints: spec.clone(),
+            environment: vec![],
+        };
+        Some(Auditor::new(models, AuditConfig::default()).map_err(invalid)?)
+    } else {
+        None
+    };
+    let tc = spec.resolve(human).map_err(invalid)?;
     let mut filter = Filter::new(method, robot, human, spec)?;
-    let q0 = demo.path()[0].clone();
-    filter.start(0.0, &q0)?;
-    let mut policy = demo.clone();
+    filter.start(0.0, start)?;
     let mut camera = Camera::new(cfg.camera_period, cfg.seed);
     let n = robot.dof();
-    let steps = (cfg.max_time / cfg.dt).round() as usize;
-    let chunk_every = ((policy.execute as f64 * cfg.policy_dt) / cfg.dt)
-        .round()
-        .max(1.0) as usize;
-    let (mut q, mut dq) = (q0.clone(), vec![0.0; n]);
+    let steps = (max_time / cfg.dt).round() as usize;
+    let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
+    let chunk_every = policy.execute * action_every;
+    let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
     let (mut violations, mut verified, mut min_sep, mut max_dev) =
         (0usize, 0usize, f64::INFINITY, 0.0f64);
+    let mut next_goal = 0usize;
     let mut success_at = None;
     let mut samples = Vec::new();
     let mut steps_run = 0usize;
+    let mut waypoints: Vec<Vec<f64>> = Vec::new();
+    let mut tool: [f64; 3];
+    tool = tool_point(robot, &q);
+    let mut last_rec_tool = tool;
+    let mut prev_tool = tool;
+    let mut path_len = 0.0;
+    if let Some(a) = auditor.as_mut() {
+        a.push_human(0.0, 0.0, &script.keypoints(0.0))
+            .map_err(invalid)?;
+        a.push_robot(0.0, &q, Some(&dq)).map_err(invalid)?;
+    }
     for k in 0..steps {
         steps_run += 1;
         let t = k as f64 * cfg.dt;
-        if k % chunk_every == 0 {
+        if method == Method::Direct {
+            if k % chunk_every == 0 {
+                let c = policy.chunk(&q);
+                waypoints.clear();
+                let mut w = q.clone();
+                for a in c.actions.iter().take(c.execute) {
+                    w.iter_mut().zip(a).for_each(|(x, d)| *x += d);
+                    waypoints.push(w.clone());
+                }
+            }
+            if k % action_every == 0 {
+                let i = (k % chunk_every) / action_every;
+                if let Some(target) = waypoints.get(i) {
+                    let c = Chunk {
+                        kind: ActionKind::Absolute,
+                        actions: vec![target.clone()],
+                        execute: 1,
+                        gripper: None,
+                    };
+                    let _ = filter.set_chunk(t, &c);
+                }
+            }
+        } else if k % chunk_every == 0 {
             let c = policy.chunk(&q);
             let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
         }
         let m = camera.measure(human, script, t);
         let cmd = filter.step(t, m.as_ref());
         if let Some(l) = log.as_mut() {
-            l.record(t, m.as_ref(), &cmd)
-                .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+            l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
         }
         q.copy_from_slice(&cmd.state.q[..n]);
         dq.copy_from_slice(&cmd.state.dq[..n]);
-        let (sep, viol, energy) =
-            ground_truth(robot, human, &tc, &q, &dq, &script.keypoints(cmd.t));
+        let truth = script.keypoints(cmd.t);
+        if let Some(a) = auditor.as_mut() {
+            a.push_human(cmd.t, cmd.t, &truth).map_err(invalid)?;
+            a.push_robot(cmd.t, &q, Some(&dq)).map_err(invalid)?;
+        }
+        let (sep, viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
+        tool = tool_point(robot, &q);
         min_sep = min_sep.min(sep);
-        max_dev = max_dev.max(demo.deviation(&q));
+        max_dev = max_dev.max(policy.deviation(&q));
         violations += viol as usize;
         verified += cmd.diag.verified as usize;
-        if success_at.is_none()
-            && q.iter()
-                .zip(demo.goal())
-                .all(|(a, b)| (a - b).abs() <= cfg.goal_tolerance)
-        {
+        while next_goal < goals.len() && goals[next_goal].reached(&q, &tool) {
+            next_goal += 1;
+        }
+        if success_at.is_none() && next_goal == goals.len() {
             success_at = Some(cmd.t);
         }
+        let dist = |a: &[f64; 3], b: &[f64; 3]| {
+            (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+        };
+        if success_at.is_none() {
+            path_len += dist(&tool, &prev_tool);
+        }
+        prev_tool = tool;
         if record_every > 0 && k % record_every == 0 {
+            let speed = if k == 0 {
+                0.0
+            } else {
+                dist(&tool, &last_rec_tool) / (record_every as f64 * cfg.dt)
+            };
+            last_rec_tool = tool;
             samples.push(Sample {
                 t: cmd.t,
                 q: q.clone(),
@@ -346,6 +562,8 @@ pub fn run_logged(
                 violation: viol,
                 energy,
                 verified: cmd.diag.verified,
+                tool,
+                tool_speed: speed,
             });
         }
         if success_at.is_some_and(|ts| cmd.t > ts + 0.2) {
@@ -354,24 +572,44 @@ pub fn run_logged(
     }
     let steps_run = steps_run.max(1) as f64;
     let success = success_at.is_some();
+    let t_end = steps_run * cfg.dt;
     if let Some(mut l) = log {
-        let t_end = steps_run * cfg.dt;
         l.event(t_end, if success { "success" } else { "failure" })
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-        l.finish()
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+            .map_err(invalid)?;
+        l.finish().map_err(invalid)?;
     }
+    let truth_audit = auditor.map(|mut a| {
+        a.push_event(if success { "success" } else { "failure" });
+        let r = a.finish("ground-truth", serde_json::Map::new());
+        }
+        let samples = r.metrics.samples.max(1) as f64;
+        TruthAudit {
+            verdict: r.verdict,
+            violation_fraction: r.metrics.violation_fraction,
+            certain_fraction: r.metrics.certain_violating_samples as f64 / samples,
+        }
+    });
+    let duration = success_at.unwrap_or(max_time);
     Ok(Episode {
         method,
+        variant: label.into(),
         human: script.name().into(),
-        task: spec.name.clone(),
+        task: task.into(),
         success,
-        safe_success: success && violations == 0,
+        safe_success: success
+            && violations == 0
+            && truth_audit
+                .as_ref()
+                .is_none_or(|a| a.certain_fraction == 0.0),
         violation_fraction: violations as f64 / steps_run,
-        duration: success_at.unwrap_or(cfg.max_time),
+        truth_audit,
+        goals_reached: next_goal,
+        ood_chunks: policy.ood_chunks(),
+        duration,
         min_separation: min_sep,
         max_deviation: max_dev,
         verified_fraction: verified as f64 / steps_run,
+        mean_tool_speed: path_len / duration.max(1e-9),
         samples,
     })
 }

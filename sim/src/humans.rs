@@ -181,3 +181,183 @@ impl Camera {
         HumanMeasurement::new(model, t, &kp, None).ok()
     }
 }
+
+/// Height (m) of the floor below the robot base in the task scenarios: the FR3 stands on a table
+/// top at z = 0 and people stand (or sit) on the floor at z = `FLOOR_Z`.
+pub const FLOOR_Z: f64 = -0.75;
+
+/// [`standing`] with the floor at height `z0` (m): keypoints of a person with the torso at
+/// (x, y), the right hand at `hand`, the left arm hanging.
+pub fn standing_on(x: f64, y: f64, z0: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
+    let mut kp = standing(x, y, [hand[0], hand[1], hand[2] - z0]);
+    for p in &mut kp {
+        p[2] += z0;
+    }
+    kp
+}
+
+/// Keypoints of a person seated on a chair at (x, y) facing the robot (−x), floor at `z0`, the
+/// head at `head` (the torso leans with it), both hands in the lap.
+pub fn seated(x: f64, y: f64, z0: f64, head: [f64; 3]) -> Vec<[f64; 3]> {
+    let hip = [x + 0.05, y, z0 + 0.55];
+    let neck = [0.35 * hip[0] + 0.65 * head[0], head[1], head[2] - 0.15];
+    let lap = |s: f64| [x - 0.2, y + s * 0.15, z0 + 0.65];
+    let shoulder = |s: f64| [neck[0], neck[1] + s * 0.2, neck[2] - 0.05];
+    let elbow = |s: f64| [x - 0.02, y + s * 0.22, z0 + 0.75];
+    vec![
+        shoulder(1.0),
+        elbow(1.0),
+        lap(1.0),
+        shoulder(-1.0),
+        elbow(-1.0),
+        lap(-1.0),
+        neck,
+        hip,
+        head,
+    ]
+}
+
+/// Sorting: a person walks up to the far side of the table, reaches for blocks at `reach` (m), and
+/// walks away. Times (s): arrival, reach start, leave start.
+#[derive(Debug, Clone)]
+pub struct Reacher {
+    /// Where the person stands (x, y) when at the table (m).
+    pub stand: [f64; 2],
+    /// Point the right hand reaches for (m).
+    pub reach: [f64; 3],
+    /// Arrival, reach start and leave start (s); walking takes `times[0]`, the reach 0.8 s.
+    pub times: [f64; 3],
+}
+
+impl HumanScript for Reacher {
+    fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
+        let [t_arrive, t_reach, t_leave] = self.times;
+        let far = self.stand[0] + 1.3;
+        let w = ease(t, 0.0, t_arrive) - ease(t, t_leave + 0.8, t_leave + 0.8 + t_arrive);
+        let x = far + w * (self.stand[0] - far);
+        let y = self.stand[1];
+        let arm = ease(t, t_reach, t_reach + 0.8) * (1.0 - ease(t, t_leave, t_leave + 0.8));
+        let rest = [x - 0.05, y - 0.25, FLOOR_Z + 0.95];
+        standing_on(x, y, FLOOR_Z, lerp(rest, self.reach, arm))
+    }
+    fn name(&self) -> &str {
+        "reacher"
+    }
+}
+
+/// Handover: a person at the table raises the right hand holding a block to `offer` (m) from
+/// `t_offer` on (over 1 s) and keeps it there, moving it slowly by up to `sway` (m).
+#[derive(Debug, Clone)]
+pub struct Offerer {
+    /// Where the person stands (x, y) (m).
+    pub stand: [f64; 2],
+    /// Where the hand holds the block (m).
+    pub offer: [f64; 3],
+    /// When the hand starts rising (s).
+    pub t_offer: f64,
+    /// Amplitude of the slow hand motion (m).
+    pub sway: f64,
+}
+
+impl HumanScript for Offerer {
+    fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
+        let [x, y] = self.stand;
+        let rest = [x - 0.05, y - 0.25, FLOOR_Z + 0.95];
+        let w = ease(t, self.t_offer, self.t_offer + 1.0);
+        let mut hand = lerp(rest, self.offer, w);
+        hand[1] += self.sway * w * (0.8 * t).sin();
+        hand[2] += 0.5 * self.sway * w * (1.3 * t).sin();
+        standing_on(x, y, FLOOR_Z, hand)
+    }
+    fn name(&self) -> &str {
+        "offerer"
+    }
+}
+
+/// Feeding: a seated person holds the head at `head` (m) and leans forward by `lean` (m) toward
+/// the fork from `t_lean` on (over 1 s), back after `t_back`.
+#[derive(Debug, Clone)]
+pub struct Diner {
+    /// Chair position (x, y) (m).
+    pub seat: [f64; 2],
+    /// Head keypoint at rest (m).
+    pub head: [f64; 3],
+    /// Lean displacement of the head (m).
+    pub lean: [f64; 3],
+    /// Lean start and lean-back start (s).
+    pub times: [f64; 2],
+}
+
+impl HumanScript for Diner {
+    fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
+        let w = ease(t, self.times[0], self.times[0] + 1.0)
+            * (1.0 - ease(t, self.times[1], self.times[1] + 1.0));
+        let head = [
+            self.head[0] + w * self.lean[0],
+            self.head[1] + w * self.lean[1],
+            self.head[2] + w * self.lean[2],
+        ];
+        seated(self.seat[0], self.seat[1], FLOOR_Z, head)
+    }
+    fn name(&self) -> &str {
+        "diner"
+    }
+}
+
+/// The paper's simulated obstacle: a sphere rolling on the table surface, on a circle of radius
+/// `radius` (m) around `center` at angular speed `omega` (rad/s), or back and forth along x when
+/// `radius` is negative (amplitude |radius|).
+#[derive(Debug, Clone)]
+pub struct RollingSphere {
+    /// Centre of the pattern (m); z is the sphere centre's height.
+    pub center: [f64; 3],
+    /// Pattern radius / amplitude (m); negative: back and forth along y.
+    pub radius: f64,
+    /// Angular speed (rad/s).
+    pub omega: f64,
+    /// Phase (rad).
+    pub phase: f64,
+}
+
+impl HumanScript for RollingSphere {
+    fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
+        let a = self.omega * t + self.phase;
+        let c = self.center;
+        if self.radius >= 0.0 {
+            vec![[
+                c[0] + self.radius * a.cos(),
+                c[1] + self.radius * a.sin(),
+                c[2],
+            ]]
+        } else {
+            vec![[c[0], c[1] - self.radius * a.sin(), c[2]]]
+        }
+    }
+    fn name(&self) -> &str {
+        "rolling-sphere"
+    }
+}
+
+/// A one-keypoint "human" model for a sphere of `radius` (m) with speed and acceleration bounds
+/// (m/s, m/s²), measurement error (m, m/s) and delay (s), so the human reachability and the
+/// shield treat the obstacle soundly.
+pub fn sphere_model(
+    radius: f64,
+    v_max: f64,
+    a_max: f64,
+    e_pos: f64,
+    e_vel: f64,
+    delay: f64,
+) -> Result<HumanModel, pacs_models::ModelError> {
+    let spec = serde_json::json!({
+        "name": "sphere",
+        "keypoints": ["center"],
+        "v_max": [v_max],
+        "a_max": [a_max],
+        "body_parts": [{"name": "sphere", "from": "center", "to": "center", "thickness": 2.0 * radius}],
+        "measurement_error_pos": e_pos,
+        "measurement_error_vel": e_vel,
+        "delay": delay,
+    });
+    HumanModel::from_json(&spec.to_string())
+}

@@ -12,5 +12,7 @@
 //! a real controller's error).
 
 pub mod episode;
+pub mod eval;
 pub mod humans;
 pub mod policy;
+pub mod task;

@@ -99,3 +99,142 @@ impl ChunkPolicy for Demonstration {
         }
     }
 }
+
+/// Distance (rad) within which an earlier demonstrated phase is preferred over the nearest.
+const TIE_TOLERANCE: f64 = 0.03;
+
+/// A behaviour-cloning stand-in trained on several demonstrations of one task: a nearest-
+/// neighbour policy over all demonstrated joint configurations that sees only the current joint
+/// angles. Near the data (within `ood_radius`, rad, Euclidean in joint space) it replays the
+/// demonstrated motion from the nearest demonstrated state, with the current offset decaying by
+/// `pull` per action (a policy generalises a little around its data). Beyond `ood_radius` it has
+/// no data: like a diffusion policy out of distribution it outputs unreliable actions (a slow
+/// random drift), from which it recovers only by chance. Slowing down along the demonstrated
+/// path therefore keeps it in distribution; being pushed off the path degrades it.
+#[derive(Debug, Clone)]
+pub struct DemoSet {
+    demos: Vec<Vec<Vec<f64>>>,
+    /// Chunk length H.
+    pub horizon: usize,
+    /// Executed actions h.
+    pub execute: usize,
+    /// Distance (rad) beyond which the policy is out of distribution.
+    pub ood_radius: f64,
+    /// Fraction of the offset to the demonstration removed per action (0..1).
+    pub pull: f64,
+    /// How far ahead (in demonstration samples) the policy may look for its nearest state.
+    pub window: usize,
+    progress: usize,
+    rng: crate::humans::Rng,
+    ood_chunks: usize,
+}
+
+impl DemoSet {
+    /// A policy over `demos` (each a list of joint configurations, all of the same length ≥ 2).
+    pub fn new(demos: Vec<Vec<Vec<f64>>>, horizon: usize, execute: usize, seed: u64) -> Self {
+        Self {
+            demos,
+            horizon,
+            execute,
+            ood_radius: 0.12,
+            pull: 0.15,
+            window: 24,
+            progress: 0,
+            rng: crate::humans::Rng::new(seed ^ 0x5EED),
+            ood_chunks: 0,
+        }
+    }
+
+    /// A single-demonstration policy that always targets the demonstrated points themselves
+    /// (full pull, never out of distribution): the behaviour of [`Demonstration`].
+    pub fn from_demonstration(d: &Demonstration) -> Self {
+        let mut s = Self::new(vec![d.path().to_vec()], d.horizon, d.execute, 0);
+        s.ood_radius = f64::INFINITY;
+        s.pull = 1.0;
+        s.window = usize::MAX;
+        s
+    }
+
+    /// The demonstrations.
+    pub fn demos(&self) -> &[Vec<Vec<f64>>] {
+        &self.demos
+    }
+
+    /// Distance (rad) from `q` to the nearest demonstrated configuration of any demonstration.
+    pub fn deviation(&self, q: &[f64]) -> f64 {
+        self.demos
+            .iter()
+            .flatten()
+            .map(|p| dist(p, q))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Number of chunks produced out of distribution so far.
+    pub fn ood_chunks(&self) -> usize {
+        self.ood_chunks
+    }
+
+    /// Restart at the beginning of the task.
+    pub fn reset(&mut self) {
+        self.progress = 0;
+        self.ood_chunks = 0;
+    }
+}
+
+impl ChunkPolicy for DemoSet {
+    fn chunk(&mut self, q: &[f64]) -> Chunk {
+        let len = self.demos[0].len();
+        let hi = self.progress.saturating_add(self.window).min(len);
+        let mut best = (f64::INFINITY, 0usize, self.progress);
+        for (d, demo) in self.demos.iter().enumerate() {
+            for (k, p) in demo.iter().enumerate().take(hi).skip(self.progress) {
+                let e = dist(p, q);
+                if e < best.0 {
+                    best = (e, d, k);
+                }
+            }
+        }
+        // Demonstrations may pass the same configuration twice (approach and withdraw): take
+        // the earliest phase whose state is nearly as close as the nearest (task context).
+        let tie = best.0 + TIE_TOLERANCE;
+        'early: for k in self.progress..best.2 {
+            for (d, demo) in self.demos.iter().enumerate() {
+                let e = dist(&demo[k], q);
+                if e <= tie {
+                    best = (e, d, k);
+                    break 'early;
+                }
+            }
+        }
+        let (e, d, k) = best;
+        let mut actions = Vec::with_capacity(self.horizon);
+        if e > self.ood_radius {
+            self.ood_chunks += 1;
+            // Out of distribution: small random deltas (≤ 0.01 rad per joint and action).
+            let step: Vec<f64> = (0..q.len())
+                .map(|_| 0.02 * (self.rng.uniform() - 0.5))
+                .collect();
+            for _ in 0..self.horizon {
+                actions.push(step.clone());
+            }
+        } else {
+            self.progress = k;
+            let demo = &self.demos[d];
+            let mut offset: Vec<f64> = q.iter().zip(&demo[k]).map(|(a, b)| a - b).collect();
+            let mut prev = q.to_vec();
+            for s in 1..=self.horizon {
+                offset.iter_mut().for_each(|o| *o *= 1.0 - self.pull);
+                let target = &demo[(k + s).min(len - 1)];
+                let next: Vec<f64> = target.iter().zip(&offset).map(|(t, o)| t + o).collect();
+                actions.push(next.iter().zip(&prev).map(|(n, p)| n - p).collect());
+                prev = next;
+            }
+        }
+        Chunk {
+            kind: ActionKind::Delta,
+            actions,
+            execute: self.execute,
+            gripper: None,
+        }
+    }
+}

@@ -107,5 +107,6 @@ fn method_name(m: Method) -> &'static str {
         Method::Pacs => "pacs",
         Method::SingleAction => "single-action",
         Method::Cbf => "cbf",
+        Method::Direct => "direct",
     }
 }

@@ -6,6 +6,7 @@ pub mod demo;
 pub mod fk;
 pub mod reach;
 pub mod show;
+pub mod simulate;
 pub mod trajectory;
 
 use std::path::Path;

@@ -1,0 +1,409 @@
+//! The evaluation tasks: Sorting (SSM), Handover (PFL hand), Feeding (PFL head) and the sphere
+//! task (SSM against a rolling sphere). Each task fixes a workspace layout (the FR3 on a table
+//! top at z = 0, people on the floor at z = [`FLOOR_Z`]), a set of demonstrations (the policy's
+//! "training data"), success sub-goals for the tool centre point, and a randomised human (or
+//! sphere) motion per rollout.
+
+use crate::humans::{
+    Diner, FLOOR_Z, HumanScript, Offerer, Reacher, RollingSphere, Rng, sphere_model,
+};
+use crate::policy::DemoSet;
+use pacs_models::constraints::RegionSpec;
+use pacs_models::{Constraint, ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
+use serde::Serialize;
+
+/// One of the evaluation tasks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TaskKind {
+    /// Pick a block and put it into a box while a person reaches across the table (SSM).
+    Sorting,
+    /// Take a block from a person's hand and put it into the box (PFL hand).
+    Handover,
+    /// Bring a fork to a seated person's mouth and withdraw it (PFL head).
+    Feeding,
+    /// Pick and place while a sphere rolls on the table (SSM against the sphere).
+    Sphere,
+}
+
+impl TaskKind {
+    /// All tasks.
+    pub const ALL: [TaskKind; 4] = [Self::Sorting, Self::Handover, Self::Feeding, Self::Sphere];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sorting => "sorting",
+            Self::Handover => "handover",
+            Self::Feeding => "feeding",
+            Self::Sphere => "sphere",
+        }
+    }
+}
+
+impl std::str::FromStr for TaskKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| format!("unknown task `{s}` (sorting, handover, feeding, sphere)"))
+    }
+}
+
+/// Which constraints a safety filter enforces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConstraintMode {
+    /// SSM for every body part (or the sphere).
+    Ssm,
+    /// The task's PFL thresholds (Handover / Feeding presets; hand thresholds for the sphere;
+    /// Sorting uses the Handover thresholds, as the paper's PFL variant of its SSM tasks).
+    Pfl,
+}
+
+/// A success sub-goal: the tool centre point within `tolerance` (m) of `point` (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ToolGoal {
+    /// Target (m, world frame).
+    pub point: [f64; 3],
+    /// Tolerance (m).
+    pub tolerance: f64,
+    /// Short name ("pick", "place", "mouth", ...).
+    pub name: &'static str,
+}
+
+/// Everything one rollout needs besides the filter.
+pub struct Scenario {
+    /// Task.
+    pub task: TaskKind,
+    /// The robot.
+    pub robot: RobotModel,
+    /// The human (or sphere) model the filter and the audit use.
+    pub human: HumanModel,
+    /// Ground-truth motion.
+    pub script: Box<dyn HumanScript>,
+    /// The policy (fresh, at the task's start).
+    pub policy: DemoSet,
+    /// Sub-goals, in order.
+    pub goals: Vec<ToolGoal>,
+    /// Start configuration (rad).
+    pub start: Vec<f64>,
+    /// Time limit (s).
+    pub max_time: f64,
+}
+
+impl Scenario {
+    /// The constraint spec for `mode` on this task.
+    pub fn spec(&self, mode: ConstraintMode) -> ConstraintSpec {
+        constraint_spec(self.task, mode)
+    }
+}
+
+/// The constraint spec of `task` under `mode`.
+pub fn constraint_spec(task: TaskKind, mode: ConstraintMode) -> ConstraintSpec {
+    let preset = |n: &str| ConstraintSpec::preset(n).expect("built-in preset");
+    match (task, mode) {
+        (TaskKind::Sphere, ConstraintMode::Ssm) => ConstraintSpec {
+            name: "sphere-ssm".into(),
+            default: Constraint::Ssm,
+            regions: vec![],
+        },
+        (TaskKind::Sphere, ConstraintMode::Pfl) => ConstraintSpec {
+            name: "sphere-pfl".into(),
+            default: Constraint::Ssm,
+            regions: vec![RegionSpec {
+                name: "sphere".into(),
+                body_parts: vec!["sphere".into()],
+                constraint: Constraint::Pfl {
+                    unconstrained: 0.265,
+                    constrained: 0.014,
+                },
+            }],
+        },
+        (_, ConstraintMode::Ssm) => preset("sorting"),
+        (TaskKind::Feeding, ConstraintMode::Pfl) => preset("feeding"),
+        (_, ConstraintMode::Pfl) => preset("handover"),
+    }
+}
+
+/// The task's own constraint mode (the paper's choice): SSM for Sorting and the sphere task, PFL
+/// for Handover and Feeding.
+pub fn native_mode(task: TaskKind) -> ConstraintMode {
+    match task {
+        TaskKind::Sorting | TaskKind::Sphere => ConstraintMode::Ssm,
+        TaskKind::Handover | TaskKind::Feeding => ConstraintMode::Pfl,
+    }
+}
+
+/// Tool centre point (m, world) at `q`.
+pub fn tool_point(robot: &RobotModel, q: &[f64]) -> [f64; 3] {
+    let f = robot.frames(q);
+    let p = (f[robot.dof()] * fr3::tcp_in_joint7()).translation.vector;
+    [p.x, p.y, p.z]
+}
+
+/// Position-only inverse kinematics by damped least squares (numeric Jacobian) from `seed`;
+/// joints stay 0.1 rad inside their limits. Returns the configuration and the remaining error (m).
+pub fn solve_ik(robot: &RobotModel, seed: &[f64], target: [f64; 3]) -> (Vec<f64>, f64) {
+    let n = robot.dof();
+    let lim = robot.limits();
+    let mut q = seed.to_vec();
+    let mut err = f64::INFINITY;
+    for _ in 0..200 {
+        let p = tool_point(robot, &q);
+        let e = [target[0] - p[0], target[1] - p[1], target[2] - p[2]];
+        err = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        if err < 1e-5 {
+            break;
+        }
+        // Numeric Jacobian J (3 × n).
+        let h = 1e-6;
+        let mut jac = vec![[0.0; 3]; n];
+        for (i, col) in jac.iter_mut().enumerate() {
+            let mut qh = q.clone();
+            qh[i] += h;
+            let ph = tool_point(robot, &qh);
+            *col = [(ph[0] - p[0]) / h, (ph[1] - p[1]) / h, (ph[2] - p[2]) / h];
+        }
+        // dq = Jᵀ (J Jᵀ + λ² I)⁻¹ e.
+        let mut a = nalgebra::Matrix3::<f64>::identity() * 1e-4;
+        for col in &jac {
+            let c = nalgebra::Vector3::from(*col);
+            a += c * c.transpose();
+        }
+        let Some(inv) = a.try_inverse() else { break };
+        let y = inv * nalgebra::Vector3::from(e);
+        for (i, col) in jac.iter().enumerate() {
+            let step = (col[0] * y[0] + col[1] * y[1] + col[2] * y[2]).clamp(-0.2, 0.2);
+            q[i] = (q[i] + step).clamp(lim.q_min()[i] + 0.1, lim.q_max()[i] - 0.1);
+        }
+    }
+    (q, err)
+}
+
+/// Dense joint-space path from `start` through the tool waypoints `tools` (m): the tool moves on
+/// straight lines (eased, `counts[k]` samples for segment k), each sample solved by IK seeded
+/// with the previous one, so the joint path is continuous and the tool path is what a
+/// teleoperator would demonstrate.
+fn dense_path(robot: &RobotModel, start: &[f64], tools: &[[f64; 3]], counts: &[usize]) -> Vec<Vec<f64>> {
+    let mut path = vec![start.to_vec()];
+    let mut from = tool_point(robot, start);
+    for (k, to) in tools.iter().enumerate() {
+        let m = counts[k].max(1);
+        for s in 1..=m {
+            let u = s as f64 / m as f64;
+            let e = u * u * (3.0 - 2.0 * u);
+            let target = [
+                from[0] + e * (to[0] - from[0]),
+                from[1] + e * (to[1] - from[1]),
+                from[2] + e * (to[2] - from[2]),
+            ];
+            let (q, _) = solve_ik(robot, path.last().expect("non-empty"), target);
+            path.push(q);
+        }
+        from = *to;
+    }
+    path
+}
+
+/// Tool waypoints (m) of a task's demonstration, in order, and the goal names of those that are
+/// success sub-goals.
+fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<(usize, &'static str, f64)>) {
+    match task {
+        TaskKind::Sorting | TaskKind::Sphere => (
+            vec![
+                [0.50, 0.25, 0.25],
+                [0.55, 0.25, 0.06],
+                [0.50, 0.20, 0.28],
+                [0.40, -0.35, 0.22],
+            ],
+            vec![(1, "pick", 0.03), (3, "place", 0.04)],
+        ),
+        TaskKind::Handover => (
+            vec![
+                [0.45, 0.0, 0.35],
+                [0.58, 0.0, 0.32],
+                [0.45, 0.0, 0.38],
+                [0.40, -0.35, 0.22],
+            ],
+            vec![(1, "grasp", 0.03), (3, "place", 0.04)],
+        ),
+        TaskKind::Feeding => (
+            vec![
+                [0.45, 0.0, 0.42],
+                [0.62, 0.0, 0.42],
+                [0.45, 0.0, 0.42],
+                [0.35, 0.15, 0.35],
+            ],
+            vec![(1, "mouth", 0.025), (3, "retreat", 0.04)],
+        ),
+    }
+}
+
+/// Number of demonstrations per task, and their spread (m) around the nominal tool waypoints.
+const DEMOS: usize = 6;
+const DEMO_SPREAD: f64 = 0.012;
+
+/// Build the demonstrations of `task` (deterministic: the same "training data" for every
+/// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad
+/// between samples at most.
+pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> {
+    let (tools, _) = tool_keyframes(task);
+    let start = fr3::Q_READY.to_vec();
+    // Nominal keyframes and sample counts from the nominal joint distances.
+    let mut nominal = vec![start.clone()];
+    for p in &tools {
+        let (q, _) = solve_ik(robot, nominal.last().expect("non-empty"), *p);
+        nominal.push(q);
+    }
+    let counts: Vec<usize> = nominal
+        .windows(2)
+        .map(|w| {
+            let d = w[0]
+                .iter()
+                .zip(&w[1])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            ((1.5 * d / 0.03).ceil() as usize).max(8)
+        })
+        .collect();
+    let mut rng = Rng::new(0xDE30 + task as u64);
+    (0..DEMOS)
+        .map(|i| {
+            let jittered: Vec<[f64; 3]> = tools
+                .iter()
+                .map(|p| {
+                    let j = if i == 0 {
+                        [0.0; 3]
+                    } else {
+                        rng.in_ball(DEMO_SPREAD)
+                    };
+                    [p[0] + j[0], p[1] + j[1], p[2] + j[2]]
+                })
+                .collect();
+            dense_path(robot, &start, &jittered, &counts)
+        })
+        .collect()
+}
+
+/// [`demonstrations`] computed once per task per process.
+fn cached_demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    type Cache = Mutex<HashMap<TaskKind, Vec<Vec<Vec<f64>>>>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(d) = cache.lock().ok().and_then(|c| c.get(&task).cloned()) {
+        return d;
+    }
+    let d = demonstrations(robot, task);
+    if let Ok(mut c) = cache.lock() {
+        c.insert(task, d.clone());
+    }
+    d
+}
+
+/// Chunk parameters of the paper's policies: H = 16 actions, h = 8 executed.
+pub const HORIZON: usize = 16;
+/// Executed actions per chunk.
+pub const EXECUTE: usize = 8;
+
+/// The scenario of rollout `seed` of `task`; `with_human: false` keeps the person (or sphere)
+/// far away (the paper's speed ablation "w/o human").
+pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
+    let robot = fr3::fr3();
+    let demos = cached_demonstrations(&robot, task);
+    let (tools, goal_idx) = tool_keyframes(task);
+    let goals = goal_idx
+        .iter()
+        .map(|&(k, name, tol)| ToolGoal {
+            point: tools[k],
+            tolerance: tol,
+            name,
+        })
+        .collect::<Vec<_>>();
+    let mut rng = Rng::new(seed.wrapping_mul(7919).wrapping_add(task as u64 + 1));
+    let mut u = |a: f64, b: f64| a + (b - a) * rng.uniform();
+    let start: Vec<f64> = fr3::Q_READY.iter().map(|q| q + u(-0.015, 0.015)).collect();
+    let person = default_human()
+        .with_uncertainty(0.01, 0.1, 0.03)
+        .expect("valid uncertainty");
+    let away = 3.0;
+    let (human, script, max_time): (HumanModel, Box<dyn HumanScript>, f64) = match task {
+        TaskKind::Sorting => {
+            let y = u(-0.25, 0.3);
+            let t0 = u(0.3, 2.0);
+            let stand = [if with_human { 1.05 } else { away }, y];
+            let reach = [u(0.62, 0.72), y + u(-0.1, 0.1) - 0.1, 0.04];
+            let dwell = u(1.0, 2.5);
+            let script = Reacher {
+                stand,
+                reach: if with_human {
+                    reach
+                } else {
+                    [away - 0.1, y - 0.25, FLOOR_Z + 0.95]
+                },
+                times: [t0 + 1.2, t0 + 1.2, t0 + 2.0 + dwell],
+            };
+            (person, Box::new(script), 20.0)
+        }
+        TaskKind::Handover => {
+            let g = tools[1];
+            let offer = [g[0] + 0.11 + u(-0.01, 0.01), g[1] + u(-0.01, 0.01), g[2] + u(-0.01, 0.01)];
+            let script = Offerer {
+                stand: [if with_human { 1.0 } else { away }, 0.1],
+                offer: if with_human {
+                    offer
+                } else {
+                    [away - 0.05, -0.15, FLOOR_Z + 0.95]
+                },
+                t_offer: u(0.0, 1.0),
+                sway: u(0.0, 0.015),
+            };
+            (person, Box::new(script), 20.0)
+        }
+        TaskKind::Feeding => {
+            let m = tools[1];
+            let head = [m[0] + 0.21, m[1], m[2] + 0.02];
+            let script = Diner {
+                seat: [if with_human { head[0] + 0.1 } else { away }, 0.0],
+                head: if with_human {
+                    head
+                } else {
+                    [away, 0.0, FLOOR_Z + 1.2]
+                },
+                lean: [u(-0.04, 0.0), u(-0.02, 0.02), 0.0],
+                times: [u(0.5, 3.0), u(6.0, 9.0)],
+            };
+            (person, Box::new(script), 40.0)
+        }
+        TaskKind::Sphere => {
+            let model = sphere_model(0.05, 0.6, 2.0, 0.005, 0.05, 0.02).expect("valid sphere");
+            let circle = rng.uniform() < 0.5;
+            let mut u = |a: f64, b: f64| a + (b - a) * rng.uniform();
+            let script = RollingSphere {
+                center: [
+                    if with_human { u(0.5, 0.6) } else { away },
+                    u(-0.1, 0.15),
+                    0.05,
+                ],
+                radius: if circle { u(0.12, 0.2) } else { -u(0.15, 0.3) },
+                omega: u(0.8, 1.6),
+                phase: u(0.0, std::f64::consts::TAU),
+            };
+            (model, Box::new(script), 20.0)
+        }
+    };
+    let policy = DemoSet::new(demos, HORIZON, EXECUTE, seed);
+    Scenario {
+        task,
+        robot,
+        human,
+        script,
+        policy,
+        goals,
+        start,
+        max_time,
+    }
+}

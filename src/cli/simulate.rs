@@ -1,0 +1,192 @@
+//! `pacs simulate`: the paper's evaluation in the kinematic simulation — rollouts of tasks ×
+//! methods in parallel, every rollout's audit log, tables (Markdown, JSON) and SVG plots.
+
+use super::CliError;
+use pacs_sim::eval::{
+    self, EvalConfig, METHOD_NAMES, Rollout, Variant, markdown, summarize, svg_paths,
+    svg_separation,
+};
+use pacs_sim::task::TaskKind;
+use serde_json::{Value, json};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `pacs simulate`.
+#[derive(clap::Args, Debug)]
+#[command(after_long_help = "\
+Tasks (FR3 on a table top, H = 16 actions per chunk, h = 8 executed, Δt = 33 ms):
+  sorting   pick a block, place it in a box; a person walks up and reaches across the table (SSM)
+  handover  take a block from a person's (moving) hand, place it in the box (PFL hand)
+  feeding   bring a fork to a seated person's mouth and withdraw it (PFL head, 1 mJ)
+  sphere    pick and place while a 10 cm sphere rolls on the table (SSM against the sphere)
+
+Methods:
+  off                  intended chunk trajectories, never brake (unsafe reference)
+  pacs                 PACS with the task's own constraints (SSM: sorting, sphere; PFL: handover, feeding)
+  pacs-ssm, pacs-pfl   PACS enforcing SSM / PFL
+  single-action[-ssm|-pfl]  PACS planning each action as its own stop-at-target motion
+  cbf                  control-barrier-function filter (clarabel QP, distance constraints)
+  direct               no time parameterisation: each action sent as a target every Δt to a
+                       jerk-limited controller (the paper's H4 speed baseline, no safety filter)
+
+Metrics per task and method: Success, Safe Success (success without any violation), Safety Viol.
+(fraction of 1 ms steps in violation, from the offline audit of the rollout against the true human
+motion), violations at the sampled states, duration of successful rollouts, path deviation from the
+demonstrations (rad), fraction of rollouts in which the policy left its training distribution.
+
+Outputs in --out: summary.md, summary.json (rows), rollouts.json (every rollout), TASK-paths.svg
+(tool paths coloured by speed, demonstrations shaded), TASK-separation.svg, logs/*.jsonl (audit
+format v1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: the rows as JSON.
+
+Examples:
+  pacs simulate --task sorting --method off,pacs,cbf --rollouts 20
+  pacs simulate --task all --method all --rollouts 10 --seed 7 --out eval
+  pacs simulate --task sorting --method direct,pacs --no-human   # H4 speed ablation")]
+pub struct SimulateArgs {
+    /// Tasks, comma-separated, or `all`.
+    #[arg(long, value_name = "T[,T...]", default_value = "sorting")]
+    pub task: String,
+    /// Methods, comma-separated, or `all`.
+    #[arg(long, value_name = "M[,M...]", default_value = "off,pacs,single-action,cbf")]
+    pub method: String,
+    /// Rollouts per task and method (rollout i uses seed S + i for every method).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub rollouts: usize,
+    /// Base seed (human motion, start configuration, camera noise).
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "pacs-sim")]
+    pub out: PathBuf,
+    /// Keep the person (or sphere) far away (speed ablation).
+    #[arg(long)]
+    pub no_human: bool,
+    /// Do not write per-rollout audit logs (each is a few MB).
+    #[arg(long)]
+    pub no_logs: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+fn parse_list<T: std::str::FromStr<Err = String>>(
+    s: &str,
+    all: &[&str],
+    what: &str,
+) -> Result<Vec<T>, CliError> {
+    let names: Vec<&str> = if s == "all" {
+        all.to_vec()
+    } else {
+        s.split(',').map(str::trim).filter(|x| !x.is_empty()).collect()
+    };
+    if names.is_empty() {
+        return Err(CliError::Input(format!("--{what}: empty list")));
+    }
+    names
+        .into_iter()
+        .map(|n| n.parse::<T>().map_err(|e| CliError::Input(format!("--{what}: {e}"))))
+        .collect()
+}
+
+fn write(path: &Path, text: &str) -> Result<(), CliError> {
+    std::fs::write(path, text)
+        .map_err(|e| CliError::Input(format!("cannot write {}: {e}", path.display())))
+}
+
+/// Run `pacs simulate`.
+pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
+    let task_names: Vec<&str> = TaskKind::ALL.iter().map(|t| t.name()).collect();
+    let tasks: Vec<TaskKind> = parse_list(&args.task, &task_names, "task")?;
+    let variants: Vec<Variant> = parse_list(&args.method, &METHOD_NAMES, "method")?;
+    if args.rollouts == 0 {
+        return Err(CliError::Input("--rollouts: must be at least 1".into()));
+    }
+    if args.threads == Some(0) {
+        return Err(CliError::Input("--threads: must be at least 1".into()));
+    }
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| CliError::Input(format!("cannot create {}: {e}", args.out.display())))?;
+    let cfg = EvalConfig {
+        tasks: tasks.clone(),
+        variants,
+        rollouts: args.rollouts,
+        seed: args.seed,
+        with_human: !args.no_human,
+        log_dir: (!args.no_logs).then(|| args.out.join("logs")),
+        record_every: 10,
+    };
+    let total = (cfg.tasks.len() * cfg.variants.len() * cfg.rollouts) as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    if std::io::stderr().is_terminal() {
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} simulate [{elapsed_precise}] {bar:40} {pos}/{len} rollouts (eta {eta}) {msg}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+    } else {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let progress = |r: &Rollout| {
+        bar.set_message(format!("{} {} #{}", r.task.name(), r.method, r.seed));
+        bar.inc(1);
+    };
+    let pool = {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = args.threads {
+            b = b.num_threads(n);
+        }
+        b.build()
+            .map_err(|e| CliError::Internal(format!("thread pool: {e}")))?
+    };
+    let rollouts = pool
+        .install(|| eval::evaluate(&cfg, &progress))
+        .map_err(|e| match e {
+            eval::EvalError::Io { .. } => CliError::Input(e.to_string()),
+            other => CliError::Internal(other.to_string()),
+        })?;
+    bar.finish_and_clear();
+    let rows = summarize(&rollouts);
+    let mut md = format!(
+        "# pacs simulate\n\nCommand: `pacs simulate --task {} --method {} --rollouts {} --seed {}{}`\n\n",
+        args.task,
+        args.method,
+        args.rollouts,
+        args.seed,
+        if args.no_human { " --no-human" } else { "" }
+    );
+    md.push_str(&markdown(&rows));
+    write(&args.out.join("summary.md"), &md)?;
+    let rows_json = serde_json::to_value(&rows).map_err(|e| CliError::Internal(e.to_string()))?;
+    write(
+        &args.out.join("summary.json"),
+        &serde_json::to_string_pretty(&rows_json).unwrap_or_default(),
+    )?;
+    write(
+        &args.out.join("rollouts.json"),
+        &serde_json::to_string_pretty(&rollouts).unwrap_or_default(),
+    )?;
+    let mut plots = Vec::new();
+    for &task in &tasks {
+        // At most 5 rollouts per method in the plots, to keep them readable.
+        let sel: Vec<&Rollout> = rollouts
+            .iter()
+            .filter(|r| r.task == task && r.seed < args.seed + 5)
+            .collect();
+        let p = args.out.join(format!("{}-paths.svg", task.name()));
+        write(&p, &svg_paths(task, &sel))?;
+        plots.push(p.display().to_string());
+        let p = args.out.join(format!("{}-separation.svg", task.name()));
+        write(&p, &svg_separation(task, &sel))?;
+        plots.push(p.display().to_string());
+    }
+    if std::io::stderr().is_terminal() {
+        eprintln!("{md}");
+    }
+    Ok(json!({
+        "rows": rows_json,
+        "summary": args.out.join("summary.md").display().to_string(),
+        "plots": plots,
+        "logs": cfg.log_dir.map(|d| d.display().to_string()),
+    }))
+}
