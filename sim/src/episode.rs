@@ -581,7 +581,6 @@ pub fn run_setup(
     let truth_audit = auditor.map(|mut a| {
         a.push_event(if success { "success" } else { "failure" });
         let r = a.finish("ground-truth", serde_json::Map::new());
-        }
         let samples = r.metrics.samples.max(1) as f64;
         TruthAudit {
             verdict: r.verdict,
