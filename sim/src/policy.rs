@@ -100,8 +100,8 @@ impl ChunkPolicy for Demonstration {
     }
 }
 
-/// Distance (rad) within which an earlier demonstrated phase is preferred over the nearest.
-const TIE_TOLERANCE: f64 = 0.03;
+/// Cost (rad) per demonstration sample between a candidate and the phase the last chunk led to.
+const PHASE_COST: f64 = 0.002;
 
 /// A behaviour-cloning stand-in trained on several demonstrations of one task: a nearest-
 /// neighbour policy over all demonstrated joint configurations that sees only the current joint
@@ -125,6 +125,7 @@ pub struct DemoSet {
     /// How far ahead (in demonstration samples) the policy may look for its nearest state.
     pub window: usize,
     progress: usize,
+    last: Option<(usize, usize)>,
     rng: crate::humans::Rng,
     ood_chunks: usize,
 }
@@ -140,6 +141,7 @@ impl DemoSet {
             pull: 0.15,
             window: 24,
             progress: 0,
+            last: None,
             rng: crate::humans::Rng::new(seed ^ 0x5EED),
             ood_chunks: 0,
         }
@@ -177,6 +179,7 @@ impl DemoSet {
     /// Restart at the beginning of the task.
     pub fn reset(&mut self) {
         self.progress = 0;
+        self.last = None;
         self.ood_chunks = 0;
     }
 }
@@ -185,28 +188,33 @@ impl ChunkPolicy for DemoSet {
     fn chunk(&mut self, q: &[f64]) -> Chunk {
         let len = self.demos[0].len();
         let hi = self.progress.saturating_add(self.window).min(len);
+        // The phase the robot reached along the stretch the last chunk commanded.
+        let expected = match self.last {
+            Some((d, k0)) => {
+                let demo = &self.demos[d];
+                (k0..=k0 + self.execute)
+                    .min_by(|&i, &j| {
+                        dist(&demo[i.min(len - 1)], q).total_cmp(&dist(&demo[j.min(len - 1)], q))
+                    })
+                    .unwrap_or(k0)
+            }
+            None => 0,
+        };
         let mut best = (f64::INFINITY, 0usize, self.progress);
         for (d, demo) in self.demos.iter().enumerate() {
             for (k, p) in demo.iter().enumerate().take(hi).skip(self.progress) {
+                // Demonstrations may pass the same configuration twice (approach and
+                // withdraw): a small cost per sample away from the phase the last chunk led to
+                // disambiguates (the task context a real policy gets from its observations).
                 let e = dist(p, q);
-                if e < best.0 {
-                    best = (e, d, k);
+                let cost = e + PHASE_COST * k.abs_diff(expected) as f64;
+                if cost < best.0 {
+                    best = (cost, d, k);
                 }
             }
         }
-        // Demonstrations may pass the same configuration twice (approach and withdraw): take
-        // the earliest phase whose state is nearly as close as the nearest (task context).
-        let tie = best.0 + TIE_TOLERANCE;
-        'early: for k in self.progress..best.2 {
-            for (d, demo) in self.demos.iter().enumerate() {
-                let e = dist(&demo[k], q);
-                if e <= tie {
-                    best = (e, d, k);
-                    break 'early;
-                }
-            }
-        }
-        let (e, d, k) = best;
+        let (_, d, k) = best;
+        let e = dist(&self.demos[d][k], q);
         let mut actions = Vec::with_capacity(self.horizon);
         if e > self.ood_radius {
             self.ood_chunks += 1;
@@ -219,6 +227,7 @@ impl ChunkPolicy for DemoSet {
             }
         } else {
             self.progress = k;
+            self.last = Some((d, k));
             let demo = &self.demos[d];
             let mut offset: Vec<f64> = q.iter().zip(&demo[k]).map(|(a, b)| a - b).collect();
             let mut prev = q.to_vec();

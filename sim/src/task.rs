@@ -246,11 +246,14 @@ const DEMOS: usize = 6;
 const DEMO_SPREAD: f64 = 0.012;
 
 /// Build the demonstrations of `task` (deterministic: the same "training data" for every
-/// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad
+/// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad (0.05 rad for Handover)
 /// between samples at most.
 pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> {
     let (tools, _) = tool_keyframes(task);
     let start = fr3::Q_READY.to_vec();
+    // Largest joint step (rad) between demonstration samples (one sample per policy step Δt):
+    // the handover partner is approached briskly, as in the paper's handover demonstrations.
+    let spacing = if task == TaskKind::Handover { 0.05 } else { 0.03 };
     // Nominal keyframes and sample counts from the nominal joint distances.
     let mut nominal = vec![start.clone()];
     for p in &tools {
@@ -265,7 +268,7 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
                 .zip(&w[1])
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            ((1.5 * d / 0.03).ceil() as usize).max(8)
+            ((1.5 * d / spacing).ceil() as usize).max(8)
         })
         .collect();
     let mut rng = Rng::new(0xDE30 + task as u64);
