@@ -1,0 +1,162 @@
+//! A short seeded evaluation (the CI version of `pacs simulate`): PACS has no violation against
+//! the ground-truth human, OFF violates, single-action is slower than chunk trajectories, and the
+//! task humans and sphere respect their models' limits.
+
+use pacs_sim::eval::{Variant, run_rollout, summarize};
+use pacs_sim::task::{TaskKind, scenario};
+
+fn v(s: &str) -> Variant {
+    s.parse().unwrap()
+}
+
+#[test]
+fn task_humans_respect_their_model_limits() {
+    for task in TaskKind::ALL {
+        for seed in 0..6 {
+            let scn = scenario(task, seed, true);
+            let dt = 1e-3;
+            let v_max = scn.human.v_max().to_vec();
+            let a_max = scn.human.a_max().to_vec();
+            let mut p0 = scn.script.keypoints(0.0);
+            let mut p1 = scn.script.keypoints(dt);
+            for k in 2..(scn.max_time / dt) as usize {
+                let p2 = scn.script.keypoints(k as f64 * dt);
+                for i in 0..p0.len() {
+                    let d = |a: [f64; 3], b: [f64; 3]| {
+                        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+                            .sqrt()
+                    };
+                    let v = d(p2[i], p1[i]) / dt;
+                    let acc = [
+                        (p2[i][0] - 2.0 * p1[i][0] + p0[i][0]) / (dt * dt),
+                        (p2[i][1] - 2.0 * p1[i][1] + p0[i][1]) / (dt * dt),
+                        (p2[i][2] - 2.0 * p1[i][2] + p0[i][2]) / (dt * dt),
+                    ];
+                    let a = d(acc, [0.0; 3]);
+                    assert!(
+                        v <= v_max[i],
+                        "{} seed {seed}: keypoint {i} at {v:.3} m/s (t = {:.3})",
+                        task.name(),
+                        k as f64 * dt
+                    );
+                    // Finite differences of the cubic ease jump at its ends; allow 1 % slack.
+                    assert!(
+                        a <= a_max[i] * 1.01,
+                        "{} seed {seed}: keypoint {i} at {a:.3} m/s² (t = {:.3})",
+                        task.name(),
+                        k as f64 * dt
+                    );
+                }
+                p0 = p1;
+                p1 = p2;
+            }
+        }
+    }
+}
+
+#[test]
+fn demonstrations_reach_every_sub_goal() {
+    for task in TaskKind::ALL {
+        let scn = scenario(task, 0, true);
+        for (di, demo) in scn.policy.demos().iter().enumerate() {
+            let mut next = 0;
+            for q in demo {
+                let p = pacs_sim::task::tool_point(&scn.robot, q);
+                if next < scn.goals.len() {
+                    let g = &scn.goals[next];
+                    let d = (0..3).map(|i| (p[i] - g.point[i]).powi(2)).sum::<f64>().sqrt();
+                    if d <= g.tolerance {
+                        next += 1;
+                    }
+                }
+            }
+            assert_eq!(
+                next,
+                scn.goals.len(),
+                "{} demonstration {di} misses sub-goal {next}",
+                task.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn seeded_evaluation_pacs_safe_off_violates_single_action_slower() {
+    let mut rollouts = Vec::new();
+    for task in [TaskKind::Sorting, TaskKind::Sphere] {
+        for method in ["off", "pacs", "single-action"] {
+            for seed in 1..=2 {
+                rollouts.push(run_rollout(task, &v(method), seed, true, None, 0).unwrap());
+            }
+        }
+    }
+    let rows = summarize(&rollouts);
+    let row = |t: TaskKind, m: &str| {
+        rows.iter()
+            .find(|r| r.task == t && r.method == m)
+            .unwrap()
+            .clone()
+    };
+    for task in [TaskKind::Sorting, TaskKind::Sphere] {
+        let pacs = row(task, "pacs");
+        let single = row(task, "single-action");
+        let off = row(task, "off");
+        for r in [&pacs, &single] {
+            assert_eq!(
+                r.safety_violation.mean,
+                0.0,
+                "{} {}: violations against the true human",
+                task.name(),
+                r.method
+            );
+            assert_eq!(r.exact_violation.mean, 0.0);
+            assert!(r.path_deviation.mean < 0.05, "{} left the path", r.method);
+        }
+        assert_eq!(pacs.success, 1.0, "{} pacs failed", task.name());
+        assert!(
+            off.safety_violation.mean > 0.0,
+            "{}: OFF should violate",
+            task.name()
+        );
+        assert!(
+            single.success < pacs.success || single.duration.mean > pacs.duration.mean,
+            "{}: single-action {} s vs chunk {} s",
+            task.name(),
+            single.duration.mean,
+            pacs.duration.mean
+        );
+    }
+    // PACS without a person is as fast as OFF without a person (no slowdown unless needed).
+    let free_pacs = run_rollout(TaskKind::Sorting, &v("pacs"), 3, false, None, 0).unwrap();
+    let free_off = run_rollout(TaskKind::Sorting, &v("off"), 3, false, None, 0).unwrap();
+    assert!(free_pacs.episode.success && free_off.episode.success);
+    assert!(
+        (free_pacs.episode.duration - free_off.episode.duration).abs() < 0.05,
+        "{} vs {}",
+        free_pacs.episode.duration,
+        free_off.episode.duration
+    );
+}
+
+#[test]
+fn cbf_leaves_the_demonstrations_pacs_does_not() {
+    // The sphere rolls across the path: the CBF pushes the arm sideways, PACS only slows down.
+    let mut dev_cbf: f64 = 0.0;
+    let mut dev_pacs: f64 = 0.0;
+    for seed in 1..=2 {
+        dev_cbf = dev_cbf.max(
+            run_rollout(TaskKind::Sphere, &v("cbf"), seed, true, None, 0)
+                .unwrap()
+                .episode
+                .max_deviation,
+        );
+        dev_pacs = dev_pacs.max(
+            run_rollout(TaskKind::Sphere, &v("pacs"), seed, true, None, 0)
+                .unwrap()
+                .episode
+                .max_deviation,
+        );
+    }
+    assert!(dev_pacs < 0.05, "PACS deviation {dev_pacs}");
+    assert!(dev_cbf > 2.0 * dev_pacs, "CBF {dev_cbf} vs PACS {dev_pacs}");
+}
