@@ -1,0 +1,72 @@
+//! `pacs simulate` end to end: rollouts, logs that `pacs audit` accepts, tables, plots; bad
+//! arguments exit 3.
+
+use std::process::Command;
+
+fn pacs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pacs"))
+}
+
+#[test]
+fn simulate_writes_tables_plots_and_auditable_logs() {
+    let dir = std::env::temp_dir().join(format!("pacs-sim-test-{}", std::process::id()));
+    let out = pacs()
+        .args([
+            "simulate",
+            "--task",
+            "sphere",
+            "--method",
+            "off,pacs",
+            "--rollouts",
+            "1",
+            "--seed",
+            "1",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    let pacs_row = rows.iter().find(|r| r["method"] == "pacs").unwrap();
+    assert_eq!(pacs_row["safety_violation"]["mean"].as_f64(), Some(0.0));
+    assert_eq!(pacs_row["constraints"], "ssm");
+    let md = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(md.contains("| sphere | pacs | SSM | 1 |"), "{md}");
+    for plot in ["sphere-paths.svg", "sphere-separation.svg"] {
+        let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{plot}");
+    }
+    let paths = std::fs::read_to_string(dir.join("sphere-paths.svg")).unwrap();
+    assert!(paths.contains("<line"), "tool path segments drawn");
+    // The PACS log audits without invalid input (exit 0 pass, 1 fail or 2 inconclusive, not 3),
+    // and the OFF log, in which the sphere hits the moving robot, fails.
+    let logs = dir.join("logs");
+    let pacs_log = logs.join("sphere-pacs-0001.jsonl");
+    let off_log = logs.join("sphere-off-0001.jsonl");
+    let a = pacs().arg("audit").arg(&pacs_log).output().unwrap();
+    assert!(matches!(a.status.code(), Some(0..=2)), "{a:?}");
+    let a = pacs().arg("audit").arg(&off_log).output().unwrap();
+    assert_eq!(a.status.code(), Some(1), "{}", String::from_utf8_lossy(&a.stdout));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn simulate_rejects_unknown_task_and_method() {
+    for args in [
+        ["--task", "juggling"],
+        ["--method", "pacs-magic"],
+        ["--rollouts", "0"],
+    ] {
+        let out = pacs().arg("simulate").args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(3), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(args[0]), "{args:?}: {err}");
+    }
+}
