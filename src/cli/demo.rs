@@ -94,6 +94,7 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
         settings: serde_json::to_value(&audit_cfg).unwrap_or_default(),
     };
     pacs_reports::write_reports(out, &input).map_err(|e| CliError::Internal(e.to_string()))?;
+    eprint!("{}", screen_summary(&runs, out));
     Ok(json!({
         "scenario": "FR3 follows a demonstration with a nearest-neighbour chunk policy (H=16, h=8, Δt=33 ms). Sorting (SSM): a person walks up and reaches across the robot's path. Handover (PFL, hand 0.265 J free / 0.014 J clamped): a person offers a block at the goal. Camera 100 Hz, 30 ms delay, 1 cm noise; metrics against the true human motion; each run is logged, audited offline (audit_verdict) and reported (report).",
         "runs": runs,
@@ -109,4 +110,35 @@ fn method_name(m: Method) -> &'static str {
         Method::Cbf => "cbf",
         Method::Direct => "direct",
     }
+}
+
+/// The one-screen, human-readable summary printed on stderr (stdout carries the JSON).
+fn screen_summary(runs: &[Value], out: &Path) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from(
+        "\npacs demo: FR3 + nearest-neighbour chunk policy (H = 16, h = 8, Δt = 33 ms); camera 100 Hz, 30 ms delay, 1 cm noise\n\n  task      filter  success  steps violating (true human)  audit verdict  duration  min. separation\n",
+    );
+    for r in runs {
+        let _ = writeln!(
+            s,
+            "  {:<9} {:<7} {:<8} {:<29} {:<14} {:>6.2} s  {:>7.3} m",
+            r["task"].as_str().unwrap_or("?"),
+            r["method"].as_str().unwrap_or("?"),
+            if r["success"] == true { "yes" } else { "no" },
+            format!(
+                "{:.1} %",
+                100.0 * r["safety_violation_fraction"].as_f64().unwrap_or(f64::NAN)
+            ),
+            r["audit_verdict"].as_str().unwrap_or("?"),
+            r["duration_s"].as_f64().unwrap_or(f64::NAN),
+            r["min_separation_m"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n  PACS brakes along the demonstrated path and stays safe; OFF hits the person while moving.\n  Negative separation = contact: allowed for SSM only while the robot is at rest, for PFL only\n  below the body part's energy threshold. The audit judges each log alone (measurement errors\n  and delay included), so it may flag what the true motion did not do, never the reverse.\n  Certification report: {}  (logs: {}/*.jsonl; JSON summary on stdout)\n",
+        out.join("report.html").display(),
+        out.display()
+    );
+    s
 }
