@@ -41,7 +41,10 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     assert!(md.contains("| sphere | pacs | SSM | 1 |"), "{md}");
     for plot in ["sphere-paths.svg", "sphere-separation.svg"] {
         let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
-        assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{plot}");
+        assert!(
+            svg.starts_with("<svg") && svg.contains("<polyline"),
+            "{plot}"
+        );
     }
     let paths = std::fs::read_to_string(dir.join("sphere-paths.svg")).unwrap();
     assert!(paths.contains("<line"), "tool path segments drawn");
@@ -53,7 +56,12 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     let a = pacs().arg("audit").arg(&pacs_log).output().unwrap();
     assert!(matches!(a.status.code(), Some(0..=2)), "{a:?}");
     let a = pacs().arg("audit").arg(&off_log).output().unwrap();
-    assert_eq!(a.status.code(), Some(1), "{}", String::from_utf8_lossy(&a.stdout));
+    assert_eq!(
+        a.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&a.stdout)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

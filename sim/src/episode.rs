@@ -9,8 +9,8 @@ use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
 use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_verify::audit::log::{Header, LogModels, ModelRef};
 use pacs_verify::audit::{AuditConfig, Auditor};
-use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
+use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_verify::shield_log::ShieldLog;
 use serde::Serialize;
@@ -319,7 +319,6 @@ pub fn ground_truth(
     (sep, violation, energies[robot.dof()])
 }
 
-
 /// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).
 pub fn log_header(
     label: &str,
@@ -540,9 +539,8 @@ pub fn run_setup(
         if success_at.is_none() && next_goal == goals.len() {
             success_at = Some(cmd.t);
         }
-        let dist = |a: &[f64; 3], b: &[f64; 3]| {
-            (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
-        };
+        let dist =
+            |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
         if success_at.is_none() {
             path_len += dist(&tool, &prev_tool);
         }

@@ -227,9 +227,7 @@ pub fn evaluate(
             Ok(r)
         })
         .collect::<Result<_, EvalError>>()?;
-    out.sort_by(|a, b| {
-        (a.task as u8, &a.method, a.seed).cmp(&(b.task as u8, &b.method, b.seed))
-    });
+    out.sort_by(|a, b| (a.task as u8, &a.method, a.seed).cmp(&(b.task as u8, &b.method, b.seed)));
     Ok(out)
 }
 
@@ -340,9 +338,7 @@ pub fn summarize(rollouts: &[Rollout]) -> Vec<Row> {
                             .map_or(e.violation_fraction, |a| a.certain_fraction),
                     )
                 }),
-                possible_violation: stat(&|e| {
-                    e.truth_audit.as_ref().map(|a| a.violation_fraction)
-                }),
+                possible_violation: stat(&|e| e.truth_audit.as_ref().map(|a| a.violation_fraction)),
                 exact_violation: stat(&|e| Some(e.violation_fraction)),
                 duration: stat(&|e| e.success.then_some(e.duration)),
                 path_deviation: stat(&|e| Some(e.max_deviation)),
@@ -421,11 +417,17 @@ pub fn svg_paths(task: TaskKind, rollouts: &[&Rollout]) -> String {
             methods.push(&r.method);
         }
     }
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    let pts = demo_tool
-        .iter()
-        .flatten()
-        .chain(rollouts.iter().flat_map(|r| r.episode.samples.iter().map(|s| &s.tool)));
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    let pts = demo_tool.iter().flatten().chain(
+        rollouts
+            .iter()
+            .flat_map(|r| r.episode.samples.iter().map(|s| &s.tool)),
+    );
     for p in pts {
         x0 = x0.min(p[0]);
         x1 = x1.max(p[0]);

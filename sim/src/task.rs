@@ -5,7 +5,7 @@
 //! sphere) motion per rollout.
 
 use crate::humans::{
-    Diner, FLOOR_Z, HumanScript, Offerer, Reacher, RollingSphere, Rng, sphere_model,
+    Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng, RollingSphere, sphere_model,
 };
 use crate::policy::DemoSet;
 use pacs_models::constraints::RegionSpec;
@@ -186,7 +186,12 @@ pub fn solve_ik(robot: &RobotModel, seed: &[f64], target: [f64; 3]) -> (Vec<f64>
 /// straight lines (eased, `counts[k]` samples for segment k), each sample solved by IK seeded
 /// with the previous one, so the joint path is continuous and the tool path is what a
 /// teleoperator would demonstrate.
-fn dense_path(robot: &RobotModel, start: &[f64], tools: &[[f64; 3]], counts: &[usize]) -> Vec<Vec<f64>> {
+fn dense_path(
+    robot: &RobotModel,
+    start: &[f64],
+    tools: &[[f64; 3]],
+    counts: &[usize],
+) -> Vec<Vec<f64>> {
     let mut path = vec![start.to_vec()];
     let mut from = tool_point(robot, start);
     for (k, to) in tools.iter().enumerate() {
@@ -207,9 +212,12 @@ fn dense_path(robot: &RobotModel, start: &[f64], tools: &[[f64; 3]], counts: &[u
     path
 }
 
+/// A success sub-goal at a tool waypoint: (waypoint index, name, tolerance in m).
+type GoalAt = (usize, &'static str, f64);
+
 /// Tool waypoints (m) of a task's demonstration, in order, and the goal names of those that are
 /// success sub-goals.
-fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<(usize, &'static str, f64)>) {
+fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
     match task {
         TaskKind::Sorting | TaskKind::Sphere => (
             vec![
@@ -253,7 +261,11 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
     let start = fr3::Q_READY.to_vec();
     // Largest joint step (rad) between demonstration samples (one sample per policy step Δt):
     // the handover partner is approached briskly, as in the paper's handover demonstrations.
-    let spacing = if task == TaskKind::Handover { 0.05 } else { 0.03 };
+    let spacing = if task == TaskKind::Handover {
+        0.05
+    } else {
+        0.03
+    };
     // Nominal keyframes and sample counts from the nominal joint distances.
     let mut nominal = vec![start.clone()];
     for p in &tools {
@@ -353,7 +365,11 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
         }
         TaskKind::Handover => {
             let g = tools[1];
-            let offer = [g[0] + 0.11 + u(-0.01, 0.01), g[1] + u(-0.01, 0.01), g[2] + u(-0.01, 0.01)];
+            let offer = [
+                g[0] + 0.11 + u(-0.01, 0.01),
+                g[1] + u(-0.01, 0.01),
+                g[2] + u(-0.01, 0.01),
+            ];
             let script = Offerer {
                 stand: [if with_human { 1.0 } else { away }, 0.1],
                 offer: if with_human {

@@ -64,7 +64,10 @@ fn demonstrations_reach_every_sub_goal() {
                 let p = pacs_sim::task::tool_point(&scn.robot, q);
                 if next < scn.goals.len() {
                     let g = &scn.goals[next];
-                    let d = (0..3).map(|i| (p[i] - g.point[i]).powi(2)).sum::<f64>().sqrt();
+                    let d = (0..3)
+                        .map(|i| (p[i] - g.point[i]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
                     if d <= g.tolerance {
                         next += 1;
                     }

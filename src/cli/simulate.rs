@@ -47,7 +47,11 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "T[,T...]", default_value = "sorting")]
     pub task: String,
     /// Methods, comma-separated, or `all`.
-    #[arg(long, value_name = "M[,M...]", default_value = "off,pacs,single-action,cbf")]
+    #[arg(
+        long,
+        value_name = "M[,M...]",
+        default_value = "off,pacs,single-action,cbf"
+    )]
     pub method: String,
     /// Rollouts per task and method (rollout i uses seed S + i for every method).
     #[arg(long, value_name = "N", default_value_t = 10)]
@@ -77,14 +81,20 @@ fn parse_list<T: std::str::FromStr<Err = String>>(
     let names: Vec<&str> = if s == "all" {
         all.to_vec()
     } else {
-        s.split(',').map(str::trim).filter(|x| !x.is_empty()).collect()
+        s.split(',')
+            .map(str::trim)
+            .filter(|x| !x.is_empty())
+            .collect()
     };
     if names.is_empty() {
         return Err(CliError::Input(format!("--{what}: empty list")));
     }
     names
         .into_iter()
-        .map(|n| n.parse::<T>().map_err(|e| CliError::Input(format!("--{what}: {e}"))))
+        .map(|n| {
+            n.parse::<T>()
+                .map_err(|e| CliError::Input(format!("--{what}: {e}")))
+        })
         .collect()
 }
 
