@@ -79,16 +79,16 @@ fn spline(wp: &[Vec<f64>], t: &[f64], n: usize, split: &[usize]) -> Spline {
     let mut a = vec![vec![0.0; m]; m];
     let mut b = vec![vec![0.0; n]; m];
     // add c*Y(knot)
-    let add_y = |a: &mut Vec<Vec<f64>>, b: &mut Vec<Vec<f64>>, r: usize, kn: usize, c: f64| {
-        match known[kn] {
+    let add_y =
+        |a: &mut Vec<Vec<f64>>, b: &mut Vec<Vec<f64>>, r: usize, kn: usize, c: f64| match known[kn]
+        {
             Some(w) => {
                 for i in 0..n {
                     b[r][i] -= c * wp[w][i];
                 }
             }
             None => a[r][yidx[kn]] += c,
-        }
-    };
+        };
     let add_m = |a: &mut Vec<Vec<f64>>, _b: &mut Vec<Vec<f64>>, r: usize, kn: usize, c: f64| {
         if kn >= 1 && kn < p {
             a[r][kn - 1] += c;
@@ -179,13 +179,25 @@ fn main() {
     let hw = Limits::from_joint_limits(robot.limits());
     let l = hw.with_uniform_acc_jerk(10.0, 400.0);
     let probs = anchor_set(robot.limits(), 200, 7);
-    let mode: usize = std::env::args().nth(1).map(|s| s.parse().unwrap()).unwrap_or(0);
-    let iters: usize = std::env::args().nth(2).map(|s| s.parse().unwrap()).unwrap_or(30);
-    let beta: f64 = std::env::args().nth(3).map(|s| s.parse().unwrap()).unwrap_or(0.5);
+    let mode: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(0);
+    let iters: usize = std::env::args()
+        .nth(2)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(30);
+    let beta: f64 = std::env::args()
+        .nth(3)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(0.5);
     let mut ls = 0.0;
     let mut ls0 = 0.0;
     for p in &probs {
-        let wp = p.chunk.waypoints(&p.q0, robot.limits(), OutOfLimits::Reject).unwrap();
+        let wp = p
+            .chunk
+            .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
         let h = wp.segments();
         let rows: Vec<Vec<f64>> = (0..=h).map(|k| wp.row(k).to_vec()).collect();
         let lb = lower_bound(&wp, &l.v[..7]);
@@ -206,10 +218,20 @@ fn main() {
                     .fold(0.0, f64::max)
             })
             .collect();
-        let init: usize = std::env::args().nth(4).map(|s| s.parse().unwrap()).unwrap_or(0);
+        let init: usize = std::env::args()
+            .nth(4)
+            .map(|s| s.parse().unwrap())
+            .unwrap_or(0);
         for k in 0..h {
-            let lbk = (0..7).map(|i| (rows[k+1][i]-rows[k][i]).abs()/l.v[i]).fold(0.0,f64::max);
-            match init { 1 => t[k] = lbk.max(1e-4), 2 => t[k] = (t[k]*lbk).sqrt().max(1e-4), 3 => t[k] = t[k].powf(0.75)*lbk.powf(0.25), _ => {} }
+            let lbk = (0..7)
+                .map(|i| (rows[k + 1][i] - rows[k][i]).abs() / l.v[i])
+                .fold(0.0, f64::max);
+            match init {
+                1 => t[k] = lbk.max(1e-4),
+                2 => t[k] = (t[k] * lbk).sqrt().max(1e-4),
+                3 => t[k] = t[k].powf(0.75) * lbk.powf(0.25),
+                _ => {}
+            }
         }
         let (mut best, mut rk) = eval(&rows, &t, 7, &l, &split);
         let first = best;

@@ -46,7 +46,7 @@ impl Default for PlannerConfig {
         Self {
             end: EndCondition::AtRest,
             method: Method::Spline,
-            spline_iterations: 12,
+            spline_iterations: 16,
             sweeps: 3,
             velocity_gain: 1.0,
             acceleration_gain: 0.0,
@@ -136,13 +136,11 @@ impl Planner {
             && (wp.segments() >= 2 || end == EndCondition::Moving)
         {
             self.validate(start, wp)?;
-            if let Some(mut t) = self.spline.plan(
-                &self.limits,
-                start,
-                wp,
-                end,
-                self.config.spline_iterations,
-            ) && t.check(&self.limits).is_ok()
+            let sp = self
+                .spline
+                .plan(&self.limits, start, wp, end, self.config.spline_iterations);
+            if let Some(mut t) = sp
+                && t.check(&self.limits).is_ok()
             {
                 if t.duration() <= self.rest_to_rest_total(wp) {
                     self.last = Method::Spline;

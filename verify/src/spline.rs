@@ -23,6 +23,12 @@ const FREE: usize = usize::MAX;
 /// Relative slack accepted on the limit ratios of the optimiser (the exact check allows 1e-9).
 const RATIO_TOL: f64 = 1e-10;
 
+/// Ratio the optimiser aims at for starts that are not at rest.
+const MOVING_TARGET: f64 = 0.97;
+
+/// Exponent of the duration update t_k ← t_k · r_k^e (r_k: segment k's scale-normalised ratio).
+const STEP_EXPONENT: f64 = 0.6;
+
 /// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)
 /// still get a piece.
 const MIN_SEGMENT: f64 = 1e-3;
@@ -54,6 +60,8 @@ pub(crate) struct SplineSolver {
     acc: Vec<[f64; MAX_DOF]>,
     /// End velocity per joint.
     v_end: [f64; MAX_DOF],
+    /// Duration of the first piece of a two-piece first segment (s; 0: half the segment).
+    first_ramp: f64,
 }
 
 impl SplineSolver {
@@ -76,7 +84,8 @@ impl SplineSolver {
         for k in 0..h {
             for s in 0..self.split[k] {
                 self.seg_of.push(k);
-                self.knot_wp.push(if s + 1 == self.split[k] { k + 1 } else { FREE });
+                self.knot_wp
+                    .push(if s + 1 == self.split[k] { k + 1 } else { FREE });
             }
         }
         let p = self.seg_of.len();
@@ -113,6 +122,10 @@ impl SplineSolver {
         for (q, t) in self.tau.iter_mut().enumerate() {
             let k = self.seg_of[q];
             *t = seg_t[k] / self.split[k] as f64;
+        }
+        if self.split[0] == 2 && self.first_ramp > 0.0 {
+            self.tau[0] = self.first_ramp.clamp(0.1 * seg_t[0], 0.5 * seg_t[0]);
+            self.tau[1] = seg_t[0] - self.tau[0];
         }
         for i in 0..n {
             self.v_end[i] = match end {
@@ -215,7 +228,10 @@ impl SplineSolver {
             }
         }
         self.y.iter().all(|r| r[..n].iter().all(|x| x.is_finite()))
-            && self.acc.iter().all(|r| r[..n].iter().all(|x| x.is_finite()))
+            && self
+                .acc
+                .iter()
+                .all(|r| r[..n].iter().all(|x| x.is_finite()))
     }
 
     /// Add `c`·y_knot to equation `row` (known positions go to the right-hand side).
@@ -259,7 +275,8 @@ impl SplineSolver {
     #[inline]
     fn v_start(&self, q: usize, i: usize) -> f64 {
         let t = self.tau[q];
-        (self.y[q + 1][i] - self.y[q][i]) / t - t * (2.0 * self.acc[q][i] + self.acc[q + 1][i]) / 6.0
+        (self.y[q + 1][i] - self.y[q][i]) / t
+            - t * (2.0 * self.acc[q][i] + self.acc[q + 1][i]) / 6.0
     }
 
     /// Per-segment limit ratios of the current spline (into `rj`, `ra`, `rv`).
@@ -302,6 +319,10 @@ impl SplineSolver {
 
     /// Time-optimised spline trajectory through the waypoints, or `None` if the optimiser found no
     /// spline within the limits (by its own ratios; the caller still runs the exact check).
+    ///
+    /// From a moving start the first piece is given the time to swing the start acceleration
+    /// across the acceleration range at the jerk limit, τ_r = max_i (|q̈_0,i| + a_i)/j_i (clamped
+    /// to [0.1, 0.5] of the first segment); if no spline is found, τ_r/2 and 2τ_r are tried.
     pub(crate) fn plan(
         &mut self,
         lim: &Limits,
@@ -317,6 +338,33 @@ impl SplineSolver {
         }
         self.layout(h);
         let at_rest = (0..n).all(|i| start.dq[i] == 0.0 && start.ddq[i] == 0.0);
+        if at_rest {
+            self.first_ramp = 0.0;
+            return self.optimise(lim, start, wp, end, iterations, true);
+        }
+        let ramp = (0..n)
+            .map(|i| (start.ddq[i].abs() + lim.a[i]) / lim.j[i])
+            .fold(0.0, f64::max);
+        for c in [1.0, 0.5, 2.0] {
+            self.first_ramp = c * ramp;
+            if let Some(t) = self.optimise(lim, start, wp, end, iterations, false) {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    fn optimise(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        iterations: usize,
+        at_rest: bool,
+    ) -> Option<Trajectory> {
+        let n = lim.dof;
+        let h = wp.segments();
         // Start: synchronized rest-to-rest durations (closed form).
         let mut seg_t = std::mem::take(&mut self.seg_t);
         let mut best_t = std::mem::take(&mut self.best_t);
@@ -336,6 +384,8 @@ impl SplineSolver {
         }
         best_t.clear();
         let mut best = f64::INFINITY;
+        // Moving starts do not scale exactly: aim slightly inside the limits.
+        let target = if at_rest { 1.0 } else { MOVING_TARGET };
         for _ in 0..iterations.max(1) {
             if !self.solve(n, start, wp, end, &seg_t) {
                 break;
@@ -358,26 +408,10 @@ impl SplineSolver {
                 best_t.extend(seg_t.iter().map(|t| t * scale));
             }
             for k in 0..h {
-                let r = self.seg_ratio(k);
+                let r = self.seg_ratio(k) / target;
                 if r > 0.0 {
-                    seg_t[k] = (seg_t[k] * r.powf(0.6)).max(MIN_SEGMENT);
+                    seg_t[k] = (seg_t[k] * r.powf(STEP_EXPONENT)).max(MIN_SEGMENT);
                 }
-            }
-        }
-        if best_t.is_empty() && !at_rest {
-            // Not converged into the limits: grow the last iterate uniformly a few times.
-            let mut t = seg_t.clone();
-            for _ in 0..4 {
-                if !self.solve(n, start, wp, end, &t) {
-                    break;
-                }
-                self.ratios(n, lim, h);
-                let lam = (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max);
-                if lam <= 1.0 + RATIO_TOL {
-                    best_t = t;
-                    break;
-                }
-                t.iter_mut().for_each(|x| *x *= lam.min(4.0));
             }
         }
         let result = if best_t.is_empty() {
@@ -395,7 +429,13 @@ impl SplineSolver {
     }
 
     /// The trajectory of the last solved spline.
-    fn assemble(&self, n: usize, start: &JointState, wp: &Waypoints, end: EndCondition) -> Trajectory {
+    fn assemble(
+        &self,
+        n: usize,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+    ) -> Trajectory {
         let p = self.tau.len();
         let h = wp.segments();
         let mut pieces = Vec::with_capacity(n * (p + 1));
