@@ -52,9 +52,16 @@ pub(crate) struct SplineSolver {
     /// Per knot: waypoint index or [`FREE`]; and the unknown index of a free knot's position.
     knot_wp: Vec<usize>,
     knot_var: Vec<usize>,
+    /// Per knot: the unknown index of its acceleration ([`FREE`] for the known M_0 and M_p).
+    acc_var: Vec<usize>,
     /// Dense system (row-major), right-hand sides (one column per joint).
     mat: Vec<f64>,
-    rhs: Vec<[f64; MAX_DOF]>,
+    /// Right-hand sides, row-major with stride `n` (one column per joint).
+    rhs: Vec<f64>,
+    /// Lower and upper bandwidth of the system (from its sparsity pattern).
+    band: (usize, usize),
+    /// Cached scale-normalised ratio per segment.
+    rs: Vec<f64>,
     /// Knot positions and accelerations per joint.
     y: Vec<[f64; MAX_DOF]>,
     acc: Vec<[f64; MAX_DOF]>,
@@ -88,21 +95,42 @@ impl SplineSolver {
                     .push(if s + 1 == self.split[k] { k + 1 } else { FREE });
             }
         }
+        // Unknowns interleaved in knot order (free position, then acceleration) so that the
+        // system is banded: equation q couples only knots q − 1, q, q + 1.
         let p = self.seg_of.len();
-        let mut next = p - 1;
-        for &w in &self.knot_wp {
+        self.acc_var.clear();
+        let mut next = 0;
+        for (q, &w) in self.knot_wp.iter().enumerate() {
             if w == FREE {
                 self.knot_var.push(next);
                 next += 1;
             } else {
                 self.knot_var.push(FREE);
             }
+            if q > 0 && q < p {
+                self.acc_var.push(next);
+                next += 1;
+            } else {
+                self.acc_var.push(FREE);
+            }
         }
         debug_assert_eq!(next, p + 1);
+        // Equation q couples the unknowns of knots q − 1, q, q + 1.
+        let (mut lb, mut ub) = (0usize, 0usize);
+        for q in 0..=p {
+            for k in q.saturating_sub(1)..=(q + 1).min(p) {
+                for v in [self.knot_var[k], self.acc_var[k]] {
+                    if v != FREE {
+                        lb = lb.max(q.saturating_sub(v));
+                        ub = ub.max(v.saturating_sub(q));
+                    }
+                }
+            }
+        }
+        self.band = (lb, ub);
         self.tau.resize(p, 0.0);
         self.y.resize(p + 1, [0.0; MAX_DOF]);
         self.acc.resize(p + 1, [0.0; MAX_DOF]);
-        self.rhs.resize(p + 1, [0.0; MAX_DOF]);
         self.mat.resize((p + 1) * (p + 1), 0.0);
     }
 
@@ -134,9 +162,10 @@ impl SplineSolver {
             };
         }
         self.mat.iter_mut().for_each(|x| *x = 0.0);
-        self.rhs.iter_mut().for_each(|r| *r = [0.0; MAX_DOF]);
-        self.rhs[0][..n].copy_from_slice(&start.dq[..n]);
-        self.rhs[p][..n].copy_from_slice(&self.v_end[..n]);
+        self.rhs.clear();
+        self.rhs.resize(m * n, 0.0);
+        self.rhs[..n].copy_from_slice(&start.dq[..n]);
+        self.rhs[p * n..(p + 1) * n].copy_from_slice(&self.v_end[..n]);
         // Velocity at the start of piece q: (y_{q+1} − y_q)/τ − τ(2M_q + M_{q+1})/6;
         // at its end: (y_{q+1} − y_q)/τ + τ(M_q + 2M_{q+1})/6.
         // Row 0: start velocity; row q (1..p−1): continuity at knot q; row p: end velocity.
@@ -159,11 +188,16 @@ impl SplineSolver {
                 self.coef_m(n, m, start, row, row, t / 3.0);
             }
         }
-        // Gaussian elimination with partial pivoting, all joints' right-hand sides at once.
+        // Banded Gaussian elimination with partial pivoting, all joints' right-hand sides at
+        // once; pivoting widens the upper band by the lower bandwidth.
+        let (lb, ub) = self.band;
+        let ub = ub + lb;
         for c in 0..m {
+            let r_end = m.min(c + lb + 1);
+            let k_end = m.min(c + ub + 1);
             let mut piv = c;
             let mut best = self.mat[c * m + c].abs();
-            for r in c + 1..m {
+            for r in c + 1..r_end {
                 let v = self.mat[r * m + c].abs();
                 if v > best {
                     best = v;
@@ -174,43 +208,46 @@ impl SplineSolver {
                 return false;
             }
             if piv != c {
-                for k in 0..m {
+                for k in c..k_end {
                     self.mat.swap(c * m + k, piv * m + k);
                 }
-                self.rhs.swap(c, piv);
+                for i in 0..n {
+                    self.rhs.swap(c * n + i, piv * n + i);
+                }
             }
             let d = 1.0 / self.mat[c * m + c];
-            for r in c + 1..m {
+            for r in c + 1..r_end {
                 let f = self.mat[r * m + c] * d;
                 if f != 0.0 {
-                    for k in c + 1..m {
+                    for k in c + 1..k_end {
                         self.mat[r * m + k] -= f * self.mat[c * m + k];
                     }
-                    let rc = self.rhs[c];
-                    for i in 0..n {
-                        self.rhs[r][i] -= f * rc[i];
+                    let (top, bottom) = self.rhs.split_at_mut(r * n);
+                    let rc = &top[c * n..(c + 1) * n];
+                    for (x, y) in bottom[..n].iter_mut().zip(rc) {
+                        *x -= f * y;
                     }
                 }
             }
         }
         for c in (0..m).rev() {
             let d = 1.0 / self.mat[c * m + c];
-            let mut x = self.rhs[c];
-            for k in c + 1..m {
+            let (top, bottom) = self.rhs.split_at_mut((c + 1) * n);
+            let x = &mut top[c * n..];
+            for k in c + 1..m.min(c + ub + 1) {
                 let f = self.mat[c * m + k];
                 if f != 0.0 {
-                    let xk = self.rhs[k];
-                    for i in 0..n {
-                        x[i] -= f * xk[i];
+                    let xk = &bottom[(k - c - 1) * n..(k - c) * n];
+                    for (xi, yi) in x.iter_mut().zip(xk) {
+                        *xi -= f * yi;
                     }
                 }
             }
-            for i in 0..n {
-                x[i] *= d;
+            for xi in x.iter_mut() {
+                *xi *= d;
             }
-            self.rhs[c] = x;
         }
-        // Unknowns: M_1 … M_{p−1} at indices 0 … p−2, free knot positions after them.
+        // Knot accelerations and positions from the unknowns.
         for q in 0..=p {
             for i in 0..n {
                 self.acc[q][i] = if q == 0 {
@@ -218,10 +255,10 @@ impl SplineSolver {
                 } else if q == p {
                     0.0
                 } else {
-                    self.rhs[q - 1][i]
+                    self.rhs[self.acc_var[q] * n + i]
                 };
                 self.y[q][i] = match self.knot_wp[q] {
-                    FREE => self.rhs[self.knot_var[q]][i],
+                    FREE => self.rhs[self.knot_var[q] * n + i],
                     0 => start.q[i],
                     w => wp.row(w)[i],
                 };
@@ -252,7 +289,7 @@ impl SplineSolver {
             w => {
                 let q = if w == 0 { &start.q[..n] } else { wp.row(w) };
                 for i in 0..n {
-                    self.rhs[row][i] -= c * q[i];
+                    self.rhs[row * n + i] -= c * q[i];
                 }
             }
         }
@@ -264,10 +301,10 @@ impl SplineSolver {
         let p = m - 1;
         if knot == 0 {
             for i in 0..n {
-                self.rhs[row][i] -= c * start.ddq[i];
+                self.rhs[row * n + i] -= c * start.ddq[i];
             }
         } else if knot < p {
-            self.mat[row * m + knot - 1] += c;
+            self.mat[row * m + self.acc_var[knot]] += c;
         }
     }
 
@@ -309,12 +346,18 @@ impl SplineSolver {
             self.ra[k] = ra;
             self.rv[k] = rv;
         }
+        self.rs.clear();
+        for k in 0..h {
+            self.rs
+                .push(self.rj[k].cbrt().max(self.ra[k].sqrt()).max(self.rv[k]));
+        }
     }
 
-    /// Scale-normalised ratio of segment k (> 1: too fast, < 1: slack).
+    /// Scale-normalised ratio of segment k (> 1: too fast, < 1: slack), as of the last
+    /// [`SplineSolver::ratios`].
     #[inline]
     fn seg_ratio(&self, k: usize) -> f64 {
-        self.rj[k].cbrt().max(self.ra[k].sqrt()).max(self.rv[k])
+        self.rs[k]
     }
 
     /// Time-optimised spline trajectory through the waypoints, or `None` if the optimiser found no
