@@ -204,7 +204,7 @@ impl SplineSolver {
                     piv = r;
                 }
             }
-            if !(best > 0.0) || !best.is_finite() {
+            if best == 0.0 || !best.is_finite() {
                 return false;
             }
             if piv != c {
