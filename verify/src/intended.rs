@@ -1,7 +1,9 @@
-//! Intended trajectories from waypoints: per segment a time-synchronized jerk-limited
-//! state-to-state motion (rsruckig single target, Ruckig steps 1 and 2), with the velocities at
-//! intermediate waypoints chosen by a few sweeps of a fixed-point heuristic, every candidate
-//! checked by our own exact piecewise limit and continuity checks before it is returned.
+//! Intended trajectories from waypoints. Default ([`Method::Spline`]): a time-optimised C² cubic
+//! spline (see [`crate::spline`]). Fallback and single targets ([`Method::Segments`]): per segment
+//! a time-synchronized jerk-limited state-to-state motion (rsruckig single target, Ruckig steps 1
+//! and 2), with the velocities at intermediate waypoints chosen by a few sweeps of a fixed-point
+//! heuristic. Every trajectory is checked by our own exact piecewise limit and continuity checks
+//! before it is returned.
 
 use crate::chunk::Waypoints;
 use crate::error::TrajectoryError;
