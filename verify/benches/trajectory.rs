@@ -1,14 +1,14 @@
 //! Criterion benches of the intended trajectory, the failsafe and the monitored trajectory on the
 //! anchor problem set (FR3, H = 16, h = 8 / 6, a = 10 rad/s², j = 400 rad/s³), plus a printed
-//! quality table (duration / lower bound, geometric mean) for the chunk planner and the
-//! single-action baseline.
+//! quality table (duration / lower bound, geometric mean) for the spline planner (default), the
+//! per-segment planner and the single-action baseline.
 #![allow(clippy::needless_range_loop)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
 use pacs_verify::failsafe::{Failsafe, FailsafeKind};
 use pacs_verify::problems::{anchor_set, lower_bound};
-use pacs_verify::{JointState, Limits, Monitored, OutOfLimits, Planner, PlannerConfig};
+use pacs_verify::{JointState, Limits, Method, Monitored, OutOfLimits, Planner, PlannerConfig};
 use std::hint::black_box;
 
 fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
@@ -32,27 +32,48 @@ fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
 
 fn quality() {
     let (hw, plan, set) = setup();
-    for sweeps in [0usize, 1, 2, 3, 4, 6] {
-        let mut planner = Planner::new(
-            plan,
-            PlannerConfig {
-                sweeps,
-                ..Default::default()
-            },
-        );
+    let configs: Vec<(String, PlannerConfig)> = [8usize, 12, 16, 24]
+        .iter()
+        .map(|&it| {
+            (
+                format!("spline iterations={it}"),
+                PlannerConfig {
+                    spline_iterations: it,
+                    ..Default::default()
+                },
+            )
+        })
+        .chain([1usize, 3].iter().map(|&sw| {
+            (
+                format!("segments sweeps={sw}"),
+                PlannerConfig {
+                    method: Method::Segments,
+                    sweeps: sw,
+                    ..Default::default()
+                },
+            )
+        }))
+        .collect();
+    let default = PlannerConfig::default();
+    for (name, config) in configs {
+        let mut planner = Planner::new(plan, config);
         let mut lsum = [0.0; 2];
         let mut lsum_sa = [0.0; 2];
         let mut count = [0usize; 2];
+        let mut fallbacks = 0usize;
         let (mut fs_n, mut fs_delay, mut fs_follow, mut fs_stop) = (0usize, 0usize, 0usize, 0.0);
         for (s, wp) in &set {
             let lb = lower_bound(wp, &plan.v[..plan.dof]);
             let t = planner.plan(s, wp).expect("plan");
+            if planner.last_method() != config.method {
+                fallbacks += 1;
+            }
             let sa = planner.plan_single_action(s, wp).expect("single");
             let g = if wp.segments() == 8 { 0 } else { 1 };
             lsum[g] += (t.duration() / lb).ln();
             lsum_sa[g] += (sa.duration() / lb).ln();
             count[g] += 1;
-            if sweeps == 3 {
+            if config == default {
                 for k in 0..20 {
                     let t0 = t.duration() * k as f64 / 20.0;
                     let m = Monitored::new(&t, t0, 0.001, &hw).expect("monitored");
@@ -69,7 +90,7 @@ fn quality() {
         let all = ((lsum[0] + lsum[1]) / (count[0] + count[1]) as f64).exp();
         let all_sa = ((lsum_sa[0] + lsum_sa[1]) / (count[0] + count[1]) as f64).exp();
         println!(
-            "quality sweeps={sweeps}: duration/LB geomean chunk {all:.2} (h=8 {:.2}, h=6 {:.2}); single-action {all_sa:.2} (h=8 {:.2}, h=6 {:.2})",
+            "quality {name}: duration/LB geomean chunk {all:.2} (h=8 {:.2}, h=6 {:.2}), {fallbacks} fallbacks; single-action {all_sa:.2} (h=8 {:.2}, h=6 {:.2})",
             (lsum[0] / count[0] as f64).exp(),
             (lsum[1] / count[1] as f64).exp(),
             (lsum_sa[0] / count[0] as f64).exp(),
@@ -77,7 +98,7 @@ fn quality() {
         );
         if fs_n > 0 {
             println!(
-                "failsafes (sweeps=3, hardware limits a=10, j=5000): {fs_n} built, {} immediate braking, {fs_delay} delayed braking, {fs_follow} follow-to-end; mean stop time {:.1} ms",
+                "failsafes (default planner, hardware limits a=10, j=5000): {fs_n} built, {} immediate braking, {fs_delay} delayed braking, {fs_follow} follow-to-end; mean stop time {:.1} ms",
                 fs_n - fs_delay - fs_follow,
                 1e3 * fs_stop / fs_n as f64
             );
@@ -97,18 +118,18 @@ fn benches(c: &mut Criterion) {
             black_box(planner.plan(s, wp).expect("plan"))
         })
     });
-    let mut planner1 = Planner::new(
+    let mut segments = Planner::new(
         plan,
         PlannerConfig {
-            sweeps: 1,
+            method: Method::Segments,
             ..Default::default()
         },
     );
-    c.bench_function("intended_trajectory_chunk_1_sweep", |b| {
+    c.bench_function("intended_trajectory_chunk_segments_3_sweeps", |b| {
         b.iter(|| {
             let (s, wp) = &set[k % set.len()];
             k += 1;
-            black_box(planner1.plan(s, wp).expect("plan"))
+            black_box(segments.plan(s, wp).expect("plan"))
         })
     });
     // Replanning while moving: the next chunk arrives Δt = 33 ms or 100 ms into the previous one.
@@ -161,6 +182,19 @@ fn benches(c: &mut Criterion) {
     c.bench_function("failsafe_build", |b| {
         b.iter(|| {
             let t = &trajs[k % trajs.len()];
+            let s0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
+            k += 1;
+            black_box(Failsafe::new(t, s0, &hw).expect("fs").stop_time())
+        })
+    });
+    // Failsafes on per-segment trajectories (what the shield plans with).
+    let seg_trajs: Vec<_> = set
+        .iter()
+        .map(|(s, wp)| segments.plan(s, wp).expect("plan"))
+        .collect();
+    c.bench_function("failsafe_build_segments_trajectory", |b| {
+        b.iter(|| {
+            let t = &seg_trajs[k % seg_trajs.len()];
             let s0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
             k += 1;
             black_box(Failsafe::new(t, s0, &hw).expect("fs").stop_time())

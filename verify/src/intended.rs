@@ -1,20 +1,39 @@
-//! Intended trajectories from waypoints: per segment a time-synchronized jerk-limited
-//! state-to-state motion (rsruckig single target, Ruckig steps 1 and 2), with the velocities at
-//! intermediate waypoints chosen by a few sweeps of a fixed-point heuristic, every candidate
-//! checked by our own exact piecewise limit and continuity checks before it is returned.
+//! Intended trajectories from waypoints. Default ([`Method::Spline`]): a time-optimised C² cubic
+//! spline (see [`crate::spline`]). Fallback and single targets ([`Method::Segments`]): per segment
+//! a time-synchronized jerk-limited state-to-state motion (rsruckig single target, Ruckig steps 1
+//! and 2), with the velocities at intermediate waypoints chosen by a few sweeps of a fixed-point
+//! heuristic. Every trajectory is checked by our own exact piecewise limit and continuity checks
+//! before it is returned.
 
 use crate::chunk::Waypoints;
 use crate::error::TrajectoryError;
 use crate::profile::{LIMIT_REL_TOL, Piece};
+use crate::spline::SplineSolver;
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_models::MAX_DOF;
 use rsruckig::prelude::*;
+
+/// How the intended trajectory through several waypoints is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Time-optimised C² cubic spline (one constant-jerk piece per segment; see [`crate::spline`]),
+    /// falling back to [`Method::Segments`] if it fails the exact check or is slower than stopping
+    /// at every waypoint.
+    #[default]
+    Spline,
+    /// Per-segment synchronized rsruckig solves with waypoint velocities from `sweeps` sweeps.
+    Segments,
+}
 
 /// Planner settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlannerConfig {
     /// How the trajectory ends at q̂_h.
     pub end: EndCondition,
+    /// Spline (default) or per-segment solver.
+    pub method: Method,
+    /// Iterations of the spline duration optimiser.
+    pub spline_iterations: usize,
     /// Number of waypoint-velocity refinement sweeps after the rest-to-rest start (0: single-action-like).
     pub sweeps: usize,
     /// Intermediate waypoint velocities: fraction of the neighbouring segments' mean velocity.
@@ -28,6 +47,8 @@ impl Default for PlannerConfig {
     fn default() -> Self {
         Self {
             end: EndCondition::AtRest,
+            method: Method::Spline,
+            spline_iterations: 16,
             sweeps: 3,
             velocity_gain: 1.0,
             acceleration_gain: 0.0,
@@ -49,6 +70,8 @@ pub struct Planner {
     cand_dur: Vec<Vec<f64>>,
     vel: Vec<f64>,
     acc: Vec<f64>,
+    spline: SplineSolver,
+    last: Method,
 }
 
 impl std::fmt::Debug for Planner {
@@ -82,6 +105,8 @@ impl Planner {
             cand_dur: Vec::new(),
             vel: Vec::new(),
             acc: Vec::new(),
+            spline: SplineSolver::default(),
+            last: Method::Segments,
         }
     }
 
@@ -107,7 +132,63 @@ impl Planner {
         wp: &Waypoints,
     ) -> Result<Trajectory, TrajectoryError> {
         let sweeps = self.config.sweeps;
-        self.plan_with(start, wp, sweeps, self.config.end)
+        let end = self.config.end;
+        // A single segment ending at rest is one time-optimal single-target solve: no spline.
+        if self.config.method == Method::Spline
+            && (wp.segments() >= 2 || end == EndCondition::Moving)
+        {
+            self.validate(start, wp)?;
+            let sp = self
+                .spline
+                .plan(&self.limits, start, wp, end, self.config.spline_iterations);
+            if let Some(mut t) = sp
+                && t.check(&self.limits).is_ok()
+            {
+                if t.duration() <= self.rest_to_rest_total(wp) {
+                    self.last = Method::Spline;
+                    return Ok(t);
+                }
+                // Slower than stopping at every waypoint (e.g. long moves where a cubic cannot
+                // cruise at the velocity limit): take the per-segment solver if it is shorter.
+                return Ok(match self.plan_with(start, wp, sweeps, end) {
+                    Ok(s) if s.duration() < t.duration() => {
+                        self.last = Method::Segments;
+                        s
+                    }
+                    _ => {
+                        self.last = Method::Spline;
+                        t
+                    }
+                });
+            }
+        }
+        self.last = Method::Segments;
+        self.plan_with(start, wp, sweeps, end)
+    }
+
+    /// Which method produced the trajectory of the last successful [`Planner::plan`] call.
+    pub fn last_method(&self) -> Method {
+        self.last
+    }
+
+    /// Σ_k of the synchronized closed-form rest-to-rest segment durations (s): the single-action
+    /// duration for a start at rest.
+    fn rest_to_rest_total(&self, wp: &Waypoints) -> f64 {
+        let l = &self.limits;
+        (1..=wp.segments())
+            .map(|k| {
+                (0..l.dof)
+                    .map(|i| {
+                        rest_to_rest_time(
+                            (wp.row(k)[i] - wp.row(k - 1)[i]).abs(),
+                            l.v[i],
+                            l.a[i],
+                            l.j[i],
+                        )
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .sum()
     }
 
     /// The paper's single-action baseline: each waypoint as its own time-optimal, synchronized

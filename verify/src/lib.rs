@@ -31,12 +31,13 @@ pub mod profile;
 pub mod scaling;
 pub mod shield;
 pub mod shield_log;
+pub mod spline;
 pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
 pub use error::{FailsafeError, TrajectoryError};
 pub use failsafe::Failsafe;
-pub use intended::{Planner, PlannerConfig};
+pub use intended::{Method, Planner, PlannerConfig};
 pub use monitored::Monitored;
 pub use profile::{LIMIT_REL_TOL, Piece, Range};
 pub use trajectory::{Bounds, EndCondition, JointState, Limits, Trajectory};

@@ -22,7 +22,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::chunk::{Chunk, OutOfLimits};
-use crate::intended::{Planner, PlannerConfig};
+use crate::intended::{Method, Planner, PlannerConfig};
 use crate::profile::Piece;
 use crate::scaling::{PathState, SpeedProfile, admissible};
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
@@ -515,6 +515,10 @@ impl Shield {
             plan,
             PlannerConfig {
                 end: EndCondition::AtRest,
+                // The per-segment planner: the spline's time-optimal trajectories use the
+                // acceleration limit from the first piece on, which leaves the shield's ramp-up
+                // from rest along a fresh path fewer verifiable steps (tests/shield.rs).
+                method: Method::Segments,
                 ..PlannerConfig::default()
             },
         );

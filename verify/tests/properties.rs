@@ -1,4 +1,5 @@
-//! Property tests (10^4 cases each) over random chunks, start states, limit scales and failsafe starts.
+//! Property tests over random chunks, start states, limit scales and failsafe starts: 2 × 10^4 cases
+//! with the default (spline) planner plus 4000 spline-vs-segments cases (moving starts and ends).
 #![allow(clippy::needless_range_loop)]
 
 mod common;
@@ -96,5 +97,127 @@ proptest! {
         for i in 0..7 {
             prop_assert!(end.dq[i].abs() < 1e-9 && end.ddq[i].abs() < 1e-9);
         }
+    }
+}
+
+/// A random chunk planned from a random (at rest or moving) start with the given end condition
+/// by both methods; the moving start comes from a previous spline plan.
+fn random_spline_case(
+    seed: u64,
+    end: EndCondition,
+) -> (Limits, JointState, Waypoints, Planner, Planner) {
+    let (_, plan0) = limits();
+    let mut rng = Rng::new(seed ^ 0x5eed_5eed);
+    let plan = plan0.scaled(rng.uniform(0.2, 1.0)).unwrap();
+    let h = 2 + (rng.next_u64() % 10) as usize;
+    let step = rng.uniform(0.001, 0.06);
+    let q0: Vec<f64> = (0..7)
+        .map(|i| rng.uniform(plan.q_min[i] + 0.5, plan.q_max[i] - 0.5))
+        .collect();
+    let cfg = |method| PlannerConfig {
+        end,
+        method,
+        ..Default::default()
+    };
+    let mut spline = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::AtRest,
+            ..cfg(Method::Spline)
+        },
+    );
+    let start = if rng.uniform(0.0, 1.0) < 0.3 {
+        JointState::at_rest(&q0)
+    } else {
+        let mut rows = vec![q0.clone()];
+        for _ in 0..4 {
+            let last = rows.last().unwrap().clone();
+            rows.push(last.iter().map(|x| x + step * rng.normal()).collect());
+        }
+        let pre = spline
+            .plan(
+                &JointState::at_rest(&q0),
+                &Waypoints::from_rows(&rows).unwrap(),
+            )
+            .unwrap();
+        pre.state_at(rng.uniform(0.0, pre.duration()))
+    };
+    // Correlated deltas (as policies produce) or independent ones.
+    let mut d: Vec<f64> = (0..7).map(|_| rng.normal()).collect();
+    let rho = if rng.uniform(0.0, 1.0) < 0.5 {
+        0.8
+    } else {
+        0.0
+    };
+    let mut rows = vec![start.q[..7].to_vec()];
+    for _ in 0..h {
+        let last = rows.last().unwrap().clone();
+        for x in d.iter_mut() {
+            *x = rho * *x + (1.0 - rho) * rng.normal();
+        }
+        rows.push(
+            last.iter()
+                .enumerate()
+                .map(|(i, x)| (x + step * d[i]).clamp(plan.q_min[i], plan.q_max[i]))
+                .collect(),
+        );
+    }
+    spline.set_config(cfg(Method::Spline));
+    let segments = Planner::new(plan, cfg(Method::Segments));
+    (
+        plan,
+        start,
+        Waypoints::from_rows(&rows).unwrap(),
+        spline,
+        segments,
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4_000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The spline planner (with its fallback) plans wherever the per-segment planner does, passes
+    /// every waypoint within 1e-9 rad, starts in the given state, ends as configured and passes
+    /// the exact limit check.
+    #[test]
+    fn spline_plans_start_exactly_pass_waypoints_and_never_fail_where_segments_succeed(
+        seed in any::<u64>(), moving_end in any::<bool>()
+    ) {
+        let end = if moving_end { EndCondition::Moving } else { EndCondition::AtRest };
+        let (plan, start, wp, mut spline, mut segments) = random_spline_case(seed, end);
+        let seg = segments.plan(&start, &wp);
+        let sp = spline.plan(&start, &wp);
+        if seg.is_ok() {
+            prop_assert!(sp.is_ok(), "spline failed where segments succeeded: {:?}", sp.err());
+        }
+        let Ok(mut t) = sp else { return Ok(()) };
+        let s = t.state_at(0.0);
+        for i in 0..7 {
+            prop_assert!((s.q[i] - start.q[i]).abs() <= 1e-12);
+            prop_assert!((s.dq[i] - start.dq[i]).abs() <= 1e-12);
+            prop_assert!((s.ddq[i] - start.ddq[i]).abs() <= 1e-12);
+        }
+        for (m, &tk) in t.waypoint_times().iter().enumerate() {
+            for i in 0..7 {
+                let (ql, _, _) = left_limit(&t, i, tk);
+                prop_assert!((ql - wp.row(m + 1)[i]).abs() <= 1e-9);
+                prop_assert!((t.state_at(tk).q[i] - wp.row(m + 1)[i]).abs() <= 1e-9);
+            }
+        }
+        let after = t.state_at(t.duration());
+        let h = wp.segments();
+        for i in 0..7 {
+            let v_end = if moving_end && spline.last_method() == Method::Spline {
+                (wp.row(h)[i] - wp.row(h - 1)[i]) / (t.duration() - if h > 1 { t.waypoint_times()[h - 2] } else { 0.0 })
+            } else if moving_end {
+                after.dq[i]
+            } else {
+                0.0
+            };
+            prop_assert!((after.dq[i] - v_end).abs() <= 1e-9 * (1.0 + v_end.abs()));
+            prop_assert!(after.ddq[i] == 0.0);
+        }
+        t.check(&plan).unwrap();
+        assert_limits_at_samples(&t, &plan, 10);
     }
 }

@@ -394,3 +394,78 @@ fn zero_and_repeated_actions_are_handled() {
     }
     assert_limits_at_samples(&t, &plan, 200);
 }
+
+/// The spline planner on the anchor set: every chunk by the spline itself (no fallback), checked
+/// exactly, every waypoint within 1e-9 rad, and a duration / lower-bound geometric mean below
+/// rsruckig's refined waypoint result (10.45).
+#[test]
+fn spline_planner_on_the_anchor_set_beats_the_refined_waypoint_solver() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(plan, PlannerConfig::default());
+    let set = anchor_set(robot.limits(), 200, 7);
+    let mut log_sum = 0.0;
+    for p in &set {
+        let wp = p
+            .chunk
+            .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let mut t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
+        assert_eq!(pl.last_method(), Method::Spline);
+        t.check(&plan).unwrap();
+        for (m, &tk) in t.waypoint_times().iter().enumerate() {
+            for i in 0..7 {
+                let (ql, _, _) = left_limit(&t, i, tk);
+                assert!((ql - wp.row(m + 1)[i]).abs() <= 1e-9);
+            }
+        }
+        log_sum += (t.duration() / lower_bound(&wp, &plan.v[..7])).ln();
+    }
+    let ratio = (log_sum / set.len() as f64).exp();
+    assert!(ratio <= 10.45, "duration / LB geometric mean {ratio}");
+}
+
+/// Replanning from moving states with the spline: continuous start, checked, and shorter on
+/// average than the per-segment planner from the same states.
+#[test]
+fn spline_replanning_from_moving_states_is_continuous_and_shorter_on_average() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut sp = Planner::new(plan, PlannerConfig::default());
+    let mut seg = Planner::new(
+        plan,
+        PlannerConfig {
+            method: Method::Segments,
+            ..Default::default()
+        },
+    );
+    let set = anchor_set(robot.limits(), 40, 5);
+    let (mut ls, mut lg, mut used) = (0.0, 0.0, 0);
+    for w in set.windows(2) {
+        let wp = w[0]
+            .chunk
+            .waypoints(&w[0].q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let t1 = sp.plan(&JointState::at_rest(&w[0].q0), &wp).unwrap();
+        for dt in [0.033, 0.1] {
+            let s = t1.state_at(dt);
+            let wp2 = w[1]
+                .chunk
+                .waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject)
+                .unwrap();
+            let mut t2 = sp.plan(&s, &wp2).unwrap();
+            used += usize::from(sp.last_method() == Method::Spline);
+            t2.check(&plan).unwrap();
+            let s2 = t2.state_at(0.0);
+            for i in 0..7 {
+                assert!((s2.q[i] - s.q[i]).abs() <= 1e-12);
+                assert!((s2.dq[i] - s.dq[i]).abs() <= 1e-12);
+                assert!((s2.ddq[i] - s.ddq[i]).abs() <= 1e-12);
+            }
+            ls += t2.duration().ln();
+            lg += seg.plan(&s, &wp2).unwrap().duration().ln();
+        }
+    }
+    assert!(used >= 70, "spline used for only {used} of 78 replans");
+    assert!(ls < lg, "spline not shorter on average");
+}

@@ -1,0 +1,98 @@
+//! Quick quality/timing probe of the planner on the anchor set (development aid).
+use pacs_models::RobotModel;
+use pacs_verify::problems::{anchor_set, lower_bound};
+use pacs_verify::{JointState, Limits, Method, OutOfLimits, Planner, PlannerConfig};
+use std::time::Instant;
+
+fn main() {
+    let robot = RobotModel::builtin("fr3").unwrap();
+    let hw = Limits::from_joint_limits(robot.limits());
+    let l = hw.with_uniform_acc_jerk(10.0, 400.0);
+    let probs = anchor_set(robot.limits(), 200, 7);
+    let iters: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(12);
+    let seg = std::env::args().nth(2).is_some();
+    let mut pl = Planner::new(
+        l,
+        PlannerConfig {
+            spline_iterations: iters,
+            method: if seg {
+                Method::Segments
+            } else {
+                Method::Spline
+            },
+            ..Default::default()
+        },
+    );
+    let set: Vec<_> = probs
+        .iter()
+        .map(|p| {
+            (
+                JointState::at_rest(&p.q0),
+                p.chunk
+                    .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+                    .unwrap(),
+            )
+        })
+        .collect();
+    let mut ls = 0.0;
+    let mut fb = 0;
+    for (s, wp) in &set {
+        let t = pl.plan(s, wp).unwrap();
+        if pl.last_method() != Method::Spline {
+            fb += 1;
+        }
+        ls += (t.duration() / lower_bound(wp, &l.v[..7])).ln();
+    }
+    for dt in [0.033f64, 0.1] {
+        let (mut fbm, mut lsm, mut lss) = (0, 0.0, 0.0);
+        let mut seg = Planner::new(
+            l,
+            PlannerConfig {
+                method: Method::Segments,
+                ..Default::default()
+            },
+        );
+        for w in set.windows(2) {
+            let t = pl.plan(&w[0].0, &w[0].1).unwrap();
+            let s = t.state_at(dt.min(t.duration()));
+            let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
+                .map(|k| {
+                    (0..7)
+                        .map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i])
+                        .collect()
+                })
+                .collect();
+            let wp = pacs_verify::Waypoints::from_rows(&rows).unwrap();
+            let t2 = pl.plan(&s, &wp).unwrap();
+            if pl.last_method() != Method::Spline {
+                fbm += 1;
+            }
+            let t3 = seg.plan(&s, &wp).unwrap();
+            lsm += t2.duration().ln();
+            lss += t3.duration().ln();
+        }
+        println!(
+            "replan dt {dt}: fallbacks {fbm}/199, spline/segments duration geomean ratio {:.3}",
+            ((lsm - lss) / 199.0).exp()
+        );
+    }
+    let mut times = Vec::new();
+    for _ in 0..5 {
+        for (s, wp) in &set {
+            let t0 = Instant::now();
+            let t = pl.plan(s, wp).unwrap();
+            times.push(t0.elapsed().as_secs_f64() * 1e6);
+            std::hint::black_box(t);
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "fallbacks {fb} iters {iters}: ratio {:.3}  median {:.1} us p99 {:.1} us",
+        (ls / set.len() as f64).exp(),
+        times[times.len() / 2],
+        times[times.len() * 99 / 100]
+    );
+}

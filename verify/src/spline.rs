@@ -1,0 +1,525 @@
+//! Intended trajectories as time-optimised C² cubic splines: one constant-jerk piece per segment
+//! between consecutive waypoints (the first and last segments are split into two pieces, which
+//! gives the two extra degrees of freedom a clamped start (q, q̇, q̈) and end (q̇, q̈ = 0) need),
+//! knots at the waypoint times. For given segment durations the spline is the unique solution of a
+//! small linear system (the same matrix for every joint); the durations are then optimised by a
+//! fixed-point iteration that lengthens segments whose pieces exceed a limit and shortens those
+//! with slack, with an exact uniform time scaling (for starts at rest) making every iterate a
+//! feasible candidate. The caller checks the assembled trajectory exactly before using it.
+//!
+//! Uniform time scaling by λ keeps the spline shape (for a start at rest): velocities scale by
+//! 1/λ, accelerations by 1/λ², jerks by 1/λ³, so the smallest admissible λ for given durations
+//! follows from the per-piece ratios in closed form.
+
+use crate::chunk::Waypoints;
+use crate::intended::rest_to_rest_time;
+use crate::profile::Piece;
+use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
+use pacs_models::MAX_DOF;
+
+/// Knot whose position is an unknown of the linear system (not a waypoint).
+const FREE: usize = usize::MAX;
+
+/// Relative slack accepted on the limit ratios of the optimiser (the exact check allows 1e-9).
+const RATIO_TOL: f64 = 1e-10;
+
+/// Ratio the optimiser aims at for starts that are not at rest.
+const MOVING_TARGET: f64 = 0.97;
+
+/// Exponent of the duration update t_k ← t_k · r_k^e (r_k: segment k's scale-normalised ratio).
+const STEP_EXPONENT: f64 = 0.6;
+
+/// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)
+/// still get a piece.
+const MIN_SEGMENT: f64 = 1e-3;
+
+/// Scratch space and state of the spline optimiser (reused across plans; no allocation once warm).
+#[derive(Debug, Default, Clone)]
+pub(crate) struct SplineSolver {
+    /// Segment durations of the current iterate (s).
+    seg_t: Vec<f64>,
+    /// Best feasible segment durations found so far.
+    best_t: Vec<f64>,
+    /// Per-segment limit ratios (max over pieces and joints of |j|/J, |a|/A, |v|/V).
+    rj: Vec<f64>,
+    ra: Vec<f64>,
+    rv: Vec<f64>,
+    /// Pieces per segment.
+    split: Vec<usize>,
+    /// Piece durations and the segment of each piece.
+    tau: Vec<f64>,
+    seg_of: Vec<usize>,
+    /// Per knot: waypoint index or [`FREE`]; and the unknown index of a free knot's position.
+    knot_wp: Vec<usize>,
+    knot_var: Vec<usize>,
+    /// Per knot: the unknown index of its acceleration ([`FREE`] for the known M_0 and M_p).
+    acc_var: Vec<usize>,
+    /// Dense system (row-major), right-hand sides (one column per joint).
+    mat: Vec<f64>,
+    /// Right-hand sides, row-major with stride `n` (one column per joint).
+    rhs: Vec<f64>,
+    /// Lower and upper bandwidth of the system (from its sparsity pattern).
+    band: (usize, usize),
+    /// Cached scale-normalised ratio per segment.
+    rs: Vec<f64>,
+    /// Knot positions and accelerations per joint.
+    y: Vec<[f64; MAX_DOF]>,
+    acc: Vec<[f64; MAX_DOF]>,
+    /// End velocity per joint.
+    v_end: [f64; MAX_DOF],
+    /// Duration of the first piece of a two-piece first segment (s; 0: half the segment).
+    first_ramp: f64,
+}
+
+impl SplineSolver {
+    /// Knot layout for `h` segments: the first and last segment split in two (one segment: three).
+    fn layout(&mut self, h: usize) {
+        self.split.clear();
+        for k in 0..h {
+            self.split.push(if h == 1 {
+                3
+            } else if k == 0 || k == h - 1 {
+                2
+            } else {
+                1
+            });
+        }
+        self.seg_of.clear();
+        self.knot_wp.clear();
+        self.knot_var.clear();
+        self.knot_wp.push(0);
+        for k in 0..h {
+            for s in 0..self.split[k] {
+                self.seg_of.push(k);
+                self.knot_wp
+                    .push(if s + 1 == self.split[k] { k + 1 } else { FREE });
+            }
+        }
+        // Unknowns interleaved in knot order (free position, then acceleration) so that the
+        // system is banded: equation q couples only knots q − 1, q, q + 1.
+        let p = self.seg_of.len();
+        self.acc_var.clear();
+        let mut next = 0;
+        for (q, &w) in self.knot_wp.iter().enumerate() {
+            if w == FREE {
+                self.knot_var.push(next);
+                next += 1;
+            } else {
+                self.knot_var.push(FREE);
+            }
+            if q > 0 && q < p {
+                self.acc_var.push(next);
+                next += 1;
+            } else {
+                self.acc_var.push(FREE);
+            }
+        }
+        debug_assert_eq!(next, p + 1);
+        // Equation q couples the unknowns of knots q − 1, q, q + 1.
+        let (mut lb, mut ub) = (0usize, 0usize);
+        for q in 0..=p {
+            for k in q.saturating_sub(1)..=(q + 1).min(p) {
+                for v in [self.knot_var[k], self.acc_var[k]] {
+                    if v != FREE {
+                        lb = lb.max(q.saturating_sub(v));
+                        ub = ub.max(v.saturating_sub(q));
+                    }
+                }
+            }
+        }
+        self.band = (lb, ub);
+        self.tau.resize(p, 0.0);
+        self.y.resize(p + 1, [0.0; MAX_DOF]);
+        self.acc.resize(p + 1, [0.0; MAX_DOF]);
+        self.mat.resize((p + 1) * (p + 1), 0.0);
+    }
+
+    /// Spline for the segment durations `seg_t`: knot positions and accelerations of every joint.
+    /// Returns false if the system is singular.
+    fn solve(
+        &mut self,
+        n: usize,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        seg_t: &[f64],
+    ) -> bool {
+        let p = self.seg_of.len();
+        let m = p + 1;
+        let h = seg_t.len();
+        for (q, t) in self.tau.iter_mut().enumerate() {
+            let k = self.seg_of[q];
+            *t = seg_t[k] / self.split[k] as f64;
+        }
+        if self.split[0] == 2 && self.first_ramp > 0.0 {
+            self.tau[0] = self.first_ramp.clamp(0.1 * seg_t[0], 0.5 * seg_t[0]);
+            self.tau[1] = seg_t[0] - self.tau[0];
+        }
+        for i in 0..n {
+            self.v_end[i] = match end {
+                EndCondition::AtRest => 0.0,
+                EndCondition::Moving => (wp.row(h)[i] - wp.row(h - 1)[i]) / seg_t[h - 1],
+            };
+        }
+        self.mat.iter_mut().for_each(|x| *x = 0.0);
+        self.rhs.clear();
+        self.rhs.resize(m * n, 0.0);
+        self.rhs[..n].copy_from_slice(&start.dq[..n]);
+        self.rhs[p * n..(p + 1) * n].copy_from_slice(&self.v_end[..n]);
+        // Velocity at the start of piece q: (y_{q+1} − y_q)/τ − τ(2M_q + M_{q+1})/6;
+        // at its end: (y_{q+1} − y_q)/τ + τ(M_q + 2M_{q+1})/6.
+        // Row 0: start velocity; row q (1..p−1): continuity at knot q; row p: end velocity.
+        for row in 0..=p {
+            if row < p {
+                // − v_start of piece `row`.
+                let t = self.tau[row];
+                let s = if row == 0 { 1.0 } else { -1.0 };
+                self.coef_y(n, m, start, wp, row, row + 1, s / t);
+                self.coef_y(n, m, start, wp, row, row, -s / t);
+                self.coef_m(n, m, start, row, row, -s * t / 3.0);
+                self.coef_m(n, m, start, row, row + 1, -s * t / 6.0);
+            }
+            if row > 0 {
+                // + v_end of piece `row − 1`.
+                let t = self.tau[row - 1];
+                self.coef_y(n, m, start, wp, row, row, 1.0 / t);
+                self.coef_y(n, m, start, wp, row, row - 1, -1.0 / t);
+                self.coef_m(n, m, start, row, row - 1, t / 6.0);
+                self.coef_m(n, m, start, row, row, t / 3.0);
+            }
+        }
+        // Banded Gaussian elimination with partial pivoting, all joints' right-hand sides at
+        // once; pivoting widens the upper band by the lower bandwidth.
+        let (lb, ub) = self.band;
+        let ub = ub + lb;
+        for c in 0..m {
+            let r_end = m.min(c + lb + 1);
+            let k_end = m.min(c + ub + 1);
+            let mut piv = c;
+            let mut best = self.mat[c * m + c].abs();
+            for r in c + 1..r_end {
+                let v = self.mat[r * m + c].abs();
+                if v > best {
+                    best = v;
+                    piv = r;
+                }
+            }
+            if best == 0.0 || !best.is_finite() {
+                return false;
+            }
+            if piv != c {
+                for k in c..k_end {
+                    self.mat.swap(c * m + k, piv * m + k);
+                }
+                for i in 0..n {
+                    self.rhs.swap(c * n + i, piv * n + i);
+                }
+            }
+            let d = 1.0 / self.mat[c * m + c];
+            for r in c + 1..r_end {
+                let f = self.mat[r * m + c] * d;
+                if f != 0.0 {
+                    for k in c + 1..k_end {
+                        self.mat[r * m + k] -= f * self.mat[c * m + k];
+                    }
+                    let (top, bottom) = self.rhs.split_at_mut(r * n);
+                    let rc = &top[c * n..(c + 1) * n];
+                    for (x, y) in bottom[..n].iter_mut().zip(rc) {
+                        *x -= f * y;
+                    }
+                }
+            }
+        }
+        for c in (0..m).rev() {
+            let d = 1.0 / self.mat[c * m + c];
+            let (top, bottom) = self.rhs.split_at_mut((c + 1) * n);
+            let x = &mut top[c * n..];
+            for k in c + 1..m.min(c + ub + 1) {
+                let f = self.mat[c * m + k];
+                if f != 0.0 {
+                    let xk = &bottom[(k - c - 1) * n..(k - c) * n];
+                    for (xi, yi) in x.iter_mut().zip(xk) {
+                        *xi -= f * yi;
+                    }
+                }
+            }
+            for xi in x.iter_mut() {
+                *xi *= d;
+            }
+        }
+        // Knot accelerations and positions from the unknowns.
+        for q in 0..=p {
+            for i in 0..n {
+                self.acc[q][i] = if q == 0 {
+                    start.ddq[i]
+                } else if q == p {
+                    0.0
+                } else {
+                    self.rhs[self.acc_var[q] * n + i]
+                };
+                self.y[q][i] = match self.knot_wp[q] {
+                    FREE => self.rhs[self.knot_var[q] * n + i],
+                    0 => start.q[i],
+                    w => wp.row(w)[i],
+                };
+            }
+        }
+        self.y.iter().all(|r| r[..n].iter().all(|x| x.is_finite()))
+            && self
+                .acc
+                .iter()
+                .all(|r| r[..n].iter().all(|x| x.is_finite()))
+    }
+
+    /// Add `c`·y_knot to equation `row` (known positions go to the right-hand side).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn coef_y(
+        &mut self,
+        n: usize,
+        m: usize,
+        start: &JointState,
+        wp: &Waypoints,
+        row: usize,
+        knot: usize,
+        c: f64,
+    ) {
+        match self.knot_wp[knot] {
+            FREE => self.mat[row * m + self.knot_var[knot]] += c,
+            w => {
+                let q = if w == 0 { &start.q[..n] } else { wp.row(w) };
+                for i in 0..n {
+                    self.rhs[row * n + i] -= c * q[i];
+                }
+            }
+        }
+    }
+
+    /// Add `c`·M_knot to equation `row` (M_0 = start acceleration and M_p = 0 are known).
+    #[inline]
+    fn coef_m(&mut self, n: usize, m: usize, start: &JointState, row: usize, knot: usize, c: f64) {
+        let p = m - 1;
+        if knot == 0 {
+            for i in 0..n {
+                self.rhs[row * n + i] -= c * start.ddq[i];
+            }
+        } else if knot < p {
+            self.mat[row * m + self.acc_var[knot]] += c;
+        }
+    }
+
+    /// Velocity at the start of piece `q` for joint `i`.
+    #[inline]
+    fn v_start(&self, q: usize, i: usize) -> f64 {
+        let t = self.tau[q];
+        (self.y[q + 1][i] - self.y[q][i]) / t
+            - t * (2.0 * self.acc[q][i] + self.acc[q + 1][i]) / 6.0
+    }
+
+    /// Per-segment limit ratios of the current spline (into `rj`, `ra`, `rv`).
+    fn ratios(&mut self, n: usize, lim: &Limits, h: usize) {
+        self.rj.clear();
+        self.rj.resize(h, 0.0);
+        self.ra.clear();
+        self.ra.resize(h, 0.0);
+        self.rv.clear();
+        self.rv.resize(h, 0.0);
+        for q in 0..self.tau.len() {
+            let k = self.seg_of[q];
+            let t = self.tau[q];
+            let (mut rj, mut ra, mut rv) = (self.rj[k], self.ra[k], self.rv[k]);
+            for i in 0..n {
+                let (m0, m1) = (self.acc[q][i], self.acc[q + 1][i]);
+                let j = (m1 - m0) / t;
+                let v0 = self.v_start(q, i);
+                let v1 = v0 + 0.5 * t * (m0 + m1);
+                let mut vm = v0.abs().max(v1.abs());
+                if m0 * m1 < 0.0 {
+                    let d = -m0 / j;
+                    vm = vm.max((v0 + d * (m0 + 0.5 * j * d)).abs());
+                }
+                rj = rj.max(j.abs() / lim.j[i]);
+                ra = ra.max(m0.abs().max(m1.abs()) / lim.a[i]);
+                rv = rv.max(vm / lim.v[i]);
+            }
+            self.rj[k] = rj;
+            self.ra[k] = ra;
+            self.rv[k] = rv;
+        }
+        self.rs.clear();
+        for k in 0..h {
+            self.rs
+                .push(self.rj[k].cbrt().max(self.ra[k].sqrt()).max(self.rv[k]));
+        }
+    }
+
+    /// Scale-normalised ratio of segment k (> 1: too fast, < 1: slack), as of the last
+    /// [`SplineSolver::ratios`].
+    #[inline]
+    fn seg_ratio(&self, k: usize) -> f64 {
+        self.rs[k]
+    }
+
+    /// Time-optimised spline trajectory through the waypoints, or `None` if the optimiser found no
+    /// spline within the limits (by its own ratios; the caller still runs the exact check).
+    ///
+    /// From a moving start the first piece is given the time to swing the start acceleration
+    /// across the acceleration range at the jerk limit, τ_r = max_i (|q̈_0,i| + a_i)/j_i (clamped
+    /// to [0.1, 0.5] of the first segment); if no spline is found, τ_r/2 and 2τ_r are tried.
+    pub(crate) fn plan(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        iterations: usize,
+    ) -> Option<Trajectory> {
+        let n = lim.dof;
+        let h = wp.segments();
+        if h == 0 {
+            return None;
+        }
+        self.layout(h);
+        let at_rest = (0..n).all(|i| start.dq[i] == 0.0 && start.ddq[i] == 0.0);
+        if at_rest {
+            self.first_ramp = 0.0;
+            return self.optimise(lim, start, wp, end, iterations, true);
+        }
+        let ramp = (0..n)
+            .map(|i| (start.ddq[i].abs() + lim.a[i]) / lim.j[i])
+            .fold(0.0, f64::max);
+        for c in [1.0, 0.5, 2.0] {
+            self.first_ramp = c * ramp;
+            if let Some(t) = self.optimise(lim, start, wp, end, iterations, false) {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    fn optimise(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        iterations: usize,
+        at_rest: bool,
+    ) -> Option<Trajectory> {
+        let n = lim.dof;
+        let h = wp.segments();
+        // Start: synchronized rest-to-rest durations (closed form).
+        let mut seg_t = std::mem::take(&mut self.seg_t);
+        let mut best_t = std::mem::take(&mut self.best_t);
+        seg_t.clear();
+        for k in 1..=h {
+            let t = (0..n)
+                .map(|i| {
+                    rest_to_rest_time(
+                        (wp.row(k)[i] - wp.row(k - 1)[i]).abs(),
+                        lim.v[i],
+                        lim.a[i],
+                        lim.j[i],
+                    )
+                })
+                .fold(0.0, f64::max);
+            seg_t.push(t.max(MIN_SEGMENT));
+        }
+        best_t.clear();
+        let mut best = f64::INFINITY;
+        // Moving starts do not scale exactly: aim slightly inside the limits.
+        let target = if at_rest { 1.0 } else { MOVING_TARGET };
+        for _ in 0..iterations.max(1) {
+            if !self.solve(n, start, wp, end, &seg_t) {
+                break;
+            }
+            self.ratios(n, lim, h);
+            let lam = (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max);
+            let total: f64 = seg_t.iter().sum();
+            // At rest, λ·durations is exactly feasible; otherwise only an iterate within the
+            // limits (λ ≤ 1) is a candidate as it stands.
+            let (cand, scale) = if at_rest {
+                (lam * total, lam)
+            } else if lam <= 1.0 + RATIO_TOL {
+                (total, 1.0)
+            } else {
+                (f64::INFINITY, 1.0)
+            };
+            if cand < best {
+                best = cand;
+                best_t.clear();
+                best_t.extend(seg_t.iter().map(|t| t * scale));
+            }
+            for k in 0..h {
+                let r = self.seg_ratio(k) / target;
+                if r > 0.0 {
+                    seg_t[k] = (seg_t[k] * r.powf(STEP_EXPONENT)).max(MIN_SEGMENT);
+                }
+            }
+        }
+        let result = if best_t.is_empty() {
+            None
+        } else if self.solve(n, start, wp, end, &best_t) {
+            self.ratios(n, lim, h);
+            let lam = (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max);
+            (lam <= 1.0 + RATIO_TOL).then(|| self.assemble(n, start, wp, end))
+        } else {
+            None
+        };
+        self.seg_t = seg_t;
+        self.best_t = best_t;
+        result
+    }
+
+    /// The trajectory of the last solved spline.
+    fn assemble(
+        &self,
+        n: usize,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+    ) -> Trajectory {
+        let p = self.tau.len();
+        let h = wp.segments();
+        let mut pieces = Vec::with_capacity(n * (p + 1));
+        let mut offsets = [0usize; MAX_DOF + 1];
+        let mut times = Vec::with_capacity(h);
+        let mut t = 0.0;
+        for q in 0..p {
+            t += self.tau[q];
+            if self.knot_wp[q + 1] != FREE {
+                times.push(t);
+            }
+        }
+        let duration = t;
+        for i in 0..n {
+            offsets[i] = pieces.len();
+            let mut t = 0.0;
+            for q in 0..p {
+                let tq = self.tau[q];
+                let (v, a) = if q == 0 {
+                    (start.dq[i], start.ddq[i])
+                } else {
+                    (self.v_start(q, i), self.acc[q][i])
+                };
+                pieces.push(Piece {
+                    t,
+                    q: self.y[q][i],
+                    v,
+                    a,
+                    j: (self.acc[q + 1][i] - self.acc[q][i]) / tq,
+                });
+                t += tq;
+            }
+            pieces.push(Piece {
+                t: duration,
+                q: wp.row(h)[i],
+                v: self.v_end[i],
+                a: 0.0,
+                j: 0.0,
+            });
+        }
+        offsets[n] = pieces.len();
+        Trajectory::from_parts(n, pieces, offsets, duration, times, end)
+    }
+}
