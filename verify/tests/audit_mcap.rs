@@ -877,3 +877,12 @@ fn cdr_decoder_matches_hand_written_bytes() {
     cdr::decode_string(&string_msg("success"), &mut s).unwrap();
     assert_eq!(s, "success");
 }
+
+#[test]
+fn fuzz_regression_huge_string_length_in_a_metadata_record() {
+    // Found by `cargo fuzz run mcap`: a metadata string declaring 3.7 GB made `mcap`'s record
+    // parser reserve it; the reader parses the records it needs itself and checks every length.
+    let bytes = include_bytes!("data/mcap_fuzz_oom_metadata_string.mcap");
+    let e = audit_bytes("oom.mcap", bytes, &AuditConfig::default(), None).unwrap_err();
+    assert!(e.to_string().starts_with("oom.mcap: "), "{e}");
+}

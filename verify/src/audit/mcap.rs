@@ -17,11 +17,8 @@
 use super::cdr::{self, CdrWriter, JointState, PoseArray, Stamp};
 use super::error::{AuditError, Location};
 use super::log::{Header, LogModels, Record, RecordReader};
-use mcap::records::{Record as McapRecord, op};
-use mcap::sans_io::{
-    LinearReadEvent, LinearReader, LinearReaderOptions, SummaryReadEvent, SummaryReader,
-    SummaryReaderOptions,
-};
+use mcap::records::op;
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use serde::{Deserialize, Serialize};
 use std::collections::{BinaryHeap, HashMap};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -397,78 +394,142 @@ impl<R: Read + Seek> McapReader<R> {
     }
 }
 
+/// Little-endian field reader over one MCAP record body; every length is checked against the
+/// remaining bytes before use (`mcap`'s own record parser reserves a string's declared length
+/// before checking it, so the records the audit needs are parsed here).
+struct Fields<'a> {
+    b: &'a [u8],
+}
+
+impl<'a> Fields<'a> {
+    fn take(&mut self, n: u64, what: &str) -> Result<&'a [u8], String> {
+        if n > self.b.len() as u64 {
+            return Err(format!(
+                "{what}: {n} bytes declared, only {} remain in the record",
+                self.b.len()
+            ));
+        }
+        let (h, t) = self.b.split_at(n as usize);
+        self.b = t;
+        Ok(h)
+    }
+    fn int<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+        let s = self.take(N as u64, what)?;
+        let mut a = [0u8; N];
+        a.copy_from_slice(s);
+        Ok(a)
+    }
+    fn u16(&mut self, what: &str) -> Result<u16, String> {
+        Ok(u16::from_le_bytes(self.int(what)?))
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.int(what)?))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.int(what)?))
+    }
+    fn bytes(&mut self, what: &str) -> Result<&'a [u8], String> {
+        let n = self.u32(what)?;
+        self.take(u64::from(n), what)
+    }
+    fn str(&mut self, what: &str) -> Result<&'a str, String> {
+        std::str::from_utf8(self.bytes(what)?).map_err(|_| format!("{what}: not valid UTF-8"))
+    }
+    /// A `Map<string, string>` (byte length, then key/value pairs); visits each pair.
+    fn map(&mut self, what: &str, mut f: impl FnMut(&'a str, &'a str)) -> Result<(), String> {
+        let n = self.u32(what)?;
+        let mut m = Fields {
+            b: self.take(u64::from(n), what)?,
+        };
+        while !m.b.is_empty() {
+            let k = m.str(what)?;
+            let v = m.str(what)?;
+            f(k, v);
+        }
+        Ok(())
+    }
+}
+
 /// Look for the `pacs` metadata record through the summary's metadata index. A missing or
-/// unreadable summary gives `None` (the linear pass then looks for the record); a `pacs` index
-/// entry pointing at an invalid record is an error.
+/// unreadable summary gives `None` (the linear pass then looks for the record, and reports a
+/// damaged file); a `pacs` index entry pointing at an invalid record is an error.
 fn header_from_summary<R: Read + Seek>(
     file: &str,
     input: &mut R,
     size: u64,
 ) -> Result<Option<(Header, u64)>, AuditError> {
-    let mut sr = SummaryReader::new_with_options(
-        SummaryReaderOptions::default()
-            .with_file_size(size)
-            .with_record_length_limit(RECORD_LIMIT),
-    );
-    let mut pos = 0u64;
-    while let Some(ev) = sr.next_event() {
-        match ev {
-            Err(_) => return Ok(None),
-            Ok(SummaryReadEvent::SeekRequest(to)) => match input.seek(to) {
-                Ok(p) => {
-                    pos = p;
-                    sr.notify_seeked(p);
-                }
-                Err(_) => return Ok(None),
-            },
-            Ok(SummaryReadEvent::ReadRequest(n)) => {
-                let n = (n as u64).min(size.saturating_sub(pos)) as usize;
-                let buf = sr.insert(n);
-                match input.read(buf) {
-                    Ok(k) => {
-                        pos += k as u64;
-                        sr.notify_read(k);
-                    }
-                    Err(_) => return Ok(None),
-                }
-            }
-        }
-    }
-    let Some(summary) = sr.finish() else {
-        return Ok(None);
-    };
-    let mut found = summary
-        .metadata_indexes
-        .iter()
-        .filter(|m| m.name == METADATA_NAME);
-    let Some(idx) = found.next() else {
-        return Ok(None);
-    };
-    let loc = Location::Offset(idx.offset);
-    let err = |p: String| AuditError::input(file, loc, p);
-    if found.next().is_some() {
-        return Err(err(format!(
-            "more than one metadata record named `{METADATA_NAME}` (ambiguous header)"
-        )));
-    }
-    let len = idx.length;
-    if len < 9 || len > RECORD_LIMIT as u64 || idx.offset.saturating_add(len) > size {
-        return Err(err(format!(
-            "metadata index of `{METADATA_NAME}`: record length {len} at offset {} does not fit the file",
-            idx.offset
-        )));
-    }
-    input
-        .seek(SeekFrom::Start(idx.offset))
-        .map_err(|e| AuditError::Io {
-            file: file.to_string(),
-            source: e,
-        })?;
-    let mut buf = vec![0u8; len as usize];
-    input.read_exact(&mut buf).map_err(|e| AuditError::Io {
+    // Footer record (opcode, length, summary_start, summary_offset_start, crc) + end magic.
+    const TAIL: u64 = 1 + 8 + 8 + 8 + 4 + 8;
+    let io = |e: std::io::Error| AuditError::Io {
         file: file.to_string(),
         source: e,
-    })?;
+    };
+    if size < TAIL + 8 {
+        return Ok(None);
+    }
+    let mut tail = [0u8; TAIL as usize];
+    input.seek(SeekFrom::Start(size - TAIL)).map_err(io)?;
+    if input.read_exact(&mut tail).is_err() || tail[0] != op::FOOTER || &tail[29..] != MAGIC {
+        return Ok(None);
+    }
+    let mut f = Fields { b: &tail[9..29] };
+    let (Ok(start), Ok(_)) = (f.u64(""), f.u64("")) else {
+        return Ok(None);
+    };
+    let end = size - TAIL;
+    if start == 0 || start >= end {
+        return Ok(None);
+    }
+    // Walk the summary section's records, reading only metadata index bodies.
+    let mut pos = start;
+    let mut found: Option<(u64, u64)> = None;
+    while pos + 9 <= end {
+        let mut head = [0u8; 9];
+        input.seek(SeekFrom::Start(pos)).map_err(io)?;
+        if input.read_exact(&mut head).is_err() {
+            return Ok(None);
+        }
+        let len = u64::from_le_bytes(head[1..9].try_into().unwrap_or([0xff; 8]));
+        let Some(next) = (pos + 9).checked_add(len).filter(|&n| n <= end) else {
+            return Ok(None);
+        };
+        if head[0] == op::METADATA_INDEX && len <= 4096 {
+            let mut body = vec![0u8; len as usize];
+            if input.read_exact(&mut body).is_err() {
+                return Ok(None);
+            }
+            let mut m = Fields { b: &body };
+            let (Ok(offset), Ok(length), Ok(name)) = (m.u64(""), m.u64(""), m.str("")) else {
+                return Ok(None);
+            };
+            if name == METADATA_NAME {
+                if found.is_some() {
+                    return Err(AuditError::input(
+                        file,
+                        Location::Offset(offset),
+                        format!(
+                            "more than one metadata record named `{METADATA_NAME}` (ambiguous header)"
+                        ),
+                    ));
+                }
+                found = Some((offset, length));
+            }
+        }
+        pos = next;
+    }
+    let Some((offset, len)) = found else {
+        return Ok(None);
+    };
+    let loc = Location::Offset(offset);
+    let err = |p: String| AuditError::input(file, loc, p);
+    if len < 9 || len > RECORD_LIMIT as u64 || offset.saturating_add(len) > size {
+        return Err(err(format!(
+            "metadata index of `{METADATA_NAME}`: record length {len} at offset {offset} does not fit the file"
+        )));
+    }
+    input.seek(SeekFrom::Start(offset)).map_err(io)?;
+    let mut buf = vec![0u8; len as usize];
+    input.read_exact(&mut buf).map_err(io)?;
     let body_len = buf
         .get(1..9)
         .and_then(|b| b.try_into().ok())
@@ -478,26 +539,36 @@ fn header_from_summary<R: Read + Seek>(
             "metadata index of `{METADATA_NAME}` does not point at a metadata record"
         )));
     }
-    let h = match mcap::parse_record(op::METADATA, &buf[9..]) {
-        Ok(McapRecord::Metadata(m)) if m.name == METADATA_NAME => metadata_header(&m),
-        Ok(_) => {
-            return Err(err(format!(
-                "metadata index of `{METADATA_NAME}` points at another record"
-            )));
-        }
-        Err(e) => return Err(err(format!("invalid metadata record: {e}"))),
-    };
-    Ok(Some((h.map_err(err)?, idx.offset)))
+    match parse_metadata(&buf[9..]) {
+        Ok((name, h)) if name == METADATA_NAME => Ok(Some((h.map_err(err)?, offset))),
+        Ok(_) => Err(err(format!(
+            "metadata index of `{METADATA_NAME}` points at another record"
+        ))),
+        Err(p) => Err(err(format!("invalid metadata record: {p}"))),
+    }
 }
 
-/// The header in a `pacs` metadata record; the error names the problem.
-fn metadata_header(m: &mcap::records::Metadata) -> Result<Header, String> {
-    match m.metadata.get(METADATA_KEY) {
-        None => Err(format!(
+/// A metadata record body: its name, and (for a `pacs` record) the header it holds.
+fn parse_metadata(body: &[u8]) -> Result<(&str, Result<Header, String>), String> {
+    let mut f = Fields { b: body };
+    let name = f.str("metadata name")?;
+    let mut text = None;
+    let mut count = 0;
+    f.map("metadata", |k, v| {
+        if k == METADATA_KEY {
+            text = Some(v);
+            count += 1;
+        }
+    })?;
+    let h = match (name == METADATA_NAME, text) {
+        (false, _) => Err(String::new()),
+        (true, None) => Err(format!(
             "missing header: metadata record `{METADATA_NAME}` has no key `{METADATA_KEY}`"
         )),
-        Some(text) => parse_header_json(text).map_err(|p| format!("header: {p}")),
-    }
+        (true, Some(_)) if count > 1 => Err(format!("key `{METADATA_KEY}` appears twice")),
+        (true, Some(t)) => parse_header_json(t).map_err(|p| format!("header: {p}")),
+    };
+    Ok((name, h))
 }
 
 impl State {
@@ -541,73 +612,107 @@ impl State {
             op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => {}
             _ => return Ok(()),
         }
-        let rec = mcap::parse_record(opcode, data)
-            .map_err(|e| self.err(format!("invalid MCAP record (opcode 0x{opcode:02x}): {e}")))?;
-        match rec {
-            McapRecord::Schema { header, .. } => {
-                let new = (header.name, header.encoding);
-                if let Some(old) = self.schemas.get(&header.id) {
-                    if *old != new {
+        let bad = |p: String| {
+            AuditError::input(
+                &self.file,
+                Location::Offset(self.pos),
+                format!("invalid MCAP record (opcode 0x{opcode:02x}): {p}"),
+            )
+        };
+        let mut f = Fields { b: data };
+        match opcode {
+            op::SCHEMA => {
+                let id = f.u16("schema id").map_err(bad)?;
+                let name = f.str("schema name").map_err(bad)?;
+                let encoding = f.str("schema encoding").map_err(bad)?;
+                f.bytes("schema data").map_err(bad)?;
+                if let Some(old) = self.schemas.get(&id) {
+                    if old.0 != name || old.1 != encoding {
                         return Err(self.err(format!(
-                            "schema id {} redefined (`{}` then `{}`)",
-                            header.id, old.0, new.0
+                            "schema id {id} redefined (`{}` then `{name}`)",
+                            old.0
                         )));
                     }
-                } else {
-                    self.schemas.insert(header.id, new);
+                } else if id != 0 {
+                    self.schemas.insert(id, (name.into(), encoding.into()));
                 }
             }
-            McapRecord::Channel(c) => self.channel(c)?,
-            McapRecord::Metadata(m) if m.name == METADATA_NAME => match self.header_from {
-                Some(HeaderFrom::Given) => {}
-                Some(HeaderFrom::Record(o)) if o == start => {}
-                Some(HeaderFrom::Record(o)) => {
-                    return Err(self.err(format!(
-                        "a second metadata record named `{METADATA_NAME}` (the header is at offset {o})"
-                    )));
+            op::CHANNEL => {
+                let id = f.u16("channel id").map_err(bad)?;
+                let schema_id = f.u16("channel schema id").map_err(bad)?;
+                let topic = f.str("channel topic").map_err(bad)?;
+                let enc = f.str("channel message encoding").map_err(bad)?;
+                f.map("channel metadata", |_, _| {}).map_err(bad)?;
+                self.channel(id, schema_id, topic, enc)?;
+            }
+            op::METADATA => {
+                let (name, h) = parse_metadata(data).map_err(bad)?;
+                if name == METADATA_NAME {
+                    match self.header_from {
+                        Some(HeaderFrom::Given) => {}
+                        Some(HeaderFrom::Record(o)) if o == start => {}
+                        Some(HeaderFrom::Record(o)) => {
+                            return Err(self.err(format!(
+                                "a second metadata record named `{METADATA_NAME}` (the header is at offset {o})"
+                            )));
+                        }
+                        None => {
+                            self.header_from = Some(HeaderFrom::Record(start));
+                            let h = h.map_err(|p| {
+                                AuditError::input(&self.file, Location::Offset(start), p)
+                            })?;
+                            self.set_header(h)?;
+                        }
+                    }
                 }
-                None => {
-                    self.header_from = Some(HeaderFrom::Record(start));
-                    let h = metadata_header(&m)
-                        .map_err(|p| AuditError::input(&self.file, Location::Offset(start), p))?;
-                    self.set_header(h)?;
-                }
-            },
-            McapRecord::Message { header, data } => self.message(&header, &data)?,
-            _ => {}
+            }
+            _ => {
+                let header = mcap::records::MessageHeader {
+                    channel_id: f.u16("message channel id").map_err(bad)?,
+                    sequence: f.u32("message sequence").map_err(bad)?,
+                    log_time: f.u64("message log time").map_err(bad)?,
+                    publish_time: f.u64("message publish time").map_err(bad)?,
+                };
+                self.message(&header, f.b)?;
+            }
         }
         Ok(())
     }
 
-    fn channel(&mut self, c: mcap::records::Channel) -> Result<(), AuditError> {
+    fn channel(
+        &mut self,
+        id: u16,
+        schema_id: u16,
+        topic: &str,
+        message_encoding: &str,
+    ) -> Result<(), AuditError> {
         let cfg = &self.cfg;
-        let (stream, expected) = if c.topic == cfg.robot_topic {
+        let (stream, expected) = if topic == cfg.robot_topic {
             (Stream::Robot, JOINT_STATE)
-        } else if c.topic == cfg.human_topic {
+        } else if topic == cfg.human_topic {
             (Stream::Human, POSE_ARRAY)
-        } else if c.topic == cfg.event_topic {
+        } else if topic == cfg.event_topic {
             (Stream::Event, STRING)
         } else {
             (Stream::Ignored, "")
         };
-        if let Some((topic, _)) = self.channels.get(&c.id) {
-            if *topic != c.topic {
+        if let Some((old, _)) = self.channels.get(&id) {
+            if old != topic {
                 return Err(self.err(format!(
-                    "channel id {} redefined (topic `{topic}` then `{}`)",
-                    c.id, c.topic
+                    "channel id {id} redefined (topic `{old}` then `{topic}`)"
                 )));
             }
             return Ok(());
         }
         if stream != Stream::Ignored {
-            let what = format!("channel {} on topic `{}`", c.id, c.topic);
-            if c.schema_id == 0 {
+            let what = format!("channel {} on topic `{}`", id, topic);
+            if schema_id == 0 {
                 return Err(self.err(format!("{what} has no schema (expected `{expected}`)")));
             }
-            let Some((name, encoding)) = self.schemas.get(&c.schema_id) else {
+            let Some((name, encoding)) = self.schemas.get(&schema_id) else {
                 return Err(self.err(format!(
                     "{what} refers to schema id {} which is not defined before it",
-                    c.schema_id
+                    schema_id
                 )));
             };
             if name != expected {
@@ -620,14 +725,14 @@ impl State {
                     "{what}: schema encoding `{encoding}` is not supported (expected `ros2msg`)"
                 )));
             }
-            if c.message_encoding != "cdr" {
+            if message_encoding != "cdr" {
                 return Err(self.err(format!(
                     "{what}: message encoding `{}` is not supported (expected `cdr`)",
-                    c.message_encoding
+                    message_encoding
                 )));
             }
         }
-        self.channels.insert(c.id, (c.topic, stream));
+        self.channels.insert(id, (topic.to_string(), stream));
         Ok(())
     }
 
