@@ -37,7 +37,7 @@ impl Enc {
         }
     }
     fn pad(&mut self, k: usize) {
-        while (self.b.len() - 4) % k != 0 {
+        while !(self.b.len() - 4).is_multiple_of(k) {
             self.b.push(0);
         }
     }
@@ -472,11 +472,13 @@ fn configured_topics_are_used() {
         t.0 = rename(&t.0);
     }
     let bytes = write_mcap(&spec, &header("ssm"), &msgs);
-    let mut cfg = AuditConfig::default();
-    cfg.mcap = McapConfig {
-        robot_topic: "/fr3/joint_states".into(),
-        human_topic: "/perception/skeleton".into(),
-        ..McapConfig::default()
+    let cfg = AuditConfig {
+        mcap: McapConfig {
+            robot_topic: "/fr3/joint_states".into(),
+            human_topic: "/perception/skeleton".into(),
+            ..McapConfig::default()
+        },
+        ..AuditConfig::default()
     };
     same_result(&a, &audit_bytes("t.mcap", &bytes, &cfg, None).unwrap());
     // With the default topics nothing is read: inconclusive, never pass.

@@ -277,11 +277,11 @@ impl<R: Read + Seek> McapReader<R> {
         let size = input.seek(SeekFrom::End(0)).map_err(io)?;
         let mut header_from = header.as_ref().map(|_| HeaderFrom::Given);
         let mut header = header;
-        if header.is_none() {
-            if let Some((h, off)) = header_from_summary(file, &mut input, size)? {
-                header = Some(h);
-                header_from = Some(HeaderFrom::Record(off));
-            }
+        if header.is_none()
+            && let Some((h, off)) = header_from_summary(file, &mut input, size)?
+        {
+            header = Some(h);
+            header_from = Some(HeaderFrom::Record(off));
         }
         input.seek(SeekFrom::Start(0)).map_err(io)?;
         let lin = LinearReader::new_with_options(
@@ -948,12 +948,10 @@ impl<R: Read + Seek> McapReader<R> {
             let ready = self.st.heap.peek().is_some_and(|top| {
                 self.st.done || top.t <= self.st.max_t - self.st.cfg.reorder_window
             });
-            if ready {
-                if let Some(p) = self.st.heap.pop() {
-                    self.st.last_released = p.t;
-                    self.current = Some(p);
-                    return Ok(self.current.as_ref());
-                }
+            if ready && let Some(p) = self.st.heap.pop() {
+                self.st.last_released = p.t;
+                self.current = Some(p);
+                return Ok(self.current.as_ref());
             }
             if self.st.done {
                 return Ok(None);
