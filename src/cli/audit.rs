@@ -12,7 +12,8 @@ use std::process::ExitCode;
 /// Arguments of `pacs audit`.
 #[derive(clap::Args, Debug)]
 pub struct AuditArgs {
-    /// Log files (JSON Lines, format v1: see docs/log-format.md).
+    /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
+    /// by its magic bytes or `*.mcap`; see docs/log-format.md).
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<PathBuf>,
     /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
@@ -25,23 +26,44 @@ pub struct AuditArgs {
     /// Print `{"runs": [...]}` as JSON on stdout instead of a text summary.
     #[arg(long)]
     pub json: bool,
+    /// MCAP logs only: the pacs header (JSON, or TOML for `*.toml`) instead of the logs' `pacs`
+    /// metadata records.
+    #[arg(long, value_name = "FILE")]
+    pub header: Option<PathBuf>,
+    /// MCAP logs only: topic of the robot's sensor_msgs/msg/JointState (overrides the config's
+    /// `mcap.robot_topic`; default /joint_states).
+    #[arg(long, value_name = "TOPIC")]
+    pub robot_topic: Option<String>,
+    /// MCAP logs only: topic of the human keypoints, geometry_msgs/msg/PoseArray (overrides the
+    /// config's `mcap.human_topic`; default /human/keypoints).
+    #[arg(long, value_name = "TOPIC")]
+    pub human_topic: Option<String>,
 }
 
 /// Exit code for invalid input.
 const EXIT_INVALID: u8 = 3;
 
 fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), String> {
-    match &args.config {
-        None => Ok((AuditConfig::default(), None)),
+    let (mut cfg, hash) = match &args.config {
+        None => (AuditConfig::default(), None),
         Some(p) => {
             let name = p.display().to_string();
             let text =
                 std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
             let cfg = audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
             let hash = InputFile::hash(p).map_err(|e| e.to_string())?;
-            Ok((cfg, Some(hash)))
+            (cfg, Some(hash))
         }
+    };
+    if let Some(t) = &args.robot_topic {
+        cfg.mcap.robot_topic.clone_from(t);
     }
+    if let Some(t) = &args.human_topic {
+        cfg.mcap.human_topic.clone_from(t);
+    }
+    cfg.validate()
+        .map_err(|p| format!("invalid settings: {p}"))?;
+    Ok((cfg, hash))
 }
 
 /// Run the audit; returns the process exit code.
@@ -53,6 +75,16 @@ pub fn main(args: AuditArgs) -> ExitCode {
             return ExitCode::from(EXIT_INVALID);
         }
     };
+    let header = match &args.header {
+        None => None,
+        Some(p) => match audit::mcap::load_header_file(p) {
+            Ok(h) => Some(h),
+            Err(e) => {
+                eprintln!("pacs: error: {e}");
+                return ExitCode::from(EXIT_INVALID);
+            }
+        },
+    };
     let bar = indicatif::ProgressBar::new(args.logs.len() as u64);
     if !std::io::stderr().is_terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -61,7 +93,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
         .logs
         .par_iter()
         .map(|p| {
-            let r = audit::audit_file(p, &cfg);
+            let r = audit::audit_file_with_header(p, &cfg, header.as_ref());
             bar.inc(1);
             r
         })

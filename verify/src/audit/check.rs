@@ -52,6 +52,8 @@ pub struct AuditConfig {
     pub human: Option<super::log::ModelRef<pacs_models::HumanSpec>>,
     /// Override the header's constraints.
     pub constraints: Option<super::log::ModelRef<pacs_models::ConstraintSpec>>,
+    /// MCAP reading settings (topics, reorder window): the `[mcap]` table.
+    pub mcap: super::mcap::McapConfig,
 }
 
 impl Default for AuditConfig {
@@ -67,6 +69,7 @@ impl Default for AuditConfig {
             robot: None,
             human: None,
             constraints: None,
+            mcap: Default::default(),
         }
     }
 }
@@ -90,7 +93,7 @@ impl AuditConfig {
                 "human_model: `acc` needs measured velocities, which logs do not carry".into(),
             );
         }
-        Ok(())
+        self.mcap.validate()
     }
 }
 

@@ -192,6 +192,10 @@ pub trait RecordReader {
     fn next_record(&mut self) -> Result<Option<Record<'_>>, crate::audit::AuditError>;
     /// Where the last returned record was found (for errors detected downstream).
     fn location(&self) -> crate::audit::Location;
+    /// Where the header was found (for errors in its models). Default: line 1.
+    fn header_location(&self) -> crate::audit::Location {
+        crate::audit::Location::Line(1)
+    }
     /// The file name used in errors.
     fn file(&self) -> &str;
 }

@@ -1,0 +1,435 @@
+//! A small, bounds-checked decoder (and the matching encoder) of the OMG CDR (XCDR1) encoding ROS 2
+//! uses for message payloads, covering the three message types the MCAP reader needs:
+//! `sensor_msgs/msg/JointState`, `geometry_msgs/msg/PoseArray` and `std_msgs/msg/String`.
+//!
+//! Layout rules: a 4-byte encapsulation header (`00 00` big-endian CDR, `00 01` little-endian CDR,
+//! then two option bytes), then the body; every primitive of size `k` is aligned to a multiple of
+//! `k` counted from the start of the body; strings are a `u32` length that counts the terminating
+//! NUL, the bytes and the NUL; sequences are a `u32` element count followed by the elements.
+//! Every length is checked against the remaining bytes before anything is allocated, so a
+//! malformed length is an error, never a panic or a large allocation.
+
+use thiserror::Error;
+
+/// Why a CDR payload could not be decoded. `at` is the byte position in the payload.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum CdrError {
+    /// The payload is shorter than the 4-byte encapsulation header.
+    #[error("CDR payload of {0} bytes is shorter than the 4-byte encapsulation header")]
+    NoEncapsulation(usize),
+    /// The encapsulation kind is not plain CDR (e.g. parameter lists or XCDR2).
+    #[error(
+        "CDR encapsulation 0x{0:04x} is not supported (expected 0x0000 CDR_BE or 0x0001 CDR_LE)"
+    )]
+    Encapsulation(u16),
+    /// A field runs past the end of the payload.
+    #[error("field `{field}` at byte {at} needs {need} bytes, only {have} remain (truncated)")]
+    Truncated {
+        /// Field being read.
+        field: &'static str,
+        /// Position in the payload.
+        at: usize,
+        /// Bytes needed.
+        need: u64,
+        /// Bytes remaining.
+        have: usize,
+    },
+    /// A string does not end with NUL, has length 0 or is not UTF-8.
+    #[error("field `{field}` at byte {at}: {problem}")]
+    BadString {
+        /// Field being read.
+        field: &'static str,
+        /// Position in the payload.
+        at: usize,
+        /// What is wrong.
+        problem: &'static str,
+    },
+    /// More bytes follow the message than alignment padding explains.
+    #[error("{0} unexpected bytes after the end of the message")]
+    Trailing(usize),
+}
+
+/// A cursor over a CDR payload (after the encapsulation header).
+pub struct CdrReader<'a> {
+    body: &'a [u8],
+    pos: usize,
+    little: bool,
+}
+
+impl<'a> CdrReader<'a> {
+    /// Read the encapsulation header of `data` and position the cursor at the body.
+    pub fn new(data: &'a [u8]) -> Result<Self, CdrError> {
+        let (head, body) = data
+            .split_first_chunk::<4>()
+            .ok_or(CdrError::NoEncapsulation(data.len()))?;
+        let kind = u16::from_be_bytes([head[0], head[1]]);
+        let little = match kind {
+            0x0000 => false,
+            0x0001 => true,
+            k => return Err(CdrError::Encapsulation(k)),
+        };
+        Ok(Self {
+            body,
+            pos: 0,
+            little,
+        })
+    }
+
+    /// Bytes left after the cursor.
+    pub fn remaining(&self) -> usize {
+        self.body.len() - self.pos
+    }
+
+    /// The absolute payload position of the cursor (including the 4 header bytes).
+    fn at(&self) -> usize {
+        self.pos + 4
+    }
+
+    fn take(&mut self, field: &'static str, n: usize, align: usize) -> Result<&'a [u8], CdrError> {
+        let pad = (align - self.pos % align) % align;
+        let need = pad as u64 + n as u64;
+        if need > self.remaining() as u64 {
+            return Err(CdrError::Truncated {
+                field,
+                at: self.at(),
+                need,
+                have: self.remaining(),
+            });
+        }
+        let start = self.pos + pad;
+        self.pos = start + n;
+        Ok(&self.body[start..start + n])
+    }
+
+    fn array<const N: usize>(&mut self, field: &'static str) -> Result<[u8; N], CdrError> {
+        let s = self.take(field, N, N)?;
+        let mut a = [0u8; N];
+        a.copy_from_slice(s);
+        if self.little {
+            Ok(a)
+        } else {
+            a.reverse();
+            Ok(a)
+        }
+    }
+
+    /// A `uint32`.
+    pub fn u32(&mut self, field: &'static str) -> Result<u32, CdrError> {
+        Ok(u32::from_le_bytes(self.array(field)?))
+    }
+
+    /// An `int32`.
+    pub fn i32(&mut self, field: &'static str) -> Result<i32, CdrError> {
+        Ok(i32::from_le_bytes(self.array(field)?))
+    }
+
+    /// A `float64`.
+    pub fn f64(&mut self, field: &'static str) -> Result<f64, CdrError> {
+        Ok(f64::from_le_bytes(self.array(field)?))
+    }
+
+    /// A `string`: returns the text without its NUL terminator.
+    pub fn string(&mut self, field: &'static str) -> Result<&'a str, CdrError> {
+        let at = self.at();
+        let len = self.u32(field)? as usize;
+        if len == 0 {
+            return Err(CdrError::BadString {
+                field,
+                at,
+                problem: "string length 0 (a CDR string counts its NUL terminator)",
+            });
+        }
+        let bytes = self.take(field, len, 1)?;
+        let (text, nul) = bytes.split_at(len - 1);
+        if nul != [0] {
+            return Err(CdrError::BadString {
+                field,
+                at,
+                problem: "string does not end with NUL",
+            });
+        }
+        std::str::from_utf8(text).map_err(|_| CdrError::BadString {
+            field,
+            at,
+            problem: "string is not valid UTF-8",
+        })
+    }
+
+    /// A sequence length, checked against the remaining bytes given the smallest encoded element
+    /// size `min_elem` (≥ 1), so that callers may reserve `count` elements.
+    pub fn seq_len(&mut self, field: &'static str, min_elem: usize) -> Result<usize, CdrError> {
+        let at = self.at();
+        let count = self.u32(field)?;
+        let need = u64::from(count) * min_elem as u64;
+        if need > self.remaining() as u64 {
+            return Err(CdrError::Truncated {
+                field,
+                at,
+                need,
+                have: self.remaining(),
+            });
+        }
+        Ok(count as usize)
+    }
+
+    /// A `float64[]` appended to `out` (cleared first).
+    pub fn f64_seq(&mut self, field: &'static str, out: &mut Vec<f64>) -> Result<(), CdrError> {
+        out.clear();
+        let n = self.seq_len(field, 8)?;
+        if n == 0 {
+            return Ok(());
+        }
+        // The 8-byte alignment padding may make the elements not fit even though `8n` bytes remain.
+        let bytes = self.take(field, n * 8, 8)?;
+        out.reserve(n);
+        for c in bytes.chunks_exact(8) {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(c);
+            if !self.little {
+                a.reverse();
+            }
+            out.push(f64::from_le_bytes(a));
+        }
+        Ok(())
+    }
+
+    /// Accept the end of the message: at most 7 bytes of padding may follow.
+    pub fn finish(&self) -> Result<(), CdrError> {
+        match self.remaining() {
+            0..8 => Ok(()),
+            n => Err(CdrError::Trailing(n)),
+        }
+    }
+}
+
+/// `std_msgs/msg/Header`: stamp (sec, nanosec) and frame id.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Stamp {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds.
+    pub nanosec: u32,
+}
+
+impl Stamp {
+    /// The stamp in nanoseconds (exact).
+    pub fn nanos(&self) -> i128 {
+        i128::from(self.sec) * 1_000_000_000 + i128::from(self.nanosec)
+    }
+}
+
+fn header<'a>(r: &mut CdrReader<'a>) -> Result<(Stamp, &'a str), CdrError> {
+    let sec = r.i32("header.stamp.sec")?;
+    let nanosec = r.u32("header.stamp.nanosec")?;
+    let frame = r.string("header.frame_id")?;
+    Ok((Stamp { sec, nanosec }, frame))
+}
+
+/// A decoded `sensor_msgs/msg/JointState`, in buffers reused across messages.
+#[derive(Debug, Default, Clone)]
+pub struct JointState {
+    /// `header.stamp`.
+    pub stamp: Stamp,
+    /// `name` (joint names; may be empty).
+    pub names: Vec<String>,
+    /// `position` (rad).
+    pub position: Vec<f64>,
+    /// `velocity` (rad/s; may be empty).
+    pub velocity: Vec<f64>,
+    /// `effort` (ignored by the audit).
+    pub effort: Vec<f64>,
+}
+
+impl JointState {
+    /// Decode `data` (a CDR `JointState`) into `self`, reusing its buffers.
+    pub fn decode(&mut self, data: &[u8]) -> Result<(), CdrError> {
+        let mut r = CdrReader::new(data)?;
+        let (stamp, _) = header(&mut r)?;
+        self.stamp = stamp;
+        // Each string needs at least its 4-byte length and a NUL.
+        let n = r.seq_len("name", 5)?;
+        self.names.truncate(n);
+        for i in 0..n {
+            let s = r.string("name")?;
+            if let Some(slot) = self.names.get_mut(i) {
+                if slot != s {
+                    slot.clear();
+                    slot.push_str(s);
+                }
+            } else {
+                self.names.push(s.to_string());
+            }
+        }
+        r.f64_seq("position", &mut self.position)?;
+        r.f64_seq("velocity", &mut self.velocity)?;
+        r.f64_seq("effort", &mut self.effort)?;
+        r.finish()
+    }
+}
+
+/// A decoded `geometry_msgs/msg/PoseArray`: the stamp and the pose positions (orientations are
+/// read and ignored).
+#[derive(Debug, Default, Clone)]
+pub struct PoseArray {
+    /// `header.stamp`.
+    pub stamp: Stamp,
+    /// `poses[i].position` (m).
+    pub positions: Vec<[f64; 3]>,
+}
+
+impl PoseArray {
+    /// Decode `data` (a CDR `PoseArray`) into `self`, reusing its buffers.
+    pub fn decode(&mut self, data: &[u8]) -> Result<(), CdrError> {
+        let mut r = CdrReader::new(data)?;
+        let (stamp, _) = header(&mut r)?;
+        self.stamp = stamp;
+        self.positions.clear();
+        let n = r.seq_len("poses", 56)?;
+        self.positions.reserve(n);
+        for _ in 0..n {
+            let p = [
+                r.f64("poses.position.x")?,
+                r.f64("poses.position.y")?,
+                r.f64("poses.position.z")?,
+            ];
+            for f in [
+                "poses.orientation.x",
+                "poses.orientation.y",
+                "poses.orientation.z",
+                "poses.orientation.w",
+            ] {
+                r.f64(f)?;
+            }
+            self.positions.push(p);
+        }
+        r.finish()
+    }
+}
+
+/// Decode a CDR `std_msgs/msg/String` into `out`.
+pub fn decode_string(data: &[u8], out: &mut String) -> Result<(), CdrError> {
+    let mut r = CdrReader::new(data)?;
+    let s = r.string("data")?;
+    out.clear();
+    out.push_str(s);
+    r.finish()
+}
+
+/// A little-endian CDR encoder (for writing MCAP logs and tests).
+#[derive(Debug, Clone)]
+pub struct CdrWriter {
+    buf: Vec<u8>,
+}
+
+impl Default for CdrWriter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl CdrWriter {
+    /// A payload with the CDR_LE encapsulation header.
+    pub fn new() -> Self {
+        Self {
+            buf: vec![0, 1, 0, 0],
+        }
+    }
+
+    fn align(&mut self, k: usize) {
+        while !(self.buf.len() - 4).is_multiple_of(k) {
+            self.buf.push(0);
+        }
+    }
+
+    /// A `uint32`.
+    pub fn u32(&mut self, v: u32) -> &mut Self {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+
+    /// An `int32`.
+    pub fn i32(&mut self, v: i32) -> &mut Self {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+
+    /// A `float64`.
+    pub fn f64(&mut self, v: f64) -> &mut Self {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+        self
+    }
+
+    /// A `string`.
+    pub fn string(&mut self, s: &str) -> &mut Self {
+        self.u32(s.len() as u32 + 1);
+        self.buf.extend_from_slice(s.as_bytes());
+        self.buf.push(0);
+        self
+    }
+
+    /// A `float64[]`.
+    pub fn f64_seq(&mut self, v: &[f64]) -> &mut Self {
+        self.u32(v.len() as u32);
+        for x in v {
+            self.f64(*x);
+        }
+        self
+    }
+
+    /// A `std_msgs/msg/Header`.
+    pub fn header(&mut self, stamp: Stamp, frame_id: &str) -> &mut Self {
+        self.i32(stamp.sec).u32(stamp.nanosec).string(frame_id)
+    }
+
+    /// The encoded bytes.
+    pub fn into_bytes(self) -> Vec<u8> {
+        self.buf
+    }
+
+    /// A `sensor_msgs/msg/JointState`.
+    pub fn joint_state(
+        stamp: Stamp,
+        names: &[&str],
+        position: &[f64],
+        velocity: &[f64],
+        effort: &[f64],
+    ) -> Vec<u8> {
+        let mut w = Self::new();
+        w.header(stamp, "").u32(names.len() as u32);
+        for n in names {
+            w.string(n);
+        }
+        w.f64_seq(position).f64_seq(velocity).f64_seq(effort);
+        w.into_bytes()
+    }
+
+    /// A `geometry_msgs/msg/PoseArray` with identity orientations.
+    pub fn pose_array(stamp: Stamp, frame_id: &str, positions: &[[f64; 3]]) -> Vec<u8> {
+        let mut w = Self::new();
+        w.header(stamp, frame_id).u32(positions.len() as u32);
+        for p in positions {
+            w.f64(p[0]).f64(p[1]).f64(p[2]);
+            w.f64(0.0).f64(0.0).f64(0.0).f64(1.0);
+        }
+        w.into_bytes()
+    }
+
+    /// A `std_msgs/msg/String`.
+    pub fn string_msg(s: &str) -> Vec<u8> {
+        let mut w = Self::new();
+        w.string(s);
+        w.into_bytes()
+    }
+}
+
+impl Stamp {
+    /// A stamp from nanoseconds since the clock's epoch (`None` if out of the `int32` range).
+    pub fn from_nanos(ns: i128) -> Option<Self> {
+        let sec = i32::try_from(ns.div_euclid(1_000_000_000)).ok()?;
+        let nanosec = ns.rem_euclid(1_000_000_000) as u32;
+        Some(Self { sec, nanosec })
+    }
+}
