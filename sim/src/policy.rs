@@ -101,7 +101,7 @@ impl ChunkPolicy for Demonstration {
 }
 
 /// Cost (rad) per demonstration sample between a candidate and the phase the last chunk led to.
-const PHASE_COST: f64 = 0.002;
+const PHASE_COST: f64 = 0.005;
 
 /// A behaviour-cloning stand-in trained on several demonstrations of one task: a nearest-
 /// neighbour policy over all demonstrated joint configurations that sees only the current joint
@@ -191,11 +191,15 @@ impl ChunkPolicy for DemoSet {
         // The phase the robot reached along the stretch the last chunk commanded.
         let expected = match self.last {
             Some((d, k0)) => {
+                // The earliest point of the stretch about as close as the closest: the robot
+                // runs the stretch in order, and a slowed robot has reached the earlier one.
                 let demo = &self.demos[d];
+                let at = |i: usize| dist(&demo[i.min(len - 1)], q);
+                let closest = (k0..=k0 + self.execute)
+                    .map(at)
+                    .fold(f64::INFINITY, f64::min);
                 (k0..=k0 + self.execute)
-                    .min_by(|&i, &j| {
-                        dist(&demo[i.min(len - 1)], q).total_cmp(&dist(&demo[j.min(len - 1)], q))
-                    })
+                    .find(|&i| at(i) <= closest + 0.003)
                     .unwrap_or(k0)
             }
             None => 0,
