@@ -23,7 +23,22 @@ fn main() {
                 hi[i] = a + w * next();
             }
             let caps = reach.occupancy(&lo, &hi).unwrap();
-            let r: Vec<String> = caps.iter().map(|c| format!("{:.9e}", c.radius())).collect();
+            let mut r: Vec<String> = caps.iter().map(|c| format!("{:.9e}", c.radius())).collect();
+            if std::env::var_os("ENERGY").is_some() {
+                let mut vl = [0.0; 7];
+                let mut vh = [0.0; 7];
+                for i in 0..7 {
+                    let v = lim.v_max()[i] * (2.0 * next() - 1.0);
+                    let wv = [0.0, 0.01, 0.5, 2.0][(next() * 4.0) as usize % 4];
+                    vl[i] = v - wv * next();
+                    vh[i] = v + wv * next();
+                }
+                let mut e = [0.0; 8];
+                reach
+                    .subchain_energy_bounds_into(&lo, &hi, &vl, &vh, &mut e)
+                    .unwrap();
+                r = e[1..].iter().map(|x| format!("{x:.9e}")).collect();
+            }
             println!("{w} {}", r.join(" "));
         }
     }
