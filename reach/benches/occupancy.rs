@@ -6,7 +6,7 @@ use nalgebra::Point3;
 use pacs_models::{Capsule, default_human, fr3};
 use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_disjoint};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
-use pacs_reach::robot::RobotReach;
+use pacs_reach::robot::{ReachScratch, RobotReach};
 use std::hint::black_box;
 
 fn human(c: &mut Criterion) {
@@ -50,7 +50,17 @@ fn robot(c: &mut Criterion) {
         Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
         reach.capsule_count()
     ];
+    // The hot-path form (the shield's): caller-provided scratch, frames recomputed every call.
+    let mut scratch = ReachScratch::default();
     c.bench_function("fr3_occupancy_1_joint_box", |b| {
+        b.iter(|| {
+            reach
+                .occupancy_with(&mut scratch, black_box(&lo), black_box(&hi), &mut out)
+                .unwrap()
+        })
+    });
+    // The convenience form (fresh scratch per call).
+    c.bench_function("fr3_occupancy_1_joint_box_into", |b| {
         b.iter(|| {
             reach
                 .occupancy_into(black_box(&lo), black_box(&hi), &mut out)

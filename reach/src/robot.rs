@@ -1,16 +1,30 @@
 //! Robot reachable occupancy: capsules that contain every link capsule for every configuration in
 //! a joint box `[q_lo, q_hi]` (plus a Cartesian tracking-error margin).
 //!
-//! Two rigorous enclosures are computed per capsule endpoint and the tighter one is used:
-//! - **interval forward kinematics** over the box in midpoint-radius form: each frame's rotation
-//!   and origin as a float matrix plus an elementwise radius (sin/cos enclosed by
-//!   [`crate::rounding::sin_cos_interval`]; products bound their rounding error by Higham's γ₄ and
-//!   every radius is inflated by 1e-13 relative to cover its own rounding); an endpoint's box is
-//!   enclosed by the ball around its midpoint through the farthest corner;
-//! - **mean-value form**: the endpoint at the box centre q_c (interval FK of the point box) plus
-//!   Σ_j δ_j · sup‖p − o_j‖, where δ_j is the half-width of joint j's range and sup‖p − o_j‖ (over the
-//!   box, from the interval FK) bounds ‖∂p/∂q_j‖ = ‖z_j × (p − o_j)‖ on the whole box (mean value
-//!   theorem along the segment from q_c to q).
+//! One forward-kinematics chain is evaluated per query, at the box centre q_c (libm `sin`/`cos`
+//! of q_c), in midpoint-radius form with **two radii** around the shared midpoint:
+//! - `e`, valid at q_c only: libm error ([`TRIG_PAD`]) and the rounding of the midpoint chain;
+//! - `w`, valid over the whole box: additionally |sin q − sin q_c| ≤ |sin q_c|·min(δ²/2, 2) +
+//!   |cos q_c|·min(δ, 1) for |q − q_c| ≤ δ (and likewise for cos), capped by 1 + |sin q_c|.
+//!
+//! Products bound the rounding error of the midpoint product by Higham's γ₄ (`GAMMA`) and
+//! inflate every radius by 1e-13 relative to cover its own rounding. Two rigorous enclosures of
+//! each capsule endpoint share the midpoint p̂ (the endpoint at q_c) and the tighter radius is
+//! used:
+//! - **interval forward kinematics** over the box: ‖w_p‖ (the box of the endpoint, enclosed by the
+//!   ball through its farthest corner);
+//! - **mean-value form**: ‖e_p‖ + Σ_j δ_j · sup‖p − o_j‖, where δ_j is the half-width of joint j's
+//!   range and sup‖p − o_j‖ (over the box enclosures of p and of the joint origin o_j) bounds
+//!   ‖∂p/∂q_j‖ = ‖z_j × (p − o_j)‖ on the whole box (mean value theorem along the segment from q_c
+//!   to q).
+//!
+//! The mean-value sum is evaluated in round-to-nearest, vectorised over the joints, and padded
+//! once at the end: it is an expression of at most 30 correctly rounded operations (one
+//! subtraction of floats, which is relatively exact: fl(a − b) = (a − b)(1 + ε), |ε| ≤ u; the rest
+//! `+ × √` on non-negative values), so the computed value is at least (1 − u)³⁰ > 1 − 4e-15 times
+//! the exact one; multiplying by `RAD_UP` = 1 + 1e-13 covers that, and [`NORM_PAD`] covers
+//! underflow (a square below the normal range loses < 2⁻¹⁰⁷⁴ absolutely, which a square root
+//! turns into < 1e-161).
 //!
 //! A point of a link capsule is a convex combination of its endpoints plus a radius offset, so a
 //! capsule between the two endpoint centres with radius max(e₁, e₂) + r contains it.
@@ -18,7 +32,7 @@
 //! difference to the quaternion form used by nominal kinematics (≤ 1e-14 m over the FR3 chain) is
 //! covered by [`MODEL_PAD`].
 
-use crate::rounding::{add_up, mul_up, norm3_up, sin_cos_interval, sub_up};
+use crate::rounding::{TRIG_PAD, add_up, sin_cos_interval, sub_up};
 use nalgebra::{Matrix3, Point3, Vector3};
 use pacs_models::{Capsule, MAX_DOF, RobotModel};
 
@@ -26,117 +40,455 @@ use pacs_models::{Capsule, MAX_DOF, RobotModel};
 /// model's fixed transforms (documented bound ≤ 1e-14 m; padded a hundredfold).
 pub const MODEL_PAD: f64 = 1e-12;
 
+/// Absolute pad (m) added to every Euclidean norm computed in round-to-nearest: covers the
+/// underflow of squares of tiny components (see the module docs).
+pub const NORM_PAD: f64 = 1e-150;
+
 /// Relative bound on the rounding error of a dot product of length ≤ 4 computed in f64:
 /// γ₄ = 4u/(1−4u) < 4.45e-16 (Higham, *Accuracy and Stability*, Thm 3.1), doubled for margin.
 const GAMMA: f64 = 1e-15;
-/// Relative inflation applied to every radius computed as a sum of ≤ 16 non-negative products:
-/// round-to-nearest loses at most a factor (1 − u)^16 > 1 − 2e-15 of the exact value.
+/// Relative inflation applied to every radius computed as an expression of ≤ 30 correctly
+/// rounded operations on non-negative values: round-to-nearest loses at most a factor
+/// (1 − u)^30 > 1 − 4e-15 of the exact value.
 const RAD_UP: f64 = 1.0 + 1e-13;
 /// Absolute slack per element for underflow (each operation loses < 2⁻¹⁰⁷⁴ absolutely).
 const TINY: f64 = 1e-290;
+/// Largest joint half-width (rad) for which one chain around the box centre serves both
+/// enclosures; wider boxes also evaluate the chain with hull sin/cos enclosures (tighter there).
+const WIDE_DELTA: f64 = 0.025;
+/// Joints processed per vector chunk in the mean-value sum.
+const LANES: usize = 4;
+/// Chunks of joints in the mean-value sum.
+const JCH: usize = MAX_DOF.div_ceil(LANES);
+/// Lane masks: row r keeps the first r lanes.
+const LANE_MASK: [[f64; LANES]; LANES + 1] = [
+    [0.0, 0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0, 0.0],
+    [1.0, 1.0, 0.0, 0.0],
+    [1.0, 1.0, 1.0, 0.0],
+    [1.0, 1.0, 1.0, 1.0],
+];
 
-/// A 3×3 matrix known up to an elementwise radius: every exact matrix M with
-/// |M − mid| ≤ rad (elementwise) is represented.
-#[derive(Debug, Clone, Copy)]
-struct MatMR {
-    mid: Matrix3<f64>,
-    rad: Matrix3<f64>,
-}
+/// A 3-vector in four lanes (lane 3 is unused), one AVX register on x86-64 with AVX (the
+/// workspace builds for x86-64-v3), a plain array elsewhere; every operation is lanewise and
+/// correctly rounded either way, so the error analysis does not depend on the backend.
+#[derive(Clone, Copy)]
+#[repr(transparent)]
+struct Col(simd::V);
 
-/// A 3-vector known up to an elementwise radius.
-#[derive(Debug, Clone, Copy)]
-struct VecMR {
-    mid: Vector3<f64>,
-    rad: Vector3<f64>,
-}
-
-#[inline(always)]
-fn inflate_m(m: Matrix3<f64>) -> Matrix3<f64> {
-    m.map(|x| x * RAD_UP + TINY)
-}
-
-#[inline(always)]
-fn inflate_v(v: Vector3<f64>) -> Vector3<f64> {
-    v.map(|x| x * RAD_UP + TINY)
-}
-
-/// A·B: mid = fl(Aₘ·Bₘ); rad ≥ |Aₘ|·B_r + A_r·|Bₘ| + A_r·B_r + γ·|Aₘ|·|Bₘ|
-/// (the last term bounds the rounding error of the midpoint product).
-#[inline(always)]
-fn mat_mul(a: &MatMR, b: &MatMR) -> MatMR {
-    let aa = a.mid.abs();
-    let ba = b.mid.abs();
-    let mid = a.mid * b.mid;
-    let rad = aa * b.rad + a.rad * (ba + b.rad) + (aa * ba) * GAMMA;
-    MatMR {
-        mid,
-        rad: inflate_m(rad),
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+mod simd {
+    use std::arch::x86_64::*;
+    pub type V = __m256d;
+    #[inline(always)]
+    pub fn new(a: [f64; 4]) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above); `a` holds four f64.
+        unsafe { _mm256_loadu_pd(a.as_ptr()) }
+    }
+    #[inline(always)]
+    pub fn arr(v: V) -> [f64; 4] {
+        // SAFETY: `__m256d` and `[f64; 4]` have the same size and every bit pattern is valid
+        // for both.
+        unsafe { std::mem::transmute::<V, [f64; 4]>(v) }
+    }
+    #[inline(always)]
+    pub fn splat(x: f64) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_set1_pd(x) }
+    }
+    #[inline(always)]
+    pub fn add(a: V, b: V) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_add_pd(a, b) }
+    }
+    #[inline(always)]
+    pub fn sub(a: V, b: V) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_sub_pd(a, b) }
+    }
+    #[inline(always)]
+    pub fn mul(a: V, b: V) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_mul_pd(a, b) }
+    }
+    #[inline(always)]
+    pub fn fma(a: V, b: V, c: V) -> V {
+        #[cfg(target_feature = "fma")]
+        // SAFETY: FMA is enabled for the whole build (cfg above).
+        unsafe {
+            _mm256_fmadd_pd(a, b, c)
+        }
+        #[cfg(not(target_feature = "fma"))]
+        add(mul(a, b), c)
+    }
+    #[inline(always)]
+    pub fn sqrt(a: V) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_sqrt_pd(a) }
+    }
+    #[inline(always)]
+    pub fn abs(a: V) -> V {
+        // SAFETY: AVX is enabled for the whole build (cfg above).
+        unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), a) }
     }
 }
 
-/// A·v + t for an exact vector v (capsule endpoints, joint offsets).
-#[inline(always)]
-fn affine_point(r: &MatMR, t: &VecMR, v: &Vector3<f64>) -> VecMR {
-    let va = v.abs();
-    let rv = r.mid * v;
-    let mid = rv + t.mid;
-    let rad = r.rad * va + t.rad + (r.mid.abs() * va + t.mid.abs()) * GAMMA;
-    VecMR {
-        mid,
-        rad: inflate_v(rad),
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+mod simd {
+    pub type V = [f64; 4];
+    #[inline(always)]
+    fn map2(a: V, b: V, f: impl Fn(f64, f64) -> f64) -> V {
+        [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])]
+    }
+    #[inline(always)]
+    pub fn new(a: [f64; 4]) -> V {
+        a
+    }
+    #[inline(always)]
+    pub fn arr(v: V) -> [f64; 4] {
+        v
+    }
+    #[inline(always)]
+    pub fn splat(x: f64) -> V {
+        [x; 4]
+    }
+    #[inline(always)]
+    pub fn add(a: V, b: V) -> V {
+        map2(a, b, |x, y| x + y)
+    }
+    #[inline(always)]
+    pub fn sub(a: V, b: V) -> V {
+        map2(a, b, |x, y| x - y)
+    }
+    #[inline(always)]
+    pub fn mul(a: V, b: V) -> V {
+        map2(a, b, |x, y| x * y)
+    }
+    #[inline(always)]
+    pub fn fma(a: V, b: V, c: V) -> V {
+        add(mul(a, b), c)
+    }
+    #[inline(always)]
+    pub fn sqrt(a: V) -> V {
+        a.map(f64::sqrt)
+    }
+    #[inline(always)]
+    pub fn abs(a: V) -> V {
+        a.map(f64::abs)
     }
 }
 
-/// Upper bound of sup ‖x‖ over a midpoint-radius vector.
-#[inline(always)]
-fn mag_up(v: &VecMR) -> f64 {
-    let m = v.mid.abs() + v.rad;
-    norm3_up(m.x * RAD_UP, m.y * RAD_UP, m.z * RAD_UP)
+impl Col {
+    #[inline(always)]
+    fn splat(x: f64) -> Col {
+        Col(simd::splat(x))
+    }
+    #[inline(always)]
+    fn arr(self) -> [f64; 4] {
+        simd::arr(self.0)
+    }
 }
 
-/// Upper bound of sup ‖x − y‖ for x, y in two midpoint-radius vectors.
-#[inline(always)]
-fn dist_sup_up(a: &VecMR, b: &VecMR) -> f64 {
-    let d = (a.mid - b.mid).abs() * (1.0 + GAMMA) + a.rad + b.rad;
-    norm3_up(
-        d.x * RAD_UP + TINY,
-        d.y * RAD_UP + TINY,
-        d.z * RAD_UP + TINY,
-    )
+impl Default for Col {
+    fn default() -> Self {
+        Col(simd::splat(0.0))
+    }
 }
 
-/// Midpoint and an upper bound of the distance from it to any represented point.
+impl std::fmt::Debug for Col {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.arr().fmt(f)
+    }
+}
+
 #[inline(always)]
-fn mid_radius(v: &VecMR) -> (Point3<f64>, f64) {
-    (
-        Point3::from(v.mid),
-        mag_up(&VecMR {
-            mid: Vector3::zeros(),
-            rad: v.rad,
-        }),
-    )
+fn cadd(a: Col, b: Col) -> Col {
+    Col(simd::add(a.0, b.0))
+}
+#[inline(always)]
+fn csub(a: Col, b: Col) -> Col {
+    Col(simd::sub(a.0, b.0))
+}
+#[inline(always)]
+fn cmul(a: Col, b: Col) -> Col {
+    Col(simd::mul(a.0, b.0))
+}
+#[inline(always)]
+fn csqrt(a: Col) -> Col {
+    Col(simd::sqrt(a.0))
+}
+#[inline(always)]
+fn cscale(a: Col, s: f64) -> Col {
+    Col(simd::mul(a.0, simd::splat(s)))
+}
+#[inline(always)]
+fn cabs(a: Col) -> Col {
+    Col(simd::abs(a.0))
+}
+#[inline(always)]
+fn cinflate(a: Col) -> Col {
+    Col(simd::fma(a.0, simd::splat(RAD_UP), simd::splat(TINY)))
+}
+/// a·s + c (one rounding with FMA, two without).
+#[inline(always)]
+fn cfma(a: Col, s: f64, c: Col) -> Col {
+    Col(simd::fma(a.0, simd::splat(s), c.0))
+}
+#[inline(always)]
+fn col(v: &Vector3<f64>) -> Col {
+    // Construction-time only; through memory (keeps the generated code within what valgrind
+    // decodes).
+    Col(simd::new(std::hint::black_box([v.x, v.y, v.z, 0.0])))
+}
+/// Upper bound of the Euclidean norm of a non-negative radius vector (lanes 0..3).
+#[inline(always)]
+fn norm_up(r: Col) -> f64 {
+    let r = r.arr();
+    (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() * RAD_UP + NORM_PAD
+}
+
+/// A 3×3 matrix as three columns.
+#[derive(Debug, Clone, Copy, Default)]
+struct M3([Col; 3]);
+
+impl M3 {
+    #[inline(always)]
+    fn from_matrix(m: &Matrix3<f64>) -> Self {
+        let c = |j: usize| col(&m.column(j).into_owned());
+        M3([c(0), c(1), c(2)])
+    }
+    /// M·v (v in lanes 0..3).
+    #[inline(always)]
+    fn mv(&self, v: Col) -> Col {
+        let v = v.arr();
+        // Fused or not, each entry is a dot product of length 3 with at most 3 roundings.
+        cfma(
+            self.0[2],
+            v[2],
+            cfma(self.0[1], v[1], cscale(self.0[0], v[0])),
+        )
+    }
+    #[inline(always)]
+    fn mm(&self, b: &M3) -> M3 {
+        M3([self.mv(b.0[0]), self.mv(b.0[1]), self.mv(b.0[2])])
+    }
+    #[inline(always)]
+    fn abs(&self) -> M3 {
+        M3([cabs(self.0[0]), cabs(self.0[1]), cabs(self.0[2])])
+    }
+    #[inline(always)]
+    fn add(&self, b: &M3) -> M3 {
+        M3([
+            cadd(self.0[0], b.0[0]),
+            cadd(self.0[1], b.0[1]),
+            cadd(self.0[2], b.0[2]),
+        ])
+    }
+    #[inline(always)]
+    fn scale(&self, s: f64) -> M3 {
+        M3([
+            cscale(self.0[0], s),
+            cscale(self.0[1], s),
+            cscale(self.0[2], s),
+        ])
+    }
+    #[inline(always)]
+    fn inflate(&self) -> M3 {
+        M3([
+            cinflate(self.0[0]),
+            cinflate(self.0[1]),
+            cinflate(self.0[2]),
+        ])
+    }
+}
+
+/// Enclosure of a frame rotation: every exact rotation at the box centre lies within `e` of `m`
+/// (elementwise), every exact rotation over the box within `w` of `m`.
+#[derive(Debug, Clone, Copy, Default)]
+struct MatEnc {
+    m: M3,
+    e: M3,
+    w: M3,
+}
+
+/// Enclosure of a vector (frame origin or point), as [`MatEnc`].
+#[derive(Debug, Clone, Copy, Default)]
+struct VecEnc {
+    m: Col,
+    e: Col,
+    w: Col,
+}
+
+impl MatEnc {
+    /// An exactly known matrix.
+    fn exact(m: &Matrix3<f64>) -> Self {
+        let m = M3::from_matrix(m);
+        MatEnc {
+            m,
+            e: M3::default(),
+            w: M3::default(),
+        }
+    }
+
+    /// A·B: mid = fl(Aₘ·Bₘ); each radius R ≥ |Aₘ|·B_R + A_R·(|Bₘ| + B_R) + γ·|Aₘ|·|Bₘ| (the
+    /// last term bounds the rounding error of the midpoint product).
+    #[inline(always)]
+    fn mul(&self, b: &MatEnc) -> MatEnc {
+        let (aa, ba) = (self.m.abs(), b.m.abs());
+        let m = self.m.mm(&b.m);
+        let g = aa.mm(&ba).scale(GAMMA);
+        let e = aa.mm(&b.e).add(&self.e.mm(&ba.add(&b.e))).add(&g).inflate();
+        let w = aa.mm(&b.w).add(&self.w.mm(&ba.add(&b.w))).add(&g).inflate();
+        MatEnc { m, e, w }
+    }
+
+    /// A·v + t for an exact vector v.
+    #[inline(always)]
+    fn affine(&self, t: &VecEnc, v: Col) -> VecEnc {
+        let va = cabs(v);
+        let m = cadd(self.m.mv(v), t.m);
+        let g = cscale(cadd(self.m.abs().mv(va), cabs(t.m)), GAMMA);
+        VecEnc {
+            m,
+            e: cinflate(cadd(cadd(self.e.mv(va), t.e), g)),
+            w: cinflate(cadd(cadd(self.w.mv(va), t.w), g)),
+        }
+    }
+}
+
+/// Sound bounds of link velocities over joint and velocity boxes: interval arithmetic with
+/// endpoints rounded to nearest and one final widening.
+///
+/// Each interval operation (sum, difference, product as min/max of the four endpoint
+/// products) is evaluated in round-to-nearest. Compared with exact interval arithmetic on the
+/// same inputs, every computed endpoint is off by at most γ_d·M, where d ≤ 24 is the depth of
+/// the expression (midpoint ± radius → lower/upper bound, difference c − o, the two products and
+/// the difference of a cross-product component, the velocity product, ≤ 16 sums, plus margin)
+/// and M is the same expression evaluated on magnitudes (Higham, *Accuracy and Stability*,
+/// Thm 3.1 and Lemma 3.3; min/max are exact and move an endpoint by at most the error of their
+/// arguments). γ₂₄ < 2.7e-15 < [`GAMMA_E`]. Each velocity component is widened by `GAMMA_E·M` with
+/// M accumulated alongside (plus `TINY_V` for underflow); squares and the final sums are
+/// non-negative and covered by [`INFLATE`] and [`TINY_E`].
+mod energy_iv {
+    /// Bound on the relative rounding error of the endpoint computations (module docs).
+    pub const GAMMA_E: f64 = 1e-14;
+    /// Final relative inflation of non-negative results (≤ 30 roundings each).
+    pub const INFLATE: f64 = 1.0 + 1e-13;
+    /// Absolute slack (J) for underflow in the squares and their weighted sum (each operation
+    /// loses < 2⁻¹⁰⁷⁵ absolutely; a few dozen of them, scaled by masses and moments < 10³).
+    pub const TINY_E: f64 = 1e-315;
+    /// Absolute widening of each velocity component (m/s, rad/s) for underflow in the products
+    /// and sums (< 2⁻¹⁰⁷⁵ each, a few hundred of them).
+    const TINY_V: f64 = 1e-300;
+    /// Inputs beyond this magnitude (never physical) make the bound +∞ (no overflow to NaN).
+    pub const HUGE: f64 = 1e100;
+
+    /// An interval [lo, hi] with endpoints rounded to nearest.
+    pub type Iv = (f64, f64);
+    /// An interval 3-vector.
+    pub type V3 = [Iv; 3];
+
+    // Plain comparisons (one instruction each): no NaN can arise here, since every input is
+    // finite and bounded (frames of finite joint values, velocities within `HUGE`).
+    #[inline(always)]
+    fn min(a: f64, b: f64) -> f64 {
+        if a < b { a } else { b }
+    }
+    #[inline(always)]
+    fn max(a: f64, b: f64) -> f64 {
+        if a > b { a } else { b }
+    }
+    #[inline(always)]
+    fn mul(a: Iv, b: Iv) -> Iv {
+        let (p, q, r, s) = (a.0 * b.0, a.0 * b.1, a.1 * b.0, a.1 * b.1);
+        (min(min(p, q), min(r, s)), max(max(p, q), max(r, s)))
+    }
+    #[inline(always)]
+    fn mag(a: Iv) -> f64 {
+        max(a.0.abs(), a.1.abs())
+    }
+
+    /// Upper bounds of sup‖v_c‖² and sup‖ω‖² for v_c = Σ_{j<k} (z_j × (c − o_j))·q̇_j and
+    /// ω = Σ_{j<k} z_j·q̇_j.
+    #[inline(always)]
+    pub fn velocity_bounds(z: &[V3], o: &[V3], dq: &[Iv], c: &V3, k: usize) -> (f64, f64) {
+        let mut v = [(0.0, 0.0); 3];
+        let mut w = [(0.0, 0.0); 3];
+        let (mut vg, mut wg) = ([0.0; 3], [0.0; 3]);
+        for j in 0..k {
+            let (zj, oj, d) = (&z[j], &o[j], dq[j]);
+            let dmag = mag(d);
+            let mut r = [(0.0, 0.0); 3];
+            let mut rmag = [0.0; 3];
+            for i in 0..3 {
+                r[i] = (c[i].0 - oj[i].1, c[i].1 - oj[i].0);
+                rmag[i] = mag(c[i]) + mag(oj[i]);
+            }
+            for i in 0..3 {
+                let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+                // cross_i = z_a r_b − z_b r_a
+                let p1 = mul(zj[a], r[b]);
+                let p2 = mul(zj[b], r[a]);
+                let x = (p1.0 - p2.1, p1.1 - p2.0);
+                let t = mul(x, d);
+                v[i] = (v[i].0 + t.0, v[i].1 + t.1);
+                vg[i] += (mag(zj[a]) * rmag[b] + mag(zj[b]) * rmag[a]) * dmag;
+                let u = mul(zj[i], d);
+                w[i] = (w[i].0 + u.0, w[i].1 + u.1);
+                wg[i] += mag(zj[i]) * dmag;
+            }
+        }
+        let sq = |x: &V3, g: &[f64; 3]| {
+            let mut acc = 0.0;
+            for i in 0..3 {
+                let b = mag(x[i]) + GAMMA_E * g[i] + TINY_V;
+                acc += b * b;
+            }
+            acc
+        };
+        (sq(&v, &vg), sq(&w, &wg))
+    }
+}
+
+/// sin/cos of the box centre and their radii: `(ŝ, ĉ, e, w_s, w_c)` with |sin q_c − ŝ| ≤ e,
+/// |cos q_c − ĉ| ≤ e, and |sin q − ŝ| ≤ w_s, |cos q − ĉ| ≤ w_c for every |q − q_c| ≤ δ.
+#[inline(always)]
+fn centre_trig(qc: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
+    let (s, c) = qc.sin_cos();
+    let (sa, ca) = (s.abs(), c.abs());
+    // sin(q_c + t) − sin q_c = sin q_c (cos t − 1) + cos q_c sin t, 1 − cos t ≤ min(t²/2, 2),
+    // |sin t| ≤ min(|t|, 1); the exact sin q_c, cos q_c are within TRIG_PAD of ŝ, ĉ.
+    let h = (0.5 * delta * delta).min(2.0);
+    let sd = delta.min(1.0);
+    let (sp, cp) = (sa + TRIG_PAD, ca + TRIG_PAD);
+    let ws = (sp * h + cp * sd).min(1.0 + sa) + 2.0 * TRIG_PAD;
+    let wc = (cp * h + sp * sd).min(1.0 + ca) + 2.0 * TRIG_PAD;
+    (s, c, TRIG_PAD, ws * RAD_UP + TINY, wc * RAD_UP + TINY)
 }
 
 #[derive(Debug, Clone)]
 struct JointData {
     /// Origin rotation (f64 matrix, taken as exact).
-    r0: Matrix3<f64>,
+    r0: MatEnc,
     /// Origin translation (exact).
-    t0: Vector3<f64>,
+    t0: Col,
     /// Cross-product matrix K of the unit axis and K² (Rodrigues: R = I + sK + (1−c)K²).
-    k: Matrix3<f64>,
-    k2: Matrix3<f64>,
+    k: M3,
+    k2: M3,
     /// Axis is +z (fast path).
     z_axis: bool,
     /// Unit axis in the joint frame (exact f64 values).
-    axis: Vector3<f64>,
+    axis: Col,
+    /// Columns of `r0` and their absolute values (z-axis fast path).
+    r0c: [Col; 3],
+    r0a: [Col; 2],
 }
 
 #[derive(Debug, Clone)]
 struct InertialData {
     frame: usize,
     mass: f64,
-    com: Vector3<f64>,
+    com: Col,
     /// Upper bound of the largest principal moment (Gershgorin, rounded up), kg·m².
     lambda_max: f64,
 }
@@ -144,17 +496,20 @@ struct InertialData {
 #[derive(Debug, Clone)]
 struct CapsuleData {
     frame: usize,
-    p1: Vector3<f64>,
-    p2: Vector3<f64>,
+    p1: Col,
+    p2: Col,
     radius: f64,
 }
 
 /// Robot occupancy computer for one robot model; queries allocate nothing.
 #[derive(Debug, Clone)]
 pub struct RobotReach {
+    /// Unique per construction (clones share it: they hold the same model), keys frame reuse.
+    id: u64,
     dof: usize,
-    base_r: Matrix3<f64>,
-    base_t: Vector3<f64>,
+    base_r: MatEnc,
+    base_t: Col,
+    identity: M3,
     joints: Vec<JointData>,
     capsules: Vec<CapsuleData>,
     /// For each link: range of its capsules in `capsules`.
@@ -163,16 +518,48 @@ pub struct RobotReach {
     inertials: Vec<InertialData>,
 }
 
-/// Enclosed frames: rotation and origin for frames 0..=n.
+/// Enclosed frames: rotation and origin for frames 0..=n, plus the joint origins and half-widths
+/// in joint-major arrays for the vectorised mean-value sum.
+#[derive(Clone, Copy)]
 struct Frames {
-    r: [MatMR; MAX_DOF + 1],
-    t: [VecMR; MAX_DOF + 1],
+    r: [MatEnc; MAX_DOF + 1],
+    t: [VecEnc; MAX_DOF + 1],
+    /// Midpoint and box radius of the origin of joint j (= frame j + 1), per coordinate.
+    om: [[Col; JCH]; 3],
+    ow: [[Col; JCH]; 3],
+}
+
+impl Default for Frames {
+    fn default() -> Self {
+        Frames {
+            r: [MatEnc::default(); MAX_DOF + 1],
+            t: [VecEnc::default(); MAX_DOF + 1],
+            om: [[Col::default(); JCH]; 3],
+            ow: [[Col::default(); JCH]; 3],
+        }
+    }
 }
 
 /// Reusable scratch space for [`RobotReach`] queries (avoids re-initialising frame buffers).
+/// It remembers the last joint box, so that an energy bound over the same box reuses the frames
+/// of the occupancy computed just before.
+#[derive(Clone)]
 pub struct ReachScratch {
-    boxf: Frames,
-    cent: Frames,
+    /// The chain around the box centre (radius `e` at the centre, `w` over the box).
+    a: Frames,
+    /// For wide boxes only: the chain with the tightest sin/cos enclosures over the box (hull of
+    /// the range, own midpoints), used for the interval form and the sup‖p − o_j‖ bounds.
+    b: Frames,
+    /// Whether `b` is in use (some half-width above [`WIDE_DELTA`]).
+    wide: bool,
+    /// Half-width δ_j of joint j's range around the centre (0 beyond the dof).
+    delta: [Col; JCH],
+    /// The box the frames belong to (valid when `n > 0`).
+    lo: [f64; MAX_DOF],
+    hi: [f64; MAX_DOF],
+    n: usize,
+    /// Identity of the [`RobotReach`] that computed the frames (0: none).
+    owner: u64,
 }
 
 impl std::fmt::Debug for ReachScratch {
@@ -184,25 +571,14 @@ impl std::fmt::Debug for ReachScratch {
 impl Default for ReachScratch {
     fn default() -> Self {
         Self {
-            boxf: Frames::new(),
-            cent: Frames::new(),
-        }
-    }
-}
-
-impl Frames {
-    fn new() -> Self {
-        let zm = MatMR {
-            mid: Matrix3::zeros(),
-            rad: Matrix3::zeros(),
-        };
-        let zv = VecMR {
-            mid: Vector3::zeros(),
-            rad: Vector3::zeros(),
-        };
-        Self {
-            r: [zm; MAX_DOF + 1],
-            t: [zv; MAX_DOF + 1],
+            a: Frames::default(),
+            b: Frames::default(),
+            wide: false,
+            delta: [Col::default(); JCH],
+            lo: [0.0; MAX_DOF],
+            hi: [0.0; MAX_DOF],
+            n: 0,
+            owner: 0,
         }
     }
 }
@@ -235,13 +611,17 @@ impl RobotReach {
             .map(|j| {
                 let a: Vector3<f64> = j.axis.into_inner();
                 let k = Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0);
+                let r0 = iso_r(&j.origin);
+                let c = |i: usize| col(&r0.column(i).into_owned());
                 JointData {
-                    r0: iso_r(&j.origin),
-                    t0: iso_t(&j.origin),
-                    k,
-                    k2: k * k,
+                    r0: MatEnc::exact(&r0),
+                    t0: col(&iso_t(&j.origin)),
+                    k: M3::from_matrix(&k),
+                    k2: M3::from_matrix(&(k * k)),
                     z_axis: a.x == 0.0 && a.y == 0.0 && a.z == 1.0,
-                    axis: a,
+                    axis: col(&a),
+                    r0c: [c(0), c(1), c(2)],
+                    r0a: [cabs(c(0)), cabs(c(1))],
                 }
             })
             .collect();
@@ -252,8 +632,8 @@ impl RobotReach {
             for c in &l.capsules {
                 capsules.push(CapsuleData {
                     frame: l.frame,
-                    p1: c.p1().coords,
-                    p2: c.p2().coords,
+                    p1: col(&c.p1().coords),
+                    p2: col(&c.p2().coords),
                     radius: c.radius(),
                 });
             }
@@ -278,15 +658,18 @@ impl RobotReach {
                 Some(InertialData {
                     frame: l.frame,
                     mass: i.mass,
-                    com: i.com.coords,
+                    com: col(&i.com.coords),
                     lambda_max: lambda_max * (1.0 + 1e-12),
                 })
             })
             .collect();
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         Ok(Self {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             dof: model.dof(),
-            base_r: iso_r(model.base()),
-            base_t: iso_t(model.base()),
+            base_r: MatEnc::exact(&iso_r(model.base())),
+            base_t: col(&iso_t(model.base())),
+            identity: M3::from_matrix(&Matrix3::identity()),
             joints,
             capsules,
             link_ranges,
@@ -315,55 +698,155 @@ impl RobotReach {
         self.tracking_error
     }
 
-    fn frames(&self, lo: &[f64], hi: &[f64], f: &mut Frames) {
-        f.r[0] = MatMR {
-            mid: self.base_r,
-            rad: Matrix3::zeros(),
+    /// Enclosed frames for the box `[lo, hi]` (validated by the caller), stored in `scratch`
+    /// together with the box; with `reuse`, does nothing if `scratch` already holds this box
+    /// computed by this `RobotReach`.
+    fn frames(&self, lo: &[f64], hi: &[f64], scratch: &mut ReachScratch, reuse: bool) {
+        let n = self.dof;
+        if reuse
+            && scratch.owner == self.id
+            && scratch.n == n
+            && scratch.lo[..n] == *lo
+            && scratch.hi[..n] == *hi
+        {
+            return;
+        }
+        let mut qc = [0.0; MAX_DOF];
+        let mut delta = [0.0; JCH * LANES];
+        for j in 0..n {
+            qc[j] = (0.5 * lo[j] + 0.5 * hi[j]).clamp(lo[j], hi[j]);
+            delta[j] = sub_up(hi[j], qc[j]).max(sub_up(qc[j], lo[j]));
+        }
+        for ch in 0..JCH {
+            scratch.delta[ch] = Col(simd::new(
+                delta[ch * LANES..(ch + 1) * LANES]
+                    .try_into()
+                    .expect("chunk"),
+            ));
+        }
+        scratch.wide = delta.iter().any(|&d| d > WIDE_DELTA);
+        self.chain(&mut scratch.a, |j| centre_trig(qc[j], delta[j]));
+        if scratch.wide {
+            self.chain(&mut scratch.b, |j| {
+                let (s, c) = sin_cos_interval(lo[j], hi[j]);
+                let (ws, wc) = (s.rad_up(), c.rad_up());
+                (s.mid(), c.mid(), ws.max(wc), ws, wc)
+            });
+        }
+        scratch.lo[..n].copy_from_slice(lo);
+        scratch.hi[..n].copy_from_slice(hi);
+        scratch.n = n;
+        scratch.owner = self.id;
+    }
+
+    /// One enclosed frame chain; `trig(j)` gives joint j's `(ŝ, ĉ, e, w_s, w_c)` as
+    /// [`centre_trig`] does (midpoints and radii of sin/cos at the centre and over the box).
+    #[inline(always)]
+    fn chain(&self, f: &mut Frames, trig: impl Fn(usize) -> (f64, f64, f64, f64, f64)) {
+        f.r[0] = self.base_r;
+        f.t[0] = VecEnc {
+            m: self.base_t,
+            ..VecEnc::default()
         };
-        f.t[0] = VecMR {
-            mid: self.base_t,
-            rad: Vector3::zeros(),
-        };
+        let mut om = [[0.0; JCH * LANES]; 3];
+        let mut ow = [[0.0; JCH * LANES]; 3];
         for (j, jd) in self.joints.iter().enumerate() {
-            let (s, c) = sin_cos_interval(lo[j], hi[j]);
-            let (sm, sr) = (s.mid(), s.rad_up());
-            let (cm, cr) = (c.mid(), c.rad_up());
+            let (sm, cm, e, ws, wc) = trig(j);
             // Local transform R0·Rot(θ) in midpoint-radius form (R0 exact).
             let local = if jd.z_axis {
                 // Columns: R0·(c, s, 0), R0·(−s, c, 0), R0·(0, 0, 1).
-                let (a, b) = (jd.r0.column(0), jd.r0.column(1));
-                let (aa, ba) = (a.abs(), b.abs());
-                let c0 = a * cm + b * sm;
-                let c1 = b * cm - a * sm;
-                let r0 = aa * cr + ba * sr + (aa * cm.abs() + ba * sm.abs()) * GAMMA;
-                let r1 = ba * cr + aa * sr + (ba * cm.abs() + aa * sm.abs()) * GAMMA;
-                MatMR {
-                    mid: Matrix3::from_columns(&[c0, c1, jd.r0.column(2).into_owned()]),
-                    rad: inflate_m(Matrix3::from_columns(&[r0, r1, Vector3::zeros()])),
+                let ([a, b, z], [aa, ba]) = (jd.r0c, jd.r0a);
+                let c0 = cadd(cscale(a, cm), cscale(b, sm));
+                let c1 = csub(cscale(b, cm), cscale(a, sm));
+                let g0 = cscale(cadd(cscale(aa, cm.abs()), cscale(ba, sm.abs())), GAMMA);
+                let g1 = cscale(cadd(cscale(ba, cm.abs()), cscale(aa, sm.abs())), GAMMA);
+                let ab = cscale(cadd(aa, ba), e);
+                let m = M3([c0, c1, z]);
+                MatEnc {
+                    m,
+                    e: M3([
+                        cinflate(cadd(ab, g0)),
+                        cinflate(cadd(ab, g1)),
+                        Col::default(),
+                    ]),
+                    w: M3([
+                        cinflate(cadd(cadd(cscale(aa, wc), cscale(ba, ws)), g0)),
+                        cinflate(cadd(cadd(cscale(ba, wc), cscale(aa, ws)), g1)),
+                        Col::default(),
+                    ]),
                 }
             } else {
                 // R = I + sK + (1−c)K²: elementwise, mid and radius of each term.
                 let omc = 1.0 - cm;
-                let mid = Matrix3::identity() + jd.k * sm + jd.k2 * omc;
-                let rad = jd.k.abs() * sr
-                    + jd.k2.abs() * cr
-                    + (jd.k.abs() * sm.abs() + jd.k2.abs() * omc.abs() + Matrix3::identity())
-                        * GAMMA;
-                let rot = MatMR {
-                    mid,
-                    rad: inflate_m(rad),
+                let id = self.identity;
+                let (ka, k2a) = (jd.k.abs(), jd.k2.abs());
+                let m = id.add(&jd.k.scale(sm)).add(&jd.k2.scale(omc));
+                let g = ka
+                    .scale(sm.abs())
+                    .add(&k2a.scale(omc.abs()))
+                    .add(&id)
+                    .scale(GAMMA);
+                let rot = MatEnc {
+                    m,
+                    e: ka.scale(e).add(&k2a.scale(e)).add(&g).inflate(),
+                    w: ka.scale(ws).add(&k2a.scale(wc)).add(&g).inflate(),
                 };
-                mat_mul(
-                    &MatMR {
-                        mid: jd.r0,
-                        rad: Matrix3::zeros(),
-                    },
-                    &rot,
-                )
+                jd.r0.mul(&rot)
             };
-            f.t[j + 1] = affine_point(&f.r[j], &f.t[j], &jd.t0);
-            f.r[j + 1] = mat_mul(&f.r[j], &local);
+            let t = f.r[j].affine(&f.t[j], jd.t0);
+            f.r[j + 1] = f.r[j].mul(&local);
+            f.t[j + 1] = t;
+            let (tm, tw) = (t.m.arr(), t.w.arr());
+            for i in 0..3 {
+                om[i][j] = tm[i];
+                ow[i][j] = tw[i];
+            }
         }
+        for i in 0..3 {
+            for ch in 0..JCH {
+                let r = ch * LANES..(ch + 1) * LANES;
+                f.om[i][ch] = Col(simd::new(om[i][r.clone()].try_into().expect("chunk")));
+                f.ow[i][ch] = Col(simd::new(ow[i][r].try_into().expect("chunk")));
+            }
+        }
+    }
+
+    /// Upper bounds (before the final pad) of Σ_{j<k} δ_j · sup‖p − o_j‖ for the two points of
+    /// `p` over their box enclosures and those of the joint origins, evaluated in
+    /// round-to-nearest (module docs). Both points are processed together (independent
+    /// dependency chains interleave).
+    #[inline(always)]
+    fn mean_value_sums(f: &Frames, delta: &[Col; JCH], p: [&VecEnc; 2], k: usize) -> [f64; 2] {
+        let (pm0, pw0, pm1, pw1) = (p[0].m.arr(), p[0].w.arr(), p[1].m.arr(), p[1].w.arr());
+        let mut acc0 = Col::default();
+        let mut acc1 = Col::default();
+        for ch in 0..k.div_ceil(LANES) {
+            let mut d20 = Col::default();
+            let mut d21 = Col::default();
+            for i in 0..3 {
+                let (om, ow) = (f.om[i][ch], f.ow[i][ch]);
+                let d0 = cadd(
+                    cadd(cabs(csub(Col::splat(pm0[i]), om)), Col::splat(pw0[i])),
+                    ow,
+                );
+                let d1 = cadd(
+                    cadd(cabs(csub(Col::splat(pm1[i]), om)), Col::splat(pw1[i])),
+                    ow,
+                );
+                d20 = cadd(d20, cmul(d0, d0));
+                d21 = cadd(d21, cmul(d1, d1));
+            }
+            // Lanes of joints ≥ k are multiplied by 0 (a NaN there only ever discards this form).
+            let mask = Col(simd::new(LANE_MASK[(k - ch * LANES).min(LANES)]));
+            let dl = cmul(delta[ch], mask);
+            acc0 = cadd(acc0, cmul(csqrt(d20), dl));
+            acc1 = cadd(acc1, cmul(csqrt(d21), dl));
+        }
+        let (a0, a1) = (acc0.arr(), acc1.arr());
+        [
+            (a0[0] + a0[1]) + (a0[2] + a0[3]),
+            (a1[0] + a1[1]) + (a1[2] + a1[3]),
+        ]
     }
 
     /// Capsules (link-capsule order) that contain every point of every link capsule for every
@@ -414,34 +897,48 @@ impl RobotReach {
                 self.capsules.len()
             )));
         }
-        let mut qc = [0.0; MAX_DOF];
-        let mut delta = [0.0; MAX_DOF];
-        for i in 0..n {
-            qc[i] = 0.5 * q_lo[i] + 0.5 * q_hi[i];
-            qc[i] = qc[i].clamp(q_lo[i], q_hi[i]);
-            delta[i] = sub_up(q_hi[i], qc[i]).max(sub_up(qc[i], q_lo[i]));
-        }
-        let ReachScratch { boxf, cent } = scratch;
-        self.frames(q_lo, q_hi, boxf);
-        self.frames(&qc[..n], &qc[..n], cent);
+        self.frames(q_lo, q_hi, scratch, false);
+        let (fa, fb) = (&scratch.a, &scratch.b);
         let margin = add_up(self.tracking_error, MODEL_PAD);
         for (ci, c) in self.capsules.iter().enumerate() {
             let k = c.frame;
-            let mut ends = [(Point3::origin(), 0.0); 2];
-            for (e, p) in [&c.p1, &c.p2].into_iter().enumerate() {
-                let pb = affine_point(&boxf.r[k], &boxf.t[k], p);
-                let (ca, ea) = mid_radius(&pb);
-                // Mean-value form around the centre configuration.
-                let pc = affine_point(&cent.r[k], &cent.t[k], p);
-                let (cb, mut eb) = mid_radius(&pc);
-                for (j, &dj) in delta.iter().enumerate().take(k.min(n)) {
-                    if dj == 0.0 {
-                        continue;
+            let kk = k.min(n);
+            let (r, t) = (&fa.r[k], &fa.t[k]);
+            let pa = [r.affine(t, c.p1), r.affine(t, c.p2)];
+            let point = |v: &VecEnc| {
+                let m = v.m.arr();
+                Point3::new(m[0], m[1], m[2])
+            };
+            let e_centre = |v: &VecEnc| {
+                let e = v.e.arr();
+                (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt()
+            };
+            let ends = if scratch.wide {
+                // Interval FK over the box (own midpoint) vs the mean-value form around the
+                // centre.
+                let (r, t) = (&fb.r[k], &fb.t[k]);
+                let pb = [r.affine(t, c.p1), r.affine(t, c.p2)];
+                let mv = Self::mean_value_sums(fb, &scratch.delta, [&pb[0], &pb[1]], kk);
+                let end = |e: usize| {
+                    let ea = norm_up(pb[e].w);
+                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + NORM_PAD;
+                    if eb < ea {
+                        (point(&pa[e]), eb)
+                    } else {
+                        (point(&pb[e]), ea)
                     }
-                    eb = add_up(eb, mul_up(dj, dist_sup_up(&pb, &boxf.t[j + 1])));
-                }
-                ends[e] = if eb < ea { (cb, eb) } else { (ca, ea) };
-            }
+                };
+                [end(0), end(1)]
+            } else {
+                // Both forms share the centre midpoint.
+                let mv = Self::mean_value_sums(fa, &scratch.delta, [&pa[0], &pa[1]], kk);
+                let end = |e: usize| {
+                    let ea = norm_up(pa[e].w);
+                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + NORM_PAD;
+                    (point(&pa[e]), ea.min(eb))
+                };
+                [end(0), end(1)]
+            };
             let r = add_up(add_up(ends[0].1.max(ends[1].1), c.radius), margin);
             out[ci] = Capsule::new_unchecked(ends[0].0, ends[1].0, r);
         }
@@ -463,8 +960,28 @@ impl RobotReach {
         dq_hi: &[f64],
         out: &mut [f64],
     ) -> Result<(), crate::human::ReachError> {
+        self.subchain_energy_bounds_with(
+            &mut ReachScratch::default(),
+            q_lo,
+            q_hi,
+            dq_lo,
+            dq_hi,
+            out,
+        )
+    }
+
+    /// [`Self::subchain_energy_bounds_into`] with caller-provided scratch space; the enclosed
+    /// frames of an occupancy just computed for the same joint box in `scratch` are reused.
+    pub fn subchain_energy_bounds_with(
+        &self,
+        scratch: &mut ReachScratch,
+        q_lo: &[f64],
+        q_hi: &[f64],
+        dq_lo: &[f64],
+        dq_hi: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), crate::human::ReachError> {
         use crate::human::ReachError;
-        use crate::interval::Interval;
         let n = self.dof;
         self.check_box(q_lo, q_hi)?;
         self.check_box(dq_lo, dq_hi)
@@ -476,52 +993,34 @@ impl RobotReach {
                 n + 1
             )));
         }
-        let mut boxf = Frames::new();
-        self.frames(q_lo, q_hi, &mut boxf);
-        let to_iv = |v: &VecMR| -> [Interval; 3] {
-            let w = |i: usize| {
-                Interval::point(v.mid[i])
-                    + Interval::new(-v.rad[i], v.rad[i]).unwrap_or(Interval::ENTIRE)
-            };
-            [w(0), w(1), w(2)]
-        };
-        let zero = VecMR {
-            mid: Vector3::zeros(),
-            rad: Vector3::zeros(),
-        };
-        let mut z = [[Interval::ZERO; 3]; MAX_DOF];
-        let mut o = [[Interval::ZERO; 3]; MAX_DOF];
-        let mut dq = [Interval::ZERO; MAX_DOF];
-        for j in 0..n {
-            z[j] = to_iv(&affine_point(&boxf.r[j + 1], &zero, &self.joints[j].axis));
-            o[j] = to_iv(&boxf.t[j + 1]);
-            dq[j] = Interval::new(dq_lo[j], dq_hi[j]).unwrap_or(Interval::ENTIRE);
+        self.frames(q_lo, q_hi, scratch, true);
+        let boxf = if scratch.wide { &scratch.b } else { &scratch.a };
+        // Interval evaluation in round-to-nearest, widened once (module docs of `energy_iv`).
+        use energy_iv::{HUGE, INFLATE, Iv, TINY_E, V3, velocity_bounds};
+        if (0..n).any(|j| !(dq_lo[j].abs() <= HUGE && dq_hi[j].abs() <= HUGE)) {
+            out.fill(f64::INFINITY);
+            out[0] = 0.0;
+            return Ok(());
         }
-        let norm2_up =
-            |v: &[Interval; 3]| add_up(add_up(v[0].sqr().hi(), v[1].sqr().hi()), v[2].sqr().hi());
+        let zero = VecEnc::default();
+        let iv = |v: &VecEnc| -> V3 {
+            let (m, w) = (v.m.arr(), v.w.arr());
+            [0, 1, 2].map(|i| (m[i] - w[i], m[i] + w[i]))
+        };
+        let mut z = [[(0.0, 0.0); 3]; MAX_DOF];
+        let mut o = [[(0.0, 0.0); 3]; MAX_DOF];
+        let mut dq: [Iv; MAX_DOF] = [(0.0, 0.0); MAX_DOF];
+        for j in 0..n {
+            z[j] = iv(&boxf.r[j + 1].affine(&zero, self.joints[j].axis));
+            o[j] = iv(&boxf.t[j + 1]);
+            dq[j] = (dq_lo[j], dq_hi[j]);
+        }
         let mut per_frame = [0.0; MAX_DOF + 1];
         for l in &self.inertials {
             let k = l.frame;
-            let c = to_iv(&affine_point(&boxf.r[k], &boxf.t[k], &l.com));
-            let mut v = [Interval::ZERO; 3];
-            let mut w = [Interval::ZERO; 3];
-            for j in 0..k.min(n) {
-                let r = [c[0] - o[j][0], c[1] - o[j][1], c[2] - o[j][2]];
-                let zj = &z[j];
-                let cross = [
-                    zj[1] * r[2] - zj[2] * r[1],
-                    zj[2] * r[0] - zj[0] * r[2],
-                    zj[0] * r[1] - zj[1] * r[0],
-                ];
-                for i in 0..3 {
-                    v[i] = v[i] + cross[i] * dq[j];
-                    w[i] = w[i] + zj[i] * dq[j];
-                }
-            }
-            let e = add_up(
-                mul_up(0.5 * l.mass, norm2_up(&v)),
-                mul_up(0.5 * l.lambda_max, norm2_up(&w)),
-            );
+            let c = iv(&boxf.r[k].affine(&boxf.t[k], l.com));
+            let (v2, w2) = velocity_bounds(&z, &o, &dq, &c, k.min(n));
+            let e = (0.5 * l.mass * v2 + 0.5 * l.lambda_max * w2) * INFLATE + TINY_E;
             per_frame[k] = add_up(per_frame[k], e);
         }
         out[0] = 0.0;

@@ -68,6 +68,82 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 10_000, ..ProptestConfig::default() })]
+
+    /// Shield-sized boxes (every half-width ≤ 0.025 rad: one shared chain around the centre),
+    /// mostly at corners, where the mean-value and interval forms are both at their limit.
+    #[test]
+    fn fr3_link_points_stay_in_small_box_occupancy(seed in any::<u64>()) {
+        let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &seed.to_le_bytes().repeat(4));
+        let robot = fr3();
+        let lim = robot.limits();
+        let reach = RobotReach::new(&robot, 0.0);
+        let mut lo = [0.0; 7];
+        let mut hi = [0.0; 7];
+        for i in 0..7 {
+            let c: f64 = rng.random_range(lim.q_min()[i]..=lim.q_max()[i]);
+            let d: f64 = if rng.random_bool(0.5) { 0.025 } else { rng.random_range(0.0..=0.025) };
+            lo[i] = c - d;
+            hi[i] = c + d;
+        }
+        let caps = reach.occupancy(&lo, &hi).unwrap();
+        for _ in 0..4 {
+            let mut q = [0.0; 7];
+            for i in 0..7 {
+                q[i] = if rng.random_bool(0.8) {
+                    if rng.random_bool(0.5) { lo[i] } else { hi[i] }
+                } else {
+                    rng.random_range(lo[i]..=hi[i])
+                };
+            }
+            for (ci, (_, c)) in robot.capsules_world(&q).iter().enumerate() {
+                for e in [c.p1(), c.p2()] {
+                    let x = e + rand_in_ball(&mut rng, c.radius());
+                    prop_assert!(capsule_contains_point(&caps[ci], &x),
+                        "capsule {ci}: q {q:?} in [{lo:?}, {hi:?}]: {x:?} outside {:?}", caps[ci]);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn scratch_reuse_matches_fresh_computation() {
+    // Occupancy then energy on the same box with one scratch (frames reused), across a narrow
+    // and a wide box, equals the fresh computations.
+    use pacs_models::Capsule;
+    use pacs_reach::robot::ReachScratch;
+    let robot = fr3();
+    let reach = RobotReach::new(&robot, 0.003);
+    let q = pacs_models::fr3::Q_READY;
+    let mut scratch = ReachScratch::default();
+    let mut out = vec![
+        Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
+        reach.capsule_count()
+    ];
+    for d in [0.001, 0.3, 0.01, 0.01] {
+        let lo: Vec<f64> = q.iter().map(|x| x - d).collect();
+        let hi: Vec<f64> = q.iter().map(|x| x + d).collect();
+        let vl = [-0.5; 7];
+        let vh = [0.4; 7];
+        reach
+            .occupancy_with(&mut scratch, &lo, &hi, &mut out)
+            .unwrap();
+        let fresh = reach.occupancy(&lo, &hi).unwrap();
+        assert_eq!(out, fresh);
+        let mut e1 = [0.0; 8];
+        let mut e2 = [0.0; 8];
+        reach
+            .subchain_energy_bounds_with(&mut scratch, &lo, &hi, &vl, &vh, &mut e1)
+            .unwrap();
+        reach
+            .subchain_energy_bounds_into(&lo, &hi, &vl, &vh, &mut e2)
+            .unwrap();
+        assert_eq!(e1, e2);
+    }
+}
+
 #[test]
 fn point_box_is_tight() {
     // A degenerate box gives the link capsules themselves, enlarged by at most 1e-9 m.

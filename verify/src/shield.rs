@@ -1017,9 +1017,11 @@ impl Shield {
                 }
                 c @ pacs_models::Constraint::Pfl { .. } => {
                     if !energies_done {
+                        // Same joint box as the occupancy above: the scratch's frames are reused.
                         if self
                             .reach
-                            .subchain_energy_bounds_into(
+                            .subchain_energy_bounds_with(
+                                &mut self.scratch,
                                 &q_lo[..n],
                                 &q_hi[..n],
                                 &v_lo[..n],

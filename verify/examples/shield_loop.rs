@@ -1,0 +1,22 @@
+//! Instruction-count harness for the shield step: `valgrind --tool=callgrind
+//! target/release/examples/shield_loop sorting|handover N` runs the `pacs bench shield` scenario
+//! (N steps) and prints its statistics.
+
+use pacs_verify::bench::shield_scenario;
+use pacs_verify::shield::FilterMode;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let spec = args.next().unwrap_or_else(|| "handover".into());
+    let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20_000);
+    let s = shield_scenario(&spec, FilterMode::Pacs, steps);
+    println!(
+        "{}: median {:.1} us, p90 {:.1} us, p99 {:.1} us, max {:.1} us, verified {:.3}",
+        s.scenario,
+        s.median * 1e6,
+        s.p90 * 1e6,
+        s.p99 * 1e6,
+        s.max * 1e6,
+        s.verified_fraction
+    );
+}
