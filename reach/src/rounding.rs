@@ -74,10 +74,15 @@ pub const INFLATE: f64 = 1.0 + 1e-14;
 /// Absolute slack covering underflow in [`INFLATE`]-bounded expressions.
 pub const TINY: f64 = 1e-300;
 
-/// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`]).
+/// Absolute slack after a square root of an [`INFLATE`]-bounded sum: squares that underflow lose
+/// up to 2⁻¹⁰⁷⁴ each, and √ turns an absolute error ε of the radicand into up to √ε ≈ 4e-162 (for
+/// three terms), far above [`TINY`].
+pub const SQRT_TINY: f64 = 1e-150;
+
+/// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`], [`SQRT_TINY`]).
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
-    (x * x + y * y + z * z).sqrt() * INFLATE + TINY
+    (x * x + y * y + z * z).sqrt() * INFLATE + SQRT_TINY
 }
 
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
