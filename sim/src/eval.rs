@@ -436,21 +436,28 @@ pub fn svg_paths(task: TaskKind, rollouts: &[&Rollout]) -> String {
     }
     let pad = 0.05;
     let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
-    let v_max = rollouts
+    // Colour scale: 0 to the 95th percentile of the recorded tool speeds (robust to spikes).
+    let mut speeds: Vec<f64> = rollouts
         .iter()
         .flat_map(|r| r.episode.samples.iter().map(|s| s.tool_speed))
-        .fold(0.1, f64::max);
+        .collect();
+    speeds.sort_by(f64::total_cmp);
+    let v_max = speeds
+        .get(speeds.len() * 95 / 100)
+        .copied()
+        .unwrap_or(0.1)
+        .max(0.05);
     let panel = 320.0;
     let scale = panel / (x1 - x0).max(y1 - y0);
     let w = panel * methods.len().max(1) as f64 + 20.0;
-    let h = panel + 70.0;
+    let h = panel + 74.0;
     let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w:.0}\" height=\"{h:.0}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"10\" y=\"16\">{}: tool paths, top view (robot base at origin; x forward, y left; colour: tool speed 0–{v_max:.2} m/s, light to dark); grey: demonstrations ±2 cm</text>\n",
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w:.0}\" height=\"{h:.0}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"10\" y=\"16\">{}: tool paths seen from above (robot base at the origin, x up the page, y to the left)</text>\n<text x=\"10\" y=\"32\">colour: tool speed 0–{v_max:.2} m/s (light to dark blue); grey band: the demonstrations ±2 cm</text>\n",
         task.name()
     );
     for (mi, m) in methods.iter().enumerate() {
         let ox = 10.0 + mi as f64 * panel;
-        let oy = 40.0;
+        let oy = 44.0;
         // Screen: x axis to the right = world −y (robot's left on the left), down = world −x.
         let map = |p: &[f64; 3]| (ox + (y1 - p[1]) * scale, oy + (x1 - p[0]) * scale);
         let _ = writeln!(
@@ -479,7 +486,7 @@ pub fn svg_paths(task: TaskKind, rollouts: &[&Rollout]) -> String {
                 let (a, b) = (map(&w2[0].tool), map(&w2[1].tool));
                 let _ = writeln!(
                     s,
-                    "<line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"{}\" stroke-width=\"1.5\"/>",
+                    "<line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"{}\" stroke-width=\"2\" stroke-linecap=\"round\"/>",
                     a.0,
                     a.1,
                     b.0,
