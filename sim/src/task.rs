@@ -395,7 +395,7 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
                 lean: [u(-0.04, 0.0), u(-0.02, 0.02), 0.0],
                 times: [u(0.5, 3.0), u(6.0, 9.0)],
             };
-            (person, Box::new(script), 40.0)
+            (person, Box::new(script), 60.0)
         }
         TaskKind::Sphere => {
             let model = sphere_model(0.05, 0.6, 2.0, 0.005, 0.05, 0.02).expect("valid sphere");

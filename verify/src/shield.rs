@@ -52,6 +52,10 @@ pub struct ShieldConfig {
     pub safety_step: f64,
     /// Cartesian tracking error of the low-level controller (m), added to every robot capsule.
     pub tracking_error: f64,
+    /// Joint velocity tracking error of the low-level controller (rad/s, per joint): added to
+    /// the commanded velocity bounds in every PFL energy bound (the robot's real kinetic energy
+    /// comes from its real velocities).
+    pub velocity_tracking_error: f64,
     /// Human reachability model.
     pub human_model: HumanReachModel,
     /// Acceleration limit of intended trajectories as a fraction of the robot's (0, 1): the rest
@@ -78,6 +82,7 @@ impl Default for ShieldConfig {
         Self {
             safety_step: 0.001,
             tracking_error: 0.005,
+            velocity_tracking_error: 0.004,
             human_model: HumanReachModel::Combined,
             intended_acc_fraction: 0.8,
             intended_jerk: 400.0,
@@ -484,6 +489,9 @@ impl Shield {
         };
         if !(c.safety_step > 0.0 && c.safety_step.is_finite()) {
             return Err(bad("safety_step", c.safety_step));
+        }
+        if !(c.velocity_tracking_error >= 0.0 && c.velocity_tracking_error.is_finite()) {
+            return Err(bad("velocity_tracking_error", c.velocity_tracking_error));
         }
         if !(c.tracking_error >= 0.0 && c.tracking_error.is_finite()) {
             return Err(bad("tracking_error", c.tracking_error));
@@ -1017,6 +1025,13 @@ impl Shield {
                 }
                 c @ pacs_models::Constraint::Pfl { .. } => {
                     if !energies_done {
+                        // The real velocities may differ from the commanded ones by the
+                        // controller's velocity tracking error (rounded outward).
+                        let e = self.config.velocity_tracking_error;
+                        for i in 0..n {
+                            v_lo[i] = (v_lo[i] - e).next_down();
+                            v_hi[i] = (v_hi[i] + e).next_up();
+                        }
                         // Same joint box as the occupancy above: the scratch's frames are reused.
                         if self
                             .reach
