@@ -445,3 +445,44 @@ fn step_before_start_carries_no_joint_targets() {
     assert!(!cmd.diag.verified);
     assert!(sh.set_chunk(&chunk(DELTA, 8)).is_err());
 }
+
+/// The PFL energy bound includes the controller's velocity tracking error: a robot commanded to
+/// stay at rest with the hand on its gripper verifies under the handover thresholds with the
+/// default margin, but not with a margin whose kinetic energy alone exceeds the hand's threshold.
+#[test]
+fn velocity_tracking_margin_enters_the_pfl_energy_bound() {
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let spec = ConstraintSpec::builtin("handover").unwrap();
+    let tool = {
+        let f = robot.frames(&Q0);
+        (f[7] * fr3::tcp_in_joint7()).translation.vector
+    };
+    // The right hand on the tool, the person 0.8 m in front.
+    let kp = human_at(tool.x + 0.8, tool.y, [tool.x + 0.05, tool.y, tool.z]);
+    let step_once = |margin: f64| {
+        let cfg = ShieldConfig {
+            velocity_tracking_error: margin,
+            ..ShieldConfig::default()
+        };
+        let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+        sh.start(0.0, &Q0).unwrap();
+        let m = HumanMeasurement::new(&human, 0.0, &kp, None).unwrap();
+        sh.step(0.0, Some(&m)).diag
+    };
+    let small = step_once(0.004);
+    assert!(small.verified, "{small:?}");
+    assert!(
+        small.contact_energy > 0.0,
+        "contact possible, margin energy > 0: {small:?}"
+    );
+    assert!(small.contact_energy <= small.contact_threshold);
+    let large = step_once(2.0);
+    assert!(!large.verified, "{large:?}");
+    assert!(large.contact_energy > large.contact_threshold, "{large:?}");
+    let invalid = ShieldConfig {
+        velocity_tracking_error: f64::NAN,
+        ..ShieldConfig::default()
+    };
+    assert!(Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], invalid).is_err());
+}
