@@ -36,8 +36,8 @@ demonstrations (rad), fraction of rollouts in which the policy left its training
 
 Outputs in --out: summary.md, summary.json (rows), rollouts.json (every rollout), TASK-paths.svg
 (tool paths coloured by speed, demonstrations shaded), TASK-separation.svg, logs/*.jsonl (audit
-format v1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: JSON {"rows", "summary",
-"plots", "logs"}.
+format v1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: a JSON object with the
+rows, the summary path, the plot paths and the log directory.
 
 Examples:
   pacs simulate --task sorting --method off,pacs,cbf --rollouts 20
