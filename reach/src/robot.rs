@@ -22,9 +22,9 @@
 //! once at the end: it is an expression of at most 30 correctly rounded operations (one
 //! subtraction of floats, which is relatively exact: fl(a − b) = (a − b)(1 + ε), |ε| ≤ u; the rest
 //! `+ × √` on non-negative values), so the computed value is at least (1 − u)³⁰ > 1 − 4e-15 times
-//! the exact one; multiplying by `RAD_UP` = 1 + 1e-13 covers that, and [`NORM_PAD`] covers
-//! underflow (a square below the normal range loses < 2⁻¹⁰⁷⁴ absolutely, which a square root
-//! turns into < 1e-161).
+//! the exact one; multiplying by `RAD_UP` = 1 + 1e-13 covers that, and [`NORM_PAD`]·(1 + Σ (hi −
+//! lo)) covers underflow (a square below the normal range loses < 2⁻¹⁰⁷⁴ absolutely, which a
+//! square root turns into < 1e-161, then scaled by δ_j ≤ hi − lo in the sum).
 //!
 //! A point of a link capsule is a convex combination of its endpoints plus a radius offset, so a
 //! capsule between the two endpoint centres with radius max(e₁, e₂) + r contains it.
@@ -32,7 +32,7 @@
 //! difference to the quaternion form used by nominal kinematics (≤ 1e-14 m over the FR3 chain) is
 //! covered by [`MODEL_PAD`].
 
-use crate::rounding::{TRIG_PAD, add_up, sin_cos_interval, sub_up};
+use crate::rounding::{TRIG_PAD, add_up, mul_up, sin_cos_interval, sub_up};
 use nalgebra::{Matrix3, Point3, Vector3};
 use pacs_models::{Capsule, MAX_DOF, RobotModel};
 
@@ -900,6 +900,15 @@ impl RobotReach {
         self.frames(q_lo, q_hi, scratch, false);
         let (fa, fb) = (&scratch.a, &scratch.b);
         let margin = add_up(self.tracking_error, MODEL_PAD);
+        // Underflow pad of the mean-value form: each square root's underflow loss (< 1e-161) is
+        // scaled by δ_j before the sum, so the pad grows with Σ δ_j ≤ Σ (hi − lo).
+        let mv_pad = {
+            let mut w = 1.0;
+            for i in 0..n {
+                w = add_up(w, sub_up(q_hi[i], q_lo[i]));
+            }
+            mul_up(NORM_PAD, w)
+        };
         for (ci, c) in self.capsules.iter().enumerate() {
             let k = c.frame;
             let kk = k.min(n);
@@ -921,7 +930,7 @@ impl RobotReach {
                 let mv = Self::mean_value_sums(fb, &scratch.delta, [&pb[0], &pb[1]], kk);
                 let end = |e: usize| {
                     let ea = norm_up(pb[e].w);
-                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + NORM_PAD;
+                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + mv_pad;
                     if eb < ea {
                         (point(&pa[e]), eb)
                     } else {
@@ -934,7 +943,7 @@ impl RobotReach {
                 let mv = Self::mean_value_sums(fa, &scratch.delta, [&pa[0], &pa[1]], kk);
                 let end = |e: usize| {
                     let ea = norm_up(pa[e].w);
-                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + NORM_PAD;
+                    let eb = (e_centre(&pa[e]) + mv[e]) * RAD_UP + mv_pad;
                     (point(&pa[e]), ea.min(eb))
                 };
                 [end(0), end(1)]

@@ -516,8 +516,7 @@ pub fn run_setup(
     let mut samples = Vec::new();
     let mut steps_run = 0usize;
     let mut waypoints: Vec<Vec<f64>> = Vec::new();
-    let mut tool: [f64; 3];
-    tool = tool_point(robot, &q);
+    let mut tool = tool_point(robot, &q);
     let mut last_rec_tool = tool;
     let mut prev_tool = tool;
     let mut path_len = 0.0;

@@ -388,6 +388,17 @@ pub fn markdown(rows: &[Row]) -> String {
     s
 }
 
+/// The method labels of `rollouts`, in first-seen order.
+fn methods_in<'a>(rollouts: &[&'a Rollout]) -> Vec<&'a str> {
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rollouts {
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    methods
+}
+
 fn color(speed: f64, v_max: f64) -> String {
     // Light (slow) to dark blue (fast).
     let u = (speed / v_max).clamp(0.0, 1.0);
@@ -411,12 +422,7 @@ pub fn svg_paths(task: TaskKind, rollouts: &[&Rollout]) -> String {
         .iter()
         .map(|d| d.iter().map(|q| tool_point(&scn.robot, q)).collect())
         .collect();
-    let mut methods: Vec<&str> = Vec::new();
-    for r in rollouts {
-        if !methods.contains(&r.method.as_str()) {
-            methods.push(&r.method);
-        }
-    }
+    let methods = methods_in(rollouts);
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -513,12 +519,7 @@ pub fn svg_separation(task: TaskKind, rollouts: &[&Rollout]) -> String {
         "#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
         "#7f7f7f",
     ];
-    let mut methods: Vec<&str> = Vec::new();
-    for r in rollouts {
-        if !methods.contains(&r.method.as_str()) {
-            methods.push(&r.method);
-        }
-    }
+    let methods = methods_in(rollouts);
     let t_max = rollouts
         .iter()
         .flat_map(|r| r.episode.samples.last().map(|s| s.t))

@@ -13,10 +13,7 @@ fn human() -> HumanModel {
 }
 
 fn tool(q: &[f64]) -> [f64; 3] {
-    let r = fr3::fr3();
-    let f = r.frames(q);
-    let p = (f[7] * fr3::tcp_in_joint7()).translation.vector;
-    [p.x, p.y, p.z]
+    pacs_sim::task::tool_point(&fr3::fr3(), q)
 }
 
 fn scripts(demo: &Demonstration) -> Vec<Box<dyn HumanScript>> {
@@ -69,18 +66,11 @@ fn pacs_is_safe_and_succeeds_off_violates() {
     let cfg = EpisodeConfig::default();
     let sorting = ConstraintSpec::builtin("sorting").unwrap();
     let handover = ConstraintSpec::builtin("handover").unwrap();
+    let ep = |m: Method, spec: &ConstraintSpec, script: &dyn HumanScript| {
+        run(m, &robot, &h, spec, script, &demo, &cfg, 0).unwrap()
+    };
     for (spec, script) in [(&sorting, &ss[0]), (&handover, &ss[1]), (&sorting, &ss[2])] {
-        let e = run(
-            Method::Pacs,
-            &robot,
-            &h,
-            spec,
-            script.as_ref(),
-            &demo,
-            &cfg,
-            0,
-        )
-        .unwrap();
+        let e = ep(Method::Pacs, spec, script.as_ref());
         assert_eq!(
             e.violation_fraction,
             0.0,
@@ -101,44 +91,14 @@ fn pacs_is_safe_and_succeeds_off_violates() {
             e.max_deviation
         );
     }
-    let off = run(
-        Method::Off,
-        &robot,
-        &h,
-        &sorting,
-        ss[0].as_ref(),
-        &demo,
-        &cfg,
-        0,
-    )
-    .unwrap();
+    let off = ep(Method::Off, &sorting, ss[0].as_ref());
     assert!(
         off.violation_fraction > 0.0,
         "OFF should violate SSM when a person reaches across the path"
     );
     // Without a human PACS is not slower than OFF (H4: no slowdown unless needed).
-    let pacs_free = run(
-        Method::Pacs,
-        &robot,
-        &h,
-        &sorting,
-        ss[2].as_ref(),
-        &demo,
-        &cfg,
-        0,
-    )
-    .unwrap();
-    let off_free = run(
-        Method::Off,
-        &robot,
-        &h,
-        &sorting,
-        ss[2].as_ref(),
-        &demo,
-        &cfg,
-        0,
-    )
-    .unwrap();
+    let pacs_free = ep(Method::Pacs, &sorting, ss[2].as_ref());
+    let off_free = ep(Method::Off, &sorting, ss[2].as_ref());
     assert!(
         pacs_free.duration <= off_free.duration + 0.01,
         "{} vs {}",

@@ -34,11 +34,7 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
         .with_uncertainty(0.01, 0.1, 0.03)
         .map_err(|e| CliError::Internal(e.to_string()))?;
     let demo = Demonstration::linear(&fr3::Q_READY, &Q_GOAL, 40, 16, 8);
-    let tool = |q: &[f64]| {
-        let f = robot.frames(q);
-        let p = (f[7] * fr3::tcp_in_joint7()).translation.vector;
-        [p.x, p.y, p.z]
-    };
+    let tool = |q: &[f64]| pacs_sim::task::tool_point(&robot, q);
     let mid = tool(&demo.path()[20]);
     let goal = tool(&Q_GOAL);
     let sorting: Box<dyn HumanScript> = Box::new(WalkIn {

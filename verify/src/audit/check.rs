@@ -19,7 +19,7 @@ use pacs_models::robot::MAX_DOF;
 use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_distance_upper_bound};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
-use pacs_reach::robot::RobotReach;
+use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_reach::rounding::{add_up, dist3_up, mul_up, sub_down, sub_up};
 use serde::{Deserialize, Serialize};
 
@@ -264,6 +264,8 @@ pub struct Auditor {
     rcaps: Vec<Capsule>,
     hcaps: Vec<Capsule>,
     energies: Vec<f64>,
+    /// Robot-occupancy scratch (the energy bound of the same box reuses its frames).
+    scratch: Box<ReachScratch>,
     frames: Vec<Isometry3<f64>>,
     nom_caps: Vec<Capsule>,
     nom_energies: Vec<f64>,
@@ -429,6 +431,7 @@ impl Auditor {
             rcaps,
             hcaps: vec![zero; parts],
             energies: vec![0.0; n + 1],
+            scratch: Box::default(),
             frames: vec![Isometry3::identity(); n + 1],
             nom_caps: vec![zero; ncaps],
             nom_energies: vec![0.0; n + 1],
@@ -688,6 +691,37 @@ impl Auditor {
         }
     }
 
+    /// Which robot capsules (bit mask per body part, in `self.contact`) may touch each body part,
+    /// from the occupancies in `self.rcaps` and `self.hcaps`: a bounding-sphere test first, then
+    /// capsule by capsule. Lowers `sep` to the separation lower bound (0 on possible contact);
+    /// returns whether any contact is possible.
+    fn contact_masks(&mut self, sep: &mut f64) -> bool {
+        let sphere = bounding_sphere(&self.rcaps);
+        let mut any_contact = false;
+        for p in 0..self.parts {
+            let h = &self.hcaps[p];
+            let d = capsule_distance_lower_bound(&sphere, h);
+            if d > 0.0 {
+                *sep = sep.min(d);
+                self.contact[p] = 0;
+                continue;
+            }
+            let mut mask = 0u128;
+            for (c, rc) in self.rcaps.iter().enumerate() {
+                let dc = capsule_distance_lower_bound(rc, h);
+                if dc > 0.0 {
+                    *sep = sep.min(dc);
+                } else {
+                    mask |= 1u128 << c;
+                    *sep = 0.0;
+                }
+            }
+            self.contact[p] = mask;
+            any_contact |= mask != 0;
+        }
+        any_contact
+    }
+
     /// Fast path: one check over the union of the block's span boxes and the human occupancy
     /// over the whole block (both supersets of every span's enclosures, so "no violation
     /// possible" holds for every span). Returns false, having recorded nothing, if the block is
@@ -754,34 +788,12 @@ impl Auditor {
             sep = f64::INFINITY;
             if self
                 .rreach
-                .occupancy_into(&u_qlo[..n], &u_qhi[..n], &mut self.rcaps)
+                .occupancy_with(&mut self.scratch, &u_qlo[..n], &u_qhi[..n], &mut self.rcaps)
                 .is_err()
             {
                 return false;
             }
-            let sphere = bounding_sphere(&self.rcaps);
-            let mut any_contact = false;
-            for p in 0..self.parts {
-                let h = &self.hcaps[p];
-                let d = capsule_distance_lower_bound(&sphere, h);
-                if d > 0.0 {
-                    sep = sep.min(d);
-                    self.contact[p] = 0;
-                    continue;
-                }
-                let mut mask = 0u128;
-                for (c, rc) in self.rcaps.iter().enumerate() {
-                    let dc = capsule_distance_lower_bound(rc, h);
-                    if dc > 0.0 {
-                        sep = sep.min(dc);
-                    } else {
-                        mask |= 1u128 << c;
-                        sep = 0.0;
-                    }
-                }
-                self.contact[p] = mask;
-                any_contact |= mask != 0;
-            }
+            let any_contact = self.contact_masks(&mut sep);
             if any_contact {
                 let at_rest = (0..n)
                     .all(|j| u_dlo[j] >= -self.cfg.rest_speed && u_dhi[j] <= self.cfg.rest_speed);
@@ -801,7 +813,8 @@ impl Auditor {
                     if !energies_done {
                         if self
                             .rreach
-                            .subchain_energy_bounds_into(
+                            .subchain_energy_bounds_with(
+                                &mut self.scratch,
                                 &u_qlo[..n],
                                 &u_qhi[..n],
                                 &u_dlo[..n],
@@ -960,7 +973,7 @@ impl Auditor {
         // Robot occupancy over the span.
         if self
             .rreach
-            .occupancy_into(&q_lo[..n], &q_hi[..n], &mut self.rcaps)
+            .occupancy_with(&mut self.scratch, &q_lo[..n], &q_hi[..n], &mut self.rcaps)
             .is_err()
         {
             // Boxes are finite and ordered by construction; treat a failure as unchecked.
@@ -969,29 +982,7 @@ impl Auditor {
             finish_span(self, false, false);
             return;
         }
-        let sphere = bounding_sphere(&self.rcaps);
-        let mut any_contact = false;
-        for p in 0..self.parts {
-            let h = &self.hcaps[p];
-            let d = capsule_distance_lower_bound(&sphere, h);
-            if d > 0.0 {
-                sep = sep.min(d);
-                self.contact[p] = 0;
-                continue;
-            }
-            let mut mask = 0u128;
-            for (c, rc) in self.rcaps.iter().enumerate() {
-                let dc = capsule_distance_lower_bound(rc, h);
-                if dc > 0.0 {
-                    sep = sep.min(dc);
-                } else {
-                    mask |= 1u128 << c;
-                    sep = 0.0;
-                }
-            }
-            self.contact[p] = mask;
-            any_contact |= mask != 0;
-        }
+        let any_contact = self.contact_masks(&mut sep);
         self.record_separation(bidx, sep);
         if !any_contact {
             finish_span(self, false, false);
@@ -1002,7 +993,8 @@ impl Auditor {
             (0..n).all(|j| dq_lo[j] >= -self.cfg.rest_speed && dq_hi[j] <= self.cfg.rest_speed);
         if self
             .rreach
-            .subchain_energy_bounds_into(
+            .subchain_energy_bounds_with(
+                &mut self.scratch,
                 &q_lo[..n],
                 &q_hi[..n],
                 &dq_lo[..n],
