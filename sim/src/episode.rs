@@ -319,9 +319,12 @@ impl Tracking {
     }
 }
 
-/// Ground truth at (q, q̇): minimum separation of moving links to the true human, and whether a
-/// constraint is violated (SSM: contact while moving faster than [`REST_SPEED`]; PFL: contact
-/// with the energy of the sub-chain up to the contacting link above the unconstrained threshold).
+/// Ground truth at (q, q̇) under the ISO/TS 15066 rule of [`pacs_verify::iso15066`]: minimum
+/// separation of the robot's links (the fixed base included) to the true human, and whether a
+/// constraint is violated (SSM: contact while some joint moves faster than [`REST_SPEED`]; PFL:
+/// contact with the whole robot's kinetic energy ½q̇ᵀM(q)q̇ above the body part's threshold, the
+/// constrained one if the part touches links on two different frames or a clampable body part
+/// touches it). Returns (separation, violation, kinetic energy).
 pub fn ground_truth(
     robot: &RobotModel,
     human: &HumanModel,
@@ -330,32 +333,50 @@ pub fn ground_truth(
     dq: &[f64],
     kp: &[[f64; 3]],
 ) -> (f64, bool, f64) {
+    use pacs_verify::iso15066::{frames_can_pinch, threshold};
     let caps = robot.capsules_world(q);
-    let mut energies = vec![0.0; robot.dof() + 1];
-    robot.subchain_energies_into(q, dq, &mut energies);
+    let energy = robot.kinetic_energy(q, dq);
     let moving = dq.iter().any(|v| v.abs() > REST_SPEED);
+    let part_cap = |bp: &pacs_models::human::BodyPart| {
+        (
+            Point3::from(kp[bp.from]),
+            Point3::from(kp[bp.to]),
+            bp.thickness / 2.0,
+        )
+    };
+    let parts = human.body_parts();
     let mut sep = f64::INFINITY;
     let mut violation = false;
-    for (b, bp) in human.body_parts().iter().enumerate() {
-        let (a, c) = (Point3::from(kp[bp.from]), Point3::from(kp[bp.to]));
+    for (b, bp) in parts.iter().enumerate() {
+        let (a, c, r) = part_cap(bp);
+        let mut touched: Option<usize> = None;
+        let mut pinched = false;
         for (li, cap) in &caps {
             let frame = robot.links()[*li].frame;
-            if frame == 0 {
-                continue;
-            }
-            let d = segment_distance_lower_bound(&a, &c, &cap.p1(), &cap.p2())
-                - cap.radius()
-                - bp.thickness / 2.0;
+            let d = segment_distance_lower_bound(&a, &c, &cap.p1(), &cap.p2()) - cap.radius() - r;
             sep = sep.min(d);
-            if d <= 0.0 && moving {
-                let threshold = tc.per_part[b].threshold(false);
-                if energies[frame] > threshold {
-                    violation = true;
+            if d <= 0.0 {
+                match touched {
+                    Some(f) if frames_can_pinch(f, frame) => pinched = true,
+                    Some(_) => {}
+                    None => touched = Some(frame),
                 }
             }
         }
+        if touched.is_none() || !moving {
+            continue;
+        }
+        let clamped = pinched
+            || parts.iter().enumerate().any(|(o, op)| {
+                let (oa, oc, orad) = part_cap(op);
+                human.clampable(b, o)
+                    && segment_distance_lower_bound(&a, &c, &oa, &oc) - r - orad <= 0.0
+            });
+        if energy > threshold(tc.per_part[b], clamped) {
+            violation = true;
+        }
     }
-    (sep, violation, energies[robot.dof()])
+    (sep, violation, energy)
 }
 
 /// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).

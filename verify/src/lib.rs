@@ -9,6 +9,8 @@
 //! - [`monitored`]: intended motion for one safety step, then the failsafe; queryable state and bounds;
 //! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic;
 //! - [`scaling`]: path-speed profiles from any path state (braking and resuming along the path);
+//! - [`iso15066`]: the one ISO/TS 15066 rule (SSM, PFL, clamping) for one time interval, called by
+//!   the shield and the audit;
 //! - [`shield`]: the PACS online safety shield (OFF and single-action by configuration);
 //! - [`cbf`]: the control-barrier-function baseline;
 //! - [`bench`]: reproducible timing scenarios for `pacs bench`.
@@ -25,6 +27,7 @@ pub mod chunk;
 pub mod error;
 pub mod failsafe;
 pub mod intended;
+pub mod iso15066;
 pub mod monitored;
 pub mod problems;
 pub mod profile;

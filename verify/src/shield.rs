@@ -6,12 +6,12 @@
 //! (ṡ → 0; [`crate::scaling`]). It encloses the robot over a sequence of time intervals covering
 //! the monitored trajectory until standstill (joint boxes from sound path bounds →
 //! [`RobotReach`] capsules) and the human over the same intervals from the latest measurement
-//! (its age, delay and errors included → [`HumanReach`]), then checks per body part:
-//! - SSM: no robot capsule may intersect the body part while the robot may move;
-//! - PFL: wherever contact is possible, a sound upper bound of the kinetic energy of the sub-chain
-//!   up to the contacting link (over the interval's position and velocity boxes) is at most the
-//!   body part's threshold — the constrained one if the part may be clamped (it may also touch
-//!   the environment, a clampable body part that may touch the robot, or two non-adjacent links).
+//! (its age, delay and errors included → [`HumanReach`]), then applies the one ISO/TS 15066 rule
+//! ([`crate::iso15066::ContactRule`], shared with the audit) to every interval: SSM (no contact
+//! possible while the robot may move) and PFL (wherever contact is possible, a sound upper bound
+//! of the whole robot's kinetic energy over the interval's position and velocity boxes, widened
+//! by the controller's velocity tracking error, is at most the body part's threshold — the
+//! constrained one if the part may be pinched).
 //!
 //! Verified → execute the intended step and remember this failsafe. Not verified → continue the
 //! last verified failsafe. By induction the robot is always on a verified monitored trajectory;
@@ -23,15 +23,15 @@
 
 use crate::chunk::{Chunk, OutOfLimits};
 use crate::intended::{Method, Planner, PlannerConfig};
+use crate::iso15066::{ConstraintKind, ContactRule};
 use crate::profile::Piece;
 use crate::scaling::{PathState, SpeedProfile, admissible};
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
-use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel, TaskConstraints};
-use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
+use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_reach::rounding::{add_up, mul_up};
 use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 use thiserror::Error;
 
 /// Which filter runs behind the shield interface.
@@ -75,6 +75,10 @@ pub struct ShieldConfig {
     pub first_interval: f64,
     /// Maximum number of occupancy intervals (the last one extends to standstill).
     pub max_intervals: usize,
+    /// SSM: the commanded robot is at rest on an interval if every commanded joint speed is
+    /// provably at most this (rad/s). Default 0: only a stopped path counts as rest (the audit's
+    /// default of 0.02 rad/s covers the controller's velocity tracking error on a real robot).
+    pub rest_speed: f64,
 }
 
 impl Default for ShieldConfig {
@@ -92,70 +96,12 @@ impl Default for ShieldConfig {
             out_of_limits: OutOfLimits::Reject,
             first_interval: 0.002,
             max_intervals: 12,
+            rest_speed: 0.0,
         }
     }
 }
 
-/// A static environment shape (for clamping decisions): a capsule or an axis-aligned box.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
-pub enum EnvShape {
-    /// Capsule (a sphere when p1 = p2).
-    Capsule {
-        /// First endpoint (m).
-        p1: [f64; 3],
-        /// Second endpoint (m).
-        p2: [f64; 3],
-        /// Radius (m).
-        radius: f64,
-    },
-    /// Axis-aligned box.
-    Box {
-        /// Minimum corner (m).
-        min: [f64; 3],
-        /// Maximum corner (m).
-        max: [f64; 3],
-    },
-}
-
-impl EnvShape {
-    /// True unless the capsule provably does not touch the shape.
-    pub fn may_touch(&self, c: &Capsule) -> bool {
-        match *self {
-            EnvShape::Capsule { p1, p2, radius } => {
-                let e = Capsule::new_unchecked(p1.into(), p2.into(), radius);
-                capsules_may_intersect(&e, c)
-            }
-            EnvShape::Box { min, max } => {
-                // The capsule is within the box inflated by its radius iff its segment meets it;
-                // slab test on the inflated box, with a small outward tolerance.
-                let r = c.radius() * (1.0 + 1e-12) + 1e-9;
-                let (a, b) = (c.p1(), c.p2());
-                let (mut t0, mut t1) = (0.0f64, 1.0f64);
-                for k in 0..3 {
-                    let (lo, hi) = (min[k] - r, max[k] + r);
-                    let d = b[k] - a[k];
-                    if d.abs() < 1e-300 {
-                        if a[k] < lo || a[k] > hi {
-                            return false;
-                        }
-                    } else {
-                        let (mut u, mut v) = ((lo - a[k]) / d, (hi - a[k]) / d);
-                        if u > v {
-                            std::mem::swap(&mut u, &mut v);
-                        }
-                        t0 = t0.max(u - 1e-12);
-                        t1 = t1.min(v + 1e-12);
-                        if t0 > t1 {
-                            return false;
-                        }
-                    }
-                }
-                true
-            }
-        }
-    }
-}
+pub use crate::iso15066::EnvShape;
 
 /// Errors of shield construction and chunk handling.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -380,8 +326,8 @@ pub struct Shield {
     hw: Limits,
     planner: Planner,
     reach: RobotReach,
-    human: Option<(HumanReach, TaskConstraints)>,
-    env: Vec<EnvShape>,
+    /// The human's reachability and the ISO/TS 15066 rule for its body parts.
+    human: Option<(HumanReach, ContactRule)>,
     config: ShieldConfig,
     trajs: [Option<Trajectory>; 2],
     /// Current slot and path state at `time`.
@@ -399,51 +345,7 @@ pub struct Shield {
     robot_caps: Vec<Capsule>,
     human_caps: Vec<Capsule>,
     energies: Vec<f64>,
-    /// Per robot capsule: its link index.
-    capsule_link: Vec<usize>,
-    /// Axis-aligned boxes of the robot capsules of the current interval (broad phase).
-    robot_aabb: Vec<Aabb>,
     scratch: ReachScratch,
-}
-
-/// An axis-aligned box containing a capsule (bounds rounded outward).
-#[derive(Debug, Clone, Copy, Default)]
-struct Aabb {
-    lo: [f64; 3],
-    hi: [f64; 3],
-}
-
-impl Aabb {
-    #[inline]
-    fn of(c: &Capsule) -> Self {
-        let (a, b, r) = (c.p1(), c.p2(), c.radius());
-        let mut bx = Aabb::default();
-        for k in 0..3 {
-            // |x ± r| rounding error ≤ u·|result|: pad relatively (plus a tiny absolute term).
-            let lo = a[k].min(b[k]) - r;
-            let hi = a[k].max(b[k]) + r;
-            bx.lo[k] = lo - lo.abs() * 1e-15 - 1e-300;
-            bx.hi[k] = hi + hi.abs() * 1e-15 + 1e-300;
-        }
-        bx
-    }
-    /// Lower bound of the distance between two boxes (0 if they overlap).
-    #[inline]
-    fn distance_lb(&self, o: &Aabb) -> f64 {
-        let mut d2 = 0.0;
-        for k in 0..3 {
-            let g = (o.lo[k] - self.hi[k]).max(self.lo[k] - o.hi[k]).next_down();
-            if g > 0.0 {
-                d2 += g * g;
-            }
-        }
-        // Rounded down: the products and sum of positive terms lose at most a few ulps.
-        (d2 * (1.0 - 1e-12)).sqrt()
-    }
-    #[inline]
-    fn overlaps(&self, o: &Aabb) -> bool {
-        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
-    }
 }
 
 impl std::fmt::Debug for Shield {
@@ -544,18 +446,14 @@ impl Shield {
                     HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
                         .map_err(|e| ShieldError::Invalid(e.to_string()))?,
                 );
-                Some((HumanReach::new(h, c.human_model), tc))
+                let rule = ContactRule::new(&robot, &reach, &h, &tc.per_part, env, c.rest_speed)
+                    .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+                Some((HumanReach::new(h, c.human_model), rule))
             }
         };
         let parts = human
             .as_ref()
             .map_or(0, |(h, _)| h.model().body_parts().len());
-        let mut capsule_link = vec![0; reach.capsule_count()];
-        for (li, &(s, e)) in reach.link_ranges().iter().enumerate() {
-            for cl in capsule_link.iter_mut().take(e).skip(s) {
-                *cl = li;
-            }
-        }
         Ok(Self {
             dof,
             hw,
@@ -569,12 +467,9 @@ impl Shield {
                 parts
             ],
             energies: vec![0.0; dof + 1],
-            robot_aabb: vec![Aabb::default(); reach.capsule_count()],
             scratch: ReachScratch::default(),
-            capsule_link,
             reach,
             human,
-            env,
             config,
             robot,
             trajs: [None, None],
@@ -932,155 +827,104 @@ impl Shield {
                 .copied()
                 .fold(f64::NEG_INFINITY, f64::max)
                 .next_up();
+            if sd_hi == 0.0 {
+                // Path speed exactly 0 over the interval: the commanded joints are at rest.
+                (v_lo[i], v_hi[i]) = (0.0, 0.0);
+            }
         }
-        if self
-            .reach
-            .occupancy_with(
-                &mut self.scratch,
-                &q_lo[..n],
-                &q_hi[..n],
-                &mut self.robot_caps,
-            )
-            .is_err()
-        {
-            return false;
-        }
-        let Some((hr, tc)) = self.human.as_mut() else {
+        let Self {
+            reach,
+            scratch,
+            robot_caps,
+            human_caps,
+            energies,
+            human,
+            config,
+            ..
+        } = self;
+        let Some((hr, rule)) = human.as_mut() else {
             return true;
         };
-        if hr
-            .occupancy_into(meas, t + ta, t + tb, &mut self.human_caps)
-            .is_err()
-        {
+        if hr.occupancy_into(meas, t + ta, t + tb, human_caps).is_err() {
             diag.binding = Binding::NoMeasurement;
             return false;
         }
-        let moving = sd_hi > 0.0 && (0..n).any(|i| v_lo[i] != 0.0 || v_hi[i] != 0.0);
-        let mut energies_done = false;
-        let parts = self.human_caps.len();
-        // Broad phase: boxes around the robot's capsules and their union.
-        let mut all = Aabb {
-            lo: [f64::INFINITY; 3],
-            hi: [f64::NEG_INFINITY; 3],
+        // Broad phase, stage 1: the human is outside the robot's workspace ball.
+        if let Some(sep) = rule.workspace_clear(human_caps) {
+            if k == 0 {
+                diag.min_separation = diag.min_separation.min(sep);
+            }
+            return true;
+        }
+        if reach
+            .occupancy_with(scratch, &q_lo[..n], &q_hi[..n], robot_caps)
+            .is_err()
+        {
+            return false;
+        }
+        // The robot's real velocities may differ from the commanded ones by the controller's
+        // velocity tracking error (rounded outward): the energy bound uses the widened box.
+        let e_track = config.velocity_tracking_error;
+        let (q_lo, q_hi) = (&q_lo[..n], &q_hi[..n]);
+        let energy = || {
+            let mut wl = [0.0; MAX_DOF];
+            let mut wh = [0.0; MAX_DOF];
+            for i in 0..n {
+                wl[i] = (v_lo[i] - e_track).next_down();
+                wh[i] = (v_hi[i] + e_track).next_up();
+            }
+            // Same joint box as the occupancy above: the scratch's frames are reused.
+            match reach.subchain_energy_bounds_with(
+                scratch,
+                q_lo,
+                q_hi,
+                &wl[..n],
+                &wh[..n],
+                energies,
+            ) {
+                Ok(()) => energies[n],
+                Err(_) => f64::INFINITY,
+            }
         };
-        for (bx, rc) in self.robot_aabb.iter_mut().zip(&self.robot_caps) {
-            *bx = Aabb::of(rc);
-            for k in 0..3 {
-                all.lo[k] = all.lo[k].min(bx.lo[k]);
-                all.hi[k] = all.hi[k].max(bx.hi[k]);
-            }
+        let mut first = None;
+        let outcome = rule.check(
+            robot_caps,
+            &v_lo[..n],
+            &v_hi[..n],
+            human_caps,
+            energy,
+            k == 0,
+            |h| {
+                first = Some(*h);
+                ControlFlow::Break(())
+            },
+        );
+        if k == 0 {
+            diag.min_separation = diag.min_separation.min(outcome.separation);
         }
-        for b in 0..parts {
-            let hc = self.human_caps[b];
-            let hb = Aabb::of(&hc);
-            if k == 0 && all.distance_lb(&hb) < diag.min_separation {
-                // Separation lower bound; a pair whose boxes are farther apart than the best so
-                // far cannot lower it.
-                let mut best = diag.min_separation;
-                for (rc, rb) in self.robot_caps.iter().zip(&self.robot_aabb) {
-                    if rb.distance_lb(&hb) < best {
-                        best = best.min(capsule_distance_lower_bound(rc, &hc));
-                    }
-                }
-                diag.min_separation = best;
-            }
-            if !all.overlaps(&hb) {
-                continue;
-            }
-            // Robot capsules that may touch this part.
-            let mut first_frame = usize::MAX;
-            let mut nonadjacent = false;
-            let mut worst: Option<(usize, usize)> = None; // (capsule, frame) with the largest frame
-            for (ci, rc) in self.robot_caps.iter().enumerate() {
-                if !self.robot_aabb[ci].overlaps(&hb) || !capsules_may_intersect(rc, &hc) {
-                    continue;
-                }
-                let frame = self.reach.capsule_frame(ci);
-                if frame == 0 {
-                    continue; // the base never moves
-                }
-                if first_frame == usize::MAX {
-                    first_frame = frame;
-                } else if first_frame.abs_diff(frame) >= 2 {
-                    nonadjacent = true;
-                }
-                if worst.is_none_or(|(_, f)| frame > f) {
-                    worst = Some((ci, frame));
-                }
-            }
-            let Some((ci, frame)) = worst else { continue };
-            let link = self.capsule_link[ci];
-            match tc.per_part[b] {
-                pacs_models::Constraint::Ssm => {
-                    if moving {
-                        if matches!(diag.binding, Binding::None) {
-                            diag.binding = Binding::Ssm {
-                                link,
-                                body_part: b,
-                                interval: k,
-                            };
-                        }
-                        return false;
-                    }
-                }
-                c @ pacs_models::Constraint::Pfl { .. } => {
-                    if !energies_done {
-                        // The real velocities may differ from the commanded ones by the
-                        // controller's velocity tracking error (rounded outward).
-                        let e = self.config.velocity_tracking_error;
-                        for i in 0..n {
-                            v_lo[i] = (v_lo[i] - e).next_down();
-                            v_hi[i] = (v_hi[i] + e).next_up();
-                        }
-                        // Same joint box as the occupancy above: the scratch's frames are reused.
-                        if self
-                            .reach
-                            .subchain_energy_bounds_with(
-                                &mut self.scratch,
-                                &q_lo[..n],
-                                &q_hi[..n],
-                                &v_lo[..n],
-                                &v_hi[..n],
-                                &mut self.energies,
-                            )
-                            .is_err()
-                        {
-                            return false;
-                        }
-                        energies_done = true;
-                    }
-                    let constrained = nonadjacent
-                        || self.env.iter().any(|e| e.may_touch(&hc))
-                        || (0..parts).any(|o| {
-                            o != b
-                                && hr.model().clampable(b, o)
-                                && self
-                                    .robot_caps
-                                    .iter()
-                                    .any(|rc| capsules_may_intersect(rc, &self.human_caps[o]))
-                        });
-                    let threshold = c.threshold(constrained);
-                    let energy = self.energies[frame];
-                    if energy > diag.contact_energy {
-                        diag.contact_energy = energy;
-                        diag.contact_threshold = threshold;
-                    }
-                    if energy > threshold {
-                        if matches!(diag.binding, Binding::None) {
-                            diag.binding = Binding::Pfl {
-                                link,
-                                body_part: b,
-                                energy,
-                                threshold,
-                                constrained,
-                            };
-                        }
-                        return false;
-                    }
-                }
-            }
+        if let Some((e, thr)) = outcome.pfl
+            && e > diag.contact_energy
+        {
+            diag.contact_energy = e;
+            diag.contact_threshold = thr;
         }
-        let _ = (add_up(0.0, 0.0), mul_up(0.0, 0.0));
-        true
+        let Some(h) = first else { return true };
+        if matches!(diag.binding, Binding::None) {
+            diag.binding = match h.kind {
+                ConstraintKind::Ssm => Binding::Ssm {
+                    link: h.link,
+                    body_part: h.part,
+                    interval: k,
+                },
+                ConstraintKind::Pfl => Binding::Pfl {
+                    link: h.link,
+                    body_part: h.part,
+                    energy: h.energy,
+                    threshold: h.threshold,
+                    constrained: h.constrained,
+                },
+            };
+        }
+        false
     }
 }

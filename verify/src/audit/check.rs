@@ -9,19 +9,22 @@
 // Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
+use super::enclosure::{Sample, SpanBoxes, span_boxes};
 use super::log::LogModels;
 use super::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, SeriesPoint, Verdict,
     Violation,
 };
+use crate::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
 use nalgebra::{Isometry3, Point3};
 use pacs_models::robot::MAX_DOF;
-use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};
-use pacs_reach::geometry::{capsule_distance_lower_bound, segment_distance_upper_bound};
+use pacs_models::{Capsule, HumanModel, RobotModel};
+use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_reach::rounding::{add_up, dist3_up, mul_up, sub_down, sub_up};
+use pacs_reach::rounding::{add_up, sub_down};
 use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 
 /// Audit settings (`--config task.toml`); every field has a documented default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,9 +43,6 @@ pub struct AuditConfig {
     pub human_model: HumanReachModel,
     /// Extra radius (m) added to every robot capsule (tracking/calibration error). Default 0.
     pub tracking_error: f64,
-    /// Count two *adjacent* links (carrying frames differ by 1) touching one body part as
-    /// clamping. Default false (only non-adjacent links clamp).
-    pub clamp_adjacent_links: bool,
     /// Relative slack on `|q_{i+1} − q_i| ≤ v_max·Δt` before samples count as exceeding the
     /// velocity limits. Default 1e-9.
     pub limit_slack: f64,
@@ -64,7 +64,6 @@ impl Default for AuditConfig {
             rest_speed: 0.02,
             human_model: HumanReachModel::Combined,
             tracking_error: 0.0,
-            clamp_adjacent_links: false,
             limit_slack: 1e-9,
             robot: None,
             human: None,
@@ -98,19 +97,11 @@ impl AuditConfig {
 }
 
 /// Maximum number of robot capsules supported (bit masks).
-pub const MAX_CAPSULES: usize = 128;
+pub use crate::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
 /// Maximum number of plot buckets per log.
 pub const SERIES_BUCKETS: usize = 1024;
-
-#[derive(Clone, Copy)]
-struct Sample {
-    t: f64,
-    q: [f64; MAX_DOF],
-    dq: [f64; MAX_DOF],
-    has_dq: bool,
-}
 
 #[derive(Clone, Copy)]
 struct Hit {
@@ -247,7 +238,8 @@ pub struct Auditor {
     cfg: AuditConfig,
     robot: RobotModel,
     human: HumanModel,
-    constraints: Vec<Constraint>,
+    /// The one ISO/TS 15066 rule (shared with the shield).
+    rule: ContactRule,
     environment: Vec<Capsule>,
     names: ModelNames,
     rreach: RobotReach,
@@ -255,11 +247,7 @@ pub struct Auditor {
     n: usize,
     parts: usize,
     links: usize,
-    cap_link: Vec<usize>,
-    cap_frame: Vec<usize>,
     cap_local: Vec<Capsule>,
-    /// Sphere containing the robot for every configuration.
-    global_sphere: Capsule,
     // Buffers.
     rcaps: Vec<Capsule>,
     hcaps: Vec<Capsule>,
@@ -268,8 +256,6 @@ pub struct Auditor {
     scratch: Box<ReachScratch>,
     frames: Vec<Isometry3<f64>>,
     nom_caps: Vec<Capsule>,
-    nom_energies: Vec<f64>,
-    contact: Vec<u128>,
     hits: Vec<Hit>,
     // State.
     prev: Option<Sample>,
@@ -300,54 +286,6 @@ pub struct Auditor {
     series: Series,
 }
 
-fn bounding_sphere(caps: &[Capsule]) -> Capsule {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for c in caps {
-        for p in [c.p1(), c.p2()] {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
-    let centre = [
-        0.5 * lo[0] + 0.5 * hi[0],
-        0.5 * lo[1] + 0.5 * hi[1],
-        0.5 * lo[2] + 0.5 * hi[2],
-    ];
-    let mut r: f64 = 0.0;
-    for c in caps {
-        let d1 = dist3_up(&centre, &c.p1().coords.into());
-        let d2 = dist3_up(&centre, &c.p2().coords.into());
-        r = r.max(add_up(d1.max(d2), c.radius()));
-    }
-    Capsule::new_unchecked(Point3::from(centre), Point3::from(centre), r)
-}
-
-/// A ball around the base origin containing every link capsule for every configuration: a point
-/// of a capsule carried by frame k is within Σ_{j≤k} |t_j| + |p| + r of the base origin (rotations
-/// preserve lengths), rounded up and padded for the rounding of the model's fixed transforms.
-fn reach_sphere(robot: &RobotModel, tracking_error: f64) -> Capsule {
-    use pacs_reach::rounding::norm3_up;
-    let mut cum = [0.0; MAX_DOF + 1];
-    for (j, joint) in robot.joints().iter().enumerate() {
-        let t = joint.origin.translation.vector;
-        cum[j + 1] = add_up(cum[j], norm3_up(t.x, t.y, t.z));
-    }
-    let mut r: f64 = 0.0;
-    for l in robot.links() {
-        for c in &l.capsules {
-            let (a, b) = (c.p1(), c.p2());
-            let p = norm3_up(a.x, a.y, a.z).max(norm3_up(b.x, b.y, b.z));
-            r = r.max(add_up(add_up(cum[l.frame], p), c.radius()));
-        }
-    }
-    let r = add_up(mul_up(r, 1.0 + 1e-12), add_up(tracking_error, 1e-9));
-    let base = Point3::from(robot.base().translation.vector);
-    Capsule::new_unchecked(base, base, r)
-}
-
 /// Signed separation lower bound (m) of two capsules: negative values bound the overlap depth.
 fn signed_separation(a: &Capsule, b: &Capsule) -> f64 {
     let d = pacs_reach::geometry::segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
@@ -372,28 +310,22 @@ impl Auditor {
         let rreach = RobotReach::try_new(&models.robot, cfg.tracking_error)
             .map_err(|e| format!("tracking_error: {e}"))?;
         let ncaps = rreach.capsule_count();
-        if ncaps > MAX_CAPSULES {
-            return Err(format!(
-                "robot `{}` has {ncaps} capsules; the audit supports at most {MAX_CAPSULES}",
-                models.robot.name()
-            ));
-        }
         if models.robot.links().len() > MAX_CAPSULES {
             return Err(format!(
                 "robot `{}` has more than {MAX_CAPSULES} links",
                 models.robot.name()
             ));
         }
-        if ncaps == 0 {
-            return Err(format!("robot `{}` has no capsules", models.robot.name()));
-        }
-        let mut cap_link = vec![0; ncaps];
-        for (l, &(s, e)) in rreach.link_ranges().iter().enumerate() {
-            for c in &mut cap_link[s..e] {
-                *c = l;
-            }
-        }
-        let cap_frame: Vec<usize> = (0..ncaps).map(|i| rreach.capsule_frame(i)).collect();
+        let env: Vec<EnvShape> = models.environment.iter().map(EnvShape::from).collect();
+        let rule = ContactRule::new(
+            &models.robot,
+            &rreach,
+            &models.human,
+            &tc.per_part,
+            env,
+            cfg.rest_speed,
+        )
+        .map_err(|e| e.to_string())?;
         let cap_local: Vec<Capsule> = models
             .robot
             .links()
@@ -402,7 +334,6 @@ impl Auditor {
             .collect();
         let zero = Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
         let rcaps = vec![zero; ncaps];
-        let global_sphere = reach_sphere(&models.robot, cfg.tracking_error);
         let n = models.robot.dof();
         let parts = models.human.body_parts().len();
         let names = ModelNames {
@@ -424,18 +355,14 @@ impl Auditor {
             n,
             parts,
             links,
-            cap_link,
-            cap_frame,
             cap_local,
-            global_sphere,
+            rule,
             rcaps,
             hcaps: vec![zero; parts],
             energies: vec![0.0; n + 1],
             scratch: Box::default(),
             frames: vec![Isometry3::identity(); n + 1],
             nom_caps: vec![zero; ncaps],
-            nom_energies: vec![0.0; n + 1],
-            contact: vec![0; parts],
             hits: Vec::with_capacity(parts * links),
             prev: None,
             block: Vec::with_capacity(BLOCK_SPANS + 1),
@@ -464,7 +391,6 @@ impl Auditor {
                 width: 1e-3,
                 buckets: Vec::with_capacity(SERIES_BUCKETS + 1),
             },
-            constraints: tc.per_part,
             environment: models.environment,
             robot: models.robot,
             human: models.human,
@@ -504,7 +430,8 @@ impl Auditor {
         self.humans[slot] = Some(m);
         self.latest_human = Some(slot);
         self.human_records += 1;
-        self.unused_human_t_meas = Some(t_meas);
+        // Every human record after the last robot sample counts: keep the earliest measurement.
+        self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
         Ok(())
     }
 
@@ -520,6 +447,19 @@ impl Auditor {
     /// A robot sample at `t` (s): positions (rad), optional velocities (rad/s). Checks the span
     /// from the previous sample. Errors (wrong length, non-finite value) name the field.
     pub fn push_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), String> {
+        self.push_robot_with_acc(t, q, dq, None)
+    }
+
+    /// A robot sample at `t` (s): positions (rad), optional velocities (rad/s) and optional
+    /// accelerations (rad/s², used with the jerk limit between samples; only together with
+    /// velocities). Checks the span from the previous sample. Errors name the field.
+    pub fn push_robot_with_acc(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        dq: Option<&[f64]>,
+        ddq: Option<&[f64]>,
+    ) -> Result<(), String> {
         let n = self.n;
         self.unused_human_t_meas = None;
         if q.len() != n {
@@ -532,26 +472,40 @@ impl Auditor {
         if let Some((i, x)) = q.iter().enumerate().find(|(_, x)| !x.is_finite()) {
             return Err(format!("q[{i}]: value {x} is not finite"));
         }
+        if !t.is_finite() {
+            return Err(format!("t: value {t} is not finite"));
+        }
         let mut s = Sample {
             t,
             q: [0.0; MAX_DOF],
             dq: [0.0; MAX_DOF],
+            ddq: [0.0; MAX_DOF],
             has_dq: false,
+            has_ddq: false,
         };
         s.q[..n].copy_from_slice(q);
-        if let Some(dq) = dq {
-            if dq.len() != n {
+        for (field, what, src, dst, flag) in [
+            ("dq", "velocities", dq, &mut s.dq, &mut s.has_dq),
+            ("ddq", "accelerations", ddq, &mut s.ddq, &mut s.has_ddq),
+        ] {
+            let Some(v) = src else { continue };
+            if v.len() != n {
                 return Err(format!(
-                    "dq: expected {n} joint velocities for robot `{}`, found {}",
+                    "{field}: expected {n} joint {what} for robot `{}`, found {}",
                     self.names.robot,
-                    dq.len()
+                    v.len()
                 ));
             }
-            if let Some((i, x)) = dq.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(format!("dq[{i}]: value {x} is not finite"));
+            if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                return Err(format!("{field}[{i}]: value {x} is not finite"));
             }
-            s.dq[..n].copy_from_slice(dq);
-            s.has_dq = true;
+            dst[..n].copy_from_slice(v);
+            *flag = true;
+        }
+        if s.has_ddq && !s.has_dq {
+            return Err(
+                "ddq: accelerations are only accepted together with velocities (dq)".into(),
+            );
         }
         if self.prev.is_none() {
             self.t_first = t;
@@ -599,78 +553,10 @@ impl Auditor {
         }
     }
 
-    /// Joint position and velocity boxes over the span (outward-rounded). Returns false if the
-    /// samples contradict the velocity or acceleration limits (the boxes are then widened to
-    /// contain the samples, but the span is inconclusive).
-    #[allow(clippy::too_many_arguments)]
-    fn boxes(
-        &self,
-        s0: &Sample,
-        s1: &Sample,
-        q_lo: &mut [f64; MAX_DOF],
-        q_hi: &mut [f64; MAX_DOF],
-        dq_lo: &mut [f64; MAX_DOF],
-        dq_hi: &mut [f64; MAX_DOF],
-    ) -> bool {
-        let lim = self.robot.limits();
-        let dt = s1.t - s0.t;
-        let dt_up = sub_up(s1.t, s0.t);
-        let dt_down = sub_down(s1.t, s0.t).max(0.0);
-        let slack = 1.0 + self.cfg.limit_slack;
-        let mut ok = true;
-        for j in 0..self.n {
-            let (a, b) = (s0.q[j], s1.q[j]);
-            let v = lim.v_max()[j];
-            let acc = lim.a_max()[j];
-            let reach = mul_up(v, dt_up);
-            // Position: q(t) ∈ [(a+b−vΔ)/2, (a+b+vΔ)/2]; outward-rounded, 1 ulp for decimal parsing.
-            let lo = 0.5 * sub_down(pacs_reach::rounding::add_down(a, b), reach);
-            let hi = 0.5 * add_up(add_up(a, b), reach);
-            q_lo[j] = lo.min(a).min(b).next_down();
-            q_hi[j] = hi.max(a).max(b).next_up();
-            if (b - a).abs() > v * dt * slack + f64::MIN_POSITIVE {
-                ok = false;
-            }
-            // Velocity.
-            let acc_dt = mul_up(acc, dt_up);
-            let (mut vlo, mut vhi);
-            if s0.has_dq && s1.has_dq {
-                let (c, d) = (s0.dq[j], s1.dq[j]);
-                vlo = 0.5 * sub_down(pacs_reach::rounding::add_down(c, d), acc_dt);
-                vhi = 0.5 * add_up(add_up(c, d), acc_dt);
-                if (d - c).abs() > acc * dt * slack + f64::MIN_POSITIVE
-                    || c.abs() > v * slack
-                    || d.abs() > v * slack
-                {
-                    ok = false;
-                }
-                vlo = vlo.min(c).min(d);
-                vhi = vhi.max(c).max(d);
-            } else if dt_down > 0.0 {
-                // The mean velocity (b−a)/Δ is attained somewhere in the span.
-                let m_lo = pacs_reach::rounding::div_down(sub_down(b, a), dt_up.max(dt_down));
-                let m_lo = m_lo.min(pacs_reach::rounding::div_down(sub_down(b, a), dt_down));
-                let m_hi = pacs_reach::rounding::div_up(sub_up(b, a), dt_down)
-                    .max(pacs_reach::rounding::div_up(sub_up(b, a), dt_up));
-                vlo = sub_down(m_lo, acc_dt);
-                vhi = add_up(m_hi, acc_dt);
-            } else {
-                vlo = -v;
-                vhi = v;
-            }
-            // Clip to the velocity limits (if consistent), keeping a non-empty box.
-            let clo = vlo.max(-v);
-            let chi = vhi.min(v);
-            if clo <= chi {
-                vlo = clo;
-                vhi = chi;
-            } else {
-                ok = false;
-            }
-            dq_lo[j] = vlo.next_down();
-            dq_hi[j] = vhi.next_up();
-        }
-        ok
+    /// The span's joint boxes ([`span_boxes`]); false if the samples contradict each other or
+    /// the robot's limits (the span is then `exceeds_limits`).
+    fn boxes(&self, s0: &Sample, s1: &Sample, b: &mut SpanBoxes) -> bool {
+        span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack, b)
     }
 
     /// Check the buffered spans (all using the human measurement `block_human`), keeping the
@@ -691,35 +577,59 @@ impl Auditor {
         }
     }
 
-    /// Which robot capsules (bit mask per body part, in `self.contact`) may touch each body part,
-    /// from the occupancies in `self.rcaps` and `self.hcaps`: a bounding-sphere test first, then
-    /// capsule by capsule. Lowers `sep` to the separation lower bound (0 on possible contact);
-    /// returns whether any contact is possible.
-    fn contact_masks(&mut self, sep: &mut f64) -> bool {
-        let sphere = bounding_sphere(&self.rcaps);
-        let mut any_contact = false;
-        for p in 0..self.parts {
-            let h = &self.hcaps[p];
-            let d = capsule_distance_lower_bound(&sphere, h);
-            if d > 0.0 {
-                *sep = sep.min(d);
-                self.contact[p] = 0;
-                continue;
-            }
-            let mut mask = 0u128;
-            for (c, rc) in self.rcaps.iter().enumerate() {
-                let dc = capsule_distance_lower_bound(rc, h);
-                if dc > 0.0 {
-                    *sep = sep.min(dc);
-                } else {
-                    mask |= 1u128 << c;
-                    *sep = 0.0;
+    /// The one ISO/TS 15066 rule ([`ContactRule::check`]) on the occupancies in `self.rcaps`
+    /// (computed for `b`'s position box) and `self.hcaps`, with the whole-robot energy bound over
+    /// `b`. With `collect`, every violating pair is pushed to `self.hits`; otherwise the rule
+    /// stops at the first.
+    fn apply_rule(&mut self, b: &SpanBoxes, collect: bool) -> Outcome {
+        let n = self.n;
+        let Self {
+            rule,
+            rreach,
+            scratch,
+            rcaps,
+            hcaps,
+            energies,
+            hits,
+            ..
+        } = self;
+        hits.clear();
+        // Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
+        let energy = || match rreach.subchain_energy_bounds_with(
+            scratch,
+            &b.q_lo[..n],
+            &b.q_hi[..n],
+            &b.dq_lo[..n],
+            &b.dq_hi[..n],
+            energies,
+        ) {
+            Ok(()) => energies[n],
+            Err(_) => f64::INFINITY,
+        };
+        rule.check(
+            rcaps,
+            &b.dq_lo[..n],
+            &b.dq_hi[..n],
+            hcaps,
+            energy,
+            true,
+            |h| {
+                if !collect {
+                    return ControlFlow::Break(());
                 }
-            }
-            self.contact[p] = mask;
-            any_contact |= mask != 0;
-        }
-        any_contact
+                hits.push(Hit {
+                    part: h.part,
+                    link: h.link,
+                    kind: h.kind,
+                    energy: h.energy,
+                    threshold: h.threshold,
+                    constrained: h.constrained,
+                    certain: false,
+                    separation: f64::INFINITY,
+                });
+                ControlFlow::Continue(())
+            },
+        )
     }
 
     /// Fast path: one check over the union of the block's span boxes and the human occupancy
@@ -747,104 +657,47 @@ impl Auditor {
         {
             return false;
         }
-        let mut u_qlo = [f64::INFINITY; MAX_DOF];
-        let mut u_qhi = [f64::NEG_INFINITY; MAX_DOF];
-        let mut u_dlo = [f64::INFINITY; MAX_DOF];
-        let mut u_dhi = [f64::NEG_INFINITY; MAX_DOF];
+        let mut u = SpanBoxes {
+            q_lo: [f64::INFINITY; MAX_DOF],
+            q_hi: [f64::NEG_INFINITY; MAX_DOF],
+            dq_lo: [f64::INFINITY; MAX_DOF],
+            dq_hi: [f64::NEG_INFINITY; MAX_DOF],
+        };
+        let mut sb = SpanBoxes::default();
         for i in 0..m - 1 {
-            let (a, b) = (&self.block[i], &self.block[i + 1]);
-            if b.t - a.t > self.cfg.max_gap {
-                return false;
-            }
-            let (mut ql, mut qh, mut dl, mut dh) = (
-                [0.0; MAX_DOF],
-                [0.0; MAX_DOF],
-                [0.0; MAX_DOF],
-                [0.0; MAX_DOF],
-            );
-            if !self.boxes(a, b, &mut ql, &mut qh, &mut dl, &mut dh) {
+            let (a, b) = (self.block[i], self.block[i + 1]);
+            if b.t - a.t > self.cfg.max_gap || !self.boxes(&a, &b, &mut sb) {
                 return false;
             }
             for j in 0..n {
-                u_qlo[j] = u_qlo[j].min(ql[j]);
-                u_qhi[j] = u_qhi[j].max(qh[j]);
-                u_dlo[j] = u_dlo[j].min(dl[j]);
-                u_dhi[j] = u_dhi[j].max(dh[j]);
+                u.q_lo[j] = u.q_lo[j].min(sb.q_lo[j]);
+                u.q_hi[j] = u.q_hi[j].max(sb.q_hi[j]);
+                u.dq_lo[j] = u.dq_lo[j].min(sb.dq_lo[j]);
+                u.dq_hi[j] = u.dq_hi[j].max(sb.dq_hi[j]);
             }
         }
-        let mut sep = f64::INFINITY;
-        let mut clear = true;
-        for h in &self.hcaps {
-            let d = capsule_distance_lower_bound(&self.global_sphere, h);
-            if d > 0.0 {
-                sep = sep.min(d);
-            } else {
-                clear = false;
-                break;
-            }
-        }
-        let mut pfl_seen: Option<(f64, f64)> = None;
-        if !clear {
-            sep = f64::INFINITY;
-            if self
-                .rreach
-                .occupancy_with(&mut self.scratch, &u_qlo[..n], &u_qhi[..n], &mut self.rcaps)
-                .is_err()
-            {
-                return false;
-            }
-            let any_contact = self.contact_masks(&mut sep);
-            if any_contact {
-                let at_rest = (0..n)
-                    .all(|j| u_dlo[j] >= -self.cfg.rest_speed && u_dhi[j] <= self.cfg.rest_speed);
-                let mut energies_done = false;
-                for p in 0..self.parts {
-                    let mask = self.contact[p];
-                    if mask == 0 {
-                        continue;
-                    }
-                    let constraint = self.constraints[p];
-                    if matches!(constraint, Constraint::Ssm) {
-                        if !at_rest {
-                            return false;
-                        }
-                        continue;
-                    }
-                    if !energies_done {
-                        if self
-                            .rreach
-                            .subchain_energy_bounds_with(
-                                &mut self.scratch,
-                                &u_qlo[..n],
-                                &u_qhi[..n],
-                                &u_dlo[..n],
-                                &u_dhi[..n],
-                                &mut self.energies,
-                            )
-                            .is_err()
-                        {
-                            return false;
-                        }
-                        energies_done = true;
-                    }
-                    let part_clamp = self.part_may_clamp(p);
-                    for c in 0..self.rcaps.len() {
-                        if mask & (1u128 << c) == 0 {
-                            continue;
-                        }
-                        let e = self.energies[self.cap_frame[c]];
-                        let thr = constraint.threshold(part_clamp || self.links_may_clamp(mask, c));
-                        if e > thr {
-                            return false;
-                        }
-                        pfl_seen = Some(match pfl_seen {
-                            Some((a, b)) => (a.max(e), b.min(thr)),
-                            None => (e, thr),
-                        });
-                    }
+        let (sep, pfl_seen) = match self.rule.workspace_clear(&self.hcaps) {
+            Some(sep) => (sep, None),
+            None => {
+                if self
+                    .rreach
+                    .occupancy_with(
+                        &mut self.scratch,
+                        &u.q_lo[..n],
+                        &u.q_hi[..n],
+                        &mut self.rcaps,
+                    )
+                    .is_err()
+                {
+                    return false;
                 }
+                let out = self.apply_rule(&u, false);
+                if out.violated {
+                    return false;
+                }
+                (out.separation, out.pfl)
             }
-        }
+        };
         // Every span of the block is clean: per-span bookkeeping only.
         for i in 0..m - 1 {
             let (a, b) = (self.block[i], self.block[i + 1]);
@@ -934,12 +787,9 @@ impl Auditor {
             finish_span(self, false, false);
             return;
         }
-        let mut q_lo = [0.0; MAX_DOF];
-        let mut q_hi = [0.0; MAX_DOF];
-        let mut dq_lo = [0.0; MAX_DOF];
-        let mut dq_hi = [0.0; MAX_DOF];
         let n = self.n;
-        let consistent = self.boxes(s0, s1, &mut q_lo, &mut q_hi, &mut dq_lo, &mut dq_hi);
+        let mut bx = SpanBoxes::default();
+        let consistent = self.boxes(s0, s1, &mut bx);
         if !consistent {
             self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
             self.inconclusive_duration += dt;
@@ -948,106 +798,37 @@ impl Auditor {
         if new_bucket {
             self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(s0, s1));
         }
-        // Broad phase 1: the sphere around every configuration within the joint limits.
-        let lim = self.robot.limits();
-        let within_limits = (0..n).all(|j| q_lo[j] >= lim.q_min()[j] && q_hi[j] <= lim.q_max()[j]);
-        let mut sep = f64::INFINITY;
-        if within_limits {
-            let mut all_clear = true;
-            for h in &self.hcaps {
-                let d = capsule_distance_lower_bound(&self.global_sphere, h);
-                if d > 0.0 {
-                    sep = sep.min(d);
-                } else {
-                    all_clear = false;
-                    break;
-                }
-            }
-            if all_clear {
-                self.record_separation(bidx, sep);
-                finish_span(self, false, false);
-                return;
-            }
-            sep = f64::INFINITY;
+        // Broad phase, stage 1: every body part outside the robot's workspace ball.
+        if let Some(sep) = self.rule.workspace_clear(&self.hcaps) {
+            self.record_separation(bidx, sep);
+            finish_span(self, false, false);
+            return;
         }
         // Robot occupancy over the span.
         if self
             .rreach
-            .occupancy_with(&mut self.scratch, &q_lo[..n], &q_hi[..n], &mut self.rcaps)
-            .is_err()
-        {
-            // Boxes are finite and ordered by construction; treat a failure as unchecked.
-            self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
-            self.inconclusive_duration += dt;
-            finish_span(self, false, false);
-            return;
-        }
-        let any_contact = self.contact_masks(&mut sep);
-        self.record_separation(bidx, sep);
-        if !any_contact {
-            finish_span(self, false, false);
-            return;
-        }
-        // Narrow phase: constraints of the parts that may be touched.
-        let at_rest =
-            (0..n).all(|j| dq_lo[j] >= -self.cfg.rest_speed && dq_hi[j] <= self.cfg.rest_speed);
-        if self
-            .rreach
-            .subchain_energy_bounds_with(
+            .occupancy_with(
                 &mut self.scratch,
-                &q_lo[..n],
-                &q_hi[..n],
-                &dq_lo[..n],
-                &dq_hi[..n],
-                &mut self.energies,
+                &bx.q_lo[..n],
+                &bx.q_hi[..n],
+                &mut self.rcaps,
             )
             .is_err()
         {
-            self.energies.iter_mut().for_each(|e| *e = f64::INFINITY);
+            // Only non-finite boxes (absurd samples) get here: never let the span pass.
+            if consistent {
+                self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
+                self.inconclusive_duration += dt;
+            }
+            finish_span(self, false, false);
+            return;
         }
-        self.hits.clear();
-        for p in 0..self.parts {
-            let mask = self.contact[p];
-            if mask == 0 {
-                continue;
-            }
-            let constraint = self.constraints[p];
-            let part_clamp = self.part_may_clamp(p);
-            let mut link_done = 0u128;
-            for c in 0..self.rcaps.len() {
-                if mask & (1u128 << c) == 0 {
-                    continue;
-                }
-                let l = self.cap_link[c];
-                if link_done & (1u128 << l.min(127)) != 0 {
-                    continue;
-                }
-                link_done |= 1u128 << l.min(127);
-                let e = self.energies[self.cap_frame[c]];
-                let (kind, thr, constrained, bad) = match constraint {
-                    Constraint::Ssm => (ConstraintKind::Ssm, 0.0, false, !at_rest),
-                    Constraint::Pfl { .. } => {
-                        let clamp = part_clamp || self.links_may_clamp(mask, c);
-                        let thr = constraint.threshold(clamp);
-                        let b = &mut self.series.buckets[bidx];
-                        b.energy_bound = max_opt(b.energy_bound, Some(e));
-                        b.threshold = min_opt(b.threshold, Some(thr));
-                        (ConstraintKind::Pfl, thr, clamp, e > thr)
-                    }
-                };
-                if bad {
-                    self.hits.push(Hit {
-                        part: p,
-                        link: l,
-                        kind,
-                        energy: e,
-                        threshold: thr,
-                        constrained,
-                        certain: false,
-                        separation: f64::INFINITY,
-                    });
-                }
-            }
+        let out = self.apply_rule(&bx, true);
+        self.record_separation(bidx, out.separation);
+        if let Some((e, thr)) = out.pfl {
+            let b = &mut self.series.buckets[bidx];
+            b.energy_bound = max_opt(b.energy_bound, Some(e));
+            b.threshold = min_opt(b.threshold, Some(thr));
         }
         if self.hits.is_empty() {
             finish_span(self, false, false);
@@ -1105,32 +886,11 @@ impl Auditor {
         }
     }
 
-    /// Body part `p`'s occupancy may touch an environment shape or a body part it can be clamped
-    /// against.
-    fn part_may_clamp(&self, p: usize) -> bool {
-        let h = &self.hcaps[p];
-        self.environment
-            .iter()
-            .any(|e| capsule_distance_lower_bound(e, h) <= 0.0)
-            || (0..self.parts).any(|o| {
-                o != p
-                    && self.human.clampable(p, o)
-                    && capsule_distance_lower_bound(&self.hcaps[o], h) <= 0.0
-            })
-    }
-
-    /// Another link that may touch the same body part (mask) can clamp it against capsule `c`'s link.
-    fn links_may_clamp(&self, mask: u128, c: usize) -> bool {
-        let (l, f) = (self.cap_link[c], self.cap_frame[c]);
-        (0..self.rcaps.len()).any(|o| {
-            mask & (1u128 << o) != 0
-                && self.cap_link[o] != l
-                && (self.cfg.clamp_adjacent_links || self.cap_frame[o].abs_diff(f) > 1)
-        })
-    }
-
     /// Evaluate the span's hits at the recorded sample `s` with the measured keypoints; updates
-    /// each hit's `certain` and `separation`. Returns whether any hit is certain there.
+    /// each hit's `certain` and `separation`. Returns whether any hit is certain there. The
+    /// classification is the rule's ([`crate::iso15066`]), with "certainly touches" (exact axis
+    /// distance ≤ sum of radii) in place of "may touch", and the nominal whole-robot kinetic
+    /// energy ½q̇ᵀM(q)q̇ at the sample in place of its bound.
     fn certain_at(&mut self, s: &Sample, s0: &Sample, s1: &Sample, slot: usize) -> bool {
         let n = self.n;
         let Some(m) = self.humans[slot].as_ref() else {
@@ -1150,28 +910,30 @@ impl Auditor {
         }
         self.robot.frames_into(&s.q[..n], &mut self.frames);
         for (c, local) in self.cap_local.iter().enumerate() {
-            self.nom_caps[c] = local.transformed(&self.frames[self.cap_frame[c]]);
+            self.nom_caps[c] = local.transformed(&self.frames[self.rule.capsule_frame(c)]);
         }
-        self.robot
-            .subchain_energies_into(&s.q[..n], &dq[..n], &mut self.nom_energies);
+        let energy = self.robot.kinetic_energy(&s.q[..n], &dq[..n]);
         let moving = known_dq && dq[..n].iter().any(|v| v.abs() > self.cfg.rest_speed);
         let pos = m.positions();
         let part_cap = |p: usize| {
             let bp = &self.human.body_parts()[p];
             Capsule::new_unchecked(pos[bp.from], pos[bp.to], bp.thickness * 0.5)
         };
+        let rule = &self.rule;
         let mut any = false;
         for k in 0..self.hits.len() {
             let h = self.hits[k];
             let pc = part_cap(h.part);
-            let (s_, e_) = self.robot_link_range(h.link);
+            let (s_, e_) = self.rreach.link_ranges()[h.link];
             let mut touch = false;
             let mut sep = f64::INFINITY;
             let mut frame = 0;
             for c in s_..e_ {
                 sep = sep.min(signed_separation(&self.nom_caps[c], &pc));
-                touch |= certainly_touch(&self.nom_caps[c], &pc);
-                frame = self.cap_frame[c];
+                if certainly_touch(&self.nom_caps[c], &pc) {
+                    touch = true;
+                    frame = rule.capsule_frame(c);
+                }
             }
             let certain = touch
                 && match h.kind {
@@ -1179,18 +941,14 @@ impl Auditor {
                     ConstraintKind::Pfl => {
                         let clamp = self.environment.iter().any(|e| certainly_touch(e, &pc))
                             || (0..self.parts).any(|o| {
-                                o != h.part
-                                    && self.human.clampable(h.part, o)
-                                    && certainly_touch(&part_cap(o), &pc)
+                                rule.clampable(h.part, o) && certainly_touch(&part_cap(o), &pc)
                             })
                             || (0..self.nom_caps.len()).any(|o| {
-                                self.cap_link[o] != h.link
-                                    && (self.cfg.clamp_adjacent_links
-                                        || self.cap_frame[o].abs_diff(frame) > 1)
+                                frames_can_pinch(rule.capsule_frame(o), frame)
                                     && certainly_touch(&self.nom_caps[o], &pc)
                             });
-                        let thr = self.constraints[h.part].threshold(clamp);
-                        known_dq && self.nom_energies[frame] > thr
+                        let thr = threshold(rule.constraint(h.part), clamp);
+                        known_dq && energy > thr
                     }
                 };
             let hit = &mut self.hits[k];
@@ -1199,10 +957,6 @@ impl Auditor {
             any |= certain;
         }
         any
-    }
-
-    fn robot_link_range(&self, link: usize) -> (usize, usize) {
-        self.rreach.link_ranges()[link]
     }
 
     /// Close the audit: the verdict, intervals and metrics.
@@ -1317,7 +1071,7 @@ mod tests {
     #[test]
     fn reach_sphere_contains_the_robot_in_every_sampled_configuration() {
         let robot = RobotModel::builtin("fr3").unwrap();
-        let s = reach_sphere(&robot, 0.0);
+        let s = crate::iso15066::workspace_ball(&robot, 0.0);
         let mut x = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = || {
             x ^= x << 13;

@@ -12,6 +12,7 @@
 pub mod cdr;
 pub mod check;
 pub mod csv;
+pub mod enclosure;
 pub mod error;
 pub mod jsonl;
 pub mod log;

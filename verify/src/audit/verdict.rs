@@ -37,15 +37,7 @@ impl Verdict {
     }
 }
 
-/// Which kind of constraint was violated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ConstraintKind {
-    /// Speed and separation monitoring.
-    Ssm,
-    /// Power and force limiting.
-    Pfl,
-}
+pub use crate::iso15066::ConstraintKind;
 
 /// A maximal run of consecutive checked spans in which one (body part, link) pair violates its
 /// constraint.
@@ -64,7 +56,7 @@ pub struct Violation {
     /// Smallest signed separation (m) between the link's capsules and the body part as measured,
     /// at the recorded robot samples of the interval (negative: overlap depth).
     pub min_separation: f64,
-    /// Largest sound upper bound (J) of the kinetic energy of the sub-chain up to the link.
+    /// Largest sound upper bound (J) of the whole robot's kinetic energy (PFL; 0 for SSM).
     pub energy: f64,
     /// Smallest energy threshold (J) that applied (0 for SSM).
     pub threshold: f64,
