@@ -335,9 +335,6 @@ impl ContactRule {
                 parts,
             });
         }
-        if !(rest_speed.is_finite() && rest_speed >= 0.0) {
-            return Err(RuleError::RestSpeed(rest_speed));
-        }
         let mut capsule_link = vec![0; ncaps];
         for (l, &(s, e)) in reach.link_ranges().iter().enumerate() {
             for c in &mut capsule_link[s..e] {
@@ -345,21 +342,63 @@ impl ContactRule {
             }
         }
         let capsule_frame = (0..ncaps).map(|i| reach.capsule_frame(i)).collect();
-        let mut clampable = vec![false; parts * parts];
-        for a in 0..parts {
-            for b in 0..parts {
-                clampable[a * parts + b] = a != b && human.clampable(a, b);
-            }
+        let clampable = (0..parts * parts)
+            .map(|i| human.clampable(i / parts, i % parts))
+            .collect();
+        Self::from_tables(
+            capsule_link,
+            capsule_frame,
+            constraints.to_vec(),
+            clampable,
+            environment,
+            rest_speed,
+            workspace_ball(robot, reach.tracking_error()),
+        )
+    }
+
+    /// The rule from plain tables (no models): per robot capsule its link and carrying frame
+    /// (capsules of one link contiguous), per body part its constraint, the clampable relation
+    /// (row-major parts × parts), the environment, the rest speed (rad/s) and a ball containing
+    /// the robot in every configuration (see [`workspace_ball`]). Used by the harnesses.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_tables(
+        capsule_link: Vec<usize>,
+        capsule_frame: Vec<usize>,
+        constraints: Vec<Constraint>,
+        clampable: Vec<bool>,
+        environment: Vec<EnvShape>,
+        rest_speed: f64,
+        workspace: Capsule,
+    ) -> Result<Self, RuleError> {
+        let ncaps = capsule_link.len();
+        let parts = constraints.len();
+        if ncaps == 0 || ncaps > MAX_CAPSULES || capsule_frame.len() != ncaps {
+            return Err(RuleError::Capsules {
+                robot: "tables".into(),
+                capsules: ncaps,
+            });
         }
+        if clampable.len() != parts * parts {
+            return Err(RuleError::Constraints {
+                given: parts,
+                parts: (clampable.len() as f64).sqrt() as usize,
+            });
+        }
+        if !(rest_speed.is_finite() && rest_speed >= 0.0) {
+            return Err(RuleError::RestSpeed(rest_speed));
+        }
+        let clampable = (0..parts * parts)
+            .map(|i| i / parts != i % parts && clampable[i])
+            .collect();
         Ok(Self {
             capsule_link,
             capsule_frame,
-            constraints: constraints.to_vec(),
+            constraints,
             clampable,
             parts,
             environment,
             rest_speed,
-            workspace: workspace_ball(robot, reach.tracking_error()),
+            workspace,
             robot_aabb: vec![Aabb::default(); ncaps],
             contact: vec![0; parts],
         })

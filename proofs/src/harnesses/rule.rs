@@ -1,0 +1,194 @@
+//! (i1) The one ISO/TS 15066 rule is sound (claim C8′, `verify::iso15066::ContactRule::check`).
+//!
+//! Three robot capsules (one link each, on random frames 0–2: the same frame, adjacent frames or
+//! the base), two body parts with random constraints (SSM, or PFL with random thresholds) and a
+//! random clampable relation, optionally one environment capsule. *True* capsules are random; the
+//! occupancies handed to the rule contain them (axis endpoints moved by at most `e`, radius grown
+//! by `e` + 1e-9). The true joint velocities lie in the velocity box, the true kinetic energy is at
+//! most the bound `E`. If the rule reports no violation, then for every body part that truly
+//! touches the robot: SSM → every true joint speed ≤ `rest_speed`; PFL → true energy ≤ the
+//! threshold of the *true* contact type (constrained if the part truly touches capsules on two
+//! different frames, the environment, or a clampable part).
+
+use crate::{Source, harness};
+use nalgebra::Point3;
+use pacs_models::{Capsule, Constraint};
+use pacs_verify::iso15066::{ContactRule, EnvShape, frames_can_pinch, threshold};
+use std::ops::ControlFlow;
+
+/// Distance between two segments, computed finely in floating point (for the ground truth).
+fn segment_distance(a0: [f64; 3], a1: [f64; 3], b0: [f64; 3], b1: [f64; 3]) -> f64 {
+    // Dense sampling of one segment against the exact point–segment distance of the other;
+    // ground truth only needs to decide "touching" for pairs at least 1e-9 m inside the
+    // occupancies' margin, so the sampling error (≤ |a1 − a0| / 2·512) is covered below by
+    // comparing with a tolerance that favours "touching" only when clearly so.
+    let pd = |p: [f64; 3]| {
+        let d = [b1[0] - b0[0], b1[1] - b0[1], b1[2] - b0[2]];
+        let w = [p[0] - b0[0], p[1] - b0[1], p[2] - b0[2]];
+        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let t = if dd > 0.0 {
+            ((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let r = [w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]];
+        (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt()
+    };
+    let mut best = f64::INFINITY;
+    for i in 0..=64 {
+        let u = i as f64 / 64.0;
+        let p = [
+            a0[0] + u * (a1[0] - a0[0]),
+            a0[1] + u * (a1[1] - a0[1]),
+            a0[2] + u * (a1[2] - a0[2]),
+        ];
+        best = best.min(pd(p));
+    }
+    best
+}
+
+#[derive(Clone, Copy)]
+struct Cap {
+    p1: [f64; 3],
+    p2: [f64; 3],
+    r: f64,
+}
+
+impl Cap {
+    /// Truly touching (with a sampling tolerance: only pairs overlapping by ≥ 1e-6 m count).
+    fn touches(&self, o: &Cap) -> bool {
+        segment_distance(self.p1, self.p2, o.p1, o.p2) + 1e-6 <= self.r + o.r
+    }
+    fn capsule(&self) -> Capsule {
+        Capsule::new_unchecked(Point3::from(self.p1), Point3::from(self.p2), self.r)
+    }
+}
+
+fn random_cap<S: Source>(s: &mut S) -> Cap {
+    Cap {
+        p1: s.vec3(-0.2, 0.2),
+        p2: s.vec3(-0.2, 0.2),
+        r: s.f64_in(0.0, 0.08),
+    }
+}
+
+/// An occupancy capsule containing `c`: endpoints moved by at most `e`, radius `r + e + 1e-9`.
+fn enclose<S: Source>(s: &mut S, c: &Cap, e: f64) -> Capsule {
+    let d1 = s.in_ball(e);
+    let d2 = s.in_ball(e);
+    let add = |p: [f64; 3], d: [f64; 3]| Point3::new(p[0] + d[0], p[1] + d[1], p[2] + d[2]);
+    Capsule::new_unchecked(add(c.p1, d1), add(c.p2, d2), c.r + e + 1e-9)
+}
+
+fn rule_sound<S: Source>(s: &mut S) {
+    const CAPS: usize = 3;
+    const PARTS: usize = 2;
+    let frames: [usize; CAPS] = [s.index(3), s.index(3), s.index(3)];
+    let mut constraints = [Constraint::Ssm; PARTS];
+    for c in &mut constraints {
+        if s.bool() {
+            *c = Constraint::Pfl {
+                unconstrained: s.f64_in(0.0, 1.0),
+                constrained: s.f64_in(0.0, 1.0),
+            };
+        }
+    }
+    let clampable = [false, s.bool(), s.bool(), false];
+    let env = if s.bool() { Some(random_cap(s)) } else { None };
+    let rest_speed = s.f64_in(0.0, 0.05);
+    let workspace = Capsule::new_unchecked(Point3::origin(), Point3::origin(), 1.0);
+    let mut rule = ContactRule::from_tables(
+        (0..CAPS).collect(),
+        frames.to_vec(),
+        constraints.to_vec(),
+        clampable.to_vec(),
+        env.iter().map(|c| EnvShape::from(&c.capsule())).collect(),
+        rest_speed,
+        workspace,
+    )
+    .expect("valid tables");
+    // True geometry and occupancies.
+    let robot: [Cap; CAPS] = [random_cap(s), random_cap(s), random_cap(s)];
+    let human: [Cap; PARTS] = [random_cap(s), random_cap(s)];
+    let e_robot = s.f64_in(0.0, 0.05);
+    let e_human = s.f64_in(0.0, 0.05);
+    let robot_occ = [
+        enclose(s, &robot[0], e_robot),
+        enclose(s, &robot[1], e_robot),
+        enclose(s, &robot[2], e_robot),
+    ];
+    let human_occ = [
+        enclose(s, &human[0], e_human),
+        enclose(s, &human[1], e_human),
+    ];
+    // True velocities (2 joints) inside the box; true energy below the bound.
+    let mut dq_lo = [0.0; 2];
+    let mut dq_hi = [0.0; 2];
+    let mut dq = [0.0; 2];
+    for j in 0..2 {
+        let a = s.f64_in(-0.1, 0.1);
+        let b = s.f64_in(-0.1, 0.1);
+        dq_lo[j] = a.min(b);
+        dq_hi[j] = a.max(b);
+        dq[j] = s.f64_in(dq_lo[j], dq_hi[j]);
+    }
+    let e_bound = s.f64_in(0.0, 1.0);
+    let e_true = s.f64_in(0.0, e_bound);
+    let out = rule.check(
+        &robot_occ,
+        &dq_lo,
+        &dq_hi,
+        &human_occ,
+        || e_bound,
+        true,
+        |_| ControlFlow::Break(()),
+    );
+    if out.violated {
+        return;
+    }
+    let moving = dq.iter().any(|v| v.abs() > rest_speed);
+    for p in 0..PARTS {
+        let touched: Vec<usize> = (0..CAPS).filter(|&c| robot[c].touches(&human[p])).collect();
+        if touched.is_empty() {
+            continue;
+        }
+        assert!(out.contact, "a true contact was not seen");
+        assert!(out.separation == 0.0, "separation bound above 0 on contact");
+        match constraints[p] {
+            Constraint::Ssm => assert!(!moving, "SSM contact while moving passed"),
+            c @ Constraint::Pfl { .. } => {
+                let pinched = touched.iter().any(|&a| {
+                    touched
+                        .iter()
+                        .any(|&b| frames_can_pinch(frames[a], frames[b]))
+                });
+                let clamped = pinched
+                    || env.is_some_and(|e| e.touches(&human[p]))
+                    || (0..PARTS)
+                        .any(|o| o != p && clampable[p * PARTS + o] && human[o].touches(&human[p]));
+                assert!(
+                    e_true <= threshold(c, clamped),
+                    "PFL contact above the true threshold passed (clamped: {clamped})"
+                );
+            }
+        }
+    }
+    // The separation bound never exceeds a true gap (0 on contact).
+    for p in 0..PARTS {
+        for c in &robot {
+            let gap = segment_distance(c.p1, c.p2, human[p].p1, human[p].p2) - c.r - human[p].r;
+            assert!(
+                out.separation <= gap.max(0.0) + 1e-6,
+                "separation bound {} above a true gap {gap}",
+                out.separation
+            );
+        }
+    }
+}
+
+harness!(
+    i1_rule_sound,
+    unwind = 66,
+    cases = crate::DEFAULT_CASES,
+    rule_sound
+);

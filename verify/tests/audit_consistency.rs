@@ -1,0 +1,197 @@
+//! Issue 11: logged values that other logged values contradict are never trusted, the PFL energy
+//! is the whole robot's, pinches between adjacent links count, trailing human records count.
+//! Each case here passed (exit 0) before the fix.
+
+use pacs_models::{HumanModel, MAX_DOF, RobotModel};
+use pacs_verify::audit::enclosure::{Sample, SpanBoxes, span_boxes};
+use pacs_verify::audit::jsonl::JsonlReader;
+use pacs_verify::audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
+
+fn run(text: &str) -> RunResult {
+    let mut r = JsonlReader::new("t.jsonl", std::io::Cursor::new(text.as_bytes())).unwrap();
+    audit_reader(&mut r, &AuditConfig::default()).unwrap()
+}
+
+fn reasons(r: &RunResult) -> Vec<&str> {
+    r.inconclusive.iter().map(|s| s.reason.as_str()).collect()
+}
+
+/// The issue's log: joint 1 turns at 2.4 rad/s while both samples claim `dq = 0`, and the right
+/// hand overlaps the gripper by 3 cm.
+const HUMAN: &str = r#"{"type":"human","t":0.0,"positions":[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[0.9017,0.5819,0.6393],[0.7169,0.4626,0.6393],[0.4816,0.3108,0.6393],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]}"#;
+const ROBOT: &str = r#"{"type":"robot","t":0.0,"q":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6],"dq":[0,0,0,0,0,0,0]}
+{"type":"robot","t":0.001,"q":[0.3024,-0.5,0.2,-2.0,0.1,1.8,0.6],"dq":[0,0,0,0,0,0,0]}"#;
+
+fn header(constraints: &str) -> String {
+    format!(
+        r#"{{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"{constraints}"}}"#
+    )
+}
+
+#[test]
+fn velocities_contradicting_positions_never_pass_ssm() {
+    let r = run(&format!("{}\n{HUMAN}\n{ROBOT}\n", header("ssm")));
+    assert_eq!(r.verdict, Verdict::Fail, "{r:?}");
+    assert_eq!(reasons(&r), ["exceeds_limits"]);
+    let v = &r.violations[0];
+    assert_eq!(v.constraint, ConstraintKind::Ssm);
+    assert_eq!(v.body_part, "rHand");
+}
+
+#[test]
+fn velocities_contradicting_positions_never_pass_pfl() {
+    let r = run(&format!("{}\n{HUMAN}\n{ROBOT}\n", header("handover")));
+    assert_eq!(r.verdict, Verdict::Fail, "{r:?}");
+    assert_eq!(reasons(&r), ["exceeds_limits"]);
+    let v = r
+        .violations
+        .iter()
+        .find(|v| v.body_part == "rHand")
+        .expect("a PFL violation at the right hand");
+    assert_eq!(v.constraint, ConstraintKind::Pfl);
+    // The velocity box covers what Δq implies (2.4 rad/s on joint 1): the true whole-robot
+    // energy at 2.4 rad/s is about 2.2 J.
+    let robot = RobotModel::builtin("fr3").unwrap();
+    let q = [0.3012, -0.5, 0.2, -2.0, 0.1, 1.8, 0.6];
+    let truth = robot.kinetic_energy(&q, &[2.4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    assert!(truth > 1.5, "{truth}");
+    assert!(
+        v.energy >= truth,
+        "bound {} < true energy {truth}",
+        v.energy
+    );
+}
+
+#[test]
+fn consistent_zero_velocities_at_rest_are_not_flagged() {
+    // The same contact with the robot truly at rest: SSM allows it, nothing is inconclusive.
+    let still = ROBOT.replace("0.3024", "0.3");
+    let r = run(&format!("{}\n{HUMAN}\n{still}\n", header("ssm")));
+    assert_eq!(r.verdict, Verdict::Pass, "{r:?}");
+}
+
+/// A joint accelerating at 5 rad/s² from rest, its velocity logged by a filter lagging 50 ms.
+#[test]
+fn lagging_velocity_filter_is_inconclusive_or_fails() {
+    let mut text = header("handover");
+    text.push('\n');
+    text.push_str(HUMAN);
+    text.push('\n');
+    for k in 0..=200 {
+        let t = k as f64 * 0.001;
+        let q0 = 0.3 + 2.5 * t * t;
+        let lagged = 5.0 * (t - 0.05).max(0.0);
+        text.push_str(&format!(
+            r#"{{"type":"robot","t":{t},"q":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6],"dq":[{lagged},0,0,0,0,0,0]}}"#
+        ));
+        text.push('\n');
+    }
+    let r = run(&text);
+    assert_ne!(r.verdict, Verdict::Pass);
+    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+}
+
+#[test]
+fn a_contradiction_within_limits_is_flagged_by_the_displacement_test_alone() {
+    // |Δq| ≤ v_max·Δ, |Δq̇| ≤ A·Δ, |q̇| ≤ v_max: only the displacement-vs-velocities test sees it.
+    let lim = RobotModel::builtin("fr3").unwrap().limits().clone();
+    let a = lim.a_max()[0];
+    let dt = 0.01;
+    let mut s0 = Sample {
+        t: 0.0,
+        q: [0.0; MAX_DOF],
+        dq: [0.0; MAX_DOF],
+        ddq: [0.0; MAX_DOF],
+        has_dq: true,
+        has_ddq: false,
+    };
+    let mut s1 = Sample { t: dt, ..s0 };
+    // The most a joint starting and ending at rest can travel: A·Δ²/4 (bang-bang).
+    s1.q[0] = a * dt * dt / 4.0 * 0.999;
+    let mut b = SpanBoxes::default();
+    assert!(span_boxes(&lim, &s0, &s1, 1e-9, &mut b));
+    s1.q[0] = a * dt * dt / 4.0 * 1.01;
+    assert!(!span_boxes(&lim, &s0, &s1, 1e-9, &mut b));
+    // The velocity box then covers the mean velocity Δq/Δ.
+    assert!(b.dq_hi[0] >= s1.q[0] / dt);
+    s0.q[0] = 0.0;
+}
+
+/// Only joint 4 (the elbow) moves; the right hand touches link 2. The sub-chain up to link 2 has
+/// no kinetic energy, the whole robot has: PFL must use the whole robot's.
+#[test]
+fn pfl_uses_the_whole_robot_energy() {
+    let robot = RobotModel::builtin("fr3").unwrap();
+    let human = HumanModel::builtin("default").unwrap();
+    let q = [0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.6];
+    let caps = robot.capsules_world(&q);
+    let link2 = robot.link_index("fr3_link2").unwrap();
+    let (_, c) = caps.iter().find(|(l, _)| *l == link2).unwrap();
+    let mid = nalgebra::center(&c.p1(), &c.p2());
+    let hand_r = human.body_parts()[5].thickness / 2.0;
+    // The hand touches the link's capsule side facing +y, forearm pointing away.
+    let hand = [mid.x, mid.y + c.radius() + hand_r - 0.01, mid.z];
+    let mut kp = vec![[2.6, 0.0, 1.0]; 9];
+    kp[5] = hand;
+    kp[4] = [hand[0], hand[1] + 0.3, hand[2]];
+    kp[3] = [hand[0], hand[1] + 0.6, hand[2]];
+    let kp_json = serde_json::to_string(&kp).unwrap();
+    let dq = [0.0, 0.0, 0.0, 1.5, 0.0, 0.0, 0.0];
+    let mut e = vec![0.0; 8];
+    robot.subchain_energies_into(&q, &dq, &mut e);
+    assert_eq!(e[2], 0.0);
+    let whole = robot.kinetic_energy(&q, &dq);
+    assert!(whole > 0.265, "{whole}");
+    let mut text = header("handover");
+    text.push_str(&format!(
+        "\n{{\"type\":\"human\",\"t\":0.0,\"positions\":{kp_json}}}\n"
+    ));
+    let mut qk = q;
+    for k in 0..=4 {
+        let t = k as f64 * 0.001;
+        qk[3] = q[3] + 1.5 * t;
+        text.push_str(&format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":{},\"dq\":{}}}\n",
+            serde_json::to_string(&qk).unwrap(),
+            serde_json::to_string(&dq).unwrap()
+        ));
+    }
+    let r = run(&text);
+    assert_eq!(r.verdict, Verdict::Fail, "{r:?}");
+    let v = r
+        .violations
+        .iter()
+        .find(|v| v.body_part == "rHand" && v.link == "fr3_link2")
+        .expect("violation at link 2");
+    assert!(
+        v.certain,
+        "the nominal whole-robot energy exceeds the threshold at the samples"
+    );
+    assert!(v.energy >= whole);
+}
+
+/// Two human records after the last robot sample: the first, measured inside the logged time,
+/// shows contact; only the second was remembered before.
+#[test]
+fn every_trailing_human_record_counts() {
+    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let contact = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[0.9017,0.5819,0.6393],[0.7169,0.4626,0.6393],[0.4816,0.3108,0.6393],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let robots: String = (0..=10)
+        .map(|k| {
+            format!(
+                "{{\"type\":\"robot\",\"t\":{},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n",
+                k as f64 * 0.05
+            )
+        })
+        .collect();
+    let text = format!(
+        "{}\n{{\"type\":\"human\",\"t\":0.0,\"positions\":{far}}}\n\
+         {robots}\
+         {{\"type\":\"human\",\"t\":0.6,\"t_meas\":0.4,\"positions\":{contact}}}\n\
+         {{\"type\":\"human\",\"t\":0.7,\"t_meas\":0.7,\"positions\":{far}}}\n",
+        header("ssm")
+    );
+    let r = run(&text);
+    assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
+    assert_eq!(reasons(&r), ["human_record_after_last_robot_sample"]);
+}
