@@ -15,8 +15,9 @@
 //! - with accelerations, the same one derivative up: `|q̈₀|, |q̈₁| ≤ A`, `|q̈₁ − q̈₀| ≤ JΔ` and
 //!   `|q̇₁ − q̇₀ − Δ(q̈₀ + q̈₁)/2| ≤ (J²Δ² − (q̈₁ − q̈₀)²)/(4J)`.
 //!
-//! Every test is evaluated leniently (outward-rounded, each input widened by one ulp for decimal
-//! parsing, plus a relative `slack`), so it never flags a true motion; a span that fails is
+//! Every bound is rounded outward (each logged value standing for the reals within one ulp of it,
+//! for decimal parsing; see `PAD`) and every test is evaluated leniently (plus a relative
+//! `slack`), so it never flags a true motion; a span that fails is
 //! `exceeds_limits` (inconclusive, never pass) and its boxes are the *hull* of every enclosure
 //! below (so they also cover what Δq implies), without clipping to the limits.
 //!
@@ -38,7 +39,6 @@
 
 use pacs_models::JointLimits;
 use pacs_models::robot::MAX_DOF;
-use pacs_reach::interval::Interval;
 
 /// One logged robot sample (units: s, rad, rad/s, rad/s²).
 #[derive(Debug, Clone, Copy)]
@@ -81,56 +81,53 @@ impl Default for SpanBoxes {
     }
 }
 
-/// A logged value as the interval of reals it may stand for (one ulp each way: decimal parsing).
-#[inline]
-fn logged(x: f64) -> Interval {
-    Interval::new(x.next_down(), x.next_up()).unwrap_or(Interval::ENTIRE)
+/// Relative pad of every bound below: each is a short expression (≤ 12 rounded operations) of
+/// logged values, each of which stands for the reals within one ulp (decimal parsing). With unit
+/// roundoff u = 2⁻⁵³, its error is at most (2 + 12)·u·`mag`, where `mag` is the sum of the
+/// magnitudes of the expression's terms; `PAD = 16u` covers it and the rounding of the padding
+/// addition itself. `TINY` covers underflow (absolute errors ≤ 2⁻¹⁰⁷⁴ per operation).
+const PAD: f64 = 8.0 * f64::EPSILON;
+const TINY: f64 = 1e-300;
+
+/// An upper bound of the exact value of the expression computed as `x`, whose terms have
+/// magnitudes summing to `mag` (`mag ≥ |x|`).
+#[inline(always)]
+fn up(x: f64, mag: f64) -> f64 {
+    x + (PAD * mag + TINY)
 }
 
-#[inline]
-fn pt(x: f64) -> Interval {
-    Interval::point(x)
+/// A lower bound, as [`up`].
+#[inline(always)]
+fn down(x: f64, mag: f64) -> f64 {
+    x - (PAD * mag + TINY)
 }
 
-/// `num / den` for `den.lo() > 0` (outward rounded).
-#[inline]
-fn div_pos(num: Interval, den: Interval) -> Interval {
-    let c = [
-        num.lo() / den.lo(),
-        num.lo() / den.hi(),
-        num.hi() / den.lo(),
-        num.hi() / den.hi(),
-    ];
-    let lo = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
-    let hi = c
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max)
-        .next_up();
-    Interval::new(lo, hi).unwrap_or(Interval::ENTIRE)
-}
-
-/// Bounds of `x + y·h ± k·h²/2` over the step `h` (an interval ≥ 0): the Taylor envelope
-/// `[lo, hi]` of a quantity with value `x` and rate `y` at one end of the half span and second
-/// derivative bounded by `k`, evaluated at `h` (its value at the span's end is `x` itself).
-#[inline]
-fn envelope(x: Interval, y: Interval, k: f64, h: Interval) -> (f64, f64) {
-    let mid = x + y * h;
-    let bend = (h.sqr() * pt(k)).scale(0.5);
-    ((mid - bend).lo().min(x.lo()), (mid + bend).hi().max(x.hi()))
-}
-
-/// `|r| − bound > tol`, evaluated leniently: the smallest `|r|` against the largest bound.
-#[inline]
-fn exceeds(r: Interval, bound: Interval, tol: f64) -> bool {
-    let r_min = if r.lo() > 0.0 {
-        r.lo()
-    } else if r.hi() < 0.0 {
-        -r.hi()
-    } else {
-        0.0
+/// Taylor envelope over a half span: a quantity with value `x` and rate `y` at one end of the
+/// span and second derivative bounded by `k` lies, at distance `τ ∈ [0, h]` from that end, within
+/// `x + yτ ± kτ²/2`; the upper envelope is convex and the lower concave in τ, so their extremes
+/// over the half span are at τ = 0 or τ = h, with `h ∈ [h_lo, h_hi]`. Returns (lower, upper).
+#[inline(always)]
+fn envelope(x: f64, y: f64, k: f64, h_lo: f64, h_hi: f64) -> (f64, f64) {
+    let (yl, yh) = {
+        let (p, q) = (y * h_lo, y * h_hi);
+        (p.min(q), p.max(q))
     };
-    r_min > bound.hi() + tol
+    let bend = 0.5 * k * h_hi * h_hi;
+    let mag = x.abs() + y.abs() * h_hi + bend;
+    (
+        down(x + yl - bend, mag).min(down(x, x.abs())),
+        up(x + yh + bend, mag).max(up(x, x.abs())),
+    )
+}
+
+/// The bound `(K²Δ² − δ²)/(4K)` on the displacement between two rates differing by `δ` under
+/// `|rate'| ≤ K` over `Δ ≤ dt_hi`, rounded up (`delta_abs_min` a lower bound of `|δ|`).
+#[inline(always)]
+fn reach_band(k: f64, dt_hi: f64, delta_abs_min: f64) -> f64 {
+    let kd = k * dt_hi;
+    let num = kd * kd - delta_abs_min * delta_abs_min;
+    let mag = (kd * kd + delta_abs_min * delta_abs_min) / (4.0 * k);
+    up(num / (4.0 * k), mag)
 }
 
 /// The span's boxes and whether the samples are consistent (module docs). `slack` is the
@@ -143,98 +140,115 @@ pub fn span_boxes(
     out: &mut SpanBoxes,
 ) -> bool {
     let n = lim.dof();
-    let dt = logged(s1.t) - logged(s0.t);
-    let dt = Interval::new(dt.lo().max(0.0), dt.hi()).unwrap_or(Interval::ENTIRE);
-    let h = dt.scale(0.5);
-    let dt_hi = dt.hi();
-    let positive = dt.lo() > 0.0;
+    // Δ ∈ [dt_lo, dt_hi] (time stamps within one ulp each, one rounded subtraction).
+    let dt = s1.t - s0.t;
+    let dt_err = PAD * (s0.t.abs() + s1.t.abs()) + TINY;
+    let dt_hi = dt + dt_err;
+    let dt_lo = (dt - dt_err).max(0.0);
+    let (h_lo, h_hi) = (0.5 * dt_lo, 0.5 * dt_hi);
     let both_dq = s0.has_dq && s1.has_dq;
     let both_ddq = both_dq && s0.has_ddq && s1.has_ddq;
     let rel = 1.0 + slack;
-    let mut ok = true;
+    let mut ok = dt_hi.is_finite();
     for j in 0..n {
         let (v, acc, jerk) = (lim.v_max()[j], lim.a_max()[j], lim.j_max()[j]);
-        let (a, b) = (logged(s0.q[j]), logged(s1.q[j]));
-        let scale = 16.0 * f64::EPSILON;
+        let (a, b) = (s0.q[j], s1.q[j]);
+        let mag_ab = a.abs() + b.abs();
         // Positions from v_max.
-        let mid = (a + b).scale(0.5);
-        let reach = (pt(v) * dt).scale(0.5);
-        let mut p_lo = (mid - reach).lo().min(a.lo()).min(b.lo());
-        let mut p_hi = (mid + reach).hi().max(a.hi()).max(b.hi());
-        let dq_pos = b - a;
-        if exceeds(
-            dq_pos,
-            pt(v) * dt,
-            slack * v * dt_hi + scale * (a.mag() + b.mag()),
-        ) {
+        let reach = v * dt_hi;
+        let mut p_lo = down(0.5 * (a + b - reach), mag_ab + reach)
+            .min(down(a, a.abs()))
+            .min(down(b, b.abs()));
+        let mut p_hi = up(0.5 * (a + b + reach), mag_ab + reach)
+            .max(up(a, a.abs()))
+            .max(up(b, b.abs()));
+        let dpos = b - a;
+        if down(dpos.abs(), mag_ab) > reach * rel {
             ok = false;
         }
-        // Velocity candidates.
-        let mut v_lo = -v;
-        let mut v_hi = v;
+        // The mean velocity (b − a)/Δ is attained somewhere in the span: q̇ ∈ mean ± AΔ.
+        let mean_box = || {
+            if dt_lo > 0.0 {
+                let (n_lo, n_hi) = (down(dpos, mag_ab), up(dpos, mag_ab));
+                let m_hi = (n_hi / dt_lo).max(n_hi / dt_hi);
+                let m_lo = (n_lo / dt_lo).min(n_lo / dt_hi);
+                let w = acc * dt_hi;
+                Some((down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w)))
+            } else {
+                None
+            }
+        };
+        // Velocity box: the intersection of the candidates, starting from the limits.
+        let (mut v_lo, mut v_hi) = (-v, v);
         let (mut hull_lo, mut hull_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut take = |lo: f64, hi: f64, v_lo: &mut f64, v_hi: &mut f64| {
+        let mut take = |(lo, hi): (f64, f64), v_lo: &mut f64, v_hi: &mut f64| {
             *v_lo = v_lo.max(lo);
             *v_hi = v_hi.min(hi);
             hull_lo = hull_lo.min(lo);
             hull_hi = hull_hi.max(hi);
         };
-        if positive {
-            // The mean velocity is attained somewhere in the span.
-            let m = div_pos(dq_pos, dt);
-            let w = pt(acc) * dt;
-            take((m - w).lo(), (m + w).hi(), &mut v_lo, &mut v_hi);
-        }
         let mut pos_dq: Option<(f64, f64)> = None;
         if both_dq {
-            let (c, d) = (logged(s0.dq[j]), logged(s1.dq[j]));
-            let mid_v = (c + d).scale(0.5);
-            let w = (pt(acc) * dt).scale(0.5);
+            let (c, d) = (s0.dq[j], s1.dq[j]);
+            let mag_cd = c.abs() + d.abs();
+            let w = acc * dt_hi;
             take(
-                (mid_v - w).lo().min(c.lo()).min(d.lo()),
-                (mid_v + w).hi().max(c.hi()).max(d.hi()),
+                (
+                    down(0.5 * (c + d - w), mag_cd + w)
+                        .min(down(c, c.abs()))
+                        .min(down(d, d.abs())),
+                    up(0.5 * (c + d + w), mag_cd + w)
+                        .max(up(c, c.abs()))
+                        .max(up(d, d.abs())),
+                ),
                 &mut v_lo,
                 &mut v_hi,
             );
-            let tol_v = scale * (c.mag() + d.mag());
-            if c.mag() > v * rel || d.mag() > v * rel {
+            if down(c.abs(), c.abs()) > v * rel || down(d.abs(), d.abs()) > v * rel {
                 ok = false;
             }
             let dv = d - c;
-            if exceeds(dv, pt(acc) * dt, slack * acc * dt_hi + tol_v) {
+            let dv_min = down(dv.abs(), mag_cd).max(0.0);
+            if dv_min > w * rel {
                 ok = false;
             }
-            // Displacement reachable between the two velocities under |q̈| ≤ A.
-            let r = dq_pos - dt * mid_v;
-            let bound = div_pos((pt(acc) * dt).sqr() - dv.sqr(), pt(4.0 * acc));
-            let tol = slack * acc * dt_hi * dt_hi + scale * (a.mag() + b.mag() + dt_hi * tol_v);
-            if exceeds(r, bound, tol) {
+            // Displacement reachable between the two velocities under |q̈| ≤ A:
+            // |b − a − Δ(c + d)/2| ≤ (A²Δ² − (d − c)²)/(4A).
+            let r = dpos - dt * 0.5 * (c + d);
+            let r_min = r.abs()
+                - (PAD * (mag_ab + dt_hi * mag_cd) + TINY)
+                - 0.5 * mag_cd * (dt_hi - dt_lo);
+            if r_min > reach_band(acc, dt_hi, dv_min) + slack * acc * dt_hi * dt_hi {
                 ok = false;
             }
-            // Positions from velocities and A (Taylor envelopes from both ends).
-            let (l0, h0) = envelope(a, c, acc, h);
-            let (l1, h1) = envelope(b, -d, acc, h);
+            // Positions from velocities and A: envelopes from both ends.
+            let (l0, h0) = envelope(a, c, acc, h_lo, h_hi);
+            let (l1, h1) = envelope(b, -d, acc, h_lo, h_hi);
             pos_dq = Some((l0.min(l1), h0.max(h1)));
             if both_ddq {
-                let (e0, e1) = (logged(s0.ddq[j]), logged(s1.ddq[j]));
-                let tol_a = scale * (e0.mag() + e1.mag());
-                if e0.mag() > acc * rel || e1.mag() > acc * rel {
+                let (e0, e1) = (s0.ddq[j], s1.ddq[j]);
+                let mag_e = e0.abs() + e1.abs();
+                if down(e0.abs(), e0.abs()) > acc * rel || down(e1.abs(), e1.abs()) > acc * rel {
                     ok = false;
                 }
                 let de = e1 - e0;
-                if exceeds(de, pt(jerk) * dt, slack * jerk * dt_hi + tol_a) {
+                let de_min = down(de.abs(), mag_e).max(0.0);
+                if de_min > jerk * dt_hi * rel {
                     ok = false;
                 }
-                let r = dv - dt * (e0 + e1).scale(0.5);
-                let bound = div_pos((pt(jerk) * dt).sqr() - de.sqr(), pt(4.0 * jerk));
-                let tol = slack * jerk * dt_hi * dt_hi + tol_v + dt_hi * tol_a;
-                if exceeds(r, bound, tol) {
+                let r = dv - dt * 0.5 * (e0 + e1);
+                let r_min = r.abs()
+                    - (PAD * (mag_cd + dt_hi * mag_e) + TINY)
+                    - 0.5 * mag_e * (dt_hi - dt_lo);
+                if r_min > reach_band(jerk, dt_hi, de_min) + slack * jerk * dt_hi * dt_hi {
                     ok = false;
                 }
-                let (l0, h0) = envelope(c, e0, jerk, h);
-                let (l1, h1) = envelope(d, -e1, jerk, h);
-                take(l0.min(l1), h0.max(h1), &mut v_lo, &mut v_hi);
+                let (l0, h0) = envelope(c, e0, jerk, h_lo, h_hi);
+                let (l1, h1) = envelope(d, -e1, jerk, h_lo, h_hi);
+                take((l0.min(l1), h0.max(h1)), &mut v_lo, &mut v_hi);
             }
+        } else if let Some(m) = mean_box() {
+            take(m, &mut v_lo, &mut v_hi);
         }
         let (i_lo, i_hi) = match pos_dq {
             Some((l, h)) => (p_lo.max(l), p_hi.min(h)),
@@ -244,9 +258,13 @@ pub fn span_boxes(
             (p_lo, p_hi) = (i_lo, i_hi);
         } else {
             ok = false;
-            // Contradicted: the hull of every enclosure (covers what Δq implies), no clipping.
+            // Contradicted: the hull of every enclosure (it covers what Δq implies), no
+            // clipping to the limits.
             if let Some((l, h)) = pos_dq {
                 (p_lo, p_hi) = (p_lo.min(l), p_hi.max(h));
+            }
+            if both_dq && let Some(m) = mean_box() {
+                take(m, &mut v_lo, &mut v_hi);
             }
             (v_lo, v_hi) = if hull_lo <= hull_hi {
                 (hull_lo, hull_hi)
