@@ -1,5 +1,5 @@
 //! Writing a shield run as an audit log (format v1, [`crate::audit::log`]): the robot's commanded
-//! samples, the human measurements the shield received, and the shield's diagnostics, so that
+//! samples (positions, velocities and accelerations), the human measurements the shield received, and the shield's diagnostics, so that
 //! `pacs audit` can check the run offline.
 
 use crate::audit::log::{Header, LogWriter, WriteError};
@@ -54,13 +54,20 @@ impl<W: Write> ShieldLog<W> {
         }
         if let Some(q0) = self.pending.take() {
             let t0 = self.last_t;
-            self.w.write_robot(t0, &q0, Some(&vec![0.0; q0.len()]))?;
+            let zeros = vec![0.0; q0.len()];
+            self.w
+                .write_robot_with_acc(t0, &q0, Some(&zeros), Some(&zeros))?;
         }
         let n = cmd.dof;
         let tc = cmd.t.max(self.last_t);
         self.last_t = tc;
-        self.w
-            .write_robot(tc, &cmd.state.q[..n], Some(&cmd.state.dq[..n]))?;
+        // The commanded accelerations let the audit use the jerk limit between samples.
+        self.w.write_robot_with_acc(
+            tc,
+            &cmd.state.q[..n],
+            Some(&cmd.state.dq[..n]),
+            Some(&cmd.state.ddq[..n]),
+        )?;
         let d = &cmd.diag;
         let mut fields = serde_json::Map::new();
         fields.insert("verified".into(), d.verified.into());
@@ -87,7 +94,9 @@ impl<W: Write> ShieldLog<W> {
     pub fn finish(mut self) -> Result<W, WriteError> {
         if let Some(q0) = self.pending.take() {
             let t0 = self.last_t;
-            self.w.write_robot(t0, &q0, Some(&vec![0.0; q0.len()]))?;
+            let zeros = vec![0.0; q0.len()];
+            self.w
+                .write_robot_with_acc(t0, &q0, Some(&zeros), Some(&zeros))?;
         }
         self.w.finish()
     }

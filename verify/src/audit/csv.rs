@@ -1,6 +1,6 @@
 //! Streaming reader of the CSV form of log format v1 (see `docs/log-format.md`):
 //! line 1 is `#` followed by the JSON header; then one record per line:
-//! `robot,t,n,q_1..q_n[,dq_1..dq_n]`, `human,t,t_meas,x_1,y_1,z_1,...`, `event,t,name`,
+//! `robot,t,n,q_1..q_n[,dq_1..dq_n[,ddq_1..ddq_n]]`, `human,t,t_meas,x_1,y_1,z_1,...`, `event,t,name`,
 //! `shield,t,...`. Blank lines and lines starting with `#` after the header are skipped.
 
 use super::error::{AuditError, Location};
@@ -16,6 +16,7 @@ pub struct CsvReader<R: BufRead> {
     header: Header,
     q: Vec<f64>,
     dq: Vec<f64>,
+    ddq: Vec<f64>,
     positions: Vec<[f64; 3]>,
     name: String,
 }
@@ -68,6 +69,7 @@ impl<R: BufRead> CsvReader<R> {
             header,
             q: Vec::new(),
             dq: Vec::new(),
+            ddq: Vec::new(),
             positions: Vec::new(),
             name: String::new(),
         })
@@ -139,25 +141,34 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                     .map_err(|_| err(format!("n: `{}` is not a joint count", n_cell.trim())))?;
                 self.q.clear();
                 self.dq.clear();
+                self.ddq.clear();
                 for (i, c) in cells.enumerate() {
                     if i < n {
                         self.q.push(num(&format!("q[{i}]"), c).map_err(err)?);
-                    } else {
+                    } else if i < 2 * n {
                         self.dq
                             .push(num(&format!("dq[{}]", i - n), c).map_err(err)?);
+                    } else {
+                        self.ddq
+                            .push(num(&format!("ddq[{}]", i - 2 * n), c).map_err(err)?);
                     }
                 }
-                if self.q.len() != n || (!self.dq.is_empty() && self.dq.len() != n) {
+                if self.q.len() != n
+                    || (!self.dq.is_empty() && self.dq.len() != n)
+                    || (!self.ddq.is_empty() && self.ddq.len() != n)
+                {
                     return Err(err(format!(
-                        "robot row: expected {n} or {} values after n = {n}, found {}",
+                        "robot row: expected {n}, {} or {} values after n = {n}, found {}",
                         2 * n,
-                        self.q.len() + self.dq.len()
+                        3 * n,
+                        self.q.len() + self.dq.len() + self.ddq.len()
                     )));
                 }
                 Ok(Some(Record::Robot {
                     t,
                     q: &self.q,
                     dq: (!self.dq.is_empty()).then_some(&self.dq[..]),
+                    ddq: (!self.ddq.is_empty()).then_some(&self.ddq[..]),
                 }))
             }
             "human" => {

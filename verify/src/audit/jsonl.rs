@@ -28,6 +28,8 @@ struct Bufs {
     has_q: bool,
     dq: Vec<f64>,
     has_dq: bool,
+    ddq: Vec<f64>,
+    has_ddq: bool,
     positions: Vec<[f64; 3]>,
     has_positions: bool,
     name: String,
@@ -46,6 +48,8 @@ impl Bufs {
         self.has_q = false;
         self.dq.clear();
         self.has_dq = false;
+        self.ddq.clear();
+        self.has_ddq = false;
         self.positions.clear();
         self.has_positions = false;
         self.name.clear();
@@ -61,6 +65,7 @@ enum Field {
     TMeas,
     Q,
     Dq,
+    Ddq,
     Positions,
     Name,
     Other,
@@ -87,6 +92,7 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
             "t_meas" => Field::TMeas,
             "q" => Field::Q,
             "dq" => Field::Dq,
+            "ddq" => Field::Ddq,
             "positions" => Field::Positions,
             "name" => Field::Name,
             other => {
@@ -195,6 +201,11 @@ impl<'de> Visitor<'de> for LineSeed<'_> {
                     dup(b.has_dq, "dq");
                     map.next_value_seed(VecInto(&mut b.dq))?;
                     b.has_dq = true;
+                }
+                Field::Ddq => {
+                    dup(b.has_ddq, "ddq");
+                    map.next_value_seed(VecInto(&mut b.ddq))?;
+                    b.has_ddq = true;
                 }
                 Field::Positions => {
                     dup(b.has_positions, "positions");
@@ -348,10 +359,10 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         let t =
             b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
         let allowed: &[&str] = match kind {
-            Kind::Robot => &["q", "dq"],
+            Kind::Robot => &["q", "dq", "ddq"],
             Kind::Human => &["t_meas", "positions"],
             Kind::Event => &["name"],
-            Kind::Shield => &["t_meas", "q", "dq", "positions", "name"],
+            Kind::Shield => &["t_meas", "q", "dq", "ddq", "positions", "name"],
             Kind::Unknown | Kind::Header => {
                 return Err(err(format!("unknown record type `{}`", b.kind_name)));
             }
@@ -367,6 +378,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                 ("t_meas", b.t_meas.is_some()),
                 ("q", b.has_q),
                 ("dq", b.has_dq),
+                ("ddq", b.has_ddq),
                 ("positions", b.has_positions),
                 ("name", b.has_name),
             ];
@@ -386,6 +398,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                     t,
                     q: &b.q,
                     dq: b.has_dq.then_some(&b.dq[..]),
+                    ddq: b.has_ddq.then_some(&b.ddq[..]),
                 }
             }
             Kind::Human => {

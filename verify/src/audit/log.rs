@@ -148,6 +148,8 @@ pub enum Record<'a> {
         q: &'a [f64],
         /// Joint velocities (rad/s), if logged.
         dq: Option<&'a [f64]>,
+        /// Joint accelerations (rad/s²), if logged (only together with `dq`).
+        ddq: Option<&'a [f64]>,
     },
     /// A human measurement logged at `t`, taken at `t_meas ≤ t` (s); keypoints in model order (m).
     Human {
@@ -294,12 +296,27 @@ impl<W: Write> LogWriter<W> {
 
     /// A robot sample: time (s), joint positions (rad), optional velocities (rad/s).
     pub fn write_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), WriteError> {
+        self.write_robot_with_acc(t, q, dq, None)
+    }
+
+    /// A robot sample with optional accelerations (rad/s²; written only together with `dq`).
+    pub fn write_robot_with_acc(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        dq: Option<&[f64]>,
+        ddq: Option<&[f64]>,
+    ) -> Result<(), WriteError> {
         self.begin(t)?;
         write!(self.out, "{{\"type\":\"robot\",\"t\":{t:?},\"q\":")?;
         write_list(&mut self.out, "q", q)?;
         if let Some(dq) = dq {
             self.out.write_all(b",\"dq\":")?;
             write_list(&mut self.out, "dq", dq)?;
+            if let Some(ddq) = ddq {
+                self.out.write_all(b",\"ddq\":")?;
+                write_list(&mut self.out, "ddq", ddq)?;
+            }
         }
         self.out.write_all(b"}\n")?;
         Ok(())

@@ -980,6 +980,7 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
                 t,
                 q,
                 dq: dq.as_deref(),
+                ddq: None,
             },
             Body::Human { t_meas, positions } => Record::Human {
                 t,

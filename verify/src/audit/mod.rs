@@ -71,7 +71,7 @@ pub fn audit_reader(
         } else {
             last_t = t;
             match rec {
-                Record::Robot { t, q, dq } => auditor.push_robot(t, q, dq).err(),
+                Record::Robot { t, q, dq, ddq } => auditor.push_robot_with_acc(t, q, dq, ddq).err(),
                 Record::Human {
                     t,
                     t_meas,
