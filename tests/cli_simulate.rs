@@ -70,6 +70,59 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Issue 11: the shield's own logs of every task pass the offline audit (PFL included: the logs
+/// carry the commanded accelerations, which the audit uses with the jerk limit), and OFF logs
+/// that truly violate the constraints fail.
+#[test]
+fn pacs_logs_of_every_task_pass_the_audit_and_violating_off_logs_fail() {
+    let dir = std::env::temp_dir().join(format!("pacs-sim-all-{}", std::process::id()));
+    let out = pacs()
+        .args([
+            "simulate",
+            "--task",
+            "all",
+            "--method",
+            "pacs,off",
+            "--rollouts",
+            "1",
+            "--seed",
+            "5",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let logs = dir.join("logs");
+    for task in ["sorting", "handover", "feeding", "sphere"] {
+        let log = logs.join(format!("{task}-pacs-0005.jsonl"));
+        let a = pacs().arg("audit").arg(&log).output().unwrap();
+        assert_eq!(
+            a.status.code(),
+            Some(0),
+            "{task}: {}",
+            String::from_utf8_lossy(&a.stdout)
+        );
+    }
+    // Feeding OFF brings the fork to the head at full speed (true violations in every seed).
+    let a = pacs()
+        .arg("audit")
+        .arg(logs.join("feeding-off-0005.jsonl"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        a.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&a.stdout)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn simulate_rejects_unknown_task_and_method() {
     for args in [
