@@ -215,9 +215,8 @@ pub fn span_boxes(
             // Displacement reachable between the two velocities under |q̈| ≤ A:
             // |b − a − Δ(c + d)/2| ≤ (A²Δ² − (d − c)²)/(4A).
             let r = dpos - dt * 0.5 * (c + d);
-            let r_min = r.abs()
-                - (PAD * (mag_ab + dt_hi * mag_cd) + TINY)
-                - 0.5 * mag_cd * (dt_hi - dt_lo);
+            let r_min =
+                r.abs() - (PAD * (mag_ab + dt_hi * mag_cd) + TINY) - 0.5 * mag_cd * (dt_hi - dt_lo);
             if r_min > reach_band(acc, dt_hi, dv_min) + slack * acc * dt_hi * dt_hi {
                 ok = false;
             }
