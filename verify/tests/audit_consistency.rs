@@ -194,3 +194,56 @@ fn every_trailing_human_record_counts() {
     assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
     assert_eq!(reasons(&r), ["human_record_after_last_robot_sample"]);
 }
+
+/// A clean log (robot at rest, the human far away) written robot-then-human or human-then-robot
+/// at every time stamp, in JSON Lines and CSV: the same verdict, PASS, in all four forms.
+#[test]
+fn equal_times_follow_one_order_in_jsonl_and_csv() {
+    let q = "0.3,-0.5,0.2,-2.0,0.1,1.8,0.6";
+    let kp: Vec<String> = (0..9)
+        .map(|i| format!("2.6,{},1", i as f64 * 0.1))
+        .collect();
+    let kp_csv = kp.join(",");
+    let kp_json = format!(
+        "[{}]",
+        kp.iter()
+            .map(|p| format!("[{p}]"))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let head = header("ssm");
+    for robot_first in [true, false] {
+        let (mut jsonl, mut csv) = (format!("{head}\n"), format!("#{head}\n"));
+        for k in 0..=20 {
+            let t = k as f64 * 0.01;
+            let rj = format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{q}]}}\n");
+            let hj = format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{kp_json}}}\n");
+            let rc = format!("robot,{t},7,{q}\n");
+            let hc = format!("human,{t},{t},{kp_csv}\n");
+            if robot_first {
+                jsonl.push_str(&(rj + &hj));
+                csv.push_str(&(rc + &hc));
+            } else {
+                jsonl.push_str(&(hj + &rj));
+                csv.push_str(&(hc + &rc));
+            }
+        }
+        let r = run(&jsonl);
+        assert_eq!(
+            r.verdict,
+            Verdict::Pass,
+            "jsonl, robot first {robot_first}: {r:?}"
+        );
+        let mut reader =
+            pacs_verify::audit::csv::CsvReader::new("t.csv", std::io::Cursor::new(csv.as_bytes()))
+                .unwrap();
+        let r = audit_reader(&mut reader, &AuditConfig::default()).unwrap();
+        assert_eq!(
+            r.verdict,
+            Verdict::Pass,
+            "csv, robot first {robot_first}: {r:?}"
+        );
+        assert_eq!(r.metrics.samples, 21);
+        assert_eq!(r.metrics.human_records, 21);
+    }
+}

@@ -121,7 +121,7 @@ fn bad_csv_input_is_rejected_with_its_line() {
     expect(
         &format!("{H}\n{human}\nrobot,0,7,0,0,0\n"),
         3,
-        "expected 7 or 14",
+        "expected 7, 14 or 21",
     );
     expect(
         &format!("{H}\n{human}\nrobot,0,6,0,0,0,0,0,0\n"),

@@ -271,9 +271,11 @@ pub struct Auditor {
     inconclusive: Vec<(InconclusiveSpan, Reason, u64)>,
     samples: u64,
     human_records: u64,
-    /// Measurement time of a human record that arrived after the last robot sample (not yet
-    /// covered by any span).
+    /// Earliest measurement time of the human records pushed since the last robot sample.
     unused_human_t_meas: Option<f64>,
+    /// Earliest measurement time of the human records pushed between the last two robot samples:
+    /// they are in use only from the last sample on, which starts no span yet.
+    awaiting_human_t_meas: Option<f64>,
     t_first: f64,
     t_last: f64,
     violating_samples: u64,
@@ -377,6 +379,7 @@ impl Auditor {
             samples: 0,
             human_records: 0,
             unused_human_t_meas: None,
+            awaiting_human_t_meas: None,
             t_first: f64::NAN,
             t_last: f64::NAN,
             violating_samples: 0,
@@ -461,7 +464,6 @@ impl Auditor {
         ddq: Option<&[f64]>,
     ) -> Result<(), String> {
         let n = self.n;
-        self.unused_human_t_meas = None;
         if q.len() != n {
             return Err(format!(
                 "q: expected {n} joint positions for robot `{}`, found {}",
@@ -507,6 +509,9 @@ impl Auditor {
                 "ddq: accelerations are only accepted together with velocities (dq)".into(),
             );
         }
+        // The human records before the previous sample are in use for the span that this sample
+        // closes; those since the previous sample wait for the span this sample opens.
+        self.awaiting_human_t_meas = self.unused_human_t_meas.take();
         if self.prev.is_none() {
             self.t_first = t;
             self.series.t0 = t;
@@ -959,6 +964,36 @@ impl Auditor {
         any
     }
 
+    /// Human records that no span used. Those pushed after the last robot sample: if any was
+    /// measured inside the logged time (`t_meas − delay ≤ t_last`; the earliest counts), its
+    /// information was not checked: `human_record_after_last_robot_sample` (inconclusive). The
+    /// latest record pushed between the last two robot samples (in use from the last sample on,
+    /// which starts no span): the last sample's instant is checked with it (a zero-length span),
+    /// so a contact it shows at the end of the log is a violation.
+    fn check_final_instant(&mut self, inconclusive: &mut Option<InconclusiveSpan>) {
+        let Some(last) = self.prev else { return };
+        let delay = self.human.delay();
+        if let Some(tm) = self.unused_human_t_meas
+            && tm - delay <= last.t
+        {
+            *inconclusive = Some(InconclusiveSpan {
+                t_start: last.t,
+                t_end: last.t,
+                reason: "human_record_after_last_robot_sample".into(),
+                spans: 0,
+            });
+            return;
+        }
+        if self.awaiting_human_t_meas.is_some() && self.samples >= 2 {
+            let (was_violated, was_certain) = (self.last_span_violated, self.last_span_certain);
+            self.check_span(&last, &last, self.span_human);
+            // The last sample counts once (finish adds it for a violated last span).
+            let (v, c) = (self.last_span_violated, self.last_span_certain);
+            self.last_span_violated = was_violated && !v;
+            self.last_span_certain = was_certain && !c;
+        }
+    }
+
     /// Close the audit: the verdict, intervals and metrics.
     pub fn finish(
         mut self,
@@ -966,6 +1001,8 @@ impl Auditor {
         meta: serde_json::Map<String, serde_json::Value>,
     ) -> RunResult {
         self.flush_block();
+        let mut final_inconclusive = None;
+        self.check_final_instant(&mut final_inconclusive);
         for key in 0..self.open.len() {
             if let Some(o) = self.open[key].take() {
                 self.close(key, o);
@@ -984,19 +1021,7 @@ impl Auditor {
         }
         let mut inconclusive: Vec<InconclusiveSpan> =
             self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
-        // A human record after the last robot sample that describes a state within the logged
-        // robot time is covered by no span: it was not checked, so the log cannot pass.
-        if let Some(tm) = self.unused_human_t_meas
-            && self.samples >= 1
-            && tm - self.human.delay() <= self.t_last
-        {
-            inconclusive.push(InconclusiveSpan {
-                t_start: self.t_last,
-                t_end: self.t_last,
-                reason: "human_record_after_last_robot_sample".into(),
-                spans: 0,
-            });
-        }
+        inconclusive.extend(final_inconclusive);
         if self.samples < 2 {
             inconclusive.push(InconclusiveSpan {
                 t_start: if self.samples == 1 { self.t_first } else { 0.0 },

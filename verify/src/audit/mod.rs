@@ -17,6 +17,7 @@ pub mod error;
 pub mod jsonl;
 pub mod log;
 pub mod mcap;
+pub mod order;
 pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
@@ -24,6 +25,7 @@ pub use error::{AuditError, Location};
 pub use log::{Header, LogModels, LogWriter, ModelRef, Record, RecordReader};
 pub use verdict::{ConstraintKind, Metrics, RunResult, Verdict, Violation};
 
+use order::EqualTimeGroup;
 use std::path::Path;
 
 /// Load an audit config from TOML text; errors name the file and the problem.
@@ -58,36 +60,49 @@ pub fn audit_reader(
     let mut auditor =
         Auditor::new(models, cfg.clone()).map_err(|p| AuditError::input(&file, header_loc, p))?;
     let mut last_t = f64::NEG_INFINITY;
+    // Records of one time stamp are applied in the canonical order (`order`): human
+    // measurements, robot samples, events, then file order.
+    let mut group = EqualTimeGroup::default();
+    let mut apply = |rec: Record<'_>| -> Result<(), String> {
+        match rec {
+            Record::Robot { t, q, dq, ddq } => auditor.push_robot_with_acc(t, q, dq, ddq),
+            Record::Human {
+                t,
+                t_meas,
+                positions,
+            } => auditor.push_human(t, t_meas, positions),
+            Record::Event { name, .. } => {
+                auditor.push_event(name);
+                Ok(())
+            }
+            Record::Shield { .. } => Ok(()),
+        }
+    };
     loop {
         let rec = reader.next_record()?;
         let Some(rec) = rec else { break };
         let t = rec.t();
-        let problem = if !t.is_finite() {
-            Some(format!("t: value {t} is not finite"))
-        } else if t < last_t {
-            Some(format!(
-                "time goes backwards: t = {t} s after t = {last_t} s"
-            ))
-        } else {
-            last_t = t;
-            match rec {
-                Record::Robot { t, q, dq, ddq } => auditor.push_robot_with_acc(t, q, dq, ddq).err(),
-                Record::Human {
-                    t,
-                    t_meas,
-                    positions,
-                } => auditor.push_human(t, t_meas, positions).err(),
-                Record::Event { name, .. } => {
-                    auditor.push_event(name);
-                    None
-                }
-                Record::Shield { .. } => None,
-            }
-        };
-        if let Some(p) = problem {
+        if !t.is_finite() {
+            let p = format!("t: value {t} is not finite");
             return Err(AuditError::input(&file, reader.location(), p));
         }
+        if t < last_t {
+            let p = format!("time goes backwards: t = {t} s after t = {last_t} s");
+            return Err(AuditError::input(&file, reader.location(), p));
+        }
+        if group.time().is_some_and(|tg| tg != t) {
+            group
+                .drain(&mut apply)
+                .map_err(|(loc, p)| AuditError::input(&file, loc, p))?;
+        }
+        last_t = t;
+        group.push(&rec, Location::File);
+        group.locate_last(reader.location());
     }
+    group
+        .drain(&mut apply)
+        .map_err(|(loc, p)| AuditError::input(&file, loc, p))?;
+    drop(apply);
     Ok(auditor.finish(&file, header.meta))
 }
 
