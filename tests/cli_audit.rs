@@ -295,3 +295,45 @@ fn csv_logs_are_audited_by_extension() {
     assert!(err.contains("bad.csv: line 3: q[0]"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 11: a PFL task with a robot whose moving link has capsules but no mass, or a robot with
+/// a massless moving body, is refused (exit 3) naming the link; the same robot is accepted for an
+/// SSM-only task (no energy involved).
+#[test]
+fn massless_moving_link_is_refused_for_pfl() {
+    let mut spec = pacs_models::RobotModel::builtin("fr3")
+        .unwrap()
+        .spec()
+        .clone();
+    let l4 = spec
+        .links
+        .iter_mut()
+        .find(|l| l.name == "fr3_link4")
+        .unwrap();
+    l4.inertial = None;
+    let d = tmpdir("massless");
+    for (constraints, code) in [("handover", 3), ("ssm", 0)] {
+        let h = Header::new(
+            ModelRef::Spec(Box::new(spec.clone())),
+            ModelRef::Name("default".into()),
+            ModelRef::Name(constraints.into()),
+        );
+        let mut w = LogWriter::new(Vec::new());
+        w.write_header(&h).unwrap();
+        w.write_human(0.0, 0.0, &standing(2.5)).unwrap();
+        w.write_robot(0.0, &Q, None).unwrap();
+        w.write_robot(0.001, &Q, None).unwrap();
+        let path = d.join(format!("{constraints}.jsonl"));
+        std::fs::write(&path, w.finish().unwrap()).unwrap();
+        let o = pacs(&["audit", &s(&path)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{constraints}: {err}");
+        if code == 3 {
+            assert!(
+                err.contains("`fr3_link4`") && err.contains("without mass"),
+                "{err}"
+            );
+            assert!(err.contains("line 1"), "names the header line: {err}");
+        }
+    }
+}

@@ -183,6 +183,36 @@ pub struct TaskConstraints {
 }
 
 impl TaskConstraints {
+    /// Refuse a robot that would make this task's PFL checks vacuous: with any PFL body part,
+    /// every moving link (frame ≥ 1) that has collision capsules must have a positive mass and a
+    /// non-zero inertia tensor, else its kinetic energy would be ignored. Links without capsules
+    /// and without mass are frames, not bodies, and are accepted. SSM-only tasks accept any robot.
+    pub fn check_robot(&self, robot: &crate::RobotModel) -> Result<(), ModelError> {
+        if self.is_ssm_only() {
+            return Ok(());
+        }
+        let links: Vec<String> = robot
+            .links()
+            .iter()
+            .filter(|l| l.frame >= 1 && !l.capsules.is_empty())
+            .filter(|l| {
+                l.inertial
+                    .as_ref()
+                    .is_none_or(|i| !(i.mass > 0.0) || !(i.inertia.trace() > 0.0))
+            })
+            .map(|l| l.name.clone())
+            .collect();
+        if links.is_empty() {
+            Ok(())
+        } else {
+            Err(ModelError::MasslessLinks {
+                task: self.name.clone(),
+                robot: robot.name().to_string(),
+                links,
+            })
+        }
+    }
+
     /// True if every body part is SSM.
     pub fn is_ssm_only(&self) -> bool {
         self.per_part.iter().all(|c| matches!(c, Constraint::Ssm))

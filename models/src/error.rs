@@ -43,6 +43,30 @@ pub enum ModelError {
         /// The repeated name.
         name: String,
     },
+    /// Links whose collision geometry includes a mesh, without side-file capsules: pacs cannot
+    /// bound a mesh, and ignoring it would make the checks vacuous for those bodies.
+    #[error(
+        "links with mesh collision geometry and no capsules: {} (give capsules for them in the side file)",
+        links.iter().map(|l| format!("`{l}`")).collect::<Vec<_>>().join(", ")
+    )]
+    MeshCollision {
+        /// The link names.
+        links: Vec<String>,
+    },
+    /// A robot model that would make a PFL check vacuous: moving links with collision geometry
+    /// but no mass or no inertia.
+    #[error(
+        "task `{task}` has PFL constraints, but robot `{robot}` has moving links without mass or inertia: {} (their kinetic energy would be ignored)",
+        links.iter().map(|l| format!("`{l}`")).collect::<Vec<_>>().join(", ")
+    )]
+    MasslessLinks {
+        /// Task name.
+        task: String,
+        /// Robot name.
+        robot: String,
+        /// The link names.
+        links: Vec<String>,
+    },
     /// A structural problem that is not a single value (empty chain, bad index...).
     #[error("invalid model: {0}")]
     Invalid(String),

@@ -19,8 +19,9 @@
 //!   URDF says about that link's collision geometry; otherwise URDF `<collision>` primitives are
 //!   converted into capsules that contain them (sphere → ball; cylinder and URDF 1.2 capsule of
 //!   length L, radius r → segment ±L/2 on the local z axis with radius r; box → segment along its
-//!   longest edge with radius = half the diagonal of the other two edges); meshes contribute
-//!   nothing (give side-file capsules for mesh-only links);
+//!   longest edge with radius = half the diagonal of the other two edges); a link with a mesh
+//!   collision and no side-file capsules is refused ([`ModelError::MeshCollision`]: a mesh cannot
+//!   be bounded here, and dropping it would make SSM and PFL checks vacuous for that body);
 //! - inertials: URDF `<inertial>` with its origin applied (centre of mass = origin xyz, inertia
 //!   rotated into the link frame by the origin rpy); an all-zero `<inertial>` or none means
 //!   massless; a side-file `inertial` (link frame) replaces the URDF one;
@@ -296,8 +297,13 @@ impl<'a> Tree<'a> {
         // (link, carrying frame name, pose of the link frame in the carrying frame; None = identity)
         let mut stack: Vec<(usize, String, Option<Isometry3<f64>>)> =
             vec![(self.root, "base".into(), None)];
+        let mut mesh_links = Vec::new();
         while let Some((li, carrier, acc)) = stack.pop() {
-            links.push(self.link_spec(li, &carrier, acc, side)?);
+            match self.link_spec(li, &carrier, acc, side) {
+                Ok(l) => links.push(l),
+                Err(ModelError::MeshCollision { links: l }) => mesh_links.extend(l),
+                Err(e) => return Err(e),
+            }
             // Push children in reverse so that they are visited in URDF order.
             for &ji in self.child_joints[li].iter().rev() {
                 let j = &robot.joints[ji];
@@ -361,6 +367,9 @@ impl<'a> Tree<'a> {
                 }
             }
         }
+        if !mesh_links.is_empty() {
+            return Err(ModelError::MeshCollision { links: mesh_links });
+        }
         Ok(RobotSpec {
             name: side.name.clone().unwrap_or_else(|| robot.name.clone()),
             base: side.base.unwrap_or_default(),
@@ -380,7 +389,20 @@ impl<'a> Tree<'a> {
         let ov = side.links.get(&link.name);
         let capsules = match ov.and_then(|o| o.capsules.clone()) {
             Some(c) => c,
-            None => collision_capsules(link)?,
+            None => {
+                // A mesh cannot be bounded here: a link whose collision geometry includes one
+                // needs side-file capsules, else SSM/PFL would silently ignore that body.
+                if link
+                    .collision
+                    .iter()
+                    .any(|c| matches!(c.geometry, urdf_rs::Geometry::Mesh { .. }))
+                {
+                    return Err(ModelError::MeshCollision {
+                        links: vec![link.name.clone()],
+                    });
+                }
+                collision_capsules(link)?
+            }
         };
         let inertial = match ov.and_then(|o| o.inertial) {
             Some(i) => Some(i),

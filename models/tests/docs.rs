@@ -59,7 +59,7 @@ fn urdf_and_side_examples() {
     assert_eq!(
         r.capsule_count(),
         2,
-        "cylinder of `upper` + side capsule of `fore` (mesh ignored)"
+        "cylinder of `upper` + side capsule of `fore` (its mesh replaced by the side file)"
     );
 }
 

@@ -195,7 +195,7 @@ fn planar_collision_primitives_become_capsules() {
         "{lo} {hi}"
     );
     assert_eq!(up[0].radius, 0.05);
-    // Sphere → ball; box 0.2 × 0.1 × 0.4 → segment ±0.2 on z, radius ½·√(0.2² + 0.1²); mesh → nothing.
+    // Sphere → ball; box 0.2 × 0.1 × 0.4 → segment ±0.2 on z, radius ½·√(0.2² + 0.1²).
     let fore = &link("fore").capsules;
     assert_eq!(fore.len(), 2);
     assert_eq!(fore[0].p1, [0.8, 0.0, 0.0]);
@@ -646,4 +646,24 @@ fn missing_files_are_errors_not_panics() {
         load_urdf_files(&data("planar2.urdf"), None),
         Err(ModelError::InvalidValue { field, .. }) if field == "joint `shoulder` a_max"
     ));
+}
+
+/// A link whose collision geometry is (or includes) a mesh, without side-file capsules, would be
+/// invisible to SSM and PFL: the model is refused, naming every such link.
+#[test]
+fn mesh_collision_without_capsules_is_refused_naming_the_links() {
+    let urdf = read("planar2.urdf")
+        .replace(
+            "<box size=\"0.2 0.1 0.4\"/>",
+            "<mesh filename=\"package://planar2/fore.stl\"/>",
+        )
+        .replace(
+            "<cylinder radius=\"0.05\" length=\"1.0\"/>",
+            "<mesh filename=\"package://planar2/upper.stl\"/>",
+        );
+    assert_ne!(urdf, read("planar2.urdf"), "premise: meshes put in");
+    let side = SideFile::parse(&read("planar2_side.json")).unwrap();
+    let err = urdf_to_spec(&urdf, &side).unwrap_err().to_string();
+    assert!(err.contains("mesh collision geometry"), "{err}");
+    assert!(err.contains("`upper`") && err.contains("`fore`"), "{err}");
 }

@@ -441,6 +441,8 @@ impl Shield {
                 let tc = spec
                     .resolve(&h)
                     .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
+                tc.check_robot(&robot)
+                    .map_err(|e| ShieldError::Invalid(e.to_string()))?;
                 let zeros = vec![[0.0; 3]; h.keypoint_count()];
                 meas_buffer = Some(
                     HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))

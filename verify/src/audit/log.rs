@@ -122,7 +122,9 @@ impl LogModels {
         .map_err(|e| format!("header.constraints: {e}"))?;
         constraints
             .resolve(&human)
-            .map_err(|e| format!("header.constraints: {e}"))?;
+            .map_err(|e| format!("header.constraints: {e}"))?
+            .check_robot(&robot)
+            .map_err(|e| format!("header.robot: {e}"))?;
         let mut environment = Vec::with_capacity(h.environment.len());
         for (i, c) in h.environment.iter().enumerate() {
             environment
