@@ -361,3 +361,41 @@ fn builtin_examples_run_without_input() {
     let v = ok_json(pacs(&["reach", "robot"]));
     assert_eq!(v["boxes"][0]["links"].as_array().unwrap().len(), 10);
 }
+
+/// Issue 11: a bound that overflows is an input error (exit 3, naming the field and value),
+/// never `null` where a number is promised.
+#[test]
+fn overflowing_bounds_are_input_errors_not_null() {
+    let dir = std::env::temp_dir().join(format!("pacs-reach-overflow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = dir.join("robot.json");
+    std::fs::write(
+        &robot,
+        r#"{"robot":"fr3","boxes":[{"q_lo":[0,0,0,-2,0,1,0],"q_hi":[0.1,0.1,0.1,-1.9,0.1,1.1,0.1]}],"tracking_error":1.7976931348623157e308}"#,
+    )
+    .unwrap();
+    let human = dir.join("human.json");
+    std::fs::write(
+        &human,
+        r#"{"human":"default","measurement":{"time":0.0,"positions":[[0.8,0.25,1.35],[0.9,0.3,1.1],[0.75,0.3,0.95],[0.8,-0.25,1.35],[0.75,-0.3,1.1],[0.6,-0.2,1.0],[0.8,0.0,1.45],[0.85,0.0,0.95],[0.8,0.0,1.6]]},"intervals":[[1,1e308]]}"#,
+    )
+    .unwrap();
+    for (what, file, field) in [
+        ("robot", &robot, "tracking_error 1.7976931348623157e308"),
+        ("human", &human, "intervals[0] = [1.0, 1e308]"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_pacs"))
+            .args(["reach", what, "--input"])
+            .arg(file)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{what}: {err}");
+        assert!(
+            err.contains(field) && err.contains("overflows"),
+            "{what}: {err}"
+        );
+        assert!(!String::from_utf8_lossy(&o.stdout).contains("null"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

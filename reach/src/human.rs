@@ -27,6 +27,7 @@
 
 use crate::rounding::{INFLATE, TINY, add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
 use nalgebra::{Point3, Vector3};
+use pacs_models::human::Extremity;
 use pacs_models::{Capsule, HumanModel};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -351,6 +352,18 @@ impl HumanReach {
             let b1 = self.balls[bp.from];
             let b2 = self.balls[bp.to];
             let r = add_up(b1.radius.max(b2.radius), bp.thickness * 0.5);
+            if !(r.is_finite()
+                && b1
+                    .centre
+                    .iter()
+                    .chain(b2.centre.iter())
+                    .all(|x| x.is_finite()))
+            {
+                return Err(ReachError::Input(format!(
+                    "body part `{}`: the occupancy bound overflows over [{t_a:?}, {t_b:?}]",
+                    bp.name
+                )));
+            }
             out[i] = Capsule::new_unchecked(b1.centre, b2.centre, r);
         }
         if self.kind == HumanReachModel::Pos {
@@ -361,6 +374,7 @@ impl HumanReach {
                     .extremities()
                     .iter()
                     .find(|e| e.body_parts.contains(&p))
+                    && self.extremity_consistent(m, e)
                 {
                     let c = m.positions[e.base];
                     let travel = mul_up(self.model.v_max()[e.base], add_up(t_hi, back));
@@ -368,11 +382,38 @@ impl HumanReach {
                         add_up(self.model.measurement_error_pos(), travel),
                         add_up(e.length, e.thickness * 0.5),
                     );
+                    if !r.is_finite() {
+                        return Err(ReachError::Input(format!(
+                            "extremity `{}`: the occupancy bound overflows over [{t_a:?}, {t_b:?}]",
+                            e.name
+                        )));
+                    }
                     *cap = Capsule::new_unchecked(c, c, r);
                 }
             }
         }
         Ok(())
+    }
+
+    /// The `pos` model's assumption holds for this measurement: every measured keypoint of the
+    /// extremity's body parts is within `length + thickness/2 + 2·e_pos` of its measured base
+    /// (both measured within `e_pos`). A measurement that contradicts it (e.g. a hand 1.4 m from
+    /// the shoulder with a 1.0 m arm) must not be trusted: the extremity's parts then keep the
+    /// speed-bounded (`vel`) occupancy, which does not rest on the extremity length.
+    fn extremity_consistent(&self, m: &HumanMeasurement, e: &Extremity) -> bool {
+        let base = m.positions[e.base];
+        let limit = add_up(
+            add_up(e.length, e.thickness * 0.5),
+            mul_up(2.0, self.model.measurement_error_pos()),
+        );
+        e.body_parts.iter().all(|&p| {
+            let bp = &self.model.body_parts()[p];
+            [bp.from, bp.to].iter().all(|&k| {
+                let d = m.positions[k] - base;
+                // A lower bound of the distance: flag only clear contradictions.
+                crate::rounding::norm3_down(d.x, d.y, d.z) <= limit
+            })
+        })
     }
 
     /// Allocating convenience form of [`Self::occupancy_into`].

@@ -949,6 +949,12 @@ impl RobotReach {
                 [end(0), end(1)]
             };
             let r = add_up(add_up(ends[0].1.max(ends[1].1), c.radius), margin);
+            if !r.is_finite() {
+                return Err(ReachError::Input(format!(
+                    "capsule {ci}: the occupancy radius overflows (the joint box or tracking_error {:?} is too large)",
+                    self.tracking_error
+                )));
+            }
             out[ci] = Capsule::new_unchecked(ends[0].0, ends[1].0, r);
         }
         Ok(())

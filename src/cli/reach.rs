@@ -7,6 +7,25 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::Path;
 
+/// A capsule's numbers as promised (finite): a bound that overflowed is an input error naming the
+/// field, never `null` in the output.
+fn finite_capsule(field: &str, c: &pacs_models::Capsule) -> Result<(), CliError> {
+    let (p1, p2, r) = (c.p1().coords, c.p2().coords, c.radius());
+    let bad = p1
+        .iter()
+        .chain(p2.iter())
+        .chain(std::iter::once(&r))
+        .copied()
+        .find(|x| !x.is_finite());
+    match bad {
+        None => Ok(()),
+        Some(x) => Err(CliError::Input(format!(
+            "{field}: the occupancy bound overflows ({x}): the input is too large to bound in \
+             floating point"
+        ))),
+    }
+}
+
 fn capsule_json(c: &pacs_models::Capsule) -> Value {
     json!({"p1": c.p1().coords.as_slice(), "p2": c.p2().coords.as_slice(), "radius": c.radius()})
 }
@@ -61,6 +80,17 @@ pub fn run_robot(path: Option<&Path>) -> Result<Value, CliError> {
         reach
             .occupancy_into(&b.q_lo, &b.q_hi, &mut caps)
             .map_err(|e| CliError::Input(format!("boxes[{i}]: {e}")))?;
+        for (l, &(s, e)) in robot.links().iter().zip(reach.link_ranges()) {
+            for c in &caps[s..e] {
+                finite_capsule(
+                    &format!(
+                        "boxes[{i}] (link `{}`, tracking_error {:?})",
+                        l.name, input.tracking_error
+                    ),
+                    c,
+                )?;
+            }
+        }
         let links: Vec<Value> = robot
             .links()
             .iter()
@@ -117,6 +147,12 @@ pub fn run_human(path: Option<&Path>) -> Result<Value, CliError> {
         let caps = reach
             .occupancy(&m, *t_a, *t_b)
             .map_err(|e| CliError::Input(format!("intervals[{i}]: {e}")))?;
+        for (n, c) in names.iter().zip(&caps) {
+            finite_capsule(
+                &format!("intervals[{i}] = [{t_a:?}, {t_b:?}] (body part `{n}`)"),
+                c,
+            )?;
+        }
         let parts: Vec<Value> = names
             .iter()
             .zip(&caps)

@@ -247,3 +247,28 @@ fn equal_times_follow_one_order_in_jsonl_and_csv() {
         assert_eq!(r.metrics.human_records, 21);
     }
 }
+
+/// `human_model = "pos"` must not trust the extremity length when the measurement contradicts it:
+/// the right shoulder measured 1.4 m from the hand with a 1.0 m arm, the hand on the moving
+/// gripper. Before: PASS with `pos` (FAIL with the default model).
+#[test]
+fn pos_model_does_not_trust_a_contradicted_extremity_length() {
+    let human = r#"{"type":"human","t":0.0,"positions":[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[1.8816,0.3108,0.6393],[1.1816,0.3108,0.6393],[0.4816,0.3108,0.6393],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]}"#;
+    let robot = r#"{"type":"robot","t":0.0,"q":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6],"dq":[0.5,0,0,0,0,0,0]}
+{"type":"robot","t":0.001,"q":[0.3005,-0.5,0.2,-2.0,0.1,1.8,0.6],"dq":[0.5,0,0,0,0,0,0]}"#;
+    let text = format!("{}\n{human}\n{robot}\n", header("ssm"));
+    let audit = |model: &str| {
+        let cfg: AuditConfig = toml::from_str(&format!("human_model = \"{model}\"")).unwrap();
+        let mut r = JsonlReader::new("t.jsonl", std::io::Cursor::new(text.as_bytes())).unwrap();
+        audit_reader(&mut r, &cfg).unwrap()
+    };
+    for model in ["combined", "vel", "pos"] {
+        let r = audit(model);
+        assert_eq!(r.verdict, Verdict::Fail, "{model}: {r:?}");
+        assert!(
+            r.violations.iter().any(|v| v.body_part == "rHand"),
+            "{model}: {:?}",
+            r.violations
+        );
+    }
+}
