@@ -382,7 +382,7 @@ fn overflowing_bounds_are_input_errors_not_null() {
     .unwrap();
     for (what, file, field) in [
         ("robot", &robot, "tracking_error 1.7976931348623157e308"),
-        ("human", &human, "intervals[0] = [1.0, 1e308]"),
+        ("human", &human, "intervals[0]: body part `lUpperArm`"),
     ] {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_pacs"))
             .args(["reach", what, "--input"])
