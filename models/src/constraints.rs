@@ -196,9 +196,12 @@ impl TaskConstraints {
             .iter()
             .filter(|l| l.frame >= 1 && !l.capsules.is_empty())
             .filter(|l| {
-                l.inertial
-                    .as_ref()
-                    .is_none_or(|i| !(i.mass > 0.0) || !(i.inertia.trace() > 0.0))
+                l.inertial.as_ref().is_none_or(|i| {
+                    i.mass.is_nan()
+                        || i.mass <= 0.0
+                        || i.inertia.trace().is_nan()
+                        || i.inertia.trace() <= 0.0
+                })
             })
             .map(|l| l.name.clone())
             .collect();

@@ -534,7 +534,13 @@ impl ContactRule {
                         Some((a, b)) => (a.max(e), b.min(thr)),
                         None => (e, thr),
                     });
-                    (ConstraintKind::Pfl, e, thr, constrained, !(e <= thr))
+                    (
+                        ConstraintKind::Pfl,
+                        e,
+                        thr,
+                        constrained,
+                        e > thr || thr.is_nan(),
+                    )
                 }
             };
             if !bad {

@@ -4,7 +4,9 @@
 //! Admissible motion (module doc of `reach::human`): at `time − delay` each keypoint is within
 //! `e_p` of its measured position (velocity within `e_v` of the measured one); afterwards speed
 //! ≤ `v_max` (vel, pos, combined) and acceleration ≤ `a_max` (acc, combined); for `pos`, points of
-//! an extremity's body parts stay within `length + thickness/2` of the base keypoint. The set of
+//! an extremity's body parts stay within `length + thickness/2` of the base keypoint — unless the
+//! measurement contradicts that (a measured keypoint farther than `length + thickness/2 + 2·e_p`
+//! from the measured base), when only the speed bound is assumed. The set of
 //! positions such motions reach at elapsed time T is exactly
 //! - vel: Ball(p + e, v_max·T) over |e| ≤ e_p;
 //! - acc: Ball(p + e + (v + ε)·T, ½·a_max·T²) over |e| ≤ e_p, |ε| ≤ e_v;
@@ -103,11 +105,29 @@ fn occupancy<S: Source>(s: &mut S) {
         add(scale(truth[0], 1.0 - lambda), scale(truth[1], lambda)),
         ball(s, 0.5 * bp.thickness),
     );
+    // The pos model's assumption holds only for measurements that do not contradict it (every
+    // measured keypoint of the extremity within length + thickness/2 + 2·e_p of the measured
+    // base); a contradicted measurement falls back to the speed bound (vel samples above).
+    let extremity = model
+        .extremities()
+        .iter()
+        .find(|e| e.body_parts.contains(&part))
+        .filter(|e| {
+            let limit = e.length + 0.5 * e.thickness + 2.0 * e_p;
+            let base = Vector3::from(pos[e.base]);
+            let worst = e
+                .body_parts
+                .iter()
+                .flat_map(|&q| {
+                    let b = &model.body_parts()[q];
+                    [b.from, b.to]
+                })
+                .map(|k| (Vector3::from(pos[k]) - base).norm())
+                .fold(0.0, f64::max);
+            worst <= limit
+        });
     if kind == HumanReachModel::Pos
-        && let Some(e) = model
-            .extremities()
-            .iter()
-            .find(|e| e.body_parts.contains(&part))
+        && let Some(e) = extremity
     {
         // Any point within length + thickness/2 of the (admissibly moving) base keypoint.
         let b = e.base;

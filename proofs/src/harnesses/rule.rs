@@ -174,9 +174,9 @@ fn rule_sound<S: Source>(s: &mut S) {
         }
     }
     // The separation bound never exceeds a true gap (0 on contact).
-    for p in 0..PARTS {
+    for h in &human {
         for c in &robot {
-            let gap = segment_distance(c.p1, c.p2, human[p].p1, human[p].p2) - c.r - human[p].r;
+            let gap = segment_distance(c.p1, c.p2, h.p1, h.p2) - c.r - h.r;
             assert!(
                 out.separation <= gap.max(0.0) + 1e-6,
                 "separation bound {} above a true gap {gap}",

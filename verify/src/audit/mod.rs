@@ -102,7 +102,6 @@ pub fn audit_reader(
     group
         .drain(&mut apply)
         .map_err(|(loc, p)| AuditError::input(&file, loc, p))?;
-    drop(apply);
     Ok(auditor.finish(&file, header.meta))
 }
 
