@@ -17,7 +17,7 @@ pub struct AuditArgs {
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<PathBuf>,
     /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
-    /// clamp_adjacent_links, limit_slack, and optional robot/human/constraints overrides).
+    /// limit_slack, and optional robot/human/constraints overrides; see docs/audit.md).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Write report.json, report.md and report.html into this directory.
