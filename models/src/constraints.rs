@@ -186,15 +186,25 @@ impl TaskConstraints {
     /// Refuse a robot that would make this task's PFL checks vacuous: with any PFL body part,
     /// every moving link (frame ≥ 1) that has collision capsules must have a positive mass and a
     /// non-zero inertia tensor, else its kinetic energy would be ignored. Links without capsules
-    /// and without mass are frames, not bodies, and are accepted. SSM-only tasks accept any robot.
+    /// and without mass are frames (flanges, TCPs), not bodies, and are accepted — unless no
+    /// moving link has any mass, when every moving link is refused. SSM-only tasks accept any
+    /// robot.
     pub fn check_robot(&self, robot: &crate::RobotModel) -> Result<(), ModelError> {
         if self.is_ssm_only() {
             return Ok(());
         }
+        // No moving mass at all: every moving link is refused (the energy would always be 0).
+        let moving_mass: f64 = robot
+            .links()
+            .iter()
+            .filter(|l| l.frame >= 1)
+            .filter_map(|l| l.inertial.as_ref().map(|i| i.mass))
+            .sum();
+        let massless_robot = moving_mass.is_nan() || moving_mass <= 0.0;
         let links: Vec<String> = robot
             .links()
             .iter()
-            .filter(|l| l.frame >= 1 && !l.capsules.is_empty())
+            .filter(|l| l.frame >= 1 && (massless_robot || !l.capsules.is_empty()))
             .filter(|l| {
                 l.inertial.as_ref().is_none_or(|i| {
                     i.mass.is_nan()

@@ -313,3 +313,66 @@ fn huge_axis_whose_norm_overflows_is_rejected() {
     let v = invalid_value(RobotModel::new(s), "joints[0].axis");
     assert!(v.is_infinite());
 }
+
+/// Issue 11: a model that would make a PFL check vacuous is refused, naming the links.
+#[test]
+fn pfl_tasks_refuse_massless_moving_bodies() {
+    use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+    let human = HumanModel::builtin("default").unwrap();
+    let pfl = ConstraintSpec::builtin("handover")
+        .unwrap()
+        .resolve(&human)
+        .unwrap();
+    let ssm = ConstraintSpec::builtin("ssm")
+        .unwrap()
+        .resolve(&human)
+        .unwrap();
+    let fr3 = RobotModel::builtin("fr3").unwrap();
+    assert!(pfl.check_robot(&fr3).is_ok());
+    let with = |edit: &dyn Fn(&mut pacs_models::RobotSpec)| {
+        let mut spec = fr3.spec().clone();
+        edit(&mut spec);
+        RobotModel::new(spec).unwrap()
+    };
+    let link = |spec: &mut pacs_models::RobotSpec, name: &str| -> usize {
+        spec.links.iter().position(|l| l.name == name).unwrap()
+    };
+    // A body with capsules and no inertial.
+    let r = with(&|s| {
+        let i = link(s, "fr3_link4");
+        s.links[i].inertial = None;
+    });
+    let e = pfl.check_robot(&r).unwrap_err().to_string();
+    assert!(
+        e.contains("`fr3_link4`") && !e.contains("`fr3_link3`"),
+        "{e}"
+    );
+    assert!(ssm.check_robot(&r).is_ok(), "SSM needs no masses");
+    // Mass without inertia.
+    let r = with(&|s| {
+        let i = link(s, "fr3_link6");
+        if let Some(inr) = s.links[i].inertial.as_mut() {
+            inr.inertia = [0.0; 6];
+        }
+    });
+    let e = pfl.check_robot(&r).unwrap_err().to_string();
+    assert!(e.contains("`fr3_link6`"), "{e}");
+    // A frame without capsules and without mass is not a body.
+    let r = with(&|s| {
+        let i = link(s, "fr3_fingers");
+        s.links[i].inertial = None;
+    });
+    assert!(pfl.check_robot(&r).is_ok());
+    // No moving mass at all: every moving link is named.
+    let r = with(&|s| {
+        for l in s.links.iter_mut() {
+            l.inertial = None;
+        }
+    });
+    let e = pfl.check_robot(&r).unwrap_err().to_string();
+    assert!(
+        e.contains("`fr3_fingers`") && e.contains("`fr3_link1`"),
+        "{e}"
+    );
+    assert!(!e.contains("`fr3_link0`"), "the base does not move: {e}");
+}
