@@ -288,6 +288,12 @@ pub struct Auditor {
     series: Series,
 }
 
+/// An energy bound as reported (JSON has no infinity): an unbounded energy is reported as
+/// `f64::MAX` J, still an upper bound of any physical robot's energy, never `null`.
+fn reportable(e: f64) -> f64 {
+    if e.is_finite() { e } else { f64::MAX }
+}
+
 /// Signed separation lower bound (m) of two capsules: negative values bound the overlap depth.
 fn signed_separation(a: &Capsule, b: &Capsule) -> f64 {
     let d = pacs_reach::geometry::segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
@@ -713,7 +719,7 @@ impl Auditor {
             }
             if let Some((e, thr)) = pfl_seen {
                 let bk = &mut self.series.buckets[bidx];
-                bk.energy_bound = max_opt(bk.energy_bound, Some(e));
+                bk.energy_bound = max_opt(bk.energy_bound, Some(reportable(e)));
                 bk.threshold = min_opt(bk.threshold, Some(thr));
             }
             self.record_separation(bidx, sep);
@@ -737,7 +743,7 @@ impl Auditor {
                 0.0
             };
         }
-        self.robot.kinetic_energy(&a.q[..n], &dq[..n])
+        reportable(self.robot.kinetic_energy(&a.q[..n], &dq[..n]))
     }
 
     fn check_span(&mut self, s0: &Sample, s1: &Sample, span_human: Option<usize>) {
@@ -832,7 +838,7 @@ impl Auditor {
         self.record_separation(bidx, out.separation);
         if let Some((e, thr)) = out.pfl {
             let b = &mut self.series.buckets[bidx];
-            b.energy_bound = max_opt(b.energy_bound, Some(e));
+            b.energy_bound = max_opt(b.energy_bound, Some(reportable(e)));
             b.threshold = min_opt(b.threshold, Some(thr));
         }
         if self.hits.is_empty() {
@@ -1080,7 +1086,7 @@ impl Auditor {
             body_part: self.human.body_parts()[part].name.clone(),
             link: self.robot.links()[link].name.clone(),
             min_separation: o.min_sep,
-            energy: o.energy,
+            energy: reportable(o.energy),
             threshold: o.threshold,
             constrained: o.constrained,
             certain: o.certain,
