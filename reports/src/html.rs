@@ -139,7 +139,7 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
                     "<li>{:.4}–{:.4} s: {} ({} spans)</li>",
                     i.t_start,
                     i.t_end,
-                    esc(&i.reason),
+                    esc(i.reason.as_str()),
                     i.spans
                 );
             }

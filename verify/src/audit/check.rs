@@ -129,26 +129,7 @@ struct Open {
     last_span: u64,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Reason {
-    Gap,
-    NoHuman,
-    StaleHuman,
-    ExceedsLimits,
-    HumanReach,
-}
-
-impl Reason {
-    fn name(self) -> &'static str {
-        match self {
-            Reason::Gap => "gap",
-            Reason::NoHuman => "no_human",
-            Reason::StaleHuman => "stale_human",
-            Reason::ExceedsLimits => "exceeds_limits",
-            Reason::HumanReach => "human_reach_error",
-        }
-    }
-}
+use super::verdict::InconclusiveReason as Reason;
 
 struct Series {
     t0: f64,
@@ -555,7 +536,7 @@ impl Auditor {
                 InconclusiveSpan {
                     t_start: t0,
                     t_end: t1,
-                    reason: reason.name().to_string(),
+                    reason,
                     spans: 1,
                 },
                 reason,
@@ -792,7 +773,7 @@ impl Auditor {
             return;
         }
         if let Err(_e) = self.hreach.occupancy_into(m, t0, t1, &mut self.hcaps) {
-            self.mark_inconclusive(t0, t1, Reason::HumanReach);
+            self.mark_inconclusive(t0, t1, Reason::HumanReachError);
             self.inconclusive_duration += dt;
             self.series.buckets[bidx].inconclusive = true;
             finish_span(self, false, false);
@@ -985,7 +966,7 @@ impl Auditor {
             *inconclusive = Some(InconclusiveSpan {
                 t_start: last.t,
                 t_end: last.t,
-                reason: "human_record_after_last_robot_sample".into(),
+                reason: Reason::HumanRecordAfterLastRobotSample,
                 spans: 0,
             });
             return;
@@ -1032,7 +1013,7 @@ impl Auditor {
             inconclusive.push(InconclusiveSpan {
                 t_start: if self.samples == 1 { self.t_first } else { 0.0 },
                 t_end: if self.samples == 1 { self.t_last } else { 0.0 },
-                reason: "fewer_than_two_robot_samples".into(),
+                reason: Reason::FewerThanTwoRobotSamples,
                 spans: 0,
             });
         }

@@ -23,7 +23,7 @@ pub mod verdict;
 pub use check::{AuditConfig, Auditor};
 pub use error::{AuditError, Location};
 pub use log::{Header, LogModels, LogWriter, ModelRef, Record, RecordReader};
-pub use verdict::{ConstraintKind, Metrics, RunResult, Verdict, Violation};
+pub use verdict::{ConstraintKind, InconclusiveReason, Metrics, RunResult, Verdict, Violation};
 
 use order::EqualTimeGroup;
 use std::path::Path;

@@ -69,6 +69,54 @@ pub struct Violation {
     pub spans: u64,
 }
 
+/// Why a span (or the log) could not be checked (serialized as its snake_case name, e.g.
+/// `"no_human"`; see `docs/audit.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InconclusiveReason {
+    /// Consecutive robot samples further apart than `max_gap`.
+    Gap,
+    /// No human record before the span's first robot sample.
+    NoHuman,
+    /// The human measurement in use is older than `max_human_age` at the span's end.
+    StaleHuman,
+    /// The samples contradict each other or the robot's limits.
+    ExceedsLimits,
+    /// The human occupancy could not be computed.
+    HumanReachError,
+    /// A human record after the last robot sample describes a time inside the log.
+    HumanRecordAfterLastRobotSample,
+    /// The log has fewer than two robot samples: it covers no time.
+    FewerThanTwoRobotSamples,
+}
+
+impl InconclusiveReason {
+    /// The snake_case name (as serialized).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Gap => "gap",
+            Self::NoHuman => "no_human",
+            Self::StaleHuman => "stale_human",
+            Self::ExceedsLimits => "exceeds_limits",
+            Self::HumanReachError => "human_reach_error",
+            Self::HumanRecordAfterLastRobotSample => "human_record_after_last_robot_sample",
+            Self::FewerThanTwoRobotSamples => "fewer_than_two_robot_samples",
+        }
+    }
+}
+
+impl std::fmt::Display for InconclusiveReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for InconclusiveReason {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
 /// A maximal run of consecutive spans that could not be checked, for one reason.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InconclusiveSpan {
@@ -76,8 +124,8 @@ pub struct InconclusiveSpan {
     pub t_start: f64,
     /// End (s).
     pub t_end: f64,
-    /// Why (e.g. `gap`, `no_human`, `stale_human`, `exceeds_limits`).
-    pub reason: String,
+    /// Why.
+    pub reason: InconclusiveReason,
     /// Number of spans.
     pub spans: u64,
 }
