@@ -1,4 +1,5 @@
 //! pacs: path-consistent safety filtering for action-chunking robot policies.
 pub use pacs_models as models;
+pub use pacs_motion as motion;
 pub use pacs_reach as reach;
 pub use pacs_verify as verify;

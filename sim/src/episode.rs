@@ -6,11 +6,11 @@ use crate::policy::{ChunkPolicy, DemoSet, Demonstration};
 use crate::task::{ToolGoal, tool_point};
 use nalgebra::Point3;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
+use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_verify::audit::log::{Header, LogModels, ModelRef};
 use pacs_verify::audit::{AuditConfig, Auditor};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
-use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_verify::shield_log::ShieldLog;
 use serde::Serialize;
@@ -96,7 +96,7 @@ impl Filter {
             Filter::Cbf(c) => c.start(t, q),
         }
     }
-    fn set_chunk(&mut self, t: f64, chunk: &pacs_verify::chunk::Chunk) -> Result<(), ShieldError> {
+    fn set_chunk(&mut self, t: f64, chunk: &pacs_motion::chunk::Chunk) -> Result<(), ShieldError> {
         match self {
             Filter::Shield(s) => s.set_chunk(chunk),
             Filter::Cbf(c) => c.set_chunk(t, chunk),

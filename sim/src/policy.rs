@@ -4,7 +4,7 @@
 //! path keeps it in distribution; being pushed off the path makes its chunks pull back toward the
 //! demonstration from wherever the robot is (degrading the motion).
 
-use pacs_verify::chunk::{ActionKind, Chunk};
+use pacs_motion::chunk::{ActionKind, Chunk};
 
 /// Anything that maps the current joint angles to an action chunk.
 pub trait ChunkPolicy {

@@ -2,8 +2,8 @@
 //! Contract: docs/trajectory.md.
 
 use super::{CliError, RobotRef, check_vec, read_json};
-use pacs_verify::failsafe::FailsafeKind;
-use pacs_verify::{
+use pacs_motion::failsafe::FailsafeKind;
+use pacs_motion::{
     Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory,
 };
 use serde::Deserialize;
@@ -162,7 +162,7 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
                 "--brake-at: value {tb} must lie in [0, {t_end}] s"
             )));
         }
-        let fs = pacs_verify::Failsafe::new(&traj, tb, &hw)
+        let fs = pacs_motion::Failsafe::new(&traj, tb, &hw)
             .map_err(|e| CliError::Input(e.to_string()))?;
         let count = sample_count("failsafe samples", fs.stop_time(), dt)?;
         let fsamples: Vec<Value> = times(0.0, fs.stop_time(), dt, count)

@@ -3,10 +3,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_motion::chunk::Chunk;
 use pacs_reach::human::HumanMeasurement;
 use pacs_verify::bench::{back_and_forth, walking_human};
 use pacs_verify::cbf::{CbfConfig, CbfFilter};
-use pacs_verify::chunk::Chunk;
 use pacs_verify::shield::{Shield, ShieldConfig};
 
 /// The measurement of the walking human at step `k` (built outside the timed routine).

@@ -4,9 +4,9 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::chunk::{ActionKind, Chunk};
 use crate::shield::{FilterMode, Shield, ShieldConfig};
 use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use std::time::Instant;
 

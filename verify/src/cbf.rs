@@ -12,16 +12,16 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::chunk::Chunk;
-use crate::intended::{Planner, PlannerConfig};
 use crate::shield::{Binding, Command, Diagnostics, ShieldError};
-use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
 };
 use nalgebra::Point3;
 use pacs_models::{Capsule, HumanModel, MAX_DOF, RobotModel};
+use pacs_motion::chunk::Chunk;
+use pacs_motion::intended::{Planner, PlannerConfig};
+use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_closest_points};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 
@@ -157,7 +157,7 @@ impl CbfFilter {
         let wp = chunk.waypoints(
             &self.q[..n],
             self.robot.limits(),
-            crate::chunk::OutOfLimits::Reject,
+            pacs_motion::chunk::OutOfLimits::Reject,
         )?;
         self.reference = Some(self.planner.plan(&start, &wp)?);
         self.ref_t0 = t;

@@ -3,7 +3,7 @@
 //! Every safety step α_s the shield builds a **monitored trajectory** from the robot's current
 //! commanded state: one step of intended motion (ṡ → 1 along the current path; exactly the
 //! intended timing when already on it), then a **failsafe** braking along the same path
-//! (ṡ → 0; [`crate::scaling`]). It encloses the robot over a sequence of time intervals covering
+//! (ṡ → 0; [`pacs_motion::scaling`]). It encloses the robot over a sequence of time intervals covering
 //! the monitored trajectory until standstill (joint boxes from sound path bounds →
 //! [`RobotReach`] capsules) and the human over the same intervals from the latest measurement
 //! (its age, delay and errors included → [`HumanReach`]), then applies the one ISO/TS 15066 rule
@@ -21,13 +21,12 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::chunk::{Chunk, OutOfLimits};
-use crate::intended::{Method, Planner, PlannerConfig};
 use crate::iso15066::{ConstraintKind, ContactRule};
-use crate::profile::Piece;
-use crate::scaling::{PathState, SpeedProfile, admissible};
-use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel};
+use pacs_motion::chunk::{Chunk, OutOfLimits};
+use pacs_motion::intended::{Method, Planner, PlannerConfig};
+use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
+use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use serde::{Deserialize, Serialize};
@@ -114,7 +113,7 @@ pub enum ShieldError {
     NotStarted,
     /// The chunk could not be planned; it is ignored and the robot keeps its verified motion.
     #[error("chunk ignored: {0}")]
-    Chunk(#[from] crate::error::TrajectoryError),
+    Chunk(#[from] pacs_motion::error::TrajectoryError),
 }
 
 /// What decided a step.
@@ -357,25 +356,6 @@ impl std::fmt::Debug for Shield {
     }
 }
 
-fn hold(q: &[f64]) -> Trajectory {
-    let n = q.len();
-    let mut offsets = [0usize; MAX_DOF + 1];
-    let pieces: Vec<Piece> = q
-        .iter()
-        .map(|&x| Piece {
-            t: 0.0,
-            q: x,
-            v: 0.0,
-            a: 0.0,
-            j: 0.0,
-        })
-        .collect();
-    for (i, o) in offsets.iter_mut().enumerate().take(n + 1) {
-        *o = i;
-    }
-    Trajectory::from_parts(n, pieces, offsets, 0.0, vec![0.0], EndCondition::AtRest)
-}
-
 impl Shield {
     /// Build a shield for a robot, an optional human with a task constraint spec, and static
     /// environment shapes.
@@ -512,7 +492,7 @@ impl Shield {
                 "start: configuration outside the joint position limits".into(),
             ));
         }
-        self.trajs = [Some(hold(q)), None];
+        self.trajs = [Some(Trajectory::standstill(q)), None];
         self.slot = 0;
         self.path = PathState::rest(0.0);
         self.time = t;

@@ -3,9 +3,9 @@
 
 use nalgebra::Point3;
 use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
+use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_reach::human::HumanMeasurement;
-use pacs_verify::chunk::{ActionKind, Chunk};
 use pacs_verify::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
 
 const Q0: [f64; 7] = fr3::Q_READY;

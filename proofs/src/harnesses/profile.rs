@@ -5,7 +5,7 @@
 //! jerk −J (ṡ still rises by at most s̈₀²/(2J)), which the harness checks as the bound on ṡ.
 
 use crate::{Source, harness};
-use pacs_verify::scaling::{PathState, SpeedProfile};
+use pacs_motion::scaling::{PathState, SpeedProfile};
 
 /// Relative slack for the float evaluation of the cubic phases (the verification uses the sound
 /// `ranges`, padded by 1e-12 relative; this harness checks the profile's own semantics).

@@ -14,7 +14,7 @@
 //!   is at rest by the reported stop time and stays there.
 
 use crate::{Source, harness};
-use pacs_verify::scaling::{PathState, SpeedProfile};
+use pacs_motion::scaling::{PathState, SpeedProfile};
 use pacs_verify::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
 
 /// Steps of the symbolic sequence in `f1` (the property is inductive; see README).
@@ -152,8 +152,8 @@ harness!(
 mod real {
     use crate::Source;
     use pacs_models::{ConstraintSpec, default_human, fr3};
+    use pacs_motion::chunk::{ActionKind, Chunk};
     use pacs_reach::human::HumanMeasurement;
-    use pacs_verify::chunk::{ActionKind, Chunk};
     use pacs_verify::shield::{Shield, ShieldConfig};
 
     /// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).

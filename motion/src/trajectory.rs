@@ -161,6 +161,26 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// Standing still at `q` (rad) forever: zero duration, one waypoint, at rest.
+    pub fn standstill(q: &[f64]) -> Trajectory {
+        let n = q.len();
+        let mut offsets = [0usize; MAX_DOF + 1];
+        let pieces: Vec<Piece> = q
+            .iter()
+            .map(|&x| Piece {
+                t: 0.0,
+                q: x,
+                v: 0.0,
+                a: 0.0,
+                j: 0.0,
+            })
+            .collect();
+        for (i, o) in offsets.iter_mut().enumerate().take(n + 1) {
+            *o = i;
+        }
+        Self::from_parts(n, pieces, offsets, 0.0, vec![0.0], EndCondition::AtRest)
+    }
+
     /// Assemble from per-joint piece lists (each non-empty, sorted, first at t = 0, last extending to +∞).
     pub(crate) fn from_parts(
         dof: usize,

@@ -6,12 +6,12 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
-use pacs_verify::failsafe::{Failsafe, FailsafeKind};
-use pacs_verify::problems::{anchor_set, lower_bound};
-use pacs_verify::{JointState, Limits, Method, Monitored, OutOfLimits, Planner, PlannerConfig};
+use pacs_motion::failsafe::{Failsafe, FailsafeKind};
+use pacs_motion::problems::{anchor_set, lower_bound};
+use pacs_motion::{JointState, Limits, Method, Monitored, OutOfLimits, Planner, PlannerConfig};
 use std::hint::black_box;
 
-fn setup() -> (Limits, Limits, Vec<(JointState, pacs_verify::Waypoints)>) {
+fn setup() -> (Limits, Limits, Vec<(JointState, pacs_motion::Waypoints)>) {
     let robot = RobotModel::builtin("fr3").expect("fr3");
     let hw = Limits::from_joint_limits(robot.limits());
     let plan = hw.with_uniform_acc_jerk(10.0, 400.0);
@@ -147,7 +147,7 @@ fn benches(c: &mut Criterion) {
                             .collect()
                     })
                     .collect();
-                let wp = pacs_verify::Waypoints::from_rows(&rows).expect("rows");
+                let wp = pacs_motion::Waypoints::from_rows(&rows).expect("rows");
                 assert!((1..rows.len()).all(|k| robot.limits().contains(&rows[k])));
                 (s, wp)
             })

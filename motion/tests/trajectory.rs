@@ -4,8 +4,8 @@
 mod common;
 
 use common::*;
-use pacs_verify::problems::{anchor_set, lower_bound};
-use pacs_verify::*;
+use pacs_motion::problems::{anchor_set, lower_bound};
+use pacs_motion::*;
 use rsruckig::prelude::{InputParameter, Ruckig, ThrowErrorHandler};
 
 fn plan_anchor(k: usize, sweeps: usize) -> (Waypoints, Trajectory) {

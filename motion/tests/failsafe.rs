@@ -4,9 +4,9 @@
 mod common;
 
 use common::*;
-use pacs_verify::failsafe::FailsafeKind;
-use pacs_verify::problems::anchor_set;
-use pacs_verify::*;
+use pacs_motion::failsafe::FailsafeKind;
+use pacs_motion::problems::anchor_set;
+use pacs_motion::*;
 
 fn trajectories(n: usize, seed: u64, plan: Limits) -> Vec<Trajectory> {
     let robot = fr3();

@@ -5,8 +5,8 @@
 mod common;
 
 use common::*;
-use pacs_verify::problems::Rng;
-use pacs_verify::*;
+use pacs_motion::problems::Rng;
+use pacs_motion::*;
 use proptest::prelude::*;
 
 fn random_problem(seed: u64) -> (Limits, Limits, JointState, Waypoints, Trajectory) {

@@ -1,7 +1,7 @@
 //! Quick quality/timing probe of the planner on the anchor set (development aid).
 use pacs_models::RobotModel;
-use pacs_verify::problems::{anchor_set, lower_bound};
-use pacs_verify::{JointState, Limits, Method, OutOfLimits, Planner, PlannerConfig};
+use pacs_motion::problems::{anchor_set, lower_bound};
+use pacs_motion::{JointState, Limits, Method, OutOfLimits, Planner, PlannerConfig};
 use std::time::Instant;
 
 fn main() {
@@ -65,7 +65,7 @@ fn main() {
                         .collect()
                 })
                 .collect();
-            let wp = pacs_verify::Waypoints::from_rows(&rows).unwrap();
+            let wp = pacs_motion::Waypoints::from_rows(&rows).unwrap();
             let t2 = pl.plan(&s, &wp).unwrap();
             if pl.last_method() != Method::Spline {
                 fbm += 1;

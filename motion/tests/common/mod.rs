@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use pacs_models::RobotModel;
-use pacs_verify::{JointState, Limits, Trajectory};
+use pacs_motion::{JointState, Limits, Trajectory};
 
 pub fn fr3() -> RobotModel {
     RobotModel::builtin("fr3").expect("fr3")

@@ -1,8 +1,8 @@
 //! Plans the 200 anchor chunks `reps` times with the default planner (instruction counting under
 //! callgrind; development aid).
 use pacs_models::RobotModel;
-use pacs_verify::problems::anchor_set;
-use pacs_verify::{JointState, Limits, OutOfLimits, Planner, PlannerConfig};
+use pacs_motion::problems::anchor_set;
+use pacs_motion::{JointState, Limits, OutOfLimits, Planner, PlannerConfig};
 
 fn main() {
     let robot = RobotModel::builtin("fr3").unwrap();
