@@ -1,6 +1,6 @@
 //! End-to-end tests of `pacs audit`: exit codes, `--json` output, reports.
 
-use pacs_verify::audit::{Header, LogWriter, ModelRef};
+use pacs_log::{Header, LogWriter, ModelRef};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -1,8 +1,8 @@
 //! End-to-end tests of `pacs audit` on MCAP logs (ROS 2 recordings): detection, exit codes,
 //! `--header`, topic flags, and the same verdict and violations as the JSON Lines form.
 
-use pacs_verify::audit::mcap::{McapConfig, McapLogWriter};
-use pacs_verify::audit::{Header, LogWriter, ModelRef};
+use pacs_log::mcap::{McapConfig, McapLogWriter};
+use pacs_log::{Header, LogWriter, ModelRef};
 use serde_json::Value;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};

@@ -4,11 +4,18 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use pacs_verify::audit::{AuditConfig, Verdict, audit_reader, mcap::McapReader};
+use pacs_log::mcap::McapReader;
+use pacs_verify::audit::{AuditConfig, Verdict, audit_reader};
 
 fuzz_target!(|data: &[u8]| {
     let cfg = AuditConfig::default();
-    let Ok(mut r) = McapReader::new("fuzz.mcap", std::io::Cursor::new(data), &cfg, None) else {
+    let Ok(mut r) = McapReader::new(
+        "fuzz.mcap",
+        std::io::Cursor::new(data),
+        &cfg.mcap,
+        &cfg.overrides(),
+        None,
+    ) else {
         return;
     };
     if let Ok(run) = audit_reader(&mut r, &cfg) {

@@ -2,8 +2,9 @@
 //! in parallel, with an optional certification report. Exit codes: 0 all pass, 1 any fail,
 //! 2 any inconclusive and none fail, 3 invalid input (any log or the config), 70 internal error.
 
+use pacs_log::LogError;
 use pacs_reports::{InputFile, ReportInput};
-use pacs_verify::audit::{self, AuditConfig, AuditError, RunResult, Verdict};
+use pacs_verify::audit::{self, AuditConfig, RunResult, Verdict};
 use rayon::prelude::*;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -77,7 +78,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
     };
     let header = match &args.header {
         None => None,
-        Some(p) => match audit::mcap::load_header_file(p) {
+        Some(p) => match pacs_log::mcap::load_header_file(p) {
             Ok(h) => Some(h),
             Err(e) => {
                 eprintln!("pacs: error: {e}");
@@ -89,7 +90,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
     if !std::io::stderr().is_terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let results: Vec<Result<RunResult, AuditError>> = args
+    let results: Vec<Result<RunResult, LogError>> = args
         .logs
         .par_iter()
         .map(|p| {

@@ -4,8 +4,9 @@
 //! Run: `CARGO_TARGET_DIR=/work/target-audit cargo bench -p pacs-verify --bench audit`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use pacs_log::{Header, LogModels, LogWriter, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
-use pacs_verify::audit::{self, AuditConfig, Auditor, Header, LogModels, LogWriter, ModelRef};
+use pacs_verify::audit::{self, AuditConfig, Auditor};
 use std::hint::black_box;
 
 const N: usize = 10_000;
@@ -110,7 +111,8 @@ fn bench(c: &mut Criterion) {
     g.bench_function("jsonl_read_and_check_near_handover", |b| {
         b.iter(|| {
             let mut r =
-                audit::jsonl::JsonlReader::new("bench", std::io::Cursor::new(&bytes[..])).unwrap();
+                pacs_log::jsonl::JsonlReader::new("bench", std::io::Cursor::new(&bytes[..]))
+                    .unwrap();
             black_box(audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
         })
     });

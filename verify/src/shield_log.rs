@@ -1,9 +1,9 @@
-//! Writing a shield run as an audit log (format v1, [`crate::audit::log`]): the robot's commanded
+//! Writing a shield run as an audit log (format v1, `pacs_log`): the robot's commanded
 //! samples (positions, velocities and accelerations), the human measurements the shield received, and the shield's diagnostics, so that
 //! `pacs audit` can check the run offline.
 
-use crate::audit::log::{Header, LogWriter, WriteError};
 use crate::shield::Command;
+use pacs_log::{Header, LogWriter, WriteError};
 use pacs_reach::human::HumanMeasurement;
 use std::io::Write;
 

@@ -2,9 +2,9 @@
 //! is the whole robot's, pinches between adjacent links count, trailing human records count.
 //! Each case here passed (exit 0) before the fix.
 
+use pacs_log::jsonl::JsonlReader;
 use pacs_models::{HumanModel, MAX_DOF, RobotModel};
 use pacs_verify::audit::enclosure::{Sample, SpanBoxes, span_boxes};
-use pacs_verify::audit::jsonl::JsonlReader;
 use pacs_verify::audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
 
 fn run(text: &str) -> RunResult {
@@ -235,8 +235,7 @@ fn equal_times_follow_one_order_in_jsonl_and_csv() {
             "jsonl, robot first {robot_first}: {r:?}"
         );
         let mut reader =
-            pacs_verify::audit::csv::CsvReader::new("t.csv", std::io::Cursor::new(csv.as_bytes()))
-                .unwrap();
+            pacs_log::csv::CsvReader::new("t.csv", std::io::Cursor::new(csv.as_bytes())).unwrap();
         let r = audit_reader(&mut reader, &AuditConfig::default()).unwrap();
         assert_eq!(
             r.verdict,

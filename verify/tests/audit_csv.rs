@@ -3,7 +3,8 @@
 mod audit_common;
 
 use audit_common::*;
-use pacs_verify::audit::{self, AuditConfig, AuditError, Location, Verdict, csv::CsvReader};
+use pacs_log::{Location, LogError, csv::CsvReader};
+use pacs_verify::audit::{self, AuditConfig, Verdict};
 use serde_json::Value;
 
 /// Convert a JSON Lines log to the CSV form (written here, independently of the reader).
@@ -52,7 +53,7 @@ fn to_csv(jsonl: &str) -> String {
     out
 }
 
-fn run_csv(text: &str) -> Result<audit::RunResult, AuditError> {
+fn run_csv(text: &str) -> Result<audit::RunResult, LogError> {
     let mut r = CsvReader::new("test.csv", std::io::Cursor::new(text.as_bytes()))?;
     audit::audit_reader(&mut r, &AuditConfig::default())
 }
@@ -91,7 +92,7 @@ fn expect(text: &str, line: u64, what: &str) {
     let e = run_csv(text).expect_err("must be rejected");
     let msg = e.to_string();
     assert!(
-        matches!(e, AuditError::Input { location, .. } if location == Location::Line(line)),
+        matches!(e, LogError::Input { location, .. } if location == Location::Line(line)),
         "{msg}"
     );
     assert!(msg.contains(what), "`{msg}` should mention `{what}`");

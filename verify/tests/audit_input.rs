@@ -3,8 +3,9 @@
 mod audit_common;
 
 use audit_common::*;
-use pacs_verify::audit::log::WriteError;
-use pacs_verify::audit::{AuditConfig, AuditError, Location, LogWriter};
+use pacs_log::WriteError;
+use pacs_log::{Location, LogError, LogWriter};
+use pacs_verify::audit::AuditConfig;
 
 const HEADER: &str = r#"{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm"}"#;
 const HUMAN: &str = r#"{"type":"human","t":0.0,"positions":[[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1]]}"#;
@@ -20,7 +21,7 @@ fn expect_error(text: &str, line: Option<u64>, what: &str) {
     let e = run(text, &AuditConfig::default()).expect_err("must be rejected");
     let msg = e.to_string();
     match &e {
-        AuditError::Input { file, location, .. } => {
+        LogError::Input { file, location, .. } => {
             assert_eq!(file, "test.jsonl");
             if let Some(l) = line {
                 assert_eq!(*location, Location::Line(l), "{msg}");
@@ -157,9 +158,9 @@ fn measurement_from_the_future() {
 fn writer_rejects_what_the_reader_would_reject() {
     let mut w = LogWriter::new(Vec::new());
     assert!(w.write_robot(0.0, &[0.0], None).is_err(), "header first");
-    let h = pacs_verify::audit::Header::new(
-        pacs_verify::audit::ModelRef::Name("fr3".into()),
-        pacs_verify::audit::ModelRef::Name("default".into()),
+    let h = pacs_log::Header::new(
+        pacs_log::ModelRef::Name("fr3".into()),
+        pacs_log::ModelRef::Name("default".into()),
         ssm(),
     );
     w.write_header(&h).unwrap();

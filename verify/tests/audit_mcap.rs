@@ -7,10 +7,9 @@ mod audit_common;
 
 use audit_common::*;
 use mcap::records::{MessageHeader, Metadata};
-use pacs_verify::audit::mcap::{McapConfig, McapLogWriter, McapReader};
-use pacs_verify::audit::{
-    self, AuditConfig, AuditError, Header, Location, ModelRef, RunResult, Verdict, cdr,
-};
+use pacs_log::mcap::{McapConfig, McapLogWriter, McapReader};
+use pacs_log::{Header, Location, LogError, ModelRef, cdr};
+use pacs_verify::audit::{self, AuditConfig, RunResult, Verdict};
 use std::collections::BTreeMap;
 use std::io::Cursor;
 
@@ -219,8 +218,8 @@ fn audit_bytes(
     bytes: &[u8],
     cfg: &AuditConfig,
     h: Option<Header>,
-) -> Result<RunResult, AuditError> {
-    let mut r = McapReader::new(name, Cursor::new(bytes), cfg, h)?;
+) -> Result<RunResult, LogError> {
+    let mut r = McapReader::new(name, Cursor::new(bytes), &cfg.mcap, &cfg.overrides(), h)?;
     audit::audit_reader(&mut r, cfg)
 }
 
@@ -407,7 +406,7 @@ fn header_from_the_summary_or_given_separately() {
     assert!(
         matches!(
             e,
-            AuditError::Input {
+            LogError::Input {
                 location: Location::Offset(_),
                 ..
             }
@@ -572,10 +571,7 @@ fn expect_bad(bytes: &[u8], what: &str) {
         .expect_err("must be rejected");
     let msg = e.to_string();
     assert!(msg.starts_with("bad.mcap: "), "{msg}");
-    assert!(
-        matches!(e, AuditError::Input { .. }),
-        "an input error: {msg}"
-    );
+    assert!(matches!(e, LogError::Input { .. }), "an input error: {msg}");
     assert!(msg.contains(what), "`{msg}` should mention `{what}`");
 }
 

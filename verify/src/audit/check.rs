@@ -10,13 +10,13 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::enclosure::{Sample, SpanBoxes, span_boxes};
-use super::log::LogModels;
 use super::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, SeriesPoint, Verdict,
     Violation,
 };
 use crate::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
 use nalgebra::{Isometry3, Point3};
+use pacs_log::LogModels;
 use pacs_models::robot::MAX_DOF;
 use pacs_models::{Capsule, HumanModel, RobotModel};
 use pacs_reach::geometry::segment_distance_upper_bound;
@@ -47,13 +47,13 @@ pub struct AuditConfig {
     /// velocity limits. Default 1e-9.
     pub limit_slack: f64,
     /// Override the header's robot.
-    pub robot: Option<super::log::ModelRef<pacs_models::RobotSpec>>,
+    pub robot: Option<pacs_log::ModelRef<pacs_models::RobotSpec>>,
     /// Override the header's human model.
-    pub human: Option<super::log::ModelRef<pacs_models::HumanSpec>>,
+    pub human: Option<pacs_log::ModelRef<pacs_models::HumanSpec>>,
     /// Override the header's constraints.
-    pub constraints: Option<super::log::ModelRef<pacs_models::ConstraintSpec>>,
+    pub constraints: Option<pacs_log::ModelRef<pacs_models::ConstraintSpec>>,
     /// MCAP reading settings (topics, reorder window): the `[mcap]` table.
-    pub mcap: super::mcap::McapConfig,
+    pub mcap: pacs_log::mcap::McapConfig,
 }
 
 impl Default for AuditConfig {
@@ -74,6 +74,15 @@ impl Default for AuditConfig {
 }
 
 impl AuditConfig {
+    /// The models this config puts in place of a log header's.
+    pub fn overrides(&self) -> pacs_log::ModelOverrides {
+        pacs_log::ModelOverrides {
+            robot: self.robot.clone(),
+            human: self.human.clone(),
+            constraints: self.constraints.clone(),
+        }
+    }
+
     /// Check every value; the error names the field and value.
     pub fn validate(&self) -> Result<(), String> {
         for (f, v) in [

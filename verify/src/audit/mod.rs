@@ -1,39 +1,29 @@
-//! Offline audit of logged runs against SSM and PFL (issue 5).
+//! The offline audit of logged runs against SSM and PFL: every span between logged robot samples
+//! judged by the one ISO/TS 15066 rule ([`crate::iso15066`]).
 //!
-//! - [`log`]: log format v1 (header, records) and the JSON Lines [`log::LogWriter`];
-//! - [`jsonl`]: the streaming JSON Lines reader; [`csv`]: the CSV form; [`mcap`]: MCAP files of
-//!   ROS 2 recordings (payloads decoded by [`cdr`]);
-//! - [`check`]: the sound span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
-//! - [`verdict`]: verdicts, violation intervals, metrics;
-//! - [`error`]: typed input errors naming file, line and problem.
+//! - [`check`]: the span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
+//! - [`enclosure`]: sound joint boxes over a span and the consistency of the samples;
+//! - [`verdict`]: verdicts, violation intervals, metrics.
 //!
-//! Entry points: [`audit_file`] and [`audit_reader`]. Semantics: `docs/audit.md`.
+//! The log format and its readers live in `pacs-log`. Entry points: [`audit_file`] and
+//! [`audit_reader`]. Semantics: `docs/audit.md`.
 
-pub mod cdr;
 pub mod check;
-pub mod csv;
 pub mod enclosure;
-pub mod error;
-pub mod jsonl;
-pub mod log;
-pub mod mcap;
-pub mod order;
 pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
-pub use error::{AuditError, Location};
-pub use log::{Header, LogModels, LogWriter, ModelRef, Record, RecordReader};
 pub use verdict::{ConstraintKind, InconclusiveReason, Metrics, RunResult, Verdict, Violation};
 
-use order::EqualTimeGroup;
+use pacs_log::{EqualTimeGroup, Header, Location, LogError, LogModels, Record, RecordReader};
 use std::path::Path;
 
 /// Load an audit config from TOML text; errors name the file and the problem.
-pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, AuditError> {
+pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, LogError> {
     let cfg: AuditConfig = toml::from_str(text)
-        .map_err(|e| AuditError::input(file, Location::File, format!("invalid config: {e}")))?;
+        .map_err(|e| LogError::input(file, Location::File, format!("invalid config: {e}")))?;
     cfg.validate()
-        .map_err(|p| AuditError::input(file, Location::File, format!("invalid config: {p}")))?;
+        .map_err(|p| LogError::input(file, Location::File, format!("invalid config: {p}")))?;
     Ok(cfg)
 }
 
@@ -42,23 +32,14 @@ pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, AuditError> {
 pub fn audit_reader(
     reader: &mut dyn RecordReader,
     cfg: &AuditConfig,
-) -> Result<RunResult, AuditError> {
+) -> Result<RunResult, LogError> {
     let file = reader.file().to_string();
-    let mut header = reader.header().clone();
-    if let Some(r) = &cfg.robot {
-        header.robot = r.clone();
-    }
-    if let Some(h) = &cfg.human {
-        header.human = h.clone();
-    }
-    if let Some(c) = &cfg.constraints {
-        header.constraints = c.clone();
-    }
+    let header = reader.header().with_overrides(&cfg.overrides());
     let header_loc = reader.header_location();
     let models =
-        LogModels::from_header(&header).map_err(|p| AuditError::input(&file, header_loc, p))?;
+        LogModels::from_header(&header).map_err(|p| LogError::input(&file, header_loc, p))?;
     let mut auditor =
-        Auditor::new(models, cfg.clone()).map_err(|p| AuditError::input(&file, header_loc, p))?;
+        Auditor::new(models, cfg.clone()).map_err(|p| LogError::input(&file, header_loc, p))?;
     let mut last_t = f64::NEG_INFINITY;
     // Records of one time stamp are applied in the canonical order (`order`): human
     // measurements, robot samples, events, then file order.
@@ -84,16 +65,16 @@ pub fn audit_reader(
         let t = rec.t();
         if !t.is_finite() {
             let p = format!("t: value {t} is not finite");
-            return Err(AuditError::input(&file, reader.location(), p));
+            return Err(LogError::input(&file, reader.location(), p));
         }
         if t < last_t {
             let p = format!("time goes backwards: t = {t} s after t = {last_t} s");
-            return Err(AuditError::input(&file, reader.location(), p));
+            return Err(LogError::input(&file, reader.location(), p));
         }
         if group.time().is_some_and(|tg| tg != t) {
             group
                 .drain(&mut apply)
-                .map_err(|(loc, p)| AuditError::input(&file, loc, p))?;
+                .map_err(|(loc, p)| LogError::input(&file, loc, p))?;
         }
         last_t = t;
         group.push(&rec, Location::File);
@@ -101,19 +82,19 @@ pub fn audit_reader(
     }
     group
         .drain(&mut apply)
-        .map_err(|(loc, p)| AuditError::input(&file, loc, p))?;
+        .map_err(|(loc, p)| LogError::input(&file, loc, p))?;
     Ok(auditor.finish(&file, header.meta))
 }
 
 /// Audit one log file: MCAP if it starts with the MCAP magic or its name ends in `.mcap`, CSV
 /// form if the name ends in `.csv`, JSON Lines otherwise. The path as given names the log in
 /// messages and in the result.
-pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, AuditError> {
+pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, LogError> {
     audit_file_with_header(path, cfg, None)
 }
 
 /// Whether `path` is an MCAP file: its name ends in `.mcap` or it starts with the MCAP magic.
-pub fn is_mcap(path: &Path) -> Result<bool, AuditError> {
+pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
     use std::io::Read;
     if path
         .extension()
@@ -122,18 +103,18 @@ pub fn is_mcap(path: &Path) -> Result<bool, AuditError> {
         return Ok(true);
     }
     let name = path.display().to_string();
-    let f = std::fs::File::open(path).map_err(|e| AuditError::Io {
+    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
         file: name.clone(),
         source: e,
     })?;
     let mut prefix = Vec::with_capacity(8);
     f.take(8)
         .read_to_end(&mut prefix)
-        .map_err(|e| AuditError::Io {
+        .map_err(|e| LogError::Io {
             file: name,
             source: e,
         })?;
-    Ok(mcap::has_magic(&prefix))
+    Ok(pacs_log::mcap::has_magic(&prefix))
 }
 
 /// [`audit_file`] with a pacs header given separately (`pacs audit --header`), which only MCAP
@@ -142,20 +123,26 @@ pub fn audit_file_with_header(
     path: &Path,
     cfg: &AuditConfig,
     header: Option<&Header>,
-) -> Result<RunResult, AuditError> {
+) -> Result<RunResult, LogError> {
     let name = path.display().to_string();
     let mcap_log = is_mcap(path)?;
-    let f = std::fs::File::open(path).map_err(|e| AuditError::Io {
+    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
         file: name.clone(),
         source: e,
     })?;
     let input = std::io::BufReader::with_capacity(1 << 16, f);
     if mcap_log {
-        let mut reader = mcap::McapReader::new(&name, input, cfg, header.cloned())?;
+        let mut reader = pacs_log::mcap::McapReader::new(
+            &name,
+            input,
+            &cfg.mcap,
+            &cfg.overrides(),
+            header.cloned(),
+        )?;
         return audit_reader(&mut reader, cfg);
     }
     if header.is_some() {
-        return Err(AuditError::input(
+        return Err(LogError::input(
             &name,
             Location::File,
             "a separate header (--header) applies to MCAP logs only; this log carries its own",
@@ -165,10 +152,10 @@ pub fn audit_file_with_header(
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
     {
-        let mut reader = csv::CsvReader::new(&name, input)?;
+        let mut reader = pacs_log::csv::CsvReader::new(&name, input)?;
         audit_reader(&mut reader, cfg)
     } else {
-        let mut reader = jsonl::JsonlReader::new(&name, input)?;
+        let mut reader = pacs_log::jsonl::JsonlReader::new(&name, input)?;
         audit_reader(&mut reader, cfg)
     }
 }

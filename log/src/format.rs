@@ -89,6 +89,34 @@ impl Header {
     }
 }
 
+/// Models that replace a header's (an audit config's `robot`, `human`, `constraints`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ModelOverrides {
+    /// Robot model.
+    pub robot: Option<ModelRef<RobotSpec>>,
+    /// Human model.
+    pub human: Option<ModelRef<HumanSpec>>,
+    /// Task constraints.
+    pub constraints: Option<ModelRef<ConstraintSpec>>,
+}
+
+impl Header {
+    /// This header with the given models replaced.
+    pub fn with_overrides(&self, o: &ModelOverrides) -> Header {
+        let mut h = self.clone();
+        if let Some(r) = &o.robot {
+            h.robot = r.clone();
+        }
+        if let Some(x) = &o.human {
+            h.human = x.clone();
+        }
+        if let Some(c) = &o.constraints {
+            h.constraints = c.clone();
+        }
+        h
+    }
+}
+
 /// The models a log refers to, validated.
 #[derive(Debug, Clone)]
 pub struct LogModels {
@@ -193,12 +221,12 @@ pub trait RecordReader {
     /// The file's header (already read and checked for type, format and version).
     fn header(&self) -> &Header;
     /// The next record, `None` at a clean end of file. Errors name the file and location.
-    fn next_record(&mut self) -> Result<Option<Record<'_>>, crate::audit::AuditError>;
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, crate::LogError>;
     /// Where the last returned record was found (for errors detected downstream).
-    fn location(&self) -> crate::audit::Location;
+    fn location(&self) -> crate::Location;
     /// Where the header was found (for errors in its models). Default: line 1.
-    fn header_location(&self) -> crate::audit::Location {
-        crate::audit::Location::Line(1)
+    fn header_location(&self) -> crate::Location {
+        crate::Location::Line(1)
     }
     /// The file name used in errors.
     fn file(&self) -> &str;

@@ -3,8 +3,8 @@
 //! `robot,t,n,q_1..q_n[,dq_1..dq_n[,ddq_1..ddq_n]]`, `human,t,t_meas,x_1,y_1,z_1,...`, `event,t,name`,
 //! `shield,t,...`. Blank lines and lines starting with `#` after the header are skipped.
 
-use super::error::{AuditError, Location};
-use super::log::{Header, Record, RecordReader};
+use crate::error::{Location, LogError};
+use crate::format::{Header, Record, RecordReader};
 use std::io::BufRead;
 
 /// Streaming CSV log reader; buffers are reused, so reading allocates nothing per robot sample.
@@ -35,32 +35,30 @@ fn num(field: &str, s: &str) -> Result<f64, String> {
 
 impl<R: BufRead> CsvReader<R> {
     /// Read and check the `#`-prefixed JSON header on the first line.
-    pub fn new(file: &str, mut input: R) -> Result<Self, AuditError> {
+    pub fn new(file: &str, mut input: R) -> Result<Self, LogError> {
         let mut line = String::new();
-        let n = input.read_line(&mut line).map_err(|e| AuditError::Io {
+        let n = input.read_line(&mut line).map_err(|e| LogError::Io {
             file: file.into(),
             source: e,
         })?;
         let loc = Location::Line(1);
         if n == 0 {
-            return Err(AuditError::input(
+            return Err(LogError::input(
                 file,
                 Location::File,
                 "missing header: the file is empty",
             ));
         }
         let Some(json) = line.trim().strip_prefix('#') else {
-            return Err(AuditError::input(
+            return Err(LogError::input(
                 file,
                 loc,
                 "missing header: the first line must be `#` followed by the JSON header",
             ));
         };
         let header: Header = serde_json::from_str(json)
-            .map_err(|e| AuditError::input(file, loc, format!("invalid header: {e}")))?;
-        header
-            .check()
-            .map_err(|p| AuditError::input(file, loc, p))?;
+            .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
+        header.check().map_err(|p| LogError::input(file, loc, p))?;
         Ok(Self {
             file: file.into(),
             input,
@@ -87,18 +85,18 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
         Location::Line(self.line_no)
     }
 
-    fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
         loop {
             self.line.clear();
             let n = self.input.read_line(&mut self.line).map_err(|e| {
                 if e.kind() == std::io::ErrorKind::InvalidData {
-                    AuditError::input(
+                    LogError::input(
                         &self.file,
                         Location::Line(self.line_no + 1),
                         "line is not valid UTF-8",
                     )
                 } else {
-                    AuditError::Io {
+                    LogError::Io {
                         file: self.file.clone(),
                         source: e,
                     }
@@ -115,7 +113,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
         }
         let loc = Location::Line(self.line_no);
         let file = self.file.as_str();
-        let err = |p: String| AuditError::input(file, loc, p);
+        let err = |p: String| LogError::input(file, loc, p);
         if !self.line.ends_with('\n') {
             return Err(err(
                 "truncated line (no newline at the end of the file)".into()

@@ -4,8 +4,8 @@
 //! this way by construction; JSON Lines and CSV records pass through [`EqualTimeGroup`], so the
 //! same data gets the same verdict whatever order a logger wrote it in.
 
-use super::error::Location;
-use super::log::Record;
+use crate::error::Location;
+use crate::format::Record;
 
 /// An owned copy of one record (buffers reused across groups).
 #[derive(Debug, Default)]

@@ -25,7 +25,7 @@ impl std::fmt::Display for Location {
 
 /// Why a log or config could not be audited. Every variant is "invalid input" (CLI exit 3).
 #[derive(Debug, Error)]
-pub enum AuditError {
+pub enum LogError {
     /// The file content is invalid at `location`; `problem` names the field and the value.
     #[error("{file}: {location}{problem}")]
     Input {
@@ -47,10 +47,10 @@ pub enum AuditError {
     },
 }
 
-impl AuditError {
+impl LogError {
     /// An input error at a location.
     pub fn input(file: &str, location: Location, problem: impl Into<String>) -> Self {
-        AuditError::Input {
+        LogError::Input {
             file: file.to_string(),
             location,
             problem: problem.into(),

@@ -9,14 +9,14 @@
 //! - the pacs header: the JSON text of the JSON Lines header line, in key [`METADATA_KEY`] of the
 //!   metadata record named [`METADATA_NAME`], or given separately (`pacs audit --header`).
 //!
-//! Message payloads are CDR (decoded by [`super::cdr`]). The file is read once, front to back,
+//! Message payloads are CDR (decoded by [`crate::cdr`]). The file is read once, front to back,
 //! through `mcap`'s sans-I/O linear reader (chunks are decompressed as a stream), and messages are
 //! put into time order within a bounded window ([`McapConfig::reorder_window`]); a message that
 //! would need a longer window is an error, never silently reordered or dropped.
 
-use super::cdr::{self, CdrWriter, JointState, PoseArray, Stamp};
-use super::error::{AuditError, Location};
-use super::log::{Header, LogModels, Record, RecordReader};
+use crate::cdr::{self, CdrWriter, JointState, PoseArray, Stamp};
+use crate::error::{Location, LogError};
+use crate::format::{Header, LogModels, ModelOverrides, Record, RecordReader};
 use mcap::records::op;
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use serde::{Deserialize, Serialize};
@@ -117,9 +117,9 @@ pub fn header_from_value(value: serde_json::Value) -> Result<Header, String> {
 
 /// Load a header side file (`pacs audit --header FILE`): JSON, or TOML when the name ends in
 /// `.toml`. Errors name the file.
-pub fn load_header_file(path: &std::path::Path) -> Result<Header, AuditError> {
+pub fn load_header_file(path: &std::path::Path) -> Result<Header, LogError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| AuditError::Io {
+    let text = std::fs::read_to_string(path).map_err(|e| LogError::Io {
         file: name.clone(),
         source: e,
     })?;
@@ -128,14 +128,14 @@ pub fn load_header_file(path: &std::path::Path) -> Result<Header, AuditError> {
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
     {
         let v: toml::Value = toml::from_str(&text)
-            .map_err(|e| AuditError::input(&name, Location::File, format!("invalid TOML: {e}")))?;
+            .map_err(|e| LogError::input(&name, Location::File, format!("invalid TOML: {e}")))?;
         serde_json::to_value(v)
-            .map_err(|e| AuditError::input(&name, Location::File, format!("invalid header: {e}")))?
+            .map_err(|e| LogError::input(&name, Location::File, format!("invalid header: {e}")))?
     } else {
         serde_json::from_str(&text)
-            .map_err(|e| AuditError::input(&name, Location::File, format!("invalid JSON: {e}")))?
+            .map_err(|e| LogError::input(&name, Location::File, format!("invalid JSON: {e}")))?
     };
-    header_from_value(value).map_err(|p| AuditError::input(&name, Location::File, p))
+    header_from_value(value).map_err(|p| LogError::input(&name, Location::File, p))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -213,7 +213,7 @@ struct State {
     size: u64,
     pos: u64,
     cfg: McapConfig,
-    audit_cfg: super::AuditConfig,
+    overrides: ModelOverrides,
     header: Option<Header>,
     header_from: Option<HeaderFrom>,
     /// Model joint names (effective robot) and keypoint count (effective human).
@@ -264,16 +264,17 @@ impl<R: Read + Seek> McapReader<R> {
     pub fn new(
         file: &str,
         mut input: R,
-        cfg: &super::AuditConfig,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
         header: Option<Header>,
-    ) -> Result<Self, AuditError> {
-        let io = |e: std::io::Error| AuditError::Io {
+    ) -> Result<Self, LogError> {
+        let io = |e: std::io::Error| LogError::Io {
             file: file.to_string(),
             source: e,
         };
-        let mcfg = cfg.mcap.clone();
+        let mcfg = cfg.clone();
         mcfg.validate()
-            .map_err(|p| AuditError::input(file, Location::File, format!("invalid config: {p}")))?;
+            .map_err(|p| LogError::input(file, Location::File, format!("invalid config: {p}")))?;
         let size = input.seek(SeekFrom::End(0)).map_err(io)?;
         let mut header_from = header.as_ref().map(|_| HeaderFrom::Given);
         let mut header = header;
@@ -299,7 +300,7 @@ impl<R: Read + Seek> McapReader<R> {
                 size,
                 pos: 0,
                 cfg: mcfg,
-                audit_cfg: cfg.clone(),
+                overrides: overrides.clone(),
                 header: None,
                 header_from,
                 joints: Vec::new(),
@@ -330,7 +331,7 @@ impl<R: Read + Seek> McapReader<R> {
             r.pump()?;
         }
         if r.st.header.is_none() {
-            return Err(AuditError::input(
+            return Err(LogError::input(
                 file,
                 Location::File,
                 format!(
@@ -345,7 +346,7 @@ impl<R: Read + Seek> McapReader<R> {
     }
 
     /// Process one MCAP event that yields a record (or the end of the file).
-    fn pump(&mut self) -> Result<(), AuditError> {
+    fn pump(&mut self) -> Result<(), LogError> {
         let st = &mut self.st;
         loop {
             let ev = match self.lin.next_event() {
@@ -354,7 +355,7 @@ impl<R: Read + Seek> McapReader<R> {
                     return Ok(());
                 }
                 Some(Err(e)) => {
-                    return Err(AuditError::input(
+                    return Err(LogError::input(
                         &st.file,
                         Location::Offset(st.pos),
                         mcap_problem(&e),
@@ -376,7 +377,7 @@ impl<R: Read + Seek> McapReader<R> {
                             Ok(k) => break k,
                             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                             Err(e) => {
-                                return Err(AuditError::Io {
+                                return Err(LogError::Io {
                                     file: st.file.clone(),
                                     source: e,
                                 });
@@ -457,10 +458,10 @@ fn header_from_summary<R: Read + Seek>(
     file: &str,
     input: &mut R,
     size: u64,
-) -> Result<Option<(Header, u64)>, AuditError> {
+) -> Result<Option<(Header, u64)>, LogError> {
     // Footer record (opcode, length, summary_start, summary_offset_start, crc) + end magic.
     const TAIL: u64 = 1 + 8 + 8 + 8 + 4 + 8;
-    let io = |e: std::io::Error| AuditError::Io {
+    let io = |e: std::io::Error| LogError::Io {
         file: file.to_string(),
         source: e,
     };
@@ -504,7 +505,7 @@ fn header_from_summary<R: Read + Seek>(
             };
             if name == METADATA_NAME {
                 if found.is_some() {
-                    return Err(AuditError::input(
+                    return Err(LogError::input(
                         file,
                         Location::Offset(offset),
                         format!(
@@ -521,7 +522,7 @@ fn header_from_summary<R: Read + Seek>(
         return Ok(None);
     };
     let loc = Location::Offset(offset);
-    let err = |p: String| AuditError::input(file, loc, p);
+    let err = |p: String| LogError::input(file, loc, p);
     if len < 9 || len > RECORD_LIMIT as u64 || offset.saturating_add(len) > size {
         return Err(err(format!(
             "metadata index of `{METADATA_NAME}`: record length {len} at offset {offset} does not fit the file"
@@ -572,28 +573,18 @@ fn parse_metadata(body: &[u8]) -> Result<(&str, Result<Header, String>), String>
 }
 
 impl State {
-    fn err(&self, p: impl Into<String>) -> AuditError {
-        AuditError::input(&self.file, Location::Offset(self.pos), p)
+    fn err(&self, p: impl Into<String>) -> LogError {
+        LogError::input(&self.file, Location::Offset(self.pos), p)
     }
 
-    fn set_header(&mut self, h: Header) -> Result<(), AuditError> {
-        let cfg = &self.audit_cfg;
-        let mut eff = h.clone();
-        if let Some(r) = &cfg.robot {
-            eff.robot = r.clone();
-        }
-        if let Some(x) = &cfg.human {
-            eff.human = x.clone();
-        }
-        if let Some(c) = &cfg.constraints {
-            eff.constraints = c.clone();
-        }
+    fn set_header(&mut self, h: Header) -> Result<(), LogError> {
+        let eff = h.with_overrides(&self.overrides);
         let loc = match self.header_from {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
             _ => Location::File,
         };
         let models =
-            LogModels::from_header(&eff).map_err(|p| AuditError::input(&self.file, loc, p))?;
+            LogModels::from_header(&eff).map_err(|p| LogError::input(&self.file, loc, p))?;
         self.joints = models
             .robot
             .joints()
@@ -605,7 +596,7 @@ impl State {
         Ok(())
     }
 
-    fn record(&mut self, opcode: u8, data: &[u8]) -> Result<(), AuditError> {
+    fn record(&mut self, opcode: u8, data: &[u8]) -> Result<(), LogError> {
         // Top-level records end exactly at `pos` (the reader is fed only the bytes it asks for).
         let start = self.pos.saturating_sub(9 + data.len() as u64);
         match opcode {
@@ -613,7 +604,7 @@ impl State {
             _ => return Ok(()),
         }
         let bad = |p: String| {
-            AuditError::input(
+            LogError::input(
                 &self.file,
                 Location::Offset(self.pos),
                 format!("invalid MCAP record (opcode 0x{opcode:02x}): {p}"),
@@ -659,7 +650,7 @@ impl State {
                         None => {
                             self.header_from = Some(HeaderFrom::Record(start));
                             let h = h.map_err(|p| {
-                                AuditError::input(&self.file, Location::Offset(start), p)
+                                LogError::input(&self.file, Location::Offset(start), p)
                             })?;
                             self.set_header(h)?;
                         }
@@ -685,7 +676,7 @@ impl State {
         schema_id: u16,
         topic: &str,
         message_encoding: &str,
-    ) -> Result<(), AuditError> {
+    ) -> Result<(), LogError> {
         let cfg = &self.cfg;
         let (stream, expected) = if topic == cfg.robot_topic {
             (Stream::Robot, JOINT_STATE)
@@ -753,7 +744,7 @@ impl State {
         (ns - base) as f64 / 1e9
     }
 
-    fn message(&mut self, h: &mcap::records::MessageHeader, data: &[u8]) -> Result<(), AuditError> {
+    fn message(&mut self, h: &mcap::records::MessageHeader, data: &[u8]) -> Result<(), LogError> {
         let Some((_, stream)) = self.channels.get(&h.channel_id) else {
             return Err(self.err(format!(
                 "message on channel id {} which is not defined before it",
@@ -940,7 +931,7 @@ impl State {
 impl<R: Read + Seek> McapReader<R> {
     /// The next record in time order (the `RecordReader` implementation), needing the config for
     /// the header overrides of a late header.
-    fn next_inner(&mut self) -> Result<Option<&Pending>, AuditError> {
+    fn next_inner(&mut self) -> Result<Option<&Pending>, LogError> {
         if let Some(p) = self.current.take() {
             self.st.recycle(p);
         }
@@ -970,7 +961,7 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
             .expect("McapReader::new guarantees a header")
     }
 
-    fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
         let Some(p) = self.next_inner()? else {
             return Ok(None);
         };

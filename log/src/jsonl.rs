@@ -1,8 +1,8 @@
 //! Streaming JSON Lines reader of log format v1. Memory is bounded by the longest line; records
 //! are parsed into reused buffers, so reading allocates nothing per robot sample.
 
-use super::error::{AuditError, Location};
-use super::log::{Header, Record, RecordReader};
+use crate::error::{Location, LogError};
+use crate::format::{Header, Record, RecordReader};
 use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use std::fmt;
 use std::io::BufRead;
@@ -238,14 +238,14 @@ pub struct JsonlReader<R: BufRead> {
 
 impl<R: BufRead> JsonlReader<R> {
     /// Read and check the header (first non-blank line). `file` names the input in errors.
-    pub fn new(file: &str, mut input: R) -> Result<Self, AuditError> {
+    pub fn new(file: &str, mut input: R) -> Result<Self, LogError> {
         let mut line = String::new();
         let mut line_no = 0u64;
         loop {
             line.clear();
             let n = read_line(file, &mut input, &mut line, line_no + 1)?;
             if n == 0 {
-                return Err(AuditError::input(
+                return Err(LogError::input(
                     file,
                     Location::File,
                     "missing header: the file is empty",
@@ -258,19 +258,17 @@ impl<R: BufRead> JsonlReader<R> {
         }
         let loc = Location::Line(line_no);
         let value: serde_json::Value = serde_json::from_str(&line)
-            .map_err(|e| AuditError::input(file, loc, format!("invalid JSON: {e}")))?;
+            .map_err(|e| LogError::input(file, loc, format!("invalid JSON: {e}")))?;
         if value.get("type").and_then(|t| t.as_str()) != Some("header") {
-            return Err(AuditError::input(
+            return Err(LogError::input(
                 file,
                 loc,
                 "missing header: the first record must have \"type\": \"header\"",
             ));
         }
         let header: Header = serde_json::from_value(value)
-            .map_err(|e| AuditError::input(file, loc, format!("invalid header: {e}")))?;
-        header
-            .check()
-            .map_err(|p| AuditError::input(file, loc, p))?;
+            .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
+        header.check().map_err(|p| LogError::input(file, loc, p))?;
         Ok(Self {
             file: file.to_string(),
             input,
@@ -287,12 +285,12 @@ fn read_line<R: BufRead>(
     input: &mut R,
     line: &mut String,
     line_no: u64,
-) -> Result<usize, AuditError> {
+) -> Result<usize, LogError> {
     input.read_line(line).map_err(|e| {
         if e.kind() == std::io::ErrorKind::InvalidData {
-            AuditError::input(file, Location::Line(line_no), "line is not valid UTF-8")
+            LogError::input(file, Location::Line(line_no), "line is not valid UTF-8")
         } else {
-            AuditError::Io {
+            LogError::Io {
                 file: file.to_string(),
                 source: e,
             }
@@ -313,7 +311,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         Location::Line(self.line_no)
     }
 
-    fn next_record(&mut self) -> Result<Option<Record<'_>>, AuditError> {
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
         loop {
             self.line.clear();
             let n = read_line(
@@ -332,7 +330,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         }
         let loc = Location::Line(self.line_no);
         let file = self.file.as_str();
-        let err = |p: String| AuditError::input(file, loc, p);
+        let err = |p: String| LogError::input(file, loc, p);
         if !self.line.ends_with('\n') {
             // The last line of a file must be complete: a writer killed mid-line leaves a prefix
             // that may still parse (e.g. a shortened number), so an unterminated line is rejected.

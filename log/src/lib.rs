@@ -1,0 +1,24 @@
+//! # pacs-log
+//!
+//! The log format v1 (`docs/log-format.md`) of logged robot runs, independent of the checker that
+//! audits them:
+//! - [`format`]: the header (models by name or inline spec), the record view every reader yields,
+//!   the models a header refers to ([`LogModels`]) and the JSON Lines writer ([`LogWriter`]);
+//! - [`jsonl`], [`csv`], [`mcap`] (+ [`cdr`]): streaming readers of the three forms;
+//! - [`order`]: records of equal time in the one canonical order (human, robot, event, file order);
+//! - [`error`]: input errors naming the file, line or offset, and the problem.
+
+pub mod cdr;
+pub mod csv;
+pub mod error;
+pub mod format;
+pub mod jsonl;
+pub mod mcap;
+pub mod order;
+
+pub use error::{Location, LogError};
+pub use format::{
+    FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, Record, RecordReader, VERSION,
+    WriteError,
+};
+pub use order::EqualTimeGroup;
