@@ -3,8 +3,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use pacs_audit::{AuditConfig, Verdict, audit_reader};
 use pacs_log::jsonl::JsonlReader;
-use pacs_verify::audit::{AuditConfig, Verdict, audit_reader};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(mut r) = JsonlReader::new("fuzz.jsonl", std::io::Cursor::new(data)) else {

@@ -4,8 +4,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+use pacs_audit::{AuditConfig, Verdict, audit_reader};
 use pacs_log::mcap::McapReader;
-use pacs_verify::audit::{AuditConfig, Verdict, audit_reader};
 
 fuzz_target!(|data: &[u8]| {
     let cfg = AuditConfig::default();

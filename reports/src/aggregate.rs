@@ -1,7 +1,7 @@
 //! Aggregate table over several logs, grouped by `meta.task`, `meta.policy`, `meta.filter` (the
 //! paper's "Impact of safeguarding"): Success, Safe Success, Safety Viol. as mean ± std.
 
-use pacs_verify::audit::RunResult;
+use pacs_audit::RunResult;
 use serde::Serialize;
 
 /// One group of runs with equal (task, policy, filter).

@@ -3,7 +3,7 @@
 use crate::{
     GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg,
 };
-use pacs_verify::audit::Verdict;
+use pacs_audit::Verdict;
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {

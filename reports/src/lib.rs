@@ -10,7 +10,7 @@ pub mod html;
 pub mod markdown;
 pub mod svg;
 
-use pacs_verify::audit::{RunResult, Verdict};
+use pacs_audit::{RunResult, Verdict};
 use serde::Serialize;
 use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
@@ -96,27 +96,27 @@ pub fn check_backing() -> Value {
     json!([
         {"check": "robot occupancy over a span (joint box from v_max, outward-rounded)",
          "backed_by": ["reach/tests/robot_occupancy.rs (proptest: sampled link points stay in the box occupancy)",
-                       "verify/tests/audit_checks.rs::violation_only_between_samples_is_caught"]},
+                       "audit/tests/audit_checks.rs::violation_only_between_samples_is_caught"]},
         {"check": "human occupancy since the measurement (vel/pos/combined models)",
          "backed_by": ["reach/tests/human_occupancy.rs (proptest soundness of every model)"]},
         {"check": "conservative capsule separation / intersection",
          "backed_by": ["reach/tests/geometry.rs (lower bound never above exact distance; touching never disjoint)"]},
         {"check": "span enclosures and consistency of logged positions, velocities and accelerations",
          "backed_by": ["proofs: h2_span_enclosure_sound (Kani harness + property twin)",
-                       "verify/tests/audit_consistency.rs"]},
+                       "audit/tests/audit_consistency.rs"]},
         {"check": "whole-robot kinetic-energy upper bound over the boxes",
          "backed_by": ["reach/tests/energy.rs (proptest: bound covers every sampled state)",
-                       "verify/tests/audit_checks.rs::pfl_energy_just_above_and_below_threshold",
-                       "verify/tests/audit_consistency.rs::pfl_uses_the_whole_robot_energy"]},
+                       "audit/tests/audit_checks.rs::pfl_energy_just_above_and_below_threshold",
+                       "audit/tests/audit_consistency.rs::pfl_uses_the_whole_robot_energy"]},
         {"check": "the one ISO/TS 15066 rule (SSM, PFL, clamping) shared with the shield",
          "backed_by": ["proofs: i1_rule_sound (Kani harness + property twin)",
                        "proofs/mutants: x9, x10 caught"]},
         {"check": "SSM violation detection (first, last sample, one-sample spike, between samples)",
-         "backed_by": ["verify/tests/audit_checks.rs"]},
+         "backed_by": ["audit/tests/audit_checks.rs"]},
         {"check": "PFL constrained vs unconstrained contact",
-         "backed_by": ["verify/tests/audit_checks.rs::pfl_constrained_vs_unconstrained"]},
+         "backed_by": ["audit/tests/audit_checks.rs::pfl_constrained_vs_unconstrained"]},
         {"check": "bad input rejected (exit 3), never pass",
-         "backed_by": ["verify/tests/audit_input.rs", "tests/cli_audit.rs", "fuzz/ (cargo fuzz target jsonl)"]}
+         "backed_by": ["audit/tests/audit_input.rs", "tests/cli_audit.rs", "fuzz/ (cargo fuzz target jsonl)"]}
     ])
 }
 

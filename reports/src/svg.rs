@@ -1,7 +1,7 @@
 //! Hand-written SVG plots (no dependencies): minimum separation and energy vs threshold over
 //! time, with violation spans shaded red and inconclusive spans grey.
 
-use pacs_verify::audit::verdict::SeriesPoint;
+use pacs_audit::verdict::SeriesPoint;
 use std::fmt::Write;
 
 const W: f64 = 760.0;

@@ -1,8 +1,8 @@
 //! Report building blocks: hashing (FIPS 180-2 test vector), aggregate statistics (computed by
 //! hand here), plots and documents.
 
+use pacs_audit::verdict::{Metrics, ModelNames, RunResult, SeriesPoint, Verdict};
 use pacs_reports::{InputFile, ReportInput, aggregate, html, markdown, report_json, svg};
-use pacs_verify::audit::verdict::{Metrics, ModelNames, RunResult, SeriesPoint, Verdict};
 
 fn run(name: &str, filter: &str, success: Option<bool>, viol: f64, verdict: Verdict) -> RunResult {
     let mut meta = serde_json::Map::new();

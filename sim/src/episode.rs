@@ -5,14 +5,14 @@ use crate::humans::{Camera, HumanScript};
 use crate::policy::{ChunkPolicy, DemoSet, Demonstration};
 use crate::task::{ToolGoal, tool_point};
 use nalgebra::Point3;
+use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::{Header, LogModels, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::geometry::segment_distance_lower_bound;
-use pacs_verify::audit::{AuditConfig, Auditor};
-use pacs_verify::cbf::{CbfConfig, CbfFilter};
-use pacs_verify::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
-use pacs_verify::shield_log::ShieldLog;
+use pacs_shield::cbf::{CbfConfig, CbfFilter};
+use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
+use pacs_shield::shield_log::ShieldLog;
 use serde::Serialize;
 
 /// Which safety filter runs.
@@ -218,7 +218,7 @@ pub struct Episode {
 #[derive(Debug, Clone, Serialize)]
 pub struct TruthAudit {
     /// Verdict.
-    pub verdict: pacs_verify::audit::Verdict,
+    pub verdict: pacs_audit::Verdict,
     /// Robot samples in violation / samples.
     pub violation_fraction: f64,
     /// Robot samples in a certain violation / samples.

@@ -3,7 +3,7 @@
 
 use crate::episode::{Episode, EpisodeConfig, Goal, Method, Outputs, Setup, run_setup};
 use crate::task::{ConstraintMode, TaskKind, constraint_spec, native_mode, scenario, tool_point};
-use pacs_verify::shield::ShieldError;
+use pacs_shield::shield::ShieldError;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -2,9 +2,9 @@
 //! in parallel, with an optional certification report. Exit codes: 0 all pass, 1 any fail,
 //! 2 any inconclusive and none fail, 3 invalid input (any log or the config), 70 internal error.
 
+use pacs_audit::{AuditConfig, RunResult, Verdict};
 use pacs_log::LogError;
 use pacs_reports::{InputFile, ReportInput};
-use pacs_verify::audit::{self, AuditConfig, RunResult, Verdict};
 use rayon::prelude::*;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -51,7 +51,7 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Str
             let name = p.display().to_string();
             let text =
                 std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
-            let cfg = audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
+            let cfg = pacs_audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
             let hash = InputFile::hash(p).map_err(|e| e.to_string())?;
             (cfg, Some(hash))
         }
@@ -94,7 +94,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
         .logs
         .par_iter()
         .map(|p| {
-            let r = audit::audit_file_with_header(p, &cfg, header.as_ref());
+            let r = pacs_audit::audit_file_with_header(p, &cfg, header.as_ref());
             bar.inc(1);
             r
         })

@@ -1,8 +1,8 @@
 //! `pacs bench shield`: step-time statistics of the shield and the CBF baseline on a fixed scenario.
 
 use super::CliError;
-use pacs_verify::bench::{StepStats, cbf_scenario, shield_scenario};
-use pacs_verify::shield::FilterMode;
+use pacs_shield::bench::{StepStats, cbf_scenario, shield_scenario};
+use pacs_shield::shield::FilterMode;
 use serde_json::{Value, json};
 
 fn us(s: &StepStats) -> Value {

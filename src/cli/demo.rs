@@ -2,12 +2,12 @@
 //! against the ground-truth human motion.
 
 use super::CliError;
+use pacs_audit::AuditConfig;
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_reports::{InputFile, ReportInput};
 use pacs_sim::episode::{Episode, EpisodeConfig, Method, run_logged};
 use pacs_sim::humans::{Handover, HumanScript, WalkIn};
 use pacs_sim::policy::Demonstration;
-use pacs_verify::audit::{self, AuditConfig};
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -71,7 +71,7 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
             )
             .map_err(|e| CliError::Internal(e.to_string()))?;
             drop(w);
-            let audited = audit::audit_file(&path, &audit_cfg)
+            let audited = pacs_audit::audit_file(&path, &audit_cfg)
                 .map_err(|e| CliError::Internal(format!("audit of {}: {e}", path.display())))?;
             let mut v = summary(&e);
             v["log"] = json!(path.display().to_string());

@@ -1,24 +1,13 @@
 //! # pacs-verify
 //!
-//! The safety checks of PACS: the one ISO/TS 15066 rule, the online filters that apply it, and the
-//! offline audit that applies it to logged runs:
-//! - [`iso15066`]: the one ISO/TS 15066 rule (SSM, PFL, clamping) for one time interval, called by
-//!   the shield and the audit;
-//! - [`shield`]: the PACS online safety shield (OFF and single-action by configuration);
-//! - [`cbf`]: the control-barrier-function baseline;
-//! - [`shield_log`]: a shield run written as an audit log;
-//! - [`audit`]: the log format v1 (readers, writer) and the offline checker;
-//! - [`bench`]: reproducible timing scenarios for `pacs bench`.
+//! The one ISO/TS 15066 rule of pacs ([`iso15066`]): the SSM/PFL decision for one time interval —
+//! contact between the robot's link occupancies and the body parts' occupancies, the robot at
+//! rest or not, the whole robot's kinetic-energy bound against the body part's threshold, and the
+//! clamping classification — with its soundness statement and harness. The online filters
+//! (`pacs-shield`) and the offline audit (`pacs-audit`) both call it; there is no other copy.
 //!
-//! Motion (chunks, intended trajectories, path-speed scaling, braking) lives in `pacs-motion`.
-//! Units: rad, rad/s, rad/s², rad/s³, seconds, m, J.
+//! Units: m, rad/s, J.
 
-// Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
-#![allow(clippy::needless_range_loop)]
-
-pub mod audit;
-pub mod bench;
-pub mod cbf;
 pub mod iso15066;
-pub mod shield;
-pub mod shield_log;
+
+pub use iso15066::{ConstraintKind, ContactRule, EnvShape, Hit, Outcome, RuleError};

@@ -9,9 +9,9 @@
 //! covers no span — see README, "doubtful".)
 
 use crate::{Source, harness};
+use pacs_audit::{AuditConfig, Auditor, Verdict};
 use pacs_log::LogModels;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
-use pacs_verify::audit::{AuditConfig, Auditor, Verdict};
 
 /// Audit one random violating log; the verdict.
 fn violating_log<S: Source>(s: &mut S) -> Verdict {

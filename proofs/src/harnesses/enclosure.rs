@@ -10,9 +10,9 @@
 //! Δq" case) must be judged inconsistent.
 
 use crate::{Source, harness};
+use pacs_audit::enclosure::{Sample, SpanBoxes, span_boxes};
 use pacs_models::JointLimits;
 use pacs_models::robot::MAX_DOF;
-use pacs_verify::audit::enclosure::{Sample, SpanBoxes, span_boxes};
 
 /// State (q, v, a) after time `t` of constant jerk `j` from (q, v, a).
 fn advance(q: f64, v: f64, a: f64, j: f64, t: f64) -> (f64, f64, f64) {

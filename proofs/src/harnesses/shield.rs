@@ -15,7 +15,7 @@
 
 use crate::{Source, harness};
 use pacs_motion::scaling::{PathState, SpeedProfile};
-use pacs_verify::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
+use pacs_shield::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
 
 /// Steps of the symbolic sequence in `f1` (the property is inductive; see README).
 const STEPS: usize = 3;
@@ -154,7 +154,7 @@ mod real {
     use pacs_models::{ConstraintSpec, default_human, fr3};
     use pacs_motion::chunk::{ActionKind, Chunk};
     use pacs_reach::human::HumanMeasurement;
-    use pacs_verify::shield::{Shield, ShieldConfig};
+    use pacs_shield::shield::{Shield, ShieldConfig};
 
     /// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
     fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {

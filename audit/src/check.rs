@@ -9,12 +9,11 @@
 // Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use super::enclosure::{Sample, SpanBoxes, span_boxes};
-use super::verdict::{
+use crate::enclosure::{Sample, SpanBoxes, span_boxes};
+use crate::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, SeriesPoint, Verdict,
     Violation,
 };
-use crate::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
 use nalgebra::{Isometry3, Point3};
 use pacs_log::LogModels;
 use pacs_models::robot::MAX_DOF;
@@ -23,6 +22,7 @@ use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_reach::rounding::{add_up, sub_down};
+use pacs_verify::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 
@@ -106,7 +106,7 @@ impl AuditConfig {
 }
 
 /// Maximum number of robot capsules supported (bit masks).
-pub use crate::iso15066::MAX_CAPSULES;
+pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
 /// Maximum number of plot buckets per log.
@@ -138,7 +138,7 @@ struct Open {
     last_span: u64,
 }
 
-use super::verdict::InconclusiveReason as Reason;
+use crate::verdict::InconclusiveReason as Reason;
 
 struct Series {
     t0: f64,
@@ -889,7 +889,7 @@ impl Auditor {
 
     /// Evaluate the span's hits at the recorded sample `s` with the measured keypoints; updates
     /// each hit's `certain` and `separation`. Returns whether any hit is certain there. The
-    /// classification is the rule's ([`crate::iso15066`]), with "certainly touches" (exact axis
+    /// classification is the rule's ([`pacs_verify::iso15066`]), with "certainly touches" (exact axis
     /// distance ≤ sum of radii) in place of "may touch", and the nominal whole-robot kinetic
     /// energy ½q̇ᵀM(q)q̇ at the sample in place of its bound.
     fn certain_at(&mut self, s: &Sample, s0: &Sample, s1: &Sample, slot: usize) -> bool {
@@ -1092,7 +1092,7 @@ mod tests {
     #[test]
     fn reach_sphere_contains_the_robot_in_every_sampled_configuration() {
         let robot = RobotModel::builtin("fr3").unwrap();
-        let s = crate::iso15066::workspace_ball(&robot, 0.0);
+        let s = pacs_verify::iso15066::workspace_ball(&robot, 0.0);
         let mut x = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = || {
             x ^= x << 13;

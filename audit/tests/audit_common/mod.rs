@@ -3,9 +3,9 @@
 #![allow(dead_code)]
 
 use nalgebra::{Point3, Vector3};
+use pacs_audit::{AuditConfig, RunResult};
 use pacs_log::{Header, LogWriter, ModelRef, jsonl::JsonlReader};
 use pacs_models::{Capsule, HumanModel, RobotModel};
-use pacs_verify::audit::{self, AuditConfig, RunResult};
 
 /// FR3 "ready" configuration (rad).
 pub const Q_READY: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
@@ -145,7 +145,7 @@ impl Log {
 /// Audit log text with a config.
 pub fn run(text: &str, cfg: &AuditConfig) -> Result<RunResult, pacs_log::LogError> {
     let mut r = JsonlReader::new("test.jsonl", std::io::Cursor::new(text.as_bytes()))?;
-    audit::audit_reader(&mut r, cfg)
+    pacs_audit::audit_reader(&mut r, cfg)
 }
 
 pub fn ssm() -> ModelRef<pacs_models::ConstraintSpec> {

@@ -1,13 +1,13 @@
 //! Criterion bench of one shield step (FR3 + default human walking nearby, SSM and PFL), and of
-//! one CBF step. Run: `cargo bench -p pacs-verify --bench shield`.
+//! one CBF step. Run: `cargo bench -p pacs-shield --bench shield`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::Chunk;
 use pacs_reach::human::HumanMeasurement;
-use pacs_verify::bench::{back_and_forth, walking_human};
-use pacs_verify::cbf::{CbfConfig, CbfFilter};
-use pacs_verify::shield::{Shield, ShieldConfig};
+use pacs_shield::bench::{back_and_forth, walking_human};
+use pacs_shield::cbf::{CbfConfig, CbfFilter};
+use pacs_shield::shield::{Shield, ShieldConfig};
 
 /// The measurement of the walking human at step `k` (built outside the timed routine).
 fn measurement(human: &pacs_models::HumanModel, k: usize) -> HumanMeasurement {

@@ -37,7 +37,7 @@ impl Verdict {
     }
 }
 
-pub use crate::iso15066::ConstraintKind;
+pub use pacs_verify::iso15066::ConstraintKind;
 
 /// A maximal run of consecutive checked spans in which one (body part, link) pair violates its
 /// constraint.

@@ -3,7 +3,7 @@
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
-use pacs_verify::shield::{Shield, ShieldConfig};
+use pacs_shield::shield::{Shield, ShieldConfig};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 

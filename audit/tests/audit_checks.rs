@@ -5,10 +5,10 @@ mod audit_common;
 
 use audit_common::*;
 use nalgebra::{DVector, Point3, Vector3};
+use pacs_audit::{AuditConfig, ConstraintKind, Verdict};
 use pacs_log::ModelRef;
 use pacs_models::constraints::RegionSpec;
 use pacs_models::{Capsule, Constraint, ConstraintSpec, HumanModel, RobotModel};
-use pacs_verify::audit::{AuditConfig, ConstraintKind, Verdict};
 
 fn fr3() -> RobotModel {
     RobotModel::builtin("fr3").unwrap()

@@ -1,12 +1,12 @@
 //! Audit throughput (robot samples per second, one core): the SSM+PFL span checker alone and the
 //! JSON Lines reader plus checker, FR3 and the default human at 1 kHz, human at 30 Hz.
 //!
-//! Run: `CARGO_TARGET_DIR=/work/target-audit cargo bench -p pacs-verify --bench audit`.
+//! Run: `CARGO_TARGET_DIR=/work/target-audit cargo bench -p pacs-audit --bench audit`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::{Header, LogModels, LogWriter, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
-use pacs_verify::audit::{self, AuditConfig, Auditor};
 use std::hint::black_box;
 
 const N: usize = 10_000;
@@ -58,7 +58,7 @@ fn models(task: &str) -> LogModels {
     }
 }
 
-fn run_core(s: &[Sample], x: f64, task: &str) -> audit::RunResult {
+fn run_core(s: &[Sample], x: f64, task: &str) -> pacs_audit::RunResult {
     let mut a = Auditor::new(models(task), AuditConfig::default()).unwrap();
     let kp = standing(x);
     for (i, s) in s.iter().enumerate() {
@@ -113,7 +113,7 @@ fn bench(c: &mut Criterion) {
             let mut r =
                 pacs_log::jsonl::JsonlReader::new("bench", std::io::Cursor::new(&bytes[..]))
                     .unwrap();
-            black_box(audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
+            black_box(pacs_audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
         })
     });
     g.finish();

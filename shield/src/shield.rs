@@ -7,7 +7,7 @@
 //! the monitored trajectory until standstill (joint boxes from sound path bounds →
 //! [`RobotReach`] capsules) and the human over the same intervals from the latest measurement
 //! (its age, delay and errors included → [`HumanReach`]), then applies the one ISO/TS 15066 rule
-//! ([`crate::iso15066::ContactRule`], shared with the audit) to every interval: SSM (no contact
+//! ([`pacs_verify::iso15066::ContactRule`], shared with the audit) to every interval: SSM (no contact
 //! possible while the robot may move) and PFL (wherever contact is possible, a sound upper bound
 //! of the whole robot's kinetic energy over the interval's position and velocity boxes, widened
 //! by the controller's velocity tracking error, is at most the body part's threshold — the
@@ -21,7 +21,6 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::iso15066::{ConstraintKind, ContactRule};
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel};
 use pacs_motion::chunk::{Chunk, OutOfLimits};
 use pacs_motion::intended::{Method, Planner, PlannerConfig};
@@ -29,6 +28,7 @@ use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
+use pacs_verify::iso15066::{ConstraintKind, ContactRule};
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 use thiserror::Error;
@@ -100,7 +100,7 @@ impl Default for ShieldConfig {
     }
 }
 
-pub use crate::iso15066::EnvShape;
+pub use pacs_verify::iso15066::EnvShape;
 
 /// Errors of shield construction and chunk handling.
 #[derive(Debug, Error, Clone, PartialEq)]

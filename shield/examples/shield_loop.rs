@@ -2,8 +2,8 @@
 //! target/release/examples/shield_loop sorting|handover N` runs the `pacs bench shield` scenario
 //! (N steps) and prints its statistics.
 
-use pacs_verify::bench::shield_scenario;
-use pacs_verify::shield::FilterMode;
+use pacs_shield::bench::shield_scenario;
+use pacs_shield::shield::FilterMode;
 
 fn main() {
     let mut args = std::env::args().skip(1);

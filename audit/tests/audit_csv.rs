@@ -3,8 +3,8 @@
 mod audit_common;
 
 use audit_common::*;
+use pacs_audit::{AuditConfig, Verdict};
 use pacs_log::{Location, LogError, csv::CsvReader};
-use pacs_verify::audit::{self, AuditConfig, Verdict};
 use serde_json::Value;
 
 /// Convert a JSON Lines log to the CSV form (written here, independently of the reader).
@@ -53,9 +53,9 @@ fn to_csv(jsonl: &str) -> String {
     out
 }
 
-fn run_csv(text: &str) -> Result<audit::RunResult, LogError> {
+fn run_csv(text: &str) -> Result<pacs_audit::RunResult, LogError> {
     let mut r = CsvReader::new("test.csv", std::io::Cursor::new(text.as_bytes()))?;
-    audit::audit_reader(&mut r, &AuditConfig::default())
+    pacs_audit::audit_reader(&mut r, &AuditConfig::default())
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! The offline audit of logged runs against SSM and PFL: every span between logged robot samples
-//! judged by the one ISO/TS 15066 rule ([`crate::iso15066`]).
+//! judged by the one ISO/TS 15066 rule ([`pacs_verify::iso15066`]).
 //!
 //! - [`check`]: the span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
 //! - [`enclosure`]: sound joint boxes over a span and the consistency of the samples;

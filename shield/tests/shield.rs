@@ -6,7 +6,7 @@ use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_reach::human::HumanMeasurement;
-use pacs_verify::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
+use pacs_shield::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
 
 const Q0: [f64; 7] = fr3::Q_READY;
 
@@ -376,7 +376,7 @@ fn hand_resting_on_the_table_gets_the_constrained_threshold() {
 
 #[test]
 fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
-    use pacs_verify::cbf::{CbfConfig, CbfFilter};
+    use pacs_shield::cbf::{CbfConfig, CbfFilter};
     let robot = fr3::fr3();
     let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
     let run_cbf = |script: &dyn Fn(f64) -> Vec<[f64; 3]>| {

@@ -7,9 +7,9 @@ mod audit_common;
 
 use audit_common::*;
 use mcap::records::{MessageHeader, Metadata};
+use pacs_audit::{AuditConfig, RunResult, Verdict};
 use pacs_log::mcap::{McapConfig, McapLogWriter, McapReader};
 use pacs_log::{Header, Location, LogError, ModelRef, cdr};
-use pacs_verify::audit::{self, AuditConfig, RunResult, Verdict};
 use std::collections::BTreeMap;
 use std::io::Cursor;
 
@@ -220,7 +220,7 @@ fn audit_bytes(
     h: Option<Header>,
 ) -> Result<RunResult, LogError> {
     let mut r = McapReader::new(name, Cursor::new(bytes), &cfg.mcap, &cfg.overrides(), h)?;
-    audit::audit_reader(&mut r, cfg)
+    pacs_audit::audit_reader(&mut r, cfg)
 }
 
 const NS: i128 = 1_000_000_000;

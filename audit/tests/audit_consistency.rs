@@ -2,10 +2,10 @@
 //! is the whole robot's, pinches between adjacent links count, trailing human records count.
 //! Each case here passed (exit 0) before the fix.
 
+use pacs_audit::enclosure::{Sample, SpanBoxes, span_boxes};
+use pacs_audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
 use pacs_log::jsonl::JsonlReader;
 use pacs_models::{HumanModel, MAX_DOF, RobotModel};
-use pacs_verify::audit::enclosure::{Sample, SpanBoxes, span_boxes};
-use pacs_verify::audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
 
 fn run(text: &str) -> RunResult {
     let mut r = JsonlReader::new("t.jsonl", std::io::Cursor::new(text.as_bytes())).unwrap();

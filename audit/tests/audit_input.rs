@@ -3,9 +3,9 @@
 mod audit_common;
 
 use audit_common::*;
+use pacs_audit::AuditConfig;
 use pacs_log::WriteError;
 use pacs_log::{Location, LogError, LogWriter};
-use pacs_verify::audit::AuditConfig;
 
 const HEADER: &str = r#"{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm"}"#;
 const HUMAN: &str = r#"{"type":"human","t":0.0,"positions":[[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1],[2,0,1]]}"#;
@@ -40,7 +40,7 @@ fn valid_baseline_passes() {
         &AuditConfig::default(),
     )
     .unwrap();
-    assert_eq!(r.verdict, pacs_verify::audit::Verdict::Pass);
+    assert_eq!(r.verdict, pacs_audit::Verdict::Pass);
 }
 
 #[test]

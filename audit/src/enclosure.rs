@@ -33,7 +33,7 @@
 //! - then clipped to `[−v_max, v_max]`.
 //!
 //! Soundness (claim C9; harness `proofs::harnesses::audit::h2_span_enclosure_sound`, property
-//! tests in `verify/tests/enclosure.rs`): if the logged values are the true states at their
+//! tests in `audit/tests/audit_consistency.rs`): if the logged values are the true states at their
 //! times and the motion between them obeys the limits, the span is consistent and the true
 //! position and velocity at every instant of the span lie in the boxes.
 

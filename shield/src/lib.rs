@@ -1,0 +1,19 @@
+//! # pacs-shield
+//!
+//! The online filters between a chunking policy and the robot:
+//! - [`shield`]: the PACS shield (paper Algorithm 1; OFF and single-action by configuration):
+//!   every safety step a monitored trajectory (one intended step, then braking along the same
+//!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
+//! - [`cbf`]: the control-barrier-function baseline;
+//! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
+//! - [`bench`]: reproducible timing scenarios for `pacs bench`.
+//!
+//! Units: rad, rad/s, rad/s², rad/s³, s, m, J.
+
+// Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
+#![allow(clippy::needless_range_loop)]
+
+pub mod bench;
+pub mod cbf;
+pub mod shield;
+pub mod shield_log;
