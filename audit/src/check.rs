@@ -113,7 +113,7 @@ pub const BLOCK_SPANS: usize = 32;
 pub const SERIES_BUCKETS: usize = 1024;
 
 #[derive(Clone, Copy)]
-struct Hit {
+struct SpanHit {
     part: usize,
     link: usize,
     kind: ConstraintKind,
@@ -125,7 +125,7 @@ struct Hit {
 }
 
 #[derive(Clone, Copy)]
-struct Open {
+struct OpenInterval {
     v_start: f64,
     v_end: f64,
     kind: ConstraintKind,
@@ -246,7 +246,7 @@ pub struct Auditor {
     scratch: Box<ReachScratch>,
     frames: Vec<Isometry3<f64>>,
     nom_caps: Vec<Capsule>,
-    hits: Vec<Hit>,
+    hits: Vec<SpanHit>,
     // State.
     prev: Option<Sample>,
     /// Buffered samples whose spans all use the human measurement `block_human`.
@@ -256,7 +256,7 @@ pub struct Auditor {
     latest_human: Option<usize>,
     span_human: Option<usize>,
     span_index: u64,
-    open: Vec<Option<Open>>,
+    open: Vec<Option<OpenInterval>>,
     violations: Vec<Violation>,
     inconclusive: Vec<(InconclusiveSpan, Reason, u64)>,
     samples: u64,
@@ -618,7 +618,7 @@ impl Auditor {
                 if !collect {
                     return ControlFlow::Break(());
                 }
-                hits.push(Hit {
+                hits.push(SpanHit {
                     part: h.part,
                     link: h.link,
                     kind: h.kind,
@@ -862,7 +862,7 @@ impl Auditor {
                 if let Some(o) = self.open[key].take() {
                     self.close(key, o);
                 }
-                self.open[key] = Some(Open {
+                self.open[key] = Some(OpenInterval {
                     v_start: t0,
                     v_end: t1,
                     kind: h.kind,
@@ -1066,7 +1066,7 @@ impl Auditor {
         }
     }
 
-    fn close(&mut self, key: usize, o: Open) {
+    fn close(&mut self, key: usize, o: OpenInterval) {
         let part = key / self.links;
         let link = key % self.links;
         self.violations.push(Violation {

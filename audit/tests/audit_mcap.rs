@@ -761,7 +761,7 @@ fn malformed_cdr_is_an_error_not_a_panic_or_a_large_allocation() {
     let mut huge = good.clone();
     let names_len_at = 4 + 4 + 4 + 4 + 1 + 3; // header, sec, nanosec, frame_id "" (len 1 + NUL), pad
     huge[names_len_at..names_len_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
-    let mut js = cdr::JointState::default();
+    let mut js = cdr::JointStateMsg::default();
     let e = js.decode(&huge).unwrap_err();
     assert!(
         matches!(e, cdr::CdrError::Truncated { field: "name", .. }),
@@ -819,7 +819,7 @@ fn cdr_decoder_matches_hand_written_bytes() {
     b.extend_from_slice(&1.5f64.to_le_bytes()); // 32..40 (already 8-aligned)
     b.extend_from_slice(&0u32.to_le_bytes()); // 40..44 velocity count
     b.extend_from_slice(&0u32.to_le_bytes()); // 44..48 effort count
-    let mut js = cdr::JointState::default();
+    let mut js = cdr::JointStateMsg::default();
     js.decode(&b).unwrap();
     assert_eq!(js.stamp, cdr::Stamp { sec: 5, nanosec: 7 });
     assert_eq!(js.names, vec!["j".to_string()]);
@@ -839,7 +839,7 @@ fn cdr_decoder_matches_hand_written_bytes() {
         },
         b
     );
-    let mut lib = cdr::JointState::default();
+    let mut lib = cdr::JointStateMsg::default();
     lib.decode(&cdr::CdrWriter::joint_state(
         cdr::Stamp { sec: 5, nanosec: 7 },
         &["j"],
@@ -860,7 +860,7 @@ fn cdr_decoder_matches_hand_written_bytes() {
     e.seq(&[1.5]);
     e.seq(&[]);
     e.seq(&[]);
-    let mut be = cdr::JointState::default();
+    let mut be = cdr::JointStateMsg::default();
     be.decode(&e.b).unwrap();
     assert_eq!(be.stamp, js.stamp);
     assert_eq!(be.names, js.names);

@@ -227,7 +227,7 @@ fn header<'a>(r: &mut CdrReader<'a>) -> Result<(Stamp, &'a str), CdrError> {
 
 /// A decoded `sensor_msgs/msg/JointState`, in buffers reused across messages.
 #[derive(Debug, Default, Clone)]
-pub struct JointState {
+pub struct JointStateMsg {
     /// `header.stamp`.
     pub stamp: Stamp,
     /// `name` (joint names; may be empty).
@@ -240,7 +240,7 @@ pub struct JointState {
     pub effort: Vec<f64>,
 }
 
-impl JointState {
+impl JointStateMsg {
     /// Decode `data` (a CDR `JointState`) into `self`, reusing its buffers.
     pub fn decode(&mut self, data: &[u8]) -> Result<(), CdrError> {
         let mut r = CdrReader::new(data)?;

@@ -19,7 +19,7 @@ enum Kind {
 
 /// Reused parse buffers of one line.
 #[derive(Default)]
-struct Bufs {
+struct LineBuffers {
     kind: Option<Kind>,
     kind_name: String,
     t: Option<f64>,
@@ -38,7 +38,7 @@ struct Bufs {
     duplicate: Option<&'static str>,
 }
 
-impl Bufs {
+impl LineBuffers {
     fn reset(&mut self) {
         self.kind = None;
         self.kind_name.clear();
@@ -149,7 +149,7 @@ impl<'de, T: serde::Deserialize<'de>> Visitor<'de> for VecInto<'_, T> {
     }
 }
 
-struct LineSeed<'b>(&'b mut Bufs);
+struct LineSeed<'b>(&'b mut LineBuffers);
 
 impl<'de> DeserializeSeed<'de> for LineSeed<'_> {
     type Value = ();
@@ -233,7 +233,7 @@ pub struct JsonlReader<R: BufRead> {
     line: String,
     line_no: u64,
     header: Header,
-    bufs: Bufs,
+    bufs: LineBuffers,
 }
 
 impl<R: BufRead> JsonlReader<R> {
@@ -275,7 +275,7 @@ impl<R: BufRead> JsonlReader<R> {
             line,
             line_no,
             header,
-            bufs: Bufs::default(),
+            bufs: LineBuffers::default(),
         })
     }
 }

@@ -14,7 +14,7 @@
 //! put into time order within a bounded window ([`McapConfig::reorder_window`]); a message that
 //! would need a longer window is an error, never silently reordered or dropped.
 
-use crate::cdr::{self, CdrWriter, JointState, PoseArray, Stamp};
+use crate::cdr::{self, CdrWriter, JointStateMsg, PoseArray, Stamp};
 use crate::error::{Location, LogError};
 use crate::format::{Header, LogModels, ModelOverrides, Record, RecordReader};
 use mcap::records::op;
@@ -228,7 +228,7 @@ struct State {
     max_t: f64,
     last_released: f64,
     done: bool,
-    js: JointState,
+    js: JointStateMsg,
     pa: PoseArray,
     /// Cached name → model-order map of the last `JointState.name` list.
     map_names: Vec<String>,
@@ -313,7 +313,7 @@ impl<R: Read + Seek> McapReader<R> {
                 max_t: f64::NEG_INFINITY,
                 last_released: f64::NEG_INFINITY,
                 done: false,
-                js: JointState::default(),
+                js: JointStateMsg::default(),
                 pa: PoseArray::default(),
                 map_names: Vec::new(),
                 map: Vec::new(),

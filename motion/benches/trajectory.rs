@@ -6,9 +6,9 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
+use pacs_motion::anchors::{anchor_set, lower_bound};
 use pacs_motion::failsafe::{Failsafe, FailsafeKind};
-use pacs_motion::problems::{anchor_set, lower_bound};
-use pacs_motion::{JointState, Limits, Method, Monitored, OutOfLimits, Planner, PlannerConfig};
+use pacs_motion::{JointState, Limits, Monitored, OutOfLimits, PlanMethod, Planner, PlannerConfig};
 use std::hint::black_box;
 
 fn setup() -> (Limits, Limits, Vec<(JointState, pacs_motion::Waypoints)>) {
@@ -47,7 +47,7 @@ fn quality() {
             (
                 format!("segments sweeps={sw}"),
                 PlannerConfig {
-                    method: Method::Segments,
+                    method: PlanMethod::Segments,
                     sweeps: sw,
                     ..Default::default()
                 },
@@ -121,7 +121,7 @@ fn benches(c: &mut Criterion) {
     let mut segments = Planner::new(
         plan,
         PlannerConfig {
-            method: Method::Segments,
+            method: PlanMethod::Segments,
             ..Default::default()
         },
     );

@@ -1,7 +1,7 @@
 //! Plans the 200 anchor chunks `reps` times with the default planner (instruction counting under
 //! callgrind; development aid).
 use pacs_models::RobotModel;
-use pacs_motion::problems::anchor_set;
+use pacs_motion::anchors::anchor_set;
 use pacs_motion::{JointState, Limits, OutOfLimits, Planner, PlannerConfig};
 
 fn main() {

@@ -1,7 +1,7 @@
 //! Quick quality/timing probe of the planner on the anchor set (development aid).
 use pacs_models::RobotModel;
-use pacs_motion::problems::{anchor_set, lower_bound};
-use pacs_motion::{JointState, Limits, Method, OutOfLimits, Planner, PlannerConfig};
+use pacs_motion::anchors::{anchor_set, lower_bound};
+use pacs_motion::{JointState, Limits, OutOfLimits, PlanMethod, Planner, PlannerConfig};
 use std::time::Instant;
 
 fn main() {
@@ -19,9 +19,9 @@ fn main() {
         PlannerConfig {
             spline_iterations: iters,
             method: if seg {
-                Method::Segments
+                PlanMethod::Segments
             } else {
-                Method::Spline
+                PlanMethod::Spline
             },
             ..Default::default()
         },
@@ -41,7 +41,7 @@ fn main() {
     let mut fb = 0;
     for (s, wp) in &set {
         let t = pl.plan(s, wp).unwrap();
-        if pl.last_method() != Method::Spline {
+        if pl.last_method() != PlanMethod::Spline {
             fb += 1;
         }
         ls += (t.duration() / lower_bound(wp, &l.v[..7])).ln();
@@ -51,7 +51,7 @@ fn main() {
         let mut seg = Planner::new(
             l,
             PlannerConfig {
-                method: Method::Segments,
+                method: PlanMethod::Segments,
                 ..Default::default()
             },
         );
@@ -67,7 +67,7 @@ fn main() {
                 .collect();
             let wp = pacs_motion::Waypoints::from_rows(&rows).unwrap();
             let t2 = pl.plan(&s, &wp).unwrap();
-            if pl.last_method() != Method::Spline {
+            if pl.last_method() != PlanMethod::Spline {
                 fbm += 1;
             }
             let t3 = seg.plan(&s, &wp).unwrap();

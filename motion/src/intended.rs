@@ -1,5 +1,5 @@
-//! Intended trajectories from waypoints. Default ([`Method::Spline`]): a time-optimised C² cubic
-//! spline (see [`crate::spline`]). Fallback and single targets ([`Method::Segments`]): per segment
+//! Intended trajectories from waypoints. Default ([`PlanMethod::Spline`]): a time-optimised C² cubic
+//! spline (see [`crate::spline`]). Fallback and single targets ([`PlanMethod::Segments`]): per segment
 //! a time-synchronized jerk-limited state-to-state motion (rsruckig single target, Ruckig steps 1
 //! and 2), with the velocities at intermediate waypoints chosen by a few sweeps of a fixed-point
 //! heuristic. Every trajectory is checked by our own exact piecewise limit and continuity checks
@@ -15,9 +15,9 @@ use rsruckig::prelude::*;
 
 /// How the intended trajectory through several waypoints is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Method {
+pub enum PlanMethod {
     /// Time-optimised C² cubic spline (one constant-jerk piece per segment; see [`crate::spline`]),
-    /// falling back to [`Method::Segments`] if it fails the exact check or is slower than stopping
+    /// falling back to [`PlanMethod::Segments`] if it fails the exact check or is slower than stopping
     /// at every waypoint.
     #[default]
     Spline,
@@ -31,7 +31,7 @@ pub struct PlannerConfig {
     /// How the trajectory ends at q̂_h.
     pub end: EndCondition,
     /// Spline (default) or per-segment solver.
-    pub method: Method,
+    pub method: PlanMethod,
     /// Iterations of the spline duration optimiser.
     pub spline_iterations: usize,
     /// Number of waypoint-velocity refinement sweeps after the rest-to-rest start (0: single-action-like).
@@ -47,7 +47,7 @@ impl Default for PlannerConfig {
     fn default() -> Self {
         Self {
             end: EndCondition::AtRest,
-            method: Method::Spline,
+            method: PlanMethod::Spline,
             spline_iterations: 16,
             sweeps: 3,
             velocity_gain: 1.0,
@@ -71,7 +71,7 @@ pub struct Planner {
     vel: Vec<f64>,
     acc: Vec<f64>,
     spline: SplineSolver,
-    last: Method,
+    last: PlanMethod,
 }
 
 impl std::fmt::Debug for Planner {
@@ -106,7 +106,7 @@ impl Planner {
             vel: Vec::new(),
             acc: Vec::new(),
             spline: SplineSolver::default(),
-            last: Method::Segments,
+            last: PlanMethod::Segments,
         }
     }
 
@@ -134,7 +134,7 @@ impl Planner {
         let sweeps = self.config.sweeps;
         let end = self.config.end;
         // A single segment ending at rest is one time-optimal single-target solve: no spline.
-        if self.config.method == Method::Spline
+        if self.config.method == PlanMethod::Spline
             && (wp.segments() >= 2 || end == EndCondition::Moving)
         {
             self.validate(start, wp)?;
@@ -145,29 +145,29 @@ impl Planner {
                 && t.check(&self.limits).is_ok()
             {
                 if t.duration() <= self.rest_to_rest_total(wp) {
-                    self.last = Method::Spline;
+                    self.last = PlanMethod::Spline;
                     return Ok(t);
                 }
                 // Slower than stopping at every waypoint (e.g. long moves where a cubic cannot
                 // cruise at the velocity limit): take the per-segment solver if it is shorter.
                 return Ok(match self.plan_with(start, wp, sweeps, end) {
                     Ok(s) if s.duration() < t.duration() => {
-                        self.last = Method::Segments;
+                        self.last = PlanMethod::Segments;
                         s
                     }
                     _ => {
-                        self.last = Method::Spline;
+                        self.last = PlanMethod::Spline;
                         t
                     }
                 });
             }
         }
-        self.last = Method::Segments;
+        self.last = PlanMethod::Segments;
         self.plan_with(start, wp, sweeps, end)
     }
 
     /// Which method produced the trajectory of the last successful [`Planner::plan`] call.
-    pub fn last_method(&self) -> Method {
+    pub fn last_method(&self) -> PlanMethod {
         self.last
     }
 

@@ -11,19 +11,19 @@
 //! - [`failsafe`], [`monitored`]: braking of a whole trajectory and the monitored trajectory, used by
 //!   `pacs trajectory --brake-at` (to be merged into [`scaling`], see issue 13);
 //! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic;
-//! - [`problems`]: the seeded FR3 chunk problem set of the trajectory anchors.
+//! - [`anchors`]: the seeded FR3 chunk problem set of the trajectory anchors.
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, seconds.
 
 // Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
 #![allow(clippy::needless_range_loop)]
 
+pub mod anchors;
 pub mod chunk;
 pub mod error;
 pub mod failsafe;
 pub mod intended;
 pub mod monitored;
-pub mod problems;
 pub mod profile;
 pub mod scaling;
 pub mod spline;
@@ -32,7 +32,7 @@ pub mod trajectory;
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
 pub use error::{FailsafeError, TrajectoryError};
 pub use failsafe::Failsafe;
-pub use intended::{Method, Planner, PlannerConfig};
+pub use intended::{PlanMethod, Planner, PlannerConfig};
 pub use monitored::Monitored;
 pub use profile::{LIMIT_REL_TOL, Piece, Range};
 pub use trajectory::{Bounds, EndCondition, JointState, Limits, Trajectory};

@@ -4,8 +4,8 @@
 mod common;
 
 use common::*;
+use pacs_motion::anchors::anchor_set;
 use pacs_motion::failsafe::FailsafeKind;
-use pacs_motion::problems::anchor_set;
 use pacs_motion::*;
 
 fn trajectories(n: usize, seed: u64, plan: Limits) -> Vec<Trajectory> {

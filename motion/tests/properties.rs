@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use pacs_motion::problems::Rng;
+use pacs_motion::anchors::Rng;
 use pacs_motion::*;
 use proptest::prelude::*;
 
@@ -123,7 +123,7 @@ fn random_spline_case(
         plan,
         PlannerConfig {
             end: EndCondition::AtRest,
-            ..cfg(Method::Spline)
+            ..cfg(PlanMethod::Spline)
         },
     );
     let start = if rng.uniform(0.0, 1.0) < 0.3 {
@@ -162,8 +162,8 @@ fn random_spline_case(
                 .collect(),
         );
     }
-    spline.set_config(cfg(Method::Spline));
-    let segments = Planner::new(plan, cfg(Method::Segments));
+    spline.set_config(cfg(PlanMethod::Spline));
+    let segments = Planner::new(plan, cfg(PlanMethod::Segments));
     (
         plan,
         start,
@@ -207,7 +207,7 @@ proptest! {
         let after = t.state_at(t.duration());
         let h = wp.segments();
         for i in 0..7 {
-            let v_end = if moving_end && spline.last_method() == Method::Spline {
+            let v_end = if moving_end && spline.last_method() == PlanMethod::Spline {
                 (wp.row(h)[i] - wp.row(h - 1)[i]) / (t.duration() - if h > 1 { t.waypoint_times()[h - 2] } else { 0.0 })
             } else if moving_end {
                 after.dq[i]

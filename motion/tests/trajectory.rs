@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use pacs_motion::problems::{anchor_set, lower_bound};
+use pacs_motion::anchors::{anchor_set, lower_bound};
 use pacs_motion::*;
 use rsruckig::prelude::{InputParameter, Ruckig, ThrowErrorHandler};
 
@@ -89,7 +89,7 @@ fn the_checker_rejects_a_trajectory_planned_with_higher_limits() {
 #[test]
 fn bounds_enclose_dense_samples_and_are_tight() {
     let (_, t) = plan_anchor(3, 3);
-    let mut rng = problems::Rng::new(5);
+    let mut rng = anchors::Rng::new(5);
     for _ in 0..200 {
         let ta = rng.uniform(0.0, t.duration());
         let tb = ta + rng.uniform(0.0, 0.05);
@@ -179,7 +179,7 @@ fn single_target_durations_are_time_optimal() {
         );
     }
     // Several joints: rsruckig single target without waypoints.
-    let mut rng = problems::Rng::new(9);
+    let mut rng = anchors::Rng::new(9);
     for _ in 0..20 {
         let q1: Vec<f64> = q0.iter().map(|x| x + rng.uniform(-0.3, 0.3)).collect();
         let wp = Waypoints::from_rows(&[q0.to_vec(), q1.clone()]).unwrap();
@@ -411,7 +411,7 @@ fn spline_planner_on_the_anchor_set_beats_the_refined_waypoint_solver() {
             .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
             .unwrap();
         let mut t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
-        assert_eq!(pl.last_method(), Method::Spline);
+        assert_eq!(pl.last_method(), PlanMethod::Spline);
         t.check(&plan).unwrap();
         for (m, &tk) in t.waypoint_times().iter().enumerate() {
             for i in 0..7 {
@@ -435,7 +435,7 @@ fn spline_replanning_from_moving_states_is_continuous_and_shorter_on_average() {
     let mut seg = Planner::new(
         plan,
         PlannerConfig {
-            method: Method::Segments,
+            method: PlanMethod::Segments,
             ..Default::default()
         },
     );
@@ -454,7 +454,7 @@ fn spline_replanning_from_moving_states_is_continuous_and_shorter_on_average() {
                 .waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject)
                 .unwrap();
             let mut t2 = sp.plan(&s, &wp2).unwrap();
-            used += usize::from(sp.last_method() == Method::Spline);
+            used += usize::from(sp.last_method() == PlanMethod::Spline);
             t2.check(&plan).unwrap();
             let s2 = t2.state_at(0.0);
             for i in 0..7 {

@@ -25,12 +25,12 @@
 //! combination of points within r₁ of c₁ and r₂ of c₂). All radii are rounded up; centres computed
 //! in floating point have their rounding error bounded and added to the radius.
 
+pub use crate::error::ReachError;
 use crate::rounding::{INFLATE, TINY, add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
 use nalgebra::{Point3, Vector3};
 use pacs_models::human::Extremity;
 use pacs_models::{Capsule, HumanModel};
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 /// Which bounds of the human model to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -59,14 +59,6 @@ impl std::str::FromStr for HumanReachModel {
             ))),
         }
     }
-}
-
-/// Errors of reachability queries (invalid measurements or intervals).
-#[derive(Debug, Error, Clone, PartialEq)]
-pub enum ReachError {
-    /// The input is invalid; the message names the field and value.
-    #[error("{0}")]
-    Input(String),
 }
 
 /// A validated measurement of all keypoints: finite values, one entry per keypoint.

@@ -8,6 +8,7 @@
 //! - [`human`]: human reachable occupancies (SaRA-style pos/vel/acc/combined models);
 //! - [`robot`]: robot reachable occupancies for joint boxes (interval forward kinematics).
 
+pub mod error;
 pub mod geometry;
 pub mod human;
 pub mod interval;
@@ -16,4 +17,5 @@ pub mod robot;
 pub mod rounding;
 pub mod zonotope;
 
+pub use error::ReachError;
 pub use interval::Interval;

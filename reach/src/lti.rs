@@ -8,38 +8,12 @@
 //! `E = 0` and the series is exact. Interval matrices act on zonotopes as `mid(M) Z ⊕ box(rad(M)|Z|)`.
 //! See `docs/zonotopes.md` for the derivation.
 
+pub use crate::error::ReachError;
 use crate::rounding::{add_down, add_up, div_up, mul_up, sub_down, sub_up};
 use crate::zonotope::{BallApprox, Zonotope, Zonotope3, ZonotopeError, ball_zonotope};
 use inari::Interval;
 use nalgebra::{DMatrix, DVector};
 use pacs_models::shape::Capsule;
-use thiserror::Error;
-
-/// Errors of LTI reachability and of the object model.
-#[derive(Debug, Clone, PartialEq, Error)]
-pub enum ReachError {
-    /// A zonotope operation failed.
-    #[error(transparent)]
-    Zonotope(#[from] ZonotopeError),
-    /// `‖|A| r‖∞ / (η + 2) ≥ 1`: the remainder bound does not converge; use a smaller step or more terms.
-    #[error("time step {step} s too large for {terms} Taylor terms (‖|A|r‖∞ = {norm})")]
-    StepTooLarge {
-        /// Step (s).
-        step: f64,
-        /// Taylor terms η.
-        terms: usize,
-        /// Upper bound of `‖|A| r‖∞`.
-        norm: f64,
-    },
-    /// An argument is outside its valid range.
-    #[error("invalid {what}: {reason}")]
-    Invalid {
-        /// Which argument.
-        what: &'static str,
-        /// Why.
-        reason: &'static str,
-    },
-}
 
 #[inline]
 fn pt(x: f64) -> Interval {

@@ -74,7 +74,7 @@ const LANE_MASK: [[f64; LANES]; LANES + 1] = [
 /// correctly rounded either way, so the error analysis does not depend on the backend.
 #[derive(Clone, Copy)]
 #[repr(transparent)]
-struct Col(simd::V);
+struct Lanes3(simd::V);
 
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 mod simd {
@@ -178,10 +178,10 @@ mod simd {
     }
 }
 
-impl Col {
+impl Lanes3 {
     #[inline(always)]
-    fn splat(x: f64) -> Col {
-        Col(simd::splat(x))
+    fn splat(x: f64) -> Lanes3 {
+        Lanes3(simd::splat(x))
     }
     #[inline(always)]
     fn arr(self) -> [f64; 4] {
@@ -189,77 +189,77 @@ impl Col {
     }
 }
 
-impl Default for Col {
+impl Default for Lanes3 {
     fn default() -> Self {
-        Col(simd::splat(0.0))
+        Lanes3(simd::splat(0.0))
     }
 }
 
-impl std::fmt::Debug for Col {
+impl std::fmt::Debug for Lanes3 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         self.arr().fmt(f)
     }
 }
 
 #[inline(always)]
-fn cadd(a: Col, b: Col) -> Col {
-    Col(simd::add(a.0, b.0))
+fn cadd(a: Lanes3, b: Lanes3) -> Lanes3 {
+    Lanes3(simd::add(a.0, b.0))
 }
 #[inline(always)]
-fn csub(a: Col, b: Col) -> Col {
-    Col(simd::sub(a.0, b.0))
+fn csub(a: Lanes3, b: Lanes3) -> Lanes3 {
+    Lanes3(simd::sub(a.0, b.0))
 }
 #[inline(always)]
-fn cmul(a: Col, b: Col) -> Col {
-    Col(simd::mul(a.0, b.0))
+fn cmul(a: Lanes3, b: Lanes3) -> Lanes3 {
+    Lanes3(simd::mul(a.0, b.0))
 }
 #[inline(always)]
-fn csqrt(a: Col) -> Col {
-    Col(simd::sqrt(a.0))
+fn csqrt(a: Lanes3) -> Lanes3 {
+    Lanes3(simd::sqrt(a.0))
 }
 #[inline(always)]
-fn cscale(a: Col, s: f64) -> Col {
-    Col(simd::mul(a.0, simd::splat(s)))
+fn cscale(a: Lanes3, s: f64) -> Lanes3 {
+    Lanes3(simd::mul(a.0, simd::splat(s)))
 }
 #[inline(always)]
-fn cabs(a: Col) -> Col {
-    Col(simd::abs(a.0))
+fn cabs(a: Lanes3) -> Lanes3 {
+    Lanes3(simd::abs(a.0))
 }
 #[inline(always)]
-fn cinflate(a: Col) -> Col {
-    Col(simd::fma(a.0, simd::splat(RAD_UP), simd::splat(TINY)))
+fn cinflate(a: Lanes3) -> Lanes3 {
+    Lanes3(simd::fma(a.0, simd::splat(RAD_UP), simd::splat(TINY)))
 }
 /// a·s + c (one rounding with FMA, two without).
 #[inline(always)]
-fn cfma(a: Col, s: f64, c: Col) -> Col {
-    Col(simd::fma(a.0, simd::splat(s), c.0))
+fn cfma(a: Lanes3, s: f64, c: Lanes3) -> Lanes3 {
+    Lanes3(simd::fma(a.0, simd::splat(s), c.0))
 }
 #[inline(always)]
-fn col(v: &Vector3<f64>) -> Col {
+fn col(v: &Vector3<f64>) -> Lanes3 {
     // Construction-time only; through memory (keeps the generated code within what valgrind
     // decodes).
-    Col(simd::new(std::hint::black_box([v.x, v.y, v.z, 0.0])))
+    Lanes3(simd::new(std::hint::black_box([v.x, v.y, v.z, 0.0])))
 }
 /// Upper bound of the Euclidean norm of a non-negative radius vector (lanes 0..3).
 #[inline(always)]
-fn norm_up(r: Col) -> f64 {
+fn norm_up(r: Lanes3) -> f64 {
     let r = r.arr();
     (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() * RAD_UP + NORM_PAD
 }
 
 /// A 3×3 matrix as three columns.
 #[derive(Debug, Clone, Copy, Default)]
-struct M3([Col; 3]);
+struct Mat3Lanes([Lanes3; 3]);
 
-impl M3 {
+impl Mat3Lanes {
     #[inline(always)]
     fn from_matrix(m: &Matrix3<f64>) -> Self {
         let c = |j: usize| col(&m.column(j).into_owned());
-        M3([c(0), c(1), c(2)])
+        Mat3Lanes([c(0), c(1), c(2)])
     }
     /// M·v (v in lanes 0..3).
     #[inline(always)]
-    fn mv(&self, v: Col) -> Col {
+    fn mv(&self, v: Lanes3) -> Lanes3 {
         let v = v.arr();
         // Fused or not, each entry is a dot product of length 3 with at most 3 roundings.
         cfma(
@@ -269,32 +269,32 @@ impl M3 {
         )
     }
     #[inline(always)]
-    fn mm(&self, b: &M3) -> M3 {
-        M3([self.mv(b.0[0]), self.mv(b.0[1]), self.mv(b.0[2])])
+    fn mm(&self, b: &Mat3Lanes) -> Mat3Lanes {
+        Mat3Lanes([self.mv(b.0[0]), self.mv(b.0[1]), self.mv(b.0[2])])
     }
     #[inline(always)]
-    fn abs(&self) -> M3 {
-        M3([cabs(self.0[0]), cabs(self.0[1]), cabs(self.0[2])])
+    fn abs(&self) -> Mat3Lanes {
+        Mat3Lanes([cabs(self.0[0]), cabs(self.0[1]), cabs(self.0[2])])
     }
     #[inline(always)]
-    fn add(&self, b: &M3) -> M3 {
-        M3([
+    fn add(&self, b: &Mat3Lanes) -> Mat3Lanes {
+        Mat3Lanes([
             cadd(self.0[0], b.0[0]),
             cadd(self.0[1], b.0[1]),
             cadd(self.0[2], b.0[2]),
         ])
     }
     #[inline(always)]
-    fn scale(&self, s: f64) -> M3 {
-        M3([
+    fn scale(&self, s: f64) -> Mat3Lanes {
+        Mat3Lanes([
             cscale(self.0[0], s),
             cscale(self.0[1], s),
             cscale(self.0[2], s),
         ])
     }
     #[inline(always)]
-    fn inflate(&self) -> M3 {
-        M3([
+    fn inflate(&self) -> Mat3Lanes {
+        Mat3Lanes([
             cinflate(self.0[0]),
             cinflate(self.0[1]),
             cinflate(self.0[2]),
@@ -305,46 +305,46 @@ impl M3 {
 /// Enclosure of a frame rotation: every exact rotation at the box centre lies within `e` of `m`
 /// (elementwise), every exact rotation over the box within `w` of `m`.
 #[derive(Debug, Clone, Copy, Default)]
-struct MatEnc {
-    m: M3,
-    e: M3,
-    w: M3,
+struct RotationEnclosure {
+    m: Mat3Lanes,
+    e: Mat3Lanes,
+    w: Mat3Lanes,
 }
 
-/// Enclosure of a vector (frame origin or point), as [`MatEnc`].
+/// Enclosure of a vector (frame origin or point), as [`RotationEnclosure`].
 #[derive(Debug, Clone, Copy, Default)]
 struct VecEnc {
-    m: Col,
-    e: Col,
-    w: Col,
+    m: Lanes3,
+    e: Lanes3,
+    w: Lanes3,
 }
 
-impl MatEnc {
+impl RotationEnclosure {
     /// An exactly known matrix.
     fn exact(m: &Matrix3<f64>) -> Self {
-        let m = M3::from_matrix(m);
-        MatEnc {
+        let m = Mat3Lanes::from_matrix(m);
+        RotationEnclosure {
             m,
-            e: M3::default(),
-            w: M3::default(),
+            e: Mat3Lanes::default(),
+            w: Mat3Lanes::default(),
         }
     }
 
     /// A·B: mid = fl(Aₘ·Bₘ); each radius R ≥ |Aₘ|·B_R + A_R·(|Bₘ| + B_R) + γ·|Aₘ|·|Bₘ| (the
     /// last term bounds the rounding error of the midpoint product).
     #[inline(always)]
-    fn mul(&self, b: &MatEnc) -> MatEnc {
+    fn mul(&self, b: &RotationEnclosure) -> RotationEnclosure {
         let (aa, ba) = (self.m.abs(), b.m.abs());
         let m = self.m.mm(&b.m);
         let g = aa.mm(&ba).scale(GAMMA);
         let e = aa.mm(&b.e).add(&self.e.mm(&ba.add(&b.e))).add(&g).inflate();
         let w = aa.mm(&b.w).add(&self.w.mm(&ba.add(&b.w))).add(&g).inflate();
-        MatEnc { m, e, w }
+        RotationEnclosure { m, e, w }
     }
 
     /// A·v + t for an exact vector v.
     #[inline(always)]
-    fn affine(&self, t: &VecEnc, v: Col) -> VecEnc {
+    fn affine(&self, t: &VecEnc, v: Lanes3) -> VecEnc {
         let va = cabs(v);
         let m = cadd(self.m.mv(v), t.m);
         let g = cscale(cadd(self.m.abs().mv(va), cabs(t.m)), GAMMA);
@@ -384,9 +384,9 @@ mod energy_iv {
     pub const HUGE: f64 = 1e100;
 
     /// An interval [lo, hi] with endpoints rounded to nearest.
-    pub type Iv = (f64, f64);
+    pub type NearestIv = (f64, f64);
     /// An interval 3-vector.
-    pub type V3 = [Iv; 3];
+    pub type NearestIv3 = [NearestIv; 3];
 
     // Plain comparisons (one instruction each): no NaN can arise here, since every input is
     // finite and bounded (frames of finite joint values, velocities within `HUGE`).
@@ -399,19 +399,25 @@ mod energy_iv {
         if a > b { a } else { b }
     }
     #[inline(always)]
-    fn mul(a: Iv, b: Iv) -> Iv {
+    fn mul(a: NearestIv, b: NearestIv) -> NearestIv {
         let (p, q, r, s) = (a.0 * b.0, a.0 * b.1, a.1 * b.0, a.1 * b.1);
         (min(min(p, q), min(r, s)), max(max(p, q), max(r, s)))
     }
     #[inline(always)]
-    fn mag(a: Iv) -> f64 {
+    fn mag(a: NearestIv) -> f64 {
         max(a.0.abs(), a.1.abs())
     }
 
     /// Upper bounds of sup‖v_c‖² and sup‖ω‖² for v_c = Σ_{j<k} (z_j × (c − o_j))·q̇_j and
     /// ω = Σ_{j<k} z_j·q̇_j.
     #[inline(always)]
-    pub fn velocity_bounds(z: &[V3], o: &[V3], dq: &[Iv], c: &V3, k: usize) -> (f64, f64) {
+    pub fn velocity_bounds(
+        z: &[NearestIv3],
+        o: &[NearestIv3],
+        dq: &[NearestIv],
+        c: &NearestIv3,
+        k: usize,
+    ) -> (f64, f64) {
         let mut v = [(0.0, 0.0); 3];
         let mut w = [(0.0, 0.0); 3];
         let (mut vg, mut wg) = ([0.0; 3], [0.0; 3]);
@@ -438,7 +444,7 @@ mod energy_iv {
                 wg[i] += mag(zj[i]) * dmag;
             }
         }
-        let sq = |x: &V3, g: &[f64; 3]| {
+        let sq = |x: &NearestIv3, g: &[f64; 3]| {
             let mut acc = 0.0;
             for i in 0..3 {
                 let b = mag(x[i]) + GAMMA_E * g[i] + TINY_V;
@@ -469,26 +475,26 @@ fn centre_trig(qc: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
 #[derive(Debug, Clone)]
 struct JointData {
     /// Origin rotation (f64 matrix, taken as exact).
-    r0: MatEnc,
+    r0: RotationEnclosure,
     /// Origin translation (exact).
-    t0: Col,
+    t0: Lanes3,
     /// Cross-product matrix K of the unit axis and K² (Rodrigues: R = I + sK + (1−c)K²).
-    k: M3,
-    k2: M3,
+    k: Mat3Lanes,
+    k2: Mat3Lanes,
     /// Axis is +z (fast path).
     z_axis: bool,
     /// Unit axis in the joint frame (exact f64 values).
-    axis: Col,
+    axis: Lanes3,
     /// Columns of `r0` and their absolute values (z-axis fast path).
-    r0c: [Col; 3],
-    r0a: [Col; 2],
+    r0c: [Lanes3; 3],
+    r0a: [Lanes3; 2],
 }
 
 #[derive(Debug, Clone)]
 struct InertialData {
     frame: usize,
     mass: f64,
-    com: Col,
+    com: Lanes3,
     /// Upper bound of the largest principal moment (Gershgorin, rounded up), kg·m².
     lambda_max: f64,
 }
@@ -496,8 +502,8 @@ struct InertialData {
 #[derive(Debug, Clone)]
 struct CapsuleData {
     frame: usize,
-    p1: Col,
-    p2: Col,
+    p1: Lanes3,
+    p2: Lanes3,
     radius: f64,
 }
 
@@ -507,9 +513,9 @@ pub struct RobotReach {
     /// Unique per construction (clones share it: they hold the same model), keys frame reuse.
     id: u64,
     dof: usize,
-    base_r: MatEnc,
-    base_t: Col,
-    identity: M3,
+    base_r: RotationEnclosure,
+    base_t: Lanes3,
+    identity: Mat3Lanes,
     joints: Vec<JointData>,
     capsules: Vec<CapsuleData>,
     /// For each link: range of its capsules in `capsules`.
@@ -522,20 +528,20 @@ pub struct RobotReach {
 /// in joint-major arrays for the vectorised mean-value sum.
 #[derive(Clone, Copy)]
 struct Frames {
-    r: [MatEnc; MAX_DOF + 1],
+    r: [RotationEnclosure; MAX_DOF + 1],
     t: [VecEnc; MAX_DOF + 1],
     /// Midpoint and box radius of the origin of joint j (= frame j + 1), per coordinate.
-    om: [[Col; JCH]; 3],
-    ow: [[Col; JCH]; 3],
+    om: [[Lanes3; JCH]; 3],
+    ow: [[Lanes3; JCH]; 3],
 }
 
 impl Default for Frames {
     fn default() -> Self {
         Frames {
-            r: [MatEnc::default(); MAX_DOF + 1],
+            r: [RotationEnclosure::default(); MAX_DOF + 1],
             t: [VecEnc::default(); MAX_DOF + 1],
-            om: [[Col::default(); JCH]; 3],
-            ow: [[Col::default(); JCH]; 3],
+            om: [[Lanes3::default(); JCH]; 3],
+            ow: [[Lanes3::default(); JCH]; 3],
         }
     }
 }
@@ -553,7 +559,7 @@ pub struct ReachScratch {
     /// Whether `b` is in use (some half-width above [`WIDE_DELTA`]).
     wide: bool,
     /// Half-width δ_j of joint j's range around the centre (0 beyond the dof).
-    delta: [Col; JCH],
+    delta: [Lanes3; JCH],
     /// The box the frames belong to (valid when `n > 0`).
     lo: [f64; MAX_DOF],
     hi: [f64; MAX_DOF],
@@ -574,7 +580,7 @@ impl Default for ReachScratch {
             a: Frames::default(),
             b: Frames::default(),
             wide: false,
-            delta: [Col::default(); JCH],
+            delta: [Lanes3::default(); JCH],
             lo: [0.0; MAX_DOF],
             hi: [0.0; MAX_DOF],
             n: 0,
@@ -594,12 +600,9 @@ impl RobotReach {
     }
 
     /// Like [`Self::new`] but rejects a negative or non-finite tracking error.
-    pub fn try_new(
-        model: &RobotModel,
-        tracking_error: f64,
-    ) -> Result<Self, crate::human::ReachError> {
+    pub fn try_new(model: &RobotModel, tracking_error: f64) -> Result<Self, crate::ReachError> {
         if !(tracking_error.is_finite() && tracking_error >= 0.0) {
-            return Err(crate::human::ReachError::Input(format!(
+            return Err(crate::ReachError::Input(format!(
                 "tracking_error: value {tracking_error} must be finite and >= 0"
             )));
         }
@@ -614,10 +617,10 @@ impl RobotReach {
                 let r0 = iso_r(&j.origin);
                 let c = |i: usize| col(&r0.column(i).into_owned());
                 JointData {
-                    r0: MatEnc::exact(&r0),
+                    r0: RotationEnclosure::exact(&r0),
                     t0: col(&iso_t(&j.origin)),
-                    k: M3::from_matrix(&k),
-                    k2: M3::from_matrix(&(k * k)),
+                    k: Mat3Lanes::from_matrix(&k),
+                    k2: Mat3Lanes::from_matrix(&(k * k)),
                     z_axis: a.x == 0.0 && a.y == 0.0 && a.z == 1.0,
                     axis: col(&a),
                     r0c: [c(0), c(1), c(2)],
@@ -667,9 +670,9 @@ impl RobotReach {
         Ok(Self {
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             dof: model.dof(),
-            base_r: MatEnc::exact(&iso_r(model.base())),
+            base_r: RotationEnclosure::exact(&iso_r(model.base())),
             base_t: col(&iso_t(model.base())),
-            identity: M3::from_matrix(&Matrix3::identity()),
+            identity: Mat3Lanes::from_matrix(&Matrix3::identity()),
             joints,
             capsules,
             link_ranges,
@@ -718,7 +721,7 @@ impl RobotReach {
             delta[j] = sub_up(hi[j], qc[j]).max(sub_up(qc[j], lo[j]));
         }
         for ch in 0..JCH {
-            scratch.delta[ch] = Col(simd::new(
+            scratch.delta[ch] = Lanes3(simd::new(
                 delta[ch * LANES..(ch + 1) * LANES]
                     .try_into()
                     .expect("chunk"),
@@ -761,18 +764,18 @@ impl RobotReach {
                 let g0 = cscale(cadd(cscale(aa, cm.abs()), cscale(ba, sm.abs())), GAMMA);
                 let g1 = cscale(cadd(cscale(ba, cm.abs()), cscale(aa, sm.abs())), GAMMA);
                 let ab = cscale(cadd(aa, ba), e);
-                let m = M3([c0, c1, z]);
-                MatEnc {
+                let m = Mat3Lanes([c0, c1, z]);
+                RotationEnclosure {
                     m,
-                    e: M3([
+                    e: Mat3Lanes([
                         cinflate(cadd(ab, g0)),
                         cinflate(cadd(ab, g1)),
-                        Col::default(),
+                        Lanes3::default(),
                     ]),
-                    w: M3([
+                    w: Mat3Lanes([
                         cinflate(cadd(cadd(cscale(aa, wc), cscale(ba, ws)), g0)),
                         cinflate(cadd(cadd(cscale(ba, wc), cscale(aa, ws)), g1)),
-                        Col::default(),
+                        Lanes3::default(),
                     ]),
                 }
             } else {
@@ -786,7 +789,7 @@ impl RobotReach {
                     .add(&k2a.scale(omc.abs()))
                     .add(&id)
                     .scale(GAMMA);
-                let rot = MatEnc {
+                let rot = RotationEnclosure {
                     m,
                     e: ka.scale(e).add(&k2a.scale(e)).add(&g).inflate(),
                     w: ka.scale(ws).add(&k2a.scale(wc)).add(&g).inflate(),
@@ -805,8 +808,8 @@ impl RobotReach {
         for i in 0..3 {
             for ch in 0..JCH {
                 let r = ch * LANES..(ch + 1) * LANES;
-                f.om[i][ch] = Col(simd::new(om[i][r.clone()].try_into().expect("chunk")));
-                f.ow[i][ch] = Col(simd::new(ow[i][r].try_into().expect("chunk")));
+                f.om[i][ch] = Lanes3(simd::new(om[i][r.clone()].try_into().expect("chunk")));
+                f.ow[i][ch] = Lanes3(simd::new(ow[i][r].try_into().expect("chunk")));
             }
         }
     }
@@ -816,28 +819,28 @@ impl RobotReach {
     /// round-to-nearest (module docs). Both points are processed together (independent
     /// dependency chains interleave).
     #[inline(always)]
-    fn mean_value_sums(f: &Frames, delta: &[Col; JCH], p: [&VecEnc; 2], k: usize) -> [f64; 2] {
+    fn mean_value_sums(f: &Frames, delta: &[Lanes3; JCH], p: [&VecEnc; 2], k: usize) -> [f64; 2] {
         let (pm0, pw0, pm1, pw1) = (p[0].m.arr(), p[0].w.arr(), p[1].m.arr(), p[1].w.arr());
-        let mut acc0 = Col::default();
-        let mut acc1 = Col::default();
+        let mut acc0 = Lanes3::default();
+        let mut acc1 = Lanes3::default();
         for ch in 0..k.div_ceil(LANES) {
-            let mut d20 = Col::default();
-            let mut d21 = Col::default();
+            let mut d20 = Lanes3::default();
+            let mut d21 = Lanes3::default();
             for i in 0..3 {
                 let (om, ow) = (f.om[i][ch], f.ow[i][ch]);
                 let d0 = cadd(
-                    cadd(cabs(csub(Col::splat(pm0[i]), om)), Col::splat(pw0[i])),
+                    cadd(cabs(csub(Lanes3::splat(pm0[i]), om)), Lanes3::splat(pw0[i])),
                     ow,
                 );
                 let d1 = cadd(
-                    cadd(cabs(csub(Col::splat(pm1[i]), om)), Col::splat(pw1[i])),
+                    cadd(cabs(csub(Lanes3::splat(pm1[i]), om)), Lanes3::splat(pw1[i])),
                     ow,
                 );
                 d20 = cadd(d20, cmul(d0, d0));
                 d21 = cadd(d21, cmul(d1, d1));
             }
             // Lanes of joints ≥ k are multiplied by 0 (a NaN there only ever discards this form).
-            let mask = Col(simd::new(LANE_MASK[(k - ch * LANES).min(LANES)]));
+            let mask = Lanes3(simd::new(LANE_MASK[(k - ch * LANES).min(LANES)]));
             let dl = cmul(delta[ch], mask);
             acc0 = cadd(acc0, cmul(csqrt(d20), dl));
             acc1 = cadd(acc1, cmul(csqrt(d21), dl));
@@ -860,7 +863,7 @@ impl RobotReach {
         q_lo: &[f64],
         q_hi: &[f64],
         out: &mut [Capsule],
-    ) -> Result<(), crate::human::ReachError> {
+    ) -> Result<(), crate::ReachError> {
         self.occupancy_with(&mut ReachScratch::default(), q_lo, q_hi, out)
     }
 
@@ -872,8 +875,8 @@ impl RobotReach {
         q_lo: &[f64],
         q_hi: &[f64],
         out: &mut [Capsule],
-    ) -> Result<(), crate::human::ReachError> {
-        use crate::human::ReachError;
+    ) -> Result<(), crate::ReachError> {
+        use crate::ReachError;
         let n = self.dof;
         if q_lo.len() != n || q_hi.len() != n {
             return Err(ReachError::Input(format!(
@@ -974,7 +977,7 @@ impl RobotReach {
         dq_lo: &[f64],
         dq_hi: &[f64],
         out: &mut [f64],
-    ) -> Result<(), crate::human::ReachError> {
+    ) -> Result<(), crate::ReachError> {
         self.subchain_energy_bounds_with(
             &mut ReachScratch::default(),
             q_lo,
@@ -995,8 +998,8 @@ impl RobotReach {
         dq_lo: &[f64],
         dq_hi: &[f64],
         out: &mut [f64],
-    ) -> Result<(), crate::human::ReachError> {
-        use crate::human::ReachError;
+    ) -> Result<(), crate::ReachError> {
+        use crate::ReachError;
         let n = self.dof;
         self.check_box(q_lo, q_hi)?;
         self.check_box(dq_lo, dq_hi)
@@ -1011,20 +1014,20 @@ impl RobotReach {
         self.frames(q_lo, q_hi, scratch, true);
         let boxf = if scratch.wide { &scratch.b } else { &scratch.a };
         // Interval evaluation in round-to-nearest, widened once (module docs of `energy_iv`).
-        use energy_iv::{HUGE, INFLATE, Iv, TINY_E, V3, velocity_bounds};
+        use energy_iv::{HUGE, INFLATE, NearestIv, NearestIv3, TINY_E, velocity_bounds};
         if (0..n).any(|j| !(dq_lo[j].abs() <= HUGE && dq_hi[j].abs() <= HUGE)) {
             out.fill(f64::INFINITY);
             out[0] = 0.0;
             return Ok(());
         }
         let zero = VecEnc::default();
-        let iv = |v: &VecEnc| -> V3 {
+        let iv = |v: &VecEnc| -> NearestIv3 {
             let (m, w) = (v.m.arr(), v.w.arr());
             [0, 1, 2].map(|i| (m[i] - w[i], m[i] + w[i]))
         };
         let mut z = [[(0.0, 0.0); 3]; MAX_DOF];
         let mut o = [[(0.0, 0.0); 3]; MAX_DOF];
-        let mut dq: [Iv; MAX_DOF] = [(0.0, 0.0); MAX_DOF];
+        let mut dq: [NearestIv; MAX_DOF] = [(0.0, 0.0); MAX_DOF];
         for j in 0..n {
             z[j] = iv(&boxf.r[j + 1].affine(&zero, self.joints[j].axis));
             o[j] = iv(&boxf.t[j + 1]);
@@ -1053,14 +1056,14 @@ impl RobotReach {
         q_hi: &[f64],
         dq_lo: &[f64],
         dq_hi: &[f64],
-    ) -> Result<f64, crate::human::ReachError> {
+    ) -> Result<f64, crate::ReachError> {
         let mut out = [0.0; MAX_DOF + 1];
         self.subchain_energy_bounds_into(q_lo, q_hi, dq_lo, dq_hi, &mut out[..=self.dof])?;
         Ok(out[self.dof])
     }
 
-    fn check_box(&self, lo: &[f64], hi: &[f64]) -> Result<(), crate::human::ReachError> {
-        use crate::human::ReachError;
+    fn check_box(&self, lo: &[f64], hi: &[f64]) -> Result<(), crate::ReachError> {
+        use crate::ReachError;
         let n = self.dof;
         if lo.len() != n || hi.len() != n {
             return Err(ReachError::Input(format!(
@@ -1081,11 +1084,7 @@ impl RobotReach {
     }
 
     /// Allocating convenience form of [`Self::occupancy_into`].
-    pub fn occupancy(
-        &self,
-        q_lo: &[f64],
-        q_hi: &[f64],
-    ) -> Result<Vec<Capsule>, crate::human::ReachError> {
+    pub fn occupancy(&self, q_lo: &[f64], q_hi: &[f64]) -> Result<Vec<Capsule>, crate::ReachError> {
         let mut out = vec![
             Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
             self.capsules.len()

@@ -23,7 +23,7 @@
 
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, MAX_DOF, RobotModel};
 use pacs_motion::chunk::{Chunk, OutOfLimits};
-use pacs_motion::intended::{Method, Planner, PlannerConfig};
+use pacs_motion::intended::{PlanMethod, Planner, PlannerConfig};
 use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
@@ -408,7 +408,7 @@ impl Shield {
                 // The per-segment planner: the spline's time-optimal trajectories use the
                 // acceleration limit from the first piece on, which leaves the shield's ramp-up
                 // from rest along a fresh path fewer verifiable steps (tests/shield.rs).
-                method: Method::Segments,
+                method: PlanMethod::Segments,
                 ..PlannerConfig::default()
             },
         );

@@ -132,7 +132,7 @@ pub fn run_human(path: Option<&Path>) -> Result<Value, CliError> {
     let kind: HumanReachModel = input
         .model
         .parse()
-        .map_err(|e: pacs_reach::human::ReachError| CliError::Input(format!("model: {e}")))?;
+        .map_err(|e: pacs_reach::ReachError| CliError::Input(format!("model: {e}")))?;
     let m = HumanMeasurement::new(
         &human,
         input.measurement.time,

@@ -1,0 +1,34 @@
+//! The one error type of `pacs-reach`.
+
+use crate::zonotope::ZonotopeError;
+use thiserror::Error;
+
+/// Errors of reachability computations: invalid inputs (measurements, intervals, joint boxes,
+/// models), bounds that overflow, and the LTI/zonotope method's own limits.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ReachError {
+    /// The input is invalid or a bound overflows; the message names the field and value.
+    #[error("{0}")]
+    Input(String),
+    /// A zonotope operation failed.
+    #[error(transparent)]
+    Zonotope(#[from] ZonotopeError),
+    /// `‖|A| r‖∞ / (η + 2) ≥ 1`: the remainder bound does not converge; use a smaller step or more terms.
+    #[error("time step {step} s too large for {terms} Taylor terms (‖|A|r‖∞ = {norm})")]
+    StepTooLarge {
+        /// Step (s).
+        step: f64,
+        /// Taylor terms η.
+        terms: usize,
+        /// Upper bound of `‖|A| r‖∞`.
+        norm: f64,
+    },
+    /// An argument is outside its valid range.
+    #[error("invalid {what}: {reason}")]
+    Invalid {
+        /// Which argument.
+        what: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+}
