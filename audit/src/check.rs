@@ -11,8 +11,7 @@
 
 use crate::enclosure::{Sample, SpanBoxes, span_boxes};
 use crate::verdict::{
-    ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, SeriesPoint, Verdict,
-    Violation,
+    ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, Verdict, Violation,
 };
 use nalgebra::{Isometry3, Point3};
 use pacs_log::LogModels;
@@ -109,8 +108,7 @@ impl AuditConfig {
 pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
-/// Maximum number of plot buckets per log.
-pub const SERIES_BUCKETS: usize = 1024;
+pub use crate::series::SERIES_BUCKETS;
 
 #[derive(Clone, Copy)]
 struct SpanHit {
@@ -138,89 +136,8 @@ struct OpenInterval {
     last_span: u64,
 }
 
+use crate::series::{Series, max_opt, min_opt};
 use crate::verdict::InconclusiveReason as Reason;
-
-struct Series {
-    t0: f64,
-    width: f64,
-    buckets: Vec<SeriesPoint>,
-}
-
-fn empty_point(t: f64, t_end: f64) -> SeriesPoint {
-    SeriesPoint {
-        t,
-        t_end,
-        min_separation: None,
-        energy_nominal: None,
-        energy_bound: None,
-        threshold: None,
-        violation: false,
-        inconclusive: false,
-    }
-}
-
-fn min_opt(a: Option<f64>, b: Option<f64>) -> Option<f64> {
-    match (a, b) {
-        (Some(x), Some(y)) => Some(x.min(y)),
-        (x, None) => x,
-        (None, y) => y,
-    }
-}
-fn max_opt(a: Option<f64>, b: Option<f64>) -> Option<f64> {
-    match (a, b) {
-        (Some(x), Some(y)) => Some(x.max(y)),
-        (x, None) => x,
-        (None, y) => y,
-    }
-}
-
-impl Series {
-    /// The bucket for time `t`, merging pairs (doubling the width) when full. Returns the index
-    /// and whether the bucket is new.
-    fn bucket(&mut self, t: f64) -> (usize, bool) {
-        loop {
-            let idx = ((t - self.t0) / self.width).floor().max(0.0) as usize;
-            if idx < SERIES_BUCKETS {
-                let mut new = false;
-                while self.buckets.len() <= idx {
-                    let k = self.buckets.len() as f64;
-                    self.buckets.push(empty_point(
-                        self.t0 + k * self.width,
-                        self.t0 + (k + 1.0) * self.width,
-                    ));
-                    new = true;
-                }
-                return (idx, new);
-            }
-            // Merge pairs.
-            let n = self.buckets.len();
-            for i in 0..n.div_ceil(2) {
-                let a = self.buckets[2 * i];
-                let merged = if 2 * i + 1 < n {
-                    let b = self.buckets[2 * i + 1];
-                    SeriesPoint {
-                        t: a.t,
-                        t_end: b.t_end,
-                        min_separation: min_opt(a.min_separation, b.min_separation),
-                        energy_nominal: a.energy_nominal.or(b.energy_nominal),
-                        energy_bound: max_opt(a.energy_bound, b.energy_bound),
-                        threshold: min_opt(a.threshold, b.threshold),
-                        violation: a.violation || b.violation,
-                        inconclusive: a.inconclusive || b.inconclusive,
-                    }
-                } else {
-                    SeriesPoint {
-                        t_end: a.t + 2.0 * self.width,
-                        ..a
-                    }
-                };
-                self.buckets[i] = merged;
-            }
-            self.buckets.truncate(n.div_ceil(2));
-            self.width *= 2.0;
-        }
-    }
-}
 
 /// Streaming auditor of one log: feed records in time order, then [`Auditor::finish`].
 /// After warm-up, robot samples allocate nothing.

@@ -3,13 +3,15 @@
 //!
 //! - [`check`]: the span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
 //! - [`enclosure`]: sound joint boxes over a span and the consistency of the samples;
-//! - [`verdict`]: verdicts, violation intervals, metrics.
+//! - [`verdict`]: verdicts, violation intervals, metrics;
+//! - [`series`]: the bounded plot series.
 //!
 //! The log format and its readers live in `pacs-log`. Entry points: [`audit_file`] and
 //! [`audit_reader`]. Semantics: `docs/audit.md`.
 
 pub mod check;
 pub mod enclosure;
+pub mod series;
 pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};

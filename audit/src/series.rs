@@ -1,0 +1,91 @@
+//! The plot series of an audit: per time bucket the separation bound, energy bound and
+//! threshold, and whether a violation or an inconclusive span falls in it. At most
+//! [`SERIES_BUCKETS`] buckets per log: when full, neighbouring buckets merge (the width doubles),
+//! so memory stays bounded for logs of any length.
+
+use crate::verdict::SeriesPoint;
+
+/// Maximum number of plot buckets per log.
+pub const SERIES_BUCKETS: usize = 1024;
+
+pub(crate) struct Series {
+    pub(crate) t0: f64,
+    pub(crate) width: f64,
+    pub(crate) buckets: Vec<SeriesPoint>,
+}
+
+fn empty_point(t: f64, t_end: f64) -> SeriesPoint {
+    SeriesPoint {
+        t,
+        t_end,
+        min_separation: None,
+        energy_nominal: None,
+        energy_bound: None,
+        threshold: None,
+        violation: false,
+        inconclusive: false,
+    }
+}
+
+pub(crate) fn min_opt(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+pub(crate) fn max_opt(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.max(y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+
+impl Series {
+    /// The bucket for time `t`, merging pairs (doubling the width) when full. Returns the index
+    /// and whether the bucket is new.
+    pub(crate) fn bucket(&mut self, t: f64) -> (usize, bool) {
+        loop {
+            let idx = ((t - self.t0) / self.width).floor().max(0.0) as usize;
+            if idx < SERIES_BUCKETS {
+                let mut new = false;
+                while self.buckets.len() <= idx {
+                    let k = self.buckets.len() as f64;
+                    self.buckets.push(empty_point(
+                        self.t0 + k * self.width,
+                        self.t0 + (k + 1.0) * self.width,
+                    ));
+                    new = true;
+                }
+                return (idx, new);
+            }
+            // Merge pairs.
+            let n = self.buckets.len();
+            for i in 0..n.div_ceil(2) {
+                let a = self.buckets[2 * i];
+                let merged = if 2 * i + 1 < n {
+                    let b = self.buckets[2 * i + 1];
+                    SeriesPoint {
+                        t: a.t,
+                        t_end: b.t_end,
+                        min_separation: min_opt(a.min_separation, b.min_separation),
+                        energy_nominal: a.energy_nominal.or(b.energy_nominal),
+                        energy_bound: max_opt(a.energy_bound, b.energy_bound),
+                        threshold: min_opt(a.threshold, b.threshold),
+                        violation: a.violation || b.violation,
+                        inconclusive: a.inconclusive || b.inconclusive,
+                    }
+                } else {
+                    SeriesPoint {
+                        t_end: a.t + 2.0 * self.width,
+                        ..a
+                    }
+                };
+                self.buckets[i] = merged;
+            }
+            self.buckets.truncate(n.div_ceil(2));
+            self.width *= 2.0;
+        }
+    }
+}
