@@ -5,6 +5,7 @@
 //!   every safety step a monitored trajectory (one intended step, then braking along the same
 //!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
 //! - [`cbf`]: the control-barrier-function baseline;
+//! - [`filter`]: PACS, OFF, single-action and CBF as kinds of one [`filter::SafetyFilter`];
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
 //! - [`bench`]: reproducible timing scenarios for `pacs bench`.
 //!
@@ -15,5 +16,8 @@
 
 pub mod bench;
 pub mod cbf;
+pub mod filter;
 pub mod shield;
 pub mod shield_log;
+
+pub use filter::{FilterKind, SafetyFilter};

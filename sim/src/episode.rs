@@ -10,8 +10,8 @@ use pacs_log::{Header, LogModels, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, TaskConstraints};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::geometry::segment_distance_lower_bound;
-use pacs_shield::cbf::{CbfConfig, CbfFilter};
-use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
+use pacs_shield::FilterKind;
+use pacs_shield::shield::ShieldError;
 use pacs_shield::shield_log::ShieldLog;
 use serde::Serialize;
 
@@ -49,63 +49,15 @@ impl std::str::FromStr for Method {
     }
 }
 
-/// The filter behind a common interface.
-pub enum Filter {
-    /// A shield (PACS, OFF or single-action).
-    Shield(Box<Shield>),
-    /// The CBF baseline.
-    Cbf(Box<CbfFilter>),
-}
-
-impl Filter {
-    /// Build a filter for `method`.
-    pub fn new(
-        method: Method,
-        robot: &RobotModel,
-        human: &HumanModel,
-        spec: &ConstraintSpec,
-    ) -> Result<Self, ShieldError> {
-        Ok(match method {
-            Method::Cbf => Filter::Cbf(Box::new(CbfFilter::new(
-                robot.clone(),
-                Some(human.clone()),
-                CbfConfig::default(),
-            )?)),
-            m => {
-                let cfg = ShieldConfig {
-                    mode: if matches!(m, Method::Off | Method::Direct) {
-                        FilterMode::Off
-                    } else {
-                        FilterMode::Pacs
-                    },
-                    single_action: m == Method::SingleAction,
-                    ..ShieldConfig::default()
-                };
-                Filter::Shield(Box::new(Shield::new(
-                    robot.clone(),
-                    Some((human.clone(), spec)),
-                    vec![],
-                    cfg,
-                )?))
-            }
-        })
-    }
-    fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
+impl Method {
+    /// The online filter this method runs (`Direct` runs OFF: its actions go straight to the
+    /// controller, one target every Δt).
+    pub fn filter_kind(self) -> FilterKind {
         match self {
-            Filter::Shield(s) => s.start(t, q),
-            Filter::Cbf(c) => c.start(t, q),
-        }
-    }
-    fn set_chunk(&mut self, t: f64, chunk: &pacs_motion::chunk::Chunk) -> Result<(), ShieldError> {
-        match self {
-            Filter::Shield(s) => s.set_chunk(chunk),
-            Filter::Cbf(c) => c.set_chunk(t, chunk),
-        }
-    }
-    fn step(&mut self, t: f64, m: Option<&pacs_reach::human::HumanMeasurement>) -> Command {
-        match self {
-            Filter::Shield(s) => s.step(t, m),
-            Filter::Cbf(c) => c.step(t, m),
+            Method::Off | Method::Direct => FilterKind::Off,
+            Method::Pacs => FilterKind::Pacs,
+            Method::SingleAction => FilterKind::SingleAction,
+            Method::Cbf => FilterKind::Cbf,
         }
     }
 }
@@ -521,7 +473,7 @@ pub fn run_setup(
         None
     };
     let tc = spec.resolve(human).map_err(invalid)?;
-    let mut filter = Filter::new(method, robot, human, spec)?;
+    let mut filter = method.filter_kind().build(robot, human, spec)?;
     filter.start(0.0, start)?;
     let mut camera = Camera::new(cfg.camera_period, cfg.seed);
     let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);

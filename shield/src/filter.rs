@@ -1,0 +1,94 @@
+//! The online filters behind one interface: PACS, OFF, single-action and CBF are kinds of one
+//! [`SafetyFilter`], chosen by [`FilterKind`] — not a flag spread over several types.
+
+use crate::cbf::{CbfConfig, CbfFilter};
+use crate::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
+use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+use pacs_motion::Chunk;
+use pacs_reach::human::HumanMeasurement;
+use serde::{Deserialize, Serialize};
+
+/// What every online filter offers: start at rest, take chunks, one command per safety step.
+pub trait SafetyFilter {
+    /// Start at rest at `q` (rad) at time `t` (s).
+    fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError>;
+    /// Hand a new action chunk to the filter at time `t` (s); a chunk that cannot be planned is
+    /// an error and is ignored (the robot keeps its motion).
+    fn set_chunk(&mut self, t: f64, chunk: &Chunk) -> Result<(), ShieldError>;
+    /// One safety step at `t` (s) with the latest measurement, if any: the command for the next
+    /// step.
+    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command;
+}
+
+impl SafetyFilter for Shield {
+    fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
+        Shield::start(self, t, q)
+    }
+    fn set_chunk(&mut self, _t: f64, chunk: &Chunk) -> Result<(), ShieldError> {
+        Shield::set_chunk(self, chunk)
+    }
+    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+        Shield::step(self, t, measurement)
+    }
+}
+
+impl SafetyFilter for CbfFilter {
+    fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
+        CbfFilter::start(self, t, q)
+    }
+    fn set_chunk(&mut self, t: f64, chunk: &Chunk) -> Result<(), ShieldError> {
+        CbfFilter::set_chunk(self, t, chunk)
+    }
+    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+        CbfFilter::step(self, t, measurement)
+    }
+}
+
+/// The kinds of online filter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FilterKind {
+    /// PACS: verify every step, brake along the path when needed.
+    Pacs,
+    /// OFF: follow the intended trajectory, never brake.
+    Off,
+    /// PACS planning each action as its own stop-at-target motion (the single-action baseline).
+    SingleAction,
+    /// The control-barrier-function baseline.
+    Cbf,
+}
+
+impl FilterKind {
+    /// Build the filter for a robot, a human with a task constraint spec, with default settings.
+    pub fn build(
+        self,
+        robot: &RobotModel,
+        human: &HumanModel,
+        spec: &ConstraintSpec,
+    ) -> Result<Box<dyn SafetyFilter + Send>, ShieldError> {
+        Ok(match self {
+            FilterKind::Cbf => Box::new(CbfFilter::new(
+                robot.clone(),
+                Some(human.clone()),
+                CbfConfig::default(),
+            )?),
+            kind => {
+                let cfg = ShieldConfig {
+                    mode: if kind == FilterKind::Off {
+                        FilterMode::Off
+                    } else {
+                        FilterMode::Pacs
+                    },
+                    single_action: kind == FilterKind::SingleAction,
+                    ..ShieldConfig::default()
+                };
+                Box::new(Shield::new(
+                    robot.clone(),
+                    Some((human.clone(), spec)),
+                    vec![],
+                    cfg,
+                )?)
+            }
+        })
+    }
+}
