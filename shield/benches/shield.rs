@@ -47,7 +47,9 @@ fn shield(c: &mut Criterion) {
                 |m| {
                     let kk = k.get();
                     k.set(kk + 1);
-                    sh.borrow_mut().step(kk as f64 * 0.001, Some(&m))
+                    sh.borrow_mut()
+                        .step(kk as f64 * 0.001, Some(&m))
+                        .expect("started")
                 },
                 criterion::BatchSize::SmallInput,
             )
@@ -66,7 +68,7 @@ fn shield(c: &mut Criterion) {
                     let _ = f.set_chunk(t, &chunk(1.0));
                 }
                 k.set(kk + 1);
-                f.step(t, Some(&m))
+                f.step(t, Some(&m)).expect("started")
             },
             criterion::BatchSize::SmallInput,
         )

@@ -117,7 +117,7 @@ pub fn cbf_scenario(steps: usize) -> StepStats {
         let t0 = Instant::now();
         let cmd = f.step(t, Some(&m));
         times.push(t0.elapsed().as_secs_f64());
-        verified += cmd.diag.verified as usize;
+        verified += cmd.is_ok_and(|c| c.diag.verified) as usize;
     }
     stats("cbf", times, verified, chunk_times)
 }
@@ -155,7 +155,7 @@ pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats 
         let t0 = Instant::now();
         let cmd = sh.step(t, Some(&m));
         times.push(t0.elapsed().as_secs_f64());
-        if cmd.diag.verified {
+        if cmd.is_ok_and(|c| c.diag.verified) {
             verified += 1;
         }
     }

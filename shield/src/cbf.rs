@@ -164,8 +164,16 @@ impl CbfFilter {
         Ok(())
     }
 
-    /// One control step at `t` (s) with the latest measurement; returns the command for t + α_s.
-    pub fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+    /// One control step at `t` (s) with the latest measurement; returns the command for t + α_s
+    /// ([`ShieldError::NotStarted`] before [`CbfFilter::start`]).
+    pub fn step(
+        &mut self,
+        t: f64,
+        measurement: Option<&HumanMeasurement>,
+    ) -> Result<Command, ShieldError> {
+        if !self.started {
+            return Err(ShieldError::NotStarted);
+        }
         let n = self.robot.dof();
         let alpha = self.config.safety_step;
         if let Some(m) = measurement
@@ -262,12 +270,12 @@ impl CbfFilter {
         }
         let state = JointState::new(&self.q[..n], &self.dq[..n], &self.ddq[..n]);
         diag.path_speed = 0.0;
-        Command {
+        Ok(Command {
             t: t + alpha,
             state,
             dof: n,
             diag,
-        }
+        })
     }
 
     fn solve(&self, des: &[f64], rows: &[([f64; MAX_DOF], f64)]) -> Option<[f64; MAX_DOF]> {

@@ -16,8 +16,12 @@ pub trait SafetyFilter {
     /// an error and is ignored (the robot keeps its motion).
     fn set_chunk(&mut self, t: f64, chunk: &Chunk) -> Result<(), ShieldError>;
     /// One safety step at `t` (s) with the latest measurement, if any: the command for the next
-    /// step.
-    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command;
+    /// step ([`ShieldError::NotStarted`] before `start`).
+    fn step(
+        &mut self,
+        t: f64,
+        measurement: Option<&HumanMeasurement>,
+    ) -> Result<Command, ShieldError>;
 }
 
 impl SafetyFilter for Shield {
@@ -27,7 +31,11 @@ impl SafetyFilter for Shield {
     fn set_chunk(&mut self, _t: f64, chunk: &Chunk) -> Result<(), ShieldError> {
         Shield::set_chunk(self, chunk)
     }
-    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+    fn step(
+        &mut self,
+        t: f64,
+        measurement: Option<&HumanMeasurement>,
+    ) -> Result<Command, ShieldError> {
         Shield::step(self, t, measurement)
     }
 }
@@ -39,7 +47,11 @@ impl SafetyFilter for CbfFilter {
     fn set_chunk(&mut self, t: f64, chunk: &Chunk) -> Result<(), ShieldError> {
         CbfFilter::set_chunk(self, t, chunk)
     }
-    fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+    fn step(
+        &mut self,
+        t: f64,
+        measurement: Option<&HumanMeasurement>,
+    ) -> Result<Command, ShieldError> {
         CbfFilter::step(self, t, measurement)
     }
 }

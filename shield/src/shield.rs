@@ -184,8 +184,7 @@ pub struct Command {
     pub t: f64,
     /// Joint state (entries beyond dof are 0).
     pub state: JointState,
-    /// Number of joints carrying targets in `state`; **0 when the shield was not started**: such a
-    /// command holds no valid target and must not be sent to the controller.
+    /// Number of joints carrying targets in `state` (the robot's).
     pub dof: usize,
     /// Diagnostics.
     pub diag: Diagnostics,
@@ -584,11 +583,16 @@ impl Shield {
     }
 
     /// One safety step at time `t` (s; must follow the previous step by α_s) with the latest
-    /// human measurement, if any. Returns the command for time t + α_s.
-    pub fn step(&mut self, t: f64, measurement: Option<&HumanMeasurement>) -> Command {
+    /// human measurement, if any. Returns the command for time t + α_s; before
+    /// [`Shield::start`] there is no command to give ([`ShieldError::NotStarted`]).
+    pub fn step(
+        &mut self,
+        t: f64,
+        measurement: Option<&HumanMeasurement>,
+    ) -> Result<Command, ShieldError> {
         let alpha = self.config.safety_step;
         if !self.started {
-            return self.hold_command(t + alpha, Binding::NoProfile);
+            return Err(ShieldError::NotStarted);
         }
         self.take_measurement(measurement, t);
         self.time = t;
@@ -641,12 +645,12 @@ impl Shield {
         diag.verified = verified;
         diag.path_speed = self.path.sd;
         self.time = t + alpha;
-        Command {
+        Ok(Command {
             t: t + alpha,
             state: self.state(),
             dof: self.dof,
             diag,
-        }
+        })
     }
 
     /// Whether the commanded joint velocity and acceleration are exactly zero.
@@ -656,26 +660,6 @@ impl Shield {
             .iter()
             .chain(&st.ddq[..self.dof])
             .all(|&x| x == 0.0)
-    }
-
-    /// The command of a shield that was not started: no joint targets (`dof = 0`).
-    fn hold_command(&self, t: f64, binding: Binding) -> Command {
-        let diag = Diagnostics {
-            verified: false,
-            on_failsafe: true,
-            binding,
-            min_separation: f64::INFINITY,
-            contact_energy: 0.0,
-            contact_threshold: 0.0,
-            path_speed: 0.0,
-            stop_time: t,
-        };
-        Command {
-            t,
-            state: JointState::default(),
-            dof: 0,
-            diag,
-        }
     }
 
     /// The go-profile (toward ṡ = 1 for one step) and the brake profile after it, both admissible.

@@ -75,7 +75,7 @@ fn step_allocates_nothing() {
                 sh.set_chunk(&chunk).ok(); // planning may allocate: not part of the step
             }
             ARMED.store(true, Ordering::SeqCst);
-            let cmd = sh.step(k as f64 * 0.001, Some(m));
+            let cmd = sh.step(k as f64 * 0.001, Some(m)).expect("started");
             ARMED.store(false, Ordering::SeqCst);
             verified += cmd.diag.verified as usize;
             failsafe += cmd.diag.on_failsafe as usize;

@@ -529,7 +529,7 @@ pub fn run_setup(
             let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
         }
         let m = camera.measure(human, script, t);
-        let cmd = filter.step(t, m.as_ref());
+        let cmd = filter.step(t, m.as_ref())?;
         if let Some(l) = log.as_mut() {
             l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
         }

@@ -231,7 +231,7 @@ mod real {
             };
             let m = stamp.map(|st| HumanMeasurement::new(&human, st, kp, None).expect("finite"));
             let before = sh.verified_failsafe().expect("started");
-            let cmd = sh.step(t, m.as_ref());
+            let cmd = sh.step(t, m.as_ref()).expect("started");
             let after = sh.verified_failsafe().expect("started");
             count(0);
             if cmd.diag.verified {
