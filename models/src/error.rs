@@ -118,3 +118,19 @@ pub(crate) fn positive(field: impl FnOnce() -> String, value: f64) -> Result<f64
         })
     }
 }
+
+/// Parse a spec from JSON text (errors: [`ModelError::Parse`]).
+pub(crate) fn parse_json<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ModelError> {
+    serde_json::from_str(text).map_err(|e| ModelError::Parse {
+        format: "JSON",
+        message: e.to_string(),
+    })
+}
+
+/// Parse a spec from TOML text (errors: [`ModelError::Parse`]).
+pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ModelError> {
+    toml::from_str(text).map_err(|e| ModelError::Parse {
+        format: "TOML",
+        message: e.to_string(),
+    })
+}

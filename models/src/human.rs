@@ -217,20 +217,12 @@ impl HumanModel {
 
     /// Parse and validate JSON.
     pub fn from_json(text: &str) -> Result<Self, ModelError> {
-        let spec: HumanSpec = serde_json::from_str(text).map_err(|e| ModelError::Parse {
-            format: "JSON",
-            message: e.to_string(),
-        })?;
-        Self::new(spec)
+        Self::new(crate::error::parse_json(text)?)
     }
 
     /// Parse and validate TOML.
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let spec: HumanSpec = toml::from_str(text).map_err(|e| ModelError::Parse {
-            format: "TOML",
-            message: e.to_string(),
-        })?;
-        Self::new(spec)
+        Self::new(crate::error::parse_toml(text)?)
     }
 
     /// A built-in human model by name (`"default"`).

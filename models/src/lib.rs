@@ -27,14 +27,8 @@ pub use shape::Capsule;
 /// Load a model-like value from a string that is either JSON (starts with `{`) or TOML.
 pub fn parse_json_or_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ModelError> {
     if text.trim_start().starts_with('{') {
-        serde_json::from_str(text).map_err(|e| ModelError::Parse {
-            format: "JSON",
-            message: e.to_string(),
-        })
+        error::parse_json(text)
     } else {
-        toml::from_str(text).map_err(|e| ModelError::Parse {
-            format: "TOML",
-            message: e.to_string(),
-        })
+        error::parse_toml(text)
     }
 }

@@ -423,20 +423,12 @@ impl RobotModel {
 
     /// Parse a JSON robot spec and validate it.
     pub fn from_json(text: &str) -> Result<Self, ModelError> {
-        let spec: RobotSpec = serde_json::from_str(text).map_err(|e| ModelError::Parse {
-            format: "JSON",
-            message: e.to_string(),
-        })?;
-        Self::new(spec)
+        Self::new(crate::error::parse_json(text)?)
     }
 
     /// Parse a TOML robot spec and validate it.
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let spec: RobotSpec = toml::from_str(text).map_err(|e| ModelError::Parse {
-            format: "TOML",
-            message: e.to_string(),
-        })?;
-        Self::new(spec)
+        Self::new(crate::error::parse_toml(text)?)
     }
 
     /// A built-in robot by name (`"fr3"`).
