@@ -4,12 +4,14 @@
 //! - [`check`]: the span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
 //! - [`enclosure`]: sound joint boxes over a span and the consistency of the samples;
 //! - [`verdict`]: verdicts, violation intervals, metrics;
-//! - [`series`]: the bounded plot series.
+//! - [`series`]: the bounded plot series;
+//! - [`claims`]: the checks, the tests backing them, and the assumptions, in one list.
 //!
 //! The log format and its readers live in `pacs-log`. Entry points: [`audit_file`] and
 //! [`audit_reader`]. Semantics: `docs/audit.md`.
 
 pub mod check;
+pub mod claims;
 pub mod enclosure;
 pub mod series;
 pub mod verdict;

@@ -91,47 +91,15 @@ pub struct ReportInput<'a> {
     pub settings: Value,
 }
 
-/// Which checks the audit makes, and the tests and harnesses that back each (paths in the repo).
+/// Which checks the audit makes, and the tests and harnesses that back each
+/// ([`pacs_audit::claims::CHECKS`], the one list).
 pub fn check_backing() -> Value {
-    json!([
-        {"check": "robot occupancy over a span (joint box from v_max, outward-rounded)",
-         "backed_by": ["reach/tests/robot_occupancy.rs (proptest: sampled link points stay in the box occupancy)",
-                       "audit/tests/audit_checks.rs::violation_only_between_samples_is_caught"]},
-        {"check": "human occupancy since the measurement (vel/pos/combined models)",
-         "backed_by": ["reach/tests/human_occupancy.rs (proptest soundness of every model)"]},
-        {"check": "conservative capsule separation / intersection",
-         "backed_by": ["reach/tests/geometry.rs (lower bound never above exact distance; touching never disjoint)"]},
-        {"check": "span enclosures and consistency of logged positions, velocities and accelerations",
-         "backed_by": ["proofs: h2_span_enclosure_sound (Kani harness + property twin)",
-                       "audit/tests/audit_consistency.rs"]},
-        {"check": "whole-robot kinetic-energy upper bound over the boxes",
-         "backed_by": ["reach/tests/energy.rs (proptest: bound covers every sampled state)",
-                       "audit/tests/audit_checks.rs::pfl_energy_just_above_and_below_threshold",
-                       "audit/tests/audit_consistency.rs::pfl_uses_the_whole_robot_energy"]},
-        {"check": "the one ISO/TS 15066 rule (SSM, PFL, clamping) shared with the shield",
-         "backed_by": ["proofs: i1_rule_sound (Kani harness + property twin)",
-                       "proofs/mutants: x9, x10 caught"]},
-        {"check": "SSM violation detection (first, last sample, one-sample spike, between samples)",
-         "backed_by": ["audit/tests/audit_checks.rs"]},
-        {"check": "PFL constrained vs unconstrained contact",
-         "backed_by": ["audit/tests/audit_checks.rs::pfl_constrained_vs_unconstrained"]},
-        {"check": "bad input rejected (exit 3), never pass",
-         "backed_by": ["audit/tests/audit_input.rs", "tests/cli_audit.rs", "fuzz/ (cargo fuzz target jsonl)"]}
-    ])
+    serde_json::to_value(pacs_audit::claims::CHECKS).unwrap_or(Value::Null)
 }
 
-/// The modelling assumptions the verdicts rest on (see `docs/audit.md`).
+/// The modelling assumptions the verdicts rest on ([`pacs_audit::claims::ASSUMPTIONS`]).
 pub fn assumptions() -> Vec<&'static str> {
-    vec![
-        "Recorded joint positions, velocities and accelerations are exact at their time stamps (up to 1 ulp of decimal parsing).",
-        "Between samples every joint obeys |dq| <= v_max, |ddq| <= a_max and |dddq| <= j_max of the robot model; samples contradicting this or each other (positions vs velocities under a_max, velocities vs accelerations under j_max) make the span inconclusive, with boxes covering what the positions imply.",
-        "The human moves within the human model's speed bound since each measurement; positions are within measurement_error_pos of the truth; a measurement stamped t_meas describes the state at t_meas - delay.",
-        "Robot link geometry is the model's capsules enlarged by tracking_error; human body parts are the model's capsules.",
-        "SSM: any possible contact while the robot is not provably at rest (all joint speeds <= rest_speed) is a violation; contact with the fixed base link counts.",
-        "PFL: a possible contact is a violation if the sound upper bound of the whole robot's kinetic energy (which bounds the energy transferable at any contact point) exceeds the threshold; constrained (the lower threshold) if clamping is possible: the environment, robot links on two different frames (adjacent links included), or a clampable body part.",
-        "With human_model = pos: each extremity's keypoints stay within its length + thickness/2 of its base keypoint; a measurement contradicting this by more than 2 measurement_error_pos is not trusted (that extremity uses the speed-bounded occupancy).",
-        "Spans longer than max_gap, before the first human record, or with a human measurement older than max_human_age are inconclusive.",
-    ]
+    pacs_audit::claims::ASSUMPTIONS.to_vec()
 }
 
 /// Overall verdict of the runs.
