@@ -103,6 +103,32 @@ fn brake_at_adds_a_failsafe_that_ends_at_rest_on_the_path() {
     assert!(s.windows(2).all(|w| w[1] >= w[0] - 1e-12));
     assert!((s.last().unwrap() - f["s_stop"].as_f64().unwrap()).abs() < 1e-12);
     assert_eq!(vec(&f["distance_bound"]).len(), 7);
+    // The shield's braking: within the FR3's limits at every sample, and every sample on the
+    // intended path (its distance from the start within the reported bound).
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let lim = robot.limits();
+    let q0 = vec(&fs[0]["q"]);
+    let bound = vec(&f["distance_bound"]);
+    for x in fs {
+        let (q, dq, ddq) = (vec(&x["q"]), vec(&x["dq"]), vec(&x["ddq"]));
+        for i in 0..7 {
+            assert!(
+                dq[i].abs() <= lim.v_max()[i] * (1.0 + 1e-9),
+                "dq[{i}] = {}",
+                dq[i]
+            );
+            assert!(
+                ddq[i].abs() <= lim.a_max()[i] * (1.0 + 1e-9),
+                "ddq[{i}] = {}",
+                ddq[i]
+            );
+            assert!(
+                (q[i] - q0[i]).abs() <= bound[i],
+                "joint {i} beyond its distance bound"
+            );
+        }
+    }
+    assert_eq!(f["kind"], "brake");
 }
 
 #[test]

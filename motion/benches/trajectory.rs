@@ -7,8 +7,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use pacs_models::RobotModel;
 use pacs_motion::anchors::{anchor_set, lower_bound};
-use pacs_motion::failsafe::{Failsafe, FailsafeKind};
-use pacs_motion::{JointState, Limits, Monitored, OutOfLimits, PlanMethod, Planner, PlannerConfig};
+use pacs_motion::scaling::{PathState, admissible};
+use pacs_motion::{JointState, Limits, OutOfLimits, PlanMethod, Planner, PlannerConfig};
 use std::hint::black_box;
 
 fn setup() -> (Limits, Limits, Vec<(JointState, pacs_motion::Waypoints)>) {
@@ -61,7 +61,7 @@ fn quality() {
         let mut lsum_sa = [0.0; 2];
         let mut count = [0usize; 2];
         let mut fallbacks = 0usize;
-        let (mut fs_n, mut fs_delay, mut fs_follow, mut fs_stop) = (0usize, 0usize, 0usize, 0.0);
+        let (mut fs_n, mut fs_none, mut fs_stop) = (0usize, 0usize, 0.0);
         for (s, wp) in &set {
             let lb = lower_bound(wp, &plan.v[..plan.dof]);
             let t = planner.plan(s, wp).expect("plan");
@@ -75,14 +75,11 @@ fn quality() {
             count[g] += 1;
             if config == default {
                 for k in 0..20 {
-                    let t0 = t.duration() * k as f64 / 20.0;
-                    let m = Monitored::new(&t, t0, 0.001, &hw).expect("monitored");
+                    let s0 = t.duration() * k as f64 / 20.0;
                     fs_n += 1;
-                    fs_stop += m.stop_time() - m.switch_time();
-                    match m.failsafe().kind() {
-                        FailsafeKind::FollowToEnd => fs_follow += 1,
-                        _ if m.failsafe().delay() > 0.0 => fs_delay += 1,
-                        _ => {}
+                    match admissible(&t, &hw, PathState::intended(s0), 0.0, None) {
+                        Some(b) => fs_stop += b.settle_time(),
+                        None => fs_none += 1,
                     }
                 }
             }
@@ -98,9 +95,8 @@ fn quality() {
         );
         if fs_n > 0 {
             println!(
-                "failsafes (default planner, hardware limits a=10, j=5000): {fs_n} built, {} immediate braking, {fs_delay} delayed braking, {fs_follow} follow-to-end; mean stop time {:.1} ms",
-                fs_n - fs_delay - fs_follow,
-                1e3 * fs_stop / fs_n as f64
+                "braking (the shield's, default planner, hardware limits a=10, j=5000): {fs_n} starts, {fs_none} without an admissible profile; mean stop time {:.1} ms",
+                1e3 * fs_stop / (fs_n - fs_none).max(1) as f64
             );
         }
     }
@@ -171,33 +167,29 @@ fn benches(c: &mut Criterion) {
         .iter()
         .map(|(s, wp)| planner.plan(s, wp).expect("plan"))
         .collect();
-    c.bench_function("monitored_failsafe_build", |b| {
-        b.iter(|| {
-            let t = &trajs[k % trajs.len()];
-            let t0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
-            k += 1;
-            black_box(Monitored::new(t, t0, 0.001, &hw).expect("fs").stop_time())
-        })
-    });
-    c.bench_function("failsafe_build", |b| {
+    c.bench_function("brake_profile", |b| {
         b.iter(|| {
             let t = &trajs[k % trajs.len()];
             let s0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
             k += 1;
-            black_box(Failsafe::new(t, s0, &hw).expect("fs").stop_time())
+            black_box(
+                admissible(t, &hw, PathState::intended(s0), 0.0, None).map(|p| p.settle_time()),
+            )
         })
     });
-    // Failsafes on per-segment trajectories (what the shield plans with).
+    // Braking on per-segment trajectories (what the shield plans with).
     let seg_trajs: Vec<_> = set
         .iter()
         .map(|(s, wp)| segments.plan(s, wp).expect("plan"))
         .collect();
-    c.bench_function("failsafe_build_segments_trajectory", |b| {
+    c.bench_function("brake_profile_segments_trajectory", |b| {
         b.iter(|| {
             let t = &seg_trajs[k % seg_trajs.len()];
             let s0 = t.duration() * ((k * 7919) % 1000) as f64 / 1000.0;
             k += 1;
-            black_box(Failsafe::new(t, s0, &hw).expect("fs").stop_time())
+            black_box(
+                admissible(t, &hw, PathState::intended(s0), 0.0, None).map(|p| p.settle_time()),
+            )
         })
     });
     c.bench_function("state_at", |b| {

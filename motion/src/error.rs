@@ -82,23 +82,3 @@ pub enum TrajectoryError {
         message: String,
     },
 }
-
-/// Why no path-consistent failsafe could be built.
-#[derive(Debug, Clone, Copy, PartialEq, Error)]
-pub enum FailsafeError {
-    /// The start time lies outside the intended trajectory.
-    #[error("failsafe start s0 = {s0} s outside [0, {duration}] s")]
-    StartOutsideTrajectory {
-        /// Requested start (s).
-        s0: f64,
-        /// Intended trajectory duration (s).
-        duration: f64,
-    },
-    /// No candidate braking (any delay, any strength) passed the limit check, and the intended
-    /// trajectory does not end at rest.
-    #[error("no admissible path-consistent braking from s0 = {s0} s")]
-    NoAdmissibleBraking {
-        /// Start (s).
-        s0: f64,
-    },
-}

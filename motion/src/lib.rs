@@ -7,9 +7,7 @@
 //!   the spline planner); [`intended::Planner::plan_single_action`] is the paper's single-action
 //!   baseline;
 //! - [`scaling`]: path-speed profiles from any path state (braking and resuming along the path) —
-//!   what the shield runs;
-//! - [`failsafe`], [`monitored`]: braking of a whole trajectory and the monitored trajectory, used by
-//!   `pacs trajectory --brake-at` (to be merged into [`scaling`], see issue 13);
+//!   the one braking, run by the shield and by `pacs trajectory --brake-at`;
 //! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic;
 //! - [`anchors`]: the seeded FR3 chunk problem set of the trajectory anchors.
 //!
@@ -21,18 +19,14 @@
 pub mod anchors;
 pub mod chunk;
 pub mod error;
-pub mod failsafe;
 pub mod intended;
-pub mod monitored;
 pub mod profile;
 pub mod scaling;
 pub mod spline;
 pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
-pub use error::{FailsafeError, TrajectoryError};
-pub use failsafe::Failsafe;
+pub use error::TrajectoryError;
 pub use intended::{PlanMethod, Planner, PlannerConfig};
-pub use monitored::Monitored;
 pub use profile::{LIMIT_REL_TOL, Piece, Range};
 pub use trajectory::{Bounds, EndCondition, JointState, Limits, Trajectory};

@@ -14,7 +14,7 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::trajectory::{Limits, Trajectory};
+use crate::trajectory::{JointState, Limits, Trajectory};
 use pacs_models::MAX_DOF;
 use pacs_reach::rounding::{add_up, mul_up};
 
@@ -50,6 +50,20 @@ impl PathState {
     /// Whether the path speed and acceleration are exactly those of the intended timing.
     pub fn is_intended(&self) -> bool {
         self.sd == 1.0 && self.sdd == 0.0
+    }
+
+    /// The joint state on `traj` at this path state (chain rule: q̇ = q′ṡ, q̈ = q′s̈ + q″ṡ²; the
+    /// jerk entry is q‴ṡ³, the part that does not depend on the path jerk).
+    pub fn joint_state(&self, traj: &Trajectory) -> JointState {
+        let d = traj.state_at(self.s);
+        let mut out = JointState::default();
+        for i in 0..traj.dof() {
+            out.q[i] = d.q[i];
+            out.dq[i] = d.dq[i] * self.sd;
+            out.ddq[i] = d.dq[i] * self.sdd + d.ddq[i] * self.sd * self.sd;
+            out.dddq[i] = d.dddq[i] * self.sd * self.sd * self.sd;
+        }
+        out
     }
 }
 

@@ -281,14 +281,6 @@ impl Trajectory {
         k
     }
 
-    /// [`Trajectory::joint_at`] with a search hint (see `locate_hint`).
-    #[inline]
-    pub(crate) fn joint_at_hint(&self, i: usize, hint: &mut usize, t: f64) -> (f64, f64, f64) {
-        let t = t.max(0.0);
-        let p = &self.pieces[self.locate_hint(i, hint, t)];
-        p.eval(t - p.t)
-    }
-
     /// Position, velocity and acceleration of joint `i` at time `t` (s; clamped to ≥ 0).
     #[inline]
     pub fn joint_at(&self, i: usize, t: f64) -> (f64, f64, f64) {

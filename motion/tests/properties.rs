@@ -74,26 +74,33 @@ proptest! {
         assert_limits_at_samples(&t, &plan, 20);
     }
 
+    /// The shield's braking (`scaling::admissible`, ṡ from the intended timing to 0) from random
+    /// points of random trajectories: on the path, within the robot's limits, at rest at the end.
     #[test]
-    fn random_failsafes_are_admissible_on_path_and_stop(seed in any::<u64>(), frac in 0.0f64..1.0) {
+    fn random_brakes_are_admissible_on_path_and_stop(seed in any::<u64>(), frac in 0.0f64..1.0) {
+        use pacs_motion::scaling::{PathState, admissible};
         let (hw, _, _, _, t) = random_problem(seed);
         let s0 = frac * t.duration();
-        let f = Failsafe::new(&t, s0, &hw).unwrap();
+        let f = admissible(&t, &hw, PathState::intended(s0), 0.0, None);
+        prop_assume!(f.is_some());
+        let f = f.unwrap();
         let n = 12;
+        let mut s_prev = s0;
         for k in 0..=n {
-            let tau = f.stop_time() * k as f64 / n as f64;
-            let (s, sd, _, _) = f.path_at(tau);
-            let st = f.state_at(&t, tau);
-            let on = t.state_at(s);
-            prop_assert!((-1e-9..=1.0 + 1e-12).contains(&sd));
+            let tau = f.settle_time() * k as f64 / n as f64;
+            let p = f.eval(tau);
+            let st = p.joint_state(&t);
+            let on = t.state_at(p.s);
+            prop_assert!((-1e-9..=1.0 + 1e-12).contains(&p.sd));
+            prop_assert!(p.s >= s_prev - 1e-12, "the path only moves forward");
+            s_prev = p.s;
             for i in 0..7 {
                 prop_assert!((st.q[i] - on.q[i]).abs() <= 1e-9);
                 within(st.dq[i], hw.v[i], "dq");
                 within(st.ddq[i], hw.a[i], "ddq");
-                within(st.dddq[i], hw.j[i], "dddq");
             }
         }
-        let end = f.state_at(&t, f.stop_time());
+        let end = f.eval(f.settle_time()).joint_state(&t);
         for i in 0..7 {
             prop_assert!(end.dq[i].abs() < 1e-9 && end.ddq[i].abs() < 1e-9);
         }

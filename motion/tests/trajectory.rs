@@ -375,13 +375,27 @@ fn zero_and_repeated_actions_are_handled() {
     let mut pl = Planner::new(plan, PlannerConfig::default());
     let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
     let q1: Vec<f64> = q0.iter().map(|x| x + 0.02).collect();
-    // All-zero chunk: duration 0, at rest, failsafe stops at once.
+    // All-zero chunk: duration 0, at rest; braking along it never moves a joint.
     let still = Waypoints::from_rows(&[q0.clone(), q0.clone(), q0.clone()]).unwrap();
     let mut t = pl.plan(&JointState::at_rest(&q0), &still).unwrap();
     t.check(&plan).unwrap();
     assert_eq!(t.duration(), 0.0);
-    let f = Failsafe::new(&t, 0.0, &hw).unwrap();
-    assert_eq!(f.stop_time(), 0.0);
+    let brake = pacs_motion::scaling::admissible(
+        &t,
+        &hw,
+        pacs_motion::scaling::PathState::intended(0.0),
+        0.0,
+        None,
+    )
+    .expect("braking on a standstill trajectory");
+    for k in 0..=4 {
+        let st = brake
+            .eval(brake.settle_time() * k as f64 / 4.0)
+            .joint_state(&t);
+        for i in 0..7 {
+            assert_eq!((st.q[i], st.dq[i]), (q0[i], 0.0));
+        }
+    }
     // A repeated waypoint in the middle: the robot must pass it (at rest there).
     let rep = Waypoints::from_rows(&[q0.clone(), q1.clone(), q1.clone(), q0.clone()]).unwrap();
     let mut t = pl.plan(&JointState::at_rest(&q0), &rep).unwrap();

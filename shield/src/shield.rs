@@ -528,16 +528,7 @@ impl Shield {
     }
 
     fn joint_state(&self, slot: usize, p: &PathState) -> JointState {
-        let tr = self.traj(slot);
-        let d = tr.state_at(p.s);
-        let mut out = JointState::default();
-        for i in 0..self.dof {
-            out.q[i] = d.q[i];
-            out.dq[i] = d.dq[i] * p.sd;
-            out.ddq[i] = d.dq[i] * p.sdd + d.ddq[i] * p.sd * p.sd;
-            out.dddq[i] = d.dddq[i] * p.sd * p.sd * p.sd;
-        }
-        out
+        p.joint_state(self.traj(slot))
     }
 
     /// Hand a new action chunk to the shield: planned from the current commanded state into a new

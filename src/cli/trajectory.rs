@@ -2,7 +2,7 @@
 //! Contract: docs/trajectory.md.
 
 use super::{CliError, RobotRef, check_vec, read_json};
-use pacs_motion::failsafe::FailsafeKind;
+use pacs_motion::scaling::{PathState, admissible};
 use pacs_motion::{
     Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory,
 };
@@ -162,27 +162,42 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
                 "--brake-at: value {tb} must lie in [0, {t_end}] s"
             )));
         }
-        let fs = pacs_motion::Failsafe::new(&traj, tb, &hw)
-            .map_err(|e| CliError::Input(e.to_string()))?;
-        let count = sample_count("failsafe samples", fs.stop_time(), dt)?;
-        let fsamples: Vec<Value> = times(0.0, fs.stop_time(), dt, count)
+        // The shield's braking (one implementation): the path speed ṡ goes from the intended
+        // timing to 0 along the same path, jerk-limited, within the robot's limits.
+        let brake = admissible(&traj, &hw, PathState::intended(tb), 0.0, None).ok_or_else(|| {
+            CliError::Input(format!(
+                "--brake-at: no admissible braking profile from t = {tb} s within the robot's limits"
+            ))
+        })?;
+        let duration = brake.settle_time();
+        let count = sample_count("failsafe samples", duration, dt)?;
+        let fsamples: Vec<Value> = times(0.0, duration, dt, count)
             .map(|tau| {
-                let mut v = state_json(tb + tau, &fs.state_at(&traj, tau), n);
-                v["s"] = json!(fs.path_at(tau).0);
+                let p = brake.eval(tau);
+                let mut v = state_json(tb + tau, &p.joint_state(&traj), n);
+                v["s"] = json!(p.s);
                 v
             })
             .collect();
-        let (j, a) = fs.path_jerk_acc();
-        let dist: Vec<f64> = (0..n).map(|i| fs.distance_bound(&traj, i)).collect();
+        let (acc, jerk) = brake.limits();
+        let s_stop = brake.settle_s();
+        let q0 = traj.state_at(tb);
+        // Sound per-joint bound of how far the robot moves while braking: the path's range over
+        // [s(t_b), s_stop], outward rounded.
+        let dist: Vec<f64> = (0..n)
+            .map(|i| {
+                let r = traj.joint_derivs(i, tb, s_stop).r[0];
+                (r.hi - q0.q[i]).max(q0.q[i] - r.lo).max(0.0).next_up()
+            })
+            .collect();
         out["failsafe"] = json!({
             "start_time": tb,
-            "stop_time": tb + fs.stop_time(),
-            "duration": fs.stop_time(),
-            "kind": match fs.kind() { FailsafeKind::Brake => "brake", FailsafeKind::FollowToEnd => "follow-to-end" },
-            "delay": fs.delay(),
-            "path_jerk": j,
-            "path_acc": a,
-            "s_stop": fs.s_stop(),
+            "stop_time": tb + duration,
+            "duration": duration,
+            "kind": "brake",
+            "path_jerk": jerk,
+            "path_acc": acc,
+            "s_stop": s_stop,
             "distance_bound": dist,
             "limits": "robot",
             "samples": fsamples,
