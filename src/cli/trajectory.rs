@@ -2,7 +2,7 @@
 //! Contract: docs/trajectory.md.
 
 use super::{CliError, RobotRef, check_vec, read_json};
-use pacs_motion::scaling::{PathState, admissible};
+use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_motion::{
     Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory,
 };
@@ -163,24 +163,31 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
             )));
         }
         // The shield's braking (one implementation): the path speed ṡ goes from the intended
-        // timing to 0 along the same path, jerk-limited, within the robot's limits.
-        let brake = admissible(&traj, &hw, PathState::intended(tb), 0.0, None).ok_or_else(|| {
+        // timing to 0 along the same path, jerk-limited, within the robot's limits. Where the
+        // intended motion leaves no margin at t_b (a joint at its acceleration limit), it keeps
+        // the intended timing until braking is admissible (`delay`); a trajectory that ends at
+        // rest is followed to its end if no later instant admits braking.
+        let plan = brake_plan(&traj, &hw, tb).ok_or_else(|| {
             CliError::Input(format!(
                 "--brake-at: no admissible braking profile from t = {tb} s within the robot's limits"
             ))
         })?;
-        let duration = brake.settle_time();
+        let delay = plan.delay;
+        let duration = plan.stop_after();
         let count = sample_count("failsafe samples", duration, dt)?;
         let fsamples: Vec<Value> = times(0.0, duration, dt, count)
             .map(|tau| {
-                let p = brake.eval(tau);
+                let p = match plan.profile {
+                    Some(b) if tau >= delay => b.eval(tau - delay),
+                    _ => PathState::intended((tb + tau).min(tb + delay)),
+                };
                 let mut v = state_json(tb + tau, &p.joint_state(&traj), n);
                 v["s"] = json!(p.s);
                 v
             })
             .collect();
-        let (acc, jerk) = brake.limits();
-        let s_stop = brake.settle_s();
+        let (acc, jerk) = plan.profile.map_or((0.0, 0.0), |p| p.limits());
+        let s_stop = plan.profile.map_or(tb + delay, |p| p.settle_s());
         let q0 = traj.state_at(tb);
         // Sound per-joint bound of how far the robot moves while braking: the path's range over
         // [s(t_b), s_stop], outward rounded.
@@ -194,7 +201,12 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
             "start_time": tb,
             "stop_time": tb + duration,
             "duration": duration,
-            "kind": "brake",
+            "kind": match (plan.profile.is_some(), delay > 0.0) {
+                (false, _) => "follow-to-end",
+                (true, true) => "delayed-brake",
+                (true, false) => "brake",
+            },
+            "delay": delay,
             "path_jerk": jerk,
             "path_acc": acc,
             "s_stop": s_stop,
@@ -204,4 +216,55 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
         });
     }
     Ok(out)
+}
+
+/// The failsafe reported for `--brake-at t_b`: follow the intended timing for `delay` s, then the
+/// shield's path-speed braking (`profile`), or, with no profile, follow the intended trajectory
+/// to its end (where it is at rest).
+struct BrakePlan {
+    delay: f64,
+    profile: Option<SpeedProfile>,
+}
+
+impl BrakePlan {
+    fn stop_after(&self) -> f64 {
+        self.delay + self.profile.map_or(0.0, |p| p.settle_time())
+    }
+}
+
+/// The earliest-stopping failsafe from intended time `tb`: the shield's braking from `tb + δ`,
+/// δ over a growing grid (0, 1, 3, 7, 15, … ms) up to the trajectory's end (an instant where the
+/// intended motion leaves no acceleration margin admits no braking, and one with little margin
+/// only a slow one), or, for a trajectory that ends at rest, following it to its end.
+fn brake_plan(traj: &Trajectory, hw: &Limits, tb: f64) -> Option<BrakePlan> {
+    let end = traj.duration();
+    let mut best = (traj.end() == EndCondition::AtRest).then_some(BrakePlan {
+        delay: end - tb,
+        profile: None,
+    });
+    let (mut delay, mut step) = (0.0, 1e-3);
+    loop {
+        let s = (tb + delay).min(end);
+        if best.as_ref().is_some_and(|b| s - tb >= b.stop_after()) {
+            break;
+        }
+        if let Some(p) = admissible(traj, hw, PathState::intended(s), 0.0, None) {
+            let cand = BrakePlan {
+                delay: s - tb,
+                profile: Some(p),
+            };
+            if best
+                .as_ref()
+                .is_none_or(|b| cand.stop_after() < b.stop_after())
+            {
+                best = Some(cand);
+            }
+        }
+        if s >= end {
+            break;
+        }
+        delay += step;
+        step *= 2.0;
+    }
+    best
 }
