@@ -83,7 +83,7 @@ impl AuditConfig {
     }
 
     /// Check every value; the error names the field and value.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), AuditError> {
         for (f, v) in [
             ("max_gap", self.max_gap),
             ("max_human_age", self.max_human_age),
@@ -92,15 +92,13 @@ impl AuditConfig {
             ("limit_slack", self.limit_slack),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("{f}: value {v} must be finite and >= 0"));
+                return Err(AuditError::Setting { field: f, value: v });
             }
         }
         if self.human_model == HumanReachModel::Acc {
-            return Err(
-                "human_model: `acc` needs measured velocities, which logs do not carry".into(),
-            );
+            return Err(AuditError::AccModel);
         }
-        self.mcap.validate()
+        self.mcap.validate().map_err(AuditError::Mcap)
     }
 }
 
@@ -136,6 +134,7 @@ struct OpenInterval {
     last_span: u64,
 }
 
+use crate::error::AuditError;
 use crate::series::{Series, max_opt, min_opt};
 use crate::verdict::InconclusiveReason as Reason;
 
@@ -216,20 +215,20 @@ fn certainly_touch(a: &Capsule, b: &Capsule) -> bool {
 impl Auditor {
     /// Prepare an auditor for the models; fails if the constraints do not resolve against the
     /// human model, the config is invalid, or the robot has more than [`MAX_CAPSULES`] capsules.
-    pub fn new(models: LogModels, cfg: AuditConfig) -> Result<Self, String> {
+    pub fn new(models: LogModels, cfg: AuditConfig) -> Result<Self, AuditError> {
         cfg.validate()?;
         let tc = models
             .constraints
             .resolve(&models.human)
-            .map_err(|e| format!("constraints: {e}"))?;
+            .map_err(AuditError::Constraints)?;
         let rreach = RobotReach::try_new(&models.robot, cfg.tracking_error)
-            .map_err(|e| format!("tracking_error: {e}"))?;
+            .map_err(AuditError::TrackingError)?;
         let ncaps = rreach.capsule_count();
         if models.robot.links().len() > MAX_CAPSULES {
-            return Err(format!(
-                "robot `{}` has more than {MAX_CAPSULES} links",
-                models.robot.name()
-            ));
+            return Err(AuditError::TooManyLinks {
+                robot: models.robot.name().to_string(),
+                max: MAX_CAPSULES,
+            });
         }
         let env: Vec<EnvShape> = models.environment.iter().map(EnvShape::from).collect();
         let rule = ContactRule::new(
@@ -240,7 +239,7 @@ impl Auditor {
             env,
             cfg.rest_speed,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(AuditError::Rule)?;
         let cap_local: Vec<Capsule> = models
             .robot
             .links()
@@ -325,17 +324,18 @@ impl Auditor {
         t: f64,
         t_meas: f64,
         positions: &[[f64; 3]],
-    ) -> Result<(), String> {
+    ) -> Result<(), AuditError> {
         if !t_meas.is_finite() {
-            return Err(format!("t_meas: value {t_meas} is not finite"));
+            return Err(AuditError::NotFinite {
+                field: "t_meas".into(),
+                value: t_meas,
+            });
         }
         if t_meas > t {
-            return Err(format!(
-                "t_meas: {t_meas} s is after the record's t = {t} s (measurements cannot come from the future)"
-            ));
+            return Err(AuditError::MeasurementFromFuture { t_meas, t });
         }
         let m = HumanMeasurement::new(&self.human, t_meas, positions, None)
-            .map_err(|e| e.to_string())?;
+            .map_err(AuditError::Measurement)?;
         // Check the pending spans first: afterwards only `span_human`'s slot is still needed.
         self.flush_block();
         self.block_human = self.span_human;
@@ -362,7 +362,7 @@ impl Auditor {
 
     /// A robot sample at `t` (s): positions (rad), optional velocities (rad/s). Checks the span
     /// from the previous sample. Errors (wrong length, non-finite value) name the field.
-    pub fn push_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), String> {
+    pub fn push_robot(&mut self, t: f64, q: &[f64], dq: Option<&[f64]>) -> Result<(), AuditError> {
         self.push_robot_with_acc(t, q, dq, None)
     }
 
@@ -375,20 +375,28 @@ impl Auditor {
         q: &[f64],
         dq: Option<&[f64]>,
         ddq: Option<&[f64]>,
-    ) -> Result<(), String> {
+    ) -> Result<(), AuditError> {
         let n = self.n;
         if q.len() != n {
-            return Err(format!(
-                "q: expected {n} joint positions for robot `{}`, found {}",
-                self.names.robot,
-                q.len()
-            ));
+            return Err(AuditError::JointCount {
+                field: "q",
+                what: "positions",
+                expected: n,
+                robot: self.names.robot.clone(),
+                found: q.len(),
+            });
         }
         if let Some((i, x)) = q.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-            return Err(format!("q[{i}]: value {x} is not finite"));
+            return Err(AuditError::NotFinite {
+                field: format!("q[{i}]"),
+                value: *x,
+            });
         }
         if !t.is_finite() {
-            return Err(format!("t: value {t} is not finite"));
+            return Err(AuditError::NotFinite {
+                field: "t".into(),
+                value: t,
+            });
         }
         let mut s = Sample {
             t,
@@ -405,22 +413,25 @@ impl Auditor {
         ] {
             let Some(v) = src else { continue };
             if v.len() != n {
-                return Err(format!(
-                    "{field}: expected {n} joint {what} for robot `{}`, found {}",
-                    self.names.robot,
-                    v.len()
-                ));
+                return Err(AuditError::JointCount {
+                    field,
+                    what,
+                    expected: n,
+                    robot: self.names.robot.clone(),
+                    found: v.len(),
+                });
             }
             if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(format!("{field}[{i}]: value {x} is not finite"));
+                return Err(AuditError::NotFinite {
+                    field: format!("{field}[{i}]"),
+                    value: *x,
+                });
             }
             dst[..n].copy_from_slice(v);
             *flag = true;
         }
         if s.has_ddq && !s.has_dq {
-            return Err(
-                "ddq: accelerations are only accepted together with velocities (dq)".into(),
-            );
+            return Err(AuditError::AccelerationWithoutVelocity);
         }
         // The human records before the previous sample are in use for the span that this sample
         // closes; those since the previous sample wait for the span this sample opens.

@@ -13,10 +13,12 @@
 pub mod check;
 pub mod claims;
 pub mod enclosure;
+pub mod error;
 pub mod series;
 pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
+pub use error::AuditError;
 pub use verdict::{ConstraintKind, InconclusiveReason, Metrics, RunResult, Verdict, Violation};
 
 use pacs_log::{EqualTimeGroup, Header, Location, LogError, LogModels, Record, RecordReader};
@@ -42,13 +44,13 @@ pub fn audit_reader(
     let header_loc = reader.header_location();
     let models =
         LogModels::from_header(&header).map_err(|p| LogError::input(&file, header_loc, p))?;
-    let mut auditor =
-        Auditor::new(models, cfg.clone()).map_err(|p| LogError::input(&file, header_loc, p))?;
+    let mut auditor = Auditor::new(models, cfg.clone())
+        .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
     let mut last_t = f64::NEG_INFINITY;
     // Records of one time stamp are applied in the canonical order (`order`): human
     // measurements, robot samples, events, then file order.
     let mut group = EqualTimeGroup::default();
-    let mut apply = |rec: Record<'_>| -> Result<(), String> {
+    let mut apply = |rec: Record<'_>| -> Result<(), AuditError> {
         match rec {
             Record::Robot { t, q, dq, ddq } => auditor.push_robot_with_acc(t, q, dq, ddq),
             Record::Human {
@@ -78,7 +80,7 @@ pub fn audit_reader(
         if group.time().is_some_and(|tg| tg != t) {
             group
                 .drain(&mut apply)
-                .map_err(|(loc, p)| LogError::input(&file, loc, p))?;
+                .map_err(|(loc, p)| LogError::input(&file, loc, p.to_string()))?;
         }
         last_t = t;
         group.push(&rec, Location::File);
@@ -86,7 +88,7 @@ pub fn audit_reader(
     }
     group
         .drain(&mut apply)
-        .map_err(|(loc, p)| LogError::input(&file, loc, p))?;
+        .map_err(|(loc, p)| LogError::input(&file, loc, p.to_string()))?;
     Ok(auditor.finish(&file, header.meta))
 }
 
