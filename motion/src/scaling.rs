@@ -104,6 +104,11 @@ pub struct SpeedProfile {
 impl SpeedProfile {
     /// Plan the time-optimal jerk-limited change of path speed from `start` to `target`
     /// (ending with s̈ = 0) with |s̈| ≤ max(`acc`, |s̈₀|) and |s⃛| = `jerk` during ramps.
+    ///
+    /// # Soundness
+    /// Claim C6: from a consistent start, ṡ stays ≥ 0, s never decreases, and the profile is
+    /// exactly at the target from `settle_time()` on. Harness `e1_braking_profile`; mutant `x8`
+    /// caught.
     pub fn plan(start: PathState, target: f64, acc: f64, jerk: f64) -> Self {
         let (a0, v0) = (start.sdd, start.sd);
         let mut phases = [Phase::default(); 4];

@@ -84,6 +84,10 @@ pub fn segment_closest_points(
 }
 
 /// A lower bound (m, ≥ 0) of the exact Euclidean distance between segments `a0a1` and `b0b1`.
+///
+/// # Soundness
+/// Claim C2: never above the exact distance (outward-rounded separating-axis bound). Harness
+/// `b1_segment_distance_lower_bound`; mutant `x7` caught.
 #[inline]
 pub fn segment_distance_lower_bound(
     a0: &Point3<f64>,
@@ -146,6 +150,10 @@ pub fn capsules_disjoint(a: &Capsule, b: &Capsule) -> bool {
 }
 
 /// True unless the capsules are provably disjoint: touching counts as intersecting.
+///
+/// # Soundness
+/// Claim C2: `false` only if the capsules are disjoint (touching counts as intersecting).
+/// Harness `b2_capsule_intersection_conservative`.
 #[inline]
 pub fn capsules_may_intersect(a: &Capsule, b: &Capsule) -> bool {
     !capsules_disjoint(a, b)

@@ -286,6 +286,13 @@ impl HumanReach {
     /// Capsules (one per body part, model order) containing every body part over [t_a, t_b]
     /// (absolute times, s, same clock as the measurement). `out.len()` must equal the number of
     /// body parts. Allocates nothing.
+    ///
+    /// # Soundness
+    /// Claim C3: every body part of every admissible motion (the model's speed/acceleration
+    /// bounds since the measured state at `time − delay`, measurement errors `e_p`, `e_v`; for
+    /// `pos` also the extremity lengths unless the measurement contradicts them) lies inside its
+    /// capsule at every instant of `[t_a, t_b]`. Harness `c1_human_occupancy_contains_motion`;
+    /// mutants `m2`, `x6` caught.
     pub fn occupancy_into(
         &mut self,
         m: &HumanMeasurement,

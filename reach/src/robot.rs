@@ -856,6 +856,12 @@ impl RobotReach {
     /// configuration `q` with `q_lo ≤ q ≤ q_hi` (rad), enlarged by the tracking error.
     /// `out.len()` must be [`Self::capsule_count`]. Allocates nothing.
     ///
+    /// # Soundness
+    /// Claim C4 (proofs/README.md): for every `q` in the box, every link capsule at `q` (enlarged
+    /// by `tracking_error`) lies inside its output capsule. Harness `d1_robot_link_enlargement`
+    /// (FR3, boxes ≤ 1 rad wide); mutant `x5` caught. Assumes the model's fixed transforms are
+    /// exact up to `MODEL_PAD`.
+    ///
     /// # Errors
     /// Wrong lengths, non-finite values or `q_lo > q_hi`.
     pub fn occupancy_into(
@@ -970,6 +976,11 @@ impl RobotReach {
     /// Per link: ½·m·sup‖v_c‖² + ½·λ̄·sup‖ω‖², with v_c = Σ_j (z_j × (c − o_j))·q̇_j and
     /// ω = Σ_j z_j·q̇_j evaluated in interval arithmetic over the box frames, and λ̄ ≥ the largest
     /// principal moment of inertia (Gershgorin), since ωᵀ R I Rᵀ ω ≤ λ_max(I)‖ω‖².
+    ///
+    /// # Soundness
+    /// Claim C5: each output is ≥ ½ q̇ᵀ M_k(q) q̇ for every `q`, `q̇` in the boxes; the last
+    /// (`out[dof]`) bounds the whole robot's kinetic energy, what the ISO/TS 15066 rule uses.
+    /// Harness `g1_energy_bound_dominates`; mutant `m5` caught.
     pub fn subchain_energy_bounds_into(
         &self,
         q_lo: &[f64],

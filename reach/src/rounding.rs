@@ -110,6 +110,10 @@ pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 ///
 /// Uses libm at the endpoints padded by [`TRIG_PAD`], plus the extrema ±1 when a critical point
 /// `kπ/2` may lie inside (decided with an interval enclosure of π, so borderline cases include it).
+///
+/// # Soundness
+/// Claim C1: contains sin x and cos x for every x in `[lo, hi]`, assuming libm's sin/cos within
+/// 1 ulp on the reduced range. Harness `a5_sin_cos_interval_encloses`; mutant `x4` caught.
 pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
     debug_assert!(lo <= hi, "sin_cos_interval({lo}, {hi})");
     let full = Interval::new(-1.0, 1.0).expect("valid");

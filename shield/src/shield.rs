@@ -234,6 +234,11 @@ pub struct Decision {
 /// verified candidate (or any candidate in OFF mode) is executed for α_s and its brake profile
 /// becomes the stored failsafe (starting at `t + α_s`); otherwise (no candidate, or not verified)
 /// the stored failsafe is continued to `t + α_s`.
+///
+/// # Soundness
+/// Claim C8 (induction): the robot is always on a verified monitored trajectory; the stored
+/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction`, property
+/// test `f3_real_shield_commands_on_verified_failsafe`; mutant `x2` caught.
 pub fn decide(
     stored: VerifiedFailsafe,
     candidate: Option<Candidate>,
@@ -265,6 +270,10 @@ pub fn decide(
 /// items `(k, t_a, t_b)` relative to the step start: `[0, α_s]` (k = 0), then durations
 /// `first·2^(k−1)` until `stop`, the interval `max_intervals − 1` extending to `stop`. For finite
 /// `0 < α_s ≤ stop`, `first > 0`, the intervals are contiguous and cover `[0, stop]`.
+///
+/// # Soundness
+/// Claim C7: a step is verified only if every interval of the whole monitored trajectory passed,
+/// and these intervals cover it. Harness `f2_occupancy_intervals_cover`; mutant `m4` caught.
 #[derive(Debug, Clone, Copy)]
 pub struct OccupancyIntervals {
     alpha: f64,
