@@ -14,14 +14,6 @@ fn tmpdir(name: &str) -> PathBuf {
     d
 }
 
-fn standing(x: f64) -> Vec<[f64; 3]> {
-    let mut v = vec![[x, 0.0, 1.0]; 9];
-    for (i, p) in v.iter_mut().enumerate() {
-        p[1] = 0.1 * i as f64 - 0.4;
-    }
-    v
-}
-
 /// A 0.2 s log at 1 kHz, joint 1 moving at 0.3 rad/s, human at `x` (m) from the base.
 /// `human` false: no human record (inconclusive).
 fn write_log(path: &Path, x: f64, human: bool, meta: &[(&str, &str)], outcome: &str) {
@@ -38,7 +30,8 @@ fn write_log(path: &Path, x: f64, human: bool, meta: &[(&str, &str)], outcome: &
     for i in 0..=200 {
         let t = i as f64 * 1e-3;
         if human && i % 10 == 0 {
-            w.write_human(t, t, &standing(x)).unwrap();
+            w.write_human(t, t, &pacs_testkit::keypoints_in_a_row(x))
+                .unwrap();
         }
         let mut q = Q;
         q[0] = 0.3 * t;
@@ -320,7 +313,8 @@ fn massless_moving_link_is_refused_for_pfl() {
         );
         let mut w = LogWriter::new(Vec::new());
         w.write_header(&h).unwrap();
-        w.write_human(0.0, 0.0, &standing(2.5)).unwrap();
+        w.write_human(0.0, 0.0, &pacs_testkit::keypoints_in_a_row(2.5))
+            .unwrap();
         w.write_robot(0.0, &Q, None).unwrap();
         w.write_robot(0.001, &Q, None).unwrap();
         let path = d.join(format!("{constraints}.jsonl"));

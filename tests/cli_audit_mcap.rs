@@ -26,14 +26,6 @@ fn tmpdir(name: &str) -> PathBuf {
     d
 }
 
-fn standing(x: f64) -> Vec<[f64; 3]> {
-    let mut v = vec![[x, 0.0, 1.0]; 9];
-    for (i, p) in v.iter_mut().enumerate() {
-        p[1] = 0.1 * i as f64 - 0.4;
-    }
-    v
-}
-
 fn header() -> Header {
     Header::new(
         ModelRef::Name("fr3".into()),
@@ -65,8 +57,10 @@ fn write_run(jsonl: &Path, mcap: &Path, x: f64, robot_topic: &str) {
         let ns = i * 1_000_000;
         let t = ns as f64 / 1e9;
         if i % 10 == 0 {
-            j.write_human(t, t, &standing(x)).unwrap();
-            m.write_human(ns, ns, &standing(x)).unwrap();
+            j.write_human(t, t, &pacs_testkit::keypoints_in_a_row(x))
+                .unwrap();
+            m.write_human(ns, ns, &pacs_testkit::keypoints_in_a_row(x))
+                .unwrap();
         }
         let mut q = Q;
         q[0] = 0.3 * t;
@@ -256,7 +250,8 @@ fn bad_mcap_input_exits_3_naming_file_offset_and_problem() {
         &JOINTS[..6],
     )
     .unwrap();
-    w.write_human(0, 0, &standing(2.5)).unwrap();
+    w.write_human(0, 0, &pacs_testkit::keypoints_in_a_row(2.5))
+        .unwrap();
     w.write_robot(0, 0, &Q[..6], None).unwrap();
     let six = d.join("six.mcap");
     std::fs::write(&six, w.finish().unwrap().into_inner()).unwrap();

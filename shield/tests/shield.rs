@@ -10,25 +10,6 @@ use pacs_shield::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
 
 const Q0: [f64; 7] = fr3::Q_READY;
 
-/// Default human standing upright with the body centred at (x, y), right hand reaching to `hand`.
-fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
-    vec![
-        [x, y + 0.2, 1.4],
-        [x, y + 0.25, 1.15],
-        [x, y + 0.25, 0.9],
-        [x, y - 0.2, 1.4],
-        [
-            0.5 * (x + hand[0]),
-            0.5 * (y - 0.2 + hand[1]),
-            0.5 * (1.4 + hand[2]),
-        ],
-        hand,
-        [x, y, 1.5],
-        [x, y, 1.0],
-        [x, y, 1.65],
-    ]
-}
-
 /// Minimum exact distance between the robot's moving capsules at `q` and the true body parts.
 fn true_separation(
     robot: &pacs_models::RobotModel,
@@ -169,7 +150,7 @@ const FAST: [f64; 7] = [0.08, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 
 #[test]
 fn free_motion_completes_without_a_human_nearby() {
-    let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let far = |_t: f64| pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
     let r = run(FilterMode::Pacs, "sorting", 1500, 400, DELTA, &far);
     assert_eq!(r.moving_contact, 0);
     assert!(
@@ -184,7 +165,7 @@ fn free_motion_completes_without_a_human_nearby() {
 
 #[test]
 fn ssm_never_moves_into_a_person_standing_at_the_tool() {
-    let close = |_t: f64| human_at(0.9, 0.3, [0.32, 0.12, 0.45]);
+    let close = |_t: f64| pacs_testkit::human_reaching(0.9, 0.3, [0.32, 0.12, 0.45]);
     let r = run(FilterMode::Pacs, "sorting", 1000, 400, DELTA, &close);
     assert_eq!(r.moving_contact, 0, "robot moved while in contact");
     let off = run(FilterMode::Off, "sorting", 1000, 400, DELTA, &close);
@@ -216,7 +197,7 @@ fn person_walks_in_and_leaves_robot_resumes_on_the_same_path() {
             far[1] + w * (near[1] - far[1]),
             far[2] + w * (near[2] - far[2]),
         ];
-        human_at(1.4 - 0.3 * w, 0.2, hand)
+        pacs_testkit::human_reaching(1.4 - 0.3 * w, 0.2, hand)
     };
     let r = run(FilterMode::Pacs, "sorting", 4000, 400, DELTA, &script);
     assert_eq!(r.moving_contact, 0);
@@ -303,7 +284,7 @@ fn handover_pfl_contact_energy_stays_below_threshold() {
     let script = |t: f64| {
         let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
         let hand = [1.2 - w * (1.2 - 0.33), 0.1, 1.0 - w * (1.0 - 0.45)];
-        human_at(1.4, 0.2, hand)
+        pacs_testkit::human_reaching(1.4, 0.2, hand)
     };
     let (contacts, ratio, progress) =
         pfl_contacts("handover", &script, FilterMode::Pacs, 2000, vec![], false);
@@ -327,7 +308,7 @@ fn feeding_pfl_head_approach_is_safe() {
     let script = |t: f64| {
         let w = ((t - 0.1) / 1.0).clamp(0.0, 1.0);
         let x = 1.0 - 0.45 * w;
-        let mut kp = human_at(x + 0.1, 0.0, [x, -0.3, 1.0]);
+        let mut kp = pacs_testkit::human_reaching(x + 0.1, 0.0, [x, -0.3, 1.0]);
         kp[8] = [x - 0.05, 0.05, 0.62]; // head low, in front of the robot
         kp[6] = [x + 0.05, 0.0, 0.75];
         kp
@@ -346,7 +327,7 @@ fn hand_resting_on_the_table_gets_the_constrained_threshold() {
     let script = |t: f64| {
         let w = ((t - 0.2) / 0.6).clamp(0.0, 1.0);
         let hand = [1.2 - w * (1.2 - 0.33), 0.1, 0.45];
-        human_at(1.4, 0.2, hand)
+        pacs_testkit::human_reaching(1.4, 0.2, hand)
     };
     let (_, ratio, _) = pfl_contacts(
         "handover",
@@ -410,7 +391,7 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
         }
         (f.q()[0] - Q0[0], off_path, contacts)
     };
-    let far = |_t: f64| human_at(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let far = |_t: f64| pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
     let (progress, off_path, _) = run_cbf(&far);
     assert!(
         progress > 0.2,
@@ -418,7 +399,7 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
     );
     assert!(off_path < 1e-3, "no reason to leave the path: {off_path}");
     // The hand waits on the robot's upcoming path (joint 1 turns the tool toward +y).
-    let close = |_t: f64| human_at(0.9, 0.6, [0.28, 0.32, 0.5]);
+    let close = |_t: f64| pacs_testkit::human_reaching(0.9, 0.6, [0.28, 0.32, 0.5]);
     let (_, off_path, _) = run_cbf(&close);
     assert!(
         off_path > 1e-3,
@@ -458,7 +439,7 @@ fn velocity_tracking_margin_enters_the_pfl_energy_bound() {
         (f[7] * fr3::tcp_in_joint7()).translation.vector
     };
     // The right hand on the tool, the person 0.8 m in front.
-    let kp = human_at(tool.x + 0.8, tool.y, [tool.x + 0.05, tool.y, tool.z]);
+    let kp = pacs_testkit::human_reaching(tool.x + 0.8, tool.y, [tool.x + 0.05, tool.y, tool.z]);
     let step_once = |margin: f64| {
         let cfg = ShieldConfig {
             velocity_tracking_error: margin,

@@ -156,25 +156,6 @@ mod real {
     use pacs_reach::human::HumanMeasurement;
     use pacs_shield::shield::{Shield, ShieldConfig};
 
-    /// Default human standing at (x, y), right hand at `hand` (as in verify's scenario tests).
-    fn human_at(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
-        vec![
-            [x, y + 0.2, 1.4],
-            [x, y + 0.25, 1.15],
-            [x, y + 0.25, 0.9],
-            [x, y - 0.2, 1.4],
-            [
-                0.5 * (x + hand[0]),
-                0.5 * (y - 0.2 + hand[1]),
-                0.5 * (1.4 + hand[2]),
-            ],
-            hand,
-            [x, y, 1.5],
-            [x, y, 1.0],
-            [x, y, 1.65],
-        ]
-    }
-
     /// Counters of the `f3` twin (steps, verified steps, failsafe changes): the test asserts that
     /// both outcomes occur, so the invariants are exercised on verified and unverified steps.
     static F3_STATS: [std::sync::atomic::AtomicUsize; 3] =
@@ -199,8 +180,8 @@ mod real {
         let mut sh = Shield::new(robot, Some((human.clone(), &spec)), vec![], cfg).expect("valid");
         let q0 = fr3::Q_READY;
         sh.start(0.0, &q0).expect("at rest in limits");
-        let far = human_at(3.0, 0.0, [2.8, -0.3, 1.2]);
-        let near = human_at(0.6, 0.0, [0.45, 0.0, 0.6]);
+        let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.3, 1.2]);
+        let near = pacs_testkit::human_reaching(0.6, 0.0, [0.45, 0.0, 0.6]);
         let mut t = 0.0;
         let random_steps = 3 + s.index(12);
         let mut fail_forever = false;

@@ -1,0 +1,46 @@
+//! # pacs-testkit
+//!
+//! Fixtures shared by the tests, benches and harnesses of several crates, so that each exists
+//! once. Keypoints are in the order of the default human model (`lShldr`, `lForeArm`, `lHand`,
+//! `rShldr`, `rForeArm`, `rHand`, `neck`, `hip`, `head`); units m and rad. Robot configurations
+//! such as `pacs_models::fr3::Q_READY` live with the model.
+
+/// The default human standing at (x, y) with the right hand at `hand` (the forearm keypoint
+/// halfway between the right shoulder and the hand).
+pub fn human_reaching(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
+    vec![
+        [x, y + 0.2, 1.4],
+        [x, y + 0.25, 1.15],
+        [x, y + 0.25, 0.9],
+        [x, y - 0.2, 1.4],
+        [
+            0.5 * (x + hand[0]),
+            0.5 * (y - 0.2 + hand[1]),
+            0.5 * (1.4 + hand[2]),
+        ],
+        hand,
+        [x, y, 1.5],
+        [x, y, 1.0],
+        [x, y, 1.65],
+    ]
+}
+
+/// Nine keypoints in a row at `x` (m from the base), 1 m high, 0.1 m apart along y: a person
+/// far from or near the robot depending on `x`, for log and CLI tests.
+pub fn keypoints_in_a_row(x: f64) -> Vec<[f64; 3]> {
+    (0..9).map(|i| [x, 0.1 * i as f64 - 0.4, 1.0]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixtures_have_the_default_humans_nine_keypoints() {
+        assert_eq!(human_reaching(1.0, 0.0, [0.5, 0.0, 1.0]).len(), 9);
+        let row = keypoints_in_a_row(2.0);
+        assert_eq!(row.len(), 9);
+        assert_eq!(row[0], [2.0, -0.4, 1.0]);
+        assert!((row[8][1] - 0.4).abs() < 1e-15);
+    }
+}
