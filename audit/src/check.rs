@@ -764,9 +764,20 @@ impl Auditor {
             return;
         }
         let violated = true;
-        // Certain check at both recorded samples, with the measured keypoints.
-        for s in [s0, s1] {
-            certain |= self.certain_at(s, s0, s1, slot);
+        // Certain check at both recorded samples, with the measured keypoints — only where the
+        // samples agree with each other: "certain" takes the logged state at face value, which a
+        // contradicted sample does not deserve (the span's possible violation still fails the log).
+        if consistent {
+            for s in [s0, s1] {
+                certain |= self.certain_at(s, s0, s1, slot);
+            }
+        } else {
+            for s in [s0, s1] {
+                self.certain_at(s, s0, s1, slot);
+            }
+            for h in self.hits.iter_mut() {
+                h.certain = false;
+            }
         }
         let idx = self.span_index;
         for k in 0..self.hits.len() {
