@@ -86,12 +86,11 @@ impl FilterKind {
             )?),
             kind => {
                 let cfg = ShieldConfig {
-                    mode: if kind == FilterKind::Off {
-                        FilterMode::Off
-                    } else {
-                        FilterMode::Pacs
+                    mode: match kind {
+                        FilterKind::Off => FilterMode::Off,
+                        FilterKind::SingleAction => FilterMode::SingleAction,
+                        _ => FilterMode::Pacs,
                     },
-                    single_action: kind == FilterKind::SingleAction,
                     ..ShieldConfig::default()
                 };
                 Box::new(Shield::new(

@@ -42,6 +42,9 @@ pub enum FilterMode {
     Pacs,
     /// OFF: follow the intended trajectory, never brake (diagnostics are still computed).
     Off,
+    /// PACS planning each action as its own stop-at-target motion (the paper's single-action
+    /// baseline), verified like PACS.
+    SingleAction,
 }
 
 /// Shield settings (units: s, m, rad/s², rad/s³).
@@ -64,9 +67,7 @@ pub struct ShieldConfig {
     pub intended_jerk: f64,
     /// Velocity limit scale of intended trajectories, in (0, 1].
     pub intended_vel_scale: f64,
-    /// Plan each action as its own stop-at-target motion (the paper's single-action baseline).
-    pub single_action: bool,
-    /// PACS or OFF.
+    /// PACS, OFF or single-action.
     pub mode: FilterMode,
     /// Waypoints outside the position limits: reject the chunk or project them.
     pub out_of_limits: OutOfLimits,
@@ -90,7 +91,6 @@ impl Default for ShieldConfig {
             intended_acc_fraction: 0.8,
             intended_jerk: 400.0,
             intended_vel_scale: 1.0,
-            single_action: false,
             mode: FilterMode::Pacs,
             out_of_limits: OutOfLimits::Reject,
             first_interval: 0.002,
@@ -553,7 +553,7 @@ impl Shield {
             self.robot.limits(),
             self.config.out_of_limits,
         )?;
-        let traj = if self.config.single_action {
+        let traj = if self.config.mode == FilterMode::SingleAction {
             self.planner.plan_single_action(&start, &wp)?
         } else {
             self.planner.plan(&start, &wp)?
@@ -705,7 +705,7 @@ impl Shield {
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
         // when the human is far; otherwise the fine intervals below decide.
-        if self.config.mode == FilterMode::Pacs && stop > alpha {
+        if self.config.mode != FilterMode::Off && stop > alpha {
             let mut coarse = *diag;
             if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &meas, &mut coarse) {
                 *diag = coarse;
@@ -723,7 +723,7 @@ impl Shield {
         for (k, ta, tb) in intervals {
             if !self.check_interval(slot, go, brake, t, ta, tb, k, &meas, diag) {
                 ok = false;
-                if self.config.mode == FilterMode::Pacs {
+                if self.config.mode != FilterMode::Off {
                     break;
                 }
             }
