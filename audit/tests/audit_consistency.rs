@@ -271,3 +271,46 @@ fn pos_model_does_not_trust_a_contradicted_extremity_length() {
         );
     }
 }
+
+/// `ddq` is accepted in JSON Lines and CSV (3n values), only together with `dq`; the same data
+/// gets the same verdict in both forms.
+#[test]
+fn accelerations_in_jsonl_and_csv() {
+    let q = "0.3,-0.5,0.2,-2.0,0.1,1.8,0.6";
+    let zeros = "0,0,0,0,0,0,0";
+    let kp: Vec<String> = (0..9)
+        .map(|i| format!("2.6,{},1", i as f64 * 0.1))
+        .collect();
+    let head = header("handover");
+    let mut jsonl = format!(
+        "{head}\n{{\"type\":\"human\",\"t\":0,\"positions\":[{}]}}\n",
+        kp.iter()
+            .map(|p| format!("[{p}]"))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let mut csv = format!("#{head}\nhuman,0,0,{}\n", kp.join(","));
+    for k in 0..=10 {
+        let t = k as f64 * 0.001;
+        jsonl.push_str(&format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q}],\"dq\":[{zeros}],\"ddq\":[{zeros}]}}\n"
+        ));
+        csv.push_str(&format!("robot,{t},7,{q},{zeros},{zeros}\n"));
+    }
+    let r = run(&jsonl);
+    assert_eq!(r.verdict, Verdict::Pass, "{r:?}");
+    let mut reader =
+        pacs_log::csv::CsvReader::new("t.csv", std::io::Cursor::new(csv.as_bytes())).unwrap();
+    let c = audit_reader(&mut reader, &AuditConfig::default()).unwrap();
+    assert_eq!(c.verdict, Verdict::Pass);
+    assert_eq!(c.metrics.samples, r.metrics.samples);
+    // Accelerations without velocities: an input error naming the field and the line.
+    let bad = format!(
+        "{head}\n{{\"type\":\"robot\",\"t\":0,\"q\":[{q}],\"ddq\":[{zeros}]}}\n{{\"type\":\"robot\",\"t\":0.001,\"q\":[{q}]}}\n"
+    );
+    let mut reader = JsonlReader::new("t.jsonl", std::io::Cursor::new(bad.as_bytes())).unwrap();
+    let err = audit_reader(&mut reader, &AuditConfig::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("ddq") && err.contains("line 2"), "{err}");
+}
