@@ -1,0 +1,91 @@
+//! The certain check of [`Auditor`]: a possible violation is *certain* if it holds at a recorded
+//! sample with the measured keypoints taken at face value.
+
+use super::*;
+
+/// Signed separation lower bound (m) of two capsules: negative values bound the overlap depth.
+fn signed_separation(a: &Capsule, b: &Capsule) -> f64 {
+    let d = pacs_reach::geometry::segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
+    sub_down(d, add_up(a.radius(), b.radius()))
+}
+
+/// True only if the two capsules certainly overlap or touch (exact axis distance ≤ sum of radii).
+fn certainly_touch(a: &Capsule, b: &Capsule) -> bool {
+    segment_distance_upper_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2())
+        <= sub_down(a.radius() + b.radius(), (a.radius() + b.radius()) * 1e-15)
+}
+
+impl Auditor {
+    /// Evaluate the span's hits at the recorded sample `s` with the measured keypoints; updates
+    /// each hit's `certain` and `separation`. Returns whether any hit is certain there. The
+    /// classification is the rule's ([`pacs_verify::iso15066`]), with "certainly touches" (exact axis
+    /// distance ≤ sum of radii) in place of "may touch", and the nominal whole-robot kinetic
+    /// energy ½q̇ᵀM(q)q̇ at the sample in place of its bound.
+    pub(super) fn certain_at(&mut self, s: &Sample, s0: &Sample, s1: &Sample, slot: usize) -> bool {
+        let n = self.n;
+        let Some(m) = self.humans[slot].as_ref() else {
+            return false;
+        };
+        let dt = s1.t - s0.t;
+        let mut dq = [0.0; MAX_DOF];
+        let known_dq = s.has_dq || dt > 0.0;
+        for j in 0..n {
+            dq[j] = if s.has_dq {
+                s.dq[j]
+            } else if dt > 0.0 {
+                (s1.q[j] - s0.q[j]) / dt
+            } else {
+                0.0
+            };
+        }
+        self.robot.frames_into(&s.q[..n], &mut self.frames);
+        for (c, local) in self.cap_local.iter().enumerate() {
+            self.nom_caps[c] = local.transformed(&self.frames[self.rule.capsule_frame(c)]);
+        }
+        let energy = self.robot.kinetic_energy(&s.q[..n], &dq[..n]);
+        let moving = known_dq && dq[..n].iter().any(|v| v.abs() > self.cfg.rest_speed);
+        let pos = m.positions();
+        let part_cap = |p: usize| {
+            let bp = &self.human.body_parts()[p];
+            Capsule::new_unchecked(pos[bp.from], pos[bp.to], bp.thickness * 0.5)
+        };
+        let rule = &self.rule;
+        let mut any = false;
+        for k in 0..self.hits.len() {
+            let h = self.hits[k];
+            let pc = part_cap(h.part);
+            let (s_, e_) = self.rreach.link_ranges()[h.link];
+            let mut touch = false;
+            let mut sep = f64::INFINITY;
+            let mut frame = 0;
+            for c in s_..e_ {
+                sep = sep.min(signed_separation(&self.nom_caps[c], &pc));
+                if certainly_touch(&self.nom_caps[c], &pc) {
+                    touch = true;
+                    frame = rule.capsule_frame(c);
+                }
+            }
+            let certain = touch
+                && match h.kind {
+                    ConstraintKind::Ssm => moving,
+                    ConstraintKind::Pfl => {
+                        let clamp = self.environment.iter().any(|e| certainly_touch(e, &pc))
+                            || (0..self.parts).any(|o| {
+                                rule.clampable(h.part, o) && certainly_touch(&part_cap(o), &pc)
+                            })
+                            || (0..self.nom_caps.len()).any(|o| {
+                                frames_can_pinch(rule.capsule_frame(o), frame)
+                                    && certainly_touch(&self.nom_caps[o], &pc)
+                            });
+                        let thr = threshold(rule.constraint(h.part), clamp);
+                        known_dq && energy > thr
+                    }
+                };
+            let hit = &mut self.hits[k];
+            hit.separation = hit.separation.min(sep);
+            hit.certain |= certain;
+            any |= certain;
+        }
+        any
+    }
+}

@@ -1,0 +1,350 @@
+//! The span checks of [`Auditor`]: joint boxes, the block fast path, span by span, and the one
+//! ISO/TS 15066 rule applied to each.
+
+use super::*;
+
+impl Auditor {
+    /// The span's joint boxes ([`span_boxes`]); false if the samples contradict each other or
+    /// the robot's limits (the span is then `exceeds_limits`).
+    pub(super) fn boxes(&self, s0: &Sample, s1: &Sample, b: &mut SpanBoxes) -> bool {
+        span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack, b)
+    }
+
+    /// Check the buffered spans (all using the human measurement `block_human`), keeping the
+    /// last sample as the start of the next block.
+    pub(super) fn flush_block(&mut self) {
+        let m = self.block.len();
+        if m >= 2 {
+            let slot = self.block_human;
+            if !self.check_block(slot) {
+                for i in 0..m - 1 {
+                    let (a, b) = (self.block[i], self.block[i + 1]);
+                    self.check_span(&a, &b, slot);
+                }
+            }
+            let last = self.block[m - 1];
+            self.block.clear();
+            self.block.push(last);
+        }
+    }
+
+    /// The one ISO/TS 15066 rule ([`ContactRule::check`]) on the occupancies in `self.rcaps`
+    /// (computed for `b`'s position box) and `self.hcaps`, with the whole-robot energy bound over
+    /// `b`. With `collect`, every violating pair is pushed to `self.hits`; otherwise the rule
+    /// stops at the first.
+    pub(super) fn apply_rule(&mut self, b: &SpanBoxes, collect: bool) -> Outcome {
+        let n = self.n;
+        let Self {
+            rule,
+            rreach,
+            scratch,
+            rcaps,
+            hcaps,
+            energies,
+            hits,
+            ..
+        } = self;
+        hits.clear();
+        // Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
+        let energy = || match rreach.subchain_energy_bounds_with(
+            scratch,
+            &b.q_lo[..n],
+            &b.q_hi[..n],
+            &b.dq_lo[..n],
+            &b.dq_hi[..n],
+            energies,
+        ) {
+            Ok(()) => energies[n],
+            Err(_) => f64::INFINITY,
+        };
+        rule.check(
+            rcaps,
+            &b.dq_lo[..n],
+            &b.dq_hi[..n],
+            hcaps,
+            energy,
+            true,
+            |h| {
+                if !collect {
+                    return ControlFlow::Break(());
+                }
+                hits.push(SpanHit {
+                    part: h.part,
+                    link: h.link,
+                    kind: h.kind,
+                    energy: h.energy,
+                    threshold: h.threshold,
+                    constrained: h.constrained,
+                    certain: false,
+                    separation: f64::INFINITY,
+                });
+                ControlFlow::Continue(())
+            },
+        )
+    }
+
+    /// Fast path: one check over the union of the block's span boxes and the human occupancy
+    /// over the whole block (both supersets of every span's enclosures, so "no violation
+    /// possible" holds for every span). Returns false, having recorded nothing, if the block is
+    /// not provably clean; the caller then checks span by span.
+    pub(super) fn check_block(&mut self, slot: Option<usize>) -> bool {
+        let m = self.block.len();
+        let n = self.n;
+        if m < 3 {
+            return false;
+        }
+        let Some(slot) = slot else { return false };
+        let Some(meas) = self.humans[slot].as_ref() else {
+            return false;
+        };
+        let (t0, t1) = (self.block[0].t, self.block[m - 1].t);
+        if t1 - meas.time() > self.cfg.max_human_age {
+            return false;
+        }
+        if self
+            .hreach
+            .occupancy_into(meas, t0, t1, &mut self.hcaps)
+            .is_err()
+        {
+            return false;
+        }
+        let mut u = SpanBoxes {
+            q_lo: [f64::INFINITY; MAX_DOF],
+            q_hi: [f64::NEG_INFINITY; MAX_DOF],
+            dq_lo: [f64::INFINITY; MAX_DOF],
+            dq_hi: [f64::NEG_INFINITY; MAX_DOF],
+        };
+        let mut sb = SpanBoxes::default();
+        for i in 0..m - 1 {
+            let (a, b) = (self.block[i], self.block[i + 1]);
+            if b.t - a.t > self.cfg.max_gap || !self.boxes(&a, &b, &mut sb) {
+                return false;
+            }
+            for j in 0..n {
+                u.q_lo[j] = u.q_lo[j].min(sb.q_lo[j]);
+                u.q_hi[j] = u.q_hi[j].max(sb.q_hi[j]);
+                u.dq_lo[j] = u.dq_lo[j].min(sb.dq_lo[j]);
+                u.dq_hi[j] = u.dq_hi[j].max(sb.dq_hi[j]);
+            }
+        }
+        let (sep, pfl_seen) = match self.rule.workspace_clear(&self.hcaps) {
+            Some(sep) => (sep, None),
+            None => {
+                if self
+                    .rreach
+                    .occupancy_with(
+                        &mut self.scratch,
+                        &u.q_lo[..n],
+                        &u.q_hi[..n],
+                        &mut self.rcaps,
+                    )
+                    .is_err()
+                {
+                    return false;
+                }
+                let out = self.apply_rule(&u, false);
+                if out.violated {
+                    return false;
+                }
+                (out.separation, out.pfl)
+            }
+        };
+        // Every span of the block is clean: per-span bookkeeping only.
+        for i in 0..m - 1 {
+            let (a, b) = (self.block[i], self.block[i + 1]);
+            self.span_index += 1;
+            let (bidx, new_bucket) = self.series.bucket(a.t);
+            if new_bucket {
+                self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(&a, &b));
+            }
+            if let Some((e, thr)) = pfl_seen {
+                let bk = &mut self.series.buckets[bidx];
+                bk.energy_bound = max_opt(bk.energy_bound, Some(reportable(e)));
+                bk.threshold = min_opt(bk.threshold, Some(thr));
+            }
+            self.record_separation(bidx, sep);
+        }
+        self.last_span_violated = false;
+        self.last_span_certain = false;
+        true
+    }
+
+    /// Nominal whole-robot kinetic energy (J) at `a` (velocity logged, else the span's mean).
+    pub(super) fn nominal_energy(&self, a: &Sample, b: &Sample) -> f64 {
+        let n = self.n;
+        let dt = b.t - a.t;
+        let mut dq = [0.0; MAX_DOF];
+        for j in 0..n {
+            dq[j] = if a.has_dq {
+                a.dq[j]
+            } else if dt > 0.0 {
+                (b.q[j] - a.q[j]) / dt
+            } else {
+                0.0
+            };
+        }
+        reportable(self.robot.kinetic_energy(&a.q[..n], &dq[..n]))
+    }
+
+    pub(super) fn check_span(&mut self, s0: &Sample, s1: &Sample, span_human: Option<usize>) {
+        self.span_index += 1;
+        let (t0, t1) = (s0.t, s1.t);
+        let dt = t1 - t0;
+        let (bidx, new_bucket) = self.series.bucket(t0);
+        let mut certain = false;
+        let finish_span = |this: &mut Self, violated: bool, certain: bool| {
+            if violated {
+                this.violating_samples += 1;
+            }
+            if certain {
+                this.certain_samples += 1;
+            }
+            this.last_span_violated = violated;
+            this.last_span_certain = certain;
+            this.series.buckets[bidx].violation |= violated;
+        };
+        if dt > self.cfg.max_gap {
+            self.mark_inconclusive(t0, t1, Reason::Gap);
+            self.inconclusive_duration += dt;
+            self.series.buckets[bidx].inconclusive = true;
+            finish_span(self, false, false);
+            return;
+        }
+        let Some(slot) = span_human else {
+            self.mark_inconclusive(t0, t1, Reason::NoHuman);
+            self.inconclusive_duration += dt;
+            self.series.buckets[bidx].inconclusive = true;
+            finish_span(self, false, false);
+            return;
+        };
+        let Some(m) = self.humans[slot].as_ref() else {
+            // Unreachable by construction; never let an unchecked span pass.
+            self.mark_inconclusive(t0, t1, Reason::NoHuman);
+            self.inconclusive_duration += dt;
+            finish_span(self, false, false);
+            return;
+        };
+        if t1 - m.time() > self.cfg.max_human_age {
+            self.mark_inconclusive(t0, t1, Reason::StaleHuman);
+            self.inconclusive_duration += dt;
+            self.series.buckets[bidx].inconclusive = true;
+            finish_span(self, false, false);
+            return;
+        }
+        if let Err(_e) = self.hreach.occupancy_into(m, t0, t1, &mut self.hcaps) {
+            self.mark_inconclusive(t0, t1, Reason::HumanReachError);
+            self.inconclusive_duration += dt;
+            self.series.buckets[bidx].inconclusive = true;
+            finish_span(self, false, false);
+            return;
+        }
+        let n = self.n;
+        let mut bx = SpanBoxes::default();
+        let consistent = self.boxes(s0, s1, &mut bx);
+        if !consistent {
+            self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
+            self.inconclusive_duration += dt;
+            self.series.buckets[bidx].inconclusive = true;
+        }
+        if new_bucket {
+            self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(s0, s1));
+        }
+        // Broad phase, stage 1: every body part outside the robot's workspace ball.
+        if let Some(sep) = self.rule.workspace_clear(&self.hcaps) {
+            self.record_separation(bidx, sep);
+            finish_span(self, false, false);
+            return;
+        }
+        // Robot occupancy over the span.
+        if self
+            .rreach
+            .occupancy_with(
+                &mut self.scratch,
+                &bx.q_lo[..n],
+                &bx.q_hi[..n],
+                &mut self.rcaps,
+            )
+            .is_err()
+        {
+            // Only non-finite boxes (absurd samples) get here: never let the span pass.
+            if consistent {
+                self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
+                self.inconclusive_duration += dt;
+            }
+            finish_span(self, false, false);
+            return;
+        }
+        let out = self.apply_rule(&bx, true);
+        self.record_separation(bidx, out.separation);
+        if let Some((e, thr)) = out.pfl {
+            let b = &mut self.series.buckets[bidx];
+            b.energy_bound = max_opt(b.energy_bound, Some(reportable(e)));
+            b.threshold = min_opt(b.threshold, Some(thr));
+        }
+        if self.hits.is_empty() {
+            finish_span(self, false, false);
+            return;
+        }
+        let violated = true;
+        // Certain check at both recorded samples, with the measured keypoints — only where the
+        // samples agree with each other: "certain" takes the logged state at face value, which a
+        // contradicted sample does not deserve (the span's possible violation still fails the log).
+        if consistent {
+            for s in [s0, s1] {
+                certain |= self.certain_at(s, s0, s1, slot);
+            }
+        } else {
+            for s in [s0, s1] {
+                self.certain_at(s, s0, s1, slot);
+            }
+            for h in self.hits.iter_mut() {
+                h.certain = false;
+            }
+        }
+        let idx = self.span_index;
+        for k in 0..self.hits.len() {
+            let h = self.hits[k];
+            let key = h.part * self.links + h.link;
+            let extend =
+                matches!(&self.open[key], Some(o) if o.last_span + 1 == idx && o.kind == h.kind);
+            if extend {
+                let Some(o) = self.open[key].as_mut() else {
+                    continue;
+                };
+                o.v_end = t1;
+                o.min_sep = o.min_sep.min(h.separation);
+                o.energy = o.energy.max(h.energy);
+                o.threshold = o.threshold.min(h.threshold);
+                o.constrained |= h.constrained;
+                o.certain |= h.certain;
+                o.spans += 1;
+                o.last_span = idx;
+            } else {
+                if let Some(o) = self.open[key].take() {
+                    self.close(key, o);
+                }
+                self.open[key] = Some(OpenInterval {
+                    v_start: t0,
+                    v_end: t1,
+                    kind: h.kind,
+                    min_sep: h.separation,
+                    energy: h.energy,
+                    threshold: h.threshold,
+                    constrained: h.constrained,
+                    certain: h.certain,
+                    spans: 1,
+                    last_span: idx,
+                });
+            }
+        }
+        finish_span(self, violated, certain);
+    }
+
+    pub(super) fn record_separation(&mut self, bidx: usize, sep: f64) {
+        if sep.is_finite() {
+            self.min_separation = min_opt(self.min_separation, Some(sep));
+            let b = &mut self.series.buckets[bidx];
+            b.min_separation = min_opt(b.min_separation, Some(sep));
+        }
+    }
+}
