@@ -331,3 +331,46 @@ fn massless_moving_link_is_refused_for_pfl() {
         }
     }
 }
+
+/// Issue 11: a header robot with finite but astronomical offsets overflowed the checker (a panic
+/// in debug builds; in release the run came out inconclusive with `"min_separation": null` and
+/// the contact at the base unreported). The model is refused: exit 3 naming the header line and
+/// the field.
+#[test]
+fn astronomical_robot_in_the_header_is_refused() {
+    let mut spec = pacs_models::RobotModel::builtin("fr3")
+        .unwrap()
+        .spec()
+        .clone();
+    spec.joints[1].origin.xyz = [1.7e308, 0.0, 0.0];
+    spec.joints[2].origin.xyz = [1.7e308, 0.0, 0.0];
+    let d = tmpdir("astronomical");
+    let h = Header::new(
+        ModelRef::Spec(Box::new(spec)),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&h).unwrap();
+    // The human at the base: a certain SSM contact while joint 1 turns.
+    w.write_human(0.0, 0.0, &[[0.0, 0.0, 0.2]; 9]).unwrap();
+    let mut q = Q;
+    for k in 0..3 {
+        q[0] = 0.5e-3 * k as f64;
+        let dq = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        w.write_robot(1e-3 * k as f64, &q, Some(&dq)).unwrap();
+    }
+    let path = d.join("astronomical.jsonl");
+    std::fs::write(&path, w.finish().unwrap()).unwrap();
+    let o = pacs(&["audit", "--json", &s(&path)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(
+            "astronomical.jsonl: line 1: header.robot: invalid value for `joints[1].origin.xyz`"
+        ) && err.contains("must be at most 1e6 m"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}

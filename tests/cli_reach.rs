@@ -399,3 +399,68 @@ fn overflowing_bounds_are_input_errors_not_null() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 11: `pacs fk` printed `null` for a robot whose offsets overflow (finite in the file,
+/// `inf` after summing). Every command that loads a robot refuses it: exit 3 naming the field.
+#[test]
+fn astronomical_robot_is_an_input_error_not_null() {
+    let mut spec =
+        serde_json::to_value(pacs_models::RobotModel::builtin("fr3").unwrap().spec()).unwrap();
+    spec["joints"][1]["origin"]["xyz"] = json!([1.7e308, 0.0, 0.0]);
+    spec["joints"][2]["origin"]["xyz"] = json!([1.7e308, 0.0, 0.0]);
+    let cases: [(&[&str], Value); 2] = [
+        (&["fk"], json!({"robot": spec, "q": [Q_READY]})),
+        (
+            &["reach", "robot"],
+            json!({"robot": spec, "boxes": [{"q_lo": Q_READY, "q_hi": Q_READY}]}),
+        ),
+    ];
+    for (sub, input) in cases {
+        let o = with_input(sub, &input);
+        assert!(o.stdout.is_empty(), "{sub:?}: {:?}", o.stdout);
+        invalid(o, "robot: invalid value for `joints[1].origin.xyz`");
+    }
+}
+
+/// Issue 11: a URDF link whose collision geometry is a mesh (no side-file capsules) would be
+/// invisible to every check; every command that loads the robot refuses it, naming the links.
+#[test]
+fn mesh_only_urdf_links_are_refused_by_every_command() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/models/tests/data");
+    let urdf = std::fs::read_to_string(format!("{data}/planar2.urdf"))
+        .unwrap()
+        .replace(
+            "<box size=\"0.2 0.1 0.4\"/>",
+            "<mesh filename=\"package://planar2/fore.stl\"/>",
+        )
+        .replace(
+            "<cylinder radius=\"0.05\" length=\"1.0\"/>",
+            "<mesh filename=\"package://planar2/upper.stl\"/>",
+        );
+    let dir = std::env::temp_dir().join(format!("pacs-cli-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("planar2_mesh.urdf");
+    std::fs::write(&path, urdf).unwrap();
+    let robot = json!({"urdf": path, "side": format!("{data}/planar2_side.json")});
+    let cases: [(&[&str], Value); 3] = [
+        (&["fk"], json!({"robot": robot, "q": [[0.0, 0.0]]})),
+        (
+            &["reach", "robot"],
+            json!({"robot": robot, "boxes": [{"q_lo": [0.0, 0.0], "q_hi": [0.1, 0.1]}]}),
+        ),
+        (
+            &["trajectory"],
+            json!({"robot": robot, "state": {"q": [0.0, 0.0]}, "chunk": {"actions": [[0.1, 0.1]], "execute": 1}}),
+        ),
+    ];
+    for (sub, input) in cases {
+        let o = with_input(sub, &input);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        invalid(
+            o,
+            "links with mesh collision geometry and no capsules: `upper`, `fore`",
+        );
+        assert!(err.contains("planar2_mesh.urdf"), "{sub:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

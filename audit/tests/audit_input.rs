@@ -174,4 +174,26 @@ fn writer_rejects_what_the_reader_would_reject() {
     ));
     w.write_robot(1.0, &[0.0], None).unwrap();
     assert!(w.write_robot(0.5, &[0.0], None).is_err(), "time backwards");
+    // Accelerations without velocities: refused (the reader would reject the line), never
+    // dropped silently.
+    let e = w
+        .write_robot_with_acc(1.0, &[0.0], None, Some(&[0.0]))
+        .unwrap_err();
+    assert!(
+        matches!(e, WriteError::AccelerationsWithoutVelocities),
+        "{e:?}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "ddq: accelerations are written only together with velocities (dq)"
+    );
+    w.write_robot_with_acc(1.0, &[0.0], Some(&[0.0]), Some(&[0.5]))
+        .unwrap();
+    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    assert!(
+        text.ends_with(
+            "{\"type\":\"robot\",\"t\":1.0,\"q\":[0.0]}\n{\"type\":\"robot\",\"t\":1.0,\"q\":[0.0],\"dq\":[0.0],\"ddq\":[0.5]}\n"
+        ),
+        "{text}"
+    );
 }

@@ -254,6 +254,9 @@ pub enum WriteError {
     /// The header was not written first, or written twice.
     #[error("{0}")]
     Order(&'static str),
+    /// Accelerations without velocities (the format holds `ddq` only together with `dq`).
+    #[error("ddq: accelerations are written only together with velocities (dq)")]
+    AccelerationsWithoutVelocities,
     /// Serialization or I/O failed.
     #[error("write failed: {0}")]
     Io(#[from] std::io::Error),
@@ -329,7 +332,8 @@ impl<W: Write> LogWriter<W> {
         self.write_robot_with_acc(t, q, dq, None)
     }
 
-    /// A robot sample with optional accelerations (rad/s²; written only together with `dq`).
+    /// A robot sample with optional accelerations (rad/s²; only together with `dq`: `ddq`
+    /// without `dq` is refused, never dropped silently).
     pub fn write_robot_with_acc(
         &mut self,
         t: f64,
@@ -337,6 +341,9 @@ impl<W: Write> LogWriter<W> {
         dq: Option<&[f64]>,
         ddq: Option<&[f64]>,
     ) -> Result<(), WriteError> {
+        if dq.is_none() && ddq.is_some() {
+            return Err(WriteError::AccelerationsWithoutVelocities);
+        }
         self.begin(t)?;
         write!(self.out, "{{\"type\":\"robot\",\"t\":{t:?},\"q\":")?;
         write_list(&mut self.out, "q", q)?;

@@ -21,7 +21,7 @@ pub mod urdf;
 pub use constraints::{Constraint, ConstraintSpec, TaskConstraints};
 pub use error::ModelError;
 pub use human::{HumanModel, HumanSpec, default_human};
-pub use robot::{JointLimits, MAX_DOF, RobotModel, RobotSpec};
+pub use robot::{JointLimits, MAX_DOF, MAX_REACH, RobotModel, RobotSpec};
 pub use shape::Capsule;
 
 /// Load a model-like value from a string that is either JSON (starts with `{`) or TOML.

@@ -8,6 +8,12 @@ use serde::{Deserialize, Serialize};
 /// Largest number of joints a model may have (fixed-size buffers in hot paths use this).
 pub const MAX_DOF: usize = 16;
 
+/// Largest reach (m) of a robot model from the world origin: the base offset, the joint offsets
+/// along the chain and the farthest capsule point (radius included) or centre of mass. Finite
+/// but astronomical offsets (a unit mistake, `1e300`) would overflow forward kinematics,
+/// distances and energies into `inf`/NaN; such a model is refused instead.
+pub const MAX_REACH: f64 = 1.0e6;
+
 /// A rigid pose as URDF writes it: translation `xyz` (m) then roll-pitch-yaw `rpy` (rad, fixed axes X, Y, Z).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -370,6 +376,7 @@ impl RobotModel {
             lim(|l| l.j_max),
         )?;
         let mut links = Vec::with_capacity(spec.links.len());
+        let mut link_origins = Vec::with_capacity(spec.links.len());
         for (li, l) in spec.links.iter().enumerate() {
             if spec.links[..li].iter().any(|o| o.name == l.name) {
                 return Err(ModelError::DuplicateName {
@@ -391,6 +398,7 @@ impl RobotModel {
                     })?
             };
             let origin = l.origin.validate(&format!("links[{li}].origin"))?;
+            link_origins.push(origin);
             let mut capsules = Vec::with_capacity(l.capsules.len());
             for (ci, c) in l.capsules.iter().enumerate() {
                 let cap = Capsule::try_from(*c)
@@ -412,6 +420,7 @@ impl RobotModel {
                 inertial,
             });
         }
+        check_reach(&base, &joints, &links, &link_origins)?;
         Ok(Self {
             spec,
             base,
@@ -484,6 +493,59 @@ impl RobotModel {
     pub fn capsule_count(&self) -> usize {
         self.links.iter().map(|l| l.capsules.len()).sum()
     }
+}
+
+/// Refuse a model that reaches farther than [`MAX_REACH`] from the world origin (see there),
+/// naming the first offset (base, joint, link origin), capsule or centre of mass along the chain that does; the value is
+/// the reach up to it. Every point of a link on frame k is within the sum of the base and joint
+/// offsets up to k plus its distance from that frame's origin (rotations preserve lengths).
+fn check_reach(
+    base: &Isometry3<f64>,
+    joints: &[Joint],
+    links: &[Link],
+    link_origins: &[Isometry3<f64>],
+) -> Result<(), ModelError> {
+    let check = |field: &dyn Fn() -> String, reach: f64| {
+        if reach <= MAX_REACH {
+            Ok(())
+        } else {
+            Err(ModelError::InvalidValue {
+                field: field(),
+                value: reach,
+                reason: "the robot's reach from the world origin must be at most 1e6 m",
+            })
+        }
+    };
+    // Euclidean length without overflow in the squares (the value reported stays meaningful).
+    let norm = |v: &Vector3<f64>| {
+        let m = v.amax();
+        if m > 0.0 { m * (v / m).norm() } else { 0.0 }
+    };
+    let mut cum = [0.0; MAX_DOF + 1];
+    cum[0] = norm(&base.translation.vector);
+    check(&|| "base.xyz".into(), cum[0])?;
+    for (i, j) in joints.iter().enumerate() {
+        cum[i + 1] = cum[i] + norm(&j.origin.translation.vector);
+        check(&|| format!("joints[{i}].origin.xyz"), cum[i + 1])?;
+    }
+    for (li, (l, ls)) in links.iter().zip(link_origins).enumerate() {
+        let origin = cum[l.frame] + norm(&ls.translation.vector);
+        check(&|| format!("links[{li}].origin.xyz"), origin)?;
+        for (ci, c) in l.capsules.iter().enumerate() {
+            let far = norm(&c.p1().coords).max(norm(&c.p2().coords)) + c.radius();
+            check(
+                &|| format!("links[{li}].capsules[{ci}]"),
+                cum[l.frame] + far,
+            )?;
+        }
+        if let Some(i) = &l.inertial {
+            check(
+                &|| format!("links[{li}].inertial.com"),
+                cum[l.frame] + norm(&i.com.coords),
+            )?;
+        }
+    }
+    Ok(())
 }
 
 fn prefix(e: ModelError, p: &str) -> ModelError {

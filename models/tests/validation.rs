@@ -376,3 +376,47 @@ fn pfl_tasks_refuse_massless_moving_bodies() {
     );
     assert!(!e.contains("`fr3_link0`"), "the base does not move: {e}");
 }
+
+/// Issue 11: a finite but astronomical offset (a unit mistake, `1e300`) would overflow forward
+/// kinematics and distances into `inf`/NaN (`pacs fk` printed `null`, the audit panicked or lost
+/// its violations). The model is refused, naming the first offending field; the value is the
+/// reach from the world origin up to it.
+#[test]
+fn astronomical_reach_is_refused_naming_the_field() {
+    let mut s = spec();
+    s.joints[1].origin.xyz = [1.7e308, 0.0, 0.0];
+    s.joints[2].origin.xyz = [1.7e308, 0.0, 0.0];
+    let e = RobotModel::new(s.clone()).unwrap_err();
+    assert!(
+        invalid_value(Err::<(), _>(e.clone()), "joints[1].origin.xyz") >= 1.7e308,
+        "{e}"
+    );
+    assert!(
+        e.to_string().starts_with(
+            "invalid value for `joints[1].origin.xyz`: 170000000000000000000000000000"
+        ) && e
+            .to_string()
+            .ends_with("(the robot's reach from the world origin must be at most 1e6 m)"),
+        "{e}"
+    );
+    let mut s = spec();
+    s.joints[3].origin.xyz = [0.0, 1e200, 0.0];
+    invalid_value(RobotModel::new(s), "joints[3].origin.xyz");
+    let mut s = spec();
+    s.base.xyz = [0.0, 0.0, 2e6];
+    assert_eq!(invalid_value(RobotModel::new(s), "base.xyz"), 2e6);
+    let mut s = spec();
+    s.links[5].capsules[1].radius = 1.7e308;
+    invalid_value(RobotModel::new(s), "links[5].capsules[1]");
+    let mut s = spec();
+    s.links[4].origin.xyz = [3e6, 0.0, 0.0];
+    invalid_value(RobotModel::new(s), "links[4].origin.xyz");
+    let mut s = spec();
+    let k = s.links.iter().position(|l| l.inertial.is_some()).unwrap();
+    s.links[k].inertial.as_mut().unwrap().com = [0.0, 0.0, -1e7];
+    invalid_value(RobotModel::new(s), &format!("links[{k}].inertial.com"));
+    // Large but within the bound: accepted.
+    let mut s = spec();
+    s.base.xyz = [9e5, 0.0, 0.0];
+    assert!(RobotModel::new(s).is_ok());
+}

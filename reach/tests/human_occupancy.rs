@@ -366,6 +366,42 @@ fn pos_hand_computed() {
     assert!(close(r, 1.35), "{r}");
 }
 
+/// Issue 11: `pos` trusts an extremity's length only where the measurement agrees with it. Arm
+/// of length 1.0 m, thickness 0.1 m, e_p 0.01 m: a hand measured up to 1.0 + 0.05 + 2·0.01 =
+/// 1.07 m from the shoulder gets the extremity ball; farther, the arm falls back to the `vel`
+/// capsule (which the length assumption would otherwise override).
+#[test]
+fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
+    let h = HumanModel::from_json(
+        r#"{"keypoints": ["s", "h"], "v_max": [2.0, 2.0], "a_max": [10.0, 10.0],
+            "body_parts": [{"name": "arm", "from": "s", "to": "h", "thickness": 0.1}],
+            "measurement_error_pos": 0.01, "measurement_error_vel": 0.1, "delay": 0.0,
+            "extremities": [{"name": "a", "base": "s", "length": 1.0, "thickness": 0.1, "body_parts": ["arm"]}]}"#,
+    )
+    .unwrap();
+    let occupancy = |hand_x: f64, kind| {
+        let m = HumanMeasurement::new(&h, 0.0, &[[0.0; 3], [hand_x, 0.0, 0.0]], None).unwrap();
+        HumanReach::new(h.clone(), kind)
+            .occupancy(&m, 0.0, 0.1)
+            .unwrap()[0]
+    };
+    let origin = Point3::new(0.0, 0.0, 0.0);
+    for x in [1.0, 1.069] {
+        // The extremity ball: e_p 0.01 + v 2·0.1 + length 1.0 + thickness/2 0.05 = 1.26.
+        let c = occupancy(x, HumanReachModel::Pos);
+        assert_eq!((c.p1(), c.p2()), (origin, origin), "{x}");
+        assert!(close(c.radius(), 1.26), "{x}: {}", c.radius());
+    }
+    for x in [1.071, 1.4] {
+        // Contradicted: the `vel` capsule, e_p 0.01 + v 2·0.1 + thickness/2 0.05 = 0.26.
+        let c = occupancy(x, HumanReachModel::Pos);
+        let v = occupancy(x, HumanReachModel::Vel);
+        assert_eq!(c, v, "{x}");
+        assert_eq!(c.p2(), Point3::new(x, 0.0, 0.0));
+        assert!(close(c.radius(), 0.26), "{x}: {}", c.radius());
+    }
+}
+
 #[test]
 fn invalid_inputs_are_errors() {
     let h = default_human();

@@ -119,6 +119,21 @@ fn plots_and_documents() {
     assert_eq!(j["verdict"], "fail");
     assert_eq!(j["runs"][1]["sha256"], "11".repeat(32));
     assert_eq!(j["aggregate"].as_array().unwrap().len(), 2);
+    // Issue 11: the `pos` model's extremity-length assumption, and its fallback, are listed.
+    let pos = "With human_model = pos: each extremity's keypoints stay within its length + \
+               thickness/2 of its base keypoint; a measurement contradicting this by more than 2 \
+               measurement_error_pos is not trusted (that extremity uses the speed-bounded \
+               occupancy).";
+    assert!(
+        j["assumptions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|a| a == pos),
+        "{}",
+        j["assumptions"]
+    );
+    assert!(markdown::report(&input).contains(pos));
     let h = html::report(&input);
     assert_eq!(h.matches("<svg").count(), 4);
     assert!(h.contains("Safety Viol.") && h.contains("FAIL"));

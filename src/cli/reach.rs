@@ -9,7 +9,7 @@ use std::path::Path;
 
 /// A capsule's numbers as promised (finite): a bound that overflowed is an input error naming the
 /// field, never `null` in the output.
-fn finite_capsule(field: &str, c: &pacs_models::Capsule) -> Result<(), CliError> {
+pub(super) fn finite_capsule(field: &str, c: &pacs_models::Capsule) -> Result<(), CliError> {
     let (p1, p2, r) = (c.p1().coords, c.p2().coords, c.radius());
     let bad = p1
         .iter()
@@ -20,7 +20,7 @@ fn finite_capsule(field: &str, c: &pacs_models::Capsule) -> Result<(), CliError>
     match bad {
         None => Ok(()),
         Some(x) => Err(CliError::Input(format!(
-            "{field}: the occupancy bound overflows ({x}): the input is too large to bound in \
+            "{field}: the capsule overflows ({x}): the input is too large to bound in \
              floating point"
         ))),
     }
