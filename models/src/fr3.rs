@@ -140,7 +140,8 @@ fn capsules(link: usize) -> Vec<CapsuleSpec> {
         6 => vec![c([0.0, 0.0, -0.07], [0.0, 0.0, 0.01], 0.08)],
         7 => {
             // (b) is given in link7_sc = link7 rotated +π/4 about z: (0.055..0.065, 0, 0.082).
-            let (s, co) = FRAC_PI_4.sin_cos();
+            // libm's sin/cos of FRAC_PI_4, as literals (no libm call in model construction).
+            let (s, co) = (0.707_106_781_186_547_5, 0.707_106_781_186_547_6);
             let rot = |x: f64| [co * x, s * x, 0.082];
             vec![
                 c([0.0, 0.0, -0.06], [0.0, 0.0, 0.08], 0.07),

@@ -65,7 +65,7 @@ impl Piece {
         } else {
             let disc = c1 * c1 - 4.0 * c2 * c0;
             if disc >= 0.0 {
-                let s = disc.sqrt();
+                let s = pacs_reach::ieee::sqrt(disc);
                 let qq = -0.5 * (c1 + if c1 >= 0.0 { s } else { -s });
                 let r1 = qq / c2;
                 let r2 = if qq != 0.0 { c0 / qq } else { r1 };

@@ -148,7 +148,7 @@ impl SpeedProfile {
                 let d = diff.signum();
                 let u0 = d * a0;
                 let dist = d * (target - v0);
-                let up_free = (jerk * dist + 0.5 * u0 * u0).max(0.0).sqrt();
+                let up_free = pacs_reach::ieee::sqrt((jerk * dist + 0.5 * u0 * u0).max(0.0));
                 let cap = acc.max(u0);
                 let (up, plateau) = if up_free <= cap {
                     (up_free, 0.0)

@@ -10,9 +10,10 @@
 //!   [`DEFAULT_CASES`] accepted cases (or `PACS_PROOFS_CASES`), for `cargo test -p pacs-proofs`.
 //!
 //! [`exact`] holds the exact-arithmetic oracles the harnesses compare against (error-free
-//! transformations and fused multiply-add, no interval library), usable under Kani.
+//! transformations with `+ − ×` only, no interval library, no FMA), usable under Kani.
 
-pub mod exact;
+/// The exact oracles live beside the code whose contracts they decide (`pacs_reach::exact`).
+pub use pacs_reach::exact;
 
 #[cfg(any(test, kani))]
 pub mod harnesses;

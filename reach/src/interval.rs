@@ -7,7 +7,9 @@
 //! `inari` (the result must contain inari's rigorous result). A NaN anywhere yields the whole
 //! real line, never a too-small set.
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
+
+use crate::rounding::{sqrt_down, sqrt_up};
 
 /// A closed interval `[lo, hi]` of reals (`lo <= hi`, possibly infinite ends).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -114,6 +116,23 @@ impl Interval {
         }
         Self::checked(a.min(b).next_down(), a.max(b).next_up())
     }
+    /// Lower bound of `min |x|` over the interval (the mignitude; 0 if the interval holds 0).
+    #[inline(always)]
+    pub fn mig(&self) -> f64 {
+        if self.lo > 0.0 {
+            self.lo
+        } else if self.hi < 0.0 {
+            -self.hi
+        } else {
+            0.0
+        }
+    }
+    /// Enclosure of `√x` over the non-negative part of the interval (outward rounded; an
+    /// interval entirely below 0 gives `[0, 0]`, like a negative rounding artefact).
+    #[inline]
+    pub fn sqrt(self) -> Interval {
+        Self::checked(sqrt_down(self.lo), sqrt_up(self.hi.max(0.0)))
+    }
     /// Square (tighter than `x * x` when the interval straddles 0).
     #[inline]
     pub fn sqr(self) -> Interval {
@@ -185,6 +204,49 @@ impl Mul for Interval {
     }
 }
 
+impl Div for Interval {
+    type Output = Interval;
+    /// Enclosure of `x / y`; a divisor that may be 0 gives [`Interval::ENTIRE`].
+    #[inline]
+    fn div(self, o: Interval) -> Interval {
+        if o.lo <= 0.0 && o.hi >= 0.0 {
+            return Interval::ENTIRE;
+        }
+        let a = self.lo / o.lo;
+        let b = self.lo / o.hi;
+        let c = self.hi / o.lo;
+        let d = self.hi / o.hi;
+        if a.is_nan() || b.is_nan() || c.is_nan() || d.is_nan() {
+            return Interval::ENTIRE;
+        }
+        Interval::checked(
+            a.min(b).min(c.min(d)).next_down(),
+            a.max(b).max(c.max(d)).next_up(),
+        )
+    }
+}
+
+impl AddAssign for Interval {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Interval) {
+        *self = *self + o;
+    }
+}
+
+impl SubAssign for Interval {
+    #[inline(always)]
+    fn sub_assign(&mut self, o: Interval) {
+        *self = *self - o;
+    }
+}
+
+impl MulAssign for Interval {
+    #[inline(always)]
+    fn mul_assign(&mut self, o: Interval) {
+        *self = *self * o;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,9 +280,32 @@ mod tests {
             prop_assert!(encloses(-a, -ia));
             prop_assert!(encloses(a.scale(s), ia * interval!(s, s).unwrap()));
             prop_assert!(encloses(a.sqr(), ia.sqr()));
+            if !(b.lo() <= 0.0 && b.hi() >= 0.0) {
+                prop_assert!(encloses(a / b, ia / ib));
+            }
+            if a.hi() >= 0.0 {
+                prop_assert!(encloses(a.sqrt(), ia.sqrt()));
+            }
+            prop_assert!(a.mig() <= ia.mig());
+            let (mut c, mut d, mut e) = (a, a, a);
+            c += b;
+            d -= b;
+            e *= b;
+            prop_assert!(c == a + b && d == a - b && e == a * b);
             prop_assert!(a.contains(a.mid()));
             prop_assert!(a.hi() - a.mid() <= a.rad_up() && a.mid() - a.lo() <= a.rad_up());
         }
+    }
+
+    #[test]
+    fn division_by_an_interval_holding_zero_is_entire() {
+        let one = Interval::ONE;
+        assert_eq!(one / Interval::new(-1.0, 1.0).unwrap(), Interval::ENTIRE);
+        assert_eq!(one / Interval::new(0.0, 1.0).unwrap(), Interval::ENTIRE);
+        let q = one / Interval::point(3.0);
+        assert!(q.lo() < 1.0 / 3.0 && 1.0 / 3.0 < q.hi());
+        assert_eq!(Interval::new(-3.0, -2.0).unwrap().mig(), 2.0);
+        assert_eq!(Interval::new(-3.0, 2.0).unwrap().mig(), 0.0);
     }
 
     #[test]

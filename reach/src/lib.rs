@@ -2,6 +2,9 @@
 //!
 //! Sound reachability: every set here contains what it claims to contain, under outward rounding.
 //! - [`rounding`]: directed-rounding scalar helpers and rigorous sin/cos enclosures;
+//! - [`ieee`]: `√`, FMA, sin/cos as the sound code calls them (contracts under Kani);
+//! - [`exact`]: exact comparisons of float expressions (error-free transformations), the oracles
+//!   of the harnesses and of the contracts;
 //! - [`interval`]: a fast outward-rounded interval type (checked against `inari` in tests);
 //! - [`zonotope`]: zonotopes and reachability of linear time-invariant systems;
 //! - [`geometry`]: conservative capsule/sphere/zonotope intersection and distance bounds;
@@ -9,8 +12,10 @@
 //! - [`robot`]: robot reachable occupancies for joint boxes (interval forward kinematics).
 
 pub mod error;
+pub mod exact;
 pub mod geometry;
 pub mod human;
+pub mod ieee;
 pub mod interval;
 pub mod lti;
 pub mod robot;

@@ -2,28 +2,32 @@
 //! (Girard 2005; Althoff 2010, §3.2), and a dynamic-object occupancy model built on it.
 //!
 //! All matrix series (`e^{Ar}`, `Γ(r) = ∫₀ʳ e^{As} ds`, the correction matrices `F`, `F_u`) are
-//! evaluated in interval arithmetic (`inari`), with the Taylor remainder after `η` terms bounded
+//! evaluated in outward-rounded interval arithmetic ([`crate::interval::Interval`]), with the Taylor remainder after `η` terms bounded
 //! elementwise by `E = rowsum(|A|^{η+1} r^{η+1}/(η+1)!) / (1 − ‖|A|r‖∞/(η+2))`. For nilpotent `|A|`
 //! with `|A|^{η+1} = 0` (double integrator, `η ≥ 1`) the interval products are exactly zero, so
 //! `E = 0` and the series is exact. Interval matrices act on zonotopes as `mid(M) Z ⊕ box(rad(M)|Z|)`.
 //! See `docs/zonotopes.md` for the derivation.
 
 pub use crate::error::ReachError;
+use crate::interval::Interval;
 use crate::rounding::{add_down, add_up, div_up, mul_up, sub_down, sub_up};
 use crate::zonotope::{BallApprox, Zonotope, Zonotope3, ZonotopeError, ball_zonotope};
-use inari::Interval;
 use nalgebra::{DMatrix, DVector};
 use pacs_models::shape::Capsule;
 
 #[inline]
 fn pt(x: f64) -> Interval {
-    Interval::try_from((x, x)).expect("finite")
+    Interval::point(x)
 }
-const IZERO: Interval = inari::const_interval!(0.0, 0.0);
+const IZERO: Interval = Interval::ZERO;
+/// `[κ, 0]` with `κ ≤ min_{s∈[0,1]} (sⁱ − s)`; `[−1, 0]` always qualifies (`sⁱ − s ∈ [−1, 0]`).
+fn kappa_interval(i: usize) -> Interval {
+    Interval::new(kappa(i), 0.0).unwrap_or(Interval::new(-1.0, 0.0).unwrap_or(Interval::ENTIRE))
+}
 
 #[inline]
 fn is_zero(x: Interval) -> bool {
-    x.inf() == 0.0 && x.sup() == 0.0
+    x.lo() == 0.0 && x.hi() == 0.0
 }
 
 /// A dense interval matrix (row-major).
@@ -120,7 +124,7 @@ impl IntervalMatrix {
     fn widen_rows(&mut self, w: &[f64]) {
         for (i, &wi) in w.iter().enumerate().take(self.rows) {
             if wi > 0.0 {
-                let iv = Interval::try_from((-wi, wi)).expect("finite");
+                let iv = Interval::new(-wi, wi).unwrap_or(Interval::ENTIRE);
                 for j in 0..self.cols {
                     self.v[i * self.cols + j] += iv;
                 }
@@ -138,7 +142,7 @@ impl IntervalMatrix {
         for i in 0..self.rows {
             for j in 0..self.cols {
                 let x = self.get(i, j);
-                let (lo, hi) = (x.inf(), x.sup());
+                let (lo, hi) = (x.lo(), x.hi());
                 if lo == hi {
                     mid[(i, j)] = lo; // point interval: exact, radius 0
                 } else {
@@ -190,7 +194,7 @@ fn kappa(i: usize) -> f64 {
     let df = pt(i as f64) * p - pt(1.0); // i s0^{i−1} − 1
     let at0 = f - df * s;
     let at1 = f + df * (pt(1.0) - s);
-    at0.inf().min(at1.inf()).clamp(-1.0, 0.0)
+    at0.lo().min(at1.lo()).clamp(-1.0, 0.0)
 }
 
 /// A linear time-invariant system `ẋ = A x + B u`.
@@ -326,7 +330,7 @@ impl LtiReach {
             for i in 0..n {
                 let mut s = 0.0;
                 for j in 0..n {
-                    s = add_up(s, abs_ar.get(i, j).sup());
+                    s = add_up(s, abs_ar.get(i, j).hi());
                 }
                 eps_num = eps_num.max(s);
             }
@@ -342,7 +346,7 @@ impl LtiReach {
             for (i, er) in e_row.iter_mut().enumerate() {
                 let mut s = 0.0;
                 for j in 0..n {
-                    s = add_up(s, w.get(i, j).sup());
+                    s = add_up(s, w.get(i, j).hi());
                 }
                 *er = div_up(s, sub_down(1.0, eps));
             }
@@ -365,10 +369,10 @@ impl LtiReach {
                 continue;
             }
             if i >= 2 {
-                let k = Interval::try_from((kappa(i), 0.0)).expect("kappa");
+                let k = kappa_interval(i);
                 f.add_scaled(&pw[i], k / fact[i]);
             }
-            let k1 = Interval::try_from((kappa(i + 1), 0.0)).expect("kappa");
+            let k1 = kappa_interval(i + 1);
             fu.add_scaled(&pw[i], k1 * ri / fact[i + 1]);
         }
         f.widen_rows(&e_row);
@@ -413,7 +417,7 @@ impl LtiReach {
                 acc += gam.get(i, j) * pt(uc[j]);
             }
             v_mid[i] = acc.mid();
-            v_rad[i] = acc.rad();
+            v_rad[i] = acc.rad_up();
         }
         let ucabs = uc.abs();
         let mut input_box = mat_vec_up(&fu.mag(), &ucabs);

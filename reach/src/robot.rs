@@ -79,8 +79,16 @@ mod energy;
 #[repr(transparent)]
 struct Lanes3(simd::V);
 
-#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-mod simd {
+// The AVX backend on x86-64 with AVX; the scalar backend elsewhere and under Kani (which
+// supports no SIMD intrinsics). `lanes_match_bitwise` (tests below) checks that both give the
+// same bits for every operation, so a proof over the scalar backend covers the AVX one.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx", not(kani)))]
+use lanes_avx as simd;
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx", not(kani))))]
+use lanes_scalar as simd;
+
+#[cfg(all(target_arch = "x86_64", target_feature = "avx", not(kani)))]
+mod lanes_avx {
     use std::arch::x86_64::*;
     pub type V = __m256d;
     #[inline(always)]
@@ -136,8 +144,11 @@ mod simd {
     }
 }
 
-#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-mod simd {
+#[cfg_attr(
+    all(target_arch = "x86_64", target_feature = "avx", not(kani)),
+    allow(dead_code)
+)]
+mod lanes_scalar {
     pub type V = [f64; 4];
     #[inline(always)]
     fn map2(a: V, b: V, f: impl Fn(f64, f64) -> f64) -> V {
@@ -167,13 +178,20 @@ mod simd {
     pub fn mul(a: V, b: V) -> V {
         map2(a, b, |x, y| x * y)
     }
+    /// Lanewise [`crate::ieee::mul_add`]: one rounding with hardware FMA (as the AVX backend),
+    /// two without (and under Kani).
     #[inline(always)]
     pub fn fma(a: V, b: V, c: V) -> V {
-        add(mul(a, b), c)
+        [
+            crate::ieee::mul_add(a[0], b[0], c[0]),
+            crate::ieee::mul_add(a[1], b[1], c[1]),
+            crate::ieee::mul_add(a[2], b[2], c[2]),
+            crate::ieee::mul_add(a[3], b[3], c[3]),
+        ]
     }
     #[inline(always)]
     pub fn sqrt(a: V) -> V {
-        a.map(f64::sqrt)
+        a.map(crate::ieee::sqrt)
     }
     #[inline(always)]
     pub fn abs(a: V) -> V {
@@ -247,7 +265,7 @@ fn col(v: &Vector3<f64>) -> Lanes3 {
 #[inline(always)]
 fn norm_up(r: Lanes3) -> f64 {
     let r = r.arr();
-    (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() * RAD_UP + NORM_PAD
+    crate::ieee::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * RAD_UP + NORM_PAD
 }
 
 /// A 3×3 matrix as three columns.
@@ -363,7 +381,7 @@ impl RotationEnclosure {
 /// |cos q_c − ĉ| ≤ e, and |sin q − ŝ| ≤ w_s, |cos q − ĉ| ≤ w_c for every |q − q_c| ≤ δ.
 #[inline(always)]
 fn centre_trig(qc: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
-    let (s, c) = qc.sin_cos();
+    let (s, c) = crate::ieee::sin_cos(qc);
     let (sa, ca) = (s.abs(), c.abs());
     // sin(q_c + t) − sin q_c = sin q_c (cos t − 1) + cos q_c sin t, 1 − cos t ≤ min(t²/2, 2),
     // |sin t| ≤ min(|t|, 1); the exact sin q_c, cos q_c are within TRIG_PAD of ŝ, ĉ.
@@ -832,7 +850,7 @@ impl RobotReach {
             };
             let e_centre = |v: &VecEnc| {
                 let e = v.e.arr();
-                (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt()
+                crate::ieee::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
             };
             let ends = if scratch.wide {
                 // Interval FK over the box (own midpoint) vs the mean-value form around the
@@ -901,5 +919,54 @@ impl RobotReach {
         ];
         self.occupancy_into(q_lo, q_hi, &mut out)?;
         Ok(out)
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64", target_feature = "avx"))]
+mod lanes_tests {
+    use super::{lanes_avx as avx, lanes_scalar as scalar};
+
+    fn lanes(state: &mut u64) -> [f64; 4] {
+        let mut one = || {
+            *state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let z = *state;
+            let e = ((z >> 40) % 120) as i32 - 60;
+            let v = (1.0 + (z >> 11) as f64 / (1u64 << 53) as f64) * 2f64.powi(e);
+            match z % 8 {
+                0 => 0.0,
+                1 => -v,
+                _ => v,
+            }
+        };
+        [one(), one(), one(), one()]
+    }
+
+    /// The scalar backend (the one Kani verifies) and the AVX backend (the one that runs) give
+    /// the same bits for every lanewise operation, so the occupancy code, written once over
+    /// `simd::V`, computes the same result with either.
+    #[test]
+    fn lanes_match_bitwise() {
+        let mut state = 99u64;
+        let bits = |v: [f64; 4]| v.map(f64::to_bits);
+        for _ in 0..100_000 {
+            let (a, b, c) = (lanes(&mut state), lanes(&mut state), lanes(&mut state));
+            let (va, vb, vc) = (avx::new(a), avx::new(b), avx::new(c));
+            assert_eq!(bits(avx::arr(avx::add(va, vb))), bits(scalar::add(a, b)));
+            assert_eq!(bits(avx::arr(avx::sub(va, vb))), bits(scalar::sub(a, b)));
+            assert_eq!(bits(avx::arr(avx::mul(va, vb))), bits(scalar::mul(a, b)));
+            assert_eq!(
+                bits(avx::arr(avx::fma(va, vb, vc))),
+                bits(scalar::fma(a, b, c))
+            );
+            assert_eq!(bits(avx::arr(avx::abs(va))), bits(scalar::abs(a)));
+            assert_eq!(bits(avx::arr(avx::splat(a[0]))), bits(scalar::splat(a[0])));
+            let pos = a.map(f64::abs);
+            assert_eq!(
+                bits(avx::arr(avx::sqrt(avx::new(pos)))),
+                bits(scalar::sqrt(pos))
+            );
+        }
     }
 }

@@ -3,7 +3,7 @@
 //! IEEE 754 `+ - * / sqrt` are correctly rounded to nearest, so the exact result lies within half
 //! an ulp of the computed one; stepping one ulp outward (`next_up` / `next_down`) therefore gives a
 //! guaranteed upper / lower bound. These helpers are the only place where that argument is made;
-//! everything that needs a sound scalar bound goes through them (or through `inari` intervals).
+//! everything that needs a sound scalar bound goes through them (or through [`crate::interval::Interval`]).
 //!
 //! `sin`/`cos` are not correctly rounded in libm; [`sin_cos_interval`] pads libm's results by
 //! [`TRIG_PAD`], which exceeds the documented error of glibc and of Rust's libm (≤ 1 ulp on
@@ -58,12 +58,12 @@ pub fn div_down(x: f64, y: f64) -> f64 {
 /// `sqrt(x)` rounded up (`x >= 0`; a negative rounding artefact is treated as 0).
 #[inline(always)]
 pub fn sqrt_up(x: f64) -> f64 {
-    x.max(0.0).sqrt().next_up()
+    crate::ieee::sqrt(x.max(0.0)).next_up()
 }
 /// `sqrt(x)` rounded down, never below 0.
 #[inline(always)]
 pub fn sqrt_down(x: f64) -> f64 {
-    x.max(0.0).sqrt().next_down().max(0.0)
+    crate::ieee::sqrt(x.max(0.0)).next_down().max(0.0)
 }
 
 /// Relative inflation that bounds the rounding error of a short expression of non-negative terms:
@@ -82,7 +82,7 @@ pub const SQRT_TINY: f64 = 1e-150;
 /// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`], [`SQRT_TINY`]).
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
-    (x * x + y * y + z * z).sqrt() * INFLATE + SQRT_TINY
+    crate::ieee::sqrt(x * x + y * y + z * z) * INFLATE + SQRT_TINY
 }
 
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
@@ -120,7 +120,7 @@ pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
     if !(lo.is_finite() && hi.is_finite() && lo <= hi) || hi - lo >= 6.0 {
         return (full, full);
     }
-    let (s_lo, c_lo) = lo.sin_cos();
+    let (s_lo, c_lo) = crate::ieee::sin_cos(lo);
     if lo == hi {
         let s =
             Interval::new((s_lo - TRIG_PAD).max(-1.0), (s_lo + TRIG_PAD).min(1.0)).unwrap_or(full);
@@ -128,7 +128,7 @@ pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
             Interval::new((c_lo - TRIG_PAD).max(-1.0), (c_lo + TRIG_PAD).min(1.0)).unwrap_or(full);
         return (s, c);
     }
-    let (s_hi, c_hi) = hi.sin_cos();
+    let (s_hi, c_hi) = crate::ieee::sin_cos(hi);
     let mut s_min = s_lo.min(s_hi) - TRIG_PAD;
     let mut s_max = s_lo.max(s_hi) + TRIG_PAD;
     let mut c_min = c_lo.min(c_hi) - TRIG_PAD;

@@ -15,8 +15,8 @@
 //! [`Zonotope3`] is a fixed-capacity 3-D variant (no heap) for the hot path (support functions,
 //! separating-direction distance bounds against capsules).
 
+use crate::interval::Interval;
 use crate::rounding::{add_up, div_down, mul_up, norm3_up, sub_down};
-use inari::Interval;
 use nalgebra::{DMatrix, DVector};
 use pacs_models::shape::Capsule;
 use thiserror::Error;
@@ -504,11 +504,11 @@ impl Zonotope {
             if d.iter().all(|v| *v == 0.0) {
                 continue;
             }
-            let mut dx = Interval::try_from((0.0, 0.0)).unwrap();
+            let mut dx = Interval::ZERO;
             for i in 0..n {
                 dx += pt(d[i]) * pt(x[i]);
             }
-            if dx.inf() > self.support_up(&d)? {
+            if dx.lo() > self.support_up(&d)? {
                 return Ok(Containment::Outside);
             }
         }
@@ -644,7 +644,7 @@ type LpSolution = (f64, DVector<f64>, DVector<f64>);
 
 #[inline]
 fn pt(x: f64) -> Interval {
-    Interval::try_from((x, x)).expect("finite")
+    Interval::point(x)
 }
 
 /// Greedy choice of `n` columns of `g` (n × m) with large Gram–Schmidt residuals; `None` if rank < n.
@@ -734,8 +734,8 @@ pub fn inradius_lower_3d(gens: &[[f64; 3]]) -> f64 {
                 a[0] * b[1] - a[1] * b[0],
             ];
             let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            if nn.inf() <= 0.0 {
-                if nn.sup() > 0.0 {
+            if nn.lo() <= 0.0 {
+                if nn.hi() > 0.0 {
                     // Possibly degenerate pair: cannot certify, give up on a positive bound.
                     return 0.0;
                 }
@@ -746,7 +746,7 @@ pub fn inradius_lower_3d(gens: &[[f64; 3]]) -> f64 {
                 let d = n[0] * g[0] + n[1] * g[1] + n[2] * g[2];
                 h = crate::rounding::add_down(h, d.mig());
             }
-            best = best.min(div_down(h, nn.sup()));
+            best = best.min(div_down(h, nn.hi()));
         }
     }
     if best.is_finite() { best.max(0.0) } else { 0.0 }
@@ -1024,8 +1024,9 @@ impl Zonotope3 {
         simplex.p[0] = w0;
         simplex.len = 1;
         v = w0;
-        let scale =
-            dot3(self.abs_sum, [1.0; 3]) + dot3(sub3(a, b), sub3(a, b)).sqrt() + dot3(v, v).sqrt();
+        let scale = dot3(self.abs_sum, [1.0; 3])
+            + crate::ieee::sqrt(dot3(sub3(a, b), sub3(a, b)))
+            + crate::ieee::sqrt(dot3(v, v));
         for _ in 0..64 {
             let vv = dot3(v, v);
             if vv <= (1e-14 * scale) * (1e-14 * scale) {

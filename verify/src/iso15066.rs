@@ -261,7 +261,7 @@ impl Aabb {
             }
         }
         // Rounded down: the products and sum of positive terms lose at most a few ulps.
-        (d2 * (1.0 - 1e-12)).sqrt()
+        pacs_reach::ieee::sqrt(d2 * (1.0 - 1e-12))
     }
     #[inline]
     fn overlaps(&self, o: &Aabb) -> bool {

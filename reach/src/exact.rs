@@ -1,6 +1,8 @@
 //! Exact comparisons of real-number expressions of f64 values, from error-free transformations
-//! (TwoSum) and the fused multiply-add (one rounding of the exact `a·b + c`). They need no
-//! interval library, so they also run under Kani.
+//! (Knuth's TwoSum and Dekker's TwoProduct with Veltkamp splitting). They use only correctly
+//! rounded `+ − ×` (no fused multiply-add, no interval library, no libm), so the same code is the
+//! oracle of the property tests, of the Kani harnesses (CBMC models `+ − ×` bit-exactly but
+//! over-approximates `fma`) and of the IEEE 754 contracts in [`crate::ieee`].
 //!
 //! Preconditions (checked by the harnesses with `assume`): all inputs finite, no overflow, and
 //! inputs either 0 or of magnitude ≥ [`NORMAL_MIN`] (so no partial result underflows and a
@@ -24,10 +26,40 @@ pub fn two_sum(x: f64, y: f64) -> (f64, f64) {
     (s, e)
 }
 
-/// Exact error of `p = fl(x · y)`: `x·y = p + e` exactly (via FMA).
+/// Veltkamp's constant `2²⁷ + 1`.
+const SPLITTER: f64 = 134_217_729.0;
+
+/// `x = hi + lo` exactly, each half with at most 26 significant bits (Veltkamp; no overflow for
+/// `|x| < 2⁹⁹⁵`).
+#[inline]
+pub fn split(x: f64) -> (f64, f64) {
+    let c = SPLITTER * x;
+    let hi = c - (c - x);
+    (hi, x - hi)
+}
+
+/// Exact error of `p = fl(x · y)`: `x·y = p + e` exactly (Dekker's TwoProduct: the four partial
+/// products of the 26-bit halves are exact). Preconditions as in the module doc (no overflow, no
+/// underflow of the partial products).
+#[inline]
 pub fn two_prod(x: f64, y: f64) -> (f64, f64) {
     let p = x * y;
-    (p, x.mul_add(y, -p))
+    let (xh, xl) = split(x);
+    let (yh, yl) = split(y);
+    let e = ((xh * yh - p) + xh * yl + xl * yh) + xl * yl;
+    (p, e)
+}
+
+/// Order of `p + e` against `r`, where `p = fl(x·y)` and `e` its exact error: a float `r ≠ p`
+/// is at least one spacing away from `p`, and `|e|` is at most half the spacing on its side, so
+/// the order of `p` and `r` decides; for `r = p` the sign of `e` does.
+#[inline]
+fn cmp_rounded(p: f64, e: f64, r: f64) -> Ordering {
+    if p != r {
+        p.partial_cmp(&r).unwrap_or(Ordering::Equal)
+    } else {
+        e.partial_cmp(&0.0).unwrap_or(Ordering::Equal)
+    }
 }
 
 /// Order of the exact `x + y` relative to `r`.
@@ -37,33 +69,34 @@ pub fn two_prod(x: f64, y: f64) -> (f64, f64) {
 pub fn cmp_sum(x: f64, y: f64, r: f64) -> Ordering {
     let (s, e) = two_sum(x, y);
     if s != r {
-        s.partial_cmp(&r).expect("finite")
+        s.partial_cmp(&r).unwrap_or(Ordering::Equal)
     } else {
-        e.partial_cmp(&0.0).expect("finite")
+        e.partial_cmp(&0.0).unwrap_or(Ordering::Equal)
     }
 }
 
-/// Order of the exact `x · y` relative to `r`: the sign of `fl(x·y − r)` (one rounding of the
-/// exact difference preserves its sign; no underflow under the module's preconditions).
+/// Order of the exact `x · y` relative to `r`.
 pub fn cmp_prod(x: f64, y: f64, r: f64) -> Ordering {
-    x.mul_add(y, -r).partial_cmp(&0.0).expect("finite")
+    let (p, e) = two_prod(x, y);
+    cmp_rounded(p, e, r)
 }
 
-/// Order of the exact `x / y` relative to `q` (`y ≠ 0`): `x/y − q = (x − q·y)/y`.
+/// Order of the exact `x / y` relative to `q` (`y ≠ 0`): `x/y − q` has the sign of
+/// `(x − q·y)·sign(y)`.
 pub fn cmp_quot(x: f64, y: f64, q: f64) -> Ordering {
-    let d = (-q).mul_add(y, x).partial_cmp(&0.0).expect("finite");
+    let (p, e) = two_prod(q, y);
+    // x − q·y vs 0  ⟺  x vs p + e.
+    let d = cmp_rounded(p, e, x).reverse();
     if y > 0.0 { d } else { d.reverse() }
 }
 
-/// Order of the exact `√x` relative to `r` (`x ≥ 0`, `r ≥ 0`): `√x` vs `r` ⟺ `x` vs `r²`.
+/// Order of the exact `√x` relative to `r` (`x ≥ 0`): `√x` vs `r` ⟺ `x` vs `r²` (`r ≥ 0`).
 pub fn cmp_sqrt(x: f64, r: f64) -> Ordering {
     if r < 0.0 {
         return Ordering::Greater;
     }
-    r.mul_add(r, -x)
-        .partial_cmp(&0.0)
-        .expect("finite")
-        .reverse()
+    let (p, e) = two_prod(r, r);
+    cmp_rounded(p, e, x).reverse()
 }
 
 /// Sum of floats in double-double: `(value, err)` with `|Σ terms − value| ≤ err`.
@@ -119,7 +152,7 @@ pub fn norm3_ge(x: f64, y: f64, z: f64, r: f64) -> bool {
 }
 
 /// True only if the exact distance `|a − b|` is `≤ r` (proven): each `a_i − b_i = d + e` exactly
-/// (TwoSum), so `(a_i − b_i)² = d² + 2de + e²`, each product split exactly by FMA.
+/// (TwoSum), so `(a_i − b_i)² = d² + 2de + e²`, each product split exactly by [`two_prod`].
 pub fn dist3_le(a: &[f64; 3], b: &[f64; 3], r: f64) -> bool {
     if r < 0.0 {
         return false;
@@ -160,5 +193,31 @@ mod tests {
             &[0.0, 0.0, 0.0],
             0.1f64.next_down()
         ));
+    }
+
+    /// Dekker's product agrees with the fused multiply-add (the exact error rounded once is the
+    /// exact error itself when it is representable, which TwoProduct guarantees).
+    #[test]
+    fn two_prod_matches_fma() {
+        let mut state = 0x1234_5678_9abc_def0u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let e = ((state >> 40) % 200) as i32 - 100;
+            let m = 1.0 + (state >> 11) as f64 / (1u64 << 53) as f64;
+            let v = m * 2f64.powi(e);
+            if state & 1 == 0 { v } else { -v }
+        };
+        for _ in 0..100_000 {
+            let (x, y) = (next(), next());
+            let (p, e) = two_prod(x, y);
+            assert_eq!(p, x * y);
+            assert_eq!(e, x.mul_add(y, -p), "{x} * {y}");
+            let r = next();
+            let want = x.mul_add(y, -r).partial_cmp(&0.0).unwrap();
+            assert_eq!(cmp_prod(x, y, r), want);
+            assert_eq!(cmp_prod(x, y, p), e.partial_cmp(&0.0).unwrap());
+        }
     }
 }

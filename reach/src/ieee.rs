@@ -1,0 +1,155 @@
+//! The IEEE 754 operations beyond `+ − × ÷` that sound bounds rely on: `√`, fused multiply-add,
+//! `sin`/`cos`.
+//!
+//! Every sound function of pacs calls these instead of `f64::sqrt`, `f64::mul_add` and
+//! `f64::sin_cos`, so that a model checker sees each of them through its contract:
+//!
+//! - In normal builds they are the library functions (no overhead: `#[inline(always)]`).
+//! - Under Kani (`cfg(kani)`) each returns a nondeterministic value constrained only by the
+//!   contract below. CBMC models `+ − × ÷` bit-exactly but not `√` (its model is not exact) and
+//!   over-approximates `fma`, `sin` and `cos`; a proof over the contract holds for every function
+//!   that meets it, in particular for the real one. A contract is *sound* if the real function
+//!   always meets it; each is checked against the real function by a test in this module
+//!   (`contracts_hold_for_the_library`, 10⁶ arguments each, biased to hard cases).
+//!
+//! The contracts:
+//! - [`sqrt`] (IEEE 754 correctly rounded): for `x > 0` finite the result `r` satisfies
+//!   `prev(r)² ≤ x ≤ next(r)²` exactly (decided by [`crate::exact::cmp_sqrt`]); for `x = ±0`,
+//!   `+∞`, `x < 0` and NaN the IEEE results (`x`, `+∞`, NaN, NaN). This is looser than correct
+//!   rounding (within one ulp instead of half), so every bound proved with it holds for IEEE `√`.
+//! - [`mul_add`]: `a·b + c` rounded once (hardware FMA) or twice (`fl(fl(a·b) + c)`); the code
+//!   that uses it is analysed for two roundings, so under Kani it is `fl(fl(a·b) + c)`, which
+//!   CBMC models exactly.
+//! - [`sin_cos`]: both values in `[−1, 1]` (libm's accuracy, 1 ulp on the reduced range, is not
+//!   part of the contract; claims that need it leave it to the property tests, see
+//!   `proofs/README.md`, claim C1).
+
+/// `√x` (see the module doc for the contract under Kani).
+#[cfg(not(kani))]
+#[inline(always)]
+pub fn sqrt(x: f64) -> f64 {
+    x.sqrt()
+}
+
+/// `√x` under Kani: a nondeterministic `r` with `prev(r)² ≤ x ≤ next(r)²` (exactly), scaled by
+/// exact powers of two so that Dekker's product in [`crate::exact`] neither overflows nor
+/// underflows.
+#[cfg(kani)]
+pub fn sqrt(x: f64) -> f64 {
+    if x.is_nan() || x < 0.0 {
+        return f64::NAN;
+    }
+    if x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    // x·2^(2k) is exact (a power of two times a float, no overflow or underflow here), and
+    // √(x·2^(2k))·2^(−k) = √x; the scaled result is normal, so scaling back is exact too.
+    const BIG: f64 = 1.0e150;
+    let (xs, back) = if x < 1.0 / BIG {
+        (x * 2f64.powi(600), 2f64.powi(-300))
+    } else if x > BIG {
+        (x * 2f64.powi(-600), 2f64.powi(300))
+    } else {
+        (x, 1.0)
+    };
+    let r: f64 = kani::any();
+    kani::assume(r > 0.0 && r < 1.0e160);
+    kani::assume(sqrt_contract(xs, r));
+    r * back
+}
+
+/// The contract of [`sqrt`] for `x > 0` (normal range, no overflow of `r²`):
+/// `prev(r)² ≤ x ≤ next(r)²` exactly.
+pub fn sqrt_contract(x: f64, r: f64) -> bool {
+    use crate::exact::cmp_sqrt;
+    use std::cmp::Ordering::{Greater, Less};
+    r >= 0.0 && cmp_sqrt(x, r.next_down()) != Less && cmp_sqrt(x, r.next_up()) != Greater
+}
+
+/// `a·b + c`: the hardware's fused multiply-add where the build has one, else two roundings.
+/// Callers' error analyses allow for two roundings (module doc).
+#[cfg(not(kani))]
+#[inline(always)]
+pub fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
+/// `a·b + c` under Kani: two correctly rounded operations (module doc).
+#[cfg(kani)]
+#[inline(always)]
+pub fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+    a * b + c
+}
+
+/// `(sin x, cos x)` from libm.
+#[cfg(not(kani))]
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    x.sin_cos()
+}
+
+/// `(sin x, cos x)` under Kani: any two values in `[−1, 1]` (NaN for non-finite `x`).
+#[cfg(kani)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    if !x.is_finite() {
+        return (f64::NAN, f64::NAN);
+    }
+    let s: f64 = kani::any();
+    let c: f64 = kani::any();
+    kani::assume((-1.0..=1.0).contains(&s) && (-1.0..=1.0).contains(&c));
+    (s, c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A float biased to hard cases: every exponent, mantissas near powers of two, squares of
+    /// floats and their neighbours (where `√` is exact or nearly a tie).
+    fn arg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let z = *state;
+        let e = ((z >> 40) % 2000) as i32 - 1000;
+        let m = match z % 4 {
+            0 => 1.0,
+            1 => 2f64.next_down(),
+            _ => 1.0 + (z >> 11) as f64 / (1u64 << 53) as f64,
+        };
+        let v = m * 2f64.powi(e);
+        match (z >> 20) % 4 {
+            0 => v * v,
+            1 => (v * v).next_up(),
+            2 => (v * v).next_down(),
+            _ => v,
+        }
+    }
+
+    #[test]
+    fn contracts_hold_for_the_library() {
+        let mut state = 7u64;
+        for _ in 0..1_000_000 {
+            let x = arg(&mut state);
+            if x > 0.0 && x.is_finite() && (1e-150..=1e150).contains(&x) {
+                assert!(sqrt_contract(x, x.sqrt()), "sqrt({x:e}) = {:e}", x.sqrt());
+            }
+            let (s, c) = sin_cos(x);
+            if x.is_finite() {
+                assert!(
+                    (-1.0..=1.0).contains(&s) && (-1.0..=1.0).contains(&c),
+                    "{x}"
+                );
+            }
+        }
+        // The contract is not vacuous: two ulps off fails it.
+        assert!(!sqrt_contract(2.0, 2f64.sqrt().next_up().next_up()));
+        assert!(!sqrt_contract(2.0, 2f64.sqrt().next_down().next_down()));
+        assert_eq!(sqrt(4.0), 2.0);
+        assert_eq!(mul_add(2.0, 3.0, 1.0), 7.0);
+    }
+}
