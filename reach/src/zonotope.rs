@@ -461,6 +461,34 @@ impl Zonotope {
         Ok(self.solve_norm_lp(x)?.map(|(t, _, _)| t))
     }
 
+    /// Whether the point `x` lies outside the interval hull (rounded outward).
+    ///
+    /// # Soundness
+    /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`.
+    pub fn hull_excludes(&self, x: &DVector<f64>) -> bool {
+        let (lo, hi) = self.interval_hull();
+        (0..self.dim().min(x.len())).any(|i| x[i] < lo[i] || x[i] > hi[i])
+    }
+
+    /// Whether the direction `d` certifies that `x` is outside `Z`: `d·x > h_Z(d)`, with `d·x`
+    /// rounded down and the support function rounded up. Any `d` may be tried (the LP's dual
+    /// direction in [`Self::contains`]); a zero direction certifies nothing.
+    ///
+    /// # Soundness
+    /// Claim C2: never true for a point of `Z`, whatever `d` (so the LP that proposes `d` need
+    /// not be trusted). Harness `b3_zonotope_contains_conservative`.
+    pub fn separates(&self, x: &DVector<f64>, d: &DVector<f64>) -> Result<bool, ZonotopeError> {
+        if d.iter().all(|v| *v == 0.0) {
+            return Ok(false);
+        }
+        let h = self.support_up(d)?;
+        let mut dx = Interval::ZERO;
+        for i in 0..self.dim().min(x.len()) {
+            dx += pt(d[i]) * pt(x[i]);
+        }
+        Ok(dx.lo() > h)
+    }
+
     /// Conservative point containment: `Inside` / `Outside` only when proven (see [`Containment`]).
     ///
     /// Inside: the LP coefficients `β*` leave a residual `x - c - G'β*` that is bounded in interval
@@ -478,8 +506,7 @@ impl Zonotope {
         }
         check_finite("point", x.iter())?;
         // Cheap outside test: interval hull.
-        let (lo, hi) = self.interval_hull();
-        if (0..n).any(|i| x[i] < lo[i] || x[i] > hi[i]) {
+        if self.hull_excludes(x) {
             return Ok(Containment::Outside);
         }
         let zf = self.with_error_as_generators();
@@ -500,15 +527,7 @@ impl Zonotope {
         }
         // Outside certificate from the dual direction (either sign convention).
         for sgn in [1.0, -1.0] {
-            let d = &y * sgn;
-            if d.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            let mut dx = Interval::ZERO;
-            for i in 0..n {
-                dx += pt(d[i]) * pt(x[i]);
-            }
-            if dx.lo() > self.support_up(&d)? {
+            if self.separates(x, &(&y * sgn))? {
                 return Ok(Containment::Outside);
             }
         }

@@ -5,6 +5,7 @@ pub mod enclosure;
 pub mod energy;
 pub mod geometry;
 pub mod human;
+pub mod object;
 pub mod profile;
 pub mod robot;
 pub mod rounding;

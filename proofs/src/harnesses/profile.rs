@@ -86,3 +86,44 @@ harness!(
     cases = crate::DEFAULT_CASES,
     braking
 );
+
+/// The path ranges the verification turns into joint boxes (claim C7): for a profile planned
+/// from a consistent start and any τ in `[ta, tb]`, the state the shield executes at τ
+/// (`eval`) lies in `ranges(ta, tb)`: s in `[s_lo, s_hi]`, ṡ in `[ṡ_lo, ṡ_hi]`, |s̈| ≤ the bound.
+fn path_ranges<S: Source>(s: &mut S) {
+    let acc = s.f64_in(0.05, 50.0);
+    let jerk = s.f64_in(0.05, 500.0);
+    let start = PathState {
+        s: s.f64_in(0.0, 10.0),
+        sd: s.f64_in(0.0, 1.5),
+        sdd: s.f64_in(-acc, acc),
+    };
+    if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
+        return;
+    }
+    let target = if s.bool() { 0.0 } else { s.f64_in(0.0, 1.5) };
+    let p = SpeedProfile::plan(start, target, acc, jerk);
+    let horizon = p.settle_time() + 1.0;
+    let ta = s.f64_in(0.0, horizon);
+    let tb = s.f64_in(ta, horizon);
+    let tau = s.f64_in(ta, tb);
+    let (s_lo, s_hi, sd_lo, sd_hi, sdd_max) = p.ranges(ta, tb);
+    let e = p.eval(tau);
+    assert!(
+        s_lo <= e.s && e.s <= s_hi,
+        "s({tau}) = {} ∉ [{s_lo}, {s_hi}] over [{ta}, {tb}]",
+        e.s
+    );
+    assert!(
+        sd_lo <= e.sd && e.sd <= sd_hi,
+        "ṡ({tau}) = {} ∉ [{sd_lo}, {sd_hi}] over [{ta}, {tb}]",
+        e.sd
+    );
+    assert!(e.sdd.abs() <= sdd_max, "|s̈({tau})| = {} > {sdd_max}", e.sdd);
+}
+harness!(
+    f4_path_ranges_enclose,
+    unwind = 6,
+    cases = crate::DEFAULT_CASES,
+    path_ranges
+);
