@@ -13,3 +13,9 @@ pub fn proof(_attr: TokenStream, item: TokenStream) -> TokenStream {
 pub fn unwind(_attr: TokenStream, item: TokenStream) -> TokenStream {
     item
 }
+
+/// `#[kani::solver(NAME)]`: the item is returned unchanged (type-checking only).
+#[proc_macro_attribute]
+pub fn solver(_attr: TokenStream, item: TokenStream) -> TokenStream {
+    item
+}
