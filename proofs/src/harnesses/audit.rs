@@ -99,7 +99,7 @@ fn h1_violating_logs_mostly_fail() {
 }
 harness!(
     h1_audit_never_passes_violation,
-    unwind = 10,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     audit_violation
 );

@@ -50,7 +50,7 @@ fn energy<S: Source>(s: &mut S) {
 }
 harness!(
     g1_energy_bound_dominates,
-    unwind = 20,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     energy
 );

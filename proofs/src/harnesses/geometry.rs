@@ -76,6 +76,7 @@ fn segment_lb<S: Source>(s: &mut S) {
 harness!(
     b1_segment_distance_lower_bound,
     unwind = 25,
+    bits = 6,
     cases = crate::DEFAULT_CASES,
     segment_lb
 );
@@ -112,6 +113,7 @@ fn capsules<S: Source>(s: &mut S) {
 harness!(
     b2_capsule_intersection_conservative,
     unwind = 25,
+    bits = 6,
     cases = crate::DEFAULT_CASES,
     capsules
 );
@@ -150,6 +152,7 @@ fn zonotope_box<S: Source>(s: &mut S) {
 harness!(
     b3_zonotope_contains_conservative,
     unwind = 8,
+    bits = 8,
     cases = crate::DEFAULT_CASES,
     zonotope_box
 );
@@ -189,6 +192,7 @@ fn zonotope_capsule<S: Source>(s: &mut S) {
 harness!(
     b4_zonotope_capsule_conservative,
     unwind = 8,
+    bits = 4,
     cases = crate::DEFAULT_CASES,
     zonotope_capsule
 );

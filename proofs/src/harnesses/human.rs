@@ -153,6 +153,7 @@ fn occupancy<S: Source>(s: &mut S) {
 harness!(
     c1_human_occupancy_contains_motion,
     unwind = 10,
+    bits = 4,
     cases = crate::DEFAULT_CASES,
     occupancy
 );

@@ -83,6 +83,7 @@ fn braking<S: Source>(s: &mut S) {
 harness!(
     e1_braking_profile,
     unwind = 6,
+    bits = 8,
     cases = crate::DEFAULT_CASES,
     braking
 );
@@ -124,6 +125,7 @@ fn path_ranges<S: Source>(s: &mut S) {
 harness!(
     f4_path_ranges_enclose,
     unwind = 6,
+    bits = 8,
     cases = crate::DEFAULT_CASES,
     path_ranges
 );

@@ -62,7 +62,7 @@ fn link_enlargement<S: Source>(s: &mut S) {
 }
 harness!(
     d1_robot_link_enlargement,
-    unwind = 20,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     link_enlargement
 );

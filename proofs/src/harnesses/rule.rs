@@ -189,6 +189,7 @@ fn rule_sound<S: Source>(s: &mut S) {
 harness!(
     i1_rule_sound,
     unwind = 66,
+    bits = 4,
     cases = crate::DEFAULT_CASES,
     rule_sound
 );

@@ -109,6 +109,7 @@ fn decide_induction<S: Source>(s: &mut S) {
 harness!(
     f1_shield_decision_induction,
     unwind = 6,
+    bits = 8,
     cases = crate::DEFAULT_CASES,
     decide_induction
 );
