@@ -10,7 +10,7 @@ use crate::robot::{
     InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec, RobotModel, RobotSpec,
 };
 use crate::shape::CapsuleSpec;
-use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, FRAC_PI_4};
 
 const Q_MIN: [f64; 7] = [-2.7437, -1.7837, -2.9007, -3.0421, -2.8065, 0.5445, -3.0159];
 const Q_MAX: [f64; 7] = [2.7437, 1.7837, 2.9007, -0.1518, 2.8065, 4.5169, 3.0159];
@@ -140,8 +140,9 @@ fn capsules(link: usize) -> Vec<CapsuleSpec> {
         6 => vec![c([0.0, 0.0, -0.07], [0.0, 0.0, 0.01], 0.08)],
         7 => {
             // (b) is given in link7_sc = link7 rotated +π/4 about z: (0.055..0.065, 0, 0.082).
-            // libm's sin/cos of FRAC_PI_4, as literals (no libm call in model construction).
-            let (s, co) = (0.707_106_781_186_547_5, 0.707_106_781_186_547_6);
+            // libm's sin/cos of FRAC_PI_4 (one ulp apart), without a libm call in model
+            // construction (which a model checker could not evaluate).
+            let (s, co) = (FRAC_1_SQRT_2.next_down(), FRAC_1_SQRT_2);
             let rot = |x: f64| [co * x, s * x, 0.082];
             vec![
                 c([0.0, 0.0, -0.06], [0.0, 0.0, 0.08], 0.07),

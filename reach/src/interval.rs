@@ -106,9 +106,15 @@ impl Interval {
             hi: self.hi.max(other.hi),
         }
     }
-    /// Multiply by a scalar (outward rounded).
+    /// Multiply by a scalar (outward rounded; a point times a scalar whose product is exactly a
+    /// float stays a point).
     #[inline(always)]
     pub fn scale(self, x: f64) -> Interval {
+        if self.lo == self.hi
+            && let Some(p) = exact_prod(self.lo, x)
+        {
+            return Interval::point(p);
+        }
         let a = self.lo * x;
         let b = self.hi * x;
         if a.is_nan() || b.is_nan() {
@@ -153,18 +159,55 @@ impl Interval {
     }
 }
 
+/// `x + y` when it is exactly a float (TwoSum's error is 0), else `None`.
+#[inline]
+fn exact_sum(x: f64, y: f64) -> Option<f64> {
+    let (s, e) = crate::exact::two_sum(x, y);
+    (e == 0.0 && s.is_finite()).then_some(s)
+}
+
+/// `x · y` when it is exactly a float, else `None`. Dekker's TwoProduct is exact only without
+/// overflow or underflow of its partial products, hence the magnitude guards.
+#[inline]
+fn exact_prod(x: f64, y: f64) -> Option<f64> {
+    if x == 0.0 || y == 0.0 {
+        return (x.is_finite() && y.is_finite()).then_some(0.0);
+    }
+    let ok = |v: f64| (1e-250..=1e250).contains(&v.abs());
+    let p = x * y;
+    if !(ok(x) && ok(y) && ok(p)) {
+        return None;
+    }
+    let (p, e) = crate::exact::two_prod(x, y);
+    (e == 0.0).then_some(p)
+}
+
 impl Add for Interval {
     type Output = Interval;
+    /// Outward rounded; the sum of two points that is exactly a float stays a point.
     #[inline(always)]
     fn add(self, o: Interval) -> Interval {
+        if self.lo == self.hi
+            && o.lo == o.hi
+            && let Some(s) = exact_sum(self.lo, o.lo)
+        {
+            return Interval::point(s);
+        }
         Interval::checked((self.lo + o.lo).next_down(), (self.hi + o.hi).next_up())
     }
 }
 
 impl Sub for Interval {
     type Output = Interval;
+    /// Outward rounded; the difference of two points that is exactly a float stays a point.
     #[inline(always)]
     fn sub(self, o: Interval) -> Interval {
+        if self.lo == self.hi
+            && o.lo == o.hi
+            && let Some(s) = exact_sum(self.lo, -o.lo)
+        {
+            return Interval::point(s);
+        }
         Interval::checked((self.lo - o.hi).next_down(), (self.hi - o.lo).next_up())
     }
 }
@@ -211,6 +254,13 @@ impl Div for Interval {
     fn div(self, o: Interval) -> Interval {
         if o.lo <= 0.0 && o.hi >= 0.0 {
             return Interval::ENTIRE;
+        }
+        // A quotient of points that is exactly a float (q·y = x exactly) stays a point.
+        if self.lo == self.hi && o.lo == o.hi {
+            let q = self.lo / o.lo;
+            if exact_prod(q, o.lo) == Some(self.lo) {
+                return Interval::point(q);
+            }
         }
         let a = self.lo / o.lo;
         let b = self.lo / o.hi;
@@ -295,6 +345,28 @@ mod tests {
             prop_assert!(a.contains(a.mid()));
             prop_assert!(a.hi() - a.mid() <= a.rad_up() && a.mid() - a.lo() <= a.rad_up());
         }
+    }
+
+    #[test]
+    fn exact_point_results_stay_points() {
+        let p = Interval::point;
+        assert_eq!(p(1.0) + p(2.0), p(3.0));
+        assert_eq!(p(1.0) - p(0.25), p(0.75));
+        assert_eq!(p(0.5) * p(3.0), p(1.5));
+        assert_eq!(p(0.1).scale(2.0), p(0.2));
+        assert_eq!(p(1.0) / p(4.0), p(0.25));
+        let q = p(1.0) / p(3.0);
+        assert!(q.lo() < q.hi());
+        // Inexact results are widened.
+        let third = p(1.0) * p(1.0 / 3.0).scale(3.0);
+        assert!(third.lo() <= 1.0 && third.hi() >= 1.0);
+        let s = p(0.1) + p(0.2);
+        assert!(s.lo() < s.hi() && s.lo() <= 0.3 && 0.3 <= s.hi());
+        let m = p(0.1) * p(0.1);
+        assert!(m.lo() < m.hi());
+        // Extreme magnitudes fall back to outward rounding.
+        let t = p(1e-300).scale(1e-20);
+        assert!(t.lo() < t.hi() && t.hi() > 0.0);
     }
 
     #[test]
