@@ -44,32 +44,58 @@ harness!(
     sub
 );
 
-/// mul/div/sqrt up/down bound the exact product, quotient and square root.
-///
-/// Under Kani `y` has at most 8 significand bits (a 53 × 9-bit multiplier; products still round),
-/// `x` any; the property test draws both at full width.
-fn mul_div_sqrt<S: Source>(s: &mut S) {
-    let Some(x) = num(s, 1e6) else { return };
+/// `x` any float of the range, `y` with at most 8 significand bits under Kani (a 53 × 9-bit
+/// multiplier: products still round), any in the property test.
+fn operands<S: Source>(s: &mut S) -> Option<(f64, f64)> {
+    let x = num(s, 1e6)?;
     let y = s.f64_short(-1e6, 1e6, 8);
-    if !s.assume(tame(y)) {
-        return;
-    }
+    s.assume(tame(y)).then_some((x, y))
+}
+
+/// mul up/down bound the exact product.
+fn mul<S: Source>(s: &mut S) {
+    let Some((x, y)) = operands(s) else { return };
     assert!(cmp_prod(x, y, mul_up(x, y)) != Greater, "mul_up({x}, {y})");
     assert!(cmp_prod(x, y, mul_down(x, y)) != Less, "mul_down({x}, {y})");
+}
+harness!(
+    a2_mul_enclose,
+    unwind = 2,
+    bits = 52,
+    cases = crate::DEFAULT_CASES,
+    mul
+);
+
+/// div up/down bound the exact quotient.
+fn div<S: Source>(s: &mut S) {
+    let Some((x, y)) = operands(s) else { return };
     if y != 0.0 {
         assert!(cmp_quot(x, y, div_up(x, y)) != Greater, "div_up({x}, {y})");
         assert!(cmp_quot(x, y, div_down(x, y)) != Less, "div_down({x}, {y})");
     }
+}
+harness!(
+    a2_div_enclose,
+    unwind = 2,
+    bits = 52,
+    cases = crate::DEFAULT_CASES,
+    div
+);
+
+/// sqrt up/down bound the exact square root (under Kani: of any value meeting the IEEE contract
+/// of `pacs_reach::ieee::sqrt`).
+fn sqrt<S: Source>(s: &mut S) {
+    let Some(x) = num(s, 1e6) else { return };
     let a = x.abs();
     assert!(cmp_sqrt(a, sqrt_up(a)) != Greater, "sqrt_up({a})");
     assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
 }
 harness!(
-    a2_mul_div_sqrt_enclose,
+    a2_sqrt_enclose,
     unwind = 2,
     bits = 52,
     cases = crate::DEFAULT_CASES,
-    mul_div_sqrt
+    sqrt
 );
 
 /// norm3_up / norm3_down / dist3_up bound the exact Euclidean norm and distance.
