@@ -11,7 +11,10 @@ use pacs_motion::scaling::{PathState, SpeedProfile};
 /// `ranges`, padded by 1e-12 relative; this harness checks the profile's own semantics).
 const EPS: f64 = 1e-9;
 
-fn braking<S: Source>(s: &mut S) {
+/// Limits `(acc, jerk)` and a consistent start state: a decelerating state can bring s̈ to 0
+/// before ṡ reaches 0. Others make `plan` undershoot (raw ṡ < 0, s decreasing); `admissible`
+/// rejects those (`sd_lo < -1e-9`), so the shield never executes them. `None`: rejected.
+fn consistent_start<S: Source>(s: &mut S) -> Option<(f64, f64, PathState)> {
     let acc = s.f64_in(0.05, 50.0);
     let jerk = s.f64_in(0.05, 500.0);
     let start = PathState {
@@ -19,12 +22,14 @@ fn braking<S: Source>(s: &mut S) {
         sd: s.f64_in(0.0, 1.5),
         sdd: s.f64_in(-acc, acc),
     };
-    // Consistent start: a decelerating state can bring s̈ to 0 before ṡ reaches 0. Others make
-    // `plan` undershoot (raw ṡ < 0, s decreasing); `admissible` rejects those (`sd_lo < -1e-9`),
-    // so the shield never executes them.
-    if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
+    s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk))
+        .then_some((acc, jerk, start))
+}
+
+fn braking<S: Source>(s: &mut S) {
+    let Some((acc, jerk, start)) = consistent_start(s) else {
         return;
-    }
+    };
     let p = SpeedProfile::plan(start, 0.0, acc, jerk);
     let settle = p.settle_time();
     assert!(settle.is_finite() && settle >= 0.0);
@@ -92,16 +97,9 @@ harness!(
 /// from a consistent start and any τ in `[ta, tb]`, the state the shield executes at τ
 /// (`eval`) lies in `ranges(ta, tb)`: s in `[s_lo, s_hi]`, ṡ in `[ṡ_lo, ṡ_hi]`, |s̈| ≤ the bound.
 fn path_ranges<S: Source>(s: &mut S) {
-    let acc = s.f64_in(0.05, 50.0);
-    let jerk = s.f64_in(0.05, 500.0);
-    let start = PathState {
-        s: s.f64_in(0.0, 10.0),
-        sd: s.f64_in(0.0, 1.5),
-        sdd: s.f64_in(-acc, acc),
-    };
-    if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
+    let Some((acc, jerk, start)) = consistent_start(s) else {
         return;
-    }
+    };
     let target = if s.bool() { 0.0 } else { s.f64_in(0.0, 1.5) };
     let p = SpeedProfile::plan(start, target, acc, jerk);
     let horizon = p.settle_time() + 1.0;
