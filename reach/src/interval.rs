@@ -199,16 +199,11 @@ impl Add for Interval {
 
 impl Sub for Interval {
     type Output = Interval;
-    /// Outward rounded; the difference of two points that is exactly a float stays a point.
+    /// `a − b = a + (−b)`: negation is exact, so this is the same outward-rounded (or exact
+    /// point) result bit for bit.
     #[inline(always)]
     fn sub(self, o: Interval) -> Interval {
-        if self.lo == self.hi
-            && o.lo == o.hi
-            && let Some(s) = exact_sum(self.lo, -o.lo)
-        {
-            return Interval::point(s);
-        }
-        Interval::checked((self.lo - o.hi).next_down(), (self.hi - o.lo).next_up())
+        self + (-o)
     }
 }
 
