@@ -2,8 +2,8 @@
 # Model-check every Kani harness of pacs (`cargo kani -p pacs-proofs`), one CBMC run per harness,
 # and print a table: harness, result, CBMC time.
 #
-#   bash proofs/kani.sh                 # the harnesses listed in proofs/kani-ci.txt
-#   bash proofs/kani.sh a1_add_enclose f2_occupancy_intervals_cover   # these
+#   bash proofs/kani.sh                 # the harnesses listed in proofs/kani-ci.txt, each with its solver
+#   bash proofs/kani.sh a1_add_enclose f2_occupancy_intervals_cover   # these (KANI_SOLVER=bitwuzla|sat)
 #
 # Exit status: 0 if every harness run verified, 1 if any failed or timed out, 0 with one line of
 # explanation if `cargo kani` is not installed (then nothing was model-checked; CI still runs the
@@ -19,19 +19,29 @@ if ! cargo kani --version >/dev/null 2>&1; then
 fi
 
 timeout_s="${KANI_HARNESS_TIMEOUT:-300}"
-log_dir="${CARGO_TARGET_DIR:-target}/kani-logs"
+target_dir="${CARGO_TARGET_DIR:-target}"
+log_dir="$target_dir/kani-logs"
 mkdir -p "$log_dir"
 echo "proofs: $(cargo kani --version 2>/dev/null | head -n1)"
 
-# The harnesses to model-check: the arguments, else every one listed in proofs/kani-ci.txt (the
+# The harnesses to model-check, each with its decision procedure: the arguments (solver from
+# KANI_SOLVER, default bitwuzla), else every line `harness solver` of proofs/kani-ci.txt (the
 # harnesses that verify within the budget; the README's table gives the others and why).
+#   sat:      CBMC's built-in SAT back end (CaDiCaL), CBMC's own bit-precise float encoding;
+#   bitwuzla: CBMC's SMT back end with the floating-point theory, solved by Bitwuzla (10-40x
+#             faster on float claims; see proofs/README.md, "Solvers", for what it trusts).
+declare -A solver_of=()
+selected=()
 if [ "$#" -gt 0 ]; then
-  selected=("$@")
+  for h in "$@"; do selected+=("$h"); solver_of[$h]="${KANI_SOLVER:-bitwuzla}"; done
 else
-  mapfile -t selected < <(grep -vE '^\s*(#|$)' proofs/kani-ci.txt)
+  while read -r h solver _; do
+    selected+=("$h")
+    solver_of[$h]="${solver:-sat}"
+  done < <(grep -vE '^\s*(#|$)' proofs/kani-ci.txt)
   mapfile -t all < <(grep -rh -A1 '^harness!(' proofs/src/harnesses | grep -oE '^\s+[a-z][a-z0-9_]+,' | tr -d ' ,' | sort)
   for h in "${all[@]}"; do
-    if ! printf '%s\n' "${selected[@]}" | grep -qx "$h"; then
+    if [ -z "${solver_of[$h]:-}" ]; then
       if grep -A2 "^    $h,\$" proofs/src/harnesses/*.rs | grep -q twin_only; then
         echo "proofs: $h: property test only (README: what its proofs cover)"
       else
@@ -40,30 +50,70 @@ else
     fi
   done
 fi
-# One cargo kani run compiles once and checks the selected harnesses one after the other.
-args=()
-for h in "${selected[@]}"; do args+=(--harness "$h"); done
+
+# Bitwuzla: PyPI ships its Python bindings, not a binary; proofs/smt/bitwuzla_cli.py is the
+# `bitwuzla` command CBMC calls, run in a venv under the target directory.
+need_bitwuzla=0
+for h in "${selected[@]}"; do [ "${solver_of[$h]}" = bitwuzla ] && need_bitwuzla=1; done
+if [ "$need_bitwuzla" = 1 ]; then
+  smt_dir="$target_dir/kani-smt"
+  if ! "$smt_dir/venv/bin/python" -c 'import bitwuzla' >/dev/null 2>&1; then
+    python3 -m venv "$smt_dir/venv" >/dev/null 2>&1 &&
+      "$smt_dir/venv/bin/pip" install -q "bitwuzla==${BITWUZLA_VERSION:-0.10.0}" >/dev/null 2>&1
+  fi
+  if "$smt_dir/venv/bin/python" -c 'import bitwuzla' >/dev/null 2>&1; then
+    mkdir -p "$smt_dir/bin"
+    printf '#!/bin/sh\nexec "%s" "%s" "$@"\n' "$(cd "$smt_dir/venv/bin" && pwd)/python" \
+      "$(pwd)/proofs/smt/bitwuzla_cli.py" >"$smt_dir/bin/bitwuzla"
+    chmod +x "$smt_dir/bin/bitwuzla"
+    PATH="$(cd "$smt_dir/bin" && pwd):$PATH"
+    export PATH
+    echo "proofs: Bitwuzla $("$smt_dir/venv/bin/pip" show bitwuzla 2>/dev/null | sed -n 's/^Version: //p') from PyPI (CBMC's SMT back end, floating-point theory)"
+  else
+    echo "proofs: Bitwuzla could not be installed (pip): those harnesses run on CBMC's SAT back end (slower; may exceed the budget)"
+    for h in "${selected[@]}"; do solver_of[$h]=sat; done
+  fi
+fi
+
+# One cargo kani run per solver (the compilation is shared); harnesses one after the other.
 log="$log_dir/kani.log"
-timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
-  cargo kani -p pacs-proofs --lib "${args[@]}" \
-  -Z unstable-options --harness-timeout "${timeout_s}s" >"$log" 2>&1
-code=$?
+: >"$log"
+code=0
+for solver in sat bitwuzla; do
+  args=()
+  for h in "${selected[@]}"; do [ "${solver_of[$h]}" = "$solver" ] && args+=(--harness "$h"); done
+  [ "${#args[@]}" -eq 0 ] && continue
+  extra=()
+  # Bitwuzla runs as a fresh process per query (no incremental solving): without the
+  # reachability checks of every assertion, a proof is one `unsat` query instead of one query
+  # per reachable assertion. Their role (no assertion vacuously unreachable) is played by the
+  # mutants caught and by the property-test twins (proofs/README.md, "Solvers").
+  [ "$solver" = bitwuzla ] && extra=(--no-assertion-reach-checks --cbmc-args --bitwuzla)
+  echo "=== solver $solver" >>"$log"
+  timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
+    cargo kani -p pacs-proofs --lib "${args[@]}" \
+    -Z unstable-options --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1
+  c=$?
+  [ "$c" -ne 0 ] && code=$c
+done
 
 # Per harness: its result and CBMC time, from the log.
 awk '
-  /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; res[name] = "ERROR"; order[++k] = name }
+  /^=== solver / { solver = $3 }
+  /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; res[name] = "ERROR"; sol[name] = solver; order[++k] = name }
   /VERIFICATION:- SUCCESSFUL/ { res[name] = "SUCCESSFUL" }
   /VERIFICATION:- FAILED/ { res[name] = "FAILED" }
   /[Tt]imed out|TIMEOUT/ { if (name != "") res[name] = "TIMEOUT" }
   /Verification Time: / { t = $3; sub(/s$/, "", t); tm[name] = t }
   END {
-    printf "%-46s %-12s %10s\n", "harness", "result", "CBMC s"
-    for (i = 1; i <= k; i++) printf "%-46s %-12s %10s\n", order[i], res[order[i]], tm[order[i]]
+    printf "%-46s %-9s %-12s %10s\n", "harness", "solver", "result", "CBMC s"
+    for (i = 1; i <= k; i++) printf "%-46s %-9s %-12s %10s\n", order[i], sol[order[i]], res[order[i]], tm[order[i]]
   }' "$log"
-grep -E '^Complete - |^Summary' -A0 "$log" | tail -n 1
-if [ "$code" -ne 0 ] || ! grep -q '^Complete - ' "$log" || grep -q 'VERIFICATION:- FAILED' "$log"; then
+checked=$(grep -c '^Checking harness ' "$log")
+if [ "$code" -ne 0 ] || [ "$checked" -ne "${#selected[@]}" ] || grep -q 'VERIFICATION:- FAILED' "$log" ||
+  [ "$(grep -c 'VERIFICATION:- SUCCESSFUL' "$log")" -ne "${#selected[@]}" ]; then
   grep -E 'Failed Checks:|^error' "$log" | head -n 20 | sed 's/^/    /'
   echo "proofs: not every harness verified (exit $code; full log: $log)"
   exit 1
 fi
-echo "proofs: every harness VERIFICATION SUCCESSFUL (full log: $log)"
+echo "proofs: all ${#selected[@]} harnesses VERIFICATION SUCCESSFUL (full log: $log)"

@@ -58,7 +58,7 @@ pub enum AuditError {
     AccModel,
     /// The MCAP settings are invalid.
     #[error("{0}")]
-    Mcap(String),
+    Mcap(pacs_log::McapConfigError),
     /// The constraints do not resolve against the human model.
     #[error("constraints: {0}")]
     Constraints(pacs_models::ModelError),

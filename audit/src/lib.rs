@@ -42,8 +42,8 @@ pub fn audit_reader(
     let file = reader.file().to_string();
     let header = reader.header().with_overrides(&cfg.overrides());
     let header_loc = reader.header_location();
-    let models =
-        LogModels::from_header(&header).map_err(|p| LogError::input(&file, header_loc, p))?;
+    let models = LogModels::from_header(&header)
+        .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
     let mut auditor = Auditor::new(models, cfg.clone())
         .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
     let mut last_t = f64::NEG_INFINITY;

@@ -21,15 +21,27 @@ pub struct CsvReader<R: BufRead> {
     name: String,
 }
 
-fn num(field: &str, s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("{field}: `{}` is not a number", s.trim()))?;
+/// A cell that is not a finite number; `field` is its field path (`q[2]`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum CellError {
+    #[error("{field}: `{text}` is not a number")]
+    NotANumber { field: String, text: String },
+    #[error("{field}: value {value} is not finite")]
+    NotFinite { field: String, value: f64 },
+}
+
+fn num(field: &str, s: &str) -> Result<f64, CellError> {
+    let v: f64 = s.trim().parse().map_err(|_| CellError::NotANumber {
+        field: field.into(),
+        text: s.trim().into(),
+    })?;
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("{field}: value {v} is not finite"))
+        Err(CellError::NotFinite {
+            field: field.into(),
+            value: v,
+        })
     }
 }
 
@@ -58,7 +70,9 @@ impl<R: BufRead> CsvReader<R> {
         };
         let header: Header = serde_json::from_str(json)
             .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
-        header.check().map_err(|p| LogError::input(file, loc, p))?;
+        header
+            .check()
+            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
         Ok(Self {
             file: file.into(),
             input,
@@ -114,6 +128,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
         let loc = Location::Line(self.line_no);
         let file = self.file.as_str();
         let err = |p: String| LogError::input(file, loc, p);
+        let bad = |p: CellError| LogError::input(file, loc, p.to_string());
         if !self.line.ends_with('\n') {
             return Err(err(
                 "truncated line (no newline at the end of the file)".into()
@@ -127,7 +142,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 .next()
                 .ok_or_else(|| err("missing column `t`".into()))?,
         )
-        .map_err(err)?;
+        .map_err(bad)?;
         match kind {
             "robot" => {
                 let n_cell = cells
@@ -142,13 +157,13 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 self.ddq.clear();
                 for (i, c) in cells.enumerate() {
                     if i < n {
-                        self.q.push(num(&format!("q[{i}]"), c).map_err(err)?);
+                        self.q.push(num(&format!("q[{i}]"), c).map_err(bad)?);
                     } else if i < 2 * n {
                         self.dq
-                            .push(num(&format!("dq[{}]", i - n), c).map_err(err)?);
+                            .push(num(&format!("dq[{}]", i - n), c).map_err(bad)?);
                     } else {
                         self.ddq
-                            .push(num(&format!("ddq[{}]", i - 2 * n), c).map_err(err)?);
+                            .push(num(&format!("ddq[{}]", i - 2 * n), c).map_err(bad)?);
                     }
                 }
                 if self.q.len() != n
@@ -176,12 +191,12 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                         .next()
                         .ok_or_else(|| err("missing column `t_meas`".into()))?,
                 )
-                .map_err(err)?;
+                .map_err(bad)?;
                 self.positions.clear();
                 let mut p = [0.0; 3];
                 let mut k = 0;
                 for (i, c) in cells.enumerate() {
-                    p[i % 3] = num(&format!("positions[{}][{}]", i / 3, i % 3), c).map_err(err)?;
+                    p[i % 3] = num(&format!("positions[{}][{}]", i / 3, i % 3), c).map_err(bad)?;
                     k = i + 1;
                     if k % 3 == 0 {
                         self.positions.push(p);

@@ -57,3 +57,57 @@ impl LogError {
         }
     }
 }
+
+/// What is wrong with a log header (its first record, an MCAP metadata record or a side file),
+/// before a file and location are attached (`LogError::Input` carries its message).
+#[derive(Debug, Error)]
+pub enum HeaderError {
+    /// The first record is not a header.
+    #[error("first record: type `{0}`, expected `header`")]
+    NotHeader(String),
+    /// A header object without `"type": "header"`.
+    #[error("missing header: the header must have \"type\": \"header\"")]
+    MissingType,
+    /// Unsupported `format`.
+    #[error("header.format: `{0}`, expected `{format}`", format = crate::format::FORMAT)]
+    Format(String),
+    /// Unsupported `version`.
+    #[error("header.version: {0} is not supported (expected {version})", version = crate::format::VERSION)]
+    Version(u32),
+    /// The text is not JSON.
+    #[error("invalid JSON: {0}")]
+    Json(String),
+    /// The JSON does not have the header's fields and types.
+    #[error("invalid header: {0}")]
+    Fields(String),
+    /// A model the header names or specifies is invalid; `field` is its header field.
+    #[error("{field}: {source}")]
+    Model {
+        /// Header field (`header.robot`, `header.environment[2]`, …).
+        field: String,
+        /// The model's own error.
+        #[source]
+        source: pacs_models::ModelError,
+    },
+}
+
+/// An invalid MCAP reader setting (`[mcap]` of an audit config, or the CLI's topic flags).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum McapConfigError {
+    /// `mcap.reorder_window` is negative or not finite (s).
+    #[error("mcap.reorder_window: {0} must be finite and ≥ 0")]
+    ReorderWindow(f64),
+    /// A topic is empty.
+    #[error("{0}: empty topic")]
+    EmptyTopic(&'static str),
+    /// Two settings name the same topic.
+    #[error("{field}: topic `{topic}` is also {other}")]
+    DuplicateTopic {
+        /// The setting.
+        field: &'static str,
+        /// The topic.
+        topic: String,
+        /// The earlier setting with the same topic.
+        other: &'static str,
+    },
+}

@@ -1,6 +1,7 @@
 //! Log format v1 (see `docs/log-format.md`): the header, the record view shared by all readers, and
 //! the JSON Lines writer the shield uses.
 
+use crate::error::HeaderError;
 use pacs_models::shape::CapsuleSpec;
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, HumanSpec, RobotModel, RobotSpec};
 use serde::{Deserialize, Serialize};
@@ -66,24 +67,15 @@ impl Header {
     }
 
     /// Check `type`, `format` and `version`; returns the problem otherwise.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), HeaderError> {
         if self.kind != "header" {
-            return Err(format!(
-                "first record: type `{}`, expected `header`",
-                self.kind
-            ));
+            return Err(HeaderError::NotHeader(self.kind.clone()));
         }
         if self.format != FORMAT {
-            return Err(format!(
-                "header.format: `{}`, expected `{FORMAT}`",
-                self.format
-            ));
+            return Err(HeaderError::Format(self.format.clone()));
         }
         if self.version != VERSION {
-            return Err(format!(
-                "header.version: {} is not supported (expected {VERSION})",
-                self.version
-            ));
+            return Err(HeaderError::Version(self.version));
         }
         Ok(())
     }
@@ -132,31 +124,35 @@ pub struct LogModels {
 
 impl LogModels {
     /// Load and validate the header's models; the error names the header field.
-    pub fn from_header(h: &Header) -> Result<Self, String> {
+    pub fn from_header(h: &Header) -> Result<Self, HeaderError> {
+        let model = |field: &str| {
+            let field = field.to_string();
+            move |source| HeaderError::Model { field, source }
+        };
         let robot = match &h.robot {
             ModelRef::Name(n) => RobotModel::builtin(n),
             ModelRef::Spec(s) => RobotModel::new((**s).clone()),
         }
-        .map_err(|e| format!("header.robot: {e}"))?;
+        .map_err(model("header.robot"))?;
         let human = match &h.human {
             ModelRef::Name(n) => HumanModel::builtin(n),
             ModelRef::Spec(s) => HumanModel::new((**s).clone()),
         }
-        .map_err(|e| format!("header.human: {e}"))?;
+        .map_err(model("header.human"))?;
         let constraints = match &h.constraints {
             ModelRef::Name(n) => ConstraintSpec::builtin(n),
             ModelRef::Spec(s) => Ok((**s).clone()),
         }
-        .map_err(|e| format!("header.constraints: {e}"))?;
+        .map_err(model("header.constraints"))?;
         constraints
             .resolve(&human)
-            .map_err(|e| format!("header.constraints: {e}"))?
+            .map_err(model("header.constraints"))?
             .check_robot(&robot)
-            .map_err(|e| format!("header.robot: {e}"))?;
+            .map_err(model("header.robot"))?;
         let mut environment = Vec::with_capacity(h.environment.len());
         for (i, c) in h.environment.iter().enumerate() {
             environment
-                .push(Capsule::try_from(*c).map_err(|e| format!("header.environment[{i}]: {e}"))?);
+                .push(Capsule::try_from(*c).map_err(model(&format!("header.environment[{i}]")))?);
         }
         Ok(Self {
             robot,

@@ -268,7 +268,9 @@ impl<R: BufRead> JsonlReader<R> {
         }
         let header: Header = serde_json::from_value(value)
             .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
-        header.check().map_err(|p| LogError::input(file, loc, p))?;
+        header
+            .check()
+            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
         Ok(Self {
             file: file.to_string(),
             input,

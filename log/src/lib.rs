@@ -16,7 +16,7 @@ pub mod jsonl;
 pub mod mcap;
 pub mod order;
 
-pub use error::{Location, LogError};
+pub use error::{HeaderError, Location, LogError, McapConfigError};
 pub use format::{
     FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, Record, RecordReader, VERSION,
     WriteError,

@@ -15,7 +15,7 @@
 //! would need a longer window is an error, never silently reordered or dropped.
 
 use crate::cdr::{self, CdrWriter, JointStateMsg, PoseArray, Stamp};
-use crate::error::{Location, LogError};
+use crate::error::{HeaderError, Location, LogError, McapConfigError};
 use crate::format::{Header, LogModels, ModelOverrides, Record, RecordReader};
 use mcap::records::op;
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
@@ -73,12 +73,9 @@ impl Default for McapConfig {
 
 impl McapConfig {
     /// Check every value; the error names the field and value.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), McapConfigError> {
         if !(self.reorder_window.is_finite() && self.reorder_window >= 0.0) {
-            return Err(format!(
-                "mcap.reorder_window: {} must be finite and ≥ 0",
-                self.reorder_window
-            ));
+            return Err(McapConfigError::ReorderWindow(self.reorder_window));
         }
         let topics = [
             ("mcap.robot_topic", &self.robot_topic),
@@ -87,10 +84,14 @@ impl McapConfig {
         ];
         for (i, (f, t)) in topics.iter().enumerate() {
             if t.is_empty() {
-                return Err(format!("{f}: empty topic"));
+                return Err(McapConfigError::EmptyTopic(f));
             }
             if let Some((g, _)) = topics[..i].iter().find(|(_, u)| u == t) {
-                return Err(format!("{f}: topic `{t}` is also {g}"));
+                return Err(McapConfigError::DuplicateTopic {
+                    field: f,
+                    topic: t.to_string(),
+                    other: g,
+                });
             }
         }
         Ok(())
@@ -98,19 +99,19 @@ impl McapConfig {
 }
 
 /// Parse a pacs header from JSON text (the JSON Lines header object); the error names the problem.
-pub fn parse_header_json(text: &str) -> Result<Header, String> {
+pub fn parse_header_json(text: &str) -> Result<Header, HeaderError> {
     let value: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))?;
+        serde_json::from_str(text).map_err(|e| HeaderError::Json(e.to_string()))?;
     header_from_value(value)
 }
 
 /// A header from a parsed JSON value: must have `"type": "header"` and the v1 fields.
-pub fn header_from_value(value: serde_json::Value) -> Result<Header, String> {
+pub fn header_from_value(value: serde_json::Value) -> Result<Header, HeaderError> {
     if value.get("type").and_then(|t| t.as_str()) != Some("header") {
-        return Err("missing header: the header must have \"type\": \"header\"".into());
+        return Err(HeaderError::MissingType);
     }
     let header: Header =
-        serde_json::from_value(value).map_err(|e| format!("invalid header: {e}"))?;
+        serde_json::from_value(value).map_err(|e| HeaderError::Fields(e.to_string()))?;
     header.check()?;
     Ok(header)
 }
@@ -135,7 +136,7 @@ pub fn load_header_file(path: &std::path::Path) -> Result<Header, LogError> {
         serde_json::from_str(&text)
             .map_err(|e| LogError::input(&name, Location::File, format!("invalid JSON: {e}")))?
     };
-    header_from_value(value).map_err(|p| LogError::input(&name, Location::File, p))
+    header_from_value(value).map_err(|p| LogError::input(&name, Location::File, p.to_string()))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -395,6 +396,35 @@ impl<R: Read + Seek> McapReader<R> {
     }
 }
 
+/// A field of an MCAP record body that cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum FieldError {
+    /// The field's declared length runs past the record.
+    #[error("{what}: {declared} bytes declared, only {remaining} remain in the record")]
+    Truncated {
+        what: &'static str,
+        declared: u64,
+        remaining: usize,
+    },
+    /// A string field is not UTF-8.
+    #[error("{0}: not valid UTF-8")]
+    Utf8(&'static str),
+}
+
+/// The `pacs` header a metadata record holds, or why it holds none.
+#[derive(Debug, thiserror::Error)]
+enum MetadataHeaderError {
+    /// The record has no header key.
+    #[error("missing header: metadata record `{METADATA_NAME}` has no key `{METADATA_KEY}`")]
+    NoKey,
+    /// The header key appears twice.
+    #[error("key `{METADATA_KEY}` appears twice")]
+    DuplicateKey,
+    /// The header text is invalid.
+    #[error("header: {0}")]
+    Header(#[from] HeaderError),
+}
+
 /// Little-endian field reader over one MCAP record body; every length is checked against the
 /// remaining bytes before use (`mcap`'s own record parser reserves a string's declared length
 /// before checking it, so the records the audit needs are parsed here).
@@ -403,41 +433,46 @@ struct Fields<'a> {
 }
 
 impl<'a> Fields<'a> {
-    fn take(&mut self, n: u64, what: &str) -> Result<&'a [u8], String> {
+    fn take(&mut self, n: u64, what: &'static str) -> Result<&'a [u8], FieldError> {
         if n > self.b.len() as u64 {
-            return Err(format!(
-                "{what}: {n} bytes declared, only {} remain in the record",
-                self.b.len()
-            ));
+            return Err(FieldError::Truncated {
+                what,
+                declared: n,
+                remaining: self.b.len(),
+            });
         }
         let (h, t) = self.b.split_at(n as usize);
         self.b = t;
         Ok(h)
     }
-    fn int<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+    fn int<const N: usize>(&mut self, what: &'static str) -> Result<[u8; N], FieldError> {
         let s = self.take(N as u64, what)?;
         let mut a = [0u8; N];
         a.copy_from_slice(s);
         Ok(a)
     }
-    fn u16(&mut self, what: &str) -> Result<u16, String> {
+    fn u16(&mut self, what: &'static str) -> Result<u16, FieldError> {
         Ok(u16::from_le_bytes(self.int(what)?))
     }
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
+    fn u32(&mut self, what: &'static str) -> Result<u32, FieldError> {
         Ok(u32::from_le_bytes(self.int(what)?))
     }
-    fn u64(&mut self, what: &str) -> Result<u64, String> {
+    fn u64(&mut self, what: &'static str) -> Result<u64, FieldError> {
         Ok(u64::from_le_bytes(self.int(what)?))
     }
-    fn bytes(&mut self, what: &str) -> Result<&'a [u8], String> {
+    fn bytes(&mut self, what: &'static str) -> Result<&'a [u8], FieldError> {
         let n = self.u32(what)?;
         self.take(u64::from(n), what)
     }
-    fn str(&mut self, what: &str) -> Result<&'a str, String> {
-        std::str::from_utf8(self.bytes(what)?).map_err(|_| format!("{what}: not valid UTF-8"))
+    fn str(&mut self, what: &'static str) -> Result<&'a str, FieldError> {
+        std::str::from_utf8(self.bytes(what)?).map_err(|_| FieldError::Utf8(what))
     }
     /// A `Map<string, string>` (byte length, then key/value pairs); visits each pair.
-    fn map(&mut self, what: &str, mut f: impl FnMut(&'a str, &'a str)) -> Result<(), String> {
+    fn map(
+        &mut self,
+        what: &'static str,
+        mut f: impl FnMut(&'a str, &'a str),
+    ) -> Result<(), FieldError> {
         let n = self.u32(what)?;
         let mut m = Fields {
             b: self.take(u64::from(n), what)?,
@@ -541,16 +576,20 @@ fn header_from_summary<R: Read + Seek>(
         )));
     }
     match parse_metadata(&buf[9..]) {
-        Ok((name, h)) if name == METADATA_NAME => Ok(Some((h.map_err(err)?, offset))),
-        Ok(_) => Err(err(format!(
+        Ok((_, Some(h))) => Ok(Some((h.map_err(|p| err(p.to_string()))?, offset))),
+        Ok((_, None)) => Err(err(format!(
             "metadata index of `{METADATA_NAME}` points at another record"
         ))),
         Err(p) => Err(err(format!("invalid metadata record: {p}"))),
     }
 }
 
-/// A metadata record body: its name, and (for a `pacs` record) the header it holds.
-fn parse_metadata(body: &[u8]) -> Result<(&str, Result<Header, String>), String> {
+/// A metadata record body: its name, and (for a `pacs` record) the header it holds (`None` for
+/// any other record).
+#[allow(clippy::type_complexity)]
+fn parse_metadata(
+    body: &[u8],
+) -> Result<(&str, Option<Result<Header, MetadataHeaderError>>), FieldError> {
     let mut f = Fields { b: body };
     let name = f.str("metadata name")?;
     let mut text = None;
@@ -562,12 +601,10 @@ fn parse_metadata(body: &[u8]) -> Result<(&str, Result<Header, String>), String>
         }
     })?;
     let h = match (name == METADATA_NAME, text) {
-        (false, _) => Err(String::new()),
-        (true, None) => Err(format!(
-            "missing header: metadata record `{METADATA_NAME}` has no key `{METADATA_KEY}`"
-        )),
-        (true, Some(_)) if count > 1 => Err(format!("key `{METADATA_KEY}` appears twice")),
-        (true, Some(t)) => parse_header_json(t).map_err(|p| format!("header: {p}")),
+        (false, _) => None,
+        (true, None) => Some(Err(MetadataHeaderError::NoKey)),
+        (true, Some(_)) if count > 1 => Some(Err(MetadataHeaderError::DuplicateKey)),
+        (true, Some(t)) => Some(parse_header_json(t).map_err(MetadataHeaderError::from)),
     };
     Ok((name, h))
 }
@@ -583,8 +620,8 @@ impl State {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
             _ => Location::File,
         };
-        let models =
-            LogModels::from_header(&eff).map_err(|p| LogError::input(&self.file, loc, p))?;
+        let models = LogModels::from_header(&eff)
+            .map_err(|p| LogError::input(&self.file, loc, p.to_string()))?;
         self.joints = models
             .robot
             .joints()
@@ -603,7 +640,7 @@ impl State {
             op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => {}
             _ => return Ok(()),
         }
-        let bad = |p: String| {
+        let bad = |p: FieldError| {
             LogError::input(
                 &self.file,
                 Location::Offset(self.pos),
@@ -638,7 +675,8 @@ impl State {
             }
             op::METADATA => {
                 let (name, h) = parse_metadata(data).map_err(bad)?;
-                if name == METADATA_NAME {
+                if let Some(h) = h {
+                    debug_assert_eq!(name, METADATA_NAME);
                     match self.header_from {
                         Some(HeaderFrom::Given) => {}
                         Some(HeaderFrom::Record(o)) if o == start => {}
@@ -650,7 +688,7 @@ impl State {
                         None => {
                             self.header_from = Some(HeaderFrom::Record(start));
                             let h = h.map_err(|p| {
-                                LogError::input(&self.file, Location::Offset(start), p)
+                                LogError::input(&self.file, Location::Offset(start), p.to_string())
                             })?;
                             self.set_header(h)?;
                         }

@@ -487,10 +487,10 @@ impl Planner {
             };
             match r {
                 Ok(d) => durs.push(d),
-                Err(message) => {
+                Err(e) => {
                     result = Err(TrajectoryError::Solver {
                         segment: k,
-                        message,
+                        message: e.to_string(),
                     });
                     break;
                 }
@@ -578,7 +578,7 @@ impl<const N: usize> Eng<N> {
         cur: &[[f64; MAX_DOF]; 3],
         tgt: &[[f64; MAX_DOF]; 3],
         out: &mut Vec<Profile>,
-    ) -> Result<f64, String> {
+    ) -> Result<f64, RuckigError> {
         for i in 0..n {
             self.input.current_position[i] = cur[0][i];
             self.input.current_velocity[i] = cur[1][i];
@@ -587,9 +587,7 @@ impl<const N: usize> Eng<N> {
             self.input.target_velocity[i] = tgt[1][i];
             self.input.target_acceleration[i] = tgt[2][i];
         }
-        self.otg
-            .calculate(&self.input, &mut self.out)
-            .map_err(|e| e.to_string())?;
+        self.otg.calculate(&self.input, &mut self.out)?;
         let ps = &self.out.profiles[0];
         for i in 0..n {
             out.push(ps[i]);

@@ -98,6 +98,19 @@ impl Source for KaniSource {
         kani::assume(x.to_bits() & mask == 0);
         x
     }
+    /// Any point of the ball (no square root: `|v|² ≤ (r(1 − 1e-9))²` in floating point, which
+    /// the 1e-9 shrink keeps inside the exact ball).
+    fn in_ball(&mut self, r: f64) -> [f64; 3] {
+        let v = self.vec3(-r, r);
+        let rr = r * (1.0 - 1e-9);
+        kani::assume(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= rr * rr);
+        v
+    }
+    /// Any point of the ball, whatever `d` (a superset of the twin's samples along `d`).
+    fn in_ball_along(&mut self, d: [f64; 3], r: f64) -> [f64; 3] {
+        let _ = d;
+        self.in_ball(r)
+    }
     fn bool(&mut self) -> bool {
         kani::any()
     }

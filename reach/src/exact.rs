@@ -114,9 +114,12 @@ pub fn dd_sum(terms: &[f64]) -> (f64, f64) {
         mag += t.abs();
     }
     // lo accumulates ≤ n errors each ≤ u·|partial| ≤ u·mag; its own rounding ≤ n·u·|lo|.
+    // 2⁻¹⁰⁰ and 2⁻⁵² as constants (no `powi`: CBMC's SMT back end cannot flatten its model).
+    const TWO_M100: f64 = f64::from_bits((1023 - 100) << 52);
+    const TWO_M52: f64 = f64::from_bits((1023 - 52) << 52);
     let n = terms.len() as f64;
-    let err = (n * n + 2.0) * mag * 2f64.powi(-100) + f64::MIN_POSITIVE;
-    (hi + lo, err + (hi + lo).abs() * 2f64.powi(-52))
+    let err = (n * n + 2.0) * mag * TWO_M100 + f64::MIN_POSITIVE;
+    (hi + lo, err + (hi + lo).abs() * TWO_M52)
 }
 
 /// True only if the exact `Σ terms ≤ 0` is proven by [`dd_sum`].

@@ -44,11 +44,16 @@ pub fn sqrt(x: f64) -> f64 {
     }
     // x·2^(2k) is exact (a power of two times a float, no overflow or underflow here), and
     // √(x·2^(2k))·2^(−k) = √x; the scaled result is normal, so scaling back is exact too.
+    // Powers of two as constants (CBMC's SMT back end cannot flatten its `powi` model).
     const BIG: f64 = 1.0e150;
+    const P600: f64 = f64::from_bits((1023 + 600) << 52);
+    const M600: f64 = f64::from_bits((1023 - 600) << 52);
+    const P300: f64 = f64::from_bits((1023 + 300) << 52);
+    const M300: f64 = f64::from_bits((1023 - 300) << 52);
     let (xs, back) = if x < 1.0 / BIG {
-        (x * 2f64.powi(600), 2f64.powi(-300))
+        (x * P600, M300)
     } else if x > BIG {
-        (x * 2f64.powi(-600), 2f64.powi(300))
+        (x * M600, P300)
     } else {
         (x, 1.0)
     };

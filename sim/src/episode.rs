@@ -34,17 +34,19 @@ pub enum Method {
 }
 
 impl std::str::FromStr for Method {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::UnknownName;
+    fn from_str(s: &str) -> Result<Self, crate::UnknownName> {
         match s {
             "off" => Ok(Self::Off),
             "pacs" => Ok(Self::Pacs),
             "single-action" => Ok(Self::SingleAction),
             "cbf" => Ok(Self::Cbf),
             "direct" => Ok(Self::Direct),
-            o => Err(format!(
-                "unknown method `{o}` (off, pacs, single-action, cbf, direct)"
-            )),
+            o => Err(crate::UnknownName {
+                kind: "method",
+                given: o.into(),
+                choices: "off, pacs, single-action, cbf, direct".into(),
+            }),
         }
     }
 }

@@ -34,8 +34,8 @@ pub const METHOD_NAMES: [&str; 9] = [
 ];
 
 impl std::str::FromStr for Variant {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::UnknownName;
+    fn from_str(s: &str) -> Result<Self, crate::UnknownName> {
         let (method, mode) = match s {
             "off" => (Method::Off, None),
             "pacs" => (Method::Pacs, None),
@@ -47,10 +47,11 @@ impl std::str::FromStr for Variant {
             "cbf" => (Method::Cbf, None),
             "direct" => (Method::Direct, None),
             o => {
-                return Err(format!(
-                    "unknown method `{o}` (one of: {})",
-                    METHOD_NAMES.join(", ")
-                ));
+                return Err(crate::UnknownName {
+                    kind: "method",
+                    given: o.into(),
+                    choices: format!("one of: {}", METHOD_NAMES.join(", ")),
+                });
             }
         };
         Ok(Self {

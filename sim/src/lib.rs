@@ -16,3 +16,15 @@ pub mod eval;
 pub mod humans;
 pub mod policy;
 pub mod task;
+
+/// A name (task, method, variant) that is not one of the choices.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {kind} `{given}` ({choices})")]
+pub struct UnknownName {
+    /// What was named (`task`, `method`).
+    pub kind: &'static str,
+    /// The name given.
+    pub given: String,
+    /// The choices, as listed in the message.
+    pub choices: String,
+}

@@ -42,12 +42,16 @@ impl TaskKind {
 }
 
 impl std::str::FromStr for TaskKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::UnknownName;
+    fn from_str(s: &str) -> Result<Self, crate::UnknownName> {
         Self::ALL
             .into_iter()
             .find(|t| t.name() == s)
-            .ok_or_else(|| format!("unknown task `{s}` (sorting, handover, feeding, sphere)"))
+            .ok_or_else(|| crate::UnknownName {
+                kind: "task",
+                given: s.into(),
+                choices: "sorting, handover, feeding, sphere".into(),
+            })
     }
 }
 

@@ -74,7 +74,7 @@ pub struct SimulateArgs {
     pub threads: Option<usize>,
 }
 
-fn parse_list<T: std::str::FromStr<Err = String>>(
+fn parse_list<T: std::str::FromStr<Err = pacs_sim::UnknownName>>(
     s: &str,
     all: &[&str],
     what: &str,

@@ -1,0 +1,201 @@
+#!/usr/bin/env python3
+"""A `bitwuzla` command for `cbmc --bitwuzla`, over Bitwuzla's Python bindings (PyPI `bitwuzla`).
+
+CBMC runs `bitwuzla FILE` and reads the SMT-LIB2 answers (`sat`/`unsat`, then `get-value`
+results) from standard output. Bitwuzla ships no command-line binary on PyPI; this script is that
+command: it reads FILE, repairs the sorts of floating-point terms that CBMC flattens into
+bit-vectors (see `repair_float_sorts`), and executes every command with Bitwuzla's parser, which
+prints the answers as the Bitwuzla binary would.
+
+Why it is sound to use for proofs: the repair only ever *adds* freedom (a NaN float may stand for
+any NaN bit pattern; every non-NaN float keeps exactly its bits), so an `unsat` answer on the
+repaired problem implies `unsat` on CBMC's; the mutants in proofs/README.md show that failures
+are still found.
+"""
+import os
+import re
+import sys
+
+FP_LITERAL = re.compile(r"\(fp #b([01]+) #b([01]+) #b([01]+)\)")
+FP_SYMBOL = re.compile(
+    r"^\((?:declare-fun|define-fun) (\|[^|]*\||[^\s()]+) \(\) \(_ FloatingPoint (\d+) (\d+)\)",
+    re.M,
+)
+BV_DEFINITION = re.compile(
+    r"^\(define-fun (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec (\d+)\) (\|[^|]*\||\(fp #b[01]+ #b[01]+ #b[01]+\))\)$",
+    re.M,
+)
+BV_SYMBOL = re.compile(
+    r"^\((?:declare-fun|define-fun) (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec \d+\)", re.M
+)
+FP_DEFINITION = re.compile(
+    r"^\(define-fun (\|[^|]*\||[^\s()]+) \(\) \(_ FloatingPoint (\d+) (\d+)\) (.*)\)$", re.M
+)
+EQUATION = re.compile(
+    r"^\(assert \(= (\|[^|]*\||[^\s()]+) (\|[^|]*\||[^\s()]+)\)\)$", re.M
+)
+# Operators whose arguments must be bit-vectors but to which CBMC passes floats (the flattening
+# of structs and enum payloads that contain an f64).
+BIT_VECTOR_OPERATORS = {"concat"}
+
+
+def repair_float_sorts(text: str) -> str:
+    """Return `text` with every float argument of a bit-vector operator made a bit-vector.
+
+    - a float literal `(fp #bS #bE #bM)` becomes the literal `#bSEM` (the same IEEE 754 bits);
+    - a float symbol `X` becomes a fresh bit-vector symbol `X__bv` with the constraint
+      `((_ to_fp E M) X__bv) = X` (exactly X's bits unless X is NaN, then any NaN's bits);
+    - the same for a bit-vector definition whose whole body is a float symbol or literal;
+    - a float definition whose body is a bit-vector (`extract`, bit-vector symbol) reads its
+      bits with `to_fp` (the IEEE 754 reinterpretation, exact up to NaN payloads);
+    - an equation between a float symbol and a bit-vector symbol compares the float's twin.
+    """
+    float_symbols = {m.group(1): (int(m.group(2)), int(m.group(3))) for m in FP_SYMBOL.finditer(text)}
+    twins = {}
+
+    # A bit-vector definition whose whole body is a float symbol or literal.
+    def bv_body(m):
+        name, width, body = m.group(1), int(m.group(2)), m.group(3)
+        lit = FP_LITERAL.fullmatch(body)
+        if lit and sum(len(g) for g in lit.groups()) == width:
+            return "(define-fun %s () (_ BitVec %d) #b%s)" % (name, width, "".join(lit.groups()))
+        if body in float_symbols and sum(float_symbols[body]) == width:
+            twins[body] = body[:-1] + "__bv|"
+            return "(define-fun %s () (_ BitVec %d) %s)" % (name, width, twins[body])
+        return m.group(0)
+
+    text = BV_DEFINITION.sub(bv_body, text)
+
+    # A float definition whose body is a bit-vector (an `extract` from a flattened struct or
+    # array element, or a bit-vector symbol): read the bits as the float (`to_fp` of a
+    # bit-vector is the IEEE 754 reinterpretation).
+    bv_symbols = {m.group(1) for m in BV_SYMBOL.finditer(text)}
+
+    def fp_body(m):
+        name, e, sig, body = m.group(1), m.group(2), m.group(3), m.group(4)
+        if body.startswith("((_ extract ") or body in bv_symbols:
+            return "(define-fun %s () (_ FloatingPoint %s %s) ((_ to_fp %s %s) %s))" % (
+                name, e, sig, e, sig, body)
+        return m.group(0)
+
+    text = FP_DEFINITION.sub(fp_body, text)
+
+    # An equation between a float symbol and a bit-vector symbol: compare the bits.
+    def mixed_equation(m):
+        a, b = m.group(1), m.group(2)
+        if a in float_symbols and b in bv_symbols:
+            twins[a] = a[:-1] + "__bv|"
+            return "(assert (= %s %s))" % (twins[a], b)
+        if b in float_symbols and a in bv_symbols:
+            twins[b] = b[:-1] + "__bv|"
+            return "(assert (= %s %s))" % (a, twins[b])
+        return m.group(0)
+
+    text = EQUATION.sub(mixed_equation, text)
+    out = []
+    last = 0
+    operators = []  # operator of every open list ('(' for a list starting with a list)
+    i = 0
+    n = len(text)
+    while i < n:
+        c = text[i]
+        in_bv_op = bool(operators) and operators[-1] in BIT_VECTOR_OPERATORS
+        if c == "(":
+            if in_bv_op and text.startswith("(fp #b", i):
+                m = FP_LITERAL.match(text, i)
+                if m:
+                    out.append(text[last:i])
+                    out.append("#b" + m.group(1) + m.group(2) + m.group(3))
+                    i = last = m.end()
+                    continue
+            j = i + 1
+            if j < n and text[j] == "(":
+                operators.append("(")
+            else:
+                k = j
+                while k < n and text[k] not in " ()\n":
+                    k += 1
+                operators.append(text[j:k])
+            i += 1
+        elif c == ")":
+            if operators:
+                operators.pop()
+            i += 1
+        elif c == "|":
+            k = text.index("|", i + 1) + 1
+            name = text[i:k]
+            if in_bv_op and name in float_symbols:
+                twin = name[:-1] + "__bv|"
+                twins[name] = twin
+                out.append(text[last:i])
+                out.append(twin)
+                last = k
+            i = k
+        elif c == '"':
+            i = text.index('"', i + 1) + 1
+        elif c == ";":
+            k = text.find("\n", i)
+            i = n if k < 0 else k
+        else:
+            i += 1
+    out.append(text[last:])
+    result = zero_width_unused(text="".join(out))
+    if not twins:
+        return result
+    declarations = "".join(
+        "(declare-fun %s () (_ BitVec %d))\n" % (twin, sum(float_symbols[name]))
+        for name, twin in twins.items()
+    )
+    links = "".join(
+        "(assert (= ((_ to_fp %d %d) %s) %s))\n" % (*float_symbols[name], twin, name)
+        for name, twin in twins.items()
+    )
+    first = min(p for p in (result.find("\n(declare-fun"), result.find("\n(define-fun")) if p >= 0)
+    result = result[: first + 1] + declarations + result[first + 1 :]
+    check = result.find("(check-sat")
+    if check < 0:
+        return result + links
+    return result[:check] + links + result[check:]
+
+
+ZERO_WIDTH = re.compile(r"^\(declare-fun (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec 0\)\)$", re.M)
+
+
+def zero_width_unused(text: str) -> str:
+    """Drop declarations of zero-width bit-vectors (zero-sized Rust values) that nothing uses:
+    SMT-LIB has no `(_ BitVec 0)`. A used one is left for Bitwuzla to reject (an error, never a
+    wrong answer)."""
+    def keep(m):
+        return m.group(0) if text.count(m.group(1)) > 1 else "; zero-width " + m.group(1)
+    return ZERO_WIDTH.sub(keep, text)
+
+
+def main() -> int:
+    import bitwuzla
+
+    files = [a for a in sys.argv[1:] if not a.startswith("-")]
+    if len(files) != 1:
+        print("usage: bitwuzla FILE.smt2", file=sys.stderr)
+        return 2
+    with open(files[0]) as f:
+        text = repair_float_sorts(f.read())
+    terms = bitwuzla.TermManager()
+    options = bitwuzla.Options()
+    options.set(bitwuzla.Option.PRODUCE_MODELS, True)
+    parser = bitwuzla.Parser(terms, options)
+    try:
+        parser.parse(text, False, False)
+    except bitwuzla.BitwuzlaException as e:
+        keep = os.environ.get("PACS_SMT_KEEP_FAILED")
+        if keep:
+            with open(keep, "w") as f:
+                f.write(text)
+        # CBMC reports `(error "...")` answers with the message (as for the real binary).
+        message = str(e).replace("\\", "/").replace('"', "'")
+        print('(error "%s")' % message, flush=True)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
