@@ -170,7 +170,23 @@ def zero_width_unused(text: str) -> str:
     return ZERO_WIDTH.sub(keep, text)
 
 
+def die_with_parent() -> None:
+    """Exit when CBMC exits: Kani's per-harness timeout kills CBMC, not the solver it started,
+    and an orphaned solver would keep a core busy for hours (it did, once)."""
+    try:
+        import ctypes
+        import signal
+
+        PR_SET_PDEATHSIG = 1
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() == 1:  # the parent is already gone
+            sys.exit(1)
+    except (OSError, AttributeError):
+        pass  # not Linux: no orphan protection
+
+
 def main() -> int:
+    die_with_parent()
     import bitwuzla
 
     files = [a for a in sys.argv[1:] if not a.startswith("-")]
