@@ -39,6 +39,7 @@
 
 use pacs_models::JointLimits;
 use pacs_models::robot::MAX_DOF;
+use pacs_reach::JointBox;
 
 /// One logged robot sample (units: s, rad, rad/s, rad/s²).
 #[derive(Debug, Clone, Copy)]
@@ -58,27 +59,32 @@ pub struct Sample {
 }
 
 /// Joint position and velocity boxes over a span (rad, rad/s), outward rounded.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpanBoxes {
-    /// Lower position bounds.
-    pub q_lo: [f64; MAX_DOF],
-    /// Upper position bounds.
-    pub q_hi: [f64; MAX_DOF],
-    /// Lower velocity bounds.
-    pub dq_lo: [f64; MAX_DOF],
-    /// Upper velocity bounds.
-    pub dq_hi: [f64; MAX_DOF],
+    /// Positions (rad).
+    pub q: JointBox,
+    /// Velocities (rad/s).
+    pub dq: JointBox,
 }
 
-impl Default for SpanBoxes {
-    fn default() -> Self {
-        Self {
-            q_lo: [0.0; MAX_DOF],
-            q_hi: [0.0; MAX_DOF],
-            dq_lo: [0.0; MAX_DOF],
-            dq_hi: [0.0; MAX_DOF],
+impl SpanBoxes {
+    /// The smallest boxes containing both (the union of two spans' enclosures).
+    pub fn hull(&self, o: &SpanBoxes) -> SpanBoxes {
+        SpanBoxes {
+            q: self.q.hull(&o.q),
+            dq: self.dq.hull(&o.dq),
         }
     }
+}
+
+/// The enclosure of one span: the boxes (`None` if a bound is not finite: absurd samples) and
+/// whether the samples are consistent (module docs). Consistent spans always have boxes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpanEnclosure {
+    /// The boxes; for an inconsistent span the hull of every enclosure.
+    pub boxes: Option<SpanBoxes>,
+    /// The samples agree with each other and with the limits.
+    pub consistent: bool,
 }
 
 /// Relative pad of every bound below: each is a short expression (≤ 12 rounded operations) of
@@ -132,14 +138,10 @@ fn reach_band(k: f64, dt_hi: f64, delta_abs_min: f64) -> f64 {
 
 /// The span's boxes and whether the samples are consistent (module docs). `slack` is the
 /// relative tolerance of the limit tests (the audit's `limit_slack`).
-pub fn span_boxes(
-    lim: &JointLimits,
-    s0: &Sample,
-    s1: &Sample,
-    slack: f64,
-    out: &mut SpanBoxes,
-) -> bool {
+pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> SpanEnclosure {
     let n = lim.dof();
+    let (mut q_lo, mut q_hi) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
+    let (mut dq_lo, mut dq_hi) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
     // Δ ∈ [dt_lo, dt_hi] (time stamps within one ulp each, one rounded subtraction).
     let dt = s1.t - s0.t;
     let dt_err = PAD * (s0.t.abs() + s1.t.abs()) + TINY;
@@ -271,19 +273,19 @@ pub fn span_boxes(
                 (-v, v)
             };
         }
-        out.q_lo[j] = p_lo;
-        out.q_hi[j] = p_hi;
-        out.dq_lo[j] = v_lo;
-        out.dq_hi[j] = v_hi;
+        (q_lo[j], q_hi[j]) = (p_lo, p_hi);
+        (dq_lo[j], dq_hi[j]) = (v_lo, v_hi);
     }
     // Any non-finite bound (absurd inputs) makes the span unusable as evidence.
-    if (0..n).any(|j| {
-        !(out.q_lo[j].is_finite()
-            && out.q_hi[j].is_finite()
-            && out.dq_lo[j].is_finite()
-            && out.dq_hi[j].is_finite())
-    }) {
-        ok = false;
+    let boxes = match (
+        JointBox::new(&q_lo[..n], &q_hi[..n]),
+        JointBox::new(&dq_lo[..n], &dq_hi[..n]),
+    ) {
+        (Ok(q), Ok(dq)) => Some(SpanBoxes { q, dq }),
+        _ => None,
+    };
+    SpanEnclosure {
+        consistent: ok && boxes.is_some(),
+        boxes,
     }
-    ok
 }

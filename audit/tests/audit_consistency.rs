@@ -2,7 +2,7 @@
 //! is the whole robot's, pinches between adjacent links count, trailing human records count.
 //! Each case here passed (exit 0) before the fix.
 
-use pacs_audit::enclosure::{Sample, SpanBoxes, span_boxes};
+use pacs_audit::enclosure::{Sample, span_boxes};
 use pacs_audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
 use pacs_log::jsonl::JsonlReader;
 use pacs_models::{HumanModel, MAX_DOF, RobotModel};
@@ -108,12 +108,13 @@ fn a_contradiction_within_limits_is_flagged_by_the_displacement_test_alone() {
     let mut s1 = Sample { t: dt, ..s0 };
     // The most a joint starting and ending at rest can travel: A·Δ²/4 (bang-bang).
     s1.q[0] = a * dt * dt / 4.0 * 0.999;
-    let mut b = SpanBoxes::default();
-    assert!(span_boxes(&lim, &s0, &s1, 1e-9, &mut b));
+    assert!(span_boxes(&lim, &s0, &s1, 1e-9).consistent);
     s1.q[0] = a * dt * dt / 4.0 * 1.01;
-    assert!(!span_boxes(&lim, &s0, &s1, 1e-9, &mut b));
+    let enc = span_boxes(&lim, &s0, &s1, 1e-9);
+    assert!(!enc.consistent);
     // The velocity box then covers the mean velocity Δq/Δ.
-    assert!(b.dq_hi[0] >= s1.q[0] / dt);
+    let b = enc.boxes.expect("finite samples have boxes");
+    assert!(b.dq.bounds(0).1 >= s1.q[0] / dt);
 }
 
 /// Only joint 4 (the elbow) moves; the right hand touches link 2. The sub-chain up to link 2 has

@@ -4,6 +4,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Point3;
 use pacs_models::{Capsule, default_human, fr3};
+use pacs_reach::JointBox;
 use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_disjoint};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
@@ -46,6 +47,7 @@ fn robot(c: &mut Criterion) {
     let q = fr3::Q_READY;
     let lo: Vec<f64> = q.iter().map(|x| x - 0.002).collect();
     let hi: Vec<f64> = q.iter().map(|x| x + 0.002).collect();
+    let qb = JointBox::new(&lo, &hi).expect("valid box");
     let mut out = vec![
         Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
         reach.capsule_count()
@@ -55,17 +57,13 @@ fn robot(c: &mut Criterion) {
     c.bench_function("fr3_occupancy_1_joint_box", |b| {
         b.iter(|| {
             reach
-                .occupancy_with(&mut scratch, black_box(&lo), black_box(&hi), &mut out)
+                .occupancy_with(&mut scratch, black_box(&qb), &mut out)
                 .unwrap()
         })
     });
     // The convenience form (fresh scratch per call).
     c.bench_function("fr3_occupancy_1_joint_box_into", |b| {
-        b.iter(|| {
-            reach
-                .occupancy_into(black_box(&lo), black_box(&hi), &mut out)
-                .unwrap()
-        })
+        b.iter(|| reach.occupancy_into(black_box(&qb), &mut out).unwrap())
     });
 }
 

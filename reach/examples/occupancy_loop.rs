@@ -4,6 +4,7 @@
 
 use nalgebra::Point3;
 use pacs_models::{Capsule, fr3};
+use pacs_reach::JointBox;
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use std::hint::black_box;
 
@@ -16,6 +17,7 @@ fn main() {
     let q = fr3::Q_READY;
     let lo: Vec<f64> = q.iter().map(|x| x - 0.002).collect();
     let hi: Vec<f64> = q.iter().map(|x| x + 0.002).collect();
+    let qb = JointBox::new(&lo, &hi).expect("valid box");
     let mut out = vec![
         Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
         reach.capsule_count()
@@ -23,14 +25,14 @@ fn main() {
     let mut scratch = ReachScratch::default();
     if std::env::var_os("ENERGY").is_some() {
         // The shield's PFL pattern: occupancy, then the energy bound over the same box.
-        let (vl, vh) = ([-0.3; 7], [0.5; 7]);
+        let vb = JointBox::new(&[-0.3; 7], &[0.5; 7]).expect("valid box");
         let mut e = [0.0; 8];
         for _ in 0..n {
             reach
-                .occupancy_with(&mut scratch, black_box(&lo), black_box(&hi), &mut out)
+                .occupancy_with(&mut scratch, black_box(&qb), &mut out)
                 .unwrap();
             reach
-                .subchain_energy_bounds_with(&mut scratch, &lo, &hi, &vl, &vh, &mut e)
+                .subchain_energy_bounds_with(&mut scratch, &qb, &vb, &mut e)
                 .unwrap();
         }
         black_box(&e);
@@ -38,7 +40,7 @@ fn main() {
     }
     for _ in 0..n {
         reach
-            .occupancy_with(&mut scratch, black_box(&lo), black_box(&hi), &mut out)
+            .occupancy_with(&mut scratch, black_box(&qb), &mut out)
             .unwrap();
     }
     black_box(&out);

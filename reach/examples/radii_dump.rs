@@ -1,5 +1,6 @@
 //! Prints occupancy radii and endpoints of deterministic FR3 boxes (tightness comparisons).
 use pacs_models::fr3;
+use pacs_reach::JointBox;
 use pacs_reach::robot::RobotReach;
 
 fn main() {
@@ -22,7 +23,7 @@ fn main() {
                 lo[i] = a - w * next();
                 hi[i] = a + w * next();
             }
-            let caps = reach.occupancy(&lo, &hi).unwrap();
+            let caps = reach.occupancy(&JointBox::new(&lo, &hi).unwrap()).unwrap();
             let mut r: Vec<String> = caps.iter().map(|c| format!("{:.9e}", c.radius())).collect();
             if std::env::var_os("ENERGY").is_some() {
                 let mut vl = [0.0; 7];
@@ -35,7 +36,11 @@ fn main() {
                 }
                 let mut e = [0.0; 8];
                 reach
-                    .subchain_energy_bounds_into(&lo, &hi, &vl, &vh, &mut e)
+                    .subchain_energy_bounds_into(
+                        &JointBox::new(&lo, &hi).unwrap(),
+                        &JointBox::new(&vl, &vh).unwrap(),
+                        &mut e,
+                    )
                     .unwrap();
                 r = e[1..].iter().map(|x| format!("{x:.9e}")).collect();
             }

@@ -10,6 +10,9 @@ pub enum ReachError {
     /// The input is invalid or a bound overflows; the message names the field and value.
     #[error("{0}")]
     Input(String),
+    /// A joint box is invalid.
+    #[error(transparent)]
+    JointBox(#[from] crate::joint_box::JointBoxError),
     /// A zonotope operation failed.
     #[error(transparent)]
     Zonotope(#[from] ZonotopeError),

@@ -1,12 +1,16 @@
-//! Exact comparisons of real-number expressions of f64 values, from error-free transformations
-//! (Knuth's TwoSum and Dekker's TwoProduct with Veltkamp splitting). They use only correctly
-//! rounded `+ − ×` (no fused multiply-add, no interval library, no libm), so the same code is the
-//! oracle of the property tests, of the Kani harnesses (CBMC models `+ − ×` bit-exactly but
-//! over-approximates `fma`) and of the IEEE 754 contracts in [`crate::ieee`].
+//! Exact comparisons of real-number expressions of f64 values. Products, quotients and square
+//! roots are decided on integer significands ([`Dyadic`]: exact for every finite float, no
+//! overflow or underflow); sums with error-free transformations (Knuth's TwoSum, Dekker's
+//! TwoProduct with Veltkamp splitting), which use only correctly rounded `+ − ×`. No fused
+//! multiply-add, no interval library, no libm: the same code is the oracle of the property tests,
+//! of the Kani harnesses (CBMC models `+ − ×` and integers bit-exactly but over-approximates
+//! `fma`) and of the IEEE 754 contracts in [`crate::ieee`].
 //!
-//! Preconditions (checked by the harnesses with `assume`): all inputs finite, no overflow, and
-//! inputs either 0 or of magnitude ≥ [`NORMAL_MIN`] (so no partial result underflows and a
-//! rounded non-zero value cannot become 0).
+//! Preconditions of the TwoSum/TwoProduct-based functions ([`two_prod`], [`dd_sum`] and the norm
+//! and distance tests; checked by the harnesses with `assume`): all inputs finite, no overflow,
+//! and inputs either 0 or of magnitude ≥ [`NORMAL_MIN`] (so no partial result underflows and a
+//! rounded non-zero value cannot become 0). [`cmp_prod`], [`cmp_quot`] and [`cmp_sqrt`] need
+//! finite arguments only.
 
 use std::cmp::Ordering;
 
@@ -50,15 +54,89 @@ pub fn two_prod(x: f64, y: f64) -> (f64, f64) {
     (p, e)
 }
 
-/// Order of `p + e` against `r`, where `p = fl(x·y)` and `e` its exact error: a float `r ≠ p`
-/// is at least one spacing away from `p`, and `|e|` is at most half the spacing on its side, so
-/// the order of `p` and `r` decides; for `r = p` the sign of `e` does.
-#[inline]
-fn cmp_rounded(p: f64, e: f64, r: f64) -> Ordering {
-    if p != r {
-        p.partial_cmp(&r).unwrap_or(Ordering::Equal)
-    } else {
-        e.partial_cmp(&0.0).unwrap_or(Ordering::Equal)
+/// A finite float as an exact dyadic rational `(−1)^neg · m · 2^e` with an integer significand
+/// (`m < 2⁵³` for a float, `< 2¹⁰⁶` for a product of two). Integer arithmetic on the significands
+/// is exact and has no overflow or underflow, whatever the exponents, so the comparisons below
+/// need no precondition beyond finiteness; a model checker sees them as bit-vector arithmetic
+/// (one integer multiplier per product instead of Dekker's seven floating-point ones).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Dyadic {
+    /// Sign (true: negative; ignored when `m = 0`).
+    pub neg: bool,
+    /// Integer significand.
+    pub m: u128,
+    /// Binary exponent.
+    pub e: i32,
+}
+
+impl Dyadic {
+    /// The exact value of a finite `x` (`None` for ±∞ and NaN); subnormals included.
+    #[inline]
+    pub fn of(x: f64) -> Option<Self> {
+        if !x.is_finite() {
+            return None;
+        }
+        let bits = x.to_bits();
+        let biased = ((bits >> 52) & 0x7ff) as i32;
+        let frac = u128::from(bits & ((1u64 << 52) - 1));
+        let (m, e) = if biased == 0 {
+            (frac, -1074)
+        } else {
+            (frac | (1u128 << 52), biased - 1075)
+        };
+        Some(Self {
+            neg: bits >> 63 == 1,
+            m,
+            e,
+        })
+    }
+
+    /// The exact product of two values of at most 64-bit significands (floats, not products).
+    #[inline]
+    pub fn times(self, o: Self) -> Self {
+        debug_assert!(self.m >> 64 == 0 && o.m >> 64 == 0);
+        Self {
+            neg: self.neg != o.neg,
+            m: self.m * o.m,
+            e: self.e + o.e,
+        }
+    }
+
+    fn signum(&self) -> i8 {
+        match (self.m == 0, self.neg) {
+            (true, _) => 0,
+            (false, true) => -1,
+            (false, false) => 1,
+        }
+    }
+
+    /// The exact order of two dyadics: by sign, then by the position of the leading bit, then by
+    /// the significands aligned at that bit (exact: both shifted left until bit 127 is set).
+    pub fn cmp_exact(&self, o: &Self) -> Ordering {
+        let (sa, sb) = (self.signum(), o.signum());
+        if sa != sb || sa == 0 {
+            return sa.cmp(&sb);
+        }
+        let (za, zb) = (self.m.leading_zeros(), o.m.leading_zeros());
+        // Leading bit at 2^(e + 127 − z); compare e − z.
+        let (la, lb) = (
+            i64::from(self.e) - i64::from(za),
+            i64::from(o.e) - i64::from(zb),
+        );
+        let mag = if la != lb {
+            la.cmp(&lb)
+        } else {
+            (self.m << za).cmp(&(o.m << zb))
+        };
+        if sa < 0 { mag.reverse() } else { mag }
+    }
+}
+
+/// Exact order of `x·y` against `r` for finite floats (`Equal` if any is not finite).
+fn cmp_prod_dyadic(x: f64, y: f64, r: f64) -> Ordering {
+    match (Dyadic::of(x), Dyadic::of(y), Dyadic::of(r)) {
+        (Some(x), Some(y), Some(r)) => x.times(y).cmp_exact(&r),
+        _ => Ordering::Equal,
     }
 }
 
@@ -75,28 +153,27 @@ pub fn cmp_sum(x: f64, y: f64, r: f64) -> Ordering {
     }
 }
 
-/// Order of the exact `x · y` relative to `r`.
+/// Order of the exact `x · y` relative to `r` (finite arguments, any magnitude: integer
+/// significands, [`Dyadic`]).
 pub fn cmp_prod(x: f64, y: f64, r: f64) -> Ordering {
-    let (p, e) = two_prod(x, y);
-    cmp_rounded(p, e, r)
+    cmp_prod_dyadic(x, y, r)
 }
 
-/// Order of the exact `x / y` relative to `q` (`y ≠ 0`): `x/y − q` has the sign of
+/// Order of the exact `x / y` relative to `q` (`y ≠ 0`, all finite): `x/y − q` has the sign of
 /// `(x − q·y)·sign(y)`.
 pub fn cmp_quot(x: f64, y: f64, q: f64) -> Ordering {
-    let (p, e) = two_prod(q, y);
-    // x − q·y vs 0  ⟺  x vs p + e.
-    let d = cmp_rounded(p, e, x).reverse();
+    // x − q·y vs 0  ⟺  x vs q·y.
+    let d = cmp_prod_dyadic(q, y, x).reverse();
     if y > 0.0 { d } else { d.reverse() }
 }
 
-/// Order of the exact `√x` relative to `r` (`x ≥ 0`): `√x` vs `r` ⟺ `x` vs `r²` (`r ≥ 0`).
+/// Order of the exact `√x` relative to `r` (`x ≥ 0`, both finite): `√x` vs `r` ⟺ `x` vs `r²`
+/// (`r ≥ 0`).
 pub fn cmp_sqrt(x: f64, r: f64) -> Ordering {
     if r < 0.0 {
         return Ordering::Greater;
     }
-    let (p, e) = two_prod(r, r);
-    cmp_rounded(p, e, x).reverse()
+    cmp_prod_dyadic(r, r, x).reverse()
 }
 
 /// Sum of floats in double-double: `(value, err)` with `|Σ terms − value| ≤ err`.
@@ -180,6 +257,30 @@ pub fn dist3_le(a: &[f64; 3], b: &[f64; 3], r: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dyadic_comparisons_at_the_extremes() {
+        // Products that underflow or overflow in floating point are still ordered exactly.
+        assert_eq!(cmp_prod(1e-300, 1e-300, 0.0), Ordering::Greater);
+        assert_eq!(cmp_prod(-1e-300, 1e-300, 0.0), Ordering::Less);
+        assert_eq!(cmp_prod(1e300, 1e300, f64::MAX), Ordering::Greater);
+        let tiny = f64::from_bits(1); // 2^-1074
+        assert_eq!(cmp_prod(tiny, 0.5, 0.0), Ordering::Greater);
+        assert_eq!(cmp_prod(tiny, 1.0, tiny), Ordering::Equal);
+        assert_eq!(cmp_prod(tiny, 2.0, tiny.next_up()), Ordering::Equal);
+        assert_eq!(cmp_prod(f64::MAX, 0.5, f64::MAX / 2.0), Ordering::Equal);
+        assert_eq!(cmp_prod(0.0, -5.0, -0.0), Ordering::Equal);
+        assert_eq!(cmp_prod(3.0, -2.0, -6.0), Ordering::Equal);
+        assert_eq!(
+            cmp_prod(3.0, -2.0, (-6.0f64).next_down()),
+            Ordering::Greater
+        );
+        assert_eq!(cmp_prod(3.0, -2.0, (-6.0f64).next_up()), Ordering::Less);
+        assert_eq!(cmp_quot(1.0, -3.0, -1.0 / 3.0), Ordering::Less);
+        assert_eq!(cmp_sqrt(f64::MAX, 1.5e154), Ordering::Less);
+        assert_eq!(cmp_sqrt(4.0, 2.0), Ordering::Equal);
+        assert_eq!(cmp_prod(f64::NAN, 1.0, 1.0), Ordering::Equal);
+    }
 
     #[test]
     fn oracles_on_known_values() {

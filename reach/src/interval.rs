@@ -166,20 +166,15 @@ fn exact_sum(x: f64, y: f64) -> Option<f64> {
     (e == 0.0 && s.is_finite()).then_some(s)
 }
 
-/// `x · y` when it is exactly a float, else `None`. Dekker's TwoProduct is exact only without
-/// overflow or underflow of its partial products, hence the magnitude guards.
+/// `x · y` when it is exactly a float, else `None` (decided on integer significands:
+/// [`crate::exact::Dyadic`], exact at every magnitude, subnormals included).
 #[inline]
 fn exact_prod(x: f64, y: f64) -> Option<f64> {
     if x == 0.0 || y == 0.0 {
         return (x.is_finite() && y.is_finite()).then_some(0.0);
     }
-    let ok = |v: f64| (1e-250..=1e250).contains(&v.abs());
     let p = x * y;
-    if !(ok(x) && ok(y) && ok(p)) {
-        return None;
-    }
-    let (p, e) = crate::exact::two_prod(x, y);
-    (e == 0.0).then_some(p)
+    (p.is_finite() && crate::exact::cmp_prod(x, y, p) == std::cmp::Ordering::Equal).then_some(p)
 }
 
 impl Add for Interval {

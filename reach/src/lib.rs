@@ -9,6 +9,7 @@
 //! - [`zonotope`]: zonotopes and reachability of linear time-invariant systems;
 //! - [`geometry`]: conservative capsule/sphere/zonotope intersection and distance bounds;
 //! - [`human`]: human reachable occupancies (SaRA-style pos/vel/acc/combined models);
+//! - [`joint_box`]: boxes of joint values, valid by construction (the input of every robot query);
 //! - [`robot`]: robot reachable occupancies for joint boxes (interval forward kinematics).
 
 pub mod error;
@@ -17,6 +18,7 @@ pub mod geometry;
 pub mod human;
 pub mod ieee;
 pub mod interval;
+pub mod joint_box;
 pub mod lti;
 pub mod robot;
 pub mod rounding;
@@ -24,3 +26,4 @@ pub mod zonotope;
 
 pub use error::ReachError;
 pub use interval::Interval;
+pub use joint_box::{JointBox, JointBoxError};

@@ -32,6 +32,7 @@
 //! difference to the quaternion form used by nominal kinematics (≤ 1e-14 m over the FR3 chain) is
 //! covered by [`MODEL_PAD`].
 
+use crate::joint_box::JointBox;
 use crate::rounding::{TRIG_PAD, add_up, mul_up, sin_cos_interval, sub_up};
 use nalgebra::{Matrix3, Point3, Vector3};
 use pacs_models::{Capsule, MAX_DOF, RobotModel};
@@ -774,7 +775,7 @@ impl RobotReach {
     }
 
     /// Capsules (link-capsule order) that contain every point of every link capsule for every
-    /// configuration `q` with `q_lo ≤ q ≤ q_hi` (rad), enlarged by the tracking error.
+    /// configuration `q` in the joint box `q` (rad), enlarged by the tracking error.
     /// `out.len()` must be [`Self::capsule_count`]. Allocates nothing.
     ///
     /// # Soundness
@@ -784,14 +785,13 @@ impl RobotReach {
     /// exact up to `MODEL_PAD`.
     ///
     /// # Errors
-    /// Wrong lengths, non-finite values or `q_lo > q_hi`.
+    /// A box with another number of joints than the model, or a wrong `out` length.
     pub fn occupancy_into(
         &self,
-        q_lo: &[f64],
-        q_hi: &[f64],
+        q: &JointBox,
         out: &mut [Capsule],
     ) -> Result<(), crate::ReachError> {
-        self.occupancy_with(&mut ReachScratch::default(), q_lo, q_hi, out)
+        self.occupancy_with(&mut ReachScratch::default(), q, out)
     }
 
     /// [`Self::occupancy_into`] with caller-provided scratch space (the hot-path form: nothing is
@@ -799,27 +799,13 @@ impl RobotReach {
     pub fn occupancy_with(
         &self,
         scratch: &mut ReachScratch,
-        q_lo: &[f64],
-        q_hi: &[f64],
+        q: &JointBox,
         out: &mut [Capsule],
     ) -> Result<(), crate::ReachError> {
         use crate::ReachError;
         let n = self.dof;
-        if q_lo.len() != n || q_hi.len() != n {
-            return Err(ReachError::Input(format!(
-                "joint box: expected {n} values in q_lo and q_hi, found {} and {}",
-                q_lo.len(),
-                q_hi.len()
-            )));
-        }
-        for i in 0..n {
-            if !(q_lo[i].is_finite() && q_hi[i].is_finite()) || q_lo[i] > q_hi[i] {
-                return Err(ReachError::Input(format!(
-                    "joint box: joint {i}: need finite q_lo <= q_hi, got [{}, {}]",
-                    q_lo[i], q_hi[i]
-                )));
-            }
-        }
+        self.check_dof(q)?;
+        let (q_lo, q_hi) = (q.lo(), q.hi());
         if out.len() != self.capsules.len() {
             return Err(ReachError::Input(format!(
                 "output buffer holds {}, need {}",
@@ -890,34 +876,25 @@ impl RobotReach {
         Ok(())
     }
 
-    fn check_box(&self, lo: &[f64], hi: &[f64]) -> Result<(), crate::ReachError> {
-        use crate::ReachError;
-        let n = self.dof;
-        if lo.len() != n || hi.len() != n {
-            return Err(ReachError::Input(format!(
-                "box: expected {n} values in lower and upper bounds, found {} and {}",
-                lo.len(),
-                hi.len()
+    /// A box over this model's joints (the box itself is valid by construction).
+    fn check_dof(&self, b: &JointBox) -> Result<(), crate::ReachError> {
+        if b.dof() != self.dof {
+            return Err(crate::ReachError::Input(format!(
+                "joint box: expected {} joints, found {}",
+                self.dof,
+                b.dof()
             )));
-        }
-        for i in 0..n {
-            if !(lo[i].is_finite() && hi[i].is_finite()) || lo[i] > hi[i] {
-                return Err(ReachError::Input(format!(
-                    "box: joint {i}: need finite lo <= hi, got [{}, {}]",
-                    lo[i], hi[i]
-                )));
-            }
         }
         Ok(())
     }
 
     /// Allocating convenience form of [`Self::occupancy_into`].
-    pub fn occupancy(&self, q_lo: &[f64], q_hi: &[f64]) -> Result<Vec<Capsule>, crate::ReachError> {
+    pub fn occupancy(&self, q: &JointBox) -> Result<Vec<Capsule>, crate::ReachError> {
         let mut out = vec![
             Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
             self.capsules.len()
         ];
-        self.occupancy_into(q_lo, q_hi, &mut out)?;
+        self.occupancy_into(q, &mut out)?;
         Ok(out)
     }
 }

@@ -2,9 +2,15 @@
 //! from the model's mass properties) never exceeds the bound of sub-chain k.
 
 use pacs_models::fr3::fr3;
+use pacs_reach::JointBox;
 use pacs_reach::robot::RobotReach;
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, TestRng};
+
+/// A joint box from ordered finite bounds (test inputs).
+fn jb(lo: &[f64], hi: &[f64]) -> JointBox {
+    JointBox::new(lo, hi).expect("valid joint box")
+}
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 10_000, ..ProptestConfig::default() })]
@@ -28,7 +34,7 @@ proptest! {
             vh[i] = vl[i] + rng.random_range(0.0..=wv);
         }
         let mut bound = [0.0; 8];
-        reach.subchain_energy_bounds_into(&ql, &qh, &vl, &vh, &mut bound).unwrap();
+        reach.subchain_energy_bounds_into(&jb(&ql, &qh), &jb(&vl, &vh), &mut bound).unwrap();
         for k in 1..8 { prop_assert!(bound[k] >= bound[k - 1]); }
         for _ in 0..4 {
             let mut q = [0.0; 7];
@@ -54,7 +60,7 @@ fn point_boxes_are_reasonably_tight() {
     let reach = RobotReach::new(&robot, 0.0);
     let q = pacs_models::fr3::Q_READY;
     let dq = [0.5, -0.4, 0.3, 0.6, -0.8, 0.9, 1.0];
-    let b = reach.energy_bound(&q, &q, &dq, &dq).unwrap();
+    let b = reach.energy_bound(&jb(&q, &q), &jb(&dq, &dq)).unwrap();
     let e = robot.kinetic_energy(&q, &dq);
     assert!(b >= e, "{b} < {e}");
     assert!(b <= 1.5 * e, "bound {b} J is loose vs nominal {e} J");
@@ -68,10 +74,10 @@ fn single_joint_hand_check() {
     let q = pacs_models::fr3::Q_READY;
     let mut dq = [0.0; 7];
     dq[6] = 1.0;
-    let b1 = reach.energy_bound(&q, &q, &dq, &dq).unwrap();
+    let b1 = reach.energy_bound(&jb(&q, &q), &jb(&dq, &dq)).unwrap();
     dq[6] = 2.0;
-    let b2 = reach.energy_bound(&q, &q, &dq, &dq).unwrap();
+    let b2 = reach.energy_bound(&jb(&q, &q), &jb(&dq, &dq)).unwrap();
     assert!((b2 / b1 - 4.0).abs() < 1e-9);
     let zero = [0.0; 7];
-    assert!(reach.energy_bound(&q, &q, &zero, &zero).unwrap() < 1e-300);
+    assert!(reach.energy_bound(&jb(&q, &q), &jb(&zero, &zero)).unwrap() < 1e-300);
 }

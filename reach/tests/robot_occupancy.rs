@@ -3,10 +3,16 @@
 
 use nalgebra::{Point3, Vector3};
 use pacs_models::fr3::fr3;
+use pacs_reach::JointBox;
 use pacs_reach::geometry::capsule_contains_point;
 use pacs_reach::robot::RobotReach;
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, TestRng};
+
+/// A joint box from ordered finite bounds (test inputs).
+fn jb(lo: &[f64], hi: &[f64]) -> JointBox {
+    JointBox::new(lo, hi).expect("valid joint box")
+}
 
 fn rand_in_ball(rng: &mut TestRng, r: f64) -> Vector3<f64> {
     loop {
@@ -46,7 +52,7 @@ proptest! {
             lo[i] = a;
             hi[i] = a + w;
         }
-        let caps = reach.occupancy(&lo, &hi).unwrap();
+        let caps = reach.occupancy(&jb(&lo, &hi)).unwrap();
         for _ in 0..4 {
             let mut q = [0.0; 7];
             for i in 0..7 {
@@ -87,7 +93,7 @@ proptest! {
             lo[i] = c - d;
             hi[i] = c + d;
         }
-        let caps = reach.occupancy(&lo, &hi).unwrap();
+        let caps = reach.occupancy(&jb(&lo, &hi)).unwrap();
         for _ in 0..4 {
             let mut q = [0.0; 7];
             for i in 0..7 {
@@ -128,17 +134,17 @@ fn scratch_reuse_matches_fresh_computation() {
         let vl = [-0.5; 7];
         let vh = [0.4; 7];
         reach
-            .occupancy_with(&mut scratch, &lo, &hi, &mut out)
+            .occupancy_with(&mut scratch, &jb(&lo, &hi), &mut out)
             .unwrap();
-        let fresh = reach.occupancy(&lo, &hi).unwrap();
+        let fresh = reach.occupancy(&jb(&lo, &hi)).unwrap();
         assert_eq!(out, fresh);
         let mut e1 = [0.0; 8];
         let mut e2 = [0.0; 8];
         reach
-            .subchain_energy_bounds_with(&mut scratch, &lo, &hi, &vl, &vh, &mut e1)
+            .subchain_energy_bounds_with(&mut scratch, &jb(&lo, &hi), &jb(&vl, &vh), &mut e1)
             .unwrap();
         reach
-            .subchain_energy_bounds_into(&lo, &hi, &vl, &vh, &mut e2)
+            .subchain_energy_bounds_into(&jb(&lo, &hi), &jb(&vl, &vh), &mut e2)
             .unwrap();
         assert_eq!(e1, e2);
     }
@@ -150,7 +156,7 @@ fn point_box_is_tight() {
     let robot = fr3();
     let reach = RobotReach::new(&robot, 0.0);
     let q = pacs_models::fr3::Q_READY;
-    let caps = reach.occupancy(&q, &q).unwrap();
+    let caps = reach.occupancy(&jb(&q, &q)).unwrap();
     for (i, (_, c)) in robot.capsules_world(&q).iter().enumerate() {
         assert!(caps[i].radius() >= c.radius());
         assert!(
@@ -175,7 +181,7 @@ fn small_box_growth_is_close_to_first_order() {
     let mut hi = q;
     lo[0] -= d;
     hi[0] += d;
-    let caps = reach.occupancy(&lo, &hi).unwrap();
+    let caps = reach.occupancy(&jb(&lo, &hi)).unwrap();
     let world = robot.capsules_world(&q);
     let hand = world.len() - 1;
     let c = world[hand].1;
@@ -198,13 +204,17 @@ fn invalid_boxes_are_errors() {
     let robot = fr3();
     let reach = RobotReach::new(&robot, 0.0);
     let q = pacs_models::fr3::Q_READY;
-    assert!(reach.occupancy(&q[..6], &q).is_err());
+    // A valid box over the wrong number of joints.
+    let e = reach.occupancy(&jb(&q[..6], &q[..6])).unwrap_err();
+    assert!(e.to_string().contains("expected 7 joints, found 6"), "{e}");
+    // Invalid boxes cannot be built at all.
+    assert!(JointBox::new(&q[..6], &q).is_err());
     let mut hi = q;
     hi[2] -= 0.1;
-    let e = reach.occupancy(&q, &hi).unwrap_err();
+    let e = JointBox::new(&q, &hi).unwrap_err();
     assert!(e.to_string().contains("joint 2"), "{e}");
     let mut nan = q;
     nan[0] = f64::NAN;
-    assert!(reach.occupancy(&nan, &q).is_err());
+    assert!(JointBox::new(&nan, &q).is_err());
     assert!(RobotReach::try_new(&robot, -0.1).is_err());
 }

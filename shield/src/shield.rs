@@ -26,6 +26,7 @@ use pacs_motion::chunk::{Chunk, OutOfLimits};
 use pacs_motion::intended::{PlanMethod, Planner, PlannerConfig};
 use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
+use pacs_reach::JointBox;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_verify::iso15066::{ConstraintKind, ContactRule};
@@ -811,6 +812,13 @@ impl Shield {
         let Some((hr, rule)) = human.as_mut() else {
             return true;
         };
+        // Non-finite path ranges never verify.
+        let (Ok(q_box), Ok(v_box)) = (
+            JointBox::new(&q_lo[..n], &q_hi[..n]),
+            JointBox::new(&v_lo[..n], &v_hi[..n]),
+        ) else {
+            return false;
+        };
         if hr.occupancy_into(meas, t + ta, t + tb, human_caps).is_err() {
             diag.binding = Binding::NoMeasurement;
             return false;
@@ -822,49 +830,29 @@ impl Shield {
             }
             return true;
         }
-        if reach
-            .occupancy_with(scratch, &q_lo[..n], &q_hi[..n], robot_caps)
-            .is_err()
-        {
+        if reach.occupancy_with(scratch, &q_box, robot_caps).is_err() {
             return false;
         }
         // The robot's real velocities may differ from the commanded ones by the controller's
         // velocity tracking error (rounded outward): the energy bound uses the widened box.
         let e_track = config.velocity_tracking_error;
-        let (q_lo, q_hi) = (&q_lo[..n], &q_hi[..n]);
         let energy = || {
-            let mut wl = [0.0; MAX_DOF];
-            let mut wh = [0.0; MAX_DOF];
-            for i in 0..n {
-                wl[i] = (v_lo[i] - e_track).next_down();
-                wh[i] = (v_hi[i] + e_track).next_up();
-            }
+            let widened = JointBox::from_fn(n, |i| {
+                let (lo, hi) = v_box.bounds(i);
+                ((lo - e_track).next_down(), (hi + e_track).next_up())
+            });
             // Same joint box as the occupancy above: the scratch's frames are reused.
-            match reach.subchain_energy_bounds_with(
-                scratch,
-                q_lo,
-                q_hi,
-                &wl[..n],
-                &wh[..n],
-                energies,
-            ) {
-                Ok(()) => energies[n],
-                Err(_) => f64::INFINITY,
+            match widened.map(|w| reach.subchain_energy_bounds_with(scratch, &q_box, &w, energies))
+            {
+                Ok(Ok(())) => energies[n],
+                _ => f64::INFINITY,
             }
         };
         let mut first = None;
-        let outcome = rule.check(
-            robot_caps,
-            &v_lo[..n],
-            &v_hi[..n],
-            human_caps,
-            energy,
-            k == 0,
-            |h| {
-                first = Some(*h);
-                ControlFlow::Break(())
-            },
-        );
+        let outcome = rule.check(robot_caps, &v_box, human_caps, energy, k == 0, |h| {
+            first = Some(*h);
+            ControlFlow::Break(())
+        });
         if k == 0 {
             diag.min_separation = diag.min_separation.min(outcome.separation);
         }

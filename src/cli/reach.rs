@@ -30,9 +30,10 @@ fn capsule_json(c: &pacs_models::Capsule) -> Value {
     json!({"p1": c.p1().coords.as_slice(), "p2": c.p2().coords.as_slice(), "radius": c.radius()})
 }
 
+/// One joint box of the input (rad).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct JointBox {
+struct BoxInput {
     q_lo: Vec<f64>,
     q_hi: Vec<f64>,
 }
@@ -41,7 +42,7 @@ struct JointBox {
 #[serde(deny_unknown_fields)]
 struct RobotInput {
     robot: RobotRef,
-    boxes: Vec<JointBox>,
+    boxes: Vec<BoxInput>,
     #[serde(default)]
     tracking_error: f64,
 }
@@ -77,8 +78,16 @@ pub fn run_robot(path: Option<&Path>) -> Result<Value, CliError> {
     for (i, b) in input.boxes.iter().enumerate() {
         check_vec(&format!("boxes[{i}].q_lo"), &b.q_lo, robot.dof())?;
         check_vec(&format!("boxes[{i}].q_hi"), &b.q_hi, robot.dof())?;
+        let q = pacs_reach::JointBox::new(&b.q_lo, &b.q_hi).map_err(|e| {
+            CliError::Input(match e {
+                pacs_reach::JointBoxError::Invalid { joint, lo, hi } => format!(
+                    "boxes[{i}]: joint {joint}: need q_lo <= q_hi, got q_lo[{joint}] = {lo}, q_hi[{joint}] = {hi}"
+                ),
+                other => format!("boxes[{i}]: {other}"),
+            })
+        })?;
         reach
-            .occupancy_into(&b.q_lo, &b.q_hi, &mut caps)
+            .occupancy_into(&q, &mut caps)
             .map_err(|e| CliError::Input(format!("boxes[{i}]: {e}")))?;
         for (l, &(s, e)) in robot.links().iter().zip(reach.link_ranges()) {
             for c in &caps[s..e] {

@@ -44,6 +44,7 @@
 
 use pacs_models::robot::MAX_DOF;
 use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};
+use pacs_reach::JointBox;
 use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
 use pacs_reach::robot::RobotReach;
 use pacs_reach::rounding::{add_up, mul_up, norm3_up};
@@ -450,19 +451,17 @@ impl ContactRule {
     }
 
     /// The rule for one interval (see the module docs): `robot_caps` the link occupancy (one per
-    /// capsule, in `RobotReach` order), `dq_lo`/`dq_hi` the joint velocity box (rad/s),
+    /// capsule, in `RobotReach` order), `dq` the joint velocity box (rad/s),
     /// `human_caps` the body-part occupancies, `energy` computes an upper bound (J) of the
     /// whole robot's kinetic energy over the interval (called at most once, only on possible PFL
     /// contact; return +∞ if it cannot be bounded). Every violating (part, link) pair is passed
     /// to `sink` in part then link order; `sink` returns `ControlFlow::Break` to stop early.
     /// `separation`: also compute the separation lower bound when no contact is possible
     /// (costs capsule distances).
-    #[allow(clippy::too_many_arguments)]
     pub fn check(
         &mut self,
         robot_caps: &[Capsule],
-        dq_lo: &[f64],
-        dq_hi: &[f64],
+        dq: &JointBox,
         human_caps: &[Capsule],
         mut energy: impl FnMut() -> f64,
         separation: bool,
@@ -512,8 +511,10 @@ impl ContactRule {
             return out;
         }
         // Narrow phase: the constraint of every part that may be touched.
-        let n = dq_lo.len().min(dq_hi.len());
-        let at_rest = (0..n).all(|j| dq_lo[j] >= -self.rest_speed && dq_hi[j] <= self.rest_speed);
+        let at_rest = (0..dq.dof()).all(|j| {
+            let (lo, hi) = dq.bounds(j);
+            lo >= -self.rest_speed && hi <= self.rest_speed
+        });
         let mut e_robot: Option<f64> = None;
         for p in 0..self.parts {
             let mask = self.contact[p];

@@ -4,10 +4,10 @@
 use super::*;
 
 impl Auditor {
-    /// The span's joint boxes ([`span_boxes`]); false if the samples contradict each other or
-    /// the robot's limits (the span is then `exceeds_limits`).
-    pub(super) fn boxes(&self, s0: &Sample, s1: &Sample, b: &mut SpanBoxes) -> bool {
-        span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack, b)
+    /// The span's joint boxes ([`span_boxes`]); not consistent if the samples contradict each
+    /// other or the robot's limits (the span is then `exceeds_limits`).
+    pub(super) fn boxes(&self, s0: &Sample, s1: &Sample) -> SpanEnclosure {
+        span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack)
     }
 
     /// Check the buffered spans (all using the human measurement `block_human`), keeping the
@@ -46,41 +46,26 @@ impl Auditor {
         } = self;
         hits.clear();
         // Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
-        let energy = || match rreach.subchain_energy_bounds_with(
-            scratch,
-            &b.q_lo[..n],
-            &b.q_hi[..n],
-            &b.dq_lo[..n],
-            &b.dq_hi[..n],
-            energies,
-        ) {
+        let energy = || match rreach.subchain_energy_bounds_with(scratch, &b.q, &b.dq, energies) {
             Ok(()) => energies[n],
             Err(_) => f64::INFINITY,
         };
-        rule.check(
-            rcaps,
-            &b.dq_lo[..n],
-            &b.dq_hi[..n],
-            hcaps,
-            energy,
-            true,
-            |h| {
-                if !collect {
-                    return ControlFlow::Break(());
-                }
-                hits.push(SpanHit {
-                    part: h.part,
-                    link: h.link,
-                    kind: h.kind,
-                    energy: h.energy,
-                    threshold: h.threshold,
-                    constrained: h.constrained,
-                    certain: false,
-                    separation: f64::INFINITY,
-                });
-                ControlFlow::Continue(())
-            },
-        )
+        rule.check(rcaps, &b.dq, hcaps, energy, true, |h| {
+            if !collect {
+                return ControlFlow::Break(());
+            }
+            hits.push(SpanHit {
+                part: h.part,
+                link: h.link,
+                kind: h.kind,
+                energy: h.energy,
+                threshold: h.threshold,
+                constrained: h.constrained,
+                certain: false,
+                separation: f64::INFINITY,
+            });
+            ControlFlow::Continue(())
+        })
     }
 
     /// Fast path: one check over the union of the block's span boxes and the human occupancy
@@ -89,7 +74,6 @@ impl Auditor {
     /// not provably clean; the caller then checks span by span.
     pub(super) fn check_block(&mut self, slot: Option<usize>) -> bool {
         let m = self.block.len();
-        let n = self.n;
         if m < 3 {
             return false;
         }
@@ -108,36 +92,28 @@ impl Auditor {
         {
             return false;
         }
-        let mut u = SpanBoxes {
-            q_lo: [f64::INFINITY; MAX_DOF],
-            q_hi: [f64::NEG_INFINITY; MAX_DOF],
-            dq_lo: [f64::INFINITY; MAX_DOF],
-            dq_hi: [f64::NEG_INFINITY; MAX_DOF],
-        };
-        let mut sb = SpanBoxes::default();
+        let mut union: Option<SpanBoxes> = None;
         for i in 0..m - 1 {
             let (a, b) = (self.block[i], self.block[i + 1]);
-            if b.t - a.t > self.cfg.max_gap || !self.boxes(&a, &b, &mut sb) {
+            if b.t - a.t > self.cfg.max_gap {
                 return false;
             }
-            for j in 0..n {
-                u.q_lo[j] = u.q_lo[j].min(sb.q_lo[j]);
-                u.q_hi[j] = u.q_hi[j].max(sb.q_hi[j]);
-                u.dq_lo[j] = u.dq_lo[j].min(sb.dq_lo[j]);
-                u.dq_hi[j] = u.dq_hi[j].max(sb.dq_hi[j]);
-            }
+            let SpanEnclosure {
+                boxes: Some(sb),
+                consistent: true,
+            } = self.boxes(&a, &b)
+            else {
+                return false;
+            };
+            union = Some(union.map_or(sb, |u| u.hull(&sb)));
         }
+        let Some(u) = union else { return false };
         let (sep, pfl_seen) = match self.rule.workspace_clear(&self.hcaps) {
             Some(sep) => (sep, None),
             None => {
                 if self
                     .rreach
-                    .occupancy_with(
-                        &mut self.scratch,
-                        &u.q_lo[..n],
-                        &u.q_hi[..n],
-                        &mut self.rcaps,
-                    )
+                    .occupancy_with(&mut self.scratch, &u.q, &mut self.rcaps)
                     .is_err()
                 {
                     return false;
@@ -238,9 +214,7 @@ impl Auditor {
             finish_span(self, false, false);
             return;
         }
-        let n = self.n;
-        let mut bx = SpanBoxes::default();
-        let consistent = self.boxes(s0, s1, &mut bx);
+        let SpanEnclosure { boxes, consistent } = self.boxes(s0, s1);
         if !consistent {
             self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
             self.inconclusive_duration += dt;
@@ -256,14 +230,15 @@ impl Auditor {
             return;
         }
         // Robot occupancy over the span.
+        let Some(bx) = boxes else {
+            // Only non-finite boxes (absurd samples; already inconclusive) get here: never let
+            // the span pass.
+            finish_span(self, false, false);
+            return;
+        };
         if self
             .rreach
-            .occupancy_with(
-                &mut self.scratch,
-                &bx.q_lo[..n],
-                &bx.q_hi[..n],
-                &mut self.rcaps,
-            )
+            .occupancy_with(&mut self.scratch, &bx.q, &mut self.rcaps)
             .is_err()
         {
             // Only non-finite boxes (absurd samples) get here: never let the span pass.

@@ -4,6 +4,7 @@ use super::robot::joint_box;
 use crate::{Source, harness};
 use nalgebra::DVector;
 use pacs_models::fr3::fr3;
+use pacs_reach::JointBox;
 use pacs_reach::robot::RobotReach;
 
 /// Relative tolerance for the nominal (round-to-nearest) energy of the comparison: the nominal
@@ -26,7 +27,11 @@ fn energy<S: Source>(s: &mut S) {
     }
     let mut bound = vec![0.0; n + 1];
     reach
-        .subchain_energy_bounds_into(&qlo, &qhi, &vlo, &vhi, &mut bound)
+        .subchain_energy_bounds_into(
+            &JointBox::new(&qlo, &qhi).expect("valid box"),
+            &JointBox::new(&vlo, &vhi).expect("valid box"),
+            &mut bound,
+        )
         .expect("valid boxes");
     let mut nominal = vec![0.0; n + 1];
     model.subchain_energies_into(&q, &dq, &mut nominal);

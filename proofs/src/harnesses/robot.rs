@@ -5,6 +5,7 @@
 use crate::{Source, harness};
 use pacs_models::fr3::fr3;
 use pacs_models::{Capsule, RobotModel};
+use pacs_reach::JointBox;
 use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::robot::RobotReach;
 use pacs_reach::rounding::add_up;
@@ -44,7 +45,8 @@ fn link_enlargement<S: Source>(s: &mut S) {
         Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
         reach.capsule_count()
     ];
-    reach.occupancy_into(&lo, &hi, &mut occ).expect("valid box");
+    let qb = JointBox::new(&lo, &hi).expect("valid box");
+    reach.occupancy_into(&qb, &mut occ).expect("valid box");
     let nominal = model.capsules_world(&q);
     assert_eq!(nominal.len(), occ.len());
     for (i, ((_, c), o)) in nominal.iter().zip(&occ).enumerate() {

@@ -13,6 +13,7 @@
 use crate::{Source, harness};
 use nalgebra::Point3;
 use pacs_models::{Capsule, Constraint};
+use pacs_reach::JointBox;
 use pacs_verify::iso15066::{ContactRule, EnvShape, frames_can_pinch, threshold};
 use std::ops::ControlFlow;
 
@@ -149,10 +150,10 @@ fn rule_sound<S: Source>(s: &mut S) {
     }
     let e_bound = s.f64_in(0.0, 1.0);
     let e_true = s.f64_in(0.0, e_bound);
+    let dq_box = JointBox::new(&dq_lo, &dq_hi).expect("ordered finite bounds");
     let out = rule.check(
         &robot_occ,
-        &dq_lo,
-        &dq_hi,
+        &dq_box,
         &human_occ,
         || e_bound,
         true,

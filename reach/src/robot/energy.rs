@@ -106,7 +106,7 @@ pub(super) mod energy_iv {
 
 impl RobotReach {
     /// Upper bounds (J) of the kinetic energy ½ q̇ᵀ M_k(q) q̇ of the links carried by frames
-    /// `1..=k`, for k = 0..=n, valid for every `q ∈ [q_lo, q_hi]` and `q̇ ∈ [dq_lo, dq_hi]`
+    /// `1..=k`, for k = 0..=n, valid for every configuration in the box `q` and velocity in `dq`
     /// (rad, rad/s). `out.len()` must be `dof + 1`; `out[0] = 0`. Allocates nothing.
     ///
     /// Per link: ½·m·sup‖v_c‖² + ½·λ̄·sup‖ω‖², with v_c = Σ_j (z_j × (c − o_j))·q̇_j and
@@ -119,20 +119,11 @@ impl RobotReach {
     /// Harness `g1_energy_bound_dominates`; mutant `m5` caught.
     pub fn subchain_energy_bounds_into(
         &self,
-        q_lo: &[f64],
-        q_hi: &[f64],
-        dq_lo: &[f64],
-        dq_hi: &[f64],
+        q: &JointBox,
+        dq: &JointBox,
         out: &mut [f64],
     ) -> Result<(), crate::ReachError> {
-        self.subchain_energy_bounds_with(
-            &mut ReachScratch::default(),
-            q_lo,
-            q_hi,
-            dq_lo,
-            dq_hi,
-            out,
-        )
+        self.subchain_energy_bounds_with(&mut ReachScratch::default(), q, dq, out)
     }
 
     /// [`Self::subchain_energy_bounds_into`] with caller-provided scratch space; the enclosed
@@ -140,17 +131,16 @@ impl RobotReach {
     pub fn subchain_energy_bounds_with(
         &self,
         scratch: &mut ReachScratch,
-        q_lo: &[f64],
-        q_hi: &[f64],
-        dq_lo: &[f64],
-        dq_hi: &[f64],
+        q: &JointBox,
+        dq_box: &JointBox,
         out: &mut [f64],
     ) -> Result<(), crate::ReachError> {
         use crate::ReachError;
         let n = self.dof;
-        self.check_box(q_lo, q_hi)?;
-        self.check_box(dq_lo, dq_hi)
+        self.check_dof(q)?;
+        self.check_dof(dq_box)
             .map_err(|e| ReachError::Input(format!("velocity {e}")))?;
+        let (q_lo, q_hi, dq_lo, dq_hi) = (q.lo(), q.hi(), dq_box.lo(), dq_box.hi());
         if out.len() != n + 1 {
             return Err(ReachError::Input(format!(
                 "output buffer holds {}, need {}",
@@ -197,15 +187,9 @@ impl RobotReach {
 
     /// Upper bound (J) of the whole robot's kinetic energy over the boxes (see
     /// [`Self::subchain_energy_bounds_into`]).
-    pub fn energy_bound(
-        &self,
-        q_lo: &[f64],
-        q_hi: &[f64],
-        dq_lo: &[f64],
-        dq_hi: &[f64],
-    ) -> Result<f64, crate::ReachError> {
+    pub fn energy_bound(&self, q: &JointBox, dq: &JointBox) -> Result<f64, crate::ReachError> {
         let mut out = [0.0; MAX_DOF + 1];
-        self.subchain_energy_bounds_into(q_lo, q_hi, dq_lo, dq_hi, &mut out[..=self.dof])?;
+        self.subchain_energy_bounds_into(q, dq, &mut out[..=self.dof])?;
         Ok(out[self.dof])
     }
 }

@@ -1,0 +1,173 @@
+//! A box of joint values (positions in rad or velocities in rad/s), valid by construction.
+//!
+//! Every reachability query over a set of configurations takes a [`JointBox`]: one
+//! `[lo_j, hi_j]` per joint, each finite with `lo_j ≤ hi_j`, at most [`MAX_DOF`] joints. The
+//! checks happen once, in the constructors; the occupancy and energy code trusts them and
+//! allocates nothing (the bounds live on the stack).
+
+use pacs_models::MAX_DOF;
+use thiserror::Error;
+
+/// Why a [`JointBox`] could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum JointBoxError {
+    /// The lower and upper bounds have different lengths.
+    #[error("joint box: {lo} lower bounds but {hi} upper bounds")]
+    LengthMismatch {
+        /// Number of lower bounds.
+        lo: usize,
+        /// Number of upper bounds.
+        hi: usize,
+    },
+    /// More joints than any model may have.
+    #[error("joint box: {0} joints, at most {MAX_DOF} supported")]
+    TooManyJoints(usize),
+    /// A bound is not finite or `lo > hi`.
+    #[error("joint box: joint {joint}: need finite lo <= hi, got [{lo}, {hi}]")]
+    Invalid {
+        /// Joint index (0-based).
+        joint: usize,
+        /// Lower bound.
+        lo: f64,
+        /// Upper bound.
+        hi: f64,
+    },
+}
+
+/// `[lo_j, hi_j]` for each of `dof()` joints: finite, `lo_j ≤ hi_j`, `dof() ≤ MAX_DOF`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointBox {
+    n: usize,
+    lo: [f64; MAX_DOF],
+    hi: [f64; MAX_DOF],
+}
+
+impl JointBox {
+    /// The box `[lo_j, hi_j]` per joint.
+    ///
+    /// # Errors
+    /// Different lengths, more than [`MAX_DOF`] joints, a non-finite bound or `lo_j > hi_j`.
+    pub fn new(lo: &[f64], hi: &[f64]) -> Result<Self, JointBoxError> {
+        if lo.len() != hi.len() {
+            return Err(JointBoxError::LengthMismatch {
+                lo: lo.len(),
+                hi: hi.len(),
+            });
+        }
+        Self::from_fn(lo.len(), |j| (lo[j], hi[j]))
+    }
+
+    /// The box whose joint `j` is `bounds(j) = (lo_j, hi_j)`.
+    ///
+    /// # Errors
+    /// As [`Self::new`].
+    pub fn from_fn(
+        dof: usize,
+        mut bounds: impl FnMut(usize) -> (f64, f64),
+    ) -> Result<Self, JointBoxError> {
+        if dof > MAX_DOF {
+            return Err(JointBoxError::TooManyJoints(dof));
+        }
+        let mut b = Self {
+            n: dof,
+            lo: [0.0; MAX_DOF],
+            hi: [0.0; MAX_DOF],
+        };
+        for j in 0..dof {
+            let (lo, hi) = bounds(j);
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                return Err(JointBoxError::Invalid { joint: j, lo, hi });
+            }
+            b.lo[j] = lo;
+            b.hi[j] = hi;
+        }
+        Ok(b)
+    }
+
+    /// The degenerate box `{q}`.
+    ///
+    /// # Errors
+    /// As [`Self::new`] (a non-finite value).
+    pub fn point(q: &[f64]) -> Result<Self, JointBoxError> {
+        Self::new(q, q)
+    }
+
+    /// Number of joints.
+    #[inline]
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+
+    /// Lower bounds, one per joint.
+    #[inline]
+    pub fn lo(&self) -> &[f64] {
+        &self.lo[..self.n]
+    }
+
+    /// Upper bounds, one per joint.
+    #[inline]
+    pub fn hi(&self) -> &[f64] {
+        &self.hi[..self.n]
+    }
+
+    /// `(lo_j, hi_j)`.
+    #[inline]
+    pub fn bounds(&self, j: usize) -> (f64, f64) {
+        (self.lo[j], self.hi[j])
+    }
+
+    /// The smallest box containing both (same number of joints; `self`'s count otherwise).
+    pub fn hull(&self, o: &JointBox) -> JointBox {
+        let mut h = *self;
+        for j in 0..self.n.min(o.n) {
+            h.lo[j] = self.lo[j].min(o.lo[j]);
+            h.hi[j] = self.hi[j].max(o.hi[j]);
+        }
+        h
+    }
+
+    /// Whether `q` (one value per joint) lies in the box.
+    pub fn contains(&self, q: &[f64]) -> bool {
+        q.len() == self.n && (0..self.n).all(|j| self.lo[j] <= q[j] && q[j] <= self.hi[j])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn construction_validates_each_joint() {
+        let b = JointBox::new(&[0.0, -1.0], &[0.5, -1.0]).expect("valid");
+        assert_eq!(b.dof(), 2);
+        assert_eq!(b.lo(), &[0.0, -1.0]);
+        assert_eq!(b.hi(), &[0.5, -1.0]);
+        assert!(b.contains(&[0.25, -1.0]) && !b.contains(&[0.6, -1.0]) && !b.contains(&[0.1]));
+        assert_eq!(
+            JointBox::new(&[0.0], &[0.0, 1.0]),
+            Err(JointBoxError::LengthMismatch { lo: 1, hi: 2 })
+        );
+        assert_eq!(
+            JointBox::new(&[0.0, 2.0], &[1.0, 1.0]),
+            Err(JointBoxError::Invalid {
+                joint: 1,
+                lo: 2.0,
+                hi: 1.0
+            })
+        );
+        assert!(matches!(
+            JointBox::point(&[f64::NAN]),
+            Err(JointBoxError::Invalid { joint: 0, .. })
+        ));
+        assert!(matches!(
+            JointBox::new(&[0.0; MAX_DOF + 1], &[0.0; MAX_DOF + 1]),
+            Err(JointBoxError::TooManyJoints(n)) if n == MAX_DOF + 1
+        ));
+        assert_eq!(
+            JointBox::new(&[0.0, 2.0], &[1.0, 1.0])
+                .unwrap_err()
+                .to_string(),
+            "joint box: joint 1: need finite lo <= hi, got [2, 1]"
+        );
+    }
+}
