@@ -18,89 +18,13 @@ use pacs_log::LogModels;
 use pacs_models::robot::MAX_DOF;
 use pacs_models::{Capsule, HumanModel, RobotModel};
 use pacs_reach::geometry::segment_distance_upper_bound;
-use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::human::{HumanMeasurement, HumanReach};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_reach::rounding::{add_up, sub_down};
 use pacs_verify::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
-use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 
-/// Audit settings (`--config task.toml`); every field has a documented default.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct AuditConfig {
-    /// A span between robot samples longer than this (s) is inconclusive. Default 0.1 s.
-    pub max_gap: f64,
-    /// A span is inconclusive once the human measurement in use is older than this (s) at its
-    /// end. Default 1.0 s.
-    pub max_human_age: f64,
-    /// The robot is at rest on a span if every joint speed is provably ≤ this (rad/s). Default
-    /// 0.02 rad/s.
-    pub rest_speed: f64,
-    /// Human reachability model: `combined` (default), `vel`, `pos` (`acc` needs velocities,
-    /// which logs do not carry).
-    pub human_model: HumanReachModel,
-    /// Extra radius (m) added to every robot capsule (tracking/calibration error). Default 0.
-    pub tracking_error: f64,
-    /// Relative slack on `|q_{i+1} − q_i| ≤ v_max·Δt` before samples count as exceeding the
-    /// velocity limits. Default 1e-9.
-    pub limit_slack: f64,
-    /// Override the header's robot.
-    pub robot: Option<pacs_log::ModelRef<pacs_models::RobotSpec>>,
-    /// Override the header's human model.
-    pub human: Option<pacs_log::ModelRef<pacs_models::HumanSpec>>,
-    /// Override the header's constraints.
-    pub constraints: Option<pacs_log::ModelRef<pacs_models::ConstraintSpec>>,
-    /// MCAP reading settings (topics, reorder window): the `[mcap]` table.
-    pub mcap: pacs_log::mcap::McapConfig,
-}
-
-impl Default for AuditConfig {
-    fn default() -> Self {
-        Self {
-            max_gap: 0.1,
-            max_human_age: 1.0,
-            rest_speed: 0.02,
-            human_model: HumanReachModel::Combined,
-            tracking_error: 0.0,
-            limit_slack: 1e-9,
-            robot: None,
-            human: None,
-            constraints: None,
-            mcap: Default::default(),
-        }
-    }
-}
-
-impl AuditConfig {
-    /// The models this config puts in place of a log header's.
-    pub fn overrides(&self) -> pacs_log::ModelOverrides {
-        pacs_log::ModelOverrides {
-            robot: self.robot.clone(),
-            human: self.human.clone(),
-            constraints: self.constraints.clone(),
-        }
-    }
-
-    /// Check every value; the error names the field and value.
-    pub fn validate(&self) -> Result<(), AuditError> {
-        for (f, v) in [
-            ("max_gap", self.max_gap),
-            ("max_human_age", self.max_human_age),
-            ("rest_speed", self.rest_speed),
-            ("tracking_error", self.tracking_error),
-            ("limit_slack", self.limit_slack),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(AuditError::Setting { field: f, value: v });
-            }
-        }
-        if self.human_model == HumanReachModel::Acc {
-            return Err(AuditError::AccModel);
-        }
-        self.mcap.validate().map_err(AuditError::Mcap)
-    }
-}
+pub use crate::config::AuditConfig;
 
 /// Maximum number of robot capsules supported (bit masks).
 pub use pacs_verify::iso15066::MAX_CAPSULES;
@@ -141,6 +65,7 @@ use crate::verdict::InconclusiveReason as Reason;
 // The span checks (block fast path, span by span) and the certain check live in submodules
 // with access to the auditor's state.
 mod certain;
+mod finish;
 mod spans;
 
 /// Streaming auditor of one log: feed records in time order, then [`Auditor::finish`].
@@ -450,153 +375,6 @@ impl Auditor {
         self.samples += 1;
         self.t_last = t;
         Ok(())
-    }
-
-    fn mark_inconclusive(&mut self, t0: f64, t1: f64, reason: Reason) {
-        let idx = self.span_index;
-        if let Some((last, r, last_idx)) = self.inconclusive.last_mut()
-            && *r == reason
-            && *last_idx + 1 == idx
-        {
-            last.t_end = t1;
-            last.spans += 1;
-            *last_idx = idx;
-        } else {
-            self.inconclusive.push((
-                InconclusiveSpan {
-                    t_start: t0,
-                    t_end: t1,
-                    reason,
-                    spans: 1,
-                },
-                reason,
-                idx,
-            ));
-        }
-    }
-
-    /// Human records that no span used. Those pushed after the last robot sample: if any was
-    /// measured inside the logged time (`t_meas − delay ≤ t_last`; the earliest counts), its
-    /// information was not checked: `human_record_after_last_robot_sample` (inconclusive). The
-    /// latest record pushed between the last two robot samples (in use from the last sample on,
-    /// which starts no span): the last sample's instant is checked with it (a zero-length span),
-    /// so a contact it shows at the end of the log is a violation.
-    fn check_final_instant(&mut self, inconclusive: &mut Option<InconclusiveSpan>) {
-        let Some(last) = self.prev else { return };
-        let delay = self.human.delay();
-        if let Some(tm) = self.unused_human_t_meas
-            && tm - delay <= last.t
-        {
-            *inconclusive = Some(InconclusiveSpan {
-                t_start: last.t,
-                t_end: last.t,
-                reason: Reason::HumanRecordAfterLastRobotSample,
-                spans: 0,
-            });
-            return;
-        }
-        if self.awaiting_human_t_meas.is_some() && self.samples >= 2 {
-            let (was_violated, was_certain) = (self.last_span_violated, self.last_span_certain);
-            self.check_span(&last, &last, self.span_human);
-            // The last sample counts once (finish adds it for a violated last span).
-            let (v, c) = (self.last_span_violated, self.last_span_certain);
-            self.last_span_violated = was_violated && !v;
-            self.last_span_certain = was_certain && !c;
-        }
-    }
-
-    /// Close the audit: the verdict, intervals and metrics.
-    pub fn finish(
-        mut self,
-        log: &str,
-        meta: serde_json::Map<String, serde_json::Value>,
-    ) -> RunResult {
-        self.flush_block();
-        let mut final_inconclusive = None;
-        self.check_final_instant(&mut final_inconclusive);
-        for key in 0..self.open.len() {
-            if let Some(o) = self.open[key].take() {
-                self.close(key, o);
-            }
-        }
-        self.violations.sort_by(|a, b| {
-            a.t_start
-                .total_cmp(&b.t_start)
-                .then(a.body_part.cmp(&b.body_part))
-        });
-        if self.samples >= 2 && self.last_span_violated {
-            self.violating_samples += 1;
-        }
-        if self.samples >= 2 && self.last_span_certain {
-            self.certain_samples += 1;
-        }
-        let mut inconclusive: Vec<InconclusiveSpan> =
-            self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
-        inconclusive.extend(final_inconclusive);
-        if self.samples < 2 {
-            inconclusive.push(InconclusiveSpan {
-                t_start: if self.samples == 1 { self.t_first } else { 0.0 },
-                t_end: if self.samples == 1 { self.t_last } else { 0.0 },
-                reason: Reason::FewerThanTwoRobotSamples,
-                spans: 0,
-            });
-        }
-        let verdict = if !self.violations.is_empty() {
-            Verdict::Fail
-        } else if !inconclusive.is_empty() {
-            Verdict::Inconclusive
-        } else {
-            Verdict::Pass
-        };
-        let samples = self.samples;
-        let metrics = Metrics {
-            samples,
-            human_records: self.human_records,
-            duration: if samples > 0 {
-                self.t_last - self.t_first
-            } else {
-                0.0
-            },
-            violation_fraction: if samples > 0 {
-                self.violating_samples as f64 / samples as f64
-            } else {
-                0.0
-            },
-            violating_samples: self.violating_samples,
-            certain_violating_samples: self.certain_samples,
-            inconclusive_duration: self.inconclusive_duration,
-            min_separation: self.min_separation,
-            success: self.success,
-            safe_success: self.success.map(|s| s && verdict == Verdict::Pass),
-        };
-        RunResult {
-            log: log.to_string(),
-            verdict,
-            violations: self.violations,
-            inconclusive,
-            metrics,
-            meta,
-            models: self.names,
-            series: self.series.buckets,
-        }
-    }
-
-    fn close(&mut self, key: usize, o: OpenInterval) {
-        let part = key / self.links;
-        let link = key % self.links;
-        self.violations.push(Violation {
-            t_start: o.v_start,
-            t_end: o.v_end,
-            constraint: o.kind,
-            body_part: self.human.body_parts()[part].name.clone(),
-            link: self.robot.links()[link].name.clone(),
-            min_separation: o.min_sep,
-            energy: reportable(o.energy),
-            threshold: o.threshold,
-            constrained: o.constrained,
-            certain: o.certain,
-            spans: o.spans,
-        });
     }
 }
 

@@ -1,7 +1,8 @@
 //! The offline audit of logged runs against SSM and PFL: every span between logged robot samples
 //! judged by the one ISO/TS 15066 rule ([`pacs_verify::iso15066`]).
 //!
-//! - [`check`]: the span checker ([`check::Auditor`]) and its [`check::AuditConfig`];
+//! - [`check`]: the span checker ([`check::Auditor`]);
+//! - [`config`]: its settings ([`config::AuditConfig`]);
 //! - [`enclosure`]: sound joint boxes over a span and the consistency of the samples;
 //! - [`verdict`]: verdicts, violation intervals, metrics;
 //! - [`series`]: the bounded plot series;
@@ -12,6 +13,7 @@
 
 pub mod check;
 pub mod claims;
+pub mod config;
 pub mod enclosure;
 pub mod error;
 pub mod series;

@@ -60,11 +60,11 @@ impl Default for PlannerConfig {
 pub struct Planner {
     limits: Limits,
     config: PlannerConfig,
-    engine: Engine,
+    engine: SegmentSolver,
     /// Same solver with a larger margin below the limits: used for candidates with non-zero
     /// waypoint velocities (their solver error is larger), and swapped in for a second attempt
     /// if nothing passes the checks.
-    fallback: Engine,
+    fallback: SegmentSolver,
     /// Candidate profiles: [candidate][segment][joint].
     cand: Vec<Vec<Profile>>,
     cand_dur: Vec<Vec<f64>>,
@@ -89,9 +89,9 @@ impl Planner {
         let n = limits.dof;
         let make = |margin: f64| {
             if n == 7 {
-                Engine::Seven(Box::new(Eng::new(&limits, margin)))
+                SegmentSolver::Seven(Box::new(RuckigSolver::new(&limits, margin)))
             } else {
-                Engine::Dyn(Box::new(Eng::new(&limits, margin)))
+                SegmentSolver::Dyn(Box::new(RuckigSolver::new(&limits, margin)))
             }
         };
         let engine = make(SOLVER_MARGIN);
@@ -482,8 +482,8 @@ impl Planner {
                 &mut self.fallback
             };
             let r = match engine {
-                Engine::Seven(e) => e.solve(n, &cur, &tgt, &mut profs),
-                Engine::Dyn(e) => e.solve(n, &cur, &tgt, &mut profs),
+                SegmentSolver::Seven(e) => e.solve(n, &cur, &tgt, &mut profs),
+                SegmentSolver::Dyn(e) => e.solve(n, &cur, &tgt, &mut profs),
             };
             match r {
                 Ok(d) => durs.push(d),
@@ -543,18 +543,18 @@ impl Planner {
 }
 
 /// The segment solver: rsruckig single target with stack storage for 7 joints, heap otherwise.
-enum Engine {
-    Seven(Box<Eng<7>>),
-    Dyn(Box<Eng<0>>),
+enum SegmentSolver {
+    Seven(Box<RuckigSolver<7>>),
+    Dyn(Box<RuckigSolver<0>>),
 }
 
-struct Eng<const N: usize> {
+struct RuckigSolver<const N: usize> {
     otg: Ruckig<N, ThrowErrorHandler>,
     input: InputParameter<N>,
     out: rsruckig::trajectory::Trajectory<N>,
 }
 
-impl<const N: usize> Eng<N> {
+impl<const N: usize> RuckigSolver<N> {
     fn new(l: &Limits, margin: f64) -> Self {
         let dofs = if N == 0 { Some(l.dof) } else { None };
         let mut input = InputParameter::<N>::new(dofs);

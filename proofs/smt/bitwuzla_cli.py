@@ -158,6 +158,46 @@ def repair_float_sorts(text: str) -> str:
     return result[:check] + links + result[check:]
 
 
+# CBMC 6.4's SMT2 back end (without datatypes, as for Bitwuzla) builds the `overflow_result`
+# struct of signed `+`/`−` and of `×` (Rust's `*_with_overflow`, behind every checked integer
+# operation) as `(concat RESULT FLAG)`, i.e. the flag in bit 0, but reads the members back with
+# the struct layout it uses everywhere else (first member, the result, in the low bits; the flag
+# above it: `((_ extract W W) s)`), as its own unsigned `+`/`−` case builds it (`?sum`, carry on
+# top). Unrepaired, the flag reads the result's sign bit and the result is shifted by one bit:
+# `biased - 1075` "overflows" for every float below 2 (found with a harness on `Dyadic::of`).
+OVERFLOW_RESULTS = [
+    # signed + and −
+    re.compile(
+        r"\(concat \(\(_ extract (\d+) 0\) \?sum\) \(ite "
+        r"(\(not \(= \(\(_ extract \d+ \d+\) \?sum\) \(\(_ extract \d+ \d+\) \?sum\)\)\)) "
+        r"#b1 #b0\)\)"
+    ),
+    # signed ×
+    re.compile(
+        r"\(concat \(\(_ extract (\d+) 0\) prod\) \(ite "
+        r"(\(or \(bvsge prod \(_ bv\d+ \d+\)\) \(bvslt prod \(bvneg \(_ bv\d+ \d+\)\)\)\)) "
+        r"#b1 #b0\)\)"
+    ),
+    # unsigned ×
+    re.compile(
+        r"\(concat \(\(_ extract (\d+) 0\) prod\) \(ite (\(bvuge prod \(_ bv\d+ \d+\)\)) #b1 #b0\)\)"
+    ),
+]
+
+
+def repair_overflow_results(text: str) -> str:
+    """Put the overflow flag of CBMC's `overflow_result` constructions above the result (see
+    `OVERFLOW_RESULTS`), where CBMC's member accesses read it. Nothing else matches these
+    patterns (`?sum` and `prod` are the names of CBMC's `let` in exactly these constructions)."""
+    for pattern in OVERFLOW_RESULTS:
+        var = "?sum" if "sum" in pattern.pattern else "prod"
+        text = pattern.sub(
+            lambda m: "(concat (ite %s #b1 #b0) ((_ extract %s 0) %s))" % (m.group(2), m.group(1), var),
+            text,
+        )
+    return text
+
+
 ZERO_WIDTH = re.compile(r"^\(declare-fun (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec 0\)\)$", re.M)
 
 
@@ -194,7 +234,7 @@ def main() -> int:
         print("usage: bitwuzla FILE.smt2", file=sys.stderr)
         return 2
     with open(files[0]) as f:
-        text = repair_float_sorts(f.read())
+        text = repair_float_sorts(repair_overflow_results(f.read()))
     terms = bitwuzla.TermManager()
     options = bitwuzla.Options()
     options.set(bitwuzla.Option.PRODUCE_MODELS, True)

@@ -4,7 +4,7 @@
 //! `--cfg kani_stub` and exists so that CI compiles the `#[cfg(kani)]` harnesses; nothing here is
 //! meant to run (calling [`any`] panics). Under real `cargo kani` this crate is not used.
 
-pub use kani_stub_macros::{proof, solver, unwind};
+pub use kani_stub_macros::{proof, should_panic, solver, unwind};
 
 /// Types with a nondeterministic value (Kani: `kani::Arbitrary`).
 pub trait Arbitrary: Sized {
@@ -21,7 +21,7 @@ macro_rules! arbitrary {
         }
     )*};
 }
-arbitrary!(bool, u8, u16, u32, u64, usize, i32, i64, f32, f64);
+arbitrary!(bool, u8, u16, u32, u64, usize, i16, i32, i64, f32, f64);
 
 /// A nondeterministic value of type `T` (Kani: `kani::any`).
 pub fn any<T: Arbitrary>() -> T {

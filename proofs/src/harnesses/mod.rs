@@ -14,3 +14,4 @@ pub mod robot;
 pub mod rounding;
 pub mod rule;
 pub mod shield;
+pub mod solver;

@@ -32,9 +32,9 @@ pub(super) mod energy_iv {
     pub const HUGE: f64 = 1e100;
 
     /// An interval [lo, hi] with endpoints rounded to nearest.
-    pub type NearestIv = (f64, f64);
+    pub type NearestInterval = (f64, f64);
     /// An interval 3-vector.
-    pub type NearestIv3 = [NearestIv; 3];
+    pub type NearestInterval3 = [NearestInterval; 3];
 
     // Plain comparisons (one instruction each): no NaN can arise here, since every input is
     // finite and bounded (frames of finite joint values, velocities within `HUGE`).
@@ -47,12 +47,12 @@ pub(super) mod energy_iv {
         if a > b { a } else { b }
     }
     #[inline(always)]
-    fn mul(a: NearestIv, b: NearestIv) -> NearestIv {
+    fn mul(a: NearestInterval, b: NearestInterval) -> NearestInterval {
         let (p, q, r, s) = (a.0 * b.0, a.0 * b.1, a.1 * b.0, a.1 * b.1);
         (min(min(p, q), min(r, s)), max(max(p, q), max(r, s)))
     }
     #[inline(always)]
-    fn mag(a: NearestIv) -> f64 {
+    fn mag(a: NearestInterval) -> f64 {
         max(a.0.abs(), a.1.abs())
     }
 
@@ -60,10 +60,10 @@ pub(super) mod energy_iv {
     /// ω = Σ_{j<k} z_j·q̇_j.
     #[inline(always)]
     pub fn velocity_bounds(
-        z: &[NearestIv3],
-        o: &[NearestIv3],
-        dq: &[NearestIv],
-        c: &NearestIv3,
+        z: &[NearestInterval3],
+        o: &[NearestInterval3],
+        dq: &[NearestInterval],
+        c: &NearestInterval3,
         k: usize,
     ) -> (f64, f64) {
         let mut v = [(0.0, 0.0); 3];
@@ -92,7 +92,7 @@ pub(super) mod energy_iv {
                 wg[i] += mag(zj[i]) * dmag;
             }
         }
-        let sq = |x: &NearestIv3, g: &[f64; 3]| {
+        let sq = |x: &NearestInterval3, g: &[f64; 3]| {
             let mut acc = 0.0;
             for i in 0..3 {
                 let b = mag(x[i]) + GAMMA_E * g[i] + TINY_V;
@@ -140,7 +140,7 @@ impl RobotReach {
         self.check_dof(q)?;
         self.check_dof(dq_box)
             .map_err(|e| ReachError::Input(format!("velocity {e}")))?;
-        let (q_lo, q_hi, dq_lo, dq_hi) = (q.lo(), q.hi(), dq_box.lo(), dq_box.hi());
+        let (dq_lo, dq_hi) = (dq_box.lo(), dq_box.hi());
         if out.len() != n + 1 {
             return Err(ReachError::Input(format!(
                 "output buffer holds {}, need {}",
@@ -148,23 +148,25 @@ impl RobotReach {
                 n + 1
             )));
         }
-        self.frames(q_lo, q_hi, scratch, true);
+        self.frames(q, scratch, true);
         let boxf = if scratch.wide { &scratch.b } else { &scratch.a };
         // Interval evaluation in round-to-nearest, widened once (module docs of `energy_iv`).
-        use energy_iv::{HUGE, INFLATE, NearestIv, NearestIv3, TINY_E, velocity_bounds};
+        use energy_iv::{
+            HUGE, INFLATE, NearestInterval, NearestInterval3, TINY_E, velocity_bounds,
+        };
         if (0..n).any(|j| !(dq_lo[j].abs() <= HUGE && dq_hi[j].abs() <= HUGE)) {
             out.fill(f64::INFINITY);
             out[0] = 0.0;
             return Ok(());
         }
         let zero = VecEnc::default();
-        let iv = |v: &VecEnc| -> NearestIv3 {
+        let iv = |v: &VecEnc| -> NearestInterval3 {
             let (m, w) = (v.m.arr(), v.w.arr());
             [0, 1, 2].map(|i| (m[i] - w[i], m[i] + w[i]))
         };
         let mut z = [[(0.0, 0.0); 3]; MAX_DOF];
         let mut o = [[(0.0, 0.0); 3]; MAX_DOF];
-        let mut dq: [NearestIv; MAX_DOF] = [(0.0, 0.0); MAX_DOF];
+        let mut dq: [NearestInterval; MAX_DOF] = [(0.0, 0.0); MAX_DOF];
         for j in 0..n {
             z[j] = iv(&boxf.r[j + 1].affine(&zero, self.joints[j].axis));
             o[j] = iv(&boxf.t[j + 1]);

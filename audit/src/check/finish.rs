@@ -1,0 +1,153 @@
+//! Closing a run: inconclusive stretches, the final instant, open violation intervals, and the
+//! verdict with its metrics.
+
+use super::*;
+
+impl Auditor {
+    pub(super) fn mark_inconclusive(&mut self, t0: f64, t1: f64, reason: Reason) {
+        let idx = self.span_index;
+        if let Some((last, r, last_idx)) = self.inconclusive.last_mut()
+            && *r == reason
+            && *last_idx + 1 == idx
+        {
+            last.t_end = t1;
+            last.spans += 1;
+            *last_idx = idx;
+        } else {
+            self.inconclusive.push((
+                InconclusiveSpan {
+                    t_start: t0,
+                    t_end: t1,
+                    reason,
+                    spans: 1,
+                },
+                reason,
+                idx,
+            ));
+        }
+    }
+
+    /// Human records that no span used. Those pushed after the last robot sample: if any was
+    /// measured inside the logged time (`t_meas − delay ≤ t_last`; the earliest counts), its
+    /// information was not checked: `human_record_after_last_robot_sample` (inconclusive). The
+    /// latest record pushed between the last two robot samples (in use from the last sample on,
+    /// which starts no span): the last sample's instant is checked with it (a zero-length span),
+    /// so a contact it shows at the end of the log is a violation.
+    pub(super) fn check_final_instant(&mut self, inconclusive: &mut Option<InconclusiveSpan>) {
+        let Some(last) = self.prev else { return };
+        let delay = self.human.delay();
+        if let Some(tm) = self.unused_human_t_meas
+            && tm - delay <= last.t
+        {
+            *inconclusive = Some(InconclusiveSpan {
+                t_start: last.t,
+                t_end: last.t,
+                reason: Reason::HumanRecordAfterLastRobotSample,
+                spans: 0,
+            });
+            return;
+        }
+        if self.awaiting_human_t_meas.is_some() && self.samples >= 2 {
+            let (was_violated, was_certain) = (self.last_span_violated, self.last_span_certain);
+            self.check_span(&last, &last, self.span_human);
+            // The last sample counts once (finish adds it for a violated last span).
+            let (v, c) = (self.last_span_violated, self.last_span_certain);
+            self.last_span_violated = was_violated && !v;
+            self.last_span_certain = was_certain && !c;
+        }
+    }
+
+    /// Close the audit: the verdict, intervals and metrics.
+    pub fn finish(
+        mut self,
+        log: &str,
+        meta: serde_json::Map<String, serde_json::Value>,
+    ) -> RunResult {
+        self.flush_block();
+        let mut final_inconclusive = None;
+        self.check_final_instant(&mut final_inconclusive);
+        for key in 0..self.open.len() {
+            if let Some(o) = self.open[key].take() {
+                self.close(key, o);
+            }
+        }
+        self.violations.sort_by(|a, b| {
+            a.t_start
+                .total_cmp(&b.t_start)
+                .then(a.body_part.cmp(&b.body_part))
+        });
+        if self.samples >= 2 && self.last_span_violated {
+            self.violating_samples += 1;
+        }
+        if self.samples >= 2 && self.last_span_certain {
+            self.certain_samples += 1;
+        }
+        let mut inconclusive: Vec<InconclusiveSpan> =
+            self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
+        inconclusive.extend(final_inconclusive);
+        if self.samples < 2 {
+            inconclusive.push(InconclusiveSpan {
+                t_start: if self.samples == 1 { self.t_first } else { 0.0 },
+                t_end: if self.samples == 1 { self.t_last } else { 0.0 },
+                reason: Reason::FewerThanTwoRobotSamples,
+                spans: 0,
+            });
+        }
+        let verdict = if !self.violations.is_empty() {
+            Verdict::Fail
+        } else if !inconclusive.is_empty() {
+            Verdict::Inconclusive
+        } else {
+            Verdict::Pass
+        };
+        let samples = self.samples;
+        let metrics = Metrics {
+            samples,
+            human_records: self.human_records,
+            duration: if samples > 0 {
+                self.t_last - self.t_first
+            } else {
+                0.0
+            },
+            violation_fraction: if samples > 0 {
+                self.violating_samples as f64 / samples as f64
+            } else {
+                0.0
+            },
+            violating_samples: self.violating_samples,
+            certain_violating_samples: self.certain_samples,
+            inconclusive_duration: self.inconclusive_duration,
+            min_separation: self.min_separation,
+            success: self.success,
+            safe_success: self.success.map(|s| s && verdict == Verdict::Pass),
+        };
+        RunResult {
+            log: log.to_string(),
+            verdict,
+            violations: self.violations,
+            inconclusive,
+            metrics,
+            meta,
+            models: self.names,
+            series: self.series.buckets,
+        }
+    }
+
+    pub(super) fn close(&mut self, key: usize, o: OpenInterval) {
+        let part = key / self.links;
+        let link = key % self.links;
+        self.violations.push(Violation {
+            t_start: o.v_start,
+            t_end: o.v_end,
+            constraint: o.kind,
+            body_part: self.human.body_parts()[part].name.clone(),
+            link: self.robot.links()[link].name.clone(),
+            min_separation: o.min_sep,
+            energy: reportable(o.energy),
+            threshold: o.threshold,
+            constrained: o.constrained,
+            certain: o.certain,
+            spans: o.spans,
+        });
+    }
+}
