@@ -68,11 +68,7 @@ impl<R: BufRead> CsvReader<R> {
                 "missing header: the first line must be `#` followed by the JSON header",
             ));
         };
-        let header: Header = serde_json::from_str(json)
-            .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
-        header
-            .check()
-            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        let header = Header::checked(file, loc, serde_json::from_str(json))?;
         Ok(Self {
             file: file.into(),
             input,

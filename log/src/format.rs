@@ -79,6 +79,21 @@ impl Header {
         }
         Ok(())
     }
+
+    /// A header parsed by a reader (`parsed`), checked; errors name `file` and `loc`.
+    pub(crate) fn checked(
+        file: &str,
+        loc: crate::error::Location,
+        parsed: Result<Header, serde_json::Error>,
+    ) -> Result<Header, crate::error::LogError> {
+        use crate::error::LogError;
+        let header =
+            parsed.map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
+        header
+            .check()
+            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        Ok(header)
+    }
 }
 
 /// Models that replace a header's (an audit config's `robot`, `human`, `constraints`).

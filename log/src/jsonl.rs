@@ -266,11 +266,7 @@ impl<R: BufRead> JsonlReader<R> {
                 "missing header: the first record must have \"type\": \"header\"",
             ));
         }
-        let header: Header = serde_json::from_value(value)
-            .map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
-        header
-            .check()
-            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        let header = Header::checked(file, loc, serde_json::from_value(value))?;
         Ok(Self {
             file: file.to_string(),
             input,

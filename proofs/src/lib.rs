@@ -34,6 +34,11 @@ pub trait Source {
         let _ = bits;
         self.f64_in(lo, hi)
     }
+    /// A value in `[lo, hi]` with any significand, whatever the harness's `bits` (for a value
+    /// that must be able to hit a given real closely, such as a point of an enclosure of π/2).
+    fn f64_full(&mut self, lo: f64, hi: f64) -> f64 {
+        self.f64_in(lo, hi)
+    }
     /// Any boolean.
     fn bool(&mut self) -> bool;
     /// A value in `0..n` (`n >= 1`).
@@ -105,6 +110,11 @@ impl Source for KaniSource {
     }
     fn f64_short(&mut self, lo: f64, hi: f64, bits: u32) -> f64 {
         let x = short_float(bits.min(self.bits).min(51));
+        kani::assume(x >= lo && x <= hi);
+        x
+    }
+    fn f64_full(&mut self, lo: f64, hi: f64) -> f64 {
+        let x: f64 = kani::any();
         kani::assume(x >= lo && x <= hi);
         x
     }

@@ -166,17 +166,30 @@ pub(crate) fn interval<S: Source>(s: &mut S, m: f64, wmax: f64) -> Option<Interv
     Interval::new(lo, hi)
 }
 
-/// Two intervals of width ≤ 10 in [−1e3, 1e3 + 10] and a member of each.
+/// An interval whose two ends have at most 6 significand bits under Kani (drawn independently
+/// and ordered), any interval of width ≤ 10 in the twin: the second operand of a product,
+/// narrow for the same reason as `y` in a2.
+fn narrow_interval<S: Source>(s: &mut S, m: f64) -> Option<Interval> {
+    if !cfg!(kani) {
+        return interval(s, m, 10.0);
+    }
+    let (p, q) = (s.f64_short(-m, m, 6), s.f64_short(-m, m, 6));
+    s.assume(tame(p) && tame(q) && p <= q).then_some(())?;
+    Interval::new(p, q)
+}
+
+/// Two intervals in [−1e3, 1e3 + 10] and a member of each.
 ///
 /// Split (proofs/README.md): under Kani the members are the intervals' ends, `x ∈ {a.lo, a.hi}`
 /// and `y ∈ {b.lo, b.hi}`: sums and products of real intervals take their extremes at the ends
 /// (`x + y` is monotone in each argument, `x·y` bilinear), so a result that contains the exact
-/// results at the four corners contains those of every pair of members. The twin draws members
-/// anywhere in the intervals. (A symbolic member between two symbolic ends makes the model
+/// results at the four corners contains those of every pair of members. `a` has the harness
+/// width, `b` narrow ends ([`narrow_interval`]). The twin draws both intervals at full width and
+/// members anywhere in them. (A symbolic member between two symbolic ends makes the model
 /// checker prove the monotonicity of its float multipliers: beyond the budget.)
 fn interval_pair<S: Source>(s: &mut S) -> Option<(Interval, Interval, f64, f64)> {
     let a = interval(s, 1e3, 10.0)?;
-    let b = interval(s, 1e3, 10.0)?;
+    let b = narrow_interval(s, 1e3)?;
     let (x, y) = if cfg!(kani) {
         (
             if s.bool() { a.lo() } else { a.hi() },
@@ -197,26 +210,30 @@ fn inside_prod(r: Interval, x: f64, y: f64) -> bool {
 }
 
 /// Interval `+`, `−` and negation contain the exact result for every pair of members.
+///
+/// Split: under Kani `+` and negation (`a − b` is implemented as `a + (−b)`, bit for bit, so
+/// the two proved claims cover it); the twin checks all three directly.
 fn interval_add_sub<S: Source>(s: &mut S) {
     let Some((a, b, x, y)) = interval_pair(s) else {
         return;
     };
     assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
-    assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
     assert!((-a).contains(-x));
+    if !cfg!(kani) {
+        assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
+    }
 }
 harness!(
     a4_interval_add_sub_enclose,
     unwind = 2,
-    bits = 8,
+    bits = 27,
     cases = crate::DEFAULT_CASES,
     interval_add_sub
 );
 
-/// Interval `×` contains the exact product for every pair of members. Under Kani the ends are
-/// drawn with 30 significand bits (the upper end `lo + w` may use all 53): products of up to 60
-/// bits, which round (with at most 26 bits each every product would be exact and the outward
-/// rounding untested; mutant `x3` must fail here).
+/// Interval `×` contains the exact product for every pair of members. Under Kani `a` has full
+/// width and `b` 6-bit ends: products of up to 59 bits, which round (with both narrow every
+/// product would be exact and the outward rounding untested; mutant `x3` must fail here).
 fn interval_mul<S: Source>(s: &mut S) {
     let Some((a, b, x, y)) = interval_pair(s) else {
         return;
@@ -226,14 +243,20 @@ fn interval_mul<S: Source>(s: &mut S) {
 harness!(
     a4_interval_mul_enclose,
     unwind = 2,
-    bits = 30,
+    bits = 52,
     cases = crate::DEFAULT_CASES,
     interval_mul
 );
 
 /// `scale` and `sqr` contain the exact product / square of every member (under Kani: of each
-/// end, and of 0 for `sqr` when the interval holds it — the extremes of `x·k` and `x²`; see
+/// end, and 0 for `sqr` when the interval holds it — the extremes of `x·k` and `x²`; see
 /// [`interval_pair`]).
+///
+/// Split: under Kani `a` has full width and `k` 6 bits (as in a2), so `scale`'s products round;
+/// `sqr` is checked on an interval with 8-bit ends, whose squares are exact: that checks its
+/// case logic (signs, the straddling case), while its outward rounding — a square rounds only
+/// beyond 26 bits, where the model checker would have to equate two 27-bit multipliers — is the
+/// twin's (full-width intervals).
 fn interval_scale_sqr<S: Source>(s: &mut S) {
     let Some(a) = interval(s, 1e3, 10.0) else {
         return;
@@ -243,22 +266,33 @@ fn interval_scale_sqr<S: Source>(s: &mut S) {
     } else {
         s.f64_in(a.lo(), a.hi())
     };
-    let Some(k) = num(s, 1e3) else { return };
-    if !s.assume(tame(x)) {
+    let k = s.f64_short(-1e3, 1e3, 6);
+    if !s.assume(tame(x) && tame(k)) {
         return;
     }
     assert!(
         inside_prod(a.scale(k), x, k),
         "{a:?}.scale({k}) ∌ {x} * {k}"
     );
-    let sq = a.sqr();
-    assert!(inside_prod(sq, x, x), "{a:?}.sqr() ∌ {x}²");
-    assert!(sq.lo() >= 0.0 && (!a.contains(0.0) || sq.lo() == 0.0));
+    let (b, z) = if cfg!(kani) {
+        let p = s.f64_short(-1e3, 1e3, 8);
+        let q = s.f64_short(-1e3, 1e3, 8);
+        if !s.assume(tame(p) && tame(q) && p <= q) {
+            return;
+        }
+        let b = Interval::new(p, q).expect("ordered");
+        (b, if s.bool() { p } else { q })
+    } else {
+        (a, x)
+    };
+    let sq = b.sqr();
+    assert!(inside_prod(sq, z, z), "{b:?}.sqr() ∌ {z}²");
+    assert!(sq.lo() >= 0.0 && (!b.contains(0.0) || sq.lo() == 0.0));
 }
 harness!(
     a4_interval_scale_sqr_enclose,
     unwind = 2,
-    bits = 30,
+    bits = 52,
     cases = crate::DEFAULT_CASES,
     interval_scale_sqr
 );
@@ -301,7 +335,13 @@ fn sin_cos<S: Source>(s: &mut S) {
     for iv in [si, ci] {
         assert!(-1.0 <= iv.lo() && iv.lo() <= iv.hi() && iv.hi() <= 1.0);
     }
-    {
+    // A degenerate interval `lo == hi` returns libm's values, padded: that they reach an
+    // extremum at a critical point (cos 0 = 1 ⇒ the upper end is clamped to 1) rests on libm's
+    // accuracy, which the Kani contract does not state (any value in [−1, 1]); with the point
+    // case included Kani reported "cos max … missed" (e.g. `lo = hi = 0` with a contract value of
+    // `cos 0` below 1 − 1e-14). Under Kani the critical-point claim is therefore made for
+    // `lo < hi`; the twin checks both against libm.
+    if !(cfg!(kani) && lo == hi) {
         // A point of the enclosure of kπ/2 inside [lo, hi] (the true kπ/2 is one such point).
         let k = s.index(12) as i64 - 6;
         let half_pi = Interval::new(
@@ -310,7 +350,9 @@ fn sin_cos<S: Source>(s: &mut S) {
         )
         .expect("valid");
         let p = half_pi.scale(k as f64);
-        let x = s.f64_in(p.lo(), p.hi());
+        // Full width: with the harness's 3 bits no float lies within an ulp of kπ/2 (k ≠ 0),
+        // and the claim would be vacuous there (mutant `x4` survived that).
+        let x = s.f64_full(p.lo(), p.hi());
         if lo <= x && x <= hi {
             match k.rem_euclid(4) {
                 0 => assert!(ci.hi() == 1.0, "cos max at {k}π/2 ∈ [{lo}, {hi}] missed"),
