@@ -198,6 +198,64 @@ def repair_overflow_results(text: str) -> str:
     return text
 
 
+NESTED_ARRAY = re.compile(
+    r"^\((?:declare-fun|define-fun) (\|[^|]*\||[^\s()]+) \(\) \(Array \(_ BitVec (\d+)\) "
+    r"\(Array \(_ BitVec (\d+)\) \(_ (FloatingPoint (\d+) (\d+)|BitVec (\d+))\)\)\)",
+    re.M,
+)
+BV_WIDTH = re.compile(
+    r"^\((?:declare-fun|define-fun) (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec (\d+)\)", re.M
+)
+ELEMENT_EQUATION = re.compile(
+    r"^\(assert \(= \(let \(\(\?far (\|[^|]*\||[^\s()]+)\)\) \(select \?far (\(_ bv\d+ \d+\))\)\) "
+    r"(\|[^|]*\||[^\s()]+)\)\)$",
+    re.M,
+)
+
+
+def repair_array_elements(text: str) -> str:
+    """Split an equation `(select A i) = S` between an element of a nested array (of floats or
+    of bit-vectors, e.g. a `[Point3<f64>; 4]`) and a flattened bit-vector `S` of `k` elements (a
+    by-value function argument) into `k` element equations `(select (select A i) j) = bits j of
+    S` (`to_fp` of them for floats), element `j` in bits `[j·w, j·w + w)`: CBMC's flattening puts
+    element 0 lowest, as for struct members. CBMC writes the mixed equation, which Bitwuzla
+    rejects as ill-sorted. Elements `≥ k` of the inner array are left free (they are never read:
+    Rust's bounds checks), an over-approximation, so `unsat` stays sound. Harnesses
+    `z2_solver_nested_arrays` (true claims that depend on the element order) and
+    `z3_nested_array_order_is_checked` (`should_panic`: a wrong order must be found) check the
+    order in CI."""
+    arrays = {}
+    for m in NESTED_ARRAY.finditer(text):
+        if m.group(5):
+            arrays[m.group(1)] = (int(m.group(3)), int(m.group(5)), int(m.group(6)))
+        else:
+            arrays[m.group(1)] = (int(m.group(3)), 0, int(m.group(7)))
+    if not arrays:
+        return text
+    widths = {m.group(1): int(m.group(2)) for m in BV_WIDTH.finditer(text)}
+
+    def split(m):
+        array, index, symbol = m.group(1), m.group(2), m.group(3)
+        if array not in arrays or symbol not in widths:
+            return m.group(0)
+        index_width, e, sig = arrays[array]
+        w = e + sig
+        if widths[symbol] % w:
+            return m.group(0)
+
+        def bits(j):
+            b = "((_ extract %d %d) %s)" % (j * w + w - 1, j * w, symbol)
+            return "((_ to_fp %d %d) %s)" % (e, sig, b) if e else b
+
+        parts = [
+            "(= (select (select %s %s) (_ bv%d %d)) %s)" % (array, index, j, index_width, bits(j))
+            for j in range(widths[symbol] // w)
+        ]
+        return "(assert (and %s))" % " ".join(parts)
+
+    return ELEMENT_EQUATION.sub(split, text)
+
+
 ZERO_WIDTH = re.compile(r"^\(declare-fun (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec 0\)\)$", re.M)
 
 
@@ -234,7 +292,7 @@ def main() -> int:
         print("usage: bitwuzla FILE.smt2", file=sys.stderr)
         return 2
     with open(files[0]) as f:
-        text = repair_float_sorts(repair_overflow_results(f.read()))
+        text = repair_float_sorts(repair_array_elements(repair_overflow_results(f.read())))
     terms = bitwuzla.TermManager()
     options = bitwuzla.Options()
     options.set(bitwuzla.Option.PRODUCE_MODELS, True)

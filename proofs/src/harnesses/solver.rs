@@ -93,3 +93,71 @@ mod tests {
         }
     }
 }
+
+/// A weighted difference of two points: each coordinate with its own weight, so that a
+/// permutation of elements changes the value.
+#[inline(never)]
+fn weighted_gap(a: &nalgebra::Point3<f64>, b: &nalgebra::Point3<f64>) -> f64 {
+    (a.x - b.x) + 2.0 * (a.y - b.y) + 4.0 * (a.z - b.z)
+}
+
+/// Points in an array of points (`[Point3<f64>; 4]`, as `b1`/`b2` build their segments):
+/// CBMC's SMT output equates an element of such a nested array with a flattened bit-vector
+/// argument, which `bitwuzla_cli.py::repair_array_elements` splits per element; these claims
+/// hold only if the split keeps the element order.
+#[cfg(kani)]
+fn four_points() -> Option<[nalgebra::Point3<f64>; 4]> {
+    let point = || {
+        let v: [f64; 3] = [kani::any(), kani::any(), kani::any()];
+        v.iter()
+            .all(|c| c.is_finite() && c.abs() <= 2.0)
+            .then(|| nalgebra::Point3::from(v))
+    };
+    let a0 = point()?;
+    let a1 = if kani::any() { point()? } else { a0 };
+    let b0 = point()?;
+    let b1 = if kani::any() { point()? } else { b0 };
+    Some([a0, a1, b0, b1])
+}
+
+#[cfg(kani)]
+#[kani::proof]
+#[kani::unwind(5)]
+fn z2_solver_nested_arrays() {
+    let Some([a0, _, b0, b1]) = four_points() else {
+        return;
+    };
+    let g = weighted_gap(&a0, &b0);
+    assert!(g == (a0.x - b0.x) + 2.0 * (a0.y - b0.y) + 4.0 * (a0.z - b0.z));
+    let h = weighted_gap(&b1, &b0);
+    assert!(h == (b1.x - b0.x) + 2.0 * (b1.y - b0.y) + 4.0 * (b1.z - b0.z));
+    if a0 == nalgebra::Point3::new(1.0, 0.0, 0.0) && b0 == nalgebra::Point3::origin() {
+        assert!(g == 1.0);
+    }
+}
+
+/// The same points: a claim that holds only for a permuted element order must be refuted.
+#[cfg(kani)]
+#[kani::proof]
+#[kani::unwind(5)]
+#[kani::should_panic]
+fn z3_nested_array_order_is_checked() {
+    let Some([a0, _, b0, _]) = four_points() else {
+        return;
+    };
+    kani::assume(a0 == nalgebra::Point3::new(1.0, 0.0, 0.0) && b0 == nalgebra::Point3::origin());
+    assert!(weighted_gap(&a0, &b0) == 4.0, "a permuted order");
+}
+
+#[cfg(test)]
+mod nested_tests {
+    /// The twin of `z2`: the weighted gap of concrete points.
+    #[test]
+    fn z2_weighted_gap_twin() {
+        let a = nalgebra::Point3::new(1.0, 0.0, 0.0);
+        let b = nalgebra::Point3::origin();
+        assert_eq!(super::weighted_gap(&a, &b), 1.0);
+        let c = nalgebra::Point3::new(0.0, 0.0, 1.0);
+        assert_eq!(super::weighted_gap(&c, &b), 4.0);
+    }
+}
