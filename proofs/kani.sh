@@ -7,7 +7,7 @@
 #
 # Exit status: 0 if every harness run verified, 1 if any failed or timed out, 0 with one line of
 # explanation if `cargo kani` is not installed (then nothing was model-checked; CI still runs the
-# property-test twins and the `kani_stub` type-check). KANI_HARNESS_TIMEOUT (s, default 300) bounds
+# property-test twins and the `kani_stub` type-check). KANI_HARNESS_TIMEOUT (s, default 600) bounds
 # each harness; the README's budget is 120 s on an idle 2-core machine, the default leaves room
 # for a loaded one.
 set -uo pipefail
@@ -18,7 +18,7 @@ if ! cargo kani --version >/dev/null 2>&1; then
   exit 0
 fi
 
-timeout_s="${KANI_HARNESS_TIMEOUT:-300}"
+timeout_s="${KANI_HARNESS_TIMEOUT:-600}"
 target_dir="${CARGO_TARGET_DIR:-target}"
 log_dir="$target_dir/kani-logs"
 mkdir -p "$log_dir"
