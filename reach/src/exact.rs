@@ -132,11 +132,24 @@ impl Dyadic {
     }
 }
 
-/// Exact order of `x·y` against `r` for finite floats (`Equal` if any is not finite).
+/// Exact order of `x·y` against `r` for finite `x`, `y` and any non-NaN `r` (a finite product is
+/// below `+∞` and above `−∞`); `Equal` only if an argument is NaN or `x`, `y` are not finite.
 fn cmp_prod_dyadic(x: f64, y: f64, r: f64) -> Ordering {
     match (Dyadic::of(x), Dyadic::of(y), Dyadic::of(r)) {
         (Some(x), Some(y), Some(r)) => x.times(y).cmp_exact(&r),
+        (Some(_), Some(_), None) => against_infinity(r).unwrap_or(Ordering::Equal),
         _ => Ordering::Equal,
+    }
+}
+
+/// The order of any finite value against `r = ±∞` (`None` for other `r`).
+fn against_infinity(r: f64) -> Option<Ordering> {
+    if r == f64::INFINITY {
+        Some(Ordering::Less)
+    } else if r == f64::NEG_INFINITY {
+        Some(Ordering::Greater)
+    } else {
+        None
     }
 }
 
@@ -162,6 +175,9 @@ pub fn cmp_prod(x: f64, y: f64, r: f64) -> Ordering {
 /// Order of the exact `x / y` relative to `q` (`y ≠ 0`, all finite): `x/y − q` has the sign of
 /// `(x − q·y)·sign(y)`.
 pub fn cmp_quot(x: f64, y: f64, q: f64) -> Ordering {
+    if let Some(o) = against_infinity(q) {
+        return o;
+    }
     // x − q·y vs 0  ⟺  x vs q·y.
     let d = cmp_prod_dyadic(q, y, x).reverse();
     if y > 0.0 { d } else { d.reverse() }
@@ -172,6 +188,9 @@ pub fn cmp_quot(x: f64, y: f64, q: f64) -> Ordering {
 pub fn cmp_sqrt(x: f64, r: f64) -> Ordering {
     if r < 0.0 {
         return Ordering::Greater;
+    }
+    if let Some(o) = against_infinity(r) {
+        return o;
     }
     cmp_prod_dyadic(r, r, x).reverse()
 }
@@ -280,6 +299,14 @@ mod tests {
         assert_eq!(cmp_sqrt(f64::MAX, 1.5e154), Ordering::Less);
         assert_eq!(cmp_sqrt(4.0, 2.0), Ordering::Equal);
         assert_eq!(cmp_prod(f64::NAN, 1.0, 1.0), Ordering::Equal);
+        // A finite product against an infinite bound (e.g. a rounding helper that overflowed).
+        assert_eq!(cmp_prod(1e300, 1e300, f64::INFINITY), Ordering::Less);
+        assert_eq!(
+            cmp_prod(-1e300, 1e300, f64::NEG_INFINITY),
+            Ordering::Greater
+        );
+        assert_eq!(cmp_quot(1.0, 3.0, f64::INFINITY), Ordering::Less);
+        assert_eq!(cmp_sqrt(4.0, f64::INFINITY), Ordering::Less);
     }
 
     #[test]

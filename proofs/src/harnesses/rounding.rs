@@ -190,15 +190,18 @@ fn narrow_interval<S: Source>(s: &mut S, m: f64) -> Option<Interval> {
 fn interval_pair<S: Source>(s: &mut S) -> Option<(Interval, Interval, f64, f64)> {
     let a = interval(s, 1e3, 10.0)?;
     let b = narrow_interval(s, 1e3)?;
-    let (x, y) = if cfg!(kani) {
-        (
-            if s.bool() { a.lo() } else { a.hi() },
-            if s.bool() { b.lo() } else { b.hi() },
-        )
-    } else {
-        (s.f64_in(a.lo(), a.hi()), s.f64_in(b.lo(), b.hi()))
-    };
+    let (x, y) = (member(s, a), member(s, b));
     s.assume(tame(x) && tame(y)).then_some((a, b, x, y))
+}
+
+/// A member of `a`: under Kani one of its ends (the split of [`interval_pair`]), anywhere in `a`
+/// in the twin.
+fn member<S: Source>(s: &mut S, a: Interval) -> f64 {
+    if cfg!(kani) {
+        if s.bool() { a.lo() } else { a.hi() }
+    } else {
+        s.f64_in(a.lo(), a.hi())
+    }
 }
 
 fn inside_sum(r: Interval, x: f64, y: f64) -> bool {
@@ -261,11 +264,7 @@ fn interval_scale_sqr<S: Source>(s: &mut S) {
     let Some(a) = interval(s, 1e3, 10.0) else {
         return;
     };
-    let x = if cfg!(kani) {
-        if s.bool() { a.lo() } else { a.hi() }
-    } else {
-        s.f64_in(a.lo(), a.hi())
-    };
+    let x = member(s, a);
     let k = s.f64_short(-1e3, 1e3, 6);
     if !s.assume(tame(x) && tame(k)) {
         return;
