@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Model-check every Kani harness of pacs (`cargo kani -p pacs-proofs`), one CBMC run per harness,
-# and print a table: harness, result, CBMC time.
+# Model-check the Kani harnesses of pacs (`cargo kani -p PACKAGE --lib`: pacs-proofs and the proofs
+# beside the code in pacs-reach), one CBMC run per harness, and print a table: harness, result,
+# CBMC time.
 #
 #   bash proofs/kani.sh                 # the harnesses listed in proofs/kani-ci.txt, each with its solver
 #   bash proofs/kani.sh a1_add_enclose f2_occupancy_intervals_cover   # these (KANI_SOLVER=bitwuzla|sat)
@@ -30,7 +31,20 @@ echo "proofs: $(cargo kani --version 2>/dev/null | head -n1)"
 #   sat:      CBMC's built-in SAT back end (CaDiCaL), CBMC's own bit-precise float encoding;
 #   bitwuzla: CBMC's SMT back end with the floating-point theory, solved by Bitwuzla (10-40x
 #             faster on float claims; see proofs/README.md, "Solvers", for what it trusts).
+# Harnesses sit beside the code they check (`mod proofs` in a crate's src/, e.g. pacs-reach's
+# rounding and interval) or, for compositions, in proofs/src/harnesses (pacs-proofs): every
+# source file with a `harness!(` invocation or a plain `#[kani::proof]`, and the package each
+# harness is compiled in.
+mapfile -t harness_files < <(grep -rlE --include='*.rs' --exclude-dir=target --exclude-dir=kit '^harness!\(|^#\[kani::proof\]' . | sort)
+package_of() {
+  local file dir
+  file=$(grep -lE "^    $1,\$|^(pub )?fn $1\(\)" "${harness_files[@]}" | head -n1)
+  [ -z "$file" ] && return 1
+  dir=${file%%/src/*}
+  sed -n 's/^name = "\(.*\)"/\1/p' "$dir/Cargo.toml" | head -n1
+}
 declare -A solver_of=()
+declare -A package_of_h=()
 selected=()
 if [ "$#" -gt 0 ]; then
   for h in "$@"; do selected+=("$h"); solver_of[$h]="${KANI_SOLVER:-bitwuzla}"; done
@@ -39,10 +53,10 @@ else
     selected+=("$h")
     solver_of[$h]="${solver:-sat}"
   done < <(grep -vE '^\s*(#|$)' proofs/kani-ci.txt)
-  mapfile -t all < <(grep -rh -A1 '^harness!(' proofs/src/harnesses | grep -oE '^\s+[a-z][a-z0-9_]+,' | tr -d ' ,' | sort)
+  mapfile -t all < <(grep -rh -A1 '^harness!(' "${harness_files[@]}" | grep -oE '^\s+[a-z][a-z0-9_]+,' | tr -d ' ,' | sort)
   for h in "${all[@]}"; do
     if [ -z "${solver_of[$h]:-}" ]; then
-      if grep -A2 "^    $h,\$" proofs/src/harnesses/*.rs | grep -q twin_only; then
+      if grep -h -A2 "^    $h,\$" "${harness_files[@]}" | grep -q twin_only; then
         echo "proofs: $h: property test only (README: what its proofs cover)"
       else
         echo "proofs: $h: not model-checked here (not in proofs/kani-ci.txt: not yet verified within the 120 s budget; README's harness table)"
@@ -75,13 +89,25 @@ if [ "$need_bitwuzla" = 1 ]; then
   fi
 fi
 
-# One cargo kani run per solver (the compilation is shared); harnesses one after the other.
+for h in "${selected[@]}"; do
+  if ! package_of_h[$h]=$(package_of "$h") || [ -z "${package_of_h[$h]}" ]; then
+    echo "proofs: $h: no such harness (no \`harness!(\` defines it)"
+    exit 1
+  fi
+done
+mapfile -t packages < <(printf '%s\n' "${package_of_h[@]}" | sort -u)
+
+# One cargo kani run per package and solver (the compilation is shared); harnesses one after
+# the other.
 log="$log_dir/kani.log"
 : >"$log"
 code=0
+for package in "${packages[@]}"; do
 for solver in sat bitwuzla; do
   args=()
-  for h in "${selected[@]}"; do [ "${solver_of[$h]}" = "$solver" ] && args+=(--harness "$h"); done
+  for h in "${selected[@]}"; do
+    [ "${solver_of[$h]}" = "$solver" ] && [ "${package_of_h[$h]}" = "$package" ] && args+=(--harness "$h")
+  done
   [ "${#args[@]}" -eq 0 ] && continue
   extra=()
   # Bitwuzla runs as a fresh process per query (no incremental solving): without the
@@ -89,12 +115,13 @@ for solver in sat bitwuzla; do
   # per reachable assertion. Their role (no assertion vacuously unreachable) is played by the
   # mutants caught and by the property-test twins (proofs/README.md, "Solvers").
   [ "$solver" = bitwuzla ] && extra=(--no-assertion-reach-checks --cbmc-args --bitwuzla)
-  echo "=== solver $solver" >>"$log"
+  echo "=== solver $solver package $package" >>"$log"
   timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
-    cargo kani -p pacs-proofs --lib "${args[@]}" \
+    cargo kani -p "$package" --lib "${args[@]}" \
     -Z unstable-options --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1
   c=$?
   [ "$c" -ne 0 ] && code=$c
+done
 done
 
 # Per harness: its result and CBMC time, from the log.

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Mutation evidence for pacs-proofs: apply each known bug (proofs/mutants/*.patch) to a scratch
-# copy of the tree, run the harness twins (`cargo test -p pacs-proofs`), record which harnesses
+# copy of the tree, run the harness twins and unit tests (`cargo test -p pacs-proofs -p pacs-reach
+# --lib`: the harnesses of compositions and those beside the code), record which
 # fail (= catch the mutant), revert, and print a Markdown table. Exit status 1 if any mutant
 # survives or a patch no longer applies.
 #
@@ -23,7 +24,7 @@ cd "$work" || exit 2
 find . -name '*.rs' -exec touch {} +
 
 # Baseline: every harness must pass on the unmutated tree.
-if ! cargo test -q -p pacs-proofs --lib >"$work/baseline.log" 2>&1; then
+if ! cargo test -q -p pacs-proofs -p pacs-reach --lib >"$work/baseline.log" 2>&1; then
     echo "baseline fails; see $work/baseline.log" >&2
     exit 2
 fi
@@ -39,9 +40,9 @@ for patch in "$root"/proofs/mutants/*.patch; do
         continue
     fi
     log="$work/$name.log"
-    cargo test -p pacs-proofs --lib --no-fail-fast >"$log" 2>&1
+    cargo test -p pacs-proofs -p pacs-reach --lib --no-fail-fast >"$log" 2>&1
     caught=$(sed -n 's/^test \(.*\) \.\.\. FAILED$/\1/p' "$log" |
-        sed 's/^harnesses::[a-z_]*:://; s/::property_test$//' | sort | paste -sd, - | sed 's/,/, /g')
+        sed 's/::property_test$//; s/^.*:://' | sort | paste -sd, - | sed 's/,/, /g')
     if grep -q '^error\(\[E[0-9]*\]\)\?:' "$log" && [[ -z "$caught" ]]; then
         caught="BUILD FAILED"
         status=1

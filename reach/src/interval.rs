@@ -287,6 +287,10 @@ impl MulAssign for Interval {
     }
 }
 
+/// The Kani proofs of this module, each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+pub(crate) mod proofs;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -159,6 +159,10 @@ pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
     (clamp(s_min, s_max), clamp(c_min, c_max))
 }
 
+/// The Kani proofs of this module, each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+pub(crate) mod proofs;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,6 @@ pub mod human;
 pub mod object;
 pub mod profile;
 pub mod robot;
-pub mod rounding;
 pub mod rule;
 pub mod shield;
 pub mod solver;
