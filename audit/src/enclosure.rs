@@ -138,6 +138,12 @@ fn reach_band(k: f64, dt_hi: f64, delta_abs_min: f64) -> f64 {
 
 /// The span's boxes and whether the samples are consistent (module docs). `slack` is the
 /// relative tolerance of the limit tests (the audit's `limit_slack`).
+///
+/// # Soundness
+/// Claim C9: every motion between the two samples that obeys the joint limits and matches the
+/// samples is judged consistent and lies in the boxes at every instant of the span; samples no
+/// such motion matches are judged inconsistent. Harness `h2_span_enclosure_sound` (twin; Kani times
+/// out); mutant `x11` caught.
 pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> SpanEnclosure {
     let n = lim.dof();
     let (mut q_lo, mut q_hi) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);

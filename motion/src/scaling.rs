@@ -222,6 +222,11 @@ impl SpeedProfile {
     }
 
     /// Sound ranges over τ ∈ [ta, tb] (relative s): (s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|).
+    ///
+    /// # Soundness
+    /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| lie in the ranges for
+    /// every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (twin; Kani times out); mutant `x12`
+    /// caught.
     pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);

@@ -65,6 +65,9 @@ impl Interval {
         self.hi
     }
     /// A point inside the interval (the midpoint, rounded to nearest).
+    ///
+    /// # Soundness
+    /// Claim C1: a member of the interval. Harness `a4_interval_mid_rad` (beside this module).
     #[inline(always)]
     pub fn mid(&self) -> f64 {
         if self.lo == self.hi {
@@ -83,6 +86,9 @@ impl Interval {
         self.lo.abs().max(self.hi.abs())
     }
     /// Upper bound of the distance from [`Self::mid`] to either end.
+    ///
+    /// # Soundness
+    /// Claim C1: ≥ both exact distances. Harness `a4_interval_mid_rad`; mutant `x15` caught.
     #[inline(always)]
     pub fn rad_up(&self) -> f64 {
         let m = self.mid();
@@ -108,6 +114,10 @@ impl Interval {
     }
     /// Multiply by a scalar (outward rounded; a point times a scalar whose product is exactly a
     /// float stays a point).
+    ///
+    /// # Soundness
+    /// Claim C1: contains `x·k` for every member `x`. Harness `a4_interval_scale_sqr_enclose`
+    /// (twin; Kani times out).
     #[inline(always)]
     pub fn scale(self, x: f64) -> Interval {
         if self.lo == self.hi
@@ -140,6 +150,10 @@ impl Interval {
         Self::checked(sqrt_down(self.lo), sqrt_up(self.hi.max(0.0)))
     }
     /// Square (tighter than `x * x` when the interval straddles 0).
+    ///
+    /// # Soundness
+    /// Claim C1: contains `x²` for every member `x`. Harness `a4_interval_scale_sqr_enclose`
+    /// (twin; Kani times out).
     #[inline]
     pub fn sqr(self) -> Interval {
         if self.lo >= 0.0 {
@@ -180,6 +194,10 @@ fn exact_prod(x: f64, y: f64) -> Option<f64> {
 impl Add for Interval {
     type Output = Interval;
     /// Outward rounded; the sum of two points that is exactly a float stays a point.
+    ///
+    /// # Soundness
+    /// Claim C1: contains `x + y` for all members. Harness `a4_interval_add_sub_enclose` (twin;
+    /// Kani times out).
     #[inline(always)]
     fn add(self, o: Interval) -> Interval {
         if self.lo == self.hi
@@ -215,6 +233,11 @@ impl Neg for Interval {
 
 impl Mul for Interval {
     type Output = Interval;
+    /// Outward rounded; a point operand uses [`Interval::scale`].
+    ///
+    /// # Soundness
+    /// Claim C1: contains `x·y` for all members. Harness `a4_interval_mul_enclose` (twin; Kani
+    /// times out); mutant `x3` caught.
     #[inline(always)]
     fn mul(self, o: Interval) -> Interval {
         if self.lo == self.hi {

@@ -593,6 +593,11 @@ impl DynamicObject {
 
     /// Occupancy over `[t_a, t_b]` (s) after measurement `meas`: contains every point of the sphere
     /// for every admissible motion consistent with the measurement. Requires `t_m − δ ≤ t_a ≤ t_b`.
+    ///
+    /// # Soundness
+    /// Claim C4′: as stated, for the double-integrator model with the measurement errors and the
+    /// delay of the spec. Harness `j1_object_occupancy_contains_motion` (property test: the
+    /// occupancy uses the LP-based zonotope code, beyond the model checker); mutant `x13` caught.
     pub fn occupancy(
         &self,
         meas: &ObjectMeasurement,

@@ -16,51 +16,84 @@ use crate::interval::Interval;
 pub const TRIG_PAD: f64 = 1e-14;
 
 /// `x + y` rounded up.
+///
+/// # Soundness
+/// Claim C1: ≥ the exact sum (IEEE round-to-nearest, one step up). Harness `a1_add_enclose`
+/// (beside this module, `proofs.rs`); mutant `m1` caught.
 #[inline(always)]
 pub fn add_up(x: f64, y: f64) -> f64 {
     (x + y).next_up()
 }
 /// `x + y` rounded down.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact sum. Harness `a1_add_enclose`.
 #[inline(always)]
 pub fn add_down(x: f64, y: f64) -> f64 {
     (x + y).next_down()
 }
 /// `x - y` rounded up.
+///
+/// # Soundness
+/// Claim C1: ≥ the exact difference. Harness `a1_sub_enclose`.
 #[inline(always)]
 pub fn sub_up(x: f64, y: f64) -> f64 {
     (x - y).next_up()
 }
 /// `x - y` rounded down.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact difference. Harness `a1_sub_enclose`.
 #[inline(always)]
 pub fn sub_down(x: f64, y: f64) -> f64 {
     (x - y).next_down()
 }
 /// `x * y` rounded up.
+///
+/// # Soundness
+/// Claim C1: ≥ the exact product. Harness `a2_mul_enclose` (verified; not in CI: heavy-tailed
+/// solve time, `proofs/README.md`); mutant `x14` caught.
 #[inline(always)]
 pub fn mul_up(x: f64, y: f64) -> f64 {
     (x * y).next_up()
 }
 /// `x * y` rounded down.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact product. Harness `a2_mul_enclose`.
 #[inline(always)]
 pub fn mul_down(x: f64, y: f64) -> f64 {
     (x * y).next_down()
 }
 /// `x / y` rounded up.
+///
+/// # Soundness
+/// Claim C1: ≥ the exact quotient. Harness `a2_div_enclose`; mutant `x16` caught.
 #[inline(always)]
 pub fn div_up(x: f64, y: f64) -> f64 {
     (x / y).next_up()
 }
 /// `x / y` rounded down.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact quotient. Harness `a2_div_enclose`.
 #[inline(always)]
 pub fn div_down(x: f64, y: f64) -> f64 {
     (x / y).next_down()
 }
 /// `sqrt(x)` rounded up (`x >= 0`; a negative rounding artefact is treated as 0).
+///
+/// # Soundness
+/// Claim C1: ≥ the exact √x. Harness `a2_sqrt_enclose` (property twin; its Kani proof times
+/// out: `proofs/README.md`).
 #[inline(always)]
 pub fn sqrt_up(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_up()
 }
 /// `sqrt(x)` rounded down, never below 0.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact √x. Harness `a2_sqrt_enclose` (twin; Kani times out).
 #[inline(always)]
 pub fn sqrt_down(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_down().max(0.0)
@@ -80,12 +113,19 @@ pub const TINY: f64 = 1e-300;
 pub const SQRT_TINY: f64 = 1e-150;
 
 /// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`], [`SQRT_TINY`]).
+///
+/// # Soundness
+/// Claim C1: ≥ the exact norm. Harness `a3_norm_up_encloses` (twin; Kani times out); mutant
+/// `x1` caught.
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
     crate::ieee::sqrt(x * x + y * y + z * z) * INFLATE + SQRT_TINY
 }
 
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
+///
+/// # Soundness
+/// Claim C1: ≤ the exact norm. Harness `a3_norm_down_encloses` (twin; Kani times out).
 #[inline]
 pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
     sqrt_down(add_down(
@@ -95,6 +135,9 @@ pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
 }
 
 /// Upper bound of the distance between two points.
+///
+/// # Soundness
+/// Claim C1: ≥ the exact distance. Harness `a3_dist_up_encloses` (twin; Kani times out).
 #[inline]
 pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     // |fl(a-b)| may be below |a-b| by half an ulp per coordinate; bound it from both sides.
@@ -113,7 +156,8 @@ pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 ///
 /// # Soundness
 /// Claim C1: contains sin x and cos x for every x in `[lo, hi]`, assuming libm's sin/cos within
-/// 1 ulp on the reduced range. Harness `a5_sin_cos_interval_encloses`; mutant `x4` caught.
+/// 1 ulp on the reduced range. Harness `a5_sin_cos_interval_encloses` (the Kani proof: the
+/// critical points, for `lo < hi`; the twin: the whole claim against libm); mutant `x4` caught.
 pub fn sin_cos_interval(lo: f64, hi: f64) -> (Interval, Interval) {
     debug_assert!(lo <= hi, "sin_cos_interval({lo}, {hi})");
     let full = Interval::new(-1.0, 1.0).expect("valid");

@@ -1001,6 +1001,10 @@ impl Zonotope3 {
     /// Rigorous lower bound `L` with `0 ≤ L ≤ dist(Z ⊕ B(inflate), capsule)` (m); `L > 0` proves
     /// the sets disjoint. The direction comes from a small GJK on `Z − segment`; only its rigorous
     /// evaluation ([`Self::distance_bound_along`]) matters for soundness.
+    ///
+    /// # Soundness
+    /// Claim C2: never above the exact distance, whatever direction the GJK proposes. Harness
+    /// `b4_zonotope_capsule_conservative` (twin; Kani times out).
     pub fn distance_lower_bound(&self, inflate: f64, capsule: &Capsule) -> f64 {
         match self.gjk_direction(capsule) {
             Some(n) => self.distance_bound_along(inflate, capsule, n),
