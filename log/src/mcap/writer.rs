@@ -1,0 +1,127 @@
+//! [`McapLogWriter`]: writes a pacs log as an MCAP file of a ROS 2 recording.
+
+use super::{JOINT_STATE, METADATA_KEY, METADATA_NAME, McapConfig, POSE_ARRAY, STRING};
+use crate::cdr::{CdrWriter, Stamp};
+use crate::format::Header;
+use std::io::{Seek, Write};
+
+/// Writes a pacs log as an MCAP file of a ROS 2 recording (the form [`McapReader`] reads): the
+/// header as the `pacs` metadata record, then CDR messages on the configured topics.
+///
+/// [`McapReader`]: super::McapReader
+pub struct McapLogWriter<W: Write + Seek> {
+    w: mcap::Writer<W>,
+    robot: u16,
+    human: u16,
+    event: u16,
+    seq: u32,
+    joints: Vec<String>,
+    frame_id: String,
+}
+
+/// Errors of [`McapLogWriter`].
+#[derive(Debug, thiserror::Error)]
+pub enum McapWriteError {
+    /// The MCAP writer failed.
+    #[error("MCAP write failed: {0}")]
+    Mcap(#[from] mcap::McapError),
+    /// The header could not be serialized.
+    #[error("header: {0}")]
+    Header(#[from] serde_json::Error),
+    /// A time stamp does not fit a ROS 2 `builtin_interfaces/Time` (or the log time is negative).
+    #[error("time stamp {0} ns is out of range")]
+    Time(i128),
+}
+
+impl<W: Write + Seek> McapLogWriter<W> {
+    /// Start an MCAP log: writes the header metadata, schemas and channels. `joints` names the
+    /// robot joints (written into every `JointState.name`; empty: positions by index).
+    pub fn new(
+        out: W,
+        opts: mcap::WriteOptions,
+        header: &Header,
+        cfg: &McapConfig,
+        joints: &[&str],
+    ) -> Result<Self, McapWriteError> {
+        let mut w = opts.profile("ros2").create(out)?;
+        let mut md = std::collections::BTreeMap::new();
+        md.insert(METADATA_KEY.to_string(), serde_json::to_string(header)?);
+        w.write_metadata(&mcap::records::Metadata {
+            name: METADATA_NAME.into(),
+            metadata: md,
+        })?;
+        let none = std::collections::BTreeMap::new();
+        let mut chan = |name: &str, def: &str, topic: &str| -> Result<u16, McapWriteError> {
+            let s = w.add_schema(name, "ros2msg", def.as_bytes())?;
+            Ok(w.add_channel(s, topic, "cdr", &none)?)
+        };
+        let robot = chan(JOINT_STATE, JOINT_STATE_DEF, &cfg.robot_topic)?;
+        let human = chan(POSE_ARRAY, POSE_ARRAY_DEF, &cfg.human_topic)?;
+        let event = chan(STRING, "string data\n", &cfg.event_topic)?;
+        Ok(Self {
+            w,
+            robot,
+            human,
+            event,
+            seq: 0,
+            joints: joints.iter().map(|s| s.to_string()).collect(),
+            frame_id: "world".into(),
+        })
+    }
+
+    fn put(&mut self, channel_id: u16, log_time: i128, data: &[u8]) -> Result<(), McapWriteError> {
+        let lt = u64::try_from(log_time).map_err(|_| McapWriteError::Time(log_time))?;
+        self.seq = self.seq.wrapping_add(1);
+        self.w.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id,
+                sequence: self.seq,
+                log_time: lt,
+                publish_time: lt,
+            },
+            data,
+        )?;
+        Ok(())
+    }
+
+    /// A robot sample: `header.stamp` = `stamp` (ns), logged at `log_time` (ns).
+    pub fn write_robot(
+        &mut self,
+        stamp: i128,
+        log_time: i128,
+        q: &[f64],
+        dq: Option<&[f64]>,
+    ) -> Result<(), McapWriteError> {
+        let st = Stamp::from_nanos(stamp).ok_or(McapWriteError::Time(stamp))?;
+        let names: Vec<&str> = self.joints.iter().map(String::as_str).collect();
+        let data = CdrWriter::joint_state(st, &names, q, dq.unwrap_or(&[]), &[]);
+        self.put(self.robot, log_time, &data)
+    }
+
+    /// A human measurement taken at `stamp` (ns), logged at `log_time` (ns).
+    pub fn write_human(
+        &mut self,
+        stamp: i128,
+        log_time: i128,
+        positions: &[[f64; 3]],
+    ) -> Result<(), McapWriteError> {
+        let st = Stamp::from_nanos(stamp).ok_or(McapWriteError::Time(stamp))?;
+        let data = CdrWriter::pose_array(st, &self.frame_id, positions);
+        self.put(self.human, log_time, &data)
+    }
+
+    /// An event logged at `log_time` (ns).
+    pub fn write_event(&mut self, log_time: i128, name: &str) -> Result<(), McapWriteError> {
+        let data = CdrWriter::string_msg(name);
+        self.put(self.event, log_time, &data)
+    }
+
+    /// Write the summary and footer; returns the inner writer.
+    pub fn finish(mut self) -> Result<W, McapWriteError> {
+        self.w.finish()?;
+        Ok(self.w.into_inner())
+    }
+}
+
+const JOINT_STATE_DEF: &str = "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n";
+const POSE_ARRAY_DEF: &str = "std_msgs/Header header\ngeometry_msgs/Pose[] poses\n";
