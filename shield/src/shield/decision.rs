@@ -1,0 +1,83 @@
+//! The pure decision of one shield step (paper Algorithm 1): adopt a verified candidate or
+//! continue the last verified failsafe.
+
+use super::FilterMode;
+use pacs_motion::scaling::{PathState, SpeedProfile};
+
+/// The last verified failsafe: braking profile `profile` on trajectory slot `slot`, started at
+/// absolute time `t0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerifiedFailsafe {
+    /// Trajectory slot the failsafe lives on.
+    pub slot: usize,
+    /// Braking path-speed profile (ṡ → 0).
+    pub profile: SpeedProfile,
+    /// Absolute time of the profile start.
+    pub t0: f64,
+}
+
+/// A candidate of one shield step: the go-profile for α_s, then `brake`, on `slot`, and whether
+/// the monitored trajectory was verified.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Trajectory slot of the candidate.
+    pub slot: usize,
+    /// Intended step (ṡ → 1) for α_s.
+    pub go: SpeedProfile,
+    /// Failsafe after the step (ṡ → 0).
+    pub brake: SpeedProfile,
+    /// The monitored trajectory (go, then brake) was verified.
+    pub verified: bool,
+}
+
+/// The outcome of [`decide`]: the executed slot and path state at `t + α_s` and the (possibly
+/// new) last verified failsafe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decision {
+    /// Slot of the executed command.
+    pub slot: usize,
+    /// Executed path state at `t + α_s`.
+    pub path: PathState,
+    /// The last verified failsafe after this step.
+    pub failsafe: VerifiedFailsafe,
+    /// The candidate was adopted (verified, or OFF mode).
+    pub adopted: bool,
+}
+
+/// The pure decision of one shield step (paper Algorithm 1), as used by [`Shield::step`]: a
+/// verified candidate (or any candidate in OFF mode) is executed for α_s and its brake profile
+/// becomes the stored failsafe (starting at `t + α_s`); otherwise (no candidate, or not verified)
+/// the stored failsafe is continued to `t + α_s`.
+///
+/// [`Shield::step`]: super::Shield::step
+///
+/// # Soundness
+/// Claim C8 (induction): the robot is always on a verified monitored trajectory; the stored
+/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction`, property
+/// test `f3_real_shield_commands_on_verified_failsafe`; mutant `x2` caught.
+pub fn decide(
+    stored: VerifiedFailsafe,
+    candidate: Option<Candidate>,
+    mode: FilterMode,
+    t: f64,
+    alpha: f64,
+) -> Decision {
+    match candidate {
+        Some(c) if c.verified || mode == FilterMode::Off => Decision {
+            slot: c.slot,
+            path: c.go.eval(alpha),
+            failsafe: VerifiedFailsafe {
+                slot: c.slot,
+                profile: c.brake,
+                t0: t + alpha,
+            },
+            adopted: true,
+        },
+        _ => Decision {
+            slot: stored.slot,
+            path: stored.profile.eval(t + alpha - stored.t0),
+            failsafe: stored,
+            adopted: false,
+        },
+    }
+}
