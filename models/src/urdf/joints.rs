@@ -1,0 +1,130 @@
+//! URDF joints: the limits of a chain joint (URDF, then side-file overrides) and the fixed motion
+//! of a frozen off-chain joint.
+
+use super::{JointOverride, SideFile};
+use crate::error::ModelError;
+use crate::robot::JointLimitSpec;
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use urdf_rs::JointType;
+
+pub(super) fn chain_limits(
+    j: &urdf_rs::Joint,
+    ov: &JointOverride,
+    side: &SideFile,
+) -> Result<JointLimitSpec, ModelError> {
+    let l = &j.limit;
+    // urdf-rs gives an all-zero limit when `<limit>` is absent (URDF < 1.2).
+    let has_limit = !(l.lower == 0.0 && l.upper == 0.0 && l.velocity == 0.0 && l.effort == 0.0);
+    let revolute = j.joint_type == JointType::Revolute;
+    let missing = |what: &str, value: f64, reason: &'static str| ModelError::InvalidValue {
+        field: format!("joint `{}` {what}", j.name),
+        value,
+        reason,
+    };
+    let urdf_pos = |v: f64| (revolute && has_limit && v.is_finite()).then_some(v);
+    let q_min = ov.q_min.or(urdf_pos(l.lower)).ok_or_else(|| {
+        missing(
+            "q_min",
+            l.lower,
+            "no finite URDF lower limit (continuous joint or no <limit>); set q_min in the side file's [joints.NAME]",
+        )
+    })?;
+    let q_max = ov.q_max.or(urdf_pos(l.upper)).ok_or_else(|| {
+        missing(
+            "q_max",
+            l.upper,
+            "no finite URDF upper limit (continuous joint or no <limit>); set q_max in the side file's [joints.NAME]",
+        )
+    })?;
+    let urdf_pos_rate = |v: f64| (has_limit && v.is_finite() && v > 0.0).then_some(v);
+    let v_max = ov.v_max.or(urdf_pos_rate(l.velocity)).ok_or_else(|| {
+        missing(
+            "v_max",
+            l.velocity,
+            "URDF velocity limit missing or not > 0; set v_max in the side file",
+        )
+    })?;
+    let urdf_acc = urdf_pos_rate(l.acceleration.min(l.deceleration));
+    let a_max = ov.a_max.or(side.a_max).or(urdf_acc).ok_or_else(|| {
+        missing(
+            "a_max",
+            l.acceleration,
+            "no acceleration limit; set a_max (uniform or per joint) in the side file",
+        )
+    })?;
+    let j_max = ov
+        .j_max
+        .or(side.j_max)
+        .or(urdf_pos_rate(l.jerk))
+        .ok_or_else(|| {
+            missing(
+                "j_max",
+                l.jerk,
+                "no jerk limit; set j_max (uniform or per joint) in the side file",
+            )
+        })?;
+    Ok(JointLimitSpec {
+        q_min,
+        q_max,
+        v_max,
+        a_max,
+        j_max,
+    })
+}
+
+/// Transform child-joint frame → frozen child frame of an off-chain joint.
+pub(super) fn frozen_motion(
+    j: &urdf_rs::Joint,
+    frozen_at: Option<f64>,
+) -> Result<Isometry3<f64>, ModelError> {
+    let l = &j.limit;
+    let has_limit = !(l.lower == 0.0 && l.upper == 0.0 && l.velocity == 0.0 && l.effort == 0.0);
+    let default = || {
+        let mut x = 0.0_f64;
+        if has_limit && j.joint_type != JointType::Continuous {
+            if l.lower.is_finite() {
+                x = x.max(l.lower);
+            }
+            if l.upper.is_finite() {
+                x = x.min(l.upper);
+            }
+        }
+        x
+    };
+    let x = frozen_at.unwrap_or_else(default);
+    if !x.is_finite() {
+        return Err(ModelError::InvalidValue {
+            field: format!("joints.{}.frozen_at", j.name),
+            value: x,
+            reason: "must be finite",
+        });
+    }
+    let axis = || {
+        let a = Vector3::from(*j.axis.xyz);
+        let n = a.norm();
+        if n.is_finite() && n > 1e-9 {
+            Ok(Unit::new_normalize(a))
+        } else {
+            Err(ModelError::InvalidValue {
+                field: format!("joint `{}` axis", j.name),
+                value: n,
+                reason: "axis must have non-zero finite length",
+            })
+        }
+    };
+    match j.joint_type {
+        JointType::Fixed => Ok(Isometry3::identity()),
+        JointType::Revolute | JointType::Continuous => Ok(Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_axis_angle(&axis()?, x),
+        )),
+        JointType::Prismatic => Ok(Isometry3::from_parts(
+            Translation3::from(axis()?.into_inner() * x),
+            UnitQuaternion::identity(),
+        )),
+        ref t => Err(ModelError::Invalid(format!(
+            "URDF joint `{}` of type {t:?} is not supported (only revolute, continuous, prismatic and fixed)",
+            j.name
+        ))),
+    }
+}
