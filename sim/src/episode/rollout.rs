@@ -1,0 +1,243 @@
+//! The rollout loop of an episode: policy chunks, filter steps, the simulated tracking error, the
+//! camera, the log and the truth audit, and the episode's result.
+
+use super::{
+    Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
+};
+use crate::humans::Camera;
+use crate::policy::ChunkPolicy;
+use crate::task::tool_point;
+use pacs_audit::{AuditConfig, Auditor};
+use pacs_log::LogModels;
+use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_shield::shield::ShieldError;
+use pacs_shield::shield_log::ShieldLog;
+
+/// Smooth bounded tracking error: per joint `amp · sin(2π f t + φ)`, f ∈ [0.2, 1] Hz.
+struct Tracking {
+    amp: f64,
+    freq: Vec<f64>,
+    phase: Vec<f64>,
+}
+
+impl Tracking {
+    fn new(amp: f64, n: usize, seed: u64) -> Self {
+        let mut rng = crate::humans::Rng::new(seed ^ 0x7AC4);
+        let freq = (0..n).map(|_| 0.2 + 0.8 * rng.uniform()).collect();
+        let phase = (0..n)
+            .map(|_| std::f64::consts::TAU * rng.uniform())
+            .collect();
+        Self { amp, freq, phase }
+    }
+    /// Actual joint positions and velocities for commanded ones at time `t`.
+    fn apply(&self, t: f64, q: &mut [f64], dq: &mut [f64]) {
+        for i in 0..q.len() {
+            let w = std::f64::consts::TAU * self.freq[i];
+            let a = w * t + self.phase[i];
+            q[i] += self.amp * a.sin();
+            dq[i] += self.amp * w * a.cos();
+        }
+    }
+}
+
+fn invalid(e: impl std::fmt::Display) -> ShieldError {
+    ShieldError::Invalid(e.to_string())
+}
+
+/// Run one episode of `setup` with `method` (Algorithm 1: a chunk every h·Δt, a safety step
+/// every `cfg.dt`; [`Method::Direct`] sends each action as a target every Δt instead).
+pub fn run_setup(
+    method: Method,
+    setup: Setup<'_>,
+    cfg: &EpisodeConfig,
+    out: Outputs<'_>,
+) -> Result<Episode, ShieldError> {
+    let Setup {
+        robot,
+        human,
+        spec,
+        script,
+        policy,
+        goals,
+        start,
+        label,
+        task,
+        max_time,
+    } = setup;
+    let Outputs {
+        log,
+        record_every,
+        truth_audit,
+    } = out;
+    let mut log = match log {
+        Some(w) => {
+            let h = log_header(label, robot, human, spec, script);
+            let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
+            l.event(0.0, "episode_start").map_err(invalid)?;
+            Some(l)
+        }
+        None => None,
+    };
+    let mut auditor = if truth_audit {
+        let models = LogModels {
+            robot: robot.clone(),
+            human: human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?,
+            constraints: spec.clone(),
+            environment: vec![],
+        };
+        Some(Auditor::new(models, AuditConfig::default()).map_err(invalid)?)
+    } else {
+        None
+    };
+    let tc = spec.resolve(human).map_err(invalid)?;
+    let mut filter = method.filter_kind().build(robot, human, spec)?;
+    filter.start(0.0, start)?;
+    let mut camera = Camera::new(cfg.camera_period, cfg.seed);
+    let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);
+    let n = robot.dof();
+    let steps = (max_time / cfg.dt).round() as usize;
+    let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
+    let chunk_every = policy.execute * action_every;
+    let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
+    let (mut violations, mut verified, mut min_sep, mut max_dev) =
+        (0usize, 0usize, f64::INFINITY, 0.0f64);
+    let mut next_goal = 0usize;
+    let mut success_at = None;
+    let mut samples = Vec::new();
+    let mut steps_run = 0usize;
+    let mut waypoints: Vec<Vec<f64>> = Vec::new();
+    let mut tool = tool_point(robot, &q);
+    let mut last_rec_tool = tool;
+    let mut prev_tool = tool;
+    let mut path_len = 0.0;
+    tracking.apply(0.0, &mut q, &mut dq);
+    if let Some(a) = auditor.as_mut() {
+        a.push_human(0.0, 0.0, &script.keypoints(0.0))
+            .map_err(invalid)?;
+        a.push_robot(0.0, &q, Some(&dq)).map_err(invalid)?;
+    }
+    for k in 0..steps {
+        steps_run += 1;
+        let t = k as f64 * cfg.dt;
+        if method == Method::Direct {
+            if k % chunk_every == 0 {
+                let c = policy.chunk(&q);
+                waypoints.clear();
+                let mut w = q.clone();
+                for a in c.actions.iter().take(c.execute) {
+                    w.iter_mut().zip(a).for_each(|(x, d)| *x += d);
+                    waypoints.push(w.clone());
+                }
+            }
+            if k % action_every == 0 {
+                let i = (k % chunk_every) / action_every;
+                if let Some(target) = waypoints.get(i) {
+                    let c = Chunk {
+                        kind: ActionKind::Absolute,
+                        actions: vec![target.clone()],
+                        execute: 1,
+                        gripper: None,
+                    };
+                    let _ = filter.set_chunk(t, &c);
+                }
+            }
+        } else if k % chunk_every == 0 {
+            let c = policy.chunk(&q);
+            let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
+        }
+        let m = camera.measure(human, script, t);
+        let cmd = filter.step(t, m.as_ref())?;
+        if let Some(l) = log.as_mut() {
+            l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
+        }
+        q.copy_from_slice(&cmd.state.q[..n]);
+        dq.copy_from_slice(&cmd.state.dq[..n]);
+        tracking.apply(cmd.t, &mut q, &mut dq);
+        let truth = script.keypoints(cmd.t);
+        if let Some(a) = auditor.as_mut() {
+            a.push_human(cmd.t, cmd.t, &truth).map_err(invalid)?;
+            a.push_robot(cmd.t, &q, Some(&dq)).map_err(invalid)?;
+        }
+        let (sep, viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
+        tool = tool_point(robot, &q);
+        min_sep = min_sep.min(sep);
+        max_dev = max_dev.max(policy.deviation(&q));
+        violations += viol as usize;
+        verified += cmd.diag.verified as usize;
+        while next_goal < goals.len() && goals[next_goal].reached(&q, &tool) {
+            next_goal += 1;
+        }
+        if success_at.is_none() && next_goal == goals.len() {
+            success_at = Some(cmd.t);
+        }
+        let dist =
+            |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
+        if success_at.is_none() {
+            path_len += dist(&tool, &prev_tool);
+        }
+        prev_tool = tool;
+        if record_every > 0 && k % record_every == 0 {
+            let speed = if k == 0 {
+                0.0
+            } else {
+                dist(&tool, &last_rec_tool) / (record_every as f64 * cfg.dt)
+            };
+            last_rec_tool = tool;
+            samples.push(Sample {
+                t: cmd.t,
+                q: q.clone(),
+                dq: dq.clone(),
+                separation: sep,
+                violation: viol,
+                energy,
+                verified: cmd.diag.verified,
+                tool,
+                tool_speed: speed,
+            });
+        }
+        if success_at.is_some_and(|ts| cmd.t > ts + 0.2) {
+            break;
+        }
+    }
+    let steps_run = steps_run.max(1) as f64;
+    let success = success_at.is_some();
+    let t_end = steps_run * cfg.dt;
+    if let Some(mut l) = log {
+        l.event(t_end, if success { "success" } else { "failure" })
+            .map_err(invalid)?;
+        l.finish().map_err(invalid)?;
+    }
+    let truth_audit = auditor.map(|mut a| {
+        a.push_event(if success { "success" } else { "failure" });
+        let r = a.finish("ground-truth", serde_json::Map::new());
+        let samples = r.metrics.samples.max(1) as f64;
+        TruthAudit {
+            verdict: r.verdict,
+            violation_fraction: r.metrics.violation_fraction,
+            certain_fraction: r.metrics.certain_violating_samples as f64 / samples,
+        }
+    });
+    let duration = success_at.unwrap_or(max_time);
+    Ok(Episode {
+        method,
+        variant: label.into(),
+        human: script.name().into(),
+        task: task.into(),
+        success,
+        safe_success: success
+            && violations == 0
+            && truth_audit
+                .as_ref()
+                .is_none_or(|a| a.certain_fraction == 0.0),
+        violation_fraction: violations as f64 / steps_run,
+        truth_audit,
+        goals_reached: next_goal,
+        ood_chunks: policy.ood_chunks(),
+        duration,
+        min_separation: min_sep,
+        max_deviation: max_dev,
+        verified_fraction: verified as f64 / steps_run,
+        mean_tool_speed: path_len / duration.max(1e-9),
+        samples,
+    })
+}
