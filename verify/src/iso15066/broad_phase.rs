@@ -1,0 +1,79 @@
+//! The broad phase of the rule: outward-rounded boxes around capsules, and the ball containing
+//! the robot in every configuration. Both only ever skip pairs that are provably disjoint.
+
+use pacs_models::robot::MAX_DOF;
+use pacs_models::{Capsule, RobotModel};
+use pacs_reach::rounding::{add_up, mul_up, norm3_up};
+
+/// An axis-aligned box containing a capsule (bounds rounded outward).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Aabb {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Aabb {
+    pub(super) const EMPTY: Aabb = Aabb {
+        lo: [f64::INFINITY; 3],
+        hi: [f64::NEG_INFINITY; 3],
+    };
+    #[inline]
+    pub(super) fn of(c: &Capsule) -> Self {
+        let (a, b, r) = (c.p1(), c.p2(), c.radius());
+        let mut bx = Aabb::default();
+        for k in 0..3 {
+            // |x ± r| rounding error ≤ u·|result|: pad relatively (plus a tiny absolute term).
+            let lo = a[k].min(b[k]) - r;
+            let hi = a[k].max(b[k]) + r;
+            bx.lo[k] = lo - lo.abs() * 1e-15 - 1e-300;
+            bx.hi[k] = hi + hi.abs() * 1e-15 + 1e-300;
+        }
+        bx
+    }
+    #[inline]
+    pub(super) fn join(&mut self, o: &Aabb) {
+        for k in 0..3 {
+            self.lo[k] = self.lo[k].min(o.lo[k]);
+            self.hi[k] = self.hi[k].max(o.hi[k]);
+        }
+    }
+    /// Lower bound of the distance between two boxes (0 if they overlap).
+    #[inline]
+    pub(super) fn distance_lb(&self, o: &Aabb) -> f64 {
+        let mut d2 = 0.0;
+        for k in 0..3 {
+            let g = (o.lo[k] - self.hi[k]).max(self.lo[k] - o.hi[k]).next_down();
+            if g > 0.0 {
+                d2 += g * g;
+            }
+        }
+        // Rounded down: the products and sum of positive terms lose at most a few ulps.
+        pacs_reach::ieee::sqrt(d2 * (1.0 - 1e-12))
+    }
+    #[inline]
+    pub(super) fn overlaps(&self, o: &Aabb) -> bool {
+        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
+    }
+}
+
+/// A ball around the base origin containing every link capsule for every configuration: a point
+/// of a capsule carried by frame k is within Σ_{j≤k} |t_j| + |p| + r of the base origin (rotations
+/// preserve lengths), rounded up and padded for the rounding of the model's fixed transforms.
+pub fn workspace_ball(robot: &RobotModel, tracking_error: f64) -> Capsule {
+    let mut cum = [0.0; MAX_DOF + 1];
+    for (j, joint) in robot.joints().iter().enumerate() {
+        let t = joint.origin.translation.vector;
+        cum[j + 1] = add_up(cum[j], norm3_up(t.x, t.y, t.z));
+    }
+    let mut r: f64 = 0.0;
+    for l in robot.links() {
+        for c in &l.capsules {
+            let (a, b) = (c.p1(), c.p2());
+            let p = norm3_up(a.x, a.y, a.z).max(norm3_up(b.x, b.y, b.z));
+            r = r.max(add_up(add_up(cum[l.frame], p), c.radius()));
+        }
+    }
+    let r = add_up(mul_up(r, 1.0 + 1e-12), add_up(tracking_error, 1e-9));
+    let base = nalgebra::Point3::from(robot.base().translation.vector);
+    Capsule::new_unchecked(base, base, r)
+}

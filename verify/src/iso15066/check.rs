@@ -1,0 +1,175 @@
+//! [`ContactRule::check`]: the rule for one interval (stated in the docs of [`super`]), with the
+//! broad phase before it and the pinch classification of PFL contacts.
+
+use super::broad_phase::Aabb;
+use super::{ConstraintKind, ContactRule, Hit, Outcome, frames_can_pinch, threshold};
+use pacs_models::{Capsule, Constraint};
+use pacs_reach::JointBox;
+use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
+use std::ops::ControlFlow;
+
+impl ContactRule {
+    /// Broad phase, stage 1 (no robot occupancy needed): if every body-part occupancy is
+    /// provably outside the ball containing the robot in every configuration, returns a lower
+    /// bound (m) of the separation; then no contact is possible on the interval. `None` otherwise.
+    pub fn workspace_clear(&self, human_caps: &[Capsule]) -> Option<f64> {
+        let mut sep = f64::INFINITY;
+        for h in human_caps {
+            let d = capsule_distance_lower_bound(&self.workspace, h);
+            if d > 0.0 {
+                sep = sep.min(d);
+            } else {
+                return None;
+            }
+        }
+        Some(sep)
+    }
+
+    /// The rule for one interval (see the module docs): `robot_caps` the link occupancy (one per
+    /// capsule, in `RobotReach` order), `dq` the joint velocity box (rad/s),
+    /// `human_caps` the body-part occupancies, `energy` computes an upper bound (J) of the
+    /// whole robot's kinetic energy over the interval (called at most once, only on possible PFL
+    /// contact; return +∞ if it cannot be bounded). Every violating (part, link) pair is passed
+    /// to `sink` in part then link order; `sink` returns `ControlFlow::Break` to stop early.
+    /// `separation`: also compute the separation lower bound when no contact is possible
+    /// (costs capsule distances).
+    pub fn check(
+        &mut self,
+        robot_caps: &[Capsule],
+        dq: &JointBox,
+        human_caps: &[Capsule],
+        mut energy: impl FnMut() -> f64,
+        separation: bool,
+        mut sink: impl FnMut(&Hit) -> ControlFlow<()>,
+    ) -> Outcome {
+        let mut out = Outcome {
+            contact: false,
+            violated: false,
+            separation: f64::INFINITY,
+            pfl: None,
+        };
+        debug_assert_eq!(robot_caps.len(), self.capsule_link.len());
+        debug_assert_eq!(human_caps.len(), self.parts);
+        // Broad phase, stage 2: boxes around the robot's capsules and their union.
+        let mut all = Aabb::EMPTY;
+        for (bx, rc) in self.robot_aabb.iter_mut().zip(robot_caps) {
+            *bx = Aabb::of(rc);
+            all.join(bx);
+        }
+        for (p, hc) in human_caps.iter().enumerate() {
+            let hb = Aabb::of(hc);
+            let mut mask = 0u128;
+            if all.overlaps(&hb) {
+                for (c, rc) in robot_caps.iter().enumerate() {
+                    if self.robot_aabb[c].overlaps(&hb) && capsules_may_intersect(rc, hc) {
+                        mask |= 1u128 << c;
+                    }
+                }
+            }
+            self.contact[p] = mask;
+            if mask != 0 {
+                out.contact = true;
+                out.separation = 0.0;
+            } else if separation && all.distance_lb(&hb) < out.separation {
+                // Separation lower bound; a pair whose boxes are farther apart than the best so
+                // far cannot lower it.
+                let mut best = out.separation;
+                for (rc, rb) in robot_caps.iter().zip(&self.robot_aabb) {
+                    if rb.distance_lb(&hb) < best {
+                        best = best.min(capsule_distance_lower_bound(rc, hc));
+                    }
+                }
+                out.separation = best;
+            }
+        }
+        if !out.contact {
+            return out;
+        }
+        // Narrow phase: the constraint of every part that may be touched.
+        let at_rest = (0..dq.dof()).all(|j| {
+            let (lo, hi) = dq.bounds(j);
+            lo >= -self.rest_speed && hi <= self.rest_speed
+        });
+        let mut e_robot: Option<f64> = None;
+        for p in 0..self.parts {
+            let mask = self.contact[p];
+            if mask == 0 {
+                continue;
+            }
+            let constraint = self.constraints[p];
+            let (kind, e, thr, constrained, bad) = match constraint {
+                Constraint::Ssm => (ConstraintKind::Ssm, 0.0, 0.0, false, !at_rest),
+                Constraint::Pfl { .. } => {
+                    let e = *e_robot.get_or_insert_with(|| {
+                        let e = energy();
+                        if e.is_nan() { f64::INFINITY } else { e }
+                    });
+                    let constrained = self.may_pinch(p, mask, human_caps);
+                    let thr = threshold(constraint, constrained);
+                    out.pfl = Some(match out.pfl {
+                        Some((a, b)) => (a.max(e), b.min(thr)),
+                        None => (e, thr),
+                    });
+                    (
+                        ConstraintKind::Pfl,
+                        e,
+                        thr,
+                        constrained,
+                        e > thr || thr.is_nan(),
+                    )
+                }
+            };
+            if !bad {
+                continue;
+            }
+            out.violated = true;
+            // One hit per touched link (capsules of one link are contiguous).
+            let mut last_link = usize::MAX;
+            let mut m = mask;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let link = self.capsule_link[c];
+                if link == last_link {
+                    continue;
+                }
+                last_link = link;
+                let hit = Hit {
+                    part: p,
+                    link,
+                    kind,
+                    energy: e,
+                    threshold: thr,
+                    constrained,
+                };
+                if sink(&hit).is_break() {
+                    return out;
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether body part `p`, touched by the robot capsules in `mask`, may be pinched: it may
+    /// also touch the environment, a body part it can be clamped against, or the robot on two
+    /// different frames.
+    fn may_pinch(&self, p: usize, mask: u128, human_caps: &[Capsule]) -> bool {
+        let hc = &human_caps[p];
+        let mut first = usize::MAX;
+        let mut m = mask;
+        while m != 0 {
+            let c = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let f = self.capsule_frame[c];
+            if first == usize::MAX {
+                first = f;
+            } else if frames_can_pinch(first, f) {
+                return true;
+            }
+        }
+        self.environment.iter().any(|e| e.may_touch(hc))
+            || (0..self.parts).any(|o| {
+                self.clampable[p * self.parts + o] && capsules_may_intersect(&human_caps[o], hc)
+            })
+    }
+}
