@@ -27,7 +27,8 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         input: PathBuf,
     },
-    /// Reachable occupancies of the robot (joint boxes) or of a human (time intervals).
+    /// Reachable occupancies of the robot (joint boxes), a human or a dynamic object (time
+    /// intervals).
     #[command(subcommand)]
     Reach(ReachCommand),
     /// Print a built-in robot model as JSON (the format `--robot`/`"robot"` inputs accept).
@@ -36,6 +37,9 @@ enum Command {
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
+    /// Print a built-in dynamic object as JSON (the format `"object"` inputs accept).
+    #[command(subcommand)]
+    Object(ShowCommand),
     /// Run the built-in scenarios (Sorting/SSM, Handover/PFL) with PACS and with the filter OFF,
     /// audit the logs and write the certification report; print a summary.
     Demo {
@@ -98,11 +102,25 @@ enum ReachCommand {
         #[arg(long, value_name = "FILE")]
         input: Option<PathBuf>,
     },
+    /// A zonotope (plus radius) containing a dynamic object over each time interval after a
+    /// measurement, with a bounding capsule.
+    ///
+    /// Input: {"object": "ball" | {"shape": {"sphere": {"radius": r}}, "max_acc": a, ...},
+    /// "measurement": {"time": t, "position": [x,y,z], "velocity": [x,y,z]}, "intervals": [[t_a,
+    /// t_b], ...]} (m, m/s, m/s², s; absolute times). Model: double integrator, accelerations in
+    /// acc_bias + acc_generators + ball(max_acc), optional max_speed, measurement errors and delay
+    /// (docs/cli.md). Without --input: the built-in example (the rolling ball,
+    /// examples/object.json).
+    Object {
+        /// Input JSON file (default: built-in example).
+        #[arg(long, value_name = "FILE")]
+        input: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
 enum ShowCommand {
-    /// Print the named built-in model (robot: "fr3"; human: "default").
+    /// Print the named built-in model (robot: "fr3"; human: "default"; object: "ball").
     Show {
         /// Model name.
         name: String,
@@ -115,8 +133,10 @@ fn main() -> ExitCode {
         Command::Fk { input } => cli::fk::run(&input),
         Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(input.as_deref()),
         Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(input.as_deref()),
+        Command::Reach(ReachCommand::Object { input }) => cli::reach::run_object(input.as_deref()),
         Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
+        Command::Object(ShowCommand::Show { name }) => cli::show::object(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),
         Command::Demo { out } => {
             use std::io::IsTerminal;

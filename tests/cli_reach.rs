@@ -464,3 +464,96 @@ fn mesh_only_urdf_links_are_refused_by_every_command() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `pacs reach object`: the built-in example, an inline object (hand-computed: constant velocity,
+/// no errors, so the centre sweeps p + [0, 1]·v), the printed ball accepted back, and bad input
+/// naming the field (exit 3).
+#[test]
+fn reach_object_example_inline_and_errors() {
+    let v = ok_json(pacs(&["reach", "object"]));
+    let iv = v["intervals"].as_array().unwrap();
+    assert_eq!(iv.len(), 3);
+    let r = |i: usize| iv[i]["zonotope"]["radius"].as_f64().unwrap();
+    assert!(
+        r(0) < r(1) && r(1) < r(2),
+        "radii grow with the interval's end"
+    );
+    assert!(iv[0]["speed_set"]["radius"].as_f64().unwrap() > 0.04);
+    for i in iv {
+        for k in ["p1", "p2"] {
+            assert_eq!(i["bounding_capsule"][k].as_array().unwrap().len(), 3);
+        }
+    }
+    let obj = json!({"shape": {"capsule": {"half_axis": [0.0, 0.0, 0.1], "radius": 0.02}}, "max_acc": 0.0});
+    let v = ok_json(with_input(
+        &["reach", "object"],
+        &json!({"object": obj, "measurement": {"time": 0.0, "position": [1.0, 2.0, 3.0], "velocity": [1.0, 0.0, 0.0]}, "intervals": [[0.0, 1.0]]}),
+    ));
+    let z = &v["intervals"][0]["zonotope"];
+    let c: Vec<f64> = serde_json::from_value(z["centre"].clone()).unwrap();
+    assert!(
+        (c[0] - 1.5).abs() < 1e-15 && c[1] == 2.0 && c[2] == 3.0,
+        "{c:?}"
+    );
+    let g: Vec<[f64; 3]> = serde_json::from_value(z["generators"].clone()).unwrap();
+    assert!((g[0][0] - 0.5).abs() < 1e-15, "{g:?}");
+    assert_eq!(
+        g[2],
+        [0.0, 0.0, 0.1],
+        "the capsule's half axis is a generator"
+    );
+    assert!((z["radius"].as_f64().unwrap() - 0.02).abs() < 1e-15);
+    assert!(v["intervals"][0].get("speed_set").is_none());
+    // The printed built-in is accepted back.
+    let ball = ok_json(pacs(&["object", "show", "ball"]));
+    assert_eq!(ball["shape"]["sphere"]["radius"], 0.04);
+    ok_json(with_input(
+        &["reach", "object"],
+        &json!({"object": ball, "measurement": {"time": 0.0, "position": [0.0, 0.0, 0.0]}, "intervals": [[0.0, 0.1]]}),
+    ));
+    // Bad input: named fields, exit 3.
+    let m = json!({"time": 0.0, "position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0]});
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": {"shape": {"sphere": {"radius": 0.1}}}, "measurement": m, "intervals": [[0.0, 0.1]]}),
+        ),
+        "missing field `max_acc`",
+    );
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": {"shape": {"sphere": {"radius": -0.1}}, "max_acc": 1.0}, "measurement": m, "intervals": [[0.0, 0.1]]}),
+        ),
+        "shape.sphere.radius",
+    );
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": {"shape": {"cube": {}}, "max_acc": 1.0}, "measurement": m, "intervals": [[0.0, 0.1]]}),
+        ),
+        "unknown variant `cube`",
+    );
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": "rock", "measurement": m, "intervals": [[0.0, 0.1]]}),
+        ),
+        "unknown built-in object `rock`",
+    );
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": "ball", "measurement": m, "intervals": [[-1.0, 0.1]]}),
+        ),
+        "intervals[0]",
+    );
+    invalid(
+        with_input(
+            &["reach", "object"],
+            &json!({"object": {"shape": {"sphere": {"radius": 0.1}}, "max_acc": 1.0}, "measurement": {"time": 0.0, "position": [0.0, 0.0, 0.0]}, "intervals": [[0.0, 0.1]]}),
+        ),
+        "no velocity",
+    );
+    invalid(pacs(&["object", "show", "rock"]), "built-in: ball");
+}

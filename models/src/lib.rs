@@ -14,6 +14,7 @@ pub mod error;
 pub mod fr3;
 pub mod human;
 pub mod kinematics;
+pub mod object;
 pub mod robot;
 pub mod shape;
 pub mod urdf;
@@ -21,6 +22,7 @@ pub mod urdf;
 pub use constraints::{Constraint, ConstraintSpec, TaskConstraints};
 pub use error::ModelError;
 pub use human::{HumanModel, HumanSpec, default_human};
+pub use object::{ObjectModel, ObjectSpec};
 pub use robot::{JointLimits, MAX_DOF, MAX_REACH, RobotModel, RobotSpec};
 pub use shape::Capsule;
 

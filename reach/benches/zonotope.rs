@@ -4,8 +4,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{DMatrix, DVector, Point3};
+use pacs_models::object::{ObjectModel, ObjectSpec, ShapeSpec, default_ball};
 use pacs_models::shape::Capsule;
-use pacs_reach::lti::{DynamicObject, LtiReach, LtiSystem, ObjectMeasurement, ReachOptions};
+use pacs_reach::lti::{LtiReach, LtiSystem, ReachOptions};
+use pacs_reach::object::{ObjectMeasurement, occupancy};
 use pacs_reach::zonotope::{BallApprox, Zonotope, ball_zonotope};
 use std::hint::black_box;
 
@@ -26,25 +28,29 @@ fn bench_object(c: &mut Criterion) {
     let meas = ObjectMeasurement {
         time: 10.0,
         position: [0.6, 0.1, 0.05],
-        velocity: [0.2, -0.1, 0.0],
+        velocity: Some([0.2, -0.1, 0.0]),
     };
-    for (name, approx) in [("box", BallApprox::Box), ("13gen", BallApprox::Thirteen)] {
-        let obj = DynamicObject::new(0.04, 3.0, Some(1.0), 0.03, 0.005, 0.02, approx).unwrap();
+    let ball = ObjectModel::new(&default_ball()).unwrap();
+    let boxed = ObjectModel::new(&ObjectSpec {
+        name: "tote".into(),
+        shape: ShapeSpec::Box {
+            half_extents: [0.2, 0.15, 0.1],
+        },
+        max_acc: 2.0,
+        acc_bias: [0.0, 0.0, -9.81],
+        acc_generators: vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        max_speed: Some(1.5),
+        measurement_error_pos: 0.01,
+        measurement_error_vel: 0.05,
+        delay: 0.03,
+    })
+    .unwrap();
+    for (name, model) in [("ball", &ball), ("box_biased_4gen", &boxed)] {
         c.bench_function(&format!("object_occupancy_one_interval/{name}"), |b| {
-            b.iter(|| black_box(obj.occupancy(black_box(&meas), 10.05, 10.06).unwrap()))
+            b.iter(|| black_box(occupancy(model, black_box(&meas), 10.05, 10.06).unwrap()))
         });
     }
-    let obj = DynamicObject::new(
-        0.04,
-        3.0,
-        Some(1.0),
-        0.03,
-        0.005,
-        0.02,
-        BallApprox::Thirteen,
-    )
-    .unwrap();
-    let occ = obj.occupancy(&meas, 10.05, 10.06).unwrap();
+    let occ = occupancy(&ball, &meas, 10.05, 10.06).unwrap();
     let far = Capsule::new(Point3::new(0.3, 0.4, 0.1), Point3::new(0.3, 0.4, 0.5), 0.06).unwrap();
     let near = Capsule::new(
         Point3::new(0.62, 0.1, 0.05),
@@ -58,9 +64,13 @@ fn bench_object(c: &mut Criterion) {
     c.bench_function("zonotope_capsule/occupancy_overlap", |b| {
         b.iter(|| black_box(occ.distance_lower_bound(black_box(&near))))
     });
+    let occ_box = occupancy(&boxed, &meas, 10.05, 10.06).unwrap();
+    c.bench_function("zonotope_capsule/box_occupancy_disjoint", |b| {
+        b.iter(|| black_box(occ_box.distance_lower_bound(black_box(&far))))
+    });
     println!(
-        "occupancy: {} centre generators; bound far = {:.6} m, near = {:.6} m",
-        occ.centres().generators().len(),
+        "occupancy: {} generators; bound far = {:.6} m, near = {:.6} m",
+        occ.zonotope().generators().len(),
         occ.distance_lower_bound(&far),
         occ.distance_lower_bound(&near)
     );

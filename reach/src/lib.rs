@@ -20,6 +20,7 @@ pub mod ieee;
 pub mod interval;
 pub mod joint_box;
 pub mod lti;
+pub mod object;
 pub mod robot;
 pub mod rounding;
 pub mod zonotope;

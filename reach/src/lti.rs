@@ -1,5 +1,6 @@
 //! Sound reachability of linear time-invariant systems `ẋ = A x + B u`, `u(t) ∈ U`, `x(0) ∈ X0`
-//! (Girard 2005; Althoff 2010, §3.2), and a dynamic-object occupancy model built on it.
+//! (Girard 2005; Althoff 2010, §3.2). (Dynamic objects, double integrators, use the closed form of
+//! this scheme in [`crate::object`].)
 //!
 //! All matrix series (`e^{Ar}`, `Γ(r) = ∫₀ʳ e^{As} ds`, the correction matrices `F`, `F_u`) are
 //! evaluated in outward-rounded interval arithmetic ([`crate::interval::Interval`]), with the Taylor remainder after `η` terms bounded
@@ -9,10 +10,8 @@
 //! See `docs/zonotopes.md` for the derivation.
 
 mod interval_matrix;
-mod object;
 
 pub use interval_matrix::IntervalMatrix;
-pub use object::{DynamicObject, ObjectMeasurement, ObjectOccupancy};
 
 pub use crate::error::ReachError;
 use crate::interval::Interval;

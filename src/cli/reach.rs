@@ -1,4 +1,4 @@
-//! `pacs reach robot` and `pacs reach human`.
+//! `pacs reach robot`, `pacs reach human` and `pacs reach object`.
 
 use super::{CliError, HumanRef, RobotRef, check_vec, parse_json, read_json};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
@@ -168,6 +168,96 @@ pub fn run_human(path: Option<&Path>) -> Result<Value, CliError> {
             .map(|(n, c)| json!({"name": n, "p1": c.p1().coords.as_slice(), "p2": c.p2().coords.as_slice(), "radius": c.radius()}))
             .collect();
         out.push(json!({"t": [t_a, t_b], "body_parts": parts}));
+    }
+    Ok(json!({"intervals": out}))
+}
+
+/// An object given by built-in name (`"ball"`) or inline spec: read from JSON by hand, so that a
+/// bad inline spec reports its own field (no "untagged enum" message).
+fn load_object(v: &Value) -> Result<pacs_models::object::ObjectModel, CliError> {
+    let spec = match v {
+        Value::String(name) => pacs_models::object::builtin_object(name).ok_or_else(|| {
+            CliError::Input(format!(
+                "object: unknown built-in object `{name}` (built-in: {})",
+                pacs_models::object::BUILTIN_OBJECTS.join(", ")
+            ))
+        })?,
+        Value::Object(_) => serde_json::from_value::<pacs_models::object::ObjectSpec>(v.clone())
+            .map_err(|e| CliError::Input(format!("object: {e}")))?,
+        other => {
+            return Err(CliError::Input(format!(
+                "object: expected a built-in name or an inline spec, found {other}"
+            )));
+        }
+    };
+    pacs_models::object::ObjectModel::new(&spec)
+        .map_err(|e| CliError::Input(format!("object: {e}")))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectMeasurementInput {
+    time: f64,
+    position: [f64; 3],
+    #[serde(default)]
+    velocity: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectInput {
+    object: Value,
+    measurement: ObjectMeasurementInput,
+    intervals: Vec<[f64; 2]>,
+}
+
+/// Built-in example input of `pacs reach object`.
+const OBJECT_EXAMPLE: &str = include_str!("../../examples/object.json");
+
+fn zonotope_json(z: &pacs_reach::zonotope::Zonotope3, radius: f64) -> Value {
+    json!({
+        "centre": z.center(),
+        "generators": z.generators(),
+        "error_box": z.error_box(),
+        "radius": radius,
+    })
+}
+
+/// Run `pacs reach object [--input F]`.
+pub fn run_object(path: Option<&Path>) -> Result<Value, CliError> {
+    let input: ObjectInput = input_or_example(path, OBJECT_EXAMPLE)?;
+    let model = load_object(&input.object)?;
+    let m = &input.measurement;
+    check_vec("measurement.time", &[m.time], 1)?;
+    check_vec("measurement.position", &m.position, 3)?;
+    if let Some(v) = &m.velocity {
+        check_vec("measurement.velocity", v, 3)?;
+    }
+    let meas = pacs_reach::object::ObjectMeasurement {
+        time: m.time,
+        position: m.position,
+        velocity: m.velocity,
+    };
+    let mut out = Vec::with_capacity(input.intervals.len());
+    for (i, [t_a, t_b]) in input.intervals.iter().enumerate() {
+        let field = format!("intervals[{i}] = [{t_a:?}, {t_b:?}]");
+        let occ = pacs_reach::object::occupancy(&model, &meas, *t_a, *t_b)
+            .map_err(|e| CliError::Input(format!("{field}: {e}")))?;
+        let cap = occ.bounding_capsule().ok_or_else(|| {
+            CliError::Input(format!(
+                "{field}: the occupancy overflows: the input is too large to bound in floating point"
+            ))
+        })?;
+        finite_capsule(&field, &cap)?;
+        let mut entry = json!({
+            "t": [t_a, t_b],
+            "zonotope": zonotope_json(occ.zonotope(), occ.radius()),
+            "bounding_capsule": capsule_json(&cap),
+        });
+        if let Some((z, r)) = occ.speed_set() {
+            entry["speed_set"] = zonotope_json(z, r);
+        }
+        out.push(entry);
     }
     Ok(json!({"intervals": out}))
 }

@@ -1,0 +1,291 @@
+//! Occupancy of dynamic objects (claim C4′): where an object modelled by
+//! [`pacs_models::object::ObjectModel`] can be over a time interval, as a zonotope dilated by a
+//! radius. Fixed-size and allocation-free (one object, one interval: well under a microsecond).
+//!
+//! # The set
+//! Let `τ = t − (t_m − δ)` be the time since the measured state. For the double integrator
+//! `p̈ = u ∈ U = c_u ⊕ G_u ⊕ B(a)` with `p₀ ∈ B(p_m, e_p)`, `v₀ ∈ B(v_m, e_v)`:
+//!
+//! `p(τ) = p₀ + τ v₀ + ∫₀^τ (τ − s) u(s) ds`, and since the weights `τ − s ≥ 0` integrate to
+//! `τ²/2` and `U` is convex, the integral lies in `(τ²/2) U`. Hence
+//!
+//! `p(τ) ∈ p_m + f(τ) ⊕ (τ²/2) G_u ⊕ B(e_p + τ e_v + a τ²/2)`, `f(τ) = τ v_m + (τ²/2) c_u`.
+//!
+//! Over `τ ∈ [τ_a, τ_b]` (Girard's time-interval enclosure, evaluated exactly for this nilpotent
+//! system): with `τ = τ_m + s h`, `s ∈ [−1, 1]`, and `s² = (1 + t)/2`, `t ∈ [−1, 1]`,
+//!
+//! `f(τ) = τ_m v_m + (τ_m²/2 + h²/4) c_u + s·h (v_m + τ_m c_u) + t·(h²/4) c_u`,
+//!
+//! a zonotope with two generators that contains the curve. The terms `(τ²/2) G_u` and the ball
+//! grow with `τ` and `G_u` is centred, so their values at `τ_b` contain all earlier ones. The
+//! object's shape `S ⊕ B(r)` is added. With a speed bound the object is also within
+//! `B(p_m, e_p + v_max τ_b) ⊕ S ⊕ B(r)`; a point must lie in both sets.
+//!
+//! Every coefficient is computed in outward-rounded interval arithmetic; a generator is the
+//! midpoint of its interval and the radii go into the zonotope's error box, so the floats
+//! represent a superset of the real set.
+
+use crate::error::ReachError;
+use crate::interval::Interval;
+use crate::rounding::{add_down, add_up, mul_up, norm3_up, sub_down, sub_up};
+use crate::zonotope::Zonotope3;
+use pacs_models::object::{MAX_ACC_GENERATORS, MAX_SHAPE_GENERATORS, ObjectModel};
+use pacs_models::shape::Capsule;
+
+/// Generators of an occupancy zonotope: the two of the time interval, the acceleration set's and
+/// the shape's.
+pub const MAX_OCCUPANCY_GENERATORS: usize = 2 + MAX_ACC_GENERATORS + MAX_SHAPE_GENERATORS;
+
+/// A measurement of an object stamped `time` (s): the true state at `time − delay` is within the
+/// model's errors of `position` (m) and, if given, `velocity` (m/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectMeasurement {
+    /// Time stamp `t_m` (s).
+    pub time: f64,
+    /// Measured position of the reference point (m).
+    pub position: [f64; 3],
+    /// Measured velocity (m/s); `None`: unknown within the model's speed bound.
+    pub velocity: Option<[f64; 3]>,
+}
+
+/// Where an object can be over `[t_a, t_b]`: every point of the object lies in
+/// `reach ⊕ B(radius)` and, with a speed bound, also in `speed ⊕ B(speed_radius)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectOccupancy {
+    reach: Zonotope3,
+    radius: f64,
+    speed: Option<(Zonotope3, f64)>,
+    t_a: f64,
+    t_b: f64,
+}
+
+/// `x` as a point interval.
+#[inline(always)]
+fn pt(x: f64) -> Interval {
+    Interval::point(x)
+}
+
+/// Split an interval into a float (its midpoint) and a radius bound that covers the rest.
+#[inline(always)]
+fn mid_rad(x: Interval) -> (f64, f64) {
+    (x.mid(), x.rad_up())
+}
+
+/// `(τ_m, h)`, floats with `[τ_m − h, τ_m + h] ⊇ [tau_a, tau_b]` (`h` rounded up).
+#[inline]
+pub(crate) fn time_split(tau_a: f64, tau_b: f64) -> (f64, f64) {
+    let tau_m = 0.5 * (tau_a + tau_b);
+    (
+        tau_m,
+        sub_up(tau_b, tau_m).max(sub_up(tau_m, tau_a)).max(0.0),
+    )
+}
+
+/// One axis of the time-interval enclosure (module docs): every value `p + τ v + (τ²/2) c_u` with
+/// `τ ∈ [τ_m − h, τ_m + h]` equals `centre + s·g_s + t·g_t + δ` for some `|s|, |t| ≤ 1` and
+/// `|δ| ≤ err`. Returns `(centre, g_s, g_t, err)`.
+///
+/// # Soundness
+/// Exact algebra (module docs) evaluated in outward-rounded intervals, each coefficient's
+/// radius added to `err`. Harness `j2_object_curve_encloses` (beside this module).
+#[inline]
+pub(crate) fn curve_enclosure(
+    p: f64,
+    v: f64,
+    c_u: f64,
+    tau_m: f64,
+    h: f64,
+) -> (f64, f64, f64, f64) {
+    let (tm, hi, v, cu) = (pt(tau_m), pt(h), pt(v), pt(c_u));
+    let quarter_h2 = hi * hi * pt(0.25);
+    let (c, rc) = mid_rad(pt(p) + tm * v + (tm * tm * pt(0.5) + quarter_h2) * cu);
+    let (g_s, rs) = mid_rad(hi * (v + tm * cu));
+    let (g_t, rt) = mid_rad(quarter_h2 * cu);
+    (c, g_s, g_t, add_up(add_up(rc, rs), rt))
+}
+
+/// The occupancy of `model` over `[t_a, t_b]` (s) after `meas`.
+///
+/// Errors: non-finite inputs, `t_a > t_b`, `t_a` before the measured state (`t_m − delay`), a
+/// missing velocity without a speed bound.
+///
+/// # Soundness
+/// Claim C4′: for every motion the model admits (module docs: double integrator with the
+/// acceleration set, the speed bound if any, initial state within the measurement errors at
+/// `t_m − delay`), every point of the object at every `t ∈ [t_a, t_b]` lies in both sets of the
+/// result. Property test `reach/tests/object.rs` (10⁴ sampled motions with bang-bang inputs
+/// from the edge of the measurement errors); harness `j2_object_curve_encloses` (the
+/// time-interval enclosure, beside this module); mutant `x17` (the enclosure's `s` generator
+/// dropped) caught.
+pub fn occupancy(
+    model: &ObjectModel,
+    meas: &ObjectMeasurement,
+    t_a: f64,
+    t_b: f64,
+) -> Result<ObjectOccupancy, ReachError> {
+    let finite_meas = meas.time.is_finite()
+        && meas.position.iter().all(|x| x.is_finite())
+        && meas
+            .velocity
+            .is_none_or(|v| v.iter().all(|x| x.is_finite()));
+    if !finite_meas {
+        return Err(ReachError::Invalid {
+            what: "object measurement",
+            reason: "time, position and velocity must be finite",
+        });
+    }
+    if !(t_a.is_finite() && t_b.is_finite() && t_a <= t_b) {
+        return Err(ReachError::Invalid {
+            what: "time interval",
+            reason: "need finite t_a <= t_b",
+        });
+    }
+    // Time since the measured state, enclosed outward: τ ∈ [tau_a, tau_b].
+    // (The precondition `t_a ≥ t_m − δ` is evaluated in floating point; the enclosure then
+    // starts at τ = 0, the measured state, at the earliest.)
+    if t_a < meas.time - model.delay() {
+        return Err(ReachError::Invalid {
+            what: "t_a",
+            reason: "before the measured state (t_m - delay)",
+        });
+    }
+    let tau_a = add_down(sub_down(t_a, meas.time), model.delay()).max(0.0);
+    let tau_b = add_up(sub_up(t_b, meas.time), model.delay());
+    let (v_m, e_v) = match (meas.velocity, model.max_speed()) {
+        (Some(v), _) => (v, model.vel_error()),
+        (None, Some(v_max)) => ([0.0; 3], v_max),
+        (None, None) => {
+            return Err(ReachError::Invalid {
+                what: "object measurement",
+                reason: "no velocity, and the model has no speed bound",
+            });
+        }
+    };
+    let (tau_m, h) = time_split(tau_a, tau_b);
+    let half_tb2 = pt(tau_b) * pt(tau_b) * pt(0.5);
+    let c_u = model.acc_bias();
+    let mut gens = [[0.0; 3]; MAX_OCCUPANCY_GENERATORS];
+    let mut err = [0.0f64; 3];
+    let mut centre = [0.0; 3];
+    for i in 0..3 {
+        let (c, g1, g2, e) = curve_enclosure(meas.position[i], v_m[i], c_u[i], tau_m, h);
+        centre[i] = c;
+        gens[0][i] = g1;
+        gens[1][i] = g2;
+        err[i] = e;
+    }
+    let mut n = 2;
+    for g in model.acc_generators() {
+        for i in 0..3 {
+            let (x, r) = mid_rad(half_tb2 * pt(g[i]));
+            gens[n][i] = x;
+            err[i] = add_up(err[i], r);
+        }
+        n += 1;
+    }
+    for g in model.shape_generators() {
+        gens[n] = *g;
+        n += 1;
+    }
+    // e_p + τ_b e_v + a τ_b²/2 + r.
+    let radius = add_up(
+        add_up(model.pos_error(), mul_up(tau_b, e_v)),
+        add_up(
+            mul_up(mul_up(mul_up(tau_b, tau_b), 0.5), model.max_acc()),
+            model.shape_radius(),
+        ),
+    );
+    let reach = Zonotope3::new(centre, &gens[..n], err)?;
+    let speed = match model.max_speed() {
+        Some(v_max) => {
+            let r = add_up(
+                add_up(model.pos_error(), mul_up(v_max, tau_b)),
+                model.shape_radius(),
+            );
+            Some((
+                Zonotope3::new(meas.position, model.shape_generators(), [0.0; 3])?,
+                r,
+            ))
+        }
+        None => None,
+    };
+    if !(radius.is_finite() && speed.as_ref().is_none_or(|(_, r)| r.is_finite())) {
+        return Err(ReachError::Input(format!(
+            "object occupancy over [{t_a}, {t_b}] s overflows"
+        )));
+    }
+    Ok(ObjectOccupancy {
+        reach,
+        radius,
+        speed,
+        t_a,
+        t_b,
+    })
+}
+
+impl ObjectOccupancy {
+    /// The zonotope of the reachable set (m); the object lies in it dilated by [`Self::radius`].
+    pub fn zonotope(&self) -> &Zonotope3 {
+        &self.reach
+    }
+    /// Dilation radius of [`Self::zonotope`] (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+    /// The speed-bound set `(zonotope, radius)`, if the model has a speed bound (m).
+    pub fn speed_set(&self) -> Option<(&Zonotope3, f64)> {
+        self.speed.as_ref().map(|(z, r)| (z, *r))
+    }
+    /// Time interval `[t_a, t_b]` (s).
+    pub fn interval(&self) -> (f64, f64) {
+        (self.t_a, self.t_b)
+    }
+
+    /// Rigorous lower bound `L`, `0 ≤ L ≤` distance between the occupancy and `capsule` (m);
+    /// `L > 0` proves them disjoint.
+    ///
+    /// # Soundness
+    /// Each of the two sets contains the occupancy, so the larger of their rigorous distance
+    /// bounds (`Zonotope3::distance_lower_bound`, claim C2, harness `b4`) is one.
+    pub fn distance_lower_bound(&self, capsule: &Capsule) -> f64 {
+        let mut best = self.reach.distance_lower_bound(self.radius, capsule);
+        if let Some((z, r)) = &self.speed {
+            best = best.max(z.distance_lower_bound(*r, capsule));
+        }
+        best
+    }
+
+    /// A capsule containing the occupancy (m): the segment `c ± g₁` (the motion's direction over
+    /// the interval) with radius `Σ_{k≥2} ‖g_k‖ + ‖e‖ + radius`, rounded up, plus the rounding of
+    /// the segment's ends. For broad phases and display; `None` if it overflows.
+    pub fn bounding_capsule(&self) -> Option<Capsule> {
+        let z = &self.reach;
+        let c = z.center();
+        let gens = z.generators();
+        let axis = gens.first().copied().unwrap_or([0.0; 3]);
+        let e = z.error_box();
+        let mut r = add_up(norm3_up(e[0], e[1], e[2]), self.radius);
+        for g in gens.iter().skip(1) {
+            r = add_up(r, norm3_up(g[0], g[1], g[2]));
+        }
+        let mut p1 = [0.0; 3];
+        let mut p2 = [0.0; 3];
+        let mut big = 0.0f64;
+        for i in 0..3 {
+            p1[i] = c[i] - axis[i];
+            p2[i] = c[i] + axis[i];
+            big = big.max(p1[i].abs()).max(p2[i].abs());
+        }
+        // Each rounded end coordinate is within half an ulp (≤ ε·big/2) of the exact one: the
+        // ends move by at most √3·ε·big/2 < 2ε·big (plus the smallest subnormal step).
+        let r = add_up(
+            r,
+            add_up(mul_up(big, 2.0 * f64::EPSILON), f64::from_bits(1)),
+        );
+        Capsule::new(p1.into(), p2.into(), r).ok()
+    }
+}
+
+/// The Kani proof of the time-interval enclosure, also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+mod proofs;
