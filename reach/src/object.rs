@@ -27,7 +27,7 @@
 
 use crate::error::ReachError;
 use crate::interval::Interval;
-use crate::rounding::{add_down, add_up, mul_up, norm3_up, sub_down, sub_up};
+use crate::rounding::{add_down, add_up, mul_down, mul_up, norm3_up, sub_down, sub_up};
 use crate::zonotope::Zonotope3;
 use pacs_models::object::{MAX_ACC_GENERATORS, MAX_SHAPE_GENERATORS, ObjectModel};
 use pacs_models::shape::Capsule;
@@ -65,6 +65,13 @@ fn pt(x: f64) -> Interval {
     Interval::point(x)
 }
 
+/// `[a·b]` rounded outward, without the exactness test of point-interval products (the hot path
+/// only needs an enclosure).
+#[inline(always)]
+fn product(a: f64, b: f64) -> Interval {
+    Interval::new(mul_down(a, b), mul_up(a, b)).unwrap_or(Interval::ENTIRE)
+}
+
 /// Split an interval into a float (its midpoint) and a radius bound that covers the rest.
 #[inline(always)]
 fn mid_rad(x: Interval) -> (f64, f64) {
@@ -96,11 +103,11 @@ pub(crate) fn curve_enclosure(
     tau_m: f64,
     h: f64,
 ) -> (f64, f64, f64, f64) {
-    let (tm, hi, v, cu) = (pt(tau_m), pt(h), pt(v), pt(c_u));
-    let quarter_h2 = hi * hi * pt(0.25);
-    let (c, rc) = mid_rad(pt(p) + tm * v + (tm * tm * pt(0.5) + quarter_h2) * cu);
-    let (g_s, rs) = mid_rad(hi * (v + tm * cu));
-    let (g_t, rt) = mid_rad(quarter_h2 * cu);
+    let quarter_h2 = product(h, h).scale(0.25);
+    let k = product(tau_m, tau_m).scale(0.5) + quarter_h2;
+    let (c, rc) = mid_rad(pt(p) + product(tau_m, v) + k * pt(c_u));
+    let (g_s, rs) = mid_rad((pt(v) + product(tau_m, c_u)).scale(h));
+    let (g_t, rt) = mid_rad(quarter_h2 * pt(c_u));
     (c, g_s, g_t, add_up(add_up(rc, rs), rt))
 }
 
@@ -162,7 +169,7 @@ pub fn occupancy(
         }
     };
     let (tau_m, h) = time_split(tau_a, tau_b);
-    let half_tb2 = pt(tau_b) * pt(tau_b) * pt(0.5);
+    let half_tb2 = product(tau_b, tau_b).scale(0.5);
     let c_u = model.acc_bias();
     let mut gens = [[0.0; 3]; MAX_OCCUPANCY_GENERATORS];
     let mut err = [0.0f64; 3];
