@@ -122,7 +122,7 @@ pub fn threshold(c: Constraint, constrained: bool) -> f64 {
 
 /// One (body part, link) pair in violation on the interval.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hit {
+pub struct PairViolation {
     /// Body part index (human model order).
     pub part: usize,
     /// Robot link index (robot model order).

@@ -10,4 +10,4 @@
 
 pub mod iso15066;
 
-pub use iso15066::{ConstraintKind, ContactRule, EnvShape, Hit, Outcome, RuleError};
+pub use iso15066::{ConstraintKind, ContactRule, EnvShape, Outcome, PairViolation, RuleError};

@@ -2,7 +2,7 @@
 //! broad phase before it and the pinch classification of PFL contacts.
 
 use super::broad_phase::Aabb;
-use super::{ConstraintKind, ContactRule, Hit, Outcome, frames_can_pinch, threshold};
+use super::{ConstraintKind, ContactRule, Outcome, PairViolation, frames_can_pinch, threshold};
 use pacs_models::{Capsule, Constraint};
 use pacs_reach::JointBox;
 use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
@@ -40,7 +40,7 @@ impl ContactRule {
         human_caps: &[Capsule],
         mut energy: impl FnMut() -> f64,
         separation: bool,
-        mut sink: impl FnMut(&Hit) -> ControlFlow<()>,
+        mut sink: impl FnMut(&PairViolation) -> ControlFlow<()>,
     ) -> Outcome {
         let mut out = Outcome {
             contact: false,
@@ -134,7 +134,7 @@ impl ContactRule {
                     continue;
                 }
                 last_link = link;
-                let hit = Hit {
+                let hit = PairViolation {
                     part: p,
                     link,
                     kind,
