@@ -268,6 +268,32 @@ pub fn default_ball() -> ObjectSpec {
     }
 }
 
+/// What contact with a dynamic object the task allows (JSON: `"no_contact"`, `"ssm"` or
+/// `{"pfl": {"threshold": 2.0}}`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ObjectContact {
+    /// No contact at all, moving or not (an inanimate object that must not be touched).
+    NoContact,
+    /// Contact only while the robot is at rest (every joint speed within the rest speed).
+    Ssm,
+    /// Contact only while the whole robot's kinetic energy is at most `threshold` (J).
+    Pfl {
+        /// Energy threshold (J, ≥ 0).
+        threshold: f64,
+    },
+}
+
+impl ObjectContact {
+    /// Validate: a PFL threshold must be finite and ≥ 0.
+    pub fn validated(self) -> Result<Self, ModelError> {
+        if let ObjectContact::Pfl { threshold } = self {
+            non_negative(|| "contact.pfl.threshold".into(), threshold)?;
+        }
+        Ok(self)
+    }
+}
+
 /// Names of the built-in objects.
 pub const BUILTIN_OBJECTS: &[&str] = &["ball"];
 

@@ -5,9 +5,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
+use pacs_reach::object::ObjectMeasurement;
 use std::time::Instant;
 
 /// Timing statistics of a run (seconds per step).
@@ -161,4 +163,75 @@ pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats 
     }
     let name = format!("{spec} ({mode:?})");
     stats(&name, times, verified, chunk_times)
+}
+
+/// Position (m) and velocity (m/s) of a ball rolling back and forth on the table in front of the
+/// robot (0.6 m ahead, y = ±0.3 m, 0.4 m/s peak) at time `t` (s).
+pub fn rolling_ball(t: f64) -> ([f64; 3], [f64; 3]) {
+    let w = 4.0 / 3.0;
+    let y = 0.3 * (w * t).sin();
+    ([0.6, y, 0.04], [0.0, 0.3 * w * (w * t).cos(), 0.0])
+}
+
+/// [`shield_scenario`] (SSM, `sorting`) with two dynamic objects besides the walking human: the
+/// built-in ball rolling on the table in front of the robot (no contact allowed) and a second
+/// ball resting on the table to the side (SSM), both measured every step.
+pub fn shield_objects_scenario(steps: usize) -> StepStats {
+    let robot = fr3::fr3();
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
+    let cs = ConstraintSpec::builtin("sorting").expect("preset");
+    let cfg = ShieldConfig::default();
+    let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
+    let ball = ObjectModel::new(&default_ball()).expect("valid ball");
+    let rolling = sh
+        .add_object(ball, ObjectContact::NoContact)
+        .expect("valid object");
+    let resting = sh
+        .add_object(ball, ObjectContact::Ssm)
+        .expect("valid object");
+    sh.start(0.0, &fr3::Q_READY).expect("start");
+    let mut times = Vec::with_capacity(steps);
+    let mut chunk_times = Vec::new();
+    let mut verified = 0;
+    let mut sign = 1.0;
+    for k in 0..steps {
+        let t = k as f64 * cfg.safety_step;
+        if k % 200 == 0 {
+            let c = back_and_forth(sign);
+            sign = -sign;
+            let t0 = Instant::now();
+            let _ = sh.set_chunk(&c);
+            chunk_times.push(t0.elapsed().as_secs_f64());
+        }
+        let m =
+            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
+        let (p, v) = rolling_ball(t);
+        let t0 = Instant::now();
+        sh.measure_object(
+            rolling,
+            &ObjectMeasurement {
+                time: t,
+                position: p,
+                velocity: Some(v),
+            },
+        )
+        .expect("valid measurement");
+        sh.measure_object(
+            resting,
+            &ObjectMeasurement {
+                time: t,
+                position: [0.3, 0.6, 0.04],
+                velocity: Some([0.0; 3]),
+            },
+        )
+        .expect("valid measurement");
+        let cmd = sh.step(t, Some(&m));
+        times.push(t0.elapsed().as_secs_f64());
+        if cmd.is_ok_and(|c| c.diag.verified) {
+            verified += 1;
+        }
+    }
+    stats("sorting + 2 objects (Pacs)", times, verified, chunk_times)
 }

@@ -11,7 +11,9 @@
 //! possible while the robot may move) and PFL (wherever contact is possible, a sound upper bound
 //! of the whole robot's kinetic energy over the interval's position and velocity boxes, widened
 //! by the controller's velocity tracking error, is at most the body part's threshold — the
-//! constrained one if the part may be pinched).
+//! constrained one if the part may be pinched). Dynamic objects ([`Shield::add_object`]) are
+//! enclosed over the same intervals ([`pacs_reach::object`]) and checked with the same rule's
+//! object form ([`ObjectRule`]: no contact, SSM or PFL per object).
 //!
 //! Verified → execute the intended step and remember this failsafe. Not verified → continue the
 //! last verified failsafe. By induction the robot is always on a verified monitored trajectory;
@@ -29,14 +31,16 @@ mod verification;
 pub use decision::{Candidate, Decision, VerifiedFailsafe, decide};
 pub use intervals::OccupancyIntervals;
 
+use pacs_models::object::{ObjectContact, ObjectModel};
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::chunk::{Chunk, OutOfLimits};
 use pacs_motion::intended::{PlanMethod, Planner, PlannerConfig};
 use pacs_motion::scaling::{PathState, SpeedProfile};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_verify::iso15066::ContactRule;
+use pacs_verify::iso15066::{ContactRule, ObjectRule};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -129,7 +133,7 @@ pub enum ShieldError {
 pub enum Binding {
     /// Nothing bound: the intended step was verified.
     None,
-    /// No valid human measurement yet.
+    /// No valid human (or object) measurement yet.
     NoMeasurement,
     /// No admissible path-speed profile (limits leave no margin).
     NoProfile,
@@ -140,6 +144,15 @@ pub enum Binding {
         /// Body part index.
         body_part: usize,
         /// Occupancy interval index.
+        interval: usize,
+    },
+    /// A dynamic object's contact constraint may be violated.
+    Object {
+        /// Object index (order of [`Shield::add_object`]).
+        object: usize,
+        /// Robot link index.
+        link: usize,
+        /// Occupancy interval index (0 also for the coarse whole-trajectory check).
         interval: usize,
     },
     /// CBF baseline: barrier constraints were active this step.
@@ -219,11 +232,24 @@ pub struct Shield {
     /// Latest measurement (buffer allocated at construction; valid when `has_meas`).
     meas: Option<HumanMeasurement>,
     has_meas: bool,
+    /// Dynamic objects with their constraints and latest measurements.
+    objects: Vec<ObjectSlot>,
+    object_rule: ObjectRule,
     // Scratch buffers (allocated once).
+    /// Per object, its occupancy over the interval being checked.
+    object_occ: Vec<Option<ObjectOccupancy>>,
     robot_caps: Vec<Capsule>,
     human_caps: Vec<Capsule>,
     energies: Vec<f64>,
     scratch: ReachScratch,
+}
+
+/// A dynamic object in the shield's scene.
+#[derive(Debug, Clone)]
+struct ObjectSlot {
+    model: ObjectModel,
+    contact: ObjectContact,
+    meas: Option<ObjectMeasurement>,
 }
 
 impl std::fmt::Debug for Shield {
@@ -312,6 +338,8 @@ impl Shield {
                 Some((HumanReach::new(h, c.human_model), rule))
             }
         };
+        let object_rule = ObjectRule::new(&robot, &reach, c.rest_speed)
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
         let parts = human
             .as_ref()
             .map_or(0, |(h, _)| h.model().body_parts().len());
@@ -342,7 +370,59 @@ impl Shield {
             failsafe: None,
             meas: meas_buffer,
             has_meas: false,
+            objects: Vec::new(),
+            object_rule,
+            object_occ: Vec::new(),
         })
+    }
+
+    /// Add a dynamic object with its contact constraint; returns its index (for
+    /// [`Self::measure_object`] and [`Binding::Object`]). Until the object has a measurement,
+    /// no intended step verifies (the robot follows its verified failsafe). Call before the
+    /// control loop: this allocates.
+    pub fn add_object(
+        &mut self,
+        model: ObjectModel,
+        contact: ObjectContact,
+    ) -> Result<usize, ShieldError> {
+        let contact = contact
+            .validated()
+            .map_err(|e| ShieldError::Invalid(format!("object {}: {e}", self.objects.len())))?;
+        self.objects.push(ObjectSlot {
+            model,
+            contact,
+            meas: None,
+        });
+        self.object_occ.push(None);
+        Ok(self.objects.len() - 1)
+    }
+
+    /// Number of dynamic objects.
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+
+    /// Record a measurement of object `id`: it replaces the latest one if it is newer (older or
+    /// equal-time ones are ignored). Errors: unknown `id`, non-finite values.
+    pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        let finite = m.time.is_finite()
+            && m.position.iter().all(|x| x.is_finite())
+            && m.velocity.is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        if !finite {
+            return Err(ShieldError::Invalid(format!(
+                "object {id}: measurement with a non-finite value"
+            )));
+        }
+        let Some(slot) = self.objects.get_mut(id) else {
+            return Err(ShieldError::Invalid(format!(
+                "object {id}: no such object ({} added)",
+                self.objects.len()
+            )));
+        };
+        if slot.meas.is_none_or(|cur| cur.time < m.time) {
+            slot.meas = Some(*m);
+        }
+        Ok(())
     }
 
     /// The robot model.

@@ -1,19 +1,30 @@
 //! The shield step performs no heap allocation (counting global allocator).
 
+use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
+use pacs_reach::object::ObjectMeasurement;
 use pacs_shield::shield::{Shield, ShieldConfig};
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
 static COUNT: AtomicUsize = AtomicUsize::new(0);
-static ARMED: AtomicBool = AtomicBool::new(false);
+thread_local! {
+    /// Armed on the stepping thread only: libtest's own threads may allocate meanwhile (a global
+    /// flag made the test flaky).
+    static ARMED: Cell<bool> = const { Cell::new(false) };
+}
+
+fn armed() -> bool {
+    ARMED.try_with(Cell::get).unwrap_or(false)
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        if ARMED.load(Ordering::SeqCst) {
+        if armed() {
             COUNT.fetch_add(1, Ordering::SeqCst);
         }
         unsafe { System.alloc(l) }
@@ -22,7 +33,7 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(p, l) }
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        if ARMED.load(Ordering::SeqCst) {
+        if armed() {
             COUNT.fetch_add(1, Ordering::SeqCst);
         }
         unsafe { System.realloc(p, l, n) }
@@ -34,7 +45,7 @@ static A: Counting = Counting;
 
 #[test]
 fn step_allocates_nothing() {
-    for spec in ["sorting", "handover"] {
+    for (spec, objects) in [("sorting", false), ("handover", false), ("sorting", true)] {
         let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
         let cs = ConstraintSpec::builtin(spec).unwrap();
         let mut sh = Shield::new(
@@ -44,6 +55,11 @@ fn step_allocates_nothing() {
             ShieldConfig::default(),
         )
         .unwrap();
+        if objects {
+            let ball = ObjectModel::new(&default_ball()).unwrap();
+            sh.add_object(ball, ObjectContact::NoContact).unwrap();
+            sh.add_object(ball, ObjectContact::Ssm).unwrap();
+        }
         sh.start(0.0, &fr3::Q_READY).unwrap();
         let chunk = Chunk {
             kind: ActionKind::Delta,
@@ -74,21 +90,37 @@ fn step_allocates_nothing() {
             if k % 300 == 0 {
                 sh.set_chunk(&chunk).ok(); // planning may allocate: not part of the step
             }
-            ARMED.store(true, Ordering::SeqCst);
+            ARMED.with(|a| a.set(true));
+            if objects {
+                let t = k as f64 * 0.001;
+                // One ball rolling through the arm's reach, one resting beside it.
+                let rolling = ObjectMeasurement {
+                    time: t,
+                    position: [0.5, 0.6 - 0.4 * t, 0.3],
+                    velocity: Some([0.0, -0.4, 0.0]),
+                };
+                let resting = ObjectMeasurement {
+                    time: t,
+                    position: [0.3, 0.6, 0.04],
+                    velocity: None,
+                };
+                sh.measure_object(0, &rolling).unwrap();
+                sh.measure_object(1, &resting).unwrap();
+            }
             let cmd = sh.step(k as f64 * 0.001, Some(m)).expect("started");
-            ARMED.store(false, Ordering::SeqCst);
+            ARMED.with(|a| a.set(false));
             verified += cmd.diag.verified as usize;
             failsafe += cmd.diag.on_failsafe as usize;
         }
         assert_eq!(
             COUNT.load(Ordering::SeqCst),
             0,
-            "{spec}: the step allocated"
+            "{spec} (objects: {objects}): the step allocated"
         );
         // The scenario exercised both branches.
         assert!(
             verified > 0 && failsafe > 0,
-            "{spec}: verified {verified}, failsafe {failsafe}"
+            "{spec} (objects: {objects}): verified {verified}, failsafe {failsafe}"
         );
     }
 }

@@ -1,7 +1,7 @@
 //! `pacs bench shield`: step-time statistics of the shield and the CBF baseline on a fixed scenario.
 
 use super::CliError;
-use pacs_shield::bench::{StepStats, cbf_scenario, shield_scenario};
+use pacs_shield::bench::{StepStats, cbf_scenario, shield_objects_scenario, shield_scenario};
 use pacs_shield::shield::FilterMode;
 use serde_json::{Value, json};
 
@@ -26,13 +26,17 @@ pub fn shield(steps: usize, progress: bool) -> Result<Value, CliError> {
         }
         runs.push(us(&shield_scenario(spec, FilterMode::Pacs, steps)));
     }
+    if progress {
+        eprintln!("pacs bench: PACS-SSM with two objects: {steps} steps ...");
+    }
+    runs.push(us(&shield_objects_scenario(steps)));
     let cbf_steps = steps.min(20_000);
     if progress {
         eprintln!("pacs bench: CBF: {cbf_steps} steps ...");
     }
     runs.push(us(&cbf_scenario(cbf_steps)));
     Ok(json!({
-        "scenario": "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step",
+        "scenario": "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step; the objects run adds a ball rolling on the table 0.6 m ahead (no contact) and one resting to the side (SSM)",
         "runs": runs,
     }))
 }

@@ -45,12 +45,15 @@
 mod broad_phase;
 mod check;
 mod environment;
+mod object;
 
 pub use broad_phase::workspace_ball;
 pub use environment::EnvShape;
+pub use object::{ObjectOutcome, ObjectRule, ObjectViolation};
 
 use broad_phase::Aabb;
 use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};
+use pacs_reach::JointBox;
 use pacs_reach::robot::RobotReach;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -118,6 +121,16 @@ pub fn threshold(c: Constraint, constrained: bool) -> f64 {
             }
         }
     }
+}
+
+/// The robot is provably at rest on the interval: every joint's velocity box lies in
+/// `[−rest_speed, rest_speed]` (rad/s). The one rest test of SSM, for body parts and objects.
+#[inline]
+pub fn at_rest(dq: &JointBox, rest_speed: f64) -> bool {
+    (0..dq.dof()).all(|j| {
+        let (lo, hi) = dq.bounds(j);
+        lo >= -rest_speed && hi <= rest_speed
+    })
 }
 
 /// One (body part, link) pair in violation on the interval.

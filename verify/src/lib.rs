@@ -10,4 +10,7 @@
 
 pub mod iso15066;
 
-pub use iso15066::{ConstraintKind, ContactRule, EnvShape, Outcome, PairViolation, RuleError};
+pub use iso15066::{
+    ConstraintKind, ContactRule, EnvShape, ObjectOutcome, ObjectRule, ObjectViolation, Outcome,
+    PairViolation, RuleError,
+};

@@ -1,5 +1,5 @@
 //! Verification of a monitored trajectory: per occupancy interval, joint boxes from the path
-//! ranges, robot and human occupancies, and the ISO/TS 15066 rule.
+//! ranges, robot, human and object occupancies, and the ISO/TS 15066 rule.
 
 use super::{Binding, Diagnostics, FilterMode, OccupancyIntervals, Shield};
 use pacs_models::MAX_DOF;
@@ -10,7 +10,8 @@ use pacs_verify::iso15066::ConstraintKind;
 use std::ops::ControlFlow;
 
 impl Shield {
-    /// Verify the monitored trajectory (go for α_s from t, then brake) against the human.
+    /// Verify the monitored trajectory (go for α_s from t, then brake) against the human and the
+    /// objects.
     pub(super) fn verify(
         &mut self,
         slot: usize,
@@ -21,25 +22,34 @@ impl Shield {
     ) -> bool {
         let alpha = self.config.safety_step;
         let stop = alpha + brake.settle_time();
-        if self.human.is_none() {
+        if self.human.is_none() && self.objects.is_empty() {
             return true;
         }
-        if !self.has_meas {
+        if (self.human.is_some() && !self.has_meas) || self.objects.iter().any(|o| o.meas.is_none())
+        {
             diag.binding = Binding::NoMeasurement;
             return false;
         }
-        let Some(meas) = self.meas.take() else {
-            diag.binding = Binding::NoMeasurement;
-            return false;
+        // (Taken out for the borrow of `self` below, put back before returning.)
+        let meas = if self.human.is_some() {
+            match self.meas.take() {
+                Some(m) => Some(m),
+                None => {
+                    diag.binding = Binding::NoMeasurement;
+                    return false;
+                }
+            }
+        } else {
+            None
         };
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
         // when the human is far; otherwise the fine intervals below decide.
         if self.config.mode != FilterMode::Off && stop > alpha {
             let mut coarse = *diag;
-            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &meas, &mut coarse) {
+            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, meas.as_ref(), &mut coarse) {
                 *diag = coarse;
-                self.meas = Some(meas);
+                self.meas = meas;
                 return true;
             }
         }
@@ -51,14 +61,14 @@ impl Shield {
             self.config.max_intervals,
         );
         for (k, ta, tb) in intervals {
-            if !self.check_interval(slot, go, brake, t, ta, tb, k, &meas, diag) {
+            if !self.check_interval(slot, go, brake, t, ta, tb, k, meas.as_ref(), diag) {
                 ok = false;
                 if self.config.mode != FilterMode::Off {
                     break;
                 }
             }
         }
-        self.meas = Some(meas);
+        self.meas = meas;
         ok
     }
 
@@ -99,7 +109,7 @@ impl Shield {
         ta: f64,
         tb: f64,
         k: usize,
-        meas: &HumanMeasurement,
+        meas: Option<&HumanMeasurement>,
         diag: &mut Diagnostics,
     ) -> bool {
         let alpha = self.config.safety_step;
@@ -135,12 +145,12 @@ impl Shield {
             human_caps,
             energies,
             human,
+            objects,
+            object_rule,
+            object_occ,
             config,
             ..
         } = self;
-        let Some((hr, rule)) = human.as_mut() else {
-            return true;
-        };
         // Non-finite path ranges never verify.
         let (Ok(q_box), Ok(v_box)) = (
             JointBox::new(&q_lo[..n], &q_hi[..n]),
@@ -148,15 +158,40 @@ impl Shield {
         ) else {
             return false;
         };
-        if hr.occupancy_into(meas, t + ta, t + tb, human_caps).is_err() {
-            diag.binding = Binding::NoMeasurement;
-            return false;
-        }
-        // Broad phase, stage 1: the human is outside the robot's workspace ball.
-        if let Some(sep) = rule.workspace_clear(human_caps) {
-            if k == 0 {
-                diag.min_separation = diag.min_separation.min(sep);
+        // The human's occupancy; broad phase, stage 1: outside the robot's workspace ball.
+        let mut human_left = false;
+        if let (Some((hr, rule)), Some(meas)) = (human.as_mut(), meas) {
+            if hr.occupancy_into(meas, t + ta, t + tb, human_caps).is_err() {
+                diag.binding = Binding::NoMeasurement;
+                return false;
             }
+            match rule.workspace_clear(human_caps) {
+                Some(sep) => {
+                    if k == 0 {
+                        diag.min_separation = diag.min_separation.min(sep);
+                    }
+                }
+                None => human_left = true,
+            }
+        }
+        // Each object's occupancy, kept only where the workspace ball does not clear it.
+        let mut objects_left = false;
+        for (o, slot) in objects.iter().zip(object_occ.iter_mut()) {
+            *slot = None;
+            let Some(m) = &o.meas else {
+                diag.binding = Binding::NoMeasurement;
+                return false;
+            };
+            let Ok(occ) = pacs_reach::object::occupancy(&o.model, m, t + ta, t + tb) else {
+                diag.binding = Binding::NoMeasurement;
+                return false;
+            };
+            if object_rule.workspace_clear(&occ).is_none() {
+                *slot = Some(occ);
+                objects_left = true;
+            }
+        }
+        if !human_left && !objects_left {
             return true;
         }
         if reach.occupancy_with(scratch, &q_box, robot_caps).is_err() {
@@ -165,20 +200,41 @@ impl Shield {
         // The robot's real velocities may differ from the commanded ones by the controller's
         // velocity tracking error (rounded outward): the energy bound uses the widened box.
         let e_track = config.velocity_tracking_error;
-        let energy = || {
-            let widened = JointBox::from_fn(n, |i| {
-                let (lo, hi) = v_box.bounds(i);
-                ((lo - e_track).next_down(), (hi + e_track).next_up())
-            });
-            // Same joint box as the occupancy above: the scratch's frames are reused.
-            match widened.map(|w| reach.subchain_energy_bounds_with(scratch, &q_box, &w, energies))
-            {
-                Ok(Ok(())) => energies[n],
-                _ => f64::INFINITY,
+        let mut energy_cache: Option<f64> = None;
+        let mut energy = || {
+            *energy_cache.get_or_insert_with(|| {
+                let widened = JointBox::from_fn(n, |i| {
+                    let (lo, hi) = v_box.bounds(i);
+                    ((lo - e_track).next_down(), (hi + e_track).next_up())
+                });
+                // Same joint box as the occupancy above: the scratch's frames are reused.
+                match widened
+                    .map(|w| reach.subchain_energy_bounds_with(scratch, &q_box, &w, energies))
+                {
+                    Ok(Ok(())) => energies[n],
+                    _ => f64::INFINITY,
+                }
+            })
+        };
+        for (id, (o, slot)) in objects.iter().zip(object_occ.iter()).enumerate() {
+            let Some(occ) = slot else { continue };
+            let out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy);
+            if let Some(v) = out.violation {
+                if matches!(diag.binding, Binding::None) {
+                    diag.binding = Binding::Object {
+                        object: id,
+                        link: v.link,
+                        interval: k,
+                    };
+                }
+                return false;
             }
+        }
+        let (Some((_, rule)), true) = (human.as_mut(), human_left) else {
+            return true;
         };
         let mut first = None;
-        let outcome = rule.check(robot_caps, &v_box, human_caps, energy, k == 0, |h| {
+        let outcome = rule.check(robot_caps, &v_box, human_caps, &mut energy, k == 0, |h| {
             first = Some(*h);
             ControlFlow::Break(())
         });

@@ -86,10 +86,7 @@ impl ContactRule {
             return out;
         }
         // Narrow phase: the constraint of every part that may be touched.
-        let at_rest = (0..dq.dof()).all(|j| {
-            let (lo, hi) = dq.bounds(j);
-            lo >= -self.rest_speed && hi <= self.rest_speed
-        });
+        let at_rest = super::at_rest(dq, self.rest_speed);
         let mut e_robot: Option<f64> = None;
         for p in 0..self.parts {
             let mask = self.contact[p];

@@ -1,0 +1,187 @@
+//! The shield with dynamic objects (issue 14): a ball resting where the arm is going is never
+//! touched (`no_contact`) and never touched while moving (`ssm`); a far ball does not slow the
+//! robot; an object without a measurement keeps the robot at rest; bad measurements are errors.
+
+use nalgebra::Point3;
+use pacs_models::fr3;
+use pacs_models::object::{ObjectContact, ObjectModel, ObjectSpec, ShapeSpec};
+use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_reach::geometry::segment_distance_lower_bound;
+use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::shield::{Binding, Shield, ShieldConfig};
+
+const Q0: [f64; 7] = fr3::Q_READY;
+const DELTA: [f64; 7] = [0.04, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+const RADIUS: f64 = 0.05;
+
+fn chunk() -> Chunk {
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![DELTA.to_vec(); 16],
+        execute: 8,
+        gripper: None,
+    }
+}
+
+fn ball() -> ObjectModel {
+    ObjectModel::new(&ObjectSpec {
+        name: "ball".into(),
+        shape: ShapeSpec::Sphere { radius: RADIUS },
+        max_acc: 2.0,
+        acc_bias: [0.0; 3],
+        acc_generators: vec![],
+        max_speed: Some(1.0),
+        measurement_error_pos: 0.005,
+        measurement_error_vel: 0.02,
+        delay: 0.02,
+    })
+    .unwrap()
+}
+
+/// Where the flange is after joint 1 turned by `dq1` from the ready pose (m).
+fn flange_after(dq1: f64) -> [f64; 3] {
+    let robot = fr3::fr3();
+    let mut q = Q0;
+    q[0] += dq1;
+    let caps = robot.capsules_world(&q);
+    let (_, last) = caps.last().unwrap();
+    let p = last.p2();
+    [p.x, p.y, p.z]
+}
+
+/// Exact distance between the robot's moving capsules at `q` and a ball at `c` (m).
+fn separation(q: &[f64], c: [f64; 3]) -> f64 {
+    let robot = fr3::fr3();
+    let p = Point3::from(c);
+    robot
+        .capsules_world(q)
+        .iter()
+        .filter(|(li, _)| robot.links()[*li].frame != 0)
+        .map(|(_, cap)| {
+            segment_distance_lower_bound(&p, &p, &cap.p1(), &cap.p2()) - cap.radius() - RADIUS
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+struct Outcome {
+    min_separation: f64,
+    moving_contact: usize,
+    moved: f64,
+    object_bindings: usize,
+    verified: usize,
+}
+
+/// 1.5 s of a new chunk (joint 1 turning) every 0.4 s, the ball resting at `c`, measured every
+/// step (true state at t − delay, stamped t).
+fn run(c: [f64; 3], contact: ObjectContact, measure: bool) -> Outcome {
+    let cfg = ShieldConfig::default();
+    let mut sh = Shield::new(fr3::fr3(), None, vec![], cfg).unwrap();
+    let id = sh.add_object(ball(), contact).unwrap();
+    sh.start(0.0, &Q0).unwrap();
+    let mut out = Outcome {
+        min_separation: f64::INFINITY,
+        moving_contact: 0,
+        moved: 0.0,
+        object_bindings: 0,
+        verified: 0,
+    };
+    for k in 0..1500 {
+        let t = k as f64 * cfg.safety_step;
+        if k % 400 == 0 {
+            let _ = sh.set_chunk(&chunk());
+        }
+        if measure {
+            let m = ObjectMeasurement {
+                time: t,
+                position: c,
+                velocity: Some([0.0; 3]),
+            };
+            sh.measure_object(id, &m).unwrap();
+        }
+        let cmd = sh.step(t, None).unwrap();
+        let q = &cmd.state.q[..7];
+        let sep = separation(q, c);
+        out.min_separation = out.min_separation.min(sep);
+        let moving = cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-12);
+        if moving && sep <= 0.0 {
+            out.moving_contact += 1;
+        }
+        if matches!(cmd.diag.binding, Binding::Object { object: 0, .. }) {
+            out.object_bindings += 1;
+        }
+        out.verified += cmd.diag.verified as usize;
+        out.moved = q[0] - Q0[0];
+    }
+    out
+}
+
+#[test]
+fn a_ball_in_the_path_is_never_touched() {
+    // Without the ball the arm turns joint 1 by ≈ 0.75 rad in 1.5 s (a_far_ball_…); the ball
+    // sits where the flange would be after 0.9 rad, 7 cm from the folded arm at the start.
+    let c = flange_after(0.9);
+    assert!(
+        separation(&Q0, c) > 0.05,
+        "the ball starts clear of the arm"
+    );
+    let r = run(c, ObjectContact::NoContact, true);
+    assert!(
+        r.min_separation > 0.0,
+        "touched: separation {}",
+        r.min_separation
+    );
+    assert!(r.object_bindings > 0, "the object never bound a step");
+    assert!(
+        r.moved > 0.1,
+        "the arm should approach the ball first (moved {} rad)",
+        r.moved
+    );
+    assert!(
+        r.moved < 0.6,
+        "the ball did not stop the arm (moved {} rad)",
+        r.moved
+    );
+    let r = run(c, ObjectContact::Ssm, true);
+    assert_eq!(r.moving_contact, 0, "SSM: contact while moving");
+}
+
+#[test]
+fn a_far_ball_does_not_slow_the_robot() {
+    let free = run([3.0, 3.0, 0.5], ObjectContact::NoContact, true);
+    assert!(free.moved > 0.7, "moved {} rad", free.moved);
+    assert!(free.verified > 1400, "verified {} of 1500", free.verified);
+    assert_eq!(free.object_bindings, 0);
+}
+
+#[test]
+fn an_unmeasured_object_keeps_the_robot_at_rest() {
+    let r = run([3.0, 3.0, 0.5], ObjectContact::NoContact, false);
+    assert_eq!(r.verified, 0);
+    assert_eq!(r.moved, 0.0);
+}
+
+#[test]
+fn bad_object_input_is_an_error() {
+    let mut sh = Shield::new(fr3::fr3(), None, vec![], ShieldConfig::default()).unwrap();
+    let id = sh.add_object(ball(), ObjectContact::Ssm).unwrap();
+    let m = ObjectMeasurement {
+        time: 0.0,
+        position: [f64::NAN, 0.0, 0.0],
+        velocity: None,
+    };
+    assert!(sh.measure_object(id, &m).is_err());
+    let ok = ObjectMeasurement {
+        position: [0.0; 3],
+        ..m
+    };
+    assert!(
+        sh.measure_object(id + 1, &ok)
+            .unwrap_err()
+            .to_string()
+            .contains("no such object")
+    );
+    let e = sh
+        .add_object(ball(), ObjectContact::Pfl { threshold: -1.0 })
+        .unwrap_err();
+    assert!(e.to_string().contains("contact.pfl.threshold"), "{e}");
+}
