@@ -139,6 +139,9 @@ pub enum Binding {
     NoProfile,
     /// SSM: contact possible while moving.
     Ssm {
+        /// Human index (0: the first human, not written to logs).
+        #[serde(skip_serializing_if = "is_first")]
+        human: usize,
         /// Robot link index.
         link: usize,
         /// Body part index.
@@ -162,6 +165,9 @@ pub enum Binding {
     },
     /// PFL: energy bound above the threshold where contact is possible.
     Pfl {
+        /// Human index (0: the first human, not written to logs).
+        #[serde(skip_serializing_if = "is_first")]
+        human: usize,
         /// Robot link index.
         link: usize,
         /// Body part index.
@@ -173,6 +179,10 @@ pub enum Binding {
         /// Constrained (clamping) contact.
         constrained: bool,
     },
+}
+
+fn is_first(i: &usize) -> bool {
+    *i == 0
 }
 
 /// Per-step diagnostics.
@@ -217,8 +227,11 @@ pub struct Shield {
     hw: Limits,
     planner: Planner,
     reach: RobotReach,
-    /// The human's reachability and the ISO/TS 15066 rule for its body parts.
-    human: Option<(HumanReach, ContactRule)>,
+    /// The humans: reachability, the ISO/TS 15066 rule for their body parts, the latest
+    /// measurement and the occupancy buffer of each.
+    humans: Vec<HumanSlot>,
+    /// Static environment shapes (for the rule of humans added later).
+    env: Vec<EnvShape>,
     config: ShieldConfig,
     trajs: [Option<Trajectory>; 2],
     /// Current slot and path state at `time`.
@@ -229,9 +242,6 @@ pub struct Shield {
     /// Slot of a chunk planned from the current state (not yet verified).
     fresh: Option<usize>,
     failsafe: Option<VerifiedFailsafe>,
-    /// Latest measurement (buffer allocated at construction; valid when `has_meas`).
-    meas: Option<HumanMeasurement>,
-    has_meas: bool,
     /// Dynamic objects with their constraints and latest measurements.
     objects: Vec<ObjectSlot>,
     object_rule: ObjectRule,
@@ -239,9 +249,64 @@ pub struct Shield {
     /// Per object, its occupancy over the interval being checked.
     object_occ: Vec<Option<ObjectOccupancy>>,
     robot_caps: Vec<Capsule>,
-    human_caps: Vec<Capsule>,
     energies: Vec<f64>,
     scratch: ReachScratch,
+}
+
+/// A human in the shield's scene.
+#[derive(Debug, Clone)]
+struct HumanSlot {
+    reach: HumanReach,
+    rule: ContactRule,
+    /// Latest measurement (buffer allocated when the human is added; valid when `has_meas`).
+    meas: HumanMeasurement,
+    has_meas: bool,
+    /// Body-part occupancies of the interval being checked.
+    caps: Vec<Capsule>,
+    /// On the interval being checked, outside the robot's workspace ball.
+    clear: bool,
+}
+
+impl HumanSlot {
+    fn new(
+        robot: &RobotModel,
+        reach: &RobotReach,
+        h: HumanModel,
+        spec: &ConstraintSpec,
+        env: Vec<EnvShape>,
+        c: &ShieldConfig,
+    ) -> Result<Self, ShieldError> {
+        let tc = spec
+            .resolve(&h)
+            .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
+        tc.check_robot(robot)
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let zeros = vec![[0.0; 3]; h.keypoint_count()];
+        let meas = HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let rule = ContactRule::new(robot, reach, &h, &tc.per_part, env, c.rest_speed)
+            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let caps = vec![
+            Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
+            h.body_parts().len()
+        ];
+        Ok(Self {
+            reach: HumanReach::new(h, c.human_model),
+            rule,
+            meas,
+            has_meas: false,
+            caps,
+            clear: false,
+        })
+    }
+
+    /// Replace the latest measurement if `m` is newer (older or equal-time ones are ignored).
+    fn take(&mut self, m: &HumanMeasurement) {
+        if !(self.has_meas && self.meas.time() >= m.time()) {
+            self.meas.assign_from(m);
+            self.has_meas = true;
+        }
+    }
 }
 
 /// A dynamic object in the shield's scene.
@@ -319,30 +384,12 @@ impl Shield {
         );
         let reach = RobotReach::try_new(&robot, c.tracking_error)
             .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-        let mut meas_buffer = None;
-        let human = match human {
-            None => None,
-            Some((h, spec)) => {
-                let tc = spec
-                    .resolve(&h)
-                    .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
-                tc.check_robot(&robot)
-                    .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-                let zeros = vec![[0.0; 3]; h.keypoint_count()];
-                meas_buffer = Some(
-                    HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
-                        .map_err(|e| ShieldError::Invalid(e.to_string()))?,
-                );
-                let rule = ContactRule::new(&robot, &reach, &h, &tc.per_part, env, c.rest_speed)
-                    .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-                Some((HumanReach::new(h, c.human_model), rule))
-            }
+        let humans = match human {
+            None => Vec::new(),
+            Some((h, spec)) => vec![HumanSlot::new(&robot, &reach, h, spec, env.clone(), c)?],
         };
         let object_rule = ObjectRule::new(&robot, &reach, c.rest_speed)
             .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-        let parts = human
-            .as_ref()
-            .map_or(0, |(h, _)| h.model().body_parts().len());
         Ok(Self {
             dof,
             hw,
@@ -351,14 +398,11 @@ impl Shield {
                 Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
                 reach.capsule_count()
             ],
-            human_caps: vec![
-                Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
-                parts
-            ],
             energies: vec![0.0; dof + 1],
             scratch: ReachScratch::default(),
             reach,
-            human,
+            humans,
+            env,
             config,
             robot,
             trajs: [None, None],
@@ -368,8 +412,6 @@ impl Shield {
             started: false,
             fresh: None,
             failsafe: None,
-            meas: meas_buffer,
-            has_meas: false,
             objects: Vec::new(),
             object_rule,
             object_occ: Vec::new(),
@@ -433,9 +475,55 @@ impl Shield {
     pub fn config(&self) -> &ShieldConfig {
         &self.config
     }
-    /// The human model, if any.
+    /// The first human's model, if any (the one [`Self::step`]'s measurement belongs to).
     pub fn human_model(&self) -> Option<&HumanModel> {
-        self.human.as_ref().map(|(h, _)| h.model())
+        self.humans.first().map(|h| h.reach.model())
+    }
+
+    /// Number of humans.
+    pub fn human_count(&self) -> usize {
+        self.humans.len()
+    }
+
+    /// Add another human with its task constraints; returns its index (the first human, given
+    /// to [`Self::new`], is 0 and is measured through [`Self::step`]; every human through
+    /// [`Self::measure_human`]). Until it has a measurement, no intended step verifies. Call
+    /// before the control loop: this allocates.
+    pub fn add_human(
+        &mut self,
+        human: HumanModel,
+        constraints: &ConstraintSpec,
+    ) -> Result<usize, ShieldError> {
+        let slot = HumanSlot::new(
+            &self.robot,
+            &self.reach,
+            human,
+            constraints,
+            self.env.clone(),
+            &self.config,
+        )?;
+        self.humans.push(slot);
+        Ok(self.humans.len() - 1)
+    }
+
+    /// Record a measurement of human `id` (built for that human's model): it replaces the
+    /// latest one if it is newer. Errors: unknown `id`, a keypoint count that does not match.
+    pub fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
+        let n = self.humans.len();
+        let Some(h) = self.humans.get_mut(id) else {
+            return Err(ShieldError::Invalid(format!(
+                "human {id}: no such human ({n} in the scene)"
+            )));
+        };
+        let k = h.reach.model().keypoint_count();
+        if m.positions().len() != k {
+            return Err(ShieldError::Invalid(format!(
+                "human {id}: measurement with {} keypoints, the model has {k}",
+                m.positions().len()
+            )));
+        }
+        h.take(m);
+        Ok(())
     }
 
     /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.

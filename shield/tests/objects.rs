@@ -185,3 +185,68 @@ fn bad_object_input_is_an_error() {
         .unwrap_err();
     assert!(e.to_string().contains("contact.pfl.threshold"), "{e}");
 }
+
+/// Two people (issue 14): the first far away and measured through `step`, the second reaching
+/// for the tool and measured through `measure_human(1, …)`. SSM: the arm never moves while the
+/// second person's hand may touch it, the binding names human 1; with the second person far as
+/// well, the arm moves freely.
+#[test]
+fn a_second_person_at_the_tool_stops_the_arm() {
+    use pacs_models::{ConstraintSpec, default_human};
+    use pacs_reach::human::HumanMeasurement;
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let run = |second: &[[f64; 3]]| {
+        let cfg = ShieldConfig::default();
+        let mut sh = Shield::new(fr3::fr3(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+        assert_eq!(sh.add_human(human.clone(), &spec).unwrap(), 1);
+        sh.start(0.0, &Q0).unwrap();
+        let (mut moved, mut bound_by_second, mut verified) = (0.0, 0, 0);
+        for k in 0..1000 {
+            let t = k as f64 * cfg.safety_step;
+            if k % 400 == 0 {
+                let _ = sh.set_chunk(&chunk());
+            }
+            let m0 = HumanMeasurement::new(&human, t, &far, None).unwrap();
+            let m1 = HumanMeasurement::new(&human, t, second, None).unwrap();
+            sh.measure_human(1, &m1).unwrap();
+            let cmd = sh.step(t, Some(&m0)).unwrap();
+            if matches!(cmd.diag.binding, Binding::Ssm { human: 1, .. }) {
+                bound_by_second += 1;
+            }
+            verified += cmd.diag.verified as usize;
+            moved = cmd.state.q[0] - Q0[0];
+        }
+        (moved, bound_by_second, verified)
+    };
+    let (moved, bound, _) = run(&pacs_testkit::human_reaching(0.9, 0.3, [0.32, 0.12, 0.45]));
+    assert!(bound > 0, "the second person never bound a step");
+    assert!(
+        moved.abs() < 1e-9,
+        "the arm moved {moved} rad with a hand at the tool"
+    );
+    let (moved, bound, verified) = run(&far);
+    assert_eq!(bound, 0);
+    assert!(
+        moved > 0.3 && verified > 900,
+        "moved {moved}, verified {verified}"
+    );
+    // Errors: unknown index, a measurement of another keypoint count.
+    let mut sh = Shield::new(
+        fr3::fr3(),
+        Some((human.clone(), &spec)),
+        vec![],
+        ShieldConfig::default(),
+    )
+    .unwrap();
+    let m = HumanMeasurement::new(&human, 0.0, &far, None).unwrap();
+    assert!(
+        sh.measure_human(1, &m)
+            .unwrap_err()
+            .to_string()
+            .contains("no such human")
+    );
+    sh.measure_human(0, &m).unwrap();
+    assert_eq!(sh.human_count(), 1);
+}

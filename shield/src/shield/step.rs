@@ -6,19 +6,17 @@ use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_reach::human::HumanMeasurement;
 
 impl Shield {
-    /// Replace the latest human measurement if `m` is newer (older or equal-time ones are ignored).
+    /// Replace the first human's latest measurement if `m` is newer (older or equal-time ones are
+    /// ignored, as are ones from the future and ones for another model's keypoint count).
     fn take_measurement(&mut self, m: Option<&HumanMeasurement>, t: f64) {
         let Some(m) = m else { return };
         if m.time() > t {
             return; // from the future: ignore
         }
-        match &mut self.meas {
-            Some(cur) if self.has_meas && cur.time() >= m.time() => {}
-            Some(cur) => {
-                cur.assign_from(m);
-                self.has_meas = true;
-            }
-            None => {}
+        if let Some(h) = self.humans.first_mut()
+            && m.positions().len() == h.reach.model().keypoint_count()
+        {
+            h.take(m);
         }
     }
 

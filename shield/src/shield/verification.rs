@@ -5,7 +5,6 @@ use super::{Binding, Diagnostics, FilterMode, OccupancyIntervals, Shield};
 use pacs_models::MAX_DOF;
 use pacs_motion::scaling::SpeedProfile;
 use pacs_reach::JointBox;
-use pacs_reach::human::HumanMeasurement;
 use pacs_verify::iso15066::ConstraintKind;
 use std::ops::ControlFlow;
 
@@ -22,34 +21,21 @@ impl Shield {
     ) -> bool {
         let alpha = self.config.safety_step;
         let stop = alpha + brake.settle_time();
-        if self.human.is_none() && self.objects.is_empty() {
+        if self.humans.is_empty() && self.objects.is_empty() {
             return true;
         }
-        if (self.human.is_some() && !self.has_meas) || self.objects.iter().any(|o| o.meas.is_none())
+        if self.humans.iter().any(|h| !h.has_meas) || self.objects.iter().any(|o| o.meas.is_none())
         {
             diag.binding = Binding::NoMeasurement;
             return false;
         }
-        // (Taken out for the borrow of `self` below, put back before returning.)
-        let meas = if self.human.is_some() {
-            match self.meas.take() {
-                Some(m) => Some(m),
-                None => {
-                    diag.binding = Binding::NoMeasurement;
-                    return false;
-                }
-            }
-        } else {
-            None
-        };
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
         // when the human is far; otherwise the fine intervals below decide.
         if self.config.mode != FilterMode::Off && stop > alpha {
             let mut coarse = *diag;
-            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, meas.as_ref(), &mut coarse) {
+            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &mut coarse) {
                 *diag = coarse;
-                self.meas = meas;
                 return true;
             }
         }
@@ -61,14 +47,13 @@ impl Shield {
             self.config.max_intervals,
         );
         for (k, ta, tb) in intervals {
-            if !self.check_interval(slot, go, brake, t, ta, tb, k, meas.as_ref(), diag) {
+            if !self.check_interval(slot, go, brake, t, ta, tb, k, diag) {
                 ok = false;
                 if self.config.mode != FilterMode::Off {
                     break;
                 }
             }
         }
-        self.meas = meas;
         ok
     }
 
@@ -109,7 +94,6 @@ impl Shield {
         ta: f64,
         tb: f64,
         k: usize,
-        meas: Option<&HumanMeasurement>,
         diag: &mut Diagnostics,
     ) -> bool {
         let alpha = self.config.safety_step;
@@ -142,9 +126,8 @@ impl Shield {
             reach,
             scratch,
             robot_caps,
-            human_caps,
             energies,
-            human,
+            humans,
             objects,
             object_rule,
             object_occ,
@@ -158,21 +141,29 @@ impl Shield {
         ) else {
             return false;
         };
-        // The human's occupancy; broad phase, stage 1: outside the robot's workspace ball.
+        // Each human's occupancy; broad phase, stage 1: outside the robot's workspace ball.
+        // (`has_meas` marks the humans left for the narrow phase below.)
         let mut human_left = false;
-        if let (Some((hr, rule)), Some(meas)) = (human.as_mut(), meas) {
-            if hr.occupancy_into(meas, t + ta, t + tb, human_caps).is_err() {
+        for h in humans.iter_mut() {
+            if h.reach
+                .occupancy_into(&h.meas, t + ta, t + tb, &mut h.caps)
+                .is_err()
+            {
                 diag.binding = Binding::NoMeasurement;
                 return false;
             }
-            match rule.workspace_clear(human_caps) {
+            h.clear = match h.rule.workspace_clear(&h.caps) {
                 Some(sep) => {
                     if k == 0 {
                         diag.min_separation = diag.min_separation.min(sep);
                     }
+                    true
                 }
-                None => human_left = true,
-            }
+                None => {
+                    human_left = true;
+                    false
+                }
+            };
         }
         // Each object's occupancy, kept only where the workspace ball does not clear it.
         let mut objects_left = false;
@@ -230,40 +221,47 @@ impl Shield {
                 return false;
             }
         }
-        let (Some((_, rule)), true) = (human.as_mut(), human_left) else {
-            return true;
-        };
-        let mut first = None;
-        let outcome = rule.check(robot_caps, &v_box, human_caps, &mut energy, k == 0, |h| {
-            first = Some(*h);
-            ControlFlow::Break(())
-        });
-        if k == 0 {
-            diag.min_separation = diag.min_separation.min(outcome.separation);
+        for (hid, h) in humans.iter_mut().enumerate() {
+            if h.clear {
+                continue;
+            }
+            let mut first = None;
+            let outcome = h
+                .rule
+                .check(robot_caps, &v_box, &h.caps, &mut energy, k == 0, |v| {
+                    first = Some(*v);
+                    ControlFlow::Break(())
+                });
+            if k == 0 {
+                diag.min_separation = diag.min_separation.min(outcome.separation);
+            }
+            if let Some((e, thr)) = outcome.pfl
+                && e > diag.contact_energy
+            {
+                diag.contact_energy = e;
+                diag.contact_threshold = thr;
+            }
+            let Some(v) = first else { continue };
+            if matches!(diag.binding, Binding::None) {
+                diag.binding = match v.kind {
+                    ConstraintKind::Ssm => Binding::Ssm {
+                        human: hid,
+                        link: v.link,
+                        body_part: v.part,
+                        interval: k,
+                    },
+                    ConstraintKind::Pfl => Binding::Pfl {
+                        human: hid,
+                        link: v.link,
+                        body_part: v.part,
+                        energy: v.energy,
+                        threshold: v.threshold,
+                        constrained: v.constrained,
+                    },
+                };
+            }
+            return false;
         }
-        if let Some((e, thr)) = outcome.pfl
-            && e > diag.contact_energy
-        {
-            diag.contact_energy = e;
-            diag.contact_threshold = thr;
-        }
-        let Some(h) = first else { return true };
-        if matches!(diag.binding, Binding::None) {
-            diag.binding = match h.kind {
-                ConstraintKind::Ssm => Binding::Ssm {
-                    link: h.link,
-                    body_part: h.part,
-                    interval: k,
-                },
-                ConstraintKind::Pfl => Binding::Pfl {
-                    link: h.link,
-                    body_part: h.part,
-                    energy: h.energy,
-                    threshold: h.threshold,
-                    constrained: h.constrained,
-                },
-            };
-        }
-        false
+        true
     }
 }
