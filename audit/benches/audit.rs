@@ -55,6 +55,7 @@ fn models(task: &str) -> LogModels {
         human: HumanModel::builtin("default").unwrap(),
         constraints: ConstraintSpec::builtin(task).unwrap(),
         environment: vec![],
+        objects: vec![],
     }
 }
 

@@ -135,6 +135,11 @@ impl Auditor {
     /// human model, the config is invalid, or the robot has more than [`MAX_CAPSULES`] capsules.
     pub fn new(models: LogModels, cfg: AuditConfig) -> Result<Self, AuditError> {
         cfg.validate()?;
+        if !models.objects.is_empty() {
+            return Err(AuditError::ObjectsNotSupported {
+                count: models.objects.len(),
+            });
+        }
         let tc = models
             .constraints
             .resolve(&models.human)

@@ -2,6 +2,7 @@
 //! the JSON Lines writer the shield uses.
 
 use crate::error::HeaderError;
+use pacs_models::object::{ObjectContact, ObjectModel, ObjectSpec};
 use pacs_models::shape::CapsuleSpec;
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, HumanSpec, RobotModel, RobotSpec};
 use serde::{Deserialize, Serialize};
@@ -42,6 +43,9 @@ pub struct Header {
     /// Static environment shapes (capsules, m) a body part can be clamped against.
     #[serde(default)]
     pub environment: Vec<CapsuleSpec>,
+    /// Dynamic objects: `object` records name them by `id` (omitted when empty).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectEntry>,
     /// Free-form metadata (`task`, `policy`, `filter`, ... group the aggregate report).
     #[serde(default)]
     pub meta: serde_json::Map<String, serde_json::Value>,
@@ -62,6 +66,7 @@ impl Header {
             human,
             constraints,
             environment: vec![],
+            objects: vec![],
             meta: Default::default(),
         }
     }
@@ -94,6 +99,19 @@ impl Header {
             .map_err(|p| LogError::input(file, loc, p.to_string()))?;
         Ok(header)
     }
+}
+
+/// A dynamic object declared in the header: its id (what `object` records name), its model
+/// (built-in name such as `"ball"`, or an inline spec) and the contact the task allows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectEntry {
+    /// Id used by the `object` records (unique in the header).
+    pub id: String,
+    /// The object model.
+    pub object: ModelRef<ObjectSpec>,
+    /// What contact the task allows (`"no_contact"`, `"ssm"`, `{"pfl": {"threshold": J}}`).
+    pub contact: ObjectContact,
 }
 
 /// Models that replace a header's (an audit config's `robot`, `human`, `constraints`).
@@ -135,6 +153,8 @@ pub struct LogModels {
     pub constraints: ConstraintSpec,
     /// Static environment capsules (m).
     pub environment: Vec<Capsule>,
+    /// Dynamic objects: id, validated model and allowed contact.
+    pub objects: Vec<(String, ObjectModel, ObjectContact)>,
 }
 
 impl LogModels {
@@ -169,11 +189,43 @@ impl LogModels {
             environment
                 .push(Capsule::try_from(*c).map_err(model(&format!("header.environment[{i}]")))?);
         }
+        let mut objects: Vec<(String, ObjectModel, ObjectContact)> =
+            Vec::with_capacity(h.objects.len());
+        for (i, o) in h.objects.iter().enumerate() {
+            let field = format!("header.objects[{i}]");
+            if objects.iter().any(|(id, _, _)| *id == o.id) {
+                return Err(HeaderError::Model {
+                    field: format!("{field}.id"),
+                    source: pacs_models::ModelError::DuplicateName {
+                        kind: "object id",
+                        name: o.id.clone(),
+                    },
+                });
+            }
+            let spec = match &o.object {
+                ModelRef::Name(n) => pacs_models::object::builtin_object(n).ok_or_else(|| {
+                    pacs_models::ModelError::UnknownName {
+                        kind: "built-in object",
+                        name: n.clone(),
+                        field: "object".into(),
+                    }
+                }),
+                ModelRef::Spec(s) => Ok((**s).clone()),
+            }
+            .map_err(model(&format!("{field}.object")))?;
+            let m = ObjectModel::new(&spec).map_err(model(&format!("{field}.object")))?;
+            let c = o
+                .contact
+                .validated()
+                .map_err(model(&format!("{field}.contact")))?;
+            objects.push((o.id.clone(), m, c));
+        }
         Ok(Self {
             robot,
             human,
             constraints,
             environment,
+            objects,
         })
     }
 }
@@ -201,6 +253,20 @@ pub enum Record<'a> {
         /// Keypoint positions (m).
         positions: &'a [[f64; 3]],
     },
+    /// A dynamic object's measurement logged at `t`, taken at `t_meas ≤ t` (s): the object `id`
+    /// of the header at `position` (m), with `velocity` (m/s) if measured.
+    Object {
+        /// Log time (s).
+        t: f64,
+        /// Measurement time stamp (s).
+        t_meas: f64,
+        /// The header's object id.
+        id: &'a str,
+        /// Measured position (m).
+        position: [f64; 3],
+        /// Measured velocity (m/s), if any.
+        velocity: Option<[f64; 3]>,
+    },
     /// Shield diagnostics (ignored by the verdict).
     Shield {
         /// Time (s).
@@ -221,6 +287,7 @@ impl Record<'_> {
         match *self {
             Record::Robot { t, .. }
             | Record::Human { t, .. }
+            | Record::Object { t, .. }
             | Record::Shield { t }
             | Record::Event { t, .. } => t,
         }
@@ -390,6 +457,32 @@ impl<W: Write> LogWriter<W> {
             write_list(&mut self.out, "positions", p)?;
         }
         self.out.write_all(b"]}\n")?;
+        Ok(())
+    }
+
+    /// A measurement of the header's object `id` logged at `t`, taken at `t_meas` (s): position
+    /// (m) and, if measured, velocity (m/s).
+    pub fn write_object(
+        &mut self,
+        t: f64,
+        t_meas: f64,
+        id: &str,
+        position: [f64; 3],
+        velocity: Option<[f64; 3]>,
+    ) -> Result<(), WriteError> {
+        finite("t_meas", t_meas)?;
+        self.begin(t)?;
+        let id = serde_json::to_string(id).map_err(|e| WriteError::Io(std::io::Error::other(e)))?;
+        write!(
+            self.out,
+            "{{\"type\":\"object\",\"t\":{t:?},\"t_meas\":{t_meas:?},\"id\":{id},\"position\":"
+        )?;
+        write_list(&mut self.out, "position", &position)?;
+        if let Some(v) = velocity {
+            self.out.write_all(b",\"velocity\":")?;
+            write_list(&mut self.out, "velocity", &v)?;
+        }
+        self.out.write_all(b"}\n")?;
         Ok(())
     }
 

@@ -11,6 +11,7 @@ use std::io::BufRead;
 enum Kind {
     Robot,
     Human,
+    Object,
     Shield,
     Event,
     Header,
@@ -34,6 +35,12 @@ struct LineBuffers {
     has_positions: bool,
     name: String,
     has_name: bool,
+    id: String,
+    has_id: bool,
+    position: Vec<f64>,
+    has_position: bool,
+    velocity: Vec<f64>,
+    has_velocity: bool,
     unknown_field: String,
     duplicate: Option<&'static str>,
 }
@@ -54,6 +61,12 @@ impl LineBuffers {
         self.has_positions = false;
         self.name.clear();
         self.has_name = false;
+        self.id.clear();
+        self.has_id = false;
+        self.position.clear();
+        self.has_position = false;
+        self.velocity.clear();
+        self.has_velocity = false;
         self.unknown_field.clear();
         self.duplicate = None;
     }
@@ -68,6 +81,9 @@ enum Field {
     Ddq,
     Positions,
     Name,
+    Id,
+    Position,
+    Velocity,
     Other,
 }
 
@@ -95,6 +111,9 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
             "ddq" => Field::Ddq,
             "positions" => Field::Positions,
             "name" => Field::Name,
+            "id" => Field::Id,
+            "position" => Field::Position,
+            "velocity" => Field::Velocity,
             other => {
                 if self.0.is_empty() {
                     self.0.push_str(other);
@@ -178,6 +197,7 @@ impl<'de> Visitor<'de> for LineSeed<'_> {
                     b.kind = Some(match b.kind_name.as_str() {
                         "robot" => Kind::Robot,
                         "human" => Kind::Human,
+                        "object" => Kind::Object,
                         "shield" => Kind::Shield,
                         "event" => Kind::Event,
                         "header" => Kind::Header,
@@ -216,6 +236,21 @@ impl<'de> Visitor<'de> for LineSeed<'_> {
                     dup(b.has_name, "name");
                     map.next_value_seed(StrInto(&mut b.name))?;
                     b.has_name = true;
+                }
+                Field::Id => {
+                    dup(b.has_id, "id");
+                    map.next_value_seed(StrInto(&mut b.id))?;
+                    b.has_id = true;
+                }
+                Field::Position => {
+                    dup(b.has_position, "position");
+                    map.next_value_seed(VecInto(&mut b.position))?;
+                    b.has_position = true;
+                }
+                Field::Velocity => {
+                    dup(b.has_velocity, "velocity");
+                    map.next_value_seed(VecInto(&mut b.velocity))?;
+                    b.has_velocity = true;
                 }
                 Field::Other => {
                     map.next_value::<IgnoredAny>()?;
@@ -357,8 +392,19 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         let allowed: &[&str] = match kind {
             Kind::Robot => &["q", "dq", "ddq"],
             Kind::Human => &["t_meas", "positions"],
+            Kind::Object => &["t_meas", "id", "position", "velocity"],
             Kind::Event => &["name"],
-            Kind::Shield => &["t_meas", "q", "dq", "ddq", "positions", "name"],
+            Kind::Shield => &[
+                "t_meas",
+                "q",
+                "dq",
+                "ddq",
+                "positions",
+                "name",
+                "id",
+                "position",
+                "velocity",
+            ],
             Kind::Unknown | Kind::Header => {
                 return Err(err(format!("unknown record type `{}`", b.kind_name)));
             }
@@ -377,6 +423,9 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                 ("ddq", b.has_ddq),
                 ("positions", b.has_positions),
                 ("name", b.has_name),
+                ("id", b.has_id),
+                ("position", b.has_position),
+                ("velocity", b.has_velocity),
             ];
             if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
                 return Err(err(format!(
@@ -405,6 +454,35 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                     t,
                     t_meas: b.t_meas.unwrap_or(t),
                     positions: &b.positions,
+                }
+            }
+            Kind::Object => {
+                if !b.has_id {
+                    return Err(err("object record has no `id` field".into()));
+                }
+                let vec3 = |field: &str, v: &[f64]| -> Result<[f64; 3], LogError> {
+                    <[f64; 3]>::try_from(v).map_err(|_| {
+                        err(format!(
+                            "object record: `{field}` needs 3 values (m, m/s), found {}",
+                            v.len()
+                        ))
+                    })
+                };
+                if !b.has_position {
+                    return Err(err("object record has no `position` field".into()));
+                }
+                let position = vec3("position", &b.position)?;
+                let velocity = if b.has_velocity {
+                    Some(vec3("velocity", &b.velocity)?)
+                } else {
+                    None
+                };
+                Record::Object {
+                    t,
+                    t_meas: b.t_meas.unwrap_or(t),
+                    id: &b.id,
+                    position,
+                    velocity,
                 }
             }
             Kind::Event => {

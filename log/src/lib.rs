@@ -18,7 +18,7 @@ pub mod order;
 
 pub use error::{HeaderError, Location, LogError, McapConfigError};
 pub use format::{
-    FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, Record, RecordReader, VERSION,
-    WriteError,
+    FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, ObjectEntry, Record,
+    RecordReader, VERSION, WriteError,
 };
 pub use order::EqualTimeGroup;

@@ -1,4 +1,4 @@
-//! Records with equal time stamps, put in the one order every log form follows: human
+//! Records with equal time stamps, put in the one order every log form follows: human and object
 //! measurements first (a measurement logged at `t` is in use from the robot sample at `t` on),
 //! then robot samples, then events and shield diagnostics, then file order. MCAP's reader orders
 //! this way by construction; JSON Lines and CSV records pass through [`EqualTimeGroup`], so the
@@ -22,6 +22,8 @@ struct Slot {
     has_ddq: bool,
     positions: Vec<[f64; 3]>,
     name: String,
+    position: [f64; 3],
+    velocity: Option<[f64; 3]>,
 }
 
 impl Slot {
@@ -43,6 +45,19 @@ impl Slot {
                 self.rank = 0;
                 self.t_meas = t_meas;
                 self.positions.extend_from_slice(positions);
+            }
+            Record::Object {
+                t_meas,
+                id,
+                position,
+                velocity,
+                ..
+            } => {
+                self.rank = 4;
+                self.t_meas = t_meas;
+                self.name.push_str(id);
+                self.position = position;
+                self.velocity = velocity;
             }
             Record::Robot { q, dq, ddq, .. } => {
                 self.rank = 1;
@@ -80,6 +95,13 @@ impl Slot {
             2 => Record::Event {
                 t: self.t,
                 name: &self.name,
+            },
+            4 => Record::Object {
+                t: self.t,
+                t_meas: self.t_meas,
+                id: &self.name,
+                position: self.position,
+                velocity: self.velocity,
             },
             _ => Record::Shield { t: self.t },
         }
@@ -127,7 +149,10 @@ impl EqualTimeGroup {
         self.order.clear();
         self.order.extend(0..self.len);
         let slots = &self.slots;
-        self.order.sort_by_key(|&i| (slots[i].rank, slots[i].seq));
+        // Object measurements (rank 4) go with the human ones, before the robot samples.
+        let key = |r: u8| if r == 4 { 0 } else { r };
+        self.order
+            .sort_by_key(|&i| (key(slots[i].rank), slots[i].seq));
         let len = std::mem::take(&mut self.len);
         for k in 0..len {
             let s = &self.slots[self.order[k]];

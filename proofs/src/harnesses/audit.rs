@@ -22,6 +22,7 @@ fn violating_log<S: Source>(s: &mut S) -> Verdict {
         human: human.clone(),
         constraints: ConstraintSpec::builtin("ssm").expect("preset"),
         environment: vec![],
+        objects: vec![],
     };
     let cfg = AuditConfig::default();
     let mut auditor = Auditor::new(models, cfg.clone()).expect("valid models");

@@ -84,6 +84,7 @@ pub fn run_setup(
             human: human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?,
             constraints: spec.clone(),
             environment: vec![],
+            objects: vec![],
         };
         Some(Auditor::new(models, AuditConfig::default()).map_err(invalid)?)
     } else {
