@@ -15,13 +15,17 @@ use crate::verdict::{
 };
 use nalgebra::{Isometry3, Point3};
 use pacs_log::LogModels;
+use pacs_models::object::{ObjectContact, ObjectModel};
 use pacs_models::robot::MAX_DOF;
 use pacs_models::{Capsule, HumanModel, RobotModel};
 use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach};
+use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_reach::rounding::{add_up, sub_down};
-use pacs_verify::iso15066::{ContactRule, EnvShape, Outcome, frames_can_pinch, threshold};
+use pacs_verify::iso15066::{
+    ContactRule, EnvShape, ObjectRule, Outcome, frames_can_pinch, threshold,
+};
 use std::ops::ControlFlow;
 
 pub use crate::config::AuditConfig;
@@ -68,6 +72,20 @@ mod certain;
 mod finish;
 mod spans;
 
+/// A dynamic object of the log: its model, allowed contact and measurements.
+#[derive(Debug, Clone)]
+struct ObjectTrack {
+    id: String,
+    model: ObjectModel,
+    contact: ObjectContact,
+    /// The latest measurement logged.
+    latest: Option<ObjectMeasurement>,
+    /// The measurement in use for the span the last robot sample opened (like `span_human`).
+    span: Option<ObjectMeasurement>,
+    /// Its occupancy over the span being checked (`None`: outside the workspace ball).
+    occ: Option<ObjectOccupancy>,
+}
+
 /// Streaming auditor of one log: feed records in time order, then [`Auditor::finish`].
 /// After warm-up, robot samples allocate nothing.
 pub struct Auditor {
@@ -76,6 +94,10 @@ pub struct Auditor {
     human: HumanModel,
     /// The one ISO/TS 15066 rule (shared with the shield).
     rule: ContactRule,
+    /// Its object form, and the log's objects (their hits follow the body parts': part index
+    /// `parts + k` for object `k`).
+    object_rule: ObjectRule,
+    objects: Vec<ObjectTrack>,
     environment: Vec<Capsule>,
     names: ModelNames,
     rreach: RobotReach,
@@ -135,11 +157,6 @@ impl Auditor {
     /// human model, the config is invalid, or the robot has more than [`MAX_CAPSULES`] capsules.
     pub fn new(models: LogModels, cfg: AuditConfig) -> Result<Self, AuditError> {
         cfg.validate()?;
-        if !models.objects.is_empty() {
-            return Err(AuditError::ObjectsNotSupported {
-                count: models.objects.len(),
-            });
-        }
         let tc = models
             .constraints
             .resolve(&models.human)
@@ -185,7 +202,24 @@ impl Auditor {
             environment_shapes: models.environment.len(),
         };
         let links = models.robot.links().len();
+        let object_rule =
+            ObjectRule::new(&models.robot, &rreach, cfg.rest_speed).map_err(AuditError::Rule)?;
+        let objects: Vec<ObjectTrack> = models
+            .objects
+            .iter()
+            .map(|(id, model, contact)| ObjectTrack {
+                id: id.clone(),
+                model: *model,
+                contact: *contact,
+                latest: None,
+                span: None,
+                occ: None,
+            })
+            .collect();
+        let slots = parts + objects.len();
         Ok(Self {
+            object_rule,
+            objects,
             hreach: HumanReach::new(models.human.clone(), cfg.human_model),
             rreach,
             cfg,
@@ -200,7 +234,7 @@ impl Auditor {
             scratch: Box::default(),
             frames: vec![Isometry3::identity(); n + 1],
             nom_caps: vec![zero; ncaps],
-            hits: Vec::with_capacity(parts * links),
+            hits: Vec::with_capacity(slots * links),
             prev: None,
             block: Vec::with_capacity(BLOCK_SPANS + 1),
             block_human: None,
@@ -208,7 +242,7 @@ impl Auditor {
             latest_human: None,
             span_human: None,
             span_index: 0,
-            open: vec![None; parts * links],
+            open: vec![None; slots * links],
             violations: Vec::new(),
             inconclusive: Vec::new(),
             samples: 0,
@@ -271,6 +305,44 @@ impl Auditor {
         self.human_records += 1;
         // Every human record after the last robot sample counts: keep the earliest measurement.
         self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
+        Ok(())
+    }
+
+    /// A measurement of object `id` (declared in the header) logged at `t`, taken at `t_meas`
+    /// (s): position (m), velocity (m/s) if measured. Errors name the field and value.
+    pub fn push_object(
+        &mut self,
+        t: f64,
+        t_meas: f64,
+        id: &str,
+        position: [f64; 3],
+        velocity: Option<[f64; 3]>,
+    ) -> Result<(), AuditError> {
+        let Some(k) = self.objects.iter().position(|o| o.id == id) else {
+            return Err(AuditError::UnknownObject { id: id.to_string() });
+        };
+        for (field, v) in std::iter::once(("t_meas", t_meas))
+            .chain(position.iter().map(|x| ("position", *x)))
+            .chain(velocity.iter().flatten().map(|x| ("velocity", *x)))
+        {
+            if !v.is_finite() {
+                return Err(AuditError::NotFinite {
+                    field: format!("object `{id}`: {field}"),
+                    value: v,
+                });
+            }
+        }
+        if t_meas > t {
+            return Err(AuditError::MeasurementFromFuture { t_meas, t });
+        }
+        let o = &mut self.objects[k];
+        if o.latest.is_none_or(|m| m.time <= t_meas) {
+            o.latest = Some(ObjectMeasurement {
+                time: t_meas,
+                position,
+                velocity,
+            });
+        }
         Ok(())
     }
 
@@ -371,12 +443,20 @@ impl Auditor {
             self.block_human = self.span_human;
         }
         self.block.push(s);
+        if !self.objects.is_empty() {
+            // With objects every span is checked as soon as it closes, with the object
+            // measurements in use for it (no block fast path: it does not know objects).
+            self.flush_block();
+        }
         if self.block.len() > BLOCK_SPANS {
             self.flush_block();
             self.block_human = self.latest_human;
         }
         self.prev = Some(s);
         self.span_human = self.latest_human;
+        for o in &mut self.objects {
+            o.span = o.latest;
+        }
         self.samples += 1;
         self.t_last = t;
         Ok(())

@@ -7,15 +7,6 @@ use thiserror::Error;
 /// Why the checker refused a record, the models or its settings.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum AuditError {
-    /// The header declares dynamic objects: the audit does not check them yet, and certifying
-    /// a run while ignoring them would be unsound (issue 14; the shield handles objects).
-    #[error(
-        "header.objects: {count} dynamic object(s) declared; the offline audit does not check objects yet, so this log cannot be certified (remove them only if they are irrelevant to safety)"
-    )]
-    ObjectsNotSupported {
-        /// Number of declared objects.
-        count: usize,
-    },
     /// An `object` record names an object the header does not declare.
     #[error("object record: id `{id}` is not declared in header.objects")]
     UnknownObject {

@@ -65,9 +65,13 @@ pub fn audit_reader(
                 Ok(())
             }
             Record::Shield { .. } => Ok(()),
-            // Unreachable: a header with objects is refused by `Auditor::new`; an object record
-            // without a declared object is an error, never silently ignored.
-            Record::Object { id, .. } => Err(AuditError::UnknownObject { id: id.to_string() }),
+            Record::Object {
+                t,
+                t_meas,
+                id,
+                position,
+                velocity,
+            } => auditor.push_object(t, t_meas, id, position, velocity),
         }
     };
     loop {

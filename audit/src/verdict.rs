@@ -88,6 +88,12 @@ pub enum InconclusiveReason {
     HumanRecordAfterLastRobotSample,
     /// The log has fewer than two robot samples: it covers no time.
     FewerThanTwoRobotSamples,
+    /// A declared object has no measurement before the span's first robot sample.
+    NoObject,
+    /// An object's measurement in use is older than `max_human_age` at the span's end.
+    StaleObject,
+    /// An object's occupancy could not be computed (e.g. it overflows).
+    ObjectReachError,
 }
 
 impl InconclusiveReason {
@@ -101,6 +107,9 @@ impl InconclusiveReason {
             Self::HumanReachError => "human_reach_error",
             Self::HumanRecordAfterLastRobotSample => "human_record_after_last_robot_sample",
             Self::FewerThanTwoRobotSamples => "fewer_than_two_robot_samples",
+            Self::NoObject => "no_object",
+            Self::StaleObject => "stale_object",
+            Self::ObjectReachError => "object_reach_error",
         }
     }
 }

@@ -199,18 +199,19 @@ fn writer_rejects_what_the_reader_would_reject() {
 }
 
 /// Dynamic objects (issue 14): the log format carries them (header `objects`, `object` records,
-/// written by `LogWriter::write_object` and read back), but the audit does not check them yet,
-/// so a log that declares any is refused (never certified with the objects ignored); an object
-/// record without a declared object is an error; a malformed one names its field.
+/// written by `LogWriter::write_object` and read back); an object record without a declared
+/// object is an error; a malformed one names its field.
 #[test]
-fn object_logs_are_read_but_not_certified_yet() {
+fn object_records_are_read_and_checked_for_errors() {
     let header_objects = r#"{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm","objects":[{"id":"b1","object":"ball","contact":"no_contact"}]}"#;
     let object = r#"{"type":"object","t":0.0,"t_meas":0.0,"id":"b1","position":[0.5,0.0,0.04],"velocity":[0.0,0.1,0.0]}"#;
-    expect_error(
+    // (Audited: `audit_objects.rs`.) An object far from the arm: the log passes.
+    let r = run(
         &lines(&[header_objects, HUMAN, object, ROBOT0, ROBOT1]),
-        Some(1),
-        "the offline audit does not check objects yet",
-    );
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, pacs_audit::Verdict::Pass);
     // Undeclared object: an error at its line.
     expect_error(
         &lines(&[HEADER, HUMAN, object, ROBOT0, ROBOT1]),

@@ -93,6 +93,20 @@ pub enum ConstraintKind {
     Ssm,
     /// Power and force limiting.
     Pfl,
+    /// No contact at all (a dynamic object that must not be touched; never a body part).
+    #[serde(rename = "no_contact")]
+    NoContact,
+}
+
+impl ConstraintKind {
+    /// The kind of an object's contact constraint.
+    pub fn of_object(c: pacs_models::object::ObjectContact) -> Self {
+        match c {
+            pacs_models::object::ObjectContact::NoContact => ConstraintKind::NoContact,
+            pacs_models::object::ObjectContact::Ssm => ConstraintKind::Ssm,
+            pacs_models::object::ObjectContact::Pfl { .. } => ConstraintKind::Pfl,
+        }
+    }
 }
 
 /// Whether two robot capsules carried by frames `a` and `b` can pinch a body part between them:

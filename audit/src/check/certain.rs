@@ -53,6 +53,9 @@ impl Auditor {
         let mut any = false;
         for k in 0..self.hits.len() {
             let h = self.hits[k];
+            if h.part >= self.parts {
+                continue; // an object's hit: never certain (module docs)
+            }
             let pc = part_cap(h.part);
             let (s_, e_) = self.rreach.link_ranges()[h.link];
             let mut touch = false;
@@ -68,6 +71,8 @@ impl Auditor {
             let certain = touch
                 && match h.kind {
                     ConstraintKind::Ssm => moving,
+                    // Object hits never reach here (`certain_at` skips them).
+                    ConstraintKind::NoContact => true,
                     ConstraintKind::Pfl => {
                         let clamp = self.environment.iter().any(|e| certainly_touch(e, &pc))
                             || (0..self.parts).any(|o| {

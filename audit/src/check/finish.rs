@@ -140,7 +140,10 @@ impl Auditor {
             t_start: o.v_start,
             t_end: o.v_end,
             constraint: o.kind,
-            body_part: self.human.body_parts()[part].name.clone(),
+            body_part: match self.human.body_parts().get(part) {
+                Some(bp) => bp.name.clone(),
+                None => format!("object `{}`", self.objects[part - self.parts].id),
+            },
             link: self.robot.links()[link].name.clone(),
             min_separation: o.min_sep,
             energy: reportable(o.energy),

@@ -16,7 +16,8 @@ impl Auditor {
         let m = self.block.len();
         if m >= 2 {
             let slot = self.block_human;
-            if !self.check_block(slot) {
+            // The block fast path checks body parts only: with objects, span by span.
+            if !(self.objects.is_empty() && self.check_block(slot)) {
                 for i in 0..m - 1 {
                     let (a, b) = (self.block[i], self.block[i + 1]);
                     self.check_span(&a, &b, slot);
@@ -214,6 +215,33 @@ impl Auditor {
             finish_span(self, false, false);
             return;
         }
+        // Each object's occupancy over the span, from the measurement in use for it.
+        let mut objects_left = false;
+        for k in 0..self.objects.len() {
+            let o = &mut self.objects[k];
+            o.occ = None;
+            let reason = match o.span {
+                None => Some(Reason::NoObject),
+                Some(m) if t1 - m.time > self.cfg.max_human_age => Some(Reason::StaleObject),
+                Some(m) => match pacs_reach::object::occupancy(&o.model, &m, t0, t1) {
+                    Err(_) => Some(Reason::ObjectReachError),
+                    Ok(occ) => {
+                        if self.object_rule.workspace_clear(&occ).is_none() {
+                            o.occ = Some(occ);
+                            objects_left = true;
+                        }
+                        None
+                    }
+                },
+            };
+            if let Some(r) = reason {
+                self.mark_inconclusive(t0, t1, r);
+                self.inconclusive_duration += dt;
+                self.series.buckets[bidx].inconclusive = true;
+                finish_span(self, false, false);
+                return;
+            }
+        }
         let SpanEnclosure { boxes, consistent } = self.boxes(s0, s1);
         if !consistent {
             self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
@@ -223,8 +251,11 @@ impl Auditor {
         if new_bucket {
             self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(s0, s1));
         }
-        // Broad phase, stage 1: every body part outside the robot's workspace ball.
-        if let Some(sep) = self.rule.workspace_clear(&self.hcaps) {
+        // Broad phase, stage 1: every body part (and object) outside the robot's workspace ball.
+        let human_clear = self.rule.workspace_clear(&self.hcaps);
+        if let Some(sep) = human_clear
+            && !objects_left
+        {
             self.record_separation(bidx, sep);
             finish_span(self, false, false);
             return;
@@ -249,8 +280,20 @@ impl Auditor {
             finish_span(self, false, false);
             return;
         }
-        let out = self.apply_rule(&bx, true);
+        let out = match human_clear {
+            Some(sep) => {
+                self.hits.clear();
+                Outcome {
+                    contact: false,
+                    violated: false,
+                    separation: sep,
+                    pfl: None,
+                }
+            }
+            None => self.apply_rule(&bx, true),
+        };
         self.record_separation(bidx, out.separation);
+        self.apply_object_rule(&bx);
         if let Some((e, thr)) = out.pfl {
             let b = &mut self.series.buckets[bidx];
             b.energy_bound = max_opt(b.energy_bound, Some(reportable(e)));
@@ -264,6 +307,7 @@ impl Auditor {
         // Certain check at both recorded samples, with the measured keypoints — only where the
         // samples agree with each other: "certain" takes the logged state at face value, which a
         // contradicted sample does not deserve (the span's possible violation still fails the log).
+        // (Object hits are never certain: `certain_at` evaluates body-part hits only.)
         if consistent {
             for s in [s0, s1] {
                 certain |= self.certain_at(s, s0, s1, slot);
@@ -313,6 +357,53 @@ impl Auditor {
             }
         }
         finish_span(self, violated, certain);
+    }
+
+    /// The object rule ([`ObjectRule::check`]) for every object whose occupancy is not cleared
+    /// by the workspace ball, on the robot occupancy in `self.rcaps` (computed for `b`'s
+    /// position box); each violation is appended to `self.hits` as part `parts + k`.
+    pub(super) fn apply_object_rule(&mut self, b: &SpanBoxes) {
+        let n = self.n;
+        let Self {
+            object_rule,
+            objects,
+            rreach,
+            scratch,
+            rcaps,
+            energies,
+            hits,
+            parts,
+            ..
+        } = self;
+        let mut energy_cache: Option<f64> = None;
+        for (k, o) in objects.iter().enumerate() {
+            let Some(occ) = &o.occ else { continue };
+            let energy = || {
+                *energy_cache.get_or_insert_with(|| {
+                    match rreach.subchain_energy_bounds_with(scratch, &b.q, &b.dq, energies) {
+                        Ok(()) => energies[n],
+                        Err(_) => f64::INFINITY,
+                    }
+                })
+            };
+            let out = object_rule.check(rcaps, &b.dq, occ, o.contact, energy);
+            if let Some(v) = out.violation {
+                let threshold = match o.contact {
+                    ObjectContact::Pfl { threshold } => threshold,
+                    _ => 0.0,
+                };
+                hits.push(SpanHit {
+                    part: *parts + k,
+                    link: v.link,
+                    kind: ConstraintKind::of_object(o.contact),
+                    energy: v.energy,
+                    threshold,
+                    constrained: false,
+                    certain: false,
+                    separation: 0.0,
+                });
+            }
+        }
     }
 
     pub(super) fn record_separation(&mut self, bidx: usize, sep: f64) {

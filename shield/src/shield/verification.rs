@@ -244,7 +244,8 @@ impl Shield {
             let Some(v) = first else { continue };
             if matches!(diag.binding, Binding::None) {
                 diag.binding = match v.kind {
-                    ConstraintKind::Ssm => Binding::Ssm {
+                    // (The body-part rule reports SSM or PFL only.)
+                    ConstraintKind::Ssm | ConstraintKind::NoContact => Binding::Ssm {
                         human: hid,
                         link: v.link,
                         body_part: v.part,

@@ -1,0 +1,152 @@
+//! Dynamic objects in the audit (issue 14): a log declares objects in its header and logs their
+//! measurements as `object` records; every span is checked against each object with the object
+//! form of the one rule. A ball far away passes; a ball on the flange fails under `no_contact`
+//! (at rest too) and under `ssm` only while the arm moves; a declared but unmeasured object, or a
+//! stale measurement, makes the log inconclusive, never a pass.
+
+mod audit_common;
+
+use audit_common::*;
+use pacs_audit::{AuditConfig, Verdict};
+use pacs_log::{Header, LogWriter, ModelRef, ObjectEntry};
+use pacs_models::object::ObjectContact;
+
+/// Where the flange capsule ends at the ready pose (m).
+fn flange() -> [f64; 3] {
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let caps = robot.capsules_world(&Q_READY);
+    let p = caps.last().unwrap().1.p2();
+    [p.x, p.y, p.z]
+}
+
+/// 0.2 s of robot samples at 1 kHz (joint 1 turning at `speed` rad/s from the ready pose), the
+/// default human 2.5 m away (measured every 10 ms), and the ball `b1` at `ball` measured every 10 ms until `last_meas`
+/// (s); `contact` is the ball's constraint.
+fn log(
+    ball: [f64; 3],
+    contact: ObjectContact,
+    speed: f64,
+    last_meas: f64,
+    declare_only: bool,
+) -> String {
+    let mut h = Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    h.objects.push(ObjectEntry {
+        id: "b1".into(),
+        object: ModelRef::Name("ball".into()),
+        contact,
+    });
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&h).unwrap();
+    for k in 0..=200 {
+        let t = k as f64 * 1e-3;
+        if k % 10 == 0 {
+            w.write_human(t, t, &standing(2.5, 0.0)).unwrap();
+        }
+        if !declare_only && k % 10 == 0 && t <= last_meas {
+            w.write_object(t, t, "b1", ball, Some([0.0; 3])).unwrap();
+        }
+        let mut q = Q_READY;
+        q[0] += speed * t;
+        let mut dq = [0.0; 7];
+        dq[0] = speed;
+        w.write_robot(t, &q, Some(&dq)).unwrap();
+    }
+    String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+#[test]
+fn a_far_ball_passes() {
+    let r = run(
+        &log([3.0, 3.0, 0.5], ObjectContact::NoContact, 0.2, 1.0, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.violations);
+}
+
+#[test]
+fn a_ball_on_the_flange_fails_no_contact_even_at_rest() {
+    let r = run(
+        &log(flange(), ObjectContact::NoContact, 0.0, 1.0, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    let v = &r.violations[0];
+    assert_eq!(v.body_part, "object `b1`");
+    assert_eq!(
+        v.constraint,
+        pacs_verify::iso15066::ConstraintKind::NoContact
+    );
+    assert!(!v.certain, "object violations are reported as possible");
+    let json = serde_json::to_string(v).unwrap();
+    assert!(json.contains("\"no_contact\""), "{json}");
+}
+
+#[test]
+fn ssm_ball_fails_only_while_the_arm_moves() {
+    let rest = run(
+        &log(flange(), ObjectContact::Ssm, 0.0, 1.0, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(rest.verdict, Verdict::Pass, "{:?}", rest.violations);
+    let moving = run(
+        &log(flange(), ObjectContact::Ssm, 0.2, 1.0, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(moving.verdict, Verdict::Fail);
+    // PFL with a threshold above the arm's energy at 0.2 rad/s passes; a tiny one fails.
+    let pfl = |thr: f64| {
+        run(
+            &log(
+                flange(),
+                ObjectContact::Pfl { threshold: thr },
+                0.2,
+                1.0,
+                false,
+            ),
+            &AuditConfig::default(),
+        )
+        .unwrap()
+        .verdict
+    };
+    assert_eq!(pfl(100.0), Verdict::Pass);
+    assert_eq!(pfl(1e-9), Verdict::Fail);
+}
+
+#[test]
+fn an_unmeasured_or_stale_object_is_inconclusive() {
+    let r = run(
+        &log([3.0, 3.0, 0.5], ObjectContact::NoContact, 0.2, 1.0, true),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    assert!(
+        r.inconclusive.iter().any(|s| s.reason == "no_object"),
+        "{:?}",
+        r.inconclusive
+    );
+    // Measured only until 0.05 s; max_human_age 0.1 s (it also bounds object measurements).
+    let cfg = AuditConfig {
+        max_human_age: 0.1,
+        ..AuditConfig::default()
+    };
+    let r = run(
+        &log([3.0, 3.0, 0.5], ObjectContact::NoContact, 0.2, 0.05, false),
+        &cfg,
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    assert!(
+        r.inconclusive.iter().any(|s| s.reason == "stale_object"),
+        "{:?}",
+        r.inconclusive
+    );
+}
