@@ -884,3 +884,56 @@ fn fuzz_regression_huge_string_length_in_a_metadata_record() {
     let e = audit_bytes("oom.mcap", bytes, &AuditConfig::default(), None).unwrap_err();
     assert!(e.to_string().starts_with("oom.mcap: "), "{e}");
 }
+
+/// Dynamic objects from MCAP (issue 14): an object's positions on its configured topic
+/// (`mcap.object_topics`, `geometry_msgs/msg/PoseStamped` here) are audited like JSON Lines
+/// `object` records: a ball on the flange fails `no_contact`; read without the topic mapping the
+/// object is never measured and the log is inconclusive (`no_object`), never a pass.
+#[test]
+fn object_topics_are_audited() {
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let caps = robot.capsules_world(&Q_READY);
+    let f = caps.last().unwrap().1.p2();
+    let mut h = header("ssm");
+    h.objects.push(pacs_log::ObjectEntry {
+        id: "b1".into(),
+        object: ModelRef::Name("ball".into()),
+        contact: pacs_models::object::ObjectContact::NoContact,
+    });
+    let mut cfg = McapConfig::default();
+    cfg.object_topics.insert("b1".into(), "/ball/pose".into());
+    let names = fr3_joints();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut w = McapLogWriter::new(
+        Cursor::new(Vec::new()),
+        mcap::WriteOptions::new(),
+        &h,
+        &cfg,
+        &names,
+    )
+    .unwrap();
+    for k in 0..=100i128 {
+        let ns = k * 1_000_000;
+        if k % 10 == 0 {
+            w.write_human(ns, ns, &standing(2.5, 0.0)).unwrap();
+            w.write_object("b1", ns, ns, [f.x, f.y, f.z]).unwrap();
+        }
+        w.write_robot(ns, ns, &Q_READY, Some(&[0.0; 7])).unwrap();
+    }
+    assert!(w.write_object("b2", 0, 0, [0.0; 3]).is_err());
+    let bytes = w.finish().unwrap().into_inner();
+    let audit_cfg = AuditConfig {
+        mcap: cfg,
+        ..AuditConfig::default()
+    };
+    let r = audit_bytes("objects.mcap", &bytes, &audit_cfg, None).unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    assert_eq!(r.violations[0].body_part, "object `b1`");
+    let r = audit_bytes("objects.mcap", &bytes, &AuditConfig::default(), None).unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    assert!(
+        r.inconclusive.iter().any(|s| s.reason == "no_object"),
+        "{:?}",
+        r.inconclusive
+    );
+}

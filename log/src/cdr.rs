@@ -306,6 +306,38 @@ impl PoseArray {
     }
 }
 
+/// A decoded `geometry_msgs/msg/PoseStamped` (orientation read and ignored).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PoseStamped {
+    /// `header.stamp`.
+    pub stamp: Stamp,
+    /// `pose.position` (m).
+    pub position: [f64; 3],
+}
+
+impl PoseStamped {
+    /// Decode `data` (a CDR `PoseStamped`).
+    pub fn decode(data: &[u8]) -> Result<Self, CdrError> {
+        let mut r = CdrReader::new(data)?;
+        let (stamp, _) = header(&mut r)?;
+        let position = [
+            r.f64("pose.position.x")?,
+            r.f64("pose.position.y")?,
+            r.f64("pose.position.z")?,
+        ];
+        for f in [
+            "pose.orientation.x",
+            "pose.orientation.y",
+            "pose.orientation.z",
+            "pose.orientation.w",
+        ] {
+            r.f64(f)?;
+        }
+        r.finish()?;
+        Ok(Self { stamp, position })
+    }
+}
+
 /// Decode a CDR `std_msgs/msg/String` into `out`.
 pub fn decode_string(data: &[u8], out: &mut String) -> Result<(), CdrError> {
     let mut r = CdrReader::new(data)?;
@@ -414,6 +446,15 @@ impl CdrWriter {
             w.f64(p[0]).f64(p[1]).f64(p[2]);
             w.f64(0.0).f64(0.0).f64(0.0).f64(1.0);
         }
+        w.into_bytes()
+    }
+
+    /// A `geometry_msgs/msg/PoseStamped` (identity orientation).
+    pub fn pose_stamped(stamp: Stamp, frame_id: &str, position: [f64; 3]) -> Vec<u8> {
+        let mut w = Self::new();
+        w.header(stamp, frame_id);
+        w.f64(position[0]).f64(position[1]).f64(position[2]);
+        w.f64(0.0).f64(0.0).f64(0.0).f64(1.0);
         w.into_bytes()
     }
 

@@ -34,6 +34,9 @@ pub const METADATA_KEY: &str = "header";
 pub const JOINT_STATE: &str = "sensor_msgs/msg/JointState";
 /// Schema name of human keypoint messages.
 pub const POSE_ARRAY: &str = "geometry_msgs/msg/PoseArray";
+/// Schema name of single-object pose messages (object topics also accept [`POSE_ARRAY`], first
+/// pose).
+pub const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
 /// Schema name of event messages.
 pub const STRING: &str = "std_msgs/msg/String";
 /// Largest MCAP record (other than a chunk, which is streamed) the reader accepts, in bytes.
@@ -58,6 +61,10 @@ pub struct McapConfig {
     pub human_topic: String,
     /// Topic of task events (`std_msgs/msg/String`). Default `/pacs/events`.
     pub event_topic: String,
+    /// Per dynamic object of the header (its id), the topic of its position
+    /// (`geometry_msgs/msg/PoseStamped`, or `PoseArray` whose first pose is used; no velocity).
+    /// Default none: a log whose header declares objects then has no object measurements.
+    pub object_topics: std::collections::BTreeMap<String, String>,
     /// Messages are put in time order within this window (s); a message older than one already
     /// handed to the checker by more than this is an error. Default 1.0 s.
     pub reorder_window: f64,
@@ -69,6 +76,7 @@ impl Default for McapConfig {
             robot_topic: "/joint_states".into(),
             human_topic: "/human/keypoints".into(),
             event_topic: "/pacs/events".into(),
+            object_topics: Default::default(),
             reorder_window: 1.0,
         }
     }
@@ -80,11 +88,16 @@ impl McapConfig {
         if !(self.reorder_window.is_finite() && self.reorder_window >= 0.0) {
             return Err(McapConfigError::ReorderWindow(self.reorder_window));
         }
-        let topics = [
+        let mut topics = vec![
             ("mcap.robot_topic", &self.robot_topic),
             ("mcap.human_topic", &self.human_topic),
             ("mcap.event_topic", &self.event_topic),
         ];
+        topics.extend(
+            self.object_topics
+                .values()
+                .map(|t| ("mcap.object_topics", t)),
+        );
         for (i, (f, t)) in topics.iter().enumerate() {
             if t.is_empty() {
                 return Err(McapConfigError::EmptyTopic(f));

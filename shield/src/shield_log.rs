@@ -84,6 +84,18 @@ impl<W: Write> ShieldLog<W> {
         self.w.write_shield(tc, &fields)
     }
 
+    /// A measurement of the header's object `id`, given to the shield at step time `t` (s):
+    /// written as an `object` record (before the step's robot sample in the audit's order).
+    pub fn object(
+        &mut self,
+        t: f64,
+        id: &str,
+        m: &pacs_reach::object::ObjectMeasurement,
+    ) -> Result<(), WriteError> {
+        self.w
+            .write_object(t.max(self.last_t), m.time, id, m.position, m.velocity)
+    }
+
     /// A named event (`episode_start`, `success`, `failure`, ...).
     pub fn event(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
         self.last_t = t.max(self.last_t);

@@ -16,6 +16,10 @@ use std::io::{Read, Seek, SeekFrom};
 enum Stream {
     Robot,
     Human,
+    /// A dynamic object's positions: `PoseStamped` (`stamped`) or `PoseArray` (first pose).
+    Object {
+        stamped: bool,
+    },
     Event,
     Ignored,
 }
@@ -30,6 +34,12 @@ enum Body {
         positions: Vec<[f64; 3]>,
     },
     Event(String),
+    Object {
+        /// The header's object id.
+        id: String,
+        t_meas: f64,
+        position: [f64; 3],
+    },
 }
 
 struct Pending {
@@ -51,11 +61,11 @@ impl PartialOrd for Pending {
     }
 }
 impl Pending {
-    /// At equal times: human measurements first (a measurement logged at `t` is in use from the
+    /// At equal times: human and object measurements first (a measurement logged at `t` is in use from the
     /// robot sample at `t` on), then robot samples, then events.
     fn rank(&self) -> u8 {
         match self.body {
-            Body::Human { .. } => 0,
+            Body::Human { .. } | Body::Object { .. } => 0,
             Body::Robot { .. } => 1,
             Body::Event(_) => 2,
         }
@@ -320,6 +330,17 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
                 positions,
             },
             Body::Event(name) => Record::Event { t, name },
+            Body::Object {
+                id,
+                t_meas,
+                position,
+            } => Record::Object {
+                t,
+                t_meas: *t_meas,
+                id,
+                position: *position,
+                velocity: None,
+            },
         }))
     }
 

@@ -1,6 +1,8 @@
 //! [`McapLogWriter`]: writes a pacs log as an MCAP file of a ROS 2 recording.
 
-use super::{JOINT_STATE, METADATA_KEY, METADATA_NAME, McapConfig, POSE_ARRAY, STRING};
+use super::{
+    JOINT_STATE, METADATA_KEY, METADATA_NAME, McapConfig, POSE_ARRAY, POSE_STAMPED, STRING,
+};
 use crate::cdr::{CdrWriter, Stamp};
 use crate::format::Header;
 use std::io::{Seek, Write};
@@ -14,6 +16,8 @@ pub struct McapLogWriter<W: Write + Seek> {
     robot: u16,
     human: u16,
     event: u16,
+    /// Per object id of `cfg.object_topics`, its `PoseStamped` channel.
+    objects: std::collections::BTreeMap<String, u16>,
     seq: u32,
     joints: Vec<String>,
     frame_id: String,
@@ -31,6 +35,9 @@ pub enum McapWriteError {
     /// A time stamp does not fit a ROS 2 `builtin_interfaces/Time` (or the log time is negative).
     #[error("time stamp {0} ns is out of range")]
     Time(i128),
+    /// An object id without a topic in the config's `object_topics`.
+    #[error("object `{0}` has no topic in mcap.object_topics")]
+    UnknownObject(String),
 }
 
 impl<W: Write + Seek> McapLogWriter<W> {
@@ -58,11 +65,16 @@ impl<W: Write + Seek> McapLogWriter<W> {
         let robot = chan(JOINT_STATE, JOINT_STATE_DEF, &cfg.robot_topic)?;
         let human = chan(POSE_ARRAY, POSE_ARRAY_DEF, &cfg.human_topic)?;
         let event = chan(STRING, "string data\n", &cfg.event_topic)?;
+        let mut objects = std::collections::BTreeMap::new();
+        for (id, topic) in &cfg.object_topics {
+            objects.insert(id.clone(), chan(POSE_STAMPED, POSE_STAMPED_DEF, topic)?);
+        }
         Ok(Self {
             w,
             robot,
             human,
             event,
+            objects,
             seq: 0,
             joints: joints.iter().map(|s| s.to_string()).collect(),
             frame_id: "world".into(),
@@ -110,6 +122,23 @@ impl<W: Write + Seek> McapLogWriter<W> {
         self.put(self.human, log_time, &data)
     }
 
+    /// A position of object `id` (a key of the config's `object_topics`) taken at `stamp` (ns),
+    /// logged at `log_time` (ns), as a `PoseStamped`. An unknown id is an error.
+    pub fn write_object(
+        &mut self,
+        id: &str,
+        stamp: i128,
+        log_time: i128,
+        position: [f64; 3],
+    ) -> Result<(), McapWriteError> {
+        let Some(&channel) = self.objects.get(id) else {
+            return Err(McapWriteError::UnknownObject(id.to_string()));
+        };
+        let st = Stamp::from_nanos(stamp).ok_or(McapWriteError::Time(stamp))?;
+        let data = CdrWriter::pose_stamped(st, &self.frame_id, position);
+        self.put(channel, log_time, &data)
+    }
+
     /// An event logged at `log_time` (ns).
     pub fn write_event(&mut self, log_time: i128, name: &str) -> Result<(), McapWriteError> {
         let data = CdrWriter::string_msg(name);
@@ -124,4 +153,5 @@ impl<W: Write + Seek> McapLogWriter<W> {
 }
 
 const JOINT_STATE_DEF: &str = "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n";
+const POSE_STAMPED_DEF: &str = "std_msgs/Header header\ngeometry_msgs/Pose pose\n";
 const POSE_ARRAY_DEF: &str = "std_msgs/Header header\ngeometry_msgs/Pose[] poses\n";

@@ -7,7 +7,7 @@ use crate::error::{Location, LogError};
 use crate::format::{Header, LogModels};
 use crate::mcap::fields::{FieldError, Fields};
 use crate::mcap::header::parse_metadata;
-use crate::mcap::{JOINT_STATE, MAX_PENDING, METADATA_NAME, POSE_ARRAY, STRING};
+use crate::mcap::{JOINT_STATE, MAX_PENDING, METADATA_NAME, POSE_ARRAY, POSE_STAMPED, STRING};
 use mcap::records::op;
 
 impl State {
@@ -123,6 +123,16 @@ impl State {
             (Stream::Human, POSE_ARRAY)
         } else if topic == cfg.event_topic {
             (Stream::Event, STRING)
+        } else if cfg.object_topics.values().any(|t| t == topic) {
+            // Either pose message; which one is decided by the channel's schema below.
+            let stamped = self
+                .schemas
+                .get(&schema_id)
+                .is_some_and(|(name, _)| name == POSE_STAMPED);
+            (
+                Stream::Object { stamped },
+                if stamped { POSE_STAMPED } else { POSE_ARRAY },
+            )
         } else {
             (Stream::Ignored, "")
         };
@@ -321,6 +331,48 @@ impl State {
                     },
                 }
             }
+            Stream::Object { stamped } => {
+                let topic = self.channels.get(&h.channel_id).map(|c| c.0.as_str());
+                let id = self
+                    .cfg
+                    .object_topics
+                    .iter()
+                    .find(|(_, t)| Some(t.as_str()) == topic)
+                    .map(|(id, _)| id.clone())
+                    .unwrap_or_default();
+                let (stamp, position) = if stamped {
+                    let m = cdr::PoseStamped::decode(data)
+                        .map_err(|e| self.err(format!("{}: PoseStamped: {e}", self.what(h))))?;
+                    (m.stamp, m.position)
+                } else {
+                    self.pa
+                        .decode(data)
+                        .map_err(|e| self.err(format!("{}: PoseArray: {e}", self.what(h))))?;
+                    let Some(p) = self.pa.positions.first() else {
+                        return Err(self.err(format!(
+                            "{}: PoseArray for object `{id}` has no pose",
+                            self.what(h)
+                        )));
+                    };
+                    (self.pa.stamp, *p)
+                };
+                if let Some(c) = position.iter().find(|c| !c.is_finite()) {
+                    return Err(self.err(format!(
+                        "{}: object `{id}` position: value {c} is not finite",
+                        self.what(h)
+                    )));
+                }
+                Pending {
+                    t: log_t,
+                    seq: 0,
+                    offset: 0,
+                    body: Body::Object {
+                        id,
+                        t_meas: self.secs(stamp.nanos()),
+                        position,
+                    },
+                }
+            }
             Stream::Event | Stream::Ignored => {
                 let mut s = self.str_pool.pop().unwrap_or_default();
                 cdr::decode_string(data, &mut s)
@@ -362,7 +414,7 @@ impl State {
                 self.f64_pool.extend(dq);
             }
             Body::Human { positions, .. } => self.pos_pool.push(positions),
-            Body::Event(s) => self.str_pool.push(s),
+            Body::Event(s) | Body::Object { id: s, .. } => self.str_pool.push(s),
         }
     }
 }
