@@ -140,3 +140,36 @@ fn bad_csv_input_is_rejected_with_its_line() {
     let e = run_csv(&format!("{human}\n")).unwrap_err();
     assert!(e.to_string().contains("missing header"));
 }
+
+/// Object rows (issue 14): `object,t,t_meas,id,x,y,z[,vx,vy,vz]`. A ball resting on the flange
+/// under `no_contact` fails; malformed rows name the problem and the line.
+#[test]
+fn object_rows_are_audited() {
+    let h = r#"#{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":"default","constraints":"ssm","objects":[{"id":"b1","object":"ball","contact":"no_contact"}]}"#;
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let f = robot.capsules_world(&Q_READY).last().unwrap().1.p2();
+    let kp: Vec<String> = standing(2.5, 0.0)
+        .iter()
+        .flat_map(|p| p.iter().map(|x| x.to_string()))
+        .collect();
+    let q: Vec<String> = Q_READY.iter().map(|x| x.to_string()).collect();
+    let mut text = format!("{h}\n");
+    for k in 0..=50 {
+        let t = k as f64 * 1e-3;
+        if k % 10 == 0 {
+            text += &format!("human,{t},{t},{}\n", kp.join(","));
+            text += &format!("object,{t},{t},b1,{},{},{},0,0,0\n", f.x, f.y, f.z);
+        }
+        text += &format!("robot,{t},7,{}\n", q.join(","));
+    }
+    let r = run_csv(&text).unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    assert_eq!(r.violations[0].body_part, "object `b1`");
+    expect(
+        &format!("{h}\nobject,0,0,b1,1,2\n"),
+        2,
+        "expected 3 (position) or 6",
+    );
+    expect(&format!("{h}\nobject,0,0,b1,1,2,nan\n"), 2, "position[2]");
+    expect(&format!("{h}\nobject,0,0\n"), 2, "missing column `id`");
+}

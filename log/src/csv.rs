@@ -222,6 +222,46 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                     name: &self.name,
                 }))
             }
+            "object" => {
+                let t_meas = num(
+                    "t_meas",
+                    cells
+                        .next()
+                        .ok_or_else(|| err("missing column `t_meas`".into()))?,
+                )
+                .map_err(bad)?;
+                self.name.clear();
+                self.name.push_str(
+                    cells
+                        .next()
+                        .ok_or_else(|| err("missing column `id`".into()))?
+                        .trim(),
+                );
+                let mut v = [0.0; 6];
+                let mut k = 0;
+                for (i, c) in cells.enumerate() {
+                    if i >= 6 {
+                        return Err(err(
+                            "object row: more than 6 values after the id (x,y,z[,vx,vy,vz])".into(),
+                        ));
+                    }
+                    let field = if i < 3 { "position" } else { "velocity" };
+                    v[i] = num(&format!("{field}[{}]", i % 3), c).map_err(bad)?;
+                    k = i + 1;
+                }
+                if k != 3 && k != 6 {
+                    return Err(err(format!(
+                        "object row: expected 3 (position) or 6 (position, velocity) values after the id, found {k}"
+                    )));
+                }
+                Ok(Some(Record::Object {
+                    t,
+                    t_meas,
+                    id: &self.name,
+                    position: [v[0], v[1], v[2]],
+                    velocity: (k == 6).then_some([v[3], v[4], v[5]]),
+                }))
+            }
             "shield" => Ok(Some(Record::Shield { t })),
             other => Err(err(format!("unknown record type `{other}`"))),
         }
