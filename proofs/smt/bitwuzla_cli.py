@@ -17,6 +17,15 @@ import re
 import sys
 
 FP_LITERAL = re.compile(r"\(fp #b([01]+) #b([01]+) #b([01]+)\)")
+# Special float literals with exactly one bit pattern each (NaN has many: not rewritten).
+FP_SPECIAL = re.compile(r"\(_ (\+oo|-oo|\+zero|-zero) (\d+) (\d+)\)")
+
+
+def special_bits(kind: str, e: int, s: int) -> str:
+    """The IEEE 754 bits of `(_ kind e s)` (±oo, ±zero): sign, exponent, significand."""
+    sign = "1" if kind.startswith("-") else "0"
+    exponent = ("1" if kind.endswith("oo") else "0") * e
+    return sign + exponent + "0" * (s - 1)
 FP_SYMBOL = re.compile(
     r"^\((?:declare-fun|define-fun) (\|[^|]*\||[^\s()]+) \(\) \(_ FloatingPoint (\d+) (\d+)\)",
     re.M,
@@ -42,7 +51,9 @@ BIT_VECTOR_OPERATORS = {"concat"}
 def repair_float_sorts(text: str) -> str:
     """Return `text` with every float argument of a bit-vector operator made a bit-vector.
 
-    - a float literal `(fp #bS #bE #bM)` becomes the literal `#bSEM` (the same IEEE 754 bits);
+    - a float literal `(fp #bS #bE #bM)` becomes the literal `#bSEM` (the same IEEE 754 bits),
+      and so do `(_ +oo E S)`, `(_ -oo E S)`, `(_ +zero E S)`, `(_ -zero E S)` (one bit pattern
+      each; `NaN` literals are left alone: they have many);
     - a float symbol `X` becomes a fresh bit-vector symbol `X__bv` with the constraint
       `((_ to_fp E M) X__bv) = X` (exactly X's bits unless X is NaN, then any NaN's bits);
     - the same for a bit-vector definition whose whole body is a float symbol or literal;
@@ -106,6 +117,13 @@ def repair_float_sorts(text: str) -> str:
                 if m:
                     out.append(text[last:i])
                     out.append("#b" + m.group(1) + m.group(2) + m.group(3))
+                    i = last = m.end()
+                    continue
+            if in_bv_op and text.startswith("(_ ", i):
+                m = FP_SPECIAL.match(text, i)
+                if m:
+                    out.append(text[last:i])
+                    out.append("#b" + special_bits(m.group(1), int(m.group(2)), int(m.group(3))))
                     i = last = m.end()
                     continue
             j = i + 1
