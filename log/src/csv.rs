@@ -132,6 +132,16 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
         }
         let mut cells = self.line.trim_end_matches(['\n', '\r']).split(',');
         let kind = cells.next().unwrap_or("").trim();
+        // The `t_meas` column of measurement rows (human, object).
+        let t_meas_cell = |cells: &mut std::str::Split<'_, char>| -> Result<f64, LogError> {
+            num(
+                "t_meas",
+                cells
+                    .next()
+                    .ok_or_else(|| err("missing column `t_meas`".into()))?,
+            )
+            .map_err(bad)
+        };
         let t = num(
             "t",
             cells
@@ -181,13 +191,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 }))
             }
             "human" => {
-                let t_meas = num(
-                    "t_meas",
-                    cells
-                        .next()
-                        .ok_or_else(|| err("missing column `t_meas`".into()))?,
-                )
-                .map_err(bad)?;
+                let t_meas = t_meas_cell(&mut cells)?;
                 self.positions.clear();
                 let mut p = [0.0; 3];
                 let mut k = 0;
@@ -223,13 +227,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 }))
             }
             "object" => {
-                let t_meas = num(
-                    "t_meas",
-                    cells
-                        .next()
-                        .ok_or_else(|| err("missing column `t_meas`".into()))?,
-                )
-                .map_err(bad)?;
+                let t_meas = t_meas_cell(&mut cells)?;
                 self.name.clear();
                 self.name.push_str(
                     cells

@@ -128,6 +128,21 @@ pub fn cbf_scenario(steps: usize) -> StepStats {
 /// chunk, a new chunk every 200 ms), the default human walking between 1.5 m and 1.0 m in front
 /// of the robot (0.5 Hz), measured every step; `spec` = "sorting" (SSM) or "handover" (PFL).
 pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats {
+    let name = format!("{spec} ({mode:?})");
+    run_walking_scenario(&name, spec, mode, steps, |_| {}, |_, _| {})
+}
+
+/// The loop of the walking-human scenarios: build the shield (`setup` adds objects), then per
+/// step a chunk every 200 ms (timed apart), `measure` (extra measurements, timed with the step)
+/// and the step with the human's measurement.
+fn run_walking_scenario(
+    name: &str,
+    spec: &str,
+    mode: FilterMode,
+    steps: usize,
+    setup: impl FnOnce(&mut Shield),
+    mut measure: impl FnMut(&mut Shield, f64),
+) -> StepStats {
     let robot = fr3::fr3();
     let human = default_human()
         .with_uncertainty(0.01, 0.1, 0.02)
@@ -138,6 +153,7 @@ pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats 
         ..ShieldConfig::default()
     };
     let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
+    setup(&mut sh);
     sh.start(0.0, &fr3::Q_READY).expect("start");
     let mut times = Vec::with_capacity(steps);
     let mut chunk_times = Vec::new();
@@ -155,14 +171,14 @@ pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats 
         let m =
             HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
         let t0 = Instant::now();
+        measure(&mut sh, t);
         let cmd = sh.step(t, Some(&m));
         times.push(t0.elapsed().as_secs_f64());
         if cmd.is_ok_and(|c| c.diag.verified) {
             verified += 1;
         }
     }
-    let name = format!("{spec} ({mode:?})");
-    stats(&name, times, verified, chunk_times)
+    stats(name, times, verified, chunk_times)
 }
 
 /// Position (m) and velocity (m/s) of a ball rolling back and forth on the table in front of the
@@ -177,61 +193,31 @@ pub fn rolling_ball(t: f64) -> ([f64; 3], [f64; 3]) {
 /// built-in ball rolling on the table in front of the robot (no contact allowed) and a second
 /// ball resting on the table to the side (SSM), both measured every step.
 pub fn shield_objects_scenario(steps: usize) -> StepStats {
-    let robot = fr3::fr3();
-    let human = default_human()
-        .with_uncertainty(0.01, 0.1, 0.02)
-        .expect("valid");
-    let cs = ConstraintSpec::builtin("sorting").expect("preset");
-    let cfg = ShieldConfig::default();
-    let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
     let ball = ObjectModel::new(&default_ball()).expect("valid ball");
-    let rolling = sh
-        .add_object(ball, ObjectContact::NoContact)
-        .expect("valid object");
-    let resting = sh
-        .add_object(ball, ObjectContact::Ssm)
-        .expect("valid object");
-    sh.start(0.0, &fr3::Q_READY).expect("start");
-    let mut times = Vec::with_capacity(steps);
-    let mut chunk_times = Vec::new();
-    let mut verified = 0;
-    let mut sign = 1.0;
-    for k in 0..steps {
-        let t = k as f64 * cfg.safety_step;
-        if k % 200 == 0 {
-            let c = back_and_forth(sign);
-            sign = -sign;
-            let t0 = Instant::now();
-            let _ = sh.set_chunk(&c);
-            chunk_times.push(t0.elapsed().as_secs_f64());
-        }
-        let m =
-            HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
-        let (p, v) = rolling_ball(t);
-        let t0 = Instant::now();
-        sh.measure_object(
-            rolling,
-            &ObjectMeasurement {
+    let (rolling, resting) = (0, 1);
+    run_walking_scenario(
+        "sorting + 2 objects (Pacs)",
+        "sorting",
+        FilterMode::Pacs,
+        steps,
+        |sh| {
+            assert_eq!(
+                sh.add_object(ball, ObjectContact::NoContact).ok(),
+                Some(rolling)
+            );
+            assert_eq!(sh.add_object(ball, ObjectContact::Ssm).ok(), Some(resting));
+        },
+        |sh, t| {
+            let (p, v) = rolling_ball(t);
+            let m = |position, velocity| ObjectMeasurement {
                 time: t,
-                position: p,
-                velocity: Some(v),
-            },
-        )
-        .expect("valid measurement");
-        sh.measure_object(
-            resting,
-            &ObjectMeasurement {
-                time: t,
-                position: [0.3, 0.6, 0.04],
-                velocity: Some([0.0; 3]),
-            },
-        )
-        .expect("valid measurement");
-        let cmd = sh.step(t, Some(&m));
-        times.push(t0.elapsed().as_secs_f64());
-        if cmd.is_ok_and(|c| c.diag.verified) {
-            verified += 1;
-        }
-    }
-    stats("sorting + 2 objects (Pacs)", times, verified, chunk_times)
+                position,
+                velocity,
+            };
+            sh.measure_object(rolling, &m(p, Some(v)))
+                .expect("valid measurement");
+            sh.measure_object(resting, &m([0.3, 0.6, 0.04], Some([0.0; 3])))
+                .expect("valid measurement");
+        },
+    )
 }

@@ -3,6 +3,21 @@
 
 use super::*;
 
+/// Upper bound (J) of the whole robot's kinetic energy over the span's boxes (+∞ if it cannot be
+/// bounded). Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
+fn span_energy(
+    rreach: &RobotReach,
+    scratch: &mut ReachScratch,
+    b: &SpanBoxes,
+    energies: &mut [f64],
+    n: usize,
+) -> f64 {
+    match rreach.subchain_energy_bounds_with(scratch, &b.q, &b.dq, energies) {
+        Ok(()) => energies[n],
+        Err(_) => f64::INFINITY,
+    }
+}
+
 impl Auditor {
     /// The span's joint boxes ([`span_boxes`]); not consistent if the samples contradict each
     /// other or the robot's limits (the span is then `exceeds_limits`).
@@ -46,11 +61,7 @@ impl Auditor {
             ..
         } = self;
         hits.clear();
-        // Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
-        let energy = || match rreach.subchain_energy_bounds_with(scratch, &b.q, &b.dq, energies) {
-            Ok(()) => energies[n],
-            Err(_) => f64::INFINITY,
-        };
+        let energy = || span_energy(rreach, scratch, b, energies, n);
         rule.check(rcaps, &b.dq, hcaps, energy, true, |h| {
             if !collect {
                 return ControlFlow::Break(());
@@ -379,12 +390,7 @@ impl Auditor {
         for (k, o) in objects.iter().enumerate() {
             let Some(occ) = &o.occ else { continue };
             let energy = || {
-                *energy_cache.get_or_insert_with(|| {
-                    match rreach.subchain_energy_bounds_with(scratch, &b.q, &b.dq, energies) {
-                        Ok(()) => energies[n],
-                        Err(_) => f64::INFINITY,
-                    }
-                })
+                *energy_cache.get_or_insert_with(|| span_energy(rreach, scratch, b, energies, n))
             };
             let out = object_rule.check(rcaps, &b.dq, occ, o.contact, energy);
             if let Some(v) = out.violation {
