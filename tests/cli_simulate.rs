@@ -98,7 +98,7 @@ fn pacs_logs_of_every_task_pass_the_audit_and_violating_off_logs_fail() {
         String::from_utf8_lossy(&out.stderr)
     );
     let logs = dir.join("logs");
-    for task in ["sorting", "handover", "feeding", "sphere"] {
+    for task in ["sorting", "handover", "feeding", "sphere", "crowded"] {
         let log = logs.join(format!("{task}-pacs-0005.jsonl"));
         let a = pacs().arg("audit").arg(&log).output().unwrap();
         assert_eq!(

@@ -7,7 +7,10 @@
 //! points and J_p the point Jacobian, and q̇_des = q̇_ref + k_p·(q_ref − q) tracks the intended
 //! trajectory of the current chunk. This is the paper's CBF comparison: it offers no formal
 //! guarantee (the barrier ignores future human motion beyond one step) and pushes the robot off
-//! the intended path. Allocates per step (QP setup).
+//! the intended path. Dynamic objects enter as further obstacles: the bounding capsule of each
+//! object's occupancy over the coming step ([`pacs_reach::object`]), with the same barrier for
+//! every contact kind (the baseline keeps its distance from everything). Allocates per step (QP
+//! setup).
 
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
@@ -18,12 +21,14 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
 };
 use nalgebra::Point3;
+use pacs_models::object::ObjectModel;
 use pacs_models::{Capsule, HumanModel, MAX_DOF, RobotModel};
 use pacs_motion::chunk::Chunk;
 use pacs_motion::intended::{Planner, PlannerConfig};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_closest_points};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::object::ObjectMeasurement;
 
 /// CBF settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,6 +76,7 @@ pub struct CbfFilter {
     dq: [f64; MAX_DOF],
     ddq: [f64; MAX_DOF],
     meas: Option<HumanMeasurement>,
+    objects: Vec<(ObjectModel, Option<ObjectMeasurement>)>,
     started: bool,
 }
 
@@ -118,6 +124,7 @@ impl CbfFilter {
             dq: [0.0; MAX_DOF],
             ddq: [0.0; MAX_DOF],
             meas: None,
+            objects: Vec::new(),
             started: false,
         })
     }
@@ -137,6 +144,36 @@ impl CbfFilter {
         self.ref_t0 = t;
         self.reference = None;
         self.started = true;
+        Ok(())
+    }
+
+    /// Add a dynamic object; returns its id. The barrier keeps the robot away from every object
+    /// whatever its contact constraint (a CBF has no notion of allowed contact).
+    pub fn add_object(&mut self, model: ObjectModel) -> usize {
+        self.objects.push((model, None));
+        self.objects.len() - 1
+    }
+
+    /// Record a measurement of object `id` (a newer one replaces the latest). Errors: unknown
+    /// `id`, non-finite values.
+    pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        let finite = m.time.is_finite()
+            && m.position.iter().all(|x| x.is_finite())
+            && m.velocity.is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        if !finite {
+            return Err(ShieldError::Invalid(format!(
+                "object {id}: measurement with a non-finite value"
+            )));
+        }
+        let n = self.objects.len();
+        let Some((_, latest)) = self.objects.get_mut(id) else {
+            return Err(ShieldError::Invalid(format!(
+                "object {id}: no such object ({n} added)"
+            )));
+        };
+        if latest.is_none_or(|cur| cur.time < m.time) {
+            *latest = Some(*m);
+        }
         Ok(())
     }
 
@@ -200,48 +237,61 @@ impl CbfFilter {
             path_speed: 1.0,
             stop_time: t + alpha,
         };
-        // Barrier rows: -∇h·q̇ ≤ γ·h.
-        let mut rows: Vec<([f64; MAX_DOF], f64)> = Vec::new();
+        // Obstacles over the coming step: the human's body-part capsules and each object's
+        // bounding capsule. An object never measured, or whose occupancy cannot be bounded,
+        // leaves the step unconstrained against it and is reported as missing.
+        let mut obstacles: Vec<Capsule> = Vec::new();
         if let (Some(hr), Some(m)) = (self.human.as_mut(), self.meas.as_ref()) {
             match hr.occupancy(m, t.max(m.time() - hr.model().delay()), t + alpha) {
-                Ok(hcaps) => {
-                    let frames = self.robot.frames(&self.q[..n]);
-                    for l in self.robot.links() {
-                        if l.frame == 0 {
+                Ok(hcaps) => obstacles.extend(hcaps.iter().cloned()),
+                Err(_) => diag.binding = Binding::NoMeasurement,
+            }
+        }
+        for (model, meas) in &self.objects {
+            let caps = meas.as_ref().and_then(|m| {
+                pacs_reach::object::occupancy(model, m, t, t + alpha)
+                    .ok()
+                    .and_then(|o| o.bounding_capsule())
+            });
+            match caps {
+                Some(c) => obstacles.push(c),
+                None => diag.binding = Binding::NoMeasurement,
+            }
+        }
+        // Barrier rows: -∇h·q̇ ≤ γ·h.
+        let mut rows: Vec<([f64; MAX_DOF], f64)> = Vec::new();
+        if !obstacles.is_empty() {
+            let frames = self.robot.frames(&self.q[..n]);
+            for l in self.robot.links() {
+                if l.frame == 0 {
+                    continue;
+                }
+                for c in &l.capsules {
+                    let w = c.transformed(&frames[l.frame]);
+                    for hc in &obstacles {
+                        let d = capsule_distance_lower_bound(&w, hc);
+                        diag.min_separation = diag.min_separation.min(d);
+                        let h = d - self.config.margin;
+                        if d > self.config.activation {
                             continue;
                         }
-                        for c in &l.capsules {
-                            let w = c.transformed(&frames[l.frame]);
-                            for hc in &hcaps {
-                                let d = capsule_distance_lower_bound(&w, hc);
-                                diag.min_separation = diag.min_separation.min(d);
-                                let h = d - self.config.margin;
-                                if d > self.config.activation {
-                                    continue;
-                                }
-                                let (pr, ph) =
-                                    segment_closest_points(&w.p1(), &w.p2(), &hc.p1(), &hc.p2());
-                                let dir = pr - ph;
-                                let len = dir.norm();
-                                if len < 1e-12 {
-                                    continue;
-                                }
-                                let nrm = dir / len;
-                                let jac = self.robot.point_jacobian(
-                                    &frames,
-                                    l.frame,
-                                    &Point3::from(pr.coords),
-                                );
-                                let mut g = [0.0; MAX_DOF];
-                                for (j, gj) in g.iter_mut().enumerate().take(n) {
-                                    *gj = nrm.dot(&jac.column(j));
-                                }
-                                rows.push((g, self.config.gamma * h));
-                            }
+                        let (pr, ph) = segment_closest_points(&w.p1(), &w.p2(), &hc.p1(), &hc.p2());
+                        let dir = pr - ph;
+                        let len = dir.norm();
+                        if len < 1e-12 {
+                            continue;
                         }
+                        let nrm = dir / len;
+                        let jac =
+                            self.robot
+                                .point_jacobian(&frames, l.frame, &Point3::from(pr.coords));
+                        let mut g = [0.0; MAX_DOF];
+                        for (j, gj) in g.iter_mut().enumerate().take(n) {
+                            *gj = nrm.dot(&jac.column(j));
+                        }
+                        rows.push((g, self.config.gamma * h));
                     }
                 }
-                Err(_) => diag.binding = Binding::NoMeasurement,
             }
         }
         let qd = self.solve(&des[..n], &rows).unwrap_or_else(|| {

@@ -3,9 +3,12 @@
 
 use crate::cbf::{CbfConfig, CbfFilter};
 use crate::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
+use pacs_models::object::ObjectContact;
+use pacs_models::object::ObjectModel;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::Chunk;
 use pacs_reach::human::HumanMeasurement;
+use pacs_reach::object::ObjectMeasurement;
 use serde::{Deserialize, Serialize};
 
 /// What every online filter offers: start at rest, take chunks, one command per safety step.
@@ -22,6 +25,14 @@ pub trait SafetyFilter {
         t: f64,
         measurement: Option<&HumanMeasurement>,
     ) -> Result<Command, ShieldError>;
+    /// Add a dynamic object with the contact its task allows; returns its id.
+    fn add_object(
+        &mut self,
+        model: ObjectModel,
+        contact: ObjectContact,
+    ) -> Result<usize, ShieldError>;
+    /// Record a measurement of object `id` (a newer one replaces the latest).
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
 }
 
 impl SafetyFilter for Shield {
@@ -38,6 +49,16 @@ impl SafetyFilter for Shield {
     ) -> Result<Command, ShieldError> {
         Shield::step(self, t, measurement)
     }
+    fn add_object(
+        &mut self,
+        model: ObjectModel,
+        contact: ObjectContact,
+    ) -> Result<usize, ShieldError> {
+        Shield::add_object(self, model, contact)
+    }
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        Shield::measure_object(self, id, m)
+    }
 }
 
 impl SafetyFilter for CbfFilter {
@@ -53,6 +74,19 @@ impl SafetyFilter for CbfFilter {
         measurement: Option<&HumanMeasurement>,
     ) -> Result<Command, ShieldError> {
         CbfFilter::step(self, t, measurement)
+    }
+    fn add_object(
+        &mut self,
+        model: ObjectModel,
+        contact: ObjectContact,
+    ) -> Result<usize, ShieldError> {
+        contact
+            .validated()
+            .map_err(|e| ShieldError::Invalid(format!("object contact: {e}")))?;
+        Ok(CbfFilter::add_object(self, model))
+    }
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        CbfFilter::measure_object(self, id, m)
     }
 }
 

@@ -1,13 +1,15 @@
-//! One rollout: a filter, a policy, a scripted human; ground-truth safety metrics computed with
-//! exact geometry against the true human (not the measurements).
+//! One rollout: a filter, a policy, a scripted human and scripted objects; ground-truth safety
+//! metrics computed with exact geometry against the true human and objects (not the
+//! measurements).
 
 mod rollout;
 mod scoring;
 
 pub use rollout::run_setup;
-pub use scoring::ground_truth;
+pub use scoring::{ground_truth, object_ground_truth};
 
 use crate::humans::HumanScript;
+use crate::objects::SimObject;
 use crate::policy::{DemoSet, Demonstration};
 use crate::task::ToolGoal;
 use pacs_log::{Header, ModelRef};
@@ -112,7 +114,8 @@ pub struct Sample {
     pub q: Vec<f64>,
     /// Joint velocities (rad/s).
     pub dq: Vec<f64>,
-    /// True minimum separation between moving robot links and the human (m; ≤ 0: contact).
+    /// True minimum separation between robot links and the human or an object (m; ≤ 0:
+    /// contact).
     pub separation: f64,
     /// Ground-truth violation at this step.
     pub violation: bool,
@@ -212,12 +215,14 @@ impl Goal {
 pub struct Setup<'a> {
     /// Robot.
     pub robot: &'a RobotModel,
-    /// Human (or object) model used by the filter.
+    /// Human model used by the filter.
     pub human: &'a HumanModel,
     /// Constraints the filter enforces (and the ground truth is scored against).
     pub spec: &'a ConstraintSpec,
     /// Ground-truth motion.
     pub script: &'a dyn HumanScript,
+    /// Dynamic objects (each with its model, contact and true motion).
+    pub objects: &'a [SimObject],
     /// The policy.
     pub policy: &'a mut DemoSet,
     /// Sub-goals in order; success when all are reached.
@@ -247,19 +252,29 @@ pub struct Outputs<'a> {
 /// `rest_speed` (a robot holding position under a controller is never exactly still).
 pub const REST_SPEED: f64 = 0.02;
 
-/// The audit-log header of an episode (models inline, `meta` with task, policy, filter, human).
+/// The audit-log header of an episode (models inline, objects with their contact, `meta` with
+/// task, policy, filter, human).
 pub fn log_header(
     label: &str,
     robot: &RobotModel,
     human: &HumanModel,
     spec: &ConstraintSpec,
     script: &dyn HumanScript,
+    objects: &[SimObject],
 ) -> Header {
     let mut h = Header::new(
         ModelRef::Spec(Box::new(robot.spec().clone())),
         ModelRef::Spec(Box::new(human.spec().clone())),
         ModelRef::Spec(Box::new(spec.clone())),
     );
+    h.objects = objects
+        .iter()
+        .map(|o| pacs_log::ObjectEntry {
+            id: o.id.clone(),
+            object: ModelRef::Spec(Box::new(o.spec.clone())),
+            contact: o.contact,
+        })
+        .collect();
     h.meta.insert("task".into(), spec.name.clone().into());
     h.meta.insert("policy".into(), "nn-demonstration".into());
     h.meta.insert("filter".into(), label.into());
@@ -320,6 +335,7 @@ pub fn run_logged(
         human,
         spec,
         script,
+        objects: &[],
         policy: &mut policy,
         goals: &goals,
         start: &demo.path()[0],

@@ -118,7 +118,7 @@ pub struct EvalConfig {
     pub rollouts: usize,
     /// Base seed: rollout i uses seed + i (the same humans for every method).
     pub seed: u64,
-    /// People (or the sphere) present.
+    /// People and objects present (false: far away, the speed ablation).
     pub with_human: bool,
     /// Write every rollout's audit log to this directory.
     pub log_dir: Option<PathBuf>,
@@ -147,6 +147,7 @@ pub fn run_rollout(
         source,
     };
     let mut scn = scenario(task, seed, with_human);
+    scn.set_mode(variant_mode(task, v));
     let spec = constraint_spec(task, variant_mode(task, v));
     let goals: Vec<Goal> = scn.goals.iter().copied().map(Goal::Tool).collect();
     let cfg = EpisodeConfig {
@@ -168,6 +169,7 @@ pub fn run_rollout(
         human: &scn.human,
         spec: &spec,
         script: scn.script.as_ref(),
+        objects: &scn.objects,
         policy: &mut scn.policy,
         goals: &goals,
         start: &scn.start,

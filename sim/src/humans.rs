@@ -123,6 +123,10 @@ impl Rng {
         self.0 ^= self.0 << 17;
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// Uniform in [a, b).
+    pub fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.uniform()
+    }
     /// Uniform in the ball of radius `r`.
     pub fn in_ball(&mut self, r: f64) -> [f64; 3] {
         loop {
@@ -304,60 +308,20 @@ impl HumanScript for Diner {
     }
 }
 
-/// The paper's simulated obstacle: a sphere rolling on the table surface, on a circle of radius
-/// `radius` (m) around `center` at angular speed `omega` (rad/s), or back and forth along x when
-/// `radius` is negative (amplitude |radius|).
+/// A person standing still on the floor at (x, y) (m), arms down: a bystander outside the
+/// workspace in the tasks whose hazards are objects.
 #[derive(Debug, Clone)]
-pub struct RollingSphere {
-    /// Centre of the pattern (m); z is the sphere centre's height.
-    pub center: [f64; 3],
-    /// Pattern radius / amplitude (m); negative: back and forth along y.
-    pub radius: f64,
-    /// Angular speed (rad/s).
-    pub omega: f64,
-    /// Phase (rad).
-    pub phase: f64,
+pub struct Bystander {
+    /// Torso position (x, y) (m).
+    pub at: [f64; 2],
 }
 
-impl HumanScript for RollingSphere {
-    fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
-        let a = self.omega * t + self.phase;
-        let c = self.center;
-        if self.radius >= 0.0 {
-            vec![[
-                c[0] + self.radius * a.cos(),
-                c[1] + self.radius * a.sin(),
-                c[2],
-            ]]
-        } else {
-            vec![[c[0], c[1] - self.radius * a.sin(), c[2]]]
-        }
+impl HumanScript for Bystander {
+    fn keypoints(&self, _t: f64) -> Vec<[f64; 3]> {
+        let [x, y] = self.at;
+        standing_on(x, y, FLOOR_Z, [x - 0.05, y - 0.25, FLOOR_Z + 0.95])
     }
     fn name(&self) -> &str {
-        "rolling-sphere"
+        "bystander"
     }
-}
-
-/// A one-keypoint "human" model for a sphere of `radius` (m) with speed and acceleration bounds
-/// (m/s, m/s²), measurement error (m, m/s) and delay (s), so the human reachability and the
-/// shield treat the obstacle soundly.
-pub fn sphere_model(
-    radius: f64,
-    v_max: f64,
-    a_max: f64,
-    e_pos: f64,
-    e_vel: f64,
-    delay: f64,
-) -> Result<HumanModel, pacs_models::ModelError> {
-    let spec = serde_json::json!({
-        "name": "sphere",
-        "keypoints": ["center"],
-        "v_max": [v_max],
-        "a_max": [a_max],
-        "body_parts": [{"name": "sphere", "from": "center", "to": "center", "thickness": 2.0 * radius}],
-        "measurement_error_pos": e_pos,
-        "measurement_error_vel": e_vel,
-        "delay": delay,
-    });
-    HumanModel::from_json(&spec.to_string())
 }

@@ -3,10 +3,12 @@
 //! A kinematic simulation of the paper's evaluation, used by `pacs demo` and the evaluation:
 //! - [`humans`]: scripted human keypoint motions within the default model's limits, and a
 //!   measurement model with delay and bounded noise;
+//! - [`objects`]: scripted dynamic objects (the rolling spheres) with their object models and
+//!   a measurement model;
 //! - [`policy`]: the [`policy::ChunkPolicy`] trait and a nearest-neighbour demonstration policy that
 //!   emits chunks of joint deltas from the current joint angles only;
-//! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy and a human,
-//!   with ground-truth safety metrics (exact geometry against the true human).
+//! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy, a human and
+//!   objects, with ground-truth safety metrics (exact geometry against the true human and objects).
 //!
 //! The robot follows the filter's commands exactly (the occupancy's tracking-error margin covers
 //! a real controller's error).
@@ -14,6 +16,7 @@
 pub mod episode;
 pub mod eval;
 pub mod humans;
+pub mod objects;
 pub mod policy;
 pub mod task;
 

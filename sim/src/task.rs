@@ -1,15 +1,15 @@
-//! The evaluation tasks: Sorting (SSM), Handover (PFL hand), Feeding (PFL head) and the sphere
-//! task (SSM against a rolling sphere). Each task fixes a workspace layout (the FR3 on a table
-//! top at z = 0, people on the floor at z = [`FLOOR_Z`]), a set of demonstrations (the policy's
-//! "training data"), success sub-goals for the tool centre point, and a randomised human (or
-//! sphere) motion per rollout.
+//! The evaluation tasks: Sorting (SSM), Handover (PFL hand), Feeding (PFL head), the sphere
+//! task (SSM against a rolling sphere, a dynamic object) and the crowded task (Sorting with a
+//! person reaching across and two rolling spheres at once). Each task fixes a workspace layout
+//! (the FR3 on a table top at z = 0, people on the floor at z = [`FLOOR_Z`]), a set of
+//! demonstrations (the policy's "training data"), success sub-goals for the tool centre point,
+//! and randomised human and object motions per rollout.
 
-use crate::humans::{
-    Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng, RollingSphere, sphere_model,
-};
+use crate::humans::{Bystander, Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng};
+use crate::objects::{RollingSphere, SimObject, sphere_spec};
 use crate::policy::DemoSet;
-use pacs_models::constraints::RegionSpec;
-use pacs_models::{Constraint, ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
+use pacs_models::object::ObjectContact;
+use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
 use serde::Serialize;
 
 /// One of the evaluation tasks.
@@ -22,13 +22,23 @@ pub enum TaskKind {
     Handover,
     /// Bring a fork to a seated person's mouth and withdraw it (PFL head).
     Feeding,
-    /// Pick and place while a sphere rolls on the table (SSM against the sphere).
+    /// Pick and place while a sphere rolls on the table (SSM against the sphere, a dynamic
+    /// object; a bystander stands 2 m away).
     Sphere,
+    /// Sorting while a person reaches across the table and two spheres roll on it (SSM against
+    /// the person and both spheres).
+    Crowded,
 }
 
 impl TaskKind {
     /// All tasks.
-    pub const ALL: [TaskKind; 4] = [Self::Sorting, Self::Handover, Self::Feeding, Self::Sphere];
+    pub const ALL: [TaskKind; 5] = [
+        Self::Sorting,
+        Self::Handover,
+        Self::Feeding,
+        Self::Sphere,
+        Self::Crowded,
+    ];
 
     /// The command-line name.
     pub fn name(self) -> &'static str {
@@ -37,6 +47,7 @@ impl TaskKind {
             Self::Handover => "handover",
             Self::Feeding => "feeding",
             Self::Sphere => "sphere",
+            Self::Crowded => "crowded",
         }
     }
 }
@@ -50,7 +61,7 @@ impl std::str::FromStr for TaskKind {
             .ok_or_else(|| crate::UnknownName {
                 kind: "task",
                 given: s.into(),
-                choices: "sorting, handover, feeding, sphere".into(),
+                choices: "sorting, handover, feeding, sphere, crowded".into(),
             })
     }
 }
@@ -59,10 +70,11 @@ impl std::str::FromStr for TaskKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ConstraintMode {
-    /// SSM for every body part (or the sphere).
+    /// SSM for every body part and object.
     Ssm,
-    /// The task's PFL thresholds (Handover / Feeding presets; hand thresholds for the sphere;
-    /// Sorting uses the Handover thresholds, as the paper's PFL variant of its SSM tasks).
+    /// The task's PFL thresholds (Handover / Feeding presets; Sorting and the object tasks use
+    /// the Handover thresholds, as the paper's PFL variant of its SSM tasks; objects
+    /// [`SPHERE_PFL_THRESHOLD`]).
     Pfl,
 }
 
@@ -83,10 +95,12 @@ pub struct Scenario {
     pub task: TaskKind,
     /// The robot.
     pub robot: RobotModel,
-    /// The human (or sphere) model the filter and the audit use.
+    /// The human model the filter and the audit use.
     pub human: HumanModel,
-    /// Ground-truth motion.
+    /// Ground-truth motion of the human.
     pub script: Box<dyn HumanScript>,
+    /// Dynamic objects (models, contact under the task's native mode, true motions).
+    pub objects: Vec<SimObject>,
     /// The policy (fresh, at the task's start).
     pub policy: DemoSet,
     /// Sub-goals, in order.
@@ -102,40 +116,45 @@ impl Scenario {
     pub fn spec(&self, mode: ConstraintMode) -> ConstraintSpec {
         constraint_spec(self.task, mode)
     }
+
+    /// Set every object's contact constraint to the one `mode` gives.
+    pub fn set_mode(&mut self, mode: ConstraintMode) {
+        for o in &mut self.objects {
+            o.contact = object_contact(mode);
+        }
+    }
+}
+
+/// The PFL energy threshold (J) of the spheres: the transient hand/finger value of the
+/// Handover preset (unconstrained), a stand-in for an object that may be nudged.
+pub const SPHERE_PFL_THRESHOLD: f64 = 0.265;
+
+/// The contact the task's objects allow under `mode`: SSM (contact only at rest), or PFL with
+/// [`SPHERE_PFL_THRESHOLD`].
+pub fn object_contact(mode: ConstraintMode) -> ObjectContact {
+    match mode {
+        ConstraintMode::Ssm => ObjectContact::Ssm,
+        ConstraintMode::Pfl => ObjectContact::Pfl {
+            threshold: SPHERE_PFL_THRESHOLD,
+        },
+    }
 }
 
 /// The constraint spec of `task` under `mode`.
 pub fn constraint_spec(task: TaskKind, mode: ConstraintMode) -> ConstraintSpec {
     let preset = |n: &str| ConstraintSpec::preset(n).expect("built-in preset");
     match (task, mode) {
-        (TaskKind::Sphere, ConstraintMode::Ssm) => ConstraintSpec {
-            name: "sphere-ssm".into(),
-            default: Constraint::Ssm,
-            regions: vec![],
-        },
-        (TaskKind::Sphere, ConstraintMode::Pfl) => ConstraintSpec {
-            name: "sphere-pfl".into(),
-            default: Constraint::Ssm,
-            regions: vec![RegionSpec {
-                name: "sphere".into(),
-                body_parts: vec!["sphere".into()],
-                constraint: Constraint::Pfl {
-                    unconstrained: 0.265,
-                    constrained: 0.014,
-                },
-            }],
-        },
         (_, ConstraintMode::Ssm) => preset("sorting"),
         (TaskKind::Feeding, ConstraintMode::Pfl) => preset("feeding"),
         (_, ConstraintMode::Pfl) => preset("handover"),
     }
 }
 
-/// The task's own constraint mode (the paper's choice): SSM for Sorting and the sphere task, PFL
-/// for Handover and Feeding.
+/// The task's own constraint mode (the paper's choice): SSM for Sorting and the object tasks,
+/// PFL for Handover and Feeding.
 pub fn native_mode(task: TaskKind) -> ConstraintMode {
     match task {
-        TaskKind::Sorting | TaskKind::Sphere => ConstraintMode::Ssm,
+        TaskKind::Sorting | TaskKind::Sphere | TaskKind::Crowded => ConstraintMode::Ssm,
         TaskKind::Handover | TaskKind::Feeding => ConstraintMode::Pfl,
     }
 }
@@ -223,7 +242,7 @@ type GoalAt = (usize, &'static str, f64);
 /// success sub-goals.
 fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
     match task {
-        TaskKind::Sorting | TaskKind::Sphere => (
+        TaskKind::Sorting | TaskKind::Sphere | TaskKind::Crowded => (
             vec![
                 [0.50, 0.25, 0.25],
                 [0.55, 0.25, 0.06],
@@ -343,36 +362,68 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
         })
         .collect::<Vec<_>>();
     let mut rng = Rng::new(seed.wrapping_mul(7919).wrapping_add(task as u64 + 1));
-    let mut u = |a: f64, b: f64| a + (b - a) * rng.uniform();
-    let start: Vec<f64> = fr3::Q_READY.iter().map(|q| q + u(-0.015, 0.015)).collect();
-    let person = default_human()
+    let start: Vec<f64> = fr3::Q_READY
+        .iter()
+        .map(|q| q + rng.range(-0.015, 0.015))
+        .collect();
+    let human = default_human()
         .with_uncertainty(0.01, 0.1, 0.03)
         .expect("valid uncertainty");
     let away = 3.0;
-    let (human, script, max_time): (HumanModel, Box<dyn HumanScript>, f64) = match task {
-        TaskKind::Sorting => {
-            let y = u(-0.25, 0.3);
-            let t0 = u(0.3, 2.0);
-            let stand = [if with_human { 1.05 } else { away }, y];
-            let reach = [u(0.62, 0.72), y + u(-0.1, 0.1) - 0.1, 0.04];
-            let dwell = u(1.0, 2.5);
-            let script = Reacher {
-                stand,
-                reach: if with_human {
-                    reach
+    // A sphere rolling on the table around `center` (x, y) ± `spread` (m); far away without
+    // people and objects.
+    let sphere = |rng: &mut Rng, id: &str, center: [f64; 2], spread: [f64; 2]| {
+        let circle = rng.uniform() < 0.5;
+        let script = RollingSphere {
+            center: [
+                if with_human {
+                    center[0] + rng.range(-spread[0], spread[0])
                 } else {
-                    [away - 0.1, y - 0.25, FLOOR_Z + 0.95]
+                    away
                 },
-                times: [t0 + 1.2, t0 + 1.2, t0 + 2.0 + dwell],
-            };
-            (person, Box::new(script), 20.0)
+                center[1] + rng.range(-spread[1], spread[1]),
+                0.05,
+            ],
+            radius: if circle {
+                rng.range(0.12, 0.2)
+            } else {
+                -rng.range(0.15, 0.3)
+            },
+            omega: rng.range(0.8, 1.6),
+            phase: rng.range(0.0, std::f64::consts::TAU),
+        };
+        SimObject::new(
+            id,
+            sphere_spec(),
+            object_contact(native_mode(task)),
+            Box::new(script),
+        )
+        .expect("valid sphere")
+    };
+    let reacher = |rng: &mut Rng| {
+        let y = rng.range(-0.25, 0.3);
+        let t0 = rng.range(0.3, 2.0);
+        let stand = [if with_human { 1.05 } else { away }, y];
+        let reach = [rng.range(0.62, 0.72), y + rng.range(-0.1, 0.1) - 0.1, 0.04];
+        let dwell = rng.range(1.0, 2.5);
+        Reacher {
+            stand,
+            reach: if with_human {
+                reach
+            } else {
+                [away - 0.1, y - 0.25, FLOOR_Z + 0.95]
+            },
+            times: [t0 + 1.2, t0 + 1.2, t0 + 2.0 + dwell],
         }
+    };
+    let (script, objects, max_time): (Box<dyn HumanScript>, Vec<SimObject>, f64) = match task {
+        TaskKind::Sorting => (Box::new(reacher(&mut rng)), vec![], 20.0),
         TaskKind::Handover => {
             let g = tools[1];
             let offer = [
-                g[0] + 0.11 + u(-0.01, 0.01),
-                g[1] + u(-0.01, 0.01),
-                g[2] + u(-0.01, 0.01),
+                g[0] + 0.11 + rng.range(-0.01, 0.01),
+                g[1] + rng.range(-0.01, 0.01),
+                g[2] + rng.range(-0.01, 0.01),
             ];
             let script = Offerer {
                 stand: [if with_human { 1.0 } else { away }, 0.1],
@@ -381,10 +432,10 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
                 } else {
                     [away - 0.05, -0.15, FLOOR_Z + 0.95]
                 },
-                t_offer: u(0.0, 1.0),
-                sway: u(0.0, 0.015),
+                t_offer: rng.range(0.0, 1.0),
+                sway: rng.range(0.0, 0.015),
             };
-            (person, Box::new(script), 20.0)
+            (Box::new(script), vec![], 20.0)
         }
         TaskKind::Feeding => {
             let m = tools[1];
@@ -396,26 +447,20 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
                 } else {
                     [away, 0.0, FLOOR_Z + 1.2]
                 },
-                lean: [u(-0.04, 0.0), u(-0.02, 0.02), 0.0],
-                times: [u(0.5, 3.0), u(6.0, 9.0)],
+                lean: [rng.range(-0.04, 0.0), rng.range(-0.02, 0.02), 0.0],
+                times: [rng.range(0.5, 3.0), rng.range(6.0, 9.0)],
             };
-            (person, Box::new(script), 60.0)
+            (Box::new(script), vec![], 60.0)
         }
         TaskKind::Sphere => {
-            let model = sphere_model(0.05, 0.6, 2.0, 0.005, 0.05, 0.02).expect("valid sphere");
-            let circle = rng.uniform() < 0.5;
-            let mut u = |a: f64, b: f64| a + (b - a) * rng.uniform();
-            let script = RollingSphere {
-                center: [
-                    if with_human { u(0.5, 0.6) } else { away },
-                    u(-0.1, 0.15),
-                    0.05,
-                ],
-                radius: if circle { u(0.12, 0.2) } else { -u(0.15, 0.3) },
-                omega: u(0.8, 1.6),
-                phase: u(0.0, std::f64::consts::TAU),
-            };
-            (model, Box::new(script), 20.0)
+            let ball = sphere(&mut rng, "sphere", [0.55, 0.025], [0.05, 0.125]);
+            (Box::new(Bystander { at: [2.0, 0.5] }), vec![ball], 20.0)
+        }
+        TaskKind::Crowded => {
+            let person = reacher(&mut rng);
+            let a = sphere(&mut rng, "sphere-a", [0.55, 0.025], [0.05, 0.125]);
+            let b = sphere(&mut rng, "sphere-b", [0.45, -0.2], [0.03, 0.05]);
+            (Box::new(person), vec![a, b], 20.0)
         }
     };
     let policy = DemoSet::new(demos, HORIZON, EXECUTE, seed);
@@ -424,6 +469,7 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
         robot,
         human,
         script,
+        objects,
         policy,
         goals,
         start,

@@ -14,6 +14,9 @@ fn task_humans_respect_their_model_limits() {
     for task in TaskKind::ALL {
         for seed in 0..6 {
             let scn = scenario(task, seed, true);
+            if task == TaskKind::Sphere {
+                continue; // the bystander stands still
+            }
             let dt = 1e-3;
             let v_max = scn.human.v_max().to_vec();
             let a_max = scn.human.a_max().to_vec();
@@ -52,6 +55,58 @@ fn task_humans_respect_their_model_limits() {
             }
         }
     }
+}
+
+#[test]
+fn task_objects_respect_their_model_limits() {
+    // Every scripted object moves within its model's speed and acceleration bounds, and the
+    // velocity its script reports (what the camera measures) is the derivative of its position.
+    let mut checked = 0;
+    for task in TaskKind::ALL {
+        for seed in 0..20 {
+            let scn = scenario(task, seed, true);
+            for o in &scn.objects {
+                let v_max = o.model.max_speed().unwrap_or(f64::INFINITY);
+                let a_max = o.model.max_acc();
+                let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                let h = 1e-4;
+                for k in 0..2000 {
+                    let t = k as f64 * 0.01;
+                    let (p0, v0) = o.script.state(t - h);
+                    let (p1, v1) = o.script.state(t);
+                    let (p2, v2) = o.script.state(t + h);
+                    let fd_v = [0, 1, 2].map(|i| (p2[i] - p0[i]) / (2.0 * h));
+                    let fd_a = [0, 1, 2].map(|i| (v2[i] - v0[i]) / (2.0 * h));
+                    let dv = [0, 1, 2].map(|i| fd_v[i] - v1[i]);
+                    assert!(
+                        norm(dv) < 1e-6,
+                        "{} {}: velocity {v1:?} vs {fd_v:?}",
+                        task.name(),
+                        o.id
+                    );
+                    assert!(
+                        norm(v1) <= v_max,
+                        "{} {}: {} m/s at {t}",
+                        task.name(),
+                        o.id,
+                        norm(v1)
+                    );
+                    assert!(
+                        norm(fd_a) <= a_max,
+                        "{} {}: {} m/s²",
+                        task.name(),
+                        o.id,
+                        norm(fd_a)
+                    );
+                    // The sphere rolls on the table (its centre one radius above z = 0).
+                    assert!((p1[2] - 0.05).abs() < 1e-12);
+                    checked += 1;
+                }
+            }
+        }
+    }
+    // The sphere task has one sphere, the crowded task two.
+    assert_eq!(checked, (20 + 40) * 2000);
 }
 
 #[test]
@@ -162,4 +217,43 @@ fn cbf_leaves_the_demonstrations_pacs_does_not() {
     }
     assert!(dev_pacs < 0.05, "PACS deviation {dev_pacs}");
     assert!(dev_cbf > 2.0 * dev_pacs, "CBF {dev_cbf} vs PACS {dev_pacs}");
+}
+
+#[test]
+fn crowded_task_pacs_is_safe_against_person_and_spheres_and_its_log_audits() {
+    // Two spheres and a person at once: PACS has no ground-truth violation against any of them,
+    // its log declares both spheres and logs their measurements, and the offline audit of that
+    // log does not fail; OFF's log of the same scene fails.
+    let dir = std::env::temp_dir().join(format!("pacs-crowded-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut verdicts = Vec::new();
+    for method in ["pacs", "off"] {
+        let path = dir.join(format!("{method}.jsonl"));
+        let r = run_rollout(TaskKind::Crowded, &v(method), 1, true, Some(&path), 0).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let header: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+        let ids: Vec<&str> = header["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| o["id"].as_str().unwrap())
+            .collect();
+        assert_eq!(ids, ["sphere-a", "sphere-b"]);
+        let object_records = text
+            .lines()
+            .filter(|l| l.contains("\"type\":\"object\""))
+            .count();
+        assert!(object_records > 100, "{object_records} object records");
+        let audit = pacs_audit::audit_file(&path, &pacs_audit::AuditConfig::default()).unwrap();
+        if method == "pacs" {
+            assert!(r.episode.success, "pacs failed the crowded task");
+            assert_eq!(r.episode.violation_fraction, 0.0);
+            let t = r.episode.truth_audit.as_ref().unwrap();
+            assert_eq!(t.violation_fraction, 0.0, "{:?}", t.verdict);
+        }
+        verdicts.push(audit.verdict);
+    }
+    assert_ne!(verdicts[0], pacs_audit::Verdict::Fail);
+    assert_eq!(verdicts[1], pacs_audit::Verdict::Fail);
+    std::fs::remove_dir_all(&dir).ok();
 }

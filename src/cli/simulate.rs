@@ -18,11 +18,13 @@ Tasks (FR3 on a table top, H = 16 actions per chunk, h = 8 executed, Δt = 33 ms
   sorting   pick a block, place it in a box; a person walks up and reaches across the table (SSM)
   handover  take a block from a person's (moving) hand, place it in the box (PFL hand)
   feeding   bring a fork to a seated person's mouth and withdraw it (PFL head, 1 mJ)
-  sphere    pick and place while a 10 cm sphere rolls on the table (SSM against the sphere)
+  sphere    pick and place while a 10 cm sphere rolls on the table (a dynamic object: SSM)
+  crowded   sorting while a person reaches across and two spheres roll on the table (SSM)
 
 Methods:
   off                  intended chunk trajectories, never brake (unsafe reference)
-  pacs                 PACS with the task's own constraints (SSM: sorting, sphere; PFL: handover, feeding)
+  pacs                 PACS with the task's own constraints (SSM: sorting, sphere, crowded;
+                       PFL: handover, feeding)
   pacs-ssm, pacs-pfl   PACS enforcing SSM / PFL
   single-action[-ssm|-pfl]  PACS planning each action as its own stop-at-target motion
   cbf                  control-barrier-function filter (clarabel QP, distance constraints)
@@ -63,7 +65,7 @@ pub struct SimulateArgs {
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "pacs-sim")]
     pub out: PathBuf,
-    /// Keep the person (or sphere) far away (speed ablation).
+    /// Keep people and objects far away (speed ablation).
     #[arg(long)]
     pub no_human: bool,
     /// Do not write per-rollout audit logs (each is a few MB).

@@ -16,16 +16,17 @@ fn certainly_touch(a: &Capsule, b: &Capsule) -> bool {
 }
 
 impl Auditor {
-    /// Evaluate the span's hits at the recorded sample `s` with the measured keypoints; updates
-    /// each hit's `certain` and `separation`. Returns whether any hit is certain there. The
-    /// classification is the rule's ([`pacs_verify::iso15066`]), with "certainly touches" (exact axis
-    /// distance ≤ sum of radii) in place of "may touch", and the nominal whole-robot kinetic
-    /// energy ½q̇ᵀM(q)q̇ at the sample in place of its bound.
+    /// Evaluate the span's hits at the recorded sample `s` with the measured keypoints and
+    /// object positions; updates each hit's `certain` and `separation`. Returns whether any hit
+    /// is certain there. The classification is the rule's ([`pacs_verify::iso15066`]), with
+    /// "certainly touches" (exact axis distance ≤ sum of radii) in place of "may touch", and the
+    /// nominal whole-robot kinetic energy ½q̇ᵀM(q)q̇ at the sample in place of its bound. An
+    /// object counts as its reference point dilated by its shape's radius (the point lies in
+    /// the shape's zonotope, so a touch of that ball is a touch of the object), placed at its
+    /// measured position taken at face value, and is decided by
+    /// [`pacs_verify::iso15066::contact_violates`].
     pub(super) fn certain_at(&mut self, s: &Sample, s0: &Sample, s1: &Sample, slot: usize) -> bool {
         let n = self.n;
-        let Some(m) = self.humans[slot].as_ref() else {
-            return false;
-        };
         let dt = s1.t - s0.t;
         let mut dq = [0.0; MAX_DOF];
         let known_dq = s.has_dq || dt > 0.0;
@@ -44,20 +45,42 @@ impl Auditor {
         }
         let energy = self.robot.kinetic_energy(&s.q[..n], &dq[..n]);
         let moving = known_dq && dq[..n].iter().any(|v| v.abs() > self.cfg.rest_speed);
-        let pos = m.positions();
+        let pos = self.humans[slot].as_ref().map(|m| m.positions());
         let part_cap = |p: usize| {
             let bp = &self.human.body_parts()[p];
-            Capsule::new_unchecked(pos[bp.from], pos[bp.to], bp.thickness * 0.5)
+            pos.map(|pos| Capsule::new_unchecked(pos[bp.from], pos[bp.to], bp.thickness * 0.5))
         };
         let rule = &self.rule;
         let mut any = false;
         for k in 0..self.hits.len() {
             let h = self.hits[k];
-            if h.part >= self.parts {
-                continue; // an object's hit: never certain (module docs)
-            }
-            let pc = part_cap(h.part);
             let (s_, e_) = self.rreach.link_ranges()[h.link];
+            if h.part >= self.parts {
+                let o = &self.objects[h.part - self.parts];
+                let Some(m) = o.span.as_ref() else {
+                    continue;
+                };
+                let p = nalgebra::Point3::from(m.position);
+                let ball = Capsule::new_unchecked(p, p, o.model.shape_radius());
+                let mut touch = false;
+                let mut sep = f64::INFINITY;
+                for c in s_..e_ {
+                    sep = sep.min(signed_separation(&self.nom_caps[c], &ball));
+                    touch |= certainly_touch(&self.nom_caps[c], &ball);
+                }
+                let (bad, _) = pacs_verify::iso15066::contact_violates(o.contact, !moving, || {
+                    if known_dq { energy } else { f64::NEG_INFINITY }
+                });
+                let certain = touch && bad;
+                let hit = &mut self.hits[k];
+                hit.separation = hit.separation.min(sep);
+                hit.certain |= certain;
+                any |= certain;
+                continue;
+            }
+            let Some(pc) = part_cap(h.part) else {
+                continue;
+            };
             let mut touch = false;
             let mut sep = f64::INFINITY;
             let mut frame = 0;
@@ -71,12 +94,13 @@ impl Auditor {
             let certain = touch
                 && match h.kind {
                     ConstraintKind::Ssm => moving,
-                    // Object hits never reach here (`certain_at` skips them).
+                    // Body parts are never under no-contact.
                     ConstraintKind::NoContact => true,
                     ConstraintKind::Pfl => {
                         let clamp = self.environment.iter().any(|e| certainly_touch(e, &pc))
                             || (0..self.parts).any(|o| {
-                                rule.clampable(h.part, o) && certainly_touch(&part_cap(o), &pc)
+                                rule.clampable(h.part, o)
+                                    && part_cap(o).is_some_and(|oc| certainly_touch(&oc, &pc))
                             })
                             || (0..self.nom_caps.len()).any(|o| {
                                 frames_can_pinch(rule.capsule_frame(o), frame)

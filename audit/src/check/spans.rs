@@ -318,7 +318,6 @@ impl Auditor {
         // Certain check at both recorded samples, with the measured keypoints — only where the
         // samples agree with each other: "certain" takes the logged state at face value, which a
         // contradicted sample does not deserve (the span's possible violation still fails the log).
-        // (Object hits are never certain: `certain_at` evaluates body-part hits only.)
         if consistent {
             for s in [s0, s1] {
                 certain |= self.certain_at(s, s0, s1, slot);
@@ -406,7 +405,7 @@ impl Auditor {
                     threshold,
                     constrained: false,
                     certain: false,
-                    separation: 0.0,
+                    separation: f64::INFINITY,
                 });
             }
         }

@@ -3,8 +3,10 @@
 
 use super::{
     Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
+    object_ground_truth,
 };
 use crate::humans::Camera;
+use crate::objects::ObjectCamera;
 use crate::policy::ChunkPolicy;
 use crate::task::tool_point;
 use pacs_audit::{AuditConfig, Auditor};
@@ -57,6 +59,7 @@ pub fn run_setup(
         human,
         spec,
         script,
+        objects,
         policy,
         goals,
         start,
@@ -71,7 +74,7 @@ pub fn run_setup(
     } = out;
     let mut log = match log {
         Some(w) => {
-            let h = log_header(label, robot, human, spec, script);
+            let h = log_header(label, robot, human, spec, script, objects);
             let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
             l.event(0.0, "episode_start").map_err(invalid)?;
             Some(l)
@@ -84,7 +87,10 @@ pub fn run_setup(
             human: human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?,
             constraints: spec.clone(),
             environment: vec![],
-            objects: vec![],
+            objects: objects
+                .iter()
+                .map(|o| Ok((o.id.clone(), o.exact_model().map_err(invalid)?, o.contact)))
+                .collect::<Result<_, ShieldError>>()?,
         };
         Some(Auditor::new(models, AuditConfig::default()).map_err(invalid)?)
     } else {
@@ -92,8 +98,14 @@ pub fn run_setup(
     };
     let tc = spec.resolve(human).map_err(invalid)?;
     let mut filter = method.filter_kind().build(robot, human, spec)?;
+    for o in objects {
+        filter.add_object(o.model, o.contact)?;
+    }
     filter.start(0.0, start)?;
     let mut camera = Camera::new(cfg.camera_period, cfg.seed);
+    let mut object_cameras: Vec<ObjectCamera> = (0..objects.len())
+        .map(|i| ObjectCamera::new(cfg.camera_period, cfg.seed ^ (0x0B1E + i as u64)))
+        .collect();
     let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);
     let n = robot.dof();
     let steps = (max_time / cfg.dt).round() as usize;
@@ -115,6 +127,11 @@ pub fn run_setup(
     if let Some(a) = auditor.as_mut() {
         a.push_human(0.0, 0.0, &script.keypoints(0.0))
             .map_err(invalid)?;
+        for o in objects {
+            let (p, v) = o.script.state(0.0);
+            a.push_object(0.0, 0.0, &o.id, p, Some(v))
+                .map_err(invalid)?;
+        }
         a.push_robot(0.0, &q, Some(&dq)).map_err(invalid)?;
     }
     for k in 0..steps {
@@ -147,6 +164,14 @@ pub fn run_setup(
             let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
         }
         let m = camera.measure(human, script, t);
+        for (i, (o, cam)) in objects.iter().zip(&mut object_cameras).enumerate() {
+            if let Some(om) = cam.measure(o, t) {
+                filter.measure_object(i, &om)?;
+                if let Some(l) = log.as_mut() {
+                    l.object(t, &o.id, &om).map_err(invalid)?;
+                }
+            }
+        }
         let cmd = filter.step(t, m.as_ref())?;
         if let Some(l) = log.as_mut() {
             l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
@@ -157,9 +182,26 @@ pub fn run_setup(
         let truth = script.keypoints(cmd.t);
         if let Some(a) = auditor.as_mut() {
             a.push_human(cmd.t, cmd.t, &truth).map_err(invalid)?;
+            for o in objects {
+                let (p, v) = o.script.state(cmd.t);
+                a.push_object(cmd.t, cmd.t, &o.id, p, Some(v))
+                    .map_err(invalid)?;
+            }
             a.push_robot(cmd.t, &q, Some(&dq)).map_err(invalid)?;
         }
-        let (sep, viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
+        let (mut sep, mut viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
+        if !objects.is_empty() {
+            let caps: Vec<_> = robot
+                .capsules_world(&q)
+                .into_iter()
+                .map(|(_, c)| c)
+                .collect();
+            for o in objects {
+                let (s, v) = object_ground_truth(o, cmd.t, &caps, &dq, energy);
+                sep = sep.min(s);
+                viol |= v;
+            }
+        }
         tool = tool_point(robot, &q);
         min_sep = min_sep.min(sep);
         max_dev = max_dev.max(policy.deviation(&q));

@@ -1,7 +1,8 @@
 //! Scoring against the ground truth: separation, ISO/TS 15066 violation and kinetic energy of a
-//! robot state, computed with exact geometry against the true human.
+//! robot state, computed with exact geometry against the true human and objects.
 
 use super::REST_SPEED;
+use crate::objects::SimObject;
 use nalgebra::Point3;
 use pacs_models::{HumanModel, RobotModel, TaskConstraints};
 use pacs_reach::geometry::segment_distance_lower_bound;
@@ -64,4 +65,29 @@ pub fn ground_truth(
         }
     }
     (sep, violation, energy)
+}
+
+/// Ground truth of a robot state against the true object at `t` under the object rule of
+/// [`pacs_verify::iso15066::contact_violates`] (SSM: contact while some joint moves faster than
+/// [`REST_SPEED`]; PFL: contact with the whole robot's kinetic energy above the object's
+/// threshold; no-contact: any contact). `caps` are the robot's world capsules at the state,
+/// `energy` its kinetic energy (J). Returns (separation in m, violation).
+pub fn object_ground_truth(
+    object: &SimObject,
+    t: f64,
+    caps: &[pacs_models::Capsule],
+    dq: &[f64],
+    energy: f64,
+) -> (f64, bool) {
+    let sep = caps
+        .iter()
+        .map(|c| object.separation(t, c))
+        .fold(f64::INFINITY, f64::min);
+    if sep > 0.0 {
+        return (sep, false);
+    }
+    let at_rest = dq.iter().all(|v| v.abs() <= REST_SPEED);
+    let (violation, _) =
+        pacs_verify::iso15066::contact_violates(object.contact, at_rest, || energy);
+    (sep, violation)
 }
