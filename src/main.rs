@@ -63,6 +63,25 @@ enum Command {
     /// Offline audit of logs against SSM/PFL: exit 0 all pass, 1 any fail, 2 any inconclusive
     /// (none fail), 3 invalid input. See docs/audit.md.
     Audit(cli::audit::AuditArgs),
+    /// Run the shield on your own scene: robot, human, objects, constraints, timed chunks and
+    /// timed measurements → the command of every safety step and an audit-format log.
+    ///
+    /// Writes DIR/commands.jsonl (one line per step: t, q, dq, ddq in rad, rad/s, rad/s²;
+    /// verified, on_failsafe, binding, path_speed, stop_time, min_separation_m) and DIR/log.jsonl
+    /// (`pacs audit DIR/log.jsonl` checks it); prints a summary. Scene format: docs/cli.md.
+    /// Without --input: the built-in example (examples/scene.json: the FR3, a person walking up
+    /// to the table, a rolling ball, six chunks). Exit 3 on invalid input, naming the field.
+    #[command(after_help = "Examples:
+  pacs shield                                   # the built-in example scene
+  pacs shield --input examples/scene.json --out shield-out && pacs audit shield-out/log.jsonl")]
+    Shield {
+        /// Scene JSON file (default: built-in example).
+        #[arg(long, value_name = "FILE")]
+        input: Option<PathBuf>,
+        /// Output directory for commands.jsonl and log.jsonl.
+        #[arg(long, value_name = "DIR", default_value = "pacs-shield")]
+        out: PathBuf,
+    },
     /// Simulate the paper's evaluation: tasks × methods × rollouts in parallel, each rollout
     /// logged in the audit format and scored against the true human; tables and SVG plots.
     Simulate(cli::simulate::SimulateArgs),
@@ -146,6 +165,7 @@ fn main() -> ExitCode {
             use std::io::IsTerminal;
             cli::bench::shield(steps, std::io::stderr().is_terminal())
         }
+        Command::Shield { input, out } => cli::shield::run(input.as_deref(), &out),
         Command::Audit(args) => return cli::audit::main(args),
         Command::Simulate(args) => cli::simulate::run(&args),
     };

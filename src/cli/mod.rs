@@ -5,6 +5,7 @@ pub mod bench;
 pub mod demo;
 pub mod fk;
 pub mod reach;
+pub mod shield;
 pub mod show;
 pub mod simulate;
 pub mod trajectory;

@@ -49,7 +49,7 @@ mod object;
 
 pub use broad_phase::workspace_ball;
 pub use environment::EnvShape;
-pub use object::{ObjectOutcome, ObjectRule, ObjectViolation};
+pub use object::{ObjectOutcome, ObjectRule, ObjectViolation, contact_violates};
 
 use broad_phase::Aabb;
 use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};

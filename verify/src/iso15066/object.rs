@@ -124,15 +124,7 @@ impl ObjectRule {
                 separation,
             };
         };
-        let (bad, e) = match contact {
-            ObjectContact::NoContact => (true, 0.0),
-            ObjectContact::Ssm => (!at_rest(dq, self.rest_speed), 0.0),
-            ObjectContact::Pfl { threshold } => {
-                let e = energy();
-                let e = if e.is_nan() { f64::INFINITY } else { e };
-                (e > threshold || threshold.is_nan(), e)
-            }
-        };
+        let (bad, e) = contact_violates(contact, at_rest(dq, self.rest_speed), energy);
         ObjectOutcome {
             contact: true,
             violation: bad.then_some(ObjectViolation {
@@ -141,6 +133,27 @@ impl ObjectRule {
                 energy: e,
             }),
             separation: 0.0,
+        }
+    }
+}
+
+/// Whether a contact with an object under `contact` violates it: `no_contact` always, `ssm`
+/// unless the robot is `at_rest`, `pfl` when the kinetic-energy bound `energy` (J, called only
+/// for PFL; NaN counts as +∞) exceeds the threshold. Returns (violation, the energy used, 0 for
+/// SSM and no-contact). The one decision for objects: [`ObjectRule::check`] applies it to
+/// reachable sets, the simulation's ground truth to exact states.
+pub fn contact_violates(
+    contact: ObjectContact,
+    at_rest: bool,
+    energy: impl FnOnce() -> f64,
+) -> (bool, f64) {
+    match contact {
+        ObjectContact::NoContact => (true, 0.0),
+        ObjectContact::Ssm => (!at_rest, 0.0),
+        ObjectContact::Pfl { threshold } => {
+            let e = energy();
+            let e = if e.is_nan() { f64::INFINITY } else { e };
+            (e > threshold || threshold.is_nan(), e)
         }
     }
 }

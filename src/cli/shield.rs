@@ -1,0 +1,401 @@
+//! `pacs shield --input scene.json`: run the shield on a user's own scene — a robot, a human,
+//! dynamic objects, the constraints, timed action chunks and timed measurements — and write the
+//! command of every safety step (JSON Lines) and the run as an audit-format log.
+//!
+//! The scene's model fields are those of a log header (`robot`, `human`, `constraints`,
+//! `environment`, `objects`: built-in names or inline specs), so the log written is audited
+//! against exactly the models the shield used. A measurement stamped `t` reaches the shield at
+//! its `received` time (default: `t`), a chunk at its `t`: each is handed over at the first
+//! safety step at or after that time, in file order for equal times.
+
+use super::{CliError, check_vec, read_file};
+use pacs_log::{Header, LogModels, ModelRef, ObjectEntry};
+use pacs_models::ConstraintSpec;
+use pacs_models::human::HumanSpec;
+use pacs_models::robot::RobotSpec;
+use pacs_motion::chunk::{ActionKind, Chunk, OutOfLimits};
+use pacs_reach::human::HumanMeasurement;
+use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_shield::shield_log::ShieldLog;
+use serde::Deserialize;
+use serde_json::{Value, json};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The scene file (see docs/cli.md, `pacs shield`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Scene {
+    robot: ModelRef<RobotSpec>,
+    human: ModelRef<HumanSpec>,
+    constraints: ModelRef<ConstraintSpec>,
+    #[serde(default)]
+    environment: Vec<pacs_models::shape::CapsuleSpec>,
+    #[serde(default)]
+    objects: Vec<ObjectEntry>,
+    #[serde(default)]
+    config: SceneConfig,
+    /// Start configuration at rest (rad) at `t0`.
+    start: Vec<f64>,
+    /// Start time (s).
+    #[serde(default)]
+    t0: f64,
+    /// Run length (s): steps at t0, t0 + α_s, … while t < t0 + duration.
+    duration: f64,
+    #[serde(default)]
+    chunks: Vec<TimedChunk>,
+    #[serde(default)]
+    human_measurements: Vec<HumanEntry>,
+    #[serde(default)]
+    object_measurements: Vec<ObjectEntryMeasurement>,
+}
+
+/// Shield settings a scene may override (the rest keep their defaults).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneConfig {
+    /// `"pacs"`, `"off"` or `"single-action"`.
+    mode: Option<String>,
+    /// Safety step α_s (s).
+    safety_step: Option<f64>,
+    /// Cartesian tracking error (m).
+    tracking_error: Option<f64>,
+    /// Joint velocity tracking error (rad/s).
+    velocity_tracking_error: Option<f64>,
+    /// SSM rest speed (rad/s).
+    rest_speed: Option<f64>,
+    /// `"combined"`, `"pos"`, `"vel"` or `"acc"`.
+    human_model: Option<String>,
+    /// `"reject"` or `"project"` for waypoints outside the joint limits.
+    out_of_limits: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TimedChunk {
+    /// When the policy hands the chunk over (s).
+    t: f64,
+    #[serde(default)]
+    kind: ActionKind,
+    actions: Vec<Vec<f64>>,
+    execute: usize,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HumanEntry {
+    /// Measurement time stamp (s).
+    t: f64,
+    /// When the shield receives it (s; default `t`).
+    received: Option<f64>,
+    /// Keypoint positions (m), in the model's order.
+    keypoints: Vec<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectEntryMeasurement {
+    /// Measurement time stamp (s).
+    t: f64,
+    /// When the shield receives it (s; default `t`).
+    received: Option<f64>,
+    /// Object id (declared in `objects`).
+    id: String,
+    /// Position (m).
+    position: [f64; 3],
+    /// Velocity (m/s), if measured.
+    velocity: Option<[f64; 3]>,
+}
+
+fn input(msg: impl Into<String>) -> CliError {
+    CliError::Input(msg.into())
+}
+
+fn finite(field: &str, v: f64) -> Result<f64, CliError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(input(format!("{field}: value {v} is not finite")))
+    }
+}
+
+fn config(c: &SceneConfig) -> Result<ShieldConfig, CliError> {
+    let mut cfg = ShieldConfig::default();
+    if let Some(m) = &c.mode {
+        cfg.mode = match m.as_str() {
+            "pacs" => FilterMode::Pacs,
+            "off" => FilterMode::Off,
+            "single-action" => FilterMode::SingleAction,
+            o => {
+                return Err(input(format!(
+                    "config.mode: unknown mode `{o}` (pacs, off, single-action)"
+                )));
+            }
+        };
+    }
+    if let Some(m) = &c.human_model {
+        cfg.human_model = m
+            .parse()
+            .map_err(|e| input(format!("config.human_model: {e}")))?;
+    }
+    if let Some(m) = &c.out_of_limits {
+        cfg.out_of_limits = match m.as_str() {
+            "reject" => OutOfLimits::Reject,
+            "project" => OutOfLimits::Project,
+            o => {
+                return Err(input(format!(
+                    "config.out_of_limits: unknown choice `{o}` (reject, project)"
+                )));
+            }
+        };
+    }
+    if let Some(v) = c.safety_step {
+        cfg.safety_step = finite("config.safety_step", v)?;
+    }
+    if let Some(v) = c.tracking_error {
+        cfg.tracking_error = finite("config.tracking_error", v)?;
+    }
+    if let Some(v) = c.velocity_tracking_error {
+        cfg.velocity_tracking_error = finite("config.velocity_tracking_error", v)?;
+    }
+    if let Some(v) = c.rest_speed {
+        cfg.rest_speed = finite("config.rest_speed", v)?;
+    }
+    Ok(cfg)
+}
+
+/// One input event, in the order the shield receives it.
+enum Event {
+    Chunk(usize),
+    Human(usize),
+    Object(usize),
+}
+
+/// Built-in example scene (`examples/scene.json`).
+const SCENE_EXAMPLE: &str = include_str!("../../examples/scene.json");
+
+/// Run `pacs shield [--input F] [--out DIR]`: returns the summary printed on stdout.
+pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
+    let (name, text) = match path {
+        Some(p) => (p.display().to_string(), read_file(p)?),
+        None => ("examples/scene.json".to_string(), SCENE_EXAMPLE.to_string()),
+    };
+    let scene: Scene =
+        serde_json::from_str(&text).map_err(|e| input(format!("{name}: invalid scene: {e}")))?;
+    let mut header = Header::new(
+        scene.robot.clone(),
+        scene.human.clone(),
+        scene.constraints.clone(),
+    );
+    header.environment = scene.environment.clone();
+    header.objects = scene.objects.clone();
+    header.meta.insert("filter".into(), "pacs-shield".into());
+    header.meta.insert("scene".into(), name.clone().into());
+    let models = LogModels::from_header(&header)
+        .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
+    let cfg = config(&scene.config)?;
+    let n = models.robot.dof();
+    check_vec("start", &scene.start, n)?;
+    let t0 = finite("t0", scene.t0)?;
+    let duration = finite("duration", scene.duration)?;
+    if duration <= 0.0 || duration > 3600.0 {
+        return Err(input(format!(
+            "duration: {duration} s is outside (0, 3600]"
+        )));
+    }
+    let env: Vec<_> = models
+        .environment
+        .iter()
+        .map(pacs_shield::shield::EnvShape::from)
+        .collect();
+    let mut shield = Shield::new(
+        models.robot.clone(),
+        Some((models.human.clone(), &models.constraints)),
+        env,
+        cfg,
+    )
+    .map_err(|e| input(format!("{name}: {e}")))?;
+    for (id, model, contact) in &models.objects {
+        shield
+            .add_object(*model, *contact)
+            .map_err(|e| input(format!("objects `{id}`: {e}")))?;
+    }
+    shield
+        .start(t0, &scene.start)
+        .map_err(|e| input(format!("start: {e}")))?;
+
+    // Validate every input up front and order them by arrival.
+    let mut events: Vec<(f64, Event)> = Vec::new();
+    let mut chunks = Vec::with_capacity(scene.chunks.len());
+    for (i, c) in scene.chunks.iter().enumerate() {
+        let field = format!("chunks[{i}]");
+        finite(&format!("{field}.t"), c.t)?;
+        for (a, row) in c.actions.iter().enumerate() {
+            check_vec(&format!("{field}.actions[{a}]"), row, n)?;
+        }
+        if c.execute == 0 || c.execute > c.actions.len() {
+            return Err(input(format!(
+                "{field}.execute: {} is outside 1..={} (the number of actions)",
+                c.execute,
+                c.actions.len()
+            )));
+        }
+        chunks.push(Chunk {
+            kind: c.kind,
+            actions: c.actions.clone(),
+            execute: c.execute,
+            gripper: None,
+        });
+        events.push((c.t, Event::Chunk(i)));
+    }
+    let mut humans = Vec::with_capacity(scene.human_measurements.len());
+    for (i, m) in scene.human_measurements.iter().enumerate() {
+        let field = format!("human_measurements[{i}]");
+        let t = finite(&format!("{field}.t"), m.t)?;
+        let received = finite(&format!("{field}.received"), m.received.unwrap_or(t))?;
+        if received < t {
+            return Err(input(format!(
+                "{field}.received: {received} s is before the time stamp {t} s"
+            )));
+        }
+        let hm = HumanMeasurement::new(&models.human, t, &m.keypoints, None)
+            .map_err(|e| input(format!("{field}.keypoints: {e}")))?;
+        humans.push(hm);
+        events.push((received, Event::Human(i)));
+    }
+    let mut objects = Vec::with_capacity(scene.object_measurements.len());
+    for (i, m) in scene.object_measurements.iter().enumerate() {
+        let field = format!("object_measurements[{i}]");
+        let t = finite(&format!("{field}.t"), m.t)?;
+        let received = finite(&format!("{field}.received"), m.received.unwrap_or(t))?;
+        if received < t {
+            return Err(input(format!(
+                "{field}.received: {received} s is before the time stamp {t} s"
+            )));
+        }
+        let Some(k) = models.objects.iter().position(|(id, _, _)| *id == m.id) else {
+            return Err(input(format!(
+                "{field}.id: no object `{}` in `objects`",
+                m.id
+            )));
+        };
+        for (j, x) in m
+            .position
+            .iter()
+            .chain(m.velocity.iter().flatten())
+            .enumerate()
+        {
+            finite(
+                &format!("{field}.{}", if j < 3 { "position" } else { "velocity" }),
+                *x,
+            )?;
+        }
+        objects.push((
+            k,
+            ObjectMeasurement {
+                time: t,
+                position: m.position,
+                velocity: m.velocity,
+            },
+        ));
+        events.push((received, Event::Object(i)));
+    }
+    events.sort_by(|a, b| a.0.total_cmp(&b.0)); // stable: file order for equal times
+
+    std::fs::create_dir_all(out)
+        .map_err(|e| input(format!("cannot create {}: {e}", out.display())))?;
+    let cmd_path = out.join("commands.jsonl");
+    let log_path = out.join("log.jsonl");
+    let create = |p: &PathBuf| {
+        std::fs::File::create(p)
+            .map(std::io::BufWriter::new)
+            .map_err(|e| input(format!("cannot create {}: {e}", p.display())))
+    };
+    let mut cmd_out = create(&cmd_path)?;
+    let mut log = ShieldLog::new(create(&log_path)?, &header, t0, &scene.start)
+        .map_err(|e| CliError::Internal(format!("{}: {e}", log_path.display())))?;
+    let werr = |p: &Path, e: &dyn std::fmt::Display| {
+        CliError::Internal(format!("cannot write {}: {e}", p.display()))
+    };
+
+    let dt = shield.config().safety_step;
+    let steps = (duration / dt).ceil() as usize;
+    let (mut next, mut verified, mut accepted) = (0usize, 0usize, 0usize);
+    let mut rejected: Vec<Value> = Vec::new();
+    let mut max_step_us: f64 = 0.0;
+    for k in 0..steps {
+        let t = t0 + k as f64 * dt;
+        let mut latest_human: Option<&HumanMeasurement> = None;
+        while next < events.len() && events[next].0 <= t + 1e-12 {
+            match events[next].1 {
+                Event::Chunk(i) => match shield.set_chunk(&chunks[i]) {
+                    Ok(()) => accepted += 1,
+                    Err(e) => {
+                        log.event(t, "chunk_rejected")
+                            .map_err(|e| werr(&log_path, &e))?;
+                        rejected.push(json!({"chunk": i, "t": t, "reason": e.to_string()}));
+                    }
+                },
+                Event::Human(i) => {
+                    let m = &humans[i];
+                    if latest_human.is_none_or(|l| l.time() < m.time()) {
+                        latest_human = Some(m);
+                    }
+                }
+                Event::Object(i) => {
+                    let (k, m) = &objects[i];
+                    shield
+                        .measure_object(*k, m)
+                        .map_err(|e| input(format!("object_measurements[{i}]: {e}")))?;
+                    log.object(t, &models.objects[*k].0, m)
+                        .map_err(|e| werr(&log_path, &e))?;
+                }
+            }
+            next += 1;
+        }
+        let clock = std::time::Instant::now();
+        let cmd = shield
+            .step(t, latest_human)
+            .map_err(|e| CliError::Internal(format!("step at {t} s: {e}")))?;
+        max_step_us = max_step_us.max(clock.elapsed().as_secs_f64() * 1e6);
+        verified += cmd.diag.verified as usize;
+        log.record(t, latest_human, &cmd)
+            .map_err(|e| werr(&log_path, &e))?;
+        let d = &cmd.diag;
+        let mut line = json!({
+            "t": cmd.t,
+            "q": &cmd.state.q[..n],
+            "dq": &cmd.state.dq[..n],
+            "ddq": &cmd.state.ddq[..n],
+            "verified": d.verified,
+            "on_failsafe": d.on_failsafe,
+            "binding": d.binding,
+            "path_speed": d.path_speed,
+            "stop_time": d.stop_time,
+        });
+        if d.min_separation.is_finite() {
+            line["min_separation_m"] = json!(d.min_separation);
+        }
+        serde_json::to_writer(&mut cmd_out, &line).map_err(|e| werr(&cmd_path, &e))?;
+        writeln!(cmd_out).map_err(|e| werr(&cmd_path, &e))?;
+    }
+    log.event(t0 + steps as f64 * dt, "end")
+        .map_err(|e| werr(&log_path, &e))?;
+    log.finish()
+        .map_err(|e| werr(&log_path, &e))?
+        .flush()
+        .map_err(|e| werr(&log_path, &e))?;
+    cmd_out.flush().map_err(|e| werr(&cmd_path, &e))?;
+    Ok(json!({
+        "scene": name,
+        "steps": steps,
+        "safety_step_s": dt,
+        "verified_fraction": verified as f64 / steps.max(1) as f64,
+        "chunks_accepted": accepted,
+        "chunks_rejected": rejected,
+        "max_step_us": max_step_us,
+        "commands": cmd_path,
+        "log": log_path,
+    }))
+}

@@ -1,0 +1,187 @@
+//! `pacs shield --input scene.json` end to end (issue 15): the shipped example runs, writes one
+//! command per safety step and a log `pacs audit` passes; the commands stay within the joint
+//! limits, stop for the person and resume; a person in the way from the start keeps the arm at
+//! rest; bad scenes exit 3 naming the field.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn pacs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pacs"))
+}
+
+fn dir(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("pacs-shield-{name}-{}", std::process::id()))
+}
+
+fn example() -> Value {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scene.json");
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn run_scene(name: &str, scene: &Value) -> (Output, PathBuf) {
+    let d = dir(name);
+    std::fs::create_dir_all(&d).unwrap();
+    let input = d.join("scene.json");
+    std::fs::write(&input, scene.to_string()).unwrap();
+    let out = pacs()
+        .args(["shield", "--input"])
+        .arg(&input)
+        .arg("--out")
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    (out, d)
+}
+
+fn commands(d: &Path) -> Vec<Value> {
+    std::fs::read_to_string(d.join("out/commands.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn the_example_scene_runs_and_its_log_passes_the_audit() {
+    let (out, d) = run_scene("example", &example());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["steps"], 2400);
+    assert_eq!(summary["chunks_accepted"], 6);
+    let cmds = commands(&d);
+    assert_eq!(cmds.len(), 2400);
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let lim = robot.limits();
+    let mut unverified = 0;
+    for (k, c) in cmds.iter().enumerate() {
+        let t = c["t"].as_f64().unwrap();
+        assert!(
+            (t - (k + 1) as f64 * 1e-3).abs() < 1e-9,
+            "step {k}: t = {t}"
+        );
+        let q: Vec<f64> = serde_json::from_value(c["q"].clone()).unwrap();
+        let dq: Vec<f64> = serde_json::from_value(c["dq"].clone()).unwrap();
+        assert!(lim.contains(&q), "step {k}: {q:?} outside the limits");
+        for (j, v) in dq.iter().enumerate() {
+            assert!(
+                v.abs() <= lim.v_max()[j] + 1e-9,
+                "step {k}: joint {j} at {v}"
+            );
+        }
+        unverified += (!c["verified"].as_bool().unwrap()) as usize;
+    }
+    // The person walks up and the ball rolls past: some steps brake, most are verified.
+    let frac = summary["verified_fraction"].as_f64().unwrap();
+    assert!(frac > 0.5 && frac < 1.0, "verified fraction {frac}");
+    assert!(unverified > 0);
+    let a = pacs()
+        .arg("audit")
+        .arg(d.join("out/log.jsonl"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        a.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&a.stdout)
+    );
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn the_built_in_example_is_the_shipped_file() {
+    let d = dir("builtin");
+    let out = pacs().args(["shield", "--out"]).arg(&d).output().unwrap();
+    assert!(out.status.success());
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["scene"], "examples/scene.json");
+    assert_eq!(summary["steps"], 2400);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn a_person_at_the_arm_from_the_start_keeps_it_at_rest() {
+    let mut scene = example();
+    // The hand on the flange at every measurement.
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let start: Vec<f64> = serde_json::from_value(scene["start"].clone()).unwrap();
+    let p = robot.capsules_world(&start).last().unwrap().1.p2();
+    for m in scene["human_measurements"].as_array_mut().unwrap() {
+        m["keypoints"][5] = serde_json::json!([p.x, p.y, p.z]);
+    }
+    let (out, d) = run_scene("blocked", &scene);
+    assert!(out.status.success());
+    for c in commands(&d) {
+        assert_eq!(c["q"], scene["start"], "moved at t = {}", c["t"]);
+        assert_eq!(c["verified"], false);
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn bad_scenes_exit_3_naming_the_field() {
+    type Edit = Box<dyn Fn(&mut Value)>;
+    let cases: Vec<(&str, Edit, &str)> = vec![
+        (
+            "keypoints",
+            Box::new(|s| {
+                s["human_measurements"][7]["keypoints"]
+                    .as_array_mut()
+                    .unwrap()
+                    .pop();
+            }),
+            "human_measurements[7].keypoints",
+        ),
+        (
+            "action",
+            Box::new(|s| s["chunks"][2]["actions"][5] = serde_json::json!([0.0, 0.0])),
+            "chunks[2].actions[5]",
+        ),
+        (
+            "object",
+            Box::new(|s| s["object_measurements"][3]["id"] = "cup".into()),
+            "object_measurements[3].id",
+        ),
+        (
+            "received",
+            Box::new(|s| s["human_measurements"][4]["received"] = serde_json::json!(-1.0)),
+            "human_measurements[4].received",
+        ),
+        (
+            "execute",
+            Box::new(|s| s["chunks"][0]["execute"] = serde_json::json!(17)),
+            "chunks[0].execute",
+        ),
+        (
+            "mode",
+            Box::new(|s| s["config"]["mode"] = "fast".into()),
+            "config.mode",
+        ),
+        (
+            "start",
+            Box::new(|s| s["start"][3] = serde_json::json!(5.0)),
+            "start",
+        ),
+        (
+            "unknown",
+            Box::new(|s| s["chunk"] = serde_json::json!([])),
+            "unknown field `chunk`",
+        ),
+    ];
+    for (name, edit, want) in cases {
+        let mut scene = example();
+        edit(&mut scene);
+        let (out, d) = run_scene(name, &scene);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        std::fs::remove_dir_all(&d).ok();
+    }
+}
