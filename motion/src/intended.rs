@@ -59,6 +59,14 @@ impl Default for PlannerConfig {
     }
 }
 
+/// A clone is a fresh planner with the same limits and settings (the scratch buffers are not
+/// state: every plan starts from them anew).
+impl Clone for Planner {
+    fn clone(&self) -> Self {
+        Planner::new(self.limits, self.config)
+    }
+}
+
 /// Reusable planner (holds the segment solver and scratch buffers; reuse it across chunks).
 pub struct Planner {
     limits: Limits,

@@ -25,18 +25,88 @@ pub struct StepStats {
     pub p90: f64,
     /// 99th percentile (s).
     pub p99: f64,
+    /// 99.9th percentile (s).
+    pub p999: f64,
     /// Maximum (s).
     pub max: f64,
+    /// Steps slower than 50 µs.
+    pub over_50us: usize,
+    /// The step's work without the machine's noise: per step the fastest of the step and two
+    /// re-runs of it on copies of the shield (same state, same inputs); its maximum over the run
+    /// (s). A step slower than this was interrupted, not busy. 0 where not measured (CBF).
+    pub work_max: f64,
+    /// 99.9th percentile of that work time (s).
+    pub work_p999: f64,
+    /// Steps whose work time exceeds 50 µs.
+    pub work_over_50us: usize,
     /// Fraction of steps whose intended motion was verified.
     pub verified_fraction: f64,
     /// Median time of `set_chunk` (trajectory planning), s.
     pub chunk_median: f64,
+    /// 99th percentile of `set_chunk`, s.
+    pub chunk_p99: f64,
     /// Maximum time of `set_chunk`, s.
     pub chunk_max: f64,
+    /// `set_chunk` calls slower than 100 µs.
+    pub chunk_over_100us: usize,
+    /// The slowest steps by work time (at most 8, slowest first), with what the step did.
+    pub slowest: Vec<SlowStep>,
 }
 
-fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> StepStats {
+/// One slow step of a run: when, how long, and what decided it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SlowStep {
+    /// Step index.
+    pub step: usize,
+    /// Step time (s).
+    pub time: f64,
+    /// Steps since the last `set_chunk` (0: the first step after it).
+    pub since_chunk: usize,
+    /// The step verified its intended motion.
+    pub verified: bool,
+    /// What decided the step (`Binding` in its log form).
+    pub binding: String,
+}
+
+/// What one step did, kept for [`StepStats::slowest`].
+struct StepNote {
+    since_chunk: usize,
+    verified: bool,
+    binding: crate::shield::Binding,
+}
+
+fn stats(
+    name: &str,
+    v: Vec<f64>,
+    mut work: Vec<f64>,
+    notes: &[StepNote],
+    mut chunks: Vec<f64>,
+) -> StepStats {
+    let verified = notes.iter().filter(|n| n.verified).count();
+    // Slowest by work time where measured (noise-free), else by wall time.
+    let key = if work.len() == v.len() { &work } else { &v };
+    let mut order: Vec<usize> = (0..v.len()).collect();
+    order.sort_by(|&a, &b| key[b].total_cmp(&key[a]));
+    let slowest = order
+        .iter()
+        .take(8)
+        .filter_map(|&k| {
+            let n = notes.get(k)?;
+            Some(SlowStep {
+                step: k,
+                time: key[k],
+                since_chunk: n.since_chunk,
+                verified: n.verified,
+                binding: serde_json::to_string(&n.binding).unwrap_or_default(),
+            })
+        })
+        .collect();
+    let over_50us = v.iter().filter(|&&x| x > 50e-6).count();
+    let chunk_over_100us = chunks.iter().filter(|&&x| x > 100e-6).count();
+    let work_over_50us = work.iter().filter(|&&x| x > 50e-6).count();
+    let mut v = v;
     v.sort_by(f64::total_cmp);
+    work.sort_by(f64::total_cmp);
     chunks.sort_by(f64::total_cmp);
     let q = |v: &[f64], p: f64| {
         if v.is_empty() {
@@ -51,10 +121,36 @@ fn stats(name: &str, mut v: Vec<f64>, verified: usize, mut chunks: Vec<f64>) -> 
         median: q(&v, 0.5),
         p90: q(&v, 0.9),
         p99: q(&v, 0.99),
+        p999: q(&v, 0.999),
         max: v.last().copied().unwrap_or(0.0),
+        over_50us,
+        work_max: work.last().copied().unwrap_or(0.0),
+        work_p999: q(&work, 0.999),
+        work_over_50us,
         verified_fraction: verified as f64 / v.len().max(1) as f64,
         chunk_median: q(&chunks, 0.5),
+        chunk_p99: q(&chunks, 0.99),
         chunk_max: chunks.last().copied().unwrap_or(0.0),
+        chunk_over_100us,
+        slowest,
+    }
+}
+
+fn note(
+    since_chunk: usize,
+    cmd: Result<crate::shield::Command, crate::shield::ShieldError>,
+) -> StepNote {
+    match cmd {
+        Ok(c) => StepNote {
+            since_chunk,
+            verified: c.diag.verified,
+            binding: c.diag.binding,
+        },
+        Err(_) => StepNote {
+            since_chunk,
+            verified: false,
+            binding: crate::shield::Binding::NoProfile,
+        },
     }
 }
 
@@ -104,8 +200,12 @@ pub fn cbf_scenario(steps: usize) -> StepStats {
     let cfg = CbfConfig::default();
     let mut f = CbfFilter::new(fr3::fr3(), Some(human.clone()), cfg).expect("valid");
     f.start(0.0, &fr3::Q_READY).expect("start");
-    let (mut times, mut chunk_times, mut verified, mut sign) =
-        (Vec::with_capacity(steps), Vec::new(), 0, 1.0);
+    let (mut times, mut chunk_times, mut notes, mut sign) = (
+        Vec::with_capacity(steps),
+        Vec::new(),
+        Vec::with_capacity(steps),
+        1.0,
+    );
     for k in 0..steps {
         let t = k as f64 * cfg.safety_step;
         if k % 200 == 0 {
@@ -119,9 +219,9 @@ pub fn cbf_scenario(steps: usize) -> StepStats {
         let t0 = Instant::now();
         let cmd = f.step(t, Some(&m));
         times.push(t0.elapsed().as_secs_f64());
-        verified += cmd.is_ok_and(|c| c.diag.verified) as usize;
+        notes.push(note(k % 200, cmd));
     }
-    stats("cbf", times, verified, chunk_times)
+    stats("cbf", times, vec![], &notes, chunk_times)
 }
 
 /// FR3 moving back and forth (chunks of 8 × 0.02 rad on six joints, alternating direction every
@@ -157,7 +257,8 @@ fn run_walking_scenario(
     sh.start(0.0, &fr3::Q_READY).expect("start");
     let mut times = Vec::with_capacity(steps);
     let mut chunk_times = Vec::new();
-    let mut verified = 0;
+    let mut notes = Vec::with_capacity(steps);
+    let mut work = Vec::with_capacity(steps);
     let mut sign = 1.0;
     for k in 0..steps {
         let t = k as f64 * cfg.safety_step;
@@ -170,15 +271,24 @@ fn run_walking_scenario(
         }
         let m =
             HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
+        // Two re-runs on copies first (their result is discarded), then the real step.
+        let mut fastest = f64::INFINITY;
+        for _ in 0..2 {
+            let mut copy = sh.clone();
+            let t0 = Instant::now();
+            measure(&mut copy, t);
+            let _ = std::hint::black_box(copy.step(t, Some(&m)));
+            fastest = fastest.min(t0.elapsed().as_secs_f64());
+        }
         let t0 = Instant::now();
         measure(&mut sh, t);
         let cmd = sh.step(t, Some(&m));
-        times.push(t0.elapsed().as_secs_f64());
-        if cmd.is_ok_and(|c| c.diag.verified) {
-            verified += 1;
-        }
+        let real = t0.elapsed().as_secs_f64();
+        times.push(real);
+        work.push(fastest.min(real));
+        notes.push(note(k % 200, cmd));
     }
-    stats(name, times, verified, chunk_times)
+    stats(name, times, work, &notes, chunk_times)
 }
 
 /// Position (m) and velocity (m/s) of a ball rolling back and forth on the table in front of the

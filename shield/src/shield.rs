@@ -221,6 +221,7 @@ pub struct Command {
 }
 
 /// The PACS shield (also OFF and single-action, by configuration).
+#[derive(Clone)]
 pub struct Shield {
     robot: RobotModel,
     dof: usize,
@@ -568,6 +569,14 @@ impl Shield {
         let f = self.failsafe?;
         self.trajs[f.slot].as_ref()?;
         Some(self.joint_state(f.slot, &f.profile.eval(t - f.t0)))
+    }
+
+    /// The intended trajectory the commands currently follow and the path state on it (path
+    /// position `s` in intended-trajectory time, speed ṡ, acceleration s̈): every command is
+    /// `path.joint_state(trajectory)` — on the trajectory of an accepted chunk (or the start's
+    /// standstill), never off it.
+    pub fn path(&self) -> (&Trajectory, PathState) {
+        (self.traj(self.slot), self.path)
     }
 
     /// Current commanded joint state.

@@ -8,9 +8,17 @@ use serde_json::{Value, json};
 fn us(s: &StepStats) -> Value {
     json!({
         "scenario": s.scenario, "steps": s.steps,
-        "median_us": s.median * 1e6, "p90_us": s.p90 * 1e6, "p99_us": s.p99 * 1e6, "max_us": s.max * 1e6,
+        "median_us": s.median * 1e6, "p90_us": s.p90 * 1e6, "p99_us": s.p99 * 1e6,
+        "p99_9_us": s.p999 * 1e6, "max_us": s.max * 1e6, "steps_over_50_us": s.over_50us,
+        "work_max_us": s.work_max * 1e6, "work_p99_9_us": s.work_p999 * 1e6,
+        "work_steps_over_50_us": s.work_over_50us,
         "verified_fraction": s.verified_fraction,
-        "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_max_us": s.chunk_max * 1e6,
+        "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_p99_us": s.chunk_p99 * 1e6,
+        "set_chunk_max_us": s.chunk_max * 1e6, "set_chunk_over_100_us": s.chunk_over_100us,
+        "slowest_steps": s.slowest.iter().map(|w| json!({
+            "step": w.step, "us": w.time * 1e6, "steps_since_chunk": w.since_chunk,
+            "verified": w.verified, "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
+        })).collect::<Vec<_>>(),
     })
 }
 
