@@ -122,6 +122,9 @@ pub struct Auditor {
     block_human: Option<usize>,
     humans: [Option<HumanMeasurement>; 2],
     latest_human: Option<usize>,
+    /// Pairs of consecutive human measurements that contradict the model (merged when they
+    /// chain), reported as `human_exceeds_model`.
+    model_breaks: Vec<InconclusiveSpan>,
     span_human: Option<usize>,
     span_index: u64,
     open: Vec<Option<OpenInterval>>,
@@ -240,6 +243,7 @@ impl Auditor {
             block_human: None,
             humans: [None, None],
             latest_human: None,
+            model_breaks: Vec::new(),
             span_human: None,
             span_index: 0,
             open: vec![None; slots * links],
@@ -293,6 +297,7 @@ impl Auditor {
         }
         let m = HumanMeasurement::new(&self.human, t_meas, positions, None)
             .map_err(AuditError::Measurement)?;
+        self.check_human_model(&m);
         // Check the pending spans first: afterwards only `span_human`'s slot is still needed.
         self.flush_block();
         self.block_human = self.span_human;
@@ -306,6 +311,45 @@ impl Auditor {
         // Every human record after the last robot sample counts: keep the earliest measurement.
         self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
         Ok(())
+    }
+
+    /// Whether `m` and the latest human measurement are consistent with the human model: every
+    /// keypoint moved at most `v_max·|Δt| + 2·e_pos` (m) between the two stamps (both describe
+    /// the state `delay` earlier). A contradiction is recorded as `human_exceeds_model` over the
+    /// two stamps: the audit's occupancies assume the model, so a pass there would rest on an
+    /// assumption the log itself refutes.
+    fn check_human_model(&mut self, m: &HumanMeasurement) {
+        let Some(prev) = self.latest_human.and_then(|s| self.humans[s].as_ref()) else {
+            return;
+        };
+        let dt = (m.time() - prev.time()).abs();
+        let e = self.human.measurement_error_pos();
+        let broke = m
+            .positions()
+            .iter()
+            .zip(prev.positions())
+            .zip(self.human.v_max())
+            .any(|((a, b), v)| {
+                let allowed = v * dt + 2.0 * e;
+                // Only a clear excess counts (rounding of the logged values is not a break).
+                (a - b).norm() > allowed * (1.0 + 1e-9) + 1e-9
+            });
+        if !broke {
+            return;
+        }
+        let (t0, t1) = (prev.time().min(m.time()), prev.time().max(m.time()));
+        match self.model_breaks.last_mut() {
+            Some(last) if last.t_end >= t0 => {
+                last.t_end = last.t_end.max(t1);
+                last.spans += 1;
+            }
+            _ => self.model_breaks.push(InconclusiveSpan {
+                t_start: t0,
+                t_end: t1,
+                reason: Reason::HumanExceedsModel,
+                spans: 1,
+            }),
+        }
     }
 
     /// A measurement of object `id` (declared in the header) logged at `t`, taken at `t_meas`

@@ -94,6 +94,11 @@ pub enum InconclusiveReason {
     StaleObject,
     /// An object's occupancy could not be computed (e.g. it overflows).
     ObjectReachError,
+    /// Two human measurements lie farther apart than the model allows (keypoint speed bound ×
+    /// time between them + twice the position error): the person broke the model between them,
+    /// and what was checked with the earlier one assumed it (`t_start`, `t_end`: the two
+    /// measurement stamps).
+    HumanExceedsModel,
 }
 
 impl InconclusiveReason {
@@ -110,6 +115,7 @@ impl InconclusiveReason {
             Self::NoObject => "no_object",
             Self::StaleObject => "stale_object",
             Self::ObjectReachError => "object_reach_error",
+            Self::HumanExceedsModel => "human_exceeds_model",
         }
     }
 }

@@ -193,7 +193,53 @@ fn every_trailing_human_record_counts() {
     );
     let r = run(&text);
     assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
-    assert_eq!(reasons(&r), ["human_record_after_last_robot_sample"]);
+    // The hand also jumps 2 m within 0.4 s between the records (the model allows 0.8 m).
+    assert_eq!(
+        reasons(&r),
+        [
+            "human_record_after_last_robot_sample",
+            "human_exceeds_model"
+        ]
+    );
+}
+
+/// A person who moves faster than the model allows between two measurements makes the log
+/// inconclusive where it would otherwise pass: the occupancies checked with the earlier
+/// measurement assumed the model (a spike of one record 1.5 m away from the others, 10 ms apart,
+/// is such a contradiction; a 1.5 cm one, 1.5 m/s, is not).
+#[test]
+fn a_human_faster_than_the_model_is_inconclusive_not_a_pass() {
+    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    // One record displaced by `dx` (m) along x, 10 ms after and before its neighbours.
+    let log = |dx: f64| {
+        let x = 2.6 + dx;
+        let spike: Vec<String> = (0..9)
+            .map(|i| format!("[{x},{},1]", i as f64 * 0.1))
+            .collect();
+        let spike = format!("[{}]", spike.join(","));
+        let mut text = format!("{}\n", header("ssm"));
+        for k in 0..=20 {
+            let t = k as f64 * 0.01;
+            let kp = if k == 10 { spike.as_str() } else { far };
+            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{kp}}}\n");
+            text += &format!(
+                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n"
+            );
+        }
+        run(&text)
+    };
+    let fast = log(1.5);
+    assert_eq!(
+        fast.verdict,
+        Verdict::Inconclusive,
+        "{:?}",
+        fast.inconclusive
+    );
+    assert_eq!(reasons(&fast), ["human_exceeds_model"]);
+    let span = &fast.inconclusive[0];
+    assert_eq!((span.t_start, span.t_end), (0.09, 0.11));
+    let slow = log(0.015);
+    assert_eq!(slow.verdict, Verdict::Pass, "{:?}", slow.inconclusive);
 }
 
 /// A clean log (robot at rest, the human far away) written robot-then-human or human-then-robot

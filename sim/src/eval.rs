@@ -4,7 +4,7 @@
 mod metrics;
 mod plots;
 
-pub use metrics::{Row, Stat, markdown, summarize};
+pub use metrics::{Row, Stat, markdown, summarize, wilson95};
 pub use plots::{svg_paths, svg_separation};
 
 use crate::episode::{Episode, EpisodeConfig, Goal, Method, Outputs, Setup, run_setup};

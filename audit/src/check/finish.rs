@@ -85,6 +85,7 @@ impl Auditor {
         let mut inconclusive: Vec<InconclusiveSpan> =
             self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
         inconclusive.extend(final_inconclusive);
+        inconclusive.append(&mut self.model_breaks);
         if self.samples < 2 {
             inconclusive.push(InconclusiveSpan {
                 t_start: if self.samples == 1 { self.t_first } else { 0.0 },
