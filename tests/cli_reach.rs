@@ -557,3 +557,28 @@ fn reach_object_example_inline_and_errors() {
     );
     invalid(pacs(&["object", "show", "rock"]), "built-in: ball");
 }
+
+/// Issue 17 item 3: an inline robot or human with a missing or unknown field names it; no
+/// "untagged enum" message reaches the user.
+#[test]
+fn inline_models_name_the_faulty_field() {
+    let out = pacs(&["robot", "show", "fr3"]);
+    let mut robot: Value = ok_json(out);
+    robot.as_object_mut().unwrap().remove("joints");
+    let o = with_input(&["fk"], &json!({"robot": robot, "q": [Q_READY]}));
+    invalid(o, "missing field `joints`");
+    let o = with_input(
+        &["fk"],
+        &json!({"robot": {"urdf": "arm.urdf", "sidefile": "x"}, "q": [Q_READY]}),
+    );
+    invalid(o, "unknown field `sidefile`");
+    let mut human: Value = ok_json(pacs(&["human", "show", "default"]));
+    human.as_object_mut().unwrap().remove("body_parts");
+    let o = with_input(
+        &["reach", "human"],
+        &json!({"human": human, "measurement": {"time": 0.0, "positions": []}, "intervals": []}),
+    );
+    invalid(o, "missing field `body_parts`");
+    let o = with_input(&["fk"], &json!({"robot": 3, "q": [Q_READY]}));
+    invalid(o, "expected a built-in robot name");
+}

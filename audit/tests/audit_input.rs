@@ -125,6 +125,31 @@ fn missing_or_bad_header() {
     expect_error(&lines(&[HEADER, HUMAN, HEADER]), Some(3), "second header");
 }
 
+/// Issue 17 item 3: an inline model with a missing or unknown field names that field, never
+/// "did not match any variant of untagged enum".
+#[test]
+fn inline_models_name_their_missing_or_unknown_field() {
+    // The built-in human, inline, without `keypoints`; then with an unknown field.
+    let human = pacs_models::default_human().spec().clone();
+    let mut v = serde_json::to_value(&human).unwrap();
+    v.as_object_mut().unwrap().remove("keypoints");
+    let h = HEADER.replace("\"human\":\"default\"", &format!("\"human\":{v}"));
+    expect_error(&lines(&[&h, HUMAN]), Some(1), "missing field `keypoints`");
+    let mut v = serde_json::to_value(&human).unwrap();
+    v.as_object_mut()
+        .unwrap()
+        .insert("v_maximum".into(), serde_json::json!(2.0));
+    let h = HEADER.replace("\"human\":\"default\"", &format!("\"human\":{v}"));
+    expect_error(&lines(&[&h, HUMAN]), Some(1), "unknown field `v_maximum`");
+    // A number where a model belongs says what is expected.
+    let h = HEADER.replace("\"robot\":\"fr3\"", "\"robot\":7");
+    expect_error(&lines(&[&h, HUMAN]), Some(1), "built-in model name");
+    let bad = HEADER.replace("\"robot\":\"fr3\"", "\"robot\":{\"name\":\"x\"}");
+    let e = run(&lines(&[&bad, HUMAN]), &AuditConfig::default()).unwrap_err();
+    assert!(!e.to_string().contains("untagged"), "{e}");
+    assert!(e.to_string().contains("missing field"), "{e}");
+}
+
 #[test]
 fn unknown_record_type_and_fields() {
     expect_error(

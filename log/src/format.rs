@@ -14,13 +14,41 @@ pub const FORMAT: &str = "pacs-log";
 pub const VERSION: u32 = 1;
 
 /// A model given by built-in name or as an inline spec (the JSON forms the model loaders accept).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Read by its shape — a string is a name, a table/object a spec — so a faulty inline spec
+/// reports its own error (the missing or unknown field), not "did not match any variant".
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum ModelRef<T> {
     /// Built-in name (`"fr3"`, `"default"`, `"ssm"`, ...).
     Name(String),
     /// Inline spec.
     Spec(Box<T>),
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for ModelRef<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Shape<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Shape<T> {
+            type Value = ModelRef<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a built-in model name (a string) or an inline spec (an object)")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+                Ok(ModelRef::Name(v.to_string()))
+            }
+            fn visit_string<E: serde::de::Error>(self, v: String) -> Result<Self::Value, E> {
+                Ok(ModelRef::Name(v))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(|t| ModelRef::Spec(Box::new(t)))
+            }
+        }
+        d.deserialize_any(Shape(std::marker::PhantomData))
+    }
 }
 
 /// The first record of every log: models, constraints, static environment and free-form metadata.

@@ -68,9 +68,10 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliEr
 
 /// A robot given by built-in name (`"fr3"`), as a URDF file plus optional side file
 /// (`{"urdf": "arm.urdf", "side": "arm.toml"}`, paths relative to the working directory), or as
-/// an inline model object (the format `pacs robot show` prints).
-#[derive(Debug, Clone, serde::Deserialize)]
-#[serde(untagged)]
+/// an inline model object (the format `pacs robot show` prints). Read by its shape (a string, an
+/// object with `urdf`, any other object), so a faulty inline spec reports its own missing or
+/// unknown field.
+#[derive(Debug, Clone)]
 pub enum RobotRef {
     /// Built-in name.
     Name(String),
@@ -79,11 +80,41 @@ pub enum RobotRef {
         /// URDF path.
         urdf: std::path::PathBuf,
         /// Side file (JSON or TOML) with capsules and acceleration/jerk limits.
-        #[serde(default)]
         side: Option<std::path::PathBuf>,
     },
     /// Inline spec.
     Spec(Box<pacs_models::RobotSpec>),
+}
+
+impl<'de> serde::Deserialize<'de> for RobotRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct UrdfRef {
+            urdf: std::path::PathBuf,
+            #[serde(default)]
+            side: Option<std::path::PathBuf>,
+        }
+        let v = serde_json::Value::deserialize(d)?;
+        match &v {
+            serde_json::Value::String(n) => Ok(RobotRef::Name(n.clone())),
+            serde_json::Value::Object(m) if m.contains_key("urdf") => {
+                let u: UrdfRef = serde_json::from_value(v).map_err(D::Error::custom)?;
+                Ok(RobotRef::Urdf {
+                    urdf: u.urdf,
+                    side: u.side,
+                })
+            }
+            serde_json::Value::Object(_) => serde_json::from_value(v)
+                .map(|s| RobotRef::Spec(Box::new(s)))
+                .map_err(|e| D::Error::custom(format!("inline robot spec: {e}"))),
+            other => Err(D::Error::custom(format!(
+                "expected a built-in robot name, {{\"urdf\": ..., \"side\": ...}} or an inline \
+                 spec, found {other}"
+            ))),
+        }
+    }
 }
 
 impl RobotRef {
@@ -101,22 +132,19 @@ impl RobotRef {
     }
 }
 
-/// A human model given by built-in name (`"default"`) or inline.
+/// A human model given by built-in name (`"default"`) or inline (read by its shape, like
+/// [`pacs_log::ModelRef`], so a faulty inline spec reports its own field).
 #[derive(Debug, Clone, serde::Deserialize)]
-#[serde(untagged)]
-pub enum HumanRef {
-    /// Built-in name.
-    Name(String),
-    /// Inline spec.
-    Spec(Box<pacs_models::HumanSpec>),
-}
+#[serde(transparent)]
+pub struct HumanRef(pub pacs_log::ModelRef<pacs_models::HumanSpec>);
 
 impl HumanRef {
     /// Resolve to a validated model.
     pub fn load(&self) -> Result<pacs_models::HumanModel, CliError> {
-        Ok(match self {
-            HumanRef::Name(n) => pacs_models::HumanModel::builtin(n)?,
-            HumanRef::Spec(s) => pacs_models::HumanModel::new((**s).clone())
+        use pacs_log::ModelRef;
+        Ok(match &self.0 {
+            ModelRef::Name(n) => pacs_models::HumanModel::builtin(n)?,
+            ModelRef::Spec(s) => pacs_models::HumanModel::new((**s).clone())
                 .map_err(|e| CliError::Input(format!("human: {e}")))?,
         })
     }
