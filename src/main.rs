@@ -178,7 +178,7 @@ fn main() -> ExitCode {
                 writeln!(out).map_err(serde_json::Error::io)
             }) {
                 eprintln!("pacs: cannot write output: {e}");
-                return ExitCode::from(74);
+                return ExitCode::from(cli::EXIT_CANNOT_WRITE as u8);
             }
             ExitCode::SUCCESS
         }

@@ -137,7 +137,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
     };
     if let Err(e) = written {
         eprintln!("pacs: cannot write output: {e}");
-        return ExitCode::from(74);
+        return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
     }
     if let Some(dir) = &args.out {
         let logs: Result<Vec<InputFile>, _> =
@@ -157,7 +157,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
         };
         if let Err(e) = pacs_reports::write_reports(dir, &input) {
             eprintln!("pacs: cannot write report: {e}");
-            return ExitCode::from(74);
+            return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
         }
     }
     ExitCode::from(verdict.exit_code())

@@ -28,7 +28,7 @@ fn summary(e: &Episode) -> Value {
 /// Run `pacs demo`: simulate, log, audit the logs, write the certification report to `out`.
 pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
     std::fs::create_dir_all(out)
-        .map_err(|e| CliError::Input(format!("cannot create {}: {e}", out.display())))?;
+        .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
     let robot = fr3::fr3();
     let human = default_human()
         .with_uncertainty(0.01, 0.1, 0.03)
@@ -56,7 +56,7 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
             }
             let path = out.join(format!("{task}-{}.jsonl", method_name(method)));
             let file = std::fs::File::create(&path)
-                .map_err(|e| CliError::Input(format!("cannot write {}: {e}", path.display())))?;
+                .map_err(|e| CliError::Output(format!("cannot write {}: {e}", path.display())))?;
             let mut w = std::io::BufWriter::new(file);
             let e = run_logged(
                 method,

@@ -16,12 +16,17 @@ use std::path::Path;
 pub const EXIT_INVALID_INPUT: i32 = 3;
 /// Exit code for an internal failure (a bug: please report).
 pub const EXIT_INTERNAL: i32 = 70;
+/// Exit code when an output (file, directory, stdout) cannot be written (`EX_IOERR` of
+/// sysexits.h): nothing is wrong with the input, the destination refused.
+pub const EXIT_CANNOT_WRITE: i32 = 74;
 
 /// A CLI failure with the exit code it maps to.
 #[derive(Debug)]
 pub enum CliError {
     /// Invalid input: exit 3.
     Input(String),
+    /// An output cannot be written: exit 74.
+    Output(String),
     /// Anything else: exit 70.
     Internal(String),
 }
@@ -31,13 +36,14 @@ impl CliError {
     pub fn code(&self) -> i32 {
         match self {
             CliError::Input(_) => EXIT_INVALID_INPUT,
+            CliError::Output(_) => EXIT_CANNOT_WRITE,
             CliError::Internal(_) => EXIT_INTERNAL,
         }
     }
     /// Human-readable message.
     pub fn message(&self) -> &str {
         match self {
-            CliError::Input(m) | CliError::Internal(m) => m,
+            CliError::Input(m) | CliError::Output(m) | CliError::Internal(m) => m,
         }
     }
 }

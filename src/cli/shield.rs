@@ -304,19 +304,19 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     events.sort_by(|a, b| a.0.total_cmp(&b.0)); // stable: file order for equal times
 
     std::fs::create_dir_all(out)
-        .map_err(|e| input(format!("cannot create {}: {e}", out.display())))?;
+        .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
     let cmd_path = out.join("commands.jsonl");
     let log_path = out.join("log.jsonl");
     let create = |p: &PathBuf| {
         std::fs::File::create(p)
             .map(std::io::BufWriter::new)
-            .map_err(|e| input(format!("cannot create {}: {e}", p.display())))
+            .map_err(|e| CliError::Output(format!("cannot create {}: {e}", p.display())))
     };
     let mut cmd_out = create(&cmd_path)?;
     let mut log = ShieldLog::new(create(&log_path)?, &header, t0, &scene.start)
         .map_err(|e| CliError::Internal(format!("{}: {e}", log_path.display())))?;
     let werr = |p: &Path, e: &dyn std::fmt::Display| {
-        CliError::Internal(format!("cannot write {}: {e}", p.display()))
+        CliError::Output(format!("cannot write {}: {e}", p.display()))
     };
 
     let dt = shield.config().safety_step;

@@ -103,7 +103,7 @@ fn parse_list<T: std::str::FromStr<Err = pacs_sim::UnknownName>>(
 
 fn write(path: &Path, text: &str) -> Result<(), CliError> {
     std::fs::write(path, text)
-        .map_err(|e| CliError::Input(format!("cannot write {}: {e}", path.display())))
+        .map_err(|e| CliError::Output(format!("cannot write {}: {e}", path.display())))
 }
 
 /// Run `pacs simulate`.
@@ -118,7 +118,7 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
         return Err(CliError::Input("--threads: must be at least 1".into()));
     }
     std::fs::create_dir_all(&args.out)
-        .map_err(|e| CliError::Input(format!("cannot create {}: {e}", args.out.display())))?;
+        .map_err(|e| CliError::Output(format!("cannot create {}: {e}", args.out.display())))?;
     let cfg = EvalConfig {
         tasks: tasks.clone(),
         variants,
