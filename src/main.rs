@@ -82,8 +82,10 @@ enum Command {
         #[arg(long, value_name = "DIR", default_value = "pacs-shield")]
         out: PathBuf,
     },
-    /// Simulate the paper's evaluation: tasks × methods × rollouts in parallel, each rollout
-    /// logged in the audit format and scored against the true human; tables and SVG plots.
+    /// Simulate the paper's evaluation: tasks × methods × rollouts in parallel, scored against
+    /// the true people and objects; tables and SVG plots. Each rollout is also logged in the
+    /// audit format (≈ 0.7 MB per simulated second; the disk needed is printed first;
+    /// --no-logs skips the logs).
     Simulate(cli::simulate::SimulateArgs),
 }
 

@@ -31,6 +31,12 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The disk the logs may take is stated first: 2 rollouts × 20 s × 0.75 MB/s = 30 MB.
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("take up to 30 MB") && err.contains("--no-logs"),
+        "{err}"
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 2);
