@@ -22,7 +22,7 @@ use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach};
 use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_reach::rounding::{add_up, sub_down};
+use pacs_reach::rounding::{add_down, add_up, dist3_up, mul_down, sub_down};
 use pacs_verify::iso15066::{
     ContactRule, EnvShape, ObjectRule, Outcome, frames_can_pinch, threshold,
 };
@@ -322,17 +322,19 @@ impl Auditor {
         let Some(prev) = self.latest_human.and_then(|s| self.humans[s].as_ref()) else {
             return;
         };
-        let dt = (m.time() - prev.time()).abs();
-        let e = self.human.measurement_error_pos();
+        // Conservative both ways: the distance rounded up, the allowance rounded down, so a
+        // contradiction is never missed by rounding (only one within an ulp is flagged too).
+        let (lo, hi) = (prev.time().min(m.time()), prev.time().max(m.time()));
+        let dt = sub_down(hi, lo).max(0.0);
+        let e2 = mul_down(2.0, self.human.measurement_error_pos());
         let broke = m
             .positions()
             .iter()
             .zip(prev.positions())
             .zip(self.human.v_max())
             .any(|((a, b), v)| {
-                let allowed = v * dt + 2.0 * e;
-                // Only a clear excess counts (rounding of the logged values is not a break).
-                (a - b).norm() > allowed * (1.0 + 1e-9) + 1e-9
+                let allowed = add_down(mul_down(*v, dt), e2);
+                dist3_up(&[a.x, a.y, a.z], &[b.x, b.y, b.z]) > allowed
             });
         if !broke {
             return;

@@ -48,6 +48,25 @@ pub struct ObjectMeasurement {
     pub velocity: Option<[f64; 3]>,
 }
 
+impl ObjectMeasurement {
+    /// Every value (time, position, velocity if given) is finite.
+    pub fn is_finite(&self) -> bool {
+        self.time.is_finite()
+            && self.position.iter().all(|x| x.is_finite())
+            && self
+                .velocity
+                .is_none_or(|v| v.iter().all(|x| x.is_finite()))
+    }
+
+    /// Keep the newest of `latest` and `self`: `self` replaces it only if strictly newer (an
+    /// older or equal-time measurement arriving late is ignored).
+    pub fn keep_newest(self, latest: &mut Option<ObjectMeasurement>) {
+        if latest.is_none_or(|cur| cur.time < self.time) {
+            *latest = Some(self);
+        }
+    }
+}
+
 /// Where an object can be over `[t_a, t_b]`: every point of the object lies in
 /// `reach ⊕ B(radius)` and, with a speed bound, also in `speed ⊕ B(speed_radius)`.
 #[derive(Debug, Clone, PartialEq)]

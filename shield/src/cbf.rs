@@ -157,10 +157,7 @@ impl CbfFilter {
     /// Record a measurement of object `id` (a newer one replaces the latest). Errors: unknown
     /// `id`, non-finite values.
     pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
-        let finite = m.time.is_finite()
-            && m.position.iter().all(|x| x.is_finite())
-            && m.velocity.is_none_or(|v| v.iter().all(|x| x.is_finite()));
-        if !finite {
+        if !m.is_finite() {
             return Err(ShieldError::Invalid(format!(
                 "object {id}: measurement with a non-finite value"
             )));
@@ -171,9 +168,7 @@ impl CbfFilter {
                 "object {id}: no such object ({n} added)"
             )));
         };
-        if latest.is_none_or(|cur| cur.time < m.time) {
-            *latest = Some(*m);
-        }
+        m.keep_newest(latest);
         Ok(())
     }
 

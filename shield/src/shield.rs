@@ -448,23 +448,18 @@ impl Shield {
     /// Record a measurement of object `id`: it replaces the latest one if it is newer (older or
     /// equal-time ones are ignored). Errors: unknown `id`, non-finite values.
     pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
-        let finite = m.time.is_finite()
-            && m.position.iter().all(|x| x.is_finite())
-            && m.velocity.is_none_or(|v| v.iter().all(|x| x.is_finite()));
-        if !finite {
+        if !m.is_finite() {
             return Err(ShieldError::Invalid(format!(
                 "object {id}: measurement with a non-finite value"
             )));
         }
+        let n = self.objects.len();
         let Some(slot) = self.objects.get_mut(id) else {
             return Err(ShieldError::Invalid(format!(
-                "object {id}: no such object ({} added)",
-                self.objects.len()
+                "object {id}: no such object ({n} added)"
             )));
         };
-        if slot.meas.is_none_or(|cur| cur.time < m.time) {
-            slot.meas = Some(*m);
-        }
+        m.keep_newest(&mut slot.meas);
         Ok(())
     }
 

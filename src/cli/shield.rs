@@ -165,6 +165,19 @@ fn config(c: &SceneConfig) -> Result<ShieldConfig, CliError> {
     Ok(cfg)
 }
 
+/// A measurement's time stamp and arrival time (default: the stamp), both finite, the arrival
+/// not before the stamp; errors name `field`.
+fn stamp_and_arrival(field: &str, t: f64, received: Option<f64>) -> Result<(f64, f64), CliError> {
+    let t = finite(&format!("{field}.t"), t)?;
+    let received = finite(&format!("{field}.received"), received.unwrap_or(t))?;
+    if received < t {
+        return Err(input(format!(
+            "{field}.received: {received} s is before the time stamp {t} s"
+        )));
+    }
+    Ok((t, received))
+}
+
 /// One input event, in the order the shield receives it.
 enum Event {
     Chunk(usize),
@@ -252,13 +265,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let mut humans = Vec::with_capacity(scene.human_measurements.len());
     for (i, m) in scene.human_measurements.iter().enumerate() {
         let field = format!("human_measurements[{i}]");
-        let t = finite(&format!("{field}.t"), m.t)?;
-        let received = finite(&format!("{field}.received"), m.received.unwrap_or(t))?;
-        if received < t {
-            return Err(input(format!(
-                "{field}.received: {received} s is before the time stamp {t} s"
-            )));
-        }
+        let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
         let hm = HumanMeasurement::new(&models.human, t, &m.keypoints, None)
             .map_err(|e| input(format!("{field}.keypoints: {e}")))?;
         humans.push(hm);
@@ -267,13 +274,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let mut objects = Vec::with_capacity(scene.object_measurements.len());
     for (i, m) in scene.object_measurements.iter().enumerate() {
         let field = format!("object_measurements[{i}]");
-        let t = finite(&format!("{field}.t"), m.t)?;
-        let received = finite(&format!("{field}.received"), m.received.unwrap_or(t))?;
-        if received < t {
-            return Err(input(format!(
-                "{field}.received: {received} s is before the time stamp {t} s"
-            )));
-        }
+        let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
         let Some(k) = models.objects.iter().position(|(id, _, _)| *id == m.id) else {
             return Err(input(format!(
                 "{field}.id: no object `{}` in `objects`",
