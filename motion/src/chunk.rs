@@ -48,6 +48,9 @@ pub struct Waypoints {
     dof: usize,
     rows: Vec<f64>,
     gripper: Option<Vec<f64>>,
+    /// q̂_{h+1} … q̂_H: where the chunk's predicted but not executed actions lead (row-major; as
+    /// long as they are finite and inside the position limits).
+    next: Vec<f64>,
 }
 
 impl Waypoints {
@@ -76,6 +79,7 @@ impl Waypoints {
             dof,
             rows: flat,
             gripper: None,
+            next: Vec::new(),
         })
     }
 
@@ -94,6 +98,16 @@ impl Waypoints {
     /// Gripper values of the executed actions (passed through), if the chunk had a gripper channel.
     pub fn gripper(&self) -> Option<&[f64]> {
         self.gripper.as_deref()
+    }
+    /// q̂_{h+1}, the configuration the chunk's first predicted but not executed action leads to
+    /// (when H > h, finite and inside the position limits): a hint of the direction and pace in
+    /// which the next chunk will continue. It is never a waypoint of the trajectory.
+    pub fn lookahead(&self) -> Option<&[f64]> {
+        self.predicted(0)
+    }
+    /// q̂_{h+1+k}: the k-th predicted, not executed configuration (see [`Self::lookahead`]).
+    pub fn predicted(&self, k: usize) -> Option<&[f64]> {
+        self.next.get(k * self.dof..(k + 1) * self.dof)
     }
 }
 
@@ -176,10 +190,30 @@ impl Chunk {
                 Some(g[..h].to_vec())
             }
         };
+        // The predicted rest of the chunk, as long as it stays finite and inside the limits.
+        let mut next: Vec<f64> = Vec::new();
+        for a in &self.actions[h..] {
+            let last = if next.is_empty() {
+                &rows[h * n..(h + 1) * n]
+            } else {
+                &next[next.len() - n..]
+            };
+            let x: Vec<f64> = (0..n)
+                .map(|i| match self.kind {
+                    ActionKind::Delta => last[i] + a.get(i).copied().unwrap_or(f64::NAN),
+                    ActionKind::Absolute => a.get(i).copied().unwrap_or(f64::NAN),
+                })
+                .collect();
+            if a.len() != n || !x.iter().all(|v| v.is_finite()) || !limits.contains(&x) {
+                break;
+            }
+            next.extend_from_slice(&x);
+        }
         Ok(Waypoints {
             dof: n,
             rows,
             gripper,
+            next,
         })
     }
 }

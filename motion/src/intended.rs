@@ -137,13 +137,35 @@ impl Planner {
     /// Intended trajectory from `start` through q̂_1 … q̂_h of `wp` (q̂_0 must equal `start.q`),
     /// passing every waypoint exactly, within every limit at every instant (checked), and
     /// continuous in q, q̇, q̈ with `start`. The shortest of the candidates tried is returned.
+    ///
+    /// With [`EndCondition::Moving`] the trajectory passes q̂_h moving and then stops along its
+    /// stopping tail ([`Trajectory::rest_time`]); the tail is checked like every other piece. If
+    /// the tail would leave the limits (e.g. run into a position limit), the chunk is planned to
+    /// end at rest instead ([`Trajectory::end`] tells which).
     pub fn plan(
         &mut self,
         start: &JointState,
         wp: &Waypoints,
     ) -> Result<Trajectory, TrajectoryError> {
+        let t = self.plan_end(start, wp, self.config.end)?;
+        if t.end() != EndCondition::Moving {
+            return Ok(t);
+        }
+        if let Some(mut tailed) = t.with_stop_tail(&self.limits)
+            && tailed.check(&self.limits).is_ok()
+        {
+            return Ok(tailed);
+        }
+        self.plan_end(start, wp, EndCondition::AtRest)
+    }
+
+    fn plan_end(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+    ) -> Result<Trajectory, TrajectoryError> {
         let sweeps = self.config.sweeps;
-        let end = self.config.end;
         // A single segment ending at rest is one time-optimal single-target solve: no spline.
         if self.config.method == PlanMethod::Spline
             && (wp.segments() >= 2 || end == EndCondition::Moving)

@@ -221,6 +221,22 @@ impl SpeedProfile {
         (self.acc, self.jerk)
     }
 
+    /// The constant-jerk phases: (start time relative to the profile start (s), the path state
+    /// there, the path jerk (1/s²)); the last phase is the constant target speed.
+    pub(crate) fn phases(&self) -> impl Iterator<Item = (f64, PathState, f64)> + '_ {
+        self.phases[..self.n].iter().map(|p| {
+            (
+                p.t0,
+                PathState {
+                    s: p.s,
+                    sd: p.sd,
+                    sdd: p.sdd,
+                },
+                p.jerk,
+            )
+        })
+    }
+
     /// Sound ranges over τ ∈ [ta, tb] (relative s): (s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|).
     ///
     /// # Soundness

@@ -17,6 +17,17 @@ use crate::profile::Piece;
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_models::MAX_DOF;
 
+/// How the duration optimiser starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Init {
+    /// Start at rest: rest-to-rest durations, and every iterate scales exactly.
+    Rest,
+    /// Moving start, from the rest-to-rest durations.
+    Cold,
+    /// Moving start, from durations at the start's own pace (see `optimise`).
+    Warm,
+}
+
 /// Knot whose position is an unknown of the linear system (not a waypoint).
 const FREE: usize = usize::MAX;
 
@@ -28,6 +39,10 @@ const MOVING_TARGET: f64 = 0.97;
 
 /// Exponent of the duration update t_k ← t_k · r_k^e (r_k: segment k's scale-normalised ratio).
 const STEP_EXPONENT: f64 = 0.6;
+
+/// Exponent and per-iteration clamp of the duration update for moving starts.
+const MOVING_STEP_EXPONENT: f64 = 0.3;
+const MOVING_STEP_CLAMP: f64 = 0.85;
 
 /// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)
 /// still get a piece.
@@ -138,6 +153,7 @@ impl SplineSolver {
     /// Returns false if the system is singular.
     fn solve(
         &mut self,
+        lim: &Limits,
         n: usize,
         start: &JointState,
         wp: &Waypoints,
@@ -155,11 +171,9 @@ impl SplineSolver {
             self.tau[0] = self.first_ramp.clamp(0.1 * seg_t[0], 0.5 * seg_t[0]);
             self.tau[1] = seg_t[0] - self.tau[0];
         }
-        for i in 0..n {
-            self.v_end[i] = match end {
-                EndCondition::AtRest => 0.0,
-                EndCondition::Moving => (wp.row(h)[i] - wp.row(h - 1)[i]) / seg_t[h - 1],
-            };
+        match end {
+            EndCondition::AtRest => self.v_end[..n].iter_mut().for_each(|x| *x = 0.0),
+            EndCondition::Moving => self.end_velocity(lim, wp, seg_t[h - 1]),
         }
         self.mat.iter_mut().for_each(|x| *x = 0.0);
         self.rhs.clear();
@@ -308,6 +322,39 @@ impl SplineSolver {
         }
     }
 
+    /// Velocities (rad/s) at q̂_h for a Moving end, into `v_end`, with `t_last` (s) the duration
+    /// of the last segment. Without a lookahead: the last segment's mean velocity. With q̂_{h+1}
+    /// ([`Waypoints::lookahead`]): the central difference (q̂_{h+1} − q̂_{h−1})/(t_last·(1 + r)),
+    /// assuming the pace continues (r = |q̂_{h+1} − q̂_h| / |q̂_h − q̂_{h−1}|, clamped to
+    /// [0.25, 4]), so that the next chunk starts close to the velocity it continues with.
+    fn end_velocity(&mut self, lim: &Limits, wp: &Waypoints, t_last: f64) {
+        let n = lim.dof;
+        let h = wp.segments();
+        let (a, b) = (wp.row(h - 1), wp.row(h));
+        let Some(c) = wp.lookahead() else {
+            for i in 0..n {
+                self.v_end[i] = (b[i] - a[i]) / t_last;
+            }
+            return;
+        };
+        let dist = |x: &[f64], y: &[f64]| {
+            x.iter()
+                .zip(y)
+                .map(|(p, q)| (p - q) * (p - q))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let (l0, l1) = (dist(a, b), dist(b, c));
+        let r = if l0 > 0.0 {
+            (l1 / l0).clamp(0.25, 4.0)
+        } else {
+            1.0
+        };
+        for i in 0..n {
+            self.v_end[i] = (c[i] - a[i]) / (t_last * (1.0 + r));
+        }
+    }
+
     /// Velocity at the start of piece `q` for joint `i`.
     #[inline]
     fn v_start(&self, q: usize, i: usize) -> f64 {
@@ -383,18 +430,25 @@ impl SplineSolver {
         let at_rest = (0..n).all(|i| start.dq[i] == 0.0 && start.ddq[i] == 0.0);
         if at_rest {
             self.first_ramp = 0.0;
-            return self.optimise(lim, start, wp, end, iterations, true);
+            return self.optimise(lim, start, wp, end, iterations, Init::Rest);
         }
         let ramp = (0..n)
             .map(|i| (start.ddq[i].abs() + lim.a[i]) / lim.j[i])
             .fold(0.0, f64::max);
-        for c in [1.0, 0.5, 2.0] {
-            self.first_ramp = c * ramp;
-            if let Some(t) = self.optimise(lim, start, wp, end, iterations, false) {
-                return Some(t);
+        // Two starts of the optimiser (rest-to-rest and warm durations); the shorter plan wins.
+        let mut best: Option<Trajectory> = None;
+        for init in [Init::Cold, Init::Warm] {
+            for c in [1.0, 0.5, 2.0] {
+                self.first_ramp = c * ramp;
+                if let Some(t) = self.optimise(lim, start, wp, end, iterations, init) {
+                    if best.as_ref().is_none_or(|b| t.duration() < b.duration()) {
+                        best = Some(t);
+                    }
+                    break;
+                }
             }
         }
-        None
+        best
     }
 
     fn optimise(
@@ -404,8 +458,10 @@ impl SplineSolver {
         wp: &Waypoints,
         end: EndCondition,
         iterations: usize,
-        at_rest: bool,
+        init: Init,
     ) -> Option<Trajectory> {
+        let at_rest = init == Init::Rest;
+        let warm = init == Init::Warm;
         let n = lim.dof;
         let h = wp.segments();
         // Start: synchronized rest-to-rest durations (closed form).
@@ -427,10 +483,79 @@ impl SplineSolver {
         }
         best_t.clear();
         let mut best = f64::INFINITY;
+        if warm {
+            // Warm start (moving starts): durations proportional to the segment lengths
+            // (limit-normalised joint-space norm), d_k = c·len_k, with the smallest feasible c
+            // found by a geometric scan around the start's own pace and a bisection. For a
+            // moving start the limit ratio is not monotone in c (too slow a pace must brake
+            // the start velocity first), hence the scan.
+            let norm = |d: &dyn Fn(usize) -> f64| {
+                (0..n)
+                    .map(|i| (d(i) / lim.v[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            let pace = norm(&|i| start.dq[i]);
+            let total_len: f64 = (1..=h)
+                .map(|k| norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i]))
+                .sum();
+            if pace > 0.0 && total_len > 0.0 {
+                let c0 = 1.0 / pace;
+                // λ(c): the largest limit ratio of the spline with durations c·len_k (∞ if
+                // singular); leaves those durations in `seg_t`.
+                let lam_at = |c: f64, this: &mut Self, seg_t: &mut Vec<f64>| -> f64 {
+                    seg_t.clear();
+                    for k in 1..=h {
+                        let len = norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i]);
+                        seg_t.push((c * len).max(MIN_SEGMENT));
+                    }
+                    if !this.solve(lim, n, start, wp, end, seg_t) {
+                        return f64::INFINITY;
+                    }
+                    this.ratios(n, lim, h);
+                    (0..h).map(|k| this.seg_ratio(k)).fold(0.0, f64::max)
+                };
+                let ok = |lam: f64| lam <= 1.0 + RATIO_TOL;
+                let mut lo_infeasible = None;
+                let mut found = None;
+                let mut least = (f64::INFINITY, c0);
+                for k in -8i32..=8 {
+                    let c = c0 * 2f64.powf(k as f64 / 4.0);
+                    let lam = lam_at(c, self, &mut seg_t);
+                    if lam < least.0 {
+                        least = (lam, c);
+                    }
+                    if ok(lam) {
+                        found = Some(c);
+                        break;
+                    }
+                    lo_infeasible = Some(c);
+                }
+                if let Some(mut hi) = found {
+                    if let Some(mut lo) = lo_infeasible {
+                        for _ in 0..5 {
+                            let mid = (lo * hi).sqrt();
+                            if ok(lam_at(mid, self, &mut seg_t)) {
+                                hi = mid;
+                            } else {
+                                lo = mid;
+                            }
+                        }
+                    }
+                    let lam = lam_at(hi, self, &mut seg_t);
+                    debug_assert!(ok(lam));
+                    best = seg_t.iter().sum();
+                    best_t.extend_from_slice(&seg_t);
+                } else {
+                    // Nothing feasible at a uniform pace: refine from the least infeasible one.
+                    lam_at(least.1, self, &mut seg_t);
+                }
+            }
+        }
         // Moving starts do not scale exactly: aim slightly inside the limits.
         let target = if at_rest { 1.0 } else { MOVING_TARGET };
         for _ in 0..iterations.max(1) {
-            if !self.solve(n, start, wp, end, &seg_t) {
+            if !self.solve(lim, n, start, wp, end, &seg_t) {
                 break;
             }
             self.ratios(n, lim, h);
@@ -453,13 +578,22 @@ impl SplineSolver {
             for k in 0..h {
                 let r = self.seg_ratio(k) / target;
                 if r > 0.0 {
-                    seg_t[k] = (seg_t[k] * r.powf(STEP_EXPONENT)).max(MIN_SEGMENT);
+                    let f = if !warm {
+                        r.powf(STEP_EXPONENT)
+                    } else {
+                        // Warm (moving) starts: the ratios couple through the fixed start
+                        // state, so the update is damped (a smaller exponent, at most ±15 % a
+                        // step).
+                        r.powf(MOVING_STEP_EXPONENT)
+                            .clamp(MOVING_STEP_CLAMP, 1.0 / MOVING_STEP_CLAMP)
+                    };
+                    seg_t[k] = (seg_t[k] * f).max(MIN_SEGMENT);
                 }
             }
         }
         let result = if best_t.is_empty() {
             None
-        } else if self.solve(n, start, wp, end, &best_t) {
+        } else if self.solve(lim, n, start, wp, end, &best_t) {
             self.ratios(n, lim, h);
             let lam = (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max);
             (lam <= 1.0 + RATIO_TOL).then(|| self.assemble(n, start, wp, end))

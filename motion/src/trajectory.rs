@@ -141,8 +141,12 @@ pub enum EndCondition {
     /// At rest at q̂_h (and holds q̂_h afterwards).
     #[default]
     AtRest,
-    /// Passing q̂_h with a velocity toward the next chunk (constant-velocity extrapolation
-    /// afterwards; failsafes must stop before the end).
+    /// Passing q̂_h with a velocity v_end toward the next chunk, then — unless a next chunk takes
+    /// over — a jerk-limited **stopping tail** along v_end: q(T + u) = q̂_h + v_end·σ(u) with the
+    /// time-optimal scalar stop σ′: 1 → 0 under the planning limits (see
+    /// [`Trajectory::rest_time`]). The tail is part of the trajectory: it is checked against every
+    /// limit (positions included) like the rest, so following a Moving trajectory to its end is a
+    /// stop, and any failsafe braking along it stays on checked path.
     Moving,
 }
 
@@ -153,6 +157,8 @@ pub struct Trajectory {
     pieces: Vec<Piece>,
     offsets: [usize; MAX_DOF + 1],
     duration: f64,
+    /// Time (s) from which the trajectory is at rest (the duration, or the end of the stopping tail).
+    rest_time: f64,
     waypoint_times: Vec<f64>,
     end: EndCondition,
     peak: [[f64; 3]; MAX_DOF],
@@ -206,6 +212,7 @@ impl Trajectory {
             pieces,
             offsets,
             duration,
+            rest_time: duration,
             waypoint_times,
             end,
             peak: [[f64::INFINITY; 3]; MAX_DOF],
@@ -221,6 +228,12 @@ impl Trajectory {
     #[inline]
     pub fn duration(&self) -> f64 {
         self.duration
+    }
+    /// Time (s) from which the trajectory stands still: the duration for [`EndCondition::AtRest`],
+    /// the end of the stopping tail for [`EndCondition::Moving`].
+    #[inline]
+    pub fn rest_time(&self) -> f64 {
+        self.rest_time
     }
     /// Times (s) at which q̂_1 … q̂_h are passed (the last equals the duration).
     pub fn waypoint_times(&self) -> &[f64] {
@@ -240,6 +253,84 @@ impl Trajectory {
     fn locate(&self, i: usize, t: f64) -> usize {
         let p = &self.pieces[self.offsets[i]..self.offsets[i + 1]];
         p.partition_point(|x| x.t <= t).max(1) - 1 + self.offsets[i]
+    }
+
+    /// A [`EndCondition::Moving`] trajectory with its stopping tail appended: every joint continues
+    /// from its state at T = [`Self::duration`] as q̂_h + v_end·σ(u), where σ is the time-optimal
+    /// scalar stop (σ′ from 1 to 0, σ″ = 0 at both ends) with |σ″| ≤ min_i a_i/|v_end,i| and
+    /// |σ‴| ≤ min_i j_i/|v_end,i|, so the tail itself is within `lim`'s velocity, acceleration
+    /// and jerk limits; positions are left to [`Self::check`]. The last piece is exactly at rest.
+    /// `None` if the trajectory does not end Moving, already has a tail, or is not at zero
+    /// acceleration at T (the tail starts with σ″ = 0). The result must be checked again.
+    pub(crate) fn with_stop_tail(&self, lim: &Limits) -> Option<Trajectory> {
+        if self.end != EndCondition::Moving || self.rest_time > self.duration {
+            return None;
+        }
+        let t_end = self.duration;
+        let mut ends = [(0.0, 0.0); MAX_DOF];
+        let (mut acc, mut jerk) = (f64::INFINITY, f64::INFINITY);
+        for i in 0..self.dof {
+            let (q, v, a) = self.joint_at(i, t_end);
+            if a.abs() > 1e-9 * lim.a[i] || !v.is_finite() {
+                return None;
+            }
+            if v != 0.0 {
+                acc = acc.min(lim.a[i] / v.abs());
+                jerk = jerk.min(lim.j[i] / v.abs());
+            }
+            ends[i] = (q, v);
+        }
+        let stop = if acc.is_finite() && jerk.is_finite() {
+            Some(crate::scaling::SpeedProfile::plan(
+                crate::scaling::PathState::intended(0.0),
+                0.0,
+                acc,
+                jerk,
+            ))
+        } else {
+            None // every joint already at rest at T
+        };
+        let mut pieces = Vec::with_capacity(self.pieces.len() + 4 * self.dof);
+        let mut offsets = [0usize; MAX_DOF + 1];
+        let mut rest_time = t_end;
+        for i in 0..self.dof {
+            offsets[i] = pieces.len();
+            // Pieces up to T (the terminal one is replaced by the tail).
+            pieces.extend(self.pieces(i).iter().filter(|p| p.t < t_end).copied());
+            let (q, v) = ends[i];
+            if let Some(stop) = &stop {
+                for (t0, st, sj) in stop.phases() {
+                    let last = t0 >= stop.settle_time();
+                    pieces.push(Piece {
+                        t: t_end + t0,
+                        q: q + v * st.s,
+                        v: if last { 0.0 } else { v * st.sd },
+                        a: if last { 0.0 } else { v * st.sdd },
+                        j: if last { 0.0 } else { v * sj },
+                    });
+                }
+                rest_time = t_end + stop.settle_time();
+            } else {
+                pieces.push(Piece {
+                    t: t_end,
+                    q,
+                    v: 0.0,
+                    a: 0.0,
+                    j: 0.0,
+                });
+            }
+        }
+        offsets[self.dof] = pieces.len();
+        let mut t = Self::from_parts(
+            self.dof,
+            pieces,
+            offsets,
+            t_end,
+            self.waypoint_times.clone(),
+            EndCondition::Moving,
+        );
+        t.rest_time = rest_time;
+        Some(t)
     }
 
     /// Exact state at time `t` (s; clamped to t ≥ 0), right-continuous at piece boundaries.

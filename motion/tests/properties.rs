@@ -214,15 +214,25 @@ proptest! {
         let after = t.state_at(t.duration());
         let h = wp.segments();
         for i in 0..7 {
-            let v_end = if moving_end && spline.last_method() == PlanMethod::Spline {
+            let moving = t.end() == EndCondition::Moving;
+            let v_end = if moving && spline.last_method() == PlanMethod::Spline {
                 (wp.row(h)[i] - wp.row(h - 1)[i]) / (t.duration() - if h > 1 { t.waypoint_times()[h - 2] } else { 0.0 })
-            } else if moving_end {
+            } else if moving {
                 after.dq[i]
             } else {
                 0.0
             };
             prop_assert!((after.dq[i] - v_end).abs() <= 1e-9 * (1.0 + v_end.abs()));
             prop_assert!(after.ddq[i] == 0.0);
+        }
+        // A Moving trajectory stops on its own tail; either way it is at rest from rest_time on.
+        let rest = t.state_at(t.rest_time());
+        let later = t.state_at(t.rest_time() + 1.0);
+        prop_assert!(t.rest_time() >= t.duration());
+        prop_assert!(t.end() == EndCondition::Moving || t.rest_time() == t.duration());
+        for i in 0..7 {
+            prop_assert!(rest.dq[i] == 0.0 && rest.ddq[i] == 0.0 && later.dq[i] == 0.0);
+            prop_assert!(rest.q[i] == later.q[i]);
         }
         t.check(&plan).unwrap();
         assert_limits_at_samples(&t, &plan, 10);

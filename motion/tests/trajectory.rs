@@ -254,6 +254,112 @@ fn moving_end_keeps_velocity_toward_the_next_chunk() {
     assert!((0..7).any(|i| s.dq[i].abs() > 1e-3), "should not stop");
 }
 
+/// A Moving chunk passes q̂_h at v_end and then stops on its own tail: parallel to v_end, exactly
+/// at rest from `rest_time` on, within every limit (checked and sampled) all the way.
+#[test]
+fn moving_end_ends_at_rest_after_a_checked_tail() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::Moving,
+            ..Default::default()
+        },
+    );
+    let mut tails = 0;
+    for p in &anchor_set(robot.limits(), 30, 4) {
+        let wp = p
+            .chunk
+            .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let mut t = pl.plan(&JointState::at_rest(&p.q0), &wp).unwrap();
+        t.check(&plan).unwrap();
+        assert_limits_at_samples(&t, &plan, 400);
+        if t.end() != EndCondition::Moving {
+            continue;
+        }
+        tails += 1;
+        let big = t.duration();
+        let at_t = t.state_at(big);
+        let v_end: Vec<f64> = at_t.dq[..7].to_vec();
+        let vmax = v_end.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(vmax > 1e-3, "a Moving chunk passes q̂_h moving");
+        assert!(t.rest_time() > big);
+        // Stop time of the scalar stop at the binding joint: ≥ 1/A with A = min a_i/|v_i|.
+        let a_min = (0..7)
+            .filter(|&i| v_end[i] != 0.0)
+            .map(|i| plan.a[i] / v_end[i].abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!(t.rest_time() - big >= 1.0 / a_min * (1.0 - 1e-9));
+        // Along the tail every joint moves parallel to v_end: (q − q̂_h)_i / v_i is one σ.
+        for k in 1..=20 {
+            let u = (t.rest_time() - big) * k as f64 / 20.0;
+            let s = t.state_at(big + u);
+            let i0 = (0..7)
+                .max_by(|&a, &b| v_end[a].abs().total_cmp(&v_end[b].abs()))
+                .unwrap();
+            let sigma = (s.q[i0] - at_t.q[i0]) / v_end[i0];
+            assert!(sigma >= -1e-12 && sigma <= u + 1e-12, "σ({u}) = {sigma}");
+            for i in 0..7 {
+                assert!((s.q[i] - at_t.q[i] - v_end[i] * sigma).abs() <= 1e-9);
+                assert!(
+                    s.dq[i] * v_end[i] >= -1e-12,
+                    "the tail never runs backwards"
+                );
+            }
+        }
+        let rest = t.state_at(t.rest_time());
+        let later = t.state_at(t.rest_time() + 5.0);
+        for i in 0..7 {
+            assert_eq!(rest.dq[i], 0.0);
+            assert_eq!(rest.ddq[i], 0.0);
+            assert_eq!(rest.q[i], later.q[i]);
+        }
+    }
+    assert!(
+        tails >= 25,
+        "only {tails} of 30 anchor chunks kept a Moving end"
+    );
+}
+
+/// A chunk whose stopping tail would cross a position limit is planned to end at rest instead.
+#[test]
+fn moving_tail_through_a_position_limit_falls_back_to_at_rest() {
+    let robot = fr3();
+    let (_, plan) = limits();
+    let l = robot.limits();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::Moving,
+            ..Default::default()
+        },
+    );
+    // Joint 0 runs fast toward its upper limit and its last waypoint is 1 mrad short of it.
+    let mut q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    q0[0] = l.q_max()[0] - 0.4;
+    let c = Chunk {
+        kind: ActionKind::Delta,
+        actions: (0..4)
+            .map(|_| vec![0.0999, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            .collect(),
+        execute: 4,
+        gripper: None,
+    };
+    let wp = c.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
+    let mut t = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
+    assert_eq!(t.end(), EndCondition::AtRest);
+    assert_eq!(t.rest_time(), t.duration());
+    t.check(&plan).unwrap();
+    assert_limits_at_samples(&t, &plan, 400);
+    // The same chunk away from the limit keeps its Moving end.
+    q0[0] = 0.0;
+    let wp = c.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
+    let t = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
+    assert_eq!(t.end(), EndCondition::Moving);
+}
+
 #[test]
 fn scaled_limits_slow_execution() {
     let (_, plan) = limits();

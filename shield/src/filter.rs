@@ -7,6 +7,7 @@ use pacs_models::object::ObjectContact;
 use pacs_models::object::ObjectModel;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::Chunk;
+use pacs_motion::trajectory::EndCondition;
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use serde::{Deserialize, Serialize};
@@ -33,6 +34,11 @@ pub trait SafetyFilter {
     ) -> Result<usize, ShieldError>;
     /// Record a measurement of object `id` (a newer one replaces the latest).
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
+    /// Intended time (s) left until the current chunk's last waypoint, if the filter follows a
+    /// time-parameterised chunk ([`Shield::remaining`]); `None` otherwise.
+    fn remaining(&self) -> Option<f64> {
+        None
+    }
 }
 
 impl SafetyFilter for Shield {
@@ -58,6 +64,9 @@ impl SafetyFilter for Shield {
     }
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         Shield::measure_object(self, id, m)
+    }
+    fn remaining(&self) -> Option<f64> {
+        Shield::remaining(self)
     }
 }
 
@@ -102,6 +111,10 @@ pub enum FilterKind {
     SingleAction,
     /// The control-barrier-function baseline.
     Cbf,
+    /// No filter, each action sent as a target on its own: OFF with every chunk planned to end
+    /// at rest (a chunk of one action is one time-optimal jerk-limited move to that target, cut
+    /// short by the next target).
+    Direct,
 }
 
 impl FilterKind {
@@ -121,9 +134,14 @@ impl FilterKind {
             kind => {
                 let cfg = ShieldConfig {
                     mode: match kind {
-                        FilterKind::Off => FilterMode::Off,
+                        FilterKind::Off | FilterKind::Direct => FilterMode::Off,
                         FilterKind::SingleAction => FilterMode::SingleAction,
                         _ => FilterMode::Pacs,
+                    },
+                    chunk_end: if kind == FilterKind::Direct {
+                        EndCondition::AtRest
+                    } else {
+                        ShieldConfig::default().chunk_end
                     },
                     ..ShieldConfig::default()
                 };

@@ -90,6 +90,18 @@ pub struct ShieldConfig {
     /// provably at most this (rad/s). Default 0: only a stopped path counts as rest (the audit's
     /// default of 0.02 rad/s covers the controller's velocity tracking error on a real robot).
     pub rest_speed: f64,
+    /// How each chunk's intended trajectory ends at its last executed waypoint q̂_h.
+    /// [`EndCondition::AtRest`] (default): every chunk stops at q̂_h.
+    /// [`EndCondition::Moving`] (opt-in, see `docs/shield.md`): it passes q̂_h moving and, unless
+    /// the next chunk takes over, stops on a checked stopping tail along the same direction — so
+    /// a chunk handed over near q̂_h ([`Shield::remaining`]) continues without stopping. The
+    /// single-action mode always stops. Safety does not depend on this choice: the failsafe
+    /// brakes along whatever path is executed, and the tail is checked like every other piece.
+    pub chunk_end: EndCondition,
+    /// Planner of the intended trajectories (default: the per-segment planner, whose ramp-up
+    /// from rest along a fresh path leaves more verifiable steps; [`PlanMethod::Spline`] is the
+    /// faster time-optimised spline with the per-segment planner as its fallback).
+    pub plan_method: PlanMethod,
 }
 
 impl Default for ShieldConfig {
@@ -107,6 +119,8 @@ impl Default for ShieldConfig {
             first_interval: 0.002,
             max_intervals: 12,
             rest_speed: 0.0,
+            chunk_end: EndCondition::AtRest,
+            plan_method: PlanMethod::Segments,
         }
     }
 }
@@ -375,11 +389,8 @@ impl Shield {
         let planner = Planner::new(
             plan,
             PlannerConfig {
-                end: EndCondition::AtRest,
-                // The per-segment planner: the spline's time-optimal trajectories use the
-                // acceleration limit from the first piece on, which leaves the shield's ramp-up
-                // from rest along a fresh path fewer verifiable steps (tests/shield.rs).
-                method: PlanMethod::Segments,
+                end: c.chunk_end,
+                method: c.plan_method,
                 ..PlannerConfig::default()
             },
         );
@@ -572,6 +583,18 @@ impl Shield {
     /// standstill), never off it.
     pub fn path(&self) -> (&Trajectory, PathState) {
         (self.traj(self.slot), self.path)
+    }
+
+    /// Intended time (s) left on the current trajectory until its last waypoint q̂_h is passed
+    /// (0 once passed; at the intended timing — braking makes it last longer). `None` before
+    /// [`Self::start`]. A control loop that hands the next chunk over when this drops to one
+    /// safety step keeps a Moving trajectory ([`ShieldConfig::chunk_end`]) moving across chunks.
+    pub fn remaining(&self) -> Option<f64> {
+        if !self.started {
+            return None;
+        }
+        let (traj, p) = self.path();
+        Some((traj.duration() - p.s).max(0.0))
     }
 
     /// Current commanded joint state.

@@ -59,7 +59,8 @@ impl Method {
     /// controller, one target every Δt).
     pub fn filter_kind(self) -> FilterKind {
         match self {
-            Method::Off | Method::Direct => FilterKind::Off,
+            Method::Off => FilterKind::Off,
+            Method::Direct => FilterKind::Direct,
             Method::Pacs => FilterKind::Pacs,
             Method::SingleAction => FilterKind::SingleAction,
             Method::Cbf => FilterKind::Cbf,
@@ -89,6 +90,22 @@ pub struct EpisodeConfig {
     /// within 5e-4·2π ≈ 0.0031 rad/s of the commanded one, inside the shield's 0.004 rad/s
     /// velocity tracking margin.
     pub tracking_error: f64,
+    /// When chunk filters get their next chunk (the direct baseline sends an action every Δt).
+    pub handover: Handover,
+}
+
+/// When a chunk-following filter is handed its next chunk.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Handover {
+    /// Every h·Δt (the policy's clock: h actions of Δt each), whatever the robot has done.
+    #[default]
+    Periodic,
+    /// When the current chunk's last waypoint is one safety step away (the robot has executed
+    /// the chunk at its own, time-optimal pace), and at the latest every h·Δt (a braking or
+    /// stopped robot still gets fresh chunks). With chunks that end moving this hands over
+    /// without stopping.
+    AtEnd,
 }
 
 impl Default for EpisodeConfig {
@@ -101,6 +118,7 @@ impl Default for EpisodeConfig {
             camera_period: 0.01,
             seed: 1,
             tracking_error: 5e-4,
+            handover: Handover::Periodic,
         }
     }
 }

@@ -21,9 +21,10 @@ pub fn left_limit(traj: &Trajectory, i: usize, t: f64) -> (f64, f64, f64) {
     ps[k].eval(t - ps[k].t)
 }
 
-/// Dense sample times over [0, T]: a grid of `n` points plus every piece boundary and its neighbours.
+/// Dense sample times over [0, T_rest] (the stopping tail of a Moving trajectory included): a grid
+/// of `n` points plus every piece boundary and its neighbours.
 pub fn sample_times(traj: &Trajectory, n: usize) -> Vec<f64> {
-    let t_end = traj.duration();
+    let t_end = traj.rest_time();
     let mut ts: Vec<f64> = (0..=n).map(|k| t_end * k as f64 / n as f64).collect();
     for i in 0..traj.dof() {
         for p in traj.pieces(i) {

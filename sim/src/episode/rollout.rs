@@ -2,8 +2,8 @@
 //! camera, the log and the truth audit, and the episode's result.
 
 use super::{
-    Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
-    object_ground_truth,
+    Episode, EpisodeConfig, Handover, Method, Outputs, Sample, Setup, TruthAudit, ground_truth,
+    log_header, object_ground_truth,
 };
 use crate::humans::Camera;
 use crate::objects::ObjectCamera;
@@ -41,6 +41,10 @@ impl Tracking {
         }
     }
 }
+
+/// [`Handover::AtEnd`]: the next chunk is requested once the current one has less than this many
+/// safety steps of intended motion left (the last step before its last waypoint).
+const HANDOVER_STEPS: f64 = 1.5;
 
 fn invalid(e: impl std::fmt::Display) -> ShieldError {
     ShieldError::Invalid(e.to_string())
@@ -111,6 +115,8 @@ pub fn run_setup(
     let steps = (max_time / cfg.dt).round() as usize;
     let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
     let chunk_every = policy.execute * action_every;
+    // Steps since the last chunk (the first chunk is due at once).
+    let mut since_chunk = chunk_every;
     let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
     let (mut violations, mut verified, mut min_sep, mut max_dev) =
         (0usize, 0usize, f64::INFINITY, 0.0f64);
@@ -159,10 +165,18 @@ pub fn run_setup(
                     let _ = filter.set_chunk(t, &c);
                 }
             }
-        } else if k % chunk_every == 0 {
+        } else if since_chunk >= chunk_every
+            || (cfg.handover == Handover::AtEnd
+                && since_chunk >= action_every
+                && filter
+                    .remaining()
+                    .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
+        {
+            since_chunk = 0;
             let c = policy.chunk(&q);
             let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
         }
+        since_chunk += 1;
         let m = camera.measure(human, script, t);
         for (i, (o, cam)) in objects.iter().zip(&mut object_cameras).enumerate() {
             if let Some(om) = cam.measure(o, t) {
