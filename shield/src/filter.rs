@@ -7,6 +7,7 @@ use pacs_models::object::ObjectContact;
 use pacs_models::object::ObjectModel;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::Chunk;
+use pacs_motion::intended::PlanMethod;
 use pacs_motion::trajectory::EndCondition;
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
@@ -99,6 +100,37 @@ impl SafetyFilter for CbfFilter {
     }
 }
 
+/// How chunk-following filters move from one chunk to the next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ChunkMotion {
+    /// Every chunk is planned (per segment) to come to rest at its last executed waypoint; the
+    /// next chunk starts from wherever the robot is when it arrives.
+    #[default]
+    Stop,
+    /// Chunks are planned with the time-optimised spline and pass their last waypoint moving
+    /// toward the next chunk ([`EndCondition::Moving`], with a checked stopping tail in case no
+    /// next chunk comes); a control loop hands the next chunk over when
+    /// [`SafetyFilter::remaining`] drops to about one safety step.
+    Continuous,
+}
+
+impl ChunkMotion {
+    /// Apply to a shield configuration (chunk end and planner).
+    pub fn apply(self, cfg: &mut ShieldConfig) {
+        match self {
+            ChunkMotion::Stop => {
+                cfg.chunk_end = EndCondition::AtRest;
+                cfg.plan_method = PlanMethod::Segments;
+            }
+            ChunkMotion::Continuous => {
+                cfg.chunk_end = EndCondition::Moving;
+                cfg.plan_method = PlanMethod::Spline;
+            }
+        }
+    }
+}
+
 /// The kinds of online filter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -125,6 +157,19 @@ impl FilterKind {
         human: &HumanModel,
         spec: &ConstraintSpec,
     ) -> Result<Box<dyn SafetyFilter + Send>, ShieldError> {
+        self.build_with(robot, human, spec, ChunkMotion::default())
+    }
+
+    /// [`Self::build`] with the given chunk motion for the chunk-following kinds (PACS, OFF,
+    /// single-action; single actions always stop, the direct baseline always stops at its one
+    /// target, the CBF has no chunk trajectory).
+    pub fn build_with(
+        self,
+        robot: &RobotModel,
+        human: &HumanModel,
+        spec: &ConstraintSpec,
+        motion: ChunkMotion,
+    ) -> Result<Box<dyn SafetyFilter + Send>, ShieldError> {
         Ok(match self {
             FilterKind::Cbf => Box::new(CbfFilter::new(
                 robot.clone(),
@@ -132,19 +177,20 @@ impl FilterKind {
                 CbfConfig::default(),
             )?),
             kind => {
-                let cfg = ShieldConfig {
+                let mut cfg = ShieldConfig {
                     mode: match kind {
                         FilterKind::Off | FilterKind::Direct => FilterMode::Off,
                         FilterKind::SingleAction => FilterMode::SingleAction,
                         _ => FilterMode::Pacs,
                     },
-                    chunk_end: if kind == FilterKind::Direct {
-                        EndCondition::AtRest
-                    } else {
-                        ShieldConfig::default().chunk_end
-                    },
                     ..ShieldConfig::default()
                 };
+                match kind {
+                    FilterKind::Direct | FilterKind::SingleAction => {
+                        ChunkMotion::Stop.apply(&mut cfg)
+                    }
+                    _ => motion.apply(&mut cfg),
+                }
                 Box::new(Shield::new(
                     robot.clone(),
                     Some((human.clone(), spec)),

@@ -20,4 +20,4 @@ pub mod filter;
 pub mod shield;
 pub mod shield_log;
 
-pub use filter::{FilterKind, SafetyFilter};
+pub use filter::{ChunkMotion, FilterKind, SafetyFilter};

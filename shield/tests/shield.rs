@@ -466,3 +466,80 @@ fn velocity_tracking_margin_enters_the_pfl_energy_bound() {
     };
     assert!(Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], invalid).is_err());
 }
+
+/// Continuous chunk motion ([`ChunkMotion::Continuous`]) with nobody near: each chunk is handed
+/// over as the robot reaches its last waypoint, and the robot keeps moving across hand-overs
+/// (it never stops between chunks once it has ramped up), verifies ≥ 97 % of its steps, never
+/// moves backwards along the path, and covers more distance than stopping at every chunk.
+#[test]
+fn continuous_chunks_never_stop_without_a_human() {
+    use pacs_shield::ChunkMotion;
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let run = |motion: ChunkMotion| {
+        let mut cfg = ShieldConfig::default();
+        motion.apply(&mut cfg);
+        let dt = cfg.safety_step;
+        let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+        sh.start(0.0, &Q0).unwrap();
+        let (mut since, mut verified, mut handovers) = (usize::MAX, 0usize, 0usize);
+        let mut qs = Vec::new();
+        let mut speeds = Vec::new();
+        for k in 0..1500 {
+            let t = k as f64 * dt;
+            let due = match motion {
+                ChunkMotion::Stop => since >= 264,
+                ChunkMotion::Continuous => {
+                    since >= 264 || (since >= 33 && sh.remaining().unwrap() < 1.5 * dt)
+                }
+            };
+            if due {
+                sh.set_chunk(&chunk(DELTA, 8)).unwrap();
+                since = 0;
+                handovers += 1;
+            }
+            since += 1;
+            let m = HumanMeasurement::new(&human, t, &far, None).unwrap();
+            let cmd = sh.step(t, Some(&m)).unwrap();
+            verified += cmd.diag.verified as usize;
+            qs.push(cmd.state.q[0]);
+            speeds.push(cmd.state.dq[0]);
+        }
+        (qs, speeds, verified, handovers)
+    };
+    let (qs, speeds, verified, handovers) = run(ChunkMotion::Continuous);
+    assert!(verified * 100 >= 97 * 1500, "verified {verified} of 1500");
+    assert!(
+        handovers > 1500 / 264 + 1,
+        "{handovers} hand-overs: no faster than the clock"
+    );
+    let slowest = speeds[300..].iter().fold(f64::INFINITY, |m, v| m.min(*v));
+    assert!(
+        slowest > 0.05,
+        "joint 1 slowed to {slowest} rad/s between chunks"
+    );
+    for w in qs.windows(2) {
+        assert!(
+            w[1] >= w[0] - 1e-12,
+            "moved backwards: {} -> {}",
+            w[0],
+            w[1]
+        );
+    }
+    let (qs_stop, speeds_stop, _, _) = run(ChunkMotion::Stop);
+    let slowest_stop = speeds_stop[300..]
+        .iter()
+        .fold(f64::INFINITY, |m, v| m.min(*v));
+    eprintln!("slowest: continuous {slowest} rad/s, stopping {slowest_stop} rad/s");
+    assert!(
+        slowest_stop < 0.5 * slowest,
+        "the stop mode slows down between chunks (else this comparison proves nothing)"
+    );
+    let (moved, moved_stop) = (qs[1499] - Q0[0], qs_stop[1499] - Q0[0]);
+    assert!(
+        moved > 1.2 * moved_stop,
+        "continuous {moved} rad vs stopping {moved_stop} rad"
+    );
+}

@@ -14,8 +14,8 @@ use crate::policy::{DemoSet, Demonstration};
 use crate::task::ToolGoal;
 use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
-use pacs_shield::FilterKind;
 use pacs_shield::shield::ShieldError;
+use pacs_shield::{ChunkMotion, FilterKind};
 use serde::Serialize;
 
 /// Which safety filter runs.
@@ -90,22 +90,13 @@ pub struct EpisodeConfig {
     /// within 5e-4·2π ≈ 0.0031 rad/s of the commanded one, inside the shield's 0.004 rad/s
     /// velocity tracking margin.
     pub tracking_error: f64,
-    /// When chunk filters get their next chunk (the direct baseline sends an action every Δt).
-    pub handover: Handover,
-}
-
-/// When a chunk-following filter is handed its next chunk.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Handover {
-    /// Every h·Δt (the policy's clock: h actions of Δt each), whatever the robot has done.
-    #[default]
-    Periodic,
-    /// When the current chunk's last waypoint is one safety step away (the robot has executed
-    /// the chunk at its own, time-optimal pace), and at the latest every h·Δt (a braking or
-    /// stopped robot still gets fresh chunks). With chunks that end moving this hands over
-    /// without stopping.
-    AtEnd,
+    /// How chunk filters move across chunks, and when they get the next one:
+    /// [`ChunkMotion::Stop`] every h·Δt (the policy's clock); [`ChunkMotion::Continuous`] when
+    /// the current chunk's last waypoint is one safety step away (the robot runs each chunk at
+    /// its own time-optimal pace and hands over moving), and at the latest every h·Δt (a
+    /// braking or stopped robot still gets fresh chunks). The direct baseline sends an action
+    /// every Δt either way.
+    pub chunk_motion: ChunkMotion,
 }
 
 impl Default for EpisodeConfig {
@@ -118,7 +109,7 @@ impl Default for EpisodeConfig {
             camera_period: 0.01,
             seed: 1,
             tracking_error: 5e-4,
-            handover: Handover::Periodic,
+            chunk_motion: ChunkMotion::Stop,
         }
     }
 }

@@ -9,6 +9,7 @@ pub use plots::{svg_paths, svg_separation};
 
 use crate::episode::{Episode, EpisodeConfig, Goal, Method, Outputs, Setup, run_setup};
 use crate::task::{ConstraintMode, TaskKind, constraint_spec, native_mode, scenario};
+use pacs_shield::ChunkMotion;
 use pacs_shield::shield::ShieldError;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -23,6 +24,8 @@ pub struct Variant {
     pub mode: Option<ConstraintMode>,
     /// Name as given on the command line.
     pub label: String,
+    /// How chunk filters move across chunks (`pacs simulate --chunk-motion`).
+    pub motion: ChunkMotion,
 }
 
 /// Every method name `pacs simulate --method` accepts.
@@ -63,6 +66,7 @@ impl std::str::FromStr for Variant {
             method,
             mode,
             label: s.into(),
+            motion: ChunkMotion::Stop,
         })
     }
 }
@@ -153,6 +157,7 @@ pub fn run_rollout(
     let cfg = EpisodeConfig {
         max_time: scn.max_time,
         seed,
+        chunk_motion: v.motion,
         ..EpisodeConfig::default()
     };
     let mut file = match log {

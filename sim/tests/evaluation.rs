@@ -257,3 +257,38 @@ fn crowded_task_pacs_is_safe_against_person_and_spheres_and_its_log_audits() {
     assert_eq!(verdicts[1], pacs_audit::Verdict::Fail);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Continuous chunk motion with people and objects present: PACS stays without a ground-truth
+/// violation, succeeds, its log does not fail the offline audit, and it finishes sooner than
+/// stopping at every chunk (the robot no longer waits for the policy's clock).
+#[test]
+fn continuous_chunk_motion_is_safe_and_faster_with_people() {
+    use pacs_shield::ChunkMotion;
+    let dir = std::env::temp_dir().join(format!("pacs-continuous-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for task in [TaskKind::Sorting, TaskKind::Crowded] {
+        let mut durations = Vec::new();
+        for motion in [ChunkMotion::Continuous, ChunkMotion::Stop] {
+            let mut pacs = v("pacs");
+            pacs.motion = motion;
+            let path = dir.join(format!("{}-{motion:?}.jsonl", task.name()));
+            let r = run_rollout(task, &pacs, 1, true, Some(&path), 0).unwrap();
+            assert!(r.episode.success, "{task:?} {motion:?}: no success");
+            assert_eq!(r.episode.violation_fraction, 0.0, "{task:?} {motion:?}");
+            let audit = pacs_audit::audit_file(&path, &pacs_audit::AuditConfig::default()).unwrap();
+            assert_ne!(
+                audit.verdict,
+                pacs_audit::Verdict::Fail,
+                "{task:?} {motion:?}"
+            );
+            durations.push(r.episode.duration);
+        }
+        assert!(
+            durations[0] < 0.95 * durations[1],
+            "{task:?}: continuous {} s vs stopping {} s",
+            durations[0],
+            durations[1]
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -72,6 +72,12 @@ pub struct SimulateArgs {
     /// Keep people and objects far away (speed ablation).
     #[arg(long)]
     pub no_human: bool,
+    /// How off, pacs and cbf-free chunk methods move across chunks: `stop` (each chunk planned
+    /// to rest at its last waypoint, a new chunk every h·Δt) or `continuous` (time-optimised
+    /// spline passing the last waypoint moving, the next chunk handed over as the robot
+    /// reaches it). Single actions, direct and cbf are unaffected.
+    #[arg(long, value_name = "MODE", default_value = "continuous", value_parser = ["continuous", "stop"])]
+    pub chunk_motion: String,
     /// Do not write per-rollout audit logs (each is a few MB).
     #[arg(long)]
     pub no_logs: bool,
@@ -114,7 +120,13 @@ fn write(path: &Path, text: &str) -> Result<(), CliError> {
 pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
     let task_names: Vec<&str> = TaskKind::ALL.iter().map(|t| t.name()).collect();
     let tasks: Vec<TaskKind> = parse_list(&args.task, &task_names, "task")?;
-    let variants: Vec<Variant> = parse_list(&args.method, &METHOD_NAMES, "method")?;
+    let mut variants: Vec<Variant> = parse_list(&args.method, &METHOD_NAMES, "method")?;
+    let motion = if args.chunk_motion == "continuous" {
+        pacs_shield::ChunkMotion::Continuous
+    } else {
+        pacs_shield::ChunkMotion::Stop
+    };
+    variants.iter_mut().for_each(|v| v.motion = motion);
     if args.rollouts == 0 {
         return Err(CliError::Input("--rollouts: must be at least 1".into()));
     }

@@ -2,8 +2,8 @@
 //! camera, the log and the truth audit, and the episode's result.
 
 use super::{
-    Episode, EpisodeConfig, Handover, Method, Outputs, Sample, Setup, TruthAudit, ground_truth,
-    log_header, object_ground_truth,
+    Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
+    object_ground_truth,
 };
 use crate::humans::Camera;
 use crate::objects::ObjectCamera;
@@ -12,6 +12,7 @@ use crate::task::tool_point;
 use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::LogModels;
 use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_shield::ChunkMotion;
 use pacs_shield::shield::ShieldError;
 use pacs_shield::shield_log::ShieldLog;
 
@@ -42,7 +43,7 @@ impl Tracking {
     }
 }
 
-/// [`Handover::AtEnd`]: the next chunk is requested once the current one has less than this many
+/// [`ChunkMotion::Continuous`]: the next chunk is requested once the current one has less than this many
 /// safety steps of intended motion left (the last step before its last waypoint).
 const HANDOVER_STEPS: f64 = 1.5;
 
@@ -101,7 +102,9 @@ pub fn run_setup(
         None
     };
     let tc = spec.resolve(human).map_err(invalid)?;
-    let mut filter = method.filter_kind().build(robot, human, spec)?;
+    let mut filter = method
+        .filter_kind()
+        .build_with(robot, human, spec, cfg.chunk_motion)?;
     for o in objects {
         filter.add_object(o.model, o.contact)?;
     }
@@ -166,7 +169,7 @@ pub fn run_setup(
                 }
             }
         } else if since_chunk >= chunk_every
-            || (cfg.handover == Handover::AtEnd
+            || (cfg.chunk_motion == ChunkMotion::Continuous
                 && since_chunk >= action_every
                 && filter
                     .remaining()

@@ -120,6 +120,7 @@ pub fn summarize(rollouts: &[Rollout]) -> Vec<Row> {
                 method: Method::Off,
                 mode: None,
                 label: method.clone(),
+                motion: Default::default(),
             });
             Row {
                 task,
