@@ -14,7 +14,7 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
         .args([
             "simulate",
             "--task",
-            "sphere",
+            "crowded",
             "--method",
             "off,pacs",
             "--rollouts",
@@ -44,21 +44,21 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     assert_eq!(pacs_row["safety_violation"]["mean"].as_f64(), Some(0.0));
     assert_eq!(pacs_row["constraints"], "ssm");
     let md = std::fs::read_to_string(dir.join("summary.md")).unwrap();
-    assert!(md.contains("| sphere | pacs | SSM | 1 |"), "{md}");
-    for plot in ["sphere-paths.svg", "sphere-separation.svg"] {
+    assert!(md.contains("| crowded | pacs | SSM | 1 |"), "{md}");
+    for plot in ["crowded-paths.svg", "crowded-separation.svg"] {
         let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
         assert!(
             svg.starts_with("<svg") && svg.contains("<polyline"),
             "{plot}"
         );
     }
-    let paths = std::fs::read_to_string(dir.join("sphere-paths.svg")).unwrap();
+    let paths = std::fs::read_to_string(dir.join("crowded-paths.svg")).unwrap();
     assert!(paths.contains("<line"), "tool path segments drawn");
     // The PACS log passes the offline audit (from the measurements alone), and the OFF log, in
-    // which the sphere hits the moving robot, fails.
+    // which a sphere or the person meets the moving robot, fails.
     let logs = dir.join("logs");
-    let pacs_log = logs.join("sphere-pacs-0001.jsonl");
-    let off_log = logs.join("sphere-off-0001.jsonl");
+    let pacs_log = logs.join("crowded-pacs-0001.jsonl");
+    let off_log = logs.join("crowded-off-0001.jsonl");
     let a = pacs().arg("audit").arg(&pacs_log).output().unwrap();
     assert_eq!(
         a.status.code(),
@@ -104,7 +104,7 @@ fn pacs_logs_of_every_task_pass_the_audit_and_violating_off_logs_fail() {
         String::from_utf8_lossy(&out.stderr)
     );
     let logs = dir.join("logs");
-    for task in ["sorting", "handover", "feeding", "sphere", "crowded"] {
+    for task in ["sorting", "handover", "feeding", "crowded", "crowded"] {
         let log = logs.join(format!("{task}-pacs-0005.jsonl"));
         let a = pacs().arg("audit").arg(&log).output().unwrap();
         assert_eq!(

@@ -177,6 +177,17 @@ impl Planner {
             if let Some(mut t) = sp
                 && t.check(&self.limits).is_ok()
             {
+                // A moving chunk whose spline rings past a waypoint (typically where the chunk
+                // slows into a pause of the demonstration) takes the per-segment solver, whose
+                // waypoint velocities follow the neighbouring segments and do not overshoot:
+                // ringing there makes the robot hunt back and forth around the pause.
+                if end == EndCondition::Moving
+                    && overshoot(&t, wp) > MOVING_OVERSHOOT
+                    && let Ok(s) = self.plan_with(start, wp, sweeps, end)
+                {
+                    self.last = PlanMethod::Segments;
+                    return Ok(s);
+                }
                 if t.duration() <= self.rest_to_rest_total(wp) {
                     self.last = PlanMethod::Spline;
                     return Ok(t);
@@ -301,6 +312,27 @@ impl Planner {
         }
         Ok(())
     }
+}
+
+/// Overshoot (rad) past a waypoint above which a Moving spline plan gives way to the per-segment
+/// solver (see [`Planner::plan`]).
+pub const MOVING_OVERSHOOT: f64 = 1e-3;
+
+/// Largest distance (rad) by which any joint of `t` leaves the range between the two waypoints of
+/// a segment while running it (a spline ringing past a waypoint and coming back).
+pub fn overshoot(t: &Trajectory, wp: &Waypoints) -> f64 {
+    let times = t.waypoint_times();
+    let mut worst = 0.0f64;
+    for k in 0..wp.segments() {
+        let ta = if k == 0 { 0.0 } else { times[k - 1] };
+        let tb = times[k];
+        for i in 0..wp.dof() {
+            let (a, b) = (wp.row(k)[i], wp.row(k + 1)[i]);
+            let r = t.joint_derivs(i, ta, tb).r[0];
+            worst = worst.max(a.min(b) - r.lo).max(r.hi - a.max(b));
+        }
+    }
+    worst
 }
 
 /// Time-optimal rest-to-rest duration (s) of one joint moving `d` ≥ 0 rad under limits v, a, j.

@@ -100,6 +100,9 @@ impl ChunkPolicy for Demonstration {
     }
 }
 
+/// Distance (rad) within which demonstrated points of one stretch count as one place (a pause).
+const PAUSE_TOLERANCE: f64 = 0.003;
+
 /// Cost (rad) per demonstration sample between a candidate and the phase the last chunk led to.
 const PHASE_COST: f64 = 0.005;
 
@@ -191,15 +194,19 @@ impl ChunkPolicy for DemoSet {
         // The phase the robot reached along the stretch the last chunk commanded.
         let expected = match self.last {
             Some((d, k0)) => {
-                // The earliest point of the stretch about as close as the closest: the robot
-                // runs the stretch in order, and a slowed robot has reached the earlier one.
+                // The closest point of the stretch, or the latest one about as close: where
+                // the demonstration pauses its points cluster within millimetres, and a robot
+                // that ran the whole stretch must not be sent back to the start of the pause
+                // (it would hunt back and forth); a robot slowed on a moving stretch is
+                // closest to the point it reached, which is centimetres from the later ones.
                 let demo = &self.demos[d];
                 let at = |i: usize| dist(&demo[i.min(len - 1)], q);
                 let closest = (k0..=k0 + self.execute)
                     .map(at)
                     .fold(f64::INFINITY, f64::min);
                 (k0..=k0 + self.execute)
-                    .find(|&i| at(i) <= closest + 0.003)
+                    .rev()
+                    .find(|&i| at(i) <= closest + PAUSE_TOLERANCE)
                     .unwrap_or(k0)
             }
             None => 0,
