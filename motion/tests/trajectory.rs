@@ -589,3 +589,48 @@ fn spline_replanning_from_moving_states_is_continuous_and_shorter_on_average() {
     assert!(used >= 70, "spline used for only {used} of 78 replans");
     assert!(ls < lg, "spline not shorter on average");
 }
+
+/// Moving chunks kept as splines never ring more than [`MOVING_OVERSHOOT`] past a waypoint; the
+/// overshoot measure itself is exact on a hand-made case (a stop between two equal waypoints).
+#[test]
+fn moving_splines_do_not_ring_past_their_waypoints() {
+    use pacs_motion::intended::{MOVING_OVERSHOOT, overshoot};
+    let robot = fr3();
+    let (_, plan) = limits();
+    let mut pl = Planner::new(
+        plan,
+        PlannerConfig {
+            end: EndCondition::Moving,
+            ..Default::default()
+        },
+    );
+    let set = anchor_set(robot.limits(), 30, 7);
+    for w in set.windows(2) {
+        let wp = w[0]
+            .chunk
+            .waypoints(&w[0].q0, robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let t1 = pl.plan(&JointState::at_rest(&w[0].q0), &wp).unwrap();
+        // Replan from a moving state 50 ms in.
+        let s = t1.state_at(0.05);
+        let wp2 = w[1]
+            .chunk
+            .waypoints(&s.q[..7], robot.limits(), OutOfLimits::Reject)
+            .unwrap();
+        let t2 = pl.plan(&s, &wp2).unwrap();
+        if pl.last_method() == PlanMethod::Spline && t2.end() == EndCondition::Moving {
+            assert!(overshoot(&t2, &wp2) <= MOVING_OVERSHOOT);
+        }
+    }
+    // Hand-made: joint 0 moves 0.1 rad away and the measure is taken against waypoints that
+    // both sit at the start: the whole excursion is overshoot.
+    let q0 = pacs_models::fr3::Q_READY.to_vec();
+    let mut q1 = q0.clone();
+    q1[0] += 0.1;
+    let go = Waypoints::from_rows(&[q0.clone(), q1]).unwrap();
+    let same = Waypoints::from_rows(&[q0.clone(), q0.clone()]).unwrap();
+    let mut stop = Planner::new(plan, PlannerConfig::default());
+    let t = stop.plan(&JointState::at_rest(&q0), &go).unwrap();
+    assert!((overshoot(&t, &same) - 0.1).abs() < 1e-9);
+    assert!(overshoot(&t, &go) < 1e-9);
+}
