@@ -46,6 +46,55 @@ fn main() {
         }
         ls += (t.duration() / lower_bound(wp, &l.v[..7])).ln();
     }
+    // Item 2 of issue 15: replanning from a moving state vs planning the same waypoints from
+    // rest at the same configuration; the third case hands over at the last waypoint of a
+    // chunk planned to end moving (continuous chunks).
+    let mut moving = Planner::new(
+        l,
+        PlannerConfig {
+            spline_iterations: iters,
+            end: pacs_motion::EndCondition::Moving,
+            ..Default::default()
+        },
+    );
+    for (label, at_end) in [("33 ms", Some(0.033)), ("100 ms", Some(0.1)), ("end", None)] {
+        let (mut lr, mut worst, mut n) = (0.0f64, 0.0f64, 0usize);
+        for w in set.windows(2) {
+            let pl_ = if at_end.is_none() {
+                &mut moving
+            } else {
+                &mut pl
+            };
+            let t = pl_.plan(&w[0].0, &w[0].1).unwrap();
+            let ts = at_end.unwrap_or(t.duration() - 1e-3).min(t.duration());
+            let s = t.state_at(ts);
+            let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
+                .map(|k| {
+                    (0..7)
+                        .map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i])
+                        .collect()
+                })
+                .collect();
+            let Ok(wp) = pacs_motion::Waypoints::from_rows(&rows) else {
+                continue;
+            };
+            let (Ok(a), Ok(b)) = (
+                pl_.plan(&s, &wp),
+                pl_.plan(&JointState::at_rest(&s.q[..7]), &wp),
+            ) else {
+                continue;
+            };
+            let r = a.duration() / b.duration();
+            lr += r.ln();
+            worst = worst.max(r);
+            n += 1;
+        }
+        println!(
+            "moving start at {label}: duration / from rest, geomean {:.3}, worst {:.3} ({n} cases)",
+            (lr / n.max(1) as f64).exp(),
+            worst
+        );
+    }
     for dt in [0.033f64, 0.1] {
         let (mut fbm, mut lsm, mut lss) = (0, 0.0, 0.0);
         let mut seg = Planner::new(
