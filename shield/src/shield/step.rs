@@ -35,17 +35,19 @@ impl Shield {
         self.take_measurement(measurement, t);
         self.time = t;
         // Candidate: a fresh chunk starting at the current state, else the current path.
-        let (cand_slot, cand_start) = match self.fresh.take() {
+        let (cand_slot, cand_start, ramp) = match self.fresh.take() {
             Some(s) if self.at_rest() => {
-                // At rest the robot is at the new trajectory's start q(0), where q′ = 0: it can
-                // adopt the new path at path speed 0 (standing still is verified on either path)
-                // and accelerate along it as fast as verification allows.
+                // At rest the robot is at the new trajectory's start q(0), where q̇ = q̈ = 0 as
+                // well: it can take the intended timing at once (tried first), or adopt the new
+                // path at path speed 0 (standing still is verified on either path) and
+                // accelerate along it as fast as verification allows (if the intended timing
+                // does not verify).
                 self.slot = s;
                 self.path = PathState::rest(0.0);
-                (s, PathState::rest(0.0))
+                (s, PathState::intended(0.0), true)
             }
-            Some(s) => (s, PathState::intended(0.0)),
-            None => (self.slot, self.path),
+            Some(s) => (s, PathState::intended(0.0), false),
+            None => (self.slot, self.path, false),
         };
         let mut diag = Diagnostics {
             verified: false,
@@ -57,10 +59,18 @@ impl Shield {
             path_speed: 0.0,
             stop_time: t,
         };
-        let outcome = self.candidate(cand_slot, cand_start).map(|(go, brake)| {
+        let mut outcome = self.candidate(cand_slot, cand_start).map(|(go, brake)| {
             let result = self.verify(cand_slot, &go, &brake, t, &mut diag);
             (go, brake, result)
         });
+        if ramp && !outcome.is_some_and(|(_, _, ok)| ok) {
+            outcome = self
+                .candidate(cand_slot, PathState::rest(0.0))
+                .map(|(go, brake)| {
+                    let result = self.verify(cand_slot, &go, &brake, t, &mut diag);
+                    (go, brake, result)
+                });
+        }
         if outcome.is_none() {
             diag.binding = Binding::NoProfile;
         }
