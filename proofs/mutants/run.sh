@@ -46,6 +46,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-audit --test audit_objects --no-fail-fast >>"$log" 2>&1
     # The audit's input-consistency checks (x20: a human faster than the model).
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
+    # The planner's checked stopping tail of Moving chunks (x21).
+    cargo test -p pacs-motion --test trajectory --no-fail-fast >>"$log" 2>&1
     caught=$(sed -n 's/^test \(.*\) \.\.\. FAILED$/\1/p' "$log" |
         sed 's/::property_test$//; s/^.*:://' | sort | paste -sd, - | sed 's/,/, /g')
     if grep -q '^error\(\[E[0-9]*\]\)\?:' "$log" && [[ -z "$caught" ]]; then

@@ -4,6 +4,7 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
+use crate::filter::ChunkMotion;
 use crate::shield::{FilterMode, Shield, ShieldConfig};
 use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
@@ -228,8 +229,22 @@ pub fn cbf_scenario(steps: usize) -> StepStats {
 /// chunk, a new chunk every 200 ms), the default human walking between 1.5 m and 1.0 m in front
 /// of the robot (0.5 Hz), measured every step; `spec` = "sorting" (SSM) or "handover" (PFL).
 pub fn shield_scenario(spec: &str, mode: FilterMode, steps: usize) -> StepStats {
-    let name = format!("{spec} ({mode:?})");
-    run_walking_scenario(&name, spec, mode, steps, |_| {}, |_, _| {})
+    shield_scenario_with(spec, mode, ChunkMotion::Stop, steps)
+}
+
+/// [`shield_scenario`] with the given chunk motion (continuous: spline chunks ending moving, each
+/// planned from the moving state the previous one left; the policy clock stays at 200 ms).
+pub fn shield_scenario_with(
+    spec: &str,
+    mode: FilterMode,
+    motion: ChunkMotion,
+    steps: usize,
+) -> StepStats {
+    let name = match motion {
+        ChunkMotion::Stop => format!("{spec} ({mode:?})"),
+        ChunkMotion::Continuous => format!("{spec} ({mode:?}, continuous chunks)"),
+    };
+    run_walking_scenario(&name, spec, mode, motion, steps, |_| {}, |_, _| {})
 }
 
 /// The loop of the walking-human scenarios: build the shield (`setup` adds objects), then per
@@ -239,6 +254,7 @@ fn run_walking_scenario(
     name: &str,
     spec: &str,
     mode: FilterMode,
+    motion: ChunkMotion,
     steps: usize,
     setup: impl FnOnce(&mut Shield),
     mut measure: impl FnMut(&mut Shield, f64),
@@ -248,10 +264,11 @@ fn run_walking_scenario(
         .with_uncertainty(0.01, 0.1, 0.02)
         .expect("valid");
     let cs = ConstraintSpec::builtin(spec).expect("preset");
-    let cfg = ShieldConfig {
+    let mut cfg = ShieldConfig {
         mode,
         ..ShieldConfig::default()
     };
+    motion.apply(&mut cfg);
     let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
     setup(&mut sh);
     sh.start(0.0, &fr3::Q_READY).expect("start");
@@ -309,6 +326,7 @@ pub fn shield_objects_scenario(steps: usize) -> StepStats {
         "sorting + 2 objects (Pacs)",
         "sorting",
         FilterMode::Pacs,
+        ChunkMotion::Stop,
         steps,
         |sh| {
             assert_eq!(

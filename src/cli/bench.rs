@@ -35,6 +35,15 @@ pub fn shield(steps: usize, progress: bool) -> Result<Value, CliError> {
         runs.push(us(&shield_scenario(spec, FilterMode::Pacs, steps)));
     }
     if progress {
+        eprintln!("pacs bench: PACS-SSM, continuous chunks: {steps} steps ...");
+    }
+    runs.push(us(&pacs_shield::bench::shield_scenario_with(
+        "sorting",
+        FilterMode::Pacs,
+        pacs_shield::ChunkMotion::Continuous,
+        steps,
+    )));
+    if progress {
         eprintln!("pacs bench: PACS-SSM with two objects: {steps} steps ...");
     }
     runs.push(us(&shield_objects_scenario(steps)));
