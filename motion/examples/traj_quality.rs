@@ -68,14 +68,7 @@ fn main() {
             let t = pl_.plan(&w[0].0, &w[0].1).unwrap();
             let ts = at_end.unwrap_or(t.duration() - 1e-3).min(t.duration());
             let s = t.state_at(ts);
-            let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
-                .map(|k| {
-                    (0..7)
-                        .map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i])
-                        .collect()
-                })
-                .collect();
-            let Ok(wp) = pacs_motion::Waypoints::from_rows(&rows) else {
+            let Ok(wp) = shifted(&w[1].1, &s.q[..7]) else {
                 continue;
             };
             let (Ok(a), Ok(b)) = (
@@ -107,14 +100,7 @@ fn main() {
         for w in set.windows(2) {
             let t = pl.plan(&w[0].0, &w[0].1).unwrap();
             let s = t.state_at(dt.min(t.duration()));
-            let rows: Vec<Vec<f64>> = (0..=w[1].1.segments())
-                .map(|k| {
-                    (0..7)
-                        .map(|i| s.q[i] + w[1].1.row(k)[i] - w[1].1.row(0)[i])
-                        .collect()
-                })
-                .collect();
-            let wp = pacs_motion::Waypoints::from_rows(&rows).unwrap();
+            let wp = shifted(&w[1].1, &s.q[..7]).unwrap();
             let t2 = pl.plan(&s, &wp).unwrap();
             if pl.last_method() != PlanMethod::Spline {
                 fbm += 1;
@@ -144,4 +130,20 @@ fn main() {
         times[times.len() / 2],
         times[times.len() * 99 / 100]
     );
+}
+
+/// The waypoints `wp` translated so that they start at `q` (the next chunk replanned from
+/// wherever the previous one left the robot).
+fn shifted(
+    wp: &pacs_motion::Waypoints,
+    q: &[f64],
+) -> Result<pacs_motion::Waypoints, pacs_motion::TrajectoryError> {
+    let rows: Vec<Vec<f64>> = (0..=wp.segments())
+        .map(|k| {
+            (0..q.len())
+                .map(|i| q[i] + wp.row(k)[i] - wp.row(0)[i])
+                .collect()
+        })
+        .collect();
+    pacs_motion::Waypoints::from_rows(&rows)
 }
