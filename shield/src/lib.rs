@@ -6,6 +6,7 @@
 //!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
 //! - [`cbf`]: the control-barrier-function baseline;
 //! - [`filter`]: PACS, OFF, single-action and CBF as kinds of one [`filter::SafetyFilter`];
+//! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
 //! - [`bench`]: reproducible timing scenarios for `pacs bench`.
 //!
@@ -17,6 +18,7 @@
 pub mod bench;
 pub mod cbf;
 pub mod filter;
+pub mod settings;
 pub mod shield;
 pub mod shield_log;
 

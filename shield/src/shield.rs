@@ -249,6 +249,11 @@ pub struct Shield {
     env: Vec<EnvShape>,
     config: ShieldConfig,
     trajs: [Option<Trajectory>; 2],
+    /// Serial number of the chunk each slot holds (0: the start's standstill; the n-th
+    /// accepted chunk is n).
+    chunk_serial: [u64; 2],
+    /// Chunks accepted so far.
+    chunks_accepted: u64,
     /// Current slot and path state at `time`.
     slot: usize,
     path: PathState,
@@ -418,6 +423,8 @@ impl Shield {
             config,
             robot,
             trajs: [None, None],
+            chunk_serial: [0, 0],
+            chunks_accepted: 0,
             slot: 0,
             path: PathState::rest(0.0),
             time: 0.0,
@@ -547,6 +554,7 @@ impl Shield {
             ));
         }
         self.trajs = [Some(Trajectory::standstill(q)), None];
+        self.chunk_serial = [0, 0];
         self.slot = 0;
         self.path = PathState::rest(0.0);
         self.time = t;
@@ -628,7 +636,51 @@ impl Shield {
         let keep = self.failsafe.map(|f| f.slot).unwrap_or(self.slot);
         let slot = if keep == 0 { 1 } else { 0 };
         self.trajs[slot] = Some(traj);
+        self.chunks_accepted += 1;
+        self.chunk_serial[slot] = self.chunks_accepted;
         self.fresh = Some(slot);
         Ok(())
     }
+
+    /// Which chunk the commands follow and how many of its executed actions the commanded
+    /// state has passed (`None` before [`Self::start`]). What a real-time-chunking policy needs
+    /// to know: the actions `passed..h` of chunk `chunk` are still ahead (or will never run if
+    /// a newer chunk takes over).
+    pub fn chunk_progress(&self) -> Option<ChunkProgress> {
+        if !self.started {
+            return None;
+        }
+        let (traj, p) = self.path();
+        let times = traj.waypoint_times();
+        let passed = if self.chunk_serial[self.slot] == 0 {
+            0
+        } else {
+            times.iter().take_while(|&&tw| tw <= p.s).count()
+        };
+        Some(ChunkProgress {
+            chunk: self.chunk_serial[self.slot],
+            passed,
+            executed: if self.chunk_serial[self.slot] == 0 {
+                0
+            } else {
+                times.len()
+            },
+            accepted: self.chunks_accepted,
+        })
+    }
+}
+
+/// Progress along the chunk the shield's commands follow ([`Shield::chunk_progress`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct ChunkProgress {
+    /// Serial number of the chunk the commands follow: the n-th chunk accepted by
+    /// [`Shield::set_chunk`] is n; 0 is the standstill at the start (no chunk yet).
+    pub chunk: u64,
+    /// Number of that chunk's waypoints q̂_1 … q̂_h passed by the commanded state (0 ≤ passed ≤ h):
+    /// the actions `0..passed` have been executed.
+    pub passed: usize,
+    /// h: the number of actions of that chunk that are executed (0 for the standstill).
+    pub executed: usize,
+    /// Chunks accepted so far (a chunk newer than `chunk` waits for a verified step).
+    pub accepted: u64,
 }

@@ -13,10 +13,11 @@ use pacs_log::{Header, LogModels, ModelRef, ObjectEntry};
 use pacs_models::ConstraintSpec;
 use pacs_models::human::HumanSpec;
 use pacs_models::robot::RobotSpec;
-use pacs_motion::chunk::{ActionKind, Chunk, OutOfLimits};
+use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
-use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_shield::settings::ShieldSettings;
+use pacs_shield::shield::Shield;
 use pacs_shield::shield_log::ShieldLog;
 use serde::Deserialize;
 use serde_json::{Value, json};
@@ -35,7 +36,7 @@ struct Scene {
     #[serde(default)]
     objects: Vec<ObjectEntry>,
     #[serde(default)]
-    config: SceneConfig,
+    config: ShieldSettings,
     /// Start configuration at rest (rad) at `t0`.
     start: Vec<f64>,
     /// Start time (s).
@@ -49,26 +50,6 @@ struct Scene {
     human_measurements: Vec<HumanEntry>,
     #[serde(default)]
     object_measurements: Vec<ObjectEntryMeasurement>,
-}
-
-/// Shield settings a scene may override (the rest keep their defaults).
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SceneConfig {
-    /// `"pacs"`, `"off"` or `"single-action"`.
-    mode: Option<String>,
-    /// Safety step α_s (s).
-    safety_step: Option<f64>,
-    /// Cartesian tracking error (m).
-    tracking_error: Option<f64>,
-    /// Joint velocity tracking error (rad/s).
-    velocity_tracking_error: Option<f64>,
-    /// SSM rest speed (rad/s).
-    rest_speed: Option<f64>,
-    /// `"combined"`, `"pos"`, `"vel"` or `"acc"`.
-    human_model: Option<String>,
-    /// `"reject"` or `"project"` for waypoints outside the joint limits.
-    out_of_limits: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -120,51 +101,6 @@ fn finite(field: &str, v: f64) -> Result<f64, CliError> {
     }
 }
 
-fn config(c: &SceneConfig) -> Result<ShieldConfig, CliError> {
-    let mut cfg = ShieldConfig::default();
-    if let Some(m) = &c.mode {
-        cfg.mode = match m.as_str() {
-            "pacs" => FilterMode::Pacs,
-            "off" => FilterMode::Off,
-            "single-action" => FilterMode::SingleAction,
-            o => {
-                return Err(input(format!(
-                    "config.mode: unknown mode `{o}` (pacs, off, single-action)"
-                )));
-            }
-        };
-    }
-    if let Some(m) = &c.human_model {
-        cfg.human_model = m
-            .parse()
-            .map_err(|e| input(format!("config.human_model: {e}")))?;
-    }
-    if let Some(m) = &c.out_of_limits {
-        cfg.out_of_limits = match m.as_str() {
-            "reject" => OutOfLimits::Reject,
-            "project" => OutOfLimits::Project,
-            o => {
-                return Err(input(format!(
-                    "config.out_of_limits: unknown choice `{o}` (reject, project)"
-                )));
-            }
-        };
-    }
-    if let Some(v) = c.safety_step {
-        cfg.safety_step = finite("config.safety_step", v)?;
-    }
-    if let Some(v) = c.tracking_error {
-        cfg.tracking_error = finite("config.tracking_error", v)?;
-    }
-    if let Some(v) = c.velocity_tracking_error {
-        cfg.velocity_tracking_error = finite("config.velocity_tracking_error", v)?;
-    }
-    if let Some(v) = c.rest_speed {
-        cfg.rest_speed = finite("config.rest_speed", v)?;
-    }
-    Ok(cfg)
-}
-
 /// A measurement's time stamp and arrival time (default: the stamp), both finite, the arrival
 /// not before the stamp; errors name `field`.
 fn stamp_and_arrival(field: &str, t: f64, received: Option<f64>) -> Result<(f64, f64), CliError> {
@@ -207,7 +143,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     header.meta.insert("scene".into(), name.clone().into());
     let models = LogModels::from_header(&header)
         .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
-    let cfg = config(&scene.config)?;
+    let cfg = scene.config.config().map_err(|e| input(e.to_string()))?;
     let n = models.robot.dof();
     check_vec("start", &scene.start, n)?;
     let t0 = finite("t0", scene.t0)?;

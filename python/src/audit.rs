@@ -1,0 +1,424 @@
+//! `pacs.audit`, `pacs.Run`, `pacs.LogWriter`, `pacs.report`: the offline audit of logged runs
+//! against SSM and PFL from Python — the same code as `pacs audit`.
+
+use crate::convert::{finite, from_py, points, show, to_py, vector};
+use crate::errors::{Kind, err, input, type_err};
+use crate::models::scene;
+use pacs_audit::{AuditConfig, RunResult};
+use pacs_log::{Header, LogWriter};
+use pacs_reports::{InputFile, ReportInput};
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+/// The audit settings from `config`: None (defaults), a dict (the TOML file's fields), or a
+/// path to a TOML file. Returns the settings and the config file (hashed in reports).
+fn audit_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<(AuditConfig, Option<PathBuf>)> {
+    let Some(c) = config.filter(|c| !c.is_none()) else {
+        return Ok((AuditConfig::default(), None));
+    };
+    if c.cast::<pyo3::types::PyDict>().is_ok() {
+        let cfg: AuditConfig = from_py(c, "config")?;
+        cfg.validate().map_err(|e| input(format!("config: {e}")))?;
+        return Ok((cfg, None));
+    }
+    let p: PathBuf = c.extract().map_err(|_| {
+        type_err(format!(
+            "config: expected None, a dict or a path to a TOML file, got {}",
+            show(c)
+        ))
+    })?;
+    let text = std::fs::read_to_string(&p)
+        .map_err(|e| input(format!("config: cannot read {}: {e}", p.display())))?;
+    let cfg = pacs_audit::parse_config(&p.display().to_string(), &text)
+        .map_err(|e| input(e.to_string()))?;
+    Ok((cfg, Some(p)))
+}
+
+fn verdict_str(v: pacs_audit::Verdict) -> &'static str {
+    match v {
+        pacs_audit::Verdict::Pass => "pass",
+        pacs_audit::Verdict::Fail => "fail",
+        pacs_audit::Verdict::Inconclusive => "inconclusive",
+    }
+}
+
+/// The audit result of one log: verdict, violations, unchecked spans and metrics.
+#[pyclass(name = "Run", module = "pacs", frozen)]
+pub struct PyRun {
+    run: RunResult,
+    path: PathBuf,
+    config: AuditConfig,
+    config_path: Option<PathBuf>,
+}
+
+#[pymethods]
+impl PyRun {
+    /// The log file as given.
+    #[getter]
+    fn log(&self) -> String {
+        self.run.log.clone()
+    }
+    /// "pass", "fail" or "inconclusive".
+    #[getter]
+    fn verdict(&self) -> &'static str {
+        verdict_str(self.run.verdict)
+    }
+    /// verdict == "pass": every span was checked and no violation is possible.
+    #[getter]
+    fn passed(&self) -> bool {
+        self.run.verdict == pacs_audit::Verdict::Pass
+    }
+    /// Violation intervals (list of dicts: t_start, t_end (s), constraint, link, body part,
+    /// separation bound (m), energy bound and threshold (J), certain), by start time.
+    #[getter]
+    fn violations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.violations)
+    }
+    /// Spans that could not be checked (list of dicts with the reason), by start time.
+    #[getter]
+    fn inconclusive<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.inconclusive)
+    }
+    /// Metrics (dict): samples, duration (s), violation_fraction, min_separation (m), ...
+    #[getter]
+    fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.metrics)
+    }
+    /// The models the run was audited with (names and the limits the checks used).
+    #[getter]
+    fn models<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.models)
+    }
+    /// The header's `meta` object.
+    #[getter]
+    fn meta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.meta)
+    }
+    /// Everything above as one dict (what `pacs audit --json` prints per run).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run)
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Run(log={:?}, verdict={:?}, violations={}, inconclusive={})",
+            self.run.log,
+            verdict_str(self.run.verdict),
+            self.run.violations.len(),
+            self.run.inconclusive.len()
+        )
+    }
+}
+
+/// audit(paths, config=None) -> list[Run]
+/// --
+///
+/// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP) against the SSM and
+/// PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
+/// `paths`: one path or a list; `config`: None, a dict of audit settings (max_gap,
+/// max_human_age, rest_speed, human_model, tracking_error, limit_slack, robot/human/constraints
+/// overrides; see docs/audit.md) or a TOML file. A run passes only if every span between its
+/// first and last robot sample was checked. Invalid logs raise `pacs.InputError` naming the
+/// file, line and field. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (paths, config=None))]
+pub fn audit(
+    py: Python<'_>,
+    paths: &Bound<'_, PyAny>,
+    config: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Vec<PyRun>> {
+    let list: Vec<PathBuf> = if paths.is_instance_of::<PyString>() {
+        vec![paths.extract()?]
+    } else if let Ok(p) = paths.extract::<PathBuf>() {
+        vec![p]
+    } else {
+        paths.extract().map_err(|_| {
+            type_err(format!(
+                "paths: expected a path or a list of paths, got {}",
+                show(paths)
+            ))
+        })?
+    };
+    if list.is_empty() {
+        return Err(input("paths: no log given"));
+    }
+    let (cfg, cfg_path) = audit_config(config)?;
+    let mut out = Vec::with_capacity(list.len());
+    for p in list {
+        let r = py.detach(|| pacs_audit::audit_file(&p, &cfg));
+        let run = r.map_err(|e| match e {
+            pacs_log::LogError::Io { .. } => input(format!("{e}")),
+            _ => input(e.to_string()),
+        })?;
+        out.push(PyRun {
+            run,
+            path: p,
+            config: cfg.clone(),
+            config_path: cfg_path.clone(),
+        });
+    }
+    Ok(out)
+}
+
+/// report(runs, out_dir)
+/// --
+///
+/// Write the certification report of audited runs into `out_dir` (created): report.json
+/// (inputs with SHA-256, settings, assumptions, checks and the tests/harnesses backing them,
+/// verdicts, violations, metrics), report.md and report.html (with plots). The runs must come
+/// from one `audit` call (one set of settings). Returns the overall verdict.
+#[pyfunction]
+pub fn report(runs: Vec<PyRef<'_, PyRun>>, out_dir: PathBuf) -> PyResult<&'static str> {
+    let Some(first) = runs.first() else {
+        return Err(input("runs: no run given"));
+    };
+    if runs.iter().any(|r| r.config != first.config) {
+        return Err(input(
+            "runs: audited with different settings; report each audit call separately",
+        ));
+    }
+    let mut logs = Vec::with_capacity(runs.len());
+    for r in &runs {
+        logs.push(InputFile::hash(&r.path).map_err(|e| input(format!("runs: {e}")))?);
+    }
+    let config = match &first.config_path {
+        Some(p) => Some(InputFile::hash(p).map_err(|e| input(format!("config: {e}")))?),
+        None => None,
+    };
+    let results: Vec<RunResult> = runs.iter().map(|r| r.run.clone()).collect();
+    let input_doc = ReportInput {
+        runs: &results,
+        logs,
+        config,
+        settings: serde_json::to_value(&first.config).unwrap_or_default(),
+    };
+    pacs_reports::write_reports(&out_dir, &input_doc)
+        .map_err(|e| err(Kind::Output, format!("out_dir: {e}")))?;
+    Ok(verdict_str(pacs_reports::overall(&results)))
+}
+
+/// LogWriter(path, robot="fr3", human="default", constraints="sorting", objects=None, environment=None, side=None, meta=None)
+/// --
+///
+/// Write a run as a pacs log (format v1, JSON Lines) from a Python loop, for `pacs.audit`.
+/// The models are named as for `Shield` (URDF robots are written as their converted spec).
+/// Records must come in time order: `robot(t, q, dq=None, ddq=None)` (rad, rad/s, rad/s²; the
+/// audit bounds motion between samples by the robot's limits, tighter with dq/ddq),
+/// `human(t, t_meas, positions)` (m, shape (K, 3)), `object(t, t_meas, id, position,
+/// velocity=None)`, `event(t, name)` ("success" / "failure" set the task outcome). Use as a
+/// context manager or call `close()`.
+#[pyclass(name = "LogWriter", module = "pacs")]
+pub struct PyLogWriter {
+    w: Option<LogWriter<BufWriter<File>>>,
+    path: PathBuf,
+    dof: usize,
+    keypoints: usize,
+    object_ids: Vec<String>,
+}
+
+impl PyLogWriter {
+    fn writer(&mut self) -> PyResult<&mut LogWriter<BufWriter<File>>> {
+        self.w
+            .as_mut()
+            .ok_or_else(|| err(Kind::State, "LogWriter: already closed"))
+    }
+    fn werr(&self, e: pacs_log::WriteError) -> PyErr {
+        match e {
+            pacs_log::WriteError::Io(e) => {
+                err(Kind::Output, format!("{}: {e}", self.path.display()))
+            }
+            e => input(format!("{}: {e}", self.path.display())),
+        }
+    }
+}
+
+#[pymethods]
+impl PyLogWriter {
+    #[new]
+    #[pyo3(signature = (path, robot=None, human=None, constraints=None, objects=None, environment=None, side=None, meta=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        path: PathBuf,
+        robot: Option<&Bound<'_, PyAny>>,
+        human: Option<&Bound<'_, PyAny>>,
+        constraints: Option<&Bound<'_, PyAny>>,
+        objects: Option<&Bound<'_, PyAny>>,
+        environment: Option<&Bound<'_, PyAny>>,
+        side: Option<&Bound<'_, PyAny>>,
+        meta: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let fr3 = "fr3".into_pyobject(py)?.into_any();
+        let default = "default".into_pyobject(py)?.into_any();
+        let sorting = "sorting".into_pyobject(py)?.into_any();
+        let s = scene(
+            robot.unwrap_or(&fr3),
+            side,
+            human.unwrap_or(&default),
+            constraints.unwrap_or(&sorting),
+            objects,
+            environment,
+        )?;
+        let mut header: Header = s.header;
+        header.meta.insert("filter".into(), "python".into());
+        if let Some(m) = meta.filter(|m| !m.is_none()) {
+            let extra: serde_json::Map<String, serde_json::Value> = from_py(m, "meta")?;
+            header.meta.extend(extra);
+        }
+        let f = File::create(&path).map_err(|e| {
+            err(
+                Kind::Output,
+                format!("path: cannot create {}: {e}", path.display()),
+            )
+        })?;
+        let mut w = LogWriter::new(BufWriter::new(f));
+        let mut me = Self {
+            w: None,
+            path,
+            dof: s.models.robot.dof(),
+            keypoints: s.models.human.keypoint_count(),
+            object_ids: s
+                .models
+                .objects
+                .iter()
+                .map(|(id, _, _)| id.clone())
+                .collect(),
+        };
+        w.write_header(&header).map_err(|e| me.werr(e))?;
+        me.w = Some(w);
+        Ok(me)
+    }
+
+    /// robot(t, q, dq=None, ddq=None)
+    /// --
+    ///
+    /// A robot sample at `t` (s): positions `q` (rad), optional velocities `dq` (rad/s) and
+    /// accelerations `ddq` (rad/s², only with `dq`).
+    #[pyo3(signature = (t, q, dq=None, ddq=None))]
+    fn robot(
+        &mut self,
+        t: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        dq: Option<&Bound<'_, PyAny>>,
+        ddq: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let t = finite(t, "t")?;
+        let n = self.dof;
+        let q = vector(q, "q", n)?;
+        let opt = |v: Option<&Bound<'_, PyAny>>, name: &str| -> PyResult<Option<Vec<f64>>> {
+            match v {
+                Some(v) if !v.is_none() => Ok(Some(vector(v, name, n)?)),
+                _ => Ok(None),
+            }
+        };
+        let dq = opt(dq, "dq")?;
+        let ddq = opt(ddq, "ddq")?;
+        if dq.is_none() && ddq.is_some() {
+            return Err(input("ddq: accelerations need velocities (dq)"));
+        }
+        let r = self
+            .writer()?
+            .write_robot_with_acc(t, &q, dq.as_deref(), ddq.as_deref());
+        r.map_err(|e| self.werr(e))
+    }
+
+    /// human(t, t_meas, positions)
+    /// --
+    ///
+    /// A human measurement logged at `t`, taken at `t_meas` (s): keypoints (m, shape (K, 3)).
+    fn human(
+        &mut self,
+        t: &Bound<'_, PyAny>,
+        t_meas: &Bound<'_, PyAny>,
+        positions: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let t = finite(t, "t")?;
+        let tm = finite(t_meas, "t_meas")?;
+        if tm > t {
+            return Err(input(format!(
+                "t_meas: {tm} s is after the log time t = {t} s"
+            )));
+        }
+        let p = points(positions, "positions", Some(self.keypoints))?;
+        let r = self.writer()?.write_human(t, tm, &p);
+        r.map_err(|e| self.werr(e))
+    }
+
+    /// object(t, t_meas, id, position, velocity=None)
+    /// --
+    ///
+    /// A measurement of the header's object `id` logged at `t`, taken at `t_meas` (s):
+    /// position (m), velocity (m/s) if measured.
+    #[pyo3(signature = (t, t_meas, id, position, velocity=None))]
+    fn object(
+        &mut self,
+        t: &Bound<'_, PyAny>,
+        t_meas: &Bound<'_, PyAny>,
+        id: String,
+        position: &Bound<'_, PyAny>,
+        velocity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        if !self.object_ids.contains(&id) {
+            return Err(input(format!(
+                "id: no object `{id}` in the header (objects: {:?})",
+                self.object_ids
+            )));
+        }
+        let t = finite(t, "t")?;
+        let tm = finite(t_meas, "t_meas")?;
+        let p = vector(position, "position", 3)?;
+        let v = match velocity {
+            Some(v) if !v.is_none() => {
+                let v = vector(v, "velocity", 3)?;
+                Some([v[0], v[1], v[2]])
+            }
+            _ => None,
+        };
+        let r = self
+            .writer()?
+            .write_object(t, tm, &id, [p[0], p[1], p[2]], v);
+        r.map_err(|e| self.werr(e))
+    }
+
+    /// event(t, name)
+    /// --
+    ///
+    /// A named event at `t` (s): "success" / "failure" record the task outcome.
+    fn event(&mut self, t: &Bound<'_, PyAny>, name: String) -> PyResult<()> {
+        let t = finite(t, "t")?;
+        let r = self.writer()?.write_event(t, &name);
+        r.map_err(|e| self.werr(e))
+    }
+
+    /// close()
+    /// --
+    ///
+    /// Flush and close the file (idempotent).
+    fn close(&mut self) -> PyResult<()> {
+        if let Some(w) = self.w.take() {
+            let path = self.path.display().to_string();
+            let mut out = w.finish().map_err(|e| self.werr(e))?;
+            out.flush()
+                .map_err(|e| err(Kind::Output, format!("{path}: {e}")))?;
+        }
+        Ok(())
+    }
+
+    /// The log's path.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.path.clone()
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&mut self, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close()?;
+        Ok(false)
+    }
+}

@@ -1,0 +1,169 @@
+//! `pacs.Demo`: the simulation's built-in FR3 scenes (the paper's tasks) and their chunking
+//! demonstration policy, for examples and tests of Python policy loops without a robot.
+
+use crate::convert::{finite, show, to_py, vector};
+use crate::errors::{input, type_err};
+use numpy::{PyArray1, PyArray2};
+use pacs_sim::policy::ChunkPolicy;
+use pacs_sim::task::{Scenario, TaskKind, constraint_spec, native_mode, scenario, tool_point};
+use pyo3::prelude::*;
+
+/// Demo(task="sorting", seed=0, with_human=True)
+/// --
+///
+/// One of the simulation's FR3 tasks ("sorting", "handover", "feeding", "sphere", "crowded"):
+/// its start configuration, models, the true motion of its person (`keypoints(t)`) and objects
+/// (`object_state(i, t)`), and its chunking demonstration policy (`chunk(q)`: delta joint
+/// actions, as a diffusion policy or SmolVLA emits them). Build the shield from `shield_args()`.
+#[pyclass(name = "Demo", module = "pacs", unsendable)]
+pub struct PyDemo {
+    sc: Scenario,
+}
+
+#[pymethods]
+impl PyDemo {
+    #[new]
+    #[pyo3(signature = (task="sorting", seed=0, with_human=true))]
+    fn new(task: &str, seed: u64, with_human: bool) -> PyResult<Self> {
+        let kind: TaskKind = task.parse().map_err(|_| {
+            input(format!(
+                "task: unknown task `{task}` (sorting, handover, feeding, sphere, crowded)"
+            ))
+        })?;
+        Ok(Self {
+            sc: scenario(kind, seed, with_human),
+        })
+    }
+
+    /// The task's name.
+    #[getter]
+    fn task(&self) -> &'static str {
+        self.sc.task.name()
+    }
+
+    /// Start configuration (rad), at rest.
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.sc.start)
+    }
+
+    /// Time limit of the task (s).
+    #[getter]
+    fn max_time(&self) -> f64 {
+        self.sc.max_time
+    }
+
+    /// Sub-goals of the tool point, in order: [{"name", "point" (m), "tolerance" (m)}].
+    #[getter]
+    fn goals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let g: Vec<serde_json::Value> = self
+            .sc
+            .goals
+            .iter()
+            .map(
+                |g| serde_json::json!({"name": g.name, "point": g.point, "tolerance": g.tolerance}),
+            )
+            .collect();
+        to_py(py, &g)
+    }
+
+    /// shield_args() -> dict
+    /// --
+    ///
+    /// Keyword arguments for `pacs.Shield` (and `pacs.LogWriter`) for this task: robot,
+    /// humans (the model with the task's measurement uncertainty), constraints (the task's
+    /// native SSM/PFL spec) and objects.
+    fn shield_args<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let objects: Vec<serde_json::Value> = self
+            .sc
+            .objects
+            .iter()
+            .map(|o| serde_json::json!({"id": o.id, "object": o.spec, "contact": o.contact}))
+            .collect();
+        let v = serde_json::json!({
+            "robot": "fr3",
+            "humans": self.sc.human.spec(),
+            "constraints": constraint_spec(self.sc.task, native_mode(self.sc.task)),
+            "objects": objects,
+        });
+        to_py(py, &v)
+    }
+
+    /// chunk(q) -> (deltas, h)
+    /// --
+    ///
+    /// The demonstration policy's next chunk for joint positions `q` (rad): `deltas` (H, 7)
+    /// joint-position deltas (rad) and the number `h` of actions to execute.
+    fn chunk<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, usize)> {
+        let q = vector(q, "q", self.sc.start.len())?;
+        let c = self.sc.policy.chunk(&q);
+        let a = PyArray2::from_vec2(py, &c.actions).map_err(|e| input(e.to_string()))?;
+        Ok((a, c.execute))
+    }
+
+    /// keypoints(t) -> ndarray
+    /// --
+    ///
+    /// The person's true keypoints (m, shape (K, 3)) at time `t` (s).
+    fn keypoints<'py>(
+        &self,
+        py: Python<'py>,
+        t: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let t = finite(t, "t")?;
+        let k: Vec<Vec<f64>> = self
+            .sc
+            .script
+            .keypoints(t)
+            .iter()
+            .map(|p| p.to_vec())
+            .collect();
+        PyArray2::from_vec2(py, &k).map_err(|e| input(e.to_string()))
+    }
+
+    /// Object ids, in index order.
+    #[getter]
+    fn object_ids(&self) -> Vec<String> {
+        self.sc.objects.iter().map(|o| o.id.clone()).collect()
+    }
+
+    /// object_state(i, t) -> (position, velocity)
+    /// --
+    ///
+    /// Object `i`'s true position (m) and velocity (m/s) at `t` (s).
+    fn object_state(
+        &self,
+        i: &Bound<'_, PyAny>,
+        t: &Bound<'_, PyAny>,
+    ) -> PyResult<([f64; 3], [f64; 3])> {
+        let i: usize = i
+            .extract()
+            .map_err(|_| type_err(format!("i: expected an object index, got {}", show(i))))?;
+        let o = self.sc.objects.get(i).ok_or_else(|| {
+            input(format!(
+                "i: object {i} does not exist ({} objects)",
+                self.sc.objects.len()
+            ))
+        })?;
+        Ok(o.script.state(finite(t, "t")?))
+    }
+
+    /// tool_point(q) -> list
+    /// --
+    ///
+    /// The tool point (m, world frame) at joint positions `q` (rad).
+    fn tool_point(&self, q: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
+        let q = vector(q, "q", self.sc.start.len())?;
+        Ok(tool_point(&self.sc.robot, &q))
+    }
+
+    /// Distance (rad) from `q` to the nearest demonstrated configuration.
+    fn deviation(&self, q: &Bound<'_, PyAny>) -> PyResult<f64> {
+        let q = vector(q, "q", self.sc.start.len())?;
+        Ok(self.sc.policy.deviation(&q))
+    }
+}
