@@ -130,7 +130,10 @@ pub fn to_json(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
         .import("pacs._convert")
         .and_then(|m| m.getattr("to_json"));
     let text = match helper {
-        Ok(f) => f.call1((obj,)),
+        Ok(f) => match f.call1((obj, name)) {
+            Err(e) if e.is_instance_of::<pyo3::exceptions::PyValueError>(py) => return Err(e),
+            r => r,
+        },
         Err(_) => py
             .import("json")
             .and_then(|j| j.call_method1("dumps", (obj,))),

@@ -1,7 +1,10 @@
 """JSON text of the JSON-like arguments pacs accepts (dicts, lists, numpy arrays, paths)."""
 
 import json
+import math
 import os
+
+from .errors import InputError
 
 
 def _default(value):
@@ -12,6 +15,21 @@ def _default(value):
     raise TypeError(f"{type(value).__name__} is not JSON-like")
 
 
-def to_json(value) -> str:
-    """``json.dumps`` with numpy values and paths converted; NaN/inf refused."""
-    return json.dumps(value, default=_default, allow_nan=False)
+def _check_finite(value, path):
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{path}: value {value} is not finite")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _check_finite(v, f"{path}.{k}")
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _check_finite(v, f"{path}[{i}]")
+    elif hasattr(value, "tolist"):
+        _check_finite(value.tolist(), path)
+
+
+def to_json(value, name="value") -> str:
+    """``json.dumps`` with numpy values and paths converted; a NaN/inf raises
+    :class:`pacs.InputError` naming its path (``config.safety_step``)."""
+    _check_finite(value, name)
+    return json.dumps(value, default=_default)

@@ -1,0 +1,341 @@
+"""Adapters between pacs and LeRobot-style policy loops.
+
+LeRobot's interfaces (lerobot ≥ 0.4; checked against 0.6): a policy (``PreTrainedPolicy``) has
+``predict_action_chunk(batch) -> (B, chunk_size, action_dim)`` and ``select_action(batch) ->
+(B, action_dim)`` and ``reset()``; a robot (``Robot``) has ``get_observation() -> dict`` and
+``send_action(action: dict) -> dict`` with joint keys such as ``"shoulder_pan.pos"`` (SO-100/101:
+degrees); a robot-side processor step (``RobotActionProcessorStep``) maps a ``RobotAction`` dict to
+a ``RobotAction`` dict and is registered with ``ProcessorStepRegistry.register(name)``. These
+adapters use only those names, so they work with LeRobot's classes and with anything shaped
+like them (lerobot itself is optional: it pulls torch).
+
+- :class:`ShieldedPolicyLoop`: policy → chunks → shield (1 kHz) → ``robot.send_action``, in real
+  time or in simulated time; tells which actions of each chunk were executed (and the left-over
+  actions real-time chunking needs).
+- :class:`ShieldActionStep`: a ``RobotActionProcessorStep``-style step for a LeRobot robot
+  pipeline: every action the pipeline passes goes through a running :class:`pacs.ShieldLoop`,
+  and the robot receives the shield's command instead.
+
+Units: the shield works in rad, rad/s, s; ``unit="deg"`` converts robot/policy values in
+degrees (LeRobot's SO-100/101 default) in and out. Keys not listed in ``joint_keys`` (e.g. a
+gripper) pass through unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from ._pacs import Shield, ShieldLoop
+from .errors import ArgumentTypeError, InputError
+
+__all__ = ["ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
+
+_UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
+
+
+def _scale(unit: str) -> float:
+    if unit not in _UNITS:
+        raise InputError(f"unit: unknown unit {unit!r} (rad, deg)")
+    return _UNITS[unit]
+
+
+def to_numpy(x: Any) -> np.ndarray:
+    """A float64 numpy array of a torch tensor (any device), numpy array or nested list."""
+    if hasattr(x, "detach"):  # torch.Tensor
+        x = x.detach().to("cpu").numpy()
+    try:
+        return np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise ArgumentTypeError(f"expected an array of numbers, got {type(x).__name__}: {e}") from e
+
+
+class ShieldedPolicyLoop:
+    """Run a chunking policy on a robot through a pacs shield.
+
+    Each control tick (``fps``): read the robot's observation, and when the shield has passed
+    all but ``replan_margin`` of the current chunk's executed actions, ask the policy for a new
+    chunk (``predict_action_chunk``; ``select_action`` for policies without chunks, one action
+    at a time), hand it to the shield, let the shield step at its safety rate up to now, and
+    send the shield's command to the robot.
+
+    Args:
+        policy: has ``predict_action_chunk(batch)`` (→ (B, H, A) or (H, A)) or
+            ``select_action(batch)`` (→ (B, A) or (A,)); optional ``reset()``.
+        robot: has ``get_observation() -> dict`` and ``send_action(dict) -> dict``.
+        shield: a started :class:`pacs.Shield` (its time is the loop's time).
+        joint_keys: the robot's joint keys in the shield's joint order (e.g.
+            ``["shoulder_pan.pos", ...]``); observation and action dicts use them.
+        action_indices: which columns of the policy's action vector are these joints
+            (default ``0..len(joint_keys)``).
+        unit: ``"rad"`` or ``"deg"``: the unit of joint values in observations, actions and
+            the policy's outputs.
+        action_kind: ``"absolute"`` (LeRobot policies emit joint targets) or ``"delta"``
+            (joint-position deltas, as the PACS paper's policies).
+        n_action_steps: h, the executed actions per chunk (default: all H).
+        preprocess: ``obs -> batch`` for the policy (e.g. LeRobot's preprocessor pipeline);
+            default: the observation dict itself.
+        humans: ``t -> None | (t_meas, positions (K, 3) m)``, polled every tick, or None.
+        realtime: True: wall-clock ticks and a :class:`pacs.ShieldLoop` stepping at the
+            safety rate on a Rust thread; False: simulated time, the shield steps between ticks.
+        replan_margin: request the next chunk when this many executed actions are left.
+    """
+
+    def __init__(
+        self,
+        policy: Any,
+        robot: Any,
+        shield: Shield,
+        joint_keys: Sequence[str],
+        *,
+        action_indices: Sequence[int] | None = None,
+        unit: str = "rad",
+        action_kind: str = "absolute",
+        n_action_steps: int | None = None,
+        preprocess: Callable[[Mapping[str, Any]], Any] | None = None,
+        humans: Callable[[float], Any] | None = None,
+        fps: float = 30.0,
+        realtime: bool = False,
+        replan_margin: int = 0,
+    ) -> None:
+        if not hasattr(policy, "predict_action_chunk") and not hasattr(policy, "select_action"):
+            raise ArgumentTypeError(
+                "policy: needs predict_action_chunk(batch) or select_action(batch)"
+            )
+        for m in ("get_observation", "send_action"):
+            if not hasattr(robot, m):
+                raise ArgumentTypeError(f"robot: needs {m}()")
+        if not isinstance(shield, Shield):
+            raise ArgumentTypeError(f"shield: expected a pacs.Shield, got {type(shield).__name__}")
+        self.joint_keys = list(joint_keys)
+        if len(self.joint_keys) != shield.dof:
+            raise InputError(
+                f"joint_keys: {len(self.joint_keys)} keys for a robot with {shield.dof} joints"
+            )
+        self.action_indices = (
+            list(range(shield.dof)) if action_indices is None else list(action_indices)
+        )
+        if len(self.action_indices) != shield.dof:
+            raise InputError(
+                f"action_indices: {len(self.action_indices)} indices for {shield.dof} joints"
+            )
+        if action_kind not in ("absolute", "delta"):
+            raise InputError(f"action_kind: {action_kind!r} (absolute, delta)")
+        if not (fps > 0 and math.isfinite(fps)):
+            raise InputError(f"fps: {fps} is not a positive rate (Hz)")
+        self.policy, self.robot, self.shield = policy, robot, shield
+        self.scale = _scale(unit)
+        self.absolute = action_kind == "absolute"
+        self.n_action_steps = n_action_steps
+        self.preprocess = preprocess
+        self.humans = humans
+        self.period = 1.0 / fps
+        self.realtime = realtime
+        self.replan_margin = replan_margin
+        self.loop = ShieldLoop(shield, realtime=realtime)
+        self.loop.start()
+        self.chunks: dict[int, np.ndarray] = {}
+        self.chunk_h: dict[int, int] = {}
+        self.last_chunk = 0
+        self._wall0 = time.monotonic()
+        self._t0 = shield.time
+
+    # -- time ---------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """The shield's time (s)."""
+        return self.loop.time
+
+    def _advance(self, t: float) -> None:
+        if self.realtime:
+            wait = self._wall0 + (t - self._t0) - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+        else:
+            self.loop.run_until(t)
+
+    # -- chunks -------------------------------------------------------------------------
+    def _policy_chunk(self, obs: Mapping[str, Any]) -> np.ndarray:
+        batch = self.preprocess(obs) if self.preprocess is not None else obs
+        if hasattr(self.policy, "predict_action_chunk"):
+            a = to_numpy(self.policy.predict_action_chunk(batch))
+            if a.ndim == 3:
+                a = a[0]
+        else:
+            a = to_numpy(self.policy.select_action(batch))
+            if a.ndim == 2:
+                a = a[0]
+            a = a[None, :]
+        if a.ndim != 2:
+            raise InputError(f"policy: action chunk of shape {a.shape}, expected (H, A) or (B, H, A)")
+        if max(self.action_indices) >= a.shape[1]:
+            raise InputError(
+                f"policy: action dimension {a.shape[1]} has no column {max(self.action_indices)}"
+            )
+        return a
+
+    def _needs_chunk(self) -> bool:
+        p = self.loop.progress()
+        if self.last_chunk == 0:
+            return True
+        if p["chunk"] != self.last_chunk:
+            return False  # the newest chunk has not taken over yet
+        return p["executed"] - p["passed"] <= self.replan_margin
+
+    def executed(self) -> dict:
+        """Which chunk runs and how many of its executed actions were passed:
+        ``{"chunk", "passed", "executed", "accepted"}`` (see ``Shield.progress``)."""
+        return self.loop.progress()
+
+    def left_over(self) -> np.ndarray:
+        """The current chunk's actions not yet executed (policy units, shape (H - passed, A)):
+        LeRobot's real-time chunking passes these as ``prev_chunk_left_over``."""
+        p = self.loop.progress()
+        c = self.chunks.get(p["chunk"])
+        if c is None:
+            return np.zeros((0, 0))
+        return c[p["passed"]:]
+
+    def observe_joints(self, obs: Mapping[str, Any]) -> np.ndarray:
+        """Joint positions (rad) from an observation dict."""
+        try:
+            return np.array([float(obs[k]) for k in self.joint_keys]) * self.scale
+        except KeyError as e:
+            raise InputError(f"robot observation: no joint key {e.args[0]!r}") from None
+
+    # -- one tick -----------------------------------------------------------------------
+    def tick(self) -> dict:
+        """One control tick: observe, maybe hand over a chunk, step the shield to the next tick,
+        send the command. Returns the action dict sent to the robot."""
+        t = self.loop.time
+        obs = self.robot.get_observation()
+        if self.humans is not None:
+            m = self.humans(t)
+            if m is not None:
+                t_meas, positions = m
+                self.loop.measure(t_meas, positions)
+        if self._needs_chunk():
+            a = self._policy_chunk(obs)
+            joints = a[:, self.action_indices] * self.scale
+            h = self.n_action_steps if self.n_action_steps is not None else len(joints)
+            h = min(h, len(joints))
+            serial = self.loop.set_chunk(joints, h=h, absolute=self.absolute, t=t)
+            self.chunks[serial] = a
+            self.chunk_h[serial] = h
+            self.last_chunk = serial
+            for old in [k for k in self.chunks if k < serial - 1]:
+                del self.chunks[old], self.chunk_h[old]
+        self._advance(t + self.period)
+        cmd = self.loop.latest()
+        action = {k: v for k, v in obs.items() if k.endswith(".pos") and k not in self.joint_keys}
+        if cmd is not None:
+            q = cmd.q / self.scale
+            for k, v in zip(self.joint_keys, q):
+                action[k] = float(v)
+        return self.robot.send_action(action)
+
+    def run(self, duration: float) -> None:
+        """Tick for ``duration`` seconds (shield time)."""
+        end = self.loop.time + duration
+        while self.loop.time + 0.5 * self.period < end:
+            self.tick()
+
+    def close(self) -> None:
+        """Stop the shield loop (the shield can step directly again)."""
+        self.loop.stop()
+
+    def __enter__(self) -> "ShieldedPolicyLoop":
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        self.close()
+        return False
+
+
+try:  # LeRobot's base class and registry, when installed.
+    from lerobot.processor import ProcessorStepRegistry as _Registry
+    from lerobot.processor import RobotActionProcessorStep as _ActionStepBase
+except Exception:  # noqa: BLE001 - lerobot absent or of another layout
+    _Registry = None
+
+    class _ActionStepBase:  # the documented interface of RobotActionProcessorStep
+        """Stand-in for ``lerobot.processor.RobotActionProcessorStep`` (lerobot not installed)."""
+
+        _current_transition = None
+
+        def __call__(self, transition: dict) -> dict:
+            new = dict(transition)
+            action = new.get("action")
+            if not isinstance(action, dict):
+                raise InputError("transition['action']: expected a robot action dict")
+            new["action"] = self.action(action.copy())
+            return new
+
+        def get_config(self) -> dict:
+            return {}
+
+        def state_dict(self) -> dict:
+            return {}
+
+        def load_state_dict(self, state: dict) -> None:
+            return None
+
+        def reset(self) -> None:
+            return None
+
+
+class ShieldActionStep(_ActionStepBase):
+    """A robot-pipeline step (``RobotActionProcessorStep``-style): each robot action (a dict of
+    joint targets, one per control tick) is handed to a running :class:`pacs.ShieldLoop` as a
+    one-action chunk of absolute joint positions, and the action returned to the robot is the
+    shield's latest command — the verified motion toward the target, or braking along the path.
+
+    Args:
+        loop: a started :class:`pacs.ShieldLoop` (real time) stepping the shield.
+        joint_keys: the robot's joint keys in the shield's joint order.
+        unit: ``"rad"`` or ``"deg"`` (joint values in the action dicts).
+    """
+
+    def __init__(self, loop: ShieldLoop, joint_keys: Sequence[str], unit: str = "rad") -> None:
+        if not isinstance(loop, ShieldLoop):
+            raise ArgumentTypeError(f"loop: expected a pacs.ShieldLoop, got {type(loop).__name__}")
+        self.loop = loop
+        self.joint_keys = list(joint_keys)
+        self.unit = unit
+        self.scale = _scale(unit)
+        self._last_target: np.ndarray | None = None
+
+    def action(self, action: dict) -> dict:
+        try:
+            target = np.array([float(action[k]) for k in self.joint_keys]) * self.scale
+        except KeyError as e:
+            raise InputError(f"action: no joint key {e.args[0]!r}") from None
+        if self._last_target is None or not np.array_equal(target, self._last_target):
+            self.loop.set_chunk(target[None, :], absolute=True)
+            self._last_target = target
+        cmd = self.loop.latest()
+        out = dict(action)
+        if cmd is not None:
+            for k, v in zip(self.joint_keys, cmd.q / self.scale):
+                out[k] = float(v)
+        return out
+
+    def transform_features(self, features):
+        """The step keeps the action features (same keys, same shapes)."""
+        return features
+
+    def get_config(self) -> dict:
+        return {"joint_keys": self.joint_keys, "unit": self.unit}
+
+    def reset(self) -> None:
+        self._last_target = None
+
+
+if _Registry is not None:  # pragma: no cover - only with lerobot installed
+    try:
+        _Registry.register("pacs_shield_action")(ShieldActionStep)
+    except ValueError:
+        pass

@@ -1,0 +1,112 @@
+"""Audit from Python: a shield run's log passes, a LogWriter log of a violating run fails, a
+gap is inconclusive; reports are written."""
+
+import json
+
+import numpy as np
+import pytest
+
+import pacs
+from conftest import away, run
+
+
+def shield_run(demo, path, steps=1500):
+    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=path)
+    s.start(0.0, demo.start)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    run(s, steps, measure=away(demo))
+    s.close()
+    return s
+
+
+def test_a_shield_log_passes_the_audit(demo, tmp_path):
+    log = tmp_path / "shield.jsonl"
+    shield_run(demo, log)
+    runs = pacs.audit(log)
+    assert len(runs) == 1
+    r = runs[0]
+    assert r.verdict == "pass" and r.passed, r.to_dict()
+    assert r.violations == [] and r.inconclusive == []
+    assert r.metrics["samples"] >= 1500
+    assert r.models["robot"] == "fr3"
+    verdict = pacs.report(runs, tmp_path / "report")
+    assert verdict == "pass"
+    doc = json.loads((tmp_path / "report" / "report.json").read_text())
+    assert doc["verdict"] == "pass" and doc["runs"][0]["sha256"]
+    assert (tmp_path / "report" / "report.html").stat().st_size > 1000
+
+
+def moving_through(writer, q0, human, t_end=1.0, dt=0.001, speed=0.5):
+    """Joint 1 turning at `speed` rad/s while a person stands at the start pose's gripper."""
+    for k in range(int(t_end / dt) + 1):
+        t = k * dt
+        if k % 10 == 0:
+            writer.human(t, t, human)
+        q = q0.copy()
+        q[0] += speed * t
+        dq = np.zeros(7)
+        dq[0] = speed
+        writer.robot(t, q, dq)
+
+
+def test_log_writer_round_trip_a_violation_fails(demo, tmp_path):
+    log = tmp_path / "violating.jsonl"
+    at_gripper = np.tile(demo.tool_point(demo.start), (9, 1))
+    with pacs.LogWriter(log, robot="fr3", human="default", constraints="sorting",
+                        meta={"operator": "test"}) as w:
+        moving_through(w, demo.start, at_gripper)
+        w.event(1.0, "success")
+    (r,) = pacs.audit([log])
+    assert r.verdict == "fail"
+    assert r.violations and r.violations[0]["t_start"] <= 0.01
+    assert r.meta["operator"] == "test"
+    assert r.metrics["violation_fraction"] > 0.5
+
+
+def test_log_writer_far_person_passes_and_a_gap_is_inconclusive(demo, tmp_path):
+    far = tmp_path / "far.jsonl"
+    person = np.tile([3.0, 0.0, 1.0], (9, 1))
+    with pacs.LogWriter(far) as w:
+        moving_through(w, demo.start, person, speed=0.1)
+    assert pacs.audit(far)[0].verdict == "pass"
+    gap = tmp_path / "gap.jsonl"
+    with pacs.LogWriter(gap) as w:
+        w.human(0.0, 0.0, person)
+        w.robot(0.0, demo.start, np.zeros(7))
+        w.human(5.0, 5.0, person)
+        w.robot(5.0, demo.start, np.zeros(7))
+    (r,) = pacs.audit(gap, config={"max_gap": 0.1})
+    assert r.verdict == "inconclusive" and r.inconclusive
+
+
+def test_audit_errors_name_file_and_field(tmp_path):
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"type": "header", "format": "pacs-log", "version": 1, "robot": "fr4", '
+                   '"human": "default", "constraints": "sorting"}\n')
+    with pytest.raises(pacs.InputError) as e:
+        pacs.audit(bad)
+    assert "bad.jsonl" in str(e.value) and "fr4" in str(e.value)
+    with pytest.raises(pacs.InputError, match="missing.jsonl"):
+        pacs.audit(tmp_path / "missing.jsonl")
+    with pytest.raises(pacs.InputError, match="config"):
+        pacs.audit(bad, config={"max_gapp": 1})
+    with pytest.raises(pacs.ArgumentTypeError, match="paths"):
+        pacs.audit(3)
+
+
+def test_log_writer_refuses_bad_records(demo, tmp_path):
+    with pacs.LogWriter(tmp_path / "w.jsonl") as w:
+        w.robot(1.0, demo.start)
+        with pytest.raises(pacs.InputError, match="backwards|before"):
+            w.robot(0.5, demo.start)
+        with pytest.raises(pacs.InputError, match=r"q\[3\]: value NaN"):
+            w.robot(2.0, np.where(np.arange(7) == 3, np.nan, demo.start))
+        with pytest.raises(pacs.InputError, match="ddq"):
+            w.robot(2.0, demo.start, None, np.zeros(7))
+        with pytest.raises(pacs.InputError, match="positions: shape"):
+            w.human(2.0, 2.0, np.zeros((8, 3)))
+        with pytest.raises(pacs.InputError, match="no object `ball`"):
+            w.object(2.0, 2.0, "ball", [0, 0, 0])
+    with pytest.raises(pacs.OutputError):
+        pacs.LogWriter(tmp_path / "no" / "such" / "dir.jsonl")

@@ -1,0 +1,152 @@
+"""The LeRobot adapters against LeRobot's documented interfaces (fake policy and robot with
+the same method names and shapes), and against LeRobot's real classes when
+PACS_TEST_LEROBOT=1 and lerobot is installed."""
+
+import os
+
+import numpy as np
+import pytest
+
+import pacs
+from pacs.lerobot import ShieldActionStep, ShieldedPolicyLoop
+from conftest import far_human
+
+KEYS = [f"joint{i + 1}.pos" for i in range(7)]
+
+
+class DemoPolicy:
+    """A PreTrainedPolicy-shaped wrapper of the simulation's demonstration policy:
+    predict_action_chunk(batch) -> (B, H, A) absolute joint targets (degrees)."""
+
+    def __init__(self, demo):
+        self.demo = demo
+        self.calls = 0
+
+    def predict_action_chunk(self, batch):
+        self.calls += 1
+        q = np.radians([batch[k] for k in KEYS])
+        deltas, _ = self.demo.chunk(q)
+        targets = q + np.cumsum(deltas, axis=0)
+        gripper = np.zeros((len(targets), 1))
+        return np.degrees(np.hstack([targets, gripper]))[None]
+
+    def reset(self):
+        pass
+
+
+class FakeRobot:
+    """A Robot-shaped simulated arm: get_observation() -> {key: degrees}, send_action(dict)."""
+
+    def __init__(self, q0_deg):
+        self.q = dict(zip(KEYS, q0_deg))
+        self.q["gripper.pos"] = 0.0
+        self.sent = []
+
+    def get_observation(self):
+        return dict(self.q)
+
+    def send_action(self, action):
+        self.sent.append(dict(action))
+        self.q.update(action)
+        return action
+
+
+def test_shielded_policy_loop_runs_chunks_through_the_shield(demo):
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(np.degrees(demo.start))
+    policy = DemoPolicy(demo)
+    person = far_human(demo)
+    loop = ShieldedPolicyLoop(
+        policy, robot, shield, KEYS, unit="deg", n_action_steps=8, fps=30.0,
+        humans=lambda t: (t, person), realtime=False,
+    )
+    with loop:
+        loop.run(3.0)
+        progress = loop.executed()
+        left = loop.left_over()
+    assert policy.calls >= 3
+    assert progress["accepted"] == policy.calls
+    assert 0 <= progress["passed"] <= 8
+    assert left.shape[1] == 8 and len(left) == 16 - progress["passed"]
+    # The robot moved along the demonstration and received every joint key (+ the gripper).
+    assert len(robot.sent) == pytest.approx(90, abs=2)
+    assert set(robot.sent[-1]) == set(KEYS) | {"gripper.pos"}
+    q = np.radians([robot.q[k] for k in KEYS])
+    assert np.linalg.norm(q - demo.start) > 0.05
+    assert demo.deviation(q) < 0.05
+
+
+def test_a_select_action_policy_becomes_one_action_chunks(demo):
+    class SinglePolicy:
+        def select_action(self, batch):
+            q = np.array([batch[k] for k in KEYS])
+            return (q + 0.01)[None]
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    with ShieldedPolicyLoop(SinglePolicy(), robot, shield, KEYS,
+                            humans=lambda t: (t, person)) as loop:
+        loop.run(0.5)
+    assert loop.executed()["executed"] == 1
+    assert robot.q["joint1.pos"] > demo.start[0]
+
+
+def test_adapter_argument_errors(demo):
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    with pytest.raises(pacs.ArgumentTypeError, match="policy"):
+        ShieldedPolicyLoop(object(), robot, shield, KEYS)
+    with pytest.raises(pacs.InputError, match="joint_keys"):
+        ShieldedPolicyLoop(DemoPolicy(demo), robot, shield, KEYS[:6])
+    with pytest.raises(pacs.InputError, match="unit"):
+        ShieldedPolicyLoop(DemoPolicy(demo), robot, shield, KEYS, unit="grad")
+
+
+def test_action_step_replaces_actions_by_shield_commands(demo):
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    shield.measure(0.0, far_human(demo))
+    with pacs.ShieldLoop(shield, realtime=True) as loop:
+        step = ShieldActionStep(loop, KEYS)
+        target = demo.start + 0.02
+        action = dict(zip(KEYS, target))
+        action["gripper.pos"] = 40.0
+        transition = {"observation": {}, "action": action}
+        import time
+
+        out = None
+        for _ in range(20):
+            out = step(transition)["action"]
+            time.sleep(0.01)
+    assert out["gripper.pos"] == 40.0  # passed through
+    q = np.array([out[k] for k in KEYS])
+    # The command moves from the start toward the target, never beyond it.
+    assert np.all(q >= demo.start - 1e-12) and np.all(q <= target + 1e-12)
+    assert np.linalg.norm(q - demo.start) > 0
+    assert step.transform_features({"a": 1}) == {"a": 1}
+    with pytest.raises(pacs.InputError, match="joint3.pos"):
+        step.action({k: 0.0 for k in KEYS if k != "joint3.pos"})
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_against_lerobot_classes(demo):
+    processor = pytest.importorskip("lerobot.processor")
+    assert issubclass(ShieldActionStep, processor.RobotActionProcessorStep)
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    shield.measure(0.0, far_human(demo))
+    with pacs.ShieldLoop(shield) as loop:
+        step = ShieldActionStep(loop, KEYS)
+        pipe = processor.RobotProcessorPipeline(
+            steps=[step],
+            to_transition=processor.converters.robot_action_observation_to_transition,
+            to_output=processor.converters.transition_to_robot_action,
+        )
+        action = dict(zip(KEYS, demo.start + 0.01))
+        out = pipe((action, {}))
+    assert set(KEYS) <= set(out)

@@ -1,0 +1,136 @@
+"""Shield loop invariants: commands on the intended path, the verified flag, a person at the
+gripper stops the robot, chunk progress."""
+
+import numpy as np
+import pytest
+
+import pacs
+from conftest import away, far_human, run
+
+
+def started(demo, **kw):
+    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", **kw)
+    s.start(0.0, demo.start)
+    return s
+
+
+def test_no_measurement_never_verifies_and_the_robot_stays(demo):
+    s = started(demo)
+    deltas, h = demo.chunk(demo.start)
+    assert s.set_chunk(deltas, t=0.0, h=h) == 1
+    cmds = run(s, 50)
+    assert not any(c.verified for c in cmds)
+    assert all(c.binding["kind"] == "no-measurement" for c in cmds)
+    for c in cmds:
+        np.testing.assert_array_equal(c.q, demo.start)
+        np.testing.assert_array_equal(c.dq, np.zeros(7))
+
+
+def test_free_motion_is_verified_and_follows_the_integrated_waypoints(demo):
+    s = started(demo)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    cmds = run(s, 3000, measure=away(demo))
+    assert all(c.verified for c in cmds)
+    # The chunk ends at rest at the integrated waypoint q̂_h = q_0 + Σ_{i<h} Δq_i.
+    goal = demo.start + deltas[:h].sum(axis=0)
+    np.testing.assert_allclose(cmds[-1].q, goal, atol=1e-9)
+    np.testing.assert_allclose(cmds[-1].dq, 0.0, atol=1e-12)
+    assert cmds[-1].chunk == 1 and cmds[-1].passed == h
+    assert s.progress() == {"chunk": 1, "passed": h, "executed": h, "accepted": 1}
+    # Waypoints are passed in order: `passed` never decreases and reaches h.
+    passed = [c.passed for c in cmds]
+    assert passed == sorted(passed) and passed[0] == 0
+    # Times are the step times plus one safety step.
+    assert cmds[0].t == pytest.approx(0.001)
+
+
+def test_braking_stays_on_the_intended_path(demo):
+    """A person stepping next to the robot mid-chunk: the commands brake, but every commanded
+    configuration lies on the path the free run took (path consistency)."""
+    deltas, h = demo.chunk(demo.start)
+    free = started(demo)
+    free.set_chunk(deltas, t=0.0, h=h)
+    path = np.array([c.q for c in run(free, 3000, measure=away(demo))])
+
+    s = started(demo)
+    s.set_chunk(deltas, t=0.0, h=h)
+    mid = path[len(path) // 3]
+    near = np.tile(demo.tool_point(mid), (9, 1)) + np.array([0.25, 0.0, 0.0])
+
+    def person(t):
+        return (t, far_human(demo)) if t < 0.05 else (t, near)
+
+    cmds = run(s, 3000, measure=person)
+    assert any(c.on_failsafe for c in cmds), "the person never made the shield brake"
+    step = np.max(np.linalg.norm(np.diff(path, axis=0), axis=1))
+    for c in cmds:
+        d = np.min(np.linalg.norm(path - c.q, axis=1))
+        assert d <= step + 1e-9, f"command off the intended path by {d} rad at t={c.t}"
+
+
+def test_a_person_at_the_gripper_stops_the_robot(demo):
+    s = started(demo)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    cmds = run(s, 60, measure=away(demo))
+    assert cmds[-1].verified and np.linalg.norm(cmds[-1].dq) > 0
+    at_gripper = np.tile(demo.tool_point(cmds[-1].q), (9, 1))
+    cmds = run(s, 1500, t0=0.06, measure=lambda t: (t, at_gripper))
+    assert not any(c.verified for c in cmds[5:])
+    assert cmds[-1].binding["kind"] == "ssm"
+    np.testing.assert_allclose(cmds[-1].dq, 0.0, atol=1e-12)
+    np.testing.assert_allclose(cmds[-1].q, cmds[-2].q, atol=0)
+    assert cmds[-1].path_speed == 0.0
+
+
+def test_continuous_chunks_and_progress(demo):
+    s = started(demo, config={"chunk_motion": "continuous"})
+    measure = away(demo)
+    q = demo.start
+    t, serials, speeds = 0.0, [], []
+    for _ in range(6):
+        deltas, h = demo.chunk(q)
+        serials.append(s.set_chunk(deltas, t=t, h=h))
+        while True:
+            m = measure(t)
+            if m is not None:
+                s.measure(*m)
+            c = s.step(t)
+            t += 0.001
+            speeds.append(np.linalg.norm(c.dq))
+            q = c.q
+            if s.remaining is not None and s.remaining <= 0.0015 and c.chunk == serials[-1]:
+                break
+    assert serials == [1, 2, 3, 4, 5, 6]
+    # Handed over near the end of each chunk, the robot never stops between chunks.
+    assert min(speeds[200:]) > 1e-3
+
+
+def test_objects_and_multiple_humans():
+    demo = pacs.Demo("crowded", seed=2)
+    args = demo.shield_args()
+    s = pacs.Shield(**args)
+    assert s.object_ids == demo.object_ids and len(s.object_ids) == 2
+    s.start(0.0, demo.start)
+    s.measure(0.0, demo.keypoints(0.0))
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    c = s.step(0.0)
+    assert not c.verified and c.binding["kind"] == "no-measurement"
+    for i, oid in enumerate(s.object_ids):
+        p, v = demo.object_state(i, 0.0)
+        s.measure_object(oid, 0.0, p, v)
+    c = s.step(0.001)
+    assert c.verified
+    two = pacs.Shield(humans=["default", "default"])
+    assert two.humans == 2 and two.keypoints == [9, 9]
+
+
+def test_urdf_robot(tmp_path):
+    spec = pacs.robot_spec("fr3")
+    assert len(spec["links"]) >= 7
+    with pytest.raises(pacs.InputError, match="URDF"):
+        pacs.Shield(robot=str(tmp_path / "missing.urdf"))
+    with pytest.raises(pacs.InputError, match="robot\\[\"mesh\"\\]"):
+        pacs.Shield(robot={"urdf": "x.urdf", "mesh": 1})
