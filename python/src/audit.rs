@@ -112,9 +112,6 @@ impl PyRun {
     }
 }
 
-/// audit(paths, config=None) -> list[Run]
-/// --
-///
 /// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP) against the SSM and
 /// PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
 /// `paths`: one path or a list; `config`: None, a dict of audit settings (max_gap,
@@ -162,9 +159,6 @@ pub fn audit(
     Ok(out)
 }
 
-/// report(runs, out_dir)
-/// --
-///
 /// Write the certification report of audited runs into `out_dir` (created): report.json
 /// (inputs with SHA-256, settings, assumptions, checks and the tests/harnesses backing them,
 /// verdicts, violations, metrics), report.md and report.html (with plots). The runs must come
@@ -199,9 +193,6 @@ pub fn report(runs: Vec<PyRef<'_, PyRun>>, out_dir: PathBuf) -> PyResult<&'stati
     Ok(verdict_str(pacs_reports::overall(&results)))
 }
 
-/// LogWriter(path, robot="fr3", human="default", constraints="sorting", objects=None, environment=None, side=None, meta=None)
-/// --
-///
 /// Write a run as a pacs log (format v1, JSON Lines) from a Python loop, for `pacs.audit`.
 /// The models are named as for `Shield` (URDF robots are written as their converted spec).
 /// Records must come in time order: `robot(t, q, dq=None, ddq=None)` (rad, rad/s, rad/s²; the
@@ -291,9 +282,6 @@ impl PyLogWriter {
         Ok(me)
     }
 
-    /// robot(t, q, dq=None, ddq=None)
-    /// --
-    ///
     /// A robot sample at `t` (s): positions `q` (rad), optional velocities `dq` (rad/s) and
     /// accelerations `ddq` (rad/s², only with `dq`).
     #[pyo3(signature = (t, q, dq=None, ddq=None))]
@@ -324,9 +312,6 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// human(t, t_meas, positions)
-    /// --
-    ///
     /// A human measurement logged at `t`, taken at `t_meas` (s): keypoints (m, shape (K, 3)).
     fn human(
         &mut self,
@@ -346,9 +331,6 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// object(t, t_meas, id, position, velocity=None)
-    /// --
-    ///
     /// A measurement of the header's object `id` logged at `t`, taken at `t_meas` (s):
     /// position (m), velocity (m/s) if measured.
     #[pyo3(signature = (t, t_meas, id, position, velocity=None))]
@@ -382,9 +364,6 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// event(t, name)
-    /// --
-    ///
     /// A named event at `t` (s): "success" / "failure" record the task outcome.
     fn event(&mut self, t: &Bound<'_, PyAny>, name: String) -> PyResult<()> {
         let t = finite(t, "t")?;
@@ -392,9 +371,6 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// close()
-    /// --
-    ///
     /// Flush and close the file (idempotent).
     fn close(&mut self) -> PyResult<()> {
         if let Some(w) = self.w.take() {

@@ -201,9 +201,6 @@ pub fn scene(
     })
 }
 
-/// robot_spec(robot, side=None) -> dict
-/// --
-///
 /// The robot's spec as pacs uses it (links, capsules, masses, limits; units m, kg, rad, rad/s,
 /// rad/s², rad/s³): a built-in name, a spec dict, or a URDF path (with `side`, the side file
 /// giving what URDF lacks), converted and validated.

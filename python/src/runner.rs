@@ -27,6 +27,7 @@ struct LoopOut {
     /// Steps that began more than one safety step after their deadline (real time only).
     overruns: u64,
     max_step_us: f64,
+    total_step_us: f64,
 }
 
 struct Shared {
@@ -34,9 +35,6 @@ struct Shared {
     out: Mutex<LoopOut>,
 }
 
-/// ShieldLoop(shield, realtime=True, history=10000)
-/// --
-///
 /// Runs `shield.step` every safety step on a Rust thread. `realtime=True`: step k runs at wall
 /// time start + k·α_s (the steps keep their grid t_k = t_0 + k·α_s; a late step is counted in
 /// `stats()["overruns"]`). `realtime=False`: simulated time, as fast as possible, until
@@ -99,6 +97,7 @@ fn run_steps(
                 }
                 o.steps += 1;
                 o.max_step_us = o.max_step_us.max(us);
+                o.total_step_us += us;
             }
             Err(e) => {
                 o.error = Some(e);
@@ -168,9 +167,6 @@ impl PyShieldLoop {
         })
     }
 
-    /// start()
-    /// --
-    ///
     /// Start stepping on the Rust thread (real time), or, with `realtime=False`, do nothing
     /// until `run_until`.
     fn start(&mut self) -> PyResult<()> {
@@ -191,10 +187,7 @@ impl PyShieldLoop {
         Ok(())
     }
 
-    /// run_until(t)
-    /// --
-    ///
-    /// Simulated time (`realtime=False`): step on the Rust thread until the shield's time
+    /// Simulated time (`realtime=False`): step (in Rust, the GIL released) until the shield's time
     /// reaches `t` (s), then return (the GIL is released meanwhile).
     fn run_until(&mut self, py: Python<'_>, t: &Bound<'_, PyAny>) -> PyResult<()> {
         if self.realtime {
@@ -222,9 +215,6 @@ impl PyShieldLoop {
         self.check_error()
     }
 
-    /// stop()
-    /// --
-    ///
     /// Stop the thread (after its current step) and hand the shield back to direct `step`s.
     fn stop(&mut self, py: Python<'_>) -> PyResult<()> {
         self.shared.stop.store(true, Ordering::Relaxed);
@@ -236,9 +226,6 @@ impl PyShieldLoop {
         self.check_error()
     }
 
-    /// set_chunk(deltas, h=None, absolute=False, t=None) -> int
-    /// --
-    ///
     /// `Shield.set_chunk` through the loop (`t` defaults to the loop's current time).
     #[pyo3(signature = (deltas, h=None, absolute=false, t=None))]
     fn set_chunk(
@@ -266,9 +253,6 @@ impl PyShieldLoop {
         .map_err(raise)
     }
 
-    /// measure(t_meas, positions, velocities=None, human=0)
-    /// --
-    ///
     /// `Shield.measure` through the loop.
     #[pyo3(signature = (t_meas, positions, velocities=None, human=0))]
     fn measure(
@@ -283,9 +267,6 @@ impl PyShieldLoop {
         g.measure(human, m).map_err(raise)
     }
 
-    /// measure_object(id, t_meas, position, velocity=None)
-    /// --
-    ///
     /// `Shield.measure_object` through the loop.
     #[pyo3(signature = (id, t_meas, position, velocity=None))]
     fn measure_object(
@@ -300,9 +281,6 @@ impl PyShieldLoop {
         g.measure_object(k, m).map_err(raise)
     }
 
-    /// latest() -> Command | None
-    /// --
-    ///
     /// The newest command (None before the first step).
     fn latest(&self) -> PyResult<Option<PyCommand>> {
         self.check_error()?;
@@ -320,9 +298,6 @@ impl PyShieldLoop {
         Ok(lock(&self.inner)?.now())
     }
 
-    /// progress() -> dict
-    /// --
-    ///
     /// `Shield.progress()`: which chunk runs and how many of its actions were executed.
     fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let g = lock(&self.inner)?;
@@ -332,9 +307,6 @@ impl PyShieldLoop {
         }
     }
 
-    /// commands() -> dict
-    /// --
-    ///
     /// The commands since the last call (at most `history`), drained: {"t": (N,) s,
     /// "q": (N, dof) rad, "dq": (N, dof) rad/s, "ddq": (N, dof) rad/s², "verified": (N,) bool}.
     fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
@@ -370,11 +342,8 @@ impl PyShieldLoop {
         Ok(d)
     }
 
-    /// stats() -> dict
-    /// --
-    ///
     /// {"steps": int, "overruns": steps begun more than a safety step late, "max_step_us":
-    /// the longest step (µs)}.
+    /// the longest step (µs), "mean_step_us": the mean step (µs, the Rust step alone)}.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let o = self
             .shared
@@ -385,6 +354,14 @@ impl PyShieldLoop {
         d.set_item("steps", o.steps)?;
         d.set_item("overruns", o.overruns)?;
         d.set_item("max_step_us", o.max_step_us)?;
+        d.set_item(
+            "mean_step_us",
+            if o.steps > 0 {
+                o.total_step_us / o.steps as f64
+            } else {
+                0.0
+            },
+        )?;
         Ok(d)
     }
 

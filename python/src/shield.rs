@@ -213,9 +213,6 @@ pub fn lock(inner: &Mutex<Inner>) -> PyResult<MutexGuard<'_, Inner>> {
         .map_err(|_| err(Kind::State, "the shield's state was poisoned by a panic"))
 }
 
-/// Shield(robot="fr3", humans="default", constraints="sorting", objects=None, environment=None, config=None, side=None, log=None)
-/// --
-///
 /// The PACS shield: give it action chunks, human (and object) measurements, and call `step(t)`
 /// every safety step (default 1 ms); each step returns the joint command for `t + α_s`, which
 /// lies on the intended path of the latest verified chunk or on the verified failsafe braking
@@ -461,9 +458,6 @@ impl PyShield {
         })
     }
 
-    /// start(t, q)
-    /// --
-    ///
     /// Start at rest at joint positions `q` (rad, shape (dof,)) at time `t` (s). The shield only
     /// starts from rest; standing still is the first verified failsafe.
     fn start(&self, t: &Bound<'_, PyAny>, q: &Bound<'_, PyAny>) -> PyResult<()> {
@@ -479,9 +473,6 @@ impl PyShield {
         g.start(t, &q).map_err(raise)
     }
 
-    /// set_chunk(deltas, t, h=None, absolute=False) -> int
-    /// --
-    ///
     /// Hand over an action chunk: `deltas` (shape (H, dof), rad) are the policy's joint-position
     /// deltas, integrated from the current commanded state into waypoints q̂_1 … q̂_h as in the
     /// paper (`absolute=True`: the rows are joint positions). `h` (default H) actions are
@@ -511,9 +502,6 @@ impl PyShield {
         r.map_err(raise)
     }
 
-    /// measure(t_meas, positions, velocities=None, human=0)
-    /// --
-    ///
     /// A measurement of human `human`'s keypoints taken at `t_meas` (s): `positions` (m, shape
     /// (K, 3), the model's keypoint order), optional `velocities` (m/s). Older measurements than
     /// the latest are ignored; a measurement reaches the shield at the first step at or after
@@ -531,9 +519,6 @@ impl PyShield {
         g.measure(human, m).map_err(raise)
     }
 
-    /// measure_object(id, t_meas, position, velocity=None)
-    /// --
-    ///
     /// A measurement of object `id` (its id string or index) taken at `t_meas` (s): position
     /// (m, shape (3,)) and, if measured, velocity (m/s).
     #[pyo3(signature = (id, t_meas, position, velocity=None))]
@@ -549,9 +534,6 @@ impl PyShield {
         g.measure_object(k, m).map_err(raise)
     }
 
-    /// step(t) -> Command
-    /// --
-    ///
     /// One safety step at time `t` (s; one safety step after the previous one): verifies the
     /// monitored trajectory (one intended step, then braking along the path) against every
     /// human's and object's reachable occupancy and returns the command for `t + safety_step`:
@@ -575,9 +557,6 @@ impl PyShield {
         Ok(PyCommand { cmd, progress })
     }
 
-    /// progress() -> dict
-    /// --
-    ///
     /// Which chunk the commands follow and how many of its actions were executed:
     /// {"chunk": serial (0 = standstill), "passed": actions executed, "executed": h,
     /// "accepted": chunks accepted so far}. What real-time-chunking policies need.
@@ -644,9 +623,6 @@ impl PyShield {
         to_py(py, &g.header)
     }
 
-    /// close()
-    /// --
-    ///
     /// Flush and close the log (if any). The shield can still step; nothing more is logged.
     fn close(&self) -> PyResult<()> {
         lock(&self.inner)?.close().map_err(raise)

@@ -8,9 +8,6 @@ use pacs_sim::policy::ChunkPolicy;
 use pacs_sim::task::{Scenario, TaskKind, constraint_spec, native_mode, scenario, tool_point};
 use pyo3::prelude::*;
 
-/// Demo(task="sorting", seed=0, with_human=True)
-/// --
-///
 /// One of the simulation's FR3 tasks ("sorting", "handover", "feeding", "sphere", "crowded"):
 /// its start configuration, models, the true motion of its person (`keypoints(t)`) and objects
 /// (`object_state(i, t)`), and its chunking demonstration policy (`chunk(q)`: delta joint
@@ -67,9 +64,6 @@ impl PyDemo {
         to_py(py, &g)
     }
 
-    /// shield_args() -> dict
-    /// --
-    ///
     /// Keyword arguments for `pacs.Shield` (and `pacs.LogWriter`) for this task: robot,
     /// humans (the model with the task's measurement uncertainty), constraints (the task's
     /// native SSM/PFL spec) and objects.
@@ -89,9 +83,6 @@ impl PyDemo {
         to_py(py, &v)
     }
 
-    /// chunk(q) -> (deltas, h)
-    /// --
-    ///
     /// The demonstration policy's next chunk for joint positions `q` (rad): `deltas` (H, 7)
     /// joint-position deltas (rad) and the number `h` of actions to execute.
     fn chunk<'py>(
@@ -105,9 +96,6 @@ impl PyDemo {
         Ok((a, c.execute))
     }
 
-    /// keypoints(t) -> ndarray
-    /// --
-    ///
     /// The person's true keypoints (m, shape (K, 3)) at time `t` (s).
     fn keypoints<'py>(
         &self,
@@ -131,9 +119,6 @@ impl PyDemo {
         self.sc.objects.iter().map(|o| o.id.clone()).collect()
     }
 
-    /// object_state(i, t) -> (position, velocity)
-    /// --
-    ///
     /// Object `i`'s true position (m) and velocity (m/s) at `t` (s).
     fn object_state(
         &self,
@@ -152,9 +137,6 @@ impl PyDemo {
         Ok(o.script.state(finite(t, "t")?))
     }
 
-    /// tool_point(q) -> list
-    /// --
-    ///
     /// The tool point (m, world frame) at joint positions `q` (rad).
     fn tool_point(&self, q: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
         let q = vector(q, "q", self.sc.start.len())?;

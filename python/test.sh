@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The Python package's tests: build the extension into a venv (under the cargo target
+# directory; created on first use with maturin, numpy and pytest from PyPI) and run pytest.
+#
+#   bash python/test.sh [PYTEST_ARGS...]
+#
+# The extension is built with the release profile, as `pip install ./python` builds it (the
+# real-time loop tests need release speed).
+# PACS_TEST_LEROBOT=1 also runs the tests against LeRobot's real classes (if lerobot is
+# installed in that venv: `pip install lerobot` pulls torch).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+target_dir="${CARGO_TARGET_DIR:-target}"
+venv="$target_dir/python-venv"
+python="${PYTHON:-python3}"
+if ! "$python" -c 'import sys; assert sys.version_info >= (3, 10)' 2>/dev/null; then
+  echo "python/test.sh: needs Python >= 3.10 as \`$python\` (set PYTHON=...)" >&2
+  exit 1
+fi
+if ! "$venv/bin/python" -c 'import maturin, numpy, pytest' 2>/dev/null; then
+  rm -rf "$venv"
+  "$python" -m venv "$venv"
+  "$venv/bin/pip" install -q --upgrade pip
+  "$venv/bin/pip" install -q "maturin>=1.9,<2" "numpy>=1.21" "pytest>=7"
+fi
+# maturin develop installs into the active virtualenv.
+VIRTUAL_ENV="$(cd "$venv" && pwd)" PATH="$(cd "$venv" && pwd)/bin:$PATH" \
+  "$venv/bin/maturin" develop -q --release -m python/Cargo.toml
+"$venv/bin/python" -m pytest -q python/tests "$@"
