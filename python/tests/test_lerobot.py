@@ -94,6 +94,29 @@ def test_a_select_action_policy_becomes_one_action_chunks(demo):
     assert robot.q["joint1.pos"] > demo.start[0]
 
 
+def test_rejected_chunks_are_recorded_and_the_loop_goes_on(demo):
+    class WildPolicy:
+        def __init__(self):
+            self.calls = 0
+
+        def predict_action_chunk(self, batch):
+            self.calls += 1
+            q = np.array([batch[k] for k in KEYS])
+            far = 10.0 if self.calls <= 3 else 0.01  # the first chunks leave the joint limits
+            return (q + far * np.arange(1, 5)[:, None])[None]
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    policy = WildPolicy()
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS, humans=lambda t: (t, person)) as loop:
+        loop.run(0.5)
+    assert len(loop.rejected) == 3 and "outside" in loop.rejected[0][1]
+    assert loop.executed()["accepted"] >= 1
+    assert np.all(np.array([robot.q[k] for k in KEYS]) > demo.start)
+
+
 def test_adapter_argument_errors(demo):
     shield = pacs.Shield()
     shield.start(0.0, demo.start)

@@ -30,7 +30,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from ._pacs import Shield, ShieldLoop
-from .errors import ArgumentTypeError, InputError
+from .errors import ArgumentTypeError, ChunkRejected, InputError
 
 __all__ = ["ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
 
@@ -82,6 +82,9 @@ class ShieldedPolicyLoop:
         realtime: True: wall-clock ticks and a :class:`pacs.ShieldLoop` stepping at the
             safety rate on a Rust thread; False: simulated time, the shield steps between ticks.
         replan_margin: request the next chunk when this many executed actions are left.
+
+    A chunk the shield rejects (``pacs.ChunkRejected``) is recorded in ``rejected`` (time,
+    reason) and the policy is asked again at the next tick; the robot keeps its verified motion.
     """
 
     def __init__(
@@ -137,6 +140,7 @@ class ShieldedPolicyLoop:
         self.replan_margin = replan_margin
         self.loop = ShieldLoop(shield, realtime=realtime)
         self.loop.start()
+        self.rejected: list[tuple[float, str]] = []
         self.chunks: dict[int, np.ndarray] = {}
         self.chunk_h: dict[int, int] = {}
         self.last_chunk = 0
@@ -222,12 +226,20 @@ class ShieldedPolicyLoop:
             joints = a[:, self.action_indices] * self.scale
             h = self.n_action_steps if self.n_action_steps is not None else len(joints)
             h = min(h, len(joints))
-            serial = self.loop.set_chunk(joints, h=h, absolute=self.absolute, t=t)
-            self.chunks[serial] = a
-            self.chunk_h[serial] = h
-            self.last_chunk = serial
-            for old in [k for k in self.chunks if k < serial - 1]:
-                del self.chunks[old], self.chunk_h[old]
+            try:
+                serial = self.loop.set_chunk(joints, h=h, absolute=self.absolute, t=t)
+            except ChunkRejected as e:
+                # Not plannable from this state (e.g. a target outside the joint limits, or
+                # braking harder than the intended limits allow): the robot keeps its verified
+                # motion and the policy is asked again next tick.
+                self.rejected.append((t, str(e)))
+                serial = None
+            if serial is not None:
+                self.chunks[serial] = a
+                self.chunk_h[serial] = h
+                self.last_chunk = serial
+                for old in [k for k in self.chunks if k < serial - 1]:
+                    del self.chunks[old], self.chunk_h[old]
         self._advance(t + self.period)
         cmd = self.loop.latest()
         action = {k: v for k, v in obs.items() if k.endswith(".pos") and k not in self.joint_keys}
