@@ -1,7 +1,7 @@
 //! `pacs.audit`, `pacs.Run`, `pacs.LogWriter`, `pacs.report`: the offline audit of logged runs
 //! against SSM and PFL from Python — the same code as `pacs audit`.
 
-use crate::convert::{finite, from_py, points, show, to_py, vector};
+use crate::convert::{Given, finite, from_py, path, points, show, text, to_py, vector};
 use crate::errors::{Kind, err, input, type_err};
 use crate::models::scene;
 use pacs_audit::{AuditConfig, RunResult};
@@ -164,7 +164,14 @@ pub fn audit(
 /// verdicts, violations, metrics), report.md and report.html (with plots). The runs must come
 /// from one `audit` call (one set of settings). Returns the overall verdict.
 #[pyfunction]
-pub fn report(runs: Vec<PyRef<'_, PyRun>>, out_dir: PathBuf) -> PyResult<&'static str> {
+pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&'static str> {
+    let out_dir = path(out_dir, "out_dir")?;
+    let runs: Vec<PyRef<'_, PyRun>> = runs.extract().map_err(|_| {
+        type_err(format!(
+            "runs: expected a list of pacs.Run (from pacs.audit), got {}",
+            show(runs)
+        ))
+    })?;
     let Some(first) = runs.first() else {
         return Err(input("runs: no run given"));
     };
@@ -228,13 +235,13 @@ impl PyLogWriter {
 #[pymethods]
 impl PyLogWriter {
     #[new]
-    #[pyo3(signature = (path, robot=None, human=None, constraints=None, objects=None, environment=None, side=None, meta=None))]
+    #[pyo3(signature = (path, robot=None, human=Given::Missing, constraints=None, objects=None, environment=None, side=None, meta=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        path: PathBuf,
+        path: &Bound<'_, PyAny>,
         robot: Option<&Bound<'_, PyAny>>,
-        human: Option<&Bound<'_, PyAny>>,
+        human: Given<'_>,
         constraints: Option<&Bound<'_, PyAny>>,
         objects: Option<&Bound<'_, PyAny>>,
         environment: Option<&Bound<'_, PyAny>>,
@@ -242,16 +249,31 @@ impl PyLogWriter {
         meta: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let fr3 = "fr3".into_pyobject(py)?.into_any();
-        let default = "default".into_pyobject(py)?.into_any();
+        let human = match human {
+            Given::Missing => "default".into_pyobject(py)?.into_any(),
+            Given::Value(h) if h.is_none() => {
+                return Err(input(
+                    "human: a log names one human model (the audit checks the robot against its measurements)",
+                ));
+            }
+            Given::Value(h) => h,
+        };
         let sorting = "sorting".into_pyobject(py)?.into_any();
         let s = scene(
             robot.unwrap_or(&fr3),
             side,
-            human.unwrap_or(&default),
+            &human,
             constraints.unwrap_or(&sorting),
             objects,
             environment,
         )?;
+        let path = crate::convert::path(path, "path")?;
+        if s.humans.len() != 1 {
+            return Err(input(format!(
+                "human: a log names exactly one human model, got {}",
+                s.humans.len()
+            )));
+        }
         let mut header: Header = s.header;
         header.meta.insert("filter".into(), "python".into());
         if let Some(m) = meta.filter(|m| !m.is_none()) {
@@ -338,10 +360,11 @@ impl PyLogWriter {
         &mut self,
         t: &Bound<'_, PyAny>,
         t_meas: &Bound<'_, PyAny>,
-        id: String,
+        id: &Bound<'_, PyAny>,
         position: &Bound<'_, PyAny>,
         velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
+        let id = text(id, "id")?;
         if !self.object_ids.contains(&id) {
             return Err(input(format!(
                 "id: no object `{id}` in the header (objects: {:?})",
@@ -365,8 +388,9 @@ impl PyLogWriter {
     }
 
     /// A named event at `t` (s): "success" / "failure" record the task outcome.
-    fn event(&mut self, t: &Bound<'_, PyAny>, name: String) -> PyResult<()> {
+    fn event(&mut self, t: &Bound<'_, PyAny>, name: &Bound<'_, PyAny>) -> PyResult<()> {
         let t = finite(t, "t")?;
+        let name = text(name, "name")?;
         let r = self.writer()?.write_event(t, &name);
         r.map_err(|e| self.werr(e))
     }

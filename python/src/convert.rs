@@ -157,3 +157,51 @@ pub fn to_py<'py>(py: Python<'py>, v: &impl serde::Serialize) -> PyResult<Bound<
     let text = serde_json::to_string(v).map_err(|e| input(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
+
+/// An optional argument whose absence differs from an explicit `None` (e.g. `humans`: absent
+/// means the default human, `None` means no human).
+pub enum Given<'py> {
+    /// Not passed.
+    Missing,
+    /// Passed (possibly `None`).
+    Value(Bound<'py, PyAny>),
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Given<'py> {
+    type Error = PyErr;
+    fn extract(obj: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        Ok(Given::Value(obj.to_owned()))
+    }
+}
+
+/// A non-negative integer argument.
+pub fn index(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<usize> {
+    if obj.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(type_err(format!(
+            "{name}: expected an int, got {}",
+            show(obj)
+        )));
+    }
+    let v: i64 = obj
+        .extract()
+        .map_err(|_| type_err(format!("{name}: expected an int, got {}", show(obj))))?;
+    usize::try_from(v).map_err(|_| input(format!("{name}: value {v} is negative")))
+}
+
+/// A bool argument.
+pub fn flag(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<bool> {
+    obj.extract::<bool>()
+        .map_err(|_| type_err(format!("{name}: expected True or False, got {}", show(obj))))
+}
+
+/// A path argument (str or os.PathLike).
+pub fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path::PathBuf> {
+    obj.extract::<std::path::PathBuf>()
+        .map_err(|_| type_err(format!("{name}: expected a path, got {}", show(obj))))
+}
+
+/// A str argument.
+pub fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+    obj.extract::<String>()
+        .map_err(|_| type_err(format!("{name}: expected a str, got {}", show(obj))))
+}

@@ -1,20 +1,31 @@
 //! `pacs.ShieldLoop`: the shield's step loop on a Rust thread, at the safety step's rate in
 //! real time (or as fast as possible in simulated time), so that a Python policy loop at its
 //! own rate only hands over chunks and measurements and reads the latest command.
+//!
+//! Locking: the shield state sits behind a mutex that Python threads only take with the GIL
+//! released ([`with_inner`]) and that is never held while Python code runs; the loop's output
+//! mutex is held only for copies, and its only other user (the loop thread) never waits for the
+//! GIL. Neither can deadlock with the GIL.
 
-use crate::convert::{finite, show, to_py};
+use crate::convert::{finite, flag, index, show, to_py};
 use crate::errors::{Kind, err, input, type_err};
 use crate::shield::{
-    Fail, Inner, PyCommand, PyShield, chunk_args, lock, measurement, object_measurement, raise,
+    Fail, Inner, PyCommand, PyShield, chunk_args, measurement, object_measurement, with_inner,
 };
-use numpy::{PyArray1, PyArray2};
+use numpy::{PyArray1, PyArrayMethods};
+use pacs_models::human::HumanModel;
 use pacs_shield::shield::{ChunkProgress, Command};
 use pyo3::prelude::*;
 use std::collections::VecDeque;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+
+/// Most steps one `run_until` call may take (10⁹ s of 1 ms steps is 31 years).
+const MAX_RUN_STEPS: f64 = 1e9;
+
+static NEXT_LOOP_ID: AtomicU64 = AtomicU64::new(1);
 
 /// What the loop thread reports.
 #[derive(Default)]
@@ -37,18 +48,22 @@ struct Shared {
 
 /// Runs `shield.step` every safety step on a Rust thread. `realtime=True`: step k runs at wall
 /// time start + k·α_s (the steps keep their grid t_k = t_0 + k·α_s; a late step is counted in
-/// `stats()["overruns"]`). `realtime=False`: simulated time, as fast as possible, until
-/// `run_until(t)` returns. While the loop runs, the shield's own `step` refuses; `set_chunk`,
-/// `measure` and `measure_object` go through the loop. Use as a context manager or call
-/// `stop()`. The last `history` commands are kept for `commands()`.
+/// `stats()["overruns"]`). `realtime=False`: simulated time, as fast as possible, on the calling
+/// thread with the GIL released, until `run_until(t)` returns. While the loop runs, the shield's
+/// own `step` refuses; `set_chunk`, `measure` and `measure_object` go through the loop. Use as
+/// a context manager or call `stop()`. The last `history` commands are kept for `commands()`.
+/// A step that fails (it should not) stops the loop; the next call raises its error.
 #[pyclass(name = "ShieldLoop", module = "pacs")]
 pub struct PyShieldLoop {
+    id: u64,
     inner: Arc<Mutex<Inner>>,
     shared: Arc<Shared>,
-    handle: Option<JoinHandle<()>>,
+    handle: Mutex<Option<JoinHandle<()>>>,
     realtime: bool,
     dof: usize,
     alpha: f64,
+    humans: Vec<HumanModel>,
+    object_ids: Vec<String>,
 }
 
 /// Step the shield from its current time for `steps` steps (None: until stopped); real time
@@ -109,49 +124,82 @@ fn run_steps(
 }
 
 impl PyShieldLoop {
-    fn check_error(&self) -> PyResult<()> {
-        let o = self
-            .shared
+    /// The loop's output. Locked with the GIL held: its other user, the loop thread, never
+    /// waits for the GIL, and no Python code runs while it is held.
+    fn out(&self, _py: Python<'_>) -> PyResult<MutexGuard<'_, LoopOut>> {
+        self.shared
             .out
             .lock()
-            .map_err(|_| err(Kind::State, "poisoned loop state"))?;
+            .map_err(|_| err(Kind::State, "poisoned loop state"))
+    }
+
+    fn check_error(&self, py: Python<'_>) -> PyResult<()> {
+        let o = self.out(py)?;
         if let Some(e) = &o.error {
             return Err(err(e.0, format!("the shield loop stopped: {}", e.1)));
         }
         Ok(())
+    }
+
+    /// Make this loop the one that steps the shield (refused if another one does).
+    fn claim(&self, py: Python<'_>) -> PyResult<()> {
+        let id = self.id;
+        with_inner(py, &self.inner, move |g| match g.running {
+            Some(other) if other != id => Err((
+                Kind::State,
+                "ShieldLoop: another ShieldLoop runs this shield".into(),
+            )),
+            _ => {
+                g.running = Some(id);
+                Ok(())
+            }
+        })
+    }
+
+    fn release(&self) {
+        if let Ok(mut g) = self.inner.lock()
+            && g.running == Some(self.id)
+        {
+            g.running = None;
+        }
     }
 }
 
 #[pymethods]
 impl PyShieldLoop {
     #[new]
-    #[pyo3(signature = (shield, realtime=true, history=10000))]
-    fn new(shield: &Bound<'_, PyAny>, realtime: bool, history: usize) -> PyResult<Self> {
+    #[pyo3(signature = (shield, realtime=None, history=None))]
+    fn new(
+        py: Python<'_>,
+        shield: &Bound<'_, PyAny>,
+        realtime: Option<&Bound<'_, PyAny>>,
+        history: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
         let s = shield.cast::<PyShield>().map_err(|_| {
             type_err(format!(
                 "shield: expected a pacs.Shield, got {}",
                 show(shield)
             ))
         })?;
+        let realtime = match realtime {
+            Some(r) => flag(r, "realtime")?,
+            None => true,
+        };
+        let history = match history {
+            Some(h) => index(h, "history")?,
+            None => 10_000,
+        };
         let s = s.borrow();
         let inner = s.inner.clone();
-        let (dof, alpha) = {
-            let g = lock(&inner)?;
-            if !g.started {
-                return Err(err(
-                    Kind::State,
-                    "ShieldLoop: call shield.start(t, q) first",
-                ));
-            }
-            if g.running {
-                return Err(err(
-                    Kind::State,
-                    "ShieldLoop: another loop runs this shield",
-                ));
-            }
-            (g.dof, g.shield.config().safety_step)
-        };
+        let started = with_inner(py, &inner, |g| Ok(g.started))?;
+        if !started {
+            return Err(err(
+                Kind::State,
+                "ShieldLoop: call shield.start(t, q) first",
+            ));
+        }
         Ok(Self {
+            id: NEXT_LOOP_ID.fetch_add(1, Ordering::Relaxed),
             inner,
             shared: Arc::new(Shared {
                 stop: AtomicBool::new(false),
@@ -160,36 +208,46 @@ impl PyShieldLoop {
                     ..Default::default()
                 }),
             }),
-            handle: None,
+            handle: Mutex::new(None),
             realtime,
-            dof,
-            alpha,
+            dof: s.dof,
+            alpha: s.safety_step,
+            humans: s.humans.clone(),
+            object_ids: s.object_ids.clone(),
         })
     }
 
-    /// Start stepping on the Rust thread (real time), or, with `realtime=False`, do nothing
-    /// until `run_until`.
-    fn start(&mut self) -> PyResult<()> {
-        if self.handle.is_some() {
+    /// Start stepping on the Rust thread (real time); with `realtime=False`, claim the shield
+    /// and step only in `run_until`.
+    fn start(&self, py: Python<'_>) -> PyResult<()> {
+        self.check_error(py)?;
+        self.claim(py)?;
+        self.shared.stop.store(false, Ordering::Relaxed);
+        if !self.realtime {
+            return Ok(());
+        }
+        // Only Python threads (holding the GIL) take the handle's lock; nothing below releases
+        // the GIL while it is held.
+        let mut handle = self
+            .handle
+            .lock()
+            .map_err(|_| err(Kind::State, "poisoned loop state"))?;
+        if handle.is_some() {
             return Err(err(Kind::State, "ShieldLoop.start: already running"));
         }
-        lock(&self.inner)?.running = true;
-        if self.realtime {
-            self.shared.stop.store(false, Ordering::Relaxed);
-            let (inner, shared, alpha) = (self.inner.clone(), self.shared.clone(), self.alpha);
-            self.handle = Some(
-                std::thread::Builder::new()
-                    .name("pacs-shield-loop".into())
-                    .spawn(move || run_steps(&inner, &shared, true, None, alpha))
-                    .map_err(|e| err(Kind::State, format!("cannot start the loop thread: {e}")))?,
-            );
-        }
+        let (inner, shared, alpha) = (self.inner.clone(), self.shared.clone(), self.alpha);
+        *handle = Some(
+            std::thread::Builder::new()
+                .name("pacs-shield-loop".into())
+                .spawn(move || run_steps(&inner, &shared, true, None, alpha))
+                .map_err(|e| err(Kind::State, format!("cannot start the loop thread: {e}")))?,
+        );
         Ok(())
     }
 
-    /// Simulated time (`realtime=False`): step (in Rust, the GIL released) until the shield's time
-    /// reaches `t` (s), then return (the GIL is released meanwhile).
-    fn run_until(&mut self, py: Python<'_>, t: &Bound<'_, PyAny>) -> PyResult<()> {
+    /// Simulated time (`realtime=False`): step (in Rust, the GIL released) until the shield's
+    /// time reaches `t` (s), then return.
+    fn run_until(&self, py: Python<'_>, t: &Bound<'_, PyAny>) -> PyResult<()> {
         if self.realtime {
             return Err(err(
                 Kind::State,
@@ -197,130 +255,129 @@ impl PyShieldLoop {
             ));
         }
         let t = finite(t, "t")?;
-        let now = {
-            let mut g = lock(&self.inner)?;
-            g.running = true;
-            g.last_t.map_or(g.start_t, |x| x + self.alpha)
-        };
+        self.check_error(py)?;
+        self.claim(py)?;
+        let alpha = self.alpha;
+        let now = with_inner(py, &self.inner, move |g| {
+            Ok(g.last_t.map_or(g.start_t, |x| x + alpha))
+        })?;
         if t < now {
             return Ok(());
         }
-        let steps = ((t - now) / self.alpha).floor() as u64 + 1;
-        let (inner, shared, alpha) = (self.inner.clone(), self.shared.clone(), self.alpha);
-        py.detach(move || {
-            let h =
-                std::thread::spawn(move || run_steps(&inner, &shared, false, Some(steps), alpha));
-            h.join().ok();
-        });
-        self.check_error()
+        let n = ((t - now) / alpha).floor() + 1.0;
+        if n > MAX_RUN_STEPS {
+            return Err(input(format!(
+                "t: {t} s is {n:.3e} steps ahead of the shield's time {now} s (at most {MAX_RUN_STEPS:.0e} per call)"
+            )));
+        }
+        self.shared.stop.store(false, Ordering::Relaxed);
+        let (inner, shared) = (&self.inner, &self.shared);
+        py.detach(|| run_steps(inner, shared, false, Some(n as u64), alpha));
+        self.check_error(py)
     }
 
     /// Stop the thread (after its current step) and hand the shield back to direct `step`s.
-    fn stop(&mut self, py: Python<'_>) -> PyResult<()> {
+    fn stop(&self, py: Python<'_>) -> PyResult<()> {
         self.shared.stop.store(true, Ordering::Relaxed);
-        if let Some(h) = self.handle.take() {
+        let h = self
+            .handle
+            .lock()
+            .map_err(|_| err(Kind::State, "poisoned loop state"))?
+            .take();
+        if let Some(h) = h {
             py.detach(|| h.join())
                 .map_err(|_| err(Kind::State, "the loop thread panicked"))?;
         }
-        lock(&self.inner)?.running = false;
-        self.check_error()
+        py.detach(|| self.release());
+        self.check_error(py)
     }
 
     /// `Shield.set_chunk` through the loop (`t` defaults to the loop's current time).
-    #[pyo3(signature = (deltas, h=None, absolute=false, t=None))]
+    #[pyo3(signature = (deltas, t=None, h=None, absolute=None))]
     fn set_chunk(
         &self,
         py: Python<'_>,
         deltas: &Bound<'_, PyAny>,
-        h: Option<&Bound<'_, PyAny>>,
-        absolute: bool,
         t: Option<&Bound<'_, PyAny>>,
+        h: Option<&Bound<'_, PyAny>>,
+        absolute: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<u64> {
-        self.check_error()?;
-        let t = match t {
-            Some(t) if !t.is_none() => Some(finite(t, "t")?),
-            _ => None,
-        };
-        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute)?;
-        let inner = &self.inner;
-        py.detach(|| -> Result<u64, Fail> {
-            let mut g = inner
-                .lock()
-                .map_err(|_| (Kind::State, "poisoned shield state".to_string()))?;
-            let t = t.unwrap_or_else(|| g.now());
-            g.set_chunk(t, rows, h, kind)
-        })
-        .map_err(raise)
+        self.check_error(py)?;
+        if let Some(t) = t.filter(|t| !t.is_none()) {
+            finite(t, "t")?;
+        }
+        let no = pyo3::types::PyBool::new(py, false).to_owned().into_any();
+        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute.unwrap_or(&no))?;
+        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
     }
 
     /// `Shield.measure` through the loop.
-    #[pyo3(signature = (t_meas, positions, velocities=None, human=0))]
+    #[pyo3(signature = (t_meas, positions, velocities=None, human=None))]
     fn measure(
         &self,
+        py: Python<'_>,
         t_meas: &Bound<'_, PyAny>,
         positions: &Bound<'_, PyAny>,
         velocities: Option<&Bound<'_, PyAny>>,
-        human: usize,
+        human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let mut g = lock(&self.inner)?;
-        let m = measurement(&g, human, t_meas, positions, velocities)?;
-        g.measure(human, m).map_err(raise)
+        let zero = 0i64.into_pyobject(py)?.into_any();
+        let (id, m) = measurement(
+            &self.humans,
+            human.unwrap_or(&zero),
+            t_meas,
+            positions,
+            velocities,
+        )?;
+        with_inner(py, &self.inner, move |g| g.measure(id, m))
     }
 
     /// `Shield.measure_object` through the loop.
     #[pyo3(signature = (id, t_meas, position, velocity=None))]
     fn measure_object(
         &self,
+        py: Python<'_>,
         id: &Bound<'_, PyAny>,
         t_meas: &Bound<'_, PyAny>,
         position: &Bound<'_, PyAny>,
         velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let mut g = lock(&self.inner)?;
-        let (k, m) = object_measurement(&g, id, t_meas, position, velocity)?;
-        g.measure_object(k, m).map_err(raise)
+        let (k, m) = object_measurement(&self.object_ids, id, t_meas, position, velocity)?;
+        with_inner(py, &self.inner, move |g| g.measure_object(k, m))
     }
 
     /// The newest command (None before the first step).
-    fn latest(&self) -> PyResult<Option<PyCommand>> {
-        self.check_error()?;
-        let o = self
-            .shared
-            .out
-            .lock()
-            .map_err(|_| err(Kind::State, "poisoned loop state"))?;
+    fn latest(&self, py: Python<'_>) -> PyResult<Option<PyCommand>> {
+        self.check_error(py)?;
+        let o = self.out(py)?;
         Ok(o.latest.map(|(cmd, progress)| PyCommand { cmd, progress }))
     }
 
     /// The loop's current time (s): the time of the latest step.
     #[getter]
-    fn time(&self) -> PyResult<f64> {
-        Ok(lock(&self.inner)?.now())
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        with_inner(py, &self.inner, |g| Ok(g.now()))
     }
 
     /// `Shield.progress()`: which chunk runs and how many of its actions were executed.
     fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let g = lock(&self.inner)?;
-        match g.shield.chunk_progress() {
-            Some(p) => to_py(py, &p),
-            None => Err(input("progress: the shield is not started")),
-        }
+        let p = with_inner(py, &self.inner, |g| {
+            g.shield
+                .chunk_progress()
+                .ok_or((Kind::State, "progress: the shield is not started".into()))
+        })?;
+        to_py(py, &p)
     }
 
     /// The commands since the last call (at most `history`), drained: {"t": (N,) s,
     /// "q": (N, dof) rad, "dq": (N, dof) rad/s, "ddq": (N, dof) rad/s², "verified": (N,) bool}.
     fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let cmds: Vec<Command> = {
-            let mut o = self
-                .shared
-                .out
-                .lock()
-                .map_err(|_| err(Kind::State, "poisoned loop state"))?;
-            o.history.drain(..).collect()
-        };
+        let cmds: Vec<Command> = self.out(py)?.history.drain(..).collect();
         let n = self.dof;
-        let rows = |f: &dyn Fn(&Command) -> &[f64]| -> Vec<Vec<f64>> {
-            cmds.iter().map(|c| f(c)[..n].to_vec()).collect()
+        let rows = |f: &dyn Fn(&Command) -> &[f64]| -> Vec<f64> {
+            cmds.iter()
+                .flat_map(|c| f(c)[..n].iter().copied())
+                .collect()
         };
         let d = pyo3::types::PyDict::new(py);
         let t: Vec<f64> = cmds.iter().map(|c| c.t).collect();
@@ -330,11 +387,9 @@ impl PyShieldLoop {
             ("dq", rows(&|c| &c.state.dq)),
             ("ddq", rows(&|c| &c.state.ddq)),
         ] {
-            let a = if v.is_empty() {
-                PyArray2::<f64>::zeros(py, [0, n], false)
-            } else {
-                PyArray2::from_vec2(py, &v).map_err(|e| input(e.to_string()))?
-            };
+            let a = PyArray1::from_vec(py, v)
+                .reshape([cmds.len(), n])
+                .map_err(|e| input(e.to_string()))?;
             d.set_item(name, a)?;
         }
         let verified: Vec<bool> = cmds.iter().map(|c| c.diag.verified).collect();
@@ -342,40 +397,32 @@ impl PyShieldLoop {
         Ok(d)
     }
 
-    /// {"steps": int, "overruns": steps begun more than a safety step late, "max_step_us":
-    /// the longest step (µs), "mean_step_us": the mean step (µs, the Rust step alone)}.
+    /// {"steps": int, "overruns": int (steps begun more than a safety step late),
+    /// "max_step_us": the longest step (µs), "mean_step_us": the mean step (µs; the Rust step
+    /// alone: lock + `Shield::step`)}.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let o = self
-            .shared
-            .out
-            .lock()
-            .map_err(|_| err(Kind::State, "poisoned loop state"))?;
+        let (steps, overruns, max, total) = {
+            let o = self.out(py)?;
+            (o.steps, o.overruns, o.max_step_us, o.total_step_us)
+        };
         let d = pyo3::types::PyDict::new(py);
-        d.set_item("steps", o.steps)?;
-        d.set_item("overruns", o.overruns)?;
-        d.set_item("max_step_us", o.max_step_us)?;
+        d.set_item("steps", steps)?;
+        d.set_item("overruns", overruns)?;
+        d.set_item("max_step_us", max)?;
         d.set_item(
             "mean_step_us",
-            if o.steps > 0 {
-                o.total_step_us / o.steps as f64
-            } else {
-                0.0
-            },
+            if steps > 0 { total / steps as f64 } else { 0.0 },
         )?;
         Ok(d)
     }
 
-    fn __enter__(mut slf: PyRefMut<'_, Self>) -> PyResult<PyRefMut<'_, Self>> {
-        slf.start()?;
+    fn __enter__<'a>(slf: PyRef<'a, Self>, py: Python<'a>) -> PyResult<PyRef<'a, Self>> {
+        slf.start(py)?;
         Ok(slf)
     }
 
     #[pyo3(signature = (*_args))]
-    fn __exit__(
-        &mut self,
-        py: Python<'_>,
-        _args: &Bound<'_, pyo3::types::PyTuple>,
-    ) -> PyResult<bool> {
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
         self.stop(py)?;
         Ok(false)
     }
@@ -384,11 +431,11 @@ impl PyShieldLoop {
 impl Drop for PyShieldLoop {
     fn drop(&mut self) {
         self.shared.stop.store(true, Ordering::Relaxed);
-        if let Some(h) = self.handle.take() {
+        if let Ok(mut h) = self.handle.lock()
+            && let Some(h) = h.take()
+        {
             let _ = h.join();
         }
-        if let Ok(mut g) = self.inner.lock() {
-            g.running = false;
-        }
+        self.release();
     }
 }

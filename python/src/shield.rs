@@ -3,7 +3,7 @@
 //! The shield state lives behind a mutex ([`Inner`]) so that [`crate::runner`] can run its step
 //! loop on a Rust thread; a direct `step` takes the (uncontended) lock and releases the GIL.
 
-use crate::convert::{finite, floats, points, show, to_py, vector};
+use crate::convert::{Given, finite, flag, floats, index, path, points, show, to_py, vector};
 use crate::errors::{Kind, err, input, type_err};
 use crate::models::scene;
 use numpy::PyArray1;
@@ -19,35 +19,61 @@ use pyo3::prelude::*;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex};
 
 /// An error of the shield state, raised as `pacs.<kind>` once the GIL is held again.
 pub type Fail = (Kind, String);
+
+/// Measurements waiting for a step at or after their time stamp (per queue).
+const MAX_PENDING: usize = 4096;
+
+/// How far (s) a step time may be from the previous step plus one safety step (float
+/// rounding of `k·α_s`).
+const STEP_TOLERANCE: f64 = 1e-9;
 
 /// Everything a shield needs between calls.
 pub struct Inner {
     pub shield: Shield,
     pub dof: usize,
-    pub humans: Vec<HumanModel>,
+    pub humans: usize,
     pub object_ids: Vec<String>,
     pub header: Header,
     pub log_path: Option<PathBuf>,
     pub log: Option<ShieldLog<BufWriter<File>>>,
-    /// The newest measurement of human 0 not yet handed to a step (the shield takes it at the
-    /// first step at or after its time stamp).
-    pub pending: Option<HumanMeasurement>,
+    /// The first log write that failed (the run goes on; `close` reports it).
+    pub log_error: Option<String>,
+    /// The log was opened (a logging shield starts once).
+    pub log_opened: bool,
+    /// Human measurements (human index, measurement) not yet handed to a step: each reaches
+    /// the shield at the first step at or after its time stamp.
+    pub pending_humans: Vec<(usize, HumanMeasurement)>,
+    /// Object measurements not yet handed to a step (the same rule).
+    pub pending_objects: Vec<(usize, ObjectMeasurement)>,
     /// Time of the last step (s).
     pub last_t: Option<f64>,
     pub start_t: f64,
     pub started: bool,
-    /// A `ShieldLoop` steps this shield: direct steps are refused.
-    pub running: bool,
+    /// The `ShieldLoop` (its id) that steps this shield: direct steps are refused meanwhile.
+    pub running: Option<u64>,
     pub settings: ShieldSettings,
 }
 
 impl Inner {
     /// Start at rest at `q` (rad) at `t` (s); opens the log if one was asked for.
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), Fail> {
+        if self.running.is_some() {
+            return Err((
+                Kind::State,
+                "start: a ShieldLoop is running this shield".into(),
+            ));
+        }
+        if self.log_opened {
+            return Err((
+                Kind::State,
+                "start: a shield that logs (log=...) runs once; create a new Shield for a new run"
+                    .into(),
+            ));
+        }
         self.shield
             .start(t, q)
             .map_err(|e| (Kind::Input, e.to_string()))?;
@@ -61,11 +87,11 @@ impl Inner {
             let log = ShieldLog::new(BufWriter::new(f), &self.header, t, q)
                 .map_err(|e| (Kind::Output, format!("log {}: {e}", p.display())))?;
             self.log = Some(log);
+            self.log_opened = true;
         }
         self.started = true;
         self.last_t = None;
         self.start_t = t;
-        self.pending = None;
         Ok(())
     }
 
@@ -74,10 +100,22 @@ impl Inner {
         self.last_t.unwrap_or(self.start_t)
     }
 
+    /// Record a log failure (the first one) and stop logging; the run goes on.
+    fn log_failed(&mut self, e: impl std::fmt::Display) {
+        if self.log_error.is_none() {
+            let p = self
+                .log_path
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default();
+            self.log_error = Some(format!("log {p}: {e} (nothing was logged after this)"));
+        }
+        self.log = None;
+    }
+
     /// Hand over a chunk (rows of `dof` values); returns its serial number.
     pub fn set_chunk(
         &mut self,
-        t: f64,
         actions: Vec<Vec<f64>>,
         h: usize,
         kind: ActionKind,
@@ -91,57 +129,46 @@ impl Inner {
             execute: h,
             gripper: None,
         };
-        let t_log = t.max(self.now());
-        if let Err(e) = self.shield.set_chunk(&chunk) {
-            if let Some(log) = &mut self.log {
-                let _ = log.event(t_log, "chunk_rejected");
-            }
-            return Err((Kind::Chunk, format!("set_chunk: {e}")));
+        let now = self.now();
+        let r = self.shield.set_chunk(&chunk);
+        let event = if r.is_ok() { "chunk" } else { "chunk_rejected" };
+        if let Some(log) = &mut self.log
+            && let Err(e) = log.event(now, event)
+        {
+            self.log_failed(e);
         }
-        if let Some(log) = &mut self.log {
-            log.event(t_log, "chunk")
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?;
-        }
+        r.map_err(|e| (Kind::Chunk, format!("set_chunk: {e}")))?;
         Ok(self.shield.chunk_progress().map_or(0, |p| p.accepted))
     }
 
-    /// Record a human measurement.
-    pub fn measure(&mut self, id: usize, m: HumanMeasurement) -> Result<(), Fail> {
-        if id >= self.humans.len() {
+    fn queue_full(len: usize, what: &str) -> Result<(), Fail> {
+        if len >= MAX_PENDING {
             return Err((
                 Kind::Input,
                 format!(
-                    "human: {id} is not a human of this shield ({} humans)",
-                    self.humans.len()
+                    "{what}: {MAX_PENDING} measurements already wait for a step at or after their time stamps (are they stamped ahead of the shield's clock?)"
                 ),
             ));
-        }
-        if id == 0 {
-            if self.pending.as_ref().is_none_or(|p| p.time() < m.time()) {
-                self.pending = Some(m);
-            }
-            Ok(())
-        } else {
-            self.shield
-                .measure_human(id, &m)
-                .map_err(|e| (Kind::Input, e.to_string()))
-        }
-    }
-
-    /// Record an object measurement.
-    pub fn measure_object(&mut self, k: usize, m: ObjectMeasurement) -> Result<(), Fail> {
-        self.shield
-            .measure_object(k, &m)
-            .map_err(|e| (Kind::Input, e.to_string()))?;
-        let now = self.now();
-        if let Some(log) = &mut self.log {
-            log.object(now, &self.object_ids[k], &m)
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?;
         }
         Ok(())
     }
 
+    /// Queue a human measurement (human index validated by the caller).
+    pub fn measure(&mut self, id: usize, m: HumanMeasurement) -> Result<(), Fail> {
+        Self::queue_full(self.pending_humans.len(), "measure")?;
+        self.pending_humans.push((id, m));
+        Ok(())
+    }
+
+    /// Queue an object measurement (object index validated by the caller).
+    pub fn measure_object(&mut self, k: usize, m: ObjectMeasurement) -> Result<(), Fail> {
+        Self::queue_full(self.pending_objects.len(), "measure_object")?;
+        self.pending_objects.push((k, m));
+        Ok(())
+    }
+
     /// One safety step at `t` (s): the command for `t + α_s` and the chunk progress after it.
+    /// Steps follow each other by exactly one safety step (the grid the shield verifies).
     pub fn step(&mut self, t: f64) -> Result<(Command, ChunkProgress), Fail> {
         if !self.started {
             return Err((Kind::State, "step: call start(t, q) first".into()));
@@ -149,52 +176,122 @@ impl Inner {
         if !t.is_finite() {
             return Err((Kind::Input, format!("t: value {t} is not finite")));
         }
-        if let Some(last) = self.last_t
-            && t <= last
-        {
-            return Err((
-                Kind::Input,
-                format!("t: {t} s is not after the previous step at {last} s"),
-            ));
+        let alpha = self.shield.config().safety_step;
+        match self.last_t {
+            Some(last) if (t - (last + alpha)).abs() > STEP_TOLERANCE => {
+                return Err((
+                    Kind::Input,
+                    format!(
+                        "t: {t} s, but steps follow each other by the safety step: the previous step was at {last} s, so this one is at {} s",
+                        last + alpha
+                    ),
+                ));
+            }
+            None if t < self.start_t - STEP_TOLERANCE => {
+                return Err((
+                    Kind::Input,
+                    format!("t: {t} s is before the start at {} s", self.start_t),
+                ));
+            }
+            _ => {}
         }
-        if t < self.start_t {
-            return Err((
-                Kind::Input,
-                format!("t: {t} s is before the start at {} s", self.start_t),
-            ));
+        // Hand over the measurements stamped at or before t: per human and object the newest
+        // (the shield ignores older ones anyway); later ones keep waiting.
+        let mut newest: Vec<Option<usize>> = vec![None; self.humans];
+        for (i, (id, m)) in self.pending_humans.iter().enumerate() {
+            if m.time() <= t
+                && newest[*id].is_none_or(|j| self.pending_humans[j].1.time() < m.time())
+            {
+                newest[*id] = Some(i);
+            }
         }
-        let take = self.pending.as_ref().is_some_and(|m| m.time() <= t);
-        let meas = if take { self.pending.take() } else { None };
+        let mut first: Option<HumanMeasurement> = None;
+        for (id, idx) in newest.iter().enumerate() {
+            let Some(i) = *idx else { continue };
+            let m = &self.pending_humans[i].1;
+            if id == 0 {
+                first = Some(m.clone());
+            } else {
+                self.shield
+                    .measure_human(id, m)
+                    .map_err(|e| (Kind::State, e.to_string()))?;
+            }
+        }
+        self.pending_humans.retain(|(_, m)| m.time() > t);
+        let mut objects: Vec<Option<usize>> = vec![None; self.object_ids.len()];
+        for (i, (k, m)) in self.pending_objects.iter().enumerate() {
+            if m.time <= t && objects[*k].is_none_or(|j| self.pending_objects[j].1.time < m.time) {
+                objects[*k] = Some(i);
+            }
+        }
+        for (k, idx) in objects.iter().enumerate() {
+            let Some(i) = *idx else { continue };
+            let m = self.pending_objects[i].1;
+            self.shield
+                .measure_object(k, &m)
+                .map_err(|e| (Kind::State, e.to_string()))?;
+            if let Some(log) = &mut self.log
+                && let Err(e) = log.object(t, &self.object_ids[k], &m)
+            {
+                self.log_failed(e);
+            }
+        }
+        self.pending_objects.retain(|(_, m)| m.time > t);
         let cmd = self
             .shield
-            .step(t, meas.as_ref())
+            .step(t, first.as_ref())
             .map_err(|e| (Kind::State, e.to_string()))?;
         self.last_t = Some(t);
-        if let Some(log) = &mut self.log {
-            log.record(t, meas.as_ref(), &cmd)
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?;
+        if let Some(log) = &mut self.log
+            && let Err(e) = log.record(t, first.as_ref(), &cmd)
+        {
+            // The step happened: its command is returned; the log stops (reported by close).
+            self.log_failed(e);
         }
         let progress = self
             .shield
             .chunk_progress()
-            .expect("started shields report progress");
+            .ok_or((Kind::State, "step: shield not started".to_string()))?;
         Ok((cmd, progress))
     }
 
-    /// Flush and close the log (idempotent).
+    /// Flush and close the log (idempotent); reports a log failure of the run once.
     pub fn close(&mut self) -> Result<(), Fail> {
-        if let Some(log) = self.log.take() {
+        if let Some(mut log) = self.log.take() {
             let t = self.now();
-            let mut log = log;
-            log.event(t, "end")
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?;
-            log.finish()
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?
-                .flush()
-                .map_err(|e| (Kind::Output, format!("log: {e}")))?;
+            let r = log
+                .event(t, "end")
+                .map_err(|e| e.to_string())
+                .and_then(|()| log.finish().map_err(|e| e.to_string()))
+                .and_then(|mut w| w.flush().map_err(|e| e.to_string()));
+            if let Err(e) = r {
+                self.log_failed(e);
+            }
         }
-        Ok(())
+        match self.log_error.take() {
+            Some(e) => Err((Kind::Output, e)),
+            None => Ok(()),
+        }
     }
+}
+
+/// Run `f` on the shield state with the GIL released (so that no thread ever waits for the
+/// lock while holding the GIL, and no Python code runs while the lock is held).
+pub fn with_inner<R: Send>(
+    py: Python<'_>,
+    inner: &Mutex<Inner>,
+    f: impl FnOnce(&mut Inner) -> Result<R, Fail> + Send,
+) -> PyResult<R> {
+    py.detach(|| {
+        let mut g = inner.lock().map_err(|_| {
+            (
+                Kind::State,
+                "the shield's state was poisoned by a panic".to_string(),
+            )
+        })?;
+        f(&mut g)
+    })
+    .map_err(raise)
 }
 
 fn py_bool(b: bool) -> &'static str {
@@ -204,13 +301,6 @@ fn py_bool(b: bool) -> &'static str {
 /// Raise a [`Fail`].
 pub fn raise(f: Fail) -> PyErr {
     err(f.0, f.1)
-}
-
-/// Lock the shared state (a poisoned lock is reported, never unwrapped).
-pub fn lock(inner: &Mutex<Inner>) -> PyResult<MutexGuard<'_, Inner>> {
-    inner
-        .lock()
-        .map_err(|_| err(Kind::State, "the shield's state was poisoned by a panic"))
 }
 
 /// The PACS shield: give it action chunks, human (and object) measurements, and call `step(t)`
@@ -234,12 +324,22 @@ pub fn lock(inner: &Mutex<Inner>) -> PyResult<MutexGuard<'_, Inner>> {
 ///     "chunk_motion": "stop" | "continuous"}.
 ///   side: the side file of a URDF robot (masses, capsules, limits URDF lacks).
 ///   log: a path: the run is written there as an audit log (format v1, JSON Lines) that
-///     `pacs.audit` / `pacs audit` check.
+///     `pacs.audit` / `pacs audit` check (one human at most: the log format carries one).
+///
+/// Timing: `step(t)` is called every safety step, t_k = t_0 + k·α_s (other times are refused);
+/// a measurement (human or object) reaches the shield at the first step at or after its time
+/// stamp; a chunk is planned at once and tried at the next step: if that step does not verify
+/// it, the chunk is dropped (the robot keeps its verified failsafe; `Command.chunk` and
+/// `progress()` tell which chunk runs) and the policy should hand over a new one.
 #[pyclass(name = "Shield", module = "pacs")]
 pub struct PyShield {
     pub inner: Arc<Mutex<Inner>>,
-    dof: usize,
-    safety_step: f64,
+    pub dof: usize,
+    pub safety_step: f64,
+    /// Human models, in index order (immutable: read without the lock).
+    pub humans: Vec<HumanModel>,
+    /// Object ids, in index order.
+    pub object_ids: Vec<String>,
 }
 
 fn chunk_rows(deltas: &Bound<'_, PyAny>, dof: usize) -> PyResult<Vec<Vec<f64>>> {
@@ -254,19 +354,16 @@ fn chunk_rows(deltas: &Bound<'_, PyAny>, dof: usize) -> PyResult<Vec<Vec<f64>>> 
 
 fn horizon(h: Option<&Bound<'_, PyAny>>, rows: usize) -> PyResult<usize> {
     match h {
-        None => Ok(rows),
-        Some(h) if h.is_none() => Ok(rows),
-        Some(h) => {
-            let v: i64 = h
-                .extract()
-                .map_err(|_| type_err(format!("h: expected an int, got {}", show(h))))?;
-            if v < 1 || v as usize > rows {
+        Some(h) if !h.is_none() => {
+            let v = index(h, "h")?;
+            if v < 1 || v > rows {
                 return Err(input(format!(
                     "h: {v} is outside 1..={rows} (the number of actions in the chunk)"
                 )));
             }
-            Ok(v as usize)
+            Ok(v)
         }
+        _ => Ok(rows),
     }
 }
 
@@ -275,11 +372,11 @@ pub fn chunk_args(
     dof: usize,
     deltas: &Bound<'_, PyAny>,
     h: Option<&Bound<'_, PyAny>>,
-    absolute: bool,
+    absolute: &Bound<'_, PyAny>,
 ) -> PyResult<(Vec<Vec<f64>>, usize, ActionKind)> {
     let rows = chunk_rows(deltas, dof)?;
     let h = horizon(h, rows.len())?;
-    let kind = if absolute {
+    let kind = if flag(absolute, "absolute")? {
         ActionKind::Absolute
     } else {
         ActionKind::Delta
@@ -287,18 +384,19 @@ pub fn chunk_args(
     Ok((rows, h, kind))
 }
 
-/// Parse measure arguments (shared with the loop).
+/// Parse measure arguments (shared with the loop): the human index and the measurement.
 pub fn measurement(
-    inner: &Inner,
-    human: usize,
+    humans: &[HumanModel],
+    human: &Bound<'_, PyAny>,
     t_meas: &Bound<'_, PyAny>,
     positions: &Bound<'_, PyAny>,
     velocities: Option<&Bound<'_, PyAny>>,
-) -> PyResult<HumanMeasurement> {
-    let Some(model) = inner.humans.get(human) else {
+) -> PyResult<(usize, HumanMeasurement)> {
+    let id = index(human, "human")?;
+    let Some(model) = humans.get(id) else {
         return Err(input(format!(
-            "human: {human} is not a human of this shield ({} humans)",
-            inner.humans.len()
+            "human: {id} is not a human of this shield ({} humans)",
+            humans.len()
         )));
     };
     let t = finite(t_meas, "t_meas")?;
@@ -308,33 +406,30 @@ pub fn measurement(
         Some(v) if !v.is_none() => Some(points(v, "velocities", Some(k))?),
         _ => None,
     };
-    HumanMeasurement::new(model, t, &p, v.as_deref()).map_err(|e| input(e.to_string()))
+    let m = HumanMeasurement::new(model, t, &p, v.as_deref()).map_err(|e| input(e.to_string()))?;
+    Ok((id, m))
 }
 
 /// Parse measure_object arguments (shared with the loop).
 pub fn object_measurement(
-    inner: &Inner,
+    object_ids: &[String],
     id: &Bound<'_, PyAny>,
     t_meas: &Bound<'_, PyAny>,
     position: &Bound<'_, PyAny>,
     velocity: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<(usize, ObjectMeasurement)> {
     let k = if let Ok(s) = id.extract::<String>() {
-        inner
-            .object_ids
-            .iter()
-            .position(|o| *o == s)
-            .ok_or_else(|| {
-                input(format!(
-                    "id: no object `{s}` in this shield (objects: {:?})",
-                    inner.object_ids
-                ))
-            })?
-    } else if let Ok(i) = id.extract::<usize>() {
-        if i >= inner.object_ids.len() {
+        object_ids.iter().position(|o| *o == s).ok_or_else(|| {
+            input(format!(
+                "id: no object `{s}` in this shield (objects: {object_ids:?})"
+            ))
+        })?
+    } else if id.is_instance_of::<pyo3::types::PyInt>() {
+        let i = index(id, "id")?;
+        if i >= object_ids.len() {
             return Err(input(format!(
                 "id: object {i} does not exist ({} objects)",
-                inner.object_ids.len()
+                object_ids.len()
             )));
         }
         i
@@ -363,19 +458,15 @@ pub fn object_measurement(
     ))
 }
 
-fn time_arg(t: &Bound<'_, PyAny>) -> PyResult<f64> {
-    finite(t, "t")
-}
-
 #[pymethods]
 impl PyShield {
     #[new]
-    #[pyo3(signature = (robot=None, humans=None, constraints=None, objects=None, environment=None, config=None, side=None, log=None))]
+    #[pyo3(signature = (robot=None, humans=Given::Missing, constraints=None, objects=None, environment=None, config=None, side=None, log=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         robot: Option<&Bound<'_, PyAny>>,
-        humans: Option<&Bound<'_, PyAny>>,
+        humans: Given<'_>,
         constraints: Option<&Bound<'_, PyAny>>,
         objects: Option<&Bound<'_, PyAny>>,
         environment: Option<&Bound<'_, PyAny>>,
@@ -384,11 +475,10 @@ impl PyShield {
         log: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let fr3 = "fr3".into_pyobject(py)?.into_any();
-        let default = "default".into_pyobject(py)?.into_any();
         let sorting = "sorting".into_pyobject(py)?.into_any();
         let humans_arg = match humans {
-            Some(h) => h.clone(),
-            None => default,
+            Given::Value(h) => h,
+            Given::Missing => "default".into_pyobject(py)?.into_any(),
         };
         let s = scene(
             robot.unwrap_or(&fr3),
@@ -423,15 +513,18 @@ impl PyShield {
                 .map_err(|e| input(format!("objects `{id}`: {e}")))?;
         }
         let log_path = match log {
-            Some(l) if !l.is_none() => Some(
-                l.extract::<PathBuf>()
-                    .map_err(|_| type_err(format!("log: expected a path, got {}", show(l))))?,
-            ),
+            Some(l) if !l.is_none() => Some(path(l, "log")?),
             _ => None,
         };
+        if log_path.is_some() && s.humans.len() > 1 {
+            return Err(input(format!(
+                "log: a scene with {} humans cannot be logged: log format v1 carries one human's measurements (the audit would not check the others)",
+                s.humans.len()
+            )));
+        }
         let dof = m.robot.dof();
         let safety_step = cfg.safety_step;
-        let object_ids = m.objects.iter().map(|(id, _, _)| id.clone()).collect();
+        let object_ids: Vec<String> = m.objects.iter().map(|(id, _, _)| id.clone()).collect();
         let mut header = s.header;
         header.meta.insert(
             "shield_config".into(),
@@ -441,119 +534,119 @@ impl PyShield {
             inner: Arc::new(Mutex::new(Inner {
                 shield,
                 dof,
-                humans: s.humans,
-                object_ids,
+                humans: s.humans.len(),
+                object_ids: object_ids.clone(),
                 header,
                 log_path,
                 log: None,
-                pending: None,
+                log_error: None,
+                log_opened: false,
+                pending_humans: Vec::new(),
+                pending_objects: Vec::new(),
                 last_t: None,
                 start_t: 0.0,
                 started: false,
-                running: false,
+                running: None,
                 settings,
             })),
             dof,
             safety_step,
+            humans: s.humans,
+            object_ids,
         })
     }
 
     /// Start at rest at joint positions `q` (rad, shape (dof,)) at time `t` (s). The shield only
-    /// starts from rest; standing still is the first verified failsafe.
-    fn start(&self, t: &Bound<'_, PyAny>, q: &Bound<'_, PyAny>) -> PyResult<()> {
-        let t = time_arg(t)?;
+    /// starts from rest; standing still is the first verified failsafe. Steps then run at
+    /// t, t + α_s, t + 2·α_s, … A shield that logs starts once.
+    fn start(&self, py: Python<'_>, t: &Bound<'_, PyAny>, q: &Bound<'_, PyAny>) -> PyResult<()> {
+        let t = finite(t, "t")?;
         let q = vector(q, "q", self.dof)?;
-        let mut g = lock(&self.inner)?;
-        if g.running {
-            return Err(err(
-                Kind::State,
-                "start: a ShieldLoop is running this shield",
-            ));
-        }
-        g.start(t, &q).map_err(raise)
+        with_inner(py, &self.inner, |g| g.start(t, &q))
     }
 
     /// Hand over an action chunk: `deltas` (shape (H, dof), rad) are the policy's joint-position
     /// deltas, integrated from the current commanded state into waypoints q̂_1 … q̂_h as in the
     /// paper (`absolute=True`: the rows are joint positions). `h` (default H) actions are
     /// executed; the rest only shape the end of the motion. `t` (s) is when the policy hands
-    /// it over (logged). The chunk is planned at once into a jerk-limited intended trajectory
-    /// and takes over at the first verified step. Returns the chunk's serial number (1, 2, …;
-    /// `Command.chunk`). Raises `pacs.ChunkRejected` if it cannot be planned (e.g. a waypoint
-    /// outside the joint limits): the robot keeps its verified motion.
-    #[pyo3(signature = (deltas, t, h=None, absolute=false))]
+    /// it over (checked finite; the log records the handover at the shield's time). The chunk
+    /// is planned at once into a jerk-limited intended trajectory and tried at the next step;
+    /// if that step does not verify it, the chunk is dropped (see the class doc). Returns the
+    /// chunk's serial number (1, 2, …; `Command.chunk`). Raises `pacs.ChunkRejected` if it
+    /// cannot be planned (e.g. a waypoint outside the joint limits, or a start state braking
+    /// harder than the intended limits): the robot keeps its verified motion.
+    #[pyo3(signature = (deltas, t, h=None, absolute=None))]
     fn set_chunk(
         &self,
         py: Python<'_>,
         deltas: &Bound<'_, PyAny>,
         t: &Bound<'_, PyAny>,
         h: Option<&Bound<'_, PyAny>>,
-        absolute: bool,
+        absolute: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<u64> {
-        let t = time_arg(t)?;
-        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute)?;
-        let inner = &self.inner;
-        let r = py.detach(|| -> Result<u64, Fail> {
-            let mut g = inner
-                .lock()
-                .map_err(|_| (Kind::State, "poisoned shield state".to_string()))?;
-            g.set_chunk(t, rows, h, kind)
-        });
-        r.map_err(raise)
+        finite(t, "t")?;
+        let no = pyo3::types::PyBool::new(py, false).to_owned().into_any();
+        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute.unwrap_or(&no))?;
+        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
     }
 
     /// A measurement of human `human`'s keypoints taken at `t_meas` (s): `positions` (m, shape
-    /// (K, 3), the model's keypoint order), optional `velocities` (m/s). Older measurements than
-    /// the latest are ignored; a measurement reaches the shield at the first step at or after
-    /// its time stamp. Until every human has a measurement, no intended step verifies.
-    #[pyo3(signature = (t_meas, positions, velocities=None, human=0))]
+    /// (K, 3), the model's keypoint order), optional `velocities` (m/s). It reaches the shield
+    /// at the first step at or after `t_meas`; per step the newest is used, older ones than the
+    /// shield's latest are ignored. Until every human has a measurement, no intended step
+    /// verifies.
+    #[pyo3(signature = (t_meas, positions, velocities=None, human=None))]
     fn measure(
         &self,
+        py: Python<'_>,
         t_meas: &Bound<'_, PyAny>,
         positions: &Bound<'_, PyAny>,
         velocities: Option<&Bound<'_, PyAny>>,
-        human: usize,
+        human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let mut g = lock(&self.inner)?;
-        let m = measurement(&g, human, t_meas, positions, velocities)?;
-        g.measure(human, m).map_err(raise)
+        let zero = 0i64.into_pyobject(py)?.into_any();
+        let (id, m) = measurement(
+            &self.humans,
+            human.unwrap_or(&zero),
+            t_meas,
+            positions,
+            velocities,
+        )?;
+        with_inner(py, &self.inner, move |g| g.measure(id, m))
     }
 
     /// A measurement of object `id` (its id string or index) taken at `t_meas` (s): position
-    /// (m, shape (3,)) and, if measured, velocity (m/s).
+    /// (m, shape (3,)) and, if measured, velocity (m/s). It reaches the shield at the first
+    /// step at or after `t_meas`.
     #[pyo3(signature = (id, t_meas, position, velocity=None))]
     fn measure_object(
         &self,
+        py: Python<'_>,
         id: &Bound<'_, PyAny>,
         t_meas: &Bound<'_, PyAny>,
         position: &Bound<'_, PyAny>,
         velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let mut g = lock(&self.inner)?;
-        let (k, m) = object_measurement(&g, id, t_meas, position, velocity)?;
-        g.measure_object(k, m).map_err(raise)
+        let (k, m) = object_measurement(&self.object_ids, id, t_meas, position, velocity)?;
+        with_inner(py, &self.inner, move |g| g.measure_object(k, m))
     }
 
-    /// One safety step at time `t` (s; one safety step after the previous one): verifies the
-    /// monitored trajectory (one intended step, then braking along the path) against every
-    /// human's and object's reachable occupancy and returns the command for `t + safety_step`:
-    /// the intended step if verified, else the stored verified failsafe's. Releases the GIL.
+    /// One safety step at time `t` (s; the start time, then one safety step after the previous
+    /// one): verifies the monitored trajectory (one intended step, then braking along the path)
+    /// against every human's and object's reachable occupancy and returns the command for
+    /// `t + safety_step`: the intended step if verified, else the stored verified failsafe's.
+    /// Releases the GIL.
     fn step(&self, py: Python<'_>, t: &Bound<'_, PyAny>) -> PyResult<PyCommand> {
-        let t = time_arg(t)?;
-        let inner = &self.inner;
-        let r = py.detach(|| -> Result<(Command, ChunkProgress), Fail> {
-            let mut g = inner
-                .lock()
-                .map_err(|_| (Kind::State, "poisoned shield state".to_string()))?;
-            if g.running {
+        let t = finite(t, "t")?;
+        let (cmd, progress) = with_inner(py, &self.inner, |g| {
+            if g.running.is_some() {
                 return Err((
                     Kind::State,
                     "step: a ShieldLoop is running this shield".into(),
                 ));
             }
             g.step(t)
-        });
-        let (cmd, progress) = r.map_err(raise)?;
+        })?;
         Ok(PyCommand { cmd, progress })
     }
 
@@ -561,19 +654,20 @@ impl PyShield {
     /// {"chunk": serial (0 = standstill), "passed": actions executed, "executed": h,
     /// "accepted": chunks accepted so far}. What real-time-chunking policies need.
     fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let g = lock(&self.inner)?;
-        match g.shield.chunk_progress() {
-            Some(p) => to_py(py, &p),
-            None => Err(err(Kind::State, "progress: call start(t, q) first")),
-        }
+        let p = with_inner(py, &self.inner, |g| {
+            g.shield
+                .chunk_progress()
+                .ok_or((Kind::State, "progress: call start(t, q) first".into()))
+        })?;
+        to_py(py, &p)
     }
 
     /// Intended time (s) left until the current chunk's last executed waypoint (None before
     /// start): hand the next chunk over when this drops to about one safety step to keep
     /// `chunk_motion="continuous"` moving across chunks.
     #[getter]
-    fn remaining(&self) -> PyResult<Option<f64>> {
-        Ok(lock(&self.inner)?.shield.remaining())
+    fn remaining(&self, py: Python<'_>) -> PyResult<Option<f64>> {
+        with_inner(py, &self.inner, |g| Ok(g.shield.remaining()))
     }
 
     /// Number of joints.
@@ -590,42 +684,40 @@ impl PyShield {
 
     /// Time of the latest step (s; the start time before the first step).
     #[getter]
-    fn time(&self) -> PyResult<f64> {
-        Ok(lock(&self.inner)?.now())
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        with_inner(py, &self.inner, |g| Ok(g.now()))
     }
 
     /// Number of humans.
     #[getter]
-    fn humans(&self) -> PyResult<usize> {
-        Ok(lock(&self.inner)?.humans.len())
+    fn humans(&self) -> usize {
+        self.humans.len()
     }
 
     /// Keypoint count of each human (the rows `measure` expects).
     #[getter]
-    fn keypoints(&self) -> PyResult<Vec<usize>> {
-        Ok(lock(&self.inner)?
-            .humans
-            .iter()
-            .map(HumanModel::keypoint_count)
-            .collect())
+    fn keypoints(&self) -> Vec<usize> {
+        self.humans.iter().map(HumanModel::keypoint_count).collect()
     }
 
     /// Object ids, in index order.
     #[getter]
-    fn object_ids(&self) -> PyResult<Vec<String>> {
-        Ok(lock(&self.inner)?.object_ids.clone())
+    fn object_ids(&self) -> Vec<String> {
+        self.object_ids.clone()
     }
 
     /// The log header (dict) the run is logged with: robot, human, constraints, objects.
     #[getter]
     fn header<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let g = lock(&self.inner)?;
-        to_py(py, &g.header)
+        let h = with_inner(py, &self.inner, |g| Ok(g.header.clone()))?;
+        to_py(py, &h)
     }
 
-    /// Flush and close the log (if any). The shield can still step; nothing more is logged.
-    fn close(&self) -> PyResult<()> {
-        lock(&self.inner)?.close().map_err(raise)
+    /// Flush and close the log (if any); raises `pacs.OutputError` if a log write failed
+    /// during the run (the run went on; nothing was logged after the failure). The shield can
+    /// still step; nothing more is logged.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        with_inner(py, &self.inner, |g| g.close())
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
@@ -633,21 +725,22 @@ impl PyShield {
     }
 
     #[pyo3(signature = (*_args))]
-    fn __exit__(&self, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.close()?;
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close(py)?;
         Ok(false)
     }
 
-    fn __repr__(&self) -> PyResult<String> {
-        let g = lock(&self.inner)?;
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let (name, started) = with_inner(py, &self.inner, |g| {
+            Ok((g.shield.robot().name().to_string(), g.started))
+        })?;
         Ok(format!(
-            "Shield(robot={:?}, dof={}, humans={}, objects={:?}, safety_step={} s, started={})",
-            g.shield.robot().name(),
+            "Shield(robot={name:?}, dof={}, humans={}, objects={:?}, safety_step={} s, started={})",
             self.dof,
-            g.humans.len(),
-            g.object_ids,
+            self.humans.len(),
+            self.object_ids,
             self.safety_step,
-            py_bool(g.started)
+            py_bool(started)
         ))
     }
 }

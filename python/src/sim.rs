@@ -1,8 +1,8 @@
 //! `pacs.Demo`: the simulation's built-in FR3 scenes (the paper's tasks) and their chunking
 //! demonstration policy, for examples and tests of Python policy loops without a robot.
 
-use crate::convert::{finite, show, to_py, vector};
-use crate::errors::{input, type_err};
+use crate::convert::{finite, flag, index, text, to_py, vector};
+use crate::errors::input;
 use numpy::{PyArray1, PyArray2};
 use pacs_sim::policy::ChunkPolicy;
 use pacs_sim::task::{Scenario, TaskKind, constraint_spec, native_mode, scenario, tool_point};
@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 /// its start configuration, models, the true motion of its person (`keypoints(t)`) and objects
 /// (`object_state(i, t)`), and its chunking demonstration policy (`chunk(q)`: delta joint
 /// actions, as a diffusion policy or SmolVLA emits them). Build the shield from `shield_args()`.
-#[pyclass(name = "Demo", module = "pacs", unsendable)]
+#[pyclass(name = "Demo", module = "pacs")]
 pub struct PyDemo {
     sc: Scenario,
 }
@@ -20,8 +20,25 @@ pub struct PyDemo {
 #[pymethods]
 impl PyDemo {
     #[new]
-    #[pyo3(signature = (task="sorting", seed=0, with_human=true))]
-    fn new(task: &str, seed: u64, with_human: bool) -> PyResult<Self> {
+    #[pyo3(signature = (task=None, seed=None, with_human=None))]
+    fn new(
+        task: Option<&Bound<'_, PyAny>>,
+        seed: Option<&Bound<'_, PyAny>>,
+        with_human: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let task = match task {
+            Some(t) => text(t, "task")?,
+            None => "sorting".to_string(),
+        };
+        let task = task.as_str();
+        let seed = match seed {
+            Some(s) => index(s, "seed")? as u64,
+            None => 0,
+        };
+        let with_human = match with_human {
+            Some(w) => flag(w, "with_human")?,
+            None => true,
+        };
         let kind: TaskKind = task.parse().map_err(|_| {
             input(format!(
                 "task: unknown task `{task}` (sorting, handover, feeding, sphere, crowded)"
@@ -125,9 +142,7 @@ impl PyDemo {
         i: &Bound<'_, PyAny>,
         t: &Bound<'_, PyAny>,
     ) -> PyResult<([f64; 3], [f64; 3])> {
-        let i: usize = i
-            .extract()
-            .map_err(|_| type_err(format!("i: expected an object index, got {}", show(i))))?;
+        let i = index(i, "i")?;
         let o = self.sc.objects.get(i).ok_or_else(|| {
             input(format!(
                 "i: object {i} does not exist ({} objects)",

@@ -72,7 +72,7 @@ def test_call_errors(shield, demo):
     with pytest.raises(pacs.InputError, match=r"t: value NaN"):
         shield.step(float("nan"))
     shield.step(0.0)
-    with pytest.raises(pacs.InputError, match="not after the previous step"):
+    with pytest.raises(pacs.InputError, match="steps follow each other by the safety step"):
         shield.step(0.0)
     with pytest.raises(pacs.InputError, match=r"q: shape \[6\]"):
         shield.start(0.0, np.zeros(6))

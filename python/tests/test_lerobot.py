@@ -27,8 +27,8 @@ class DemoPolicy:
         q = np.radians([batch[k] for k in KEYS])
         deltas, _ = self.demo.chunk(q)
         targets = q + np.cumsum(deltas, axis=0)
-        gripper = np.zeros((len(targets), 1))
-        return np.degrees(np.hstack([targets, gripper]))[None]
+        gripper = np.full((len(targets), 1), 40.0)  # percent, not converted
+        return np.hstack([np.degrees(targets), gripper])[None]
 
     def reset(self):
         pass
@@ -59,7 +59,7 @@ def test_shielded_policy_loop_runs_chunks_through_the_shield(demo):
     person = far_human(demo)
     loop = ShieldedPolicyLoop(
         policy, robot, shield, KEYS, unit="deg", n_action_steps=8, fps=30.0,
-        humans=lambda t: (t, person), realtime=False,
+        humans=lambda t: (t, person), realtime=False, extra_keys={"gripper.pos": 7},
     )
     with loop:
         loop.run(3.0)
@@ -72,6 +72,7 @@ def test_shielded_policy_loop_runs_chunks_through_the_shield(demo):
     # The robot moved along the demonstration and received every joint key (+ the gripper).
     assert len(robot.sent) == pytest.approx(90, abs=2)
     assert set(robot.sent[-1]) == set(KEYS) | {"gripper.pos"}
+    assert robot.sent[-1]["gripper.pos"] == 40.0  # the policy's gripper command, not the observation's
     q = np.radians([robot.q[k] for k in KEYS])
     assert np.linalg.norm(q - demo.start) > 0.05
     assert demo.deviation(q) < 0.05
@@ -115,6 +116,22 @@ def test_rejected_chunks_are_recorded_and_the_loop_goes_on(demo):
     assert len(loop.rejected) == 3 and "outside" in loop.rejected[0][1]
     assert loop.executed()["accepted"] >= 1
     assert np.all(np.array([robot.q[k] for k in KEYS]) > demo.start)
+
+
+def test_a_dropped_chunk_is_asked_for_again(demo):
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(np.degrees(demo.start))
+    policy = DemoPolicy(demo)
+    person = far_human(demo)
+    # No measurement before 0.2 s: the first chunks are dropped; the policy is asked again.
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS, unit="deg", n_action_steps=8,
+                            humans=lambda t: (t, person) if t >= 0.2 else None) as loop:
+        loop.run(1.0)
+    assert policy.calls >= 8
+    assert loop.executed()["chunk"] >= 2
+    q = np.radians([robot.q[k] for k in KEYS])
+    assert np.linalg.norm(q - demo.start) > 0.02
 
 
 def test_adapter_argument_errors(demo):

@@ -36,6 +36,30 @@ def test_simulated_loop_matches_direct_steps(demo):
         s.step(1.0)
     loop.stop()
     s.step(loop.time + 0.001)  # direct steps again after stop
+    # The same loop again, in simulated time, after stop.
+    loop.run_until(0.31)
+    assert loop.stats()["steps"] >= 310
+    loop.stop()
+
+
+def test_one_loop_per_shield_and_bounded_runs(demo):
+    s = pacs.Shield()
+    s.start(0.0, demo.start)
+    a = pacs.ShieldLoop(s, realtime=False)
+    b = pacs.ShieldLoop(s, realtime=False)
+    a.start()
+    with pytest.raises(pacs.NotStartedError, match="another ShieldLoop"):
+        b.start()
+    with pytest.raises(pacs.InputError, match="steps ahead"):
+        a.run_until(1e300)
+    a.stop()
+    b.start()
+    b.run_until(0.01)
+    b.stop()
+    with pytest.raises(pacs.InputError, match="human: value -1 is negative"):
+        a.measure(0.0, far_human(demo), human=-1)
+    with pytest.raises(pacs.ArgumentTypeError, match="history"):
+        pacs.ShieldLoop(s, history="many")
 
 
 def test_realtime_loop_steps_at_the_safety_rate(demo):

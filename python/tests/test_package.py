@@ -17,17 +17,51 @@ def test_module_docstring_example():
     assert tried >= 8 and failures == 0
 
 
-def test_stubs_cover_the_extension():
+def stub_classes():
+    """Class name -> its block of the stub file."""
     stub = (ROOT / "python" / "pacs" / "_pacs.pyi").read_text()
+    blocks, name = {}, None
+    for line in stub.splitlines():
+        if line.startswith("class "):
+            name = line[6:].split("(")[0].split(":")[0]
+            blocks[name] = ""
+        elif line and not line.startswith(" "):
+            name = None
+        if name is not None:
+            blocks[name] += line + "\n"
+    return stub, blocks
+
+
+def test_stubs_cover_the_extension():
+    stub, blocks = stub_classes()
     for name in dir(native):
         if name.startswith("_") or name == "pacs":
             continue
-        assert f"class {name}" in stub or f"def {name}(" in stub, name
         obj = getattr(native, name)
         if isinstance(obj, type):
+            assert name in blocks, f"class {name} missing from _pacs.pyi"
             for attr in dir(obj):
                 if not attr.startswith("_"):
-                    assert f"def {attr}(" in stub, f"{name}.{attr} missing from _pacs.pyi"
+                    assert f"def {attr}(" in blocks[name], f"{name}.{attr} missing from its stub"
+        else:
+            assert f"def {name}(" in stub, name
+
+
+def test_stub_signatures_match():
+    import inspect
+    _, blocks = stub_classes()
+    for cls in (native.Shield, native.ShieldLoop, native.LogWriter):
+        for attr in ("set_chunk", "measure", "measure_object", "robot", "human", "object"):
+            fn = getattr(cls, attr, None)
+            if fn is None or not callable(fn):
+                continue
+            params = list(inspect.signature(fn).parameters)[1:]
+            block = blocks[cls.__name__]
+            line = block[block.index(f"def {attr}("):]
+            line = line[: line.index(")")]
+            names = [p.split(":")[0].strip() for p in line.split("(", 1)[1].split(",")]
+            names = [n for n in names if n and n != "self"]
+            assert names == params, f"{cls.__name__}.{attr}: stub {names}, module {params}"
 
 
 def test_docstrings_have_units():

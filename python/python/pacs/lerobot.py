@@ -82,6 +82,10 @@ class ShieldedPolicyLoop:
         realtime: True: wall-clock ticks and a :class:`pacs.ShieldLoop` stepping at the
             safety rate on a Rust thread; False: simulated time, the shield steps between ticks.
         replan_margin: request the next chunk when this many executed actions are left.
+        extra_keys: robot action keys that are not shield joints (e.g. ``{"gripper.pos": 6}``)
+            mapped to their column in the policy's action vector: sent with the current
+            chunk's action at the shield's progress along it (unfiltered: the shield does not
+            model them). Other ``.pos`` keys of the observation are sent back unchanged.
 
     A chunk the shield rejects (``pacs.ChunkRejected``) is recorded in ``rejected`` (time,
     reason) and the policy is asked again at the next tick; the robot keeps its verified motion.
@@ -103,6 +107,7 @@ class ShieldedPolicyLoop:
         fps: float = 30.0,
         realtime: bool = False,
         replan_margin: int = 0,
+        extra_keys: Mapping[str, int] | None = None,
     ) -> None:
         if not hasattr(policy, "predict_action_chunk") and not hasattr(policy, "select_action"):
             raise ArgumentTypeError(
@@ -138,6 +143,9 @@ class ShieldedPolicyLoop:
         self.period = 1.0 / fps
         self.realtime = realtime
         self.replan_margin = replan_margin
+        self.extra_keys = dict(extra_keys or {})
+        if hasattr(policy, "reset"):
+            policy.reset()  # a new episode
         self.loop = ShieldLoop(shield, realtime=realtime)
         self.loop.start()
         self.rejected: list[tuple[float, str]] = []
@@ -186,7 +194,9 @@ class ShieldedPolicyLoop:
         if self.last_chunk == 0:
             return True
         if p["chunk"] != self.last_chunk:
-            return False  # the newest chunk has not taken over yet
+            # The newest chunk did not take over at the step after its handover (not verified,
+            # e.g. a person close by): the shield dropped it; ask the policy again.
+            return True
         return p["executed"] - p["passed"] <= self.replan_margin
 
     def executed(self) -> dict:
@@ -247,6 +257,11 @@ class ShieldedPolicyLoop:
             q = cmd.q / self.scale
             for k, v in zip(self.joint_keys, q):
                 action[k] = float(v)
+            chunk = self.chunks.get(cmd.chunk)
+            if chunk is not None:
+                row = chunk[min(cmd.passed, len(chunk) - 1)]
+                for k, col in self.extra_keys.items():
+                    action[k] = float(row[col])
         return self.robot.send_action(action)
 
     def run(self, duration: float) -> None:
@@ -304,6 +319,9 @@ class ShieldActionStep(_ActionStepBase):
     joint targets, one per control tick) is handed to a running :class:`pacs.ShieldLoop` as a
     one-action chunk of absolute joint positions, and the action returned to the robot is the
     shield's latest command — the verified motion toward the target, or braking along the path.
+    A target the shield drops (not verified at its first step) is handed over again; one it
+    rejects (``pacs.ChunkRejected``) is recorded in ``rejected`` and the robot keeps its
+    verified motion. Keys other than ``joint_keys`` pass through unchanged.
 
     Args:
         loop: a started :class:`pacs.ShieldLoop` (real time) stepping the shield.
@@ -319,15 +337,21 @@ class ShieldActionStep(_ActionStepBase):
         self.unit = unit
         self.scale = _scale(unit)
         self._last_target: np.ndarray | None = None
+        self._last_serial = 0
+        self.rejected: list[str] = []
 
     def action(self, action: dict) -> dict:
         try:
             target = np.array([float(action[k]) for k in self.joint_keys]) * self.scale
         except KeyError as e:
             raise InputError(f"action: no joint key {e.args[0]!r}") from None
-        if self._last_target is None or not np.array_equal(target, self._last_target):
-            self.loop.set_chunk(target[None, :], absolute=True)
-            self._last_target = target
+        dropped = self._last_serial and self.loop.progress()["chunk"] != self._last_serial
+        if dropped or self._last_target is None or not np.array_equal(target, self._last_target):
+            try:
+                self._last_serial = self.loop.set_chunk(target[None, :], absolute=True)
+                self._last_target = target
+            except ChunkRejected as e:  # the robot keeps its verified motion
+                self.rejected.append(str(e))
         cmd = self.loop.latest()
         out = dict(action)
         if cmd is not None:
@@ -344,6 +368,7 @@ class ShieldActionStep(_ActionStepBase):
 
     def reset(self) -> None:
         self._last_target = None
+        self._last_serial = 0
 
 
 if _Registry is not None:  # pragma: no cover - only with lerobot installed
