@@ -234,3 +234,27 @@ def test_urdf_robot(tmp_path):
         pacs.Shield(robot=str(tmp_path / "missing.urdf"))
     with pytest.raises(pacs.InputError, match="robot\\[\"mesh\"\\]"):
         pacs.Shield(robot={"urdf": "x.urdf", "mesh": 1})
+
+
+DATA = __import__("pathlib").Path(__file__).resolve().parents[2] / "models" / "tests" / "data"
+
+
+def test_a_urdf_robot_in_every_form(demo, tmp_path):
+    urdf, side = DATA / "fr3.urdf", DATA / "fr3_side.toml"
+    spec = pacs.robot_spec(urdf, side=side)
+    assert len(spec["links"]) >= 7
+    for robot, kw in [(str(urdf), {"side": side}), ({"urdf": urdf, "side": side}, {})]:
+        s = pacs.Shield(robot=robot, log=tmp_path / "urdf.jsonl", **kw)
+        assert s.dof == 7
+        # The header carries the converted spec, so the audit uses the same robot.
+        assert isinstance(s.header["robot"], dict)
+    s.start(0.0, demo.start)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    cmds = run(s, 400, measure=away(demo))
+    assert cmds[-1].verified
+    s.close()
+    (r,) = pacs.audit(tmp_path / "urdf.jsonl")
+    assert r.verdict == "pass", r.to_dict()
+    with pytest.raises(pacs.InputError, match="URDF"):
+        pacs.Shield(robot=DATA / "planar2.urdf")  # no side file: no masses/capsules
