@@ -66,9 +66,10 @@ pub struct PyShieldLoop {
     object_ids: Vec<String>,
 }
 
-/// Step the shield from its current time for `steps` steps (None: until stopped); real time
-/// paces them.
+/// Step the shield from its current time for `steps` steps (None: until stopped) while loop
+/// `id` owns it; real time paces them.
 fn run_steps(
+    id: u64,
     inner: &Mutex<Inner>,
     shared: &Shared,
     realtime: bool,
@@ -96,7 +97,19 @@ fn run_steps(
         let t = t0 + k as f64 * alpha;
         let clock = Instant::now();
         let r = match inner.lock() {
-            Ok(mut g) => g.step(t),
+            // Only the loop that claimed the shield steps it (a stop() racing a start() may
+            // have released the claim).
+            Ok(g) if g.running != Some(id) => Err((
+                Kind::State,
+                "this ShieldLoop no longer owns the shield (stopped)".to_string(),
+            )),
+            Ok(mut g) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| g.step(t)))
+                .unwrap_or_else(|_| {
+                    Err((
+                        Kind::State,
+                        format!("internal error: the step at {t} s panicked"),
+                    ))
+                }),
             Err(_) => Err((Kind::State, "poisoned shield state".into())),
         };
         let us = clock.elapsed().as_secs_f64() * 1e6;
@@ -134,11 +147,12 @@ impl PyShieldLoop {
     }
 
     fn check_error(&self, py: Python<'_>) -> PyResult<()> {
-        let o = self.out(py)?;
-        if let Some(e) = &o.error {
-            return Err(err(e.0, format!("the shield loop stopped: {}", e.1)));
+        // Copy the error out first: building the Python exception runs Python code.
+        let e = self.out(py)?.error.clone();
+        match e {
+            Some(e) => Err(err(e.0, format!("the shield loop stopped: {}", e.1))),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// Make this loop the one that steps the shield (refused if another one does).
@@ -228,18 +242,19 @@ impl PyShieldLoop {
         }
         // Only Python threads (holding the GIL) take the handle's lock; nothing below releases
         // the GIL while it is held.
-        let mut handle = self
-            .handle
-            .lock()
-            .map_err(|_| err(Kind::State, "poisoned loop state"))?;
+        let Ok(mut handle) = self.handle.lock() else {
+            return Err(err(Kind::State, "poisoned loop state"));
+        };
         if handle.is_some() {
+            drop(handle);
             return Err(err(Kind::State, "ShieldLoop.start: already running"));
         }
-        let (inner, shared, alpha) = (self.inner.clone(), self.shared.clone(), self.alpha);
+        let (id, inner, shared, alpha) =
+            (self.id, self.inner.clone(), self.shared.clone(), self.alpha);
         *handle = Some(
             std::thread::Builder::new()
                 .name("pacs-shield-loop".into())
-                .spawn(move || run_steps(&inner, &shared, true, None, alpha))
+                .spawn(move || run_steps(id, &inner, &shared, true, None, alpha))
                 .map_err(|e| err(Kind::State, format!("cannot start the loop thread: {e}")))?,
         );
         Ok(())
@@ -264,7 +279,8 @@ impl PyShieldLoop {
         if t < now {
             return Ok(());
         }
-        let n = ((t - now) / alpha).floor() + 1.0;
+        // (t on the grid: (t − now)/α may round just below an integer.)
+        let n = ((t - now) / alpha + 1e-6).floor() + 1.0;
         if n > MAX_RUN_STEPS {
             return Err(input(format!(
                 "t: {t} s is {n:.3e} steps ahead of the shield's time {now} s (at most {MAX_RUN_STEPS:.0e} per call)"
@@ -272,7 +288,8 @@ impl PyShieldLoop {
         }
         self.shared.stop.store(false, Ordering::Relaxed);
         let (inner, shared) = (&self.inner, &self.shared);
-        py.detach(|| run_steps(inner, shared, false, Some(n as u64), alpha));
+        let id = self.id;
+        py.detach(|| run_steps(id, inner, shared, false, Some(n as u64), alpha));
         self.check_error(py)
     }
 
@@ -284,11 +301,14 @@ impl PyShieldLoop {
             .lock()
             .map_err(|_| err(Kind::State, "poisoned loop state"))?
             .take();
-        if let Some(h) = h {
-            py.detach(|| h.join())
-                .map_err(|_| err(Kind::State, "the loop thread panicked"))?;
-        }
+        let joined = match h {
+            Some(h) => py.detach(|| h.join()).is_ok(),
+            None => true,
+        };
         py.detach(|| self.release());
+        if !joined {
+            return Err(err(Kind::State, "the loop thread panicked"));
+        }
         self.check_error(py)
     }
 

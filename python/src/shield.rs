@@ -28,7 +28,7 @@ pub type Fail = (Kind, String);
 const MAX_PENDING: usize = 4096;
 
 /// How far (s) a step time may be from the previous step plus one safety step (float
-/// rounding of `k·α_s`).
+/// rounding of `k·α_s`; at least 8 ulps of t).
 const STEP_TOLERANCE: f64 = 1e-9;
 
 /// Everything a shield needs between calls.
@@ -49,6 +49,8 @@ pub struct Inner {
     pub pending_humans: Vec<(usize, HumanMeasurement)>,
     /// Object measurements not yet handed to a step (the same rule).
     pub pending_objects: Vec<(usize, ObjectMeasurement)>,
+    /// Per object, the time stamp of the newest measurement handed to the shield (and logged).
+    pub object_latest: Vec<f64>,
     /// Time of the last step (s).
     pub last_t: Option<f64>,
     pub start_t: f64,
@@ -72,6 +74,15 @@ impl Inner {
                 Kind::State,
                 "start: a shield that logs (log=...) runs once; create a new Shield for a new run"
                     .into(),
+            ));
+        }
+        if self.started && t < self.now() {
+            return Err((
+                Kind::Input,
+                format!(
+                    "t: a restart at {t} s is before the shield's time {} s (its measurements would look newer than the new ones)",
+                    self.now()
+                ),
             ));
         }
         self.shield
@@ -177,8 +188,10 @@ impl Inner {
             return Err((Kind::Input, format!("t: value {t} is not finite")));
         }
         let alpha = self.shield.config().safety_step;
+        // Float rounding of t = t_0 + k·α_s grows with |t| (a Unix-time t_0 has ulps of 2e-7 s).
+        let tol = STEP_TOLERANCE.max(8.0 * f64::EPSILON * t.abs());
         match self.last_t {
-            Some(last) if (t - (last + alpha)).abs() > STEP_TOLERANCE => {
+            Some(last) if (t - (last + alpha)).abs() > tol => {
                 return Err((
                     Kind::Input,
                     format!(
@@ -187,7 +200,7 @@ impl Inner {
                     ),
                 ));
             }
-            None if t < self.start_t - STEP_TOLERANCE => {
+            None if t < self.start_t - tol => {
                 return Err((
                     Kind::Input,
                     format!("t: {t} s is before the start at {} s", self.start_t),
@@ -227,6 +240,12 @@ impl Inner {
         for (k, idx) in objects.iter().enumerate() {
             let Some(i) = *idx else { continue };
             let m = self.pending_objects[i].1;
+            // The shield keeps the first of equal-time measurements and ignores older ones:
+            // hand over (and log) only strictly newer ones, so that the log shows what it used.
+            if m.time <= self.object_latest[k] {
+                continue;
+            }
+            self.object_latest[k] = m.time;
             self.shield
                 .measure_object(k, &m)
                 .map_err(|e| (Kind::State, e.to_string()))?;
@@ -543,6 +562,7 @@ impl PyShield {
                 log_opened: false,
                 pending_humans: Vec::new(),
                 pending_objects: Vec::new(),
+                object_latest: vec![f64::NEG_INFINITY; object_ids.len()],
                 last_t: None,
                 start_t: 0.0,
                 started: false,

@@ -88,3 +88,13 @@ def test_not_started():
         pacs.ShieldLoop(s)
     with pytest.raises(pacs.InputError, match="outside the joint position limits"):
         s.start(0.0, np.full(7, 5.0))
+
+
+def test_restart_before_the_shield_time(demo):
+    s = pacs.Shield()
+    s.start(1.0, demo.start)
+    s.step(1.0)
+    with pytest.raises(pacs.InputError, match="before the shield's time"):
+        s.start(0.5, demo.start)
+    s.start(2.0, demo.start)
+    s.step(2.0)

@@ -27,7 +27,7 @@ class DemoPolicy:
         q = np.radians([batch[k] for k in KEYS])
         deltas, _ = self.demo.chunk(q)
         targets = q + np.cumsum(deltas, axis=0)
-        gripper = np.full((len(targets), 1), 40.0)  # percent, not converted
+        gripper = 40.0 + np.arange(len(targets))[:, None]  # percent, not converted; per action
         return np.hstack([np.degrees(targets), gripper])[None]
 
     def reset(self):
@@ -72,7 +72,9 @@ def test_shielded_policy_loop_runs_chunks_through_the_shield(demo):
     # The robot moved along the demonstration and received every joint key (+ the gripper).
     assert len(robot.sent) == pytest.approx(90, abs=2)
     assert set(robot.sent[-1]) == set(KEYS) | {"gripper.pos"}
-    assert robot.sent[-1]["gripper.pos"] == 40.0  # the policy's gripper command, not the observation's
+    # The policy's gripper command of the action being executed (not the observation's, never
+    # one beyond the h executed actions).
+    assert all(40.0 <= a["gripper.pos"] <= 47.0 for a in robot.sent)
     q = np.radians([robot.q[k] for k in KEYS])
     assert np.linalg.norm(q - demo.start) > 0.05
     assert demo.deviation(q) < 0.05
@@ -190,3 +192,17 @@ def test_against_lerobot_classes(demo):
         action = dict(zip(KEYS, demo.start + 0.01))
         out = pipe((action, {}))
     assert set(KEYS) <= set(out)
+
+
+def test_action_step_never_passes_the_raw_target(demo):
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    loop = pacs.ShieldLoop(shield, realtime=False)
+    loop.start()
+    step = ShieldActionStep(loop, KEYS)
+    with pytest.raises(pacs.NotStartedError, match="has not stepped"):
+        step.action(dict(zip(KEYS, demo.start + 0.5)))
+    loop.run_until(0.01)
+    out = step.action(dict(zip(KEYS, demo.start + 0.5)))
+    np.testing.assert_array_equal([out[k] for k in KEYS], demo.start)  # no measurement: at rest
+    loop.stop()

@@ -42,6 +42,20 @@ def test_simulated_loop_matches_direct_steps(demo):
     loop.stop()
 
 
+def test_a_unix_time_clock_keeps_the_grid(demo):
+    t0 = 1.7e9  # time.time()-like start: ulps of 2.4e-7 s
+    s = pacs.Shield()
+    s.start(t0, demo.start)
+    s.measure(t0, far_human(demo))
+    for k in range(50):
+        s.step(t0 + k * 0.001)
+    loop = pacs.ShieldLoop(s, realtime=False)
+    loop.start()
+    loop.run_until(t0 + 0.5)
+    assert loop.stats()["steps"] == 451
+    loop.stop()
+
+
 def test_one_loop_per_shield_and_bounded_runs(demo):
     s = pacs.Shield()
     s.start(0.0, demo.start)
@@ -74,7 +88,7 @@ def test_realtime_loop_steps_at_the_safety_rate(demo):
         p = loop.progress()
     st = loop.stats()
     # 0.3 s at 1 kHz: about 300 steps (the thread keeps the grid t_k = t_0 + k·α_s).
-    assert 200 <= st["steps"] <= 400, st
+    assert 150 <= st["steps"] <= 400, st
     assert c is not None and c.chunk == 1 and p["accepted"] == 1
     out = loop.commands()
     np.testing.assert_allclose(np.diff(out["t"]), 0.001, atol=1e-12)

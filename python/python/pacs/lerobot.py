@@ -30,7 +30,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from ._pacs import Shield, ShieldLoop
-from .errors import ArgumentTypeError, ChunkRejected, InputError
+from .errors import ArgumentTypeError, ChunkRejected, InputError, NotStartedError
 
 __all__ = ["ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
 
@@ -78,6 +78,9 @@ class ShieldedPolicyLoop:
         n_action_steps: h, the executed actions per chunk (default: all H).
         preprocess: ``obs -> batch`` for the policy (e.g. LeRobot's preprocessor pipeline);
             default: the observation dict itself.
+        postprocess: applied to the policy's output before the shield (e.g. LeRobot's
+            postprocessor, which un-normalizes actions: LeRobot ≥ 0.4 policies return
+            normalized actions); default: none.
         humans: ``t -> None | (t_meas, positions (K, 3) m)``, polled every tick, or None.
         realtime: True: wall-clock ticks and a :class:`pacs.ShieldLoop` stepping at the
             safety rate on a Rust thread; False: simulated time, the shield steps between ticks.
@@ -103,6 +106,7 @@ class ShieldedPolicyLoop:
         action_kind: str = "absolute",
         n_action_steps: int | None = None,
         preprocess: Callable[[Mapping[str, Any]], Any] | None = None,
+        postprocess: Callable[[Any], Any] | None = None,
         humans: Callable[[float], Any] | None = None,
         fps: float = 30.0,
         realtime: bool = False,
@@ -139,6 +143,7 @@ class ShieldedPolicyLoop:
         self.absolute = action_kind == "absolute"
         self.n_action_steps = n_action_steps
         self.preprocess = preprocess
+        self.postprocess = postprocess
         self.humans = humans
         self.period = 1.0 / fps
         self.realtime = realtime
@@ -172,12 +177,13 @@ class ShieldedPolicyLoop:
     # -- chunks -------------------------------------------------------------------------
     def _policy_chunk(self, obs: Mapping[str, Any]) -> np.ndarray:
         batch = self.preprocess(obs) if self.preprocess is not None else obs
+        post = self.postprocess if self.postprocess is not None else (lambda x: x)
         if hasattr(self.policy, "predict_action_chunk"):
-            a = to_numpy(self.policy.predict_action_chunk(batch))
+            a = to_numpy(post(self.policy.predict_action_chunk(batch)))
             if a.ndim == 3:
                 a = a[0]
         else:
-            a = to_numpy(self.policy.select_action(batch))
+            a = to_numpy(post(self.policy.select_action(batch)))
             if a.ndim == 2:
                 a = a[0]
             a = a[None, :]
@@ -248,20 +254,23 @@ class ShieldedPolicyLoop:
                 self.chunks[serial] = a
                 self.chunk_h[serial] = h
                 self.last_chunk = serial
-                for old in [k for k in self.chunks if k < serial - 1]:
+                running = self.loop.progress()["chunk"]
+                for old in [k for k in self.chunks if k < min(running, serial)]:
                     del self.chunks[old], self.chunk_h[old]
         self._advance(t + self.period)
         cmd = self.loop.latest()
+        if cmd is None:
+            return {}  # the shield has not stepped yet: nothing to send (never the raw action)
         action = {k: v for k, v in obs.items() if k.endswith(".pos") and k not in self.joint_keys}
-        if cmd is not None:
-            q = cmd.q / self.scale
-            for k, v in zip(self.joint_keys, q):
-                action[k] = float(v)
-            chunk = self.chunks.get(cmd.chunk)
-            if chunk is not None:
-                row = chunk[min(cmd.passed, len(chunk) - 1)]
-                for k, col in self.extra_keys.items():
-                    action[k] = float(row[col])
+        q = cmd.q / self.scale
+        for k, v in zip(self.joint_keys, q):
+            action[k] = float(v)
+        chunk = self.chunks.get(cmd.chunk)
+        if chunk is not None:
+            # The action being executed: q̂_passed → q̂_{passed+1} (the last executed one at the end).
+            row = chunk[min(cmd.passed, self.chunk_h[cmd.chunk] - 1)]
+            for k, col in self.extra_keys.items():
+                action[k] = float(row[col])
         return self.robot.send_action(action)
 
     def run(self, duration: float) -> None:
@@ -338,6 +347,7 @@ class ShieldActionStep(_ActionStepBase):
         self.scale = _scale(unit)
         self._last_target: np.ndarray | None = None
         self._last_serial = 0
+        self._handover_time = -math.inf
         self.rejected: list[str] = []
 
     def action(self, action: dict) -> dict:
@@ -345,18 +355,27 @@ class ShieldActionStep(_ActionStepBase):
             target = np.array([float(action[k]) for k in self.joint_keys]) * self.scale
         except KeyError as e:
             raise InputError(f"action: no joint key {e.args[0]!r}") from None
-        dropped = self._last_serial and self.loop.progress()["chunk"] != self._last_serial
+        # Dropped: a step after the handover ran, and the commands still follow an older chunk.
+        dropped = (
+            self._last_serial
+            and self.loop.time > self._handover_time
+            and self.loop.progress()["chunk"] != self._last_serial
+        )
         if dropped or self._last_target is None or not np.array_equal(target, self._last_target):
             try:
+                self._handover_time = self.loop.time
                 self._last_serial = self.loop.set_chunk(target[None, :], absolute=True)
                 self._last_target = target
             except ChunkRejected as e:  # the robot keeps its verified motion
                 self.rejected.append(str(e))
         cmd = self.loop.latest()
+        if cmd is None:
+            raise NotStartedError(
+                "ShieldActionStep: the ShieldLoop has not stepped yet (start it before the pipeline runs)"
+            )
         out = dict(action)
-        if cmd is not None:
-            for k, v in zip(self.joint_keys, cmd.q / self.scale):
-                out[k] = float(v)
+        for k, v in zip(self.joint_keys, cmd.q / self.scale):
+            out[k] = float(v)
         return out
 
     def transform_features(self, features):
