@@ -154,6 +154,10 @@ def test_action_step_replaces_actions_by_shield_commands(demo):
     shield.measure(0.0, far_human(demo))
     with pacs.ShieldLoop(shield, realtime=True) as loop:
         step = ShieldActionStep(loop, KEYS)
+        import time
+
+        while loop.latest() is None:  # the first step (within a millisecond or so)
+            time.sleep(0.001)
         target = demo.start + 0.02
         action = dict(zip(KEYS, target))
         action["gripper.pos"] = 40.0
@@ -184,6 +188,10 @@ def test_against_lerobot_classes(demo):
     shield.measure(0.0, far_human(demo))
     with pacs.ShieldLoop(shield) as loop:
         step = ShieldActionStep(loop, KEYS)
+        import time
+
+        while loop.latest() is None:
+            time.sleep(0.001)
         pipe = processor.RobotProcessorPipeline(
             steps=[step],
             to_transition=processor.converters.robot_action_observation_to_transition,
