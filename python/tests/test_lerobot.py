@@ -214,3 +214,47 @@ def test_action_step_never_passes_the_raw_target(demo):
     out = step.action(dict(zip(KEYS, demo.start + 0.5)))
     np.testing.assert_array_equal([out[k] for k in KEYS], demo.start)  # no measurement: at rest
     loop.stop()
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_a_real_lerobot_policy_through_the_shield(demo):
+    """LeRobot's ACT policy (random weights, tiny) emits (1, H, A) torch chunks; the loop
+    integrates them (as deltas, scaled by a stand-in postprocessor) through the shield."""
+    torch = pytest.importorskip("torch")
+    act = pytest.importorskip("lerobot.policies.act.modeling_act")
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.act.configuration_act import ACTConfig
+
+    torch.manual_seed(0)
+    cfg = ACTConfig(
+        input_features={
+            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
+            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
+        },
+        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(8,))},
+        chunk_size=16, n_action_steps=8, dim_model=64, n_heads=2, dim_feedforward=128,
+        n_encoder_layers=1, n_decoder_layers=1, use_vae=False, device="cpu",
+    )
+    policy = act.ACTPolicy(cfg).eval()
+
+    def preprocess(obs):
+        q = torch.tensor([[obs[k] for k in KEYS]], dtype=torch.float32)
+        return {"observation.state": q, "observation.environment_state": torch.zeros(1, 3)}
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    with torch.no_grad(), ShieldedPolicyLoop(
+        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=8,
+        preprocess=preprocess, postprocess=lambda a: 0.005 * a,
+        humans=lambda t: (t, person), extra_keys={"gripper.pos": 7},
+    ) as loop:
+        loop.run(1.0)
+    assert loop.executed()["accepted"] >= 3 and not loop.rejected
+    q = np.array([robot.q[k] for k in KEYS])
+    assert np.linalg.norm(q - demo.start) > 1e-3
+    sent = np.array([[a[k] for k in KEYS] for a in robot.sent])
+    # FR3 joint speed limits ≤ 2.62 rad/s: no jump between 30 Hz commands beyond that.
+    assert np.max(np.abs(np.diff(sent, axis=0))) <= 2.62 / 30 + 1e-9
