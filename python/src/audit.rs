@@ -248,29 +248,11 @@ impl PyLogWriter {
         side: Option<&Bound<'_, PyAny>>,
         meta: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let fr3 = "fr3".into_pyobject(py)?.into_any();
-        let human = match human {
-            Given::Missing => "default".into_pyobject(py)?.into_any(),
-            Given::Value(h) if h.is_none() => {
-                return Err(input(
-                    "human: a log names one human model (the audit checks the robot against its measurements)",
-                ));
-            }
-            Given::Value(h) => h,
-        };
-        let sorting = "sorting".into_pyobject(py)?.into_any();
-        let s = scene(
-            robot.unwrap_or(&fr3),
-            side,
-            &human,
-            constraints.unwrap_or(&sorting),
-            objects,
-            environment,
-        )?;
+        let s = scene(py, robot, side, human, constraints, objects, environment)?;
         let path = crate::convert::path(path, "path")?;
         if s.humans.len() != 1 {
             return Err(input(format!(
-                "human: a log names exactly one human model, got {}",
+                "human: a log names one human model (the audit checks the robot against its measurements); got {}",
                 s.humans.len()
             )));
         }

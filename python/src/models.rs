@@ -4,7 +4,7 @@
 //! ([`LogModels::from_header`]), so that a log written from Python is audited against exactly
 //! the models the shield used.
 
-use crate::convert::{from_py, show, to_py};
+use crate::convert::{Given, from_py, show, to_py};
 use crate::errors::{input, type_err};
 use pacs_log::{Header, LogModels, ModelRef, ObjectEntry};
 use pacs_models::ConstraintSpec;
@@ -136,17 +136,32 @@ pub struct SceneModels {
     pub humans: Vec<HumanModel>,
 }
 
-/// Resolve the models of a shield or log writer.
+/// Resolve the models of a shield or log writer (absent arguments: the FR3, the default
+/// human, the sorting task; `humans=None`: no human).
 #[allow(clippy::too_many_arguments)]
 pub fn scene(
-    robot: &Bound<'_, PyAny>,
+    py: Python<'_>,
+    robot: Option<&Bound<'_, PyAny>>,
     side: Option<&Bound<'_, PyAny>>,
-    humans: &Bound<'_, PyAny>,
-    constraints: &Bound<'_, PyAny>,
+    humans: Given<'_>,
+    constraints: Option<&Bound<'_, PyAny>>,
     objects: Option<&Bound<'_, PyAny>>,
     environment: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<SceneModels> {
-    let robot = robot_ref(robot, side)?;
+    // The defaults: the FR3, the default human, the sorting task.
+    let robot = match robot {
+        Some(r) => robot_ref(r, side)?,
+        None => robot_ref(&"fr3".into_pyobject(py)?.into_any(), side)?,
+    };
+    let constraints = match constraints {
+        Some(c) => constraints_ref(c)?,
+        None => ModelRef::Name("sorting".into()),
+    };
+    let humans = match humans {
+        Given::Missing => "default".into_pyobject(py)?.into_any(),
+        Given::Value(h) => h,
+    };
+    let humans = &humans;
     let mut human_refs = Vec::new();
     if humans.is_none() {
         // No human in the scene: the header still names the default model (no measurements).
@@ -167,7 +182,7 @@ pub fn scene(
         .first()
         .cloned()
         .unwrap_or_else(|| ModelRef::Name("default".into()));
-    let mut header = Header::new(robot, first, constraints_ref(constraints)?);
+    let mut header = Header::new(robot, first, constraints);
     if let Some(o) = objects.filter(|o| !o.is_none()) {
         header.objects = from_py::<Vec<ObjectEntry>>(o, "objects")?;
     }

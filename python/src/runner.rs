@@ -7,13 +7,10 @@
 //! mutex is held only for copies, and its only other user (the loop thread) never waits for the
 //! GIL. Neither can deadlock with the GIL.
 
-use crate::convert::{finite, flag, index, show, to_py};
+use crate::convert::{finite, flag, index, show};
 use crate::errors::{Kind, err, input, type_err};
-use crate::shield::{
-    Fail, Inner, PyCommand, PyShield, chunk_args, measurement, object_measurement, with_inner,
-};
+use crate::shield::{Fail, Handle, Inner, PyCommand, PyShield, with_inner};
 use numpy::{PyArray1, PyArrayMethods};
-use pacs_models::human::HumanModel;
 use pacs_shield::shield::{ChunkProgress, Command};
 use pyo3::prelude::*;
 use std::collections::VecDeque;
@@ -56,14 +53,11 @@ struct Shared {
 #[pyclass(name = "ShieldLoop", module = "pacs")]
 pub struct PyShieldLoop {
     id: u64,
-    inner: Arc<Mutex<Inner>>,
+    /// The shield it steps (shared with the `Shield` object).
+    h: Handle,
     shared: Arc<Shared>,
     handle: Mutex<Option<JoinHandle<()>>>,
     realtime: bool,
-    dof: usize,
-    alpha: f64,
-    humans: Vec<HumanModel>,
-    object_ids: Vec<String>,
 }
 
 /// Step the shield from its current time for `steps` steps (None: until stopped) while loop
@@ -158,7 +152,7 @@ impl PyShieldLoop {
     /// Make this loop the one that steps the shield (refused if another one does).
     fn claim(&self, py: Python<'_>) -> PyResult<()> {
         let id = self.id;
-        with_inner(py, &self.inner, move |g| match g.running {
+        with_inner(py, &self.h.inner, move |g| match g.running {
             Some(other) if other != id => Err((
                 Kind::State,
                 "ShieldLoop: another ShieldLoop runs this shield".into(),
@@ -171,7 +165,7 @@ impl PyShieldLoop {
     }
 
     fn release(&self) {
-        if let Ok(mut g) = self.inner.lock()
+        if let Ok(mut g) = self.h.inner.lock()
             && g.running == Some(self.id)
         {
             g.running = None;
@@ -203,9 +197,8 @@ impl PyShieldLoop {
             Some(h) => index(h, "history")?,
             None => 10_000,
         };
-        let s = s.borrow();
-        let inner = s.inner.clone();
-        let started = with_inner(py, &inner, |g| Ok(g.started))?;
+        let h = s.borrow().h.clone();
+        let started = with_inner(py, &h.inner, |g| Ok(g.started))?;
         if !started {
             return Err(err(
                 Kind::State,
@@ -214,7 +207,7 @@ impl PyShieldLoop {
         }
         Ok(Self {
             id: NEXT_LOOP_ID.fetch_add(1, Ordering::Relaxed),
-            inner,
+            h,
             shared: Arc::new(Shared {
                 stop: AtomicBool::new(false),
                 out: Mutex::new(LoopOut {
@@ -224,10 +217,6 @@ impl PyShieldLoop {
             }),
             handle: Mutex::new(None),
             realtime,
-            dof: s.dof,
-            alpha: s.safety_step,
-            humans: s.humans.clone(),
-            object_ids: s.object_ids.clone(),
         })
     }
 
@@ -249,8 +238,12 @@ impl PyShieldLoop {
             drop(handle);
             return Err(err(Kind::State, "ShieldLoop.start: already running"));
         }
-        let (id, inner, shared, alpha) =
-            (self.id, self.inner.clone(), self.shared.clone(), self.alpha);
+        let (id, inner, shared, alpha) = (
+            self.id,
+            self.h.inner.clone(),
+            self.shared.clone(),
+            self.h.safety_step,
+        );
         *handle = Some(
             std::thread::Builder::new()
                 .name("pacs-shield-loop".into())
@@ -272,8 +265,8 @@ impl PyShieldLoop {
         let t = finite(t, "t")?;
         self.check_error(py)?;
         self.claim(py)?;
-        let alpha = self.alpha;
-        let now = with_inner(py, &self.inner, move |g| {
+        let alpha = self.h.safety_step;
+        let now = with_inner(py, &self.h.inner, move |g| {
             Ok(g.last_t.map_or(g.start_t, |x| x + alpha))
         })?;
         if t < now {
@@ -287,7 +280,7 @@ impl PyShieldLoop {
             )));
         }
         self.shared.stop.store(false, Ordering::Relaxed);
-        let (inner, shared) = (&self.inner, &self.shared);
+        let (inner, shared) = (&self.h.inner, &self.shared);
         let id = self.id;
         py.detach(|| run_steps(id, inner, shared, false, Some(n as u64), alpha));
         self.check_error(py)
@@ -312,7 +305,8 @@ impl PyShieldLoop {
         self.check_error(py)
     }
 
-    /// `Shield.set_chunk` through the loop (`t` defaults to the loop's current time).
+    /// `Shield.set_chunk` through the loop (`t`, if given, is checked finite; the log records
+    /// the handover at the loop's time).
     #[pyo3(signature = (deltas, t=None, h=None, absolute=None))]
     fn set_chunk(
         &self,
@@ -326,9 +320,7 @@ impl PyShieldLoop {
         if let Some(t) = t.filter(|t| !t.is_none()) {
             finite(t, "t")?;
         }
-        let no = pyo3::types::PyBool::new(py, false).to_owned().into_any();
-        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute.unwrap_or(&no))?;
-        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
+        self.h.set_chunk(py, deltas, h, absolute)
     }
 
     /// `Shield.measure` through the loop.
@@ -341,15 +333,7 @@ impl PyShieldLoop {
         velocities: Option<&Bound<'_, PyAny>>,
         human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let zero = 0i64.into_pyobject(py)?.into_any();
-        let (id, m) = measurement(
-            &self.humans,
-            human.unwrap_or(&zero),
-            t_meas,
-            positions,
-            velocities,
-        )?;
-        with_inner(py, &self.inner, move |g| g.measure(id, m))
+        self.h.measure(py, t_meas, positions, velocities, human)
     }
 
     /// `Shield.measure_object` through the loop.
@@ -362,8 +346,7 @@ impl PyShieldLoop {
         position: &Bound<'_, PyAny>,
         velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let (k, m) = object_measurement(&self.object_ids, id, t_meas, position, velocity)?;
-        with_inner(py, &self.inner, move |g| g.measure_object(k, m))
+        self.h.measure_object(py, id, t_meas, position, velocity)
     }
 
     /// The newest command (None before the first step).
@@ -376,24 +359,19 @@ impl PyShieldLoop {
     /// The loop's current time (s): the time of the latest step.
     #[getter]
     fn time(&self, py: Python<'_>) -> PyResult<f64> {
-        with_inner(py, &self.inner, |g| Ok(g.now()))
+        self.h.time(py)
     }
 
     /// `Shield.progress()`: which chunk runs and how many of its actions were executed.
     fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let p = with_inner(py, &self.inner, |g| {
-            g.shield
-                .chunk_progress()
-                .ok_or((Kind::State, "progress: the shield is not started".into()))
-        })?;
-        to_py(py, &p)
+        self.h.progress(py)
     }
 
     /// The commands since the last call (at most `history`), drained: {"t": (N,) s,
     /// "q": (N, dof) rad, "dq": (N, dof) rad/s, "ddq": (N, dof) rad/s², "verified": (N,) bool}.
     fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let cmds: Vec<Command> = self.out(py)?.history.drain(..).collect();
-        let n = self.dof;
+        let n = self.h.dof;
         let rows = |f: &dyn Fn(&Command) -> &[f64]| -> Vec<f64> {
             cmds.iter()
                 .flat_map(|c| f(c)[..n].iter().copied())

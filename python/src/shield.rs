@@ -209,37 +209,28 @@ impl Inner {
             _ => {}
         }
         // Hand over the measurements stamped at or before t: per human and object the newest
-        // (the shield ignores older ones anyway); later ones keep waiting.
-        let mut newest: Vec<Option<usize>> = vec![None; self.humans];
-        for (i, (id, m)) in self.pending_humans.iter().enumerate() {
-            if m.time() <= t
-                && newest[*id].is_none_or(|j| self.pending_humans[j].1.time() < m.time())
-            {
-                newest[*id] = Some(i);
-            }
-        }
+        // (the first of equal time stamps, as the shield keeps it; the shield ignores older
+        // ones anyway); later ones keep waiting. Moved out of the queues: no allocation here.
         let mut first: Option<HumanMeasurement> = None;
-        for (id, idx) in newest.iter().enumerate() {
-            let Some(i) = *idx else { continue };
-            let m = &self.pending_humans[i].1;
+        for id in 0..self.humans {
+            let Some(i) = newest_due(&self.pending_humans, id, t, |m| m.time()) else {
+                continue;
+            };
+            let (_, m) = self.pending_humans.remove(i);
             if id == 0 {
-                first = Some(m.clone());
+                first = Some(m);
             } else {
                 self.shield
-                    .measure_human(id, m)
+                    .measure_human(id, &m)
                     .map_err(|e| (Kind::State, e.to_string()))?;
             }
         }
         self.pending_humans.retain(|(_, m)| m.time() > t);
-        let mut objects: Vec<Option<usize>> = vec![None; self.object_ids.len()];
-        for (i, (k, m)) in self.pending_objects.iter().enumerate() {
-            if m.time <= t && objects[*k].is_none_or(|j| self.pending_objects[j].1.time < m.time) {
-                objects[*k] = Some(i);
-            }
-        }
-        for (k, idx) in objects.iter().enumerate() {
-            let Some(i) = *idx else { continue };
-            let m = self.pending_objects[i].1;
+        for k in 0..self.object_ids.len() {
+            let Some(i) = newest_due(&self.pending_objects, k, t, |m| m.time) else {
+                continue;
+            };
+            let (_, m) = self.pending_objects.remove(i);
             // The shield keeps the first of equal-time measurements and ignores older ones:
             // hand over (and log) only strictly newer ones, so that the log shows what it used.
             if m.time <= self.object_latest[k] {
@@ -292,6 +283,24 @@ impl Inner {
             None => Ok(()),
         }
     }
+}
+
+/// Index of the newest measurement of `id` in `queue` stamped at or before `t` (the first of
+/// equal time stamps).
+fn newest_due<M>(
+    queue: &[(usize, M)],
+    id: usize,
+    t: f64,
+    time: impl Fn(&M) -> f64,
+) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for (i, (j, m)) in queue.iter().enumerate() {
+        let tm = time(m);
+        if *j == id && tm <= t && best.is_none_or(|(_, tb)| tb < tm) {
+            best = Some((i, tm));
+        }
+    }
+    best.map(|(i, _)| i)
 }
 
 /// Run `f` on the shield state with the GIL released (so that no thread ever waits for the
@@ -352,13 +361,80 @@ pub fn raise(f: Fail) -> PyErr {
 /// `progress()` tell which chunk runs) and the policy should hand over a new one.
 #[pyclass(name = "Shield", module = "pacs")]
 pub struct PyShield {
+    pub h: Handle,
+}
+
+/// What `Shield` and `ShieldLoop` share: the shield state and the immutable facts its
+/// arguments are checked against (read without the lock); the calls both classes offer.
+#[derive(Clone)]
+pub struct Handle {
     pub inner: Arc<Mutex<Inner>>,
     pub dof: usize,
     pub safety_step: f64,
-    /// Human models, in index order (immutable: read without the lock).
+    /// Human models, in index order.
     pub humans: Vec<HumanModel>,
     /// Object ids, in index order.
     pub object_ids: Vec<String>,
+}
+
+impl Handle {
+    /// `set_chunk` (see `Shield.set_chunk`).
+    pub fn set_chunk(
+        &self,
+        py: Python<'_>,
+        deltas: &Bound<'_, PyAny>,
+        h: Option<&Bound<'_, PyAny>>,
+        absolute: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<u64> {
+        let rows = chunk_rows(deltas, self.dof)?;
+        let h = horizon(h, rows.len())?;
+        let kind = match absolute {
+            Some(a) if flag(a, "absolute")? => ActionKind::Absolute,
+            _ => ActionKind::Delta,
+        };
+        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
+    }
+
+    /// `measure` (see `Shield.measure`; `human` None: the first).
+    pub fn measure(
+        &self,
+        py: Python<'_>,
+        t_meas: &Bound<'_, PyAny>,
+        positions: &Bound<'_, PyAny>,
+        velocities: Option<&Bound<'_, PyAny>>,
+        human: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let (id, m) = measurement(&self.humans, human, t_meas, positions, velocities)?;
+        with_inner(py, &self.inner, move |g| g.measure(id, m))
+    }
+
+    /// `measure_object` (see `Shield.measure_object`).
+    pub fn measure_object(
+        &self,
+        py: Python<'_>,
+        id: &Bound<'_, PyAny>,
+        t_meas: &Bound<'_, PyAny>,
+        position: &Bound<'_, PyAny>,
+        velocity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let (k, m) = object_measurement(&self.object_ids, id, t_meas, position, velocity)?;
+        with_inner(py, &self.inner, move |g| g.measure_object(k, m))
+    }
+
+    /// `progress()` as a dict.
+    pub fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let p = with_inner(py, &self.inner, |g| {
+            g.shield
+                .chunk_progress()
+                .ok_or((Kind::State, "progress: call start(t, q) first".into()))
+        })?;
+        to_py(py, &p)
+    }
+
+    /// The time of the latest step (s).
+    pub fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        with_inner(py, &self.inner, |g| Ok(g.now()))
+    }
 }
 
 fn chunk_rows(deltas: &Bound<'_, PyAny>, dof: usize) -> PyResult<Vec<Vec<f64>>> {
@@ -386,32 +462,18 @@ fn horizon(h: Option<&Bound<'_, PyAny>>, rows: usize) -> PyResult<usize> {
     }
 }
 
-/// Parse set_chunk arguments (shared with the loop).
-pub fn chunk_args(
-    dof: usize,
-    deltas: &Bound<'_, PyAny>,
-    h: Option<&Bound<'_, PyAny>>,
-    absolute: &Bound<'_, PyAny>,
-) -> PyResult<(Vec<Vec<f64>>, usize, ActionKind)> {
-    let rows = chunk_rows(deltas, dof)?;
-    let h = horizon(h, rows.len())?;
-    let kind = if flag(absolute, "absolute")? {
-        ActionKind::Absolute
-    } else {
-        ActionKind::Delta
-    };
-    Ok((rows, h, kind))
-}
-
-/// Parse measure arguments (shared with the loop): the human index and the measurement.
-pub fn measurement(
+/// Parse measure arguments: the human index (default 0) and the measurement.
+fn measurement(
     humans: &[HumanModel],
-    human: &Bound<'_, PyAny>,
+    human: Option<&Bound<'_, PyAny>>,
     t_meas: &Bound<'_, PyAny>,
     positions: &Bound<'_, PyAny>,
     velocities: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<(usize, HumanMeasurement)> {
-    let id = index(human, "human")?;
+    let id = match human {
+        Some(h) if !h.is_none() => index(h, "human")?,
+        _ => 0,
+    };
     let Some(model) = humans.get(id) else {
         return Err(input(format!(
             "human: {id} is not a human of this shield ({} humans)",
@@ -429,8 +491,8 @@ pub fn measurement(
     Ok((id, m))
 }
 
-/// Parse measure_object arguments (shared with the loop).
-pub fn object_measurement(
+/// Parse measure_object arguments.
+fn object_measurement(
     object_ids: &[String],
     id: &Bound<'_, PyAny>,
     t_meas: &Bound<'_, PyAny>,
@@ -493,20 +555,7 @@ impl PyShield {
         side: Option<&Bound<'_, PyAny>>,
         log: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let fr3 = "fr3".into_pyobject(py)?.into_any();
-        let sorting = "sorting".into_pyobject(py)?.into_any();
-        let humans_arg = match humans {
-            Given::Value(h) => h,
-            Given::Missing => "default".into_pyobject(py)?.into_any(),
-        };
-        let s = scene(
-            robot.unwrap_or(&fr3),
-            side,
-            &humans_arg,
-            constraints.unwrap_or(&sorting),
-            objects,
-            environment,
-        )?;
+        let s = scene(py, robot, side, humans, constraints, objects, environment)?;
         let settings: ShieldSettings = match config {
             Some(c) if !c.is_none() => crate::convert::from_py(c, "config")?,
             _ => ShieldSettings::default(),
@@ -550,29 +599,31 @@ impl PyShield {
             serde_json::to_value(&settings).unwrap_or_default(),
         );
         Ok(Self {
-            inner: Arc::new(Mutex::new(Inner {
-                shield,
+            h: Handle {
+                inner: Arc::new(Mutex::new(Inner {
+                    shield,
+                    dof,
+                    humans: s.humans.len(),
+                    object_ids: object_ids.clone(),
+                    header,
+                    log_path,
+                    log: None,
+                    log_error: None,
+                    log_opened: false,
+                    pending_humans: Vec::new(),
+                    pending_objects: Vec::new(),
+                    object_latest: vec![f64::NEG_INFINITY; object_ids.len()],
+                    last_t: None,
+                    start_t: 0.0,
+                    started: false,
+                    running: None,
+                    settings,
+                })),
                 dof,
-                humans: s.humans.len(),
-                object_ids: object_ids.clone(),
-                header,
-                log_path,
-                log: None,
-                log_error: None,
-                log_opened: false,
-                pending_humans: Vec::new(),
-                pending_objects: Vec::new(),
-                object_latest: vec![f64::NEG_INFINITY; object_ids.len()],
-                last_t: None,
-                start_t: 0.0,
-                started: false,
-                running: None,
-                settings,
-            })),
-            dof,
-            safety_step,
-            humans: s.humans,
-            object_ids,
+                safety_step,
+                humans: s.humans,
+                object_ids,
+            },
         })
     }
 
@@ -581,8 +632,8 @@ impl PyShield {
     /// t, t + α_s, t + 2·α_s, … A shield that logs starts once.
     fn start(&self, py: Python<'_>, t: &Bound<'_, PyAny>, q: &Bound<'_, PyAny>) -> PyResult<()> {
         let t = finite(t, "t")?;
-        let q = vector(q, "q", self.dof)?;
-        with_inner(py, &self.inner, |g| g.start(t, &q))
+        let q = vector(q, "q", self.h.dof)?;
+        with_inner(py, &self.h.inner, |g| g.start(t, &q))
     }
 
     /// Hand over an action chunk: `deltas` (shape (H, dof), rad) are the policy's joint-position
@@ -605,9 +656,7 @@ impl PyShield {
         absolute: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<u64> {
         finite(t, "t")?;
-        let no = pyo3::types::PyBool::new(py, false).to_owned().into_any();
-        let (rows, h, kind) = chunk_args(self.dof, deltas, h, absolute.unwrap_or(&no))?;
-        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
+        self.h.set_chunk(py, deltas, h, absolute)
     }
 
     /// A measurement of human `human`'s keypoints taken at `t_meas` (s): `positions` (m, shape
@@ -624,15 +673,7 @@ impl PyShield {
         velocities: Option<&Bound<'_, PyAny>>,
         human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let zero = 0i64.into_pyobject(py)?.into_any();
-        let (id, m) = measurement(
-            &self.humans,
-            human.unwrap_or(&zero),
-            t_meas,
-            positions,
-            velocities,
-        )?;
-        with_inner(py, &self.inner, move |g| g.measure(id, m))
+        self.h.measure(py, t_meas, positions, velocities, human)
     }
 
     /// A measurement of object `id` (its id string or index) taken at `t_meas` (s): position
@@ -647,8 +688,7 @@ impl PyShield {
         position: &Bound<'_, PyAny>,
         velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let (k, m) = object_measurement(&self.object_ids, id, t_meas, position, velocity)?;
-        with_inner(py, &self.inner, move |g| g.measure_object(k, m))
+        self.h.measure_object(py, id, t_meas, position, velocity)
     }
 
     /// One safety step at time `t` (s; the start time, then one safety step after the previous
@@ -658,7 +698,7 @@ impl PyShield {
     /// Releases the GIL.
     fn step(&self, py: Python<'_>, t: &Bound<'_, PyAny>) -> PyResult<PyCommand> {
         let t = finite(t, "t")?;
-        let (cmd, progress) = with_inner(py, &self.inner, |g| {
+        let (cmd, progress) = with_inner(py, &self.h.inner, |g| {
             if g.running.is_some() {
                 return Err((
                     Kind::State,
@@ -674,12 +714,7 @@ impl PyShield {
     /// {"chunk": serial (0 = standstill), "passed": actions executed, "executed": h,
     /// "accepted": chunks accepted so far}. What real-time-chunking policies need.
     fn progress<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let p = with_inner(py, &self.inner, |g| {
-            g.shield
-                .chunk_progress()
-                .ok_or((Kind::State, "progress: call start(t, q) first".into()))
-        })?;
-        to_py(py, &p)
+        self.h.progress(py)
     }
 
     /// Intended time (s) left until the current chunk's last executed waypoint (None before
@@ -687,49 +722,53 @@ impl PyShield {
     /// `chunk_motion="continuous"` moving across chunks.
     #[getter]
     fn remaining(&self, py: Python<'_>) -> PyResult<Option<f64>> {
-        with_inner(py, &self.inner, |g| Ok(g.shield.remaining()))
+        with_inner(py, &self.h.inner, |g| Ok(g.shield.remaining()))
     }
 
     /// Number of joints.
     #[getter]
     fn dof(&self) -> usize {
-        self.dof
+        self.h.dof
     }
 
     /// Safety step α_s (s).
     #[getter]
     fn safety_step(&self) -> f64 {
-        self.safety_step
+        self.h.safety_step
     }
 
     /// Time of the latest step (s; the start time before the first step).
     #[getter]
     fn time(&self, py: Python<'_>) -> PyResult<f64> {
-        with_inner(py, &self.inner, |g| Ok(g.now()))
+        self.h.time(py)
     }
 
     /// Number of humans.
     #[getter]
     fn humans(&self) -> usize {
-        self.humans.len()
+        self.h.humans.len()
     }
 
     /// Keypoint count of each human (the rows `measure` expects).
     #[getter]
     fn keypoints(&self) -> Vec<usize> {
-        self.humans.iter().map(HumanModel::keypoint_count).collect()
+        self.h
+            .humans
+            .iter()
+            .map(HumanModel::keypoint_count)
+            .collect()
     }
 
     /// Object ids, in index order.
     #[getter]
     fn object_ids(&self) -> Vec<String> {
-        self.object_ids.clone()
+        self.h.object_ids.clone()
     }
 
     /// The log header (dict) the run is logged with: robot, human, constraints, objects.
     #[getter]
     fn header<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let h = with_inner(py, &self.inner, |g| Ok(g.header.clone()))?;
+        let h = with_inner(py, &self.h.inner, |g| Ok(g.header.clone()))?;
         to_py(py, &h)
     }
 
@@ -737,7 +776,7 @@ impl PyShield {
     /// during the run (the run went on; nothing was logged after the failure). The shield can
     /// still step; nothing more is logged.
     fn close(&self, py: Python<'_>) -> PyResult<()> {
-        with_inner(py, &self.inner, |g| g.close())
+        with_inner(py, &self.h.inner, |g| g.close())
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
@@ -751,15 +790,15 @@ impl PyShield {
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
-        let (name, started) = with_inner(py, &self.inner, |g| {
+        let (name, started) = with_inner(py, &self.h.inner, |g| {
             Ok((g.shield.robot().name().to_string(), g.started))
         })?;
         Ok(format!(
             "Shield(robot={name:?}, dof={}, humans={}, objects={:?}, safety_step={} s, started={})",
-            self.dof,
-            self.humans.len(),
-            self.object_ids,
-            self.safety_step,
+            self.h.dof,
+            self.h.humans.len(),
+            self.h.object_ids,
+            self.h.safety_step,
             py_bool(started)
         ))
     }

@@ -58,12 +58,7 @@ __all__ = [
     "report",
     "robot_spec",
     "Demo",
-    "Error",
-    "InputError",
-    "ArgumentTypeError",
-    "NotStartedError",
-    "ChunkRejected",
-    "OutputError",
     "errors",
     "__version__",
+    *errors.__all__,
 ]
