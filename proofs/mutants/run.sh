@@ -48,6 +48,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
     # The planner's checked stopping tail of Moving chunks (x21).
     cargo test -p pacs-motion --test trajectory --no-fail-fast >>"$log" 2>&1
+    # Chunks planned off the loop and taken over at their handover (x22).
+    cargo test -p pacs-shield --test handover --no-fail-fast >>"$log" 2>&1
     caught=$(sed -n 's/^test \(.*\) \.\.\. FAILED$/\1/p' "$log" |
         sed 's/::property_test$//; s/^.*:://' | sort | paste -sd, - | sed 's/,/, /g')
     if grep -q '^error\(\[E[0-9]*\]\)\?:' "$log" && [[ -z "$caught" ]]; then

@@ -24,11 +24,13 @@
 #![allow(clippy::needless_range_loop)]
 
 mod decision;
+mod handover;
 mod intervals;
 mod step;
 mod verification;
 
 pub use decision::{Candidate, Decision, VerifiedFailsafe, decide};
+pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::OccupancyIntervals;
 
 use pacs_models::object::{ObjectContact, ObjectModel};
@@ -139,6 +141,12 @@ pub enum ShieldError {
     /// The chunk could not be planned; it is ignored and the robot keeps its verified motion.
     #[error("chunk ignored: {0}")]
     Chunk(#[from] pacs_motion::error::TrajectoryError),
+    /// A chunk planned off the loop arrived after its handover time ([`Shield::offer`]): plan
+    /// it again from a newer [`Shield::handover`].
+    #[error(
+        "chunk ignored: planned for the step at {handover} s, the shield is already at {time} s"
+    )]
+    Stale { handover: f64, time: f64 },
 }
 
 /// What decided a step.
@@ -240,7 +248,8 @@ pub struct Shield {
     robot: RobotModel,
     dof: usize,
     hw: Limits,
-    planner: Planner,
+    /// Plans chunks (a copy serves planning off the loop: [`Shield::chunk_planner`]).
+    chunks: ChunkPlanner,
     reach: RobotReach,
     /// The humans: reachability, the ISO/TS 15066 rule for their body parts, the latest
     /// measurement and the occupancy buffer of each.
@@ -261,6 +270,13 @@ pub struct Shield {
     started: bool,
     /// Slot of a chunk planned from the current state (not yet verified).
     fresh: Option<usize>,
+    /// A chunk planned off the loop, waiting for its handover ([`Shield::offer`]).
+    pending: Option<PreparedChunk>,
+    /// What became of the latest offer.
+    offer_state: OfferState,
+    /// A trajectory replaced or dropped in a step, kept so the step frees nothing (dropped by
+    /// the next `offer`/`set_chunk`).
+    spare: Option<Trajectory>,
     failsafe: Option<VerifiedFailsafe>,
     /// Dynamic objects with their constraints and latest measurements.
     objects: Vec<ObjectSlot>,
@@ -410,7 +426,7 @@ impl Shield {
         Ok(Self {
             dof,
             hw,
-            planner,
+            chunks: ChunkPlanner::new(planner, robot.limits().clone(), c.out_of_limits, c.mode),
             robot_caps: vec![
                 Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
                 reach.capsule_count()
@@ -430,6 +446,9 @@ impl Shield {
             time: 0.0,
             started: false,
             fresh: None,
+            pending: None,
+            offer_state: OfferState::None,
+            spare: None,
             failsafe: None,
             objects: Vec::new(),
             object_rule,
@@ -560,6 +579,9 @@ impl Shield {
         self.time = t;
         self.started = true;
         self.fresh = None;
+        self.pending = None;
+        self.spare = None;
+        self.offer_state = OfferState::None;
         // Standing still is the first verified failsafe.
         self.failsafe = Some(VerifiedFailsafe {
             slot: 0,
@@ -622,23 +644,11 @@ impl Shield {
             return Err(ShieldError::NotStarted);
         }
         let start = self.state();
-        let wp = chunk.waypoints(
-            &start.q[..self.dof],
-            self.robot.limits(),
-            self.config.out_of_limits,
-        )?;
-        let traj = if self.config.mode == FilterMode::SingleAction {
-            self.planner.plan_single_action(&start, &wp)?
-        } else {
-            self.planner.plan(&start, &wp)?
-        };
-        // Use the slot the verified failsafe does not live on.
-        let keep = self.failsafe.map(|f| f.slot).unwrap_or(self.slot);
-        let slot = if keep == 0 { 1 } else { 0 };
-        self.trajs[slot] = Some(traj);
-        self.chunks_accepted += 1;
-        self.chunk_serial[slot] = self.chunks_accepted;
-        self.fresh = Some(slot);
+        let traj = self.chunks.plan(&start, chunk)?;
+        self.spare = None;
+        self.take_over(traj);
+        // A chunk planned off the loop and not yet taken over is older than this one.
+        self.pending = None;
         Ok(())
     }
 

@@ -86,9 +86,18 @@ fn step_allocates_nothing() {
             .collect();
         let mut verified = 0;
         let mut failsafe = 0;
+        let mut planner = sh.chunk_planner();
         for (k, m) in meas.iter().enumerate() {
             if k % 300 == 0 {
                 sh.set_chunk(&chunk).ok(); // planning may allocate: not part of the step
+            }
+            if k % 300 == 150 {
+                // A chunk planned off the loop, taken over (or dropped) by a step below.
+                if let Some(ho) = sh.handover(5)
+                    && let Ok(p) = planner.prepare(&ho, &chunk)
+                {
+                    sh.offer(p).ok();
+                }
             }
             ARMED.with(|a| a.set(true));
             if objects {

@@ -33,6 +33,7 @@ impl Shield {
             return Err(ShieldError::NotStarted);
         }
         self.take_measurement(measurement, t);
+        self.take_offer(t);
         self.time = t;
         // Candidate: a fresh chunk starting at the current state, else the current path.
         let (cand_slot, cand_start, ramp) = match self.fresh.take() {
@@ -111,7 +112,11 @@ impl Shield {
     }
 
     /// The go-profile (toward ṡ = 1 for one step) and the brake profile after it, both admissible.
-    fn candidate(&self, slot: usize, start: PathState) -> Option<(SpeedProfile, SpeedProfile)> {
+    pub(super) fn candidate(
+        &self,
+        slot: usize,
+        start: PathState,
+    ) -> Option<(SpeedProfile, SpeedProfile)> {
         let tr = self.traj(slot);
         let alpha = self.config.safety_step;
         let go = if start.is_intended() {

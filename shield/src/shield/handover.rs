@@ -1,0 +1,231 @@
+//! Chunks planned off the control loop: the shield predicts where its commands will be a few
+//! safety steps ahead ([`Shield::handover`]), a [`ChunkPlanner`] plans the chunk from that state
+//! on another thread (no lock on the shield), and [`Shield::offer`] hands the plan back. The
+//! step takes the plan over only if the commanded state at the handover is *bitwise* the state
+//! it was planned from — exactly the invariant of [`Shield::set_chunk`] (a fresh trajectory
+//! starts at the current commanded state), so the safety argument (C8) is unchanged: the fresh
+//! trajectory still runs only once one of its monitored steps is verified. If the commands went
+//! elsewhere (a step was not verified, another chunk came first), the plan is dropped
+//! ([`OfferState::Stale`]) and the caller plans again from a new handover.
+//!
+//! Planning costs 0.1–0.8 ms (the spline's two passes); a 1 kHz loop that planned in its own
+//! step would miss its deadline. With this split the loop's share is a comparison of two joint
+//! states and a move of the trajectory into a slot (no allocation: the trajectory it replaces
+//! is kept until the next [`Shield::offer`], which drops it outside the step).
+
+use super::{Candidate, FilterMode, Shield, ShieldError, decide};
+use pacs_models::JointLimits;
+use pacs_motion::chunk::{Chunk, OutOfLimits};
+use pacs_motion::intended::Planner;
+use pacs_motion::scaling::PathState;
+use pacs_motion::trajectory::{JointState, Trajectory};
+
+/// Where and when a chunk planned off the loop takes over: the commanded state the shield
+/// predicts at its step at time `t`, provided every step until then is verified.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Handover {
+    /// Time (s) of the step at which the plan can take over.
+    pub t: f64,
+    /// The commanded joint state at `t` if every step until then is verified.
+    pub start: JointState,
+}
+
+/// Plans chunks for a shield without holding it: a copy of the shield's planner, the robot's
+/// joint limits and the chunk settings ([`Shield::chunk_planner`]). One implementation serves
+/// [`Shield::set_chunk`] (planning from the current state) and [`Shield::offer`] (planning from
+/// a [`Handover`]).
+#[derive(Clone)]
+pub struct ChunkPlanner {
+    planner: Planner,
+    limits: JointLimits,
+    out_of_limits: OutOfLimits,
+    mode: FilterMode,
+}
+
+/// A chunk's intended trajectory planned from a [`Handover`], ready for [`Shield::offer`].
+#[derive(Clone)]
+pub struct PreparedChunk {
+    handover: Handover,
+    traj: Trajectory,
+}
+
+impl PreparedChunk {
+    /// The handover it was planned from.
+    pub fn handover(&self) -> &Handover {
+        &self.handover
+    }
+
+    /// The planned intended trajectory (starts at `handover().start`).
+    pub fn trajectory(&self) -> &Trajectory {
+        &self.traj
+    }
+}
+
+/// What became of the latest offered chunk ([`Shield::offer_state`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OfferState {
+    /// No chunk offered yet.
+    None,
+    /// Waiting for the step at its handover time.
+    Waiting,
+    /// Taken over as the shield's fresh chunk, with this serial number (see
+    /// [`super::ChunkProgress::chunk`]).
+    Taken(u64),
+    /// Dropped: at its handover the commanded state was not the planned start.
+    Stale,
+}
+
+impl ChunkPlanner {
+    pub(super) fn new(
+        planner: Planner,
+        limits: JointLimits,
+        out_of_limits: OutOfLimits,
+        mode: FilterMode,
+    ) -> Self {
+        Self {
+            planner,
+            limits,
+            out_of_limits,
+            mode,
+        }
+    }
+
+    /// The chunk's intended trajectory from `start` (the chunk's deltas are integrated from
+    /// `start.q`, as in the paper); single-action mode plans to rest after the first action.
+    pub fn plan(&mut self, start: &JointState, chunk: &Chunk) -> Result<Trajectory, ShieldError> {
+        let n = self.limits.dof();
+        let wp = chunk.waypoints(&start.q[..n], &self.limits, self.out_of_limits)?;
+        Ok(if self.mode == FilterMode::SingleAction {
+            self.planner.plan_single_action(start, &wp)?
+        } else {
+            self.planner.plan(start, &wp)?
+        })
+    }
+
+    /// Plan `chunk` from a handover (off the control loop; hand the result to
+    /// [`Shield::offer`]).
+    pub fn prepare(
+        &mut self,
+        handover: &Handover,
+        chunk: &Chunk,
+    ) -> Result<PreparedChunk, ShieldError> {
+        let traj = self.plan(&handover.start, chunk)?;
+        Ok(PreparedChunk {
+            handover: *handover,
+            traj,
+        })
+    }
+}
+
+/// Bitwise equality of the first `dof` joint values of position, velocity and acceleration
+/// (`-0.0` and `0.0` are equal; the states come from the same evaluation, so a state the
+/// prediction reached is reproduced exactly).
+fn same_state(a: &JointState, b: &JointState, dof: usize) -> bool {
+    a.q[..dof] == b.q[..dof] && a.dq[..dof] == b.dq[..dof] && a.ddq[..dof] == b.ddq[..dof]
+}
+
+impl Shield {
+    /// A planner for this shield's chunks that works without the shield (clone it onto the
+    /// thread that plans).
+    pub fn chunk_planner(&self) -> ChunkPlanner {
+        self.chunks.clone()
+    }
+
+    /// The handover `lead` safety steps ahead: the step time `time() + lead·α_s` and the
+    /// commanded state there if every step until then verifies its candidate (the current path,
+    /// or a fresh chunk not yet taken over; where no candidate exists the step follows the
+    /// failsafe, and so does the prediction). `lead = 0` is the current commanded state. The
+    /// prediction runs the step's own candidate and decision code, so a state it reaches is
+    /// reproduced bitwise by the steps. `None` before [`Shield::start`].
+    pub fn handover(&self, lead: usize) -> Option<Handover> {
+        if !self.started {
+            return None;
+        }
+        let alpha = self.config.safety_step;
+        let (mut slot, mut path) = (self.slot, self.path);
+        let mut failsafe = self.failsafe?;
+        if lead > 0
+            && let Some(s) = self.fresh
+        {
+            (slot, path) = (s, PathState::intended(0.0));
+        }
+        for k in 0..lead {
+            let t = self.time + k as f64 * alpha;
+            // The step's own decision, with the candidate (where one exists) verified.
+            let cand = self.candidate(slot, path).map(|(go, brake)| Candidate {
+                slot,
+                go,
+                brake,
+                verified: true,
+            });
+            let next = decide(failsafe, cand, self.config.mode, t, alpha);
+            (slot, path, failsafe) = (next.slot, next.path, next.failsafe);
+        }
+        Some(Handover {
+            t: self.time + lead as f64 * alpha,
+            start: self.joint_state(slot, &path),
+        })
+    }
+
+    /// Offer a chunk planned off the loop. Taken over (as if [`Shield::set_chunk`] had been
+    /// called then) by the first step whose commanded state before it is bitwise
+    /// `chunk.handover().start` — at its handover time, or at once if the robot already stands
+    /// there; dropped ([`OfferState::Stale`]) if the step at the handover time finds another
+    /// state. A newer offer replaces a waiting one. Errors: the handover is already past
+    /// (the shield's time is beyond it and the state differs) — plan again from a newer one.
+    pub fn offer(&mut self, chunk: PreparedChunk) -> Result<(), ShieldError> {
+        if !self.started {
+            return Err(ShieldError::NotStarted);
+        }
+        // Trajectories replaced in earlier steps are dropped here, outside the step.
+        self.spare = None;
+        let tol = 1e-9_f64.max(8.0 * f64::EPSILON * self.time.abs());
+        if same_state(&self.state(), &chunk.handover.start, self.dof) {
+            self.take_over(chunk.traj);
+            self.pending = None;
+            return Ok(());
+        }
+        if chunk.handover.t < self.time - tol {
+            self.offer_state = OfferState::Stale;
+            return Err(ShieldError::Stale {
+                handover: chunk.handover.t,
+                time: self.time,
+            });
+        }
+        self.pending = Some(chunk);
+        self.offer_state = OfferState::Waiting;
+        Ok(())
+    }
+
+    /// What became of the latest offered chunk.
+    pub fn offer_state(&self) -> OfferState {
+        self.offer_state
+    }
+
+    /// At the start of the step at `t`: take a waiting offer over if the commanded state is its
+    /// planned start, drop it if its handover time has come and the state differs. Allocation
+    /// free (a dropped or replaced trajectory waits in `spare`).
+    pub(super) fn take_offer(&mut self, t: f64) {
+        let Some(p) = &self.pending else { return };
+        let tol = 1e-9_f64.max(8.0 * f64::EPSILON * t.abs());
+        if same_state(&self.state(), &p.handover.start, self.dof) {
+            let p = self.pending.take().expect("checked above");
+            self.take_over(p.traj);
+        } else if t >= p.handover.t - tol {
+            self.spare = self.pending.take().map(|p| p.traj);
+            self.offer_state = OfferState::Stale;
+        }
+    }
+
+    /// Install `traj` (planned from the current commanded state) as the fresh chunk in the slot
+    /// the verified failsafe does not live on; the trajectory it replaces waits in `spare`.
+    pub(super) fn take_over(&mut self, traj: Trajectory) {
+        let keep = self.failsafe.map(|f| f.slot).unwrap_or(self.slot);
+        let slot = if keep == 0 { 1 } else { 0 };
+        self.spare = self.trajs[slot].replace(traj);
+        self.chunks_accepted += 1;
+        self.chunk_serial[slot] = self.chunks_accepted;
+        self.fresh = Some(slot);
+        self.offer_state = OfferState::Taken(self.chunks_accepted);
+    }
+}
