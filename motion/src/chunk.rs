@@ -129,9 +129,19 @@ fn check(what: &str, v: &[f64], n: usize) -> Result<(), TrajectoryError> {
     Ok(())
 }
 
+/// Joint moves between consecutive waypoints smaller than this (rad) are dropped: the joint holds
+/// its previous waypoint value ([`Chunk::waypoints`]). 1 µrad is far below any arm's resolution
+/// (the FR3's ±0.1 mm repeatability is ≈ 1e-4 rad at 1 m) and below the segment solver's
+/// precision: pauses of a demonstration policy (deltas of 1e-8 rad) once made the planner
+/// refuse chunks (positions 3e-9 rad off at a segment's end, jerks 2 % over the limit).
+pub const MIN_JOINT_MOVE: f64 = 1e-6;
+
 impl Chunk {
     /// Waypoints q̂_0 = `q0`, q̂_1 … q̂_h from the first h actions; every waypoint is inside the
-    /// position limits on success (rejected or projected per `policy`).
+    /// position limits on success (rejected or projected per `policy`). Deltas are integrated
+    /// exactly; a joint whose next value is less than [`MIN_JOINT_MOVE`] from its previous
+    /// waypoint holds that waypoint's value, so every waypoint is within `MIN_JOINT_MOVE` of the
+    /// chunk's own configuration (no drift accumulates).
     pub fn waypoints(
         &self,
         q0: &[f64],
@@ -149,11 +159,13 @@ impl Chunk {
         }
         let mut rows = Vec::with_capacity((h + 1) * n);
         rows.extend_from_slice(q0);
+        // The chunk's own configuration (deltas integrated without the dead band).
+        let mut raw = q0.to_vec();
         for k in 0..h {
             let a = &self.actions[k];
             check(&format!("chunk.actions[{k}]"), a, n)?;
             for i in 0..n {
-                let prev = rows[k * n + i];
+                let prev = raw[i];
                 let mut x = match self.kind {
                     ActionKind::Delta => prev + a[i],
                     ActionKind::Absolute => a[i],
@@ -180,7 +192,13 @@ impl Chunk {
                         OutOfLimits::Project => x = x.clamp(lo, hi),
                     }
                 }
-                rows.push(x);
+                raw[i] = x;
+                let held = rows[k * n + i];
+                rows.push(if (x - held).abs() < MIN_JOINT_MOVE {
+                    held
+                } else {
+                    x
+                });
             }
         }
         let gripper = match &self.gripper {

@@ -634,3 +634,43 @@ fn moving_splines_do_not_ring_past_their_waypoints() {
     assert!((overshoot(&t, &same) - 0.1).abs() < 1e-9);
     assert!(overshoot(&t, &go) < 1e-9);
 }
+
+/// Joint moves below `MIN_JOINT_MOVE` (1 µrad) between waypoints are held, without drift: a
+/// joint creeping 0.4 µrad per action holds q0 for two actions and moves at the third (1.2 µrad
+/// from q0); every waypoint stays within 1 µrad of the integrated chunk; a pause of 1e-8 rad
+/// deltas plans as a standstill.
+#[test]
+fn sub_microradian_moves_are_held_without_drift() {
+    use pacs_motion::chunk::MIN_JOINT_MOVE;
+    let robot = fr3();
+    let l = robot.limits();
+    let q0 = vec![0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.8];
+    let mut creep = vec![0.0; 7];
+    creep[0] = 0.4e-6;
+    creep[1] = 0.05; // another joint moves normally
+    let c = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![creep; 8],
+        execute: 8,
+        gripper: None,
+    };
+    let wp = c.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
+    assert_eq!(wp.row(1)[0], 0.0);
+    assert_eq!(wp.row(2)[0], 0.0);
+    assert!((wp.row(3)[0] - 1.2e-6).abs() < 1e-18, "{}", wp.row(3)[0]);
+    for k in 1..=8 {
+        let raw = k as f64 * 0.4e-6;
+        assert!((wp.row(k)[0] - raw).abs() < MIN_JOINT_MOVE, "waypoint {k}");
+        assert!((wp.row(k)[1] - (-0.5 + 0.05 * k as f64)).abs() < 1e-12);
+    }
+    let pause = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![1e-8, -1.4e-8, 3e-8, -5e-9, 2e-8, 1e-8, -1e-8]; 16],
+        execute: 8,
+        gripper: None,
+    };
+    let wp = pause.waypoints(&q0, l, OutOfLimits::Reject).unwrap();
+    for k in 0..=8 {
+        assert_eq!(wp.row(k), &q0[..], "waypoint {k}");
+    }
+}

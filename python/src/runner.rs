@@ -36,6 +36,12 @@ struct LoopOut {
     overruns: u64,
     max_step_us: f64,
     total_step_us: f64,
+    /// The latest start of a step after its deadline (µs; real time only).
+    max_late_us: f64,
+    /// The SCHED_FIFO priority the loop thread got (0: none asked or refused).
+    rt_priority: i32,
+    /// Why the requested priority was refused.
+    rt_error: Option<String>,
 }
 
 struct Shared {
@@ -50,6 +56,8 @@ struct Shared {
 /// own `step` refuses; `set_chunk`, `measure` and `measure_object` go through the loop. Use as
 /// a context manager or call `stop()`. The last `history` commands are kept for `commands()`.
 /// A step that fails (it should not) stops the loop; the next call raises its error.
+/// `priority` (1–99, Linux): run the loop thread under SCHED_FIFO at that priority (needs
+/// CAP_SYS_NICE or root; refused requests leave it at normal priority, `stats()` tells).
 #[pyclass(name = "ShieldLoop", module = "pacs")]
 pub struct PyShieldLoop {
     id: u64,
@@ -58,6 +66,30 @@ pub struct PyShieldLoop {
     shared: Arc<Shared>,
     handle: Mutex<Option<JoinHandle<()>>>,
     realtime: bool,
+    priority: i32,
+}
+
+/// Put the calling thread under SCHED_FIFO at `priority` (1–99).
+#[cfg(target_os = "linux")]
+fn set_rt_priority(priority: i32) -> Result<(), String> {
+    let param = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: `pthread_self` is the calling thread; `param` lives across the call.
+    let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "SCHED_FIFO priority {priority} refused: {} (needs CAP_SYS_NICE or an rtprio limit)",
+            std::io::Error::from_raw_os_error(rc)
+        ))
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn set_rt_priority(_priority: i32) -> Result<(), String> {
+    Err("real-time priority is supported on Linux only".into())
 }
 
 /// Step the shield from its current time for `steps` steps (None: until stopped) while loop
@@ -71,9 +103,25 @@ fn run_steps(
     alpha: f64,
 ) {
     let t0 = match inner.lock() {
-        Ok(g) => g.last_t.map_or(g.start_t, |t| t + alpha),
+        Ok(mut g) => {
+            // Wall-clock pacing: chunks are planned off the lock from then on.
+            g.paced = realtime && g.running == Some(id);
+            g.last_t.map_or(g.start_t, |t| t + alpha)
+        }
         Err(_) => return,
     };
+    // Cleared however the loop ends (stop, an error, a panic outside the step).
+    struct Unpace<'a>(&'a Mutex<Inner>, u64);
+    impl Drop for Unpace<'_> {
+        fn drop(&mut self) {
+            if let Ok(mut g) = self.0.lock()
+                && (g.running == Some(self.1) || g.running.is_none())
+            {
+                g.paced = false;
+            }
+        }
+    }
+    let _unpace = realtime.then_some(Unpace(inner, id));
     let wall0 = Instant::now();
     let mut k: u64 = 0;
     while !shared.stop.load(Ordering::Relaxed) && steps.is_none_or(|n| k < n) {
@@ -82,10 +130,13 @@ fn run_steps(
             let now = Instant::now();
             if deadline > now {
                 std::thread::sleep(deadline - now);
-            } else if now - deadline > Duration::from_secs_f64(alpha)
-                && let Ok(mut o) = shared.out.lock()
-            {
-                o.overruns += 1;
+            }
+            let late = Instant::now().saturating_duration_since(deadline);
+            if let Ok(mut o) = shared.out.lock() {
+                o.max_late_us = o.max_late_us.max(late.as_secs_f64() * 1e6);
+                if late > Duration::from_secs_f64(alpha) {
+                    o.overruns += 1;
+                }
             }
         }
         let t = t0 + k as f64 * alpha;
@@ -176,12 +227,13 @@ impl PyShieldLoop {
 #[pymethods]
 impl PyShieldLoop {
     #[new]
-    #[pyo3(signature = (shield, realtime=None, history=None))]
+    #[pyo3(signature = (shield, realtime=None, history=None, priority=None))]
     fn new(
         py: Python<'_>,
         shield: &Bound<'_, PyAny>,
         realtime: Option<&Bound<'_, PyAny>>,
         history: Option<&Bound<'_, PyAny>>,
+        priority: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let s = shield.cast::<PyShield>().map_err(|_| {
             type_err(format!(
@@ -196,6 +248,18 @@ impl PyShieldLoop {
         let history = match history {
             Some(h) => index(h, "history")?,
             None => 10_000,
+        };
+        let priority = match priority {
+            Some(p) if !p.is_none() => {
+                let v = index(p, "priority")?;
+                if !(1..=99).contains(&v) {
+                    return Err(input(format!(
+                        "priority: value {v} is outside the SCHED_FIFO range 1..=99"
+                    )));
+                }
+                v as i32
+            }
+            _ => 0,
         };
         let h = s.borrow().h.clone();
         let started = with_inner(py, &h.inner, |g| Ok(g.started))?;
@@ -217,6 +281,7 @@ impl PyShieldLoop {
             }),
             handle: Mutex::new(None),
             realtime,
+            priority,
         })
     }
 
@@ -238,16 +303,27 @@ impl PyShieldLoop {
             drop(handle);
             return Err(err(Kind::State, "ShieldLoop.start: already running"));
         }
-        let (id, inner, shared, alpha) = (
+        let (id, inner, shared, alpha, priority) = (
             self.id,
             self.h.inner.clone(),
             self.shared.clone(),
             self.h.safety_step,
+            self.priority,
         );
         *handle = Some(
             std::thread::Builder::new()
                 .name("pacs-shield-loop".into())
-                .spawn(move || run_steps(id, &inner, &shared, true, None, alpha))
+                .spawn(move || {
+                    if priority > 0
+                        && let Ok(mut o) = shared.out.lock()
+                    {
+                        match set_rt_priority(priority) {
+                            Ok(()) => o.rt_priority = priority,
+                            Err(e) => o.rt_error = Some(e),
+                        }
+                    }
+                    run_steps(id, &inner, &shared, true, None, alpha)
+                })
                 .map_err(|e| err(Kind::State, format!("cannot start the loop thread: {e}")))?,
         );
         Ok(())
@@ -306,7 +382,12 @@ impl PyShieldLoop {
     }
 
     /// `Shield.set_chunk` through the loop (`t`, if given, is checked finite; the log records
-    /// the handover at the loop's time).
+    /// the handover at the loop's time). While the real-time thread runs, the chunk is planned
+    /// on the calling thread without holding the shield (the loop's steps never wait for the
+    /// planner) from the commanded state predicted a few steps ahead, and taken over by the
+    /// step at that time if the commands got there (if not — a step was not verified — it is
+    /// planned again, up to 5 times, then `pacs.ChunkRejected`). Returns once a step has taken
+    /// it over (typically 2–3 ms later).
     #[pyo3(signature = (deltas, t=None, h=None, absolute=None))]
     fn set_chunk(
         &self,
@@ -397,11 +478,21 @@ impl PyShieldLoop {
 
     /// {"steps": int, "overruns": int (steps begun more than a safety step late),
     /// "max_step_us": the longest step (µs), "mean_step_us": the mean step (µs; the Rust step
-    /// alone: lock + `Shield::step`)}.
+    /// alone: lock + `Shield::step`), "max_late_us": the latest start of a step after its
+    /// deadline (µs), "rt_priority": the SCHED_FIFO priority the thread runs at (0: normal),
+    /// and "rt_priority_error" (str) when a requested priority was refused}.
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let (steps, overruns, max, total) = {
+        let (steps, overruns, max, total, late, prio, rt_error) = {
             let o = self.out(py)?;
-            (o.steps, o.overruns, o.max_step_us, o.total_step_us)
+            (
+                o.steps,
+                o.overruns,
+                o.max_step_us,
+                o.total_step_us,
+                o.max_late_us,
+                o.rt_priority,
+                o.rt_error.clone(),
+            )
         };
         let d = pyo3::types::PyDict::new(py);
         d.set_item("steps", steps)?;
@@ -411,6 +502,11 @@ impl PyShieldLoop {
             "mean_step_us",
             if steps > 0 { total / steps as f64 } else { 0.0 },
         )?;
+        d.set_item("max_late_us", late)?;
+        d.set_item("rt_priority", prio)?;
+        if let Some(e) = rt_error {
+            d.set_item("rt_priority_error", e)?;
+        }
         Ok(d)
     }
 

@@ -13,16 +13,24 @@ use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use pacs_shield::settings::ShieldSettings;
-use pacs_shield::shield::{ChunkProgress, Command, Shield};
+use pacs_shield::shield::{ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError};
 use pacs_shield::shield_log::ShieldLog;
 use pyo3::prelude::*;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 /// An error of the shield state, raised as `pacs.<kind>` once the GIL is held again.
 pub type Fail = (Kind, String);
+
+/// How often `set_chunk` plans a chunk again when the commands left the predicted path.
+const HANDOVER_ATTEMPTS: usize = 5;
+
+/// The longest handover lead (safety steps).
+const MAX_LEAD: usize = 200;
 
 /// Measurements waiting for a step at or after their time stamp (per queue).
 const MAX_PENDING: usize = 4096;
@@ -57,6 +65,9 @@ pub struct Inner {
     pub started: bool,
     /// The `ShieldLoop` (its id) that steps this shield: direct steps are refused meanwhile.
     pub running: Option<u64>,
+    /// A real-time `ShieldLoop` thread is stepping the shield: chunks are planned off the lock
+    /// and handed over a few steps ahead ([`Handle::set_chunk`]).
+    pub paced: bool,
     pub settings: ShieldSettings,
 }
 
@@ -125,31 +136,25 @@ impl Inner {
     }
 
     /// Hand over a chunk (rows of `dof` values); returns its serial number.
-    pub fn set_chunk(
-        &mut self,
-        actions: Vec<Vec<f64>>,
-        h: usize,
-        kind: ActionKind,
-    ) -> Result<u64, Fail> {
+    pub fn set_chunk(&mut self, chunk: &Chunk) -> Result<u64, Fail> {
         if !self.started {
             return Err((Kind::State, "set_chunk: call start(t, q) first".into()));
         }
-        let chunk = Chunk {
-            kind,
-            actions,
-            execute: h,
-            gripper: None,
-        };
+        let r = self.shield.set_chunk(chunk);
+        self.log_chunk(r.is_ok());
+        r.map_err(|e| (Kind::Chunk, format!("set_chunk: {e}")))?;
+        Ok(self.shield.chunk_progress().map_or(0, |p| p.accepted))
+    }
+
+    /// Log a chunk event (taken over or rejected) at the shield's time.
+    fn log_chunk(&mut self, taken: bool) {
         let now = self.now();
-        let r = self.shield.set_chunk(&chunk);
-        let event = if r.is_ok() { "chunk" } else { "chunk_rejected" };
+        let event = if taken { "chunk" } else { "chunk_rejected" };
         if let Some(log) = &mut self.log
             && let Err(e) = log.event(now, event)
         {
             self.log_failed(e);
         }
-        r.map_err(|e| (Kind::Chunk, format!("set_chunk: {e}")))?;
-        Ok(self.shield.chunk_progress().map_or(0, |p| p.accepted))
     }
 
     fn queue_full(len: usize, what: &str) -> Result<(), Fail> {
@@ -375,6 +380,10 @@ pub struct Handle {
     pub humans: Vec<HumanModel>,
     /// Object ids, in index order.
     pub object_ids: Vec<String>,
+    /// Plans chunks off the shield's lock while a real-time loop steps it.
+    pub planner: Arc<Mutex<ChunkPlanner>>,
+    /// The longest recent planning time (µs), for the handover's lead.
+    pub plan_us: Arc<AtomicU64>,
 }
 
 impl Handle {
@@ -392,7 +401,113 @@ impl Handle {
             Some(a) if flag(a, "absolute")? => ActionKind::Absolute,
             _ => ActionKind::Delta,
         };
-        with_inner(py, &self.inner, move |g| g.set_chunk(rows, h, kind))
+        let chunk = Chunk {
+            kind,
+            actions: rows,
+            execute: h,
+            gripper: None,
+        };
+        py.detach(|| self.hand_over(&chunk)).map_err(raise)
+    }
+
+    /// Hand `chunk` over (the GIL released). Without a real-time loop: planned from the current
+    /// commanded state at once ([`Shield::set_chunk`]). While a real-time loop steps the shield:
+    /// planned off the shield's lock from the state predicted a few steps ahead
+    /// ([`Shield::handover`]), offered, and awaited until a step takes it over (planned again if
+    /// the commands went elsewhere) — the loop's steps never wait for the planner.
+    fn hand_over(&self, chunk: &Chunk) -> Result<u64, Fail> {
+        let lock = || {
+            self.inner
+                .lock()
+                .map_err(|_| (Kind::State, "poisoned shield state".to_string()))
+        };
+        let mut lead = self.lead();
+        for _ in 0..HANDOVER_ATTEMPTS {
+            let ho = {
+                let mut g = lock()?;
+                if !g.started {
+                    return Err((Kind::State, "set_chunk: call start(t, q) first".into()));
+                }
+                if !g.paced {
+                    return g.set_chunk(chunk);
+                }
+                let now = g
+                    .shield
+                    .handover(0)
+                    .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?;
+                let n = self.dof;
+                if now.start.dq[..n]
+                    .iter()
+                    .chain(&now.start.ddq[..n])
+                    .all(|&x| x == 0.0)
+                {
+                    // At rest (e.g. stopped for a person) the robot stays where it is unless a
+                    // step verifies the old path: plan from here, taken over as soon as offered.
+                    now
+                } else {
+                    g.shield
+                        .handover(lead)
+                        .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?
+                }
+            };
+            let clock = Instant::now();
+            let prepared = self
+                .planner
+                .lock()
+                .map_err(|_| (Kind::State, "poisoned planner state".to_string()))?
+                .prepare(&ho, chunk);
+            let us = clock.elapsed().as_micros().min(u64::MAX as u128) as u64;
+            self.plan_us.fetch_max(us, Ordering::Relaxed);
+            let prepared = match prepared {
+                Ok(p) => p,
+                Err(e) => {
+                    lock()?.log_chunk(false);
+                    return Err((Kind::Chunk, format!("set_chunk: {e}")));
+                }
+            };
+            match lock()?.shield.offer(prepared) {
+                Ok(()) => {}
+                Err(ShieldError::Stale { .. }) => {
+                    // Planned too late: look further ahead.
+                    lead = (2 * lead).min(MAX_LEAD);
+                    continue;
+                }
+                Err(e) => return Err((Kind::State, format!("set_chunk: {e}"))),
+            }
+            loop {
+                let mut g = lock()?;
+                match g.shield.offer_state() {
+                    OfferState::Taken(n) => {
+                        g.log_chunk(true);
+                        return Ok(n);
+                    }
+                    OfferState::Stale => break,
+                    OfferState::Waiting if !g.paced => {
+                        return Err((
+                            Kind::State,
+                            "set_chunk: the ShieldLoop stopped before the chunk's handover (hand it over again)".into(),
+                        ));
+                    }
+                    _ => {}
+                }
+                drop(g);
+                std::thread::sleep(Duration::from_secs_f64(self.safety_step / 4.0));
+            }
+        }
+        lock()?.log_chunk(false);
+        Err((
+            Kind::Chunk,
+            format!(
+                "set_chunk: the commands left the predicted path before the chunk's handover {HANDOVER_ATTEMPTS} times (steps not verified: a person near the robot?); the robot keeps its verified motion"
+            ),
+        ))
+    }
+
+    /// Safety steps between a handover's prediction and the step that takes the chunk over:
+    /// twice the longest planning time seen, plus one step (at least 2).
+    fn lead(&self) -> usize {
+        let plan_s = self.plan_us.load(Ordering::Relaxed) as f64 * 1e-6;
+        ((2.0 * plan_s / self.safety_step).ceil() as usize + 1).clamp(2, MAX_LEAD)
     }
 
     /// `measure` (see `Shield.measure`; `human` None: the first).
@@ -592,6 +707,7 @@ impl PyShield {
         }
         let dof = m.robot.dof();
         let safety_step = cfg.safety_step;
+        let planner = shield.chunk_planner();
         let object_ids: Vec<String> = m.objects.iter().map(|(id, _, _)| id.clone()).collect();
         let mut header = s.header;
         header.meta.insert(
@@ -617,8 +733,11 @@ impl PyShield {
                     start_t: 0.0,
                     started: false,
                     running: None,
+                    paced: false,
                     settings,
                 })),
+                planner: Arc::new(Mutex::new(planner)),
+                plan_us: Arc::new(AtomicU64::new(1000)),
                 dof,
                 safety_step,
                 humans: s.humans,

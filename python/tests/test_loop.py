@@ -92,3 +92,49 @@ def test_realtime_loop_steps_at_the_safety_rate(demo):
     assert c is not None and c.chunk == 1 and p["accepted"] == 1
     out = loop.commands()
     np.testing.assert_allclose(np.diff(out["t"]), 0.001, atol=1e-12)
+
+
+def test_realtime_chunks_are_handed_over_while_moving(demo):
+    """Chunks handed to a running real-time loop are planned off the loop from the state a few
+    steps ahead and taken over there: each returns its serial once a step took it over, and the
+    commands never jump (FR3's joint limits: libfranka's velocities, 10 rad/s²)."""
+    s = pacs.Shield(config={"chunk_motion": "continuous"})
+    s.start(0.0, demo.start)
+    s.measure(0.0, far_human(demo))
+    serials = []
+    with pacs.ShieldLoop(s, realtime=True, history=100_000) as loop:
+        deltas, h = demo.chunk(demo.start)
+        serials.append(loop.set_chunk(deltas, h=h))
+        for _ in range(12):
+            time.sleep(0.03)
+            loop.measure(loop.time, far_human(demo))
+            c = loop.latest()
+            assert c.dq.any(), "moving when the next chunk comes"
+            deltas, h = demo.chunk(c.q)
+            n = loop.set_chunk(deltas, h=h)
+            # Returned once a step took it over: the commands follow it (or a newer one).
+            assert loop.progress()["chunk"] >= n
+            serials.append(n)
+        out = loop.commands()
+    assert serials == list(range(1, 14)), serials
+    v_max = np.array([2.62, 2.62, 2.62, 2.62, 5.26, 4.18, 5.26])
+    dq = np.abs(np.diff(out["q"], axis=0))
+    assert (dq <= v_max * 1e-3 + 1e-12).all(), dq.max(axis=0)
+    ddq = np.abs(np.diff(out["dq"], axis=0))
+    assert ddq.max() <= 10.0e-3 + 1e-12, ddq.max()
+    assert out["verified"].mean() > 0.95
+
+
+def test_realtime_priority_is_checked_and_reported(demo):
+    s = pacs.Shield()
+    s.start(0.0, demo.start)
+    with pytest.raises(pacs.InputError, match="priority: value 0"):
+        pacs.ShieldLoop(s, priority=0)
+    with pytest.raises(pacs.ArgumentTypeError, match="priority"):
+        pacs.ShieldLoop(s, priority="high")
+    with pacs.ShieldLoop(s, realtime=True, priority=10) as loop:
+        time.sleep(0.02)
+    st = loop.stats()
+    # Granted (root or CAP_SYS_NICE) or refused with the reason; the loop runs either way.
+    assert st["rt_priority"] == 10 or "refused" in st["rt_priority_error"], st
+    assert st["steps"] > 0 and st["max_late_us"] >= 0.0

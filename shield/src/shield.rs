@@ -407,14 +407,17 @@ impl Shield {
             plan.a[i] *= c.intended_acc_fraction;
             plan.j[i] = plan.j[i].min(c.intended_jerk);
         }
-        let planner = Planner::new(
-            plan,
-            PlannerConfig {
-                end: c.chunk_end,
-                method: c.plan_method,
-                ..PlannerConfig::default()
-            },
-        );
+        let planner_config = PlannerConfig {
+            end: c.chunk_end,
+            method: c.plan_method,
+            ..PlannerConfig::default()
+        };
+        let planner = Planner::new(plan, planner_config);
+        // For chunks handed over while the robot brakes (harder than the intended limits):
+        // the robot's acceleration and jerk, the intended velocity.
+        let mut recovery_limits = hw;
+        recovery_limits.v = plan.v;
+        let recovery = Planner::new(recovery_limits, planner_config);
         let reach = RobotReach::try_new(&robot, c.tracking_error)
             .map_err(|e| ShieldError::Invalid(e.to_string()))?;
         let humans = match human {
@@ -426,7 +429,13 @@ impl Shield {
         Ok(Self {
             dof,
             hw,
-            chunks: ChunkPlanner::new(planner, robot.limits().clone(), c.out_of_limits, c.mode),
+            chunks: ChunkPlanner::new(
+                planner,
+                recovery,
+                robot.limits().clone(),
+                c.out_of_limits,
+                c.mode,
+            ),
             robot_caps: vec![
                 Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
                 reach.capsule_count()

@@ -163,6 +163,8 @@ pub struct Episode {
     pub goals_reached: usize,
     /// Chunks the policy produced out of its training distribution.
     pub ood_chunks: usize,
+    /// Chunks the filter could not plan (ignored; the robot kept its verified motion).
+    pub chunks_rejected: usize,
     /// Time to reach the goal (s), or the time limit.
     pub duration: f64,
     /// Smallest true separation (m).

@@ -275,6 +275,10 @@ fn continuous_chunk_motion_is_safe_and_faster_with_people() {
             let r = run_rollout(task, &pacs, 1, true, Some(&path), 0).unwrap();
             assert!(r.episode.success, "{task:?} {motion:?}: no success");
             assert_eq!(r.episode.violation_fraction, 0.0, "{task:?} {motion:?}");
+            eprintln!(
+                "{task:?} {motion:?}: {} chunks rejected",
+                r.episode.chunks_rejected
+            );
             let audit = pacs_audit::audit_file(&path, &pacs_audit::AuditConfig::default()).unwrap();
             assert_ne!(
                 audit.verdict,

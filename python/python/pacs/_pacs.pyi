@@ -105,7 +105,11 @@ class Shield:
 
 class ShieldLoop:
     def __init__(
-        self, shield: Shield, realtime: bool | None = True, history: int | None = 10000
+        self,
+        shield: Shield,
+        realtime: bool | None = True,
+        history: int | None = 10000,
+        priority: int | None = None,  # SCHED_FIFO 1..99 for the loop thread (Linux)
     ) -> None: ...
     def start(self) -> None: ...
     def run_until(self, t: float) -> None: ...
@@ -128,7 +132,9 @@ class ShieldLoop:
     def time(self) -> float: ...
     def progress(self) -> Progress: ...
     def commands(self) -> dict[str, npt.NDArray[Any]]: ...  # t, q, dq, ddq, verified
-    def stats(self) -> dict[str, int | float]: ...  # steps, overruns (int); max_step_us, mean_step_us (µs)
+    def stats(
+        self,
+    ) -> dict[str, int | float | str]: ...  # steps, overruns, rt_priority (int); max_step_us, mean_step_us, max_late_us (µs); rt_priority_error (str, if refused)
     def __enter__(self) -> "ShieldLoop": ...
     def __exit__(self, *args: Any) -> bool: ...
 

@@ -37,6 +37,10 @@ pub struct Handover {
 #[derive(Clone)]
 pub struct ChunkPlanner {
     planner: Planner,
+    /// The same planner with the robot's acceleration and jerk limits: tried when a chunk
+    /// cannot be planned from a moving start (typically a start braking harder than the
+    /// intended limits allow).
+    recovery: Planner,
     limits: JointLimits,
     out_of_limits: OutOfLimits,
     mode: FilterMode,
@@ -78,12 +82,14 @@ pub enum OfferState {
 impl ChunkPlanner {
     pub(super) fn new(
         planner: Planner,
+        recovery: Planner,
         limits: JointLimits,
         out_of_limits: OutOfLimits,
         mode: FilterMode,
     ) -> Self {
         Self {
             planner,
+            recovery,
             limits,
             out_of_limits,
             mode,
@@ -92,14 +98,37 @@ impl ChunkPlanner {
 
     /// The chunk's intended trajectory from `start` (the chunk's deltas are integrated from
     /// `start.q`, as in the paper); single-action mode plans to rest after the first action.
+    ///
+    /// The intended limits keep a braking reserve (acceleration `intended_acc_fraction` of the
+    /// robot's, jerk at most `intended_jerk`). A start the failsafe is braking from may lie
+    /// beyond them; if the chunk cannot be planned from a moving start within the intended
+    /// limits, it is planned within the robot's acceleration and jerk limits (velocity still
+    /// intended). Safety does not rest on the reserve: a trajectory along which the failsafe
+    /// cannot brake admissibly is simply not verified, and the robot keeps braking.
     pub fn plan(&mut self, start: &JointState, chunk: &Chunk) -> Result<Trajectory, ShieldError> {
         let n = self.limits.dof();
         let wp = chunk.waypoints(&start.q[..n], &self.limits, self.out_of_limits)?;
-        Ok(if self.mode == FilterMode::SingleAction {
-            self.planner.plan_single_action(start, &wp)?
-        } else {
-            self.planner.plan(start, &wp)?
-        })
+        let single = self.mode == FilterMode::SingleAction;
+        let plan = |p: &mut Planner| {
+            if single {
+                p.plan_single_action(start, &wp)
+            } else {
+                p.plan(start, &wp)
+            }
+        };
+        match plan(&mut self.planner) {
+            Ok(t) => Ok(t),
+            Err(e) => {
+                let moving = start.dq[..n]
+                    .iter()
+                    .chain(&start.ddq[..n])
+                    .any(|&x| x != 0.0);
+                if moving && let Ok(t) = plan(&mut self.recovery) {
+                    return Ok(t);
+                }
+                Err(e.into())
+            }
+        }
     }
 
     /// Plan `chunk` from a handover (off the control loop; hand the result to

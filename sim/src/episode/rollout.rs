@@ -120,6 +120,7 @@ pub fn run_setup(
     let chunk_every = policy.execute * action_every;
     // Steps since the last chunk (the first chunk is due at once).
     let mut since_chunk = chunk_every;
+    let mut chunks_rejected = 0usize;
     let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
     let (mut violations, mut verified, mut min_sep, mut max_dev) =
         (0usize, 0usize, f64::INFINITY, 0.0f64);
@@ -177,7 +178,10 @@ pub fn run_setup(
         {
             since_chunk = 0;
             let c = policy.chunk(&q);
-            let _ = filter.set_chunk(t, &c); // an unplannable chunk is ignored by the filter
+            // An unplannable chunk is ignored by the filter (counted).
+            if filter.set_chunk(t, &c).is_err() {
+                chunks_rejected += 1;
+            }
         }
         since_chunk += 1;
         let m = camera.measure(human, script, t);
@@ -293,6 +297,7 @@ pub fn run_setup(
         truth_audit,
         goals_reached: next_goal,
         ood_chunks: policy.ood_chunks(),
+        chunks_rejected,
         duration,
         min_separation: min_sep,
         max_deviation: max_dev,
