@@ -25,7 +25,12 @@ fn main() {
         if deadline > now {
             std::thread::sleep(deadline - now);
         }
-        late_us.push(Instant::now().saturating_duration_since(deadline).as_secs_f64() * 1e6);
+        late_us.push(
+            Instant::now()
+                .saturating_duration_since(deadline)
+                .as_secs_f64()
+                * 1e6,
+        );
     }
     late_us.sort_by(f64::total_cmp);
     let q = |p: f64| late_us[((p * n as f64) as usize).min(n - 1)];

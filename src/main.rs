@@ -31,9 +31,10 @@ enum Command {
     /// intervals).
     #[command(subcommand)]
     Reach(ReachCommand),
-    /// Print a built-in robot model as JSON (the format `--robot`/`"robot"` inputs accept).
+    /// Robot models: print one as JSON (built-in or converted from a URDF), or fit capsules to a
+    /// URDF's collision meshes.
     #[command(subcommand)]
-    Robot(ShowCommand),
+    Robot(RobotCommand),
     /// Print a built-in human model as JSON (the format `"human"` inputs accept).
     #[command(subcommand)]
     Human(ShowCommand),
@@ -141,6 +142,54 @@ enum ReachCommand {
 }
 
 #[derive(Subcommand)]
+enum RobotCommand {
+    /// Print a robot model as JSON (the format `--robot`/`"robot"` inputs accept): a built-in by
+    /// name ("fr3"), or a URDF converted with its side file (`--urdf F [--side S]`). With both a
+    /// name and `--urdf`, the URDF is printed and where it differs from the built-in (joint
+    /// limits, joint count) is listed on stderr.
+    ///
+    /// Examples: `pacs robot show fr3`; `pacs robot show --urdf arm.urdf --side arm.toml`;
+    /// `pacs robot show fr3 --urdf fr3.urdf --side fr3.toml` (differences on stderr).
+    Show {
+        /// Built-in model name (fr3).
+        name: Option<String>,
+        /// URDF file to convert.
+        #[arg(long, value_name = "FILE")]
+        urdf: Option<PathBuf>,
+        /// Side file (JSON or TOML) with what the URDF lacks (capsules, acceleration/jerk limits).
+        #[arg(long, value_name = "FILE", requires = "urdf")]
+        side: Option<PathBuf>,
+    },
+    /// Fit capsules to a URDF's mesh collisions (STL, OBJ, COLLADA) and write them into a side
+    /// file to review. Each capsule contains every vertex of its mesh (checked vertex by vertex,
+    /// radius rounded outward), hence the mesh. Links that already have capsules in `--side`
+    /// keep them; primitive collisions (box, cylinder, sphere) of a mesh link are kept as their
+    /// containing capsules. Prints each fit with its tightness (convex hull volume / capsule
+    /// volume) as JSON.
+    ///
+    /// `package://PKG/...` mesh paths are looked up under each `--package-path DIR` (DIR/PKG/...,
+    /// or DIR/... when DIR is the package itself) and then under `ROS_PACKAGE_PATH`; other paths
+    /// are relative to the URDF's directory.
+    ///
+    /// Example: `pacs robot capsules --urdf fr3.urdf --side fr3.toml --package-path ~/ws/src
+    /// --out fr3_capsules.json`, then `pacs robot show --urdf fr3.urdf --side fr3_capsules.json`.
+    Capsules {
+        /// URDF file.
+        #[arg(long, value_name = "FILE")]
+        urdf: PathBuf,
+        /// Side file to start from (JSON or TOML); its entries are kept.
+        #[arg(long, value_name = "FILE")]
+        side: Option<PathBuf>,
+        /// Directory holding ROS packages (or a package itself); repeatable.
+        #[arg(long = "package-path", value_name = "DIR")]
+        package_path: Vec<PathBuf>,
+        /// Write the side file here (JSON); without it the side file is part of the printed JSON.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
 enum ShowCommand {
     /// Print the named built-in model (robot: "fr3"; human: "default"; object: "ball").
     Show {
@@ -156,7 +205,15 @@ fn main() -> ExitCode {
         Command::Reach(ReachCommand::Robot { input }) => cli::reach::run_robot(input.as_deref()),
         Command::Reach(ReachCommand::Human { input }) => cli::reach::run_human(input.as_deref()),
         Command::Reach(ReachCommand::Object { input }) => cli::reach::run_object(input.as_deref()),
-        Command::Robot(ShowCommand::Show { name }) => cli::show::robot(&name),
+        Command::Robot(RobotCommand::Show { name, urdf, side }) => {
+            cli::show::robot(name.as_deref(), urdf.as_deref(), side.as_deref())
+        }
+        Command::Robot(RobotCommand::Capsules {
+            urdf,
+            side,
+            package_path,
+            out,
+        }) => cli::capsules::run(&urdf, side.as_deref(), &package_path, out.as_deref()),
         Command::Human(ShowCommand::Show { name }) => cli::show::human(&name),
         Command::Object(ShowCommand::Show { name }) => cli::show::object(&name),
         Command::Trajectory { input, brake_at } => cli::trajectory::run(&input, brake_at),

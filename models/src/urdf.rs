@@ -32,11 +32,12 @@
 //! [`LinkSpec`]: crate::robot::LinkSpec
 
 mod joints;
-mod links;
+pub(crate) mod links;
 mod pose;
 mod side_file;
 mod tree;
 
+pub use links::collision_capsules;
 pub use pose::rpy_of;
 pub use side_file::{JointOverride, LinkOverride, SideFile};
 

@@ -7,7 +7,9 @@ use crate::robot::InertialSpec;
 use crate::shape::CapsuleSpec;
 use nalgebra::{Matrix3, Point3, Vector3};
 
-pub(super) fn collision_capsules(link: &urdf_rs::Link) -> Result<Vec<CapsuleSpec>, ModelError> {
+/// The capsules containing a URDF link's primitive collision geometry (sphere, cylinder, capsule, box)
+/// in the link frame; mesh collisions are skipped (fitted by `pacs-mesh`, reviewed in a side file).
+pub fn collision_capsules(link: &urdf_rs::Link) -> Result<Vec<CapsuleSpec>, ModelError> {
     let mut out = Vec::new();
     for (ci, c) in link.collision.iter().enumerate() {
         let field = || format!("link `{}` collision[{ci}]", link.name);

@@ -1,0 +1,178 @@
+//! `pacs robot show` (built-in, URDF, URDF against a built-in) and `pacs robot capsules` (mesh
+//! collisions fitted into a side file the loader then accepts).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn pacs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pacs"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("ROS_PACKAGE_PATH")
+        .output()
+        .expect("run pacs")
+}
+
+fn ok_json(o: Output) -> serde_json::Value {
+    assert!(
+        o.status.success(),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
+/// A closed square tube (binary STL) along z from 0 to `len`, half-width `w`.
+fn write_tube_stl(path: &Path, w: f64, len: f64) {
+    let c = |x: f64, y: f64, z: f64| [x, y, z];
+    let corners = [c(-w, -w, 0.0), c(w, -w, 0.0), c(w, w, 0.0), c(-w, w, 0.0)];
+    let mut tris = Vec::new();
+    for k in 0..4 {
+        let (a, b) = (corners[k], corners[(k + 1) % 4]);
+        let (a2, b2) = ([a[0], a[1], len], [b[0], b[1], len]);
+        tris.push([a, b, b2]);
+        tris.push([a, b2, a2]);
+    }
+    let mut bytes = vec![0u8; 80];
+    bytes.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    for t in &tris {
+        bytes.extend_from_slice(&[0u8; 12]);
+        for v in t {
+            for x in v {
+                bytes.extend_from_slice(&(*x as f32).to_le_bytes());
+            }
+        }
+        bytes.extend_from_slice(&[0u8; 2]);
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+#[test]
+fn capsules_are_fitted_to_meshes_and_the_side_file_loads() {
+    let dir = std::env::temp_dir().join(format!("pacs-cli-robot-{}", std::process::id()));
+    let pkg = dir.join("ws").join("arm_description").join("meshes");
+    std::fs::create_dir_all(&pkg).unwrap();
+    write_tube_stl(&pkg.join("upper.stl"), 0.04, 0.3);
+    let urdf = dir.join("arm.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="arm">
+  <link name="base"/>
+  <link name="upper"><inertial><mass value="2"/><inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.01"/></inertial>
+    <collision><geometry><mesh filename="package://arm_description/meshes/upper.stl"/></geometry></collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" velocity="2" effort="10"/></joint>
+</robot>"#,
+    )
+    .unwrap();
+    let side = dir.join("arm.toml");
+    std::fs::write(&side, "a_max = 8.0\nj_max = 4000.0\n").unwrap();
+    let (u, s) = (urdf.to_str().unwrap(), side.to_str().unwrap());
+    // Without the fitted capsules the mesh link is refused (exit 3, naming it).
+    let o = pacs(&["robot", "show", "--urdf", u, "--side", s]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("upper"));
+    // Without a package path the package cannot be found (exit 3, naming the mesh).
+    let o = pacs(&["robot", "capsules", "--urdf", u, "--side", s]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("arm_description"));
+    let out = dir.join("arm_capsules.json");
+    let ws = dir.join("ws");
+    let report = ok_json(pacs(&[
+        "robot",
+        "capsules",
+        "--urdf",
+        u,
+        "--side",
+        s,
+        "--package-path",
+        ws.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let fits = report["fits"].as_array().unwrap();
+    assert_eq!(fits.len(), 1);
+    assert_eq!(fits[0]["link"], "upper");
+    assert_eq!(fits[0]["vertices"], 24);
+    // A square tube of half-width 4 cm: its corners are 4√2 cm from the axis.
+    let r = fits[0]["radius_m"].as_f64().unwrap();
+    assert!((0.04 * 2f64.sqrt() - 1e-6..0.07).contains(&r), "radius {r}");
+    let t = fits[0]["tightness"].as_f64().unwrap();
+    assert!(t > 0.3 && t <= 1.0, "tightness {t}");
+    // The written side file keeps the user's entries and loads.
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(written["a_max"], 8.0);
+    assert_eq!(
+        written["links"]["upper"]["capsules"]
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+    let spec = ok_json(pacs(&[
+        "robot",
+        "show",
+        "--urdf",
+        u,
+        "--side",
+        out.to_str().unwrap(),
+    ]));
+    assert_eq!(spec["name"], "arm");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_urdf_named_with_a_built_in_lists_its_differences() {
+    let dir = std::env::temp_dir().join(format!("pacs-cli-robot-diff-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tests/data/fr3.urdf"),
+    )
+    .unwrap()
+    .replacen(
+        r#"lower="-2.7437" upper="2.7437""#,
+        r#"lower="-2.3093" upper="2.3093""#,
+        1,
+    );
+    let urdf = dir.join("fr3_public_limits.urdf");
+    std::fs::write(&urdf, text).unwrap();
+    let o = pacs(&[
+        "robot",
+        "show",
+        "fr3",
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--side",
+        "models/tests/data/fr3_side.toml",
+    ]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("2 differences"), "{err}");
+    assert!(
+        err.contains(
+            "joints[0] (fr3_joint1).q_min: -2.3093 rad in the URDF, -2.7437 rad in the built-in"
+        ),
+        "{err}"
+    );
+    // The spec printed is the URDF's.
+    let spec: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(spec["joints"][0]["limits"]["q_min"], -2.3093);
+    // The unmodified URDF: the same limits.
+    let o = pacs(&[
+        "robot",
+        "show",
+        "fr3",
+        "--urdf",
+        "models/tests/data/fr3.urdf",
+        "--side",
+        "models/tests/data/fr3_side.toml",
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("the same joint limits"));
+    // Neither a name nor a URDF: exit 3 with what to give.
+    let o = pacs(&["robot", "show"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--urdf FILE"));
+    std::fs::remove_dir_all(&dir).ok();
+}
