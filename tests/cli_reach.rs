@@ -580,5 +580,5 @@ fn inline_models_name_the_faulty_field() {
     );
     invalid(o, "missing field `body_parts`");
     let o = with_input(&["fk"], &json!({"robot": 3, "q": [Q_READY]}));
-    invalid(o, "expected a built-in robot name");
+    invalid(o, "expected a built-in model name");
 }

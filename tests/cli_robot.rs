@@ -176,3 +176,95 @@ fn a_urdf_named_with_a_built_in_lists_its_differences() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--urdf FILE"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `{urdf, side}` robots everywhere, paths relative to the file that names them: a log header, an
+/// audit config and a CLI input, each read from a working directory elsewhere.
+#[test]
+fn urdf_robots_in_headers_configs_and_inputs_resolve_against_their_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("pacs-cli-robot-ref-{}", std::process::id()));
+    let sub = dir.join("run");
+    std::fs::create_dir_all(sub.join("model")).unwrap();
+    for f in ["fr3.urdf", "fr3_side.toml"] {
+        std::fs::copy(
+            root.join("models/tests/data").join(f),
+            sub.join("model").join(f),
+        )
+        .unwrap();
+    }
+    let urdf_ref = r#"{"urdf": "model/fr3.urdf", "side": "model/fr3_side.toml"}"#;
+    // A log whose header names the URDF robot relative to the log.
+    let log = std::fs::read_to_string(root.join("examples/logs/clean_sorting.jsonl"))
+        .unwrap()
+        .replacen(r#""robot": "fr3""#, &format!(r#""robot": {urdf_ref}"#), 1);
+    std::fs::write(sub.join("run.jsonl"), log).unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_pacs"))
+            .args(args)
+            .current_dir(&dir) // not the log's directory
+            .output()
+            .unwrap()
+    };
+    let o = run(&["audit", "run/run.jsonl", "--out", "report"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        matches!(o.status.code(), Some(0..=2)),
+        "exit {:?}: {err}",
+        o.status.code()
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report/report.json")).unwrap())
+            .unwrap();
+    // The URDF names its robot `fr3` (the bad path below shows the URDF is what is read).
+    assert_eq!(report["runs"][0]["models"]["robot"], "fr3", "{report}");
+    // A wrong relative path names the resolved file.
+    let bad = std::fs::read_to_string(sub.join("run.jsonl"))
+        .unwrap()
+        .replacen("model/fr3.urdf", "model/nope.urdf", 1);
+    std::fs::write(sub.join("bad.jsonl"), bad).unwrap();
+    let o = run(&["audit", "run/bad.jsonl"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.urdf"));
+    // An audit config overriding the robot, relative to the config file.
+    std::fs::write(
+        sub.join("audit.toml"),
+        "robot = { urdf = \"model/fr3.urdf\", side = \"model/fr3_side.toml\" }\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "audit",
+        "--config",
+        "run/audit.toml",
+        &root
+            .join("examples/logs/clean_sorting.jsonl")
+            .display()
+            .to_string(),
+    ]);
+    assert!(
+        matches!(o.status.code(), Some(0..=2)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // A CLI input (fk) naming the URDF relative to the input file.
+    std::fs::write(
+        sub.join("fk.json"),
+        format!(r#"{{"robot": {urdf_ref}, "q": [[0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398]]}}"#),
+    )
+    .unwrap();
+    let o = run(&["fk", "--input", "run/fk.json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // An unknown field beside urdf is named.
+    std::fs::write(
+        sub.join("fk_bad.json"),
+        r#"{"robot": {"urdf": "model/fr3.urdf", "sidefile": "x"}, "q": [[0,0,0,0,0,0,0]]}"#,
+    )
+    .unwrap();
+    let o = run(&["fk", "--input", "run/fk_bad.json"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("sidefile"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -24,8 +24,8 @@ pub struct AuditConfig {
     /// Relative slack on `|q_{i+1} − q_i| ≤ v_max·Δt` before samples count as exceeding the
     /// velocity limits. Default 1e-9.
     pub limit_slack: f64,
-    /// Override the header's robot.
-    pub robot: Option<pacs_log::ModelRef<pacs_models::RobotSpec>>,
+    /// Override the header's robot (name, `{urdf, side}` relative to the config file, or spec).
+    pub robot: Option<pacs_log::RobotRef>,
     /// Override the header's human model.
     pub human: Option<pacs_log::ModelRef<pacs_models::HumanSpec>>,
     /// Override the header's constraints.

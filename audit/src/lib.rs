@@ -28,8 +28,12 @@ use std::path::Path;
 
 /// Load an audit config from TOML text; errors name the file and the problem.
 pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, LogError> {
-    let cfg: AuditConfig = toml::from_str(text)
+    let mut cfg: AuditConfig = toml::from_str(text)
         .map_err(|e| LogError::input(file, Location::File, format!("invalid config: {e}")))?;
+    // A {urdf, side} robot's relative paths are relative to the config file.
+    if let Some(r) = &mut cfg.robot {
+        r.rebase(&pacs_log::dir_of(std::path::Path::new(file)));
+    }
     cfg.validate()
         .map_err(|p| LogError::input(file, Location::File, format!("invalid config: {p}")))?;
     Ok(cfg)

@@ -51,6 +51,108 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for ModelRef<T> {
     }
 }
 
+/// A robot given by built-in name (`"fr3"`), as a URDF with its side file (`{"urdf":
+/// "arm.urdf", "side": "arm.toml"}`), or as an inline spec (what `pacs robot show` prints) —
+/// in log headers, audit configs and CLI inputs alike. Read by its shape (a string; an object
+/// with `urdf`; any other object), so a faulty inline spec reports its own missing or unknown
+/// field. Relative URDF and side-file paths mean relative to the file that names them: readers
+/// call [`RobotRef::rebase`] with that file's directory.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum RobotRef {
+    /// Built-in name.
+    Name(String),
+    /// A URDF file and its side file (JSON or TOML; capsules, acceleration/jerk limits).
+    Urdf {
+        /// URDF path.
+        urdf: std::path::PathBuf,
+        /// Side-file path.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        side: Option<std::path::PathBuf>,
+    },
+    /// Inline spec.
+    Spec(Box<RobotSpec>),
+}
+
+impl<'de> Deserialize<'de> for RobotRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct UrdfRef {
+            urdf: std::path::PathBuf,
+            #[serde(default)]
+            side: Option<std::path::PathBuf>,
+        }
+        let v = serde_json::Value::deserialize(d)?;
+        match &v {
+            serde_json::Value::String(n) => Ok(RobotRef::Name(n.clone())),
+            serde_json::Value::Object(m) if m.contains_key("urdf") => {
+                let u: UrdfRef = serde_json::from_value(v)
+                    .map_err(|e| D::Error::custom(format!("robot {{urdf, side}}: {e}")))?;
+                Ok(RobotRef::Urdf {
+                    urdf: u.urdf,
+                    side: u.side,
+                })
+            }
+            serde_json::Value::Object(_) => serde_json::from_value(v)
+                .map(|s| RobotRef::Spec(Box::new(s)))
+                .map_err(|e| D::Error::custom(format!("inline robot spec: {e}"))),
+            other => Err(D::Error::custom(format!(
+                "expected a built-in model name (a string), {{\"urdf\": ..., \"side\": ...}} or an inline spec (an object), found {other}"
+            ))),
+        }
+    }
+}
+
+impl From<ModelRef<RobotSpec>> for RobotRef {
+    fn from(m: ModelRef<RobotSpec>) -> Self {
+        match m {
+            ModelRef::Name(n) => RobotRef::Name(n),
+            ModelRef::Spec(s) => RobotRef::Spec(s),
+        }
+    }
+}
+
+impl RobotRef {
+    /// Make relative URDF and side-file paths relative to `dir` (the directory of the file that
+    /// names them); absolute paths, names and inline specs are unchanged.
+    pub fn rebase(&mut self, dir: &std::path::Path) {
+        if let RobotRef::Urdf { urdf, side } = self {
+            if urdf.is_relative() {
+                *urdf = dir.join(&*urdf);
+            }
+            if let Some(s) = side
+                && s.is_relative()
+            {
+                *s = dir.join(&*s);
+            }
+        }
+    }
+
+    /// The validated model (a URDF is converted with its side file).
+    pub fn load(&self) -> Result<RobotModel, pacs_models::ModelError> {
+        match self {
+            RobotRef::Name(n) => RobotModel::builtin(n),
+            RobotRef::Urdf { urdf, side } => {
+                pacs_models::urdf::load_urdf_files(urdf, side.as_deref()).map_err(|e| {
+                    pacs_models::ModelError::Invalid(format!("URDF {}: {e}", urdf.display()))
+                })
+            }
+            RobotRef::Spec(s) => RobotModel::new((**s).clone()),
+        }
+    }
+}
+
+/// The directory of the file at `path` (`.` for a bare file name): where the relative paths it
+/// names start.
+pub fn dir_of(path: &std::path::Path) -> std::path::PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    }
+}
+
 /// The first record of every log: models, constraints, static environment and free-form metadata.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -62,8 +164,8 @@ pub struct Header {
     pub format: String,
     /// Always [`VERSION`].
     pub version: u32,
-    /// Robot model (name or spec).
-    pub robot: ModelRef<RobotSpec>,
+    /// Robot model (name, `{urdf, side}` relative to the log file, or spec).
+    pub robot: RobotRef,
     /// Human model (name or spec).
     pub human: ModelRef<HumanSpec>,
     /// Task constraints (preset name or spec).
@@ -82,7 +184,7 @@ pub struct Header {
 impl Header {
     /// A v1 header for the given models.
     pub fn new(
-        robot: ModelRef<RobotSpec>,
+        robot: impl Into<RobotRef>,
         human: ModelRef<HumanSpec>,
         constraints: ModelRef<ConstraintSpec>,
     ) -> Self {
@@ -90,7 +192,7 @@ impl Header {
             kind: "header".into(),
             format: FORMAT.into(),
             version: VERSION,
-            robot,
+            robot: robot.into(),
             human,
             constraints,
             environment: vec![],
@@ -120,11 +222,12 @@ impl Header {
         parsed: Result<Header, serde_json::Error>,
     ) -> Result<Header, crate::error::LogError> {
         use crate::error::LogError;
-        let header =
+        let mut header =
             parsed.map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
         header
             .check()
             .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        header.robot.rebase(&dir_of(std::path::Path::new(file)));
         Ok(header)
     }
 }
@@ -146,7 +249,7 @@ pub struct ObjectEntry {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ModelOverrides {
     /// Robot model.
-    pub robot: Option<ModelRef<RobotSpec>>,
+    pub robot: Option<RobotRef>,
     /// Human model.
     pub human: Option<ModelRef<HumanSpec>>,
     /// Task constraints.
@@ -192,11 +295,7 @@ impl LogModels {
             let field = field.to_string();
             move |source| HeaderError::Model { field, source }
         };
-        let robot = match &h.robot {
-            ModelRef::Name(n) => RobotModel::builtin(n),
-            ModelRef::Spec(s) => RobotModel::new((**s).clone()),
-        }
-        .map_err(model("header.robot"))?;
+        let robot = h.robot.load().map_err(model("header.robot"))?;
         let human = match &h.human {
             ModelRef::Name(n) => HumanModel::builtin(n),
             ModelRef::Spec(s) => HumanModel::new((**s).clone()),

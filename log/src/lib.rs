@@ -19,6 +19,6 @@ pub mod order;
 pub use error::{HeaderError, Location, LogError, McapConfigError};
 pub use format::{
     FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, ObjectEntry, Record,
-    RecordReader, VERSION, WriteError,
+    RecordReader, RobotRef, VERSION, WriteError, dir_of,
 };
 pub use order::EqualTimeGroup;

@@ -16,7 +16,7 @@ struct Input {
 /// Run `pacs fk --input F`.
 pub fn run(path: &Path) -> Result<Value, CliError> {
     let input: Input = read_json(path)?;
-    let robot = input.robot.load()?;
+    let robot = super::load_robot(&input.robot, Some(path))?;
     let mut configurations = Vec::with_capacity(input.q.len());
     for (i, q) in input.q.iter().enumerate() {
         check_vec(&format!("q[{i}]"), q, robot.dof())?;

@@ -73,70 +73,21 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliEr
     parse_json(path, &text)
 }
 
-/// A robot given by built-in name (`"fr3"`), as a URDF file plus optional side file
-/// (`{"urdf": "arm.urdf", "side": "arm.toml"}`, paths relative to the working directory), or as
-/// an inline model object (the format `pacs robot show` prints). Read by its shape (a string, an
-/// object with `urdf`, any other object), so a faulty inline spec reports its own missing or
-/// unknown field.
-#[derive(Debug, Clone)]
-pub enum RobotRef {
-    /// Built-in name.
-    Name(String),
-    /// URDF file plus side file.
-    Urdf {
-        /// URDF path.
-        urdf: std::path::PathBuf,
-        /// Side file (JSON or TOML) with capsules and acceleration/jerk limits.
-        side: Option<std::path::PathBuf>,
-    },
-    /// Inline spec.
-    Spec(Box<pacs_models::RobotSpec>),
-}
+/// A robot given by built-in name, `{"urdf": ..., "side": ...}` or inline spec: the one reader
+/// shared with log headers and audit configs.
+pub use pacs_log::RobotRef;
 
-impl<'de> serde::Deserialize<'de> for RobotRef {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        use serde::de::Error;
-        #[derive(serde::Deserialize)]
-        #[serde(deny_unknown_fields)]
-        struct UrdfRef {
-            urdf: std::path::PathBuf,
-            #[serde(default)]
-            side: Option<std::path::PathBuf>,
-        }
-        let v = serde_json::Value::deserialize(d)?;
-        match &v {
-            serde_json::Value::String(n) => Ok(RobotRef::Name(n.clone())),
-            serde_json::Value::Object(m) if m.contains_key("urdf") => {
-                let u: UrdfRef = serde_json::from_value(v).map_err(D::Error::custom)?;
-                Ok(RobotRef::Urdf {
-                    urdf: u.urdf,
-                    side: u.side,
-                })
-            }
-            serde_json::Value::Object(_) => serde_json::from_value(v)
-                .map(|s| RobotRef::Spec(Box::new(s)))
-                .map_err(|e| D::Error::custom(format!("inline robot spec: {e}"))),
-            other => Err(D::Error::custom(format!(
-                "expected a built-in robot name, {{\"urdf\": ..., \"side\": ...}} or an inline \
-                 spec, found {other}"
-            ))),
-        }
+/// Load the robot an input file names: `{urdf, side}` paths relative to that file (`input`; the
+/// working directory for built-in examples).
+pub fn load_robot(
+    robot: &RobotRef,
+    input: Option<&Path>,
+) -> Result<pacs_models::RobotModel, CliError> {
+    let mut r = robot.clone();
+    if let Some(p) = input {
+        r.rebase(&pacs_log::dir_of(p));
     }
-}
-
-impl RobotRef {
-    /// Resolve to a validated model.
-    pub fn load(&self) -> Result<pacs_models::RobotModel, CliError> {
-        Ok(match self {
-            RobotRef::Name(n) => pacs_models::RobotModel::builtin(n)?,
-            RobotRef::Urdf { urdf, side } => {
-                pacs_models::urdf::load_urdf_files(urdf, side.as_deref())
-                    .map_err(|e| CliError::Input(format!("robot {}: {e}", urdf.display())))?
-            }
-            RobotRef::Spec(s) => pacs_models::RobotModel::new((**s).clone())
-                .map_err(|e| CliError::Input(format!("robot: {e}")))?,
-        })
-    }
+    r.load().map_err(|e| CliError::Input(format!("robot: {e}")))
 }
 
 /// A human model given by built-in name (`"default"`) or inline (read by its shape, like

@@ -66,7 +66,7 @@ fn input_or_example<T: serde::de::DeserializeOwned>(
 /// Run `pacs reach robot [--input F]`.
 pub fn run_robot(path: Option<&Path>) -> Result<Value, CliError> {
     let input: RobotInput = input_or_example(path, ROBOT_EXAMPLE)?;
-    let robot = input.robot.load()?;
+    let robot = super::load_robot(&input.robot, path)?;
     let reach = RobotReach::try_new(&robot, input.tracking_error)
         .map_err(|e| CliError::Input(e.to_string()))?;
     let mut boxes = Vec::with_capacity(input.boxes.len());

@@ -12,7 +12,6 @@ use super::{CliError, check_vec, read_file};
 use pacs_log::{Header, LogModels, ModelRef, ObjectEntry};
 use pacs_models::ConstraintSpec;
 use pacs_models::human::HumanSpec;
-use pacs_models::robot::RobotSpec;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
@@ -28,7 +27,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Scene {
-    robot: ModelRef<RobotSpec>,
+    robot: pacs_log::RobotRef,
     human: ModelRef<HumanSpec>,
     constraints: ModelRef<ConstraintSpec>,
     #[serde(default)]
@@ -132,11 +131,15 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     };
     let scene: Scene =
         serde_json::from_str(&text).map_err(|e| input(format!("{name}: invalid scene: {e}")))?;
-    let mut header = Header::new(
-        scene.robot.clone(),
-        scene.human.clone(),
-        scene.constraints.clone(),
-    );
+    // A {urdf, side} robot (paths relative to the scene file) is logged as its converted spec:
+    // the log stands on its own.
+    let robot_ref = match &scene.robot {
+        pacs_log::RobotRef::Urdf { .. } => pacs_log::RobotRef::Spec(Box::new(
+            super::load_robot(&scene.robot, path)?.spec().clone(),
+        )),
+        other => other.clone(),
+    };
+    let mut header = Header::new(robot_ref, scene.human.clone(), scene.constraints.clone());
     header.environment = scene.environment.clone();
     header.objects = scene.objects.clone();
     header.meta.insert("filter".into(), "pacs-shield".into());

@@ -94,7 +94,7 @@ fn times(t0: f64, t1: f64, dt: f64, count: usize) -> impl Iterator<Item = f64> {
 /// Run `pacs trajectory --input F [--brake-at t]`.
 pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
     let input: Input = read_json(path)?;
-    let robot = input.robot.load()?;
+    let robot = super::load_robot(&input.robot, Some(path))?;
     let n = robot.limits().dof();
     check_vec("state.q", &input.state.q, n)?;
     let dq = input.state.dq.clone().unwrap_or_else(|| vec![0.0; n]);

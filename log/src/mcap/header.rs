@@ -46,7 +46,11 @@ pub fn load_header_file(path: &std::path::Path) -> Result<Header, LogError> {
         serde_json::from_str(&text)
             .map_err(|e| LogError::input(&name, Location::File, format!("invalid JSON: {e}")))?
     };
-    header_from_value(value).map_err(|p| LogError::input(&name, Location::File, p.to_string()))
+    let mut h = header_from_value(value)
+        .map_err(|p| LogError::input(&name, Location::File, p.to_string()))?;
+    // A {urdf, side} robot's relative paths are relative to this header file.
+    h.robot.rebase(&crate::format::dir_of(path));
+    Ok(h)
 }
 
 /// The `pacs` header a metadata record holds, or why it holds none.
