@@ -263,3 +263,133 @@ fn bad_mcap_input_exits_3_naming_file_offset_and_problem() {
         "{err}"
     );
 }
+
+/// The shipped MCAP example (`examples/logs/clean_sorting.mcap`: the JSON Lines example as a
+/// ROS 2 recording — JointState on `/joint_states`, PoseArray on `/human/keypoints`, CDR — with
+/// its pacs header in `examples/logs/clean_sorting_header.json`, not in the file). Rewrite it
+/// with `cargo test --test cli_audit_mcap -- --ignored regenerate`.
+fn shipped_mcap() -> Vec<u8> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("examples/logs/clean_sorting.jsonl")).unwrap();
+    let mut lines = text.lines();
+    let header: Header = serde_json::from_str(lines.next().unwrap()).unwrap();
+    let mut m = McapLogWriter::new(
+        Cursor::new(Vec::new()),
+        mcap::WriteOptions::new(),
+        &header,
+        &McapConfig::default(),
+        &JOINTS,
+    )
+    .unwrap();
+    let ns = |t: f64| (t * 1e9).round() as i128;
+    for l in lines {
+        let v: Value = serde_json::from_str(l).unwrap();
+        let t = v["t"].as_f64().unwrap();
+        let arr = |k: &str| -> Vec<f64> {
+            v[k].as_array()
+                .map(|a| a.iter().map(|x| x.as_f64().unwrap()).collect())
+                .unwrap_or_default()
+        };
+        match v["type"].as_str().unwrap() {
+            "robot" => {
+                let dq = arr("dq");
+                m.write_robot(ns(t), ns(t), &arr("q"), (!dq.is_empty()).then_some(&dq[..]))
+                    .unwrap();
+            }
+            "human" => {
+                let kp: Vec<[f64; 3]> = v["positions"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|p| {
+                        let p = p.as_array().unwrap();
+                        [
+                            p[0].as_f64().unwrap(),
+                            p[1].as_f64().unwrap(),
+                            p[2].as_f64().unwrap(),
+                        ]
+                    })
+                    .collect();
+                let t_meas = v["t_meas"].as_f64().unwrap_or(t);
+                m.write_human(ns(t), ns(t_meas), &kp).unwrap();
+            }
+            "event" => m.write_event(ns(t), v["name"].as_str().unwrap()).unwrap(),
+            other => panic!("record type {other}"),
+        }
+    }
+    let with_header = m.finish().unwrap().into_inner();
+    // Ship it without the metadata record: the header comes from --header, as for a recording
+    // made by a ROS 2 stack that knows nothing of pacs.
+    let mut out = mcap::Writer::new(Cursor::new(Vec::new())).unwrap();
+    for msg in mcap::MessageStream::new(&with_header).unwrap() {
+        out.write(&msg.unwrap()).unwrap();
+    }
+    out.finish().unwrap();
+    out.into_inner().into_inner()
+}
+
+#[test]
+#[ignore = "rewrites the shipped example"]
+fn regenerate_the_shipped_mcap_example() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::write(
+        root.join("examples/logs/clean_sorting.mcap"),
+        shipped_mcap(),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(root.join("examples/logs/clean_sorting.jsonl")).unwrap();
+    let header: Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    std::fs::write(
+        root.join("examples/logs/clean_sorting_header.json"),
+        serde_json::to_string_pretty(&header).unwrap() + "\n",
+    )
+    .unwrap();
+}
+
+/// The shipped MCAP example is what the generator makes, carries no header of its own, and
+/// audits with its header file exactly as the JSON Lines example does (pass).
+#[test]
+fn the_shipped_mcap_example_audits_like_its_jsonl_twin() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shipped = std::fs::read(root.join("examples/logs/clean_sorting.mcap")).unwrap();
+    assert_eq!(
+        shipped.len(),
+        shipped_mcap().len(),
+        "regenerate the example"
+    );
+    let o = pacs(&["audit", "examples/logs/clean_sorting.mcap"]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "no header in the file: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = pacs(&[
+        "audit",
+        "examples/logs/clean_sorting.mcap",
+        "--header",
+        "examples/logs/clean_sorting_header.json",
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let m: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let o = pacs(&["audit", "examples/logs/clean_sorting.jsonl", "--json"]);
+    let j: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(m["runs"][0]["verdict"], "pass");
+    assert_eq!(m["runs"][0]["verdict"], j["runs"][0]["verdict"]);
+    for k in [
+        "samples",
+        "human_records",
+        "violation_fraction",
+        "min_separation",
+    ] {
+        let (a, b) = (&m["runs"][0]["metrics"][k], &j["runs"][0]["metrics"][k]);
+        assert!(a.is_number(), "{k} missing: {m}");
+        assert_eq!(a, b, "{k}");
+    }
+}
