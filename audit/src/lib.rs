@@ -143,6 +143,17 @@ pub fn audit_file_with_header(
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<RunResult, LogError> {
+    let mut reader = open_log(path, cfg, header)?;
+    audit_reader(reader.as_mut(), cfg)
+}
+
+/// Open a log for reading by its form (MCAP, CSV, JSON Lines; see [`audit_file`]), with a
+/// separate header for MCAP logs (`--header`; an error for other logs).
+pub fn open_log(
+    path: &Path,
+    cfg: &AuditConfig,
+    header: Option<&Header>,
+) -> Result<Box<dyn RecordReader>, LogError> {
     let name = path.display().to_string();
     let mcap_log = is_mcap(path)?;
     let f = std::fs::File::open(path).map_err(|e| LogError::Io {
@@ -151,14 +162,13 @@ pub fn audit_file_with_header(
     })?;
     let input = std::io::BufReader::with_capacity(1 << 16, f);
     if mcap_log {
-        let mut reader = pacs_log::mcap::McapReader::new(
+        return Ok(Box::new(pacs_log::mcap::McapReader::new(
             &name,
             input,
             &cfg.mcap,
             &cfg.overrides(),
             header.cloned(),
-        )?;
-        return audit_reader(&mut reader, cfg);
+        )?));
     }
     if header.is_some() {
         return Err(LogError::input(
@@ -171,10 +181,8 @@ pub fn audit_file_with_header(
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
     {
-        let mut reader = pacs_log::csv::CsvReader::new(&name, input)?;
-        audit_reader(&mut reader, cfg)
+        Ok(Box::new(pacs_log::csv::CsvReader::new(&name, input)?))
     } else {
-        let mut reader = pacs_log::jsonl::JsonlReader::new(&name, input)?;
-        audit_reader(&mut reader, cfg)
+        Ok(Box::new(pacs_log::jsonl::JsonlReader::new(&name, input)?))
     }
 }

@@ -27,6 +27,11 @@ pub struct AuditArgs {
     /// Print `{"runs": [...]}` as JSON on stdout instead of a text summary.
     #[arg(long)]
     pub json: bool,
+    /// Write a Foxglove replay of the (one) log here: an MCAP file with the robot and human
+    /// capsules, their occupancies, violation markers and the separation/energy/threshold
+    /// series, which Foxglove opens (topics in docs/audit.md).
+    #[arg(long, value_name = "FILE.mcap")]
+    pub scene: Option<PathBuf>,
     /// MCAP logs only: the pacs header (JSON, or TOML for `*.toml`) instead of the logs' `pacs`
     /// metadata records.
     #[arg(long, value_name = "FILE")]
@@ -76,6 +81,13 @@ pub fn main(args: AuditArgs) -> ExitCode {
             return ExitCode::from(EXIT_INVALID);
         }
     };
+    if args.scene.is_some() && args.logs.len() != 1 {
+        eprintln!(
+            "pacs: error: --scene writes the replay of one log; {} logs given",
+            args.logs.len()
+        );
+        return ExitCode::from(EXIT_INVALID);
+    }
     let header = match &args.header {
         None => None,
         Some(p) => match pacs_log::mcap::load_header_file(p) {
@@ -160,5 +172,51 @@ pub fn main(args: AuditArgs) -> ExitCode {
             return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
         }
     }
+    if let Some(path) = &args.scene
+        && let Err((code, e)) = write_scene(&args.logs[0], &cfg, header.as_ref(), &runs[0], path)
+    {
+        eprintln!("pacs: {e}");
+        return ExitCode::from(code);
+    }
     ExitCode::from(verdict.exit_code())
+}
+
+/// The Foxglove replay of `log` (audited as `run`) into `path`.
+fn write_scene(
+    log: &std::path::Path,
+    cfg: &AuditConfig,
+    header: Option<&pacs_log::Header>,
+    run: &RunResult,
+    path: &std::path::Path,
+) -> Result<(), (u8, String)> {
+    let invalid = |e: String| (EXIT_INVALID, format!("error: {e}"));
+    let mut reader = pacs_audit::open_log(log, cfg, header).map_err(|e| invalid(e.to_string()))?;
+    let h = reader.header().with_overrides(&cfg.overrides());
+    let models = pacs_log::LogModels::from_header(&h).map_err(|e| invalid(e.to_string()))?;
+    let file = std::fs::File::create(path).map_err(|e| {
+        (
+            super::EXIT_CANNOT_WRITE as u8,
+            format!("cannot write the scene {}: {e}", path.display()),
+        )
+    })?;
+    let opts = pacs_replay::SceneOptions {
+        human_model: cfg.human_model,
+        tracking_error: cfg.tracking_error,
+        ..Default::default()
+    };
+    pacs_replay::write_scene(
+        reader.as_mut(),
+        &models,
+        run,
+        std::io::BufWriter::new(file),
+        &opts,
+    )
+    .map_err(|e| match e {
+        pacs_replay::ReplayError::Write(m) => (
+            super::EXIT_CANNOT_WRITE as u8,
+            format!("cannot write the scene {}: {m}", path.display()),
+        ),
+        other => invalid(other.to_string()),
+    })?;
+    Ok(())
 }
