@@ -221,15 +221,18 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
     );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.starts_with("<!DOCTYPE html>"));
-    assert_eq!(html.matches("<svg").count(), 4, "two plots per log");
+    // SSM logs: the separation plot; no energy plot (no PFL threshold applies).
+    assert_eq!(html.matches("<svg").count(), 2, "one plot per SSM log");
     assert!(html.contains("class=\"separation\""));
-    assert!(html.contains("class=\"energy-nominal\""));
+    assert!(html.contains("no energy limit applied"));
     assert!(
         html.contains("class=\"violation\""),
         "violation spans shaded"
     );
     assert!(!html.contains("<script"), "self-contained, no scripts");
-    assert!(html.contains("Safety Viol."));
+    assert!(html.contains("n (logs)"));
+    let pdf = std::fs::read(out.join("report.pdf")).unwrap();
+    assert!(pdf.starts_with(b"%PDF-1.4") && pdf.ends_with(b"%%EOF\n"));
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(
         md.contains("| sorting | act | pacs | 1 |") && md.contains("| sorting | act | none | 1 |"),

@@ -203,6 +203,21 @@ impl Auditor {
             human_measurement_error_pos: models.human.measurement_error_pos(),
             human_delay: models.human.delay(),
             environment_shapes: models.environment.len(),
+            specs: serde_json::json!({
+                "robot": models.robot.spec(),
+                "human": models.human.spec(),
+                "constraints": models.constraints,
+                "environment": models.environment.iter().map(|c| [
+                    c.p1().x, c.p1().y, c.p1().z, c.p2().x, c.p2().y, c.p2().z, c.radius()
+                ]).collect::<Vec<_>>(),
+                "objects": models.objects.iter().map(|(id, m, contact)| serde_json::json!({
+                    "id": id, "contact": contact,
+                    "shape_generators": m.shape_generators(), "shape_radius": m.shape_radius(),
+                    "max_acc": m.max_acc(), "acc_bias": m.acc_bias(),
+                    "acc_generators": m.acc_generators(), "max_speed": m.max_speed(),
+                    "pos_error": m.pos_error(), "vel_error": m.vel_error(), "delay": m.delay(),
+                })).collect::<Vec<_>>(),
+            }),
         };
         let links = models.robot.links().len();
         let object_rule =

@@ -24,6 +24,7 @@ fn empty_point(t: f64, t_end: f64) -> SeriesPoint {
         threshold: None,
         violation: false,
         inconclusive: false,
+        at_rest: true,
     }
 }
 
@@ -75,6 +76,7 @@ impl Series {
                         threshold: min_opt(a.threshold, b.threshold),
                         violation: a.violation || b.violation,
                         inconclusive: a.inconclusive || b.inconclusive,
+                        at_rest: a.at_rest && b.at_rest,
                     }
                 } else {
                     SeriesPoint {

@@ -166,7 +166,8 @@ pub struct Metrics {
     pub min_separation: Option<f64>,
     /// Task outcome from the last `success` / `failure` event (None if none was logged).
     pub success: Option<bool>,
-    /// `success` and verdict `pass` (None if no outcome was logged).
+    /// [`safe_success`] with the audit as evidence: `success` and verdict `pass` (None if no
+    /// outcome was logged).
     pub safe_success: Option<bool>,
 }
 
@@ -189,6 +190,9 @@ pub struct SeriesPoint {
     pub violation: bool,
     /// Part of the bucket is inconclusive.
     pub inconclusive: bool,
+    /// The robot is nominally at rest over the whole bucket: every logged (or, without
+    /// velocities, sample-difference) joint speed is at most the config's `rest_speed`.
+    pub at_rest: bool,
 }
 
 /// The audit of one log.
@@ -234,4 +238,19 @@ pub struct ModelNames {
     pub human_delay: f64,
     /// Number of static environment capsules.
     pub environment_shapes: usize,
+    /// The full model parameters: `{"robot": spec, "human": spec, "constraints": spec,
+    /// "environment": [capsules], "objects": [...]}` (reports hash and print them; not part of
+    /// `pacs audit --json`).
+    #[serde(skip_serializing, default)]
+    pub specs: serde_json::Value,
+}
+
+/// **Safe success**, the one definition (the paper's metric, used by the audit, the reports, `pacs
+/// demo` and `pacs simulate`): the task succeeded and no safety violation occurred. What shows
+/// "no violation" is the evidence, named with every figure: in an audit and its report, the
+/// audit's verdict `pass` (sound: a pass excludes every violation the models allow); in the
+/// simulation, no violation against the true (simulated) human, which an audit pass implies but
+/// not the other way round.
+pub fn safe_success(success: bool, no_violation: bool) -> bool {
+    success && no_violation
 }

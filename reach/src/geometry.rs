@@ -142,6 +142,16 @@ pub fn capsule_distance_lower_bound(a: &Capsule, b: &Capsule) -> f64 {
     sub_down(d, add_up(a.radius(), b.radius())).max(0.0)
 }
 
+/// The separation figure of two capsules (m): a lower bound of the distance between their core
+/// segments minus the sum of their radii, rounded down, **not** clamped at 0. Positive: the
+/// capsules are provably apart by at least this much. Zero or negative: they may overlap, and
+/// the magnitude is how far the radii overlap at the bound (not a bound on penetration depth).
+/// [`capsule_distance_lower_bound`] is this clamped at 0.
+pub fn capsule_separation_lower_bound(a: &Capsule, b: &Capsule) -> f64 {
+    let d = segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
+    sub_down(d, add_up(a.radius(), b.radius()))
+}
+
 /// True only if the capsules are provably disjoint (exact distance > sum of radii).
 #[inline]
 pub fn capsules_disjoint(a: &Capsule, b: &Capsule) -> bool {

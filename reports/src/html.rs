@@ -1,7 +1,8 @@
 //! `report.html`: one self-contained file (inline CSS and SVG, no scripts), readable when printed.
 
 use crate::{
-    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg,
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing,
+    constraint_name, model_specs, overall, svg,
 };
 use pacs_audit::Verdict;
 use std::fmt::Write;
@@ -27,43 +28,123 @@ fn opt(v: Option<f64>, unit: &str) -> String {
         .unwrap_or_else(|| "n/a".into())
 }
 
+/// The effective settings as a two-column table (nested tables as `key.sub`).
+fn settings_table(s: &mut String, settings: &serde_json::Value) {
+    fn rows(prefix: &str, v: &serde_json::Value, out: &mut Vec<(String, String)>) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m {
+                    let key = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    rows(&key, x, out);
+                }
+            }
+            serde_json::Value::Null => out.push((prefix.into(), "from the log header".into())),
+            other => out.push((
+                prefix.into(),
+                other.to_string().trim_matches('"').to_string(),
+            )),
+        }
+    }
+    let mut r = Vec::new();
+    rows("", settings, &mut r);
+    s.push_str("<table><tr><th>setting</th><th>value</th></tr>");
+    for (k, v) in r {
+        let _ = write!(
+            s,
+            "<tr><td><code>{}</code></td><td>{}</td></tr>",
+            esc(&k),
+            esc(&v)
+        );
+    }
+    s.push_str("</table>");
+}
+
+/// A run's models: names, the parameters an assessor checks first, and the SHA-256 of each
+/// model's full parameters (in report.json `model_parameters`).
+fn models_table(s: &mut String, r: &pacs_audit::RunResult) {
+    let specs = model_specs(r);
+    let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("–").to_string();
+    let m = &r.models;
+    let fmt = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    s.push_str("<table><tr><th>model</th><th>name</th><th>parameters</th><th>SHA-256 of the parameters</th></tr>");
+    let _ = write!(
+        s,
+        "<tr><td>robot</td><td><code>{}</code></td><td>v_max (rad/s): {}<br>a_max (rad/s²): {}</td><td><code class=\"hash\">{}</code></td></tr>",
+        esc(&m.robot),
+        fmt(&m.robot_v_max),
+        fmt(&m.robot_a_max),
+        hash("robot")
+    );
+    let _ = write!(
+        s,
+        "<tr><td>human</td><td><code>{}</code></td><td>keypoint speeds (m/s): {}<br>position error {} m, delay {} s</td><td><code class=\"hash\">{}</code></td></tr>",
+        esc(&m.human),
+        fmt(&m.human_v_max),
+        m.human_measurement_error_pos,
+        m.human_delay,
+        hash("human")
+    );
+    let _ = write!(
+        s,
+        "<tr><td>constraints</td><td><code>{}</code></td><td>{} environment capsule(s)</td><td><code class=\"hash\">{}</code></td></tr>",
+        esc(&m.constraints),
+        m.environment_shapes,
+        hash("constraints")
+    );
+    s.push_str("</table>");
+}
+
 /// The HTML report.
 pub fn report(input: &ReportInput) -> String {
     let mut s = String::new();
     s.push_str(r#"<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>pacs audit report</title><style>
-body{font-family:sans-serif;max-width:60em;margin:1em auto;color:#111}
-table{border-collapse:collapse;margin:.5em 0;font-size:90%}th,td{border:1px solid #999;padding:2px 6px;text-align:left}
+body{font-family:sans-serif;max-width:76em;margin:1em auto;padding:0 1em;color:#111;line-height:1.35}
+table{border-collapse:collapse;margin:.5em 0;font-size:88%;width:100%;table-layout:auto}
+th,td{border:1px solid #999;padding:2px 6px;text-align:left;vertical-align:top;overflow-wrap:break-word}
+th{word-break:normal;hyphens:auto}
+td.num,th.num{text-align:right;white-space:nowrap}
 th{background:#eee}.v{font-weight:bold;padding:0 4px}.pass{color:#1b5e20}.fail{color:#b71c1c}.inconclusive{color:#e65100}
-code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
-@media print{body{max-width:none}a{color:inherit}}
+code{font-size:90%;overflow-wrap:anywhere}.hash{font-size:75%}.note{font-size:85%;color:#333}
+section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:auto}
+@media print{body{max-width:none;font-size:10pt;margin:0}table{font-size:8pt}h2{break-after:avoid}tr{break-inside:avoid}a{color:inherit}}
 </style></head><body>"#);
     let _ = write!(
         s,
-        "<h1>pacs audit certification report</h1><p>Tool: pacs {} (git <code>{}</code>). Overall verdict: {}</p>",
+        "<h1>pacs audit certification report</h1><p>Generated {} by pacs {} (git <code>{}</code>). Overall verdict: {}</p>",
+        input.generated(),
         TOOL_VERSION,
         esc(GIT_REVISION),
         verdict_cell(overall(input.runs))
     );
     let _ = write!(
         s,
-        "<p>Config: {}. Settings: <code>{}</code></p>",
+        "<h2>Settings</h2><p>Config: {}.</p>",
         input
             .config
             .as_ref()
             .map(|c| format!(
-                "<code>{}</code> (SHA-256 <code>{}</code>)",
+                "<code>{}</code> (SHA-256 <code class=\"hash\">{}</code>)",
                 esc(&c.path),
                 c.sha256
             ))
             .unwrap_or_else(|| "defaults".into()),
-        esc(&serde_json::to_string(&input.settings).unwrap_or_default())
     );
-    s.push_str("<h2>Summary</h2><table><tr><th>log</th><th>SHA-256</th><th>task</th><th>verdict</th><th>samples</th><th>duration (s)</th><th>violation fraction</th><th>min separation</th><th>violations</th><th>success</th><th>safe success</th></tr>");
+    settings_table(&mut s, &input.settings);
+    s.push_str("<h2>Summary</h2><table><tr><th>log (SHA-256)</th><th>constraints</th><th>verdict</th><th class=\"num\">samples</th><th class=\"num\">duration (s)</th><th class=\"num\">violation fraction</th><th class=\"num\">separation (m)¹</th><th class=\"num\">violations</th><th>success</th><th>safe success²</th></tr>");
     for (r, f) in input.runs.iter().zip(&input.logs) {
         let m = &r.metrics;
         let _ = write!(
             s,
-            "<tr><td><code>{}</code></td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td><code>{}</code><br><code class=\"hash\">{}</code></td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{:.4}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
             esc(&r.log),
             f.sha256,
             esc(&r.models.constraints),
@@ -71,7 +152,7 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
             m.samples,
             m.duration,
             m.violation_fraction,
-            opt(m.min_separation, "m"),
+            opt(m.min_separation, ""),
             r.violations.len(),
             m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
             m.safe_success
@@ -79,13 +160,13 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
                 .unwrap_or("n/a".into()),
         );
     }
-    s.push_str("</table>");
+    s.push_str("</table><p class=\"note\">¹ The separation figure: over the checked spans and robot/body-part capsule pairs, the least lower bound of the core-segment distance minus the radii; &gt; 0: the robot's and the human's occupancies are provably at least this far apart; ≤ 0: contact possible. ² Safe success: the task succeeded (last <code>success</code>/<code>failure</code> event) and the audit verdict is pass.</p>");
     if input.runs.len() > 1 {
-        s.push_str("<h2>Aggregate (impact of safeguarding)</h2><table><tr><th>task</th><th>policy</th><th>filter</th><th>logs</th><th>Success</th><th>Safe Success</th><th>Safety Viol.</th></tr>");
+        s.push_str("<h2>Aggregate (impact of safeguarding)</h2><table><tr><th>task</th><th>policy</th><th>filter</th><th class=\"num\">n (logs)</th><th class=\"num\">success</th><th class=\"num\">safe success</th><th class=\"num\">violation fraction (mean ± std)</th></tr>");
         for row in aggregate::aggregate(input.runs) {
             let _ = write!(
                 s,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
                 esc(&row.task),
                 esc(&row.policy),
                 esc(&row.filter),
@@ -100,36 +181,44 @@ code{font-size:90%}section{page-break-inside:avoid}svg{max-width:100%}
     for r in input.runs {
         let _ = write!(
             s,
-            "<section><h2><code>{}</code> {}</h2><p>Robot <code>{}</code>, human <code>{}</code>, constraints <code>{}</code>.</p>",
+            "<section><h2><code>{}</code> {}</h2>",
             esc(&r.log),
             verdict_cell(r.verdict),
-            esc(&r.models.robot),
-            esc(&r.models.human),
-            esc(&r.models.constraints)
         );
+        models_table(&mut s, r);
         s.push_str(&svg::separation_plot(&r.series));
-        s.push_str(&svg::energy_plot(&r.series));
+        if svg::has_threshold(&r.series) {
+            s.push_str(&svg::energy_plot(&r.series));
+        } else {
+            s.push_str("<p class=\"note\">No PFL contact was possible in this run, so no energy limit applied (an SSM body part may only be touched by a robot at rest); no energy plot.</p>");
+        }
         if r.violations.is_empty() {
             s.push_str("<p>No violations.</p>");
         } else {
-            s.push_str("<table><tr><th>t_start (s)</th><th>t_end (s)</th><th>constraint</th><th>body part</th><th>link</th><th>min separation (m)</th><th>energy (J)</th><th>threshold (J)</th><th>constrained</th><th>certain</th></tr>");
+            s.push_str("<table><tr><th class=\"num\">from (s)</th><th class=\"num\">to (s)</th><th>constraint</th><th>body part</th><th>link</th><th class=\"num\">nominal separation (m)³</th><th class=\"num\">energy bound (J)</th><th class=\"num\">threshold (J)</th><th>clamped</th><th>certain⁴</th></tr>");
             for v in &r.violations {
+                let pfl = v.constraint == pacs_audit::ConstraintKind::Pfl;
+                let num = |x: f64| if pfl { format!("{x:.4}") } else { "–".into() };
                 let _ = write!(
                     s,
-                    "<tr><td>{:.4}</td><td>{:.4}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td><td>{}</td><td>{}</td></tr>",
+                    "<tr><td class=\"num\">{:.4}</td><td class=\"num\">{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
                     v.t_start,
                     v.t_end,
-                    v.constraint,
+                    constraint_name(v.constraint),
                     esc(&v.body_part),
                     esc(&v.link),
-                    v.min_separation,
-                    v.energy,
-                    v.threshold,
-                    v.constrained,
-                    v.certain
+                    if v.min_separation.is_finite() {
+                        format!("{:.4}", v.min_separation)
+                    } else {
+                        "–".into()
+                    },
+                    num(v.energy),
+                    num(v.threshold),
+                    if v.constrained { "yes" } else { "no" },
+                    if v.certain { "yes" } else { "possible" }
                 );
             }
-            s.push_str("</table>");
+            s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part over the interval (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does.</p>");
         }
         if !r.inconclusive.is_empty() {
             s.push_str("<p>Inconclusive spans:</p><ul>");

@@ -8,6 +8,7 @@
 pub mod aggregate;
 pub mod html;
 pub mod markdown;
+pub mod pdf;
 pub mod svg;
 
 use pacs_audit::{RunResult, Verdict};
@@ -78,6 +79,54 @@ fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
+/// SHA-256 (lowercase hex) of a model's parameters as compact JSON (field order as the spec
+/// types declare it): equal parameters give equal hashes, across logs and runs.
+pub fn model_sha256(spec: &Value) -> String {
+    let bytes = serde_json::to_vec(spec).unwrap_or_default();
+    hex(&Sha256::digest(&bytes))
+}
+
+/// The models of a run with their parameters and SHA-256: `{"robot": {"sha256", "spec"}, ...}`.
+pub fn model_specs(r: &RunResult) -> Value {
+    let mut out = serde_json::Map::new();
+    if let Some(m) = r.models.specs.as_object() {
+        for (k, v) in m {
+            out.insert(k.clone(), json!({"sha256": model_sha256(v), "spec": v}));
+        }
+    }
+    Value::Object(out)
+}
+
+/// The current time as ISO 8601 UTC (`2026-11-25T15:30:00Z`), from the system clock.
+pub fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    utc(secs)
+}
+
+/// Seconds since the Unix epoch as ISO 8601 UTC (proleptic Gregorian calendar).
+pub fn utc(secs: u64) -> String {
+    let days = (secs / 86_400) as i64;
+    let rem = secs % 86_400;
+    // Civil date from days since 1970-01-01 (Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
 /// Everything a report is built from.
 #[derive(Debug, Clone)]
 pub struct ReportInput<'a> {
@@ -91,6 +140,13 @@ pub struct ReportInput<'a> {
     pub settings: Value,
 }
 
+impl ReportInput<'_> {
+    /// When the report is generated (ISO 8601 UTC).
+    pub fn generated(&self) -> String {
+        utc_now()
+    }
+}
+
 /// Which checks the audit makes, and the tests and harnesses that back each
 /// ([`pacs_audit::claims::CHECKS`], the one list).
 pub fn check_backing() -> Value {
@@ -100,6 +156,27 @@ pub fn check_backing() -> Value {
 /// The modelling assumptions the verdicts rest on ([`pacs_audit::claims::ASSUMPTIONS`]).
 pub fn assumptions() -> Vec<&'static str> {
     pacs_audit::claims::ASSUMPTIONS.to_vec()
+}
+
+/// The report's figures, defined once (report.json `definitions`; the HTML and Markdown print
+/// them under the tables).
+pub fn definitions() -> Value {
+    json!({
+        "separation_m": "the separation figure: over the checked spans and robot/body-part capsule pairs, the least (lower bound of the core-segment distance) - (sum of radii), rounded down; > 0: the occupancies are provably at least this far apart; <= 0: contact possible (magnitude: radius overlap at the bound)",
+        "violation_separation_m": "of a violation interval: the signed separation of the logged robot capsules and the measured body part (negative: they overlap as logged); positive values occur when the person may have moved since the measurement",
+        "safe_success": "the task succeeded (last success/failure event) and no violation occurred, with the audit verdict pass as the evidence",
+        "violation_fraction": "violating robot samples / robot samples",
+        "at_rest": "plot shading: every logged joint speed (or sample difference) <= rest_speed over the bucket",
+    })
+}
+
+/// A constraint kind as assessors write it.
+pub fn constraint_name(k: pacs_audit::ConstraintKind) -> &'static str {
+    match k {
+        pacs_audit::ConstraintKind::Ssm => "SSM (no contact while moving)",
+        pacs_audit::ConstraintKind::Pfl => "PFL (energy limit)",
+        pacs_audit::ConstraintKind::NoContact => "no contact",
+    }
 }
 
 /// Overall verdict of the runs.
@@ -120,6 +197,7 @@ pub fn report_json(input: &ReportInput) -> Value {
                 "bytes": f.bytes,
                 "verdict": r.verdict,
                 "models": r.models,
+                "model_parameters": model_specs(r),
                 "meta": r.meta,
                 "violations": r.violations,
                 "inconclusive": r.inconclusive,
@@ -130,6 +208,8 @@ pub fn report_json(input: &ReportInput) -> Value {
     json!({
         "report": "pacs-audit-certification",
         "tool": {"name": "pacs", "version": TOOL_VERSION, "git_revision": GIT_REVISION},
+        "generated_utc": input.generated(),
+        "definitions": definitions(),
         "inputs": {"logs": input.logs, "config": input.config},
         "settings": input.settings,
         "assumptions": assumptions(),
@@ -140,7 +220,8 @@ pub fn report_json(input: &ReportInput) -> Value {
     })
 }
 
-/// Write `report.json`, `report.md` and `report.html` into `dir` (created if missing).
+/// Write `report.json`, `report.md`, `report.html` and `report.pdf` into `dir` (created if
+/// missing).
 pub fn write_reports(dir: &Path, input: &ReportInput) -> Result<(), ReportError> {
     let io = |p: &Path| {
         let p = p.to_path_buf();
@@ -157,5 +238,7 @@ pub fn write_reports(dir: &Path, input: &ReportInput) -> Result<(), ReportError>
     std::fs::write(&m, markdown::report(input)).map_err(io(&m))?;
     let h = dir.join("report.html");
     std::fs::write(&h, html::report(input)).map_err(io(&h))?;
+    let p = dir.join("report.pdf");
+    std::fs::write(&p, pdf::report(input)).map_err(io(&p))?;
     Ok(())
 }

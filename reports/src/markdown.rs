@@ -1,6 +1,9 @@
 //! `report.md`: the same content as the HTML report, without plots.
 
-use crate::{GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, overall};
+use crate::{
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, constraint_name, definitions,
+    model_specs, overall,
+};
 use std::fmt::Write;
 
 fn opt(v: Option<f64>, unit: &str) -> String {
@@ -14,7 +17,8 @@ pub fn report(input: &ReportInput) -> String {
     let _ = writeln!(s, "# pacs audit certification report\n");
     let _ = writeln!(
         s,
-        "- Tool: pacs {TOOL_VERSION} (git {GIT_REVISION})\n- Overall verdict: **{:?}**",
+        "- Generated: {}\n- Tool: pacs {TOOL_VERSION} (git {GIT_REVISION})\n- Overall verdict: **{:?}**",
+        input.generated(),
         overall(input.runs)
     );
     if let Some(c) = &input.config {
@@ -22,15 +26,22 @@ pub fn report(input: &ReportInput) -> String {
     } else {
         let _ = writeln!(s, "- Config: defaults");
     }
-    let _ = writeln!(
-        s,
-        "- Settings: `{}`\n",
-        serde_json::to_string(&input.settings).unwrap_or_default()
-    );
+    let _ = writeln!(s, "\n| setting | value |\n|---|---|");
+    if let Some(m) = input.settings.as_object() {
+        for (k, v) in m {
+            let v = if v.is_null() {
+                "from the log header".to_string()
+            } else {
+                v.to_string()
+            };
+            let _ = writeln!(s, "| `{k}` | {} |", v.trim_matches('"'));
+        }
+    }
+    let _ = writeln!(s);
     let _ = writeln!(s, "## Summary\n");
     let _ = writeln!(
         s,
-        "| log | SHA-256 | task | verdict | samples | duration (s) | violation fraction | min separation | violations | success | safe success |\n|---|---|---|---|---|---|---|---|---|---|---|"
+        "| log | SHA-256 | constraints | verdict | samples | duration (s) | violation fraction | separation (m) | violations | success | safe success |\n|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for (r, f) in input.runs.iter().zip(&input.logs) {
         let m = &r.metrics;
@@ -44,7 +55,7 @@ pub fn report(input: &ReportInput) -> String {
             m.samples,
             m.duration,
             m.violation_fraction,
-            opt(m.min_separation, "m"),
+            opt(m.min_separation, ""),
             r.violations.len(),
             m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
             m.safe_success
@@ -52,10 +63,17 @@ pub fn report(input: &ReportInput) -> String {
                 .unwrap_or("n/a".into()),
         );
     }
+    let d = definitions();
+    let _ = writeln!(
+        s,
+        "\nSeparation: {}. Safe success: {}.",
+        d["separation_m"].as_str().unwrap_or(""),
+        d["safe_success"].as_str().unwrap_or("")
+    );
     if input.runs.len() > 1 {
         let _ = writeln!(
             s,
-            "\n## Aggregate (impact of safeguarding)\n\n| task | policy | filter | logs | Success | Safe Success | Safety Viol. |\n|---|---|---|---|---|---|---|"
+            "\n## Aggregate (impact of safeguarding)\n\n| task | policy | filter | n (logs) | success | safe success | violation fraction (mean ± std) |\n|---|---|---|---|---|---|---|"
         );
         for row in aggregate::aggregate(input.runs) {
             let _ = writeln!(
@@ -73,34 +91,46 @@ pub fn report(input: &ReportInput) -> String {
     }
     for r in input.runs {
         let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);
+        let specs = model_specs(r);
+        let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("-").to_string();
         let _ = writeln!(
             s,
-            "Models: robot `{}`, human `{}`, constraints `{}`.\n",
-            r.models.robot, r.models.human, r.models.constraints
+            "Models (SHA-256 of the parameters, full parameters in report.json): robot `{}` (`{}`), human `{}` (`{}`), constraints `{}` (`{}`).\n",
+            r.models.robot,
+            hash("robot"),
+            r.models.human,
+            hash("human"),
+            r.models.constraints,
+            hash("constraints")
         );
         if r.violations.is_empty() {
             let _ = writeln!(s, "No violations.");
         } else {
             let _ = writeln!(
                 s,
-                "| t_start (s) | t_end (s) | constraint | body part | link | min separation (m) | energy (J) | threshold (J) | constrained | certain |\n|---|---|---|---|---|---|---|---|---|---|"
+                "| from (s) | to (s) | constraint | body part | link | nominal separation (m) | energy bound (J) | threshold (J) | clamped | certain |\n|---|---|---|---|---|---|---|---|---|---|"
             );
             for v in &r.violations {
                 let _ = writeln!(
                     s,
-                    "| {:.4} | {:.4} | {:?} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} |",
+                    "| {:.4} | {:.4} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} |",
                     v.t_start,
                     v.t_end,
-                    v.constraint,
+                    constraint_name(v.constraint),
                     v.body_part,
                     v.link,
                     v.min_separation,
                     v.energy,
                     v.threshold,
-                    v.constrained,
-                    v.certain
+                    if v.constrained { "yes" } else { "no" },
+                    if v.certain { "yes" } else { "possible" }
                 );
             }
+            let _ = writeln!(
+                s,
+                "\nNominal separation: {}.",
+                d["violation_separation_m"].as_str().unwrap_or("")
+            );
         }
         if !r.inconclusive.is_empty() {
             let _ = writeln!(s, "\nInconclusive spans:\n");

@@ -8,7 +8,7 @@ const W: f64 = 760.0;
 const H: f64 = 220.0;
 const ML: f64 = 60.0;
 const MR: f64 = 15.0;
-const MT: f64 = 20.0;
+const MT: f64 = 32.0;
 const MB: f64 = 35.0;
 
 struct Frame {
@@ -46,24 +46,29 @@ fn axes(out: &mut String, f: &Frame, title: &str, ylabel: &str) {
         W - ML - MR,
         H - MT - MB
     );
-    for i in 0..=4 {
-        let v = f.y0 + (f.y1 - f.y0) * i as f64 / 4.0;
+    let (ys, ystep) = ticks(f.y0, f.y1);
+    for v in ys {
         let y = f.y(v);
         let _ = write!(
             out,
-            r##"<line x1="{ML}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            r##"<line x1="{ML}" x2="{}" y1="{y:.1}" y2="{y:.1}" stroke="{}"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
             W - MR,
+            if v == 0.0 { "#888" } else { "#ddd" },
             ML - 4.0,
             y + 4.0,
-            fmt_num(v)
+            fmt_tick(v, ystep)
         );
-        let t = f.x0 + (f.x1 - f.x0) * i as f64 / 4.0;
+    }
+    let (xs, xstep) = ticks(f.x0, f.x1);
+    for t in xs {
         let x = f.x(t);
         let _ = write!(
             out,
-            r#"<text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"#,
-            H - MB + 14.0,
-            fmt_num(t)
+            r##"<line x1="{x:.1}" x2="{x:.1}" y1="{}" y2="{}" stroke="#444"/><text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"##,
+            H - MB,
+            H - MB + 4.0,
+            H - MB + 15.0,
+            fmt_tick(t, xstep)
         );
     }
     let _ = write!(
@@ -78,17 +83,53 @@ fn axes(out: &mut String, f: &Frame, title: &str, ylabel: &str) {
     );
 }
 
-fn fmt_num(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else if v.abs() >= 100.0 || v.abs() < 0.01 {
-        format!("{v:.2e}")
-    } else {
-        format!("{v:.3}")
+/// Tick values at a 1-2-5 step covering [lo, hi] (4 to 10 ticks) and the step.
+pub fn ticks(lo: f64, hi: f64) -> (Vec<f64>, f64) {
+    let range = (hi - lo).abs().max(1e-12);
+    let raw = range / 5.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * mag)
+        .find(|&st| range / st <= 8.0)
+        .unwrap_or(10.0 * mag);
+    let first = (lo / step).ceil();
+    let mut out = Vec::new();
+    let mut k = first;
+    while k * step <= hi + 1e-9 * step && out.len() < 20 {
+        // Snap -0 and rounding noise.
+        let v = k * step;
+        out.push(if v.abs() < 1e-12 * step { 0.0 } else { v });
+        k += 1.0;
     }
+    (out, step)
+}
+
+/// A tick label with as many decimals as the step needs.
+pub fn fmt_tick(v: f64, step: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if !(1e-4..1e4).contains(&step) {
+        return format!("{v:.1e}");
+    }
+    let dec = (-step.log10().floor()).max(0.0) as usize;
+    format!("{v:.dec$}")
 }
 
 fn shading(out: &mut String, f: &Frame, s: &[SeriesPoint]) {
+    for p in s
+        .iter()
+        .filter(|p| p.at_rest && !p.violation && !p.inconclusive)
+    {
+        let (a, b) = (f.x(p.t), f.x(p.t_end.min(f.x1)));
+        let _ = write!(
+            out,
+            r##"<rect class="at-rest" x="{a:.2}" y="{MT}" width="{:.2}" height="{}" fill="#66bb6a" fill-opacity="0.18"/>"##,
+            (b - a).max(0.8),
+            H - MT - MB
+        );
+    }
     for p in s {
         let colour = if p.violation {
             "#e53935"
@@ -146,29 +187,38 @@ fn legend(out: &mut String, items: &[(&str, &str)]) {
         x -= 7.0 * label.len() as f64 + 22.0;
         let _ = write!(
             out,
-            r#"<rect x="{x:.1}" y="5" width="12" height="8" fill="{colour}"/><text x="{:.1}" y="13">{}</text>"#,
+            r#"<rect x="{x:.1}" y="18" width="12" height="8" fill="{colour}"/><text x="{:.1}" y="26">{}</text>"#,
             x + 15.0,
             esc(label)
         );
     }
 }
 
-/// Minimum-separation plot (lower bound, m) with shaded violation / inconclusive spans.
+/// The separation figure over time (m; ≤ 0: contact possible), with at-rest, violation and
+/// inconclusive spans shaded.
 pub fn separation_plot(s: &[SeriesPoint]) -> String {
     let (x0, x1) = span(s);
-    let ymax = s
+    let vals: Vec<f64> = s
         .iter()
         .filter_map(|p| p.min_separation)
-        .fold(0.0f64, f64::max)
-        .clamp(0.1, 3.0);
+        .filter(|v| v.is_finite())
+        .collect();
+    let ymax = vals.iter().copied().fold(0.0f64, f64::max).clamp(0.1, 3.0);
+    let ymin = vals.iter().copied().fold(0.0f64, f64::min).max(-1.0);
+    let pad = 0.05 * (ymax - ymin);
     let f = Frame {
         x0,
         x1,
-        y0: 0.0,
-        y1: ymax * 1.05,
+        y0: if ymin < 0.0 { ymin - pad } else { 0.0 },
+        y1: ymax + pad,
     };
     let mut out = String::new();
-    axes(&mut out, &f, "Minimum separation (lower bound)", "m");
+    axes(
+        &mut out,
+        &f,
+        "Separation figure (lower bound; ≤ 0: contact possible)",
+        "m",
+    );
     shading(&mut out, &f, s);
     polyline(
         &mut out,
@@ -180,12 +230,19 @@ pub fn separation_plot(s: &[SeriesPoint]) -> String {
         &mut out,
         &[
             ("separation", "#1565c0"),
+            ("at rest", "#66bb6a60"),
             ("violation", "#e5393580"),
             ("inconclusive", "#9e9e9e80"),
         ],
     );
     out.push_str("</svg>");
     out
+}
+
+/// Whether any bucket has a PFL threshold (a possible PFL contact): only then does the energy
+/// plot have a limit to show.
+pub fn has_threshold(s: &[SeriesPoint]) -> bool {
+    s.iter().any(|p| p.threshold.is_some_and(f64::is_finite))
 }
 
 /// Energy plot: nominal kinetic energy, energy upper bound at possible PFL contacts, and the
@@ -227,14 +284,15 @@ pub fn energy_plot(s: &[SeriesPoint]) -> String {
         s.iter().map(|p| (mid(p), p.threshold)),
         r##"class="threshold" stroke="#b71c1c" stroke-width="1.5" stroke-dasharray="5,3""##,
     );
-    legend(
-        &mut out,
-        &[
-            ("nominal energy", "#1565c0"),
-            ("energy bound at contact", "#ef6c00"),
-            ("threshold", "#b71c1c"),
-        ],
-    );
+    let mut items = vec![
+        ("nominal energy", "#1565c0"),
+        ("energy bound at contact", "#ef6c00"),
+    ];
+    if has_threshold(s) {
+        items.push(("threshold", "#b71c1c"));
+    }
+    items.push(("at rest", "#66bb6a60"));
+    legend(&mut out, &items);
     out.push_str("</svg>");
     out
 }

@@ -37,17 +37,19 @@ fn run(name: &str, filter: &str, success: Option<bool>, viol: f64, verdict: Verd
             human_measurement_error_pos: 0.0,
             human_delay: 0.0,
             environment_shapes: 0,
+            specs: serde_json::json!({"robot": {"name": "fr3", "dof": 7}, "human": {"name": "default"}}),
         },
         series: (0..10)
             .map(|i| SeriesPoint {
                 t: i as f64 * 0.01,
                 t_end: (i + 1) as f64 * 0.01,
-                min_separation: Some(0.1 * i as f64),
+                min_separation: Some(0.1 * i as f64 - 0.25),
                 energy_nominal: Some(0.01 * i as f64),
                 energy_bound: (i > 5).then_some(0.02 * i as f64),
                 threshold: (i > 5).then_some(0.1),
                 violation: i == 7,
                 inconclusive: i == 2,
+                at_rest: i == 0,
             })
             .collect(),
     }
@@ -96,6 +98,16 @@ fn plots_and_documents() {
     assert!(sep.starts_with("<svg") && sep.ends_with("</svg>"));
     assert_eq!(sep.matches("class=\"violation\"").count(), 1);
     assert_eq!(sep.matches("class=\"inconclusive\"").count(), 1);
+    assert_eq!(sep.matches("class=\"at-rest\"").count(), 1);
+    // Negative separations are drawn (the zero line is inside the plot).
+    assert!(sep.contains(">-0.2<"), "{sep}");
+    // An SSM-like series (no threshold anywhere) has nothing to draw against.
+    let mut ssm = runs[0].series.clone();
+    for p in &mut ssm {
+        p.threshold = None;
+    }
+    assert!(!svg::has_threshold(&ssm) && svg::has_threshold(&runs[0].series));
+    assert!(!svg::energy_plot(&ssm).contains(">threshold<"));
     let en = svg::energy_plot(&runs[0].series);
     assert!(en.contains("class=\"threshold\"") && en.contains("class=\"energy-bound\""));
     let input = ReportInput {
@@ -136,10 +148,76 @@ fn plots_and_documents() {
     assert!(markdown::report(&input).contains(pos));
     let h = html::report(&input);
     assert_eq!(h.matches("<svg").count(), 4);
-    assert!(h.contains("Safety Viol.") && h.contains("FAIL"));
+    assert!(h.contains("n (logs)") && h.contains("FAIL") && h.contains("Generated 20"));
+    // Settings as a table, not raw JSON; every model with the SHA-256 of its parameters.
+    assert!(
+        h.contains("<td><code>max_gap</code></td><td>0.1</td>"),
+        "{h}"
+    );
+    let robot_hash = pacs_reports::model_sha256(&serde_json::json!({"name": "fr3", "dof": 7}));
+    assert_eq!(
+        j["runs"][0]["model_parameters"]["robot"]["sha256"],
+        robot_hash
+    );
+    assert!(h.contains(&robot_hash));
+    assert_eq!(robot_hash.len(), 64);
+    // Defined once, printed with the tables.
+    for k in ["separation_m", "violation_separation_m", "safe_success"] {
+        assert!(j["definitions"][k].is_string(), "{k}");
+    }
+    assert!(j["generated_utc"].as_str().unwrap().ends_with('Z'));
     let md = markdown::report(&input);
     assert!(
         md.contains("| handover | act | pacs | 1 | 100.0 ± 0.0 % | 100.0 ± 0.0 % | 0.0 ± 0.0 % |"),
         "{md}"
     );
+    assert!(md.contains("| `max_gap` | 0.1 |") && md.contains(&robot_hash));
+    // The PDF: a well-formed file (header, objects, xref offsets that point at them, trailer).
+    let pdf = pacs_reports::pdf::report(&input);
+    assert!(pdf.starts_with(b"%PDF-1.4"));
+    let text = String::from_utf8_lossy(&pdf);
+    assert!(text.trim_end().ends_with("%%EOF"));
+    // Offsets are in bytes: check them on the bytes.
+    let tail = &pdf[pdf.len() - 64..];
+    let tail = String::from_utf8_lossy(tail);
+    let startxref: usize = tail
+        .rsplit("startxref")
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(pdf[startxref..].starts_with(b"xref"));
+    let xref = String::from_utf8_lossy(&pdf[startxref..]).to_string();
+    let count: usize = xref
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    for (i, line) in xref.lines().skip(3).take(count - 1).enumerate() {
+        let off: usize = line[..10].parse().unwrap();
+        assert!(
+            pdf[off..].starts_with(format!("{} 0 obj", i + 1).as_bytes()),
+            "object {}",
+            i + 1
+        );
+    }
+    let pages = text.matches("/Type /Page ").count();
+    assert!(pages >= 2, "{pages} pages");
+    assert!(text.contains(&format!("/Count {pages}")));
+    assert!(text.contains("(Generated 20"));
+}
+
+#[test]
+fn utc_dates_are_gregorian() {
+    assert_eq!(pacs_reports::utc(0), "1970-01-01T00:00:00Z");
+    assert_eq!(pacs_reports::utc(951_782_400), "2000-02-29T00:00:00Z");
+    assert_eq!(pacs_reports::utc(1_795_620_600), "2026-11-25T15:30:00Z");
+    assert_eq!(pacs_reports::utc(4_107_542_399), "2100-02-28T23:59:59Z");
 }

@@ -151,7 +151,8 @@ pub struct Episode {
     pub task: String,
     /// Reached the goal within the time limit.
     pub success: bool,
-    /// Success and no ground-truth violation.
+    /// [`pacs_audit::verdict::safe_success`] with the ground truth as evidence: success and no
+    /// violation against the true human (and objects).
     pub safe_success: bool,
     /// Fraction of steps with a ground-truth violation at the sampled states (exact geometry
     /// against the true human).

@@ -76,6 +76,11 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
             let mut v = summary(&e);
             v["log"] = json!(path.display().to_string());
             v["audit_verdict"] = serde_json::to_value(audited.verdict).unwrap_or_default();
+            // The same definition with the audit as evidence (what the report shows).
+            v["audit_safe_success"] = json!(pacs_audit::verdict::safe_success(
+                e.success,
+                audited.verdict == pacs_audit::Verdict::Pass
+            ));
             v["audit_violation_fraction"] = json!(audited.metrics.violation_fraction);
             runs.push(v);
             logs.push(path);

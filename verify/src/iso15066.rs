@@ -171,8 +171,12 @@ pub struct Outcome {
     pub contact: bool,
     /// A violation is possible (some hit was reported).
     pub violated: bool,
-    /// Lower bound (m) of the separation between robot and human occupancies (0 on possible
-    /// contact, +∞ without body parts). Only computed when asked for; else +∞ unless contact.
+    /// The separation figure (m) of robot and human occupancies: the least over capsule pairs
+    /// of a lower bound of their core-segment distance minus their radii
+    /// ([`pacs_reach::geometry::capsule_separation_lower_bound`]). Positive: provably apart by at
+    /// least this much. ≤ 0 exactly when contact is possible (then the most negative pair's
+    /// figure: how far the radii overlap). +∞ without body parts. Only computed when asked for;
+    /// else +∞ without contact and ≤ 0 with contact.
     pub separation: f64,
     /// For PFL contacts: (largest energy bound, smallest threshold) seen (J).
     pub pfl: Option<(f64, f64)>,

@@ -120,7 +120,9 @@ impl Auditor {
             inconclusive_duration: self.inconclusive_duration,
             min_separation: self.min_separation,
             success: self.success,
-            safe_success: self.success.map(|s| s && verdict == Verdict::Pass),
+            safe_success: self
+                .success
+                .map(|s| crate::verdict::safe_success(s, verdict == Verdict::Pass)),
         };
         RunResult {
             log: log.to_string(),

@@ -145,6 +145,8 @@ impl Auditor {
             if new_bucket {
                 self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(&a, &b));
             }
+            let rest = self.nominal_rest(&a, &b);
+            self.series.buckets[bidx].at_rest &= rest;
             if let Some((e, thr)) = pfl_seen {
                 let bk = &mut self.series.buckets[bidx];
                 bk.energy_bound = max_opt(bk.energy_bound, Some(reportable(e)));
@@ -174,11 +176,29 @@ impl Auditor {
         reportable(self.robot.kinetic_energy(&a.q[..n], &dq[..n]))
     }
 
+    /// Whether the robot is nominally at rest over the span `a`–`b` (for the plots only): the
+    /// logged velocities (else the sample difference) within `rest_speed` on every joint.
+    pub(super) fn nominal_rest(&self, a: &Sample, b: &Sample) -> bool {
+        let dt = b.t - a.t;
+        (0..self.n).all(|j| {
+            let v = if a.has_dq && b.has_dq {
+                a.dq[j].abs().max(b.dq[j].abs())
+            } else if dt > 0.0 {
+                ((b.q[j] - a.q[j]) / dt).abs()
+            } else {
+                0.0
+            };
+            v <= self.cfg.rest_speed
+        })
+    }
+
     pub(super) fn check_span(&mut self, s0: &Sample, s1: &Sample, span_human: Option<usize>) {
         self.span_index += 1;
         let (t0, t1) = (s0.t, s1.t);
         let dt = t1 - t0;
         let (bidx, new_bucket) = self.series.bucket(t0);
+        let rest = self.nominal_rest(s0, s1);
+        self.series.buckets[bidx].at_rest &= rest;
         let mut certain = false;
         let finish_span = |this: &mut Self, violated: bool, certain: bool| {
             if violated {

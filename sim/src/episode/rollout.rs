@@ -288,11 +288,13 @@ pub fn run_setup(
         human: script.name().into(),
         task: task.into(),
         success,
-        safe_success: success
-            && violations == 0
-            && truth_audit
-                .as_ref()
-                .is_none_or(|a| a.certain_fraction == 0.0),
+        safe_success: pacs_audit::verdict::safe_success(
+            success,
+            violations == 0
+                && truth_audit
+                    .as_ref()
+                    .is_none_or(|a| a.certain_fraction == 0.0),
+        ),
         violation_fraction: violations as f64 / steps_run,
         truth_audit,
         goals_reached: next_goal,

@@ -5,7 +5,9 @@ use super::broad_phase::Aabb;
 use super::{ConstraintKind, ContactRule, Outcome, PairViolation, frames_can_pinch, threshold};
 use pacs_models::{Capsule, Constraint};
 use pacs_reach::JointBox;
-use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
+use pacs_reach::geometry::{
+    capsule_distance_lower_bound, capsule_separation_lower_bound, capsules_may_intersect,
+};
 use std::ops::ControlFlow;
 
 impl ContactRule {
@@ -69,7 +71,16 @@ impl ContactRule {
             self.contact[p] = mask;
             if mask != 0 {
                 out.contact = true;
-                out.separation = 0.0;
+                if separation {
+                    // The signed figure over the pairs that may touch (each ≤ 0).
+                    for (c, rc) in robot_caps.iter().enumerate() {
+                        if mask & (1u128 << c) != 0 {
+                            out.separation =
+                                out.separation.min(capsule_separation_lower_bound(rc, hc));
+                        }
+                    }
+                }
+                out.separation = out.separation.min(0.0);
             } else if separation && all.distance_lb(&hb) < out.separation {
                 // Separation lower bound; a pair whose boxes are farther apart than the best so
                 // far cannot lower it.

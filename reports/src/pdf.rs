@@ -1,0 +1,799 @@
+//! `report.pdf`: the certification report drawn directly as PDF 1.4 (A4 portrait, the standard
+//! Helvetica and Courier fonts, vector plots), with no dependency: what an assessor prints and
+//! signs. The same content as `report.html`: provenance, settings, summary, per log the models
+//! with the SHA-256 of their parameters, the separation and energy plots and the violations,
+//! then the assumptions and the checks with the tests backing them.
+
+use crate::svg::{fmt_tick, has_threshold, ticks};
+use crate::{
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing,
+    constraint_name, definitions, model_specs, overall,
+};
+use pacs_audit::verdict::SeriesPoint;
+use std::fmt::Write;
+
+const PAGE_W: f64 = 595.0;
+const PAGE_H: f64 = 842.0;
+const MARGIN: f64 = 48.0;
+const TEXT_W: f64 = PAGE_W - 2.0 * MARGIN;
+
+/// A plotted line: (time, value) points, stroke colour (PDF `RG` operands), dash pattern.
+type Line<'a> = (Vec<(f64, Option<f64>)>, &'a str, &'a str);
+
+#[derive(Clone, Copy, PartialEq)]
+enum Font {
+    Regular,
+    Bold,
+    Mono,
+}
+
+impl Font {
+    fn name(self) -> &'static str {
+        match self {
+            Font::Regular => "F1",
+            Font::Bold => "F2",
+            Font::Mono => "F3",
+        }
+    }
+}
+
+/// Helvetica advance widths (1/1000 em) of the printable ASCII characters 32..=126 (the font's
+/// published metrics).
+const HELVETICA: [u16; 95] = [
+    278, 278, 355, 556, 556, 889, 667, 191, 333, 333, 389, 584, 278, 333, 278, 278, 556, 556, 556,
+    556, 556, 556, 556, 556, 556, 556, 278, 278, 584, 584, 584, 556, 1015, 667, 667, 722, 722, 667,
+    611, 778, 722, 278, 500, 667, 556, 833, 722, 778, 667, 778, 722, 667, 611, 722, 667, 944, 667,
+    667, 611, 278, 278, 278, 469, 556, 333, 556, 556, 500, 556, 556, 278, 556, 556, 222, 222, 500,
+    222, 833, 556, 556, 556, 556, 333, 500, 278, 556, 500, 722, 500, 500, 500, 334, 260, 334, 584,
+];
+
+/// The WinAnsi bytes of `s` (PDF standard fonts): Latin-1 as is, typographic dashes and quotes
+/// mapped, other symbols spelled out.
+fn win_ansi(s: &str) -> Vec<u8> {
+    let mut out = Vec::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            ' '..='~' => out.push(c as u8),
+            '\u{a0}'..='\u{ff}' => out.push(c as u32 as u8),
+            '–' => out.push(0x96),
+            '—' => out.push(0x97),
+            '‘' => out.push(0x91),
+            '’' => out.push(0x92),
+            '“' => out.push(0x93),
+            '”' => out.push(0x94),
+            '•' => out.push(0x95),
+            '…' => out.push(0x85),
+            '≤' => out.extend_from_slice(b"<="),
+            '≥' => out.extend_from_slice(b">="),
+            '⁴' => out.push(b'4'),
+            '∧' => out.extend_from_slice(b"and"),
+            '→' => out.extend_from_slice(b"->"),
+            '\n' | '\t' => out.push(b' '),
+            _ => out.push(b'?'),
+        }
+    }
+    out
+}
+
+fn char_width(b: u8, font: Font) -> f64 {
+    let w = match font {
+        Font::Mono => 600.0,
+        _ => match b {
+            32..=126 => HELVETICA[(b - 32) as usize] as f64,
+            _ => 556.0,
+        },
+    };
+    if font == Font::Bold { w * 1.06 } else { w }
+}
+
+fn text_width(s: &str, size: f64, font: Font) -> f64 {
+    win_ansi(s)
+        .iter()
+        .map(|&b| char_width(b, font))
+        .sum::<f64>()
+        * size
+        / 1000.0
+}
+
+/// Split `s` into lines no wider than `width` (pt), at spaces, or anywhere inside a word longer
+/// than a line (hashes, paths).
+fn wrap(s: &str, size: f64, font: Font, width: f64) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut cur = String::new();
+    for word in s.split(' ') {
+        let candidate = if cur.is_empty() {
+            word.to_string()
+        } else {
+            format!("{cur} {word}")
+        };
+        if text_width(&candidate, size, font) <= width {
+            cur = candidate;
+            continue;
+        }
+        if !cur.is_empty() {
+            lines.push(std::mem::take(&mut cur));
+        }
+        // A word wider than the line: break it by characters.
+        let mut piece = String::new();
+        for ch in word.chars() {
+            piece.push(ch);
+            if text_width(&piece, size, font) > width {
+                piece.pop();
+                lines.push(std::mem::take(&mut piece));
+                piece.push(ch);
+            }
+        }
+        cur = piece;
+    }
+    lines.push(cur);
+    lines
+}
+
+/// Pages of content streams being laid out top to bottom.
+struct Doc {
+    pages: Vec<String>,
+    y: f64,
+}
+
+impl Doc {
+    fn new() -> Self {
+        let mut d = Self {
+            pages: Vec::new(),
+            y: 0.0,
+        };
+        d.new_page();
+        d
+    }
+
+    fn new_page(&mut self) {
+        self.pages.push(String::new());
+        self.y = PAGE_H - MARGIN;
+    }
+
+    fn out(&mut self) -> &mut String {
+        self.pages.last_mut().expect("a page")
+    }
+
+    /// Make room for `h` pt, starting a new page if needed.
+    fn need(&mut self, h: f64) {
+        if self.y - h < MARGIN {
+            self.new_page();
+        }
+    }
+
+    fn put_text(&mut self, x: f64, y: f64, s: &str, size: f64, font: Font, rgb: [f64; 3]) {
+        let bytes = win_ansi(s);
+        let mut esc = String::new();
+        for b in bytes {
+            match b {
+                b'(' | b')' | b'\\' => {
+                    esc.push('\\');
+                    esc.push(b as char);
+                }
+                32..=126 => esc.push(b as char),
+                _ => {
+                    let _ = write!(esc, "\\{b:03o}");
+                }
+            }
+        }
+        let _ = writeln!(
+            self.out(),
+            "BT {:.3} {:.3} {:.3} rg /{} {size:.1} Tf {x:.2} {y:.2} Td ({esc}) Tj ET",
+            rgb[0],
+            rgb[1],
+            rgb[2],
+            font.name()
+        );
+    }
+
+    /// A paragraph, wrapped to the text width.
+    fn para(&mut self, s: &str, size: f64, font: Font) {
+        for line in wrap(s, size, font, TEXT_W) {
+            self.need(size * 1.3);
+            self.y -= size * 1.3;
+            let y = self.y;
+            self.put_text(MARGIN, y, &line, size, font, [0.0; 3]);
+        }
+    }
+
+    fn heading(&mut self, s: &str, size: f64) {
+        self.need(size * 3.0);
+        self.y -= size * 0.8;
+        self.para(s, size, Font::Bold);
+        self.y -= size * 0.3;
+    }
+
+    fn gap(&mut self, h: f64) {
+        self.y -= h;
+    }
+
+    /// A table: column widths as fractions of the text width; cells wrap; the header repeats on
+    /// a new page.
+    fn table(&mut self, header: &[&str], widths: &[f64], rows: &[Vec<(String, Font)>], size: f64) {
+        let w: Vec<f64> = widths.iter().map(|f| f * TEXT_W).collect();
+        let lh = size * 1.25;
+        let layout = |cells: &[(String, Font)]| -> (Vec<Vec<String>>, f64) {
+            let lines: Vec<Vec<String>> = cells
+                .iter()
+                .zip(&w)
+                .map(|((t, f), cw)| wrap(t, size, *f, cw - 4.0))
+                .collect();
+            let n = lines.iter().map(Vec::len).max().unwrap_or(1) as f64;
+            (lines, n * lh + 3.0)
+        };
+        let head: Vec<(String, Font)> =
+            header.iter().map(|h| (h.to_string(), Font::Bold)).collect();
+        let draw_row = |d: &mut Doc, cells: &[(String, Font)], shade: bool| {
+            let (lines, h) = layout(cells);
+            let top = d.y;
+            if shade {
+                let _ = writeln!(
+                    d.out(),
+                    "0.92 0.92 0.92 rg {:.2} {:.2} {:.2} {:.2} re f",
+                    MARGIN,
+                    top - h,
+                    TEXT_W,
+                    h
+                );
+            }
+            let mut x = MARGIN;
+            for (k, cell) in lines.iter().enumerate() {
+                for (i, line) in cell.iter().enumerate() {
+                    let y = top - lh * (i as f64 + 1.0) + 1.0;
+                    d.put_text(x + 2.0, y, line, size, cells[k].1, [0.0; 3]);
+                }
+                x += w[k];
+            }
+            let _ = writeln!(
+                d.out(),
+                "0.6 0.6 0.6 RG 0.4 w {:.2} {:.2} m {:.2} {:.2} l S",
+                MARGIN,
+                top - h,
+                MARGIN + TEXT_W,
+                top - h
+            );
+            d.y = top - h;
+        };
+        self.gap(4.0);
+        self.need(layout(&head).1 + layout(rows.first().map_or(&head[..], |r| &r[..])).1);
+        draw_row(self, &head, true);
+        for r in rows {
+            let (_, h) = layout(r);
+            if self.y - h < MARGIN {
+                self.new_page();
+                draw_row(self, &head, true);
+            }
+            draw_row(self, r, false);
+        }
+        self.gap(6.0);
+    }
+
+    /// A plot of the series: `kind` 0 = separation, 1 = energy vs threshold.
+    fn plot(&mut self, s: &[SeriesPoint], energy: bool) {
+        let (pw, ph) = (TEXT_W, 150.0);
+        self.need(ph + 30.0);
+        let top = self.y - 14.0;
+        let title = if energy {
+            "Kinetic energy: nominal (blue), bound at possible PFL contact (orange), threshold (red, dashed)"
+        } else {
+            "Separation figure (m; <= 0: contact possible)"
+        };
+        self.put_text(MARGIN, top + 3.0, title, 8.5, Font::Bold, [0.0; 3]);
+        let (l, r, b, t) = (MARGIN + 38.0, MARGIN + pw, top - ph, top - 6.0);
+        let (x0, x1) = match (s.first(), s.last()) {
+            (Some(a), Some(z)) if z.t_end > a.t => (a.t, z.t_end),
+            (Some(a), _) => (a.t, a.t + 1.0),
+            _ => (0.0, 1.0),
+        };
+        let vals: Vec<f64> = s
+            .iter()
+            .flat_map(|p| {
+                if energy {
+                    vec![p.energy_nominal, p.energy_bound, p.threshold]
+                } else {
+                    vec![p.min_separation]
+                }
+            })
+            .flatten()
+            .filter(|v| v.is_finite())
+            .collect();
+        let (mut y0, mut y1) = (
+            vals.iter().copied().fold(0.0f64, f64::min),
+            vals.iter().copied().fold(0.0f64, f64::max),
+        );
+        if !energy {
+            y1 = y1.clamp(0.1, 3.0);
+            y0 = y0.max(-1.0);
+        } else {
+            y1 = y1.max(1e-3);
+        }
+        let pad = 0.05 * (y1 - y0);
+        if y0 < 0.0 {
+            y0 -= pad;
+        }
+        y1 += pad;
+        let px = |x: f64| l + (x - x0) / (x1 - x0).max(1e-12) * (r - l);
+        let py = |v: f64| b + (v.clamp(y0, y1) - y0) / (y1 - y0).max(1e-12) * (t - b);
+        let o = self.out();
+        // Shading: at rest (green), inconclusive (grey), violation (red).
+        for p in s {
+            let c = if p.violation {
+                "0.98 0.75 0.75"
+            } else if p.inconclusive {
+                "0.85 0.85 0.85"
+            } else if p.at_rest {
+                "0.86 0.95 0.86"
+            } else {
+                continue;
+            };
+            let (a, z) = (px(p.t), px(p.t_end.min(x1)));
+            let _ = writeln!(
+                o,
+                "{c} rg {a:.2} {b:.2} {:.2} {:.2} re f",
+                (z - a).max(0.5),
+                t - b
+            );
+        }
+        let _ = writeln!(
+            o,
+            "0 0 0 RG 0.6 w {l:.2} {b:.2} {:.2} {:.2} re S",
+            r - l,
+            t - b
+        );
+        let mut labels = Vec::new();
+        let (ys, ystep) = ticks(y0, y1);
+        for v in ys {
+            let y = py(v);
+            let g = if v == 0.0 { "0.45" } else { "0.85" };
+            let _ = writeln!(o, "{g} {g} {g} RG 0.4 w {l:.2} {y:.2} m {r:.2} {y:.2} l S");
+            labels.push((l - 3.0, y - 2.5, fmt_tick(v, ystep), true));
+        }
+        let (xs, xstep) = ticks(x0, x1);
+        for x in xs {
+            let xx = px(x);
+            let _ = writeln!(
+                o,
+                "0 0 0 RG 0.4 w {xx:.2} {b:.2} m {xx:.2} {:.2} l S",
+                b - 3.0
+            );
+            labels.push((xx, b - 11.0, fmt_tick(x, xstep), false));
+        }
+        let series: Vec<Line> = if energy {
+            vec![
+                (
+                    s.iter()
+                        .map(|p| (0.5 * (p.t + p.t_end), p.energy_nominal))
+                        .collect(),
+                    "0.08 0.40 0.75",
+                    "[] 0",
+                ),
+                (
+                    s.iter()
+                        .map(|p| (0.5 * (p.t + p.t_end), p.energy_bound))
+                        .collect(),
+                    "0.94 0.42 0.0",
+                    "[] 0",
+                ),
+                (
+                    s.iter()
+                        .map(|p| (0.5 * (p.t + p.t_end), p.threshold))
+                        .collect(),
+                    "0.72 0.11 0.11",
+                    "[4 2] 0",
+                ),
+            ]
+        } else {
+            vec![(
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.min_separation))
+                    .collect(),
+                "0.08 0.40 0.75",
+                "[] 0",
+            )]
+        };
+        for (pts, rgb, dash) in series {
+            let mut pen = false;
+            let _ = write!(o, "{rgb} RG 1 w {dash} d ");
+            for (x, v) in pts {
+                match v {
+                    Some(v) if v.is_finite() => {
+                        let _ = write!(
+                            o,
+                            "{:.2} {:.2} {} ",
+                            px(x),
+                            py(v),
+                            if pen { "l" } else { "m" }
+                        );
+                        pen = true;
+                    }
+                    _ => pen = false,
+                }
+            }
+            let _ = writeln!(o, "S [] 0 d");
+        }
+        for (x, y, txt, right) in labels {
+            let w = text_width(&txt, 7.0, Font::Regular);
+            let xx = if right { x - w } else { x - w / 2.0 };
+            self.put_text(xx, y, &txt, 7.0, Font::Regular, [0.2; 3]);
+        }
+        self.put_text(r - 40.0, b - 20.0, "time (s)", 7.0, Font::Regular, [0.2; 3]);
+        self.y = b - 26.0;
+    }
+
+    /// The PDF file: catalog, page tree, fonts, pages and their content streams.
+    fn finish(self) -> Vec<u8> {
+        let n = self.pages.len();
+        // Objects: 1 catalog, 2 pages, 3-5 fonts, then per page: page, content.
+        let mut objs: Vec<Vec<u8>> = Vec::new();
+        let kids: Vec<String> = (0..n).map(|i| format!("{} 0 R", 6 + 2 * i)).collect();
+        objs.push(b"<< /Type /Catalog /Pages 2 0 R >>".to_vec());
+        objs.push(format!("<< /Type /Pages /Kids [{}] /Count {n} >>", kids.join(" ")).into_bytes());
+        for base in ["Helvetica", "Helvetica-Bold", "Courier"] {
+            objs.push(
+                format!(
+                    "<< /Type /Font /Subtype /Type1 /BaseFont /{base} /Encoding /WinAnsiEncoding >>"
+                )
+                .into_bytes(),
+            );
+        }
+        for (i, content) in self.pages.iter().enumerate() {
+            let footer = format!(
+                "BT 0.4 0.4 0.4 rg /F1 7 Tf {MARGIN:.2} 24 Td (pacs audit certification report - page {} of {n}) Tj ET\n",
+                i + 1
+            );
+            let stream = format!("{content}{footer}");
+            objs.push(
+                format!(
+                    "<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {PAGE_W} {PAGE_H}] /Resources << /Font << /F1 3 0 R /F2 4 0 R /F3 5 0 R >> >> /Contents {} 0 R >>",
+                    7 + 2 * i
+                )
+                .into_bytes(),
+            );
+            let mut c = format!("<< /Length {} >>\nstream\n", stream.len()).into_bytes();
+            c.extend_from_slice(stream.as_bytes());
+            c.extend_from_slice(b"\nendstream");
+            objs.push(c);
+        }
+        let mut out = b"%PDF-1.4\n%\xe2\xe3\xcf\xd3\n".to_vec();
+        let mut offsets = Vec::with_capacity(objs.len());
+        for (i, o) in objs.iter().enumerate() {
+            offsets.push(out.len());
+            out.extend_from_slice(format!("{} 0 obj\n", i + 1).as_bytes());
+            out.extend_from_slice(o);
+            out.extend_from_slice(b"\nendobj\n");
+        }
+        let xref = out.len();
+        let mut x = format!("xref\n0 {}\n0000000000 65535 f \n", objs.len() + 1);
+        for off in offsets {
+            let _ = writeln!(x, "{off:010} 00000 n ");
+        }
+        let _ = write!(
+            x,
+            "trailer\n<< /Size {} /Root 1 0 R /Info << /Title (pacs audit certification report) /Producer (pacs {TOOL_VERSION}) >> >>\nstartxref\n{xref}\n%%EOF\n",
+            objs.len() + 1
+        );
+        out.extend_from_slice(x.as_bytes());
+        out
+    }
+}
+
+fn reg(s: impl Into<String>) -> (String, Font) {
+    (s.into(), Font::Regular)
+}
+
+fn mono(s: impl Into<String>) -> (String, Font) {
+    (s.into(), Font::Mono)
+}
+
+/// The PDF report.
+pub fn report(input: &ReportInput) -> Vec<u8> {
+    let mut d = Doc::new();
+    let defs = definitions();
+    let def = |k: &str| defs[k].as_str().unwrap_or("").to_string();
+    d.para("pacs audit certification report", 16.0, Font::Bold);
+    d.gap(4.0);
+    d.para(
+        &format!(
+            "Generated {} by pacs {TOOL_VERSION} (git {GIT_REVISION}). Overall verdict: {}.",
+            input.generated(),
+            format!("{:?}", overall(input.runs)).to_uppercase()
+        ),
+        9.5,
+        Font::Regular,
+    );
+    d.heading("Settings", 12.0);
+    d.para(
+        &match &input.config {
+            Some(c) => format!("Config {} (SHA-256 {}).", c.path, c.sha256),
+            None => "Config: defaults.".into(),
+        },
+        8.5,
+        Font::Regular,
+    );
+    let mut rows = Vec::new();
+    if let Some(m) = input.settings.as_object() {
+        for (k, v) in m {
+            let v = match v {
+                serde_json::Value::Null => "from the log header".to_string(),
+                other => other.to_string().trim_matches('"').to_string(),
+            };
+            rows.push(vec![mono(k.clone()), reg(v)]);
+        }
+    }
+    d.table(&["setting", "value"], &[0.3, 0.7], &rows, 8.0);
+    d.heading("Summary", 12.0);
+    let rows: Vec<Vec<(String, Font)>> = input
+        .runs
+        .iter()
+        .zip(&input.logs)
+        .map(|(r, f)| {
+            let m = &r.metrics;
+            vec![
+                reg(format!("{} (SHA-256 {})", r.log, f.sha256)),
+                reg(r.models.constraints.clone()),
+                reg(format!("{:?}", r.verdict).to_uppercase()),
+                reg(m.samples.to_string()),
+                reg(format!("{:.3}", m.duration)),
+                reg(format!("{:.4}", m.violation_fraction)),
+                reg(m.min_separation.map_or("n/a".into(), |x| format!("{x:.4}"))),
+                reg(r.violations.len().to_string()),
+                reg(m
+                    .safe_success
+                    .map_or("n/a", |b| if b { "yes" } else { "no" })),
+            ]
+        })
+        .collect();
+    d.table(
+        &[
+            "log",
+            "constraints",
+            "verdict",
+            "samples",
+            "duration (s)",
+            "violation fraction",
+            "separation (m) (1)",
+            "violations",
+            "safe success (2)",
+        ],
+        &[0.30, 0.09, 0.10, 0.07, 0.08, 0.09, 0.10, 0.08, 0.09],
+        &rows,
+        7.0,
+    );
+    d.para(
+        &format!("(1) Separation: {}.", def("separation_m")),
+        7.0,
+        Font::Regular,
+    );
+    d.para(
+        &format!("(2) Safe success: {}.", def("safe_success")),
+        7.0,
+        Font::Regular,
+    );
+    if input.runs.len() > 1 {
+        d.heading("Aggregate (impact of safeguarding)", 12.0);
+        let rows: Vec<Vec<(String, Font)>> = aggregate::aggregate(input.runs)
+            .into_iter()
+            .map(|a| {
+                vec![
+                    reg(a.task),
+                    reg(a.policy),
+                    reg(a.filter),
+                    reg(a.runs.to_string()),
+                    reg(aggregate::pct(a.success)),
+                    reg(aggregate::pct(a.safe_success)),
+                    reg(aggregate::pct(Some(a.safety_violation))),
+                ]
+            })
+            .collect();
+        d.table(
+            &[
+                "task",
+                "policy",
+                "filter",
+                "n (logs)",
+                "success",
+                "safe success",
+                "violation fraction (mean +- std)",
+            ],
+            &[0.14, 0.14, 0.14, 0.1, 0.14, 0.14, 0.2],
+            &rows,
+            7.5,
+        );
+    }
+    for r in input.runs {
+        d.heading(
+            &format!("{}: {}", r.log, format!("{:?}", r.verdict).to_uppercase()),
+            11.0,
+        );
+        let specs = model_specs(r);
+        let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("-").to_string();
+        let m = &r.models;
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let rows = vec![
+            vec![
+                reg("robot"),
+                reg(m.robot.clone()),
+                reg(format!(
+                    "v_max (rad/s): {}; a_max (rad/s²): {}",
+                    list(&m.robot_v_max),
+                    list(&m.robot_a_max)
+                )),
+                mono(hash("robot")),
+            ],
+            vec![
+                reg("human"),
+                reg(m.human.clone()),
+                reg(format!(
+                    "keypoint speeds (m/s): {}; position error {} m; delay {} s",
+                    list(&m.human_v_max),
+                    m.human_measurement_error_pos,
+                    m.human_delay
+                )),
+                mono(hash("human")),
+            ],
+            vec![
+                reg("constraints"),
+                reg(m.constraints.clone()),
+                reg(format!("{} environment capsule(s)", m.environment_shapes)),
+                mono(hash("constraints")),
+            ],
+        ];
+        d.table(
+            &[
+                "model",
+                "name",
+                "parameters (all in report.json)",
+                "SHA-256 of the parameters",
+            ],
+            &[0.1, 0.12, 0.43, 0.35],
+            &rows,
+            7.0,
+        );
+        d.plot(&r.series, false);
+        if has_threshold(&r.series) {
+            d.plot(&r.series, true);
+        } else {
+            d.para(
+                "No PFL contact was possible in this run, so no energy limit applied; no energy plot.",
+                8.0,
+                Font::Regular,
+            );
+        }
+        d.para(
+            "Shading: green = robot at rest, red = violation possible, grey = inconclusive.",
+            7.0,
+            Font::Regular,
+        );
+        if r.violations.is_empty() {
+            d.para("No violations.", 9.0, Font::Regular);
+        } else {
+            const SHOWN: usize = 60;
+            let rows: Vec<Vec<(String, Font)>> = r
+                .violations
+                .iter()
+                .take(SHOWN)
+                .map(|v| {
+                    let pfl = v.constraint == pacs_audit::ConstraintKind::Pfl;
+                    let num = |x: f64| if pfl { format!("{x:.4}") } else { "-".into() };
+                    vec![
+                        reg(format!("{:.4}", v.t_start)),
+                        reg(format!("{:.4}", v.t_end)),
+                        reg(constraint_name(v.constraint)),
+                        reg(v.body_part.clone()),
+                        reg(v.link.clone()),
+                        reg(if v.min_separation.is_finite() {
+                            format!("{:.4}", v.min_separation)
+                        } else {
+                            "-".into()
+                        }),
+                        reg(num(v.energy)),
+                        reg(num(v.threshold)),
+                        reg(if v.certain { "certain" } else { "possible" }),
+                    ]
+                })
+                .collect();
+            d.table(
+                &[
+                    "from (s)",
+                    "to (s)",
+                    "constraint",
+                    "body part",
+                    "link",
+                    "nominal separation (m) (3)",
+                    "energy bound (J)",
+                    "threshold (J)",
+                    "certain?",
+                ],
+                &[0.08, 0.08, 0.17, 0.12, 0.12, 0.13, 0.1, 0.1, 0.1],
+                &rows,
+                7.0,
+            );
+            if r.violations.len() > SHOWN {
+                d.para(
+                    &format!(
+                        "... {} more violation intervals in report.json.",
+                        r.violations.len() - SHOWN
+                    ),
+                    7.5,
+                    Font::Regular,
+                );
+            }
+            d.para(
+                &format!("(3) {}.", def("violation_separation_m")),
+                7.0,
+                Font::Regular,
+            );
+        }
+        if !r.inconclusive.is_empty() {
+            d.para("Inconclusive spans:", 8.5, Font::Bold);
+            for i in r.inconclusive.iter().take(40) {
+                d.para(
+                    &format!(
+                        "- {:.4}-{:.4} s: {} ({} spans)",
+                        i.t_start,
+                        i.t_end,
+                        i.reason.as_str(),
+                        i.spans
+                    ),
+                    8.0,
+                    Font::Regular,
+                );
+            }
+        }
+    }
+    d.heading("Assumptions", 12.0);
+    for a in assumptions() {
+        d.para(&format!("- {a}"), 8.0, Font::Regular);
+    }
+    d.heading("Checks and the tests backing them", 12.0);
+    let rows: Vec<Vec<(String, Font)>> = check_backing()
+        .as_array()
+        .map(|arr| {
+            arr.iter()
+                .map(|c| {
+                    vec![
+                        reg(c["check"].as_str().unwrap_or("").to_string()),
+                        mono(
+                            c["backed_by"]
+                                .as_array()
+                                .map(|v| {
+                                    v.iter()
+                                        .filter_map(|x| x.as_str())
+                                        .collect::<Vec<_>>()
+                                        .join("; ")
+                                })
+                                .unwrap_or_default(),
+                        ),
+                    ]
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    d.table(&["check", "backed by"], &[0.45, 0.55], &rows, 6.5);
+    d.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrapping_respects_the_width_and_keeps_every_character() {
+        let s = "a b c 0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef end";
+        let lines = wrap(s, 8.0, Font::Mono, 100.0);
+        for l in &lines {
+            assert!(text_width(l, 8.0, Font::Mono) <= 100.0 + 1e-9, "{l}");
+        }
+        assert_eq!(lines.join("").replace(' ', ""), s.replace(' ', ""));
+    }
+
+    #[test]
+    fn win_ansi_maps_the_report_symbols() {
+        assert_eq!(win_ansi("a–b ≤ 2 m²"), b"a\x96b <= 2 m\xb2".to_vec());
+    }
+}
