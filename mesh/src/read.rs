@@ -6,7 +6,8 @@
 //! - **STL** (`.stl`): binary (80-byte header, triangle count, 50 bytes per triangle) or ASCII
 //!   (`vertex x y z` lines); a file whose size matches the binary layout is read as binary even
 //!   if its header starts with `solid` (exporters do that).
-//! - **OBJ** (`.obj`): `v x y z [w]` lines (a `w` ≠ 1 divides the position).
+//! - **OBJ** (`.obj`): `v x y z [w]` lines (a `w` ≠ 1 divides the position); `v x y z r g b [a]`
+//!   lines (vertex colours) are positions with colours.
 //! - **COLLADA** (`.dae`): the `POSITION` sources of every geometry instanced in the visual scene,
 //!   through the scene's node transforms (`matrix`, `translate`, `rotate`, `scale`), scaled by
 //!   `<unit meter>`. Refused rather than guessed: an `up_axis` other than `Z_UP` (tools disagree on
@@ -151,14 +152,26 @@ pub fn obj(path: &Path, s: &str) -> Result<Vec<Point3<f64>>, MeshError> {
             continue;
         }
         let p = three(path, ln + 1, &mut it, "v")?;
-        let w = match it.next() {
-            None => 1.0,
-            Some(tok) => tok.parse::<f64>().map_err(|_| {
+        // `v x y z`, `v x y z w` (homogeneous weight), or `v x y z r g b [a]` (vertex colours,
+        // as MeshLab writes them: not a weight).
+        let rest: Vec<&str> = it.collect();
+        let w = match rest.len() {
+            0 | 3 | 4 => 1.0,
+            1 => rest[0].parse::<f64>().map_err(|_| {
                 parse_err(
                     path,
-                    format!("line {}: `v` weight `{tok}` is not a number", ln + 1),
+                    format!("line {}: `v` weight `{}` is not a number", ln + 1, rest[0]),
                 )
             })?,
+            k => {
+                return Err(parse_err(
+                    path,
+                    format!(
+                        "line {}: `v` has {k} numbers after x y z (expected none, a weight, or an r g b [a] colour)",
+                        ln + 1
+                    ),
+                ));
+            }
         };
         if !(w.is_finite() && w != 0.0) {
             return Err(parse_err(path, format!("line {}: `v` weight {w}", ln + 1)));

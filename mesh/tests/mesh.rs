@@ -217,6 +217,17 @@ fn bad_mesh_files_name_the_file_and_the_problem() {
     std::fs::write(&f, "v 1 2 x\n").unwrap();
     let e = read_mesh(&f).unwrap_err().to_string();
     assert!(e.contains("`x` is not a number"), "{e}");
+    // Vertex colours (MeshLab's `v x y z r g b`) are not a weight; a weight divides.
+    std::fs::write(&f, "v 1 2 3 0.5 0.2 0.1\nv 2 4 6 2\n").unwrap();
+    let v = read_mesh(&f).unwrap();
+    assert_eq!(v[0], Point3::new(1.0, 2.0, 3.0));
+    assert_eq!(v[1], Point3::new(1.0, 2.0, 3.0));
+    std::fs::write(&f, "v 1 2 3 4 5\n").unwrap();
+    let e = read_mesh(&f).unwrap_err().to_string();
+    assert!(
+        e.contains("line 1") && e.contains("2 numbers after x y z"),
+        "{e}"
+    );
     std::fs::write(&f, "# nothing\n").unwrap();
     assert!(matches!(read_mesh(&f), Err(MeshError::Empty { .. })));
     let g = dir.join("short.stl");

@@ -194,6 +194,7 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
         logs,
         config,
         settings: serde_json::to_value(&first.config).unwrap_or_default(),
+        generated: pacs_reports::utc_now(),
     };
     pacs_reports::write_reports(&out_dir, &input_doc)
         .map_err(|e| err(Kind::Output, format!("out_dir: {e}")))?;

@@ -384,6 +384,8 @@ pub struct Handle {
     pub planner: Arc<Mutex<ChunkPlanner>>,
     /// The longest recent planning time (µs), for the handover's lead.
     pub plan_us: Arc<AtomicU64>,
+    /// Held for a whole `set_chunk`: one hand-over at a time per shield.
+    pub handover: Arc<Mutex<()>>,
 }
 
 impl Handle {
@@ -416,12 +418,19 @@ impl Handle {
     /// ([`Shield::handover`]), offered, and awaited until a step takes it over (planned again if
     /// the commands went elsewhere) — the loop's steps never wait for the planner.
     fn hand_over(&self, chunk: &Chunk) -> Result<u64, Fail> {
+        // One hand-over at a time per shield: the shield reports the state of its latest offer
+        // only, so concurrent callers would read each other's.
+        let _one = self
+            .handover
+            .lock()
+            .map_err(|_| (Kind::State, "poisoned hand-over state".to_string()))?;
         let lock = || {
             self.inner
                 .lock()
                 .map_err(|_| (Kind::State, "poisoned shield state".to_string()))
         };
         let mut lead = self.lead();
+        let (mut late, mut moved) = (0, 0);
         for _ in 0..HANDOVER_ATTEMPTS {
             let ho = {
                 let mut g = lock()?;
@@ -450,14 +459,20 @@ impl Handle {
                         .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?
                 }
             };
-            let clock = Instant::now();
-            let prepared = self
-                .planner
-                .lock()
-                .map_err(|_| (Kind::State, "poisoned planner state".to_string()))?
-                .prepare(&ho, chunk);
-            let us = clock.elapsed().as_micros().min(u64::MAX as u128) as u64;
-            self.plan_us.fetch_max(us, Ordering::Relaxed);
+            let prepared = {
+                let mut planner = self
+                    .planner
+                    .lock()
+                    .map_err(|_| (Kind::State, "poisoned planner state".to_string()))?;
+                let clock = Instant::now();
+                let p = planner.prepare(&ho, chunk);
+                // The lead follows the recent planning times: the longest, decaying by a quarter
+                // per chunk (one slow plan does not fix a long lead for good).
+                let us = clock.elapsed().as_micros().min(u64::MAX as u128) as u64;
+                let old = self.plan_us.load(Ordering::Relaxed);
+                self.plan_us.store(us.max(old - old / 4), Ordering::Relaxed);
+                p
+            };
             let prepared = match prepared {
                 Ok(p) => p,
                 Err(e) => {
@@ -469,6 +484,7 @@ impl Handle {
                 Ok(()) => {}
                 Err(ShieldError::Stale { .. }) => {
                     // Planned too late: look further ahead.
+                    late += 1;
                     lead = (2 * lead).min(MAX_LEAD);
                     continue;
                 }
@@ -481,14 +497,26 @@ impl Handle {
                         g.log_chunk(true);
                         return Ok(n);
                     }
-                    OfferState::Stale => break,
+                    OfferState::Stale => {
+                        moved += 1;
+                        break;
+                    }
                     OfferState::Waiting if !g.paced => {
+                        // Nobody steps the shield now: withdraw, so that no later step takes
+                        // over a chunk its caller was told was not handed over.
+                        g.shield.withdraw_offer();
                         return Err((
                             Kind::State,
                             "set_chunk: the ShieldLoop stopped before the chunk's handover (hand it over again)".into(),
                         ));
                     }
-                    _ => {}
+                    OfferState::Waiting => {}
+                    OfferState::None => {
+                        return Err((
+                            Kind::State,
+                            "set_chunk: the shield was restarted during the handover".into(),
+                        ));
+                    }
                 }
                 drop(g);
                 std::thread::sleep(Duration::from_secs_f64(self.safety_step / 4.0));
@@ -498,7 +526,7 @@ impl Handle {
         Err((
             Kind::Chunk,
             format!(
-                "set_chunk: the commands left the predicted path before the chunk's handover {HANDOVER_ATTEMPTS} times (steps not verified: a person near the robot?); the robot keeps its verified motion"
+                "set_chunk: not handed over in {HANDOVER_ATTEMPTS} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {late} times planning took longer than the lead; the robot keeps its verified motion"
             ),
         ))
     }
@@ -738,6 +766,7 @@ impl PyShield {
                 })),
                 planner: Arc::new(Mutex::new(planner)),
                 plan_us: Arc::new(AtomicU64::new(1000)),
+                handover: Arc::new(Mutex::new(())),
                 dof,
                 safety_step,
                 humans: s.humans,

@@ -243,6 +243,8 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
     let mut next_frame = f64::NEG_INFINITY;
     // Joint box of the samples since the last frame.
     let (mut lo, mut hi) = (vec![f64::INFINITY; n], vec![f64::NEG_INFINITY; n]);
+    let mut marked = vec![false; run.violations.len()];
+    let (mut last, mut last_ns): (Vec<f64>, u64) = (Vec::with_capacity(n), 0);
     while let Some(rec) = reader.next_record()? {
         match rec {
             Record::Human {
@@ -311,52 +313,33 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
                         counts.human_occupancy += 1;
                     }
                 }
-                // Violation markers: at the start of each interval, on the named link.
+                // Violation markers: each interval once, at the first frame at or after its
+                // start, on the named link.
                 for (k, v) in run.violations.iter().enumerate() {
-                    if v.t_start >= t - opts.frame_period && v.t_start < t + 1e-12 {
-                        let link = robot.links().iter().position(|l| l.name == v.link);
-                        let at = link
-                            .and_then(|li| {
-                                robot
-                                    .capsules_world(q)
-                                    .into_iter()
-                                    .find(|(i, _)| *i == li)
-                                    .map(|(_, c)| {
-                                        Point3::from((c.p1().coords + c.p2().coords) / 2.0)
-                                    })
-                            })
-                            .unwrap_or_else(|| caps.first().map_or(Point3::origin(), |c| c.p2()));
-                        let life = ((v.t_end - v.t_start).max(opts.frame_period) * 1e9) as u64;
-                        let mut e = entity(&format!("violation_{k}"), ns, &[], MARKER);
-                        e.lifetime = Some(foxglove::schemas::Duration::new(
-                            (life / 1_000_000_000) as i32,
-                            (life % 1_000_000_000) as u32,
-                        ));
-                        e.spheres.push(SpherePrimitive {
-                            pose: pose(&at, &UnitQuaternion::identity()),
-                            size: v3(0.08, 0.08, 0.08),
-                            color: color(MARKER),
-                        });
-                        e.texts.push(TextPrimitive {
-                            pose: pose(
-                                &Point3::new(at.x, at.y, at.z + 0.12),
-                                &UnitQuaternion::identity(),
-                            ),
-                            billboard: true,
-                            font_size: 14.0,
-                            scale_invariant: true,
-                            color: color(MARKER),
-                            text: format!(
-                                "{:?} {} on {} ({:.2}–{:.2} s)",
-                                v.constraint, v.body_part, v.link, v.t_start, v.t_end
-                            ),
-                        });
-                        log_scene(&ch.violations, e, ns);
+                    if !marked[k] && v.t_start <= t + 1e-12 {
+                        marked[k] = true;
+                        log_scene(&ch.violations, marker(robot, q, k, v, ns, opts), ns);
                         counts.violations += 1;
                     }
                 }
+                last.clear();
+                last.extend_from_slice(q);
+                last_ns = ns;
             }
             _ => {}
+        }
+    }
+    // Intervals starting after the last frame: at the last frame.
+    if !last.is_empty() {
+        for (k, v) in run.violations.iter().enumerate() {
+            if !marked[k] {
+                log_scene(
+                    &ch.violations,
+                    marker(robot, &last, k, v, last_ns, opts),
+                    last_ns,
+                );
+                counts.violations += 1;
+            }
         }
     }
     let origin = t0.unwrap_or(0.0);
@@ -385,6 +368,62 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
         .close()
         .map_err(|e| ReplayError::Write(e.to_string()))?;
     Ok((w, counts))
+}
+
+/// A violation interval's marker: a red sphere on the named link (at configuration `q`) and a
+/// text, shown for the interval.
+fn marker(
+    robot: &pacs_models::RobotModel,
+    q: &[f64],
+    k: usize,
+    v: &pacs_audit::Violation,
+    ns: u64,
+    opts: &SceneOptions,
+) -> SceneEntity {
+    let caps = robot.capsules_world(q);
+    let at = robot
+        .links()
+        .iter()
+        .position(|l| l.name == v.link)
+        .and_then(|li| caps.iter().find(|(i, _)| *i == li))
+        .or(caps.first())
+        .map_or(Point3::origin(), |(_, c)| {
+            Point3::from((c.p1().coords + c.p2().coords) / 2.0)
+        });
+    let life = ((v.t_end - v.t_start).max(opts.frame_period) * 1e9) as u64;
+    let mut e = entity(&format!("violation_{k}"), ns, &[], MARKER);
+    e.lifetime = Some(foxglove::schemas::Duration::new(
+        (life / 1_000_000_000) as i32,
+        (life % 1_000_000_000) as u32,
+    ));
+    e.spheres.push(SpherePrimitive {
+        pose: pose(&at, &UnitQuaternion::identity()),
+        size: v3(0.08, 0.08, 0.08),
+        color: color(MARKER),
+    });
+    e.texts.push(TextPrimitive {
+        pose: pose(
+            &Point3::new(at.x, at.y, at.z + 0.12),
+            &UnitQuaternion::identity(),
+        ),
+        billboard: true,
+        font_size: 14.0,
+        scale_invariant: true,
+        color: color(MARKER),
+        text: format!(
+            "{} {} on {} ({:.2}–{:.2} s)",
+            match v.constraint {
+                pacs_audit::ConstraintKind::Ssm => "SSM",
+                pacs_audit::ConstraintKind::Pfl => "PFL",
+                pacs_audit::ConstraintKind::NoContact => "no contact",
+            },
+            v.body_part,
+            v.link,
+            v.t_start,
+            v.t_end
+        ),
+    });
+    e
 }
 
 fn log_scene(ch: &foxglove::Channel<SceneUpdate>, e: SceneEntity, ns: u64) {

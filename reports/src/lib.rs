@@ -79,8 +79,8 @@ fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
-/// SHA-256 (lowercase hex) of a model's parameters as compact JSON (field order as the spec
-/// types declare it): equal parameters give equal hashes, across logs and runs.
+/// SHA-256 (lowercase hex) of a model's parameters as compact JSON (object keys sorted, as
+/// `serde_json` orders them): equal parameters give equal hashes, across logs and runs.
 pub fn model_sha256(spec: &Value) -> String {
     let bytes = serde_json::to_vec(spec).unwrap_or_default();
     hex(&Sha256::digest(&bytes))
@@ -138,12 +138,14 @@ pub struct ReportInput<'a> {
     pub config: Option<InputFile>,
     /// The effective audit settings (serialized `AuditConfig`).
     pub settings: Value,
+    /// When the report is generated (ISO 8601 UTC, [`utc_now`]): one time for all its files.
+    pub generated: String,
 }
 
 impl ReportInput<'_> {
     /// When the report is generated (ISO 8601 UTC).
     pub fn generated(&self) -> String {
-        utc_now()
+        self.generated.clone()
     }
 }
 

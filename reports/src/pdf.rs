@@ -454,6 +454,13 @@ impl Doc {
             c.extend_from_slice(b"\nendstream");
             objs.push(c);
         }
+        objs.push(
+            format!(
+                "<< /Title (pacs audit certification report) /Producer (pacs {TOOL_VERSION}) >>"
+            )
+            .into_bytes(),
+        );
+        let info = objs.len();
         let mut out = b"%PDF-1.4\n%\xe2\xe3\xcf\xd3\n".to_vec();
         let mut offsets = Vec::with_capacity(objs.len());
         for (i, o) in objs.iter().enumerate() {
@@ -469,7 +476,7 @@ impl Doc {
         }
         let _ = write!(
             x,
-            "trailer\n<< /Size {} /Root 1 0 R /Info << /Title (pacs audit certification report) /Producer (pacs {TOOL_VERSION}) >> >>\nstartxref\n{xref}\n%%EOF\n",
+            "trailer\n<< /Size {} /Root 1 0 R /Info {info} 0 R >>\nstartxref\n{xref}\n%%EOF\n",
             objs.len() + 1
         );
         out.extend_from_slice(x.as_bytes());

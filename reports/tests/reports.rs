@@ -126,6 +126,7 @@ fn plots_and_documents() {
         ],
         config: None,
         settings: serde_json::json!({"max_gap": 0.1}),
+        generated: pacs_reports::utc_now(),
     };
     let j = report_json(&input);
     assert_eq!(j["verdict"], "fail");

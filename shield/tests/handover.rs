@@ -225,6 +225,17 @@ fn an_offer_past_its_handover_is_refused() {
     );
     assert_eq!(sh.offer_state(), OfferState::Stale);
     assert_eq!(sh.chunk_progress().unwrap().accepted, 1);
+    // A waiting offer that is withdrawn is never taken over.
+    let ho = sh.handover(3).unwrap();
+    sh.offer(planner.prepare(&ho, &random_chunk(&mut rng)).unwrap())
+        .unwrap();
+    assert_eq!(sh.offer_state(), OfferState::Waiting);
+    assert!(sh.withdraw_offer());
+    for k in 60..70 {
+        step(&mut sh, k);
+    }
+    assert_eq!(sh.chunk_progress().unwrap().accepted, 1);
+    assert!(!sh.withdraw_offer());
 }
 
 /// With a person walking up to the robot and away, offers with random leads are taken over or

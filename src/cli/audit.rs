@@ -166,6 +166,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
             logs,
             config: cfg_file,
             settings: serde_json::to_value(&cfg).unwrap_or_default(),
+            generated: pacs_reports::utc_now(),
         };
         if let Err(e) = pacs_reports::write_reports(dir, &input) {
             eprintln!("pacs: cannot write report: {e}");

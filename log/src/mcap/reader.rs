@@ -163,8 +163,11 @@ impl<R: Read + Seek> McapReader<R> {
         let mut header_from = header.as_ref().map(|_| HeaderFrom::Given);
         let mut header = header;
         if header.is_none()
-            && let Some((h, off)) = header_from_summary(file, &mut input, size)?
+            && let Some((mut h, off)) = header_from_summary(file, &mut input, size)?
         {
+            // A {urdf, side} robot's relative paths are relative to the MCAP file.
+            h.robot
+                .rebase(&crate::format::dir_of(std::path::Path::new(file)));
             header = Some(h);
             header_from = Some(HeaderFrom::Record(off));
         }

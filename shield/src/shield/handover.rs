@@ -231,6 +231,16 @@ impl Shield {
         self.offer_state
     }
 
+    /// Withdraw a waiting offer (its caller gave up on it): no later step takes it over.
+    /// Returns whether one was waiting.
+    pub fn withdraw_offer(&mut self) -> bool {
+        let waiting = self.pending.take().is_some();
+        if waiting {
+            self.offer_state = OfferState::Stale;
+        }
+        waiting
+    }
+
     /// At the start of the step at `t`: take a waiting offer over if the commanded state is its
     /// planned start, drop it if its handover time has come and the state differs. Allocation
     /// free (a dropped or replaced trajectory waits in `spare`).

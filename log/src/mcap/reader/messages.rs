@@ -88,9 +88,12 @@ impl State {
                         }
                         None => {
                             self.header_from = Some(HeaderFrom::Record(start));
-                            let h = h.map_err(|p| {
+                            let mut h = h.map_err(|p| {
                                 LogError::input(&self.file, Location::Offset(start), p.to_string())
                             })?;
+                            // Relative {urdf, side} paths: relative to the MCAP file.
+                            h.robot
+                                .rebase(&crate::format::dir_of(std::path::Path::new(&self.file)));
                             self.set_header(h)?;
                         }
                     }
