@@ -50,6 +50,15 @@ pub struct StepStats {
     pub chunk_max: f64,
     /// `set_chunk` calls slower than 100 µs.
     pub chunk_over_100us: usize,
+    /// Chunks planned off the loop ([`shield_scenario_offloop`]): median, 99th percentile and
+    /// maximum of the planning (`handover` + `ChunkPlanner::prepare`, on the planning thread), s;
+    /// the `chunk_*` figures are then the loop's share (`offer`). 0 otherwise.
+    pub plan_median: f64,
+    pub plan_p99: f64,
+    pub plan_max: f64,
+    /// Offered chunks that a step took over, and offered chunks in all.
+    pub offers_taken: usize,
+    pub offers: usize,
     /// The slowest steps by work time (at most 8, slowest first), with what the step did.
     pub slowest: Vec<SlowStep>,
 }
@@ -133,6 +142,11 @@ fn stats(
         chunk_p99: q(&chunks, 0.99),
         chunk_max: chunks.last().copied().unwrap_or(0.0),
         chunk_over_100us,
+        plan_median: 0.0,
+        plan_p99: 0.0,
+        plan_max: 0.0,
+        offers_taken: 0,
+        offers: 0,
         slowest,
     }
 }
@@ -244,18 +258,43 @@ pub fn shield_scenario_with(
         ChunkMotion::Stop => format!("{spec} ({mode:?})"),
         ChunkMotion::Continuous => format!("{spec} ({mode:?}, continuous chunks)"),
     };
-    run_walking_scenario(&name, spec, mode, motion, steps, |_| {}, |_, _| {})
+    run_walking_scenario(&name, spec, mode, motion, steps, None, |_| {}, |_, _| {})
+}
+
+/// The continuous-chunks scenario with every chunk planned off the loop, as a real-time loop
+/// does it: the handover `lead` steps ahead is predicted and the chunk planned (timed as
+/// `plan_*`: the planning thread's work), then offered (timed as `chunk_*`: the loop's share);
+/// the step at the handover takes it over (inside the step's time) if the commands got there.
+pub fn shield_scenario_offloop(
+    spec: &str,
+    mode: FilterMode,
+    lead: usize,
+    steps: usize,
+) -> StepStats {
+    let name = format!("{spec} ({mode:?}, continuous chunks planned off the loop, lead {lead})");
+    run_walking_scenario(
+        &name,
+        spec,
+        mode,
+        ChunkMotion::Continuous,
+        steps,
+        Some(lead),
+        |_| {},
+        |_, _| {},
+    )
 }
 
 /// The loop of the walking-human scenarios: build the shield (`setup` adds objects), then per
 /// step a chunk every 200 ms (timed apart), `measure` (extra measurements, timed with the step)
 /// and the step with the human's measurement.
+#[allow(clippy::too_many_arguments)]
 fn run_walking_scenario(
     name: &str,
     spec: &str,
     mode: FilterMode,
     motion: ChunkMotion,
     steps: usize,
+    offloop: Option<usize>,
     setup: impl FnOnce(&mut Shield),
     mut measure: impl FnMut(&mut Shield, f64),
 ) -> StepStats {
@@ -277,14 +316,34 @@ fn run_walking_scenario(
     let mut notes = Vec::with_capacity(steps);
     let mut work = Vec::with_capacity(steps);
     let mut sign = 1.0;
+    let mut planner = sh.chunk_planner();
+    let mut plan_times = Vec::new();
+    let (mut offers, mut taken) = (0usize, 0usize);
+    let mut last_state = crate::shield::OfferState::None;
     for k in 0..steps {
         let t = k as f64 * cfg.safety_step;
         if k % 200 == 0 {
             let c = back_and_forth(sign);
             sign = -sign;
-            let t0 = Instant::now();
-            let _ = sh.set_chunk(&c);
-            chunk_times.push(t0.elapsed().as_secs_f64());
+            match offloop {
+                None => {
+                    let t0 = Instant::now();
+                    let _ = sh.set_chunk(&c);
+                    chunk_times.push(t0.elapsed().as_secs_f64());
+                }
+                Some(lead) => {
+                    let t0 = Instant::now();
+                    let prepared = sh.handover(lead).map(|ho| planner.prepare(&ho, &c));
+                    plan_times.push(t0.elapsed().as_secs_f64());
+                    if let Some(Ok(p)) = prepared {
+                        let t0 = Instant::now();
+                        if sh.offer(p).is_ok() {
+                            offers += 1;
+                        }
+                        chunk_times.push(t0.elapsed().as_secs_f64());
+                    }
+                }
+            }
         }
         let m =
             HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
@@ -304,8 +363,28 @@ fn run_walking_scenario(
         times.push(real);
         work.push(fastest.min(real));
         notes.push(note(k % 200, cmd));
+        let st = sh.offer_state();
+        if st != last_state {
+            taken += matches!(st, crate::shield::OfferState::Taken(_)) as usize;
+            last_state = st;
+        }
     }
-    stats(name, times, work, &notes, chunk_times)
+    let mut out = stats(name, times, work, &notes, chunk_times);
+    if offloop.is_some() {
+        plan_times.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            plan_times
+                .get(((plan_times.len().max(1) - 1) as f64 * p).round() as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        out.plan_median = q(0.5);
+        out.plan_p99 = q(0.99);
+        out.plan_max = plan_times.last().copied().unwrap_or(0.0);
+        out.offers = offers;
+        out.offers_taken = taken;
+    }
+    out
 }
 
 /// Position (m) and velocity (m/s) of a ball rolling back and forth on the table in front of the
@@ -328,6 +407,7 @@ pub fn shield_objects_scenario(steps: usize) -> StepStats {
         FilterMode::Pacs,
         ChunkMotion::Stop,
         steps,
+        None,
         |sh| {
             assert_eq!(
                 sh.add_object(ball, ObjectContact::NoContact).ok(),

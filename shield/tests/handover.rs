@@ -685,3 +685,20 @@ fn chunks_of_tiny_moves_from_rest_plan() {
         assert!(traj.is_ok(), "case {i}: {:?}", traj.err());
     }
 }
+
+/// The bench's off-loop scenario exercises what it reports: every chunk is offered and nearly
+/// every offer is taken over (counts only; the times are measured by `pacs bench shield`).
+#[test]
+fn the_offloop_bench_scenario_offers_and_takes_over() {
+    use pacs_shield::shield::FilterMode;
+    let s = pacs_shield::bench::shield_scenario_offloop("sorting", FilterMode::Pacs, 3, 2000);
+    assert_eq!(s.steps, 2000);
+    assert_eq!(s.offers, 10, "a chunk every 200 steps");
+    assert!(
+        s.offers_taken >= 9,
+        "{} of {} taken over",
+        s.offers_taken,
+        s.offers
+    );
+    assert!(s.plan_max > 0.0 && s.chunk_max > 0.0);
+}
