@@ -269,10 +269,15 @@ fn bad_mcap_input_exits_3_naming_file_offset_and_problem() {
 /// its pacs header in `examples/logs/clean_sorting_header.json`, not in the file). Rewrite it
 /// with `cargo test --test cli_audit_mcap -- --ignored regenerate`.
 fn shipped_mcap() -> Vec<u8> {
+    use pacs_log::RecordReader;
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(root.join("examples/logs/clean_sorting.jsonl")).unwrap();
-    let mut lines = text.lines();
-    let header: Header = serde_json::from_str(lines.next().unwrap()).unwrap();
+    let path = root.join("examples/logs/clean_sorting.jsonl");
+    let mut reader = pacs_log::jsonl::JsonlReader::new(
+        "clean_sorting.jsonl",
+        std::io::BufReader::new(std::fs::File::open(&path).unwrap()),
+    )
+    .unwrap();
+    let header = reader.header().clone();
     let mut m = McapLogWriter::new(
         Cursor::new(Vec::new()),
         mcap::WriteOptions::new(),
@@ -281,41 +286,8 @@ fn shipped_mcap() -> Vec<u8> {
         &JOINTS,
     )
     .unwrap();
-    let ns = |t: f64| (t * 1e9).round() as i128;
-    for l in lines {
-        let v: Value = serde_json::from_str(l).unwrap();
-        let t = v["t"].as_f64().unwrap();
-        let arr = |k: &str| -> Vec<f64> {
-            v[k].as_array()
-                .map(|a| a.iter().map(|x| x.as_f64().unwrap()).collect())
-                .unwrap_or_default()
-        };
-        match v["type"].as_str().unwrap() {
-            "robot" => {
-                let dq = arr("dq");
-                m.write_robot(ns(t), ns(t), &arr("q"), (!dq.is_empty()).then_some(&dq[..]))
-                    .unwrap();
-            }
-            "human" => {
-                let kp: Vec<[f64; 3]> = v["positions"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|p| {
-                        let p = p.as_array().unwrap();
-                        [
-                            p[0].as_f64().unwrap(),
-                            p[1].as_f64().unwrap(),
-                            p[2].as_f64().unwrap(),
-                        ]
-                    })
-                    .collect();
-                let t_meas = v["t_meas"].as_f64().unwrap_or(t);
-                m.write_human(ns(t), ns(t_meas), &kp).unwrap();
-            }
-            "event" => m.write_event(ns(t), v["name"].as_str().unwrap()).unwrap(),
-            other => panic!("record type {other}"),
-        }
+    while let Some(rec) = reader.next_record().unwrap() {
+        m.write_record(&rec).unwrap();
     }
     let with_header = m.finish().unwrap().into_inner();
     // Ship it without the metadata record: the header comes from --header, as for a recording

@@ -499,39 +499,11 @@ fn the_library_writer_round_trips() {
         &names,
     )
     .unwrap();
-    for line in text.lines().skip(1) {
-        let v: serde_json::Value = serde_json::from_str(line).unwrap();
-        let ns = |x: &serde_json::Value| (x.as_f64().unwrap() * 1e9).round() as i128;
-        let f = |x: &serde_json::Value| -> Vec<f64> {
-            x.as_array()
-                .unwrap()
-                .iter()
-                .map(|y| y.as_f64().unwrap())
-                .collect()
-        };
-        match v["type"].as_str().unwrap() {
-            "robot" => {
-                let dq = v.get("dq").map(f);
-                w.write_robot(ns(&v["t"]), ns(&v["t"]), &f(&v["q"]), dq.as_deref())
-                    .unwrap();
-            }
-            "human" => {
-                let kp: Vec<[f64; 3]> = v["positions"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|p| {
-                        let p = f(p);
-                        [p[0], p[1], p[2]]
-                    })
-                    .collect();
-                w.write_human(ns(&v["t_meas"]), ns(&v["t"]), &kp).unwrap();
-            }
-            "event" => w
-                .write_event(ns(&v["t"]), v["name"].as_str().unwrap())
-                .unwrap(),
-            o => panic!("{o}"),
-        }
+    let mut reader =
+        pacs_log::jsonl::JsonlReader::new("t.jsonl", std::io::Cursor::new(text.as_bytes()))
+            .unwrap();
+    while let Some(rec) = pacs_log::RecordReader::next_record(&mut reader).unwrap() {
+        w.write_record(&rec).unwrap();
     }
     let bytes = w.finish().unwrap().into_inner();
     same_result(

@@ -28,31 +28,10 @@ fn opt(v: Option<f64>, unit: &str) -> String {
         .unwrap_or_else(|| "n/a".into())
 }
 
-/// The effective settings as a two-column table (nested tables as `key.sub`).
+/// The effective settings as a two-column table.
 fn settings_table(s: &mut String, settings: &serde_json::Value) {
-    fn rows(prefix: &str, v: &serde_json::Value, out: &mut Vec<(String, String)>) {
-        match v {
-            serde_json::Value::Object(m) => {
-                for (k, x) in m {
-                    let key = if prefix.is_empty() {
-                        k.clone()
-                    } else {
-                        format!("{prefix}.{k}")
-                    };
-                    rows(&key, x, out);
-                }
-            }
-            serde_json::Value::Null => out.push((prefix.into(), "from the log header".into())),
-            other => out.push((
-                prefix.into(),
-                other.to_string().trim_matches('"').to_string(),
-            )),
-        }
-    }
-    let mut r = Vec::new();
-    rows("", settings, &mut r);
     s.push_str("<table><tr><th>setting</th><th>value</th></tr>");
-    for (k, v) in r {
+    for (k, v) in crate::settings_rows(settings) {
         let _ = write!(
             s,
             "<tr><td><code>{}</code></td><td>{}</td></tr>",

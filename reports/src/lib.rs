@@ -172,6 +172,33 @@ pub fn definitions() -> Value {
     })
 }
 
+/// The effective settings as (name, value) rows for the report tables: nested tables as
+/// `table.key`, unset model overrides as "from the log header".
+pub fn settings_rows(settings: &Value) -> Vec<(String, String)> {
+    fn rows(prefix: &str, v: &Value, out: &mut Vec<(String, String)>) {
+        match v {
+            Value::Object(m) => {
+                for (k, x) in m {
+                    let key = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    rows(&key, x, out);
+                }
+            }
+            Value::Null => out.push((prefix.into(), "from the log header".into())),
+            other => out.push((
+                prefix.into(),
+                other.to_string().trim_matches('"').to_string(),
+            )),
+        }
+    }
+    let mut out = Vec::new();
+    rows("", settings, &mut out);
+    out
+}
+
 /// A constraint kind as assessors write it.
 pub fn constraint_name(k: pacs_audit::ConstraintKind) -> &'static str {
     match k {

@@ -27,15 +27,8 @@ pub fn report(input: &ReportInput) -> String {
         let _ = writeln!(s, "- Config: defaults");
     }
     let _ = writeln!(s, "\n| setting | value |\n|---|---|");
-    if let Some(m) = input.settings.as_object() {
-        for (k, v) in m {
-            let v = if v.is_null() {
-                "from the log header".to_string()
-            } else {
-                v.to_string()
-            };
-            let _ = writeln!(s, "| `{k}` | {} |", v.trim_matches('"'));
-        }
+    for (k, v) in crate::settings_rows(&input.settings) {
+        let _ = writeln!(s, "| `{k}` | {v} |");
     }
     let _ = writeln!(s);
     let _ = writeln!(s, "## Summary\n");

@@ -517,16 +517,10 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         8.5,
         Font::Regular,
     );
-    let mut rows = Vec::new();
-    if let Some(m) = input.settings.as_object() {
-        for (k, v) in m {
-            let v = match v {
-                serde_json::Value::Null => "from the log header".to_string(),
-                other => other.to_string().trim_matches('"').to_string(),
-            };
-            rows.push(vec![mono(k.clone()), reg(v)]);
-        }
-    }
+    let rows: Vec<Vec<(String, Font)>> = crate::settings_rows(&input.settings)
+        .into_iter()
+        .map(|(k, v)| vec![mono(k), reg(v)])
+        .collect();
     d.table(&["setting", "value"], &[0.3, 0.7], &rows, 8.0);
     d.heading("Summary", 12.0);
     let rows: Vec<Vec<(String, Font)>> = input

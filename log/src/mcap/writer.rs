@@ -139,6 +139,32 @@ impl<W: Write + Seek> McapLogWriter<W> {
         self.put(channel, log_time, &data)
     }
 
+    /// A log record as the ROS 2 message a recording of it would hold (times in s become ns;
+    /// robot samples stamped at their log time, measurements at their measurement time).
+    /// Accelerations and shield diagnostics have no message here and are skipped; an object
+    /// record needs its id among the config's `object_topics`.
+    pub fn write_record(&mut self, rec: &crate::format::Record<'_>) -> Result<(), McapWriteError> {
+        use crate::format::Record;
+        let ns = |t: f64| (t * 1e9).round() as i128;
+        match *rec {
+            Record::Robot { t, q, dq, .. } => self.write_robot(ns(t), ns(t), q, dq),
+            Record::Human {
+                t,
+                t_meas,
+                positions,
+            } => self.write_human(ns(t_meas), ns(t), positions),
+            Record::Object {
+                t,
+                t_meas,
+                id,
+                position,
+                ..
+            } => self.write_object(id, ns(t_meas), ns(t), position),
+            Record::Event { t, name } => self.write_event(ns(t), name),
+            Record::Shield { .. } => Ok(()),
+        }
+    }
+
     /// An event logged at `log_time` (ns).
     pub fn write_event(&mut self, log_time: i128, name: &str) -> Result<(), McapWriteError> {
         let data = CdrWriter::string_msg(name);
