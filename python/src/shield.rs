@@ -532,7 +532,7 @@ impl Handle {
     }
 
     /// Safety steps between a handover's prediction and the step that takes the chunk over:
-    /// twice the longest planning time seen, plus one step (at least 2).
+    /// twice the recent longest planning time (decaying per chunk), plus one step (at least 2).
     fn lead(&self) -> usize {
         let plan_s = self.plan_us.load(Ordering::Relaxed) as f64 * 1e-6;
         ((2.0 * plan_s / self.safety_step).ceil() as usize + 1).clamp(2, MAX_LEAD)
