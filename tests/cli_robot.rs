@@ -245,6 +245,59 @@ fn urdf_robots_in_headers_configs_and_inputs_resolve_against_their_file() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    // The config's robot is read, relative to the config file: a wrong path is named.
+    std::fs::write(
+        sub.join("audit_bad.toml"),
+        "robot = { urdf = \"model/nope.urdf\" }\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "audit",
+        "--config",
+        "run/audit_bad.toml",
+        &root
+            .join("examples/logs/clean_sorting.jsonl")
+            .display()
+            .to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("run/model/nope.urdf"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // An MCAP recording whose embedded header names the URDF relative to the MCAP file.
+    {
+        use pacs_log::RecordReader;
+        use pacs_log::mcap::{McapConfig, McapLogWriter};
+        let mut reader = pacs_log::jsonl::JsonlReader::new(
+            "run.jsonl",
+            std::io::BufReader::new(std::fs::File::open(sub.join("run.jsonl")).unwrap()),
+        )
+        .unwrap();
+        let mut header = reader.header().clone();
+        header.robot = serde_json::from_str(urdf_ref).unwrap();
+        let joints: Vec<String> = (1..=7).map(|i| format!("fr3_joint{i}")).collect();
+        let joints: Vec<&str> = joints.iter().map(String::as_str).collect();
+        let mut w = McapLogWriter::new(
+            std::io::Cursor::new(Vec::new()),
+            mcap::WriteOptions::new(),
+            &header,
+            &McapConfig::default(),
+            &joints,
+        )
+        .unwrap();
+        while let Some(rec) = reader.next_record().unwrap() {
+            w.write_record(&rec).unwrap();
+        }
+        std::fs::write(sub.join("run.mcap"), w.finish().unwrap().into_inner()).unwrap();
+    }
+    let o = run(&["audit", "run/run.mcap"]);
+    assert!(
+        matches!(o.status.code(), Some(0..=2)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // A CLI input (fk) naming the URDF relative to the input file.
     std::fs::write(
         sub.join("fk.json"),

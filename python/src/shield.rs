@@ -35,10 +35,6 @@ const MAX_LEAD: usize = 200;
 /// Measurements waiting for a step at or after their time stamp (per queue).
 const MAX_PENDING: usize = 4096;
 
-/// How far (s) a step time may be from the previous step plus one safety step (float
-/// rounding of `k·α_s`; at least 8 ulps of t).
-const STEP_TOLERANCE: f64 = 1e-9;
-
 /// Everything a shield needs between calls.
 pub struct Inner {
     pub shield: Shield,
@@ -194,7 +190,7 @@ impl Inner {
         }
         let alpha = self.shield.config().safety_step;
         // Float rounding of t = t_0 + k·α_s grows with |t| (a Unix-time t_0 has ulps of 2e-7 s).
-        let tol = STEP_TOLERANCE.max(8.0 * f64::EPSILON * t.abs());
+        let tol = pacs_shield::shield::time_tolerance(t);
         match self.last_t {
             Some(last) if (t - (last + alpha)).abs() > tol => {
                 return Err((

@@ -138,3 +138,35 @@ def test_realtime_priority_is_checked_and_reported(demo):
     # Granted (root or CAP_SYS_NICE) or refused with the reason; the loop runs either way.
     assert st["rt_priority"] == 10 or "refused" in st["rt_priority_error"], st
     assert st["steps"] > 0 and st["max_late_us"] >= 0.0
+
+
+def test_concurrent_set_chunk_calls_get_their_own_serials(demo):
+    """Python threads handing chunks to one running loop at once: each call returns the serial
+    of its own chunk (hand-overs are serialized per shield), all distinct."""
+    import threading
+
+    s = pacs.Shield(config={"chunk_motion": "continuous"})
+    s.start(0.0, demo.start)
+    s.measure(0.0, far_human(demo))
+    serials, errors = [], []
+
+    def worker(loop):
+        for _ in range(4):
+            try:
+                c = loop.latest()
+                q = c.q if c is not None else demo.start
+                deltas, h = demo.chunk(q)
+                serials.append(loop.set_chunk(deltas, h=h))
+            except Exception as e:  # noqa: BLE001 - reported below
+                errors.append(e)
+
+    with pacs.ShieldLoop(s, realtime=True) as loop:
+        threads = [threading.Thread(target=worker, args=(loop,)) for _ in range(6)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        p = loop.progress()
+    assert not errors, errors
+    assert sorted(serials) == list(range(1, 25)), serials
+    assert p["accepted"] == 24

@@ -412,11 +412,7 @@ fn marker(
         color: color(MARKER),
         text: format!(
             "{} {} on {} ({:.2}–{:.2} s)",
-            match v.constraint {
-                pacs_audit::ConstraintKind::Ssm => "SSM",
-                pacs_audit::ConstraintKind::Pfl => "PFL",
-                pacs_audit::ConstraintKind::NoContact => "no contact",
-            },
+            v.constraint.label(),
             v.body_part,
             v.link,
             v.t_start,

@@ -1,8 +1,7 @@
 //! `report.html`: one self-contained file (inline CSS and SVG, no scripts), readable when printed.
 
 use crate::{
-    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing,
-    constraint_name, model_specs, overall, svg,
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg,
 };
 use pacs_audit::Verdict;
 use std::fmt::Write;
@@ -42,43 +41,17 @@ fn settings_table(s: &mut String, settings: &serde_json::Value) {
     s.push_str("</table>");
 }
 
-/// A run's models: names, the parameters an assessor checks first, and the SHA-256 of each
-/// model's full parameters (in report.json `model_parameters`).
+/// A run's models with their parameters and hashes ([`crate::model_rows`]).
 fn models_table(s: &mut String, r: &pacs_audit::RunResult) {
-    let specs = model_specs(r);
-    let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("–").to_string();
-    let m = &r.models;
-    let fmt = |v: &[f64]| {
-        v.iter()
-            .map(|x| format!("{x}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
     s.push_str("<table><tr><th>model</th><th>name</th><th>parameters</th><th>SHA-256 of the parameters</th></tr>");
-    let _ = write!(
-        s,
-        "<tr><td>robot</td><td><code>{}</code></td><td>v_max (rad/s): {}<br>a_max (rad/s²): {}</td><td><code class=\"hash\">{}</code></td></tr>",
-        esc(&m.robot),
-        fmt(&m.robot_v_max),
-        fmt(&m.robot_a_max),
-        hash("robot")
-    );
-    let _ = write!(
-        s,
-        "<tr><td>human</td><td><code>{}</code></td><td>keypoint speeds (m/s): {}<br>position error {} m, delay {} s</td><td><code class=\"hash\">{}</code></td></tr>",
-        esc(&m.human),
-        fmt(&m.human_v_max),
-        m.human_measurement_error_pos,
-        m.human_delay,
-        hash("human")
-    );
-    let _ = write!(
-        s,
-        "<tr><td>constraints</td><td><code>{}</code></td><td>{} environment capsule(s)</td><td><code class=\"hash\">{}</code></td></tr>",
-        esc(&m.constraints),
-        m.environment_shapes,
-        hash("constraints")
-    );
+    for [model, name, params, hash] in crate::model_rows(r) {
+        let _ = write!(
+            s,
+            "<tr><td>{model}</td><td><code>{}</code></td><td>{}</td><td><code class=\"hash\">{hash}</code></td></tr>",
+            esc(&name),
+            esc(&params)
+        );
+    }
     s.push_str("</table>");
 }
 
@@ -174,28 +147,32 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         if r.violations.is_empty() {
             s.push_str("<p>No violations.</p>");
         } else {
-            s.push_str("<table><tr><th class=\"num\">from (s)</th><th class=\"num\">to (s)</th><th>constraint</th><th>body part</th><th>link</th><th class=\"num\">nominal separation (m)³</th><th class=\"num\">energy bound (J)</th><th class=\"num\">threshold (J)</th><th>clamped</th><th>certain⁴</th></tr>");
+            s.push_str("<table><tr>");
+            for (i, h) in crate::VIOLATION_COLUMNS.iter().enumerate() {
+                let mark = match i {
+                    5 => "³",
+                    9 => "⁴",
+                    _ => "",
+                };
+                let class = if matches!(i, 0 | 1 | 5 | 6 | 7) {
+                    " class=\"num\""
+                } else {
+                    ""
+                };
+                let _ = write!(s, "<th{class}>{h}{mark}</th>");
+            }
+            s.push_str("</tr>");
             for v in &r.violations {
-                let pfl = v.constraint == pacs_audit::ConstraintKind::Pfl;
-                let num = |x: f64| if pfl { format!("{x:.4}") } else { "–".into() };
-                let _ = write!(
-                    s,
-                    "<tr><td class=\"num\">{:.4}</td><td class=\"num\">{:.4}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
-                    v.t_start,
-                    v.t_end,
-                    constraint_name(v.constraint),
-                    esc(&v.body_part),
-                    esc(&v.link),
-                    if v.min_separation.is_finite() {
-                        format!("{:.4}", v.min_separation)
+                s.push_str("<tr>");
+                for (i, c) in crate::violation_cells(v).iter().enumerate() {
+                    let class = if matches!(i, 0 | 1 | 5 | 6 | 7) {
+                        " class=\"num\""
                     } else {
-                        "–".into()
-                    },
-                    num(v.energy),
-                    num(v.threshold),
-                    if v.constrained { "yes" } else { "no" },
-                    if v.certain { "yes" } else { "possible" }
-                );
+                        ""
+                    };
+                    let _ = write!(s, "<td{class}>{}</td>", esc(c));
+                }
+                s.push_str("</tr>");
             }
             s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part over the interval (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does.</p>");
         }

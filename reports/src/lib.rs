@@ -200,12 +200,100 @@ pub fn settings_rows(settings: &Value) -> Vec<(String, String)> {
 }
 
 /// A constraint kind as assessors write it.
-pub fn constraint_name(k: pacs_audit::ConstraintKind) -> &'static str {
-    match k {
-        pacs_audit::ConstraintKind::Ssm => "SSM (no contact while moving)",
-        pacs_audit::ConstraintKind::Pfl => "PFL (energy limit)",
-        pacs_audit::ConstraintKind::NoContact => "no contact",
-    }
+pub fn constraint_name(k: pacs_audit::ConstraintKind) -> String {
+    let what = match k {
+        pacs_audit::ConstraintKind::Ssm => "no contact while moving",
+        pacs_audit::ConstraintKind::Pfl => "energy limit",
+        pacs_audit::ConstraintKind::NoContact => "never touched",
+    };
+    format!("{} ({what})", k.label())
+}
+
+/// The models of a run as report rows: model, name, the parameters an assessor checks first,
+/// and the SHA-256 of the model's full parameters ([`model_specs`]). HTML, PDF and Markdown
+/// print these.
+pub fn model_rows(r: &RunResult) -> Vec<[String; 4]> {
+    let specs = model_specs(r);
+    let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("-").to_string();
+    let m = &r.models;
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    vec![
+        [
+            "robot".into(),
+            m.robot.clone(),
+            format!(
+                "v_max (rad/s): {}; a_max (rad/s²): {}",
+                list(&m.robot_v_max),
+                list(&m.robot_a_max)
+            ),
+            hash("robot"),
+        ],
+        [
+            "human".into(),
+            m.human.clone(),
+            format!(
+                "keypoint speeds (m/s): {}; position error {} m; delay {} s",
+                list(&m.human_v_max),
+                m.human_measurement_error_pos,
+                m.human_delay
+            ),
+            hash("human"),
+        ],
+        [
+            "constraints".into(),
+            m.constraints.clone(),
+            format!("{} environment capsule(s)", m.environment_shapes),
+            hash("constraints"),
+        ],
+    ]
+}
+
+/// The column heads of [`violation_cells`].
+pub const VIOLATION_COLUMNS: [&str; 10] = [
+    "from (s)",
+    "to (s)",
+    "constraint",
+    "body part",
+    "link",
+    "nominal separation (m)",
+    "energy bound (J)",
+    "threshold (J)",
+    "clamped",
+    "certain",
+];
+
+/// A violation interval as report cells ([`VIOLATION_COLUMNS`]): energies only for PFL (`-`
+/// otherwise), the nominal separation (`-` when not computed), certain or possible.
+pub fn violation_cells(v: &pacs_audit::Violation) -> [String; 10] {
+    let pfl = v.constraint == pacs_audit::ConstraintKind::Pfl;
+    let num = |x: f64| {
+        if pfl && x.is_finite() {
+            format!("{x:.4}")
+        } else {
+            "-".into()
+        }
+    };
+    [
+        format!("{:.4}", v.t_start),
+        format!("{:.4}", v.t_end),
+        constraint_name(v.constraint),
+        v.body_part.clone(),
+        v.link.clone(),
+        if v.min_separation.is_finite() {
+            format!("{:.4}", v.min_separation)
+        } else {
+            "-".into()
+        },
+        num(v.energy),
+        num(v.threshold),
+        if v.constrained { "yes" } else { "no" }.into(),
+        if v.certain { "yes" } else { "possible" }.into(),
+    ]
 }
 
 /// Overall verdict of the runs.

@@ -1,8 +1,7 @@
 //! `report.md`: the same content as the HTML report, without plots.
 
 use crate::{
-    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, constraint_name, definitions,
-    model_specs, overall,
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, definitions, overall,
 };
 use std::fmt::Write;
 
@@ -84,40 +83,25 @@ pub fn report(input: &ReportInput) -> String {
     }
     for r in input.runs {
         let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);
-        let specs = model_specs(r);
-        let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("-").to_string();
         let _ = writeln!(
             s,
-            "Models (SHA-256 of the parameters, full parameters in report.json): robot `{}` (`{}`), human `{}` (`{}`), constraints `{}` (`{}`).\n",
-            r.models.robot,
-            hash("robot"),
-            r.models.human,
-            hash("human"),
-            r.models.constraints,
-            hash("constraints")
+            "| model | name | parameters (all in report.json) | SHA-256 of the parameters |\n|---|---|---|---|"
         );
+        for [model, name, params, hash] in crate::model_rows(r) {
+            let _ = writeln!(s, "| {model} | `{name}` | {params} | `{hash}` |");
+        }
+        let _ = writeln!(s);
         if r.violations.is_empty() {
             let _ = writeln!(s, "No violations.");
         } else {
             let _ = writeln!(
                 s,
-                "| from (s) | to (s) | constraint | body part | link | nominal separation (m) | energy bound (J) | threshold (J) | clamped | certain |\n|---|---|---|---|---|---|---|---|---|---|"
+                "| {} |\n|{}",
+                crate::VIOLATION_COLUMNS.join(" | "),
+                "---|".repeat(crate::VIOLATION_COLUMNS.len())
             );
             for v in &r.violations {
-                let _ = writeln!(
-                    s,
-                    "| {:.4} | {:.4} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {} | {} |",
-                    v.t_start,
-                    v.t_end,
-                    constraint_name(v.constraint),
-                    v.body_part,
-                    v.link,
-                    v.min_separation,
-                    v.energy,
-                    v.threshold,
-                    if v.constrained { "yes" } else { "no" },
-                    if v.certain { "yes" } else { "possible" }
-                );
+                let _ = writeln!(s, "| {} |", crate::violation_cells(v).join(" | "));
             }
             let _ = writeln!(
                 s,

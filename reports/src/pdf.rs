@@ -6,8 +6,8 @@
 
 use crate::svg::{fmt_tick, has_threshold, ticks};
 use crate::{
-    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing,
-    constraint_name, definitions, model_specs, overall,
+    GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, definitions,
+    overall,
 };
 use pacs_audit::verdict::SeriesPoint;
 use std::fmt::Write;
@@ -606,44 +606,10 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
             &format!("{}: {}", r.log, format!("{:?}", r.verdict).to_uppercase()),
             11.0,
         );
-        let specs = model_specs(r);
-        let hash = |k: &str| specs[k]["sha256"].as_str().unwrap_or("-").to_string();
-        let m = &r.models;
-        let list = |v: &[f64]| {
-            v.iter()
-                .map(|x| format!("{x}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let rows = vec![
-            vec![
-                reg("robot"),
-                reg(m.robot.clone()),
-                reg(format!(
-                    "v_max (rad/s): {}; a_max (rad/s²): {}",
-                    list(&m.robot_v_max),
-                    list(&m.robot_a_max)
-                )),
-                mono(hash("robot")),
-            ],
-            vec![
-                reg("human"),
-                reg(m.human.clone()),
-                reg(format!(
-                    "keypoint speeds (m/s): {}; position error {} m; delay {} s",
-                    list(&m.human_v_max),
-                    m.human_measurement_error_pos,
-                    m.human_delay
-                )),
-                mono(hash("human")),
-            ],
-            vec![
-                reg("constraints"),
-                reg(m.constraints.clone()),
-                reg(format!("{} environment capsule(s)", m.environment_shapes)),
-                mono(hash("constraints")),
-            ],
-        ];
+        let rows: Vec<Vec<(String, Font)>> = crate::model_rows(r)
+            .into_iter()
+            .map(|[model, name, params, hash]| vec![reg(model), reg(name), reg(params), mono(hash)])
+            .collect();
         d.table(
             &[
                 "model",
@@ -678,39 +644,13 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
                 .violations
                 .iter()
                 .take(SHOWN)
-                .map(|v| {
-                    let pfl = v.constraint == pacs_audit::ConstraintKind::Pfl;
-                    let num = |x: f64| if pfl { format!("{x:.4}") } else { "-".into() };
-                    vec![
-                        reg(format!("{:.4}", v.t_start)),
-                        reg(format!("{:.4}", v.t_end)),
-                        reg(constraint_name(v.constraint)),
-                        reg(v.body_part.clone()),
-                        reg(v.link.clone()),
-                        reg(if v.min_separation.is_finite() {
-                            format!("{:.4}", v.min_separation)
-                        } else {
-                            "-".into()
-                        }),
-                        reg(num(v.energy)),
-                        reg(num(v.threshold)),
-                        reg(if v.certain { "certain" } else { "possible" }),
-                    ]
-                })
+                .map(|v| crate::violation_cells(v).into_iter().map(reg).collect())
                 .collect();
+            let mut heads = crate::VIOLATION_COLUMNS;
+            heads[5] = "nominal separation (m) (3)";
             d.table(
-                &[
-                    "from (s)",
-                    "to (s)",
-                    "constraint",
-                    "body part",
-                    "link",
-                    "nominal separation (m) (3)",
-                    "energy bound (J)",
-                    "threshold (J)",
-                    "certain?",
-                ],
-                &[0.08, 0.08, 0.17, 0.12, 0.12, 0.13, 0.1, 0.1, 0.1],
+                &heads,
+                &[0.07, 0.07, 0.16, 0.1, 0.1, 0.12, 0.1, 0.1, 0.08, 0.1],
                 &rows,
                 7.0,
             );

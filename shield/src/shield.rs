@@ -129,6 +129,12 @@ impl Default for ShieldConfig {
 
 pub use pacs_verify::iso15066::EnvShape;
 
+/// How far (s) a step time may be from the expected grid time `t` (float rounding of
+/// `t_0 + k·α_s`): 1 ns, or 8 ulps of `t` for large (e.g. Unix-time) clocks.
+pub fn time_tolerance(t: f64) -> f64 {
+    1e-9_f64.max(8.0 * f64::EPSILON * t.abs())
+}
+
 /// Errors of shield construction and chunk handling.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ShieldError {

@@ -99,6 +99,15 @@ pub enum ConstraintKind {
 }
 
 impl ConstraintKind {
+    /// The short name assessors use: `SSM`, `PFL`, `no contact`.
+    pub fn label(self) -> &'static str {
+        match self {
+            ConstraintKind::Ssm => "SSM",
+            ConstraintKind::Pfl => "PFL",
+            ConstraintKind::NoContact => "no contact",
+        }
+    }
+
     /// The kind of an object's contact constraint.
     pub fn of_object(c: pacs_models::object::ObjectContact) -> Self {
         match c {

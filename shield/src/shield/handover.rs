@@ -208,7 +208,7 @@ impl Shield {
         }
         // Trajectories replaced in earlier steps are dropped here, outside the step.
         self.spare = None;
-        let tol = 1e-9_f64.max(8.0 * f64::EPSILON * self.time.abs());
+        let tol = super::time_tolerance(self.time);
         if same_state(&self.state(), &chunk.handover.start, self.dof) {
             self.take_over(chunk.traj);
             self.pending = None;
@@ -246,7 +246,7 @@ impl Shield {
     /// free (a dropped or replaced trajectory waits in `spare`).
     pub(super) fn take_offer(&mut self, t: f64) {
         let Some(p) = &self.pending else { return };
-        let tol = 1e-9_f64.max(8.0 * f64::EPSILON * t.abs());
+        let tol = super::time_tolerance(t);
         if same_state(&self.state(), &p.handover.start, self.dof) {
             let p = self.pending.take().expect("checked above");
             self.take_over(p.traj);

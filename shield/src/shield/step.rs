@@ -102,8 +102,9 @@ impl Shield {
         })
     }
 
-    /// Whether the commanded joint velocity and acceleration are exactly zero.
-    fn at_rest(&self) -> bool {
+    /// Whether the commanded joint velocity and acceleration are exactly zero (a chunk planned
+    /// from the current state then stays valid until a step verifies the old path).
+    pub fn at_rest(&self) -> bool {
         let st = self.state();
         st.dq[..self.dof]
             .iter()
