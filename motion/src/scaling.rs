@@ -31,6 +31,14 @@ pub struct PathState {
 }
 
 impl PathState {
+    /// Bitwise equality of all three fields (a copy equals its original even where a field is
+    /// NaN, which `==` would deny): what "the same state" means in the shield's proofs.
+    pub fn same_bits(&self, other: &Self) -> bool {
+        self.s.to_bits() == other.s.to_bits()
+            && self.sd.to_bits() == other.sd.to_bits()
+            && self.sdd.to_bits() == other.sdd.to_bits()
+    }
+
     /// On the intended timing at `s` (ṡ = 1, s̈ = 0).
     pub fn intended(s: f64) -> Self {
         Self {
@@ -199,6 +207,32 @@ impl SpeedProfile {
             p.sdd = 0.0;
         }
         p
+    }
+
+    /// Bitwise equality of every field (phases, settle time, target, limits): a copy equals its
+    /// original even where a field is NaN, which `==` would deny.
+    pub fn same_bits(&self, other: &Self) -> bool {
+        let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
+        if self.n != other.n
+            || !same(self.settle, other.settle)
+            || !same(self.target, other.target)
+            || !same(self.acc, other.acc)
+            || !same(self.jerk, other.jerk)
+        {
+            return false;
+        }
+        for k in 0..self.phases.len() {
+            let (a, b) = (&self.phases[k], &other.phases[k]);
+            if !(same(a.t0, b.t0)
+                && same(a.s, b.s)
+                && same(a.sd, b.sd)
+                && same(a.sdd, b.sdd)
+                && same(a.jerk, b.jerk))
+            {
+                return false;
+            }
+        }
+        true
     }
 
     /// Time (s, relative) at which the target speed is reached.

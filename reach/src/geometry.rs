@@ -19,8 +19,14 @@ use pacs_models::Capsule;
 const DOT_REL: f64 = 1e-15;
 
 /// Lower and upper bounds of the exact dot product `n·a` of two f64 vectors.
+///
+/// # Soundness
+/// Claim C2: `lo ≤ n·a ≤ hi` exactly, for finite `n`, `a` without overflow (a three-term dot
+/// product is within γ₃·Σ|nᵢaᵢ| of the exact value; `DOT_REL` exceeds γ₃ with margin for the
+/// rounding of the bound, `MIN_POSITIVE` covers underflow). Harness `b1_dot_bounds_enclose`
+/// (beside this module).
 #[inline]
-fn dot_bounds(n: &Vector3<f64>, a: &Point3<f64>) -> (f64, f64) {
+pub(crate) fn dot_bounds(n: &Vector3<f64>, a: &Point3<f64>) -> (f64, f64) {
     let d = n.x * a.x + n.y * a.y + n.z * a.z;
     let mag = (n.x * a.x).abs() + (n.y * a.y).abs() + (n.z * a.z).abs();
     let err = mag * DOT_REL + f64::MIN_POSITIVE;
@@ -98,7 +104,34 @@ pub fn segment_distance_lower_bound(
     let (s, t) = closest_params(a0, a1, b0, b1);
     let p = a0 + (a1 - a0) * s;
     let q = b0 + (b1 - b0) * t;
-    let n = p - q;
+    separating_axis_lower_bound(&(p - q), a0, a1, b0, b1)
+}
+
+/// The separating-axis certificate along direction `n`: a lower bound (m, ≥ 0) of the exact
+/// distance between segments `a0a1` and `b0b1`, `(min_a n·a − max_b n·b) / |n|` over the
+/// endpoints, outward rounded; 0 when `n` is 0 or not finite, or the segments' projections
+/// overlap.
+///
+/// # Soundness
+/// Claim C2, for **every** direction `n` (the closest-point direction of
+/// [`segment_distance_lower_bound`] only makes it tight). Argument: every point `p` of `a0a1` is a
+/// convex combination of its ends, so `n·p ≥ min(n·a0, n·a1) ≥ min(a0l, a1l)` (the lower ends of
+/// [`dot_bounds`]); likewise `n·q ≤ max(b0h, b1h)` on `b0b1`; then `|p − q| ≥ n·(p − q)/|n| ≥
+/// gap/len` (Cauchy–Schwarz) where `gap ≤` the exact difference (`sub_down`) and `len ≥ |n|`
+/// (`norm3_up`), and `div_down` rounds the quotient down. The floating-point steps are proved
+/// one by one: `dot_bounds` by harness `b1_dot_bounds_enclose` (beside this module), `sub_down`
+/// by `a1_sub_enclose`, `div_down` by `a2_div_enclose`, `norm3_up` by `a3_norm_up_encloses`; the
+/// whole bound against sampled points for random directions by the twin
+/// `b1_separating_axis_any_direction` and, with the closest-point direction, by
+/// `b1_segment_distance_lower_bound` (`proofs/README.md`). Mutant `x7` caught.
+#[inline]
+pub fn separating_axis_lower_bound(
+    n: &Vector3<f64>,
+    a0: &Point3<f64>,
+    a1: &Point3<f64>,
+    b0: &Point3<f64>,
+    b1: &Point3<f64>,
+) -> f64 {
     if !(n.x.is_finite() && n.y.is_finite() && n.z.is_finite()) {
         return 0.0;
     }
@@ -106,10 +139,10 @@ pub fn segment_distance_lower_bound(
     if len == 0.0 || !len.is_finite() {
         return 0.0;
     }
-    let (a0l, _) = dot_bounds(&n, a0);
-    let (a1l, _) = dot_bounds(&n, a1);
-    let (_, b0h) = dot_bounds(&n, b0);
-    let (_, b1h) = dot_bounds(&n, b1);
+    let (a0l, _) = dot_bounds(n, a0);
+    let (a1l, _) = dot_bounds(n, a1);
+    let (_, b0h) = dot_bounds(n, b0);
+    let (_, b1h) = dot_bounds(n, b1);
     let gap = sub_down(a0l.min(a1l), b0h.max(b1h));
     if gap > 0.0 { div_down(gap, len) } else { 0.0 }
 }
@@ -138,8 +171,18 @@ pub fn segment_distance_upper_bound(
 /// A lower bound (m, ≥ 0) of the distance between two capsules' surfaces (0 if they may touch).
 #[inline]
 pub fn capsule_distance_lower_bound(a: &Capsule, b: &Capsule) -> f64 {
-    let d = segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
-    sub_down(d, add_up(a.radius(), b.radius())).max(0.0)
+    capsule_separation_lower_bound(a, b).max(0.0)
+}
+
+/// `d − (ra + rb)` rounded down: the margin of two capsules of radii `ra`, `rb` whose core
+/// segments are at least `d` apart.
+///
+/// # Soundness
+/// Claim C2: `≤ d − ra − rb` exactly, so a positive margin proves `d > ra + rb`. Harness
+/// `b2_capsule_margin_sound` (beside this module).
+#[inline]
+pub(crate) fn margin(d: f64, ra: f64, rb: f64) -> f64 {
+    sub_down(d, add_up(ra, rb))
 }
 
 /// The separation figure of two capsules (m): a lower bound of the distance between their core
@@ -149,14 +192,19 @@ pub fn capsule_distance_lower_bound(a: &Capsule, b: &Capsule) -> f64 {
 /// [`capsule_distance_lower_bound`] is this clamped at 0.
 pub fn capsule_separation_lower_bound(a: &Capsule, b: &Capsule) -> f64 {
     let d = segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
-    sub_down(d, add_up(a.radius(), b.radius()))
+    margin(d, a.radius(), b.radius())
 }
 
 /// True only if the capsules are provably disjoint (exact distance > sum of radii).
+///
+/// # Soundness
+/// Claim C2: given `d ≤` the exact segment distance (`segment_distance_lower_bound`), `true` only
+/// if `d > ra + rb` exactly. The rounding step is harness `b2_capsule_margin_sound` (beside this
+/// module); the whole test against touching capsules is the twin
+/// `b2_capsule_intersection_conservative`.
 #[inline]
 pub fn capsules_disjoint(a: &Capsule, b: &Capsule) -> bool {
-    let d = segment_distance_lower_bound(&a.p1(), &a.p2(), &b.p1(), &b.p2());
-    sub_down(d, add_up(a.radius(), b.radius())) > 0.0
+    capsule_separation_lower_bound(a, b) > 0.0
 }
 
 /// True unless the capsules are provably disjoint: touching counts as intersecting.
@@ -179,3 +227,7 @@ pub fn point_capsule_distance_lower_bound(p: &Point3<f64>, c: &Capsule) -> f64 {
 pub fn capsule_contains_point(c: &Capsule, p: &Point3<f64>) -> bool {
     segment_distance_upper_bound(p, p, &c.p1(), &c.p2()) <= c.radius()
 }
+
+/// The Kani proofs of this module, each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+mod proofs;

@@ -9,7 +9,7 @@
 
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
-use crate::rounding::{sqrt_down, sqrt_up};
+use crate::rounding::{mul_down, mul_up, sqrt_down, sqrt_up};
 
 /// A closed interval `[lo, hi]` of reals (`lo <= hi`, possibly infinite ends).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,8 +116,9 @@ impl Interval {
     /// float stays a point).
     ///
     /// # Soundness
-    /// Claim C1: contains `x·k` for every member `x`. Harness `a4_interval_scale_sqr_enclose`
-    /// (twin; Kani times out).
+    /// Claim C1: contains `x·k` for every member `x`. Kani: `a4_interval_scale_ends` (the ends
+    /// against `mul_down`/`mul_up`, which a2 proves exact bounds), `a4_interval_scale_point`;
+    /// property test `a4_interval_scale_sqr_enclose` (all beside this module).
     #[inline(always)]
     pub fn scale(self, x: f64) -> Interval {
         if self.lo == self.hi
@@ -125,12 +126,17 @@ impl Interval {
         {
             return Interval::point(p);
         }
-        let a = self.lo * x;
-        let b = self.hi * x;
-        if a.is_nan() || b.is_nan() {
+        if (self.lo * x).is_nan() || (self.hi * x).is_nan() {
             return Self::ENTIRE;
         }
-        Self::checked(a.min(b).next_down(), a.max(b).next_up())
+        // The outward-rounded products of the ends (claim C1 of `mul_down`/`mul_up`), the least
+        // and the greatest: `x·k` is linear in `x`, so its extremes over the members are at the
+        // ends. (Equal bit for bit to rounding the least/greatest nominal product: `next_down`
+        // and `next_up` are monotone.)
+        Self::checked(
+            mul_down(self.lo, x).min(mul_down(self.hi, x)),
+            mul_up(self.lo, x).max(mul_up(self.hi, x)),
+        )
     }
     /// Lower bound of `min |x|` over the interval (the mignitude; 0 if the interval holds 0).
     #[inline(always)]
@@ -152,8 +158,8 @@ impl Interval {
     /// Square (tighter than `x * x` when the interval straddles 0).
     ///
     /// # Soundness
-    /// Claim C1: contains `x²` for every member `x`. Harness `a4_interval_scale_sqr_enclose`
-    /// (twin; Kani times out).
+    /// Claim C1: contains `x²` for every member `x`. Kani: `a4_interval_sqr_cases` (the case
+    /// logic, on exact squares); property test `a4_interval_scale_sqr_enclose` (the rounding).
     #[inline]
     pub fn sqr(self) -> Interval {
         if self.lo >= 0.0 {
@@ -196,8 +202,8 @@ impl Add for Interval {
     /// Outward rounded; the sum of two points that is exactly a float stays a point.
     ///
     /// # Soundness
-    /// Claim C1: contains `x + y` for all members. Harness `a4_interval_add_sub_enclose` (twin;
-    /// Kani times out).
+    /// Claim C1: contains `x + y` for all members. Kani: `a4_interval_add_lower`,
+    /// `a4_interval_add_upper`; property test `a4_interval_add_sub_enclose`.
     #[inline(always)]
     fn add(self, o: Interval) -> Interval {
         if self.lo == self.hi
@@ -236,8 +242,9 @@ impl Mul for Interval {
     /// Outward rounded; a point operand uses [`Interval::scale`].
     ///
     /// # Soundness
-    /// Claim C1: contains `x·y` for all members. Harness `a4_interval_mul_enclose` (twin; Kani
-    /// times out); mutant `x3` caught.
+    /// Claim C1: contains `x·y` for all members. Kani: `a4_interval_mul_corners` (the ends
+    /// against `mul_down`/`mul_up` of every corner, which a2 proves exact bounds); property test
+    /// `a4_interval_mul_enclose`; mutant `x3` caught.
     #[inline(always)]
     fn mul(self, o: Interval) -> Interval {
         if self.lo == self.hi {
@@ -246,16 +253,21 @@ impl Mul for Interval {
         if o.lo == o.hi {
             return self.scale(o.lo);
         }
-        let a = self.lo * o.lo;
-        let b = self.lo * o.hi;
-        let c = self.hi * o.lo;
-        let d = self.hi * o.hi;
-        if a.is_nan() || b.is_nan() || c.is_nan() || d.is_nan() {
+        let (a, b, c, d) = (self.lo, self.hi, o.lo, o.hi);
+        if (a * c).is_nan() || (a * d).is_nan() || (b * c).is_nan() || (b * d).is_nan() {
             return Interval::ENTIRE;
         }
+        // The outward-rounded products of the four corners (claim C1 of `mul_down`/`mul_up`),
+        // the least and the greatest: `x·y` is bilinear, so its extremes over a box of members
+        // are at the corners. (Equal bit for bit to rounding the least/greatest nominal product:
+        // `next_down` and `next_up` are monotone.)
         Interval::checked(
-            a.min(b).min(c.min(d)).next_down(),
-            a.max(b).max(c.max(d)).next_up(),
+            mul_down(a, c)
+                .min(mul_down(a, d))
+                .min(mul_down(b, c).min(mul_down(b, d))),
+            mul_up(a, c)
+                .max(mul_up(a, d))
+                .max(mul_up(b, c).max(mul_up(b, d))),
         )
     }
 }

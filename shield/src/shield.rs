@@ -32,6 +32,7 @@ mod verification;
 pub use decision::{Candidate, Decision, VerifiedFailsafe, decide};
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::OccupancyIntervals;
+pub use verification::monitored_joint_boxes;
 
 use pacs_models::object::{ObjectContact, ObjectModel};
 use pacs_models::{Capsule, ConstraintSpec, HumanModel, RobotModel};

@@ -254,7 +254,10 @@ pub fn run_cases(name: &str, cases: usize, mut body: impl FnMut(&mut RandomSourc
 ///
 /// `harness!(name, unwind = N, cases = C, body)`; `harness!(name, unwind = N, bits = B, cases =
 /// C, body)` limits the Kani inputs to B significand bits (see [`KaniSource`]);
-/// `harness!(name, twin_only, cases = C, body)` emits only the property test (a composition too
+/// `harness!(name, unwind = N, bits = B, stub = (f => g), cases = C, body)` replaces `f` by `g`
+/// in the Kani proof (`#[kani::stub]`, run with `-Z stubbing`): `g` must over-approximate `f`
+/// (every result `f` can give, `g` can give), so a claim proved with `g` holds with `f`; the
+/// twin runs `f`. `harness!(name, twin_only, cases = C, body)` emits only the property test (a composition too
 /// large for the model checker, whose building blocks have proofs of their own; listed in
 /// `proofs/README.md`). `body` is a generic function
 /// `fn body<S: Source>(s: &mut S)` in the same module. The proof is the function `name`; the
@@ -263,6 +266,23 @@ pub fn run_cases(name: &str, cases: usize, mut body: impl FnMut(&mut RandomSourc
 #[macro_export]
 macro_rules! harness {
     ($name:ident, twin_only, cases = $cases:expr, $body:ident) => {
+        #[cfg(test)]
+        mod $name {
+            #[test]
+            fn property_test() {
+                $crate::run_cases(stringify!($name), $cases, |s| super::$body(s));
+            }
+        }
+    };
+    ($name:ident, unwind = $n:literal, bits = $bits:literal, stub = ($orig:path => $repl:path), cases = $cases:expr, $body:ident) => {
+        #[cfg(kani)]
+        #[kani::proof]
+        #[kani::unwind($n)]
+        #[kani::stub($orig, $repl)]
+        pub fn $name() {
+            $body(&mut $crate::KaniSource { bits: $bits });
+        }
+
         #[cfg(test)]
         mod $name {
             #[test]

@@ -3,11 +3,13 @@
 
 use crate::exact::dist3_le;
 use crate::{Source, harness};
+use nalgebra::Vector3;
 use nalgebra::{DVector, Point3};
 use pacs_models::Capsule;
 use pacs_reach::Interval;
 use pacs_reach::geometry::{
     capsule_distance_lower_bound, capsules_disjoint, segment_distance_lower_bound,
+    separating_axis_lower_bound,
 };
 use pacs_reach::rounding::{add_down, norm3_up};
 use pacs_reach::zonotope::{Zonotope, Zonotope3};
@@ -73,12 +75,38 @@ fn segment_lb<S: Source>(s: &mut S) {
         );
     }
 }
+// Property test only: the Kani proofs are the floating-point steps beside the code
+// (`b1_dot_bounds_enclose`, with a1 `sub_down`, a2 `div_down`, a3 `norm3_up`) and the real-number
+// argument in the doc of `separating_axis_lower_bound` (proofs/README.md, "What the splits leave").
 harness!(
     b1_segment_distance_lower_bound,
-    unwind = 25,
-    bits = 6,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     segment_lb
+);
+
+/// The separating-axis certificate is a lower bound along **any** direction (the closest-point
+/// direction only makes it tight): random directions, half of them near `p − q`.
+fn separating_axis_any<S: Source>(s: &mut S) {
+    let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
+        return;
+    };
+    let n = if s.bool() {
+        Vector3::from(s.vec3(-2.0, 2.0))
+    } else {
+        let e = s.vec3(-1e-3, 1e-3);
+        Vector3::from(std::array::from_fn(|i| p[i].mid() - q[i].mid() + e[i]))
+    };
+    let lb = separating_axis_lower_bound(&n, &a0, &a1, &b0, &b1);
+    assert!(lb >= 0.0);
+    let ub = dist_up(&p, &q);
+    assert!(lb <= ub, "along {n:?}: lb {lb} > |p - q| ≤ {ub}");
+}
+harness!(
+    b1_separating_axis_any_direction,
+    twin_only,
+    cases = crate::DEFAULT_CASES,
+    separating_axis_any
 );
 
 /// Capsules that share a point are never reported disjoint, and the capsule distance bound is
@@ -110,10 +138,11 @@ fn capsules<S: Source>(s: &mut S) {
     }
     assert!(lb <= (ub - ra - rb).max(0.0) * (1.0 + 1e-12) + 1e-300);
 }
+// Property test only: the Kani proofs are `b2_capsule_margin_sound` (the rounding of the margin,
+// beside the code) and the b1 split for the segment distance (proofs/README.md).
 harness!(
     b2_capsule_intersection_conservative,
-    unwind = 25,
-    bits = 6,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     capsules
 );

@@ -17,9 +17,10 @@ use crate::{Source, harness};
 use pacs_motion::scaling::{PathState, SpeedProfile};
 use pacs_shield::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
 
-/// Steps of the symbolic sequence in `f1` (the property is inductive; see README): 2 under Kani
-/// (a step from the start state and a step from any state the first one reaches), 3 in tests.
-const STEPS: usize = if cfg!(kani) { 2 } else { 3 };
+/// Steps of the symbolic sequence in `f1` (the property is inductive; see README): under Kani
+/// one step from any stored failsafe (the induction step; the base, `Shield::start`'s standing
+/// still, is the twin's starting state), 3 from the start state in tests.
+const STEPS: usize = if cfg!(kani) { 1 } else { 3 };
 
 fn decide_induction<S: Source>(s: &mut S) {
     let alpha = s.f64_in(1e-4, 0.01);
@@ -33,6 +34,25 @@ fn decide_induction<S: Source>(s: &mut S) {
     };
     let mut slot = 0;
     let mut path = PathState::rest(0.0);
+    if cfg!(kani) {
+        // Any stored failsafe: a brake from any consistent path state, started at most 1 s ago,
+        // in either slot, and the executed state on it now.
+        let start = PathState {
+            s: s.f64_in(0.0, 10.0),
+            sd: s.f64_in(0.0, 1.5),
+            sdd: s.f64_in(-acc, acc),
+        };
+        if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
+            return;
+        }
+        stored = VerifiedFailsafe {
+            slot: s.index(2),
+            profile: SpeedProfile::plan(start, 0.0, acc, jerk),
+            t0: t - s.f64_in(0.0, 1.0),
+        };
+        slot = stored.slot;
+        path = stored.profile.eval(t - stored.t0);
+    }
     for _ in 0..STEPS {
         let candidate = if s.bool() {
             // A fresh chunk (other slot, from its start on the intended timing) or the current path.
@@ -62,32 +82,45 @@ fn decide_induction<S: Source>(s: &mut S) {
             let c = candidate.expect("adopted a candidate");
             assert!(c.verified, "adopted an unverified candidate");
             assert_eq!(d.slot, c.slot);
-            assert_eq!(d.path, c.go.eval(alpha));
-            assert_eq!(
-                d.failsafe,
-                VerifiedFailsafe {
-                    slot: c.slot,
-                    profile: c.brake,
-                    t0: t + alpha
-                }
+            // Bitwise: the executed state is the verified go step's state (a NaN would not
+            // compare equal to itself under `==`; the claim is that it is the same value).
+            assert!(d.path.same_bits(&c.go.eval(alpha)));
+            assert!(
+                d.failsafe.slot == c.slot
+                    && d.failsafe.profile.same_bits(&c.brake)
+                    && d.failsafe.t0.to_bits() == (t + alpha).to_bits()
             );
-            // The stored failsafe starts where the executed state is.
-            let b0 = d.failsafe.profile.eval(0.0);
-            assert_eq!(b0.s, d.path.s);
-            assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
+            if !cfg!(kani) {
+                // Split (proofs/README.md): that the stored failsafe starts where the executed
+                // state is (within rounding) is a property of the planner (`plan` from
+                // `go.eval(α)`), the twin's and f3's.
+                let b0 = d.failsafe.profile.eval(0.0);
+                assert_eq!(b0.s, d.path.s);
+                assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
+            }
         } else {
             // Not verified (or no candidate): the stored failsafe is kept and continued.
-            assert_eq!(
-                d.failsafe, stored,
+            assert!(
+                d.failsafe.slot == stored.slot
+                    && d.failsafe.profile.same_bits(&stored.profile)
+                    && d.failsafe.t0.to_bits() == stored.t0.to_bits(),
                 "failsafe abandoned without verification"
             );
             assert_eq!(d.slot, stored.slot);
-            assert_eq!(d.path, stored.profile.eval(t + alpha - stored.t0));
+            assert!(
+                d.path
+                    .same_bits(&stored.profile.eval(t + alpha - stored.t0))
+            );
         }
         stored = d.failsafe;
         slot = d.slot;
         path = d.path;
         t += alpha;
+    }
+    if cfg!(kani) {
+        // Split (proofs/README.md): that a profile is at rest from its settle time on is e1's
+        // claim (`e1_braking_profile`); the twin checks it here for the failsafe reached.
+        return;
     }
     // Verification fails from now on: every later step continues `stored` (shown above), so
     // the executed state at any time after the settle time is the rest state.
@@ -107,10 +140,14 @@ fn decide_induction<S: Source>(s: &mut S) {
     );
     assert_eq!(d.path.s, stored.profile.settle_s());
 }
+// Under Kani `√` is any non-negative finite value (`stubs::sqrt_any_nonneg`, an
+// over-approximation): `decide` only copies and evaluates the profiles it is given, so the
+// claims Kani checks hold whatever the profiles' ramp lengths are.
 harness!(
     f1_shield_decision_induction,
     unwind = 6,
     bits = 4,
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_any_nonneg),
     cases = crate::DEFAULT_CASES,
     decide_induction
 );
@@ -278,3 +315,121 @@ mod real {
         );
     }
 }
+
+/// A pool of intended trajectories for f5: the first anchor chunks of the FR3 (the motion
+/// crate's demonstration-like chunks), planned once, each with its own Moving or AtRest end.
+fn trajectory_pool() -> &'static [pacs_motion::Trajectory] {
+    use pacs_motion::anchors::anchor_set;
+    use pacs_motion::{EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig};
+    static POOL: std::sync::OnceLock<Vec<pacs_motion::Trajectory>> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| {
+        let robot = pacs_models::RobotModel::builtin("fr3").expect("built-in fr3");
+        let plan = Limits::from_joint_limits(robot.limits()).with_uniform_acc_jerk(10.0, 400.0);
+        anchor_set(robot.limits(), 8, 11)
+            .iter()
+            .enumerate()
+            .filter_map(|(k, p)| {
+                let wp = p
+                    .chunk
+                    .waypoints(&p.q0, robot.limits(), OutOfLimits::Reject)
+                    .ok()?;
+                let end = if k % 2 == 0 {
+                    EndCondition::Moving
+                } else {
+                    EndCondition::AtRest
+                };
+                let mut pl = Planner::new(
+                    plan,
+                    PlannerConfig {
+                        end,
+                        ..Default::default()
+                    },
+                );
+                pl.plan(&JointState::at_rest(&p.q0), &wp).ok()
+            })
+            .collect()
+    })
+}
+
+/// The joint boxes of one occupancy interval (claim C7, `monitored_joint_boxes`, the shield's
+/// own computation) contain the executed joint state at every instant of the interval: random
+/// intended trajectories (the pool), a go profile from a random consistent path state for α,
+/// the brake planned from where it ends (as the shield does), a random interval `[ta, tb]`
+/// around α, and sampled instants τ in it (biased to the ends); the executed state is
+/// `q(s(τ))`, `q′(s(τ))·ṡ(τ)` with `(s, ṡ)` from `go.eval(τ)` before α and
+/// `brake.eval(τ − α)` from α on.
+fn joint_boxes<S: Source>(s: &mut S) {
+    let pool = trajectory_pool();
+    let tr = &pool[s.index(pool.len())];
+    let alpha = [0.001, 0.002, 0.004][s.index(3)];
+    let (acc, jerk) = (s.f64_in(0.5, 20.0), s.f64_in(1.0, 500.0));
+    let sdd = s.f64_in(-acc, acc);
+    let sd = s.f64_in(0.0, 1.5);
+    if !s.assume(sdd >= 0.0 || sd >= sdd * sdd / (2.0 * jerk)) {
+        return;
+    }
+    let start = PathState {
+        s: s.f64_in(0.0, tr.rest_time()),
+        sd,
+        sdd,
+    };
+    let target = if s.bool() { 1.0 } else { s.f64_in(0.0, 1.5) };
+    let go = SpeedProfile::plan(start, target, acc, jerk);
+    let brake = SpeedProfile::plan(go.eval(alpha), 0.0, acc, jerk);
+    let horizon = alpha + brake.settle_time() + 0.01;
+    let ta = if s.bool() {
+        0.0
+    } else {
+        s.f64_in(0.0, horizon)
+    };
+    let tb = if s.bool() {
+        alpha.max(ta)
+    } else {
+        s.f64_in(ta, horizon)
+    };
+    let n = tr.dof();
+    let (mut q_lo, mut q_hi, mut v_lo, mut v_hi) = ([0.0; 7], [0.0; 7], [0.0; 7], [0.0; 7]);
+    pacs_shield::shield::monitored_joint_boxes(
+        tr,
+        &go,
+        &brake,
+        alpha,
+        (ta, tb),
+        (&mut q_lo[..n], &mut q_hi[..n]),
+        (&mut v_lo[..n], &mut v_hi[..n]),
+    );
+    for _ in 0..4 {
+        let tau = s.f64_in(ta, tb);
+        // At τ = α the executed state is where the go step ends (the brake is planned from it).
+        let e = if tau <= alpha {
+            go.eval(tau)
+        } else {
+            brake.eval(tau - alpha)
+        };
+        for i in 0..n {
+            let (q, dq, _) = tr.joint_at(i, e.s);
+            let v = dq * e.sd;
+            assert!(
+                q_lo[i] <= q && q <= q_hi[i],
+                "joint {i}: q = {q} ∉ [{}, {}] at τ = {tau} in [{ta}, {tb}]",
+                q_lo[i],
+                q_hi[i]
+            );
+            // q′·ṡ in floating point is within one rounding of the exact product, which the
+            // box's outward rounding (one ulp each way) already covers.
+            assert!(
+                v_lo[i] <= v && v <= v_hi[i],
+                "joint {i}: q̇ = {v} ∉ [{}, {}] at τ = {tau} in [{ta}, {tb}] (ṡ = {})",
+                v_lo[i],
+                v_hi[i],
+                e.sd
+            );
+        }
+    }
+}
+harness!(
+    f5_joint_boxes_enclose,
+    twin_only,
+    cases = crate::DEFAULT_CASES,
+    joint_boxes
+);

@@ -7,6 +7,7 @@
 use super::*;
 use crate::exact::{cmp_prod, cmp_sum, tame};
 use crate::rounding::proofs::num;
+use crate::rounding::{mul_down, mul_up};
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::{Greater, Less};
 
@@ -19,42 +20,46 @@ pub(crate) fn interval<S: Source>(s: &mut S, m: f64, wmax: f64) -> Option<Interv
     Interval::new(lo, hi)
 }
 
-/// An interval whose two ends have at most 6 significand bits under Kani (drawn independently
-/// and ordered), any interval of width ≤ 10 in the twin: the second operand of a product,
-/// narrow for the same reason as `y` in a2.
+/// An interval whose two ends have at most [`NARROW`] significand bits under Kani (drawn independently
+/// and ordered), any interval of width ≤ 10 in the twin: the second operand of the split
+/// harnesses' sums and products, narrow for the same reason as `y` in a2 (products of a
+/// full-width and a 6-bit significand still round).
 fn narrow_interval<S: Source>(s: &mut S, m: f64) -> Option<Interval> {
     if !cfg!(kani) {
         return interval(s, m, 10.0);
     }
-    let (p, q) = (s.f64_short(-m, m, 6), s.f64_short(-m, m, 6));
+    let (p, q) = (s.f64_short(-m, m, NARROW), s.f64_short(-m, m, NARROW));
     s.assume(tame(p) && tame(q) && p <= q).then_some(())?;
     Interval::new(p, q)
 }
 
-/// Two intervals in [−1e3, 1e3 + 10] and a member of each.
-///
-/// Split (proofs/README.md): under Kani the members are the intervals' ends, `x ∈ {a.lo, a.hi}`
-/// and `y ∈ {b.lo, b.hi}`: sums and products of real intervals take their extremes at the ends
-/// (`x + y` is monotone in each argument, `x·y` bilinear), so a result that contains the exact
-/// results at the four corners contains those of every pair of members. `a` has the harness
-/// width, `b` narrow ends ([`narrow_interval`]). The twin draws both intervals at full width and
-/// members anywhere in them. (A symbolic member between two symbolic ends makes the model
-/// checker prove the monotonicity of its float multipliers: beyond the budget.)
-fn interval_pair<S: Source>(s: &mut S) -> Option<(Interval, Interval, f64, f64)> {
-    let a = interval(s, 1e3, 10.0)?;
-    let b = narrow_interval(s, 1e3)?;
-    let (x, y) = (member(s, a), member(s, b));
-    s.assume(tame(x) && tame(y)).then_some((a, b, x, y))
+/// Significand bits of the narrow operand of the split `×` and `scale` harnesses under Kani: a
+/// full-width factor times a 3-bit factor has up to 56 significant bits, so the products still
+/// round (what the claims are about), and each of the four products of `×` is a narrow
+/// multiplier for the solver.
+const NARROW: u32 = 3;
+
+/// An interval in [−1e3, 1e3]: under Kani two independent ends of the harness width, ordered
+/// (no adder between the inputs and the operation, as in [`interval`]); in the twin as
+/// [`interval`].
+fn wide_interval<S: Source>(s: &mut S) -> Option<Interval> {
+    if !cfg!(kani) {
+        return interval(s, 1e3, 10.0);
+    }
+    let (p, q) = (num(s, 1e3)?, num(s, 1e3)?);
+    s.assume(p <= q).then_some(())?;
+    Interval::new(p, q)
 }
 
-/// A member of `a`: under Kani one of its ends (the split of [`interval_pair`]), anywhere in `a`
-/// in the twin.
+/// Two intervals: `a` with the harness width ([`wide_interval`]), `b` narrow under Kani
+/// ([`narrow_interval`]).
+fn interval_operands<S: Source>(s: &mut S) -> Option<(Interval, Interval)> {
+    Some((wide_interval(s)?, narrow_interval(s, 1e3)?))
+}
+
+/// A member of `a`, anywhere in it (biased to the ends by the source).
 fn member<S: Source>(s: &mut S, a: Interval) -> f64 {
-    if cfg!(kani) {
-        if s.bool() { a.lo() } else { a.hi() }
-    } else {
-        s.f64_in(a.lo(), a.hi())
-    }
+    s.f64_in(a.lo(), a.hi())
 }
 
 fn inside_sum(r: Interval, x: f64, y: f64) -> bool {
@@ -65,60 +70,174 @@ fn inside_prod(r: Interval, x: f64, y: f64) -> bool {
     cmp_prod(x, y, r.lo()) != Less && cmp_prod(x, y, r.hi()) != Greater
 }
 
-/// Interval `+`, `−` and negation contain the exact result for every pair of members.
-///
-/// Split: under Kani `+` and negation (`a − b` is implemented as `a + (−b)`, bit for bit, so
-/// the two proved claims cover it); the twin checks all three directly.
+/// Interval `+`, `−` and negation contain the exact result for every pair of members (the
+/// whole claim, property test only; the Kani proofs are the per-end splits below).
 fn interval_add_sub<S: Source>(s: &mut S) {
-    let Some((a, b, x, y)) = interval_pair(s) else {
+    let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0)) else {
         return;
     };
+    let (x, y) = (member(s, a), member(s, b));
+    if !s.assume(tame(x) && tame(y)) {
+        return;
+    }
     assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
     assert!((-a).contains(-x));
-    if !cfg!(kani) {
-        assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
-    }
+    assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
 }
 harness!(
     a4_interval_add_sub_enclose,
-    unwind = 2,
-    bits = 27,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     interval_add_sub
 );
 
-/// Interval `×` contains the exact product for every pair of members. Under Kani `a` has full
-/// width and `b` 6-bit ends: products of up to 59 bits, which round (with both narrow every
-/// product would be exact and the outward rounding untested; mutant `x3` must fail here).
-fn interval_mul<S: Source>(s: &mut S) {
-    let Some((a, b, x, y)) = interval_pair(s) else {
+/// Bitwise equality of two intervals (the same result, computed two ways).
+fn same_bits(a: Interval, b: Interval) -> bool {
+    a.lo().to_bits() == b.lo().to_bits() && a.hi().to_bits() == b.hi().to_bits()
+}
+
+/// Which end of an operation's result a split harness checks.
+#[derive(Clone, Copy, PartialEq)]
+enum End {
+    Lower,
+    Upper,
+}
+
+/// The split of a4 `+` for the model checker, one end per harness. Over real numbers `x + y` is
+/// increasing in both arguments, so a result contains the sum of every pair of members exactly
+/// when its lower end is ≤ `a.lo + b.lo` and its upper end ≥ `a.hi + b.hi` (exact sums). `a − b`
+/// is `a + (−b)` bit for bit and negation is exact, so these two claims cover `−` as well
+/// (the twin [`interval_add_sub`] checks `−` directly). The sum of two points (the exact-sum
+/// path) is decided whole by the lower harness, so the upper one takes the other cases: each
+/// claim then reads the operands as the code path it checks does (one term for the solver).
+fn interval_add_end<S: Source>(s: &mut S, end: End) {
+    let Some((a, b)) = interval_operands(s) else {
         return;
     };
+    let points = a.lo() == a.hi() && b.lo() == b.hi();
+    let r = a + b;
+    match end {
+        End::Lower => {
+            assert!(
+                cmp_sum(a.lo(), b.lo(), r.lo()) != Less,
+                "{a:?} + {b:?}: lower"
+            );
+            if points {
+                assert!(
+                    cmp_sum(a.lo(), b.lo(), r.hi()) != Greater,
+                    "{a:?} + {b:?}: point"
+                );
+            }
+        }
+        End::Upper => {
+            if !points {
+                assert!(
+                    cmp_sum(a.hi(), b.hi(), r.hi()) != Greater,
+                    "{a:?} + {b:?}: upper"
+                );
+            }
+        }
+    }
+}
+fn interval_add_lower<S: Source>(s: &mut S) {
+    interval_add_end(s, End::Lower);
+}
+fn interval_add_upper<S: Source>(s: &mut S) {
+    interval_add_end(s, End::Upper);
+}
+harness!(
+    a4_interval_add_lower,
+    unwind = 2,
+    bits = 27,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_add_lower
+);
+harness!(
+    a4_interval_add_upper,
+    unwind = 2,
+    bits = 27,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_add_upper
+);
+
+/// Interval `×` contains the exact product for every pair of members (the whole claim,
+/// property test only; the Kani proofs are the per-end splits below).
+fn interval_mul<S: Source>(s: &mut S) {
+    let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0)) else {
+        return;
+    };
+    let (x, y) = (member(s, a), member(s, b));
+    if !s.assume(tame(x) && tame(y)) {
+        return;
+    }
     assert!(inside_prod(a * b, x, y), "{a:?} * {b:?} ∌ {x} * {y}");
 }
 harness!(
     a4_interval_mul_enclose,
-    unwind = 2,
-    bits = 52,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     interval_mul
 );
 
-/// `scale` and `sqr` contain the exact product / square of every member (under Kani: of each
-/// end, and 0 for `sqr` when the interval holds it — the extremes of `x·k` and `x²`; see
-/// [`interval_pair`]).
-///
-/// Split: under Kani `a` has full width and `k` 6 bits (as in a2), so `scale`'s products round;
-/// `sqr` is checked on an interval with 8-bit ends, whose squares are exact: that checks its
-/// case logic (signs, the straddling case), while its outward rounding — a square rounds only
-/// beyond 26 bits, where the model checker would have to equate two 27-bit multipliers — is the
-/// twin's (full-width intervals).
+/// The split of a4 `×` for the model checker. Over real numbers `x·y` is bilinear, so its
+/// extremes over a box of members are taken at the four corners; `×` returns the least
+/// `mul_down` and the greatest `mul_up` of the corners, which enclose the exact corner products
+/// by a2 (`mul_down`/`mul_up`, proved beside them). The harness proves the composition: for two
+/// intervals that are not points, the result's lower end is ≤ `mul_down` and its upper end ≥
+/// `mul_up` of every corner (the same terms as the code's, compared in floating point); a point
+/// operand makes `×` the `scale` of the other, checked bit for bit (the `scale` harness proves
+/// that). The twin checks the exact claim at a random corner. Under Kani `a` has 4-bit and `b`
+/// [`NARROW`]-bit ends: the composition does not depend on whether the products round (a2
+/// proves `mul_down`/`mul_up` at full width), and narrow factors keep the solver's four
+/// multipliers small; mutant `x3` (the lower end from the nominal products) still fails, as
+/// `mul_down` is always below the nominal product.
+fn interval_mul_corners<S: Source>(s: &mut S) {
+    let Some((a, b)) = interval_operands(s) else {
+        return;
+    };
+    let r = a * b;
+    if a.lo() == a.hi() {
+        assert!(same_bits(r, b.scale(a.lo())));
+        return;
+    }
+    if b.lo() == b.hi() {
+        assert!(same_bits(r, a.scale(b.lo())));
+        return;
+    }
+    for (x, y) in [
+        (a.lo(), b.lo()),
+        (a.lo(), b.hi()),
+        (a.hi(), b.lo()),
+        (a.hi(), b.hi()),
+    ] {
+        assert!(
+            r.lo() <= mul_down(x, y),
+            "{a:?} * {b:?}: lower above {x}·{y}"
+        );
+        assert!(r.hi() >= mul_up(x, y), "{a:?} * {b:?}: upper below {x}·{y}");
+    }
+    if !cfg!(kani) {
+        let x = if s.bool() { a.lo() } else { a.hi() };
+        let y = if s.bool() { b.lo() } else { b.hi() };
+        assert!(inside_prod(r, x, y), "{a:?} * {b:?} ∌ {x}·{y}");
+    }
+}
+harness!(
+    a4_interval_mul_corners,
+    unwind = 5,
+    bits = 4,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_mul_corners
+);
+
+/// `scale` and `sqr` contain the exact product / square of every member (the whole claim,
+/// property test only; the Kani proofs are the splits below).
 fn interval_scale_sqr<S: Source>(s: &mut S) {
     let Some(a) = interval(s, 1e3, 10.0) else {
         return;
     };
     let x = member(s, a);
-    let k = s.f64_short(-1e3, 1e3, 6);
+    let k = s.f64_in(-1e3, 1e3);
     if !s.assume(tame(x) && tame(k)) {
         return;
     }
@@ -126,27 +245,105 @@ fn interval_scale_sqr<S: Source>(s: &mut S) {
         inside_prod(a.scale(k), x, k),
         "{a:?}.scale({k}) ∌ {x} * {k}"
     );
-    let (b, z) = if cfg!(kani) {
-        let p = s.f64_short(-1e3, 1e3, 8);
-        let q = s.f64_short(-1e3, 1e3, 8);
-        if !s.assume(tame(p) && tame(q) && p <= q) {
-            return;
-        }
-        let b = Interval::new(p, q).expect("ordered");
-        (b, if s.bool() { p } else { q })
-    } else {
-        (a, x)
+    let sq = a.sqr();
+    assert!(inside_prod(sq, x, x), "{a:?}.sqr() ∌ {x}²");
+    assert!(sq.lo() >= 0.0 && (!a.contains(0.0) || sq.lo() == 0.0));
+}
+harness!(
+    a4_interval_scale_sqr_enclose,
+    twin_only,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_scale_sqr
+);
+
+/// The split of a4 `scale` for the model checker: `x·k` is linear in `x`, so its extremes over
+/// the members are at `a.lo` and `a.hi`; `scale` returns the least `mul_down` and the greatest
+/// `mul_up` of the two ends, which enclose the exact products by a2. The harness proves the
+/// composition (the result's ends against `mul_down`/`mul_up` of both ends, the same terms as
+/// the code's) and, for a point, the exact-product path against the exact product; the twin
+/// checks the exact claim at either end. Under Kani `a` has 8-bit ends and `k` [`NARROW`] bits
+/// (the composition does not depend on the widths; a2 proves the roundings at full width).
+fn interval_scale_ends<S: Source>(s: &mut S) {
+    let Some(a) = wide_interval(s) else {
+        return;
     };
+    let k = s.f64_short(-1e3, 1e3, NARROW);
+    if !s.assume(tame(k)) {
+        return;
+    }
+    if a.lo() == a.hi() {
+        // A point: `a4_interval_scale_point`.
+        return;
+    }
+    let r = a.scale(k);
+    for x in [a.lo(), a.hi()] {
+        assert!(
+            r.lo() <= mul_down(x, k),
+            "{a:?}.scale({k}): lower above {x}·{k}"
+        );
+        assert!(
+            r.hi() >= mul_up(x, k),
+            "{a:?}.scale({k}): upper below {x}·{k}"
+        );
+    }
+    if !cfg!(kani) {
+        let x = if s.bool() { a.lo() } else { a.hi() };
+        assert!(inside_prod(r, x, k), "{a:?}.scale({k}) ∌ {x}·{k}");
+    }
+}
+harness!(
+    a4_interval_scale_ends,
+    unwind = 3,
+    bits = 8,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_scale_ends
+);
+
+/// `scale` of a point (the exact-product path, else the general one) contains the exact
+/// product: `x` of the harness width, `k` [`NARROW`] bits.
+fn interval_scale_point<S: Source>(s: &mut S) {
+    let Some(x) = num(s, 1e3) else {
+        return;
+    };
+    let k = s.f64_short(-1e3, 1e3, NARROW);
+    if !s.assume(tame(k)) {
+        return;
+    }
+    let r = Interval::point(x).scale(k);
+    assert!(inside_prod(r, x, k), "[{x}].scale({k}) ∌ {x}·{k}");
+}
+harness!(
+    a4_interval_scale_point,
+    unwind = 2,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    interval_scale_point
+);
+
+/// The split of a4 `sqr` for the model checker: `x²` over `[lo, hi]` takes its maximum at an
+/// end and its minimum at an end or, when the interval holds 0, at 0; the harness checks the
+/// result against any end and is ≥ 0, and 0 when the interval holds 0. Ends of 8 bits, whose
+/// squares are exact: this checks the case logic (signs, the straddling case); the outward
+/// rounding of squares (beyond 26 bits, where the model checker would have to equate two
+/// 27-bit multipliers) is the twin's, at full width.
+fn interval_sqr_cases<S: Source>(s: &mut S) {
+    let p = s.f64_short(-1e3, 1e3, 8);
+    let q = s.f64_short(-1e3, 1e3, 8);
+    if !s.assume(tame(p) && tame(q) && p <= q) {
+        return;
+    }
+    let b = Interval::new(p, q).expect("ordered");
+    let z = if s.bool() { p } else { q };
     let sq = b.sqr();
     assert!(inside_prod(sq, z, z), "{b:?}.sqr() ∌ {z}²");
     assert!(sq.lo() >= 0.0 && (!b.contains(0.0) || sq.lo() == 0.0));
 }
 harness!(
-    a4_interval_scale_sqr_enclose,
+    a4_interval_sqr_cases,
     unwind = 2,
-    bits = 52,
+    bits = 8,
     cases = pacs_proof_kit::DEFAULT_CASES,
-    interval_scale_sqr
+    interval_sqr_cases
 );
 
 /// `mid` is a member and `rad_up` bounds the distance from it to either end.

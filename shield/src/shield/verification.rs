@@ -3,6 +3,7 @@
 
 use super::{Binding, Diagnostics, FilterMode, OccupancyIntervals, Shield};
 use pacs_models::MAX_DOF;
+use pacs_motion::Trajectory;
 use pacs_motion::scaling::SpeedProfile;
 use pacs_reach::JointBox;
 use pacs_verify::iso15066::ConstraintKind;
@@ -57,33 +58,6 @@ impl Shield {
         ok
     }
 
-    /// Path and speed ranges of the monitored trajectory over relative time [ta, tb].
-    fn path_ranges(
-        go: &SpeedProfile,
-        brake: &SpeedProfile,
-        alpha: f64,
-        ta: f64,
-        tb: f64,
-    ) -> (f64, f64, f64, f64) {
-        let mut s_lo = f64::INFINITY;
-        let mut s_hi = f64::NEG_INFINITY;
-        let mut sd_lo = f64::INFINITY;
-        let mut sd_hi = f64::NEG_INFINITY;
-        let mut add = |r: (f64, f64, f64, f64, f64)| {
-            s_lo = s_lo.min(r.0);
-            s_hi = s_hi.max(r.1);
-            sd_lo = sd_lo.min(r.2);
-            sd_hi = sd_hi.max(r.3);
-        };
-        if ta < alpha {
-            add(go.ranges(ta, tb.min(alpha)));
-        }
-        if tb > alpha {
-            add(brake.ranges(ta.max(alpha) - alpha, tb - alpha));
-        }
-        (s_lo, s_hi, sd_lo.max(0.0), sd_hi)
-    }
-
     #[allow(clippy::too_many_arguments)]
     fn check_interval(
         &mut self,
@@ -98,30 +72,20 @@ impl Shield {
     ) -> bool {
         let alpha = self.config.safety_step;
         let n = self.dof;
-        let (s_lo, s_hi, sd_lo, sd_hi) = Self::path_ranges(go, brake, alpha, ta, tb);
         let tr = self.trajs[slot].as_ref().expect("slot holds a trajectory");
         let mut q_lo = [0.0; MAX_DOF];
         let mut q_hi = [0.0; MAX_DOF];
         let mut v_lo = [0.0; MAX_DOF];
         let mut v_hi = [0.0; MAX_DOF];
-        for i in 0..n {
-            let d = tr.joint_derivs(i, s_lo, s_hi);
-            q_lo[i] = d.r[0].lo;
-            q_hi[i] = d.r[0].hi;
-            // q̇ = q′·ṡ with ṡ ∈ [sd_lo, sd_hi] ⊂ [0, ∞): interval product, rounded outward.
-            let (a, b) = (d.r[1].lo, d.r[1].hi);
-            let c = [a * sd_lo, a * sd_hi, b * sd_lo, b * sd_hi];
-            v_lo[i] = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
-            v_hi[i] = c
-                .iter()
-                .copied()
-                .fold(f64::NEG_INFINITY, f64::max)
-                .next_up();
-            if sd_hi == 0.0 {
-                // Path speed exactly 0 over the interval: the commanded joints are at rest.
-                (v_lo[i], v_hi[i]) = (0.0, 0.0);
-            }
-        }
+        monitored_joint_boxes(
+            tr,
+            go,
+            brake,
+            alpha,
+            (ta, tb),
+            (&mut q_lo[..n], &mut q_hi[..n]),
+            (&mut v_lo[..n], &mut v_hi[..n]),
+        );
         let Self {
             reach,
             scratch,
@@ -264,5 +228,79 @@ impl Shield {
             return false;
         }
         true
+    }
+}
+
+/// Path and speed ranges `(s_lo, s_hi, ṡ_lo, ṡ_hi)` of the monitored trajectory (go for α, then
+/// brake from α) over relative time `[ta, tb]` (s).
+fn path_ranges(
+    go: &SpeedProfile,
+    brake: &SpeedProfile,
+    alpha: f64,
+    ta: f64,
+    tb: f64,
+) -> (f64, f64, f64, f64) {
+    let mut s_lo = f64::INFINITY;
+    let mut s_hi = f64::NEG_INFINITY;
+    let mut sd_lo = f64::INFINITY;
+    let mut sd_hi = f64::NEG_INFINITY;
+    let mut add = |r: (f64, f64, f64, f64, f64)| {
+        s_lo = s_lo.min(r.0);
+        s_hi = s_hi.max(r.1);
+        sd_lo = sd_lo.min(r.2);
+        sd_hi = sd_hi.max(r.3);
+    };
+    if ta < alpha {
+        add(go.ranges(ta, tb.min(alpha)));
+    }
+    if tb > alpha {
+        add(brake.ranges(ta.max(alpha) - alpha, tb - alpha));
+    }
+    (s_lo, s_hi, sd_lo.max(0.0), sd_hi)
+}
+
+/// The joint position (rad) and velocity (rad/s) boxes of one occupancy interval: the monitored
+/// trajectory (the path-speed profile `go` for `alpha` s, then `brake`) executed on the intended
+/// trajectory `tr`, over relative time `[ta, tb]` (s). Writes one range per joint into
+/// `q = (lo, hi)` and `v = (lo, hi)` (slices of the robot's joint count); allocates nothing.
+/// A non-finite range (which never verifies: `JointBox::new` refuses it) can result from
+/// non-finite inputs.
+///
+/// # Soundness
+/// Claim C7 (the joint boxes from path ranges): for every `τ ∈ [ta, tb]` and every joint `i`,
+/// the executed configuration `q_i(s(τ))` lies in `q` and the executed velocity
+/// `q_i′(s(τ))·ṡ(τ)` in `v`, where `(s, ṡ)` is `go.eval(τ)` before `alpha` and
+/// `brake.eval(τ − alpha)` from `alpha` on. It rests on `SpeedProfile::ranges` (harness
+/// `f4_path_ranges_enclose`), `Trajectory::joint_derivs` (motion's tests) and the outward
+/// product `q′·ṡ` (ṡ ≥ 0 is the profile's own claim, `e1_braking_profile`). Harness
+/// `f5_joint_boxes_enclose` (property test: the executed state sampled on random trajectories
+/// and profiles).
+pub fn monitored_joint_boxes(
+    tr: &Trajectory,
+    go: &SpeedProfile,
+    brake: &SpeedProfile,
+    alpha: f64,
+    (ta, tb): (f64, f64),
+    (q_lo, q_hi): (&mut [f64], &mut [f64]),
+    (v_lo, v_hi): (&mut [f64], &mut [f64]),
+) {
+    let (s_lo, s_hi, sd_lo, sd_hi) = path_ranges(go, brake, alpha, ta, tb);
+    for i in 0..q_lo.len() {
+        let d = tr.joint_derivs(i, s_lo, s_hi);
+        q_lo[i] = d.r[0].lo;
+        q_hi[i] = d.r[0].hi;
+        // q̇ = q′·ṡ with ṡ ∈ [sd_lo, sd_hi] ⊂ [0, ∞): interval product, rounded outward.
+        let (a, b) = (d.r[1].lo, d.r[1].hi);
+        let c = [a * sd_lo, a * sd_hi, b * sd_lo, b * sd_hi];
+        v_lo[i] = c.iter().copied().fold(f64::INFINITY, f64::min).next_down();
+        v_hi[i] = c
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+            .next_up();
+        if sd_hi == 0.0 {
+            // Path speed exactly 0 over the interval: the commanded joints are at rest.
+            (v_lo[i], v_hi[i]) = (0.0, 0.0);
+        }
     }
 }

@@ -25,3 +25,10 @@ pub fn solver(_attr: TokenStream, item: TokenStream) -> TokenStream {
 pub fn should_panic(_attr: TokenStream, item: TokenStream) -> TokenStream {
     item
 }
+
+/// `#[kani::stub(ORIGINAL, REPLACEMENT)]`: the item is returned unchanged (type-checking only;
+/// the stand-in does not check that the two paths resolve).
+#[proc_macro_attribute]
+pub fn stub(_attr: TokenStream, item: TokenStream) -> TokenStream {
+    item
+}

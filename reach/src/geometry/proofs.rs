@@ -1,0 +1,130 @@
+//! Proofs of the floating-point steps of the geometric queries, beside them (claim C2). Emitted
+//! by [`harness!`] as Kani proofs (`cargo kani -p pacs-reach --lib --harness NAME`) and seeded
+//! property tests (`cargo test -p pacs-reach`). The whole queries against sampled points are the
+//! property tests `b1_segment_distance_lower_bound`, `b1_separating_axis_any_direction` and
+//! `b2_capsule_intersection_conservative` in `proofs/src/harnesses/geometry.rs`; what the split
+//! leaves to them: `proofs/README.md`.
+// Proof functions are entry points of the model checker, not called from the crate.
+#![cfg_attr(kani, allow(dead_code))]
+use super::*;
+use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod, two_sum};
+use pacs_proof_kit::{Source, harness};
+use std::cmp::Ordering::{Greater, Less};
+
+/// A coordinate with at most `bits` significand bits under Kani (any tame float in the twin).
+fn short<S: Source>(s: &mut S, m: f64, bits: u32) -> Option<f64> {
+    let x = s.f64_short(-m, m, bits);
+    s.assume(tame(x)).then_some(x)
+}
+
+/// `x·y` as two floats summing to it exactly. Under Kani the factors have at most 8 and 3
+/// significand bits, so the product has at most 11 and is itself a float (tame factors in
+/// [−1e3, 1e3]: no underflow, no overflow): `(x·y, 0)`, one multiplier for the solver instead of
+/// Dekker's seven; in the twin (any widths) Dekker's TwoProduct.
+fn exact_prod_parts(x: f64, y: f64) -> (f64, f64) {
+    if cfg!(kani) {
+        (x * y, 0.0)
+    } else {
+        two_prod(x, y)
+    }
+}
+
+/// `dot_bounds(n, a)` encloses the exact dot product: `lo ≤ n·a ≤ hi`, decided exactly (each
+/// product split into `p + e`, the sum of the parts by a double-double sum with an error bound:
+/// [`sum_le_zero`] is true only if the sum is proved ≤ 0). Under Kani `n` has 8 and `a` 3
+/// significand bits: the products are exact, and the sum of three of them (different exponents)
+/// still rounds, which is what the error term covers (mutant `x7`, no error term, must fail);
+/// the rounding of the products themselves is the twin's (full width).
+fn dot_bounds_enclose<S: Source>(s: &mut S) {
+    let (Some(n0), Some(n1), Some(n2)) = (short(s, 1e3, 8), short(s, 1e3, 8), short(s, 1e3, 8))
+    else {
+        return;
+    };
+    let (Some(a0), Some(a1), Some(a2)) = (short(s, 1e3, 3), short(s, 1e3, 3), short(s, 1e3, 3))
+    else {
+        return;
+    };
+    let (lo, hi) = dot_bounds(&Vector3::new(n0, n1, n2), &Point3::new(a0, a1, a2));
+    let (p0, e0) = exact_prod_parts(n0, a0);
+    let (p1, e1) = exact_prod_parts(n1, a1);
+    let (p2, e2) = exact_prod_parts(n2, a2);
+    if p0 == 0.0 && p1 == 0.0 && p2 == 0.0 {
+        // n·a = 0 exactly (tame factors: a nonzero product is ≥ 1e-200 in magnitude, so the
+        // parts are all 0); the oracle's own absolute slack (`MIN_POSITIVE`) equals the bound's,
+        // so decide this case directly.
+        assert!(lo <= 0.0 && 0.0 <= hi, "[{lo}, {hi}] ∌ 0 = n·a");
+        return;
+    }
+    // The exact n·a as few floats: under Kani the products are exact (e = 0) and two TwoSums
+    // give p0 + p1 + p2 = t + f1 + f2 exactly (with t the code's own rounded sum, one term for
+    // the solver); in the twin all six parts.
+    let exact: &[f64] = if cfg!(kani) {
+        let (t1, f1) = two_sum(p0, p1);
+        let (t, f2) = two_sum(t1, p2);
+        &[t, f1, f2]
+    } else {
+        &[p0, e0, p1, e1, p2, e2]
+    };
+    let mut below = [0.0; 7];
+    let mut above = [0.0; 7];
+    below[0] = lo;
+    above[0] = -hi;
+    for (k, &x) in exact.iter().enumerate() {
+        below[k + 1] = -x;
+        above[k + 1] = x;
+    }
+    let n = exact.len() + 1;
+    assert!(sum_le_zero(&below[..n]), "dot lower bound {lo} above n·a");
+    assert!(sum_le_zero(&above[..n]), "dot upper bound {hi} below n·a");
+}
+harness!(
+    b1_dot_bounds_enclose,
+    unwind = 9,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    dot_bounds_enclose
+);
+
+/// The margin of two capsules (`margin`, used by `capsule_separation_lower_bound`,
+/// `capsule_distance_lower_bound` and `capsules_disjoint`) is never above the exact
+/// `d − ra − rb`: a positive margin proves `ra + rb < d` (the capsules are disjoint when `d`
+/// bounds their core segments' distance from below), and the clamped distance bound is ≤ the
+/// exact surface distance. Radii often exactly touch (`rb = d − ra` rounded). Checked as the two
+/// roundings it composes, each in its direction (`s = add_up(ra, rb) ≥ ra + rb`,
+/// `margin ≤ d − s`, exact by TwoSum), and the conclusion for a positive margin; the twin also
+/// checks `margin ≤ d − ra − rb` in one exact sum.
+fn capsule_margin<S: Source>(s: &mut S) {
+    let d = s.f64_in(0.0, 4.0);
+    let ra = s.f64_in(0.0, 1.0);
+    let rb = if s.bool() {
+        s.f64_in(0.0, 1.0)
+    } else {
+        (d - ra).max(0.0)
+    };
+    if !s.assume(tame(d) && tame(ra) && tame(rb)) {
+        return;
+    }
+    let m = margin(d, ra, rb);
+    let sum = add_up(ra, rb);
+    assert!(cmp_sum(ra, rb, sum) != Greater, "{ra} + {rb} > {sum}");
+    assert!(cmp_sum(d, -sum, m) != Less, "margin {m} above {d} − {sum}");
+    if m > 0.0 {
+        assert!(
+            cmp_sum(ra, rb, d) == Less,
+            "margin {m} > 0 with {ra} + {rb} ≥ {d}"
+        );
+        if !cfg!(kani) {
+            assert!(
+                sum_le_zero(&[m, -d, ra, rb]),
+                "margin {m} above {d} − {ra} − {rb}"
+            );
+        }
+    }
+}
+harness!(
+    b2_capsule_margin_sound,
+    unwind = 2,
+    bits = 27,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    capsule_margin
+);
