@@ -99,7 +99,7 @@ mapfile -t packages < <(printf '%s\n' "${package_of_h[@]}" | sort -u)
 
 # One cargo kani run per package and solver (the compilation is shared); harnesses one after
 # the other.
-log="$log_dir/kani.log"
+log="${PACS_KANI_LOG:-$log_dir/kani.log}"  # PACS_KANI_LOG: another file, for runs side by side
 : >"$log"
 code=0
 for package in "${packages[@]}"; do

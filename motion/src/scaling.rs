@@ -97,6 +97,14 @@ impl Phase {
     }
 }
 
+/// One phase of a [`SpeedProfile`] as raw parts: `(t0, s, ṡ, s̈, jerk)` — the start time (s),
+/// the path position (dimensionless), its first three derivatives (1/s, 1/s², 1/s³).
+pub type PhaseParts = (f64, f64, f64, f64, f64);
+
+/// A [`SpeedProfile`] as raw parts ([`SpeedProfile::to_parts`]): the 4 phase slots, the number
+/// used, the settle time (s), the target speed (1/s) and the limits (1/s², 1/s³).
+pub type ProfileParts = ([PhaseParts; 4], usize, f64, f64, f64, f64);
+
 /// A jerk-limited path-speed profile from a start state to a constant target speed (at most
 /// three constant-jerk phases, then constant speed). Copy, allocation-free.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,6 +187,57 @@ impl SpeedProfile {
             phases,
             n,
             settle: t,
+            target,
+            acc,
+            jerk,
+        }
+    }
+
+    /// The raw parts of the profile: per phase `(t0, s, ṡ, s̈, jerk)` (4 slots, the first `n`
+    /// used), `n`, the settle time, the target speed and the limits. For the proofs: the twin of
+    /// `f1` checks that planned profiles lie in the range its Kani stub draws from.
+    #[doc(hidden)]
+    pub fn to_parts(&self) -> ProfileParts {
+        (
+            self.phases.map(|p| (p.t0, p.s, p.sd, p.sdd, p.jerk)),
+            self.n,
+            self.settle,
+            self.target,
+            self.acc,
+            self.jerk,
+        )
+    }
+
+    /// A profile from its raw parts ([`Self::to_parts`]), for the model checker only
+    /// (`cfg(kani)`): a Kani stub of [`Self::plan`] that returns *any* finite profile
+    /// (`pacs_proofs::stubs::any_speed_profile`) over-approximates the planner for claims that
+    /// hold for every profile (harness `f1`: the shield's `choose` only copies the profiles it
+    /// is given). `n` must lie in `1..=4` (`eval` reads phase `n − 1`).
+    #[cfg(kani)]
+    #[doc(hidden)]
+    pub fn from_parts(
+        phases: [PhaseParts; 4],
+        n: usize,
+        settle: f64,
+        target: f64,
+        acc: f64,
+        jerk: f64,
+    ) -> Self {
+        assert!((1..=4).contains(&n), "a profile has 1 to 4 phases");
+        // Element by element (not `array::map`, whose iterator and pointer arithmetic add
+        // hundreds of checks to a model checker's formula).
+        let phase = |(t0, s, sd, sdd, jerk): PhaseParts| Phase {
+            t0,
+            s,
+            sd,
+            sdd,
+            jerk,
+        };
+        let [p0, p1, p2, p3] = phases;
+        Self {
+            phases: [phase(p0), phase(p1), phase(p2), phase(p3)],
+            n,
+            settle,
             target,
             acc,
             jerk,

@@ -19,25 +19,113 @@ pub use pacs_proof_kit::{DEFAULT_CASES, RandomSource, Source, harness, run_cases
 #[cfg(any(test, kani))]
 pub mod harnesses;
 
+/// Whether every field of `p` is finite: the range in which `stubs::any_speed_profile`
+/// over-approximates the planner (checked by f1's twin for every profile it plans).
+pub fn profile_in_stub_range(p: &pacs_motion::scaling::SpeedProfile) -> bool {
+    let (phases, _, settle, target, acc, jerk) = p.to_parts();
+    phases
+        .iter()
+        .all(|&(a, b, c, d, e)| [a, b, c, d, e].into_iter().all(f64::is_finite))
+        && [settle, target, acc, jerk].into_iter().all(f64::is_finite)
+}
+
+/// The range `[0, x + 1]` (`x + 1` rounded to nearest) that `stubs::sqrt_at_most_x_plus_one`
+/// draws the square root of a positive finite `x` from. It contains IEEE `√x`: over the reals
+/// `√x ≤ max(1, x) ≤ x + 1`, and rounding to nearest is monotone, so `fl(√x) ≤ max(1, x) ≤
+/// fl(x + 1)`. Checked against the library's `√` by `tests::sqrt_lies_in_the_stub_range`.
+pub fn sqrt_stub_range(x: f64) -> (f64, f64) {
+    (0.0, x + 1.0)
+}
+
 /// Stubs for `#[kani::stub]` (`harness!(…, stub = (f => g), …)`): each over-approximates the
 /// function it replaces, so a claim proved with the stub holds for the function.
 #[cfg(kani)]
 pub mod stubs {
-    /// Any non-negative finite value below 1e160 for a positive finite `x`, else IEEE `√`'s
-    /// result (`x` for ±0 and +∞, NaN below 0 and for NaN). Over-approximates IEEE `√` (and
-    /// the contract of `pacs_reach::ieee::sqrt`): the square root of a positive finite double
-    /// is a positive double below √MAX ≈ 1.34e154. For claims that hold whatever value the
-    /// square root takes (e1's rest claims: the last phase is set to the target whatever the
-    /// ramp lengths are), it spares the solver the contract's two exact 53-bit squares.
-    pub fn sqrt_any_nonneg(x: f64) -> f64 {
+    /// Any speed profile of 1 to 4 phases whose every field is a finite float, whatever the
+    /// arguments. Over-approximates `SpeedProfile::plan` wherever the planner's profiles are
+    /// finite, which the twin of f1 checks for every profile it plans
+    /// (`profile_in_stub_range`). For claims that hold for every profile (f1: `choose` only
+    /// copies the profiles it is given, and the claims compare bit patterns), it removes the
+    /// planner from the formula. Finite: a NaN has no fixed bit pattern in the SMT encoding
+    /// (`proofs/smt/bitwuzla_cli.py`), which would make bitwise claims fail spuriously.
+    pub fn any_speed_profile(
+        _start: pacs_motion::scaling::PathState,
+        _target: f64,
+        _acc: f64,
+        _jerk: f64,
+    ) -> pacs_motion::scaling::SpeedProfile {
+        let n: usize = kani::any();
+        kani::assume((1..=4).contains(&n));
+        let field = || {
+            let x: f64 = kani::any();
+            kani::assume(x.is_finite());
+            x
+        };
+        let phase = || (field(), field(), field(), field(), field());
+        let phases = [phase(), phase(), phase(), phase()];
+        pacs_motion::scaling::SpeedProfile::from_parts(
+            phases,
+            n,
+            field(),
+            field(),
+            field(),
+            field(),
+        )
+    }
+
+    /// Any value of [`crate::sqrt_stub_range`]`(x)` = `[0, x + 1]` for a positive finite `x`,
+    /// else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for NaN). Over-approximates
+    /// IEEE `√` (the range contains it: `sqrt_stub_range`'s doc and test). Tighter than
+    /// session 12's stub (any non-negative value below 1e160) where a claim needs the ramp lengths of a profile bounded by its
+    /// inputs (e1: a ramp of 1e160 s overflows the cubic evaluation to ±∞ and then NaN).
+    pub fn sqrt_at_most_x_plus_one(x: f64) -> f64 {
         if x.is_nan() || x < 0.0 {
             return f64::NAN;
         }
         if x == 0.0 || x == f64::INFINITY {
             return x;
         }
+        let (lo, hi) = crate::sqrt_stub_range(x);
         let r: f64 = kani::any();
-        kani::assume(r >= 0.0 && r < 1.0e160);
+        kani::assume(r >= lo && r <= hi);
         r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The stub range of `√` contains the library's `√` (IEEE 754, correctly rounded) on
+    /// squares, their neighbours, tiny, huge and random positive floats.
+    #[test]
+    fn sqrt_lies_in_the_stub_range() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        };
+        let mut xs = vec![
+            f64::MIN_POSITIVE,
+            5e-324,
+            1.0,
+            2.0,
+            0.25,
+            f64::MAX,
+            1e300,
+            1e-300,
+        ];
+        for _ in 0..200_000 {
+            let bits = next() & 0x7fef_ffff_ffff_ffff;
+            let x = f64::from_bits(bits);
+            let r = f64::from_bits(next() >> 12 | 0x3ff0_0000_0000_0000);
+            xs.extend([x, r * r, (r * r).next_up(), (r * r).next_down()]);
+        }
+        for x in xs.into_iter().filter(|x| x.is_finite() && *x > 0.0) {
+            let (lo, hi) = crate::sqrt_stub_range(x);
+            let r = pacs_reach::ieee::sqrt(x);
+            assert!(lo <= r && r <= hi, "√{x} = {r} outside [{lo}, {hi}]");
+        }
     }
 }

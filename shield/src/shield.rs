@@ -29,7 +29,7 @@ mod intervals;
 mod step;
 mod verification;
 
-pub use decision::{Candidate, Decision, VerifiedFailsafe, decide};
+pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, decide};
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::OccupancyIntervals;
 pub use verification::monitored_joint_boxes;

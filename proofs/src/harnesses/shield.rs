@@ -1,6 +1,7 @@
 //! (f) The shield state machine.
 //!
-//! - `f1` (pure, model-checkable): [`decide`], the decision `Shield::step` applies, over any
+//! - `f1` (pure, model-checkable: Kani checks [`choose`], the selection `decide` evaluates, for
+//!   any profiles; the twin [`decide`] itself): the decision `Shield::step` applies, over any
 //!   sequence of candidates (fresh chunk or current path, any profile limits) and verification
 //!   outcomes: every executed state lies on the last verified monitored trajectory, the stored
 //!   failsafe changes only when a new candidate is verified, and if verification then fails
@@ -15,7 +16,9 @@
 
 use crate::{Source, harness};
 use pacs_motion::scaling::{PathState, SpeedProfile};
-use pacs_shield::shield::{Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, decide};
+use pacs_shield::shield::{
+    Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, choose, decide,
+};
 
 /// Steps of the symbolic sequence in `f1` (the property is inductive; see README): under Kani
 /// one step from any stored failsafe (the induction step; the base, `Shield::start`'s standing
@@ -35,23 +38,14 @@ fn decide_induction<S: Source>(s: &mut S) {
     let mut slot = 0;
     let mut path = PathState::rest(0.0);
     if cfg!(kani) {
-        // Any stored failsafe: a brake from any consistent path state, started at most 1 s ago,
-        // in either slot, and the executed state on it now.
-        let start = PathState {
-            s: s.f64_in(0.0, 10.0),
-            sd: s.f64_in(0.0, 1.5),
-            sdd: s.f64_in(-acc, acc),
-        };
-        if !s.assume(start.sdd >= 0.0 || start.sd >= start.sdd * start.sdd / (2.0 * jerk)) {
-            return;
-        }
+        // Any stored failsafe (under Kani `plan` returns any profile), in either slot, started
+        // at most 1 s ago.
         stored = VerifiedFailsafe {
             slot: s.index(2),
-            profile: SpeedProfile::plan(start, 0.0, acc, jerk),
+            profile: SpeedProfile::plan(path, 0.0, acc, jerk),
             t0: t - s.f64_in(0.0, 1.0),
         };
         slot = stored.slot;
-        path = stored.profile.eval(t - stored.t0);
     }
     for _ in 0..STEPS {
         let candidate = if s.bool() {
@@ -66,7 +60,18 @@ fn decide_induction<S: Source>(s: &mut S) {
             } else {
                 SpeedProfile::plan(start, 1.0, acc, jerk)
             };
-            let brake = SpeedProfile::plan(go.eval(alpha), 0.0, acc, jerk);
+            // (Under Kani `plan` returns any profile whatever its start: no need to evaluate.)
+            let brake_start = if cfg!(kani) { start } else { go.eval(alpha) };
+            let brake = SpeedProfile::plan(brake_start, 0.0, acc, jerk);
+            if !cfg!(kani) {
+                // The range the Kani stub of `plan` draws from covers the planner's profiles.
+                for p in [&stored.profile, &go, &brake] {
+                    assert!(
+                        crate::profile_in_stub_range(p),
+                        "{p:?} outside the stub's range"
+                    );
+                }
+            }
             Some(Candidate {
                 slot: cslot,
                 go,
@@ -76,41 +81,57 @@ fn decide_induction<S: Source>(s: &mut S) {
         } else {
             None
         };
-        let d = decide(stored, candidate, FilterMode::Pacs, t, alpha);
-        if d.adopted {
+        // Kani checks the selection (`choose`: which profile, which time, which failsafe) for
+        // any profiles and times; the twin also checks `decide`, its evaluation.
+        let ch = choose(stored, candidate, FilterMode::Pacs, t, alpha);
+        if ch.adopted {
             // Executed: the verified monitored trajectory (go for α, then brake from t + α).
             let c = candidate.expect("adopted a candidate");
             assert!(c.verified, "adopted an unverified candidate");
-            assert_eq!(d.slot, c.slot);
-            // Bitwise: the executed state is the verified go step's state (a NaN would not
-            // compare equal to itself under `==`; the claim is that it is the same value).
-            assert!(d.path.same_bits(&c.go.eval(alpha)));
+            assert_eq!(ch.slot, c.slot);
+            // Bitwise: the executed state is read from the verified go step at α (a NaN would
+            // not compare equal to itself under `==`; the claim is that it is the same value).
+            assert!(ch.profile.same_bits(&c.go) && ch.tau.to_bits() == alpha.to_bits());
             assert!(
-                d.failsafe.slot == c.slot
-                    && d.failsafe.profile.same_bits(&c.brake)
-                    && d.failsafe.t0.to_bits() == (t + alpha).to_bits()
+                ch.failsafe.slot == c.slot
+                    && ch.failsafe.profile.same_bits(&c.brake)
+                    && ch.failsafe.t0.to_bits() == (t + alpha).to_bits()
             );
-            if !cfg!(kani) {
-                // Split (proofs/README.md): that the stored failsafe starts where the executed
-                // state is (within rounding) is a property of the planner (`plan` from
-                // `go.eval(α)`), the twin's and f3's.
-                let b0 = d.failsafe.profile.eval(0.0);
-                assert_eq!(b0.s, d.path.s);
-                assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
-            }
         } else {
             // Not verified (or no candidate): the stored failsafe is kept and continued.
             assert!(
-                d.failsafe.slot == stored.slot
-                    && d.failsafe.profile.same_bits(&stored.profile)
-                    && d.failsafe.t0.to_bits() == stored.t0.to_bits(),
+                ch.failsafe.slot == stored.slot
+                    && ch.failsafe.profile.same_bits(&stored.profile)
+                    && ch.failsafe.t0.to_bits() == stored.t0.to_bits(),
                 "failsafe abandoned without verification"
             );
-            assert_eq!(d.slot, stored.slot);
+            assert_eq!(ch.slot, stored.slot);
             assert!(
-                d.path
-                    .same_bits(&stored.profile.eval(t + alpha - stored.t0))
+                ch.profile.same_bits(&stored.profile)
+                    && ch.tau.to_bits() == (t + alpha - stored.t0).to_bits()
             );
+        }
+        if cfg!(kani) {
+            // One step (the induction step); the evaluation is the twin's.
+            return;
+        }
+        // `decide` is the choice evaluated: the executed state.
+        let d = decide(stored, candidate, FilterMode::Pacs, t, alpha);
+        assert!(
+            d.slot == ch.slot
+                && d.adopted == ch.adopted
+                && d.path.same_bits(&ch.profile.eval(ch.tau))
+                && d.failsafe.slot == ch.failsafe.slot
+                && d.failsafe.profile.same_bits(&ch.failsafe.profile)
+                && d.failsafe.t0.to_bits() == ch.failsafe.t0.to_bits()
+        );
+        if d.adopted {
+            // Split (proofs/README.md): that the stored failsafe starts where the executed
+            // state is (within rounding) is a property of the planner (`plan` from
+            // `go.eval(α)`), the twin's and f3's.
+            let b0 = d.failsafe.profile.eval(0.0);
+            assert_eq!(b0.s, d.path.s);
+            assert!((b0.sd - d.path.sd).abs() <= 1e-12 && (b0.sdd - d.path.sdd).abs() <= 1e-9);
         }
         stored = d.failsafe;
         slot = d.slot;
@@ -140,14 +161,15 @@ fn decide_induction<S: Source>(s: &mut S) {
     );
     assert_eq!(d.path.s, stored.profile.settle_s());
 }
-// Under Kani `√` is any non-negative finite value (`stubs::sqrt_any_nonneg`, an
-// over-approximation): `decide` only copies and evaluates the profiles it is given, so the
-// claims Kani checks hold whatever the profiles' ramp lengths are.
+// Under Kani every planned profile is *any* profile (`stubs::any_speed_profile`, an
+// over-approximation of `SpeedProfile::plan`: 1 to 4 phases, every field any finite `f64`):
+// `choose` only copies the profiles it is given and the claims compare bit patterns, so they
+// hold for every profile, planned or not, and every input at full width.
 harness!(
     f1_shield_decision_induction,
     unwind = 6,
-    bits = 4,
-    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_any_nonneg),
+    bits = 52,
+    stub = (pacs_motion::scaling::SpeedProfile::plan => crate::stubs::any_speed_profile),
     cases = crate::DEFAULT_CASES,
     decide_induction
 );

@@ -44,28 +44,43 @@ pub struct Decision {
     pub adopted: bool,
 }
 
-/// The pure decision of one shield step (paper Algorithm 1), as used by [`Shield::step`]: a
-/// verified candidate (or any candidate in OFF mode) is executed for α_s and its brake profile
-/// becomes the stored failsafe (starting at `t + α_s`); otherwise (no candidate, or not verified)
-/// the stored failsafe is continued to `t + α_s`.
-///
-/// [`Shield::step`]: super::Shield::step
+/// What one shield step executes, before it is evaluated: the slot, the profile and the time on
+/// it whose state is commanded at `t + α_s`, and the (possibly new) last verified failsafe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice {
+    /// Slot of the executed command.
+    pub slot: usize,
+    /// The profile the executed state is read from (the candidate's go step, or the failsafe).
+    pub profile: SpeedProfile,
+    /// The time on `profile` (s after its start) of the executed state.
+    pub tau: f64,
+    /// The last verified failsafe after this step.
+    pub failsafe: VerifiedFailsafe,
+    /// The candidate was adopted (verified, or OFF mode).
+    pub adopted: bool,
+}
+
+/// The selection of one shield step (paper Algorithm 1): a verified candidate (or any candidate
+/// in OFF mode) is executed — its go step at α_s — and its brake profile becomes the stored
+/// failsafe (starting at `t + α_s`); otherwise (no candidate, or not verified) the stored
+/// failsafe is continued to `t + α_s`. [`decide`] evaluates the choice.
 ///
 /// # Soundness
-/// Claim C8 (induction): the robot is always on a verified monitored trajectory; the stored
-/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction`, property
-/// test `f3_real_shield_commands_on_verified_failsafe`; mutant `x2` caught.
-pub fn decide(
+/// Claim C8 (induction): the stored failsafe changes only on a verified candidate, and the
+/// executed state is read from the verified go step or from the stored failsafe. Harness
+/// `f1_shield_decision_induction` (Kani: any profiles, any times, full width); mutant `x2` caught.
+pub fn choose(
     stored: VerifiedFailsafe,
     candidate: Option<Candidate>,
     mode: FilterMode,
     t: f64,
     alpha: f64,
-) -> Decision {
+) -> Choice {
     match candidate {
-        Some(c) if c.verified || mode == FilterMode::Off => Decision {
+        Some(c) if c.verified || mode == FilterMode::Off => Choice {
             slot: c.slot,
-            path: c.go.eval(alpha),
+            profile: c.go,
+            tau: alpha,
             failsafe: VerifiedFailsafe {
                 slot: c.slot,
                 profile: c.brake,
@@ -73,11 +88,38 @@ pub fn decide(
             },
             adopted: true,
         },
-        _ => Decision {
+        _ => Choice {
             slot: stored.slot,
-            path: stored.profile.eval(t + alpha - stored.t0),
+            profile: stored.profile,
+            tau: t + alpha - stored.t0,
             failsafe: stored,
             adopted: false,
         },
+    }
+}
+
+/// The pure decision of one shield step (paper Algorithm 1), as used by [`Shield::step`]: the
+/// [`choose`]n profile evaluated at the chosen time.
+///
+/// [`Shield::step`]: super::Shield::step
+///
+/// # Soundness
+/// Claim C8 (induction): the robot is always on a verified monitored trajectory; the stored
+/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction` (Kani:
+/// [`choose`]; the twin: `decide` as a whole, three steps from the start), property test
+/// `f3_real_shield_commands_on_verified_failsafe`; mutant `x2` caught.
+pub fn decide(
+    stored: VerifiedFailsafe,
+    candidate: Option<Candidate>,
+    mode: FilterMode,
+    t: f64,
+    alpha: f64,
+) -> Decision {
+    let c = choose(stored, candidate, mode, t, alpha);
+    Decision {
+        slot: c.slot,
+        path: c.profile.eval(c.tau),
+        failsafe: c.failsafe,
+        adopted: c.adopted,
     }
 }
