@@ -68,7 +68,9 @@ pub struct Choice {
 /// # Soundness
 /// Claim C8 (induction): the stored failsafe changes only on a verified candidate, and the
 /// executed state is read from the verified go step or from the stored failsafe. Harness
-/// `f1_shield_decision_induction` (Kani: any profiles, any times, full width); mutant `x2` caught.
+/// `f1_shield_decision_induction` (Kani: any finite profiles, full-width times with
+/// `t ∈ [0, 100]` s, `α ∈ [1e-4, 0.01]` s, the failsafe started up to 1 s before); mutant `x2`
+/// caught.
 pub fn choose(
     stored: VerifiedFailsafe,
     candidate: Option<Candidate>,
