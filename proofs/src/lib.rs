@@ -98,14 +98,8 @@ mod tests {
     /// squares, their neighbours, tiny, huge and random positive floats.
     #[test]
     fn sqrt_lies_in_the_stub_range() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        };
+        let mut random = crate::RandomSource::new("sqrt_stub_range", 0);
+        let mut next = || random.next_u64();
         let mut xs = vec![
             f64::MIN_POSITIVE,
             5e-324,
