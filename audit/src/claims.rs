@@ -50,8 +50,9 @@ pub const CHECKS: &[Check] = &[
     Check {
         check: "the one ISO/TS 15066 rule (SSM, PFL, clamping) shared with the shield",
         backed_by: &[
-            "proofs: i1_rule_sound (property twin; its Kani proof does not yet finish within the budget: proofs/README.md)",
-            "proofs/mutants: x9, x10 caught",
+            "proofs: i1_rule_judgement_sound (Kani: the narrow phase for any contact masks containing the true contacts) and i1_broad_phase_boxes_contain (Kani: the broad phase's boxes contain the capsules)",
+            "proofs: i1_rule_sound (property test of the whole rule)",
+            "proofs/mutants: x9, x10 caught (x10 also by Kani)",
         ],
     },
     Check {

@@ -31,7 +31,7 @@
 //! impact is at most ½(Jₙq̇)²/(JₙM⁻¹Jₙᵀ) ≤ ½q̇ᵀMq̇ (Cauchy–Schwarz in the M-inner product), so the
 //! whole-robot kinetic energy bounds it at any contact point.
 //!
-//! # Soundness (claim C8, harness `proofs::harnesses::rule::i1_rule_sound`)
+//! # Soundness (claim C8′, harnesses `proofs::harnesses::rule::i1_*`)
 //! If the inputs enclose the true motion over the interval (every true link capsule inside its
 //! occupancy capsule, every true body-part capsule inside its occupancy, every true joint velocity
 //! inside the box, the true kinetic energy ≤ `E`) and [`ContactRule::check`] reports no
@@ -41,13 +41,18 @@
 //! is truly pinched between two frames, the environment or a clampable part).
 //! The broad phase only skips pairs that are provably disjoint (outward-padded boxes, a ball
 //! containing the robot in every configuration), so it never hides a contact.
+//!
+//! Kani checks the claim in parts: the narrow phase ([`ContactRule::judge`]) for any contact
+//! masks containing the true contacts (`i1_rule_judgement_sound`), the broad phase's boxes
+//! ([`broad_phase_box`], `i1_broad_phase_boxes_contain`) and the capsule test
+//! (`pacs_reach::geometry`, b1/b2); the property test `i1_rule_sound` checks the whole `check`.
 
 mod broad_phase;
 mod check;
 mod environment;
 mod object;
 
-pub use broad_phase::workspace_ball;
+pub use broad_phase::{broad_phase_box, workspace_ball};
 pub use environment::EnvShape;
 pub use object::{ObjectOutcome, ObjectRule, ObjectViolation, contact_violates};
 
@@ -187,6 +192,15 @@ pub struct Outcome {
     /// figure: how far the radii overlap). +∞ without body parts. Only computed when asked for;
     /// else +∞ without contact and ≤ 0 with contact.
     pub separation: f64,
+    /// For PFL contacts: (largest energy bound, smallest threshold) seen (J).
+    pub pfl: Option<(f64, f64)>,
+}
+
+/// The narrow phase's part of an [`Outcome`] ([`ContactRule::judge`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Judgement {
+    /// A violation is possible (some hit was reported).
+    pub violated: bool,
     /// For PFL contacts: (largest energy bound, smallest threshold) seen (J).
     pub pfl: Option<(f64, f64)>,
 }

@@ -11,6 +11,6 @@
 pub mod iso15066;
 
 pub use iso15066::{
-    ConstraintKind, ContactRule, EnvShape, ObjectOutcome, ObjectRule, ObjectViolation, Outcome,
-    PairViolation, RuleError,
+    ConstraintKind, ContactRule, EnvShape, Judgement, ObjectOutcome, ObjectRule, ObjectViolation,
+    Outcome, PairViolation, RuleError,
 };

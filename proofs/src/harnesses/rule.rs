@@ -14,7 +14,7 @@ use crate::{Source, harness};
 use nalgebra::Point3;
 use pacs_models::{Capsule, Constraint};
 use pacs_reach::JointBox;
-use pacs_verify::iso15066::{ContactRule, EnvShape, frames_can_pinch, threshold};
+use pacs_verify::iso15066::{ContactRule, EnvShape};
 use std::ops::ControlFlow;
 
 /// Distance between two segments, computed finely in floating point (for the ground truth).
@@ -77,6 +77,25 @@ impl Cap {
     }
     fn capsule(&self) -> Capsule {
         Capsule::new_unchecked(Point3::from(self.p1), Point3::from(self.p2), self.r)
+    }
+}
+
+/// The threshold (J) of a PFL contact of the true type, stated from ISO/TS 15066 without the
+/// rule's `threshold`: the constrained (quasi-static) value for a clamped contact, else the
+/// unconstrained (transient) one.
+fn true_threshold(c: Constraint, clamped: bool) -> f64 {
+    match c {
+        Constraint::Ssm => 0.0,
+        Constraint::Pfl {
+            unconstrained,
+            constrained,
+        } => {
+            if clamped {
+                constrained
+            } else {
+                unconstrained
+            }
+        }
     }
 }
 
@@ -176,17 +195,17 @@ fn rule_sound<S: Source>(s: &mut S) {
         match constraints[p] {
             Constraint::Ssm => assert!(!moving, "SSM contact while moving passed"),
             c @ Constraint::Pfl { .. } => {
-                let pinched = touched.iter().any(|&a| {
-                    touched
-                        .iter()
-                        .any(|&b| frames_can_pinch(frames[a], frames[b]))
-                });
+                // Two capsules on different frames pinch (the rule's spec, stated here without
+                // the rule's own `frames_can_pinch`, so a change there is caught).
+                let pinched = touched
+                    .iter()
+                    .any(|&a| touched.iter().any(|&b| frames[a] != frames[b]));
                 let clamped = pinched
                     || env.is_some_and(|e| e.touches(&human[p]))
                     || (0..PARTS)
                         .any(|o| o != p && clampable[p * PARTS + o] && human[o].touches(&human[p]));
                 assert!(
-                    e_true <= threshold(c, clamped),
+                    e_true <= true_threshold(c, clamped),
                     "PFL contact above the true threshold passed (clamped: {clamped})"
                 );
             }
@@ -210,10 +229,158 @@ fn rule_sound<S: Source>(s: &mut S) {
     }
 }
 
+// The whole claim is the twin's (session 6: a Kani timeout at 3 bits, the capsule geometry of 3 × 2
+// pairs); Kani checks it in parts: `i1_rule_judgement_sound` (the narrow phase for any masks
+// containing the true contacts), `i1_broad_phase_boxes_contain` (the broad phase's boxes), and
+// the capsule test's claims b1/b2.
 harness!(
     i1_rule_sound,
-    unwind = 66,
-    bits = 3,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     rule_sound
+);
+
+/// (i1, the Kani split) The narrow phase [`ContactRule::judge`] is sound for any contact masks
+/// that contain the true contacts. Three robot capsules on frames 0–2 (one link each), two body
+/// parts with any constraints (SSM, or PFL with any thresholds in [0, 1] J), the truly touched
+/// capsules of each part any subset, the masks handed to the rule any supersets of them, a true
+/// clamp by the environment or a clampable part any boolean and the geometry's flag any value
+/// that reports it; true joint velocities (2 joints) inside the box, the true energy at most the
+/// bound (or any energy when the bound is NaN, which the rule must read as +∞). If the rule
+/// reports no violation: no SSM part truly touched while moving, no PFL part truly touched above
+/// the threshold of its true contact type (pinched between two frames, or clamped).
+///
+/// What it leaves to the geometry's claims and to the twin `i1_rule_sound` (the whole `check`):
+/// that the masks contain the true contacts (the broad phase's boxes contain the capsules,
+/// `i1_broad_phase_boxes_contain`; `capsules_may_intersect` is conservative, b1/b2) and that the
+/// clamping geometry reports true clamps (the same capsule test; `EnvShape::may_touch`).
+fn judgement_sound<S: Source>(s: &mut S) {
+    const PARTS: usize = 2;
+    let frames = vec![s.index(3), s.index(3), s.index(3)];
+    let mut constraints = vec![Constraint::Ssm; PARTS];
+    for c in &mut constraints {
+        if s.bool() {
+            *c = Constraint::Pfl {
+                unconstrained: s.f64_in(0.0, 1.0),
+                constrained: s.f64_in(0.0, 1.0),
+            };
+        }
+    }
+    let rest_speed = s.f64_in(0.0, 0.05);
+    let workspace = Capsule::new_unchecked(Point3::origin(), Point3::origin(), 1.0);
+    let rule = ContactRule::from_tables(
+        vec![0, 1, 2],
+        frames.clone(),
+        constraints.clone(),
+        vec![false; PARTS * PARTS],
+        vec![],
+        rest_speed,
+        workspace,
+    )
+    .expect("valid tables");
+    // The truth and the (over-approximating) inputs of the narrow phase.
+    let mut truth = [0u128; PARTS];
+    let mut masks = [0u128; PARTS];
+    let mut true_clamp = [false; PARTS];
+    let mut clamp_flag = [false; PARTS];
+    for p in 0..PARTS {
+        truth[p] = s.index(8) as u128;
+        masks[p] = truth[p] | s.index(8) as u128;
+        true_clamp[p] = s.bool();
+        clamp_flag[p] = true_clamp[p] || s.bool();
+    }
+    let mut dq_lo = [0.0; 2];
+    let mut dq_hi = [0.0; 2];
+    let mut dq = [0.0; 2];
+    for j in 0..2 {
+        dq_lo[j] = s.f64_in(-0.1, 0.1);
+        dq_hi[j] = s.f64_in(dq_lo[j], 0.1);
+        dq[j] = s.f64_in(dq_lo[j], dq_hi[j]);
+    }
+    let (e_bound, e_true) = if s.bool() {
+        (f64::NAN, s.f64_in(0.0, 10.0))
+    } else {
+        let b = s.f64_in(0.0, 1.0);
+        (b, s.f64_in(0.0, b))
+    };
+    let dq_box = JointBox::new(&dq_lo, &dq_hi).expect("ordered finite bounds");
+    let verdict = rule.judge(
+        &masks,
+        &dq_box,
+        || e_bound,
+        |p| clamp_flag[p],
+        |_| ControlFlow::Break(()),
+    );
+    if verdict.violated {
+        return;
+    }
+    let moving = dq[0].abs() > rest_speed || dq[1].abs() > rest_speed;
+    for p in 0..PARTS {
+        if truth[p] == 0 {
+            continue;
+        }
+        match constraints[p] {
+            Constraint::Ssm => assert!(!moving, "SSM contact while moving passed"),
+            c @ Constraint::Pfl { .. } => {
+                let mut pinched = false;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        if truth[p] >> a & 1 == 1 && truth[p] >> b & 1 == 1 {
+                            pinched |= frames[a] != frames[b];
+                        }
+                    }
+                }
+                let clamped = pinched || true_clamp[p];
+                assert!(
+                    e_true <= true_threshold(c, clamped),
+                    "PFL contact above the true threshold passed (clamped: {clamped})"
+                );
+            }
+        }
+    }
+}
+
+harness!(
+    i1_rule_judgement_sound,
+    unwind = 5,
+    cases = crate::DEFAULT_CASES,
+    judgement_sound
+);
+
+/// (i1, the broad phase) The box the rule's broad phase puts around a capsule contains it: per
+/// axis, the box's lower end is at most `sub_down(min(a, b), r)` and its upper end at least
+/// `add_up(max(a, b), r)`, which bound the exact `min(a, b) − r` and `max(a, b) + r` (a1). So
+/// boxes of two capsules that share a point overlap, and a pair the broad phase skips is
+/// provably disjoint. Under Kani the first axis (the others 0: the code is the same per axis)
+/// with 20-bit significands at any exponent (rounding still occurs: exponent gaps above 20);
+/// the twin draws every axis and full-width values.
+fn broad_phase_boxes<S: Source>(s: &mut S) {
+    let a = s.f64_in(-1e300, 1e300);
+    let b = s.f64_in(-1e300, 1e300);
+    let r = s.f64_in(0.0, 1e300);
+    let axis = if cfg!(kani) { 0 } else { s.index(3) };
+    let mut p1 = [0.0; 3];
+    let mut p2 = [0.0; 3];
+    p1[axis] = a;
+    p2[axis] = b;
+    let c = Capsule::new_unchecked(Point3::from(p1), Point3::from(p2), r);
+    let (lo, hi) = pacs_verify::iso15066::broad_phase_box(&c);
+    let (lo, hi) = (lo[axis], hi[axis]);
+    use pacs_reach::rounding::{add_up, sub_down};
+    assert!(
+        lo <= sub_down(a.min(b), r),
+        "box lower end {lo} above min − r"
+    );
+    assert!(
+        hi >= add_up(a.max(b), r),
+        "box upper end {hi} below max + r"
+    );
+}
+
+harness!(
+    i1_broad_phase_boxes_contain,
+    unwind = 4,
+    bits = 20,
+    cases = crate::DEFAULT_CASES,
+    broad_phase_boxes
 );

@@ -56,6 +56,20 @@ impl Aabb {
     }
 }
 
+/// The box (lower corner, upper corner; m) the broad phase puts around capsule `c`: per axis
+/// `min(a, b) − r` and `max(a, b) + r` (endpoints `a`, `b`, radius `r`), each padded outward by
+/// 1e-15 relative and 1e-300 absolute, which covers the rounding of the subtraction and addition.
+///
+/// # Soundness
+/// Contains the capsule: its ends bound the exact `min(a, b) − r` below and `max(a, b) + r` above
+/// for any finite endpoints and radius. Harness `i1_broad_phase_boxes_contain` (Kani and twin).
+/// So two capsules that share a point have overlapping boxes, and the rule's broad phase only
+/// skips provably disjoint pairs.
+pub fn broad_phase_box(c: &Capsule) -> ([f64; 3], [f64; 3]) {
+    let b = Aabb::of(c);
+    (b.lo, b.hi)
+}
+
 /// A ball around the base origin containing every link capsule for every configuration: a point
 /// of a capsule carried by frame k is within Σ_{j≤k} |t_j| + |p| + r of the base origin (rotations
 /// preserve lengths), rounded up and padded for the rounding of the model's fixed transforms.

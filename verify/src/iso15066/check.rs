@@ -2,7 +2,9 @@
 //! broad phase before it and the pinch classification of PFL contacts.
 
 use super::broad_phase::Aabb;
-use super::{ConstraintKind, ContactRule, Outcome, PairViolation, frames_can_pinch, threshold};
+use super::{
+    ConstraintKind, ContactRule, Judgement, Outcome, PairViolation, frames_can_pinch, threshold,
+};
 use pacs_models::{Capsule, Constraint};
 use pacs_reach::JointBox;
 use pacs_reach::geometry::{
@@ -40,9 +42,9 @@ impl ContactRule {
         robot_caps: &[Capsule],
         dq: &JointBox,
         human_caps: &[Capsule],
-        mut energy: impl FnMut() -> f64,
+        energy: impl FnMut() -> f64,
         separation: bool,
-        mut sink: impl FnMut(&PairViolation) -> ControlFlow<()>,
+        sink: impl FnMut(&PairViolation) -> ControlFlow<()>,
     ) -> Outcome {
         let mut out = Outcome {
             contact: false,
@@ -96,11 +98,54 @@ impl ContactRule {
         if !out.contact {
             return out;
         }
-        // Narrow phase: the constraint of every part that may be touched.
+        // Narrow phase, on the contact masks just computed; the clamping geometry of a part
+        // (environment, clampable parts) is decided here, only for PFL parts that may be touched.
+        let verdict = self.judge(
+            &self.contact,
+            dq,
+            energy,
+            |p| self.may_be_clamped(p, human_caps),
+            sink,
+        );
+        out.violated = verdict.violated;
+        out.pfl = verdict.pfl;
+        out
+    }
+
+    /// The narrow phase of [`Self::check`]: the rule's decision given which robot capsules each
+    /// body part may touch (`contact[p]`: bit `c` set when capsule `c` may touch part `p`; one
+    /// mask per part), the joint velocity box `dq` (rad/s), the energy bound (`energy`: called
+    /// at most once, only when a PFL part may be touched; NaN counts as +∞) and the clamping
+    /// geometry (`clamped_by_geometry(p)`: part `p` may touch an environment shape or a body part
+    /// it can be clamped against; called only for PFL parts with contact). Every violating
+    /// (part, link) pair goes to `sink` in part then link order, as in `check`.
+    ///
+    /// # Soundness (claim C8′, harness `i1_rule_judgement_sound`)
+    /// If every true contact is in the masks (each part's truly touched capsules ⊆ its mask),
+    /// every true clamp by the environment or a clampable part is reported by
+    /// `clamped_by_geometry`, every true joint velocity lies in `dq` and the true energy is at
+    /// most `energy()`, and no violation is reported, then: no SSM part truly touched while a
+    /// joint moves faster than `rest_speed`, and every PFL part truly touched with energy at most
+    /// its threshold for the true contact type. Over-approximated masks and clamping flags only
+    /// lower thresholds (`threshold` takes `min(constrained, unconstrained)`) or add contacts.
+    pub fn judge(
+        &self,
+        contact: &[u128],
+        dq: &JointBox,
+        mut energy: impl FnMut() -> f64,
+        mut clamped_by_geometry: impl FnMut(usize) -> bool,
+        mut sink: impl FnMut(&PairViolation) -> ControlFlow<()>,
+    ) -> Judgement {
+        let mut out = Judgement {
+            violated: false,
+            pfl: None,
+        };
         let at_rest = super::at_rest(dq, self.rest_speed);
         let mut e_robot: Option<f64> = None;
+        // An indexed loop: cheaper for the model checker than an iterator chain.
+        #[allow(clippy::needless_range_loop)]
         for p in 0..self.parts {
-            let mask = self.contact[p];
+            let mask = contact[p];
             if mask == 0 {
                 continue;
             }
@@ -112,7 +157,7 @@ impl ContactRule {
                         let e = energy();
                         if e.is_nan() { f64::INFINITY } else { e }
                     });
-                    let constrained = self.may_pinch(p, mask, human_caps);
+                    let constrained = self.frames_may_pinch(mask) || clamped_by_geometry(p);
                     let thr = threshold(constraint, constrained);
                     out.pfl = Some(match out.pfl {
                         Some((a, b)) => (a.max(e), b.min(thr)),
@@ -158,11 +203,9 @@ impl ContactRule {
         out
     }
 
-    /// Whether body part `p`, touched by the robot capsules in `mask`, may be pinched: it may
-    /// also touch the environment, a body part it can be clamped against, or the robot on two
-    /// different frames.
-    fn may_pinch(&self, p: usize, mask: u128, human_caps: &[Capsule]) -> bool {
-        let hc = &human_caps[p];
+    /// Whether the robot capsules in `mask` lie on two different frames (a possible pinch
+    /// between them, [`frames_can_pinch`]).
+    fn frames_may_pinch(&self, mask: u128) -> bool {
         let mut first = usize::MAX;
         let mut m = mask;
         while m != 0 {
@@ -175,6 +218,13 @@ impl ContactRule {
                 return true;
             }
         }
+        false
+    }
+
+    /// Whether body part `p` may be clamped by the geometry: it may touch an environment shape,
+    /// or a body part it can be clamped against.
+    fn may_be_clamped(&self, p: usize, human_caps: &[Capsule]) -> bool {
+        let hc = &human_caps[p];
         self.environment.iter().any(|e| e.may_touch(hc))
             || (0..self.parts).any(|o| {
                 self.clampable[p * self.parts + o] && capsules_may_intersect(&human_caps[o], hc)
