@@ -330,12 +330,15 @@ impl SpeedProfile {
         })
     }
 
-    /// Sound ranges over τ ∈ [ta, tb] (relative s): (s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|).
+    /// Sound ranges over τ ∈ [ta, tb] (relative s): (s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|). ṡ_lo is
+    /// the raw (unclamped) lowest ṡ, so that a planner undershoot (ṡ_lo < 0) stays visible;
+    /// ṡ_hi ≥ 0 covers `eval`'s clamp at 0.
     ///
     /// # Soundness
-    /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| lie in the ranges for
-    /// every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (twin; Kani times out); mutant `x12`
-    /// caught.
+    /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| of [`Self::eval`] lie
+    /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (Kani: the ends of
+    /// the window for any profile with bounded fields; the twin: any instant on planned
+    /// profiles); mutant `x12` caught.
     pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
@@ -343,6 +346,9 @@ impl SpeedProfile {
         let b = self.eval_raw(tb);
         let (mut sd_lo, mut sd_hi) = (a.sd.min(b.sd), a.sd.max(b.sd));
         let mut sdd = a.sdd.abs().max(b.sdd.abs());
+        // Rounding of the polynomials, bounded by their terms' magnitudes (the values may be far
+        // smaller than the terms: ṡ near 0 at the end of a braking ramp); see the padding below.
+        let (mut err_s, mut err_sd, mut err_sdd) = (0.0f64, 0.0f64, 0.0f64);
         for k in 0..self.n {
             let p = &self.phases[k];
             let end = if k + 1 < self.n {
@@ -355,8 +361,14 @@ impl SpeedProfile {
             }
             let lo = ta.max(p.t0);
             let hi = tb.min(end);
+            // The phase's own polynomial at both ends: `eval` uses it up to (not at) the next
+            // phase's start, whose own value there differs by rounding.
             for tau in [lo, hi] {
-                let e = self.eval_raw(tau);
+                let e = if k + 1 == self.n {
+                    self.eval_raw(tau)
+                } else {
+                    p.eval(tau)
+                };
                 sd_lo = sd_lo.min(e.sd);
                 sd_hi = sd_hi.max(e.sd);
                 sdd = sdd.max(e.sdd.abs());
@@ -370,17 +382,34 @@ impl SpeedProfile {
                     sd_hi = sd_hi.max(e.sd);
                 }
             }
+            // Term magnitudes at the phase's farthest instant (they grow with τ − t0).
+            let d = (hi - p.t0).abs();
+            let (t_sd, t_sdd, t_j) = (p.sd.abs(), (d * p.sdd).abs(), (d * d * p.jerk).abs());
+            err_s = err_s.max(p.s.abs() + d * t_sd + d * t_sdd + d * t_j);
+            err_sd = err_sd.max(t_sd + t_sdd + t_j);
+            err_sdd = err_sdd.max(p.sdd.abs() + (d * p.jerk).abs());
         }
-        // Relative padding for the float evaluation of the polynomials.
+        // `eval` clamps ṡ at 0 (rounding must not run the path backwards): the executed ṡ is
+        // at most max(ṡ_hi, 0). Without this, a window whose raw ṡ lies below −1e-15
+        // throughout (rounding at the end of a braking ramp) would get an upper end below the
+        // executed 0 (session 14, while splitting `f4_path_ranges_enclose` for Kani).
+        sd_hi = sd_hi.max(0.0);
+        // Padding for the float evaluation of the polynomials: relative to the value, plus
+        // 1e-14 of the terms' magnitudes. Each evaluation (here and in `eval`) rounds at most
+        // ~8 times (the time difference, two products and two sums per level), so it is within
+        // 8u ≈ 9e-16 of the terms' sum of the exact polynomial; two evaluations differ by at
+        // most twice that. Session 14: with the relative padding alone, ṡ at an instant just
+        // inside a phase exceeded the range by 5e-16 (1 in 10⁶ random windows).
         let pad = |x: f64| x.abs() * 1e-12 + 1e-15;
-        let s_lo = a.s - pad(a.s);
-        let s_hi = b.s + pad(b.s);
+        let (err_s, err_sd, err_sdd) = (err_s * 1e-14, err_sd * 1e-14, err_sdd * 1e-14);
+        let s_lo = a.s - pad(a.s) - err_s;
+        let s_hi = b.s + pad(b.s) + err_s;
         (
             s_lo,
             s_hi,
-            sd_lo - pad(sd_lo),
-            sd_hi + pad(sd_hi),
-            sdd + pad(sdd),
+            sd_lo - pad(sd_lo) - err_sd,
+            sd_hi + pad(sd_hi) + err_sd,
+            sdd + pad(sdd) + err_sdd,
         )
     }
 }

@@ -37,6 +37,45 @@ pub fn sqrt_stub_range(x: f64) -> (f64, f64) {
     (0.0, x + 1.0)
 }
 
+/// Bound on every field of the profiles `stubs::any_bounded_profile` draws: phase start times
+/// and the settle time in `[0, PROFILE_BOUND]` (s), every other field in `[−PROFILE_BOUND,
+/// PROFILE_BOUND]`. Large enough for every profile f4 plans (checked by its twin,
+/// `profile_in_bounded_range`: a slow jerk of 0.05/s³ from s̈ = 50/s² takes hours and runs s
+/// to ~1e8), small enough that evaluating a profile within `PROFILE_BOUND` s of its start
+/// cannot overflow (|s| ≤ 1e9 + 1e9·(1e9 + 1e9·(1e9 + 1e18)) ≈ 1e36).
+pub const PROFILE_BOUND: f64 = 1e9;
+
+/// Significand bits of the fields of the profiles `stubs::any_bounded_profile` draws.
+pub const PROFILE_BITS: u32 = 6;
+
+/// Whether `p` lies in the range `stubs::any_bounded_profile` draws from ([`PROFILE_BOUND`]).
+pub fn profile_in_bounded_range(p: &pacs_motion::scaling::SpeedProfile) -> bool {
+    let (phases, n, settle, target, acc, jerk) = p.to_parts();
+    let b = PROFILE_BOUND;
+    let within = |x: f64| (-b..=b).contains(&x);
+    (1..=4).contains(&n)
+        && phases.iter().all(|&(t0, s, sd, sdd, j)| {
+            (0.0..=b).contains(&t0) && within(s) && within(sd) && within(sdd) && within(j)
+        })
+        && (0.0..=b).contains(&settle)
+        && within(target)
+        && within(acc)
+        && within(jerk)
+}
+
+/// The range `[x(1 − 1e-12) − 1e-300, x(1 + 1e-12) + 1e-300]` (each end rounded to nearest) in
+/// which `stubs::sqrt_by_square` keeps the rounded square `fl(r·r)` of the root `r` it draws for a
+/// positive finite `x`. It contains `fl(fl(√x)²)` for IEEE `√`: `fl(√x) = √x(1 + δ)` with
+/// `|δ| ≤ 2⁻⁵³`, so its square is `x(1 + δ)²` within `2.3e-16·x` of `x`, and rounding the
+/// product adds at most `1.2e-16` relative, or `2⁻¹⁰⁷⁴` absolute when it underflows; both ends
+/// carry at least `1e-12·x`/`1e-300` of slack, far above these and above their own rounding
+/// (monotone rounding keeps `fl(x(1 − 1e-12)) ≤ x − 2.3e-16·x`). Near overflow the square may
+/// round to +∞, and the upper end `fl(x(1 + 1e-12))` is then +∞ too. Checked against the
+/// library's `√` by `tests::sqrt_lies_in_the_stub_range`.
+pub fn sqrt_square_range(x: f64) -> (f64, f64) {
+    (x * (1.0 - 1e-12) - 1e-300, x * (1.0 + 1e-12) + 1e-300)
+}
+
 /// Stubs for `#[kani::stub]` (`harness!(…, stub = (f => g), …)`): each over-approximates the
 /// function it replaces, so a claim proved with the stub holds for the function.
 #[cfg(kani)]
@@ -73,6 +112,37 @@ pub mod stubs {
         )
     }
 
+    /// Any speed profile of 1 to 4 phases with every field in the range of
+    /// [`crate::PROFILE_BOUND`] (start and settle times in `[0, 1e9]` s, the rest in
+    /// `[−1e9, 1e9]`) and with significands of at most [`crate::PROFILE_BITS`] bits, whatever the
+    /// arguments. Bounded (unlike [`any_speed_profile`]) so that evaluating it cannot overflow:
+    /// Kani checks every float operation for NaN. Short significands keep the evaluations'
+    /// multipliers small: a claim proved with this stub holds for such profiles (f4: the ends of
+    /// a window of `ranges`); the twin checks the planner's own profiles, every one of which lies
+    /// in the bounded range ([`crate::profile_in_bounded_range`]).
+    pub fn any_bounded_profile(
+        _start: pacs_motion::scaling::PathState,
+        _target: f64,
+        _acc: f64,
+        _jerk: f64,
+    ) -> pacs_motion::scaling::SpeedProfile {
+        use pacs_proof_kit::Source;
+        let mut src = pacs_proof_kit::KaniSource {
+            bits: crate::PROFILE_BITS,
+        };
+        let n = 1 + src.index(4);
+        let b = crate::PROFILE_BOUND;
+        let mut field = || src.f64_in(-b, b);
+        let phases = [
+            (field().abs(), field(), field(), field(), field()),
+            (field().abs(), field(), field(), field(), field()),
+            (field().abs(), field(), field(), field(), field()),
+            (field().abs(), field(), field(), field(), field()),
+        ];
+        let settle = field().abs();
+        pacs_motion::scaling::SpeedProfile::from_parts(phases, n, settle, field(), field(), field())
+    }
+
     /// Any value of [`crate::sqrt_stub_range`]`(x)` = `[0, x + 1]` for a positive finite `x`,
     /// else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for NaN). Over-approximates
     /// IEEE `√` (the range contains it: `sqrt_stub_range`'s doc and test). Tighter than
@@ -90,10 +160,65 @@ pub mod stubs {
         kani::assume(r >= lo && r <= hi);
         r
     }
+
+    /// Any finite `r ≥ 0` whose rounded square `fl(r·r)` lies in [`crate::sqrt_square_range`]`(x)`
+    /// for a positive finite `x`, else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for
+    /// NaN). Over-approximates IEEE `√` (the range contains `fl(fl(√x)²)`:
+    /// `sqrt_square_range`'s doc and test) with one multiplier instead of the exact contract of
+    /// `pacs_reach::ieee::sqrt`, and, unlike `sqrt_at_most_x_plus_one`, ties the root to `x`
+    /// within 1e-12 relative, which claims on the planner's ramps need (e1: the last ramp
+    /// brings s̈ back to 0 only if the peak s̈ is at least the start's).
+    pub fn sqrt_by_square(x: f64) -> f64 {
+        if x.is_nan() || x < 0.0 {
+            return f64::NAN;
+        }
+        if x == 0.0 || x == f64::INFINITY {
+            return x;
+        }
+        let (lo, hi) = crate::sqrt_square_range(x);
+        let r: f64 = kani::any();
+        kani::assume(r >= 0.0 && r.is_finite());
+        let rr = r * r;
+        kani::assume(rr >= lo && rr <= hi);
+        r
+    }
 }
 
 #[cfg(test)]
 mod tests {
+    /// IEEE `√` of every argument below meets `stubs::sqrt_by_square`'s constraint: its
+    /// rounded square lies in [`crate::sqrt_square_range`].
+    #[test]
+    fn sqrt_meets_the_square_stub() {
+        let mut random = crate::RandomSource::new("sqrt_square_range", 0);
+        let mut xs = vec![
+            f64::MIN_POSITIVE,
+            5e-324,
+            1e-310,
+            1.0,
+            2.0,
+            0.25,
+            f64::MAX,
+            1e300,
+            1e-300,
+        ];
+        for _ in 0..200_000 {
+            let bits = random.next_u64() & 0x7fef_ffff_ffff_ffff;
+            let x = f64::from_bits(bits);
+            let r = f64::from_bits(random.next_u64() >> 12 | 0x3ff0_0000_0000_0000);
+            xs.extend([x, r * r, (r * r).next_up(), (r * r).next_down()]);
+        }
+        for x in xs.into_iter().filter(|x| x.is_finite() && *x > 0.0) {
+            let (lo, hi) = crate::sqrt_square_range(x);
+            let r = pacs_reach::ieee::sqrt(x);
+            let rr = r * r;
+            assert!(
+                r >= 0.0 && lo <= rr && rr <= hi,
+                "√{x} = {r}: r² = {rr} outside [{lo}, {hi}]"
+            );
+        }
+    }
+
     /// The stub range of `√` contains the library's `√` (IEEE 754, correctly rounded) on
     /// squares, their neighbours, tiny, huge and random positive floats.
     #[test]

@@ -14,11 +14,27 @@ const EPS: f64 = 1e-9;
 /// Limits `(acc, jerk)` and a consistent start state: a decelerating state can bring s̈ to 0
 /// before ṡ reaches 0. Others make `plan` undershoot (raw ṡ < 0, s decreasing); `admissible`
 /// rejects those (`sd_lo < -1e-9`), so the shield never executes them. `None`: rejected.
+///
+/// Under Kani the limits are corners and the middle of the twin's ranges (acc ∈ {0.05, 1, 50},
+/// jerk ∈ {0.05, 10, 500}: the planner's arithmetic then divides by constants) and the start
+/// position is 0 (s only shifts the positions, whose claims are the twin's); the twin draws all
+/// of them from the whole ranges.
 fn consistent_start<S: Source>(s: &mut S) -> Option<(f64, f64, PathState)> {
-    let acc = s.f64_in(0.05, 50.0);
-    let jerk = s.f64_in(0.05, 500.0);
+    let (acc, jerk, s0) = if cfg!(kani) {
+        (
+            [0.05, 1.0, 50.0][s.index(3)],
+            [0.05, 10.0, 500.0][s.index(3)],
+            0.0,
+        )
+    } else {
+        (
+            s.f64_in(0.05, 50.0),
+            s.f64_in(0.05, 500.0),
+            s.f64_in(0.0, 10.0),
+        )
+    };
     let start = PathState {
-        s: s.f64_in(0.0, 10.0),
+        s: s0,
         sd: s.f64_in(0.0, 1.5),
         sdd: s.f64_in(-acc, acc),
     };
@@ -40,16 +56,26 @@ fn braking<S: Source>(s: &mut S) {
         "not at rest at settle {settle}: {rest:?}"
     );
     let later = p.eval(settle + s.f64_in(0.0, 100.0));
-    assert!(later.sd == 0.0 && later.sdd == 0.0 && later.s == rest.s);
-    assert!(p.settle_s() == rest.s);
+    assert!(later.sd == 0.0 && later.sdd == 0.0);
     // The path never runs backwards at any instant.
     let any = p.eval(s.f64_in(0.0, settle));
     assert!(any.sd >= 0.0, "ṡ {} < 0", any.sd);
+    // s̈ reaches 0 continuously at the settle time: just before it, on the last jerk ramp, s̈ is
+    // within rounding of 0 (mutant x8, a last ramp half as long, leaves half the peak s̈).
+    let before = p.eval(settle.next_down());
+    assert!(
+        before.sdd.abs() <= 1e-9 * (1.0 + acc + start.sdd.abs()),
+        "s̈ = {} just before the settle time {settle}: a jump to rest",
+        before.sdd
+    );
     if cfg!(kani) {
-        // Split (proofs/README.md): the tolerance claims on the cubic evaluation below (peak
-        // speed, s and ṡ monotone, jerk bound) are the twin's; Kani checks the claims above.
+        // Split (proofs/README.md): the position claims (s fixed from the settle time on: they
+        // need the planner's cubic evaluation to stay finite) and the tolerance claims on the
+        // cubic evaluation below (peak speed, s and ṡ monotone, jerk bound) are the twin's;
+        // Kani checks the claims above.
         return;
     }
+    assert!(later.s == rest.s && p.settle_s() == rest.s);
     // Two times in [0, settle].
     let t1 = s.f64_in(0.0, settle);
     let t2 = s.f64_in(t1, settle);
@@ -93,16 +119,16 @@ fn braking<S: Source>(s: &mut S) {
         t2 - t1
     );
 }
-// Under Kani `√x` is any value in `[0, x + 1]` (`stubs::sqrt_at_most_x_plus_one`, an
-// over-approximation): the claims Kani checks (at rest from the settle time on, ṡ ≥ 0) hold
-// whatever the ramp lengths are, as the last phase is set to the target, provided the ramps
-// are short enough for the cubic evaluation not to overflow (with `sqrt_any_nonneg`'s 1e160
-// they were not).
+// Under Kani `√x` is any `r ≥ 0` with `fl(r²)` within 1e-12 relative of `x`
+// (`stubs::sqrt_by_square`, an over-approximation of IEEE `√`): the claims Kani checks (at rest
+// from the settle time on, ṡ ≥ 0, s̈ continuous at the settle time) hold for any such root. With
+// `sqrt_at_most_x_plus_one` (any value in [0, x + 1], session 13) the continuity claim is false:
+// a peak below the start's s̈ skips the first ramp and the last one ends away from 0.
 harness!(
     e1_braking_profile,
     unwind = 6,
     bits = 4,
-    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_at_most_x_plus_one),
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
     cases = crate::DEFAULT_CASES,
     braking
 );
@@ -116,15 +142,26 @@ fn path_ranges<S: Source>(s: &mut S) {
     };
     let target = if s.bool() { 0.0 } else { s.f64_in(0.0, 1.5) };
     let p = SpeedProfile::plan(start, target, acc, jerk);
-    let horizon = p.settle_time() + 1.0;
+    // Under Kani `plan` is `stubs::any_bounded_profile`: any profile with bounded fields, which
+    // contains every profile planned here (checked in the twin).
+    assert!(
+        cfg!(kani) || crate::profile_in_bounded_range(&p),
+        "planned profile outside the stub's range: {p:?}"
+    );
+    let horizon = if cfg!(kani) {
+        crate::PROFILE_BOUND
+    } else {
+        p.settle_time() + 1.0
+    };
     let ta = s.f64_in(0.0, horizon);
     let tb = s.f64_in(ta, horizon);
     let (s_lo, s_hi, sd_lo, sd_hi, sdd_max) = p.ranges(ta, tb);
     if cfg!(kani) {
-        // Split (proofs/README.md): Kani checks the ends of the window, where `ranges` and `eval`
-        // must agree on the phase and the state (s from below at `ta`, from above at `tb`: the
-        // bound between them rests on s being monotone, a tolerance claim on the cubic
-        // evaluation); the twin checks every instant in between.
+        // Split (proofs/README.md): Kani checks the ends of the window for any profile with
+        // bounded fields, where `ranges` and `eval` must agree on the phase and the state (s from
+        // below at `ta`, from above at `tb`; ṡ with `eval`'s clamp at 0): the bound between them
+        // rests on s being monotone and the float evaluation of the cubic staying within the
+        // padding, properties of planned profiles only, which the twin checks at every instant.
         let (at_a, at_b) = (p.eval(ta), p.eval(tb));
         assert!(
             s_lo <= at_a.s && at_b.s <= s_hi,
@@ -158,6 +195,7 @@ harness!(
     f4_path_ranges_enclose,
     unwind = 6,
     bits = 4,
+    stub = (pacs_motion::scaling::SpeedProfile::plan => crate::stubs::any_bounded_profile),
     cases = crate::DEFAULT_CASES,
     path_ranges
 );
