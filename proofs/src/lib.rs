@@ -29,14 +29,6 @@ pub fn profile_in_stub_range(p: &pacs_motion::scaling::SpeedProfile) -> bool {
         && [settle, target, acc, jerk].into_iter().all(f64::is_finite)
 }
 
-/// The range `[0, x + 1]` (`x + 1` rounded to nearest) that `stubs::sqrt_at_most_x_plus_one`
-/// draws the square root of a positive finite `x` from. It contains IEEE `√x`: over the reals
-/// `√x ≤ max(1, x) ≤ x + 1`, and rounding to nearest is monotone, so `fl(√x) ≤ max(1, x) ≤
-/// fl(x + 1)`. Checked against the library's `√` by `tests::sqrt_lies_in_the_stub_range`.
-pub fn sqrt_stub_range(x: f64) -> (f64, f64) {
-    (0.0, x + 1.0)
-}
-
 /// Bound on every field of the profiles `stubs::any_bounded_profile` draws: phase start times
 /// and the settle time in `[0, PROFILE_BOUND]` (s), every other field in `[−PROFILE_BOUND,
 /// PROFILE_BOUND]`. Large enough for every profile f4 plans (checked by its twin,
@@ -143,29 +135,11 @@ pub mod stubs {
         pacs_motion::scaling::SpeedProfile::from_parts(phases, n, settle, field(), field(), field())
     }
 
-    /// Any value of [`crate::sqrt_stub_range`]`(x)` = `[0, x + 1]` for a positive finite `x`,
-    /// else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for NaN). Over-approximates
-    /// IEEE `√` (the range contains it: `sqrt_stub_range`'s doc and test). Tighter than
-    /// session 12's stub (any non-negative value below 1e160) where a claim needs the ramp lengths of a profile bounded by its
-    /// inputs (e1: a ramp of 1e160 s overflows the cubic evaluation to ±∞ and then NaN).
-    pub fn sqrt_at_most_x_plus_one(x: f64) -> f64 {
-        if x.is_nan() || x < 0.0 {
-            return f64::NAN;
-        }
-        if x == 0.0 || x == f64::INFINITY {
-            return x;
-        }
-        let (lo, hi) = crate::sqrt_stub_range(x);
-        let r: f64 = kani::any();
-        kani::assume(r >= lo && r <= hi);
-        r
-    }
-
     /// Any finite `r ≥ 0` whose rounded square `fl(r·r)` lies in [`crate::sqrt_square_range`]`(x)`
     /// for a positive finite `x`, else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for
     /// NaN). Over-approximates IEEE `√` (the range contains `fl(fl(√x)²)`:
     /// `sqrt_square_range`'s doc and test) with one multiplier instead of the exact contract of
-    /// `pacs_reach::ieee::sqrt`, and, unlike `sqrt_at_most_x_plus_one`, ties the root to `x`
+    /// `pacs_reach::ieee::sqrt`, and, unlike session 13's `sqrt_at_most_x_plus_one` (any value in `[0, x + 1]`), ties the root to `x`
     /// within 1e-12 relative, which claims on the planner's ramps need (e1: the last ramp
     /// brings s̈ back to 0 only if the peak s̈ is at least the start's).
     pub fn sqrt_by_square(x: f64) -> f64 {
@@ -216,35 +190,6 @@ mod tests {
                 r >= 0.0 && lo <= rr && rr <= hi,
                 "√{x} = {r}: r² = {rr} outside [{lo}, {hi}]"
             );
-        }
-    }
-
-    /// The stub range of `√` contains the library's `√` (IEEE 754, correctly rounded) on
-    /// squares, their neighbours, tiny, huge and random positive floats.
-    #[test]
-    fn sqrt_lies_in_the_stub_range() {
-        let mut random = crate::RandomSource::new("sqrt_stub_range", 0);
-        let mut next = || random.next_u64();
-        let mut xs = vec![
-            f64::MIN_POSITIVE,
-            5e-324,
-            1.0,
-            2.0,
-            0.25,
-            f64::MAX,
-            1e300,
-            1e-300,
-        ];
-        for _ in 0..200_000 {
-            let bits = next() & 0x7fef_ffff_ffff_ffff;
-            let x = f64::from_bits(bits);
-            let r = f64::from_bits(next() >> 12 | 0x3ff0_0000_0000_0000);
-            xs.extend([x, r * r, (r * r).next_up(), (r * r).next_down()]);
-        }
-        for x in xs.into_iter().filter(|x| x.is_finite() && *x > 0.0) {
-            let (lo, hi) = crate::sqrt_stub_range(x);
-            let r = pacs_reach::ieee::sqrt(x);
-            assert!(lo <= r && r <= hi, "√{x} = {r} outside [{lo}, {hi}]");
         }
     }
 }
