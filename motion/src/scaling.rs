@@ -560,4 +560,64 @@ mod tests {
             }
         }
     }
+
+    /// `ranges` encloses `eval` at instants next to a phase boundary, where the phase before it
+    /// and the one after it evaluate ṡ differently by rounding (the case f4's twin found at 10⁶
+    /// windows, session 14: ṡ 5e-16 above the range one ulp inside a phase, with padding
+    /// relative to the value only). Windows from just before each boundary (a few ulps to 1e-6 s)
+    /// to beyond it, on 20 000 planned profiles; also catches a `ranges` without the terms'
+    /// padding or sampling a phase's end with the next phase's polynomial.
+    #[test]
+    fn ranges_enclose_eval_next_to_phase_boundaries() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut unit = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for _ in 0..20_000 {
+            let acc = 0.05 + 50.0 * unit();
+            let jerk = 0.05 + 500.0 * unit();
+            let sdd0 = acc * (2.0 * unit() - 1.0);
+            let mut sd0 = 1.5 * unit();
+            if sdd0 < 0.0 {
+                sd0 = sd0.max(sdd0 * sdd0 / (2.0 * jerk));
+            }
+            let target = if unit() < 0.5 { 0.0 } else { 1.5 * unit() };
+            let p = SpeedProfile::plan(
+                PathState {
+                    s: 10.0 * unit(),
+                    sd: sd0,
+                    sdd: sdd0,
+                },
+                target,
+                acc,
+                jerk,
+            );
+            for k in 1..p.n {
+                let t_b = p.phases[k].t0;
+                for back in [4.0 * f64::EPSILON * t_b, 1e-12 * t_b, 1e-9, 1e-6] {
+                    let ta = (t_b - back).max(0.0);
+                    let tb = t_b + back;
+                    let (s_lo, s_hi, sd_lo, sd_hi, sdd_max) = p.ranges(ta, tb);
+                    let mut tau = ta;
+                    for _ in 0..8 {
+                        let e = p.eval(tau);
+                        assert!(
+                            sd_lo <= e.sd && e.sd <= sd_hi,
+                            "ṡ({tau}) = {} ∉ [{sd_lo}, {sd_hi}] over [{ta}, {tb}]",
+                            e.sd
+                        );
+                        assert!(s_lo <= e.s && e.s <= s_hi, "s({tau}) = {}", e.s);
+                        assert!(e.sdd.abs() <= sdd_max, "|s̈({tau})| = {}", e.sdd);
+                        checked += 1;
+                        tau = tau.next_up().min(tb);
+                    }
+                }
+            }
+        }
+        assert!(checked > 100_000, "only {checked} instants checked");
+    }
 }
