@@ -338,7 +338,8 @@ impl SpeedProfile {
     /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| of [`Self::eval`] lie
     /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (Kani: the ends of
     /// the window for any profile with bounded fields; the twin: any instant on planned
-    /// profiles); mutant `x12` caught.
+    /// profiles; `motion`'s `ranges_enclose_eval_next_to_phase_boundaries` at every phase
+    /// boundary); mutants `x12` and `x26` caught.
     pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
