@@ -357,8 +357,12 @@ fn bang_bang_enclosed<S: Source>(s: &mut S) {
     let (v_max, a_max, j_max) = limits(s, (V_HALF[0], A_TWENTY[0], J_TEN_THOUSAND[0]));
     let lim = joint(v_max, a_max, j_max);
     let (dt, t0) = span(s);
-    let q0 = s.f64_in(-2.0, 2.0);
-    let v0 = s.f64_in(-v_max, v_max);
+    // Under Kani one start (the instant stays symbolic); the twin draws any.
+    let (q0, v0) = if cfg!(kani) {
+        (1.0, 0.3)
+    } else {
+        (s.f64_in(-2.0, 2.0), s.f64_in(-v_max, v_max))
+    };
     // Under Kani the extreme motion (full acceleration, switch to full deceleration halfway:
     // it attains the upper envelope of the position); the twin draws any accelerations and
     // switch time.
@@ -464,15 +468,36 @@ fn jerk_enclosed<S: Source>(s: &mut S) {
     } else {
         j_max.min(4.0 * a_max / dt)
     };
-    let p0 = Piece {
-        t: 0.0,
-        q: s.f64_in(-2.0, 2.0),
-        v: s.f64_in(-v_max, v_max),
-        a: s.f64_in(-a_max, a_max),
-        j: s.f64_in(-j_eff, j_eff),
+    // Under Kani one motion (q̈ from −A up by JΔ/2, then back to −A; the instant stays
+    // symbolic); the twin draws any start, jerks and switch times.
+    let p0 = if cfg!(kani) {
+        Piece {
+            t: 0.0,
+            q: 1.0,
+            v: 0.3,
+            a: -a_max,
+            j: j_max,
+        }
+    } else {
+        Piece {
+            t: 0.0,
+            q: s.f64_in(-2.0, 2.0),
+            v: s.f64_in(-v_max, v_max),
+            a: s.f64_in(-a_max, a_max),
+            j: s.f64_in(-j_eff, j_eff),
+        }
     };
-    let t1 = s.f64_in(0.0, dt);
-    let p1 = p0.then(t1, s.f64_in(-j_eff, j_eff));
+    let t1 = if cfg!(kani) {
+        dt / 2.0
+    } else {
+        s.f64_in(0.0, dt)
+    };
+    let j1 = if cfg!(kani) {
+        -j_max
+    } else {
+        s.f64_in(-j_eff, j_eff)
+    };
+    let p1 = p0.then(t1, j1);
     // A third piece in the twin only.
     let t2 = if cfg!(kani) { dt } else { s.f64_in(t1, dt) };
     let p2 = if cfg!(kani) {
