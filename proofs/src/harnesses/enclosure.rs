@@ -21,9 +21,11 @@
 //! Under Kani each split takes one corner of the twin's limit ranges (`v_max ∈ [0.5, 3]`,
 //! `a_max ∈ [1, 20]`, `j_max ∈ [100, 10 000]`) as constants (the accessors of `JointLimits`
 //! stubbed, [`kani_limits`]), the span `Δ = 0.01` s from `t₀ = 10` s ([`span`]), 4-bit inputs
-//! and one symbolic instant; `h2_bang_bang_enclosed` the extreme motion (`+A` then `−A` from
-//! `Δ/2`) from any start, `h2_contradiction_inconsistent` three velocity pairs with any
-//! positions, side and excess. Each twin draws the whole ranges.
+//! and one symbolic instant; `h2_bang_bang_enclosed` and `h2_jerk_enclosed` one motion each
+//! (start `q₀ = 1`, `q̇₀ = 0.3`; bang-bang `+A` then `−A` from `Δ/2`; jerk `+J` then `−J` from
+//! `Δ/2` with `q̈₀ = −A`) at any instant (a symbolic `q̇₀` as well timed out at 120 s),
+//! `h2_contradiction_inconsistent` three velocity pairs with any positions, side and excess.
+//! Each twin draws the whole ranges.
 
 use crate::{Source, harness};
 use pacs_audit::enclosure::{Sample, SpanBoxes, span_boxes};
