@@ -35,7 +35,8 @@ pub const CHECKS: &[Check] = &[
     Check {
         check: "span enclosures and consistency of logged positions, velocities and accelerations",
         backed_by: &[
-            "proofs: h2_span_enclosure_sound (property twin; its Kani proof does not yet finish within the budget: proofs/README.md)",
+            "proofs: h2_span_enclosure_sound (property test of the whole claim)",
+            "proofs: h2_contradiction_inconsistent, h2_bang_bang_enclosed, h2_jerk_enclosed (Kani, on one corner of the limits and one span each: proofs/README.md)",
             "audit/tests/audit_consistency.rs",
         ],
     },

@@ -26,7 +26,9 @@
 //! in floating point have their rounding error bounded and added to the radius.
 
 pub use crate::error::ReachError;
-use crate::rounding::{INFLATE, TINY, add_down, add_up, dist3_up, mul_up, sub_down, sub_up};
+use crate::rounding::{
+    INFLATE, TINY, add_down, add_up, dist3_up, mul_down, mul_up, sub_down, sub_up,
+};
 use nalgebra::{Point3, Vector3};
 use pacs_models::human::Extremity;
 use pacs_models::{Capsule, HumanModel};
@@ -399,18 +401,25 @@ impl HumanReach {
     /// (both measured within `e_pos`). A measurement that contradicts it (e.g. a hand 1.4 m from
     /// the shoulder with a 1.0 m arm) must not be trusted: the extremity's parts then keep the
     /// speed-bounded (`vel`) occupancy, which does not rest on the extremity length.
+    ///
+    /// Decided soundly: consistent only if an upper bound of the exact distance is at most a
+    /// lower bound of the exact limit, so a measurement that contradicts the assumption by any
+    /// amount, an ulp included, keeps the `vel` occupancy (which contains every `pos` motion:
+    /// those are speed-bounded too). Before session 14 a lower bound of the distance was
+    /// compared with an upper bound of the limit, which let contradictions of a few ulps use the
+    /// `pos` ball.
     fn extremity_consistent(&self, m: &HumanMeasurement, e: &Extremity) -> bool {
         let base = m.positions[e.base];
-        let limit = add_up(
-            add_up(e.length, e.thickness * 0.5),
-            mul_up(2.0, self.model.measurement_error_pos()),
+        let base = [base.x, base.y, base.z];
+        let limit = add_down(
+            add_down(e.length, mul_down(e.thickness, 0.5)),
+            mul_down(2.0, self.model.measurement_error_pos()),
         );
         e.body_parts.iter().all(|&p| {
             let bp = &self.model.body_parts()[p];
             [bp.from, bp.to].iter().all(|&k| {
-                let d = m.positions[k] - base;
-                // A lower bound of the distance: flag only clear contradictions.
-                crate::rounding::norm3_down(d.x, d.y, d.z) <= limit
+                let q = m.positions[k];
+                dist3_up(&[q.x, q.y, q.z], &base) <= limit
             })
         })
     }

@@ -402,6 +402,36 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
     }
 }
 
+/// The consistency test of `pos` is decided soundly at the boundary (session 14): with a limit
+/// that is a float exactly (length 0.75 + thickness/2 0.0625 + 2·e_p 0.0625 = 0.875 m), a hand
+/// measured one ulp beyond it contradicts the length and keeps the `vel` capsule (before, a
+/// lower bound of the distance against an upper bound of the limit gave it the extremity ball),
+/// and a hand clearly inside (1e-9 m) keeps the extremity ball.
+#[test]
+fn pos_consistency_is_decided_soundly_at_the_limit() {
+    let h = HumanModel::from_json(
+        r#"{"keypoints": ["s", "h"], "v_max": [2.0, 2.0], "a_max": [10.0, 10.0],
+            "body_parts": [{"name": "arm", "from": "s", "to": "h", "thickness": 0.125}],
+            "measurement_error_pos": 0.03125, "measurement_error_vel": 0.1, "delay": 0.0,
+            "extremities": [{"name": "a", "base": "s", "length": 0.75, "thickness": 0.125, "body_parts": ["arm"]}]}"#,
+    )
+    .unwrap();
+    let occupancy = |hand_x: f64, kind| {
+        let m = HumanMeasurement::new(&h, 0.0, &[[0.0; 3], [hand_x, 0.0, 0.0]], None).unwrap();
+        HumanReach::new(h.clone(), kind)
+            .occupancy(&m, 0.0, 0.1)
+            .unwrap()[0]
+    };
+    let origin = Point3::new(0.0, 0.0, 0.0);
+    let beyond = 0.875f64.next_up();
+    let c = occupancy(beyond, HumanReachModel::Pos);
+    assert_eq!(c, occupancy(beyond, HumanReachModel::Vel), "one ulp beyond");
+    assert_eq!(c.p2(), Point3::new(beyond, 0.0, 0.0));
+    let inside = 0.875 - 1e-9;
+    let c = occupancy(inside, HumanReachModel::Pos);
+    assert_eq!((c.p1(), c.p2()), (origin, origin), "inside");
+}
+
 #[test]
 fn invalid_inputs_are_errors() {
     let h = default_human();

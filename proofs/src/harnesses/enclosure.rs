@@ -152,29 +152,17 @@ fn span<S: Source>(s: &mut S) -> (f64, f64) {
 
 /// One joint with positions in `[−10, 10]` and the given limits.
 ///
-/// Under Kani a placeholder instead (five empty vectors): `JointLimits::new` validates values
-/// it reads back from the heap, which symbolic execution does not fold to constants, so its
-/// error paths (`format!`, `String` growth, the allocator) stayed in the formula — 38 000 of the
-/// 225 000 steps of `h2_contradiction_inconsistent`, and most of its 5 000 checks. The Kani
-/// proofs read the limits only through the stubbed accessors ([`kani_limits`]), which return
-/// the corner's values; the placeholder itself is never read.
+/// Under Kani a placeholder instead (`JointLimits::placeholder_for_kani`, no joints):
+/// `JointLimits::new` validates values it reads back from the heap, which symbolic execution does
+/// not fold to constants, so its error paths (`format!`, `String` growth, the allocator) stayed
+/// in the formula — 38 000 of the 225 000 steps of `h2_contradiction_inconsistent`, and most of
+/// its 5 000 checks. The Kani proofs read the limits only through the stubbed accessors
+/// ([`kani_limits`]), which return the corner's values; the placeholder itself is never read.
 fn joint(v_max: f64, a_max: f64, j_max: f64) -> JointLimits {
     #[cfg(kani)]
     {
         let _ = (v_max, a_max, j_max);
-        // SAFETY: `JointLimits` has exactly five fields, each a `Vec<f64>` (`q_min`, `q_max`,
-        // `v_max`, `a_max`, `j_max`); `transmute` checks that the sizes agree (5 × 24 bytes, so
-        // no padding), hence the fields tile the struct in some order and each is one of the
-        // five valid empty vectors. The value is only dropped (nothing to free).
-        return unsafe {
-            std::mem::transmute::<[Vec<f64>; 5], JointLimits>([
-                Vec::new(),
-                Vec::new(),
-                Vec::new(),
-                Vec::new(),
-                Vec::new(),
-            ])
-        };
+        return JointLimits::placeholder_for_kani();
     }
     #[cfg(not(kani))]
     JointLimits::new(
