@@ -36,7 +36,9 @@ pub const CHECKS: &[Check] = &[
         check: "span enclosures and consistency of logged positions, velocities and accelerations",
         backed_by: &[
             "proofs: h2_span_enclosure_sound (property test of the whole claim)",
-            "proofs: h2_contradiction_inconsistent, h2_bang_bang_enclosed, h2_jerk_enclosed (Kani, on one corner of the limits and one span each: proofs/README.md)",
+            "proofs: h2_contradiction_inconsistent (Kani: contradicting positions judged inconsistent, one corner of the limits and one span)",
+            "proofs: h2_bang_bang_enclosed (Kani: one extreme bang-bang motion enclosed at any instant)",
+            "proofs: h2_jerk_enclosed (Kani: one extreme jerk-limited motion enclosed at any instant)",
             "audit/tests/audit_consistency.rs",
         ],
     },
@@ -51,7 +53,8 @@ pub const CHECKS: &[Check] = &[
     Check {
         check: "the one ISO/TS 15066 rule (SSM, PFL, clamping) shared with the shield",
         backed_by: &[
-            "proofs: i1_rule_judgement_sound (Kani: the narrow phase for any contact masks containing the true contacts) and i1_broad_phase_boxes_contain (Kani: the broad phase's boxes contain the capsules)",
+            "proofs: i1_rule_judgement_sound (Kani: the narrow phase for any contact masks containing the true contacts)",
+            "proofs: i1_broad_phase_boxes_contain (Kani: the broad phase's boxes contain the capsules)",
             "proofs: i1_rule_sound (property test of the whole rule)",
             "proofs/mutants: x9, x10 caught (x10 also by Kani)",
         ],
