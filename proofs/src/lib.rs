@@ -63,7 +63,7 @@ pub fn profile_in_bounded_range(p: &pacs_motion::scaling::SpeedProfile) -> bool 
 /// carry at least `1e-12·x`/`1e-300` of slack, far above these and above their own rounding
 /// (monotone rounding keeps `fl(x(1 − 1e-12)) ≤ x − 2.3e-16·x`). Near overflow the square may
 /// round to +∞, and the upper end `fl(x(1 + 1e-12))` is then +∞ too. Checked against the
-/// library's `√` by `tests::sqrt_lies_in_the_stub_range`.
+/// library's `√` by `tests::sqrt_meets_the_square_stub`.
 pub fn sqrt_square_range(x: f64) -> (f64, f64) {
     (x * (1.0 - 1e-12) - 1e-300, x * (1.0 + 1e-12) + 1e-300)
 }
@@ -139,8 +139,8 @@ pub mod stubs {
     /// for a positive finite `x`, else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for
     /// NaN). Over-approximates IEEE `√` (the range contains `fl(fl(√x)²)`:
     /// `sqrt_square_range`'s doc and test) with one multiplier instead of the exact contract of
-    /// `pacs_reach::ieee::sqrt`, and, unlike session 13's `sqrt_at_most_x_plus_one` (any value in `[0, x + 1]`), ties the root to `x`
-    /// within 1e-12 relative, which claims on the planner's ramps need (e1: the last ramp
+    /// `pacs_reach::ieee::sqrt`, and, unlike session 13's stub (any value in `[0, x + 1]`),
+    /// ties the root to `x` within 1e-12 relative, which claims on the planner's ramps need (e1: the last ramp
     /// brings s̈ back to 0 only if the peak s̈ is at least the start's).
     pub fn sqrt_by_square(x: f64) -> f64 {
         if x.is_nan() || x < 0.0 {

@@ -8,7 +8,7 @@
 //! random times in each query interval, must lie in the reported capsule.
 
 use nalgebra::{Point3, Vector3};
-use pacs_models::{HumanModel, default_human};
+use pacs_models::{Capsule, HumanModel, default_human};
 use pacs_reach::geometry::capsule_contains_point;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use proptest::prelude::*;
@@ -366,25 +366,34 @@ fn pos_hand_computed() {
     assert!(close(r, 1.35), "{r}");
 }
 
+/// The occupancy over [0, 0.1] s of the one body part of a one-arm model (shoulder at the
+/// origin, hand measured at `(hand_x, 0, 0)`; arm extremity of `length` and `thickness`, measurement
+/// error `e_p`, 2 m/s, no delay) with reach model `kind`.
+fn arm_occupancy(
+    length: f64,
+    thickness: f64,
+    e_p: f64,
+    hand_x: f64,
+    kind: HumanReachModel,
+) -> Capsule {
+    let h = HumanModel::from_json(&format!(
+        r#"{{"keypoints": ["s", "h"], "v_max": [2.0, 2.0], "a_max": [10.0, 10.0],
+            "body_parts": [{{"name": "arm", "from": "s", "to": "h", "thickness": {thickness:?}}}],
+            "measurement_error_pos": {e_p:?}, "measurement_error_vel": 0.1, "delay": 0.0,
+            "extremities": [{{"name": "a", "base": "s", "length": {length:?}, "thickness": {thickness:?}, "body_parts": ["arm"]}}]}}"#
+    ))
+    .unwrap();
+    let m = HumanMeasurement::new(&h, 0.0, &[[0.0; 3], [hand_x, 0.0, 0.0]], None).unwrap();
+    HumanReach::new(h, kind).occupancy(&m, 0.0, 0.1).unwrap()[0]
+}
+
 /// Issue 11: `pos` trusts an extremity's length only where the measurement agrees with it. Arm
 /// of length 1.0 m, thickness 0.1 m, e_p 0.01 m: a hand measured up to 1.0 + 0.05 + 2·0.01 =
 /// 1.07 m from the shoulder gets the extremity ball; farther, the arm falls back to the `vel`
 /// capsule (which the length assumption would otherwise override).
 #[test]
 fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
-    let h = HumanModel::from_json(
-        r#"{"keypoints": ["s", "h"], "v_max": [2.0, 2.0], "a_max": [10.0, 10.0],
-            "body_parts": [{"name": "arm", "from": "s", "to": "h", "thickness": 0.1}],
-            "measurement_error_pos": 0.01, "measurement_error_vel": 0.1, "delay": 0.0,
-            "extremities": [{"name": "a", "base": "s", "length": 1.0, "thickness": 0.1, "body_parts": ["arm"]}]}"#,
-    )
-    .unwrap();
-    let occupancy = |hand_x: f64, kind| {
-        let m = HumanMeasurement::new(&h, 0.0, &[[0.0; 3], [hand_x, 0.0, 0.0]], None).unwrap();
-        HumanReach::new(h.clone(), kind)
-            .occupancy(&m, 0.0, 0.1)
-            .unwrap()[0]
-    };
+    let occupancy = |hand_x: f64, kind| arm_occupancy(1.0, 0.1, 0.01, hand_x, kind);
     let origin = Point3::new(0.0, 0.0, 0.0);
     for x in [1.0, 1.069] {
         // The extremity ball: e_p 0.01 + v 2·0.1 + length 1.0 + thickness/2 0.05 = 1.26.
@@ -409,19 +418,7 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
 /// and a hand clearly inside (1e-9 m) keeps the extremity ball.
 #[test]
 fn pos_consistency_is_decided_soundly_at_the_limit() {
-    let h = HumanModel::from_json(
-        r#"{"keypoints": ["s", "h"], "v_max": [2.0, 2.0], "a_max": [10.0, 10.0],
-            "body_parts": [{"name": "arm", "from": "s", "to": "h", "thickness": 0.125}],
-            "measurement_error_pos": 0.03125, "measurement_error_vel": 0.1, "delay": 0.0,
-            "extremities": [{"name": "a", "base": "s", "length": 0.75, "thickness": 0.125, "body_parts": ["arm"]}]}"#,
-    )
-    .unwrap();
-    let occupancy = |hand_x: f64, kind| {
-        let m = HumanMeasurement::new(&h, 0.0, &[[0.0; 3], [hand_x, 0.0, 0.0]], None).unwrap();
-        HumanReach::new(h.clone(), kind)
-            .occupancy(&m, 0.0, 0.1)
-            .unwrap()[0]
-    };
+    let occupancy = |hand_x: f64, kind| arm_occupancy(0.75, 0.125, 0.03125, hand_x, kind);
     let origin = Point3::new(0.0, 0.0, 0.0);
     let beyond = 0.875f64.next_up();
     let c = occupancy(beyond, HumanReachModel::Pos);

@@ -291,6 +291,23 @@ macro_rules! harness {
             }
         }
     };
+    ($name:ident, unwind = $n:literal, bits = $bits:literal, stubs = [$(($orig:path => $repl:path)),+ $(,)?], cases = $cases:expr, $body:ident) => {
+        #[cfg(kani)]
+        #[kani::proof]
+        #[kani::unwind($n)]
+        $(#[kani::stub($orig, $repl)])+
+        pub fn $name() {
+            $body(&mut $crate::KaniSource { bits: $bits });
+        }
+
+        #[cfg(test)]
+        mod $name {
+            #[test]
+            fn property_test() {
+                $crate::run_cases(stringify!($name), $cases, |s| super::$body(s));
+            }
+        }
+    };
     ($name:ident, unwind = $n:literal, bits = $bits:literal, cases = $cases:expr, $body:ident) => {
         #[cfg(kani)]
         #[kani::proof]

@@ -379,30 +379,21 @@ fn bang_bang_enclosed<S: Source>(s: &mut S) {
     at_instants(s, dt, |tau| assert_inside(&b, tau, m.at(tau)));
 }
 
-/// Kani proof of the split (twin: `h2_bang_bang_enclosed::property_test`): 8-bit inputs, the limits'
-/// accessors stubbed by the split's corner ([`kani_limits`]).
-#[cfg(kani)]
-#[kani::proof]
-#[kani::unwind(6)]
-#[kani::stub(pacs_models::JointLimits::dof, kani_limits::one_joint)]
-#[kani::stub(pacs_models::JointLimits::v_max, kani_limits::v_half)]
-#[kani::stub(pacs_models::JointLimits::a_max, kani_limits::a_twenty)]
-#[kani::stub(pacs_models::JointLimits::j_max, kani_limits::j_ten_thousand)]
-pub fn h2_bang_bang_enclosed() {
-    bang_bang_enclosed(&mut crate::KaniSource { bits: 4 });
-}
-
-#[cfg(test)]
-mod h2_bang_bang_enclosed {
-    #[test]
-    fn property_test() {
-        crate::run_cases(
-            stringify!(h2_bang_bang_enclosed),
-            crate::DEFAULT_CASES,
-            super::bang_bang_enclosed,
-        );
-    }
-}
+// The Kani proof (4-bit inputs, the limits' accessors stubbed by the split's corner,
+// [`kani_limits`]) and the twin.
+harness!(
+    h2_bang_bang_enclosed,
+    unwind = 6,
+    bits = 4,
+    stubs = [
+        (pacs_models::JointLimits::dof => kani_limits::one_joint),
+        (pacs_models::JointLimits::v_max => kani_limits::v_half),
+        (pacs_models::JointLimits::a_max => kani_limits::a_twenty),
+        (pacs_models::JointLimits::j_max => kani_limits::j_ten_thousand),
+    ],
+    cases = crate::DEFAULT_CASES,
+    bang_bang_enclosed
+);
 
 /// A piece of constant jerk `j` from state `(q, v, a)` at time `t`.
 #[derive(Clone, Copy)]
@@ -523,28 +514,21 @@ fn jerk_enclosed<S: Source>(s: &mut S) {
     });
 }
 
-/// Kani proof of the split (twin: `h2_jerk_enclosed::property_test`): 8-bit inputs, the limits'
-/// accessors stubbed by the split's corner ([`kani_limits`]).
-#[cfg(kani)]
-#[kani::proof]
-#[kani::unwind(6)]
-#[kani::stub(pacs_models::JointLimits::dof, kani_limits::one_joint)]
-#[kani::stub(pacs_models::JointLimits::v_max, kani_limits::v_half)]
-#[kani::stub(pacs_models::JointLimits::a_max, kani_limits::a_one)]
-#[kani::stub(pacs_models::JointLimits::j_max, kani_limits::j_hundred)]
-pub fn h2_jerk_enclosed() {
-    jerk_enclosed(&mut crate::KaniSource { bits: 4 });
-}
-
-#[cfg(test)]
-mod h2_jerk_enclosed {
-    #[test]
-    fn property_test() {
-        crate::run_cases(stringify!(h2_jerk_enclosed), crate::DEFAULT_CASES, |s| {
-            super::jerk_enclosed(s)
-        });
-    }
-}
+// The Kani proof (4-bit inputs, the limits' accessors stubbed by the split's corner,
+// [`kani_limits`]) and the twin.
+harness!(
+    h2_jerk_enclosed,
+    unwind = 6,
+    bits = 4,
+    stubs = [
+        (pacs_models::JointLimits::dof => kani_limits::one_joint),
+        (pacs_models::JointLimits::v_max => kani_limits::v_half),
+        (pacs_models::JointLimits::a_max => kani_limits::a_one),
+        (pacs_models::JointLimits::j_max => kani_limits::j_hundred),
+    ],
+    cases = crate::DEFAULT_CASES,
+    jerk_enclosed
+);
 
 /// Split: any two samples with velocities (in the limits, no accelerations) whose displacement
 /// lies beyond the band reachable between the logged velocities under `|q̈| ≤ A` (by 1 % of the
@@ -581,30 +565,21 @@ fn contradiction_inconsistent<S: Source>(s: &mut S) {
     );
 }
 
-/// Kani proof of the split (twin: `h2_contradiction_inconsistent::property_test`): 8-bit inputs, the limits'
-/// accessors stubbed by the split's corner ([`kani_limits`]).
-#[cfg(kani)]
-#[kani::proof]
-#[kani::unwind(6)]
-#[kani::stub(pacs_models::JointLimits::dof, kani_limits::one_joint)]
-#[kani::stub(pacs_models::JointLimits::v_max, kani_limits::v_half)]
-#[kani::stub(pacs_models::JointLimits::a_max, kani_limits::a_one)]
-#[kani::stub(pacs_models::JointLimits::j_max, kani_limits::j_hundred)]
-pub fn h2_contradiction_inconsistent() {
-    contradiction_inconsistent(&mut crate::KaniSource { bits: 4 });
-}
-
-#[cfg(test)]
-mod h2_contradiction_inconsistent {
-    #[test]
-    fn property_test() {
-        crate::run_cases(
-            stringify!(h2_contradiction_inconsistent),
-            crate::DEFAULT_CASES,
-            super::contradiction_inconsistent,
-        );
-    }
-}
+// The Kani proof (4-bit inputs, the limits' accessors stubbed by the split's corner,
+// [`kani_limits`]) and the twin.
+harness!(
+    h2_contradiction_inconsistent,
+    unwind = 6,
+    bits = 4,
+    stubs = [
+        (pacs_models::JointLimits::dof => kani_limits::one_joint),
+        (pacs_models::JointLimits::v_max => kani_limits::v_half),
+        (pacs_models::JointLimits::a_max => kani_limits::a_one),
+        (pacs_models::JointLimits::j_max => kani_limits::j_hundred),
+    ],
+    cases = crate::DEFAULT_CASES,
+    contradiction_inconsistent
+);
 
 #[cfg(test)]
 mod tests {

@@ -120,6 +120,9 @@ impl ContactRule {
     /// it can be clamped against; called only for PFL parts with contact). Every violating
     /// (part, link) pair goes to `sink` in part then link order, as in `check`.
     ///
+    /// `contact` holds one mask per body part (`contact.len()` is the number of parts; a
+    /// shorter slice panics on indexing rather than skipping a part).
+    ///
     /// # Soundness (claim C8′, harness `i1_rule_judgement_sound`)
     /// If every true contact is in the masks (each part's truly touched capsules ⊆ its mask),
     /// every true clamp by the environment or a clampable part is reported by
@@ -140,6 +143,7 @@ impl ContactRule {
             violated: false,
             pfl: None,
         };
+        debug_assert_eq!(contact.len(), self.parts);
         let at_rest = super::at_rest(dq, self.rest_speed);
         let mut e_robot: Option<f64> = None;
         // An indexed loop: cheaper for the model checker than an iterator chain.
