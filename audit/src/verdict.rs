@@ -23,7 +23,26 @@ impl Verdict {
             Verdict::Inconclusive => 2,
         }
     }
+    /// The verdict of one log from its findings: `fail` if it has a violation, else
+    /// `inconclusive` if any part could not be checked, else `pass`.
+    ///
+    /// # Soundness
+    /// Claim C9 (with the span checks): a log with a violation is never `pass`, nor is one with
+    /// an unchecked span. Harness `h1_verdict_never_hides_findings`.
+    pub fn of_findings(violation: bool, unchecked: bool) -> Verdict {
+        if violation {
+            Verdict::Fail
+        } else if unchecked {
+            Verdict::Inconclusive
+        } else {
+            Verdict::Pass
+        }
+    }
     /// Combined verdict of several logs: fail if any fails, else inconclusive if any is, else pass.
+    ///
+    /// # Soundness
+    /// `pass` only if every log passed, `fail` if any failed. Harness
+    /// `h1_verdict_never_hides_findings`.
     pub fn combine(verdicts: impl IntoIterator<Item = Verdict>) -> Verdict {
         let mut out = Verdict::Pass;
         for v in verdicts {

@@ -94,13 +94,7 @@ impl Auditor {
                 spans: 0,
             });
         }
-        let verdict = if !self.violations.is_empty() {
-            Verdict::Fail
-        } else if !inconclusive.is_empty() {
-            Verdict::Inconclusive
-        } else {
-            Verdict::Pass
-        };
+        let verdict = Verdict::of_findings(!self.violations.is_empty(), !inconclusive.is_empty());
         let samples = self.samples;
         let metrics = Metrics {
             samples,

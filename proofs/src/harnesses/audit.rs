@@ -12,6 +12,7 @@ use crate::{Source, harness};
 use pacs_audit::{AuditConfig, Auditor, Verdict};
 use pacs_log::LogModels;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+use pacs_reach::JointBox;
 
 /// Audit one random violating log; the verdict.
 fn violating_log<S: Source>(s: &mut S) -> Verdict {
@@ -103,4 +104,85 @@ harness!(
     twin_only,
     cases = crate::DEFAULT_CASES,
     audit_violation
+);
+
+// ---- Kani splits of h1 ----------------------------------------------------------------------
+//
+// h1 is the whole audit (parsing, span enclosures, occupancies, the rule, the bookkeeping): a
+// property test only. Its parts are model-checked where a model checker can decide them: the
+// span enclosure (h2's three splits), the rule (i1's two splits), the occupancies' arithmetic
+// (a–c, f2) — and the two audit-specific steps below: the union of span boxes the block fast
+// path checks instead of each span, and the verdict from the findings.
+
+/// A joint box of two joints in [−10, 10] (rad or rad/s), lower end at most the upper.
+fn two_joint_box<S: Source>(s: &mut S) -> Option<JointBox> {
+    let (a, b) = (s.f64_in(-10.0, 10.0), s.f64_in(-10.0, 10.0));
+    let (c, d) = (s.f64_in(-10.0, 10.0), s.f64_in(-10.0, 10.0));
+    if !s.assume(a <= b && c <= d) {
+        return None;
+    }
+    JointBox::new(&[a, c], &[b, d]).ok()
+}
+
+/// (h1, the block fast path) The audit checks a block of spans at once on the hull of their
+/// boxes (`SpanBoxes::hull`, i.e. `JointBox::hull` of the position and velocity boxes): "no
+/// violation possible on the hull" implies it for each span only if every joint state of either
+/// box lies in the hull. Any two boxes of two joints (the loop is per joint), any state of
+/// either. Catches mutant `x28_joint_box_hull_keeps_first` (the hull keeps the first box's lower
+/// ends).
+fn block_hull<S: Source>(s: &mut S) {
+    let (Some(a), Some(b)) = (two_joint_box(s), two_joint_box(s)) else {
+        return;
+    };
+    let h = a.hull(&b);
+    let from = if s.bool() { a } else { b };
+    let q = [
+        s.f64_in(from.lo()[0], from.hi()[0]),
+        s.f64_in(from.lo()[1], from.hi()[1]),
+    ];
+    assert!(
+        h.contains(&q),
+        "{q:?} in {from:?} but not in the hull {h:?} of {a:?} and {b:?}"
+    );
+}
+harness!(
+    h1_block_hull_contains,
+    unwind = 3,
+    cases = crate::DEFAULT_CASES,
+    block_hull
+);
+
+/// (h1, the verdict) A log's verdict (`Verdict::of_findings`, what `Auditor::finish` returns) is
+/// `fail` whenever a violation was recorded and never `pass` with an unchecked span; the verdict
+/// over several logs (`Verdict::combine`, the CLI's exit code) is `pass` only if every log
+/// passed and `fail` if any failed. Any findings, any sequence of up to three verdicts.
+fn verdict_of_findings<S: Source>(s: &mut S) {
+    let (violation, unchecked) = (s.bool(), s.bool());
+    let v = Verdict::of_findings(violation, unchecked);
+    assert!(!violation || v == Verdict::Fail, "a violation is not fail");
+    assert!(
+        v != Verdict::Pass || (!violation && !unchecked),
+        "pass with findings"
+    );
+    assert!(
+        violation || unchecked || v == Verdict::Pass,
+        "a clean log is not pass"
+    );
+    let all = [Verdict::Pass, Verdict::Fail, Verdict::Inconclusive];
+    let n = s.index(4);
+    let logs = [all[s.index(3)], all[s.index(3)], all[s.index(3)]];
+    let c = Verdict::combine(logs[..n].iter().copied());
+    let any_fail = logs[..n].contains(&Verdict::Fail);
+    let all_pass = logs[..n].iter().all(|v| *v == Verdict::Pass);
+    assert!(!any_fail || c == Verdict::Fail, "a failing log is hidden");
+    assert!(
+        (c == Verdict::Pass) == all_pass,
+        "pass iff every log passed"
+    );
+}
+harness!(
+    h1_verdict_never_hides_findings,
+    unwind = 5,
+    cases = crate::DEFAULT_CASES,
+    verdict_of_findings
 );

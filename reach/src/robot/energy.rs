@@ -56,6 +56,19 @@ pub(super) mod energy_iv {
         max(a.0.abs(), a.1.abs())
     }
 
+    /// Upper bound (J) of one link's kinetic energy from the bounds `v2 ≥ sup‖v_c‖²` (m²/s²) and
+    /// `w2 ≥ sup‖ω‖²` (rad²/s²): ½·m·v2 + ½·λ̄·w2 in round-to-nearest, inflated by [`INFLATE`]
+    /// plus [`TINY_E`].
+    ///
+    /// # Soundness
+    /// For `mass`, `lambda_max`, `v2`, `w2` ≥ 0 and finite (no overflow): the result is ≥ the
+    /// exact ½·m·v2 + ½·λ̄·w2 (five roundings, each losing at most a factor 1 − u, and underflow
+    /// below `TINY_E`). Harness `g1_link_energy_rounds_up` (a property test: Kani timed out at 300 s).
+    #[inline(always)]
+    pub fn link_energy(mass: f64, lambda_max: f64, v2: f64, w2: f64) -> f64 {
+        (0.5 * mass * v2 + 0.5 * lambda_max * w2) * INFLATE + TINY_E
+    }
+
     /// Upper bounds of sup‖v_c‖² and sup‖ω‖² for v_c = Σ_{j<k} (z_j × (c − o_j))·q̇_j and
     /// ω = Σ_{j<k} z_j·q̇_j.
     #[inline(always)]
@@ -104,6 +117,10 @@ pub(super) mod energy_iv {
     }
 }
 
+/// The Kani proofs of this module, each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+mod proofs;
+
 impl RobotReach {
     /// Upper bounds (J) of the kinetic energy ½ q̇ᵀ M_k(q) q̇ of the links carried by frames
     /// `1..=k`, for k = 0..=n, valid for every configuration in the box `q` and velocity in `dq`
@@ -151,9 +168,7 @@ impl RobotReach {
         self.frames(q, scratch, true);
         let boxf = if scratch.wide { &scratch.b } else { &scratch.a };
         // Interval evaluation in round-to-nearest, widened once (module docs of `energy_iv`).
-        use energy_iv::{
-            HUGE, INFLATE, NearestInterval, NearestInterval3, TINY_E, velocity_bounds,
-        };
+        use energy_iv::{HUGE, NearestInterval, NearestInterval3, link_energy, velocity_bounds};
         if (0..n).any(|j| !(dq_lo[j].abs() <= HUGE && dq_hi[j].abs() <= HUGE)) {
             out.fill(f64::INFINITY);
             out[0] = 0.0;
@@ -177,7 +192,7 @@ impl RobotReach {
             let k = l.frame;
             let c = iv(&boxf.r[k].affine(&boxf.t[k], l.com));
             let (v2, w2) = velocity_bounds(&z, &o, &dq, &c, k.min(n));
-            let e = (0.5 * l.mass * v2 + 0.5 * l.lambda_max * w2) * INFLATE + TINY_E;
+            let e = link_energy(l.mass, l.lambda_max, v2, w2);
             per_frame[k] = add_up(per_frame[k], e);
         }
         out[0] = 0.0;

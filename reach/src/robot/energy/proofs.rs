@@ -1,0 +1,60 @@
+//! Proofs of the energy bound's arithmetic, beside it (claim C5). The whole claim — the bound
+//! dominates ½ q̇ᵀ M(q) q̇ over the boxes of the FR3 — is the property test
+//! `g1_energy_bound_dominates` (pacs-proofs): its interval kinematics with sin/cos are beyond a
+//! model checker. The Kani proofs here decide the steps that turn velocity bounds into energy.
+
+// Proof functions are entry points of the model checker, not called from the crate.
+#![cfg_attr(kani, allow(dead_code))]
+use super::energy_iv::link_energy;
+use crate::exact::{sum_le_zero, tame, two_prod, two_sum};
+use pacs_proof_kit::{Source, harness};
+
+/// A tame float in `[0, m]` (0 or magnitude ≥ 1e-100: see [`crate::exact`]).
+fn non_negative<S: Source>(s: &mut S, m: f64) -> Option<f64> {
+    let x = s.f64_in(0.0, m);
+    s.assume(tame(x)).then_some(x)
+}
+
+/// One link's energy bound `link_energy(m, λ̄, v2, w2)` is at least the exact ½·m·v2 + ½·λ̄·w2
+/// (masses up to 10³ kg, moments up to 10² kg·m², squared speeds up to 10⁶), decided exactly
+/// (TwoProduct splits each product into an exact pair, the double-double sum decides the sign).
+/// Catches mutant `x29_link_energy_without_inflate` (the sum not inflated: it rounds down).
+fn link_energy_rounds_up<S: Source>(s: &mut S) {
+    let (Some(m), Some(l), Some(v2), Some(w2)) = (
+        non_negative(s, 1e3),
+        non_negative(s, 1e2),
+        non_negative(s, 1e6),
+        non_negative(s, 1e6),
+    ) else {
+        return;
+    };
+    let e = link_energy(m, l, v2, w2);
+    // ½·m and ½·λ̄ are exact (no underflow: tame).
+    let (a, ae) = two_prod(0.5 * m, v2);
+    let (b, be) = two_prod(0.5 * l, w2);
+    // An exact 0 needs no oracle (the double-double sum's error bound, ≥ 2⁻¹⁰²², exceeds the
+    // slack TINY_E there); a non-zero product of tame values is ≥ 1e-200.
+    let holds = if a == 0.0 && b == 0.0 {
+        e >= 0.0
+    } else if ae == 0.0 && be == 0.0 {
+        // a + b = s + t exactly (TwoSum); e − s is exact for s/2 ≤ e ≤ 2s (Sterbenz), so
+        // e ≥ s + t is decided without rounding.
+        let (s, t) = two_sum(a, b);
+        e >= s && e <= 2.0 * s && e - s >= t
+    } else {
+        sum_le_zero(&[a, ae, b, be, -e])
+    };
+    assert!(
+        holds,
+        "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2"
+    );
+}
+// Kani (8-bit significands, the Sterbenz oracle above): timeout at 300 s with Bitwuzla and
+// with the SAT back end (session 15, load 4–6), also with the inflation as an exact
+// power-of-two scaling: a property test only until a smaller formula is found.
+harness!(
+    g1_link_energy_rounds_up,
+    twin_only,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    link_energy_rounds_up
+);
