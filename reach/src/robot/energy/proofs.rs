@@ -49,12 +49,39 @@ fn link_energy_rounds_up<S: Source>(s: &mut S) {
         "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2"
     );
 }
-// Kani (8-bit significands, the Sterbenz oracle above): timeout at 300 s with Bitwuzla and
-// with the SAT back end (session 15, load 4–6), also with the inflation as an exact
-// power-of-two scaling: a property test only until a smaller formula is found.
+// Kani: timeout at 300 s (8-bit significands, Bitwuzla and SAT, load 4–6), where the oracle
+// still contained TwoProduct and the double-double sum: the Kani proof is the split
+// `g1_link_energy_exact_products` below.
 harness!(
     g1_link_energy_rounds_up,
     twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     link_energy_rounds_up
+);
+
+/// (g1, Kani) [`link_energy_rounds_up`] for significands short enough that both products are
+/// exact (4 bits: products of ≤ 8 bits): the sum's rounding, the inflation and `TINY_E` are
+/// what is checked. `a + b = s + t` exactly (TwoSum); `e − s` is exact for `s ≤ e ≤ 2s`
+/// (Sterbenz), so `e ≥ s + t` is decided without rounding.
+fn link_energy_exact_products<S: Source>(s: &mut S) {
+    // Truncated to 4 significant bits (under Kani they have no more): the products are exact.
+    let short = |x: f64| f64::from_bits(x.to_bits() & !((1u64 << 48) - 1));
+    let m = short(s.f64_in(1e-3, 1e3));
+    let l = short(s.f64_in(1e-3, 1e2));
+    let v2 = short(s.f64_in(1e-6, 1e6));
+    let w2 = short(s.f64_in(1e-6, 1e6));
+    let (a, b) = (0.5 * m * v2, 0.5 * l * w2);
+    let e = link_energy(m, l, v2, w2);
+    let (sum, t) = two_sum(a, b);
+    assert!(
+        e >= sum && e <= 2.0 * sum && e - sum >= t,
+        "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2"
+    );
+}
+harness!(
+    g1_link_energy_exact_products,
+    unwind = 2,
+    bits = 4,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    link_energy_exact_products
 );
