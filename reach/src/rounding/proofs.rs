@@ -112,7 +112,9 @@ fn vector<S: Source>(s: &mut S, m: f64) -> Option<[f64; 3]> {
     Some([num(s, m)?, num(s, m)?, num(s, m)?])
 }
 
-/// norm3_up bounds the exact Euclidean norm from above.
+/// norm3_up bounds the exact Euclidean norm from above. Property test only (the Kani proof
+/// timed out: three squares summed against a `√` contract); its Kani proofs are the splits
+/// `a3_sum_squares_up` and `a3_norm_up_sqrt_inflate` below.
 fn norm_up<S: Source>(s: &mut S) {
     let Some([x, y, z]) = vector(s, 1e6) else {
         return;
@@ -124,13 +126,143 @@ fn norm_up<S: Source>(s: &mut S) {
 }
 harness!(
     a3_norm_up_encloses,
-    unwind = 25,
-    bits = 8,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     norm_up
 );
 
-/// norm3_down bounds the exact Euclidean norm from below.
+/// `2⁻⁴⁸ = 32u` (u = 2⁻⁵³), as a constant (no `powi`).
+const TWO_M48: f64 = f64::from_bits((1023 - 48) << 52);
+
+/// The bridge between the two splits of a3: `T(S) = fl(S + S·2⁻⁴⁸)` for a computed sum of
+/// squares `S ≥ 0` (`S·2⁻⁴⁸` is exact for `S ≥ 2⁻⁹⁷⁴`, and then
+/// `S(1 + 30u) ≤ T ≤ S(1 + 34u)`).
+fn widened(sum: f64) -> f64 {
+    sum + sum * TWO_M48
+}
+
+/// Split (i) of a3 (`norm3_up`'s radicand): the upward-rounded sum of squares
+/// `U = add_up(add_up(mul_up(x, x), mul_up(y, y)), mul_up(z, z))` is at most `T(S)`
+/// ([`widened`]) of the code's radicand `S = fl(fl(x² + y²) + z²)`, for `S > 0` (a float
+/// comparison: no exact oracle). `U ≥ x² + y² + z²` exactly by a1 (`add_up`) and a2 (`mul_up`)
+/// and monotonicity, so the exact sum of squares is ≤ `T(S)`; for `S = 0` every coordinate is 0
+/// (tame coordinates: a non-zero square is ≥ 1e-200). Margin: `U ≤ S(1 + 11u)` roughly (five
+/// roundings to nearest and three `next_up`s, each ≤ 2u), `T ≥ S(1 + 30u)`; with no widening
+/// (`T = S`) the claim fails. A lemma about the expression `norm3_up` evaluates (the code itself
+/// is called by split (ii), which ties its radicand to this `S`). Property test only: Kani timed
+/// out on it (a float comparison of two rounded chains over exponents 1e-200 … 1e12).
+fn sum_squares_up<S: Source>(s: &mut S) {
+    let Some([x, y, z]) = vector(s, 1e6) else {
+        return;
+    };
+    let sum = x * x + y * y + z * z;
+    if sum == 0.0 {
+        return;
+    }
+    let up = add_up(add_up(mul_up(x, x), mul_up(y, y)), mul_up(z, z));
+    let t = widened(sum);
+    assert!(up <= t, "{x}² + {y}² + {z}² ≤ {up}, above T({sum}) = {t}");
+}
+// Not model-checked: Kani timed out on this float comparison (bitwuzla, 200 s at 8 bits,
+// 150 s at 3 bits, under load ≈ 4; session 15), see the doc above.
+harness!(
+    a3_sum_squares_up,
+    twin_only,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    sum_squares_up
+);
+
+/// `2⁻⁴⁷ = 64u`, as a constant.
+const TWO_M47: f64 = f64::from_bits((1023 - 47) << 52);
+
+/// The argument and result of the last `√` of a positive finite value in a proof with
+/// [`any_root_recorded`] (bit patterns; 0 before any).
+#[cfg(kani)]
+static ROOT_ARG: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+#[cfg(kani)]
+static ROOT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Stub of [`crate::ieee::sqrt`] for the a3 splits: for a positive finite `x` any `r` in
+/// `[0, 1e160)`, recorded with `x` (so the harness can state its claim against the root the code
+/// used); IEEE results otherwise (`x` for ±0 and +∞, NaN below 0 and for NaN). Over-approximates
+/// IEEE `√` (whose root of a finite value is below √MAX ≈ 1.34e154): a claim proved for every such
+/// `r` holds for the real root. The root's accuracy (`prev(r)² ≤ x ≤ next(r)²`, the contract of
+/// `ieee::sqrt`, tested against the library by `ieee::tests::contracts_hold_for_the_library`)
+/// enters only in the composition written in the docs of the splits.
+#[cfg(kani)]
+pub(crate) fn any_root_recorded(x: f64) -> f64 {
+    use std::sync::atomic::Ordering::Relaxed;
+    if x.is_nan() || x < 0.0 {
+        return f64::NAN;
+    }
+    if x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    let r: f64 = kani::any();
+    kani::assume(r >= 0.0 && r < 1.0e160);
+    ROOT_ARG.store(x.to_bits(), Relaxed);
+    ROOT.store(r.to_bits(), Relaxed);
+    r
+}
+
+/// `(x, √x)` of the last `√` the code took, given the radicand the harness expects: under Kani
+/// the values [`any_root_recorded`] recorded (so a different radicand in the code is caught), in
+/// the twin the expected radicand and its library root (the code's root, `√` being
+/// deterministic).
+fn last_root(expected: f64) -> (f64, f64) {
+    #[cfg(kani)]
+    {
+        use std::sync::atomic::Ordering::Relaxed;
+        let _ = expected;
+        (
+            f64::from_bits(ROOT_ARG.load(Relaxed)),
+            f64::from_bits(ROOT.load(Relaxed)),
+        )
+    }
+    #[cfg(not(kani))]
+    {
+        (expected, crate::ieee::sqrt(expected))
+    }
+}
+
+/// Split (ii) of a3 (`norm3_up`'s `√` and inflation): the code takes `√` of its radicand
+/// `S = fl(fl(x² + y²) + z²)` (checked bitwise under Kani: the recorded argument), and for the
+/// root `r` it got, `norm3_up(x, y, z) ≥ r + r·2⁻⁴⁷` exactly ([`cmp_sum`]; `r·2⁻⁴⁷` is exact for
+/// `r ≥ 2⁻⁹⁷⁵`). Under Kani `r` is ANY value in `[0, 1e160)` ([`any_root_recorded`]), with
+/// tame coordinates of 8 significand bits; in the twin any tame coordinates and the library
+/// root. Mutant `x1` (no `INFLATE`, no `SQRT_TINY`: the result is `r`) fails for every `r > 0`.
+///
+/// Composition with split (i) (`a3_sum_squares_up`: the exact `x² + y² + z² ≤ T(S) ≤ S(1 + 34u)`)
+/// and the `√` contract (`S ≤ next(r)² ≤ r²(1 + 2u)²`): `√(x² + y² + z²) ≤ √S·(1 + 17u) ≤
+/// r(1 + 2u)(1 + 17u) < r(1 + 64u) = r(1 + 2⁻⁴⁷) ≤ norm3_up(x, y, z)` (√ is monotone; for `S = 0`
+/// the coordinates are 0 and the result is `SQRT_TINY ≥ 0`).
+fn norm_up_sqrt_inflate<S: Source>(s: &mut S) {
+    let Some([x, y, z]) = vector(s, 1e6) else {
+        return;
+    };
+    let sum = x * x + y * y + z * z;
+    let out = norm3_up(x, y, z);
+    let (arg, r) = last_root(sum);
+    assert!(
+        arg.to_bits() == sum.to_bits(),
+        "norm3_up({x}, {y}, {z}) took √{arg}, not √{sum}"
+    );
+    assert!(
+        cmp_sum(r, r * TWO_M47, out) != Greater,
+        "norm3_up({x}, {y}, {z}) = {out} below √{sum} = {r} times 1 + 2⁻⁴⁷"
+    );
+}
+harness!(
+    a3_norm_up_sqrt_inflate,
+    unwind = 2,
+    bits = 8,
+    stub = (crate::ieee::sqrt => any_root_recorded),
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    norm_up_sqrt_inflate
+);
+
+/// norm3_down bounds the exact Euclidean norm from below. Property test only; Kani: the split
+/// `a3_norm_down_sqrt` below (its radicand is a chain of a1/a2 helpers).
 fn norm_down<S: Source>(s: &mut S) {
     let Some([x, y, z]) = vector(s, 1e6) else {
         return;
@@ -142,13 +274,69 @@ fn norm_down<S: Source>(s: &mut S) {
 }
 harness!(
     a3_norm_down_encloses,
-    unwind = 25,
-    bits = 8,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     norm_down
 );
 
-/// dist3_up bounds the exact distance of two points from above.
+/// `norm3_down`'s radicand: `add_down(add_down(mul_down(x, x), mul_down(y, y)), mul_down(z, z))`.
+fn radicand_down(x: f64, y: f64, z: f64) -> f64 {
+    add_down(add_down(mul_down(x, x), mul_down(y, y)), mul_down(z, z))
+}
+
+/// Split (ii) of `norm3_down`: the code takes `√` of its radicand `L` ([`radicand_down`],
+/// recomputed and checked bitwise in the twin), and its result is 0 or at most
+/// `prev(r)` for the root `r` it got (under Kani any `r` in `[0, 1e160)`, [`any_root_recorded`];
+/// in the twin the library root). Composition: `L ≤ x² + y² + z²` exactly by a1 (`add_down`)
+/// and a2 (`mul_down`) and monotonicity, and the `√` contract gives `prev(r)² ≤ L`, so
+/// `norm3_down ≤ prev(r) ≤ √L ≤ √(x² + y² + z²)`. A `sqrt_down` or
+/// `norm3_down` that drops its `next_down` (the result is `r`, mutant `x28a`) fails; one that
+/// rounds its radicand to nearest fails the twin's radicand check.
+fn norm_down_sqrt<S: Source>(s: &mut S) {
+    let Some([x, y, z]) = vector(s, 1e6) else {
+        return;
+    };
+    let out = norm3_down(x, y, z);
+    assert!(out >= 0.0, "norm3_down({x}, {y}, {z}) = {out} < 0");
+    // The radicand is recomputed and checked in the twin only: under Kani the two copies of the
+    // `mul_down`/`add_down` chain (`next_down` branches) made the solver prove their equivalence
+    // (178.7 s at 8 bits, a timeout at 150 s at 4 bits); `norm3_down` is `sqrt_down` of that
+    // chain.
+    let l = if cfg!(kani) {
+        0.0
+    } else {
+        radicand_down(x, y, z)
+    };
+    let (arg, r) = last_root(l);
+    if !cfg!(kani) {
+        assert!(
+            arg.to_bits() == l.to_bits(),
+            "norm3_down({x}, {y}, {z}) took √{arg}, not √{l}"
+        );
+    }
+    if arg > 0.0 {
+        assert!(
+            out == 0.0 || out <= r.next_down(),
+            "norm3_down({x}, {y}, {z}) = {out} above prev(√{arg}) = prev({r})"
+        );
+    } else {
+        assert!(
+            out == 0.0,
+            "norm3_down({x}, {y}, {z}) = {out} for radicand {arg} ≤ 0"
+        );
+    }
+}
+harness!(
+    a3_norm_down_sqrt,
+    unwind = 2,
+    bits = 8,
+    stub = (crate::ieee::sqrt => any_root_recorded),
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    norm_down_sqrt
+);
+
+/// dist3_up bounds the exact distance of two points from above. Property test only; Kani: the
+/// split `a3_dist_up_sqrt_inflate` below.
 fn dist_up<S: Source>(s: &mut S) {
     let (Some(a), Some(b)) = (vector(s, 1e3), vector(s, 1e3)) else {
         return;
@@ -157,10 +345,61 @@ fn dist_up<S: Source>(s: &mut S) {
 }
 harness!(
     a3_dist_up_encloses,
-    unwind = 25,
-    bits = 6,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     dist_up
+);
+
+/// Split of a3 for `dist3_up` (its coordinate bounds, `√` and inflation): each coordinate bound
+/// `dᵢ = max(|sub_down(aᵢ, bᵢ)|, |sub_up(aᵢ, bᵢ)|)` is ≥ `|aᵢ − bᵢ|` exactly ([`cmp_sum`]), the
+/// code takes `√` of `S = fl(fl(d₀² + d₁²) + d₂²)` (checked bitwise in the twin), and for the
+/// root `r` it got (under Kani: recorded), `dist3_up(a, b) ≥ r + r·2⁻⁴⁷` exactly. Under Kani `r`
+/// is any value in `[0, 1e160)` ([`any_root_recorded`]) and the coordinates have 6 significand
+/// bits; in the twin any tame coordinates and the library root. Mutant `x1` fails (`dist3_up`
+/// calls `norm3_up`). Composition as for [`norm_up_sqrt_inflate`], with `|a − b| ≤ |d|` (the
+/// norm is monotone in each `|dᵢ|`) and the sum-of-squares bound of split (i) at `d`.
+fn dist_up_sqrt_inflate<S: Source>(s: &mut S) {
+    let (Some(a), Some(b)) = (vector(s, 1e3), vector(s, 1e3)) else {
+        return;
+    };
+    let mut d = [0.0; 3];
+    for i in 0..3 {
+        let lo = sub_down(a[i], b[i]);
+        let hi = sub_up(a[i], b[i]);
+        d[i] = lo.abs().max(hi.abs());
+        assert!(
+            cmp_sum(a[i], -b[i], d[i]) != Greater && cmp_sum(a[i], -b[i], -d[i]) != Less,
+            "|{} − {}| above {}",
+            a[i],
+            b[i],
+            d[i]
+        );
+    }
+    let sum = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let out = dist3_up(&a, &b);
+    let (arg, r) = last_root(sum);
+    // The radicand is checked in the twin only: under Kani the two copies of the coordinate
+    // bounds (`next_up`/`next_down` branches) made the solver prove their equivalence, and the
+    // proof timed out (150 s); `dist3_up` is `norm3_up(d₀, d₁, d₂)`, whose radicand
+    // `a3_norm_up_sqrt_inflate` checks.
+    if !cfg!(kani) {
+        assert!(
+            arg.to_bits() == sum.to_bits(),
+            "dist3_up({a:?}, {b:?}) took √{arg}, not √{sum}"
+        );
+    }
+    assert!(
+        cmp_sum(r, r * TWO_M47, out) != Greater,
+        "dist3_up({a:?}, {b:?}) = {out} below √{sum} = {r} times 1 + 2⁻⁴⁷"
+    );
+}
+harness!(
+    a3_dist_up_sqrt_inflate,
+    unwind = 4,
+    bits = 6,
+    stub = (crate::ieee::sqrt => any_root_recorded),
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    dist_up_sqrt_inflate
 );
 
 /// Documented bound of libm `sin`/`cos` error (1 ulp on [-1, 1] ≤ 1.12e-16; see
