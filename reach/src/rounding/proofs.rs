@@ -290,7 +290,7 @@ fn radicand_down(x: f64, y: f64, z: f64) -> f64 {
 /// in the twin the library root). Composition: `L ≤ x² + y² + z²` exactly by a1 (`add_down`)
 /// and a2 (`mul_down`) and monotonicity, and the `√` contract gives `prev(r)² ≤ L`, so
 /// `norm3_down ≤ prev(r) ≤ √L ≤ √(x² + y² + z²)`. A `sqrt_down` or
-/// `norm3_down` that drops its `next_down` (the result is `r`, mutant `x28a`) fails; one that
+/// `norm3_down` that drops its `next_down` (the result is `r`, mutant `x30`) fails; one that
 /// rounds its radicand to nearest fails the twin's radicand check.
 fn norm_down_sqrt<S: Source>(s: &mut S) {
     let Some([x, y, z]) = vector(s, 1e6) else {
