@@ -115,7 +115,9 @@ pub const SQRT_TINY: f64 = 1e-150;
 /// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`], [`SQRT_TINY`]).
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact norm. Harness `a3_norm_up_encloses` (twin; Kani times out); mutant
+/// Claim C1: ≥ the exact norm. Harness `a3_norm_up_encloses` (property test); Kani proves the
+/// `√`-and-inflation step (`a3_norm_up_sqrt_inflate`), the sum of squares is the twin's
+/// (`a3_sum_squares_up`); mutant
 /// `x1` caught.
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
@@ -125,7 +127,8 @@ pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
 ///
 /// # Soundness
-/// Claim C1: ≤ the exact norm. Harness `a3_norm_down_encloses` (twin; Kani times out).
+/// Claim C1: ≤ the exact norm. Harness `a3_norm_down_encloses` (property test); Kani proves
+/// the `√` step (`a3_norm_down_sqrt`; the radicand is a chain of a1/a2 helpers); mutant `x30`.
 #[inline]
 pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
     sqrt_down(add_down(
@@ -137,7 +140,8 @@ pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
 /// Upper bound of the distance between two points.
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact distance. Harness `a3_dist_up_encloses` (twin; Kani times out).
+/// Claim C1: ≥ the exact distance. Harness `a3_dist_up_encloses` (property test); Kani proves
+/// the coordinate bounds and the `√`-and-inflation step (`a3_dist_up_sqrt_inflate`).
 #[inline]
 pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     // |fl(a-b)| may be below |a-b| by half an ulp per coordinate; bound it from both sides.
