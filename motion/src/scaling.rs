@@ -165,8 +165,9 @@ impl SpeedProfile {
     ///
     /// # Soundness
     /// Claim C6: from a consistent start, ṡ stays ≥ 0, s never decreases, and the profile is
-    /// exactly at the target from `settle_time()` on. Harness `e1_braking_profile`; mutant `x8`
-    /// caught.
+    /// exactly at the target from `settle_time()` on. Harness `e1_braking_profile` (property
+    /// test; Kani: its splits `e1_brake_plan_plateau`, `e1_brake_plan_ramps` on [`plan_ramps`]);
+    /// mutant `x8` caught.
     pub fn plan(start: PathState, target: f64, acc: f64, jerk: f64) -> Self {
         let (a0, v0) = (start.sdd, start.sd);
         let mut phases = [Phase::default(); 4];
@@ -359,10 +360,11 @@ impl SpeedProfile {
     ///
     /// # Soundness
     /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| of [`Self::eval`] lie
-    /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (Kani: the ends of
-    /// the window for any profile with bounded fields; the twin: any instant on planned
-    /// profiles; `motion`'s `ranges_enclose_eval_next_to_phase_boundaries` at every phase
-    /// boundary); mutants `x12` and `x26` caught.
+    /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (property test: any
+    /// instant on planned profiles; Kani: its split `f4_path_ranges_phase`, one phase's step
+    /// [`phase_window_ranges`] at any instant of one window; `motion`'s
+    /// `ranges_enclose_eval_next_to_phase_boundaries` at every phase boundary); mutants `x12`
+    /// (also under Kani) and `x26` caught.
     pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
