@@ -97,6 +97,48 @@ impl Phase {
     }
 }
 
+/// The constant-jerk ramps of [`SpeedProfile::plan`] from s̈₀ = `a0`, ṡ₀ = `v0` to `target`:
+/// three `(jerk, duration)` pairs in order (a duration ≤ 0 is no phase: `plan` skips it; none
+/// when a limit is not positive). Time-optimal: bring s̈ to 0 right away if that reaches the
+/// target (within 1e-15), else ramp toward the target to the peak `up` (at most `max(acc, u0)`),
+/// hold it, and ramp back to s̈ = 0. `plan`'s arithmetic, as a function for the proofs
+/// (`pacs-proofs`: e1's Kani splits, on the ramps rather than on the evaluated profile).
+#[doc(hidden)]
+pub fn plan_ramps(
+    a0: f64,
+    v0: f64,
+    target: f64,
+    acc: f64,
+    jerk: f64,
+) -> ((f64, f64), (f64, f64), (f64, f64)) {
+    let none = (0.0, 0.0);
+    if !(jerk > 0.0 && acc > 0.0) {
+        return (none, none, none);
+    }
+    // Speed reached by bringing s̈ to zero right away.
+    let v_reach = v0 + a0 * a0.abs() / (2.0 * jerk);
+    let diff = target - v_reach;
+    if diff.abs() <= 1e-15 {
+        return ((-a0.signum() * jerk, a0.abs() / jerk), none, none);
+    }
+    let d = diff.signum();
+    let u0 = d * a0;
+    let dist = d * (target - v0);
+    let up_free = pacs_reach::ieee::sqrt((jerk * dist + 0.5 * u0 * u0).max(0.0));
+    let cap = acc.max(u0);
+    let (up, plateau) = if up_free <= cap {
+        (up_free, 0.0)
+    } else {
+        let dv_ramps = (cap * cap - u0 * u0) / (2.0 * jerk) + cap * cap / (2.0 * jerk);
+        (cap, ((dist - dv_ramps) / cap).max(0.0))
+    };
+    (
+        (d * jerk, (up - u0) / jerk),
+        (0.0, plateau),
+        (-d * jerk, up / jerk),
+    )
+}
+
 /// One phase of a [`SpeedProfile`] as raw parts: `(t0, s, ṡ, s̈, jerk)` — the start time (s),
 /// the path position (dimensionless), its first three derivatives (1/s, 1/s², 1/s³).
 pub type PhaseParts = (f64, f64, f64, f64, f64);
@@ -123,8 +165,9 @@ impl SpeedProfile {
     ///
     /// # Soundness
     /// Claim C6: from a consistent start, ṡ stays ≥ 0, s never decreases, and the profile is
-    /// exactly at the target from `settle_time()` on. Harness `e1_braking_profile`; mutant `x8`
-    /// caught.
+    /// exactly at the target from `settle_time()` on. Harness `e1_braking_profile` (property
+    /// test; Kani: its splits `e1_brake_plan_plateau`, `e1_brake_plan_ramps` on [`plan_ramps`]);
+    /// mutant `x8` caught.
     pub fn plan(start: PathState, target: f64, acc: f64, jerk: f64) -> Self {
         let (a0, v0) = (start.sdd, start.sd);
         let mut phases = [Phase::default(); 4];
@@ -154,28 +197,9 @@ impl SpeedProfile {
                 jerk: 0.0,
             };
         };
-        if jerk > 0.0 && acc > 0.0 {
-            // Speed reached by bringing s̈ to zero right away.
-            let v_reach = v0 + a0 * a0.abs() / (2.0 * jerk);
-            let diff = target - v_reach;
-            if diff.abs() <= 1e-15 {
-                push(&mut cur, -a0.signum() * jerk, a0.abs() / jerk, &mut t);
-            } else {
-                let d = diff.signum();
-                let u0 = d * a0;
-                let dist = d * (target - v0);
-                let up_free = pacs_reach::ieee::sqrt((jerk * dist + 0.5 * u0 * u0).max(0.0));
-                let cap = acc.max(u0);
-                let (up, plateau) = if up_free <= cap {
-                    (up_free, 0.0)
-                } else {
-                    let dv_ramps = (cap * cap - u0 * u0) / (2.0 * jerk) + cap * cap / (2.0 * jerk);
-                    (cap, ((dist - dv_ramps) / cap).max(0.0))
-                };
-                push(&mut cur, d * jerk, (up - u0) / jerk, &mut t);
-                push(&mut cur, 0.0, plateau, &mut t);
-                push(&mut cur, -d * jerk, up / jerk, &mut t);
-            }
+        let (r0, r1, r2) = plan_ramps(a0, v0, target, acc, jerk);
+        for (j, dur) in [r0, r1, r2] {
+            push(&mut cur, j, dur, &mut t);
         }
         // Final constant-speed phase at exactly the target speed.
         cur.sd = target;
@@ -336,20 +360,17 @@ impl SpeedProfile {
     ///
     /// # Soundness
     /// Claim C7 (the joint boxes from path ranges): s(τ), ṡ(τ) and |s̈(τ)| of [`Self::eval`] lie
-    /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (Kani: the ends of
-    /// the window for any profile with bounded fields; the twin: any instant on planned
-    /// profiles; `motion`'s `ranges_enclose_eval_next_to_phase_boundaries` at every phase
-    /// boundary); mutants `x12` and `x26` caught.
+    /// in the ranges for every τ ∈ [ta, tb]. Harness `f4_path_ranges_enclose` (property test: any
+    /// instant on planned profiles; Kani: its split `f4_path_ranges_phase`, one phase's step
+    /// [`phase_window_ranges`] at any instant of one window; `motion`'s
+    /// `ranges_enclose_eval_next_to_phase_boundaries` at every phase boundary); mutants `x12`
+    /// (also under Kani) and `x26` caught.
     pub fn ranges(&self, ta: f64, tb: f64) -> (f64, f64, f64, f64, f64) {
         let ta = ta.max(0.0);
         let tb = tb.max(ta);
         let a = self.eval_raw(ta);
         let b = self.eval_raw(tb);
-        let (mut sd_lo, mut sd_hi) = (a.sd.min(b.sd), a.sd.max(b.sd));
-        let mut sdd = a.sdd.abs().max(b.sdd.abs());
-        // Rounding of the polynomials, bounded by their terms' magnitudes (the values may be far
-        // smaller than the terms: ṡ near 0 at the end of a braking ramp); see the padding below.
-        let (mut err_s, mut err_sd, mut err_sdd) = (0.0f64, 0.0f64, 0.0f64);
+        let mut x = Extents::of_ends(a, b);
         for k in 0..self.n {
             let p = &self.phases[k];
             let end = if k + 1 < self.n {
@@ -364,32 +385,55 @@ impl SpeedProfile {
             let hi = tb.min(end);
             // The phase's own polynomial at both ends: `eval` uses it up to (not at) the next
             // phase's start, whose own value there differs by rounding.
-            for tau in [lo, hi] {
-                let e = if k + 1 == self.n {
-                    self.eval_raw(tau)
-                } else {
-                    p.eval(tau)
-                };
-                sd_lo = sd_lo.min(e.sd);
-                sd_hi = sd_hi.max(e.sd);
-                sdd = sdd.max(e.sdd.abs());
-            }
-            // Interior extremum of ṡ where s̈ = 0.
-            if p.jerk != 0.0 {
-                let tz = p.t0 - p.sdd / p.jerk;
-                if tz > lo && tz < hi {
-                    let e = p.eval(tz);
-                    sd_lo = sd_lo.min(e.sd);
-                    sd_hi = sd_hi.max(e.sd);
-                }
-            }
-            // Term magnitudes at the phase's farthest instant (they grow with τ − t0).
-            let d = (hi - p.t0).abs();
-            let (t_sd, t_sdd, t_j) = (p.sd.abs(), (d * p.sdd).abs(), (d * d * p.jerk).abs());
-            err_s = err_s.max(p.s.abs() + d * t_sd + d * t_sdd + d * t_j);
-            err_sd = err_sd.max(t_sd + t_sdd + t_j);
-            err_sdd = err_sdd.max(p.sdd.abs() + (d * p.jerk).abs());
+            let ends = if k + 1 == self.n {
+                (self.eval_raw(lo), self.eval_raw(hi))
+            } else {
+                (p.eval(lo), p.eval(hi))
+            };
+            p.extend_extents(lo, hi, ends, &mut x);
         }
+        x.padded(a.s, b.s)
+    }
+}
+
+/// What [`SpeedProfile::ranges`] gathers before padding: the lowest and highest ṡ, the largest
+/// |s̈|, and the largest magnitudes of the terms of the s, ṡ, s̈ polynomials (their rounding).
+#[derive(Debug, Clone, Copy)]
+struct Extents {
+    sd_lo: f64,
+    sd_hi: f64,
+    sdd: f64,
+    err_s: f64,
+    err_sd: f64,
+    err_sdd: f64,
+}
+
+impl Extents {
+    /// The states at the window's ends `a`, `b`; no terms yet.
+    #[inline]
+    fn of_ends(a: PathState, b: PathState) -> Self {
+        Self {
+            sd_lo: a.sd.min(b.sd),
+            sd_hi: a.sd.max(b.sd),
+            sdd: a.sdd.abs().max(b.sdd.abs()),
+            err_s: 0.0,
+            err_sd: 0.0,
+            err_sdd: 0.0,
+        }
+    }
+
+    /// The ranges `(s_lo, s_hi, ṡ_lo, ṡ_hi, max |s̈|)`, padded, from the positions `a_s`, `b_s`
+    /// at the window's ends (s is non-decreasing).
+    #[inline]
+    fn padded(self, a_s: f64, b_s: f64) -> (f64, f64, f64, f64, f64) {
+        let Self {
+            sd_lo,
+            mut sd_hi,
+            sdd,
+            err_s,
+            err_sd,
+            err_sdd,
+        } = self;
         // `eval` clamps ṡ at 0 (rounding must not run the path backwards): the executed ṡ is
         // at most max(ṡ_hi, 0). Without this, a window whose raw ṡ lies below −1e-15
         // throughout (rounding at the end of a braking ramp) would get an upper end below the
@@ -403,8 +447,8 @@ impl SpeedProfile {
         // inside a phase exceeded the range by 5e-16 (1 in 10⁶ random windows).
         let pad = |x: f64| x.abs() * 1e-12 + 1e-15;
         let (err_s, err_sd, err_sdd) = (err_s * 1e-14, err_sd * 1e-14, err_sdd * 1e-14);
-        let s_lo = a.s - pad(a.s) - err_s;
-        let s_hi = b.s + pad(b.s) + err_s;
+        let s_lo = a_s - pad(a_s) - err_s;
+        let s_hi = b_s + pad(b_s) + err_s;
         (
             s_lo,
             s_hi,
@@ -413,6 +457,73 @@ impl SpeedProfile {
             sdd + pad(sdd) + err_sdd,
         )
     }
+}
+
+impl Phase {
+    /// This phase's part of [`SpeedProfile::ranges`] over its part `[lo, hi]` of the window,
+    /// given its states `ends` at `lo` and `hi`: ṡ and |s̈| there, ṡ at an interior extremum,
+    /// the terms' magnitudes at the farthest instant.
+    #[inline]
+    fn extend_extents(&self, lo: f64, hi: f64, ends: (PathState, PathState), x: &mut Extents) {
+        let p = self;
+        for e in [ends.0, ends.1] {
+            x.sd_lo = x.sd_lo.min(e.sd);
+            x.sd_hi = x.sd_hi.max(e.sd);
+            x.sdd = x.sdd.max(e.sdd.abs());
+        }
+        // Interior extremum of ṡ where s̈ = 0.
+        if p.jerk != 0.0 {
+            let tz = p.t0 - p.sdd / p.jerk;
+            if tz > lo && tz < hi {
+                let e = p.eval(tz);
+                x.sd_lo = x.sd_lo.min(e.sd);
+                x.sd_hi = x.sd_hi.max(e.sd);
+            }
+        }
+        // Term magnitudes at the phase's farthest instant (they grow with τ − t0).
+        let d = (hi - p.t0).abs();
+        let (t_sd, t_sdd, t_j) = (p.sd.abs(), (d * p.sdd).abs(), (d * d * p.jerk).abs());
+        x.err_s = x.err_s.max(p.s.abs() + d * t_sd + d * t_sdd + d * t_j);
+        x.err_sd = x.err_sd.max(t_sd + t_sdd + t_j);
+        x.err_sdd = x.err_sdd.max(p.sdd.abs() + (d * p.jerk).abs());
+    }
+}
+
+/// The state of one constant-jerk phase `(t0, s, ṡ, s̈, jerk)` at time `tau` (the phase's
+/// polynomial, as [`SpeedProfile::eval`] evaluates it inside the phase, before its clamp of ṡ
+/// at 0). For the proofs (`pacs-proofs`: the Kani splits of e1 and f4).
+#[doc(hidden)]
+pub fn phase_eval(phase: PhaseParts, tau: f64) -> PathState {
+    let (t0, s, sd, sdd, jerk) = phase;
+    Phase {
+        t0,
+        s,
+        sd,
+        sdd,
+        jerk,
+    }
+    .eval(tau)
+}
+
+/// [`SpeedProfile::ranges`]`(lo, hi)` of a profile whose window `[lo, hi]` lies inside one
+/// phase `phase` that is not its last one (`t0 < lo ≤ hi <` the next phase's start; then no
+/// other phase meets the window and the ends are the phase's own states): the same operations
+/// on the one phase. For the proofs (`pacs-proofs`: f4's per-phase Kani split; its twin checks
+/// that this equals `ranges` bit for bit on planned profiles).
+#[doc(hidden)]
+pub fn phase_window_ranges(phase: PhaseParts, lo: f64, hi: f64) -> (f64, f64, f64, f64, f64) {
+    let (t0, s, sd, sdd, jerk) = phase;
+    let p = Phase {
+        t0,
+        s,
+        sd,
+        sdd,
+        jerk,
+    };
+    let ends = (p.eval(lo), p.eval(hi));
+    let mut x = Extents::of_ends(ends.0, ends.1);
+    p.extend_extents(lo, hi, ends, &mut x);
+    x.padded(ends.0.s, ends.1.s)
 }
 
 /// Per-joint bounds of |q′|, |q″|, |q‴| over a path window.

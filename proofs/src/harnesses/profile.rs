@@ -5,6 +5,7 @@
 //! jerk −J (ṡ still rises by at most s̈₀²/(2J)), which the harness checks as the bound on ṡ.
 
 use crate::{Source, harness};
+use pacs_motion::profile::{Piece, Range};
 use pacs_motion::scaling::{PathState, SpeedProfile};
 
 /// Relative slack for the float evaluation of the cubic phases (the verification uses the sound
@@ -15,24 +16,14 @@ const EPS: f64 = 1e-9;
 /// before ṡ reaches 0. Others make `plan` undershoot (raw ṡ < 0, s decreasing); `admissible`
 /// rejects those (`sd_lo < -1e-9`), so the shield never executes them. `None`: rejected.
 ///
-/// Under Kani the limits are corners and the middle of the twin's ranges (acc ∈ {0.05, 1, 50},
-/// jerk ∈ {0.05, 10, 500}: the planner's arithmetic then divides by constants) and the start
-/// position is 0 (s only shifts the positions, whose claims are the twin's); the twin draws all
-/// of them from the whole ranges.
+/// The limits and the start position are drawn from their whole ranges (the property tests;
+/// the Kani splits choose their own, `brake_start`).
 fn consistent_start<S: Source>(s: &mut S) -> Option<(f64, f64, PathState)> {
-    let (acc, jerk, s0) = if cfg!(kani) {
-        (
-            [0.05, 1.0, 50.0][s.index(3)],
-            [0.05, 10.0, 500.0][s.index(3)],
-            0.0,
-        )
-    } else {
-        (
-            s.f64_in(0.05, 50.0),
-            s.f64_in(0.05, 500.0),
-            s.f64_in(0.0, 10.0),
-        )
-    };
+    let (acc, jerk, s0) = (
+        s.f64_in(0.05, 50.0),
+        s.f64_in(0.05, 500.0),
+        s.f64_in(0.0, 10.0),
+    );
     let start = PathState {
         s: s0,
         sd: s.f64_in(0.0, 1.5),
@@ -60,14 +51,6 @@ fn braking<S: Source>(s: &mut S) {
     // The path never runs backwards at any instant.
     let any = p.eval(s.f64_in(0.0, settle));
     assert!(any.sd >= 0.0, "ṡ {} < 0", any.sd);
-    if cfg!(kani) {
-        // Split (proofs/README.md): the continuity of s̈ at the settle time, the position claims
-        // (s fixed from the settle time on: they need the planner's cubic evaluation to stay
-        // finite) and the tolerance claims on the cubic evaluation below (peak speed, s and ṡ
-        // monotone, jerk bound) are the twin's; Kani checks the claims above (session 14: with
-        // the continuity claim, a timeout at 300 s).
-        return;
-    }
     // s̈ reaches 0 continuously at the settle time: just before it, on the last jerk ramp, s̈ is
     // within rounding of 0 (mutant x8, a last ramp half as long, leaves half the peak s̈).
     let before = p.eval(settle.next_down());
@@ -120,16 +103,12 @@ fn braking<S: Source>(s: &mut S) {
         t2 - t1
     );
 }
-// Under Kani `√x` is any `r ≥ 0` with `fl(r²)` within 1e-12 relative of `x`
-// (`stubs::sqrt_by_square`, an over-approximation of IEEE `√`): the claims Kani checks (a finite
-// settle time, at rest from it on, ṡ ≥ 0) hold for any such root. (The continuity claim, the
-// twin's, would also hold for any such root; with session 13's stub, any value in [0, x + 1], it
-// would not: a peak below the start's s̈ skips the first ramp and the last one ends away from 0.)
+// Property test only since session 15 (a timeout under Kani, > 240 s even with `√` stubbed and
+// the limits at corners): its Kani proofs are the splits `e1_brake_plan_*` below, on the plan's
+// phases rather than on `eval` over time.
 harness!(
     e1_braking_profile,
-    unwind = 6,
-    bits = 4,
-    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
+    twin_only,
     cases = crate::DEFAULT_CASES,
     braking
 );
@@ -143,41 +122,10 @@ fn path_ranges<S: Source>(s: &mut S) {
     };
     let target = if s.bool() { 0.0 } else { s.f64_in(0.0, 1.5) };
     let p = SpeedProfile::plan(start, target, acc, jerk);
-    // Under Kani `plan` is `stubs::any_bounded_profile`: any profile with bounded fields, which
-    // contains every profile planned here (checked in the twin).
-    assert!(
-        cfg!(kani) || crate::profile_in_bounded_range(&p),
-        "planned profile outside the stub's range: {p:?}"
-    );
-    let horizon = if cfg!(kani) {
-        crate::PROFILE_BOUND
-    } else {
-        p.settle_time() + 1.0
-    };
+    let horizon = p.settle_time() + 1.0;
     let ta = s.f64_in(0.0, horizon);
     let tb = s.f64_in(ta, horizon);
     let (s_lo, s_hi, sd_lo, sd_hi, sdd_max) = p.ranges(ta, tb);
-    if cfg!(kani) {
-        // Split (proofs/README.md): Kani checks the ends of the window for any profile with
-        // bounded fields, where `ranges` and `eval` must agree on the phase and the state (s from
-        // below at `ta`, from above at `tb`; ṡ with `eval`'s clamp at 0): the bound between them
-        // rests on s being monotone and the float evaluation of the cubic staying within the
-        // padding, properties of planned profiles only, which the twin checks at every instant.
-        let (at_a, at_b) = (p.eval(ta), p.eval(tb));
-        assert!(
-            s_lo <= at_a.s && at_b.s <= s_hi,
-            "s at the ends ∉ [{s_lo}, {s_hi}]"
-        );
-        for e in [at_a, at_b] {
-            assert!(
-                sd_lo <= e.sd && e.sd <= sd_hi,
-                "ṡ = {} ∉ [{sd_lo}, {sd_hi}] at an end of [{ta}, {tb}]",
-                e.sd
-            );
-            assert!(e.sdd.abs() <= sdd_max, "|s̈| = {} > {sdd_max}", e.sdd);
-        }
-        return;
-    }
     let tau = s.f64_in(ta, tb);
     let e = p.eval(tau);
     assert!(
@@ -192,11 +140,383 @@ fn path_ranges<S: Source>(s: &mut S) {
     );
     assert!(e.sdd.abs() <= sdd_max, "|s̈({tau})| = {} > {sdd_max}", e.sdd);
 }
+// Property test only since session 15 (a timeout under Kani, the phase loop): its Kani proof is
+// the per-phase split `f4_path_ranges_phase` below.
 harness!(
     f4_path_ranges_enclose,
-    unwind = 6,
-    bits = 4,
-    stub = (pacs_motion::scaling::SpeedProfile::plan => crate::stubs::any_bounded_profile),
+    twin_only,
     cases = crate::DEFAULT_CASES,
     path_ranges
+);
+
+// ---------------------------------------------------------------------------------------------
+// e1's Kani splits: the braking plan's phases (session 15).
+
+/// Which branch of the braking plan a split covers (`SpeedProfile::plan` with target 0 from a
+/// consistent start, d = −1).
+#[derive(Clone, Copy, PartialEq)]
+enum BrakeCase {
+    /// The peak deceleration `up = √(J·ṡ₀ + s̈₀²/2)` exceeds `A`: ramp to −A, a plateau at −A,
+    /// ramp back to 0 (no `√` in the durations).
+    Plateau,
+    /// The peak stays below `A`: two ramps through the peak `up = √(J·ṡ₀ + s̈₀²/2)`.
+    Ramps,
+}
+
+/// The limits `(acc, jerk)` of e1's splits and a consistent braking start in the branch `case`.
+/// The branch is fixed by the inputs with a margin of 1e-9 relative (the `√` stub's root is
+/// within 1e-12 of the real root). Under Kani the limits are powers of two (A = 1/s², J = 8/s³:
+/// the planner's divisions by them are exact), s = 0 and s̈₀ = 0 (braking from a constant path
+/// speed; with a symbolic s̈₀ too, 4-bit, neither case decided within 300 s), any ṡ₀ (4-bit)
+/// for `Plateau`;
+/// the twin draws the limits from e1's whole ranges, s and s̈₀ from theirs.
+fn brake_start<S: Source>(s: &mut S, case: BrakeCase) -> Option<(f64, f64, PathState)> {
+    let (acc, jerk, s0) = if cfg!(kani) {
+        (1.0, 8.0, 0.0)
+    } else {
+        (
+            s.f64_in(0.05, 50.0),
+            s.f64_in(0.05, 500.0),
+            s.f64_in(0.0, 10.0),
+        )
+    };
+    // Under Kani `Ramps` from ṡ₀ = 1/16 (8ṡ₀ = 1/2 < A²): only the `√` stub's root is free
+    // (a symbolic ṡ₀ too, 4-bit, did not decide within 120 s).
+    let sd = if cfg!(kani) && case == BrakeCase::Ramps {
+        0.0625
+    } else {
+        s.f64_in(0.0, 1.5)
+    };
+    let sdd = if cfg!(kani) { 0.0 } else { s.f64_in(-acc, acc) };
+    let start = PathState { s: s0, sd, sdd };
+    let consistent = sdd >= 0.0 || sd >= sdd * sdd / (2.0 * jerk);
+    // The square of the peak the planner computes: J·ṡ₀ + s̈₀²/2 (d = −1: u₀ = −s̈₀).
+    let peak2 = jerk * sd + 0.5 * sdd * sdd;
+    let in_case = match case {
+        BrakeCase::Plateau => peak2 > acc * acc * (1.0 + 1e-9),
+        BrakeCase::Ramps => peak2 < acc * acc * (1.0 - 1e-9),
+    };
+    s.assume(consistent && in_case)
+        .then_some((acc, jerk, start))
+}
+
+/// The braking plan's ramps (claim C6, the part a model checker decides): from a consistent
+/// start, the ramps `plan_ramps(s̈₀, ṡ₀, 0, A, J)` that `SpeedProfile::plan` pushes (a duration
+/// ≤ 0 is skipped, a positive one is finite) have jerks ±J or 0, and applied in order
+/// (ṡ += Δ(s̈ + Δ·j/2), s̈ += Δ·j per ramp, in floating point) they keep, at the end of every
+/// ramp, ṡ ≥ −tol, |s̈| ≤ max(A, |s̈₀|)(1 + 1e-9) and s̈ ≤ tol (braking), and end at rest within
+/// tol: |s̈| ≤ 1e-9·(1 + A + |s̈₀|), |ṡ| ≤ 1e-9·(1 + ṡ₀ + A + |s̈₀|) (no jump to rest: mutant x8,
+/// a last ramp half as long, ends at half the peak s̈). With s̈ linear on a ramp, |s̈| at the
+/// ends bounds it everywhere; with s̈ ≤ 0 after the first ramp, ṡ decreases from then on, and on
+/// the first ramp from s̈₀ > 0 (jerk −J) ṡ is concave: the ends bound ṡ from below (real
+/// arithmetic).
+///
+/// Left to the twin: `plan`'s own evaluation of the ramps (its phases, `eval` at any instant:
+/// the twin checks the phases the same way, and e1's twin everything over time), other limits
+/// (and, for `Ramps`, s̈₀ ≠ 0: `brake_start`).
+// The ramps by index, not by iterator: cheaper for the model checker.
+#[allow(clippy::needless_range_loop)]
+fn brake_plan<S: Source>(s: &mut S, case: BrakeCase) {
+    let Some((acc, jerk, start)) = brake_start(s, case) else {
+        return;
+    };
+    let a_max = acc.max(start.sdd.abs()) * (1.0 + EPS);
+    let tol_sdd = EPS * (1.0 + acc + start.sdd.abs());
+    let tol_sd = EPS * (1.0 + start.sd + acc + start.sdd.abs());
+    let (r0, r1, r2) = pacs_motion::scaling::plan_ramps(start.sdd, start.sd, 0.0, acc, jerk);
+    let ramps = [r0, r1, r2];
+    let (mut sd, mut sdd) = (start.sd, start.sdd);
+    for k in 0..3 {
+        let (j, dur) = ramps[k];
+        if dur > 0.0 {
+            assert!(dur.is_finite(), "ramp {k} lasts {dur}");
+            assert!(j == jerk || j == -jerk || j == 0.0, "jerk {j} on ramp {k}");
+            sd += dur * (sdd + 0.5 * dur * j);
+            sdd += dur * j;
+            assert!(sd >= -tol_sd, "ṡ = {sd} < 0 after ramp {k}");
+            assert!(
+                sdd.abs() <= a_max,
+                "|s̈| = {sdd} above {a_max} after ramp {k}"
+            );
+            assert!(sdd <= tol_sdd, "s̈ = {sdd} > 0 after ramp {k}");
+        } else {
+            assert!(!dur.is_nan(), "ramp {k} lasts NaN");
+        }
+    }
+    assert!(
+        sdd.abs() <= tol_sdd,
+        "the ramps end at s̈ = {sdd} (a jump to rest)"
+    );
+    assert!(
+        sd.abs() <= tol_sd,
+        "the ramps end at ṡ = {sd} (a jump to rest)"
+    );
+    if cfg!(kani) {
+        return;
+    }
+    // The twin: the same on the phases `plan` builds from these ramps (its own evaluation).
+    let p = SpeedProfile::plan(start, 0.0, acc, jerk);
+    let (ph, n, settle, target, _, _) = p.to_parts();
+    assert!((1..=4).contains(&n) && target == 0.0, "{n} phases");
+    assert!(ph[0].0 == 0.0, "the plan starts at {}", ph[0].0);
+    let mut prev = 0.0;
+    for (k, &(t0, _, sd, sdd, j)) in ph[..n].iter().enumerate() {
+        assert!(t0 >= prev, "phase {k} starts at {t0} before {prev}");
+        assert!(sd >= -tol_sd, "ṡ = {sd} < 0 at the start of phase {k}");
+        assert!(sdd.abs() <= a_max, "|s̈| = {sdd} above {a_max} at phase {k}");
+        assert!(k == 0 || sdd <= tol_sdd, "s̈ = {sdd} > 0 at phase {k}");
+        assert!(k + 1 == n || j == jerk || j == -jerk || j == 0.0);
+        prev = t0;
+    }
+    let last = ph[n - 1];
+    assert!(
+        last.0 == settle,
+        "the last phase starts at {} ≠ settle {settle}",
+        last.0
+    );
+    assert!(
+        last.2 == 0.0 && last.3 == 0.0 && last.4 == 0.0,
+        "last phase {last:?} not at rest"
+    );
+    if n >= 2 {
+        let end = pacs_motion::scaling::phase_eval(ph[n - 2], settle);
+        assert!(
+            end.sdd.abs() <= tol_sdd,
+            "the last ramp ends at s̈ = {}",
+            end.sdd
+        );
+        assert!(
+            end.sd.abs() <= tol_sd,
+            "the last ramp ends at ṡ = {}",
+            end.sd
+        );
+    }
+}
+
+fn brake_plan_plateau<S: Source>(s: &mut S) {
+    brake_plan(s, BrakeCase::Plateau)
+}
+
+fn brake_plan_ramps<S: Source>(s: &mut S) {
+    brake_plan(s, BrakeCase::Ramps)
+}
+
+// Under Kani `√` by `stubs::sqrt_by_square`: any root whose rounded square is within 1e-12
+// relative of its argument, an over-approximation of IEEE `√` (proofs/README.md, What Kani sees).
+harness!(
+    e1_brake_plan_plateau,
+    unwind = 5,
+    bits = 4,
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
+    cases = crate::DEFAULT_CASES,
+    brake_plan_plateau
+);
+
+harness!(
+    e1_brake_plan_ramps,
+    unwind = 5,
+    bits = 4,
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
+    cases = crate::DEFAULT_CASES,
+    brake_plan_ramps
+);
+
+// ---------------------------------------------------------------------------------------------
+// f4's Kani split: one phase of `ranges` (session 15).
+
+/// One constant-jerk phase's ranges over a window inside it (claim C7, the part a model checker
+/// decides): for a phase `(t0, s, ṡ, s̈, j)` that is not the profile's last and a window
+/// `[lo, hi]` with `t0 < lo ≤ hi` before the next phase, the executed ṡ at any τ in the window
+/// (`eval`'s polynomial with its clamp at 0) lies in `[ṡ_lo, ṡ_hi]` and |s̈(τ)| ≤ the bound of
+/// `phase_window_ranges`, which is `SpeedProfile::ranges(lo, hi)` of such a profile (the twin
+/// checks that bit for bit on planned profiles, and also s(τ) ∈ [s_lo, s_hi]).
+///
+/// Under Kani one phase and window, any τ (full width): the ramp t0 = 1 s, ṡ = 100, s̈ = −40/s,
+/// j = 8/s² over [5, 7] s, whose ṡ = (10 − 2(τ − 1))² has its minimum 0 at τ = 6 s inside the
+/// window (mutant x12, the interior extremum skipped, fails: the ends give ṡ = 4). With the
+/// window's ends symbolic too (4-bit), a timeout at 150 s. Any other phase or window is the
+/// twin's (any non-final phase of a planned profile, any window in it), and so is mutant x26
+/// (padding relative to the value only, a phase's end sampled with the next phase's
+/// polynomial): its failure needs two phases' polynomials at their boundary, and Kani verifies
+/// this split with x26 applied.
+fn phase_window<S: Source>(s: &mut S) {
+    use pacs_motion::scaling::{phase_eval, phase_window_ranges};
+    let (phase, lo, hi) = if cfg!(kani) {
+        ((1.0, 0.0, 100.0, -40.0, 8.0), 5.0, 7.0)
+    } else {
+        // A non-final phase of a profile planned from a consistent start, any window inside it.
+        let Some((acc, jerk, start)) = consistent_start(s) else {
+            return;
+        };
+        let target = if s.bool() { 0.0 } else { s.f64_in(0.0, 1.5) };
+        let p = SpeedProfile::plan(start, target, acc, jerk);
+        let (ph, n, ..) = p.to_parts();
+        if !s.assume(n >= 2) {
+            return;
+        }
+        let k = s.index(n - 1);
+        let (t0, t1) = (ph[k].0, ph[k + 1].0);
+        let lo = s.f64_in(t0, t1);
+        let hi = s.f64_in(lo, t1);
+        if !s.assume(t0 < lo && hi < t1) {
+            return;
+        }
+        let whole = p.ranges(lo, hi);
+        let one = phase_window_ranges(ph[k], lo, hi);
+        assert!(
+            whole.0.to_bits() == one.0.to_bits()
+                && whole.1.to_bits() == one.1.to_bits()
+                && whole.2.to_bits() == one.2.to_bits()
+                && whole.3.to_bits() == one.3.to_bits()
+                && whole.4.to_bits() == one.4.to_bits(),
+            "ranges {whole:?} ≠ the phase's {one:?}"
+        );
+        (ph[k], lo, hi)
+    };
+    let (s_lo, s_hi, sd_lo, sd_hi, sdd_max) = phase_window_ranges(phase, lo, hi);
+    let tau = s.f64_full(lo, hi);
+    let e = phase_eval(phase, tau);
+    let sd = e.sd.max(0.0);
+    assert!(
+        sd_lo <= sd && sd <= sd_hi,
+        "ṡ({tau}) = {sd} ∉ [{sd_lo}, {sd_hi}] over [{lo}, {hi}] of {phase:?}"
+    );
+    assert!(e.sdd.abs() <= sdd_max, "|s̈({tau})| = {} > {sdd_max}", e.sdd);
+    if !cfg!(kani) {
+        assert!(
+            s_lo <= e.s && e.s <= s_hi,
+            "s({tau}) = {} ∉ [{s_lo}, {s_hi}] over [{lo}, {hi}]",
+            e.s
+        );
+    }
+}
+
+harness!(
+    f4_path_ranges_phase,
+    unwind = 3,
+    cases = crate::DEFAULT_CASES,
+    phase_window
+);
+
+// ---------------------------------------------------------------------------------------------
+// f5's Kani splits: one joint piece's bounds (`pacs_motion::profile::Piece::extend_bounds`,
+// session 15).
+
+/// A joint piece and a window `[d0, d1]` of its local time, any `d` in it. The twin: any piece
+/// with q ∈ [−4, 4] rad, q̇ ∈ [−4, 4] rad/s, q̈ ∈ [−32, 32] rad/s², j ∈ [−1024, 1024] rad/s³ (or 0
+/// when `cubic` is false), any window in [0, 2] s, any d in it. Under Kani the piece and window
+/// `kani` (constants) and any d in the window (full width): with a symbolic window (4-bit ends)
+/// too, a timeout at 150 s.
+fn piece_window<S: Source>(
+    s: &mut S,
+    cubic: bool,
+    kani: (Piece, f64, f64),
+) -> (Piece, f64, f64, f64) {
+    if cfg!(kani) {
+        let (piece, d0, d1) = kani;
+        return (piece, d0, d1, s.f64_in(d0, d1));
+    }
+    let piece = Piece {
+        t: 0.0,
+        q: s.f64_in(-4.0, 4.0),
+        v: s.f64_in(-4.0, 4.0),
+        a: s.f64_in(-32.0, 32.0),
+        j: if cubic {
+            s.f64_in(-1024.0, 1024.0)
+        } else {
+            0.0
+        },
+    };
+    let d0 = s.f64_in(0.0, 2.0);
+    let d1 = s.f64_in(d0, 2.0);
+    let d = s.f64_full(d0, d1);
+    (piece, d0, d1, d)
+}
+
+/// The velocity and acceleration bounds of one cubic joint piece (claim C7, f5's boxes): after
+/// `extend_bounds(d0, d1)` from empty ranges, q̇(d) and q̈(d) of `eval` lie in them for every d in
+/// `[d0, d1]` (any jerk). Under Kani the piece q = 0, q̇ = 2, q̈ = −8, j = 8 over [0.5, 1.5] s:
+/// q̇ has its minimum −2 at d = 1 s, between ends where it is −1 (mutant x28b, the q̇ extremum
+/// where q̈ = 0 skipped, fails).
+fn piece_vel_acc<S: Source>(s: &mut S) {
+    let kani_piece = Piece {
+        t: 0.0,
+        q: 0.0,
+        v: 5.0,
+        a: -8.0,
+        j: 8.0,
+    };
+    let (piece, d0, d1, d) = piece_window(s, true, (kani_piece, 0.5, 1.5));
+    let mut r = [Range::EMPTY; 3];
+    piece.extend_bounds(d0, d1, &mut r);
+    let (_, v, a) = piece.eval(d);
+    assert!(
+        r[1].lo <= v && v <= r[1].hi,
+        "q̇({d}) = {v} ∉ {:?} over [{d0}, {d1}] of {piece:?}",
+        r[1]
+    );
+    assert!(
+        r[2].lo <= a && a <= r[2].hi,
+        "q̈({d}) = {a} ∉ {:?} over [{d0}, {d1}] of {piece:?}",
+        r[2]
+    );
+}
+
+/// The position bounds of one joint piece without jerk (a quadratic: its extremum where q̇ = 0 is
+/// `−v/a`, no square root): after `extend_bounds(d0, d1)`, q(d) lies in them for every d in
+/// `[d0, d1]`. Under Kani the piece q = 0, q̇ = 2, q̈ = −4 over [0.25, 1] s: q has its maximum
+/// 0.5 at d = 0.5 s, above the ends' 0.375 and 0 (mutant x29b, the extremum of q skipped when
+/// j = 0, fails). The cubic case (the
+/// roots of q̇ by the stable quadratic formula, with `√`) is the twin's
+/// (`f5_piece_position_cubic`) and f5's.
+fn piece_position_quadratic<S: Source>(s: &mut S) {
+    piece_position(s, false)
+}
+
+fn piece_position_cubic<S: Source>(s: &mut S) {
+    piece_position(s, true)
+}
+
+fn piece_position<S: Source>(s: &mut S, cubic: bool) {
+    let kani_piece = Piece {
+        t: 0.0,
+        q: 0.0,
+        v: 2.0,
+        a: -4.0,
+        j: 0.0,
+    };
+    let (piece, d0, d1, d) = piece_window(s, cubic, (kani_piece, 0.25, 1.0));
+    let mut r = [Range::EMPTY; 3];
+    piece.extend_bounds(d0, d1, &mut r);
+    let (q, _, _) = piece.eval(d);
+    assert!(
+        r[0].lo <= q && q <= r[0].hi,
+        "q({d}) = {q} ∉ {:?} over [{d0}, {d1}] of {piece:?}",
+        r[0]
+    );
+}
+
+// Under Kani `√` (the roots of q̇, which only widen the ranges) by `stubs::sqrt_by_square`.
+harness!(
+    f5_piece_velocity_acceleration,
+    unwind = 3,
+    bits = 8,
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
+    cases = crate::DEFAULT_CASES,
+    piece_vel_acc
+);
+
+harness!(
+    f5_piece_position_quadratic,
+    unwind = 3,
+    bits = 8,
+    cases = crate::DEFAULT_CASES,
+    piece_position_quadratic
+);
+
+harness!(
+    f5_piece_position_cubic,
+    twin_only,
+    cases = crate::DEFAULT_CASES,
+    piece_position_cubic
 );
