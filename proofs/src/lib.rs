@@ -29,32 +29,6 @@ pub fn profile_in_stub_range(p: &pacs_motion::scaling::SpeedProfile) -> bool {
         && [settle, target, acc, jerk].into_iter().all(f64::is_finite)
 }
 
-/// Bound on every field of the profiles `stubs::any_bounded_profile` draws: phase start times
-/// and the settle time in `[0, PROFILE_BOUND]` (s), every other field in `[−PROFILE_BOUND,
-/// PROFILE_BOUND]`. Large enough for every profile f4 plans (checked by its twin,
-/// `profile_in_bounded_range`: a slow jerk of 0.05/s³ from s̈ = 50/s² takes hours and runs s
-/// to ~1e8), small enough that evaluating a profile within `PROFILE_BOUND` s of its start
-/// cannot overflow (|s| ≤ 1e9 + 1e9·(1e9 + 1e9·(1e9 + 1e18)) ≈ 1e36).
-pub const PROFILE_BOUND: f64 = 1e9;
-
-/// Significand bits of the fields of the profiles `stubs::any_bounded_profile` draws.
-pub const PROFILE_BITS: u32 = 6;
-
-/// Whether `p` lies in the range `stubs::any_bounded_profile` draws from ([`PROFILE_BOUND`]).
-pub fn profile_in_bounded_range(p: &pacs_motion::scaling::SpeedProfile) -> bool {
-    let (phases, n, settle, target, acc, jerk) = p.to_parts();
-    let b = PROFILE_BOUND;
-    let within = |x: f64| (-b..=b).contains(&x);
-    (1..=4).contains(&n)
-        && phases.iter().all(|&(t0, s, sd, sdd, j)| {
-            (0.0..=b).contains(&t0) && within(s) && within(sd) && within(sdd) && within(j)
-        })
-        && (0.0..=b).contains(&settle)
-        && within(target)
-        && within(acc)
-        && within(jerk)
-}
-
 /// The range `[x(1 − 1e-12) − 1e-300, x(1 + 1e-12) + 1e-300]` (each end rounded to nearest) in
 /// which `stubs::sqrt_by_square` keeps the rounded square `fl(r·r)` of the root `r` it draws for a
 /// positive finite `x`. It contains `fl(fl(√x)²)` for IEEE `√`: `fl(√x) = √x(1 + δ)` with
@@ -102,37 +76,6 @@ pub mod stubs {
             field(),
             field(),
         )
-    }
-
-    /// Any speed profile of 1 to 4 phases with every field in the range of
-    /// [`crate::PROFILE_BOUND`] (start and settle times in `[0, 1e9]` s, the rest in
-    /// `[−1e9, 1e9]`) and with significands of at most [`crate::PROFILE_BITS`] bits, whatever the
-    /// arguments. Bounded (unlike [`any_speed_profile`]) so that evaluating it cannot overflow:
-    /// Kani checks every float operation for NaN. Short significands keep the evaluations'
-    /// multipliers small: a claim proved with this stub holds for such profiles (f4: the ends of
-    /// a window of `ranges`); the twin checks the planner's own profiles, every one of which lies
-    /// in the bounded range ([`crate::profile_in_bounded_range`]).
-    pub fn any_bounded_profile(
-        _start: pacs_motion::scaling::PathState,
-        _target: f64,
-        _acc: f64,
-        _jerk: f64,
-    ) -> pacs_motion::scaling::SpeedProfile {
-        use pacs_proof_kit::Source;
-        let mut src = pacs_proof_kit::KaniSource {
-            bits: crate::PROFILE_BITS,
-        };
-        let n = 1 + src.index(4);
-        let b = crate::PROFILE_BOUND;
-        let mut field = || src.f64_in(-b, b);
-        let phases = [
-            (field().abs(), field(), field(), field(), field()),
-            (field().abs(), field(), field(), field(), field()),
-            (field().abs(), field(), field(), field(), field()),
-            (field().abs(), field(), field(), field(), field()),
-        ];
-        let settle = field().abs();
-        pacs_motion::scaling::SpeedProfile::from_parts(phases, n, settle, field(), field(), field())
     }
 
     /// Any finite `r ≥ 0` whose rounded square `fl(r·r)` lies in [`crate::sqrt_square_range`]`(x)`

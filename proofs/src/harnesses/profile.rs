@@ -436,7 +436,7 @@ fn piece_window<S: Source>(
 /// The velocity and acceleration bounds of one cubic joint piece (claim C7, f5's boxes): after
 /// `extend_bounds(d0, d1)` from empty ranges, q̇(d) and q̈(d) of `eval` lie in them for every d in
 /// `[d0, d1]` (any jerk). Under Kani the piece q = 0, q̇ = 2, q̈ = −8, j = 8 over [0.5, 1.5] s:
-/// q̇ has its minimum −2 at d = 1 s, between ends where it is −1 (mutant x28b, the q̇ extremum
+/// q̇ has its minimum −2 at d = 1 s, between ends where it is −1 (mutant x31, the q̇ extremum
 /// where q̈ = 0 skipped, fails).
 fn piece_vel_acc<S: Source>(s: &mut S) {
     let kani_piece = Piece {
@@ -465,7 +465,7 @@ fn piece_vel_acc<S: Source>(s: &mut S) {
 /// The position bounds of one joint piece without jerk (a quadratic: its extremum where q̇ = 0 is
 /// `−v/a`, no square root): after `extend_bounds(d0, d1)`, q(d) lies in them for every d in
 /// `[d0, d1]`. Under Kani the piece q = 0, q̇ = 2, q̈ = −4 over [0.25, 1] s: q has its maximum
-/// 0.5 at d = 0.5 s, above the ends' 0.375 and 0 (mutant x29b, the extremum of q skipped when
+/// 0.5 at d = 0.5 s, above the ends' 0.375 and 0 (mutant x32, the extremum of q skipped when
 /// j = 0, fails). The cubic case (the
 /// roots of q̇ by the stable quadratic formula, with `√`) is the twin's
 /// (`f5_piece_position_cubic`) and f5's.
