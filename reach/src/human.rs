@@ -188,6 +188,57 @@ impl Ball {
     }
 }
 
+/// Elapsed times `(T_a, T_b)` since the measured true state (`time − delay`) of the query
+/// `[t_a, t_b]`: `t_a − time + delay` rounded down and `t_b − time + delay` rounded up. The
+/// per-keypoint arithmetic of [`HumanReach::occupancy_into`] is in free functions of floats
+/// (this one and the four below) so that the proofs beside this module (`human/proofs.rs`)
+/// check it without building a `HumanModel`.
+#[inline(always)]
+fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
+    let lo = add_down(sub_down(t_a, time), delay);
+    let hi = add_up(sub_up(t_b, time), delay);
+    (lo, hi)
+}
+
+/// `vel`: the radius `e_p + v_max·T_hi` (rounded up) of a keypoint's ball around its measured
+/// position; it contains the balls of every earlier elapsed time.
+#[inline(always)]
+fn vel_radius(e_p: f64, v_max: f64, t_hi: f64) -> f64 {
+    add_up(e_p, mul_up(v_max, t_hi))
+}
+
+/// `acc`: the ball of a keypoint measured at `p` with velocity `v` at the elapsed time `t`.
+#[inline(always)]
+fn acc_ball_at(e_p: f64, e_v: f64, a_max: f64, p: &Point3<f64>, v: &Vector3<f64>, t: f64) -> Ball {
+    // Centre p + v·t in floating point: per coordinate the rounding error is at most
+    // 2u(|p| + |v·t|)(1 + u) < 3u(|p| + |v|·t); the vector error is at most the sum over
+    // coordinates (L1 ≥ L2), added to the radius. Radius: a sum of products of non-negative
+    // floats, inflated by `INFLATE` (see `rounding`).
+    let centre = p + v * t;
+    let err =
+        ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
+    let r = e_p + e_v * t + 0.5 * a_max * t * t;
+    Ball {
+        centre,
+        radius: (r + err) * INFLATE + TINY,
+    }
+}
+
+/// The radius of the capsule between two keypoints' balls of radii `r1`, `r2` for a body part
+/// of `thickness` (module doc).
+#[inline(always)]
+fn part_radius(r1: f64, r2: f64, thickness: f64) -> f64 {
+    add_up(r1.max(r2), thickness * 0.5)
+}
+
+/// `pos`: the radius of an extremity's ball (`length`, `thickness`) around its base keypoint's
+/// measured position, the base moving for up to `t` (the elapsed `T_hi` plus `back`).
+#[inline(always)]
+fn extremity_radius(e_p: f64, v_max: f64, length: f64, thickness: f64, t: f64) -> f64 {
+    let travel = mul_up(v_max, t);
+    add_up(add_up(e_p, travel), add_up(length, thickness * 0.5))
+}
+
 /// Human occupancy computer: reusable buffers, no allocation per query.
 #[derive(Debug, Clone)]
 pub struct HumanReach {
@@ -236,8 +287,7 @@ impl HumanReach {
             )));
         }
         let delay = self.model.delay();
-        let lo = add_down(sub_down(t_a, m.time), delay);
-        let hi = add_up(sub_up(t_b, m.time), delay);
+        let (lo, hi) = elapsed_range(m.time, delay, t_a, t_b);
         if lo < -1e-9 {
             return Err(ReachError::Input(format!(
                 "interval [{t_a}, {t_b}] starts before the measured state (time {} - delay {delay})",
@@ -249,31 +299,25 @@ impl HumanReach {
     }
 
     fn vel_ball(&self, m: &HumanMeasurement, k: usize, t_hi: f64) -> Ball {
-        let r = add_up(
-            self.model.measurement_error_pos(),
-            mul_up(self.model.v_max()[k], t_hi),
-        );
         Ball {
             centre: m.positions[k],
-            radius: r,
+            radius: vel_radius(
+                self.model.measurement_error_pos(),
+                self.model.v_max()[k],
+                t_hi,
+            ),
         }
     }
 
     fn acc_ball_at(&self, p: &Point3<f64>, v: &Vector3<f64>, k: usize, t: f64) -> Ball {
-        // Centre p + v·t in floating point: per coordinate the rounding error is at most
-        // 2u(|p| + |v·t|)(1 + u) < 3u(|p| + |v|·t); the vector error is at most the sum over
-        // coordinates (L1 ≥ L2), added to the radius. Radius: a sum of products of non-negative
-        // floats, inflated by `INFLATE` (see `rounding`).
-        let centre = p + v * t;
-        let err =
-            ((p.x.abs() + p.y.abs() + p.z.abs()) + (v.x.abs() + v.y.abs() + v.z.abs()) * t) * 1e-15;
-        let r = self.model.measurement_error_pos()
-            + self.model.measurement_error_vel() * t
-            + 0.5 * self.model.a_max()[k] * t * t;
-        Ball {
-            centre,
-            radius: (r + err) * INFLATE + TINY,
-        }
+        acc_ball_at(
+            self.model.measurement_error_pos(),
+            self.model.measurement_error_vel(),
+            self.model.a_max()[k],
+            p,
+            v,
+            t,
+        )
     }
 
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {
@@ -293,8 +337,10 @@ impl HumanReach {
     /// Claim C3: every body part of every admissible motion (the model's speed/acceleration
     /// bounds since the measured state at `time − delay`, measurement errors `e_p`, `e_v`; for
     /// `pos` also the extremity lengths unless the measurement contradicts them) lies inside its
-    /// capsule at every instant of `[t_a, t_b]`. Harness `c1_human_occupancy_contains_motion`;
-    /// mutants `m2`, `x6` caught.
+    /// capsule at every instant of `[t_a, t_b]`. Property test
+    /// `c1_human_occupancy_contains_motion`; its Kani splits `c1_vel_reach`, `c1_pos_reach`,
+    /// `c1_acc_ball_at` (beside this module, `human/proofs.rs`); mutants `m2`, `x6`, `x28c`
+    /// caught.
     pub fn occupancy_into(
         &mut self,
         m: &HumanMeasurement,
@@ -352,7 +398,7 @@ impl HumanReach {
         for (i, bp) in self.model.body_parts().iter().enumerate() {
             let b1 = self.balls[bp.from];
             let b2 = self.balls[bp.to];
-            let r = add_up(b1.radius.max(b2.radius), bp.thickness * 0.5);
+            let r = part_radius(b1.radius, b2.radius, bp.thickness);
             if !(r.is_finite()
                 && b1
                     .centre
@@ -378,10 +424,12 @@ impl HumanReach {
                     && self.extremity_consistent(m, e)
                 {
                     let c = m.positions[e.base];
-                    let travel = mul_up(self.model.v_max()[e.base], add_up(t_hi, back));
-                    let r = add_up(
-                        add_up(self.model.measurement_error_pos(), travel),
-                        add_up(e.length, e.thickness * 0.5),
+                    let r = extremity_radius(
+                        self.model.measurement_error_pos(),
+                        self.model.v_max()[e.base],
+                        e.length,
+                        e.thickness,
+                        add_up(t_hi, back),
                     );
                     if !r.is_finite() {
                         return Err(ReachError::Input(format!(
@@ -439,3 +487,8 @@ impl HumanReach {
         Ok(out)
     }
 }
+
+/// The Kani proofs of the human occupancy's per-keypoint arithmetic (claim C3, split by reach
+/// model), each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+mod proofs;

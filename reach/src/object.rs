@@ -130,6 +130,38 @@ pub(crate) fn curve_enclosure(
     (c, g_s, g_t, add_up(add_up(rc, rs), rt))
 }
 
+/// The elapsed times `(τ_a, τ_b)` since the measured state (`time − delay`) of the query
+/// `[t_a, t_b]`: `t_a − time + delay` rounded down and clamped at 0 (the measured state at the
+/// earliest), `t_b − time + delay` rounded up and at least `τ_a`. (`occupancy` evaluates its
+/// precondition `t_a ≥ time − delay` in floating point: a query it accepts may lie, exactly,
+/// up to an ulp before the measured state; before session 15 `τ_b` was then negative, below
+/// `τ_a = 0`, and the enclosure covered `τ_m < 0` instead of the measured state — found by the
+/// twin of `j1_object_time_and_balls`.) The scalar steps of [`occupancy`] (this one and
+/// the two radii below) are free functions of floats so that the proofs beside this module check
+/// them without an `ObjectModel`.
+#[inline(always)]
+pub(crate) fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
+    let tau_a = add_down(sub_down(t_a, time), delay).max(0.0);
+    let tau_b = add_up(sub_up(t_b, time), delay).max(tau_a);
+    (tau_a, tau_b)
+}
+
+/// The ball term `e_p + τ_b e_v + a τ_b²/2 + r` (module docs), rounded up: position error,
+/// velocity error, acceleration ball and shape radius at `τ_b` (each grows with `τ`).
+#[inline(always)]
+pub(crate) fn ball_radius(e_p: f64, e_v: f64, a: f64, r: f64, tau_b: f64) -> f64 {
+    add_up(
+        add_up(e_p, mul_up(tau_b, e_v)),
+        add_up(mul_up(mul_up(mul_up(tau_b, tau_b), 0.5), a), r),
+    )
+}
+
+/// The speed bound's radius `e_p + v_max τ_b + r` around the measured position, rounded up.
+#[inline(always)]
+pub(crate) fn speed_radius(e_p: f64, v_max: f64, r: f64, tau_b: f64) -> f64 {
+    add_up(add_up(e_p, mul_up(v_max, tau_b)), r)
+}
+
 /// The occupancy of `model` over `[t_a, t_b]` (s) after `meas`.
 ///
 /// Errors: non-finite inputs, `t_a > t_b`, `t_a` before the measured state (`t_m − delay`), a
@@ -141,8 +173,10 @@ pub(crate) fn curve_enclosure(
 /// `t_m − delay`), every point of the object at every `t ∈ [t_a, t_b]` lies in both sets of the
 /// result. Property test `reach/tests/object.rs` (10⁴ sampled motions with bang-bang inputs
 /// from the edge of the measurement errors); harness `j2_object_curve_encloses` (the
-/// time-interval enclosure, beside this module); mutant `x17` (the enclosure's `s` generator
-/// dropped) caught.
+/// time-interval enclosure, beside this module; Kani splits `j2_object_curve_velocity`,
+/// `j2_object_curve_acceleration`), `j1_object_time_and_balls` (the elapsed-time range and the
+/// ball radii, Kani); mutants `x13` (the delay dropped) and `x17` (the enclosure's `s`
+/// generator dropped) caught.
 pub fn occupancy(
     model: &ObjectModel,
     meas: &ObjectMeasurement,
@@ -175,8 +209,7 @@ pub fn occupancy(
             reason: "before the measured state (t_m - delay)",
         });
     }
-    let tau_a = add_down(sub_down(t_a, meas.time), model.delay()).max(0.0);
-    let tau_b = add_up(sub_up(t_b, meas.time), model.delay());
+    let (tau_a, tau_b) = elapsed_range(meas.time, model.delay(), t_a, t_b);
     let (v_m, e_v) = match (meas.velocity, model.max_speed()) {
         (Some(v), _) => (v, model.vel_error()),
         (None, Some(v_max)) => ([0.0; 3], v_max),
@@ -213,21 +246,17 @@ pub fn occupancy(
         gens[n] = *g;
         n += 1;
     }
-    // e_p + τ_b e_v + a τ_b²/2 + r.
-    let radius = add_up(
-        add_up(model.pos_error(), mul_up(tau_b, e_v)),
-        add_up(
-            mul_up(mul_up(mul_up(tau_b, tau_b), 0.5), model.max_acc()),
-            model.shape_radius(),
-        ),
+    let radius = ball_radius(
+        model.pos_error(),
+        e_v,
+        model.max_acc(),
+        model.shape_radius(),
+        tau_b,
     );
     let reach = Zonotope3::new(centre, &gens[..n], err)?;
     let speed = match model.max_speed() {
         Some(v_max) => {
-            let r = add_up(
-                add_up(model.pos_error(), mul_up(v_max, tau_b)),
-                model.shape_radius(),
-            );
+            let r = speed_radius(model.pos_error(), v_max, model.shape_radius(), tau_b);
             Some((
                 Zonotope3::new(meas.position, model.shape_generators(), [0.0; 3])?,
                 r,

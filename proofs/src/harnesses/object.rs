@@ -13,8 +13,10 @@
 //! capsule must contain the point.
 //!
 //! Property test (`j1`): the distance test runs a GJK iteration and square roots, beyond a model
-//! checker. Its parts are harnessed: `j2` (the time-interval enclosure, beside
-//! `pacs_reach::object`), `b4` (zonotope ⊕ ball vs capsule).
+//! checker. Its parts are harnessed: `j1_object_time_and_balls` (the elapsed-time range and the
+//! ball radii, a Kani proof beside `pacs_reach::object`; mutant `x13` caught), `j2` (the
+//! time-interval enclosure, beside `pacs_reach::object`, with its Kani splits), `b4` (zonotope ⊕
+//! ball vs capsule).
 
 #[cfg(test)]
 mod twin {
