@@ -339,7 +339,7 @@ impl HumanReach {
     /// `pos` also the extremity lengths unless the measurement contradicts them) lies inside its
     /// capsule at every instant of `[t_a, t_b]`. Property test
     /// `c1_human_occupancy_contains_motion`; its Kani splits `c1_vel_reach`, `c1_pos_reach`,
-    /// `c1_acc_ball_at` (beside this module, `human/proofs.rs`); mutants `m2`, `x6`, `x28c`
+    /// `c1_acc_ball_at` (beside this module, `human/proofs.rs`); mutants `m2`, `x6`, `x33`
     /// caught.
     pub fn occupancy_into(
         &mut self,

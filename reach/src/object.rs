@@ -344,3 +344,26 @@ impl ObjectOccupancy {
 /// The Kani proof of the time-interval enclosure, also a property test (`proofs/README.md`).
 #[cfg(any(test, kani))]
 mod proofs;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The query the twin of `j1_object_time_and_balls` found: accepted by `occupancy`'s
+    /// floating-point precondition, exactly a little before the measured state. The elapsed
+    /// range must still contain the measured state (τ = 0) and be ordered; before session 15
+    /// `τ_b` was −6.9e-17 (mutant: drop the `.max(tau_a)`).
+    #[test]
+    fn a_query_an_ulp_before_the_measured_state_keeps_its_elapsed_range_ordered() {
+        let (time, delay, t) = (2.7725560640097173, 0.1, 2.6725560640097172);
+        assert!(t >= time - delay, "the precondition accepts it");
+        let (tau_a, tau_b) = elapsed_range(time, delay, t, t);
+        assert_eq!(tau_a, 0.0);
+        assert!(tau_b >= tau_a, "τ_b = {tau_b} below τ_a = {tau_a}");
+        let (tau_m, h) = time_split(tau_a, tau_b);
+        assert!(
+            tau_m - h <= 0.0 && 0.0 <= tau_m + h,
+            "τ = 0 outside [{tau_m} ± {h}]"
+        );
+    }
+}

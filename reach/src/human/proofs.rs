@@ -15,7 +15,7 @@
 //! - `c1_pos_reach`: pos, an extremity's part (consistent measurement): every point within
 //!   length + thickness/2 of the base keypoint, which moves as in vel, lies in the ball of
 //!   `extremity_radius` around the measured base: R ≥ e_p + v_max·T + length + thickness/2.
-//!   Mutants `m2` and `x28c` (the base's travel dropped) fail it.
+//!   Mutants `m2` and `x33` (the base's travel dropped) fail it.
 //! - `c1_acc_ball_at`: acc at one elapsed time t. The keypoint set is Ball(p + v·t, e_p + e_v·t +
 //!   ½·a_max·t²) (the sum of the balls of the position, velocity and acceleration errors); the
 //!   ball `acc_ball_at` returns, centred at the rounded p + v·t, contains it: |p + v·t − c| +
