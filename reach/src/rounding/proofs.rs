@@ -175,6 +175,16 @@ harness!(
 /// `2⁻⁴⁷ = 64u`, as a constant.
 const TWO_M47: f64 = f64::from_bits((1023 - 47) << 52);
 
+/// The inflation claim of the `√` splits: `out ≥ r + r·2⁻⁴⁷` exactly ([`cmp_sum`]) for the root
+/// `r` the code took; `what` names the call and its radicand in the failure message.
+fn assert_inflated(r: f64, out: f64, what: impl Fn() -> String) {
+    assert!(
+        cmp_sum(r, r * TWO_M47, out) != Greater,
+        "{} below the root {r} times 1 + 2⁻⁴⁷",
+        what()
+    );
+}
+
 /// The argument and result of the last `√` of a positive finite value in a proof with
 /// [`any_root_recorded`] (bit patterns; 0 before any).
 #[cfg(kani)]
@@ -247,10 +257,9 @@ fn norm_up_sqrt_inflate<S: Source>(s: &mut S) {
         arg.to_bits() == sum.to_bits(),
         "norm3_up({x}, {y}, {z}) took √{arg}, not √{sum}"
     );
-    assert!(
-        cmp_sum(r, r * TWO_M47, out) != Greater,
-        "norm3_up({x}, {y}, {z}) = {out} below √{sum} = {r} times 1 + 2⁻⁴⁷"
-    );
+    assert_inflated(r, out, || {
+        format!("norm3_up({x}, {y}, {z}) = {out}, √{sum}")
+    });
 }
 harness!(
     a3_norm_up_sqrt_inflate,
@@ -388,10 +397,7 @@ fn dist_up_sqrt_inflate<S: Source>(s: &mut S) {
             "dist3_up({a:?}, {b:?}) took √{arg}, not √{sum}"
         );
     }
-    assert!(
-        cmp_sum(r, r * TWO_M47, out) != Greater,
-        "dist3_up({a:?}, {b:?}) = {out} below √{sum} = {r} times 1 + 2⁻⁴⁷"
-    );
+    assert_inflated(r, out, || format!("dist3_up({a:?}, {b:?}) = {out}, √{sum}"));
 }
 harness!(
     a3_dist_up_sqrt_inflate,
