@@ -31,7 +31,7 @@ mod verification;
 
 pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, decide};
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
-pub use intervals::OccupancyIntervals;
+pub use intervals::{OccupancyIntervals, Piece, verify_fine};
 pub use verification::monitored_joint_boxes;
 
 use pacs_models::object::{ObjectContact, ObjectModel};

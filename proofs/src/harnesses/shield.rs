@@ -8,6 +8,9 @@
 //!   forever the executed state is at rest (ṡ = s̈ = 0, fixed s) from the failsafe's settle time on.
 //! - `f2` (pure): the occupancy intervals the verification checks are contiguous and cover the
 //!   whole monitored trajectory `[0, stop]` (the last one ends at standstill).
+//! - `f2_fine_pieces_cover` (pure): the fine verification's order ([`verify_fine`]: the last
+//!   interval, the rest merged, the rest one by one only if the merged piece fails) verifies
+//!   only when the pieces that passed cover `[0, stop]`, and always when every interval passes.
 //! - `f3` (twin only: the real `Shield` is far too big for a model checker): random chunks and
 //!   random measurements (none, stale, from the future, far away, on the robot) drive the real
 //!   shield; every command equals the state of the shield's stored verified failsafe at its time,
@@ -17,7 +20,7 @@
 use crate::{Source, harness};
 use pacs_motion::scaling::{PathState, SpeedProfile};
 use pacs_shield::shield::{
-    Candidate, FilterMode, OccupancyIntervals, VerifiedFailsafe, choose, decide,
+    Candidate, FilterMode, OccupancyIntervals, Piece, VerifiedFailsafe, choose, decide, verify_fine,
 };
 
 /// Steps of the symbolic sequence in `f1` (the property is inductive; see README): under Kani
@@ -215,6 +218,85 @@ harness!(
     unwind = 14,
     cases = crate::DEFAULT_CASES,
     intervals_cover
+);
+
+/// Most occupancy intervals (`max_intervals` ≤ 12, at least 2 intervals: 13 calls at most).
+const MAX_PIECES: usize = 14;
+
+fn fine_pieces_cover<S: Source>(s: &mut S) {
+    let alpha = s.f64_in(1e-4, 0.01);
+    let stop = alpha + s.f64_in(0.0, 5.0);
+    let first = s.f64_in(1e-4, 0.1);
+    let max = 1 + s.index(12);
+    // Any verification outcome per interval (fixed per interval, as the shield's is), and any
+    // outcome of the merged piece.
+    let mut leaf_ok = [true; MAX_PIECES];
+    let mut leaves = 0;
+    for (k, _, _) in OccupancyIntervals::new(alpha, stop, first, max) {
+        leaf_ok[k] = s.bool();
+        leaves += 1;
+    }
+    let merged_ok = s.bool();
+    // The pieces that passed, as time intervals.
+    let mut passed = [(0.0, 0.0); MAX_PIECES];
+    let mut n_passed = 0;
+    let mut calls = 0;
+    let ok = verify_fine(
+        OccupancyIntervals::new(alpha, stop, first, max),
+        |piece, ta, tb| {
+            calls += 1;
+            let r = match piece {
+                Piece::Interval(k) => leaf_ok[k],
+                Piece::Before(k) => {
+                    assert!(k > 0 && k < leaves, "merged piece {k} of {leaves}");
+                    merged_ok
+                }
+            };
+            if r {
+                passed[n_passed] = (ta, tb);
+                n_passed += 1;
+            }
+            r
+        },
+    );
+    assert!(calls <= leaves + 1, "{calls} checks for {leaves} intervals");
+    if ok {
+        // Walk [0, stop] through the passed pieces: from each covered time t, a passed piece
+        // [ta, tb] with ta ≤ t < tb must continue it.
+        let mut t = 0.0;
+        let mut rounds = 0;
+        while t < stop && rounds < MAX_PIECES {
+            let mut next = t;
+            for &(ta, tb) in &passed[..n_passed] {
+                if ta <= t && tb > next {
+                    next = tb;
+                }
+            }
+            assert!(
+                next > t,
+                "verified, but no passed piece covers {t} (stop {stop})"
+            );
+            t = next;
+            rounds += 1;
+        }
+        assert!(
+            t >= stop,
+            "verified, but the passed pieces end at {t} < {stop}"
+        );
+    }
+    let mut all = true;
+    for &l in &leaf_ok[..leaves] {
+        all &= l;
+    }
+    if all {
+        assert!(ok, "every interval verified, the fine verification did not");
+    }
+}
+harness!(
+    f2_fine_pieces_cover,
+    unwind = 15,
+    cases = crate::DEFAULT_CASES,
+    fine_pieces_cover
 );
 
 /// `f3`: the real shield (property test only).

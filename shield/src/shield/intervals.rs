@@ -60,3 +60,47 @@ impl Iterator for OccupancyIntervals {
         Some((k, ta, tb))
     }
 }
+
+/// One piece of the fine verification ([`verify_fine`]): a single occupancy interval, or the
+/// union of the intervals before the last one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Piece {
+    /// Occupancy interval `k` of [`OccupancyIntervals`].
+    Interval(usize),
+    /// Intervals `0..k` as one interval (its occupancy contains each of theirs).
+    Before(usize),
+}
+
+/// The fine verification of a monitored trajectory over the occupancy intervals `leaves`, with
+/// `check(piece, t_a, t_b)` the verification of one time interval (`true`: verified). Order: the
+/// last interval (where the human's reach is largest, the usual reason a step fails), then
+/// everything before it as one interval, and only if that fails each interval before the last
+/// in order, stopping at the first failure. At most `n + 1` calls for `n` intervals, two when
+/// the merged piece verifies (the usual case when a step verifies: `docs/performance.md`).
+///
+/// # Soundness
+/// Claim C7: `true` only if `check` returned `true` for pieces that cover `[0, stop]`: the last
+/// interval `[t_a, stop]` and either `[0, t_a]` or every interval before it, which cover
+/// `[0, t_a]` (contiguous intervals from 0, harness `f2_occupancy_intervals_cover`). A step
+/// verified by the intervals one by one is verified here too (the same calls are made when
+/// the merged piece fails). Harness `f2_fine_pieces_cover` (any `check` outcomes).
+pub fn verify_fine(
+    leaves: OccupancyIntervals,
+    mut check: impl FnMut(Piece, f64, f64) -> bool,
+) -> bool {
+    let Some((last, last_ta, last_tb)) = leaves.last() else {
+        return false;
+    };
+    if !check(Piece::Interval(last), last_ta, last_tb) {
+        return false;
+    }
+    if last == 0 || check(Piece::Before(last), 0.0, last_ta) {
+        return true;
+    }
+    for (k, ta, tb) in leaves.take(last) {
+        if !check(Piece::Interval(k), ta, tb) {
+            return false;
+        }
+    }
+    true
+}

@@ -1,6 +1,7 @@
 //! Verification of a monitored trajectory: per occupancy interval, joint boxes from the path
 //! ranges, robot, human and object occupancies, and the ISO/TS 15066 rule.
 
+use super::intervals::{Piece, verify_fine};
 use super::{Binding, Diagnostics, FilterMode, OccupancyIntervals, Shield};
 use pacs_models::MAX_DOF;
 use pacs_motion::Trajectory;
@@ -40,19 +41,32 @@ impl Shield {
                 return true;
             }
         }
-        let mut ok = true;
         let intervals = OccupancyIntervals::new(
             alpha,
             stop,
             self.config.first_interval,
             self.config.max_intervals,
         );
+        if self.config.mode != FilterMode::Off {
+            return verify_fine(intervals, |piece, ta, tb| match piece {
+                Piece::Interval(k) => self.check_interval(slot, go, brake, t, ta, tb, k, diag),
+                // A merged piece reports like the coarse check (separation from its start on):
+                // its diagnostics are kept only if it verifies.
+                Piece::Before(_) => {
+                    let mut merged = *diag;
+                    let ok = self.check_interval(slot, go, brake, t, ta, tb, 0, &mut merged);
+                    if ok {
+                        *diag = merged;
+                    }
+                    ok
+                }
+            });
+        }
+        // Off: every interval is evaluated (diagnostics only).
+        let mut ok = true;
         for (k, ta, tb) in intervals {
             if !self.check_interval(slot, go, brake, t, ta, tb, k, diag) {
                 ok = false;
-                if self.config.mode != FilterMode::Off {
-                    break;
-                }
             }
         }
         ok
