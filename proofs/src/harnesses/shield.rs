@@ -220,73 +220,100 @@ harness!(
     intervals_cover
 );
 
-/// Most occupancy intervals (`max_intervals` ≤ 12, at least 2 intervals: 13 calls at most).
+/// More than the most occupancy intervals (`max_intervals` ≤ 12, so at most 12).
 const MAX_PIECES: usize = 14;
 
-fn fine_pieces_cover<S: Source>(s: &mut S) {
-    let alpha = s.f64_in(1e-4, 0.01);
-    let stop = alpha + s.f64_in(0.0, 5.0);
-    let first = s.f64_in(1e-4, 0.1);
-    let max = 1 + s.index(12);
-    // Any verification outcome per interval (fixed per interval, as the shield's is), and any
-    // outcome of the merged piece.
-    let mut leaf_ok = [true; MAX_PIECES];
-    let mut leaves = 0;
-    for (k, _, _) in OccupancyIntervals::new(alpha, stop, first, max) {
-        leaf_ok[k] = s.bool();
-        leaves += 1;
-    }
-    let merged_ok = s.bool();
-    // The pieces that passed, as time intervals.
-    let mut passed = [(0.0, 0.0); MAX_PIECES];
-    let mut n_passed = 0;
-    let mut calls = 0;
-    let ok = verify_fine(
-        OccupancyIntervals::new(alpha, stop, first, max),
-        |piece, ta, tb| {
-            calls += 1;
-            let r = match piece {
-                Piece::Interval(k) => leaf_ok[k],
-                Piece::Before(k) => {
-                    assert!(k > 0 && k < leaves, "merged piece {k} of {leaves}");
-                    merged_ok
-                }
-            };
-            if r {
-                passed[n_passed] = (ta, tb);
-                n_passed += 1;
-            }
-            r
-        },
-    );
-    assert!(calls <= leaves + 1, "{calls} checks for {leaves} intervals");
-    if ok {
-        // Walk [0, stop] through the passed pieces: from each covered time t, a passed piece
-        // [ta, tb] with ta ≤ t < tb must continue it.
-        let mut t = 0.0;
-        let mut rounds = 0;
-        while t < stop && rounds < MAX_PIECES {
-            let mut next = t;
-            for &(ta, tb) in &passed[..n_passed] {
-                if ta <= t && tb > next {
-                    next = tb;
-                }
-            }
-            assert!(
-                next > t,
-                "verified, but no passed piece covers {t} (stop {stop})"
-            );
-            t = next;
-            rounds += 1;
+/// Any sequence of intervals `(k, t_a, t_b)`, `k = 0, 1, …` (Kani's stand-in for
+/// [`OccupancyIntervals`], whose contiguity is `f2_occupancy_intervals_cover`'s claim).
+#[derive(Clone)]
+struct AnyIntervals {
+    times: [(f64, f64); MAX_PIECES],
+    n: usize,
+    k: usize,
+}
+
+impl Iterator for AnyIntervals {
+    type Item = (usize, f64, f64);
+    fn next(&mut self) -> Option<(usize, f64, f64)> {
+        if self.k >= self.n {
+            return None;
         }
-        assert!(
-            t >= stop,
-            "verified, but the passed pieces end at {t} < {stop}"
-        );
+        let (k, (ta, tb)) = (self.k, self.times[self.k]);
+        self.k += 1;
+        Some((k, ta, tb))
     }
-    let mut all = true;
-    for &l in &leaf_ok[..leaves] {
-        all &= l;
+}
+
+fn fine_pieces_cover<S: Source>(s: &mut S) {
+    // The intervals: under Kani any 1 to 12 of any times; in the twin the shield's own.
+    let mut leaf = [(0.0, 0.0); MAX_PIECES];
+    let mut leaves = 0;
+    if cfg!(kani) {
+        leaves = 1 + s.index(12);
+        for l in &mut leaf[..leaves] {
+            *l = (s.f64_in(0.0, 5.0), s.f64_in(0.0, 5.0));
+        }
+    } else {
+        let alpha = s.f64_in(1e-4, 0.01);
+        let stop = alpha + s.f64_in(0.0, 5.0);
+        let (first, max) = (s.f64_in(1e-4, 0.1), 1 + s.index(12));
+        for (k, ta, tb) in OccupancyIntervals::new(alpha, stop, first, max) {
+            leaf[k] = (ta, tb);
+            leaves = k + 1;
+        }
+    }
+    let intervals = AnyIntervals {
+        times: leaf,
+        n: leaves,
+        k: 0,
+    };
+    // Any verification outcome per interval (fixed per interval, as the shield's is) and for
+    // the merged piece.
+    let mut leaf_ok = [true; MAX_PIECES];
+    for ok in &mut leaf_ok[..leaves] {
+        *ok = s.bool();
+    }
+    let last = leaves - 1;
+    let merged_ok = s.bool();
+    // Which pieces were checked and passed; each piece's times are those it stands for.
+    let mut passed = [false; MAX_PIECES];
+    let mut merged_passed = false;
+    let mut calls = 0;
+    let ok = verify_fine(intervals, |piece, ta, tb| {
+        calls += 1;
+        match piece {
+            Piece::Interval(k) => {
+                assert!(
+                    k < leaves && (ta, tb) == leaf[k],
+                    "interval {k}: [{ta}, {tb}]"
+                );
+                passed[k] = leaf_ok[k];
+                leaf_ok[k]
+            }
+            Piece::Before(k) => {
+                // [0, t_a of the last interval] = the union of the intervals before it (when
+                // they are contiguous from 0: f2_occupancy_intervals_cover).
+                assert!(k == last && k > 0, "merged piece {k} of {leaves}");
+                assert!(ta == 0.0 && tb == leaf[last].0, "merged piece [{ta}, {tb}]");
+                merged_passed = merged_ok;
+                merged_ok
+            }
+        }
+    });
+    assert!(calls <= leaves + 1, "{calls} checks for {leaves} intervals");
+    let mut before_all = true;
+    let mut all = leaf_ok[last];
+    for k in 0..last {
+        before_all &= passed[k];
+        all &= leaf_ok[k];
+    }
+    if ok {
+        // Covered: the last interval, and everything before it, merged or one by one.
+        assert!(passed[last], "verified without the last interval");
+        assert!(
+            merged_passed || before_all,
+            "verified without covering [0, t_a] of the last interval"
+        );
     }
     if all {
         assert!(ok, "every interval verified, the fine verification did not");

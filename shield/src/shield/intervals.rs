@@ -71,7 +71,8 @@ pub enum Piece {
     Before(usize),
 }
 
-/// The fine verification of a monitored trajectory over the occupancy intervals `leaves`, with
+/// The fine verification of a monitored trajectory over the occupancy intervals `leaves` (the
+/// items of [`OccupancyIntervals`]: indices `0, 1, …` in order), with
 /// `check(piece, t_a, t_b)` the verification of one time interval (`true`: verified). Order: the
 /// last interval (where the human's reach is largest, the usual reason a step fails), then
 /// everything before it as one interval, and only if that fails each interval before the last
@@ -84,11 +85,11 @@ pub enum Piece {
 /// `[0, t_a]` (contiguous intervals from 0, harness `f2_occupancy_intervals_cover`). A step
 /// verified by the intervals one by one is verified here too (the same calls are made when
 /// the merged piece fails). Harness `f2_fine_pieces_cover` (any `check` outcomes).
-pub fn verify_fine(
-    leaves: OccupancyIntervals,
-    mut check: impl FnMut(Piece, f64, f64) -> bool,
-) -> bool {
-    let Some((last, last_ta, last_tb)) = leaves.last() else {
+pub fn verify_fine<I>(leaves: I, mut check: impl FnMut(Piece, f64, f64) -> bool) -> bool
+where
+    I: Iterator<Item = (usize, f64, f64)> + Clone,
+{
+    let Some((last, last_ta, last_tb)) = leaves.clone().last() else {
         return false;
     };
     if !check(Piece::Interval(last), last_ta, last_tb) {
