@@ -51,8 +51,8 @@ pub fn sub_down(x: f64, y: f64) -> f64 {
 /// `x * y` rounded up.
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact product. Harness `a2_mul_enclose` (beside this module; verified, not in
-/// CI: heavy-tailed solve time, `proofs/README.md`); mutant `x14` caught.
+/// Claim C1: ≥ the exact product. Harness `a2_mul_up_enclose` (Kani, beside this module; the
+/// twin `a2_mul_enclose` draws any pair); mutant `x14` caught by both.
 #[inline(always)]
 pub fn mul_up(x: f64, y: f64) -> f64 {
     (x * y).next_up()
@@ -60,7 +60,7 @@ pub fn mul_up(x: f64, y: f64) -> f64 {
 /// `x * y` rounded down.
 ///
 /// # Soundness
-/// Claim C1: ≤ the exact product. Harness `a2_mul_enclose`.
+/// Claim C1: ≤ the exact product. Harness `a2_mul_down_enclose` (Kani; twin `a2_mul_enclose`).
 #[inline(always)]
 pub fn mul_down(x: f64, y: f64) -> f64 {
     (x * y).next_down()
@@ -84,8 +84,9 @@ pub fn div_down(x: f64, y: f64) -> f64 {
 /// `sqrt(x)` rounded up (`x >= 0`; a negative rounding artefact is treated as 0).
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact √x. Harness `a2_sqrt_enclose` (Kani: verified in 210 s on CBMC 6.6.0,
-/// over the CI budget, so not in CI; the property twin runs in CI: `proofs/README.md`).
+/// Claim C1: ≥ the exact √x, given `ieee::sqrt`'s contract (`prev(r)² ≤ x ≤ next(r)²`, tested
+/// against the library). Harness `a2_sqrt_root_step` (Kani: the result is `next(r)` of the root
+/// `r` of `x` itself; mutant `x42`) and the twin `a2_sqrt_enclose` (the whole claim, exact oracle).
 #[inline(always)]
 pub fn sqrt_up(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_up()
@@ -93,7 +94,8 @@ pub fn sqrt_up(x: f64) -> f64 {
 /// `sqrt(x)` rounded down, never below 0.
 ///
 /// # Soundness
-/// Claim C1: ≤ the exact √x. Harness `a2_sqrt_enclose` (Kani: 210 s, not in CI; twin in CI).
+/// Claim C1: ≤ the exact √x, given `ieee::sqrt`'s contract. Harness `a2_sqrt_root_step` (Kani:
+/// at most `prev(r)`, never below 0; mutant `x30`) and the twin `a2_sqrt_enclose`.
 #[inline(always)]
 pub fn sqrt_down(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_down().max(0.0)
