@@ -171,42 +171,31 @@ fn within(parts: &[f64], mid: f64, r: f64) -> bool {
     sum_le_zero(&above[..n + 2]) && sum_le_zero(&below[..n + 2])
 }
 
+/// One entry of [`RotationEnclosure::mul`]: for whole 3×3 enclosures A, B (any midpoints in
+/// [−4, 4], radii `e ≤ w` up to 1/4 or 0) and members A′ = Aₘ ± A_r, B′ = Bₘ ± B_r at a random
+/// vertex (the worst points of the bilinear product), |(A′·B′)ᵢⱼ − mᵢⱼ| ≤ rᵢⱼ for r = e and
+/// r = w, decided exactly (TwoProduct and double-double sums). With radii 0 it is the γ term's
+/// claim (the midpoint's rounding); mutant `x36d` (γ dropped) fails it.
 fn rotation_mul_mid<S: Source>(s: &mut S) {
-    // Under Kani: row 0 of A and column 0 of B symbolic, exact (radii 0), the rest 0; the twin
-    // draws whole enclosures (any entries, radii up to 1/4) and members at random vertices.
-    let twin = !cfg!(kani);
     let mut am = [[0.0; 3]; 3];
     let mut bm = [[0.0; 3]; 3];
     let (mut ae, mut aw, mut be, mut bw) =
         ([[0.0; 3]; 3], [[0.0; 3]; 3], [[0.0; 3]; 3], [[0.0; 3]; 3]);
-    for k in 0..3 {
-        let (Some(a), Some(b)) = (short(s, -4.0, 4.0, 1e-30), short(s, -4.0, 4.0, 1e-30)) else {
-            return;
-        };
-        am[0][k] = a;
-        bm[k][0] = b;
-    }
-    if twin {
-        for i in 0..3 {
-            for k in 0..3 {
-                if i > 0 {
-                    am[i][k] = s.f64_in(-4.0, 4.0);
-                }
-                if k > 0 {
-                    bm[i][k] = s.f64_in(-4.0, 4.0);
-                }
-                if s.bool() {
-                    ae[i][k] = s.f64_in(0.0, 0.25);
-                    aw[i][k] = s.f64_in(ae[i][k], 0.25);
-                    be[i][k] = s.f64_in(0.0, 0.25);
-                    bw[i][k] = s.f64_in(be[i][k], 0.25);
-                }
+    for i in 0..3 {
+        for k in 0..3 {
+            am[i][k] = s.f64_in(-4.0, 4.0);
+            bm[i][k] = s.f64_in(-4.0, 4.0);
+            if s.bool() {
+                ae[i][k] = s.f64_in(0.0, 0.25);
+                aw[i][k] = s.f64_in(ae[i][k], 0.25);
+                be[i][k] = s.f64_in(0.0, 0.25);
+                bw[i][k] = s.f64_in(be[i][k], 0.25);
             }
         }
-        let all = [am, bm, ae, aw, be, bw];
-        if !s.assume(all.iter().flatten().flatten().all(|&x| tame(x))) {
-            return;
-        }
+    }
+    let all = [am, bm, ae, aw, be, bw];
+    if !s.assume(all.iter().flatten().flatten().all(|&x| tame(x))) {
+        return;
     }
     let a = RotationEnclosure {
         m: mat(am),
@@ -219,26 +208,16 @@ fn rotation_mul_mid<S: Source>(s: &mut S) {
         w: mat(bw),
     };
     let p = a.mul(&b);
-    let (i, j) = if twin {
-        (s.index(3), s.index(3))
-    } else {
-        (0, 0)
-    };
+    let (i, j) = (s.index(3), s.index(3));
     let mid = entry(&p.m, i, j);
     for (ar, br, r, what) in [(&ae, &be, &p.e, "e"), (&aw, &bw, &p.w, "w")] {
         // A member (a + σ·a_r)(b + τ·b_r) summed over k: four exact products each.
         let mut parts = [0.0; 24];
         let mut n = 0;
         for k in 0..3 {
-            let sa = if twin && s.bool() { -1.0 } else { 1.0 };
-            let sb = if twin && s.bool() { -1.0 } else { 1.0 };
+            let sa = if s.bool() { -1.0 } else { 1.0 };
+            let sb = if s.bool() { -1.0 } else { 1.0 };
             let (x, xr, y, yr) = (am[i][k], sa * ar[i][k], bm[k][j], sb * br[k][j]);
-            if !twin {
-                // Radii 0: the member is the midpoint product, a_k·b_k a float.
-                parts[n] = x * y;
-                n += 1;
-                continue;
-            }
             for (u, v) in [(x, y), (x, yr), (xr, y), (xr, yr)] {
                 if u != 0.0 && v != 0.0 {
                     let (h, l) = two_prod(u, v);
@@ -255,10 +234,11 @@ fn rotation_mul_mid<S: Source>(s: &mut S) {
         );
     }
 }
+// Property test only: under Kani `mul` on 3×3 enclosures in four lanes timed out (below and
+// `proofs/README.md`), even with one symbolic product.
 harness!(
     d1_rotation_mul_mid,
-    unwind = 8,
-    bits = 4,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     rotation_mul_mid
 );
