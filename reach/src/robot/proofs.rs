@@ -2,7 +2,8 @@
 //! beside the building blocks of the interval forward kinematics ([`super::frames`]). The whole
 //! claim — the FR3's 7-joint chain, the two enclosures of every capsule endpoint, the mean-value
 //! sums, `occupancy_with`'s choice and padding — is the property test `d1_robot_link_enlargement`
-//! (`pacs-proofs`); these splits prove the steps every frame of the chain is built from:
+//! (`pacs-proofs`); the split below proves one step every frame of the chain is built from,
+//! two property tests check two more:
 //!
 //! - `d1_centre_trig_radii`: [`trig_radii`] (the arithmetic of [`centre_trig`] after libm) bounds
 //!   the deviation of sin and cos over `[q_c − δ, q_c + δ]` from the libm values ŝ, ĉ at the
@@ -14,25 +15,31 @@
 //!   |sin q − ŝ| ≤ 1 + |ŝ|) makes that the claim of the doc; the twin also checks it against
 //!   libm at points of the interval. Mutant `x35d` (w_s with the two terms' factors swapped)
 //!   fails it.
-//! - `d1_rotation_mul_mid`: one entry of [`RotationEnclosure::mul`] for exact factors (radii 0):
-//!   the exact product Σₖ aₖ·bₖ lies within both radii `e` and `w` of the rounded midpoint — the
-//!   γ term bounds the midpoint's rounding. Mutant `x36d` (the γ term dropped) fails it.
-//! - `d1_affine_encloses`: one coordinate of [`RotationEnclosure::affine`] (A·v + t) for members
-//!   A′ = Aₘ ± A_w (any sign per entry), t′ = tₘ ± t_w: |A′·v + t′ − m| ≤ w, exactly.
+//! - `d1_rotation_mul_mid` (property test only): one entry of [`RotationEnclosure::mul`] for
+//!   whole 3×3 enclosures and members at random vertices: |(A′·B′)ᵢⱼ − mᵢⱼ| ≤ eᵢⱼ and ≤ wᵢⱼ,
+//!   exactly (TwoProduct, double-double sums); with radii 0 the γ term's claim. Mutant `x36d`
+//!   (the γ term dropped) fails it.
+//! - `d1_affine_encloses` (property test only): one coordinate of [`RotationEnclosure::affine`]
+//!   (A·v + t) for members A′ = Aₘ ± A_r, t′ = tₘ ± t_r: |A′·v + t′ − m| ≤ r for r = e, w.
+//!   Dropping the inflation of `w`, or `t.w`, fails it.
 //!
-//! Under Kani the inputs have 4-bit significands with bounded exponents (below), so that every
-//! product of the oracles is a float and the claims are decided exactly (TwoSum, [`cmp_sum`],
-//! [`sum_le_zero`]); the code under test still rounds (its constants `TRIG_PAD`, `GAMMA`,
-//! `RAD_UP` have full significands, and sums of inputs of different exponents round). The twins
-//! draw full-width inputs, whole 3×3 enclosures with random radii and members, and bound the
-//! real values from above with the outward-rounded helpers (claim C1) or decide them exactly with
-//! TwoProduct and double-double sums.
+//! Under Kani `d1_centre_trig_radii`'s inputs are ŝ, ĉ with 4-bit significands (0 or of
+//! magnitude ≥ 2⁻¹⁶) and δ a power of two (0 or ≥ 2⁻¹⁰): every product and sum of the oracle is
+//! then a float, and the claim is decided exactly ([`cmp_sum`]), while the code under test still
+//! rounds (`TRIG_PAD`, `RAD_UP` have full significands). Its twin draws full-width ŝ, ĉ, δ
+//! (and, half the time, libm's values at a centre q_c and a point q of the box, against libm's
+//! sin q, cos q) and bounds the real bound from above with the outward-rounded helpers (claim
+//! C1). `mul` and `affine` work on 3×3 matrices in four lanes ([`super::lanes`]); under Kani
+//! `d1_rotation_mul_mid` timed out (one entry, 4-bit factors: Bitwuzla could not parse CBMC's
+//! encoding of the by-value `[f64; 4]` arguments, and the SAT back end timed out at 300 s; with
+//! a local repair of that encoding Bitwuzla timed out at 240 s, also with a single symbolic
+//! product), so they are property tests.
 //!
 //! Left to the twin of `d1_robot_link_enlargement`: the chain itself (frames composed by `mul`
 //! over 7 joints, the Rodrigues and z-axis local transforms), the wide-box chain over
 //! `sin_cos_interval` (a5), the mean-value sums (square roots; mutant `x5`), the norms of the
-//! radius vectors and the capsule assembly; and to these splits' twins: full-width inputs, all
-//! nine entries of a product, the e-radius of `affine`.
+//! radius vectors and the capsule assembly; and to the twin of `d1_centre_trig_radii`:
+//! full-width ŝ, ĉ and half-widths that are not powers of two.
 // Proof functions are entry points of the model checker, not called from the crate.
 #![cfg_attr(kani, allow(dead_code))]
 use super::frames::*;
@@ -241,4 +248,77 @@ harness!(
     twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     rotation_mul_mid
+);
+
+/// One coordinate of [`RotationEnclosure::affine`] (A·v + t for an exact v): for an enclosure A
+/// and a vector enclosure t (midpoints in [−4, 4], radii `e ≤ w` up to 1/4 or 0), any v in
+/// [−4, 4]³ and members A′ = Aₘ ± A_r, t′ = tₘ ± t_r at a random vertex,
+/// |(A′·v + t′)ᵢ − mᵢ| ≤ rᵢ for r = e and r = w, decided exactly.
+fn affine_encloses<S: Source>(s: &mut S) {
+    let mut am = [[0.0; 3]; 3];
+    let (mut ae, mut aw) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+    let (mut tm, mut te, mut tw, mut v) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+    for i in 0..3 {
+        for k in 0..3 {
+            am[i][k] = s.f64_in(-4.0, 4.0);
+            if s.bool() {
+                ae[i][k] = s.f64_in(0.0, 0.25);
+                aw[i][k] = s.f64_in(ae[i][k], 0.25);
+            }
+        }
+        tm[i] = s.f64_in(-4.0, 4.0);
+        if s.bool() {
+            te[i] = s.f64_in(0.0, 0.25);
+            tw[i] = s.f64_in(te[i], 0.25);
+        }
+        v[i] = s.f64_in(-4.0, 4.0);
+    }
+    let flat = [am, ae, aw, [tm, te, tw], [v, v, v]];
+    if !s.assume(flat.iter().flatten().flatten().all(|&x| tame(x))) {
+        return;
+    }
+    let a = RotationEnclosure {
+        m: mat(am),
+        e: mat(ae),
+        w: mat(aw),
+    };
+    let lanes = |x: [f64; 3]| Lanes3(simd::new([x[0], x[1], x[2], 0.0]));
+    let t = VecEnc {
+        m: lanes(tm),
+        e: lanes(te),
+        w: lanes(tw),
+    };
+    let out = a.affine(&t, lanes(v));
+    let i = s.index(3);
+    let mid = out.m.arr()[i];
+    for (ar, tr, r, what) in [(&ae, te[i], out.e, "e"), (&aw, tw[i], out.w, "w")] {
+        // A member Σ_k (a_k + σ_k·a_r,k)·v_k + t + τ·t_r: two exact products per k.
+        let mut parts = [0.0; 14];
+        let mut n = 0;
+        for k in 0..3 {
+            let sa = if s.bool() { -1.0 } else { 1.0 };
+            for u in [am[i][k], sa * ar[i][k]] {
+                let (h, l) = two_prod(u, v[k]);
+                parts[n] = h;
+                parts[n + 1] = l;
+                n += 2;
+            }
+        }
+        let st = if s.bool() { -1.0 } else { 1.0 };
+        parts[n] = tm[i];
+        parts[n + 1] = st * tr;
+        n += 2;
+        let rad = r.arr()[i];
+        assert!(
+            within(&parts[..n], mid, rad),
+            "coordinate {i}: a member of A·v + t is farther than {what} = {rad} from {mid}"
+        );
+    }
+}
+// Property test only, as `d1_rotation_mul_mid` (the same four-lane operations under Kani).
+harness!(
+    d1_affine_encloses,
+    twin_only,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    affine_encloses
 );
