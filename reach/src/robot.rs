@@ -63,6 +63,10 @@ mod energy;
 mod frames;
 // Vectors and matrices in SIMD lanes.
 mod lanes;
+/// The Kani splits of claim C4 on the building blocks of the enclosed frames (`trig_radii`,
+/// `RotationEnclosure::mul`, `affine`), each also a property test (`proofs/README.md`).
+#[cfg(any(test, kani))]
+mod proofs;
 
 use frames::*;
 use lanes::*;

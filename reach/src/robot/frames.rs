@@ -68,6 +68,14 @@ impl RotationEnclosure {
 #[inline(always)]
 pub(super) fn centre_trig(qc: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
     let (s, c) = crate::ieee::sin_cos(qc);
+    trig_radii(s, c, delta)
+}
+
+/// [`centre_trig`] for the libm values `s` = ŝ, `c` = ĉ at the centre (the arithmetic after
+/// libm, separate so that the proof beside it, `d1_centre_trig_radii`, can take ŝ, ĉ as inputs):
+/// the same tuple, under the contract |sin q_c − ŝ| ≤ `TRIG_PAD`, |cos q_c − ĉ| ≤ `TRIG_PAD`.
+#[inline(always)]
+pub(super) fn trig_radii(s: f64, c: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
     let (sa, ca) = (s.abs(), c.abs());
     // sin(q_c + t) − sin q_c = sin q_c (cos t − 1) + cos q_c sin t, 1 − cos t ≤ min(t²/2, 2),
     // |sin t| ≤ min(|t|, 1); the exact sin q_c, cos q_c are within TRIG_PAD of ŝ, ĉ.

@@ -138,13 +138,16 @@ pub(super) mod lanes_scalar {
             crate::ieee::mul_add(a[3], b[3], c[3]),
         ]
     }
+    // Lane by lane rather than `array::map`, whose iterator machinery is hundreds of pointer
+    // checks for the model checker (the same operations).
     #[inline(always)]
     pub fn sqrt(a: Register) -> Register {
-        a.map(crate::ieee::sqrt)
+        use crate::ieee::sqrt;
+        [sqrt(a[0]), sqrt(a[1]), sqrt(a[2]), sqrt(a[3])]
     }
     #[inline(always)]
     pub fn abs(a: Register) -> Register {
-        a.map(f64::abs)
+        [a[0].abs(), a[1].abs(), a[2].abs(), a[3].abs()]
     }
 }
 
