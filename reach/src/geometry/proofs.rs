@@ -44,6 +44,11 @@ fn dot_bounds_enclose<S: Source>(s: &mut S) {
     else {
         return;
     };
+    assert_dot_bounds([n0, n1, n2], [a0, a1, a2]);
+}
+
+/// The claim of [`dot_bounds_enclose`] for given vectors.
+fn assert_dot_bounds([n0, n1, n2]: [f64; 3], [a0, a1, a2]: [f64; 3]) {
     let (lo, hi) = dot_bounds(&Vector3::new(n0, n1, n2), &Point3::new(a0, a1, a2));
     let (p0, e0) = exact_prod_parts(n0, a0);
     let (p1, e1) = exact_prod_parts(n1, a1);
@@ -77,12 +82,42 @@ fn dot_bounds_enclose<S: Source>(s: &mut S) {
     assert!(sum_le_zero(&below[..n]), "dot lower bound {lo} above n·a");
     assert!(sum_le_zero(&above[..n]), "dot upper bound {hi} below n·a");
 }
+// The whole claim as a property test (Kani: a timeout in four forms, 150–200 s); Kani checks
+// the split `b1_dot_bounds_powers` below.
 harness!(
     b1_dot_bounds_enclose,
+    twin_only,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    dot_bounds_enclose
+);
+
+/// `±2^e`, `e` in `[-60, 10]`: exact to multiply by.
+fn power_of_two<S: Source>(s: &mut S) -> f64 {
+    let e = s.index(71) as u64;
+    let p = f64::from_bits((1023 - 60 + e) << 52);
+    if s.bool() { -p } else { p }
+}
+
+/// Split of `b1_dot_bounds_enclose` for Kani: the same claim with the normal `n` made of signed
+/// powers of two (`±2^e`, `e ∈ [−60, 10]`, any per coordinate) and `a` with 3 significand bits
+/// (the twin: any tame `a`). The products are then exact (a power-of-two scaling), and the sum of
+/// three of them at exponents up to 70 apart rounds, which is what `dot_bounds`' error term
+/// covers: a `dot_bounds` without it (mutant `x7`) fails. Left to the twin of the whole claim:
+/// products that round themselves (any `n`).
+fn dot_bounds_powers<S: Source>(s: &mut S) {
+    let n = [power_of_two(s), power_of_two(s), power_of_two(s)];
+    let (Some(a0), Some(a1), Some(a2)) = (short(s, 1e3, 3), short(s, 1e3, 3), short(s, 1e3, 3))
+    else {
+        return;
+    };
+    assert_dot_bounds(n, [a0, a1, a2]);
+}
+harness!(
+    b1_dot_bounds_powers,
     unwind = 9,
     bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
-    dot_bounds_enclose
+    dot_bounds_powers
 );
 
 /// The margin of two capsules (`margin`, used by `capsule_separation_lower_bound`,
