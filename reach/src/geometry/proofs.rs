@@ -8,6 +8,7 @@
 #![cfg_attr(kani, allow(dead_code))]
 use super::*;
 use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod, two_sum};
+use crate::rounding::add_up;
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::{Greater, Less};
 
@@ -98,19 +99,43 @@ fn power_of_two<S: Source>(s: &mut S) -> f64 {
     if s.bool() { -p } else { p }
 }
 
-/// Split of `b1_dot_bounds_enclose` for Kani: the same claim with the normal `n` made of signed
+/// Split of `b1_dot_bounds_enclose` for Kani: the claim with the normal `n` made of signed
 /// powers of two (`±2^e`, `e ∈ [−60, 10]`, any per coordinate) and `a` with 3 significand bits
 /// (the twin: any tame `a`). The products are then exact (a power-of-two scaling), and the sum of
 /// three of them at exponents up to 70 apart rounds, which is what `dot_bounds`' error term
-/// covers: a `dot_bounds` without it (mutant `x7`) fails. Left to the twin of the whole claim:
-/// products that round themselves (any `n`).
+/// covers: a `dot_bounds` without it (mutant `x7`) fails. Stated as a sufficient float-only
+/// condition (TwoSums and a1's `add_up`; a failure of it would be a false alarm, never a missed
+/// violation). Left to the twin of the whole claim: products that round themselves (any `n`).
 fn dot_bounds_powers<S: Source>(s: &mut S) {
     let n = [power_of_two(s), power_of_two(s), power_of_two(s)];
     let (Some(a0), Some(a1), Some(a2)) = (short(s, 1e3, 3), short(s, 1e3, 3), short(s, 1e3, 3))
     else {
         return;
     };
-    assert_dot_bounds(n, [a0, a1, a2]);
+    let a = [a0, a1, a2];
+    let (lo, hi) = dot_bounds(&Vector3::from(n), &Point3::from(a));
+    // The products are exact (powers of two), so two TwoSums write the exact n·a as
+    // t + f₁ + f₂ (t the rounded sum). With t − lo = u + v and hi − t = u′ + v′ exactly
+    // (TwoSum), n·a − lo = u + v + f₁ + f₂ ≥ u − (|v| + |f₁| + |f₂|): the bound is sound if u
+    // covers the three error terms summed upward (a1's `add_up`); the same for hi.
+    let (p0, p1, p2) = (n[0] * a0, n[1] * a1, n[2] * a2);
+    let (t1, f1) = two_sum(p0, p1);
+    let (t, f2) = two_sum(t1, p2);
+    let slack = |u: f64, v: f64| add_up(add_up(v.abs(), f1.abs()), f2.abs()) <= u;
+    let (u, v) = two_sum(t, -lo);
+    assert!(
+        slack(u, v),
+        "dot lower bound {lo}: {t} − {lo} = {u} + {v} vs {f1}, {f2}"
+    );
+    let (u, v) = two_sum(hi, -t);
+    assert!(
+        slack(u, v),
+        "dot upper bound {hi}: {hi} − {t} = {u} + {v} vs {f1}, {f2}"
+    );
+    // The twin also decides the claim with the exact oracle of `b1_dot_bounds_enclose`.
+    if !cfg!(kani) {
+        assert_dot_bounds(n, a);
+    }
 }
 harness!(
     b1_dot_bounds_powers,
