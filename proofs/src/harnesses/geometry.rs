@@ -178,10 +178,12 @@ fn zonotope_box<S: Source>(s: &mut S) {
         );
     }
 }
+// Property test only: the Kani proofs are splits beside the code (`reach/src/zonotope/proofs.rs`:
+// `b3_hull_excludes_member`, `b3_separates_member`, the two outside certificates on small grid
+// zonotopes); the LP and full-width boxes are the twin's (proofs/README.md).
 harness!(
     b3_zonotope_contains_conservative,
-    unwind = 8,
-    bits = 8,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     zonotope_box
 );
@@ -232,10 +234,13 @@ fn zonotope_capsule<S: Source>(s: &mut S) {
     );
     assert_eq!(z.distance_lower_bound(inflate, &cap), 0.0);
 }
+// Property test only: the Kani proofs are splits beside the code (`reach/src/zonotope/proofs.rs`:
+// `b4_support_up_member`, `b4_distance_bound_shared_point`, grid zonotopes with one generator and
+// directions `λu`); several generators, full-width inputs and the GJK are the twin's
+// (proofs/README.md).
 harness!(
     b4_zonotope_capsule_conservative,
-    unwind = 8,
-    bits = 4,
+    twin_only,
     cases = crate::DEFAULT_CASES,
     zonotope_capsule
 );
