@@ -164,13 +164,23 @@ fn dynamic(p: Pair, n: usize) -> DVector<f64> {
 
 /// A plane zonotope with `m` generators on the grid and an exact member
 /// `c + Σ β_j g_j + diag(e) γ`.
-fn grid_plane<S: Source>(s: &mut S, n: usize, m: usize) -> (Plane, Pair) {
+///
+/// With `fixed`, under Kani the zonotope is the constant `c = (3/4, −1/2)`,
+/// `g₀ = (−5/8, 7/8)`, `g₁ = (5/16, −3/16)`, `e = (1/8, 1/4)` (the member stays symbolic).
+fn grid_plane<S: Source>(s: &mut S, n: usize, m: usize, fixed: bool) -> (Plane, Pair) {
     let k = big();
     let pair = |s: &mut S, signed| (number(s, k, signed), number(s, k, signed));
-    let c = pair(s, true);
-    let e = pair(s, false);
-    let g0 = pair(s, true);
-    let g1 = if m == 2 { pair(s, true) } else { (0.0, 0.0) };
+    let (c, e, g0, g1) = if cfg!(kani) && fixed {
+        (
+            (0.75, -0.5),
+            (0.125, 0.25),
+            (-0.625, 0.875),
+            (0.3125, -0.1875),
+        )
+    } else {
+        (pair(s, true), pair(s, false), pair(s, true), pair(s, true))
+    };
+    let g1 = if m == 2 { g1 } else { (0.0, 0.0) };
     let z = Plane {
         c,
         e,
@@ -191,7 +201,7 @@ fn grid_plane<S: Source>(s: &mut S, n: usize, m: usize) -> (Plane, Pair) {
 fn hull_member<S: Source>(s: &mut S) {
     // Kani: one dimension (the solver took 210 s for two); twins: one or two.
     let n = if cfg!(kani) { 1 } else { 1 + s.index(2) };
-    let (z, x) = grid_plane(s, n, 2);
+    let (z, x) = grid_plane(s, n, 2, false);
     let excluded = hull_excludes_of(&z, &x);
     assert!(!excluded, "{x:?} ∈ {z:?} excluded by the hull test");
     #[cfg(not(kani))]
@@ -207,11 +217,17 @@ harness!(
 
 fn separates_member<S: Source>(s: &mut S) {
     let n = if cfg!(kani) { 1 } else { 1 + s.index(2) };
-    let (z, x) = grid_plane(s, n, 1);
-    let Some((lambda, u)) = direction(s) else {
-        return;
+    let (z, x) = grid_plane(s, n, 1, true);
+    // Kani: any direction of full width (its products with the zonotope's numbers round); the
+    // twins also directions λu (sums of terms of very different magnitudes round).
+    let d = if cfg!(kani) || s.bool() {
+        Pair(s.f64_full(-4.0, 4.0), s.f64_full(-4.0, 4.0))
+    } else {
+        let Some((lambda, u)) = direction(s) else {
+            return;
+        };
+        Pair(factor(u[0], lambda), factor(u[1], lambda))
     };
-    let d = Pair(factor(u[0], lambda), factor(u[1], lambda));
     let separated = separates_of(&z, &x, &d);
     assert!(!separated, "direction {d:?} separates {x:?} from {z:?}");
     #[cfg(not(kani))]
@@ -241,10 +257,19 @@ fn grid3<S: Source>(s: &mut S, signed: bool) -> [f64; 3] {
 }
 
 /// A zonotope `c ⊕ [−1, 1] g ⊕ box(e)` on the grid and an exact member `c + βg + diag(e)γ`.
+///
+/// Under Kani the zonotope is the constant `c = (3/4, −1/2, 5/16)`, `g = (−5/8, 7/8, 1/4)`,
+/// `e = (1/8, 1/16, 1/4)` (the member stays symbolic).
 fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3, [f64; 3]) {
-    let c = grid3(s, true);
-    let g = grid3(s, true);
-    let e = grid3(s, false);
+    let (c, g, e) = if cfg!(kani) {
+        (
+            [0.75, -0.5, 0.3125],
+            [-0.625, 0.875, 0.25],
+            [0.125, 0.0625, 0.25],
+        )
+    } else {
+        (grid3(s, true), grid3(s, true), grid3(s, false))
+    };
     let b = Coefficient::any(s);
     let mut p = [0.0; 3];
     for i in 0..3 {
@@ -300,7 +325,7 @@ fn support_member<S: Source>(s: &mut S) {
 }
 harness!(
     b4_support_up_member,
-    unwind = 2,
+    unwind = 50,
     bits = 12,
     cases = pacs_proof_kit::DEFAULT_CASES,
     support_member
@@ -345,7 +370,7 @@ fn distance_shared_point<S: Source>(s: &mut S) {
 }
 harness!(
     b4_distance_bound_shared_point,
-    unwind = 2,
+    unwind = 50,
     bits = 12,
     cases = pacs_proof_kit::DEFAULT_CASES,
     distance_shared_point
