@@ -30,7 +30,8 @@ impl Zonotope {
     /// Whether the point `x` lies outside the interval hull (rounded outward).
     ///
     /// # Soundness
-    /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`.
+    /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`
+    /// (twin); Kani: `b3_hull_excludes_member` (beside this module, `proofs.rs`).
     pub fn hull_excludes(&self, x: &DVector<f64>) -> bool {
         hull_excludes_of(self, x)
     }

@@ -4,29 +4,31 @@
 //! Inputs on dyadic grids, so that every member point is a float computed without rounding and
 //! the claims are checked against the exact set:
 //!
-//! - `b3_hull_excludes_member`: a member `x = c + β₀g₀ + β₁g₁ + γe` of a one-dimensional
+//! - `b3_hull_excludes_member` (Kani and twin): a member `x = c + β₀g₀ + β₁g₁ + γe` of a
 //!   zonotope with two generators and an error box is never excluded by the hull pre-test of
 //!   [`Zonotope::contains`] ([`hull_excludes_of`], the arithmetic of
-//!   [`Zonotope::hull_excludes`] on fixed-size vectors). Mutant `x37b` (the hull without the
-//!   error box) fails it.
-//! - `b3_separates_member`: no direction `d` (any float) separates a member of a
-//!   one-dimensional zonotope with one generator and an error box ([`separates_of`]: `d·x`
-//!   rounded down against the support function rounded up). Mutant `x38b` (the support
-//!   function without its rounding-error term) fails it.
-//! - `b4_support_up_member`: [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for every member `p`
-//!   of a zonotope with one generator and an error box and every direction `d = λu`, `λ` any
-//!   float with a short significand and `u` a vector of `0, ±1, ±2⁻³⁰` (components of very
-//!   different magnitudes, so the support function's sums round); `u·p` is exact on the grid and
-//!   `λ·(u·p)` is compared with integer significands ([`crate::exact::cmp_prod`]).
-//! - `b4_distance_bound_shared_point`: [`Zonotope3::distance_bound_along`] is 0 for any such
-//!   direction when `Z ⊕ B(inflate)` and the capsule share a point: `q = z + w` (`z` a member,
-//!   `|w| ≤ inflate`) with `|q − p₁| ≤ r` (`p₁` the capsule's first end). Mutant `x39b` (the
-//!   bound without `inflate`) fails it.
+//!   [`Zonotope::hull_excludes`] over [`ZonotopeData`]). Under Kani one dimension, every number
+//!   a multiple of 1/16 in `[−1, 1]` (`e ≥ 0`) and the coefficients `0, ±1/2, ±1`; the twin: one
+//!   or two dimensions, multiples of 2⁻⁸ up to 256, coefficients multiples of 1/4. Mutant `x37b`
+//!   (the hull without the error box) fails it.
+//! - `b3_separates_member` (twin only): no direction `d` separates a member of a zonotope with
+//!   one generator and an error box ([`separates_of`]: `d·x` rounded down against the support
+//!   function rounded up).
+//! - `b4_support_up_member` (twin only): [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for every
+//!   member `p` of a zonotope with one generator and an error box and every direction `d = λu`,
+//!   `λ` any float and `u` a vector of `0, ±1, ±2⁻³⁰` (components of very different magnitudes,
+//!   so the support function's sums round); `u·p` is exact on the grid and `λ·(u·p)` is compared
+//!   with integer significands ([`crate::exact::cmp_prod`]).
+//! - `b4_distance_bound_shared_point` (twin only): [`Zonotope3::distance_bound_along`] is 0 for
+//!   any such direction when `Z ⊕ B(inflate)` and the capsule share a point: `q = z + w` (`z` a
+//!   member, `|w| ≤ inflate`) with `|q − p₁| ≤ r` (`p₁` the capsule's first end). Mutant `x39b`
+//!   (the bound without `inflate`) fails its twin.
 //!
 //! The generic functions are the library's own arithmetic ([`super::hull_axis`],
 //! [`super::support_up_of`]): the dynamic [`Zonotope`] calls them on its heap vectors, the
-//! proofs on fixed-size ones (the model checker unrolls nalgebra's heap storage into thousands
-//! of checks). Each twin also checks that the dynamic zonotope's method gives the same answer.
+//! proofs on plain fields (the model checker unrolls nalgebra's heap storage into thousands of
+//! checks, and Bitwuzla's repairs reject float arrays passed by value). Each b3 twin also checks
+//! that the dynamic zonotope's method gives the same answer.
 
 // Proof functions are entry points of the model checker, not called from the crate.
 #![cfg_attr(kani, allow(dead_code))]
@@ -238,10 +240,12 @@ fn separates_member<S: Source>(s: &mut S) {
         separated
     );
 }
+// Property test only (session 16): under Kani (one dimension, a constant zonotope, a full-width
+// direction) it timed out at 200–240 s on Bitwuzla (load 4–5); the exact-product test of
+// `Interval::scale` in `d·x` (integer significands) is the likely cost.
 harness!(
     b3_separates_member,
-    unwind = 3,
-    bits = 12,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     separates_member
 );
@@ -323,10 +327,12 @@ fn support_member<S: Source>(s: &mut S) {
         "support_up({d:?}) = {h} < d·p for p = {p:?} ∈ {z:?}"
     );
 }
+// Property test only (session 16): `Zonotope3`'s arguments are float arrays passed by value
+// (`new`, `support_up`), whose flattening Bitwuzla rejects ("expected bit-vector term … 'concat'",
+// a limit of `proofs/smt/bitwuzla_cli.py`'s repairs); CBMC's SAT back end timed out at 200 s.
 harness!(
     b4_support_up_member,
-    unwind = 50,
-    bits = 12,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     support_member
 );
@@ -368,10 +374,11 @@ fn distance_shared_point<S: Source>(s: &mut S) {
         [p[0] + w[0], p[1] + w[1], p[2] + w[2]]
     );
 }
+// Property test only (session 16), as `b4_support_up_member` (not run under Kani: the same
+// float-array arguments). Its twin catches mutant `x39b` (the bound without `inflate`).
 harness!(
     b4_distance_bound_shared_point,
-    unwind = 50,
-    bits = 12,
+    twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     distance_shared_point
 );
