@@ -20,6 +20,11 @@ mod containment;
 mod reduction;
 mod zonotope3;
 
+/// The Kani proofs of the outside certificates and the distance bound, also property tests
+/// (`proofs/README.md`, claim C2).
+#[cfg(any(test, kani))]
+mod proofs;
+
 pub use ball::{BallApprox, ball_zonotope, inradius_lower_3d};
 pub use containment::Containment;
 pub use zonotope3::{MAX_GENERATORS_3D, Zonotope3};
@@ -350,17 +355,10 @@ impl Zonotope {
     /// Interval hull: `(lo, hi)` with `Z ⊆ [lo, hi]` (rounded outward).
     pub fn interval_hull(&self) -> (DVector<f64>, DVector<f64>) {
         let n = self.dim();
-        let m = self.num_generators();
         let mut lo = DVector::zeros(n);
         let mut hi = DVector::zeros(n);
         for i in 0..n {
-            let mut r = self.e[i];
-            for j in 0..m {
-                r += self.g[(i, j)].abs();
-            }
-            let r = nonneg_sum_up(m + 1, r);
-            lo[i] = sub_down(self.c[i], r);
-            hi[i] = add_up(self.c[i], r);
+            (lo[i], hi[i]) = hull_axis(self, i);
         }
         (lo, hi)
     }
@@ -381,27 +379,109 @@ impl Zonotope {
                 got: d.len(),
             });
         }
-        let m = self.num_generators();
-        let (mut s, mut a) = (0.0, 0.0);
-        for i in 0..n {
-            s += d[i] * self.c[i];
-            a += (d[i] * self.c[i]).abs();
-            let t = d[i].abs() * self.e[i];
-            s += t;
-            a += t;
-        }
-        for j in 0..m {
-            let (mut y, mut ya) = (0.0, 0.0);
-            for i in 0..n {
-                let t = d[i] * self.g[(i, j)];
-                y += t;
-                ya += t.abs();
-            }
-            s += y.abs();
-            a += ya;
-        }
-        Ok(add_up(s, rnd_err(2 * n + m + 2, n * (m + 2), a)))
+        Ok(support_up_of(self, d))
     }
+}
+
+/// Read access to the numbers of `c ⊕ G[−1, 1]^m ⊕ box(e)`: the dynamic [`Zonotope`]'s heap
+/// storage, or plain fields in the proofs beside this module (which the model checker handles
+/// without a heap or float arrays). The arithmetic of [`Zonotope::interval_hull`],
+/// [`Zonotope::support_up`], [`Zonotope::hull_excludes`] and [`Zonotope::separates`] is written
+/// once over it ([`hull_axis`], [`support_up_of`], `containment::{hull_excludes_of,
+/// separates_of}`), so the proofs check the library's own operations.
+pub(crate) trait ZonotopeData {
+    /// Dimension `n`.
+    fn dim(&self) -> usize;
+    /// Number of generators `m`.
+    fn num_generators(&self) -> usize;
+    /// Centre coordinate `c_i`.
+    fn c(&self, i: usize) -> f64;
+    /// Generator entry `G_ij`.
+    fn g(&self, i: usize, j: usize) -> f64;
+    /// Error box radius `e_i`.
+    fn e(&self, i: usize) -> f64;
+}
+
+impl ZonotopeData for Zonotope {
+    #[inline]
+    fn dim(&self) -> usize {
+        self.c.len()
+    }
+    #[inline]
+    fn num_generators(&self) -> usize {
+        self.g.ncols()
+    }
+    #[inline]
+    fn c(&self, i: usize) -> f64 {
+        self.c[i]
+    }
+    #[inline]
+    fn g(&self, i: usize, j: usize) -> f64 {
+        self.g[(i, j)]
+    }
+    #[inline]
+    fn e(&self, i: usize) -> f64 {
+        self.e[i]
+    }
+}
+
+/// Read access to the coordinates of a point or direction (see [`ZonotopeData`]).
+pub(crate) trait Coords {
+    /// Number of coordinates.
+    fn len(&self) -> usize;
+    /// Coordinate `i`.
+    fn at(&self, i: usize) -> f64;
+}
+
+impl Coords for DVector<f64> {
+    #[inline]
+    fn len(&self) -> usize {
+        self.nrows()
+    }
+    #[inline]
+    fn at(&self, i: usize) -> f64 {
+        self[i]
+    }
+}
+
+/// The interval hull of `c ⊕ G[−1, 1]^m ⊕ box(e)` along axis `i` (rounded outward): the
+/// arithmetic of [`Zonotope::interval_hull`] (see [`ZonotopeData`]).
+#[inline]
+pub(crate) fn hull_axis(z: &impl ZonotopeData, i: usize) -> (f64, f64) {
+    let m = z.num_generators();
+    let mut r = z.e(i);
+    for j in 0..m {
+        r += z.g(i, j).abs();
+    }
+    let r = nonneg_sum_up(m + 1, r);
+    (sub_down(z.c(i), r), add_up(z.c(i), r))
+}
+
+/// Support function upper bound `≥ max_{z ∈ Z} d·z` (`d` of the zonotope's dimension): the
+/// arithmetic of [`Zonotope::support_up`] (see [`ZonotopeData`]).
+#[inline]
+pub(crate) fn support_up_of(z: &impl ZonotopeData, d: &impl Coords) -> f64 {
+    let n = z.dim();
+    let m = z.num_generators();
+    let (mut s, mut a) = (0.0, 0.0);
+    for i in 0..n {
+        s += d.at(i) * z.c(i);
+        a += (d.at(i) * z.c(i)).abs();
+        let t = d.at(i).abs() * z.e(i);
+        s += t;
+        a += t;
+    }
+    for j in 0..m {
+        let (mut y, mut ya) = (0.0, 0.0);
+        for i in 0..n {
+            let t = d.at(i) * z.g(i, j);
+            y += t;
+            ya += t.abs();
+        }
+        s += y.abs();
+        a += ya;
+    }
+    add_up(s, rnd_err(2 * n + m + 2, n * (m + 2), a))
 }
 
 #[inline]

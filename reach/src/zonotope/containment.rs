@@ -1,7 +1,9 @@
 //! Conservative point containment: the zonotope-norm LP (clarabel) proposes coefficients and a
 //! separating direction; only their rigorous checks decide `Inside` / `Outside`.
 
-use super::{Zonotope, ZonotopeError, check_finite, pt};
+use super::{
+    Coords, Zonotope, ZonotopeData, ZonotopeError, check_finite, hull_axis, pt, support_up_of,
+};
 use crate::interval::Interval;
 use crate::rounding::{add_up, mul_up, sub_down};
 use nalgebra::{DMatrix, DVector};
@@ -28,10 +30,10 @@ impl Zonotope {
     /// Whether the point `x` lies outside the interval hull (rounded outward).
     ///
     /// # Soundness
-    /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`.
+    /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`
+    /// (twin); Kani: `b3_hull_excludes_member` (beside this module, `proofs.rs`).
     pub fn hull_excludes(&self, x: &DVector<f64>) -> bool {
-        let (lo, hi) = self.interval_hull();
-        (0..self.dim().min(x.len())).any(|i| x[i] < lo[i] || x[i] > hi[i])
+        hull_excludes_of(self, x)
     }
 
     /// Whether the direction `d` certifies that `x` is outside `Z`: `d·x > h_Z(d)`, with `d·x`
@@ -45,12 +47,14 @@ impl Zonotope {
         if d.iter().all(|v| *v == 0.0) {
             return Ok(false);
         }
-        let h = self.support_up(d)?;
-        let mut dx = Interval::ZERO;
-        for i in 0..self.dim().min(x.len()) {
-            dx += pt(d[i]) * pt(x[i]);
+        if d.len() != self.dim() {
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "direction",
+                expected: self.dim(),
+                got: d.len(),
+            });
         }
-        Ok(dx.lo() > h)
+        Ok(separates_of(self, x, d))
     }
 
     /// Conservative point containment: `Inside` / `Outside` only when proven (see [`Containment`]).
@@ -220,6 +224,31 @@ impl Zonotope {
             s => Err(ZonotopeError::Solver(format!("status {s:?}"))),
         }
     }
+}
+
+/// [`Zonotope::hull_excludes`] on any storage (see [`ZonotopeData`]): whether `x` lies outside
+/// the interval hull (rounded outward) in one of the first `min(n, len x)` coordinates.
+#[inline]
+pub(crate) fn hull_excludes_of(z: &impl ZonotopeData, x: &impl Coords) -> bool {
+    for i in 0..z.dim().min(x.len()) {
+        let (lo, hi) = hull_axis(z, i);
+        if x.at(i) < lo || x.at(i) > hi {
+            return true;
+        }
+    }
+    false
+}
+
+/// [`Zonotope::separates`] on any storage, for a non-zero `d` of the zonotope's dimension:
+/// `d·x` rounded down (interval arithmetic) above [`support_up_of`].
+#[inline]
+pub(crate) fn separates_of(z: &impl ZonotopeData, x: &impl Coords, d: &impl Coords) -> bool {
+    let h = support_up_of(z, d);
+    let mut dx = Interval::ZERO;
+    for i in 0..z.dim().min(x.len()) {
+        dx += pt(d.at(i)) * pt(x.at(i));
+    }
+    dx.lo() > h
 }
 
 /// `(t*, β*, equality duals)` of the zonotope-norm LP.
