@@ -223,8 +223,10 @@ pub struct Diagnostics {
     pub on_failsafe: bool,
     /// What decided the step.
     pub binding: Binding,
-    /// Lower bound of the separation between robot and human occupancies over the first interval
-    /// (m; +∞ without human).
+    /// Lower bound of the separation between robot and human occupancies over the first checked
+    /// interval that contains the step (the whole monitored trajectory, or the part before its
+    /// last occupancy interval, or `[0, α_s]`: each a lower bound for the coming step; m; +∞
+    /// without a human in the robot's workspace ball).
     pub min_separation: f64,
     /// Largest energy bound where contact was possible (J; 0 if none).
     pub contact_energy: f64,

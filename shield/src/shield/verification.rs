@@ -40,6 +40,9 @@ impl Shield {
                 *diag = coarse;
                 return true;
             }
+            // Its separation bound holds for every part of the trajectory, the first interval
+            // included (the fine check below may fail before it reaches that interval).
+            diag.min_separation = diag.min_separation.min(coarse.min_separation);
         }
         let intervals = OccupancyIntervals::new(
             alpha,
