@@ -287,6 +287,9 @@ pub struct Shield {
     /// the next `offer`/`set_chunk`).
     spare: Option<Trajectory>,
     failsafe: Option<VerifiedFailsafe>,
+    /// Verifications left that skip the whole-trajectory check (it failed recently: it is tried
+    /// again after `verification::COARSE_SKIP` verifications; only the cost depends on this, never soundness).
+    coarse_skip: u32,
     /// Dynamic objects with their constraints and latest measurements.
     objects: Vec<ObjectSlot>,
     object_rule: ObjectRule,
@@ -468,6 +471,7 @@ impl Shield {
             offer_state: OfferState::None,
             spare: None,
             failsafe: None,
+            coarse_skip: 0,
             objects: Vec::new(),
             object_rule,
             object_occ: Vec::new(),

@@ -10,6 +10,9 @@ use pacs_reach::JointBox;
 use pacs_verify::iso15066::ConstraintKind;
 use std::ops::ControlFlow;
 
+/// Verifications that skip the whole-trajectory check after it failed (see [`Shield::verify`]).
+pub(crate) const COARSE_SKIP: u32 = 7;
+
 impl Shield {
     /// Verify the monitored trajectory (go for α_s from t, then brake) against the human and the
     /// objects.
@@ -34,15 +37,22 @@ impl Shield {
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
         // when the human is far; otherwise the fine intervals below decide.
+        // After it failed, the next COARSE_SKIP verifications go straight to the fine check (in a
+        // run of steps near a person it keeps failing, and costs one interval check each time).
         if self.config.mode != FilterMode::Off && stop > alpha {
-            let mut coarse = *diag;
-            if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &mut coarse) {
-                *diag = coarse;
-                return true;
+            if self.coarse_skip > 0 {
+                self.coarse_skip -= 1;
+            } else {
+                let mut coarse = *diag;
+                if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &mut coarse) {
+                    *diag = coarse;
+                    return true;
+                }
+                self.coarse_skip = COARSE_SKIP;
+                // Its separation bound holds for every part of the trajectory, the first
+                // interval included (the fine check below may fail before reaching it).
+                diag.min_separation = diag.min_separation.min(coarse.min_separation);
             }
-            // Its separation bound holds for every part of the trajectory, the first interval
-            // included (the fine check below may fail before it reaches that interval).
-            diag.min_separation = diag.min_separation.min(coarse.min_separation);
         }
         let intervals = OccupancyIntervals::new(
             alpha,
