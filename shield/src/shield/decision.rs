@@ -68,7 +68,7 @@ pub struct Choice {
 /// # Soundness
 /// Claim C8 (induction): the stored failsafe changes only on a verified candidate, and the
 /// executed state is read from the verified go step or from the stored failsafe. Harness
-/// `f1_shield_decision_induction` (Kani: any finite profiles, full-width times with
+/// `f1_shield_decision_induction` (property test; Kani: `f1_decision_adopted`, `f1_decision_kept` — any finite profiles, full-width times with
 /// `t ∈ [0, 100]` s, `α ∈ [1e-4, 0.01]` s, the failsafe started up to 1 s before); mutant `x2`
 /// caught.
 pub fn choose(
@@ -107,7 +107,7 @@ pub fn choose(
 ///
 /// # Soundness
 /// Claim C8 (induction): the robot is always on a verified monitored trajectory; the stored
-/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction` (Kani:
+/// failsafe changes only on a verified candidate. Harness `f1_shield_decision_induction` (property test; Kani, split by outcome: `f1_decision_adopted`, `f1_decision_kept`;
 /// [`choose`]; the twin: `decide` as a whole, three steps from the start), property test
 /// `f3_real_shield_commands_on_verified_failsafe`; mutant `x2` caught.
 pub fn decide(
