@@ -1,9 +1,10 @@
 //! Instruction-count harness for the shield step: `valgrind --tool=callgrind
 //! target/release/examples/shield_loop sorting|handover N` runs the `pacs bench shield` scenario
-//! (N steps) and prints its statistics; `sorting-continuous` runs the continuous-chunks scenario.
+//! (N steps) and prints its statistics; `sorting-continuous` runs the continuous-chunks scenario, `objects` the sorting scenario with
+//! two dynamic objects.
 
 use pacs_shield::ChunkMotion;
-use pacs_shield::bench::shield_scenario_with;
+use pacs_shield::bench::{shield_objects_scenario, shield_scenario_with};
 use pacs_shield::shield::FilterMode;
 
 fn main() {
@@ -14,7 +15,11 @@ fn main() {
         Some(base) => (base.to_string(), ChunkMotion::Continuous),
         None => (spec, ChunkMotion::Stop),
     };
-    let s = shield_scenario_with(&spec, FilterMode::Pacs, motion, steps);
+    let s = if spec == "objects" {
+        shield_objects_scenario(steps)
+    } else {
+        shield_scenario_with(&spec, FilterMode::Pacs, motion, steps)
+    };
     println!(
         "{}: median {:.1} us, p90 {:.1} us, p99 {:.1} us, max {:.1} us, work max {:.1} us, verified {:.3}",
         s.scenario,

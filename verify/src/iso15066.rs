@@ -220,6 +220,11 @@ pub struct ContactRule {
     workspace: Capsule,
     // Scratch.
     robot_aabb: Vec<Aabb>,
+    part_aabb: Vec<Aabb>,
+    /// Box distances (m) of the separation figure's search: per part to the robot's union box,
+    /// per robot capsule to the current part's box (+∞ once taken).
+    part_gap: Vec<f64>,
+    capsule_gap: Vec<f64>,
     contact: Vec<u128>,
 }
 
@@ -314,6 +319,9 @@ impl ContactRule {
             rest_speed,
             workspace,
             robot_aabb: vec![Aabb::default(); ncaps],
+            part_aabb: vec![Aabb::default(); parts],
+            part_gap: vec![0.0; parts],
+            capsule_gap: vec![0.0; ncaps],
             contact: vec![0; parts],
         })
     }

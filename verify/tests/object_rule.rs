@@ -47,7 +47,9 @@ fn zero_box(n: usize) -> JointBox {
 /// Soundness: over random joint boxes around the ready pose and random balls near the arm, when
 /// the rule reports no contact, no sampled configuration of the box touches the ball at any
 /// sampled point of its (constant-velocity, exactly measured) motion — exact distances, 2000
-/// cases × 20 samples. Also: the rule reports contact in a fair share of the cases (not vacuous).
+/// cases × 20 samples, in both modes (with the separation figure, and the decision only, which
+/// skips pairs by their broad-phase boxes). Also: the rule reports contact in a fair share of the
+/// cases (not vacuous), and the box-skipping mode differs from the other in few cases.
 #[test]
 fn no_contact_reported_only_when_disjoint() {
     let robot = fr3::fr3();
@@ -58,7 +60,7 @@ fn no_contact_reported_only_when_disjoint() {
         reach.capsule_count()
     ];
     let mut rng = Lcg(7);
-    let (mut contacts, mut clear) = (0, 0);
+    let (mut contacts, mut clear, mut fast_only_clear) = (0, 0, 0);
     for _ in 0..2000 {
         let w = rng.range(0.0, 0.1);
         let (lo, hi): (Vec<f64>, Vec<f64>) = fr3::Q_READY
@@ -88,14 +90,22 @@ fn no_contact_reported_only_when_disjoint() {
             velocity: Some(v),
         };
         let occ = occupancy(&obj, &meas, 0.0, 0.05).unwrap();
-        let out = rule.check(&caps, &zero_box(7), &occ, ObjectContact::NoContact, || 0.0);
+        let check = |sep| rule.check(&caps, &zero_box(7), &occ, ObjectContact::NoContact, || 0.0, sep);
+        let (out, fast) = (check(true), check(false));
         assert_eq!(out.contact, out.violation.is_some());
-        if out.contact {
+        assert_eq!(fast.contact, fast.violation.is_some());
+        // The decision-only mode skips pairs by boxes: it may clear more, never less.
+        assert!(fast.contact <= out.contact);
+        if fast.contact != out.contact {
+            fast_only_clear += 1;
+        }
+        if fast.contact {
             contacts += 1;
             continue;
         }
         clear += 1;
-        assert!(out.separation > 0.0);
+        assert!(out.contact || out.separation > 0.0);
+        assert_eq!(fast.separation, f64::INFINITY);
         for _ in 0..20 {
             let q: Vec<f64> = lo.iter().zip(&hi).map(|(a, b)| rng.range(*a, *b)).collect();
             // True state at t_m − δ = −0.01 is the measurement; constant velocity afterwards.
@@ -113,8 +123,8 @@ fn no_contact_reported_only_when_disjoint() {
         }
     }
     assert!(
-        contacts > 100 && clear > 100,
-        "contacts {contacts}, clear {clear}"
+        contacts > 100 && clear > 100 && fast_only_clear < 20,
+        "contacts {contacts}, clear {clear}, cleared only by boxes {fast_only_clear}"
     );
 }
 
@@ -143,7 +153,8 @@ fn constraints_decide_a_contact() {
     let rest = zero_box(7);
     let slow = JointBox::new(&[-0.01; 7], &[0.01; 7]).unwrap();
     let moving = JointBox::new(&[-0.5; 7], &[0.5; 7]).unwrap();
-    let check = |dq: &JointBox, c: ObjectContact, e: f64| rule.check(&caps, dq, &occ, c, || e);
+    let check =
+        |dq: &JointBox, c: ObjectContact, e: f64| rule.check(&caps, dq, &occ, c, || e, true);
     // No contact allowed: violated even at rest.
     let out = check(&rest, ObjectContact::NoContact, 0.0);
     assert!(out.contact && out.violation.is_some() && out.separation == 0.0);
@@ -165,8 +176,18 @@ fn constraints_decide_a_contact() {
         ..meas
     };
     let occ_far = occupancy(&ball(0.03), &far, 0.0, 0.01).unwrap();
-    let out = rule.check(&caps, &moving, &occ_far, ObjectContact::NoContact, || 0.0);
+    let out = rule.check(&caps, &moving, &occ_far, ObjectContact::NoContact, || 0.0, true);
     assert!(
         !out.contact && out.violation.is_none() && out.separation > 0.5 && out.separation < 1.42
     );
+    // Decision only: the same verdicts, no separation figure.
+    for c in [ObjectContact::NoContact, ObjectContact::Ssm, pfl] {
+        for dq in [&rest, &slow, &moving] {
+            let a = rule.check(&caps, dq, &occ, c, || 2.5, true);
+            let b = rule.check(&caps, dq, &occ, c, || 2.5, false);
+            assert_eq!((a.contact, a.violation), (b.contact, b.violation));
+        }
+    }
+    let far = rule.check(&caps, &moving, &occ_far, ObjectContact::NoContact, || 0.0, false);
+    assert!(!far.contact && far.separation == f64::INFINITY);
 }

@@ -411,7 +411,7 @@ impl Auditor {
             let energy = || {
                 *energy_cache.get_or_insert_with(|| span_energy(rreach, scratch, b, energies, n))
             };
-            let out = object_rule.check(rcaps, &b.dq, occ, o.contact, energy);
+            let out = object_rule.check(rcaps, &b.dq, occ, o.contact, energy, true);
             if let Some(v) = out.violation {
                 let threshold = match o.contact {
                     ObjectContact::Pfl { threshold } => threshold,

@@ -200,7 +200,7 @@ impl Shield {
         };
         for (id, (o, slot)) in objects.iter().zip(object_occ.iter()).enumerate() {
             let Some(occ) = slot else { continue };
-            let out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy);
+            let out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
             if let Some(v) = out.violation {
                 if matches!(diag.binding, Binding::None) {
                     diag.binding = Binding::Object {

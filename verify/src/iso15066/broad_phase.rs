@@ -37,7 +37,7 @@ impl Aabb {
             self.hi[k] = self.hi[k].max(o.hi[k]);
         }
     }
-    /// Lower bound of the distance between two boxes (0 if they overlap).
+    /// Lower bound of the distance between two boxes (0 if they overlap or a bound is NaN).
     #[inline]
     pub(super) fn distance_lb(&self, o: &Aabb) -> f64 {
         let mut d2 = 0.0;
@@ -50,9 +50,10 @@ impl Aabb {
         // Rounded down: the products and sum of positive terms lose at most a few ulps.
         pacs_reach::ieee::sqrt(d2 * (1.0 - 1e-12))
     }
+    /// False only if the boxes are provably apart on some axis (a NaN bound never separates).
     #[inline]
     pub(super) fn overlaps(&self, o: &Aabb) -> bool {
-        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
+        !(0..3).any(|k| self.lo[k] > o.hi[k] || o.lo[k] > self.hi[k])
     }
 }
 

@@ -62,6 +62,7 @@ impl ContactRule {
         }
         for (p, hc) in human_caps.iter().enumerate() {
             let hb = Aabb::of(hc);
+            self.part_aabb[p] = hb;
             let mut mask = 0u128;
             if all.overlaps(&hb) {
                 for (c, rc) in robot_caps.iter().enumerate() {
@@ -83,17 +84,10 @@ impl ContactRule {
                     }
                 }
                 out.separation = out.separation.min(0.0);
-            } else if separation && all.distance_lb(&hb) < out.separation {
-                // Separation lower bound; a pair whose boxes are farther apart than the best so
-                // far cannot lower it.
-                let mut best = out.separation;
-                for (rc, rb) in robot_caps.iter().zip(&self.robot_aabb) {
-                    if rb.distance_lb(&hb) < best {
-                        best = best.min(capsule_distance_lower_bound(rc, hc));
-                    }
-                }
-                out.separation = best;
             }
+        }
+        if separation && !out.contact {
+            out.separation = self.separation_figure(robot_caps, human_caps, &all);
         }
         if !out.contact {
             return out;
@@ -110,6 +104,30 @@ impl ContactRule {
         out.violated = verdict.violated;
         out.pfl = verdict.pfl;
         out
+    }
+
+    /// The separation figure (m) when no pair may touch: the least capsule distance lower bound
+    /// over the (part, capsule) pairs, searched nearest box first. A pair is passed over only
+    /// when the distance between its broad-phase boxes (a lower bound of the capsules'
+    /// distance, since the boxes contain them) is at least the least bound found so far; so the
+    /// result is a lower bound of the distance between every robot capsule and every body part.
+    /// Parts and capsules are taken in order of increasing box distance: the first pair usually
+    /// gives a bound that passes over every other. Uses the boxes [`Self::check`] just stored.
+    fn separation_figure(&mut self, robot_caps: &[Capsule], human_caps: &[Capsule], all: &Aabb) -> f64 {
+        let mut best = f64::INFINITY;
+        for (g, hb) in self.part_gap.iter_mut().zip(&self.part_aabb) {
+            *g = all.distance_lb(hb);
+        }
+        while let Some(p) = take_nearest(&mut self.part_gap, best) {
+            let hb = &self.part_aabb[p];
+            for (g, rb) in self.capsule_gap.iter_mut().zip(&self.robot_aabb) {
+                *g = rb.distance_lb(hb);
+            }
+            while let Some(c) = take_nearest(&mut self.capsule_gap, best) {
+                best = best.min(capsule_distance_lower_bound(&robot_caps[c], &human_caps[p]));
+            }
+        }
+        best
     }
 
     /// The narrow phase of [`Self::check`]: the rule's decision given which robot capsules each
@@ -234,4 +252,21 @@ impl ContactRule {
                 self.clampable[p * self.parts + o] && capsules_may_intersect(&human_caps[o], hc)
             })
     }
+}
+
+/// The index of the least gap below `bound`, marked taken (+∞); `None` if none is below it. (The
+/// gaps are box distances, never NaN: `Aabb::distance_lb` gives 0 for NaN bounds.)
+fn take_nearest(gaps: &mut [f64], bound: f64) -> Option<usize> {
+    let mut best = None;
+    let mut least = bound;
+    for (i, &g) in gaps.iter().enumerate() {
+        if g < least {
+            least = g;
+            best = Some(i);
+        }
+    }
+    if let Some(i) = best {
+        gaps[i] = f64::INFINITY;
+    }
+    best
 }

@@ -16,7 +16,8 @@ use super::{RuleError, at_rest};
 use pacs_models::object::ObjectContact;
 use pacs_models::{Capsule, RobotModel};
 use pacs_reach::JointBox;
-use pacs_reach::geometry::{capsule_distance_lower_bound, capsules_may_intersect};
+use super::broad_phase::Aabb;
+use pacs_reach::geometry::capsule_separation_lower_bound;
 use pacs_reach::object::ObjectOccupancy;
 use pacs_reach::robot::RobotReach;
 
@@ -39,7 +40,7 @@ pub struct ObjectOutcome {
     /// The violation, if one is possible.
     pub violation: Option<ObjectViolation>,
     /// Lower bound (m) of the distance between robot and object occupancies (0 on possible
-    /// contact).
+    /// contact). Only computed when asked for; else +∞ without contact.
     pub separation: f64,
 }
 
@@ -89,6 +90,15 @@ impl ObjectRule {
     /// `RobotReach` order), `dq` the joint velocity box (rad/s), `occ` the object's occupancy,
     /// `contact` its constraint, `energy` an upper bound (J) of the whole robot's kinetic energy
     /// (called at most once, only on possible PFL contact; +∞ if it cannot be bounded).
+    /// `separation`: also compute the separation lower bound (costs a capsule distance per robot
+    /// capsule); without it, a robot capsule whose broad-phase box misses the box of the
+    /// occupancy's bounding capsule is skipped at once (the decision only needs disjointness).
+    ///
+    /// # Soundness
+    /// A robot capsule is passed over as untouched only if its box and the bounding capsule's
+    /// box are disjoint (both contain their capsules: harness `i1_broad_phase_boxes_contain`),
+    /// or the bounding capsule's distance lower bound is positive, or the occupancy's own is
+    /// (claim C2/C4′). Tests: `verify/tests/object_rule.rs` (both modes).
     pub fn check(
         &self,
         robot_caps: &[Capsule],
@@ -96,17 +106,25 @@ impl ObjectRule {
         occ: &ObjectOccupancy,
         contact: ObjectContact,
         energy: impl FnOnce() -> f64,
+        separation: bool,
     ) -> ObjectOutcome {
         debug_assert_eq!(robot_caps.len(), self.capsule_link.len());
         let bounding = occ.bounding_capsule();
+        let bounding_box = bounding.as_ref().map(Aabb::of);
+        let want_separation = separation;
         let mut separation = f64::INFINITY;
         let mut touched = None;
         for (c, rc) in robot_caps.iter().enumerate() {
-            if let Some(b) = &bounding
-                && !capsules_may_intersect(rc, b)
-            {
-                separation = separation.min(capsule_distance_lower_bound(rc, b));
-                continue;
+            if let (Some(b), Some(bb)) = (&bounding, &bounding_box) {
+                if !want_separation && !Aabb::of(rc).overlaps(bb) {
+                    continue;
+                }
+                // One capsule distance decides and bounds (positive: provably disjoint).
+                let d = capsule_separation_lower_bound(rc, b);
+                if d > 0.0 {
+                    separation = separation.min(d);
+                    continue;
+                }
             }
             let d = occ.distance_lower_bound(rc);
             if d > 0.0 {
@@ -121,7 +139,12 @@ impl ObjectRule {
             return ObjectOutcome {
                 contact: false,
                 violation: None,
-                separation,
+                // Without the figure, pairs skipped by boxes are missing from the minimum.
+                separation: if want_separation {
+                    separation
+                } else {
+                    f64::INFINITY
+                },
             };
         };
         let (bad, e) = contact_violates(contact, at_rest(dq, self.rest_speed), energy);
