@@ -589,6 +589,17 @@ pub fn admissible(
     let n = traj.dof();
     let sd_max0 = start.sd.max(target);
     let mut wlen = 0.01_f64.max(start.sd * 0.01);
+    if horizon.is_none() && target < start.sd {
+        // First window: the path run while slowing down at the caps, which no admissible
+        // profile beats by much (the limits below only lower s̈ and s⃛); usually the loop then
+        // ends after one widening instead of two. Only a starting guess: every window is
+        // re-checked against the profile it yields.
+        let fast = SpeedProfile::plan(start, target, ACC_CAP, JERK_CAP);
+        let run = fast.eval(fast.settle_time()).s - start.s;
+        if run.is_finite() {
+            wlen = wlen.max(run);
+        }
+    }
     for _ in 0..8 {
         let w = window(traj, start.s, start.s + wlen);
         let sd_max = sd_max0 * (1.0 + 1e-9);

@@ -1,10 +1,10 @@
 //! Instruction-count harness for the shield step: `valgrind --tool=callgrind
 //! target/release/examples/shield_loop sorting|handover N` runs the `pacs bench shield` scenario
 //! (N steps) and prints its statistics; `sorting-continuous` runs the continuous-chunks scenario, `objects` the sorting scenario with
-//! two dynamic objects.
+//! two dynamic objects, `sorting-offloop` continuous chunks planned off the loop (lead 3).
 
 use pacs_shield::ChunkMotion;
-use pacs_shield::bench::{shield_objects_scenario, shield_scenario_with};
+use pacs_shield::bench::{shield_objects_scenario, shield_scenario_offloop, shield_scenario_with};
 use pacs_shield::shield::FilterMode;
 
 fn main() {
@@ -17,6 +17,8 @@ fn main() {
     };
     let s = if spec == "objects" {
         shield_objects_scenario(steps)
+    } else if let Some(base) = spec.strip_suffix("-offloop") {
+        shield_scenario_offloop(base, FilterMode::Pacs, 3, steps)
     } else {
         shield_scenario_with(&spec, FilterMode::Pacs, motion, steps)
     };
