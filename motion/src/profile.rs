@@ -78,6 +78,31 @@ impl Piece {
         }
     }
 
+    /// Widen `r` (q̇, q̈ ranges) by the exact extrema of this piece over local `[d0, d1]`, padded
+    /// outward: the derivative part of [`Self::extend_bounds`] (q̇ is extreme at an end or where
+    /// q̈ = 0, q̈ (linear) at an end), the same points and pads without the position's extrema.
+    #[inline]
+    pub fn extend_deriv_bounds(&self, d0: f64, d1: f64, r: &mut [Range; 2]) {
+        self.extend_derivs_at(d0, r);
+        self.extend_derivs_at(d1, r);
+        if self.j != 0.0 {
+            let d = -self.a / self.j;
+            if d > d0 && d < d1 {
+                self.extend_derivs_at(d, r);
+            }
+        }
+    }
+
+    #[inline]
+    fn extend_derivs_at(&self, d: f64, r: &mut [Range; 2]) {
+        let (_, v, a) = self.eval(d);
+        let ad = d.abs();
+        let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
+        let ta = self.a.abs() + ad * self.j.abs();
+        r[0].include_padded(v, PAD_REL * tv + PAD_ABS);
+        r[1].include_padded(a, PAD_REL * ta + PAD_ABS);
+    }
+
     #[inline]
     fn extend_at(&self, d: f64, r: &mut [Range; 3]) {
         let (q, v, a) = self.eval(d);

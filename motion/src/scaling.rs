@@ -540,13 +540,21 @@ fn window(traj: &Trajectory, s_a: f64, s_b: f64) -> Window {
         q2: [0.0; MAX_DOF],
         q3: [0.0; MAX_DOF],
     };
-    for i in 0..traj.dof() {
-        let d = traj.joint_derivs(i, s_a, s_b);
-        w.q1[i] = d.r[1].abs_max();
-        w.q2[i] = d.r[2].abs_max();
-        w.q3[i] = d.r[3].abs_max();
-    }
+    w.include(traj, s_a, s_b);
     w
+}
+
+impl Window {
+    /// Widen the bounds to cover the path window [s_a, s_b] as well (a window over [a, b] and
+    /// one over [b, c] together bound [a, c]: the union of the derivative ranges).
+    fn include(&mut self, traj: &Trajectory, s_a: f64, s_b: f64) {
+        for i in 0..traj.dof() {
+            let [d1, d2, d3] = traj.joint_deriv_abs(i, s_a, s_b);
+            self.q1[i] = self.q1[i].max(d1);
+            self.q2[i] = self.q2[i].max(d2);
+            self.q3[i] = self.q3[i].max(d3);
+        }
+    }
 }
 
 /// Sound check of the chain-rule bounds (outward rounded) for speed ≤ `sd_max`, |s̈| ≤ `sdd_max`,
@@ -600,8 +608,15 @@ pub fn admissible(
             wlen = wlen.max(run);
         }
     }
+    // The window grows only: each pass adds the path beyond the previous one.
+    let mut w = window(traj, start.s, start.s + wlen);
+    let mut covered = start.s + wlen;
     for _ in 0..8 {
-        let w = window(traj, start.s, start.s + wlen);
+        let end = start.s + wlen;
+        if end > covered {
+            w.include(traj, covered, end);
+            covered = end;
+        }
         let sd_max = sd_max0 * (1.0 + 1e-9);
         let mut acc = ACC_CAP;
         for i in 0..n {

@@ -426,6 +426,44 @@ impl Trajectory {
         }
     }
 
+    /// Upper bounds of |q̇|, |q̈|, |q⃛| of joint `i` over [ta, tb] (s, clamped to ≥ 0): the
+    /// derivative part of [`Trajectory::joint_derivs`] (each bound at most its
+    /// `r[k].abs_max()`), without the position's extrema. For the path-speed limits
+    /// ([`crate::scaling::admissible`]), which need no positions.
+    #[inline]
+    pub fn joint_deriv_abs(&self, i: usize, ta: f64, tb: f64) -> [f64; 3] {
+        let ta = ta.max(0.0);
+        let tb = tb.max(ta);
+        let mut r = [Range::EMPTY; 2];
+        let mut jr: f64 = 0.0;
+        let end = self.offsets[i + 1];
+        let mut hint = usize::MAX;
+        let mut k = self.locate_hint(i, &mut hint, ta);
+        loop {
+            let p = &self.pieces[k];
+            let next_t = if k + 1 < end {
+                self.pieces[k + 1].t
+            } else {
+                f64::INFINITY
+            };
+            if ta <= p.t && next_t <= tb {
+                let f = &self.full[k];
+                r[0].union(f[1]);
+                r[1].union(f[2]);
+            } else {
+                let d0 = ta.max(p.t) - p.t;
+                let d1 = tb.min(next_t) - p.t;
+                p.extend_deriv_bounds(d0, d1, &mut r);
+            }
+            jr = jr.max(p.j.abs());
+            if next_t > tb || k + 1 >= end {
+                break;
+            }
+            k += 1;
+        }
+        [r[0].abs_max(), r[1].abs_max(), jr]
+    }
+
     /// Sound ranges of q, q̇, q̈ for every joint over [ta, tb] (s).
     pub fn bounds(&self, ta: f64, tb: f64) -> Bounds {
         let mut b = Bounds::default();

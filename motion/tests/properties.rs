@@ -238,3 +238,38 @@ proptest! {
         assert_limits_at_samples(&t, &plan, 10);
     }
 }
+
+/// `Trajectory::joint_deriv_abs` (the path-speed limits' windows) bounds |q̇|, |q̈| sampled at
+/// 40 instants of random windows and |q⃛| of every piece the window touches, and is never looser
+/// than `joint_derivs`' derivative ranges (it evaluates a subset of the same points with the same
+/// pads). 2000 random plans (moving and resting starts) × 7 joints × 3 windows.
+#[test]
+fn derivative_bounds_enclose_samples_and_match_joint_derivs() {
+    let mut rng = Rng::new(0xd5e1);
+    for seed in 0..2000u64 {
+        let (_, _, _, _, t) = random_problem(seed);
+        for _ in 0..3 {
+            let ta = rng.uniform(-0.01, t.duration());
+            let tb = ta.max(0.0) + rng.uniform(0.0, 0.3);
+            for i in 0..7 {
+                let [v, a, j] = t.joint_deriv_abs(i, ta, tb);
+                let full = t.joint_derivs(i, ta, tb);
+                assert!(v <= full.r[1].abs_max() && a <= full.r[2].abs_max());
+                assert_eq!(j, full.r[3].abs_max());
+                let (lo, hi) = (ta.max(0.0), tb.max(ta.max(0.0)));
+                for k in 0..=40 {
+                    let s = lo + (hi - lo) * k as f64 / 40.0;
+                    let (_, sv, sa) = t.joint_at(i, s);
+                    assert!(sv.abs() <= v && sa.abs() <= a, "joint {i} at {s}: {sv} {sa} vs {v} {a}");
+                }
+                for p in t.pieces(i) {
+                    if p.t <= hi {
+                        // Pieces starting inside the window (and the one containing its start).
+                        let inside = p.t >= lo;
+                        assert!(!inside || p.j.abs() <= j);
+                    }
+                }
+            }
+        }
+    }
+}
