@@ -287,9 +287,12 @@ pub struct Shield {
     /// the next `offer`/`set_chunk`).
     spare: Option<Trajectory>,
     failsafe: Option<VerifiedFailsafe>,
-    /// Verifications left that skip the whole-trajectory check (it failed recently: it is tried
-    /// again after `verification::COARSE_SKIP` verifications; only the cost depends on this, never soundness).
+    /// Verifications left that skip the whole-trajectory check (it failed recently), and how
+    /// many it skips after its next failure: `verification::COARSE_SKIP` after a pass, doubling
+    /// (plus one) with each failure in a row up to `verification::COARSE_SKIP_MAX`. Only the cost
+    /// depends on these, never soundness.
     coarse_skip: u32,
+    coarse_backoff: u32,
     /// Dynamic objects with their constraints and latest measurements.
     objects: Vec<ObjectSlot>,
     object_rule: ObjectRule,
@@ -472,6 +475,7 @@ impl Shield {
             spare: None,
             failsafe: None,
             coarse_skip: 0,
+            coarse_backoff: verification::COARSE_SKIP,
             objects: Vec::new(),
             object_rule,
             object_occ: Vec::new(),

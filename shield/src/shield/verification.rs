@@ -10,8 +10,12 @@ use pacs_reach::JointBox;
 use pacs_verify::iso15066::ConstraintKind;
 use std::ops::ControlFlow;
 
-/// Verifications that skip the whole-trajectory check after it failed (see [`Shield::verify`]).
+/// Verifications that skip the whole-trajectory check after it failed once (see
+/// [`Shield::verify`]); each further failure in a row doubles the skip (plus one), up to
+/// [`COARSE_SKIP_MAX`].
 pub(crate) const COARSE_SKIP: u32 = 7;
+/// The longest skip of the whole-trajectory check (verifications).
+pub(crate) const COARSE_SKIP_MAX: u32 = 63;
 
 impl Shield {
     /// Verify the monitored trajectory (go for α_s from t, then brake) against the human and the
@@ -37,8 +41,9 @@ impl Shield {
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
         // when the human is far; otherwise the fine intervals below decide.
-        // After it failed, the next COARSE_SKIP verifications go straight to the fine check (in a
-        // run of steps near a person it keeps failing, and costs one interval check each time).
+        // After it failed, the next verifications go straight to the fine check (in a run of
+        // steps near a person it keeps failing, and costs one interval check each time): 7 after
+        // one failure, doubling with each failure in a row up to 63.
         if self.config.mode != FilterMode::Off && stop > alpha {
             if self.coarse_skip > 0 {
                 self.coarse_skip -= 1;
@@ -46,9 +51,12 @@ impl Shield {
                 let mut coarse = *diag;
                 if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &mut coarse) {
                     *diag = coarse;
+                    self.coarse_backoff = COARSE_SKIP;
                     return true;
                 }
-                self.coarse_skip = COARSE_SKIP;
+                // Near a person it keeps failing: try it ever more rarely (7, 15, 31, 63).
+                self.coarse_skip = self.coarse_backoff;
+                self.coarse_backoff = (2 * self.coarse_backoff + 1).min(COARSE_SKIP_MAX);
                 // Its separation bound holds for every part of the trajectory, the first
                 // interval included (the fine check below may fail before reaching it).
                 diag.min_separation = diag.min_separation.min(coarse.min_separation);
