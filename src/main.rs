@@ -94,7 +94,10 @@ enum Command {
 enum BenchCommand {
     /// Time the shield step (PACS-SSM, PACS-PFL) and the CBF baseline on a fixed FR3 + walking
     /// human scenario (and one with two objects); prints median, p90, p99, p99.9 and max per step
-    /// in microseconds, the work time without the machine's noise, and the slowest steps.
+    /// in microseconds, the work time without the machine's noise, and the slowest steps. The
+    /// PACS runs leave out the per-step separation figure (a diagnostic; config
+    /// `separation_figure`), as a real-time loop that does not log it would, except the run whose
+    /// name says "separation figure on".
     Shield {
         /// Number of 1 ms safety steps per filter (the CBF runs at most 20000).
         #[arg(long, default_value_t = 100_000)]

@@ -260,7 +260,10 @@ fn derivative_bounds_enclose_samples_and_match_joint_derivs() {
                 for k in 0..=40 {
                     let s = lo + (hi - lo) * k as f64 / 40.0;
                     let (_, sv, sa) = t.joint_at(i, s);
-                    assert!(sv.abs() <= v && sa.abs() <= a, "joint {i} at {s}: {sv} {sa} vs {v} {a}");
+                    assert!(
+                        sv.abs() <= v && sa.abs() <= a,
+                        "joint {i} at {s}: {sv} {sa} vs {v} {a}"
+                    );
                 }
                 for p in t.pieces(i) {
                     if p.t <= hi {

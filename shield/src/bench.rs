@@ -305,6 +305,9 @@ fn run_walking_scenario(
     let cs = ConstraintSpec::builtin(spec).expect("preset");
     let mut cfg = ShieldConfig {
         mode,
+        // As a real-time loop runs it: the separation figure (a diagnostic) off, except where the
+        // scenario name asks for it.
+        separation_figure: name.contains(WITH_FIGURE),
         ..ShieldConfig::default()
     };
     motion.apply(&mut cfg);
@@ -399,10 +402,24 @@ pub fn rolling_ball(t: f64) -> ([f64; 3], [f64; 3]) {
 /// built-in ball rolling on the table in front of the robot (no contact allowed) and a second
 /// ball resting on the table to the side (SSM), both measured every step.
 pub fn shield_objects_scenario(steps: usize) -> StepStats {
+    shield_objects_scenario_with(steps, false)
+}
+
+/// Marks the scenarios that compute the separation figure ([`ShieldConfig::separation_figure`]);
+/// the others run without it, as a real-time loop that does not log it would.
+pub const WITH_FIGURE: &str = "separation figure on";
+
+/// [`shield_objects_scenario`], with the separation figure computed every step if `figure`.
+pub fn shield_objects_scenario_with(steps: usize, figure: bool) -> StepStats {
     let ball = ObjectModel::new(&default_ball()).expect("valid ball");
     let (rolling, resting) = (0, 1);
+    let name = if figure {
+        format!("sorting + 2 objects (Pacs, {WITH_FIGURE})")
+    } else {
+        "sorting + 2 objects (Pacs)".to_string()
+    };
     run_walking_scenario(
-        "sorting + 2 objects (Pacs)",
+        &name,
         "sorting",
         FilterMode::Pacs,
         ChunkMotion::Stop,

@@ -90,7 +90,16 @@ fn no_contact_reported_only_when_disjoint() {
             velocity: Some(v),
         };
         let occ = occupancy(&obj, &meas, 0.0, 0.05).unwrap();
-        let check = |sep| rule.check(&caps, &zero_box(7), &occ, ObjectContact::NoContact, || 0.0, sep);
+        let check = |sep| {
+            rule.check(
+                &caps,
+                &zero_box(7),
+                &occ,
+                ObjectContact::NoContact,
+                || 0.0,
+                sep,
+            )
+        };
         let (out, fast) = (check(true), check(false));
         assert_eq!(out.contact, out.violation.is_some());
         assert_eq!(fast.contact, fast.violation.is_some());
@@ -176,7 +185,14 @@ fn constraints_decide_a_contact() {
         ..meas
     };
     let occ_far = occupancy(&ball(0.03), &far, 0.0, 0.01).unwrap();
-    let out = rule.check(&caps, &moving, &occ_far, ObjectContact::NoContact, || 0.0, true);
+    let out = rule.check(
+        &caps,
+        &moving,
+        &occ_far,
+        ObjectContact::NoContact,
+        || 0.0,
+        true,
+    );
     assert!(
         !out.contact && out.violation.is_none() && out.separation > 0.5 && out.separation < 1.42
     );
@@ -188,6 +204,13 @@ fn constraints_decide_a_contact() {
             assert_eq!((a.contact, a.violation), (b.contact, b.violation));
         }
     }
-    let far = rule.check(&caps, &moving, &occ_far, ObjectContact::NoContact, || 0.0, false);
+    let far = rule.check(
+        &caps,
+        &moving,
+        &occ_far,
+        ObjectContact::NoContact,
+        || 0.0,
+        false,
+    );
     assert!(!far.contact && far.separation == f64::INFINITY);
 }

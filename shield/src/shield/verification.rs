@@ -225,12 +225,14 @@ impl Shield {
                 continue;
             }
             let mut first = None;
+            let figure = k == 0 && config.separation_figure;
             let outcome = h
                 .rule
-                .check(robot_caps, &v_box, &h.caps, &mut energy, k == 0, |v| {
+                .check(robot_caps, &v_box, &h.caps, &mut energy, figure, |v| {
                     first = Some(*v);
                     ControlFlow::Break(())
                 });
+            // (Without the figure: 0 where contact is possible, +∞ otherwise.)
             if k == 0 {
                 diag.min_separation = diag.min_separation.min(outcome.separation);
             }

@@ -113,7 +113,12 @@ impl ContactRule {
     /// result is a lower bound of the distance between every robot capsule and every body part.
     /// Parts and capsules are taken in order of increasing box distance: the first pair usually
     /// gives a bound that passes over every other. Uses the boxes [`Self::check`] just stored.
-    fn separation_figure(&mut self, robot_caps: &[Capsule], human_caps: &[Capsule], all: &Aabb) -> f64 {
+    fn separation_figure(
+        &mut self,
+        robot_caps: &[Capsule],
+        human_caps: &[Capsule],
+        all: &Aabb,
+    ) -> f64 {
         let mut best = f64::INFINITY;
         for (g, hb) in self.part_gap.iter_mut().zip(&self.part_aabb) {
             *g = all.distance_lb(hb);

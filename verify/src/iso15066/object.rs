@@ -12,11 +12,11 @@
 //! (the bounding capsule's, then the occupancy's own), so touching counts as contact. Tests:
 //! `verify/tests/object_rule.rs`.
 
+use super::broad_phase::Aabb;
 use super::{RuleError, at_rest};
 use pacs_models::object::ObjectContact;
 use pacs_models::{Capsule, RobotModel};
 use pacs_reach::JointBox;
-use super::broad_phase::Aabb;
 use pacs_reach::geometry::capsule_separation_lower_bound;
 use pacs_reach::object::ObjectOccupancy;
 use pacs_reach::robot::RobotReach;
