@@ -164,7 +164,9 @@ impl Shield {
                 }
             };
         }
-        // Each object's occupancy, kept only where the workspace ball does not clear it.
+        // Each object's occupancy, kept only where the workspace ball does not clear it. (That
+        // test only saves the robot occupancy: when a human needs it anyway, every object goes
+        // to the object rule, whose box test is as cheap.)
         let mut objects_left = false;
         for (o, slot) in objects.iter().zip(object_occ.iter_mut()) {
             *slot = None;
@@ -176,7 +178,7 @@ impl Shield {
                 diag.binding = Binding::NoMeasurement;
                 return false;
             };
-            if object_rule.workspace_clear(&occ).is_none() {
+            if human_left || object_rule.workspace_clear(&occ).is_none() {
                 *slot = Some(occ);
                 objects_left = true;
             }
