@@ -88,6 +88,48 @@ fn main() {
             worst
         );
     }
+    // The receding-horizon case: the next chunk continues the path the robot is on. Replan the
+    // waypoints of the same chunk not yet passed from the state 33 ms / 100 ms into it, against
+    // planning them from rest at that configuration, and against the original plan's remaining
+    // time (no degradation: the replanned rest of the path takes no longer than the original).
+    for dt in [0.033f64, 0.1] {
+        let (mut lr, mut lo, mut worst, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        for (s0, wp) in &set {
+            let t = pl.plan(s0, wp).unwrap();
+            if dt >= t.duration() {
+                continue;
+            }
+            let s = t.state_at(dt);
+            let times = t.waypoint_times();
+            let mut rows = vec![s.q[..7].to_vec()];
+            // times[k − 1]: when q̂_k is passed.
+            for k in 1..=wp.segments() {
+                if times[k - 1] > dt {
+                    rows.push(wp.row(k).to_vec());
+                }
+            }
+            let Ok(rest_wp) = pacs_motion::Waypoints::from_rows(&rows) else {
+                continue;
+            };
+            let (Ok(a), Ok(b)) = (
+                pl.plan(&s, &rest_wp),
+                pl.plan(&JointState::at_rest(&s.q[..7]), &rest_wp),
+            ) else {
+                continue;
+            };
+            let r = a.duration() / b.duration();
+            lr += r.ln();
+            lo += (a.duration() / (t.duration() - dt)).ln();
+            worst = worst.max(r);
+            n += 1;
+        }
+        println!(
+            "same path, replanned {dt} s in: duration / from rest, geomean {:.3}, worst {:.3}; / the original's remaining time, geomean {:.3} ({n} cases)",
+            (lr / n.max(1) as f64).exp(),
+            worst,
+            (lo / n.max(1) as f64).exp()
+        );
+    }
     for dt in [0.033f64, 0.1] {
         let (mut fbm, mut lsm, mut lss) = (0, 0.0, 0.0);
         let mut seg = Planner::new(

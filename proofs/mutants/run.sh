@@ -44,10 +44,14 @@ for patch in "$root"/proofs/mutants/*.patch; do
     # The shield's and the audit's object scenarios (the object rule has no harness of its own yet).
     cargo test -p pacs-shield --test objects --no-fail-fast >>"$log" 2>&1
     cargo test -p pacs-audit --test audit_objects --no-fail-fast >>"$log" 2>&1
+    # The object rule's decision-only mode (x43: the box test inverted).
+    cargo test -p pacs-verify --test object_rule --no-fail-fast >>"$log" 2>&1
     # The audit's input-consistency checks (x20: a human faster than the model).
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
     # The planner's checked stopping tail of Moving chunks (x21).
     cargo test -p pacs-motion --test trajectory --no-fail-fast >>"$log" 2>&1
+    # The path-speed limits' derivative windows (x44: no interior velocity extremum).
+    cargo test -p pacs-motion --test properties derivative_bounds --no-fail-fast >>"$log" 2>&1
     # Chunks planned off the loop and taken over at their handover (x22).
     cargo test -p pacs-shield --test handover --no-fail-fast >>"$log" 2>&1
     # Capsules fitted to collision meshes (x24).
