@@ -44,22 +44,23 @@ impl Piece {
     /// Widen `r` (q, q̇, q̈ ranges) by the exact extrema of this piece over local `[d0, d1]`, padded outward.
     #[inline]
     pub fn extend_bounds(&self, d0: f64, d1: f64, r: &mut [Range; 3]) {
-        self.extend_at(d0, r);
-        self.extend_at(d1, r);
-        // q̇ extremum where q̈ = 0.
-        if self.j != 0.0 {
-            let d = -self.a / self.j;
-            if d > d0 && d < d1 {
-                self.extend_at(d, r);
-            }
-        }
+        let [rq, rv, ra] = r;
+        let mut at = |d: f64| {
+            let (q, v, a) = self.eval(d);
+            let ad = d.abs();
+            let tq = self.q.abs()
+                + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
+            rq.include_padded(q, PAD_REL * tq + PAD_ABS);
+            self.include_derivs(d, v, a, rv, ra);
+        };
+        self.for_derivative_points(d0, d1, &mut at);
         // q extrema where q̇ = 0: v + a d + j d²/2 = 0.
         let (c2, c1, c0) = (0.5 * self.j, self.a, self.v);
         if c2 == 0.0 {
             if c1 != 0.0 {
                 let d = -c0 / c1;
                 if d > d0 && d < d1 {
-                    self.extend_at(d, r);
+                    at(d);
                 }
             }
         } else {
@@ -71,7 +72,7 @@ impl Piece {
                 let r2 = if qq != 0.0 { c0 / qq } else { r1 };
                 for d in [r1, r2] {
                     if d > d0 && d < d1 {
-                        self.extend_at(d, r);
+                        at(d);
                     }
                 }
             }
@@ -79,41 +80,41 @@ impl Piece {
     }
 
     /// Widen `r` (q̇, q̈ ranges) by the exact extrema of this piece over local `[d0, d1]`, padded
-    /// outward: the derivative part of [`Self::extend_bounds`] (q̇ is extreme at an end or where
-    /// q̈ = 0, q̈ (linear) at an end), the same points and pads without the position's extrema.
+    /// outward: the derivative part of [`Self::extend_bounds`] (the same instants and pads,
+    /// shared with it, without the position's extrema; so Kani's `f5_piece_velocity_acceleration`
+    /// reaches this code through `extend_bounds`).
     #[inline]
     pub fn extend_deriv_bounds(&self, d0: f64, d1: f64, r: &mut [Range; 2]) {
-        self.extend_derivs_at(d0, r);
-        self.extend_derivs_at(d1, r);
+        let [rv, ra] = r;
+        self.for_derivative_points(d0, d1, &mut |d| {
+            let (_, v, a) = self.eval(d);
+            self.include_derivs(d, v, a, rv, ra);
+        });
+    }
+
+    /// The instants of local `[d0, d1]` where q̇ or q̈ can be extreme: both ends (q̈ is linear),
+    /// and where q̈ = 0 inside (q̇'s interior extremum).
+    #[inline]
+    fn for_derivative_points(&self, d0: f64, d1: f64, at: &mut impl FnMut(f64)) {
+        at(d0);
+        at(d1);
         if self.j != 0.0 {
             let d = -self.a / self.j;
             if d > d0 && d < d1 {
-                self.extend_derivs_at(d, r);
+                at(d);
             }
         }
     }
 
+    /// Include q̇ = `v` and q̈ = `a` at local instant `d`, each padded by its evaluation's
+    /// rounding bound.
     #[inline]
-    fn extend_derivs_at(&self, d: f64, r: &mut [Range; 2]) {
-        let (_, v, a) = self.eval(d);
+    fn include_derivs(&self, d: f64, v: f64, a: f64, rv: &mut Range, ra: &mut Range) {
         let ad = d.abs();
         let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
         let ta = self.a.abs() + ad * self.j.abs();
-        r[0].include_padded(v, PAD_REL * tv + PAD_ABS);
-        r[1].include_padded(a, PAD_REL * ta + PAD_ABS);
-    }
-
-    #[inline]
-    fn extend_at(&self, d: f64, r: &mut [Range; 3]) {
-        let (q, v, a) = self.eval(d);
-        let ad = d.abs();
-        let tq = self.q.abs()
-            + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
-        let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
-        let ta = self.a.abs() + ad * self.j.abs();
-        r[0].include_padded(q, PAD_REL * tq + PAD_ABS);
-        r[1].include_padded(v, PAD_REL * tv + PAD_ABS);
-        r[2].include_padded(a, PAD_REL * ta + PAD_ABS);
+        rv.include_padded(v, PAD_REL * tv + PAD_ABS);
+        ra.include_padded(a, PAD_REL * ta + PAD_ABS);
     }
 }
 

@@ -391,10 +391,63 @@ impl Trajectory {
     /// [`Trajectory::joint_derivs`] with a search hint for `ta` (see `locate_hint`).
     #[inline]
     pub(crate) fn joint_derivs_hint(&self, i: usize, hint: &mut usize, ta: f64, tb: f64) -> Derivs {
-        let ta = ta.max(0.0);
-        let tb = tb.max(ta);
         let mut r = [Range::EMPTY; 3];
         let mut jr = Range::EMPTY;
+        self.walk_pieces(i, hint, ta, tb, |k, part| {
+            match part {
+                None => {
+                    let f = &self.full[k];
+                    r[0].union(f[0]);
+                    r[1].union(f[1]);
+                    r[2].union(f[2]);
+                }
+                Some((d0, d1)) => self.pieces[k].extend_bounds(d0, d1, &mut r),
+            }
+            jr.union(Range::point(self.pieces[k].j));
+        });
+        Derivs {
+            r: [r[0], r[1], r[2], jr],
+        }
+    }
+
+    /// Upper bounds of |q̇|, |q̈|, |q⃛| of joint `i` over [ta, tb] (s, clamped to ≥ 0): the
+    /// derivative part of [`Trajectory::joint_derivs`] (the same pieces, instants and pads; each
+    /// bound at most its `r[k].abs_max()`), without the position's extrema. For the path-speed
+    /// limits ([`crate::scaling::admissible`]), which need no positions.
+    #[inline]
+    pub fn joint_deriv_abs(&self, i: usize, ta: f64, tb: f64) -> [f64; 3] {
+        let mut r = [Range::EMPTY; 2];
+        let mut jr = Range::EMPTY;
+        let mut hint = usize::MAX;
+        self.walk_pieces(i, &mut hint, ta, tb, |k, part| {
+            match part {
+                None => {
+                    let f = &self.full[k];
+                    r[0].union(f[1]);
+                    r[1].union(f[2]);
+                }
+                Some((d0, d1)) => self.pieces[k].extend_deriv_bounds(d0, d1, &mut r),
+            }
+            jr.union(Range::point(self.pieces[k].j));
+        });
+        [r[0].abs_max(), r[1].abs_max(), jr.abs_max()]
+    }
+
+    /// The pieces of joint `i` that [ta, tb] (s, clamped to ≥ 0) touches, in order: `visit(k,
+    /// None)` for piece `k` wholly inside (its precomputed ranges apply), `visit(k, Some((d0,
+    /// d1)))` for the local part `[d0, d1]` of one cut by an end. At `tb` equal to a piece's start
+    /// that piece is included too (state queries are right-continuous).
+    #[inline]
+    fn walk_pieces(
+        &self,
+        i: usize,
+        hint: &mut usize,
+        ta: f64,
+        tb: f64,
+        mut visit: impl FnMut(usize, Option<(f64, f64)>),
+    ) {
+        let ta = ta.max(0.0);
+        let tb = tb.max(ta);
         let end = self.offsets[i + 1];
         let mut k = self.locate_hint(i, hint, ta);
         loop {
@@ -405,63 +458,15 @@ impl Trajectory {
                 f64::INFINITY
             };
             if ta <= p.t && next_t <= tb {
-                let f = &self.full[k];
-                r[0].union(f[0]);
-                r[1].union(f[1]);
-                r[2].union(f[2]);
+                visit(k, None);
             } else {
-                let d0 = ta.max(p.t) - p.t;
-                let d1 = tb.min(next_t) - p.t;
-                p.extend_bounds(d0, d1, &mut r);
+                visit(k, Some((ta.max(p.t) - p.t, tb.min(next_t) - p.t)));
             }
-            jr.union(Range::point(p.j));
-            // At tb == next_t the next piece is included too (state queries are right-continuous).
             if next_t > tb || k + 1 >= end {
                 break;
             }
             k += 1;
         }
-        Derivs {
-            r: [r[0], r[1], r[2], jr],
-        }
-    }
-
-    /// Upper bounds of |q̇|, |q̈|, |q⃛| of joint `i` over [ta, tb] (s, clamped to ≥ 0): the
-    /// derivative part of [`Trajectory::joint_derivs`] (each bound at most its
-    /// `r[k].abs_max()`), without the position's extrema. For the path-speed limits
-    /// ([`crate::scaling::admissible`]), which need no positions.
-    #[inline]
-    pub fn joint_deriv_abs(&self, i: usize, ta: f64, tb: f64) -> [f64; 3] {
-        let ta = ta.max(0.0);
-        let tb = tb.max(ta);
-        let mut r = [Range::EMPTY; 2];
-        let mut jr: f64 = 0.0;
-        let end = self.offsets[i + 1];
-        let mut hint = usize::MAX;
-        let mut k = self.locate_hint(i, &mut hint, ta);
-        loop {
-            let p = &self.pieces[k];
-            let next_t = if k + 1 < end {
-                self.pieces[k + 1].t
-            } else {
-                f64::INFINITY
-            };
-            if ta <= p.t && next_t <= tb {
-                let f = &self.full[k];
-                r[0].union(f[1]);
-                r[1].union(f[2]);
-            } else {
-                let d0 = ta.max(p.t) - p.t;
-                let d1 = tb.min(next_t) - p.t;
-                p.extend_deriv_bounds(d0, d1, &mut r);
-            }
-            jr = jr.max(p.j.abs());
-            if next_t > tb || k + 1 >= end {
-                break;
-            }
-            k += 1;
-        }
-        [r[0].abs_max(), r[1].abs_max(), jr]
     }
 
     /// Sound ranges of q, q̇, q̈ for every joint over [ta, tb] (s).
