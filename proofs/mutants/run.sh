@@ -50,7 +50,7 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
     # The planner's checked stopping tail of Moving chunks (x21).
     cargo test -p pacs-motion --test trajectory --no-fail-fast >>"$log" 2>&1
-    # The path-speed limits' derivative windows (x44: no interior velocity extremum).
+    # The path-speed limits' derivative windows (x44: pieces cut by the window left out).
     cargo test -p pacs-motion --test properties derivative_bounds --no-fail-fast >>"$log" 2>&1
     # Chunks planned off the loop and taken over at their handover (x22).
     cargo test -p pacs-shield --test handover --no-fail-fast >>"$log" 2>&1

@@ -111,27 +111,25 @@ impl ObjectRule {
         debug_assert_eq!(robot_caps.len(), self.capsule_link.len());
         let bounding = occ.bounding_capsule();
         let bounding_box = bounding.as_ref().map(Aabb::of);
-        let want_separation = separation;
-        let mut separation = f64::INFINITY;
+        let mut figure = f64::INFINITY;
         let mut touched = None;
         for (c, rc) in robot_caps.iter().enumerate() {
             if let (Some(b), Some(bb)) = (&bounding, &bounding_box) {
-                if !want_separation && !Aabb::of(rc).overlaps(bb) {
+                if !separation && !Aabb::of(rc).overlaps(bb) {
                     continue;
                 }
                 // One capsule distance decides and bounds (positive: provably disjoint).
                 let d = capsule_separation_lower_bound(rc, b);
                 if d > 0.0 {
-                    separation = separation.min(d);
+                    figure = figure.min(d);
                     continue;
                 }
             }
             let d = occ.distance_lower_bound(rc);
             if d > 0.0 {
-                separation = separation.min(d);
+                figure = figure.min(d);
             } else {
                 touched = Some(self.capsule_link[c]);
-                separation = 0.0;
                 break;
             }
         }
@@ -140,11 +138,7 @@ impl ObjectRule {
                 contact: false,
                 violation: None,
                 // Without the figure, pairs skipped by boxes are missing from the minimum.
-                separation: if want_separation {
-                    separation
-                } else {
-                    f64::INFINITY
-                },
+                separation: if separation { figure } else { f64::INFINITY },
             };
         };
         let (bad, e) = contact_violates(contact, at_rest(dq, self.rest_speed), energy);
