@@ -7,6 +7,13 @@
 //! with slack, with an exact uniform time scaling (for starts at rest) making every iterate a
 //! feasible candidate. The caller checks the assembled trajectory exactly before using it.
 //!
+//! Moving starts (the next chunk planned from wherever the robot is) do not scale exactly, so the
+//! optimiser starts three times and keeps the shortest plan: from the rest-to-rest durations,
+//! at the start's own pace, and *shaped*: the later segments at a common multiple of the
+//! durations the same waypoints get from rest, the first segment's duration searched on its own
+//! (a start that is already moving reaches the next waypoint within the jerk limit only in a
+//! narrow window of durations, which the fixed-point update cannot find).
+//!
 //! Uniform time scaling by λ keeps the spline shape (for a start at rest): velocities scale by
 //! 1/λ, accelerations by 1/λ², jerks by 1/λ³, so the smallest admissible λ for given durations
 //! follows from the per-piece ratios in closed form.
@@ -26,6 +33,8 @@ enum Init {
     Cold,
     /// Moving start, from durations at the start's own pace (see `optimise`).
     Warm,
+    /// Moving start, from the from-rest durations' shape (see `optimise`).
+    Shaped,
 }
 
 /// Knot whose position is an unknown of the linear system (not a waypoint).
@@ -43,6 +52,22 @@ const STEP_EXPONENT: f64 = 0.6;
 /// Exponent and per-iteration clamp of the duration update for moving starts.
 const MOVING_STEP_EXPONENT: f64 = 0.3;
 const MOVING_STEP_CLAMP: f64 = 0.85;
+
+/// Shaped moving starts ([`SplineSolver::shaped_search`]): the later segments' from-rest durations
+/// are scaled by SHAPE_SCALE_MIN·SHAPE_SCALE_STEP^i, i < SHAPE_SCALES (0.6 … 1.9); the first
+/// segment's duration is scanned over [FIRST_MIN, FIRST_MAX] times its from-rest duration at
+/// FIRST_POINTS geometric points, and within ±20 % at REFINE_POINTS in the refinement.
+const SHAPE_SCALES: usize = 16;
+const SHAPE_SCALE_MIN: f64 = 0.6;
+const SHAPE_SCALE_STEP: f64 = 1.08;
+const FIRST_MIN: f64 = 0.02;
+const FIRST_MAX: f64 = 3.0;
+const FIRST_POINTS: usize = 40;
+const REFINE_ITERATIONS: usize = 8;
+const REFINE_POINTS: usize = 5;
+const GOLDEN_STEPS: usize = 6;
+const STALL_AFTER: usize = 2;
+const STALL_RATIO: f64 = 0.97;
 
 /// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)
 /// still get a piece.
@@ -84,6 +109,8 @@ pub(crate) struct SplineSolver {
     v_end: [f64; MAX_DOF],
     /// Duration of the first piece of a two-piece first segment (s; 0: half the segment).
     first_ramp: f64,
+    /// Segment durations of the same waypoints planned from rest (the shape of `Init::Shaped`).
+    shape: Vec<f64>,
 }
 
 impl SplineSolver {
@@ -435,10 +462,38 @@ impl SplineSolver {
         let ramp = (0..n)
             .map(|i| (start.ddq[i].abs() + lim.a[i]) / lim.j[i])
             .fold(0.0, f64::max);
-        // Two starts of the optimiser (rest-to-rest and warm durations); the shorter plan wins.
         let mut best: Option<Trajectory> = None;
-        for init in [Init::Cold, Init::Warm] {
-            for c in [1.0, 0.5, 2.0] {
+        // The shape of the third start: the same waypoints planned from rest here.
+        {
+            self.first_ramp = 0.0;
+            let rest = JointState::at_rest(&start.q[..n]);
+            if self
+                .optimise(lim, &rest, wp, end, iterations, Init::Rest)
+                .is_some()
+            {
+                let mut shape = std::mem::take(&mut self.shape);
+                shape.clear();
+                shape.extend_from_slice(&self.best_t);
+                self.shape = shape;
+            } else {
+                self.shape.clear();
+            }
+        }
+        // Three starts of the optimiser (rest-to-rest, warm and shaped durations); the shortest
+        // plan wins.
+        let inits: &[Init] = if self.shape.is_empty() {
+            &[Init::Cold, Init::Warm]
+        } else {
+            &[Init::Cold, Init::Warm, Init::Shaped]
+        };
+        for &init in inits {
+            // (The shaped start scans the first segment itself: one ramp is enough.)
+            let ramps: &[f64] = if init == Init::Shaped {
+                &[1.0]
+            } else {
+                &[1.0, 0.5, 2.0]
+            };
+            for &c in ramps {
                 self.first_ramp = c * ramp;
                 if let Some(t) = self.optimise(lim, start, wp, end, iterations, init) {
                     if best.as_ref().is_none_or(|b| t.duration() < b.duration()) {
@@ -461,7 +516,7 @@ impl SplineSolver {
         init: Init,
     ) -> Option<Trajectory> {
         let at_rest = init == Init::Rest;
-        let warm = init == Init::Warm;
+        let warm = init == Init::Warm || init == Init::Shaped;
         let n = lim.dof;
         let h = wp.segments();
         // Start: synchronized rest-to-rest durations (closed form).
@@ -483,7 +538,7 @@ impl SplineSolver {
         }
         best_t.clear();
         let mut best = f64::INFINITY;
-        if warm {
+        if init == Init::Warm {
             // Warm start (moving starts): durations proportional to the segment lengths
             // (limit-normalised joint-space norm), d_k = c·len_k, with the smallest feasible c
             // found by a geometric scan around the start's own pace and a bisection. For a
@@ -552,9 +607,26 @@ impl SplineSolver {
                 }
             }
         }
+        if init == Init::Shaped {
+            self.shaped_search(
+                lim,
+                start,
+                wp,
+                end,
+                iterations,
+                &mut seg_t,
+                &mut best,
+                &mut best_t,
+            );
+        }
         // Moving starts do not scale exactly: aim slightly inside the limits.
         let target = if at_rest { 1.0 } else { MOVING_TARGET };
-        for _ in 0..iterations.max(1) {
+        let generic = if init == Init::Shaped {
+            0
+        } else {
+            iterations.max(1)
+        };
+        for _ in 0..generic {
             if !self.solve(lim, n, start, wp, end, &seg_t) {
                 break;
             }
@@ -603,6 +675,184 @@ impl SplineSolver {
         self.seg_t = seg_t;
         self.best_t = best_t;
         result
+    }
+
+    /// Largest limit ratio of the spline with durations `seg_t` (∞ if singular).
+    fn lambda(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        seg_t: &[f64],
+    ) -> f64 {
+        let n = lim.dof;
+        let h = seg_t.len();
+        if !self.solve(lim, n, start, wp, end, seg_t) {
+            return f64::INFINITY;
+        }
+        self.ratios(n, lim, h);
+        (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max)
+    }
+
+    /// The first segment's duration in [lo, hi] (s) that minimises the largest limit ratio, the
+    /// other durations fixed: a geometric scan of `points` durations, then a golden-section
+    /// refinement around the best. Leaves it in `seg_t[0]` and returns the ratio.
+    #[allow(clippy::too_many_arguments)]
+    fn best_first(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        seg_t: &mut [f64],
+        lo: f64,
+        hi: f64,
+        points: usize,
+    ) -> f64 {
+        let (lo, hi) = (lo.max(MIN_SEGMENT), hi.max(MIN_SEGMENT));
+        let step = (hi / lo).powf(1.0 / (points.max(2) - 1) as f64);
+        let (mut best_i, mut best_l) = (0usize, f64::INFINITY);
+        let mut t = lo;
+        for i in 0..points {
+            seg_t[0] = t;
+            let l = self.lambda(lim, start, wp, end, seg_t);
+            if l < best_l {
+                (best_i, best_l) = (i, l);
+            }
+            t *= step;
+        }
+        let at = |i: f64| lo * step.powf(i);
+        // Golden section on log t over the neighbouring grid points.
+        let (mut a, mut b) = (best_i as f64 - 1.0, best_i as f64 + 1.0);
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        let mut best_t = at(best_i as f64);
+        for _ in 0..GOLDEN_STEPS {
+            let (x1, x2) = (b - g * (b - a), a + g * (b - a));
+            seg_t[0] = at(x1);
+            let l1 = self.lambda(lim, start, wp, end, seg_t);
+            seg_t[0] = at(x2);
+            let l2 = self.lambda(lim, start, wp, end, seg_t);
+            if l1 < best_l {
+                (best_l, best_t) = (l1, at(x1));
+            }
+            if l2 < best_l {
+                (best_l, best_t) = (l2, at(x2));
+            }
+            if l1 <= l2 {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        seg_t[0] = best_t;
+        best_l
+    }
+
+    /// Moving start from the from-rest shape (`self.shape`): the later segments at c times their
+    /// from-rest durations, the first segment's duration optimised for each c (a moving start
+    /// reaches the next waypoint within limits only in a narrow window of durations), then a
+    /// damped fixed-point refinement of the later segments with the first re-optimised.
+    #[allow(clippy::too_many_arguments)]
+    fn shaped_search(
+        &mut self,
+        lim: &Limits,
+        start: &JointState,
+        wp: &Waypoints,
+        end: EndCondition,
+        iterations: usize,
+        seg_t: &mut Vec<f64>,
+        best: &mut f64,
+        best_t: &mut Vec<f64>,
+    ) {
+        let shape = std::mem::take(&mut self.shape);
+        let h = shape.len();
+        let ok = |l: f64| l <= 1.0 + RATIO_TOL;
+        let record = |seg_t: &[f64], best: &mut f64, best_t: &mut Vec<f64>| {
+            let total: f64 = seg_t.iter().sum();
+            if total < *best {
+                *best = total;
+                best_t.clear();
+                best_t.extend_from_slice(seg_t);
+            }
+        };
+        // The later segments at c times their from-rest durations, the first one's duration
+        // from a scan of [lo, hi]·(its from-rest duration) (wide for the first scale, then
+        // around the last valley found).
+        let fill = |seg_t: &mut Vec<f64>, c: f64| {
+            seg_t.clear();
+            seg_t.push(shape[0]);
+            seg_t.extend(shape[1..].iter().map(|t| (c * t).max(MIN_SEGMENT)));
+        };
+        // Ascending scales: the first feasible one is the shortest plan of this shape. The
+        // first segment's feasible durations form a narrow valley that moves with the scale,
+        // so every scale scans the whole range.
+        let tail: f64 = shape[1..].iter().sum();
+        let mut prev = f64::INFINITY;
+        for i in 0..SHAPE_SCALES {
+            let c = SHAPE_SCALE_MIN * SHAPE_SCALE_STEP.powi(i as i32);
+            if c * tail >= *best {
+                // Every later scale is longer than a plan already found.
+                break;
+            }
+            fill(seg_t, c);
+            let l = self.best_first(
+                lim,
+                start,
+                wp,
+                end,
+                seg_t,
+                FIRST_MIN * shape[0],
+                FIRST_MAX * shape[0],
+                FIRST_POINTS,
+            );
+            if ok(l) {
+                record(seg_t, best, best_t);
+                break;
+            }
+            // Slower later segments no longer help: the shape does not fit.
+            if i >= STALL_AFTER && l > STALL_RATIO * prev {
+                break;
+            }
+            prev = l;
+        }
+        if best_t.is_empty() {
+            self.shape = shape;
+            return;
+        }
+        // Damped fixed-point refinement of the later segments from the best found, the first
+        // segment re-optimised around its last duration at every iterate.
+        if h > 1 {
+            seg_t.clear();
+            seg_t.extend_from_slice(best_t);
+            for _ in 0..iterations.min(REFINE_ITERATIONS) {
+                self.lambda(lim, start, wp, end, seg_t);
+                for k in 1..h {
+                    let r = self.seg_ratio(k) / MOVING_TARGET;
+                    if r > 0.0 {
+                        let f = r
+                            .powf(MOVING_STEP_EXPONENT)
+                            .clamp(MOVING_STEP_CLAMP, 1.0 / MOVING_STEP_CLAMP);
+                        seg_t[k] = (seg_t[k] * f).max(MIN_SEGMENT);
+                    }
+                }
+                let t0 = seg_t[0];
+                let l = self.best_first(
+                    lim,
+                    start,
+                    wp,
+                    end,
+                    seg_t,
+                    0.8 * t0,
+                    1.25 * t0,
+                    REFINE_POINTS,
+                );
+                if ok(l) {
+                    record(seg_t, best, best_t);
+                }
+            }
+        }
+        self.shape = shape;
     }
 
     /// The trajectory of the last solved spline.
