@@ -54,16 +54,20 @@ const MOVING_STEP_EXPONENT: f64 = 0.3;
 const MOVING_STEP_CLAMP: f64 = 0.85;
 
 /// Shaped moving starts ([`SplineSolver::shaped_search`]): the later segments' from-rest durations
-/// are scaled by SHAPE_SCALE_MIN·SHAPE_SCALE_STEP^i, i < SHAPE_SCALES (0.6 … 1.9); the first
-/// segment's duration is scanned over [FIRST_MIN, FIRST_MAX] times its from-rest duration at
-/// FIRST_POINTS geometric points, and within ±20 % at REFINE_POINTS in the refinement.
-const SHAPE_SCALES: usize = 16;
+/// are scaled by c = SHAPE_SCALE_STEP^±i, at most SHAPE_SCALES steps from 1 within
+/// [SHAPE_SCALE_MIN, SHAPE_SCALE_MAX] (upwards the walk stops when the largest ratio has fallen
+/// by less than 1 − STALL_RATIO after STALL_AFTER steps); the first segment's duration is
+/// scanned over [FIRST_MIN, FIRST_MAX] times its from-rest duration at FIRST_POINTS geometric
+/// points and refined by GOLDEN_STEPS golden-section steps, and within ±20 % at REFINE_POINTS
+/// in each of REFINE_ITERATIONS refinement iterations.
+const SHAPE_SCALES: usize = 8;
 const SHAPE_SCALE_MIN: f64 = 0.6;
+const SHAPE_SCALE_MAX: f64 = 1.9;
 const SHAPE_SCALE_STEP: f64 = 1.08;
 const FIRST_MIN: f64 = 0.02;
 const FIRST_MAX: f64 = 3.0;
 const FIRST_POINTS: usize = 40;
-const REFINE_ITERATIONS: usize = 8;
+const REFINE_ITERATIONS: usize = 4;
 const REFINE_POINTS: usize = 5;
 const GOLDEN_STEPS: usize = 6;
 const STALL_AFTER: usize = 2;
@@ -784,19 +788,14 @@ impl SplineSolver {
             seg_t.push(shape[0]);
             seg_t.extend(shape[1..].iter().map(|t| (c * t).max(MIN_SEGMENT)));
         };
-        // Ascending scales: the first feasible one is the shortest plan of this shape. The
-        // first segment's feasible durations form a narrow valley that moves with the scale,
-        // so every scale scans the whole range.
+        // The scale search starts at c = 1 (the later segments as from rest, where most plans
+        // land) and walks down while c stays feasible, else up until it is (or the ratio stops
+        // falling: the shape does not fit). The first segment's feasible durations form a
+        // narrow valley that moves with the scale, so every scale scans the whole range.
         let tail: f64 = shape[1..].iter().sum();
-        let mut prev = f64::INFINITY;
-        for i in 0..SHAPE_SCALES {
-            let c = SHAPE_SCALE_MIN * SHAPE_SCALE_STEP.powi(i as i32);
-            if c * tail >= *best {
-                // Every later scale is longer than a plan already found.
-                break;
-            }
+        let wide = |this: &mut Self, seg_t: &mut Vec<f64>, c: f64| -> f64 {
             fill(seg_t, c);
-            let l = self.best_first(
+            this.best_first(
                 lim,
                 start,
                 wp,
@@ -805,16 +804,36 @@ impl SplineSolver {
                 FIRST_MIN * shape[0],
                 FIRST_MAX * shape[0],
                 FIRST_POINTS,
-            );
-            if ok(l) {
+            )
+        };
+        let mut c = 1.0;
+        if ok(wide(self, seg_t, c)) {
+            record(seg_t, best, best_t);
+            for _ in 0..SHAPE_SCALES {
+                c /= SHAPE_SCALE_STEP;
+                if c < SHAPE_SCALE_MIN || !ok(wide(self, seg_t, c)) {
+                    break;
+                }
                 record(seg_t, best, best_t);
-                break;
             }
-            // Slower later segments no longer help: the shape does not fit.
-            if i >= STALL_AFTER && l > STALL_RATIO * prev {
-                break;
+        } else {
+            let mut prev = f64::INFINITY;
+            for i in 0..SHAPE_SCALES {
+                c *= SHAPE_SCALE_STEP;
+                if c > SHAPE_SCALE_MAX || c * tail >= *best {
+                    // Slower than a plan already found.
+                    break;
+                }
+                let l = wide(self, seg_t, c);
+                if ok(l) {
+                    record(seg_t, best, best_t);
+                    break;
+                }
+                if i >= STALL_AFTER && l > STALL_RATIO * prev {
+                    break;
+                }
+                prev = l;
             }
-            prev = l;
         }
         if best_t.is_empty() {
             self.shape = shape;
