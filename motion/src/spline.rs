@@ -24,6 +24,13 @@ use crate::profile::Piece;
 use crate::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_models::MAX_DOF;
 
+/// Duration factor of the damped update for moving starts: r^MOVING_STEP_EXPONENT, at most ±15 %
+/// a step (r: a segment's ratio over the target).
+fn damped_factor(r: f64) -> f64 {
+    r.powf(MOVING_STEP_EXPONENT)
+        .clamp(MOVING_STEP_CLAMP, 1.0 / MOVING_STEP_CLAMP)
+}
+
 /// Largest velocity (rad/s) from which a joint at zero acceleration stops within `d` ≥ 0 rad under
 /// the acceleration and jerk limits a, j (jerk-limited braking: d = v·√(v/j) below v = a²/j,
 /// else v·(v/a + a/j)/2).
@@ -625,11 +632,7 @@ impl SplineSolver {
                         let len = norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i]);
                         seg_t.push((c * len).max(MIN_SEGMENT));
                     }
-                    if !this.solve(lim, n, start, wp, end, seg_t) {
-                        return f64::INFINITY;
-                    }
-                    this.ratios(n, lim, h);
-                    (0..h).map(|k| this.seg_ratio(k)).fold(0.0, f64::max)
+                    this.lambda(lim, start, wp, end, seg_t)
                 };
                 let ok = |lam: f64| lam <= 1.0 + RATIO_TOL;
                 let mut lo_infeasible = None;
@@ -717,8 +720,7 @@ impl SplineSolver {
                         // Warm (moving) starts: the ratios couple through the fixed start
                         // state, so the update is damped (a smaller exponent, at most ±15 % a
                         // step).
-                        r.powf(MOVING_STEP_EXPONENT)
-                            .clamp(MOVING_STEP_CLAMP, 1.0 / MOVING_STEP_CLAMP)
+                        damped_factor(r)
                     };
                     seg_t[k] = (seg_t[k] * f).max(MIN_SEGMENT);
                 }
@@ -726,12 +728,9 @@ impl SplineSolver {
         }
         let result = if best_t.is_empty() {
             None
-        } else if self.solve(lim, n, start, wp, end, &best_t) {
-            self.ratios(n, lim, h);
-            let lam = (0..h).map(|k| self.seg_ratio(k)).fold(0.0, f64::max);
-            (lam <= 1.0 + RATIO_TOL).then(|| self.assemble(n, start, wp, end))
         } else {
-            None
+            (self.lambda(lim, start, wp, end, &best_t) <= 1.0 + RATIO_TOL)
+                .then(|| self.assemble(n, start, wp, end))
         };
         self.seg_t = seg_t;
         self.best_t = best_t;
@@ -837,9 +836,8 @@ impl SplineSolver {
                 best_t.extend_from_slice(seg_t);
             }
         };
-        // The later segments at c times their from-rest durations, the first one's duration
-        // from a scan of [lo, hi]·(its from-rest duration) (wide for the first scale, then
-        // around the last valley found).
+        // The later segments at c times their from-rest durations (the first one's is then
+        // searched by `best_first`).
         let fill = |seg_t: &mut Vec<f64>, c: f64| {
             seg_t.clear();
             seg_t.push(shape[0]);
@@ -906,10 +904,7 @@ impl SplineSolver {
                 for k in 1..h {
                     let r = self.seg_ratio(k) / MOVING_TARGET;
                     if r > 0.0 {
-                        let f = r
-                            .powf(MOVING_STEP_EXPONENT)
-                            .clamp(MOVING_STEP_CLAMP, 1.0 / MOVING_STEP_CLAMP);
-                        seg_t[k] = (seg_t[k] * f).max(MIN_SEGMENT);
+                        seg_t[k] = (seg_t[k] * damped_factor(r)).max(MIN_SEGMENT);
                     }
                 }
                 let t0 = seg_t[0];

@@ -57,3 +57,14 @@ pub fn assert_limits_at_samples(traj: &Trajectory, lim: &Limits, n: usize) {
         }
     }
 }
+
+/// A replanned trajectory starts exactly (1e-12) at the state `s` it was planned from: q, q̇, q̈
+/// of all seven joints.
+pub fn assert_starts_at(traj: &Trajectory, s: &JointState) {
+    let s2 = traj.state_at(0.0);
+    for i in 0..7 {
+        assert!((s2.q[i] - s.q[i]).abs() <= 1e-12, "q[{i}]");
+        assert!((s2.dq[i] - s.dq[i]).abs() <= 1e-12, "dq[{i}]");
+        assert!((s2.ddq[i] - s.ddq[i]).abs() <= 1e-12, "ddq[{i}]");
+    }
+}
