@@ -6,6 +6,7 @@
 use inari::Interval;
 use nalgebra::{DMatrix, DVector, Point3};
 use pacs_models::shape::Capsule;
+use pacs_reach::object::OccupancyZonotope;
 use pacs_reach::zonotope::{
     BallApprox, Containment, Zonotope, Zonotope3, ball_zonotope, inradius_lower_3d,
 };
@@ -445,6 +446,28 @@ proptest! {
         prop_assert!(lb >= best - 1e-3, "gjk {lb} < random best {best}");
     }
 
+    /// The capacity changes no result: the object occupancy's small zonotope
+    /// (`OccupancyZonotope`, 10 generators) gives the same support, hull and capsule bounds,
+    /// bit for bit, as the default capacity with the same generators.
+    #[test]
+    fn zonotope3_capacity_changes_no_result(
+        (zb, inflate, cap, d) in (z3_strategy(0, 10, true), 0.0..0.2f64, capsule_strategy(), vec(-1.0..1.0f64, 3))
+    ) {
+        let (z, _) = zb;
+        let small = OccupancyZonotope::from_parts(z.center(), z.generators(), z.error_box()).unwrap();
+        let d = [d[0], d[1], d[2]];
+        prop_assert_eq!(small.support_up(d).to_bits(), z.support_up(d).to_bits());
+        prop_assert_eq!(small.interval_hull(), z.interval_hull());
+        prop_assert_eq!(
+            small.distance_lower_bound(inflate, &cap).to_bits(),
+            z.distance_lower_bound(inflate, &cap).to_bits()
+        );
+        prop_assert_eq!(
+            small.distance_bound_along(inflate, &cap, d).to_bits(),
+            z.distance_bound_along(inflate, &cap, d).to_bits()
+        );
+    }
+
     /// Any direction gives a valid (possibly weak) bound.
     #[test]
     fn capsule_bound_along_any_direction_is_valid(
@@ -455,6 +478,14 @@ proptest! {
         let lb = z.distance_bound_along(inflate, &cap, [n[0], n[1], n[2]]);
         prop_assert!(lb >= 0.0 && lb <= dp + 1e-7, "bound {lb} > parry {dp}");
     }
+}
+
+#[test]
+fn zonotope3_refuses_more_generators_than_its_capacity() {
+    let gens = [[0.1, 0.0, 0.0]; 11];
+    assert!(OccupancyZonotope::from_parts([0.0; 3], &gens[..10], [0.0; 3]).is_ok());
+    assert!(OccupancyZonotope::from_parts([0.0; 3], &gens, [0.0; 3]).is_err());
+    assert!(Zonotope3::new([0.0; 3], &gens, [0.0; 3]).is_ok());
 }
 
 #[test]

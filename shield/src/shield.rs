@@ -309,6 +309,10 @@ pub struct Shield {
     // Scratch buffers (allocated once).
     /// Per object, its occupancy over the interval being checked.
     object_occ: Vec<Option<ObjectOccupancy>>,
+    /// Per object, its occupancy over the whole monitored trajectory of the current
+    /// verification (it contains the occupancy over every interval of it: the intervals test it
+    /// first and compute their own only where it touches the robot).
+    object_window: Vec<Option<ObjectOccupancy>>,
     robot_caps: Vec<Capsule>,
     energies: Vec<f64>,
     scratch: ReachScratch,
@@ -489,6 +493,7 @@ impl Shield {
             objects: Vec::new(),
             object_rule,
             object_occ: Vec::new(),
+            object_window: Vec::new(),
         })
     }
 
@@ -510,6 +515,7 @@ impl Shield {
             meas: None,
         });
         self.object_occ.push(None);
+        self.object_window.push(None);
         Ok(self.objects.len() - 1)
     }
 

@@ -117,7 +117,7 @@ impl SimObject {
     pub fn separation(&self, t: f64, capsule: &Capsule) -> f64 {
         let (p, _) = self.script.state(t);
         let gens = self.model.shape_generators();
-        match pacs_reach::zonotope::Zonotope3::new(p, gens, [0.0; 3]) {
+        match pacs_reach::object::OccupancyZonotope::from_parts(p, gens, [0.0; 3]) {
             Ok(z) => z.distance_lower_bound(self.model.shape_radius(), capsule),
             Err(_) => f64::NEG_INFINITY,
         }

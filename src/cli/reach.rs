@@ -214,7 +214,7 @@ struct ObjectInput {
 /// Built-in example input of `pacs reach object`.
 const OBJECT_EXAMPLE: &str = include_str!("../../examples/object.json");
 
-fn zonotope_json(z: &pacs_reach::zonotope::Zonotope3, radius: f64) -> Value {
+fn zonotope_json<const N: usize>(z: &pacs_reach::zonotope::Zonotope3<N>, radius: f64) -> Value {
     json!({
         "centre": z.center(),
         "generators": z.generators(),

@@ -11,11 +11,14 @@ use pacs_models::shape::Capsule;
 /// Capacity of [`Zonotope3`] generator storage.
 pub const MAX_GENERATORS_3D: usize = 48;
 
-/// A 3-D zonotope with inline storage (no heap): `{c + Σ β_k g_k + diag(e) γ}` (m).
+/// A 3-D zonotope with inline storage (no heap): `{c + Σ β_k g_k + diag(e) γ}` (m), at most
+/// `N` generators. The default capacity is [`MAX_GENERATORS_3D`]; the object occupancy uses the
+/// capacity its model needs (`MAX_OCCUPANCY_GENERATORS`), which keeps it small to build and copy
+/// in the shield's step (the capacity changes no result: only the first `len` generators count).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Zonotope3 {
+pub struct Zonotope3<const N: usize = MAX_GENERATORS_3D> {
     c: [f64; 3],
-    g: [[f64; 3]; MAX_GENERATORS_3D],
+    g: [[f64; 3]; N],
     len: usize,
     e: [f64; 3],
     /// Plain `Σ_k |g_k| + e` per axis (for the rounding-error bound of the support function).
@@ -25,38 +28,7 @@ pub struct Zonotope3 {
 impl Zonotope3 {
     /// Build from centre, generators (at most [`MAX_GENERATORS_3D`]) and error box radius `e ≥ 0`.
     pub fn new(c: [f64; 3], gens: &[[f64; 3]], e: [f64; 3]) -> Result<Self, ZonotopeError> {
-        if gens.len() > MAX_GENERATORS_3D {
-            return Err(ZonotopeError::DimensionMismatch {
-                what: "Zonotope3 generators",
-                expected: MAX_GENERATORS_3D,
-                got: gens.len(),
-            });
-        }
-        check_finite(
-            "Zonotope3",
-            c.iter().chain(gens.iter().flatten()).chain(e.iter()),
-        )?;
-        if e.iter().any(|&v| v < 0.0) {
-            return Err(ZonotopeError::Invalid {
-                what: "error box",
-                reason: "radii must be >= 0",
-            });
-        }
-        let mut g = [[0.0; 3]; MAX_GENERATORS_3D];
-        g[..gens.len()].copy_from_slice(gens);
-        let mut abs_sum = e;
-        for gk in gens {
-            for i in 0..3 {
-                abs_sum[i] += gk[i].abs();
-            }
-        }
-        Ok(Self {
-            c,
-            g,
-            len: gens.len(),
-            e,
-            abs_sum,
-        })
+        Self::from_parts(c, gens, e)
     }
 
     /// Convert a 3-D [`Zonotope`], Girard-reducing first if it has too many generators (⊇ input).
@@ -78,6 +50,45 @@ impl Zonotope3 {
             .map(|j| [z.g[(0, j)], z.g[(1, j)], z.g[(2, j)]])
             .collect();
         Self::new([z.c[0], z.c[1], z.c[2]], &gens, [z.e[0], z.e[1], z.e[2]])
+    }
+}
+
+impl<const N: usize> Zonotope3<N> {
+    /// Build a zonotope of capacity `N` from centre, generators (at most `N`) and error box
+    /// radius `e ≥ 0` ([`Zonotope3::new`] for the default capacity).
+    pub fn from_parts(c: [f64; 3], gens: &[[f64; 3]], e: [f64; 3]) -> Result<Self, ZonotopeError> {
+        if gens.len() > N {
+            return Err(ZonotopeError::DimensionMismatch {
+                what: "Zonotope3 generators",
+                expected: N,
+                got: gens.len(),
+            });
+        }
+        check_finite(
+            "Zonotope3",
+            c.iter().chain(gens.iter().flatten()).chain(e.iter()),
+        )?;
+        if e.iter().any(|&v| v < 0.0) {
+            return Err(ZonotopeError::Invalid {
+                what: "error box",
+                reason: "radii must be >= 0",
+            });
+        }
+        let mut g = [[0.0; 3]; N];
+        g[..gens.len()].copy_from_slice(gens);
+        let mut abs_sum = e;
+        for gk in gens {
+            for i in 0..3 {
+                abs_sum[i] += gk[i].abs();
+            }
+        }
+        Ok(Self {
+            c,
+            g,
+            len: gens.len(),
+            e,
+            abs_sum,
+        })
     }
 
     /// The general-dimension form (same set).

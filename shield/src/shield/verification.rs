@@ -2,11 +2,12 @@
 //! ranges, robot, human and object occupancies, and the ISO/TS 15066 rule.
 
 use super::intervals::{Piece, verify_fine};
-use super::{Binding, Diagnostics, FilterMode, OccupancyIntervals, Shield};
+use super::{Binding, Diagnostics, FilterMode, ObjectSlot, OccupancyIntervals, Shield};
 use pacs_models::MAX_DOF;
 use pacs_motion::Trajectory;
 use pacs_motion::scaling::SpeedProfile;
 use pacs_reach::JointBox;
+use pacs_reach::object::ObjectOccupancy;
 use pacs_verify::iso15066::ConstraintKind;
 use std::ops::ControlFlow;
 
@@ -37,6 +38,17 @@ impl Shield {
         {
             diag.binding = Binding::NoMeasurement;
             return false;
+        }
+        // Each object's occupancy over the whole monitored trajectory `[t, t + stop]`, once per
+        // verification: every interval below lies in it, so it contains theirs (claim C4′ holds
+        // at every time of its window) and they compute their own only where it touches the
+        // robot (`check_interval`).
+        for (o, w) in self.objects.iter().zip(self.object_window.iter_mut()) {
+            *w = object_occupancy(o, t, t + stop);
+            if w.is_none() {
+                diag.binding = Binding::NoMeasurement;
+                return false;
+            }
         }
         // Coarse check first: the whole monitored trajectory as one interval (its occupancy
         // contains that of every sub-interval, so passing it verifies the step). Usually decides
@@ -130,6 +142,7 @@ impl Shield {
             objects,
             object_rule,
             object_occ,
+            object_window,
             config,
             ..
         } = self;
@@ -166,17 +179,26 @@ impl Shield {
         }
         // Each object's occupancy, kept only where the workspace ball does not clear it. (That
         // test only saves the robot occupancy: when a human needs it anyway, every object goes
-        // to the object rule, whose box test is as cheap.)
+        // to the object rule, whose box test is as cheap.) It is the occupancy over the whole
+        // monitored trajectory where that contains this interval (always, in `verify`): a
+        // superset, so clearing it clears the interval; the interval's own, tighter occupancy is
+        // computed below only if the superset touches the robot.
+        let (wa, wb) = (t + ta, t + tb);
         let mut objects_left = false;
-        for (o, slot) in objects.iter().zip(object_occ.iter_mut()) {
+        for (o, (slot, window)) in objects
+            .iter()
+            .zip(object_occ.iter_mut().zip(object_window.iter()))
+        {
             *slot = None;
-            let Some(m) = &o.meas else {
-                diag.binding = Binding::NoMeasurement;
-                return false;
-            };
-            let Ok(occ) = pacs_reach::object::occupancy(&o.model, m, t + ta, t + tb) else {
-                diag.binding = Binding::NoMeasurement;
-                return false;
+            let occ = match window {
+                Some(w) if covers(w, wa, wb) => w.clone(),
+                _ => match object_occupancy(o, wa, wb) {
+                    Some(occ) => occ,
+                    None => {
+                        diag.binding = Binding::NoMeasurement;
+                        return false;
+                    }
+                },
             };
             if human_left || object_rule.workspace_clear(&occ).is_none() {
                 *slot = Some(occ);
@@ -208,9 +230,19 @@ impl Shield {
                 }
             })
         };
-        for (id, (o, slot)) in objects.iter().zip(object_occ.iter()).enumerate() {
+        for (id, (o, slot)) in objects.iter().zip(object_occ.iter_mut()).enumerate() {
             let Some(occ) = slot else { continue };
-            let out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
+            let mut out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
+            if out.violation.is_some() && occ.interval() != (wa, wb) {
+                // The whole trajectory's occupancy touches the robot: decide with this
+                // interval's own.
+                let Some(own) = object_occupancy(o, wa, wb) else {
+                    diag.binding = Binding::NoMeasurement;
+                    return false;
+                };
+                *occ = own;
+                out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
+            }
             if let Some(v) = out.violation {
                 if matches!(diag.binding, Binding::None) {
                     diag.binding = Binding::Object {
@@ -268,6 +300,20 @@ impl Shield {
         }
         true
     }
+}
+
+/// The occupancy of object `o` over `[t_a, t_b]` (s) after its latest measurement; `None`
+/// without a measurement or where `pacs_reach::object::occupancy` refuses the query.
+fn object_occupancy(o: &ObjectSlot, t_a: f64, t_b: f64) -> Option<ObjectOccupancy> {
+    pacs_reach::object::occupancy(&o.model, o.meas.as_ref()?, t_a, t_b).ok()
+}
+
+/// Whether `occ`'s time interval contains `[t_a, t_b]` (s): then every point of the object at
+/// every time of `[t_a, t_b]` lies in `occ` (claim C4′ of `pacs_reach::object::occupancy`),
+/// which may stand for the occupancy over `[t_a, t_b]` wherever a superset is sound.
+fn covers(occ: &ObjectOccupancy, t_a: f64, t_b: f64) -> bool {
+    let (a, b) = occ.interval();
+    a <= t_a && t_b <= b
 }
 
 /// Path and speed ranges `(s_lo, s_hi, ṡ_lo, ṡ_hi)` of the monitored trajectory (go for α, then

@@ -5,7 +5,7 @@
 use super::Zonotope3;
 use pacs_models::shape::Capsule;
 
-impl Zonotope3 {
+impl<const N: usize> Zonotope3<N> {
     /// A point of `Z` (approximately) maximising `d·z`, ignoring the error box (for GJK).
     #[inline]
     fn support_point(&self, d: [f64; 3]) -> [f64; 3] {
