@@ -307,12 +307,14 @@ pub struct Shield {
     objects: Vec<ObjectSlot>,
     object_rule: ObjectRule,
     // Scratch buffers (allocated once).
-    /// Per object, its occupancy over the interval being checked.
+    /// Per object, its own occupancy over the interval being checked, where computed.
     object_occ: Vec<Option<ObjectOccupancy>>,
     /// Per object, its occupancy over the whole monitored trajectory of the current
     /// verification (it contains the occupancy over every interval of it: the intervals test it
     /// first and compute their own only where it touches the robot).
     object_window: Vec<Option<ObjectOccupancy>>,
+    /// Per object, which occupancy the interval being checked uses.
+    object_pick: Vec<verification::ObjectPick>,
     robot_caps: Vec<Capsule>,
     energies: Vec<f64>,
     scratch: ReachScratch,
@@ -494,6 +496,7 @@ impl Shield {
             object_rule,
             object_occ: Vec::new(),
             object_window: Vec::new(),
+            object_pick: Vec::new(),
         })
     }
 
@@ -516,6 +519,7 @@ impl Shield {
         });
         self.object_occ.push(None);
         self.object_window.push(None);
+        self.object_pick.push(verification::ObjectPick::Cleared);
         Ok(self.objects.len() - 1)
     }
 

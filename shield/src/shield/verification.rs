@@ -142,6 +142,7 @@ impl Shield {
             objects,
             object_rule,
             object_occ,
+            object_pick,
             object_window,
             config,
             ..
@@ -185,24 +186,27 @@ impl Shield {
         // computed below only if the superset touches the robot.
         let (wa, wb) = (t + ta, t + tb);
         let mut objects_left = false;
-        for (o, (slot, window)) in objects
-            .iter()
-            .zip(object_occ.iter_mut().zip(object_window.iter()))
-        {
-            *slot = None;
-            let occ = match window {
-                Some(w) if covers(w, wa, wb) => w.clone(),
-                _ => match object_occupancy(o, wa, wb) {
-                    Some(occ) => occ,
-                    None => {
-                        diag.binding = Binding::NoMeasurement;
-                        return false;
-                    }
-                },
+        for (o, ((own, pick), window)) in objects.iter().zip(
+            object_occ
+                .iter_mut()
+                .zip(object_pick.iter_mut())
+                .zip(object_window.iter()),
+        ) {
+            *pick = match window {
+                Some(w) if covers(w, wa, wb) => ObjectPick::Window,
+                _ => {
+                    *own = object_occupancy(o, wa, wb);
+                    ObjectPick::Own
+                }
             };
-            if human_left || object_rule.workspace_clear(&occ).is_none() {
-                *slot = Some(occ);
+            let Some(occ) = pick.occupancy(own, window) else {
+                diag.binding = Binding::NoMeasurement;
+                return false;
+            };
+            if human_left || object_rule.workspace_clear(occ).is_none() {
                 objects_left = true;
+            } else {
+                *pick = ObjectPick::Cleared;
             }
         }
         if !human_left && !objects_left {
@@ -230,17 +234,29 @@ impl Shield {
                 }
             })
         };
-        for (id, (o, slot)) in objects.iter().zip(object_occ.iter_mut()).enumerate() {
-            let Some(occ) = slot else { continue };
+        for (id, (o, ((own, pick), window))) in objects
+            .iter()
+            .zip(
+                object_occ
+                    .iter_mut()
+                    .zip(object_pick.iter())
+                    .zip(object_window.iter()),
+            )
+            .enumerate()
+        {
+            let Some(occ) = pick.occupancy(own, window) else {
+                continue; // cleared (a missing occupancy was refused above)
+            };
             let mut out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
-            if out.violation.is_some() && occ.interval() != (wa, wb) {
+            if out.violation.is_some() && *pick == ObjectPick::Window && occ.interval() != (wa, wb)
+            {
                 // The whole trajectory's occupancy touches the robot: decide with this
                 // interval's own.
-                let Some(own) = object_occupancy(o, wa, wb) else {
+                *own = object_occupancy(o, wa, wb);
+                let Some(occ) = own.as_ref() else {
                     diag.binding = Binding::NoMeasurement;
                     return false;
                 };
-                *occ = own;
                 out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
             }
             if let Some(v) = out.violation {
@@ -306,6 +322,34 @@ impl Shield {
 /// without a measurement or where `pacs_reach::object::occupancy` refuses the query.
 fn object_occupancy(o: &ObjectSlot, t_a: f64, t_b: f64) -> Option<ObjectOccupancy> {
     pacs_reach::object::occupancy(&o.model, o.meas.as_ref()?, t_a, t_b).ok()
+}
+
+/// Which occupancy of an object an occupancy interval checks (see `Shield::check_interval`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum ObjectPick {
+    /// The workspace test cleared the object for this interval.
+    Cleared,
+    /// Its occupancy over the whole monitored trajectory (`Shield::object_window`), which
+    /// contains the interval's.
+    Window,
+    /// The interval's own occupancy (`Shield::object_occ`).
+    Own,
+}
+
+impl ObjectPick {
+    /// The picked occupancy; `None` if cleared or if the picked one was not computed (the
+    /// query refused: no measurement, or an interval before it).
+    fn occupancy<'a>(
+        self,
+        own: &'a Option<ObjectOccupancy>,
+        window: &'a Option<ObjectOccupancy>,
+    ) -> Option<&'a ObjectOccupancy> {
+        match self {
+            ObjectPick::Cleared => None,
+            ObjectPick::Window => window.as_ref(),
+            ObjectPick::Own => own.as_ref(),
+        }
+    }
 }
 
 /// Whether `occ`'s time interval contains `[t_a, t_b]` (s): then every point of the object at
