@@ -46,6 +46,8 @@ pub struct StepStats {
     pub chunk_median: f64,
     /// 99th percentile of `set_chunk`, s.
     pub chunk_p99: f64,
+    /// 99.9th percentile of `set_chunk`, s.
+    pub chunk_p999: f64,
     /// Maximum time of `set_chunk`, s.
     pub chunk_max: f64,
     /// `set_chunk` calls slower than 100 µs.
@@ -140,6 +142,7 @@ fn stats(
         verified_fraction: verified as f64 / v.len().max(1) as f64,
         chunk_median: q(&chunks, 0.5),
         chunk_p99: q(&chunks, 0.99),
+        chunk_p999: q(&chunks, 0.999),
         chunk_max: chunks.last().copied().unwrap_or(0.0),
         chunk_over_100us,
         plan_median: 0.0,

@@ -14,6 +14,7 @@ fn us(s: &StepStats) -> Value {
         "work_steps_over_50_us": s.work_over_50us,
         "verified_fraction": s.verified_fraction,
         "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_p99_us": s.chunk_p99 * 1e6,
+        "set_chunk_p99_9_us": s.chunk_p999 * 1e6,
         "set_chunk_max_us": s.chunk_max * 1e6, "set_chunk_over_100_us": s.chunk_over_100us,
         "planning_off_loop_median_us": s.plan_median * 1e6, "planning_off_loop_p99_us": s.plan_p99 * 1e6,
         "planning_off_loop_max_us": s.plan_max * 1e6, "offers": s.offers, "offers_taken": s.offers_taken,
