@@ -250,3 +250,56 @@ fn a_second_person_at_the_tool_stops_the_arm() {
     sh.measure_human(0, &m).unwrap();
     assert_eq!(sh.human_count(), 1);
 }
+
+/// 1.5 s of `chunk()` every 0.4 s with a ball starting at `c` and rolling at constant velocity
+/// `v` (m/s), measured every step (true state at t − delay, stamped t, with its velocity):
+/// joint 1's final turn (rad), the verified steps, and the least separation from the true ball
+/// at a commanded moving state (m).
+fn follow(c: [f64; 3], v: [f64; 3]) -> (f64, usize, f64) {
+    let cfg = ShieldConfig::default();
+    let mut sh = Shield::new(fr3::fr3(), None, vec![], cfg).unwrap();
+    let id = sh.add_object(ball(), ObjectContact::NoContact).unwrap();
+    sh.start(0.0, &Q0).unwrap();
+    let (mut verified, mut moved, mut min_sep) = (0, 0.0, f64::INFINITY);
+    for k in 0..1500 {
+        let t = k as f64 * cfg.safety_step;
+        if k % 400 == 0 {
+            let _ = sh.set_chunk(&chunk());
+        }
+        // The true ball at t − delay (the measurement's age), stamped t.
+        let tb = (t - 0.02).max(0.0);
+        let p = [c[0] + v[0] * tb, c[1] + v[1] * tb, c[2] + v[2] * tb];
+        let m = ObjectMeasurement {
+            time: t,
+            position: p,
+            velocity: Some(v),
+        };
+        sh.measure_object(id, &m).unwrap();
+        let cmd = sh.step(t, None).unwrap();
+        verified += cmd.diag.verified as usize;
+        moved = cmd.state.q[0] - Q0[0];
+        let tc = cmd.t;
+        let pt = [c[0] + v[0] * tc, c[1] + v[1] * tc, c[2] + v[2] * tc];
+        if cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-12) {
+            min_sep = min_sep.min(separation(&cmd.state.q[..7], pt));
+        }
+    }
+    (moved, verified, min_sep)
+}
+
+#[test]
+fn the_arm_follows_a_ball_rolling_away_along_its_path() {
+    // The ball starts 0.5 rad ahead along the flange's path (touching the resting arm) and rolls
+    // away along the path's tangent at 0.25 m/s. The arm follows it, never touching it while
+    // moving. Each step checks the ball's occupancy over the whole monitored trajectory first;
+    // where that touches the robot the interval's own (later, farther) occupancy decides. If
+    // the whole one decided (the recompute left out), the arm lags: 910 verified steps and
+    // 0.45 rad instead of 1169 and 0.53 rad (session 19).
+    let c = flange_after(0.5);
+    let n = (c[0] * c[0] + c[1] * c[1]).sqrt();
+    let v = [-c[1] / n * 0.25, c[0] / n * 0.25, 0.0];
+    let (moved, verified, min_sep) = follow(c, v);
+    assert!(min_sep > 0.0, "touched the ball while moving: {min_sep} m");
+    assert!(verified >= 1050, "verified {verified} of 1500 steps");
+    assert!(moved > 0.49, "moved {moved} rad");
+}
