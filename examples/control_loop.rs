@@ -187,8 +187,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    step_us.sort_by(f64::total_cmp);
-    let pct = |p: f64| step_us[((step_us.len() - 1) as f64 * p) as usize];
+    // The p-quantile of sorted times (0 if none).
+    let pct = |v: &[f64], p: f64| {
+        v.get(((v.len().max(1) - 1) as f64 * p) as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    for v in [&mut step_us, &mut loop_share_us, &mut plan_us] {
+        v.sort_by(f64::total_cmp);
+    }
     println!("{steps} steps of {} ms", dt * 1e3);
     println!(
         "verified: {verified} ({:.1} %)",
@@ -203,23 +210,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     println!(
         "step time (µs): median {:.1}, p99 {:.1}, max {:.1}",
-        pct(0.5),
-        pct(0.99),
-        pct(1.0)
+        pct(&step_us, 0.5),
+        pct(&step_us, 0.99),
+        pct(&step_us, 1.0)
     );
-    let pct_of = |v: &mut Vec<f64>, p: f64| {
-        v.sort_by(f64::total_cmp);
-        v.get(((v.len().max(1) - 1) as f64 * p) as usize)
-            .copied()
-            .unwrap_or(0.0)
-    };
     println!(
         "chunks: {offered} offered, {replanned} planned again; the loop's share per chunk \
          (handover + offer, µs): median {:.1}, max {:.1}; planning on its thread (µs): median {:.0}, max {:.0}",
-        pct_of(&mut loop_share_us, 0.5),
-        pct_of(&mut loop_share_us, 1.0),
-        pct_of(&mut plan_us, 0.5),
-        pct_of(&mut plan_us, 1.0)
+        pct(&loop_share_us, 0.5),
+        pct(&loop_share_us, 1.0),
+        pct(&plan_us, 0.5),
+        pct(&plan_us, 1.0)
     );
     println!("final q (rad): {last_q:.3?}");
     drop(to_planner);

@@ -17,6 +17,17 @@ fn num(run: &Value, key: &str) -> f64 {
     x
 }
 
+/// The four figures `keys` of `run` (median, p99, p99.9, max: µs) are finite and in order;
+/// returns the last.
+fn ordered(run: &Value, keys: [&str; 4]) -> f64 {
+    let v = keys.map(|k| num(run, k));
+    assert!(
+        v.windows(2).all(|w| w[0] <= w[1]),
+        "{keys:?} = {v:?} in {run}"
+    );
+    v[3]
+}
+
 #[test]
 fn bench_shield_reports_tails_of_steps_and_set_chunk() {
     let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
@@ -34,21 +45,17 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
     for run in runs {
         let steps = num(run, "steps");
         assert!(steps > 0.0);
-        let (m, p99, p999, max) = (
-            num(run, "median_us"),
-            num(run, "p99_us"),
-            num(run, "p99_9_us"),
-            num(run, "max_us"),
-        );
-        assert!(m <= p99 && p99 <= p999 && p999 <= max, "{run}");
+        ordered(run, ["median_us", "p99_us", "p99_9_us", "max_us"]);
         assert!(num(run, "steps_over_50_us") <= steps);
-        let (cm, c99, c999, cmax) = (
-            num(run, "set_chunk_median_us"),
-            num(run, "set_chunk_p99_us"),
-            num(run, "set_chunk_p99_9_us"),
-            num(run, "set_chunk_max_us"),
+        let cmax = ordered(
+            run,
+            [
+                "set_chunk_median_us",
+                "set_chunk_p99_us",
+                "set_chunk_p99_9_us",
+                "set_chunk_max_us",
+            ],
         );
-        assert!(cm <= c99 && c99 <= c999 && c999 <= cmax, "{run}");
         assert!(cmax > 0.0, "{}: no chunk was timed", run["scenario"]);
         num(run, "set_chunk_over_100_us");
         num(run, "work_p99_9_us");
