@@ -8,6 +8,7 @@
 //! - [`filter`]: PACS, OFF, single-action and CBF as kinds of one [`filter::SafetyFilter`];
 //! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
+//! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop;
 //! - [`bench`]: reproducible timing scenarios for `pacs bench`.
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, s, m, J.
@@ -21,5 +22,6 @@ pub mod filter;
 pub mod settings;
 pub mod shield;
 pub mod shield_log;
+pub mod worker;
 
 pub use filter::{ChunkMotion, FilterKind, SafetyFilter};

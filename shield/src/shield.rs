@@ -297,6 +297,8 @@ pub struct Shield {
     /// the next `offer`/`set_chunk`).
     spare: Option<Trajectory>,
     failsafe: Option<VerifiedFailsafe>,
+    /// Whether the latest step verified its candidate ([`Shield::last_verified`]).
+    last_verified: bool,
     /// Verifications left that skip the whole-trajectory check (it failed recently), and how
     /// many it skips after its next failure: `verification::COARSE_SKIP` after a pass, doubling
     /// (plus one) with each failure in a row up to `verification::COARSE_SKIP_MAX`. Only the cost
@@ -489,6 +491,7 @@ impl Shield {
             pending: None,
             offer_state: OfferState::None,
             spare: None,
+            last_verified: true,
             failsafe: None,
             coarse_skip: 0,
             coarse_backoff: verification::COARSE_SKIP,
@@ -628,6 +631,7 @@ impl Shield {
         self.pending = None;
         self.spare = None;
         self.offer_state = OfferState::None;
+        self.last_verified = true;
         // Standing still is the first verified failsafe.
         self.failsafe = Some(VerifiedFailsafe {
             slot: 0,
@@ -676,6 +680,11 @@ impl Shield {
     /// Current commanded joint state.
     pub fn state(&self) -> JointState {
         self.joint_state(self.slot, &self.path)
+    }
+
+    /// Time (s) of the next step (the time the commanded state [`Self::state`] is for).
+    pub fn time(&self) -> f64 {
+        self.time
     }
 
     fn joint_state(&self, slot: usize, p: &PathState) -> JointState {

@@ -167,6 +167,25 @@ impl Shield {
     /// prediction runs the step's own candidate and decision code, so a state it reaches is
     /// reproduced bitwise by the steps. `None` before [`Shield::start`].
     pub fn handover(&self, lead: usize) -> Option<Handover> {
+        self.predict(lead, true)
+    }
+
+    /// The handover `lead` safety steps ahead if *no* step until then is verified: the commands
+    /// follow the verified failsafe (braking along the path; at rest they stay). The better
+    /// prediction while a person keeps the steps from verifying (a [`crate::worker::ChunkWorker`]
+    /// takes it after an unverified step): a plan from it is taken over at once where the arm
+    /// rests, and at the handover while it brakes. `None` before [`Shield::start`].
+    pub fn handover_on_failsafe(&self, lead: usize) -> Option<Handover> {
+        self.predict(lead, false)
+    }
+
+    /// Whether the latest step verified its candidate (`true` before the first step: the start
+    /// at rest is verified).
+    pub fn last_verified(&self) -> bool {
+        self.last_verified
+    }
+
+    fn predict(&self, lead: usize, verified: bool) -> Option<Handover> {
         if !self.started {
             return None;
         }
@@ -178,17 +197,27 @@ impl Shield {
         {
             (slot, path) = (s, PathState::intended(0.0));
         }
-        for k in 0..lead {
-            let t = self.time + k as f64 * alpha;
-            // The step's own decision, with the candidate (where one exists) verified.
-            let cand = self.candidate(slot, path).map(|(go, brake)| Candidate {
-                slot,
-                go,
-                brake,
-                verified: true,
-            });
-            let next = decide(failsafe, cand, self.config.mode, t, alpha);
-            (slot, path, failsafe) = (next.slot, next.path, next.failsafe);
+        if !verified {
+            // No candidate is chosen: every step follows the stored failsafe, and the last one
+            // (at `time + (lead − 1)·α`) evaluates it once — O(1) for any lead.
+            if lead > 0 {
+                let t = self.time + (lead - 1) as f64 * alpha;
+                let next = decide(failsafe, None, self.config.mode, t, alpha);
+                (slot, path) = (next.slot, next.path);
+            }
+        } else {
+            for k in 0..lead {
+                let t = self.time + k as f64 * alpha;
+                // The step's own decision, with the candidate (where one exists) verified.
+                let cand = self.candidate(slot, path).map(|(go, brake)| Candidate {
+                    slot,
+                    go,
+                    brake,
+                    verified: true,
+                });
+                let next = decide(failsafe, cand, self.config.mode, t, alpha);
+                (slot, path, failsafe) = (next.slot, next.path, next.failsafe);
+            }
         }
         Some(Handover {
             t: self.time + lead as f64 * alpha,

@@ -89,6 +89,7 @@ impl Shield {
         self.path = next.path;
         self.failsafe = Some(next.failsafe);
         let verified = next.adopted;
+        self.last_verified = verified;
         diag.on_failsafe = !verified;
         diag.stop_time = next.failsafe.t0 + next.failsafe.profile.settle_time();
         diag.verified = verified;

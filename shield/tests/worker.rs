@@ -1,0 +1,243 @@
+//! `ChunkWorker` (issue 15 item 1): chunks planned on a thread take over exactly as
+//! `Shield::set_chunk` at their handover step would, a stale offer is planned again, a refused
+//! chunk is reported, and nothing the thread does can put a command off the verified path.
+
+use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_reach::human::HumanMeasurement;
+use pacs_shield::ChunkMotion;
+use pacs_shield::shield::{Command, Shield, ShieldConfig, ShieldError};
+use pacs_shield::worker::{ChunkWorker, WorkerState};
+
+/// A small deterministic generator (the cases are reproducible without a dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        ((self.next() * n as f64) as usize).min(n - 1)
+    }
+}
+
+fn random_chunk(rng: &mut Lcg) -> Chunk {
+    let dir: Vec<f64> = (0..7).map(|_| 0.03 * (2.0 * rng.next() - 1.0)).collect();
+    Chunk {
+        kind: ActionKind::Delta,
+        actions: (0..16)
+            .map(|k| dir.iter().map(|d| d * (1.0 + 0.05 * k as f64)).collect())
+            .collect(),
+        execute: 8,
+        gripper: None,
+    }
+}
+
+fn shield(motion: ChunkMotion) -> Shield {
+    let mut cfg = ShieldConfig::default();
+    motion.apply(&mut cfg);
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let mut sh = Shield::new(fr3::fr3(), Some((human, &spec)), vec![], cfg).unwrap();
+    sh.start(0.0, &fr3::Q_READY).unwrap();
+    sh
+}
+
+fn same(a: &Command, b: &Command) -> bool {
+    a.t == b.t
+        && a.state.q[..7] == b.state.q[..7]
+        && a.state.dq[..7] == b.state.dq[..7]
+        && a.state.ddq[..7] == b.state.ddq[..7]
+        && a.diag.verified == b.diag.verified
+}
+
+fn measure(sh: &Shield, t: f64, keypoints: &[[f64; 3]]) -> HumanMeasurement {
+    HumanMeasurement::new(sh.human_model().unwrap(), t, keypoints, None).unwrap()
+}
+
+/// The unpaced loop's share before a step: wait for a plan whose handover this step is,
+/// otherwise poll.
+fn before_step(w: &mut ChunkWorker, sh: &mut Shield, t: f64) {
+    if w.due(t) {
+        w.wait().unwrap();
+    }
+    w.poll(sh).unwrap();
+}
+
+/// Chunks handed to a worker while the arm moves (random leads, random gaps) give bitwise the
+/// commands of a shield that gets the same chunk from `set_chunk` right before the handover step
+/// (or at once, where the arm rests and the handover is the current state).
+#[test]
+fn worker_chunks_are_set_chunk_at_their_handover() {
+    let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let mut rng = Lcg(3);
+    let mut moving_cases = 0;
+    for motion in [ChunkMotion::Continuous, ChunkMotion::Stop] {
+        for lead in [1usize, 3, 8] {
+            let mut sync = shield(motion);
+            let mut sh = shield(motion);
+            let mut w = ChunkWorker::spawn(&sh, lead).unwrap();
+            let dt = sh.config().safety_step;
+            // (step index at which `sync` gets the chunk, the chunk)
+            let mut due: Option<(usize, Chunk)> = None;
+            let mut next_chunk = 0usize;
+            let mut accepted = 0u64;
+            let mut handover = 0usize;
+            for k in 0..1500 {
+                let t = k as f64 * dt;
+                if k == next_chunk {
+                    let c = random_chunk(&mut rng);
+                    let rest = sh.handover(0).unwrap().start == sh.handover(lead).unwrap().start;
+                    w.set_chunk(&mut sh, c.clone()).unwrap();
+                    if rest {
+                        // Taken at once, wherever the plan comes back: wait for it here.
+                        w.wait().unwrap();
+                        w.poll(&mut sh).unwrap();
+                        // Taken over; followed after the next step.
+                        assert!(
+                            matches!(w.state(), WorkerState::Installed(_)),
+                            "{:?}",
+                            w.state()
+                        );
+                        handover = k;
+                        sync.set_chunk(&c).unwrap();
+                    } else {
+                        moving_cases += 1;
+                        due = Some((k + lead, c));
+                        handover = k + lead;
+                    }
+                    accepted += 1;
+                    next_chunk = k + 40 + rng.below(160);
+                }
+                if let Some((at, c)) = &due
+                    && *at == k
+                {
+                    sync.set_chunk(c).unwrap();
+                    due = None;
+                }
+                before_step(&mut w, &mut sh, t);
+                if k > handover {
+                    // The poll after the handover step sees the chunk taken over.
+                    assert!(
+                        matches!(w.state(), WorkerState::Taken(_)),
+                        "step {k}: the handover passed and the chunk is {:?}",
+                        w.state()
+                    );
+                }
+                let m = measure(&sh, t, &far);
+                let a = sync.step(t, Some(&m)).unwrap();
+                let b = sh.step(t, Some(&m)).unwrap();
+                assert!(b.diag.verified, "far human: every step verifies");
+                assert!(
+                    same(&a, &b),
+                    "{motion:?}, lead {lead}, step {k}: {:?} vs {:?}",
+                    a.state.q[..7].to_vec(),
+                    b.state.q[..7].to_vec()
+                );
+            }
+            assert_eq!(w.replans(), 0, "no step failed, so no offer went stale");
+            assert_eq!(sh.chunk_progress().unwrap().accepted, accepted);
+        }
+    }
+    assert!(
+        moving_cases >= 20,
+        "{moving_cases} chunks handed in while moving"
+    );
+}
+
+/// A person stepping in front of the arm between a chunk and its handover makes the predicted
+/// handover wrong (the steps are no longer verified): the offer goes stale and the worker plans
+/// the chunk again, now predicting along the failsafe, which holds while the person stays; the
+/// chunk takes over and runs once the person left; every command is the shield's (no jump).
+#[test]
+fn a_stale_offer_is_planned_again_until_it_takes_over() {
+    let near = pacs_testkit::human_reaching(0.6, 0.0, [0.45, 0.0, 0.5]);
+    let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
+    let mut rng = Lcg(5);
+    let mut sh = shield(ChunkMotion::Continuous);
+    let mut w = ChunkWorker::spawn(&sh, 3).unwrap();
+    let dt = sh.config().safety_step;
+    let lim = fr3::fr3().limits().clone();
+    let mut prev: Option<Command> = None;
+    let mut unverified = 0;
+    for k in 0..1200 {
+        let t = k as f64 * dt;
+        if k == 0 || k == 198 {
+            w.set_chunk(&mut sh, random_chunk(&mut rng)).unwrap();
+            if k == 0 {
+                w.wait().unwrap();
+                w.poll(&mut sh).unwrap();
+            }
+        }
+        before_step(&mut w, &mut sh, t);
+        // The person steps in at 0.2 s, between the second chunk (0.198 s, lead 3) and its
+        // handover, and leaves at 0.6 s.
+        let kp = if (200..600).contains(&k) { &near } else { &far };
+        let m = measure(&sh, t, kp);
+        let cmd = sh.step(t, Some(&m)).unwrap();
+        unverified += !cmd.diag.verified as usize;
+        if let Some(p) = &prev {
+            for i in 0..7 {
+                let dq = (cmd.state.q[i] - p.state.q[i]).abs();
+                assert!(dq <= lim.v_max()[i] * dt * (1.0 + 1e-9), "jump at step {k}");
+            }
+        }
+        prev = Some(cmd);
+    }
+    eprintln!(
+        "{unverified} steps not verified, {} plans again",
+        w.replans()
+    );
+    assert!(unverified > 0, "the person must stop the arm");
+    assert!(w.replans() >= 1, "the chunk was never planned again");
+    // Planned again from the failsafe's prediction, which holds while the person stays: not
+    // once every few steps for the 0.4 s the arm is held.
+    assert!(w.replans() <= 3, "{} plans again", w.replans());
+    assert_eq!(
+        *w.state(),
+        WorkerState::Taken(2),
+        "the second chunk takes over once the person left"
+    );
+    let progress = sh.chunk_progress().unwrap();
+    assert_eq!(progress.chunk, 2);
+    assert!(progress.passed > 0, "the second chunk runs: {progress:?}");
+}
+
+/// A chunk the planner refuses (a NaN action) is reported by the poll that receives it and
+/// never offered; the arm keeps its motion. A lead of 0 is refused.
+#[test]
+fn a_refused_chunk_is_reported_and_lead_zero_is_invalid() {
+    let mut sh = shield(ChunkMotion::Continuous);
+    assert!(matches!(
+        ChunkWorker::spawn(&sh, 0),
+        Err(ShieldError::Invalid(_))
+    ));
+    let mut w = ChunkWorker::spawn(&sh, 2).unwrap();
+    let mut bad = random_chunk(&mut Lcg(9));
+    bad.actions[4][2] = f64::NAN;
+    w.set_chunk(&mut sh, bad).unwrap();
+    w.wait().unwrap();
+    let err = w.poll(&mut sh).unwrap_err();
+    assert!(matches!(err, ShieldError::Chunk(_)), "{err:?}");
+    assert_eq!(*w.state(), WorkerState::Refused);
+    assert_eq!(sh.chunk_progress().unwrap().accepted, 0);
+    // The next chunk is planned as usual.
+    w.set_chunk(&mut sh, random_chunk(&mut Lcg(10))).unwrap();
+    let far = pacs_testkit::human_reaching(3.0, 0.0, [2.8, -0.2, 1.0]);
+    {
+        w.wait().unwrap();
+        w.poll(&mut sh).unwrap();
+    }
+    assert_eq!(
+        *w.state(),
+        WorkerState::Installed(1),
+        "at rest: taken at once"
+    );
+    let m = measure(&sh, 0.0, &far);
+    sh.step(0.0, Some(&m)).unwrap();
+    w.poll(&mut sh).unwrap();
+    assert_eq!(*w.state(), WorkerState::Taken(1));
+}
