@@ -5,12 +5,12 @@
 //! path otherwise.
 //!
 //! Chunks are planned **off the loop**, as a real-time loop must (planning takes 0.1–2 ms, the
-//! step a few µs): the loop asks the shield where its commands will be `LEAD` steps ahead
-//! (`Shield::handover`), a planning thread plans the chunk from there (`ChunkPlanner::prepare`),
-//! and the loop hands the plan back (`Shield::offer`); the step at the handover takes it over
-//! only if the commands really got there (else the loop plans again). The loop's share of a
-//! chunk is the prediction and the offer. `Shield::set_chunk` plans in the caller's thread
-//! instead, which is simpler where the loop has the time.
+//! step a few µs), by a `ChunkWorker`: its `set_chunk` predicts where the commands will be
+//! `LEAD` steps ahead and sends the chunk to the worker's planning thread; its `poll`, before
+//! every step, offers a plan that came back (`Shield::offer`). The step at the handover takes it
+//! over only if the commands really got there, else the worker plans it again. The loop's share
+//! of a chunk is the prediction, the send and the offer. `Shield::set_chunk` plans in the
+//! caller's thread instead, which is simpler where the loop has the time.
 //!
 //! Run: `cargo run --release --example control_loop` (2 s of wall-clock time, paced at 1 kHz;
 //! `-- --fast` runs unpaced). Prints how many steps were verified, when the arm stopped for the
@@ -19,8 +19,8 @@
 use pacs::models::{ConstraintSpec, RobotModel, default_human, fr3};
 use pacs::motion::chunk::{ActionKind, Chunk};
 use pacs::reach::human::HumanMeasurement;
-use pacs::shield::shield::{Binding, Handover, OfferState, Shield, ShieldConfig};
-use std::sync::mpsc;
+use pacs::shield::shield::{Binding, Shield, ShieldConfig};
+use pacs::shield::worker::{ChunkWorker, WorkerState};
 use std::time::{Duration, Instant};
 
 /// Safety steps between asking for a handover and the step that takes the chunk over: 5 ms
@@ -92,60 +92,42 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut verified, mut stopped_at, mut resumed_at) = (0usize, None, None);
     let mut step_us = Vec::with_capacity(steps);
     let mut last_q = fr3::Q_READY.to_vec();
-    // The planning thread: chunks with their handover in, prepared plans out.
-    let (to_planner, planner_in) = mpsc::channel::<(Handover, Chunk)>();
-    let (planner_out, from_planner) = mpsc::channel();
-    let mut planner = shield.chunk_planner();
-    let planning = std::thread::spawn(move || {
-        for (handover, chunk) in planner_in {
-            let t0 = Instant::now();
-            let plan = planner.prepare(&handover, &chunk);
-            if planner_out.send((plan, t0.elapsed())).is_err() {
-                break;
-            }
-        }
-    });
+    // The planning thread: `set_chunk` predicts the handover LEAD steps ahead and sends the
+    // chunk there; `poll` offers what came back and plans again where an offer went stale.
+    let mut worker = ChunkWorker::spawn(&shield, LEAD)?;
     let (mut loop_share_us, mut plan_us) = (Vec::new(), Vec::new());
-    let (mut offered, mut replanned) = (0usize, 0usize);
-    // The chunk wanted until a step takes it over, and the plans asked for and not yet back.
-    let (mut wanted, mut in_flight): (Option<Chunk>, usize) = (None, 0);
+    let (mut handed_in, mut followed, mut plans_seen) = (0usize, 0usize, 0u64);
+    let mut last_state = WorkerState::Idle;
     let start = Instant::now();
     for k in 0..steps {
         let t = k as f64 * dt;
-        // A new chunk every h·Δt = 264 ms, planned off the loop from the state LEAD steps ahead.
+        // A new chunk every h·Δt = 264 ms.
         if k % 264 == 0 {
             let clock = Instant::now();
-            if let Some(h) = shield.handover(LEAD) {
-                to_planner.send((h, policy_chunk()))?;
-                in_flight += 1;
-                wanted = Some(policy_chunk());
-            }
+            worker.set_chunk(&mut shield, policy_chunk())?;
             loop_share_us.push(clock.elapsed().as_secs_f64() * 1e6);
+            handed_in += 1;
         }
-        // A plan came back: offer it. A chunk that cannot be planned is refused (the robot keeps
-        // following its current trajectory); one whose handover has passed is planned again
-        // below.
-        // (Unpaced, `--fast`, the loop waits for the plan: its clock is not the wall clock.)
-        let back = if fast && in_flight > 0 {
-            from_planner.recv().ok()
-        } else {
-            from_planner.try_recv().ok()
-        };
-        if let Some((plan, took)) = back {
-            in_flight -= 1;
-            plan_us.push(took.as_secs_f64() * 1e6);
-            let clock = Instant::now();
-            match plan {
-                Ok(p) => match shield.offer(p) {
-                    Ok(()) => offered += 1,
-                    Err(e) => eprintln!("t = {t:.3} s: {e}"),
-                },
-                Err(e) => {
-                    eprintln!("t = {t:.3} s: chunk refused: {e}");
-                    wanted = None;
-                }
-            }
+        // Unpaced (`--fast`) the loop's clock is not the wall clock: wait for a plan whose
+        // handover this step is (a 1 kHz loop has had the time).
+        if fast && worker.due(t) {
+            worker.wait()?;
+        }
+        let clock = Instant::now();
+        if let Err(e) = worker.poll(&mut shield) {
+            // A chunk the planner refused: the robot keeps following its current trajectory.
+            eprintln!("t = {t:.3} s: {e}");
+        }
+        if worker.plans() != plans_seen {
+            plans_seen = worker.plans();
             loop_share_us.push(clock.elapsed().as_secs_f64() * 1e6);
+            if let Some(d) = worker.last_planning() {
+                plan_us.push(d.as_secs_f64() * 1e6);
+            }
+        }
+        if *worker.state() != last_state {
+            last_state = worker.state().clone();
+            followed += matches!(last_state, WorkerState::Taken(_)) as usize;
         }
         // The camera: every 10 ms, stamped now, describing the person 30 ms ago (the model's
         // delay), within 1 cm.
@@ -155,19 +137,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let clock = Instant::now();
         let cmd = shield.step(t, measurement.as_ref())?;
         step_us.push(clock.elapsed().as_secs_f64() * 1e6);
-        match shield.offer_state() {
-            OfferState::Taken(_) => wanted = None,
-            // The commands did not reach the handover (a step was not verified) or the plan came
-            // back after it: plan the wanted chunk again from a newer handover.
-            OfferState::Stale if in_flight == 0 => {
-                if let (Some(c), Some(h)) = (wanted.clone(), shield.handover(LEAD)) {
-                    to_planner.send((h, c))?;
-                    in_flight += 1;
-                    replanned += 1;
-                }
-            }
-            _ => {}
-        }
         // Send cmd.state.q / dq / ddq (rad, rad/s, rad/s²) for time cmd.t to the robot here.
         last_q.copy_from_slice(&cmd.state.q[..cmd.dof]);
         if cmd.diag.verified {
@@ -215,17 +184,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pct(&step_us, 1.0)
     );
     println!(
-        "chunks: {offered} offered, {replanned} planned again; the loop's share per chunk \
-         (handover + offer, µs): median {:.1}, max {:.1}; planning on its thread (µs): median {:.0}, max {:.0}",
+        "chunks: {handed_in} handed in, {followed} followed, {} planned again; the loop's share \
+         (set_chunk, and the poll that offers a plan, µs): median {:.1}, max {:.1}; planning on \
+         its thread (µs): median {:.0}, max {:.0}",
+        worker.replans(),
         pct(&loop_share_us, 0.5),
         pct(&loop_share_us, 1.0),
         pct(&plan_us, 0.5),
         pct(&plan_us, 1.0)
     );
     println!("final q (rad): {last_q:.3?}");
-    drop(to_planner);
-    planning
-        .join()
-        .map_err(|_| "the planning thread panicked")?;
     Ok(())
 }

@@ -92,15 +92,38 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchCommand {
-    /// Time the shield step (PACS-SSM, PACS-PFL) and the CBF baseline on a fixed FR3 + walking
-    /// human scenario (and one with two objects); prints median, p90, p99, p99.9 and max per step
-    /// in microseconds, the work time without the machine's noise, and the slowest steps. The
-    /// PACS runs leave out the per-step separation figure (a diagnostic; config
-    /// `separation_figure`), as a real-time loop that does not log it would, except the run whose
-    /// name says "separation figure on".
+    /// Time the shield in a 1 kHz loop: PACS-SSM and PACS-PFL on a fixed FR3 + walking-human
+    /// scenario (a chunk every 200 ms), with continuous chunks, and with two objects. Prints per
+    /// scenario the step's median, p90, p99, p99.9 and max (µs), the work time without the
+    /// machine's noise, the steps over 50 µs, the slowest steps, and the loop's share of handing
+    /// a chunk in (`set_chunk_*_us`).
+    ///
+    /// By default the chunks are planned on a planning thread (`ChunkWorker`, as a real-time
+    /// loop must): the loop's share is a prediction and a send (`set_chunk_*`) and the offer
+    /// before the step (inside the step's time); `planning_*_us` is the thread's planning time.
+    /// `--in-loop` plans inside the loop instead (`Shield::set_chunk`). The PACS runs leave out
+    /// the per-step separation figure (a diagnostic, config `separation_figure`), except the run
+    /// whose name says "separation figure on".
+    ///
+    /// Example: `pacs bench shield --steps 1000000` (about 25 min on 2 cores).
     Shield {
-        /// Number of 1 ms safety steps per filter (the CBF runs at most 20000).
+        /// Number of 1 ms safety steps per scenario.
         #[arg(long, default_value_t = 100_000)]
+        steps: usize,
+        /// Safety steps between handing a chunk in and its handover (the planning thread's
+        /// deadline: 1 ms each).
+        #[arg(long, default_value_t = pacs_shield::bench::BENCH_LEAD)]
+        lead: usize,
+        /// Plan every chunk inside the loop (`Shield::set_chunk`) instead of on the planning
+        /// thread.
+        #[arg(long)]
+        in_loop: bool,
+    },
+    /// Time the control-barrier-function baseline (a QP per step) on the walking-human
+    /// scenario: step and `set_chunk` figures as for `pacs bench shield`.
+    Cbf {
+        /// Number of 1 ms steps.
+        #[arg(long, default_value_t = 20_000)]
         steps: usize,
     },
 }
@@ -224,10 +247,20 @@ fn main() -> ExitCode {
             use std::io::IsTerminal;
             cli::demo::run_demo(std::io::stderr().is_terminal(), &out)
         }
-        Command::Bench(BenchCommand::Shield { steps }) => {
+        Command::Bench(BenchCommand::Shield {
+            steps,
+            lead,
+            in_loop,
+        }) => {
             use std::io::IsTerminal;
-            cli::bench::shield(steps, std::io::stderr().is_terminal())
+            let delivery = if in_loop {
+                pacs_shield::bench::ChunkDelivery::InLoop
+            } else {
+                pacs_shield::bench::ChunkDelivery::Worker { lead }
+            };
+            cli::bench::shield(steps, delivery, std::io::stderr().is_terminal())
         }
+        Command::Bench(BenchCommand::Cbf { steps }) => cli::bench::cbf(steps),
         Command::Shield { input, out } => cli::shield::run(input.as_deref(), &out),
         Command::Audit(args) => return cli::audit::main(args),
         Command::Simulate(args) => cli::simulate::run(&args),

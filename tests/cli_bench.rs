@@ -1,6 +1,7 @@
-//! `pacs bench shield` (issue 15 item 1): every scenario reports the step's and `set_chunk`'s
-//! median, p99, p99.9 and maximum, the counts over 50 µs / 100 µs and the work-time figures, as
-//! finite numbers in order (median ≤ p99 ≤ p99.9 ≤ max), on a short run.
+//! `pacs bench shield` and `pacs bench cbf` (issue 15 item 1): every scenario reports the step's
+//! and `set_chunk`'s median, p99, p99.9 and maximum, the counts over 50 µs / 100 µs and the
+//! work-time figures, as finite numbers in order (median ≤ p99 ≤ p99.9 ≤ max), on a short run;
+//! by default the chunks are planned on the planning thread, whose figures are reported too.
 
 use serde_json::Value;
 use std::process::Command;
@@ -28,10 +29,9 @@ fn ordered(run: &Value, keys: [&str; 4]) -> f64 {
     v[3]
 }
 
-#[test]
-fn bench_shield_reports_tails_of_steps_and_set_chunk() {
+fn bench(args: &[&str]) -> Vec<Value> {
     let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
-        .args(["bench", "shield", "--steps", "600"])
+        .args(args)
         .output()
         .unwrap();
     assert!(
@@ -40,33 +40,107 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
         String::from_utf8_lossy(&out.stderr)
     );
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    let runs = v["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), 7, "six shield scenarios and the CBF baseline");
-    for run in runs {
-        let steps = num(run, "steps");
-        assert!(steps > 0.0);
-        ordered(run, ["median_us", "p99_us", "p99_9_us", "max_us"]);
-        assert!(num(run, "steps_over_50_us") <= steps);
-        let cmax = ordered(
-            run,
-            [
-                "set_chunk_median_us",
-                "set_chunk_p99_us",
-                "set_chunk_p99_9_us",
-                "set_chunk_max_us",
-            ],
-        );
-        assert!(cmax > 0.0, "{}: no chunk was timed", run["scenario"]);
-        num(run, "set_chunk_over_100_us");
-        num(run, "work_p99_9_us");
-        num(run, "work_max_us");
-        num(run, "work_steps_over_50_us");
-        let v = num(run, "verified_fraction");
-        assert!(v <= 1.0);
-    }
-    // The shield's scenarios time their work (the CBF baseline does not).
-    for run in &runs[..6] {
+    v["runs"].as_array().unwrap().clone()
+}
+
+/// The figures every run reports, finite and in order.
+fn check_run(run: &Value) {
+    let steps = num(run, "steps");
+    assert!(steps > 0.0);
+    ordered(run, ["median_us", "p99_us", "p99_9_us", "max_us"]);
+    assert!(num(run, "steps_over_50_us") <= steps);
+    let cmax = ordered(
+        run,
+        [
+            "set_chunk_median_us",
+            "set_chunk_p99_us",
+            "set_chunk_p99_9_us",
+            "set_chunk_max_us",
+        ],
+    );
+    assert!(cmax > 0.0, "{}: no chunk was timed", run["scenario"]);
+    num(run, "set_chunk_over_100_us");
+    num(run, "work_p99_9_us");
+    num(run, "work_max_us");
+    num(run, "work_steps_over_50_us");
+    let v = num(run, "verified_fraction");
+    assert!(v <= 1.0);
+}
+
+#[test]
+fn bench_shield_reports_tails_of_steps_and_set_chunk() {
+    let runs = bench(&["bench", "shield", "--steps", "600"]);
+    assert_eq!(runs.len(), 5, "five shield scenarios");
+    for run in &runs {
+        check_run(run);
+        // The shield's scenarios time their work.
         assert!(num(run, "work_max_us") > 0.0, "{}", run["scenario"]);
         assert!(num(run, "work_p99_9_us") <= num(run, "work_max_us"));
+        // Chunks go through the planning thread: 3 chunks in 600 steps, each planned there
+        // (the planning figures are the thread's) and offered back by a poll.
+        assert!(
+            run["scenario"]
+                .as_str()
+                .unwrap()
+                .contains("planning thread, lead 3"),
+            "{}",
+            run["scenario"]
+        );
+        assert_eq!(num(run, "chunks"), 3.0, "{}", run["scenario"]);
+        let plan = ordered(
+            run,
+            [
+                "planning_median_us",
+                "planning_median_us",
+                "planning_p99_us",
+                "planning_max_us",
+            ],
+        );
+        assert!(
+            plan > 0.0,
+            "{}: nothing planned on the thread",
+            run["scenario"]
+        );
+        assert!(num(run, "offer_median_us") <= num(run, "offer_max_us"));
+        assert!(num(run, "chunks_followed") <= 3.0);
+        num(run, "replans");
+    }
+}
+
+#[test]
+fn bench_shield_in_loop_and_cbf_report_the_same_figures() {
+    let runs = bench(&["bench", "shield", "--steps", "300", "--in-loop"]);
+    assert_eq!(runs.len(), 5);
+    for run in &runs {
+        check_run(run);
+        assert!(
+            run["scenario"]
+                .as_str()
+                .unwrap()
+                .contains("planned in the loop"),
+            "{}",
+            run["scenario"]
+        );
+        assert_eq!(num(run, "planning_max_us"), 0.0, "no planning thread");
+    }
+    let runs = bench(&["bench", "cbf", "--steps", "300"]);
+    assert_eq!(runs.len(), 1);
+    check_run(&runs[0]);
+}
+
+#[test]
+fn bench_shield_refuses_zero_steps_and_lead() {
+    for args in [
+        &["bench", "shield", "--steps", "0"][..],
+        &["bench", "shield", "--steps", "10", "--lead", "0"][..],
+        &["bench", "cbf", "--steps", "0"][..],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?} was accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("must be at least 1"), "{args:?}: {err}");
     }
 }

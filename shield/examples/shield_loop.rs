@@ -1,7 +1,9 @@
 //! Instruction-count harness for the shield step: `valgrind --tool=callgrind
 //! target/release/examples/shield_loop sorting|handover N` runs the `pacs bench shield` scenario
 //! (N steps) and prints its statistics; `sorting-continuous` runs the continuous-chunks scenario, `objects` the sorting scenario with
-//! two dynamic objects, `sorting-offloop` continuous chunks planned off the loop (lead 3).
+//! two dynamic objects, `sorting-offloop` continuous chunks planned on a `ChunkWorker`'s thread
+//! (lead 3; the worker thread's instructions count too unless callgrind's `--toggle-collect`
+//! restricts the count to the step).
 
 use pacs_shield::ChunkMotion;
 use pacs_shield::bench::{shield_objects_scenario, shield_scenario_offloop, shield_scenario_with};

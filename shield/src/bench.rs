@@ -6,12 +6,30 @@
 
 use crate::filter::ChunkMotion;
 use crate::shield::{FilterMode, Shield, ShieldConfig};
+use crate::worker::{ChunkWorker, WorkerState};
 use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use std::time::Instant;
+
+/// How a scenario hands its chunks to the shield.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChunkDelivery {
+    /// [`Shield::set_chunk`] in the loop: the loop plans (timed as `chunk_*`).
+    InLoop,
+    /// A [`ChunkWorker`] with this lead (safety steps): the loop's share is
+    /// [`ChunkWorker::set_chunk`] (timed as `chunk_*`) and [`ChunkWorker::poll`] before every
+    /// step (timed with the step); the planning runs on the worker's thread (`plan_*`). The
+    /// loop is unpaced, so where the next step is a handover whose plan is not back yet, it
+    /// waits for the plan untimed ([`ChunkWorker::wait`]): the time a 1 kHz loop spends idle.
+    Worker { lead: usize },
+}
+
+/// The lead of the bench's [`ChunkDelivery::Worker`] runs: 3 ms for planning, above the
+/// planning's worst case on a 2-core machine (≈ 1.2 ms).
+pub const BENCH_LEAD: usize = 3;
 
 /// Timing statistics of a run (seconds per step).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -20,7 +38,8 @@ pub struct StepStats {
     pub scenario: String,
     /// Number of timed steps.
     pub steps: usize,
-    /// Median step time (s).
+    /// Median step time (s): the object measurements, `Shield::step`, and with a
+    /// [`ChunkDelivery::Worker`] the worker's `poll` before it (the loop's whole share per step).
     pub median: f64,
     /// 90th percentile (s).
     pub p90: f64,
@@ -42,25 +61,31 @@ pub struct StepStats {
     pub work_over_50us: usize,
     /// Fraction of steps whose intended motion was verified.
     pub verified_fraction: f64,
-    /// Median time of `set_chunk` (trajectory planning), s.
+    /// Median time of handing a chunk in, s: `Shield::set_chunk` (planning in the loop) or
+    /// `ChunkWorker::set_chunk` (a prediction and a send), by [`ChunkDelivery`].
     pub chunk_median: f64,
-    /// 99th percentile of `set_chunk`, s.
+    /// 99th percentile of handing a chunk in, s.
     pub chunk_p99: f64,
-    /// 99.9th percentile of `set_chunk`, s.
+    /// 99.9th percentile of handing a chunk in, s.
     pub chunk_p999: f64,
-    /// Maximum time of `set_chunk`, s.
+    /// Maximum time of handing a chunk in, s.
     pub chunk_max: f64,
-    /// `set_chunk` calls slower than 100 µs.
+    /// Chunks whose hand-in took longer than 100 µs.
     pub chunk_over_100us: usize,
-    /// Chunks planned off the loop ([`shield_scenario_offloop`]): median, 99th percentile and
-    /// maximum of the planning (`handover` + `ChunkPlanner::prepare`, on the planning thread), s;
-    /// the `chunk_*` figures are then the loop's share (`offer`). 0 otherwise.
+    /// With a [`ChunkDelivery::Worker`]: median, 99th percentile and maximum of the planning on
+    /// the worker's thread (`ChunkPlanner::prepare`), s. 0 otherwise.
     pub plan_median: f64,
     pub plan_p99: f64,
     pub plan_max: f64,
-    /// Offered chunks that a step took over, and offered chunks in all.
+    /// With a worker: median and maximum of the polls that offered a plan (the loop's share
+    /// of taking a plan back, included in the step's wall time), s. 0 otherwise.
+    pub offer_median: f64,
+    pub offer_max: f64,
+    /// With a worker: chunks the commands followed, chunks handed in, and plans made again
+    /// (an offer that went stale or was dropped). 0 otherwise.
     pub offers_taken: usize,
     pub offers: usize,
+    pub replans: usize,
     /// The slowest steps by work time (at most 8, slowest first), with what the step did.
     pub slowest: Vec<SlowStep>,
 }
@@ -148,8 +173,11 @@ fn stats(
         plan_median: 0.0,
         plan_p99: 0.0,
         plan_max: 0.0,
+        offer_median: 0.0,
+        offer_max: 0.0,
         offers_taken: 0,
         offers: 0,
+        replans: 0,
         slowest,
     }
 }
@@ -257,33 +285,56 @@ pub fn shield_scenario_with(
     motion: ChunkMotion,
     steps: usize,
 ) -> StepStats {
-    let name = match motion {
-        ChunkMotion::Stop => format!("{spec} ({mode:?})"),
-        ChunkMotion::Continuous => format!("{spec} ({mode:?}, continuous chunks)"),
-    };
-    run_walking_scenario(&name, spec, mode, motion, steps, None, |_| {}, |_, _| {})
+    shield_scenario_delivered(spec, mode, motion, ChunkDelivery::InLoop, steps)
 }
 
-/// The continuous-chunks scenario with every chunk planned off the loop, as a real-time loop
-/// does it: the handover `lead` steps ahead is predicted and the chunk planned (timed as
-/// `plan_*`: the planning thread's work), then offered (timed as `chunk_*`: the loop's share);
-/// the step at the handover takes it over (inside the step's time) if the commands got there.
+/// [`shield_scenario_with`], with the chunks delivered as `delivery` says.
+pub fn shield_scenario_delivered(
+    spec: &str,
+    mode: FilterMode,
+    motion: ChunkMotion,
+    delivery: ChunkDelivery,
+    steps: usize,
+) -> StepStats {
+    let mut name = match motion {
+        ChunkMotion::Stop => format!("{spec} ({mode:?}"),
+        ChunkMotion::Continuous => format!("{spec} ({mode:?}, continuous chunks"),
+    };
+    name += &delivery_label(delivery);
+    run_walking_scenario(
+        &name,
+        spec,
+        mode,
+        motion,
+        steps,
+        delivery,
+        |_| {},
+        |_, _| {},
+    )
+}
+
+/// The scenario name's tail for a delivery.
+fn delivery_label(delivery: ChunkDelivery) -> String {
+    match delivery {
+        ChunkDelivery::InLoop => ", planned in the loop)".into(),
+        ChunkDelivery::Worker { lead } => format!(", planning thread, lead {lead})"),
+    }
+}
+
+/// The continuous-chunks scenario with every chunk planned on a [`ChunkWorker`]'s thread, as a
+/// real-time loop does it.
 pub fn shield_scenario_offloop(
     spec: &str,
     mode: FilterMode,
     lead: usize,
     steps: usize,
 ) -> StepStats {
-    let name = format!("{spec} ({mode:?}, continuous chunks planned off the loop, lead {lead})");
-    run_walking_scenario(
-        &name,
+    shield_scenario_delivered(
         spec,
         mode,
         ChunkMotion::Continuous,
+        ChunkDelivery::Worker { lead },
         steps,
-        Some(lead),
-        |_| {},
-        |_, _| {},
     )
 }
 
@@ -297,7 +348,7 @@ fn run_walking_scenario(
     mode: FilterMode,
     motion: ChunkMotion,
     steps: usize,
-    offloop: Option<usize>,
+    delivery: ChunkDelivery,
     setup: impl FnOnce(&mut Shield),
     mut measure: impl FnMut(&mut Shield, f64),
 ) -> StepStats {
@@ -322,33 +373,54 @@ fn run_walking_scenario(
     let mut notes = Vec::with_capacity(steps);
     let mut work = Vec::with_capacity(steps);
     let mut sign = 1.0;
-    let mut planner = sh.chunk_planner();
+    let mut worker = match delivery {
+        ChunkDelivery::InLoop => None,
+        ChunkDelivery::Worker { lead } => Some(ChunkWorker::spawn(&sh, lead).expect("lead ≥ 1")),
+    };
     let mut plan_times = Vec::new();
+    let mut offer_times = Vec::new();
     let (mut offers, mut taken) = (0usize, 0usize);
-    let mut last_state = crate::shield::OfferState::None;
+    let mut last_state = WorkerState::Idle;
+    let mut plans_seen = 0u64;
     for k in 0..steps {
         let t = k as f64 * cfg.safety_step;
         if k % 200 == 0 {
             let c = back_and_forth(sign);
             sign = -sign;
-            match offloop {
+            let t0 = Instant::now();
+            match worker.as_mut() {
                 None => {
-                    let t0 = Instant::now();
                     let _ = sh.set_chunk(&c);
-                    chunk_times.push(t0.elapsed().as_secs_f64());
                 }
-                Some(lead) => {
-                    let t0 = Instant::now();
-                    let prepared = sh.handover(lead).map(|ho| planner.prepare(&ho, &c));
-                    plan_times.push(t0.elapsed().as_secs_f64());
-                    if let Some(Ok(p)) = prepared {
-                        let t0 = Instant::now();
-                        if sh.offer(p).is_ok() {
-                            offers += 1;
-                        }
-                        chunk_times.push(t0.elapsed().as_secs_f64());
+                Some(w) => {
+                    if w.set_chunk(&mut sh, c).is_ok() {
+                        offers += 1;
                     }
                 }
+            }
+            chunk_times.push(t0.elapsed().as_secs_f64());
+        }
+        // The worker's share of the step: offer a plan that came back (timed with the step).
+        let mut poll = 0.0;
+        if let Some(w) = worker.as_mut() {
+            if w.due(t) {
+                // Unpaced: the plan's handover is this step; a 1 kHz loop would have idled.
+                let _ = w.wait();
+            }
+            let t0 = Instant::now();
+            let _ = w.poll(&mut sh);
+            poll = t0.elapsed().as_secs_f64();
+            if w.plans() != plans_seen {
+                plans_seen = w.plans();
+                offer_times.push(poll);
+                if let Some(d) = w.last_planning() {
+                    plan_times.push(d.as_secs_f64());
+                }
+            }
+            let st = w.state().clone();
+            if st != last_state {
+                taken += matches!(st, WorkerState::Taken(_)) as usize;
+                last_state = st;
             }
         }
         let m =
@@ -366,17 +438,14 @@ fn run_walking_scenario(
         measure(&mut sh, t);
         let cmd = sh.step(t, Some(&m));
         let real = t0.elapsed().as_secs_f64();
-        times.push(real);
+        // Wall time: the poll and the step. Work: the step's (a poll cannot be re-run; its
+        // offers are reported apart, `offer_*`).
+        times.push(real + poll);
         work.push(fastest.min(real));
         notes.push(note(k % 200, cmd));
-        let st = sh.offer_state();
-        if st != last_state {
-            taken += matches!(st, crate::shield::OfferState::Taken(_)) as usize;
-            last_state = st;
-        }
     }
     let mut out = stats(name, times, work, &notes, chunk_times);
-    if offloop.is_some() {
+    if let Some(w) = &worker {
         plan_times.sort_by(f64::total_cmp);
         let q = |p: f64| {
             plan_times
@@ -387,8 +456,15 @@ fn run_walking_scenario(
         out.plan_median = q(0.5);
         out.plan_p99 = q(0.99);
         out.plan_max = plan_times.last().copied().unwrap_or(0.0);
+        offer_times.sort_by(f64::total_cmp);
+        out.offer_median = offer_times
+            .get(offer_times.len() / 2)
+            .copied()
+            .unwrap_or(0.0);
+        out.offer_max = offer_times.last().copied().unwrap_or(0.0);
         out.offers = offers;
         out.offers_taken = taken;
+        out.replans = w.replans() as usize;
     }
     out
 }
@@ -405,29 +481,35 @@ pub fn rolling_ball(t: f64) -> ([f64; 3], [f64; 3]) {
 /// built-in ball rolling on the table in front of the robot (no contact allowed) and a second
 /// ball resting on the table to the side (SSM), both measured every step.
 pub fn shield_objects_scenario(steps: usize) -> StepStats {
-    shield_objects_scenario_with(steps, false)
+    shield_objects_scenario_with(steps, false, ChunkDelivery::InLoop)
 }
 
 /// Marks the scenarios that compute the separation figure ([`ShieldConfig::separation_figure`]);
 /// the others run without it, as a real-time loop that does not log it would.
 pub const WITH_FIGURE: &str = "separation figure on";
 
-/// [`shield_objects_scenario`], with the separation figure computed every step if `figure`.
-pub fn shield_objects_scenario_with(steps: usize, figure: bool) -> StepStats {
+/// [`shield_objects_scenario`], with the separation figure computed every step if `figure`, and
+/// the chunks delivered as `delivery` says.
+pub fn shield_objects_scenario_with(
+    steps: usize,
+    figure: bool,
+    delivery: ChunkDelivery,
+) -> StepStats {
     let ball = ObjectModel::new(&default_ball()).expect("valid ball");
     let (rolling, resting) = (0, 1);
-    let name = if figure {
-        format!("sorting + 2 objects (Pacs, {WITH_FIGURE})")
+    let mut name = if figure {
+        format!("sorting + 2 objects (Pacs, {WITH_FIGURE}")
     } else {
-        "sorting + 2 objects (Pacs)".to_string()
+        "sorting + 2 objects (Pacs".to_string()
     };
+    name += &delivery_label(delivery);
     run_walking_scenario(
         &name,
         "sorting",
         FilterMode::Pacs,
         ChunkMotion::Stop,
         steps,
-        None,
+        delivery,
         |sh| {
             assert_eq!(
                 sh.add_object(ball, ObjectContact::NoContact).ok(),

@@ -66,13 +66,16 @@ pub enum WorkerState {
     Planning,
     /// Planned and offered: waiting for the step at its handover.
     Offered,
-    /// Taken over by the shield as its chunk with this serial number, not yet followed: the
-    /// commands follow it once one of its steps is verified (at rest: the next step). If that
-    /// step is not verified the shield drops it, and the worker plans it again.
+    /// Taken over by the shield as its chunk with this serial number: the next step tries it
+    /// (at rest it is followed at once, standing still if need be).
     Installed(u64),
     /// The commands follow it: the shield's chunk with this serial number
     /// ([`crate::shield::ChunkProgress::chunk`]).
     Taken(u64),
+    /// Taken over, but its first step was not verified, so the shield dropped it and the
+    /// commands kept their path — what [`Shield::set_chunk`] does with such a chunk. The next
+    /// chunk is handled as usual.
+    Dropped(u64),
     /// Refused by the planner (the robot keeps its verified motion; the error was returned by
     /// the [`ChunkWorker::poll`] that received it).
     Refused,
@@ -97,16 +100,22 @@ pub struct ChunkWorker {
     /// The shield's time when the latest offer was seen taken over.
     installed_at: f64,
     planning: Option<Duration>,
+    plans_received: u64,
     replans: u64,
+    /// Offers of the latest chunk that went stale in a row, and when the next re-plan is sent.
+    stale_streak: u32,
+    retry_at: Option<f64>,
 }
 
 /// Jobs and plans that may wait in the channels (a loop hands in a chunk every ~0.1–0.3 s; the
 /// thread only plans the newest job it finds).
 const QUEUE: usize = 4;
 
-/// Longest wait for the failsafe to reach rest that a handover is predicted for (steps; 10 s at
-/// 1 kHz, far beyond any braking time).
-const MAX_REST_STEPS: usize = 10_000;
+/// How often the idle planning thread looks for work (adds at most this to a plan's latency).
+const POLL_INTERVAL: Duration = Duration::from_micros(200);
+
+/// Longest pause (safety steps) before planning a chunk again after offers went stale in a row.
+const MAX_BACKOFF: u64 = 63;
 
 impl ChunkWorker {
     /// Start the planning thread for `shield` (a copy of its planner and chunk settings), with
@@ -127,7 +136,17 @@ impl ChunkWorker {
             .name("pacs-chunk-planner".into())
             .spawn(move || {
                 let mut current: Option<(u64, Chunk)> = None;
-                while let Ok(first) = job_rx.recv() {
+                loop {
+                    // Polled, not blocked on: a send to a blocked receiver would wake it with a
+                    // system call inside the loop's `set_chunk` (tens of µs on a VM).
+                    let first = match job_rx.try_recv() {
+                        Ok(job) => job,
+                        Err(TryRecvError::Empty) => {
+                            std::thread::sleep(POLL_INTERVAL);
+                            continue;
+                        }
+                        Err(TryRecvError::Disconnected) => return,
+                    };
                     // Only the newest request matters; older ones are superseded.
                     let mut target = None;
                     let mut absorb = |job: Job, target: &mut Option<(u64, Handover)>| match job {
@@ -175,7 +194,10 @@ impl ChunkWorker {
             state: WorkerState::Idle,
             installed_at: 0.0,
             planning: None,
+            plans_received: 0,
             replans: 0,
+            stale_streak: 0,
+            retry_at: None,
         })
     }
 
@@ -190,6 +212,8 @@ impl ChunkWorker {
     pub fn set_chunk(&mut self, shield: &mut Shield, chunk: Chunk) -> Result<(), ShieldError> {
         let handover = self.predict(shield).ok_or(ShieldError::NotStarted)?;
         self.serial += 1;
+        self.stale_streak = 0;
+        self.retry_at = None;
         // A waiting offer of an older chunk must not take over after this one was handed in.
         shield.withdraw_offer();
         self.send(Job::Chunk {
@@ -220,6 +244,7 @@ impl ChunkWorker {
             }
         }
         self.follow(shield);
+        self.retry(shield);
         Ok(())
     }
 
@@ -263,6 +288,11 @@ impl ChunkWorker {
         self.replans
     }
 
+    /// Plans of the latest chunks received from the thread (superseded ones not counted).
+    pub fn plans(&self) -> u64 {
+        self.plans_received
+    }
+
     fn send(&mut self, job: Job) {
         match self.jobs.try_send(job) {
             Ok(()) => {}
@@ -279,6 +309,7 @@ impl ChunkWorker {
         }
         self.in_flight = None;
         self.planning = Some(plan.planning);
+        self.plans_received += 1;
         match plan.result {
             Err(e) => {
                 self.state = WorkerState::Refused;
@@ -299,12 +330,13 @@ impl ChunkWorker {
         }
     }
 
-    /// Track the offer: taken over and followed, or stale or dropped (then plan again from a
-    /// newer handover).
+    /// Track the offer: stale (then plan again from a newer handover), taken over, then
+    /// followed or dropped.
     fn follow(&mut self, shield: &Shield) {
         if self.state == WorkerState::Offered {
             match shield.offer_state() {
                 OfferState::Taken(n) => {
+                    self.stale_streak = 0;
                     self.state = WorkerState::Installed(n);
                     self.installed_at = shield.time();
                 }
@@ -319,7 +351,7 @@ impl ChunkWorker {
             } else if shield.time() > self.installed_at {
                 // A step ran since the take-over and the commands do not follow the chunk: its
                 // first step was not verified and the shield dropped it.
-                self.again(shield);
+                self.state = WorkerState::Dropped(n);
             }
         }
     }
@@ -327,28 +359,40 @@ impl ChunkWorker {
     /// Where the commands will be at the handover: the next `lead` steps are predicted to go as
     /// the latest one did (verified: along the path; not verified: along the failsafe, so a
     /// person who keeps the arm braking or at rest does not make every plan stale).
-    /// After an unverified step the handover is where the failsafe comes to rest (at least
-    /// `lead` steps ahead): a chunk taken over at rest is followed, one taken over while braking
-    /// would be dropped at its first unverified step.
+    /// Where the commands will be at the handover: the next `lead` steps are predicted to go as
+    /// the latest one did (verified: along the path; not verified: along the failsafe, so a
+    /// person who keeps the arm braking or at rest does not make every plan stale).
     fn predict(&self, shield: &Shield) -> Option<Handover> {
         if shield.last_verified() {
-            return shield.handover(self.lead);
-        }
-        let alpha = shield.config().safety_step;
-        let f = shield.verified_failsafe()?;
-        let to_rest = (f.t0 + f.profile.settle_time() - shield.time()) / alpha;
-        let steps = if to_rest.is_finite() && to_rest > 0.0 {
-            (to_rest.ceil() as usize).clamp(self.lead, MAX_REST_STEPS)
+            shield.handover(self.lead)
         } else {
-            self.lead
-        };
-        shield.handover_on_failsafe(steps)
+            shield.handover_on_failsafe(self.lead)
+        }
     }
 
+    /// An offer went stale: plan the chunk again — at once the first time, then after
+    /// 1, 3, 7, … (at most [`MAX_BACKOFF`]) steps, so a loop whose steps keep alternating between
+    /// verified and not (an arm creeping past a person; neither prediction holds) does not plan
+    /// the chunk every few steps.
     fn again(&mut self, shield: &Shield) {
+        self.stale_streak += 1;
+        let wait = ((1u64 << (self.stale_streak - 1).min(16)) - 1).min(MAX_BACKOFF);
+        self.state = WorkerState::Planning;
+        self.in_flight = None;
+        self.retry_at = Some(shield.time() + wait as f64 * shield.config().safety_step);
+        self.retry(shield);
+    }
+
+    /// Send a scheduled re-plan once its time has come.
+    fn retry(&mut self, shield: &Shield) {
+        let Some(at) = self.retry_at else { return };
+        if shield.time() < at - crate::shield::time_tolerance(at) {
+            return;
+        }
         let Some(handover) = self.predict(shield) else {
             return;
         };
+        self.retry_at = None;
         self.replans += 1;
         self.send(Job::Again {
             serial: self.serial,

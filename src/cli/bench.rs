@@ -1,7 +1,11 @@
-//! `pacs bench shield`: step-time statistics of the shield and the CBF baseline on a fixed scenario.
+//! `pacs bench shield` and `pacs bench cbf`: step-time statistics of the shield and of the CBF
+//! baseline on a fixed scenario.
 
 use super::CliError;
-use pacs_shield::bench::{StepStats, cbf_scenario, shield_objects_scenario, shield_scenario};
+use pacs_shield::ChunkMotion;
+use pacs_shield::bench::{
+    ChunkDelivery, StepStats, cbf_scenario, shield_objects_scenario_with, shield_scenario_delivered,
+};
 use pacs_shield::shield::FilterMode;
 use serde_json::{Value, json};
 
@@ -16,8 +20,10 @@ fn us(s: &StepStats) -> Value {
         "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_p99_us": s.chunk_p99 * 1e6,
         "set_chunk_p99_9_us": s.chunk_p999 * 1e6,
         "set_chunk_max_us": s.chunk_max * 1e6, "set_chunk_over_100_us": s.chunk_over_100us,
-        "planning_off_loop_median_us": s.plan_median * 1e6, "planning_off_loop_p99_us": s.plan_p99 * 1e6,
-        "planning_off_loop_max_us": s.plan_max * 1e6, "offers": s.offers, "offers_taken": s.offers_taken,
+        "planning_median_us": s.plan_median * 1e6, "planning_p99_us": s.plan_p99 * 1e6,
+        "planning_max_us": s.plan_max * 1e6,
+        "offer_median_us": s.offer_median * 1e6, "offer_max_us": s.offer_max * 1e6, "chunks": s.offers, "chunks_followed": s.offers_taken,
+        "replans": s.replans,
         "slowest_steps": s.slowest.iter().map(|w| json!({
             "step": w.step, "us": w.time * 1e6, "steps_since_chunk": w.since_chunk,
             "verified": w.verified, "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
@@ -25,56 +31,57 @@ fn us(s: &StepStats) -> Value {
     })
 }
 
-/// Run `pacs bench shield --steps N`.
-pub fn shield(steps: usize, progress: bool) -> Result<Value, CliError> {
+/// What the bench's scenario is (printed with the runs).
+const SCENARIO: &str = "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step; the objects runs add a ball rolling on the table 0.6 m ahead (no contact) and one resting to the side (SSM); the PACS runs compute the separation figure (a diagnostic, `config.separation_figure`) only where the name says so, as a real-time loop that does not log it would";
+
+fn check_steps(steps: usize) -> Result<(), CliError> {
     if steps == 0 {
         return Err(CliError::Input("--steps must be at least 1".into()));
     }
+    Ok(())
+}
+
+/// Run `pacs bench shield --steps N` with the chunks delivered as `delivery` says.
+pub fn shield(steps: usize, delivery: ChunkDelivery, progress: bool) -> Result<Value, CliError> {
+    check_steps(steps)?;
+    if let ChunkDelivery::Worker { lead: 0 } = delivery {
+        return Err(CliError::Input(
+            "--lead must be at least 1 safety step (the planning thread's deadline)".into(),
+        ));
+    }
     let mut runs = Vec::new();
-    for (label, spec) in [("PACS-SSM", "sorting"), ("PACS-PFL", "handover")] {
+    let say = |what: &str| {
         if progress {
-            eprintln!("pacs bench: {label}: {steps} steps ...");
+            eprintln!("pacs bench: {what}: {steps} steps ...");
         }
-        runs.push(us(&shield_scenario(spec, FilterMode::Pacs, steps)));
+    };
+    for (label, spec) in [("PACS-SSM", "sorting"), ("PACS-PFL", "handover")] {
+        say(label);
+        runs.push(us(&shield_scenario_delivered(
+            spec,
+            FilterMode::Pacs,
+            ChunkMotion::Stop,
+            delivery,
+            steps,
+        )));
     }
-    if progress {
-        eprintln!("pacs bench: PACS-SSM, continuous chunks: {steps} steps ...");
-    }
-    runs.push(us(&pacs_shield::bench::shield_scenario_with(
+    say("PACS-SSM, continuous chunks");
+    runs.push(us(&shield_scenario_delivered(
         "sorting",
         FilterMode::Pacs,
-        pacs_shield::ChunkMotion::Continuous,
+        ChunkMotion::Continuous,
+        delivery,
         steps,
     )));
-    if progress {
-        eprintln!(
-            "pacs bench: PACS-SSM, continuous chunks planned off the loop: {steps} steps ..."
-        );
-    }
-    // The loop's share of a chunk: `set_chunk_*` is the offer; planning runs off the loop.
-    runs.push(us(&pacs_shield::bench::shield_scenario_offloop(
-        "sorting",
-        FilterMode::Pacs,
-        3,
-        steps,
-    )));
-    if progress {
-        eprintln!("pacs bench: PACS-SSM with two objects: {steps} steps ...");
-    }
-    runs.push(us(&shield_objects_scenario(steps)));
-    if progress {
-        eprintln!("pacs bench: PACS-SSM with two objects, separation figure on: {steps} steps ...");
-    }
-    runs.push(us(&pacs_shield::bench::shield_objects_scenario_with(
-        steps, true,
-    )));
-    let cbf_steps = steps.min(20_000);
-    if progress {
-        eprintln!("pacs bench: CBF: {cbf_steps} steps ...");
-    }
-    runs.push(us(&cbf_scenario(cbf_steps)));
-    Ok(json!({
-        "scenario": "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step; the objects run adds a ball rolling on the table 0.6 m ahead (no contact) and one resting to the side (SSM); the PACS runs compute the separation figure (a diagnostic, `config.separation_figure`) only where the name says so, as a real-time loop that does not log it would",
-        "runs": runs,
-    }))
+    say("PACS-SSM with two objects");
+    runs.push(us(&shield_objects_scenario_with(steps, false, delivery)));
+    say("PACS-SSM with two objects, separation figure on");
+    runs.push(us(&shield_objects_scenario_with(steps, true, delivery)));
+    Ok(json!({ "scenario": SCENARIO, "runs": runs }))
+}
+
+/// Run `pacs bench cbf --steps N`: the CBF baseline on the same scenario.
+pub fn cbf(steps: usize) -> Result<Value, CliError> {
+    check_steps(steps)?;
+    Ok(json!({ "scenario": SCENARIO, "runs": [us(&cbf_scenario(steps))] }))
 }
