@@ -450,8 +450,10 @@ impl Handle {
                     // step verifies the old path: plan from here, taken over as soon as offered.
                     now
                 } else {
+                    // Moving: where the commands will be if the next steps go as the latest
+                    // one did (along the path, or along the failsafe after a refused step).
                     g.shield
-                        .handover(lead)
+                        .likely_handover(lead)
                         .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?
                 }
             };

@@ -363,11 +363,7 @@ impl ChunkWorker {
     /// the latest one did (verified: along the path; not verified: along the failsafe, so a
     /// person who keeps the arm braking or at rest does not make every plan stale).
     fn predict(&self, shield: &Shield) -> Option<Handover> {
-        if shield.last_verified() {
-            shield.handover(self.lead)
-        } else {
-            shield.handover_on_failsafe(self.lead)
-        }
+        shield.likely_handover(self.lead)
     }
 
     /// An offer went stale: plan the chunk again — at once the first time, then after

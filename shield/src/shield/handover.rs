@@ -179,6 +179,18 @@ impl Shield {
         self.predict(lead, false)
     }
 
+    /// The handover `lead` steps ahead if the next steps go as the latest one did: verified →
+    /// [`Self::handover`] (along the path), not verified → [`Self::handover_on_failsafe`]. The
+    /// prediction [`crate::worker::ChunkWorker`] and the Python `ShieldLoop` plan from. `None`
+    /// before [`Shield::start`].
+    pub fn likely_handover(&self, lead: usize) -> Option<Handover> {
+        if self.last_verified {
+            self.handover(lead)
+        } else {
+            self.handover_on_failsafe(lead)
+        }
+    }
+
     /// Whether the latest step verified its candidate (`true` before the first step: the start
     /// at rest is verified).
     pub fn last_verified(&self) -> bool {
