@@ -54,6 +54,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-motion --test properties derivative_bounds --no-fail-fast >>"$log" 2>&1
     # Chunks planned off the loop and taken over at their handover (x22).
     cargo test -p pacs-shield --test handover --no-fail-fast >>"$log" 2>&1
+    # The planning thread's predictions and re-plans (x49, x50).
+    cargo test -p pacs-shield --test worker --no-fail-fast >>"$log" 2>&1
     # Capsules fitted to collision meshes (x24).
     cargo test -p pacs-mesh --test mesh --no-fail-fast >>"$log" 2>&1
     # The path ranges next to phase boundaries (x26).
