@@ -9,7 +9,7 @@
 //! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
 //! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop;
-//! - [`bench`]: reproducible timing scenarios for `pacs bench`.
+//! - [`mod@bench`]: reproducible timing scenarios for `pacs bench`.
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, s, m, J.
 

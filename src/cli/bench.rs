@@ -32,7 +32,7 @@ fn us(s: &StepStats) -> Value {
 }
 
 /// What the bench's scenario is (printed with the runs).
-const SCENARIO: &str = "FR3 moving back and forth (new chunk every 200 ms), default human walking between 1.5 m and 1.0 m, measured every 1 ms step; the objects runs add a ball rolling on the table 0.6 m ahead (no contact) and one resting to the side (SSM); the PACS runs compute the separation figure (a diagnostic, `config.separation_figure`) only where the name says so, as a real-time loop that does not log it would";
+const SCENARIO: &str = "FR3 moving back and forth (new chunk every 200 ms; `pacs bench shield` plans it on the planning thread unless the run's name says `planned in the loop`), default human walking between 1.5 m and 1.0 m, measured every 1 ms step; the objects runs add a ball rolling on the table 0.6 m ahead (no contact) and one resting to the side (SSM); the PACS runs compute the separation figure (a diagnostic, `config.separation_figure`) only where the name says so, as a real-time loop that does not log it would";
 
 fn check_steps(steps: usize) -> Result<(), CliError> {
     if steps == 0 {
