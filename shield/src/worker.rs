@@ -62,7 +62,8 @@ struct Plan {
 pub enum WorkerState {
     /// No chunk handed in yet.
     Idle,
-    /// Being planned on the thread (first time, or again after a stale offer).
+    /// Being planned on the thread (first time, or again after a stale offer), or waiting for
+    /// the pause before planning it again.
     Planning,
     /// Planned and offered: waiting for the step at its handover.
     Offered,
