@@ -9,6 +9,9 @@
 //!   at the shield's path position, and the path position never runs backwards on one trajectory;
 //! - a NaN measurement is refused at construction and an invalid chunk by `set_chunk`.
 //!
+//! The second test runs the same episodes with the chunks planned on a `ChunkWorker`'s thread
+//! (an invalid chunk is then refused by the `poll` that gets it back, and never followed).
+//!
 //! Mutant `x2_adopt_unverified` (the decision adopts an unverified step) fails this test (an SSM
 //! violation within the first six episodes); `m2_drop_delay` (30 ms of sensor delay forgotten)
 //! does not: the occupancies' other margins absorb it here, the harness twins catch it.
@@ -19,7 +22,8 @@
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
-use pacs_shield::shield::{Shield, ShieldConfig};
+use pacs_shield::shield::{Shield, ShieldConfig, ShieldError};
+use pacs_shield::worker::{ChunkWorker, WorkerState};
 use pacs_sim::episode::ground_truth;
 use pacs_sim::humans::{FLOOR_Z, HumanScript, Reacher, Rng};
 
@@ -40,8 +44,10 @@ struct Tally {
     min_separation: f64,
 }
 
-/// One seeded episode; panics on a violation or an off-path command.
-fn episode(seed: u64, tally: &mut Tally) {
+/// One seeded episode; panics on a violation or an off-path command. With `worker`, the chunks
+/// go through a `ChunkWorker` (lead 3, waited for where the unpaced loop reaches a handover
+/// before the plan) instead of `Shield::set_chunk`.
+fn episode(seed: u64, tally: &mut Tally, worker: bool) {
     let mut rng = Rng::new(0xFA17 ^ seed.wrapping_mul(0x9E37));
     let robot = fr3::fr3();
     let human = default_human()
@@ -57,6 +63,10 @@ fn episode(seed: u64, tally: &mut Tally) {
     )
     .expect("valid shield");
     shield.start(0.0, &fr3::Q_READY).expect("start");
+    let mut planner = worker.then(|| ChunkWorker::spawn(&shield, 3).expect("lead 3"));
+    // Whether the latest chunk handed to the worker was invalid (its refusal comes by `poll`).
+    let mut latest_bad = false;
+    let mut worker_state = WorkerState::Idle;
     // A person walks up (≥ 1 s for 1.3 m: within 2 m/s) and reaches into the workspace.
     let y = rng.range(-0.2, 0.3);
     let arrive = rng.range(1.0, 1.3);
@@ -76,8 +86,9 @@ fn episode(seed: u64, tally: &mut Tally) {
     // Measurements in flight: (delivery time, measurement).
     let mut inbox: Vec<(f64, HumanMeasurement)> = Vec::new();
     let mut outage_until = f64::NEG_INFINITY;
-    // The accepted chunks' waypoints, newest last, to check the path against.
-    let mut accepted: Vec<Vec<Vec<f64>>> = Vec::new();
+    // The accepted chunks, newest last, to check the path against (their waypoints are
+    // integrated from the start of the trajectory that claims to follow them).
+    let mut accepted: Vec<Chunk> = Vec::new();
     let mut last_traj: Option<(Vec<f64>, f64)> = None; // (waypoint times, path position)
     let steps = (LENGTH / alpha) as usize;
     for k in 0..steps {
@@ -100,19 +111,25 @@ fn episode(seed: u64, tally: &mut Tally) {
                 execute: 8,
                 gripper: None,
             };
-            let start = shield.state();
-            let result = shield.set_chunk(&chunk);
-            if bad {
-                assert!(result.is_err(), "seed {seed}: invalid chunk accepted");
-                tally.chunks_refused += 1;
-            } else if result.is_ok() {
-                let wp = chunk
-                    .waypoints(&start.q[..7], robot.limits(), shield.config().out_of_limits)
-                    .expect("accepted chunk has waypoints");
-                accepted.push((0..=wp.segments()).map(|i| wp.row(i).to_vec()).collect());
-                tally.chunks_accepted += 1;
+            if let Some(w) = planner.as_mut() {
+                // Refused later, by the poll that gets the plan back.
+                w.set_chunk(&mut shield, chunk.clone())
+                    .expect("started shield takes every chunk");
+                latest_bad = bad;
+                if !bad {
+                    accepted.push(chunk);
+                }
             } else {
-                tally.chunks_refused += 1;
+                let result = shield.set_chunk(&chunk);
+                if bad {
+                    assert!(result.is_err(), "seed {seed}: invalid chunk accepted");
+                    tally.chunks_refused += 1;
+                } else if result.is_ok() {
+                    accepted.push(chunk);
+                    tally.chunks_accepted += 1;
+                } else {
+                    tally.chunks_refused += 1;
+                }
             }
         }
         // The camera: a frame every 10 ms, describing the person `delay` ago within e_pos.
@@ -163,6 +180,23 @@ fn episode(seed: u64, tally: &mut Tally) {
                 shield.measure_human(0, &m).expect("valid measurement");
             }
         }
+        if let Some(w) = planner.as_mut() {
+            if w.due(t) {
+                w.wait().expect("planning thread alive");
+            }
+            match w.poll(&mut shield) {
+                Ok(()) => {}
+                Err(ShieldError::Chunk(_)) => tally.chunks_refused += 1,
+                Err(e) => panic!("seed {seed}: {e}"),
+            }
+            if matches!(w.state(), WorkerState::Taken(_)) {
+                assert!(!latest_bad, "seed {seed}: an invalid chunk is followed");
+            }
+            if *w.state() != worker_state {
+                worker_state = w.state().clone();
+                tally.chunks_accepted += matches!(worker_state, WorkerState::Taken(_)) as usize;
+            }
+        }
         let cmd = shield.step(t, step_arg.as_ref()).expect("step");
         tally.steps += 1;
         tally.verified += cmd.diag.verified as usize;
@@ -190,20 +224,28 @@ fn episode(seed: u64, tally: &mut Tally) {
                 // A trajectory change: to the newest accepted chunk's trajectory, or back to the
                 // one the verified failsafe lives on (the previous chunk's, or the standstill
                 // at the start).
-                let passes = |wp: &Vec<Vec<f64>>| {
+                let q0 = traj.state_at(0.0).q;
+                let passes = |c: &Chunk| {
+                    let Ok(wp) =
+                        c.waypoints(&q0[..7], robot.limits(), shield.config().out_of_limits)
+                    else {
+                        return false;
+                    };
                     // q̂_1 … q̂_h at the waypoint times; q̂_0 (the start) at 0.
-                    times.len() + 1 == wp.len()
-                        && wp
-                            .iter()
+                    times.len() == wp.segments()
+                        && (0..=wp.segments())
                             .zip(std::iter::once(&0.0).chain(&times))
-                            .all(|(w, &tw)| {
+                            .all(|(i, &tw)| {
                                 let st = traj.state_at(tw);
-                                (0..7).all(|j| (st.q[j] - w[j]).abs() < 1e-9)
+                                (0..7).all(|j| (st.q[j] - wp.row(i)[j]).abs() < 1e-9)
                             })
                 };
                 let standstill = traj.duration() == 0.0;
+                // With the worker, chunks that were never followed (stale, dropped) may lie
+                // between the followed ones.
+                let recent = if worker { 4 } else { 2 };
                 assert!(
-                    standstill || accepted.iter().rev().take(2).any(passes),
+                    standstill || accepted.iter().rev().take(recent).any(passes),
                     "seed {seed} t = {t}: a trajectory through no accepted chunk's waypoints \
                      ({} waypoint times)",
                     times.len()
@@ -231,8 +273,7 @@ fn episode(seed: u64, tally: &mut Tally) {
     let _ = FLOOR_Z;
 }
 
-#[test]
-fn faulty_measurements_jitter_and_bad_chunks_never_lead_to_a_violation_or_off_path() {
+fn run(worker: bool) {
     let episodes: u64 = std::env::var("PACS_FAULT_EPISODES")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -242,13 +283,25 @@ fn faulty_measurements_jitter_and_bad_chunks_never_lead_to_a_violation_or_off_pa
         ..Tally::default()
     };
     for seed in 0..episodes {
-        episode(seed, &mut tally);
+        episode(seed, &mut tally, worker);
     }
-    eprintln!("{episodes} episodes: {tally:?}");
+    eprintln!("{episodes} episodes (worker: {worker}): {tally:?}");
     // The faults happened and the shield still moved the arm most of the time.
     assert!(tally.dropped > 0 && tally.late > 0 && tally.duplicated > 0 && tally.nan_refused > 0);
     assert!(tally.chunks_refused > 0 && tally.chunks_accepted > 0);
     assert!(tally.verified * 2 > tally.steps, "{tally:?}");
     // The person came close: the episodes test something.
     assert!(tally.min_separation < 0.1, "{tally:?}");
+}
+
+#[test]
+fn faulty_measurements_jitter_and_bad_chunks_never_lead_to_a_violation_or_off_path() {
+    run(false);
+}
+
+/// The same episodes with the chunks planned on a `ChunkWorker`'s thread: what the thread does
+/// changes when a chunk takes over, never what is verified.
+#[test]
+fn the_same_faults_with_chunks_on_the_planning_thread() {
+    run(true);
 }
