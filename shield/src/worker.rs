@@ -34,7 +34,9 @@
 
 use crate::shield::{Handover, OfferState, PreparedChunk, Shield, ShieldError};
 use pacs_motion::chunk::Chunk;
-use std::sync::mpsc::{Receiver, SyncSender, TryRecvError, TrySendError, sync_channel};
+use std::sync::mpsc::{
+    Receiver, RecvTimeoutError, SyncSender, TryRecvError, TrySendError, sync_channel,
+};
 use std::time::{Duration, Instant};
 
 /// Work for the planning thread.
@@ -262,13 +264,16 @@ impl ChunkWorker {
     /// simulations and benchmarks); the next [`Self::poll`] offers it. Returns at once if none
     /// is on the thread.
     pub fn wait(&mut self) -> Result<(), ShieldError> {
-        if let Some(job) = self.queued.take() {
-            self.send(job);
-        }
         while self.in_flight.is_some() && self.back.is_none() {
-            let plan = self.plans.recv().map_err(|_| thread_ended())?;
-            if plan.serial == self.serial {
-                self.back = Some(plan);
+            // A job the full queue refused is sent again while waiting: the plan waited for
+            // may be that job's.
+            if let Some(job) = self.queued.take() {
+                self.send(job);
+            }
+            match self.plans.recv_timeout(POLL_INTERVAL) {
+                Ok(plan) if plan.serial == self.serial => self.back = Some(plan),
+                Ok(_) | Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Err(thread_ended()),
             }
         }
         Ok(())

@@ -2,57 +2,15 @@
 //! `Shield::set_chunk` at their handover step would, a stale offer is planned again, a refused
 //! chunk is reported, and nothing the thread does can put a command off the verified path.
 
-use pacs_models::{ConstraintSpec, default_human, fr3};
-use pacs_motion::chunk::{ActionKind, Chunk};
+mod common;
+
+use common::{Lcg, random_chunk, same, shield};
+use pacs_models::fr3;
+use pacs_motion::chunk::Chunk;
 use pacs_reach::human::HumanMeasurement;
 use pacs_shield::ChunkMotion;
-use pacs_shield::shield::{Command, Shield, ShieldConfig, ShieldError};
+use pacs_shield::shield::{Command, Shield, ShieldError};
 use pacs_shield::worker::{ChunkWorker, WorkerState};
-
-/// A small deterministic generator (the cases are reproducible without a dependency).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        ((self.next() * n as f64) as usize).min(n - 1)
-    }
-}
-
-fn random_chunk(rng: &mut Lcg) -> Chunk {
-    let dir: Vec<f64> = (0..7).map(|_| 0.03 * (2.0 * rng.next() - 1.0)).collect();
-    Chunk {
-        kind: ActionKind::Delta,
-        actions: (0..16)
-            .map(|k| dir.iter().map(|d| d * (1.0 + 0.05 * k as f64)).collect())
-            .collect(),
-        execute: 8,
-        gripper: None,
-    }
-}
-
-fn shield(motion: ChunkMotion) -> Shield {
-    let mut cfg = ShieldConfig::default();
-    motion.apply(&mut cfg);
-    let spec = ConstraintSpec::builtin("sorting").unwrap();
-    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
-    let mut sh = Shield::new(fr3::fr3(), Some((human, &spec)), vec![], cfg).unwrap();
-    sh.start(0.0, &fr3::Q_READY).unwrap();
-    sh
-}
-
-fn same(a: &Command, b: &Command) -> bool {
-    a.t == b.t
-        && a.state.q[..7] == b.state.q[..7]
-        && a.state.dq[..7] == b.state.dq[..7]
-        && a.state.ddq[..7] == b.state.ddq[..7]
-        && a.diag.verified == b.diag.verified
-}
 
 fn measure(sh: &Shield, t: f64, keypoints: &[[f64; 3]]) -> HumanMeasurement {
     HumanMeasurement::new(sh.human_model().unwrap(), t, keypoints, None).unwrap()
@@ -284,4 +242,22 @@ fn stale_offers_in_a_row_are_planned_again_after_growing_pauses() {
     let n = w.replans();
     // Pauses 0, 1, 3, 7, 15, 31, 63, 63, …: about 19 plans in 1.1 s; without pauses ~270.
     assert!((5..=25).contains(&n), "{n} plans again");
+}
+
+/// Chunks handed in faster than the thread takes them fill its queue (4 jobs); the newest waits
+/// in the worker and `wait` still returns with its plan (it sends the waiting job again instead
+/// of blocking on a plan that was never asked for), and that newest chunk is the one taken over.
+#[test]
+fn a_burst_of_chunks_is_planned_newest_first_and_wait_returns() {
+    let mut sh = shield(ChunkMotion::Continuous);
+    let mut w = ChunkWorker::spawn(&sh, 2).unwrap();
+    let mut rng = Lcg(31);
+    for _ in 0..12 {
+        w.set_chunk(&mut sh, random_chunk(&mut rng)).unwrap();
+    }
+    w.wait().unwrap();
+    w.poll(&mut sh).unwrap();
+    // At rest: the 12th chunk's plan is taken over at once; no older one was offered.
+    assert_eq!(*w.state(), WorkerState::Installed(1));
+    assert_eq!(sh.chunk_progress().unwrap().accepted, 1);
 }
