@@ -87,17 +87,15 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
             run["scenario"]
         );
         assert_eq!(num(run, "chunks"), 3.0, "{}", run["scenario"]);
-        let plan = ordered(
-            run,
-            [
-                "planning_median_us",
-                "planning_median_us",
-                "planning_p99_us",
-                "planning_max_us",
-            ],
+        let plan =
+            ["planning_median_us", "planning_p99_us", "planning_max_us"].map(|k| num(run, k));
+        assert!(
+            plan[0] <= plan[1] && plan[1] <= plan[2],
+            "{}: planning {plan:?}",
+            run["scenario"]
         );
         assert!(
-            plan > 0.0,
+            plan[0] > 0.0,
             "{}: nothing planned on the thread",
             run["scenario"]
         );
