@@ -139,6 +139,8 @@ impl ChunkWorker {
             .name("pacs-chunk-planner".into())
             .spawn(move || {
                 let mut current: Option<(u64, Chunk)> = None;
+                // The newest serial seen: a job for an older chunk is superseded.
+                let mut newest = 0u64;
                 loop {
                     // Polled, not blocked on: a send to a blocked receiver would wake it with a
                     // system call inside the loop's `set_chunk` (tens of µs on a VM).
@@ -157,11 +159,16 @@ impl ChunkWorker {
                             serial,
                             handover,
                             chunk,
-                        } => {
+                        } if serial >= newest => {
+                            newest = serial;
                             current = Some((serial, chunk));
                             *target = Some((serial, handover));
                         }
-                        Job::Again { serial, handover } => *target = Some((serial, handover)),
+                        Job::Again { serial, handover } if serial >= newest => {
+                            newest = serial;
+                            *target = Some((serial, handover));
+                        }
+                        _ => {}
                     };
                     absorb(first, &mut target);
                     while let Ok(job) = job_rx.try_recv() {
@@ -299,7 +306,10 @@ impl ChunkWorker {
         self.plans_received
     }
 
+    /// Send the newest job. A job still waiting for room is older and superseded: it is
+    /// dropped, so the thread never receives an older chunk after a newer one.
     fn send(&mut self, job: Job) {
+        self.queued = None;
         match self.jobs.try_send(job) {
             Ok(()) => {}
             // The thread is busy and the queue full: keep the newest job for the next poll.
