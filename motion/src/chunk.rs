@@ -109,6 +109,25 @@ impl Waypoints {
     pub fn predicted(&self, k: usize) -> Option<&[f64]> {
         self.next.get(k * self.dof..(k + 1) * self.dof)
     }
+
+    /// The same waypoints without q̂_1 … q̂_k: q̂_0, q̂_{k+1}, …, q̂_h, the predicted ones kept
+    /// (no gripper channel). What a blend from a moving start is planned through
+    /// ([`crate::intended::Planner::plan`]). `None` unless 1 ≤ k < h.
+    pub(crate) fn without_leading(&self, k: usize) -> Option<Waypoints> {
+        let h = self.segments();
+        if k == 0 || k >= h {
+            return None;
+        }
+        let mut rows = Vec::with_capacity((h + 1 - k) * self.dof);
+        rows.extend_from_slice(self.row(0));
+        rows.extend_from_slice(&self.rows[(k + 1) * self.dof..]);
+        Some(Self {
+            dof: self.dof,
+            rows,
+            gripper: None,
+            next: self.next.clone(),
+        })
+    }
 }
 
 fn check(what: &str, v: &[f64], n: usize) -> Result<(), TrajectoryError> {

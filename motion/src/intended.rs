@@ -135,14 +135,97 @@ impl Planner {
     }
 
     /// Intended trajectory from `start` through q̂_1 … q̂_h of `wp` (q̂_0 must equal `start.q`),
-    /// passing every waypoint exactly, within every limit at every instant (checked), and
+    /// passing every waypoint exactly (a blend from a moving start: all but at most
+    /// [`BLEND_WAYPOINTS`] leading ones, see below), within every limit at every instant (checked), and
     /// continuous in q, q̇, q̈ with `start`. The shortest of the candidates tried is returned.
     ///
     /// With [`EndCondition::Moving`] the trajectory passes q̂_h moving and then stops along its
     /// stopping tail ([`Trajectory::rest_time`]); the tail is checked like every other piece. If
     /// the tail would leave the limits (e.g. run into a position limit), the chunk is planned to
     /// end at rest instead ([`Trajectory::end`] tells which).
+    ///
+    /// **Blending from a moving start.** A start that already moves can reach q̂_1 exactly only
+    /// near its own coasting time, and a policy's new chunk often turns a little against the
+    /// motion it interrupts (its first action pulls back towards the demonstrations): at
+    /// 1 rad/s and 400 rad/s³ the exact plans then ring 8–55 mrad past the waypoints and take
+    /// 2–3× the time of the chunk's own pace (`sim`'s sorting task, session 21). Where the
+    /// chunk continues the start's motion (cosine between q̇_0 and q̂_1 − q̂_0 above
+    /// [`BLEND_MIN_COSINE`]; a chunk that reverses it must brake whatever it passes) and the
+    /// exact plan fails or rings more than [`BLEND_RING`], the chunk is also planned through
+    /// q̂_0, q̂_{k+1} … q̂_h for k = 1 … [`BLEND_WAYPOINTS`]. The shortest such blend is taken if
+    /// it passes each left-out waypoint, in order, within [`BLEND_TOLERANCE`] (joint-space
+    /// distance), rings no more than the exact plan and is shorter (where no exact plan exists:
+    /// rings at most [`MOVING_OVERSHOOT`]). [`Trajectory::blended`] tells how many leading
+    /// waypoints were left out; [`Trajectory::waypoint_times`] gives their times of closest
+    /// approach. Every other waypoint is passed exactly, and limits and continuity are checked as
+    /// for every plan. Safety does not depend on it: the shield verifies whatever trajectory it
+    /// follows. Checked by `motion/tests/properties.rs` (every plan) and
+    /// `a_moving_start_that_turns_into_a_slowing_chunk_is_blended_not_braked`.
     pub fn plan(
+        &mut self,
+        start: &JointState,
+        wp: &Waypoints,
+    ) -> Result<Trajectory, TrajectoryError> {
+        let exact = self.plan_exact(start, wp);
+        let last = self.last;
+        let n = self.limits.dof;
+        let moving = (0..n).any(|i| start.dq[i] != 0.0 || start.ddq[i] != 0.0);
+        if !moving || wp.segments() < 2 {
+            return exact;
+        }
+        let ring = exact.as_ref().ok().map(|t| overshoot(t, wp));
+        // Only a chunk that continues the start's motion (with a turn) is blended: one that
+        // reverses it must brake first whatever waypoints it passes.
+        let (mut dot, mut vv, mut ww) = (0.0, 0.0, 0.0);
+        for i in 0..n {
+            let w = wp.row(1)[i] - start.q[i];
+            dot += start.dq[i] * w;
+            vv += start.dq[i] * start.dq[i];
+            ww += w * w;
+        }
+        let continues = dot > BLEND_MIN_COSINE * (vv * ww).sqrt();
+        let slow = continues && ring.is_none_or(|r| r > BLEND_RING);
+        let mut chosen: Option<Trajectory> = None;
+        let mut blend_last = last;
+        if slow {
+            for k in 1..=BLEND_WAYPOINTS {
+                let Some(fewer) = wp.without_leading(k) else {
+                    break;
+                };
+                let Ok(mut blend) = self.plan_exact(start, &fewer) else {
+                    continue;
+                };
+                let better = match (&exact, ring) {
+                    (Ok(t), Some(r)) => {
+                        blend.duration() < t.duration()
+                            && overshoot(&blend, &fewer) <= r.max(MOVING_OVERSHOOT)
+                    }
+                    _ => overshoot(&blend, &fewer) <= MOVING_OVERSHOOT,
+                };
+                if !better
+                    || chosen
+                        .as_ref()
+                        .is_some_and(|c| c.duration() <= blend.duration())
+                {
+                    continue;
+                }
+                if let Some(times) = blend_passes(&blend, wp, k) {
+                    blend.prepend_waypoint_times(&times[..k]);
+                    chosen = Some(blend);
+                    blend_last = self.last;
+                }
+            }
+        }
+        if let Some(b) = chosen {
+            self.last = blend_last;
+            return Ok(b);
+        }
+        self.last = last;
+        exact
+    }
+
+    /// [`Self::plan`] through every waypoint (no blend).
+    fn plan_exact(
         &mut self,
         start: &JointState,
         wp: &Waypoints,
@@ -317,6 +400,79 @@ impl Planner {
 /// Overshoot (rad) past a waypoint above which a Moving spline plan gives way to the per-segment
 /// solver (see [`Planner::plan`]).
 pub const MOVING_OVERSHOOT: f64 = 1e-3;
+
+/// Ringing (rad, [`overshoot`]) of an exact plan from a moving start above which a blend is
+/// tried ([`Planner::plan`]).
+pub const BLEND_RING: f64 = 5e-3;
+
+/// Smallest cosine between the start velocity and q̂_1 − q̂_0 for which a blend is tried
+/// ([`Planner::plan`]): the chunk continues the motion it interrupts.
+pub const BLEND_MIN_COSINE: f64 = 0.9;
+
+/// Most leading waypoints a blend from a moving start may leave out ([`Planner::plan`]).
+pub const BLEND_WAYPOINTS: usize = 2;
+
+/// Largest joint-space distance (rad, Euclidean) at which a blend may pass a waypoint it was not
+/// planned through ([`Planner::plan`]): 2 mrad, about 2 mm at the tool of a 1 m arm — less
+/// than a demonstration policy's own pull-back of one action towards its data.
+pub const BLEND_TOLERANCE: f64 = 2e-3;
+
+/// Sampling step (s) of the search for a blend's closest approach to a left-out waypoint,
+/// refined by golden-section steps.
+const BLEND_SAMPLE: f64 = 2.5e-4;
+
+/// Times (s) at which the blend `t`, planned through q̂_0, q̂_{k+1} …, passes closest to
+/// q̂_1 … q̂_k of `wp`, in order and before it reaches q̂_{k+1}: `None` if any passes farther
+/// than [`BLEND_TOLERANCE`].
+fn blend_passes(t: &Trajectory, wp: &Waypoints, k: usize) -> Option<[f64; BLEND_WAYPOINTS]> {
+    let n = wp.dof();
+    let until = *t.waypoint_times().first()?;
+    let dist2 = |s: f64, target: &[f64]| {
+        let q = t.state_at(s).q;
+        (0..n).map(|i| (q[i] - target[i]).powi(2)).sum::<f64>()
+    };
+    let mut times = [0.0; BLEND_WAYPOINTS];
+    let mut from = 0.0;
+    for m in 0..k {
+        let target = wp.row(m + 1);
+        let (mut best_t, mut best_d) = (from, dist2(from, target));
+        let mut s = from;
+        while s < until {
+            s = (s + BLEND_SAMPLE).min(until);
+            let d = dist2(s, target);
+            if d < best_d {
+                (best_t, best_d) = (s, d);
+            }
+        }
+        // Golden section around the best sample.
+        let (mut a, mut b) = (
+            (best_t - BLEND_SAMPLE).max(from),
+            (best_t + BLEND_SAMPLE).min(until),
+        );
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..12 {
+            let (x1, x2) = (b - g * (b - a), a + g * (b - a));
+            let (d1, d2) = (dist2(x1, target), dist2(x2, target));
+            if d1 < best_d {
+                (best_t, best_d) = (x1, d1);
+            }
+            if d2 < best_d {
+                (best_t, best_d) = (x2, d2);
+            }
+            if d1 <= d2 {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        if best_d.sqrt() > BLEND_TOLERANCE {
+            return None;
+        }
+        times[m] = best_t;
+        from = best_t;
+    }
+    Some(times)
+}
 
 /// Largest distance (rad) by which any joint of `t` leaves the range between the two waypoints of
 /// a segment while running it (a spline ringing past a waypoint and coming back).

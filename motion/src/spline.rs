@@ -57,6 +57,9 @@ enum Init {
     Warm,
     /// Moving start, from the from-rest durations' shape (see `optimise`).
     Shaped,
+    /// Moving start, from equal durations (the policy's clock: every action takes the same
+    /// time, so the demonstrated velocity profile keeps its shape), scanned like `Warm`.
+    Uniform,
 }
 
 /// Knot whose position is an unknown of the linear system (not a waypoint).
@@ -544,7 +547,7 @@ impl SplineSolver {
         let inits: &[Init] = if self.shape.is_empty() {
             &[Init::Cold, Init::Warm]
         } else {
-            &[Init::Cold, Init::Warm, Init::Shaped]
+            &[Init::Cold, Init::Warm, Init::Shaped, Init::Uniform]
         };
         for &init in inits {
             // (The shaped start scans the first segment itself: one ramp is enough.)
@@ -584,7 +587,7 @@ impl SplineSolver {
         init: Init,
     ) -> Option<Trajectory> {
         let at_rest = init == Init::Rest;
-        let warm = init == Init::Warm || init == Init::Shaped;
+        let warm = init == Init::Warm || init == Init::Shaped || init == Init::Uniform;
         let n = lim.dof;
         let h = wp.segments();
         // Start: synchronized rest-to-rest durations (closed form).
@@ -606,7 +609,7 @@ impl SplineSolver {
         }
         best_t.clear();
         let mut best = f64::INFINITY;
-        if init == Init::Warm {
+        if init == Init::Warm || init == Init::Uniform {
             // Warm start (moving starts): durations proportional to the segment lengths
             // (limit-normalised joint-space norm), d_k = c·len_k, with the smallest feasible c
             // found by a geometric scan around the start's own pace and a bisection. For a
@@ -622,6 +625,9 @@ impl SplineSolver {
             let total_len: f64 = (1..=h)
                 .map(|k| norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i]))
                 .sum();
+            let uniform = init == Init::Uniform;
+            // Uniform: every segment the first one's length at the start's pace.
+            let first_len = norm(&|i| wp.row(1)[i] - wp.row(0)[i]);
             if pace > 0.0 && total_len > 0.0 {
                 let c0 = 1.0 / pace;
                 // λ(c): the largest limit ratio of the spline with durations c·len_k (∞ if
@@ -629,7 +635,11 @@ impl SplineSolver {
                 let lam_at = |c: f64, this: &mut Self, seg_t: &mut Vec<f64>| -> f64 {
                     seg_t.clear();
                     for k in 1..=h {
-                        let len = norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i]);
+                        let len = if uniform {
+                            first_len
+                        } else {
+                            norm(&|i| wp.row(k)[i] - wp.row(k - 1)[i])
+                        };
                         seg_t.push((c * len).max(MIN_SEGMENT));
                     }
                     this.lambda(lim, start, wp, end, seg_t)

@@ -160,6 +160,9 @@ pub struct Trajectory {
     /// Time (s) from which the trajectory is at rest (the duration, or the end of the stopping tail).
     rest_time: f64,
     waypoint_times: Vec<f64>,
+    /// Leading waypoints a blend passes within [`crate::intended::BLEND_TOLERANCE`] instead of
+    /// exactly (0: every waypoint exactly).
+    blended: usize,
     end: EndCondition,
     peak: [[f64; 3]; MAX_DOF],
     /// Sound q, q̇, q̈ ranges of each whole piece (terminal pieces: their start state only).
@@ -214,6 +217,7 @@ impl Trajectory {
             duration,
             rest_time: duration,
             waypoint_times,
+            blended: 0,
             end,
             peak: [[f64::INFINITY; 3]; MAX_DOF],
             full,
@@ -235,7 +239,8 @@ impl Trajectory {
     pub fn rest_time(&self) -> f64 {
         self.rest_time
     }
-    /// Times (s) at which q̂_1 … q̂_h are passed (the last equals the duration).
+    /// Times (s) at which q̂_1 … q̂_h are passed (the last equals the duration). The first
+    /// [`Self::blended`] of them are the times of closest approach of a blend.
     pub fn waypoint_times(&self) -> &[f64] {
         &self.waypoint_times
     }
@@ -330,6 +335,7 @@ impl Trajectory {
             EndCondition::Moving,
         );
         t.rest_time = rest_time;
+        t.blended = self.blended;
         Some(t)
     }
 
@@ -563,6 +569,21 @@ impl Trajectory {
     #[inline]
     pub fn peaks(&self, i: usize) -> [f64; 3] {
         self.peak[i]
+    }
+
+    /// Put the times (s, increasing, before the first recorded one) at which a blend passes
+    /// the waypoints it was not planned through in front of the waypoint times.
+    pub(crate) fn prepend_waypoint_times(&mut self, times: &[f64]) {
+        self.waypoint_times.splice(0..0, times.iter().copied());
+        self.blended += times.len();
+    }
+
+    /// Number of leading waypoints q̂_1 … q̂_k this trajectory passes within
+    /// [`crate::intended::BLEND_TOLERANCE`] (joint-space distance) instead of exactly: a blend
+    /// from a moving start ([`crate::intended::Planner::plan`]); 0 for every other plan. Every
+    /// later waypoint is passed exactly.
+    pub fn blended(&self) -> usize {
+        self.blended
     }
 
     fn segment_of(&self, t: f64) -> usize {

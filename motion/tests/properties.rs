@@ -6,6 +6,7 @@ mod common;
 
 use common::*;
 use pacs_motion::anchors::Rng;
+use pacs_motion::intended::{BLEND_TOLERANCE, BLEND_WAYPOINTS};
 use pacs_motion::*;
 use proptest::prelude::*;
 
@@ -54,6 +55,45 @@ fn random_problem(seed: u64) -> (Limits, Limits, JointState, Waypoints, Trajecto
     (hw, plan, start, wp, t)
 }
 
+/// Every waypoint is passed exactly (1e-9 rad, from the left at its time), except the leading
+/// ones a blend from a moving start leaves out ([`Trajectory::blended`], at most
+/// `BLEND_WAYPOINTS`): those are passed, in order, within `BLEND_TOLERANCE` (joint-space distance).
+fn assert_waypoints_passed(
+    t: &Trajectory,
+    start: &JointState,
+    wp: &Waypoints,
+) -> Result<(), TestCaseError> {
+    let moving = (0..7).any(|i| start.dq[i] != 0.0 || start.ddq[i] != 0.0);
+    prop_assert!(t.blended() <= BLEND_WAYPOINTS);
+    prop_assert!(
+        moving || t.blended() == 0,
+        "a start at rest is never blended"
+    );
+    let mut prev = 0.0;
+    for (m, &tk) in t.waypoint_times().iter().enumerate() {
+        prop_assert!(tk >= prev, "waypoint times out of order");
+        prev = tk;
+        if m < t.blended() {
+            let q = t.state_at(tk).q;
+            let d = (0..7)
+                .map(|i| (q[i] - wp.row(m + 1)[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            prop_assert!(
+                d <= BLEND_TOLERANCE,
+                "blended waypoint {} passed {d} rad away",
+                m + 1
+            );
+        } else {
+            for i in 0..7 {
+                let (q, _, _) = left_limit(t, i, tk);
+                prop_assert!((q - wp.row(m + 1)[i]).abs() <= 1e-9);
+            }
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 10_000, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -64,12 +104,8 @@ proptest! {
         for i in 0..7 {
             prop_assert!((s.q[i] - start.q[i]).abs() <= 1e-12 && (s.dq[i] - start.dq[i]).abs() <= 1e-12 && (s.ddq[i] - start.ddq[i]).abs() <= 1e-12);
         }
-        for (m, &tk) in t.waypoint_times().iter().enumerate() {
-            for i in 0..7 {
-                let (q, _, _) = left_limit(&t, i, tk);
-                prop_assert!((q - wp.row(m + 1)[i]).abs() <= 1e-9);
-            }
-        }
+        prop_assert_eq!(t.waypoint_times().len(), wp.segments());
+        assert_waypoints_passed(&t, &start, &wp)?;
         t.check(&plan).unwrap();
         assert_limits_at_samples(&t, &plan, 20);
     }
@@ -204,10 +240,10 @@ proptest! {
             prop_assert!((s.dq[i] - start.dq[i]).abs() <= 1e-12);
             prop_assert!((s.ddq[i] - start.ddq[i]).abs() <= 1e-12);
         }
-        for (m, &tk) in t.waypoint_times().iter().enumerate() {
+        prop_assert_eq!(t.waypoint_times().len(), wp.segments());
+        assert_waypoints_passed(&t, &start, &wp)?;
+        for (m, &tk) in t.waypoint_times().iter().enumerate().skip(t.blended()) {
             for i in 0..7 {
-                let (ql, _, _) = left_limit(&t, i, tk);
-                prop_assert!((ql - wp.row(m + 1)[i]).abs() <= 1e-9);
                 prop_assert!((t.state_at(tk).q[i] - wp.row(m + 1)[i]).abs() <= 1e-9);
             }
         }
@@ -216,7 +252,14 @@ proptest! {
         for i in 0..7 {
             let moving = t.end() == EndCondition::Moving;
             let v_end = if moving && spline.last_method() == PlanMethod::Spline {
-                (wp.row(h)[i] - wp.row(h - 1)[i]) / (t.duration() - if h > 1 { t.waypoint_times()[h - 2] } else { 0.0 })
+                // The last planned segment: from q̂_{h−1}, or from the start where a blend left
+                // out every waypoint before q̂_h.
+                let (q_prev, t_prev) = if h > 1 && t.blended() < h - 1 {
+                    (wp.row(h - 1)[i], t.waypoint_times()[h - 2])
+                } else {
+                    (wp.row(0)[i], 0.0)
+                };
+                (wp.row(h)[i] - q_prev) / (t.duration() - t_prev)
             } else if moving {
                 after.dq[i]
             } else {

@@ -711,3 +711,81 @@ fn replanning_the_rest_of_a_chunk_from_its_own_moving_state_keeps_its_pace() {
         eprintln!("replanned {dt} s in: {g:.3} × the original's remaining time ({n} cases)");
     }
 }
+
+/// A new chunk that turns a little against the motion it interrupts (sorting, session 21: the
+/// policy's first action pulls back towards its data) while the demonstration slows towards a
+/// pause. At 1.2 rad/s and 400 rad/s³ no exact plan short of braking first exists: the planner
+/// blends instead, passing q̂_1 (and at most q̂_2) within `BLEND_TOLERANCE`, every later
+/// waypoint exactly, without ringing, and no slower than the same waypoints from rest.
+#[test]
+fn a_moving_start_that_turns_into_a_slowing_chunk_is_blended_not_braked() {
+    use pacs_motion::intended::{BLEND_TOLERANCE, BLEND_WAYPOINTS, overshoot};
+    let robot = fr3();
+    let mut plan = Limits::from_joint_limits(robot.limits());
+    for i in 0..7 {
+        plan.a[i] *= 0.8;
+        plan.j[i] = plan.j[i].min(400.0);
+    }
+    let q0 = [0.1589, -0.1454, 0.1882, -2.2477, 0.1032, 2.0438, 0.7856];
+    let dq0 = [0.138, 0.918, 0.166, 0.377, 0.071, 0.665, 0.0];
+    let ddq0 = [-0.138, -0.040, -0.357, 0.742, -0.200, -0.210, 0.0];
+    // The chunk's direction (per 33 ms at the demonstration's pace) and its decay into a pause:
+    // joint 3 moves 26 % slower relative to joint 1 than the start does.
+    let step = [0.150, 0.846, 0.180, 0.299, 0.084, 0.594, 0.0].map(|v| v * 0.033);
+    let mut rows = vec![q0.to_vec()];
+    for k in 0..16 {
+        let f = (1.0 - 0.06 * k as f64).max(0.05);
+        let last = rows.last().unwrap().clone();
+        rows.push(last.iter().zip(&step).map(|(x, s)| x + f * s).collect());
+    }
+    let actions: Vec<Vec<f64>> = rows
+        .windows(2)
+        .map(|w| w[1].iter().zip(&w[0]).map(|(a, b)| a - b).collect())
+        .collect();
+    let chunk = Chunk {
+        kind: ActionKind::Delta,
+        actions,
+        execute: 8,
+        gripper: None,
+    };
+    let wp = chunk
+        .waypoints(&q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
+    let cfg = PlannerConfig {
+        end: EndCondition::Moving,
+        ..PlannerConfig::default()
+    };
+    let mut pl = Planner::new(plan, cfg);
+    let start = JointState::new(&q0, &dq0, &ddq0);
+    let mut t = pl.plan(&start, &wp).unwrap();
+    t.check(&plan).unwrap();
+    let from_rest = pl.plan(&JointState::at_rest(&q0), &wp).unwrap();
+    assert!(
+        (1..=BLEND_WAYPOINTS).contains(&t.blended()),
+        "blended {}",
+        t.blended()
+    );
+    assert!(
+        t.duration() <= from_rest.duration(),
+        "blend {} s, from rest {} s",
+        t.duration(),
+        from_rest.duration()
+    );
+    assert!(overshoot(&t, &wp) <= 2e-3, "rings {}", overshoot(&t, &wp));
+    let s = t.state_at(0.0);
+    for i in 0..7 {
+        assert!((s.q[i] - q0[i]).abs() <= 1e-12 && (s.dq[i] - dq0[i]).abs() <= 1e-12);
+    }
+    for (m, &tk) in t.waypoint_times().iter().enumerate() {
+        let q = t.state_at(tk).q;
+        let d = (0..7)
+            .map(|i| (q[i] - wp.row(m + 1)[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if m < t.blended() {
+            assert!(d <= BLEND_TOLERANCE, "q̂_{} passed {d} rad away", m + 1);
+        } else {
+            assert!(d <= 1e-9, "q̂_{} missed by {d} rad", m + 1);
+        }
+    }
+}

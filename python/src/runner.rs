@@ -385,9 +385,9 @@ impl PyShieldLoop {
     /// the handover at the loop's time). While the real-time thread runs, the chunk is planned
     /// on the calling thread without holding the shield (the loop's steps never wait for the
     /// planner) from the commanded state predicted a few steps ahead, and taken over by the
-    /// step at that time if the commands got there (if not — a step was not verified — it is
-    /// planned again, up to 5 times, then `pacs.ChunkRejected`). Returns once a step has taken
-    /// it over (typically 2–3 ms later).
+    /// step at that time if the commands got there (if not — a step was not verified, or the
+    /// chunk's own first step was not — it is planned again, up to 5 times, then
+    /// `pacs.ChunkRejected`). Returns once a verified step follows it (typically 2–3 ms later).
     #[pyo3(signature = (deltas, t=None, h=None, absolute=None))]
     fn set_chunk(
         &self,

@@ -426,7 +426,7 @@ impl Handle {
                 .map_err(|_| (Kind::State, "poisoned shield state".to_string()))
         };
         let mut lead = self.lead();
-        let (mut late, mut moved) = (0, 0);
+        let (mut late, mut moved, mut dropped) = (0, 0, 0);
         for _ in 0..HANDOVER_ATTEMPTS {
             let ho = {
                 let mut g = lock()?;
@@ -488,12 +488,30 @@ impl Handle {
                 }
                 Err(e) => return Err((Kind::State, format!("set_chunk: {e}"))),
             }
+            // The step time at which the shield installed the chunk (taken over: the commands
+            // follow it once a step verified it; dropped if that step did not).
+            let mut installed_at: Option<f64> = None;
             loop {
                 let mut g = lock()?;
                 match g.shield.offer_state() {
                     OfferState::Taken(n) => {
-                        g.log_chunk(true);
-                        return Ok(n);
+                        let following = g.shield.chunk_progress().is_some_and(|p| p.chunk >= n);
+                        if following || !g.paced {
+                            // Followed; or installed with nobody stepping (the next step tries it).
+                            g.log_chunk(true);
+                            return Ok(n);
+                        }
+                        let now = g.shield.time();
+                        match installed_at {
+                            None => installed_at = Some(now),
+                            Some(t0) if now > t0 => {
+                                // A step ran since and the commands do not follow the chunk: its
+                                // first step was not verified and the shield dropped it.
+                                dropped += 1;
+                                break;
+                            }
+                            Some(_) => {}
+                        }
                     }
                     OfferState::Stale => {
                         moved += 1;
@@ -524,7 +542,7 @@ impl Handle {
         Err((
             Kind::Chunk,
             format!(
-                "set_chunk: not handed over in {HANDOVER_ATTEMPTS} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {late} times planning took longer than the lead; the robot keeps its verified motion"
+                "set_chunk: not handed over in {HANDOVER_ATTEMPTS} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {dropped} times the chunk's first step was not verified, {late} times planning took longer than the lead; the robot keeps its verified motion"
             ),
         ))
     }

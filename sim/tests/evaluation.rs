@@ -198,10 +198,11 @@ fn seeded_evaluation_pacs_safe_off_violates_single_action_slower() {
 
 #[test]
 fn cbf_leaves_the_demonstrations_pacs_does_not() {
-    // The sphere rolls across the path: the CBF pushes the arm sideways, PACS only slows down.
+    // The sphere rolls across the path: the CBF pushes the arm sideways (out of the
+    // demonstrations in some rollouts: seed 3 here, 0.46 rad), PACS only slows down.
     let mut dev_cbf: f64 = 0.0;
     let mut dev_pacs: f64 = 0.0;
-    for seed in 1..=2 {
+    for seed in 1..=4 {
         dev_cbf = dev_cbf.max(
             run_rollout(TaskKind::Sphere, &v("cbf"), seed, true, None, 0)
                 .unwrap()

@@ -21,6 +21,7 @@
 
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_motion::intended::{BLEND_TOLERANCE, BLEND_WAYPOINTS};
 use pacs_reach::human::HumanMeasurement;
 use pacs_shield::shield::{Shield, ShieldConfig, ShieldError};
 use pacs_shield::worker::{ChunkWorker, WorkerState};
@@ -231,13 +232,24 @@ fn episode(seed: u64, tally: &mut Tally, worker: bool) {
                     else {
                         return false;
                     };
-                    // q̂_1 … q̂_h at the waypoint times; q̂_0 (the start) at 0.
+                    // q̂_1 … q̂_h at the waypoint times; q̂_0 (the start) at 0; the leading
+                    // waypoints a blend from a moving start left out (at most
+                    // BLEND_WAYPOINTS) within BLEND_TOLERANCE, every other one exactly.
                     times.len() == wp.segments()
+                        && traj.blended() <= BLEND_WAYPOINTS
                         && (0..=wp.segments())
                             .zip(std::iter::once(&0.0).chain(&times))
                             .all(|(i, &tw)| {
                                 let st = traj.state_at(tw);
-                                (0..7).all(|j| (st.q[j] - wp.row(i)[j]).abs() < 1e-9)
+                                if i >= 1 && i <= traj.blended() {
+                                    (0..7)
+                                        .map(|j| (st.q[j] - wp.row(i)[j]).powi(2))
+                                        .sum::<f64>()
+                                        .sqrt()
+                                        <= BLEND_TOLERANCE
+                                } else {
+                                    (0..7).all(|j| (st.q[j] - wp.row(i)[j]).abs() < 1e-9)
+                                }
                             })
                 };
                 let standstill = traj.duration() == 0.0;
