@@ -95,6 +95,7 @@ fn main() {
     let mut moving_us = Vec::new();
     for dt in [0.033f64, 0.1] {
         let (mut lr, mut lo, mut worst, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        let mut blends = 0usize;
         for (s0, wp) in &set {
             let t = pl.plan(s0, wp).unwrap();
             if dt >= t.duration() {
@@ -119,13 +120,14 @@ fn main() {
                 continue;
             };
             let r = a.duration() / b.duration();
+            blends += (a.blended() > 0) as usize;
             lr += r.ln();
             lo += (a.duration() / (t.duration() - dt)).ln();
             worst = worst.max(r);
             n += 1;
         }
         println!(
-            "same path, replanned {dt} s in: duration / from rest, geomean {:.3}, worst {:.3}; / the original's remaining time, geomean {:.3} ({n} cases)",
+            "same path, replanned {dt} s in: duration / from rest, geomean {:.3}, worst {:.3}; / the original's remaining time, geomean {:.3} ({n} cases, {blends} blends)",
             (lr / n.max(1) as f64).exp(),
             worst,
             (lo / n.max(1) as f64).exp()

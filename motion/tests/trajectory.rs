@@ -789,3 +789,63 @@ fn a_moving_start_that_turns_into_a_slowing_chunk_is_blended_not_braked() {
         }
     }
 }
+
+/// The same slowing chunk with its first action bent 4 mrad sideways (joint 7 out and back): a
+/// blend through q̂_0, q̂_2 … would pass q̂_1 about 4 mrad away, beyond `BLEND_TOLERANCE`, so
+/// q̂_1 is not left out; whatever the planner returns passes every waypoint it did not leave out
+/// exactly and each one it left out within the tolerance.
+#[test]
+fn a_first_waypoint_off_the_blend_by_more_than_the_tolerance_is_not_left_out() {
+    use pacs_motion::intended::BLEND_TOLERANCE;
+    let robot = fr3();
+    let mut plan = Limits::from_joint_limits(robot.limits());
+    for i in 0..7 {
+        plan.a[i] *= 0.8;
+        plan.j[i] = plan.j[i].min(400.0);
+    }
+    let q0 = [0.1589, -0.1454, 0.1882, -2.2477, 0.1032, 2.0438, 0.7856];
+    let dq0 = [0.138, 0.918, 0.166, 0.377, 0.071, 0.665, 0.0];
+    let ddq0 = [-0.138, -0.040, -0.357, 0.742, -0.200, -0.210, 0.0];
+    let step = [0.150, 0.846, 0.180, 0.299, 0.084, 0.594, 0.0].map(|v| v * 0.033);
+    let mut actions: Vec<Vec<f64>> = (0..16)
+        .map(|k| {
+            let f = (1.0 - 0.06 * k as f64).max(0.05);
+            step.iter().map(|s| f * s).collect()
+        })
+        .collect();
+    actions[0][6] += 0.004;
+    actions[1][6] -= 0.004;
+    let chunk = Chunk {
+        kind: ActionKind::Delta,
+        actions,
+        execute: 8,
+        gripper: None,
+    };
+    let wp = chunk
+        .waypoints(&q0, robot.limits(), OutOfLimits::Reject)
+        .unwrap();
+    let cfg = PlannerConfig {
+        end: EndCondition::Moving,
+        ..PlannerConfig::default()
+    };
+    let mut pl = Planner::new(plan, cfg);
+    let t = pl.plan(&JointState::new(&q0, &dq0, &ddq0), &wp).unwrap();
+    for (m, &tk) in t.waypoint_times().iter().enumerate() {
+        let q = t.state_at(tk).q;
+        let d = (0..7)
+            .map(|i| (q[i] - wp.row(m + 1)[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let tol = if m < t.blended() {
+            BLEND_TOLERANCE
+        } else {
+            1e-9
+        };
+        assert!(
+            d <= tol,
+            "q̂_{} passed {d} rad away (blended {})",
+            m + 1,
+            t.blended()
+        );
+    }
+}

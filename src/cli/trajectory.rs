@@ -149,6 +149,7 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
     let mut out = json!({
         "duration": traj.duration(),
         "waypoint_times": traj.waypoint_times(),
+        "blended_waypoints": traj.blended(),
         "waypoints": waypoints,
         "samples": samples,
     });
