@@ -19,8 +19,10 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
             "off,pacs",
             "--rollouts",
             "1",
+            // A seed where OFF meets the person or a sphere (seeds 5, 6 and 10 of 1–10 with
+            // session 21's planner; OFF got faster and passes the others by chance).
             "--seed",
-            "1",
+            "6",
             "--out",
         ])
         .arg(&dir)
@@ -57,8 +59,8 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     // The PACS log passes the offline audit (from the measurements alone), and the OFF log, in
     // which a sphere or the person meets the moving robot, fails.
     let logs = dir.join("logs");
-    let pacs_log = logs.join("crowded-pacs-0001.jsonl");
-    let off_log = logs.join("crowded-off-0001.jsonl");
+    let pacs_log = logs.join("crowded-pacs-0006.jsonl");
+    let off_log = logs.join("crowded-off-0006.jsonl");
     let a = pacs().arg("audit").arg(&pacs_log).output().unwrap();
     assert_eq!(
         a.status.code(),

@@ -101,6 +101,16 @@ const SHAPED_OVERSHOOT: f64 = 1e-4;
 const STALL_AFTER: usize = 2;
 const STALL_RATIO: f64 = 0.97;
 
+/// Fraction of the room the predicted actions leave before a pause or turn within which a Moving
+/// chunk must be able to stop at its end (see `end_velocity`). The next chunk brakes on a spline
+/// whose jerk is constant per segment: its deceleration ramps up and down instead of holding the
+/// limit, which on average halves it and doubles the stopping distance of the time-optimal
+/// profile that `stopping_velocity` assumes. With the whole room (session 18–20) the robot reached
+/// the pauses of the simulation's demonstrations too fast: the next chunk could not stop in
+/// time, rang 20–90 mrad past the pause and took 0.6–0.9 s (session 21: with half the room the
+/// tasks without people ran 8–18 % faster).
+const PAUSE_ROOM_FRACTION: f64 = 0.5;
+
 /// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)
 /// still get a piece.
 const MIN_SEGMENT: f64 = 1e-3;
@@ -414,7 +424,8 @@ impl SplineSolver {
         }
         // Where the predicted (not executed) actions pause or turn back, the chunk must not end
         // faster than it could stop within the room they leave along its direction of travel
-        // (at the planning limits of the slowest joint). Without this cap a chunk ran into a
+        // (at the planning limits of the slowest joint; within PAUSE_ROOM_FRACTION of it: the
+        // next chunk brakes on a spline, not on a time-optimal profile). Without this cap a chunk ran into a
         // demonstration's pause at the pace before it, the next chunk rang past the pause, and,
         // replaced before it came back, the robot crept on (handover with people: 3 of 10
         // rollouts left the demonstrations).
@@ -435,7 +446,7 @@ impl SplineSolver {
         let (amin, jmin) = (0..n).fold((f64::INFINITY, f64::INFINITY), |(x, y), i| {
             (x.min(lim.a[i]), y.min(lim.j[i]))
         });
-        let vmax = stopping_velocity(room, amin, jmin);
+        let vmax = stopping_velocity(PAUSE_ROOM_FRACTION * room, amin, jmin);
         if speed > vmax {
             let f = vmax / speed;
             self.v_end[..n].iter_mut().for_each(|x| *x *= f);
@@ -1076,14 +1087,17 @@ mod tests {
         // The path goes on at the same pace: the end velocity is the uncapped estimate.
         let (go, _) = plan(&[1.0; 6]);
         assert!(go > 0.1, "end speed {go}");
-        // The path pauses after one more small step: room = that step's length.
+        // The path pauses after one more small step: room = that step's length (of which the
+        // chunk may use PAUSE_ROOM_FRACTION).
         let (pause, wp) = plan(&[0.25, 0.0, 0.0, 0.0, 0.0, 0.0]);
         let room: f64 = (0..7)
             .map(|i| (wp.predicted(0).unwrap()[i] - wp.row(6)[i]).powi(2))
             .sum::<f64>()
             .sqrt();
-        let cap = stopping_velocity(room, 8.0, 400.0);
+        let cap = stopping_velocity(PAUSE_ROOM_FRACTION * room, 8.0, 400.0);
         assert!(pause <= cap * (1.0 + 1e-9), "end speed {pause} > cap {cap}");
+        // Half the room: below the time-optimal stopping speed of the whole room.
+        assert!(cap < stopping_velocity(room, 8.0, 400.0));
         assert!(pause < 0.5 * go, "pause {pause} vs go {go}");
         // The path turns straight back: the chunk ends at rest.
         let (back, _) = plan(&[-1.0; 6]);
