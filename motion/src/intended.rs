@@ -169,8 +169,7 @@ impl Planner {
         let exact = self.plan_exact(start, wp);
         let last = self.last;
         let n = self.limits.dof;
-        let moving = (0..n).any(|i| start.dq[i] != 0.0 || start.ddq[i] != 0.0);
-        if !moving || wp.segments() < 2 {
+        if start.is_at_rest(n) || wp.segments() < 2 {
             return exact;
         }
         let ring = exact.as_ref().ok().map(|t| overshoot(t, wp));

@@ -525,8 +525,7 @@ impl SplineSolver {
             return None;
         }
         self.layout(h);
-        let at_rest = (0..n).all(|i| start.dq[i] == 0.0 && start.ddq[i] == 0.0);
-        if at_rest {
+        if start.is_at_rest(n) {
             self.first_ramp = 0.0;
             return self.optimise(lim, start, wp, end, iterations, Init::Rest);
         }
@@ -622,7 +621,8 @@ impl SplineSolver {
         let mut best = f64::INFINITY;
         if init == Init::Warm || init == Init::Uniform {
             // Warm start (moving starts): durations proportional to the segment lengths
-            // (limit-normalised joint-space norm), d_k = c·len_k, with the smallest feasible c
+            // (limit-normalised joint-space norm), d_k = c·len_k (Uniform: every len_k the first
+            // segment's, i.e. equal durations, the policy's clock), with the smallest feasible c
             // found by a geometric scan around the start's own pace and a bisection. For a
             // moving start the limit ratio is not monotone in c (too slow a pace must brake
             // the start velocity first), hence the scan.
@@ -639,7 +639,8 @@ impl SplineSolver {
             let uniform = init == Init::Uniform;
             // Uniform: every segment the first one's length at the start's pace.
             let first_len = norm(&|i| wp.row(1)[i] - wp.row(0)[i]);
-            if pace > 0.0 && total_len > 0.0 {
+            // (Uniform needs a first segment to take its length from.)
+            if pace > 0.0 && total_len > 0.0 && (!uniform || first_len > 0.0) {
                 let c0 = 1.0 / pace;
                 // λ(c): the largest limit ratio of the spline with durations c·len_k (∞ if
                 // singular); leaves those durations in `seg_t`.

@@ -46,6 +46,14 @@ impl JointState {
         s.ddq[..n].copy_from_slice(&ddq[..n]);
         s
     }
+    /// Whether the first `dof` joints have zero velocity and zero acceleration (exactly; −0.0
+    /// counts as zero): the start of a plan from rest, where every plan scales exactly.
+    pub fn is_at_rest(&self, dof: usize) -> bool {
+        self.dq[..dof]
+            .iter()
+            .chain(&self.ddq[..dof])
+            .all(|&x| x == 0.0)
+    }
 }
 
 /// Sound per-joint ranges of q (rad), q̇ (rad/s) and q̈ (rad/s²) over a time window.

@@ -720,11 +720,8 @@ fn replanning_the_rest_of_a_chunk_from_its_own_moving_state_keeps_its_pace() {
 /// second (q̂_1 off the path, q̂_2 on it).
 fn slowing_chunk_case(bend: f64) -> (Limits, JointState, Waypoints) {
     let robot = fr3();
-    let mut plan = Limits::from_joint_limits(robot.limits());
-    for i in 0..7 {
-        plan.a[i] *= 0.8;
-        plan.j[i] = plan.j[i].min(400.0);
-    }
+    // The FR3's 10 rad/s² on every joint, times 0.8; its jerk limits capped at 400 rad/s³.
+    let plan = limits().0.with_uniform_acc_jerk(8.0, 400.0);
     let q0 = [0.1589, -0.1454, 0.1882, -2.2477, 0.1032, 2.0438, 0.7856];
     let dq0 = [0.138, 0.918, 0.166, 0.377, 0.071, 0.665, 0.0];
     let ddq0 = [-0.138, -0.040, -0.357, 0.742, -0.200, -0.210, 0.0];

@@ -441,11 +441,7 @@ impl Handle {
                     .handover(0)
                     .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?;
                 let n = self.dof;
-                if now.start.dq[..n]
-                    .iter()
-                    .chain(&now.start.ddq[..n])
-                    .all(|&x| x == 0.0)
-                {
+                if now.start.is_at_rest(n) {
                     // At rest (e.g. stopped for a person) the robot stays where it is unless a
                     // step verifies the old path: plan from here, taken over as soon as offered.
                     now

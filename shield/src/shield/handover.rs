@@ -119,11 +119,9 @@ impl ChunkPlanner {
         match plan(&mut self.planner) {
             Ok(t) => Ok(t),
             Err(e) => {
-                let moving = start.dq[..n]
-                    .iter()
-                    .chain(&start.ddq[..n])
-                    .any(|&x| x != 0.0);
-                if moving && let Ok(t) = plan(&mut self.recovery) {
+                if !start.is_at_rest(n)
+                    && let Ok(t) = plan(&mut self.recovery)
+                {
                     return Ok(t);
                 }
                 Err(e.into())
