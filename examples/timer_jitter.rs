@@ -1,6 +1,9 @@
 //! How late this machine wakes a 1 kHz loop that does nothing: the floor under any control loop's
 //! timing (the shield's loops included). Sleeps to deadlines t_k = t_0 + k·1 ms and records how
-//! late each wake-up is.
+//! late each wake-up is. Then, for as many seconds, a busy loop that only reads the clock: every
+//! gap between two reads over 20 µs is the machine taking the CPU away from a running computation
+//! (an interrupt, the host, another thread), which no code in the loop can avoid; `pacs bench
+//! shield` measures the same floor next to every step (`floor_*`).
 //!
 //!     cargo run --release --example timer_jitter [-- SECONDS]
 //!     chrt -f 80 cargo run --release --example timer_jitter     # under SCHED_FIFO (root)
@@ -41,5 +44,23 @@ fn main() {
         q(0.99),
         q(0.999),
         late_us[n - 1]
+    );
+    // The busy loop: gaps between consecutive clock reads.
+    let (mut gaps_20, mut gaps_50, mut longest) = (0usize, 0usize, 0.0f64);
+    let start = Instant::now();
+    let mut prev = start;
+    let mut reads = 0u64;
+    while prev.duration_since(start).as_secs_f64() < seconds {
+        let now = Instant::now();
+        let gap = now.duration_since(prev).as_secs_f64() * 1e6;
+        gaps_20 += (gap > 20.0) as usize;
+        gaps_50 += (gap > 50.0) as usize;
+        longest = longest.max(gap);
+        prev = now;
+        reads += 1;
+    }
+    println!(
+        "busy loop for {seconds} s ({reads} clock reads): interrupted {gaps_20} times for over 20 us, {gaps_50} times for over 50 us ({:.0} per second), longest {longest:.0} us",
+        gaps_50 as f64 / seconds
     );
 }

@@ -76,6 +76,18 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
         // The shield's scenarios time their work.
         assert!(num(run, "work_max_us") > 0.0, "{}", run["scenario"]);
         assert!(num(run, "work_p99_9_us") <= num(run, "work_max_us"));
+        // Each floor probe spins at least as long as its step's work, so its quantiles bound
+        // the work's from above.
+        let (fp, fm) = (num(run, "floor_p99_9_us"), num(run, "floor_max_us"));
+        assert!(fp <= fm, "{}", run["scenario"]);
+        assert!(fp >= num(run, "work_p99_9_us"), "{}", run["scenario"]);
+        assert!(fm >= num(run, "work_max_us"), "{}", run["scenario"]);
+        assert!(num(run, "floor_steps_over_50_us") >= num(run, "work_steps_over_50_us"));
+        // The slowest steps' neighbourhood medians cannot exceed them (at most 7 steps of the
+        // run are slower than any of them).
+        for w in run["slowest_steps"].as_array().unwrap() {
+            assert!(num(w, "around_median_us") <= num(w, "us"), "{w}");
+        }
         // Chunks go through the planning thread: 3 chunks in 600 steps, each planned there
         // (the planning figures are the thread's) and offered back by a poll.
         assert!(

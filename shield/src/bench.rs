@@ -59,6 +59,15 @@ pub struct StepStats {
     pub work_p999: f64,
     /// Steps whose work time exceeds 50 µs.
     pub work_over_50us: usize,
+    /// The machine's floor: right after every step, a loop that only reads the clock spins
+    /// for that step's work time (plus its poll) and is timed like the step. Its wall time is
+    /// what the machine alone makes of a computation that long at that moment (the interrupts,
+    /// the host's steal, preemption by other threads); it is never below the step's work time.
+    /// 99.9th percentile and maximum (s), and the probes slower than 50 µs: compare them with
+    /// the step's `p999`, `max` and `over_50us`. 0 where not measured (CBF).
+    pub floor_p999: f64,
+    pub floor_max: f64,
+    pub floor_over_50us: usize,
     /// Fraction of steps whose intended motion was verified.
     pub verified_fraction: f64,
     /// Median time of handing a chunk in, s: `Shield::set_chunk` (planning in the loop) or
@@ -103,6 +112,11 @@ pub struct SlowStep {
     pub verified: bool,
     /// What decided the step (`Binding` in its log form).
     pub binding: String,
+    /// Median work time of the 101 steps around it (s; the steps `step − 50 ..= step + 50`
+    /// that exist). Near the run's median for a step that is expensive on its own; near the
+    /// step's own time where the machine slowed a whole stretch of steps down (the host's busy
+    /// spells), which no probe of the clock sees.
+    pub around: f64,
 }
 
 /// What one step did, kept for [`StepStats::slowest`].
@@ -129,7 +143,10 @@ fn stats(
         .take(8)
         .filter_map(|&k| {
             let n = notes.get(k)?;
+            let mut near = key[k.saturating_sub(50)..(k + 51).min(key.len())].to_vec();
+            near.sort_by(f64::total_cmp);
             Some(SlowStep {
+                around: near[near.len() / 2],
                 step: k,
                 time: key[k],
                 since_chunk: n.since_chunk,
@@ -164,6 +181,9 @@ fn stats(
         work_max: work.last().copied().unwrap_or(0.0),
         work_p999: q(&work, 0.999),
         work_over_50us,
+        floor_p999: 0.0,
+        floor_max: 0.0,
+        floor_over_50us: 0,
         verified_fraction: verified as f64 / v.len().max(1) as f64,
         chunk_median: q(&chunks, 0.5),
         chunk_p99: q(&chunks, 0.99),
@@ -198,6 +218,30 @@ fn note(
             binding: crate::shield::Binding::NoProfile,
         },
     }
+}
+
+/// Spin reading the clock until `nominal` seconds have passed; returns the wall time the spin
+/// took (≥ `nominal`, and more where the machine interrupted it): one probe of
+/// [`StepStats::floor_max`].
+fn floor_probe(nominal: f64) -> f64 {
+    let t0 = Instant::now();
+    loop {
+        let e = t0.elapsed().as_secs_f64();
+        if e >= nominal {
+            return e;
+        }
+    }
+}
+
+/// 99.9th percentile, maximum and count over 50 µs of the floor probes (s), sorting `v`.
+fn floor_figures(v: &mut [f64]) -> (f64, f64, usize) {
+    let over = v.iter().filter(|&&x| x > 50e-6).count();
+    v.sort_by(f64::total_cmp);
+    let p999 = v
+        .get(((v.len().max(1) - 1) as f64 * 0.999).round() as usize)
+        .copied()
+        .unwrap_or(0.0);
+    (p999, v.last().copied().unwrap_or(0.0), over)
 }
 
 /// Keypoints of the default human walking between 1.5 m and 1.0 m in front of the robot at time `t` (s).
@@ -372,6 +416,7 @@ fn run_walking_scenario(
     let mut chunk_times = Vec::new();
     let mut notes = Vec::with_capacity(steps);
     let mut work = Vec::with_capacity(steps);
+    let mut floor = Vec::with_capacity(steps);
     let mut sign = 1.0;
     let mut worker = match delivery {
         ChunkDelivery::InLoop => None,
@@ -443,8 +488,11 @@ fn run_walking_scenario(
         times.push(real + poll);
         work.push(fastest.min(real));
         notes.push(note(k % 200, cmd));
+        // The machine's floor for a computation as long as this step's, right after it.
+        floor.push(floor_probe(fastest.min(real) + poll));
     }
     let mut out = stats(name, times, work, &notes, chunk_times);
+    (out.floor_p999, out.floor_max, out.floor_over_50us) = floor_figures(&mut floor);
     if let Some(w) = &worker {
         plan_times.sort_by(f64::total_cmp);
         let q = |p: f64| {

@@ -16,6 +16,8 @@ fn us(s: &StepStats) -> Value {
         "p99_9_us": s.p999 * 1e6, "max_us": s.max * 1e6, "steps_over_50_us": s.over_50us,
         "work_max_us": s.work_max * 1e6, "work_p99_9_us": s.work_p999 * 1e6,
         "work_steps_over_50_us": s.work_over_50us,
+        "floor_p99_9_us": s.floor_p999 * 1e6, "floor_max_us": s.floor_max * 1e6,
+        "floor_steps_over_50_us": s.floor_over_50us,
         "verified_fraction": s.verified_fraction,
         "set_chunk_median_us": s.chunk_median * 1e6, "set_chunk_p99_us": s.chunk_p99 * 1e6,
         "set_chunk_p99_9_us": s.chunk_p999 * 1e6,
@@ -25,7 +27,7 @@ fn us(s: &StepStats) -> Value {
         "offer_median_us": s.offer_median * 1e6, "offer_max_us": s.offer_max * 1e6, "chunks": s.offers, "chunks_followed": s.offers_taken,
         "replans": s.replans,
         "slowest_steps": s.slowest.iter().map(|w| json!({
-            "step": w.step, "us": w.time * 1e6, "steps_since_chunk": w.since_chunk,
+            "step": w.step, "us": w.time * 1e6, "around_median_us": w.around * 1e6, "steps_since_chunk": w.since_chunk,
             "verified": w.verified, "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
         })).collect::<Vec<_>>(),
     })
