@@ -276,9 +276,16 @@ fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
 const DEMOS: usize = 6;
 const DEMO_SPREAD: f64 = 0.012;
 
+/// Time between two demonstration samples (s): one sample per policy step, the evaluation's
+/// `policy_dt`.
+pub const DEMO_DT: f64 = 0.033;
+
 /// Build the demonstrations of `task` (deterministic: the same "training data" for every
-/// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad (0.05 rad for Handover)
-/// between samples at most.
+/// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad
+/// (0.05 rad for Handover) between samples at most, and never faster than the robot can move:
+/// a demonstration recorded on the robot stays within its acceleration limits, so a segment
+/// whose samples would need more (finite differences at [`DEMO_DT`]) is recorded with more
+/// samples (see [`within_limits`]).
 pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> {
     let (tools, _) = tool_keyframes(task);
     let start = fr3::Q_READY.to_vec();
@@ -295,7 +302,7 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
         let (q, _) = solve_ik(robot, nominal.last().expect("non-empty"), *p);
         nominal.push(q);
     }
-    let counts: Vec<usize> = nominal
+    let mut counts: Vec<usize> = nominal
         .windows(2)
         .map(|w| {
             let d = w[0]
@@ -306,10 +313,11 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
             ((1.5 * d / spacing).ceil() as usize).max(8)
         })
         .collect();
+    // The same jitter for every attempt: only the pace changes.
     let mut rng = Rng::new(0xDE30 + task as u64);
-    (0..DEMOS)
+    let jittered: Vec<Vec<[f64; 3]>> = (0..DEMOS)
         .map(|i| {
-            let jittered: Vec<[f64; 3]> = tools
+            tools
                 .iter()
                 .map(|p| {
                     let j = if i == 0 {
@@ -319,10 +327,84 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
                     };
                     [p[0] + j[0], p[1] + j[1], p[2] + j[2]]
                 })
-                .collect();
-            dense_path(robot, &start, &jittered, &counts)
+                .collect()
         })
+        .collect();
+    let a_max = demo_acceleration_limits(robot);
+    let mut demos = Vec::new();
+    for _ in 0..PACE_ATTEMPTS {
+        demos = jittered
+            .iter()
+            .map(|tools| dense_path(robot, &start, tools, &counts))
+            .collect();
+        let ratios = acceleration_ratios(&demos, &counts, &a_max);
+        if ratios.iter().all(|&r| r <= 1.0) {
+            break;
+        }
+        // Accelerations scale with 1/count² at a given distance.
+        for (c, r) in counts.iter_mut().zip(&ratios) {
+            if *r > 1.0 {
+                *c = ((*c as f64) * r.sqrt() * 1.02).ceil() as usize;
+            }
+        }
+    }
+    demos
+}
+
+/// The joint accelerations (rad/s²) a demonstration stays within: the robot's, scaled by the
+/// fraction every method here operates it at (the shield's intended limits,
+/// `ShieldConfig::intended_acc_fraction`, which keeps a braking reserve; the baselines share
+/// them). Demonstrations recorded on the robot as it is operated cannot be faster.
+pub fn demo_acceleration_limits(robot: &RobotModel) -> Vec<f64> {
+    let fraction = pacs_shield::shield::ShieldConfig::default().intended_acc_fraction;
+    robot
+        .limits()
+        .a_max()
+        .iter()
+        .map(|a| a * fraction)
         .collect()
+}
+
+/// Re-recordings at a slower pace [`demonstrations`] tries before it gives up (the last one is
+/// kept; every task's demonstrations are within the limits after at most two).
+const PACE_ATTEMPTS: usize = 6;
+
+/// Per tool segment (sample counts `counts`), the largest ratio of a demonstration's joint
+/// acceleration (second difference at [`DEMO_DT`]) to the joint's limit `a_max`, over every
+/// demonstration; a sample's acceleration counts for the segment it ends and the one after it.
+fn acceleration_ratios(demos: &[Vec<Vec<f64>>], counts: &[usize], a_max: &[f64]) -> Vec<f64> {
+    // segment[m]: the segment sample m ends (sample 0 is the start).
+    let mut segment = vec![0usize];
+    for (k, &c) in counts.iter().enumerate() {
+        segment.extend(std::iter::repeat_n(k, c.max(1)));
+    }
+    let mut ratios = vec![0.0f64; counts.len()];
+    for d in demos {
+        for m in 1..d.len().saturating_sub(1) {
+            let r = (0..a_max.len().min(d[m].len()))
+                .map(|i| {
+                    ((d[m + 1][i] - 2.0 * d[m][i] + d[m - 1][i]) / (DEMO_DT * DEMO_DT)).abs()
+                        / a_max[i]
+                })
+                .fold(0.0, f64::max);
+            for k in [segment[m], segment[m + 1]] {
+                ratios[k] = ratios[k].max(r);
+            }
+        }
+    }
+    ratios
+}
+
+/// Whether every demonstration of `demos` stays within the joint acceleration limits `a_max`
+/// (rad/s², second differences at [`DEMO_DT`]).
+pub fn within_limits(demos: &[Vec<Vec<f64>>], a_max: &[f64]) -> bool {
+    demos.iter().all(|d| {
+        d.windows(3).all(|w| {
+            (0..a_max.len().min(w[0].len())).all(|i| {
+                ((w[2][i] - 2.0 * w[1][i] + w[0][i]) / (DEMO_DT * DEMO_DT)).abs() <= a_max[i]
+            })
+        })
+    })
 }
 
 /// [`demonstrations`] computed once per task per process.
