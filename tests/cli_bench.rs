@@ -71,6 +71,7 @@ fn check_run(run: &Value) {
 fn bench_shield_reports_tails_of_steps_and_set_chunk() {
     let runs = bench(&["bench", "shield", "--steps", "600"]);
     assert_eq!(runs.len(), 5, "five shield scenarios");
+    let mut reruns = 0;
     for run in &runs {
         check_run(run);
         // The shield's scenarios time their work.
@@ -85,9 +86,18 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
         assert!(num(run, "floor_steps_over_50_us") >= num(run, "work_steps_over_50_us"));
         // The slowest steps' neighbourhood medians cannot exceed them (at most 7 steps of the
         // run are slower than any of them).
-        for w in run["slowest_steps"].as_array().unwrap() {
+        let slowest = run["slowest_steps"].as_array().unwrap();
+        for w in slowest {
             assert!(num(w, "around_median_us") <= num(w, "us"), "{w}");
         }
+        // Re-runs at the end of the run, where a copy was kept: positive times.
+        for w in slowest.iter().filter(|w| w.get("rerun_us").is_some()) {
+            assert!(num(w, "rerun_us") > 0.0, "{w}");
+        }
+        reruns += slowest
+            .iter()
+            .filter(|w| w.get("rerun_us").is_some())
+            .count();
         // Chunks go through the planning thread: 3 chunks in 600 steps, each planned there
         // (the planning figures are the thread's) and offered back by a poll.
         assert!(
@@ -115,6 +125,9 @@ fn bench_shield_reports_tails_of_steps_and_set_chunk() {
         assert!(num(run, "chunks_followed") <= 3.0);
         num(run, "replans");
     }
+    // Each run keeps copies before the 32 steps whose runs on copies were slowest; the slowest
+    // steps by work are among them but where a step's own run was slower than its copies'.
+    assert!(reruns > 0, "no slow step was re-run in any scenario");
 }
 
 #[test]

@@ -26,10 +26,18 @@ fn us(s: &StepStats) -> Value {
         "planning_max_us": s.plan_max * 1e6,
         "offer_median_us": s.offer_median * 1e6, "offer_max_us": s.offer_max * 1e6, "chunks": s.offers, "chunks_followed": s.offers_taken,
         "replans": s.replans,
-        "slowest_steps": s.slowest.iter().map(|w| json!({
-            "step": w.step, "us": w.time * 1e6, "around_median_us": w.around * 1e6, "steps_since_chunk": w.since_chunk,
-            "verified": w.verified, "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
-        })).collect::<Vec<_>>(),
+        "slowest_steps": s.slowest.iter().map(|w| {
+            let mut v = json!({
+                "step": w.step, "us": w.time * 1e6, "around_median_us": w.around * 1e6,
+                "steps_since_chunk": w.since_chunk, "verified": w.verified,
+                "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
+            });
+            // Only where the run kept a copy of the shield before the step.
+            if let Some(r) = w.rerun {
+                v["rerun_us"] = json!(r * 1e6);
+            }
+            v
+        }).collect::<Vec<_>>(),
     })
 }
 
