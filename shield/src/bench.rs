@@ -498,10 +498,10 @@ fn run_walking_scenario(
         // (untimed; rare after the first steps).
         let kept_min = kept.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
         if kept.len() < RERUN_KEPT || fastest > kept_min {
-            if kept.len() == RERUN_KEPT {
-                if let Some(i) = kept.iter().position(|x| x.0 == kept_min) {
-                    kept.swap_remove(i);
-                }
+            if kept.len() == RERUN_KEPT
+                && let Some(i) = kept.iter().position(|x| x.0 == kept_min)
+            {
+                kept.swap_remove(i);
             }
             kept.push((fastest, k, t, sh.clone()));
         }
