@@ -18,6 +18,10 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(10.0);
+    if !(seconds >= 0.001 && seconds.is_finite()) {
+        eprintln!("timer_jitter: SECONDS must be a number of at least 0.001, got {seconds}");
+        std::process::exit(2);
+    }
     let period = Duration::from_millis(1);
     let n = (seconds * 1000.0) as usize;
     let mut late_us = Vec::with_capacity(n);

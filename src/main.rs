@@ -100,7 +100,7 @@ enum BenchCommand {
     ///
     /// `work_*` is each step's fastest of three runs (itself and two re-runs on copies): what the
     /// step costs. `floor_*` is the machine's floor: after every step a loop that only reads the
-    /// clock spins for the step's work time and is timed the same way; its p99.9, max and count
+    /// clock spins for the step's work time (plus the worker's poll) and is timed the same way; its p99.9, max and count
     /// over 50 µs are what the machine alone (interrupts, the host, other threads) does to a
     /// computation that long. Where `floor_steps_over_50_us` is about `steps_over_50_us` and
     /// `work_steps_over_50_us` is 0, the slow steps were the machine's, not the shield's.
@@ -112,7 +112,7 @@ enum BenchCommand {
     /// the per-step separation figure (a diagnostic, config `separation_figure`), except the run
     /// whose name says "separation figure on".
     ///
-    /// Example: `pacs bench shield --steps 1000000` (about 7 min on 2 cores).
+    /// Example: `pacs bench shield --steps 1000000` (about 5.5 min on 2 cores).
     Shield {
         /// Number of 1 ms safety steps per scenario.
         #[arg(long, default_value_t = 100_000)]

@@ -113,13 +113,14 @@ pub struct SlowStep {
     /// What decided the step (`Binding` in its log form).
     pub binding: String,
     /// Median work time of the 101 steps around it (s; the steps `step − 50 ..= step + 50`
-    /// that exist). Near the run's median for a step that is expensive on its own; near the
+    /// that exist; wall time where no work time is measured, CBF). Near the run's median for a step that is expensive on its own; near the
     /// step's own time where the machine slowed a whole stretch of steps down (the host's busy
     /// spells), which no probe of the clock sees.
     pub around: f64,
     /// The same step re-run at the end of the run, from a copy of the shield kept before it:
     /// the fastest of [`RERUN_TIMES`] runs (s). `None` where no copy was kept (the run keeps
-    /// copies for the [`RERUN_KEPT`] steps whose re-runs on copies were slowest). Near `time`:
+    /// copies for the [`RERUN_KEPT`] steps of largest work time, so every one of
+    /// [`StepStats::slowest`] has one, CBF runs excepted). Near `time`:
     /// the step is that expensive; far below it: the step was slowed down when it ran (a burst
     /// of the machine that also caught its re-runs).
     pub rerun: Option<f64>,
@@ -429,8 +430,9 @@ fn run_walking_scenario(
     let mut notes = Vec::with_capacity(steps);
     let mut work = Vec::with_capacity(steps);
     let mut floor = Vec::with_capacity(steps);
-    // Copies of the shield before its slowest steps (by the re-runs on copies), re-run at the
-    // end: (fastest of the copies' runs, step, time, shield).
+    // Copies of the shield before its slowest steps by work time, re-run at the end: (work
+    // time, step, time, shield). A streaming top-RERUN_KEPT: a step among the run's 8 slowest
+    // is never the smallest of the kept, so it is never dropped.
     let mut kept: Vec<(f64, usize, f64, Shield)> = Vec::with_capacity(RERUN_KEPT);
     let mut sign = 1.0;
     let mut worker = match delivery {
@@ -487,23 +489,14 @@ fn run_walking_scenario(
             HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
         // Two re-runs on copies first (their result is discarded), then the real step.
         let mut fastest = f64::INFINITY;
+        // The state before the step, kept below if the step is among the slowest (untimed).
+        let snapshot = sh.clone();
         for _ in 0..2 {
             let mut copy = sh.clone();
             let t0 = Instant::now();
             measure(&mut copy, t);
             let _ = std::hint::black_box(copy.step(t, Some(&m)));
             fastest = fastest.min(t0.elapsed().as_secs_f64());
-        }
-        // Keep a copy of the shield before a step whose re-runs were among the slowest so far
-        // (untimed; rare after the first steps).
-        let kept_min = kept.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
-        if kept.len() < RERUN_KEPT || fastest > kept_min {
-            if kept.len() == RERUN_KEPT
-                && let Some(i) = kept.iter().position(|x| x.0 == kept_min)
-            {
-                kept.swap_remove(i);
-            }
-            kept.push((fastest, k, t, sh.clone()));
         }
         let t0 = Instant::now();
         measure(&mut sh, t);
@@ -513,6 +506,17 @@ fn run_walking_scenario(
         // offers are reported apart, `offer_*`).
         times.push(real + poll);
         work.push(fastest.min(real));
+        // Keep the state before a step whose work is among the slowest so far.
+        let w = fastest.min(real);
+        let kept_min = kept.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
+        if kept.len() < RERUN_KEPT || w > kept_min {
+            if kept.len() == RERUN_KEPT
+                && let Some(i) = kept.iter().position(|x| x.0 == kept_min)
+            {
+                kept.swap_remove(i);
+            }
+            kept.push((w, k, t, snapshot));
+        }
         notes.push(note(k % 200, cmd));
         // The machine's floor for a computation as long as this step's, right after it.
         floor.push(floor_probe(fastest.min(real) + poll));

@@ -103,7 +103,7 @@ impl Default for EpisodeConfig {
     fn default() -> Self {
         Self {
             dt: 0.001,
-            policy_dt: 0.033,
+            policy_dt: crate::task::DEMO_DT,
             max_time: 8.0,
             goal_tolerance: 0.02,
             camera_period: 0.01,

@@ -276,16 +276,18 @@ fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
 const DEMOS: usize = 6;
 const DEMO_SPREAD: f64 = 0.012;
 
-/// Time between two demonstration samples (s): one sample per policy step, the evaluation's
-/// `policy_dt`.
+/// Time between two demonstration samples (s): one sample per policy step (the evaluation's
+/// default `EpisodeConfig::policy_dt` is this constant).
 pub const DEMO_DT: f64 = 0.033;
 
 /// Build the demonstrations of `task` (deterministic: the same "training data" for every
 /// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad
-/// (0.05 rad for Handover) between samples at most, and never faster than the robot can move:
-/// a demonstration recorded on the robot stays within its acceleration limits, so a segment
-/// whose samples would need more (finite differences at [`DEMO_DT`]) is recorded with more
-/// samples (see [`within_limits`]).
+/// (0.05 rad for Handover) between samples at most, and never faster than the robot is operated:
+/// a demonstration recorded on the robot stays within the acceleration limits it runs at
+/// ([`demo_acceleration_limits`]), so a segment whose samples would need more (second
+/// differences at [`DEMO_DT`]) is recorded again with proportionally more samples, up to
+/// six recordings in all (every task needs at most two; checked by
+/// [`within_limits`] in a debug build and by `sim/tests/evaluation.rs`).
 pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> {
     let (tools, _) = tool_keyframes(task);
     let start = fr3::Q_READY.to_vec();
@@ -341,13 +343,17 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
         if ratios.iter().all(|&r| r <= 1.0) {
             break;
         }
-        // Accelerations scale with 1/count² at a given distance.
+        // Accelerations scale with 1/count² at a given distance (2 % more for the IK's bends).
         for (c, r) in counts.iter_mut().zip(&ratios) {
             if *r > 1.0 {
                 *c = ((*c as f64) * r.sqrt() * 1.02).ceil() as usize;
             }
         }
     }
+    debug_assert!(
+        within_limits(&demos, &a_max),
+        "{task:?}: demonstrations still beyond the operated limits after {PACE_ATTEMPTS} recordings"
+    );
     demos
 }
 
@@ -365,8 +371,8 @@ pub fn demo_acceleration_limits(robot: &RobotModel) -> Vec<f64> {
         .collect()
 }
 
-/// Re-recordings at a slower pace [`demonstrations`] tries before it gives up (the last one is
-/// kept; every task's demonstrations are within the limits after at most two).
+/// Recordings [`demonstrations`] makes at most, each slower where the last was too fast (the
+/// last one is kept; every task's demonstrations are within the limits after at most two).
 const PACE_ATTEMPTS: usize = 6;
 
 /// Per tool segment (sample counts `counts`), the largest ratio of a demonstration's joint

@@ -341,8 +341,9 @@ fn continuous_chunk_motion_is_safe_and_faster_with_people() {
 }
 
 /// Issue 15 item 3: without people, PACS (continuous chunks) finishes every task at least 10 %
-/// sooner than `direct` (each action a target every 33 ms), with the same success: seeds 1–3,
-/// mean durations.
+/// sooner than `direct` (each action a target every 33 ms), with the same success: the mean
+/// duration over seeds 1–10, the rollouts of `docs/evaluation.md`'s speed table (handover's are
+/// bimodal: a test on a few seeds would depend on which).
 #[test]
 fn without_people_pacs_is_at_least_ten_percent_faster_than_direct_on_every_task() {
     for task in TaskKind::ALL {
@@ -353,7 +354,7 @@ fn without_people_pacs_is_at_least_ten_percent_faster_than_direct_on_every_task(
                 variant.motion = pacs_shield::ChunkMotion::Continuous;
             }
             let mut sum = 0.0;
-            for seed in 1..=3 {
+            for seed in 1..=10 {
                 let r = run_rollout(task, &variant, seed, false, None, 0).unwrap();
                 assert!(
                     r.episode.success,
@@ -361,7 +362,7 @@ fn without_people_pacs_is_at_least_ten_percent_faster_than_direct_on_every_task(
                 );
                 sum += r.episode.duration;
             }
-            sum / 3.0
+            sum / 10.0
         };
         let (pacs, direct) = (mean("pacs"), mean("direct"));
         assert!(

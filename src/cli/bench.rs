@@ -32,7 +32,7 @@ fn us(s: &StepStats) -> Value {
                 "steps_since_chunk": w.since_chunk, "verified": w.verified,
                 "binding": serde_json::from_str::<Value>(&w.binding).unwrap_or(Value::Null),
             });
-            // Only where the run kept a copy of the shield before the step.
+            // Where the run kept a copy of the shield before the step (not CBF).
             if let Some(r) = w.rerun {
                 v["rerun_us"] = json!(r * 1e6);
             }
