@@ -579,8 +579,8 @@ impl Trajectory {
         self.peak[i]
     }
 
-    /// Put the times (s, increasing, before the first recorded one) at which a blend passes
-    /// the waypoints it was not planned through in front of the waypoint times.
+    /// Put the times (s, non-decreasing, at or before the first recorded one) at which a blend
+    /// passes the waypoints it was not planned through in front of the waypoint times.
     pub(crate) fn prepend_waypoint_times(&mut self, times: &[f64]) {
         self.waypoint_times.splice(0..0, times.iter().copied());
         self.blended += times.len();

@@ -158,7 +158,7 @@ fn stats(
             let mut near = key[k.saturating_sub(50)..(k + 51).min(key.len())].to_vec();
             near.sort_by(f64::total_cmp);
             Some(SlowStep {
-                around: near[near.len() / 2],
+                around: quantile(&near, 0.5),
                 rerun: None,
                 step: k,
                 time: key[k],
@@ -175,32 +175,25 @@ fn stats(
     v.sort_by(f64::total_cmp);
     work.sort_by(f64::total_cmp);
     chunks.sort_by(f64::total_cmp);
-    let q = |v: &[f64], p: f64| {
-        if v.is_empty() {
-            0.0
-        } else {
-            v[((v.len() - 1) as f64 * p).round() as usize]
-        }
-    };
     StepStats {
         scenario: name.into(),
         steps: v.len(),
-        median: q(&v, 0.5),
-        p90: q(&v, 0.9),
-        p99: q(&v, 0.99),
-        p999: q(&v, 0.999),
+        median: quantile(&v, 0.5),
+        p90: quantile(&v, 0.9),
+        p99: quantile(&v, 0.99),
+        p999: quantile(&v, 0.999),
         max: v.last().copied().unwrap_or(0.0),
         over_50us,
         work_max: work.last().copied().unwrap_or(0.0),
-        work_p999: q(&work, 0.999),
+        work_p999: quantile(&work, 0.999),
         work_over_50us,
         floor_p999: 0.0,
         floor_max: 0.0,
         floor_over_50us: 0,
         verified_fraction: verified as f64 / v.len().max(1) as f64,
-        chunk_median: q(&chunks, 0.5),
-        chunk_p99: q(&chunks, 0.99),
-        chunk_p999: q(&chunks, 0.999),
+        chunk_median: quantile(&chunks, 0.5),
+        chunk_p99: quantile(&chunks, 0.99),
+        chunk_p999: quantile(&chunks, 0.999),
         chunk_max: chunks.last().copied().unwrap_or(0.0),
         chunk_over_100us,
         plan_median: 0.0,
@@ -250,11 +243,17 @@ fn floor_probe(nominal: f64) -> f64 {
 fn floor_figures(v: &mut [f64]) -> (f64, f64, usize) {
     let over = v.iter().filter(|&&x| x > 50e-6).count();
     v.sort_by(f64::total_cmp);
-    let p999 = v
-        .get(((v.len().max(1) - 1) as f64 * 0.999).round() as usize)
-        .copied()
-        .unwrap_or(0.0);
-    (p999, v.last().copied().unwrap_or(0.0), over)
+    (quantile(v, 0.999), v.last().copied().unwrap_or(0.0), over)
+}
+
+/// The `p`-quantile of the ascending `sorted` (nearest rank: the element at
+/// round((len − 1)·p)); 0 for an empty slice. Every figure of [`StepStats`] uses it.
+fn quantile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        0.0
+    } else {
+        sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+    }
 }
 
 /// Keypoints of the default human walking between 1.5 m and 1.0 m in front of the robot at time `t` (s).
@@ -542,20 +541,11 @@ fn run_walking_scenario(
     }
     if let Some(w) = &worker {
         plan_times.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            plan_times
-                .get(((plan_times.len().max(1) - 1) as f64 * p).round() as usize)
-                .copied()
-                .unwrap_or(0.0)
-        };
-        out.plan_median = q(0.5);
-        out.plan_p99 = q(0.99);
+        out.plan_median = quantile(&plan_times, 0.5);
+        out.plan_p99 = quantile(&plan_times, 0.99);
         out.plan_max = plan_times.last().copied().unwrap_or(0.0);
         offer_times.sort_by(f64::total_cmp);
-        out.offer_median = offer_times
-            .get(offer_times.len() / 2)
-            .copied()
-            .unwrap_or(0.0);
+        out.offer_median = quantile(&offer_times, 0.5);
         out.offer_max = offer_times.last().copied().unwrap_or(0.0);
         out.offers = offers;
         out.offers_taken = taken;
@@ -625,4 +615,61 @@ pub fn shield_objects_scenario_with(
                 .expect("valid measurement");
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn notes(n: usize) -> Vec<StepNote> {
+        (0..n)
+            .map(|k| StepNote {
+                since_chunk: k % 200,
+                verified: k % 2 == 0,
+                binding: crate::shield::Binding::NoProfile,
+            })
+            .collect()
+    }
+
+    /// Hand-computed figures: 1000 steps of 2 µs work (3 µs wall), one expensive step (500:
+    /// 100 µs) and a slow stretch (800–900: 40 µs). The expensive step's neighbourhood median
+    /// is the run's 2 µs; the stretch's first step (800, the slowest after 500 by index among
+    /// equals) has 50 steps of 2 µs and 51 of 40 µs around it: median 40 µs.
+    #[test]
+    fn stats_quantiles_and_neighbourhoods_are_exact() {
+        let mut work = vec![2e-6; 1000];
+        work[500] = 100e-6;
+        work[800..=900].iter_mut().for_each(|w| *w = 40e-6);
+        let wall: Vec<f64> = work.iter().map(|w| w + 1e-6).collect();
+        let s = stats("t", wall, work, &notes(1000), vec![5e-6, 7e-6, 200e-6]);
+        // Sorted wall: 898 × 3 µs, 101 × 41 µs, 1 × 101 µs; nearest ranks 500, 899, 989, 998.
+        assert_eq!(s.median, 3e-6);
+        assert_eq!(s.p90, 41e-6);
+        assert_eq!(s.p99, 41e-6);
+        assert_eq!(s.p999, 41e-6);
+        assert_eq!(s.max, 101e-6);
+        assert_eq!((s.over_50us, s.work_over_50us), (1, 1));
+        assert_eq!((s.work_max, s.work_p999), (100e-6, 40e-6));
+        assert_eq!(s.verified_fraction, 0.5);
+        assert_eq!(
+            (s.chunk_median, s.chunk_max, s.chunk_over_100us),
+            (7e-6, 200e-6, 1)
+        );
+        assert_eq!(s.slowest.len(), 8);
+        assert_eq!((s.slowest[0].step, s.slowest[0].time), (500, 100e-6));
+        assert_eq!(s.slowest[0].around, 2e-6);
+        assert_eq!((s.slowest[1].step, s.slowest[1].time), (800, 40e-6));
+        assert_eq!(s.slowest[1].around, 40e-6);
+        assert!(s.slowest.iter().all(|w| w.rerun.is_none()));
+    }
+
+    #[test]
+    fn floor_figures_count_and_rank_exactly() {
+        let mut v = vec![10e-6, 60e-6, 51e-6, 20e-6, 50e-6];
+        // Over 50 µs: 60 and 51 (50 itself is not over); p99.9 = rank round(4 · 0.999) = 4.
+        assert_eq!(floor_figures(&mut v), (60e-6, 60e-6, 2));
+        assert_eq!(floor_figures(&mut []), (0.0, 0.0, 0));
+        assert_eq!(quantile(&[1.0, 2.0, 3.0, 4.0], 0.5), 3.0);
+        assert_eq!(quantile(&[1.0, 2.0, 3.0], 0.5), 2.0);
+    }
 }

@@ -388,10 +388,7 @@ fn acceleration_ratios(demos: &[Vec<Vec<f64>>], counts: &[usize], a_max: &[f64])
     for d in demos {
         for m in 1..d.len().saturating_sub(1) {
             let r = (0..a_max.len().min(d[m].len()))
-                .map(|i| {
-                    ((d[m + 1][i] - 2.0 * d[m][i] + d[m - 1][i]) / (DEMO_DT * DEMO_DT)).abs()
-                        / a_max[i]
-                })
+                .map(|i| sample_acceleration(&d[m - 1..=m + 1], i) / a_max[i])
                 .fold(0.0, f64::max);
             for k in [segment[m], segment[m + 1]] {
                 ratios[k] = ratios[k].max(r);
@@ -406,11 +403,16 @@ fn acceleration_ratios(demos: &[Vec<Vec<f64>>], counts: &[usize], a_max: &[f64])
 pub fn within_limits(demos: &[Vec<Vec<f64>>], a_max: &[f64]) -> bool {
     demos.iter().all(|d| {
         d.windows(3).all(|w| {
-            (0..a_max.len().min(w[0].len())).all(|i| {
-                ((w[2][i] - 2.0 * w[1][i] + w[0][i]) / (DEMO_DT * DEMO_DT)).abs() <= a_max[i]
-            })
+            (0..a_max.len().min(w[0].len())).all(|i| sample_acceleration(w, i) <= a_max[i])
         })
     })
+}
+
+/// |acceleration| (rad/s²) of joint `i` at the middle of three consecutive demonstration
+/// samples `w` (their second difference at [`DEMO_DT`]): the one measure of a demonstration's
+/// pace that [`within_limits`] and the re-recording in [`demonstrations`] share.
+fn sample_acceleration(w: &[Vec<f64>], i: usize) -> f64 {
+    ((w[2][i] - 2.0 * w[1][i] + w[0][i]) / (DEMO_DT * DEMO_DT)).abs()
 }
 
 /// [`demonstrations`] computed once per task per process.
