@@ -236,7 +236,7 @@ pub struct Setup<'a> {
     /// Dynamic objects (each with its model, contact and true motion).
     pub objects: &'a [SimObject],
     /// The policy.
-    pub policy: &'a mut DemoSet,
+    pub policy: &'a mut dyn crate::policy::TaskPolicy,
     /// Sub-goals in order; success when all are reached.
     pub goals: &'a [Goal],
     /// Start configuration at rest (rad).
@@ -273,6 +273,7 @@ pub fn log_header(
     spec: &ConstraintSpec,
     script: &dyn HumanScript,
     objects: &[SimObject],
+    policy: &str,
 ) -> Header {
     let mut h = Header::new(
         ModelRef::Spec(Box::new(robot.spec().clone())),
@@ -288,7 +289,7 @@ pub fn log_header(
         })
         .collect();
     h.meta.insert("task".into(), spec.name.clone().into());
-    h.meta.insert("policy".into(), "nn-demonstration".into());
+    h.meta.insert("policy".into(), policy.into());
     h.meta.insert("filter".into(), label.into());
     h.meta.insert("human".into(), script.name().into());
     h

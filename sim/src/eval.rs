@@ -26,6 +26,36 @@ pub struct Variant {
     pub label: String,
     /// How chunk filters move across chunks (`pacs simulate --chunk-motion`).
     pub motion: ChunkMotion,
+    /// The policy that produces the chunks (`pacs simulate --policy`).
+    pub policy: PolicyKind,
+}
+
+/// Which policy stand-in an evaluation runs (`pacs simulate --policy`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PolicyKind {
+    /// [`crate::policy::DemoSet`]: nearest demonstrated state from the joint angles, with a
+    /// phase cost; random drift beyond 0.12 rad (the default).
+    #[default]
+    Nearest,
+    /// [`crate::policy::KernelPolicy`]: kernel regression learned from the demonstrations,
+    /// observing the last two timesteps and the sub-goals reached.
+    Kernel,
+}
+
+impl std::str::FromStr for PolicyKind {
+    type Err = crate::UnknownName;
+    fn from_str(s: &str) -> Result<Self, crate::UnknownName> {
+        match s {
+            "nearest" => Ok(Self::Nearest),
+            "kernel" => Ok(Self::Kernel),
+            o => Err(crate::UnknownName {
+                kind: "policy",
+                given: o.into(),
+                choices: "nearest, kernel".into(),
+            }),
+        }
+    }
 }
 
 /// Every method name `pacs simulate --method` accepts.
@@ -67,6 +97,7 @@ impl std::str::FromStr for Variant {
             mode,
             label: s.into(),
             motion: ChunkMotion::Stop,
+            policy: PolicyKind::Nearest,
         })
     }
 }
@@ -169,13 +200,21 @@ pub fn run_rollout(
         )?)),
         None => None,
     };
+    let mut learned;
+    let policy: &mut dyn crate::policy::TaskPolicy = match v.policy {
+        PolicyKind::Nearest => &mut scn.policy,
+        PolicyKind::Kernel => {
+            learned = crate::task::learned_policy(task);
+            &mut learned
+        }
+    };
     let setup = Setup {
         robot: &scn.robot,
         human: &scn.human,
         spec: &spec,
         script: scn.script.as_ref(),
         objects: &scn.objects,
-        policy: &mut scn.policy,
+        policy,
         goals: &goals,
         start: &scn.start,
         label: &v.label,

@@ -6,10 +6,66 @@
 
 use pacs_motion::chunk::{ActionKind, Chunk};
 
+mod kernel;
+pub use kernel::{KernelPolicy, Observation, Recording, TrainError};
+
 /// Anything that maps the current joint angles to an action chunk.
 pub trait ChunkPolicy {
     /// The next chunk for joint angles `q` (rad).
     fn chunk(&mut self, q: &[f64]) -> Chunk;
+}
+
+/// A policy as an episode runs it: a chunk for each observation, and the measures the
+/// evaluation reports.
+pub trait TaskPolicy {
+    /// The next chunk for `obs`.
+    fn act(&mut self, obs: &Observation) -> Chunk;
+    /// Distance (rad, Euclidean in joint space) from `q` to the nearest demonstrated
+    /// configuration.
+    fn deviation(&self, q: &[f64]) -> f64;
+    /// Chunks produced out of the training distribution so far.
+    fn ood_chunks(&self) -> usize;
+    /// Name in audit-log headers (`meta.policy`).
+    fn name(&self) -> &'static str;
+    /// Actions executed per chunk (h).
+    fn execute(&self) -> usize;
+}
+
+impl TaskPolicy for KernelPolicy {
+    fn act(&mut self, obs: &Observation) -> Chunk {
+        KernelPolicy::act(self, obs)
+    }
+    fn deviation(&self, q: &[f64]) -> f64 {
+        KernelPolicy::deviation(self, q)
+    }
+    fn ood_chunks(&self) -> usize {
+        KernelPolicy::ood_chunks(self)
+    }
+    fn name(&self) -> &'static str {
+        "kernel-regression"
+    }
+    fn execute(&self) -> usize {
+        self.execute
+    }
+}
+
+impl TaskPolicy for DemoSet {
+    /// Sees only the joint angles (`obs.q`).
+    fn act(&mut self, obs: &Observation) -> Chunk {
+        self.chunk(obs.q)
+    }
+    fn deviation(&self, q: &[f64]) -> f64 {
+        DemoSet::deviation(self, q)
+    }
+    fn ood_chunks(&self) -> usize {
+        DemoSet::ood_chunks(self)
+    }
+    fn name(&self) -> &'static str {
+        "nn-demonstration"
+    }
+    fn execute(&self) -> usize {
+        self.execute
+    }
 }
 
 /// A demonstrated joint path (dense waypoints) and the chunk parameters.

@@ -7,7 +7,7 @@
 
 use crate::humans::{Bystander, Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng};
 use crate::objects::{RollingSphere, SimObject, sphere_spec};
-use crate::policy::DemoSet;
+use crate::policy::{DemoSet, KernelPolicy, Recording};
 use pacs_models::object::ObjectContact;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
 use serde::Serialize;
@@ -430,6 +430,50 @@ fn cached_demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>
         c.insert(task, d.clone());
     }
     d
+}
+
+/// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), trained once per task
+/// per process (the same training data for every rollout). Each demonstrated configuration's
+/// stage is the number of sub-goals its tool point has reached, in order, by the episode's own
+/// rule (within the goal's tolerance).
+pub fn learned_policy(task: TaskKind) -> KernelPolicy {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    type Cache = Mutex<HashMap<TaskKind, KernelPolicy>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(p) = cache.lock().ok().and_then(|c| c.get(&task).cloned()) {
+        return p;
+    }
+    let robot = fr3::fr3();
+    let (tools, goal_idx) = tool_keyframes(task);
+    let recordings: Vec<Recording> = cached_demonstrations(&robot, task)
+        .into_iter()
+        .map(|path| {
+            let mut stage = 0;
+            let stages = path
+                .iter()
+                .map(|q| {
+                    let tool = tool_point(&robot, q);
+                    while let Some(&(k, _, tol)) = goal_idx.get(stage) {
+                        let d: f64 = (0..3).map(|i| (tool[i] - tools[k][i]).powi(2)).sum();
+                        if d.sqrt() > tol {
+                            break;
+                        }
+                        stage += 1;
+                    }
+                    stage
+                })
+                .collect();
+            Recording { path, stages }
+        })
+        .collect();
+    let p = KernelPolicy::train(&recordings, HORIZON, EXECUTE)
+        .expect("DEMOS ≥ 2 well-formed demonstrations");
+    if let Ok(mut c) = cache.lock() {
+        c.insert(task, p.clone());
+    }
+    p
 }
 
 /// Chunk parameters of the paper's policies: H = 16 actions, h = 8 executed.

@@ -78,6 +78,12 @@ pub struct SimulateArgs {
     /// reaches it). Single actions, direct and cbf are unaffected.
     #[arg(long, value_name = "MODE", default_value = "continuous", value_parser = ["continuous", "stop"])]
     pub chunk_motion: String,
+    /// The policy stand-in: `nearest` (nearest demonstrated state from the joint angles, a
+    /// phase cost, random drift beyond 0.12 rad from the data) or `kernel` (kernel regression
+    /// learned from the demonstrations, observing the last two timesteps and the sub-goals
+    /// reached; its kernel width chosen by leave-one-demonstration-out cross-validation).
+    #[arg(long, value_name = "P", default_value = "nearest", value_parser = ["nearest", "kernel"])]
+    pub policy: String,
     /// Do not write per-rollout audit logs (each is a few MB).
     #[arg(long)]
     pub no_logs: bool,
@@ -126,7 +132,14 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
     } else {
         pacs_shield::ChunkMotion::Stop
     };
-    variants.iter_mut().for_each(|v| v.motion = motion);
+    let policy: pacs_sim::eval::PolicyKind = args
+        .policy
+        .parse()
+        .map_err(|e| CliError::Input(format!("--policy: {e}")))?;
+    variants.iter_mut().for_each(|v| {
+        v.motion = motion;
+        v.policy = policy;
+    });
     if args.rollouts == 0 {
         return Err(CliError::Input("--rollouts: must be at least 1".into()));
     }
@@ -191,12 +204,22 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
     bar.finish_and_clear();
     let rows = summarize(&rollouts);
     let mut md = format!(
-        "# pacs simulate\n\nCommand: `pacs simulate --task {} --method {} --rollouts {} --seed {}{}`\n\n",
+        "# pacs simulate\n\nCommand: `pacs simulate --task {} --method {} --rollouts {} --seed {}{}{}{}`\n\n",
         args.task,
         args.method,
         args.rollouts,
         args.seed,
-        if args.no_human { " --no-human" } else { "" }
+        if args.no_human { " --no-human" } else { "" },
+        if args.chunk_motion == "stop" {
+            " --chunk-motion stop"
+        } else {
+            ""
+        },
+        if args.policy == "nearest" {
+            String::new()
+        } else {
+            format!(" --policy {}", args.policy)
+        }
     );
     md.push_str(&markdown(&rows));
     write(&args.out.join("summary.md"), &md)?;
@@ -227,6 +250,7 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
         eprintln!("{md}");
     }
     Ok(json!({
+        "policy": args.policy,
         "rows": rows_json,
         "summary": args.out.join("summary.md").display().to_string(),
         "plots": plots,

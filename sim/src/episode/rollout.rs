@@ -7,7 +7,7 @@ use super::{
 };
 use crate::humans::Camera;
 use crate::objects::ObjectCamera;
-use crate::policy::ChunkPolicy;
+use crate::policy::Observation;
 use crate::task::tool_point;
 use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::LogModels;
@@ -79,7 +79,7 @@ pub fn run_setup(
     } = out;
     let mut log = match log {
         Some(w) => {
-            let h = log_header(label, robot, human, spec, script, objects);
+            let h = log_header(label, robot, human, spec, script, objects, policy.name());
             let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
             l.event(0.0, "episode_start").map_err(invalid)?;
             Some(l)
@@ -117,9 +117,13 @@ pub fn run_setup(
     let n = robot.dof();
     let steps = (max_time / cfg.dt).round() as usize;
     let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
-    let chunk_every = policy.execute * action_every;
+    let chunk_every = policy.execute() * action_every;
     // Steps since the last chunk (the first chunk is due at once).
     let mut since_chunk = chunk_every;
+    // The actual joints over the last policy step Δt (one entry per safety step), so that a
+    // policy can observe q now and one Δt before (the paper's policies see two timesteps).
+    let mut past = vec![start.to_vec(); action_every];
+    let mut before = start.to_vec();
     let mut chunks_rejected = 0usize;
     let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
     let (mut violations, mut verified, mut min_sep, mut max_dev) =
@@ -147,9 +151,16 @@ pub fn run_setup(
     for k in 0..steps {
         steps_run += 1;
         let t = k as f64 * cfg.dt;
+        before.copy_from_slice(&past[k % action_every]);
+        past[k % action_every].copy_from_slice(&q);
+        let obs = Observation {
+            q: &q,
+            q_before: &before,
+            stage: next_goal,
+        };
         if method == Method::Direct {
             if k % chunk_every == 0 {
-                let c = policy.chunk(&q);
+                let c = policy.act(&obs);
                 waypoints.clear();
                 let mut w = q.clone();
                 for a in c.actions.iter().take(c.execute) {
@@ -177,7 +188,7 @@ pub fn run_setup(
                     .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
         {
             since_chunk = 0;
-            let c = policy.chunk(&q);
+            let c = policy.act(&obs);
             // An unplannable chunk is ignored by the filter (counted).
             if filter.set_chunk(t, &c).is_err() {
                 chunks_rejected += 1;

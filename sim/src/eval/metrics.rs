@@ -121,6 +121,7 @@ pub fn summarize(rollouts: &[Rollout]) -> Vec<Row> {
                 mode: None,
                 label: method.clone(),
                 motion: Default::default(),
+                policy: Default::default(),
             });
             Row {
                 task,
