@@ -1,25 +1,30 @@
-//! Train the kernel-regression policy of every task and print its cross-validation:
+//! Train the learned policies of every task (`pacs simulate --policy kernel` and
+//! `kernel-paced`) and print their cross-validation:
 //! `cargo run --release -p pacs-sim --example learned_policy`.
 use pacs_sim::task::{TaskKind, learned_policy};
 
 fn main() {
     for task in TaskKind::ALL {
-        let p = learned_policy(task);
-        println!(
-            "{}: kernel width {} (standard deviations)",
-            task.name(),
-            p.bandwidth()
-        );
-        for (b, e) in p.cross_validation() {
-            let mark = if b == p.bandwidth() {
-                "  <- chosen"
-            } else {
-                ""
-            };
+        for (paced, name) in [(false, "kernel"), (true, "kernel-paced")] {
+            let start = std::time::Instant::now();
+            let p = learned_policy(task, paced);
             println!(
-                "  width {b:>5}: held-out RMS error {:.5} rad{mark}",
-                e.sqrt()
+                "{} ({name}): kernel width {} standard deviations, trained in {:.2} s",
+                task.name(),
+                p.bandwidth(),
+                start.elapsed().as_secs_f64()
             );
+            for (b, e) in p.cross_validation() {
+                let mark = if b == p.bandwidth() {
+                    "  <- chosen"
+                } else {
+                    ""
+                };
+                println!(
+                    "  width {b:>5}: held-out RMS error {:.5} rad{mark}",
+                    e.sqrt()
+                );
+            }
         }
     }
 }

@@ -41,6 +41,9 @@ pub enum PolicyKind {
     /// [`crate::policy::KernelPolicy`]: kernel regression learned from the demonstrations,
     /// observing the last two timesteps and the sub-goals reached.
     Kernel,
+    /// [`PolicyKind::Kernel`], also trained on the demonstrations replayed at
+    /// [`crate::task::REPLAY_PACES`] of their pace.
+    KernelPaced,
 }
 
 impl std::str::FromStr for PolicyKind {
@@ -49,10 +52,11 @@ impl std::str::FromStr for PolicyKind {
         match s {
             "nearest" => Ok(Self::Nearest),
             "kernel" => Ok(Self::Kernel),
+            "kernel-paced" => Ok(Self::KernelPaced),
             o => Err(crate::UnknownName {
                 kind: "policy",
                 given: o.into(),
-                choices: "nearest, kernel".into(),
+                choices: "nearest, kernel, kernel-paced".into(),
             }),
         }
     }
@@ -203,8 +207,8 @@ pub fn run_rollout(
     let mut learned;
     let policy: &mut dyn crate::policy::TaskPolicy = match v.policy {
         PolicyKind::Nearest => &mut scn.policy,
-        PolicyKind::Kernel => {
-            learned = crate::task::learned_policy(task);
+        PolicyKind::Kernel | PolicyKind::KernelPaced => {
+            learned = crate::task::learned_policy(task, v.policy == PolicyKind::KernelPaced);
             &mut learned
         }
     };

@@ -432,17 +432,26 @@ fn cached_demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>
     d
 }
 
-/// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), trained once per task
-/// per process (the same training data for every rollout). Each demonstrated configuration's
-/// stage is the number of sub-goals its tool point has reached, in order, by the episode's own
-/// rule (within the goal's tolerance).
-pub fn learned_policy(task: TaskKind) -> KernelPolicy {
+/// Fractions of the recorded pace at which the `kernel-paced` policy also sees every
+/// demonstration ([`KernelPolicy::train`]): half and a quarter, the slow passages a human
+/// demonstrator's recordings contain.
+pub const REPLAY_PACES: [f64; 2] = [0.5, 0.25];
+
+/// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), with the replays at
+/// [`REPLAY_PACES`] if `paced`; trained once per task per process (the same training data for
+/// every rollout). Each demonstrated configuration's stage is the number of sub-goals its
+/// tool point has reached, in order, by the episode's own rule (within the goal's tolerance).
+pub fn learned_policy(task: TaskKind, paced: bool) -> KernelPolicy {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    type Cache = Mutex<HashMap<TaskKind, KernelPolicy>>;
+    type Cache = Mutex<HashMap<(TaskKind, bool), KernelPolicy>>;
     static CACHE: OnceLock<Cache> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(p) = cache.lock().ok().and_then(|c| c.get(&task).cloned()) {
+    if let Some(p) = cache
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&(task, paced)).cloned())
+    {
         return p;
     }
     let robot = fr3::fr3();
@@ -468,10 +477,11 @@ pub fn learned_policy(task: TaskKind) -> KernelPolicy {
             Recording { path, stages }
         })
         .collect();
-    let p = KernelPolicy::train(&recordings, HORIZON, EXECUTE)
-        .expect("DEMOS ≥ 2 well-formed demonstrations");
+    let paces: &[f64] = if paced { &REPLAY_PACES } else { &[] };
+    let p = KernelPolicy::train(&recordings, HORIZON, EXECUTE, paces)
+        .expect("DEMOS ≥ 2 well-formed demonstrations, positive paces");
     if let Ok(mut c) = cache.lock() {
-        c.insert(task, p.clone());
+        c.insert((task, paced), p.clone());
     }
     p
 }

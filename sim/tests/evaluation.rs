@@ -371,3 +371,53 @@ fn without_people_pacs_is_at_least_ten_percent_faster_than_direct_on_every_task(
         );
     }
 }
+
+/// Issue 15 item 4 with the policy learned from the demonstrations (`--policy kernel` and
+/// `kernel-paced`), handover without people, seed 1 (as `pacs simulate` runs it): continuous
+/// chunks finish; single actions, planned rest-to-rest, never do, in the two ways a learned
+/// policy that observes its own motion fails (`docs/evaluation.md`): trained on the
+/// demonstrations as recorded, the standing robot matches no demonstrated state and the policy
+/// leaves its data; trained also on slow replays, it stays in its data but copies the robot's
+/// slowness and stalls.
+#[test]
+fn with_the_learned_policy_chunks_finish_where_single_actions_fail() {
+    use pacs_sim::eval::PolicyKind;
+    let run = |method: &str, policy| {
+        let mut variant = v(method);
+        variant.motion = pacs_shield::ChunkMotion::Continuous;
+        variant.policy = policy;
+        run_rollout(TaskKind::Handover, &variant, 1, false, None, 0)
+            .unwrap()
+            .episode
+    };
+    for policy in [PolicyKind::Kernel, PolicyKind::KernelPaced] {
+        let chunks = run("pacs", policy);
+        assert!(chunks.success && chunks.ood_chunks == 0, "{policy:?}");
+        assert!(chunks.duration < 3.5, "{policy:?}: {}", chunks.duration);
+        let single = run("single-action", policy);
+        assert!(!single.success, "{policy:?}");
+        if policy == PolicyKind::Kernel {
+            assert!(single.ood_chunks > 10 && single.max_deviation > 1.0);
+        } else {
+            assert_eq!(single.ood_chunks, 0);
+            assert!(single.max_deviation < 0.12 && single.goals_reached <= 1);
+        }
+    }
+}
+
+/// Safety does not rest on the policy: with the learned policy, which leaves its data where
+/// PACS brakes for the person (crowded, seed 1), PACS still has no violating step against the
+/// true person and spheres, and the offline audit finds no certain violation.
+#[test]
+fn pacs_stays_safe_when_the_learned_policy_leaves_its_data() {
+    let mut variant = v("pacs");
+    variant.motion = pacs_shield::ChunkMotion::Continuous;
+    variant.policy = pacs_sim::eval::PolicyKind::Kernel;
+    let e = run_rollout(TaskKind::Crowded, &variant, 1, true, None, 0)
+        .unwrap()
+        .episode;
+    assert!(e.ood_chunks > 0, "the policy stayed in its data");
+    assert_eq!(e.violation_fraction, 0.0);
+    let audit = e.truth_audit.expect("truth audit");
+    assert_eq!(audit.certain_fraction, 0.0);
+}

@@ -79,10 +79,12 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "MODE", default_value = "continuous", value_parser = ["continuous", "stop"])]
     pub chunk_motion: String,
     /// The policy stand-in: `nearest` (nearest demonstrated state from the joint angles, a
-    /// phase cost, random drift beyond 0.12 rad from the data) or `kernel` (kernel regression
+    /// phase cost, random drift beyond 0.12 rad from the data), `kernel` (kernel regression
     /// learned from the demonstrations, observing the last two timesteps and the sub-goals
-    /// reached; its kernel width chosen by leave-one-demonstration-out cross-validation).
-    #[arg(long, value_name = "P", default_value = "nearest", value_parser = ["nearest", "kernel"])]
+    /// reached; its kernel width chosen by leave-one-demonstration-out cross-validation) or
+    /// `kernel-paced` (the same, also trained on every demonstration replayed at 1/2 and 1/4
+    /// of its pace).
+    #[arg(long, value_name = "P", default_value = "nearest", value_parser = ["nearest", "kernel", "kernel-paced"])]
     pub policy: String,
     /// Do not write per-rollout audit logs (each is a few MB).
     #[arg(long)]

@@ -19,8 +19,8 @@ use super::dist;
 use pacs_motion::chunk::{ActionKind, Chunk};
 
 /// Candidate kernel widths (in standard deviations of the standardised observation).
-const BANDWIDTHS: [f64; 12] = [
-    0.05, 0.07, 0.1, 0.14, 0.2, 0.28, 0.4, 0.56, 0.8, 1.1, 1.6, 2.2,
+const BANDWIDTHS: [f64; 14] = [
+    0.025, 0.035, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28, 0.4, 0.56, 0.8, 1.1, 1.6, 2.2,
 ];
 
 /// What a chunk policy observes when it is queried.
@@ -86,14 +86,47 @@ pub enum TrainError {
     /// A configuration is not finite.
     #[error("demonstration {0}: a joint angle is not finite")]
     NotFinite(usize),
+    /// A replay pace is not a positive number.
+    #[error("replay pace {0}: must be a positive finite fraction of the recorded pace")]
+    Pace(f64),
+}
+
+/// `r` replayed at `pace` times its recorded pace: configurations linearly interpolated at
+/// sample positions 0, pace, 2·pace, … (up to the last sample, which is kept); each keeps the
+/// stage of the nearest recorded sample.
+fn replay(r: &Recording, pace: f64) -> Recording {
+    let last = r.path.len() - 1;
+    let steps = (last as f64 / pace).ceil() as usize;
+    let (mut path, mut stages) = (Vec::with_capacity(steps + 1), Vec::with_capacity(steps + 1));
+    for j in 0..=steps {
+        let u = (j as f64 * pace).min(last as f64);
+        let i = (u.floor() as usize).min(last - 1);
+        let w = u - i as f64;
+        path.push(
+            r.path[i]
+                .iter()
+                .zip(&r.path[i + 1])
+                .map(|(a, b)| a + w * (b - a))
+                .collect(),
+        );
+        stages.push(r.stages[u.round() as usize]);
+    }
+    Recording { path, stages }
 }
 
 impl KernelPolicy {
     /// Learn a policy with chunks of `horizon` actions (`execute` executed) from `recordings`.
+    ///
+    /// With `paces` (each > 0, e.g. 0.5), the learner also sees every demonstration replayed
+    /// at those fractions of its recorded pace (the same configurations, linearly interpolated
+    /// at `pace` samples per step): data augmentation for the slow passages a human
+    /// demonstrator's recordings contain and machine-made ones do not. A replay belongs to its
+    /// demonstration in the cross-validation (held out with it).
     pub fn train(
         recordings: &[Recording],
         horizon: usize,
         execute: usize,
+        paces: &[f64],
     ) -> Result<Self, TrainError> {
         if recordings.len() < 2 {
             return Err(TrainError::TooFewDemonstrations(recordings.len()));
@@ -110,10 +143,23 @@ impl KernelPolicy {
             if r.path.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(TrainError::NotFinite(i));
             }
+            if r.stages.windows(2).any(|w| w[1] < w[0]) {
+                return Err(TrainError::Malformed(i));
+            }
+        }
+        if let Some(&p) = paces.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
+            return Err(TrainError::Pace(p));
+        }
+        let mut data: Vec<(usize, std::borrow::Cow<Recording>)> = Vec::new();
+        for (d, r) in recordings.iter().enumerate() {
+            data.push((d, std::borrow::Cow::Borrowed(r)));
+            for &pace in paces {
+                data.push((d, std::borrow::Cow::Owned(replay(r, pace))));
+            }
         }
         let (mut raw, mut outputs, mut stages, mut demo_of) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (d, r) in recordings.iter().enumerate() {
+        for (d, r) in data.iter().map(|(d, r)| (*d, r.as_ref())) {
             let len = r.path.len();
             for k in 0..len {
                 let here = &r.path[k];
@@ -155,6 +201,7 @@ impl KernelPolicy {
                     .map(|(v, (m, s))| (v - m) / s)
             })
             .collect();
+        let demos = recordings.iter().map(|r| r.path.clone()).collect();
         let mut p = Self {
             n,
             inputs,
@@ -165,7 +212,7 @@ impl KernelPolicy {
             scale,
             bandwidth: BANDWIDTHS[0],
             cv_errors: Vec::new(),
-            demos: recordings.iter().map(|r| r.path.clone()).collect(),
+            demos,
             horizon,
             execute,
             ood_radius: 0.12,
@@ -384,7 +431,7 @@ mod tests {
         // cross-validation keeps the narrowest width, where the neighbouring samples (0.71
         // standard deviations away) weigh exp(-100).
         let path = [0.0, 1.0, 2.0, 3.0, 4.0];
-        let mut p = KernelPolicy::train(&[rec(&path, 0), rec(&path, 0)], 3, 2).unwrap();
+        let mut p = KernelPolicy::train(&[rec(&path, 0), rec(&path, 0)], 3, 2, &[]).unwrap();
         assert_eq!(p.bandwidth(), BANDWIDTHS[0]);
         assert!(p.cross_validation().next().unwrap().1 < 1e-24);
         // At sample 1 (q = 1, one Δt after q = 0): the next three samples 2, 3, 4.
@@ -415,6 +462,7 @@ mod tests {
             ],
             2,
             1,
+            &[],
         )
         .unwrap();
         let up = offsets(&act(&mut p, obs(&[2.0], &[1.0], 0)));
@@ -437,6 +485,7 @@ mod tests {
             ],
             2,
             1,
+            &[],
         )
         .unwrap();
         let at = |p: &mut KernelPolicy, stage| offsets(&act(p, obs(&[2.0], &[1.0], stage)));
@@ -456,7 +505,7 @@ mod tests {
             rec(&[0.05, 0.2, 0.35, 0.7, 1.05, 1.3, 1.55, 1.6], 0),
             rec(&[-0.02, 0.1, 0.25, 0.55, 0.9, 1.25, 1.5, 1.62], 0),
         ];
-        let mut p = KernelPolicy::train(&demos, 4, 2).unwrap();
+        let mut p = KernelPolicy::train(&demos, 4, 2, &[]).unwrap();
         let (lo, hi) = p
             .outputs
             .iter()
@@ -483,26 +532,69 @@ mod tests {
     }
 
     #[test]
+    fn replays_interpolate_the_recording_at_the_given_pace() {
+        let r = Recording {
+            path: vec![vec![0.0], vec![1.0], vec![3.0]],
+            stages: vec![0, 1, 1],
+        };
+        let half = replay(&r, 0.5);
+        assert_eq!(
+            half.path,
+            [0.0, 0.5, 1.0, 2.0, 3.0].map(|x| vec![x]).to_vec()
+        );
+        // Sample positions 0, 0.5, 1, 1.5, 2 round to recorded samples 0, 1, 1, 2, 2.
+        assert_eq!(half.stages, [0, 1, 1, 1, 1]);
+        // A pace that does not divide the recording ends on its last sample.
+        let p = replay(&r, 0.75);
+        assert_eq!(p.path.last(), Some(&vec![3.0]));
+        assert_eq!(p.path.len(), 4);
+        // Replays belong to their demonstration: held out with it in the cross-validation.
+        let pol = KernelPolicy::train(&[r.clone(), r], 2, 1, &[0.5, 0.25]).unwrap();
+        assert_eq!(pol.demo_of.iter().filter(|&&d| d == 0).count(), 3 + 5 + 9);
+        assert_eq!(pol.demo_of.len(), 2 * 17);
+        assert_eq!(
+            pol.demos.len(),
+            2,
+            "deviation is measured from the recordings"
+        );
+    }
+
+    #[test]
     fn refuses_what_it_cannot_learn_from() {
         let one = [rec(&[0.0, 1.0], 0)];
         assert_eq!(
-            KernelPolicy::train(&one, 2, 1).unwrap_err(),
+            KernelPolicy::train(&one, 2, 1, &[]).unwrap_err(),
             TrainError::TooFewDemonstrations(1)
         );
         let mut bad = rec(&[0.0, 1.0], 0);
         bad.stages.pop();
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0, 1.0], 0), bad], 2, 1).unwrap_err(),
+            KernelPolicy::train(&[rec(&[0.0, 1.0], 0), bad], 2, 1, &[]).unwrap_err(),
             TrainError::Malformed(1)
         );
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0, f64::NAN], 0), rec(&[0.0, 1.0], 0)], 2, 1)
+            KernelPolicy::train(&[rec(&[0.0, f64::NAN], 0), rec(&[0.0, 1.0], 0)], 2, 1, &[])
                 .unwrap_err(),
             TrainError::NotFinite(0)
         );
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0], 0), rec(&[0.0, 1.0], 0)], 2, 1).unwrap_err(),
+            KernelPolicy::train(&[rec(&[0.0], 0), rec(&[0.0, 1.0], 0)], 2, 1, &[]).unwrap_err(),
             TrainError::Malformed(0)
         );
+        let going_back = Recording {
+            path: vec![vec![0.0], vec![1.0]],
+            stages: vec![1, 0],
+        };
+        assert_eq!(
+            KernelPolicy::train(&[rec(&[0.0, 1.0], 0), going_back], 2, 1, &[]).unwrap_err(),
+            TrainError::Malformed(1)
+        );
+        let two = [rec(&[0.0, 1.0], 0), rec(&[0.0, 1.0], 0)];
+        for pace in [0.0, -0.5, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                KernelPolicy::train(&two, 2, 1, &[pace]),
+                Err(TrainError::Pace(_))
+            ));
+        }
     }
 }
