@@ -13,7 +13,9 @@
 //!
 //! Nothing here is tuned to the evaluation: the features are standardised with the training
 //! data's own spread (z-scores), and the kernel width is the one that best predicts each
-//! demonstration's chunks from the other demonstrations (leave-one-demonstration-out).
+//! demonstration's chunks from the other demonstrations (leave-one-demonstration-out). The
+//! replay paces of the augmented variant (`crate::task::REPLAY_PACES`) were chosen once
+//! (1/2 and 1/4) and not varied.
 
 use super::dist;
 use pacs_motion::chunk::{ActionKind, Chunk};
@@ -86,6 +88,14 @@ pub enum TrainError {
     /// A configuration is not finite.
     #[error("demonstration {0}: a joint angle is not finite")]
     NotFinite(usize),
+    /// The chunk needs 1 ≤ executed ≤ horizon actions.
+    #[error("chunk of {horizon} actions with {execute} executed: needs 1 ≤ executed ≤ horizon")]
+    Chunk {
+        /// Actions per chunk (H).
+        horizon: usize,
+        /// Executed actions (h).
+        execute: usize,
+    },
     /// A replay pace is not a positive number.
     #[error("replay pace {0}: must be a positive finite fraction of the recorded pace")]
     Pace(f64),
@@ -130,6 +140,9 @@ impl KernelPolicy {
     ) -> Result<Self, TrainError> {
         if recordings.len() < 2 {
             return Err(TrainError::TooFewDemonstrations(recordings.len()));
+        }
+        if horizon == 0 || execute == 0 || execute > horizon {
+            return Err(TrainError::Chunk { horizon, execute });
         }
         let n = recordings[0].path.first().map_or(0, Vec::len);
         for (i, r) in recordings.iter().enumerate() {
@@ -343,6 +356,7 @@ impl KernelPolicy {
     /// The chunk for `obs`: the predicted offsets of the next H configurations, as deltas from
     /// the current joint angles.
     pub fn act(&mut self, obs: &Observation) -> Chunk {
+        debug_assert!(obs.q.len() == self.n && obs.q_before.len() == self.n);
         if self.deviation(obs.q) > self.ood_radius {
             self.ood_chunks += 1;
         }
@@ -590,6 +604,15 @@ mod tests {
             TrainError::Malformed(1)
         );
         let two = [rec(&[0.0, 1.0], 0), rec(&[0.0, 1.0], 0)];
+        for (h, e) in [(0, 0), (2, 0), (2, 3)] {
+            assert_eq!(
+                KernelPolicy::train(&two, h, e, &[]).unwrap_err(),
+                TrainError::Chunk {
+                    horizon: h,
+                    execute: e
+                }
+            );
+        }
         for pace in [0.0, -0.5, f64::NAN, f64::INFINITY] {
             assert!(matches!(
                 KernelPolicy::train(&two, 2, 1, &[pace]),
