@@ -182,10 +182,12 @@ fn simulate_runs_the_learned_policy_and_says_so() {
     let header: serde_json::Value = serde_json::from_str(log.lines().next().unwrap()).unwrap();
     assert_eq!(header["meta"]["policy"], "kernel-regression", "{header}");
     let _ = std::fs::remove_dir_all(&dir);
+    // An unknown policy is an input error (exit 3, as an unknown task or method), naming it.
     let out = pacs()
         .args(["simulate", "--policy", "oracle"])
         .output()
         .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("oracle"));
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--policy") && err.contains("oracle"), "{err}");
 }

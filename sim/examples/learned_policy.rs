@@ -14,6 +14,16 @@ fn main() {
                 p.bandwidth(),
                 start.elapsed().as_secs_f64()
             );
+            let s = p.feature_scales();
+            let n = s.len() / 2;
+            let fmt = |v: &[f64]| {
+                v.iter()
+                    .map(|x| format!("{x:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            println!("  spread of the joint angles (rad):   {}", fmt(&s[..n]));
+            println!("  spread of the motion per Δt (rad):  {}", fmt(&s[n..]));
             for (b, e) in p.cross_validation() {
                 let mark = if b == p.bandwidth() {
                     "  <- chosen"

@@ -138,6 +138,8 @@ pub struct Rollout {
     pub task: TaskKind,
     /// Method label.
     pub method: String,
+    /// The policy that produced the chunks.
+    pub policy: PolicyKind,
     /// Rollout seed.
     pub seed: u64,
     /// The audit log written, if any.
@@ -239,6 +241,7 @@ pub fn run_rollout(
     Ok(Rollout {
         task,
         method: v.label.clone(),
+        policy: v.policy,
         seed,
         log: log.map(Path::to_path_buf),
         episode,

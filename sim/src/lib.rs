@@ -5,8 +5,9 @@
 //!   measurement model with delay and bounded noise;
 //! - [`objects`]: scripted dynamic objects (the rolling spheres) with their object models and
 //!   a measurement model;
-//! - [`policy`]: the [`policy::ChunkPolicy`] trait and a nearest-neighbour demonstration policy that
-//!   emits chunks of joint deltas from the current joint angles only;
+//! - [`policy`]: the [`policy::TaskPolicy`] trait, a nearest-neighbour demonstration policy that
+//!   emits chunks of joint deltas from the current joint angles only, and a policy learned from
+//!   the demonstrations by kernel regression on the last two observations;
 //! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy, a human and
 //!   objects, with ground-truth safety metrics (exact geometry against the true human and objects).
 //!

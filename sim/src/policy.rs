@@ -1,13 +1,46 @@
-//! Chunked policies. A trained diffusion policy is not available here: [`Demonstration`] is a
-//! nearest-neighbour stand-in over a demonstrated joint path that, like the paper's policies, sees
-//! only the current joint angles (no velocity) and outputs H joint deltas. Slowing down along the
-//! path keeps it in distribution; being pushed off the path makes its chunks pull back toward the
-//! demonstration from wherever the robot is (degrading the motion).
+//! Chunked policies. A trained diffusion policy is not available here; three stand-ins are:
+//! - [`Demonstration`]: a nearest-neighbour policy over one demonstrated joint path;
+//! - [`DemoSet`] (`pacs simulate --policy nearest`, the default): a nearest-neighbour policy
+//!   over several demonstrations that, like the paper's requirement for the filter, sees only
+//!   the current joint angles (no velocity) and outputs H joint deltas. Slowing down along the
+//!   path keeps it in distribution; being pushed off the path makes its chunks pull back toward
+//!   the demonstration, and beyond [`OOD_RADIUS`] it drifts at random;
+//! - [`KernelPolicy`] (`--policy kernel`, `kernel-paced`): a policy learned from the same
+//!   demonstrations by kernel regression, which observes the last two timesteps
+//!   ([`Observation`]) as the paper's policies do ([`kernel`]).
+//!
+//! Episodes run them through [`TaskPolicy`].
 
 use pacs_motion::chunk::{ActionKind, Chunk};
 
-mod kernel;
-pub use kernel::{KernelPolicy, Observation, Recording, TrainError};
+pub mod kernel;
+pub use kernel::{KernelPolicy, Recording, TrainError};
+
+/// Distance (rad, Euclidean in joint space) from every demonstrated configuration beyond which
+/// a policy counts a chunk as out of distribution.
+pub const OOD_RADIUS: f64 = 0.12;
+
+/// What a chunk policy observes when it is queried.
+#[derive(Debug, Clone, Copy)]
+pub struct Observation<'a> {
+    /// Joint angles now (rad).
+    pub q: &'a [f64],
+    /// Joint angles one policy step Δt earlier (rad; equal to `q` at the start).
+    pub q_before: &'a [f64],
+    /// How many of the task's sub-goals have been reached (the gripper's state: empty before
+    /// the pick, holding after it), as a real policy sees it in its observations.
+    pub stage: usize,
+}
+
+/// Distance (rad, Euclidean in joint space) from `q` to the nearest of `configurations`.
+pub(crate) fn nearest_distance<'a>(
+    configurations: impl Iterator<Item = &'a Vec<f64>>,
+    q: &[f64],
+) -> f64 {
+    configurations
+        .map(|p| dist(p, q))
+        .fold(f64::INFINITY, f64::min)
+}
 
 /// Anything that maps the current joint angles to an action chunk.
 pub trait ChunkPolicy {
@@ -42,10 +75,14 @@ impl TaskPolicy for KernelPolicy {
         KernelPolicy::ood_chunks(self)
     }
     fn name(&self) -> &'static str {
-        "kernel-regression"
+        if self.paced() {
+            "kernel-regression-paced"
+        } else {
+            "kernel-regression"
+        }
     }
     fn execute(&self) -> usize {
-        self.execute
+        KernelPolicy::execute(self)
     }
 }
 
@@ -111,10 +148,7 @@ impl Demonstration {
 
     /// Joint-space distance (rad, Euclidean) from `q` to the demonstrated path's points.
     pub fn deviation(&self, q: &[f64]) -> f64 {
-        self.path
-            .iter()
-            .map(|p| dist(p, q))
-            .fold(f64::INFINITY, f64::min)
+        nearest_distance(self.path.iter(), q)
     }
 }
 
@@ -196,7 +230,7 @@ impl DemoSet {
             demos,
             horizon,
             execute,
-            ood_radius: 0.12,
+            ood_radius: OOD_RADIUS,
             pull: 0.15,
             window: 24,
             progress: 0,
@@ -223,11 +257,7 @@ impl DemoSet {
 
     /// Distance (rad) from `q` to the nearest demonstrated configuration of any demonstration.
     pub fn deviation(&self, q: &[f64]) -> f64 {
-        self.demos
-            .iter()
-            .flatten()
-            .map(|p| dist(p, q))
-            .fold(f64::INFINITY, f64::min)
+        nearest_distance(self.demos.iter().flatten(), q)
     }
 
     /// Number of chunks produced out of distribution so far.

@@ -7,6 +7,7 @@
 
 use crate::humans::{Bystander, Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng};
 use crate::objects::{RollingSphere, SimObject, sphere_spec};
+use crate::policy::kernel::replay_path;
 use crate::policy::{DemoSet, KernelPolicy, Recording};
 use pacs_models::object::ObjectContact;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
@@ -433,57 +434,69 @@ fn cached_demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>
 }
 
 /// Fractions of the recorded pace at which the `kernel-paced` policy also sees every
-/// demonstration ([`KernelPolicy::train`]): half and a quarter, the slow passages a human
+/// demonstration ([`replay_path`]): half and a quarter, the slow passages a human
 /// demonstrator's recordings contain.
 pub const REPLAY_PACES: [f64; 2] = [0.5, 0.25];
 
-/// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), with the replays at
+/// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), with their replays at
 /// [`REPLAY_PACES`] if `paced`; trained once per task per process (the same training data for
-/// every rollout). Each demonstrated configuration's stage is the number of sub-goals its
-/// tool point has reached, in order, by the episode's own rule (within the goal's tolerance).
+/// every rollout; clones share it). Each configuration's stage, recorded or replayed, is the
+/// number of sub-goals its tool point has reached, in order, by the episode's own rule (within
+/// the goal's tolerance).
 pub fn learned_policy(task: TaskKind, paced: bool) -> KernelPolicy {
     use std::collections::HashMap;
-    use std::sync::{Mutex, OnceLock};
-    type Cache = Mutex<HashMap<(TaskKind, bool), KernelPolicy>>;
+    use std::sync::{Arc, Mutex, OnceLock};
+    type Cache = Mutex<HashMap<(TaskKind, bool), Arc<OnceLock<KernelPolicy>>>>;
     static CACHE: OnceLock<Cache> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(p) = cache
-        .lock()
-        .ok()
-        .and_then(|c| c.get(&(task, paced)).cloned())
-    {
-        return p;
-    }
+    // One cell per key: concurrent rollouts wait for one training instead of each training.
+    let cell = match cache.lock() {
+        Ok(mut c) => c.entry((task, paced)).or_default().clone(),
+        Err(_) => Arc::new(OnceLock::new()),
+    };
+    cell.get_or_init(|| train_policy(task, paced)).clone()
+}
+
+fn train_policy(task: TaskKind, paced: bool) -> KernelPolicy {
     let robot = fr3::fr3();
     let (tools, goal_idx) = tool_keyframes(task);
-    let recordings: Vec<Recording> = cached_demonstrations(&robot, task)
-        .into_iter()
-        .map(|path| {
-            let mut stage = 0;
-            let stages = path
-                .iter()
-                .map(|q| {
-                    let tool = tool_point(&robot, q);
-                    while let Some(&(k, _, tol)) = goal_idx.get(stage) {
-                        let d: f64 = (0..3).map(|i| (tool[i] - tools[k][i]).powi(2)).sum();
-                        if d.sqrt() > tol {
-                            break;
-                        }
-                        stage += 1;
+    let stages = |path: &[Vec<f64>]| -> Vec<usize> {
+        let mut stage = 0;
+        path.iter()
+            .map(|q| {
+                let tool = tool_point(&robot, q);
+                while let Some(&(k, _, tol)) = goal_idx.get(stage) {
+                    let d: f64 = (0..3).map(|i| (tool[i] - tools[k][i]).powi(2)).sum();
+                    if d.sqrt() > tol {
+                        break;
                     }
-                    stage
-                })
-                .collect();
-            Recording { path, stages }
-        })
-        .collect();
+                    stage += 1;
+                }
+                stage
+            })
+            .collect()
+    };
     let paces: &[f64] = if paced { &REPLAY_PACES } else { &[] };
-    let p = KernelPolicy::train(&recordings, HORIZON, EXECUTE, paces)
-        .expect("DEMOS ≥ 2 well-formed demonstrations, positive paces");
-    if let Ok(mut c) = cache.lock() {
-        c.insert((task, paced), p.clone());
+    let mut recordings = Vec::new();
+    for (demonstration, path) in cached_demonstrations(&robot, task).into_iter().enumerate() {
+        for &pace in paces {
+            let replay = replay_path(&path, pace).expect("REPLAY_PACES within [MIN_PACE, 1]");
+            recordings.push(Recording {
+                stages: stages(&replay),
+                path: replay,
+                demonstration,
+                pace,
+            });
+        }
+        recordings.push(Recording {
+            stages: stages(&path),
+            path,
+            demonstration,
+            pace: 1.0,
+        });
     }
-    p
+    KernelPolicy::train(&recordings, HORIZON, EXECUTE)
+        .expect("DEMOS ≥ 2 well-formed demonstrations")
 }
 
 /// Chunk parameters of the paper's policies: H = 16 actions, h = 8 executed.

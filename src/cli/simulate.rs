@@ -43,7 +43,11 @@ demonstrations (rad), fraction of rollouts in which the policy left its training
 Outputs in --out: summary.md, summary.json (rows), rollouts.json (every rollout), TASK-paths.svg
 (tool paths coloured by speed, demonstrations shaded), TASK-separation.svg, logs/*.jsonl (audit
 format v1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: a JSON object with the
-rows, the summary path, the plot paths and the log directory.
+policy, the rows, the summary path, the plot paths and the log directory.
+
+Policies (--policy): nearest (default; the hand-written nearest-neighbour stand-in), kernel
+(kernel regression learned from the demonstrations, observing the last two timesteps),
+kernel-paced (the same, also trained on the demonstrations replayed at 1/2 and 1/4 pace).
 
 Examples:
   pacs simulate --task sorting --method off,pacs,cbf --rollouts 20
@@ -84,7 +88,7 @@ pub struct SimulateArgs {
     /// reached; its kernel width chosen by leave-one-demonstration-out cross-validation) or
     /// `kernel-paced` (the same, also trained on every demonstration replayed at 1/2 and 1/4
     /// of its pace).
-    #[arg(long, value_name = "P", default_value = "nearest", value_parser = ["nearest", "kernel", "kernel-paced"])]
+    #[arg(long, value_name = "P", default_value = "nearest")]
     pub policy: String,
     /// Do not write per-rollout audit logs (each is a few MB).
     #[arg(long)]

@@ -120,10 +120,6 @@ pub fn run_setup(
     let chunk_every = policy.execute() * action_every;
     // Steps since the last chunk (the first chunk is due at once).
     let mut since_chunk = chunk_every;
-    // The actual joints over the last policy step Δt (one entry per safety step), so that a
-    // policy can observe q now and one Δt before (the paper's policies see two timesteps).
-    let mut past = vec![start.to_vec(); action_every];
-    let mut before = start.to_vec();
     let mut chunks_rejected = 0usize;
     let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
     let (mut violations, mut verified, mut min_sep, mut max_dev) =
@@ -138,6 +134,11 @@ pub fn run_setup(
     let mut prev_tool = tool;
     let mut path_len = 0.0;
     tracking.apply(0.0, &mut q, &mut dq);
+    // The actual joints over the last policy step Δt (one entry per safety step), so that a
+    // policy can observe q now and one Δt before (the paper's policies see two timesteps); at
+    // rest before the start.
+    let mut past = vec![q.clone(); action_every];
+    let mut before = q.clone();
     if let Some(a) = auditor.as_mut() {
         a.push_human(0.0, 0.0, &script.keypoints(0.0))
             .map_err(invalid)?;

@@ -13,43 +13,73 @@
 //!
 //! Nothing here is tuned to the evaluation: the features are standardised with the training
 //! data's own spread (z-scores), and the kernel width is the one that best predicts each
-//! demonstration's chunks from the other demonstrations (leave-one-demonstration-out). The
-//! replay paces of the augmented variant (`crate::task::REPLAY_PACES`) were chosen once
-//! (1/2 and 1/4) and not varied.
+//! demonstration's chunks from the other demonstrations (leave-one-demonstration-out).
+//! Demonstrations replayed at a slower pace ([`replay_path`]) may be added to the training
+//! data; they are held out with their demonstration. The evaluation's replay paces
+//! (`crate::task::REPLAY_PACES`) were chosen once (1/2 and 1/4) and not varied.
 
-use super::dist;
+use super::{OOD_RADIUS, Observation, nearest_distance};
 use pacs_motion::chunk::{ActionKind, Chunk};
+use std::sync::Arc;
 
 /// Candidate kernel widths (in standard deviations of the standardised observation).
 const BANDWIDTHS: [f64; 14] = [
     0.025, 0.035, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28, 0.4, 0.56, 0.8, 1.1, 1.6, 2.2,
 ];
 
-/// What a chunk policy observes when it is queried.
-#[derive(Debug, Clone, Copy)]
-pub struct Observation<'a> {
-    /// Joint angles now (rad).
-    pub q: &'a [f64],
-    /// Joint angles one policy step Δt earlier (rad; equal to `q` at the start).
-    pub q_before: &'a [f64],
-    /// How many of the task's sub-goals have been reached (the gripper's state: empty before
-    /// the pick, holding after it), as a real policy sees it in its observations.
-    pub stage: usize,
-}
+/// Smallest spread (rad) a feature is standardised with: differences below a milliradian (the
+/// order of a robot's tracking error) carry no information about the task, so a joint that
+/// hardly moves in the data must not dominate the distance.
+pub const MIN_FEATURE_SCALE: f64 = 1e-3;
 
-/// The training data of one demonstration.
+/// Slowest replay pace accepted by [`replay_path`] (a fraction of the recorded pace).
+pub const MIN_PACE: f64 = 0.01;
+
+/// The training data of one demonstration, or of a replay of one.
 #[derive(Debug, Clone)]
 pub struct Recording {
     /// Joint configurations, one per policy step Δt (rad).
     pub path: Vec<Vec<f64>>,
     /// Sub-goals reached at each configuration (non-decreasing).
     pub stages: Vec<usize>,
+    /// Which demonstration this is (a replay: of which); held out together in the
+    /// cross-validation.
+    pub demonstration: usize,
+    /// Fraction of the recorded pace ([`MIN_PACE`]..=1; 1: the recording itself).
+    pub pace: f64,
 }
 
-/// Kernel-regression chunk policy (see the module documentation).
-#[derive(Debug, Clone)]
-pub struct KernelPolicy {
+/// `path` replayed at `pace` times its recorded pace ([`MIN_PACE`] ≤ pace ≤ 1): the
+/// configurations linearly interpolated at sample positions 0, pace, 2·pace, … up to the last
+/// sample, which is always included. Label its stages by the same rule as the recording's.
+pub fn replay_path(path: &[Vec<f64>], pace: f64) -> Result<Vec<Vec<f64>>, TrainError> {
+    if !(MIN_PACE..=1.0).contains(&pace) {
+        return Err(TrainError::Pace(pace));
+    }
+    let Some(last) = path.len().checked_sub(1).filter(|&l| l > 0) else {
+        return Ok(path.to_vec());
+    };
+    let steps = (last as f64 / pace).ceil() as usize;
+    Ok((0..=steps)
+        .map(|j| {
+            let u = (j as f64 * pace).min(last as f64);
+            let i = (u.floor() as usize).min(last - 1);
+            let w = u - i as f64;
+            path[i]
+                .iter()
+                .zip(&path[i + 1])
+                .map(|(a, b)| a + w * (b - a))
+                .collect()
+        })
+        .collect())
+}
+
+/// What training fixed: the standardised data, the kernel width and its cross-validation.
+#[derive(Debug)]
+struct Model {
     n: usize,
+    horizon: usize,
+    execute: usize,
     /// Standardised observations, `2n` per sample: q, then q − q(t − Δt).
     inputs: Vec<f64>,
     /// Per sample the next H demonstrated configurations relative to the sample's own (rad),
@@ -63,14 +93,16 @@ pub struct KernelPolicy {
     bandwidth: f64,
     /// Leave-one-demonstration-out mean squared chunk error (rad²) at each of [`BANDWIDTHS`].
     cv_errors: Vec<f64>,
+    /// The recorded configurations (not the replays), for the deviation measure.
     demos: Vec<Vec<Vec<f64>>>,
-    /// Chunk length H.
-    pub horizon: usize,
-    /// Executed actions h.
-    pub execute: usize,
-    /// Distance (rad) from every demonstrated configuration beyond which a chunk is counted as
-    /// out of distribution (a measure only: it does not change what the policy does).
-    pub ood_radius: f64,
+    paced: bool,
+}
+
+/// Kernel-regression chunk policy (see the module documentation). Clones share the trained
+/// model.
+#[derive(Debug, Clone)]
+pub struct KernelPolicy {
+    model: Arc<Model>,
     ood_chunks: usize,
     weights: Vec<f64>,
 }
@@ -81,12 +113,14 @@ pub enum TrainError {
     /// Cross-validation needs at least two demonstrations.
     #[error("{0} demonstration(s): leave-one-out cross-validation needs at least 2")]
     TooFewDemonstrations(usize),
-    /// A demonstration is shorter than 2 samples, has a configuration of another size, or its
-    /// stages do not match its samples.
-    #[error("demonstration {0}: needs ≥ 2 samples of the same size and one stage per sample")]
+    /// A recording is shorter than 2 samples, has a configuration of another size, or its
+    /// stages do not match its samples or decrease.
+    #[error(
+        "recording {0}: needs ≥ 2 samples of the same size and one non-decreasing stage per sample"
+    )]
     Malformed(usize),
     /// A configuration is not finite.
-    #[error("demonstration {0}: a joint angle is not finite")]
+    #[error("recording {0}: a joint angle is not finite")]
     NotFinite(usize),
     /// The chunk needs 1 ≤ executed ≤ horizon actions.
     #[error("chunk of {horizon} actions with {execute} executed: needs 1 ≤ executed ≤ horizon")]
@@ -96,50 +130,25 @@ pub enum TrainError {
         /// Executed actions (h).
         execute: usize,
     },
-    /// A replay pace is not a positive number.
-    #[error("replay pace {0}: must be a positive finite fraction of the recorded pace")]
+    /// A replay pace outside [`MIN_PACE`]..=1.
+    #[error("replay pace {0}: must be a fraction of the recorded pace in [0.01, 1]")]
     Pace(f64),
 }
 
-/// `r` replayed at `pace` times its recorded pace: configurations linearly interpolated at
-/// sample positions 0, pace, 2·pace, … (up to the last sample, which is kept); each keeps the
-/// stage of the nearest recorded sample.
-fn replay(r: &Recording, pace: f64) -> Recording {
-    let last = r.path.len() - 1;
-    let steps = (last as f64 / pace).ceil() as usize;
-    let (mut path, mut stages) = (Vec::with_capacity(steps + 1), Vec::with_capacity(steps + 1));
-    for j in 0..=steps {
-        let u = (j as f64 * pace).min(last as f64);
-        let i = (u.floor() as usize).min(last - 1);
-        let w = u - i as f64;
-        path.push(
-            r.path[i]
-                .iter()
-                .zip(&r.path[i + 1])
-                .map(|(a, b)| a + w * (b - a))
-                .collect(),
-        );
-        stages.push(r.stages[u.round() as usize]);
-    }
-    Recording { path, stages }
-}
-
 impl KernelPolicy {
-    /// Learn a policy with chunks of `horizon` actions (`execute` executed) from `recordings`.
-    ///
-    /// With `paces` (each > 0, e.g. 0.5), the learner also sees every demonstration replayed
-    /// at those fractions of its recorded pace (the same configurations, linearly interpolated
-    /// at `pace` samples per step): data augmentation for the slow passages a human
-    /// demonstrator's recordings contain and machine-made ones do not. A replay belongs to its
-    /// demonstration in the cross-validation (held out with it).
+    /// Learn a policy with chunks of `horizon` actions (`execute` executed) from `recordings`
+    /// (at least two distinct demonstrations; replays of them may be added, see
+    /// [`replay_path`]).
     pub fn train(
         recordings: &[Recording],
         horizon: usize,
         execute: usize,
-        paces: &[f64],
     ) -> Result<Self, TrainError> {
-        if recordings.len() < 2 {
-            return Err(TrainError::TooFewDemonstrations(recordings.len()));
+        let mut distinct: Vec<usize> = recordings.iter().map(|r| r.demonstration).collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        if distinct.len() < 2 {
+            return Err(TrainError::TooFewDemonstrations(distinct.len()));
         }
         if horizon == 0 || execute == 0 || execute > horizon {
             return Err(TrainError::Chunk { horizon, execute });
@@ -150,29 +159,20 @@ impl KernelPolicy {
                 || r.path.len() < 2
                 || r.stages.len() != r.path.len()
                 || r.path.iter().any(|q| q.len() != n)
+                || r.stages.windows(2).any(|w| w[1] < w[0])
             {
                 return Err(TrainError::Malformed(i));
             }
             if r.path.iter().flatten().any(|x| !x.is_finite()) {
                 return Err(TrainError::NotFinite(i));
             }
-            if r.stages.windows(2).any(|w| w[1] < w[0]) {
-                return Err(TrainError::Malformed(i));
-            }
-        }
-        if let Some(&p) = paces.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
-            return Err(TrainError::Pace(p));
-        }
-        let mut data: Vec<(usize, std::borrow::Cow<Recording>)> = Vec::new();
-        for (d, r) in recordings.iter().enumerate() {
-            data.push((d, std::borrow::Cow::Borrowed(r)));
-            for &pace in paces {
-                data.push((d, std::borrow::Cow::Owned(replay(r, pace))));
+            if !(MIN_PACE..=1.0).contains(&r.pace) {
+                return Err(TrainError::Pace(r.pace));
             }
         }
         let (mut raw, mut outputs, mut stages, mut demo_of) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (d, r) in data.iter().map(|(d, r)| (*d, r.as_ref())) {
+        for r in recordings {
             let len = r.path.len();
             for k in 0..len {
                 let here = &r.path[k];
@@ -184,7 +184,7 @@ impl KernelPolicy {
                     outputs.extend(next.iter().zip(here).map(|(a, b)| a - b));
                 }
                 stages.push(r.stages[k]);
-                demo_of.push(d);
+                demo_of.push(r.demonstration);
             }
         }
         let samples = stages.len();
@@ -202,10 +202,9 @@ impl KernelPolicy {
                 .zip(x.iter().zip(&mean))
                 .for_each(|(s, (v, m))| *s += (v - m) * (v - m) / samples as f64);
         }
-        // A feature that never varies in the data carries no information: unit scale.
         scale
             .iter_mut()
-            .for_each(|s| *s = if *s > 1e-18 { s.sqrt() } else { 1.0 });
+            .for_each(|s| *s = s.sqrt().max(MIN_FEATURE_SCALE));
         let inputs: Vec<f64> = raw
             .chunks_exact(dims)
             .flat_map(|x| {
@@ -214,9 +213,18 @@ impl KernelPolicy {
                     .map(|(v, (m, s))| (v - m) / s)
             })
             .collect();
-        let demos = recordings.iter().map(|r| r.path.clone()).collect();
-        let mut p = Self {
+        let mut recorded: Vec<Vec<Vec<f64>>> = recordings
+            .iter()
+            .filter(|r| r.pace == 1.0)
+            .map(|r| r.path.clone())
+            .collect();
+        if recorded.is_empty() {
+            recorded = recordings.iter().map(|r| r.path.clone()).collect();
+        }
+        let mut model = Model {
             n,
+            horizon,
+            execute,
             inputs,
             outputs,
             stages,
@@ -225,30 +233,31 @@ impl KernelPolicy {
             scale,
             bandwidth: BANDWIDTHS[0],
             cv_errors: Vec::new(),
-            demos,
-            horizon,
-            execute,
-            ood_radius: 0.12,
-            ood_chunks: 0,
-            weights: vec![0.0; samples],
+            demos: recorded,
+            paced: recordings.iter().any(|r| r.pace != 1.0),
         };
-        p.cv_errors = BANDWIDTHS
+        let mut weights = vec![0.0; samples];
+        model.cv_errors = BANDWIDTHS
             .iter()
-            .map(|&b| p.cross_validation_error(b))
+            .map(|&b| model.cross_validation_error(b, &mut weights))
             .collect();
-        let best = p
+        let best = model
             .cv_errors
             .iter()
             .enumerate()
             .min_by(|a, b| a.1.total_cmp(b.1))
             .map_or(0, |(i, _)| i);
-        p.bandwidth = BANDWIDTHS[best];
-        Ok(p)
+        model.bandwidth = BANDWIDTHS[best];
+        Ok(Self {
+            model: Arc::new(model),
+            ood_chunks: 0,
+            weights,
+        })
     }
 
     /// The kernel width chosen by cross-validation (standard deviations).
     pub fn bandwidth(&self) -> f64 {
-        self.bandwidth
+        self.model.bandwidth
     }
 
     /// The candidate widths and their leave-one-demonstration-out errors (rad², mean squared
@@ -257,23 +266,100 @@ impl KernelPolicy {
         BANDWIDTHS
             .iter()
             .copied()
-            .zip(self.cv_errors.iter().copied())
+            .zip(self.model.cv_errors.iter().copied())
     }
 
+    /// The spread (rad) each observed feature is standardised with: per joint the angle's,
+    /// then per joint the motion's over one Δt (at least [`MIN_FEATURE_SCALE`]).
+    pub fn feature_scales(&self) -> &[f64] {
+        &self.model.scale
+    }
+
+    /// Chunk length H.
+    pub fn horizon(&self) -> usize {
+        self.model.horizon
+    }
+
+    /// Executed actions per chunk (h).
+    pub fn execute(&self) -> usize {
+        self.model.execute
+    }
+
+    /// Whether replays were part of the training data.
+    pub fn paced(&self) -> bool {
+        self.model.paced
+    }
+
+    /// The chunk for `obs`: the predicted offsets of the next H configurations, as deltas from
+    /// the current joint angles.
+    pub fn act(&mut self, obs: &Observation) -> Chunk {
+        let m = &*self.model;
+        debug_assert!(obs.q.len() == m.n && obs.q_before.len() == m.n);
+        if self.deviation(obs.q) > OOD_RADIUS {
+            self.ood_chunks += 1;
+        }
+        let x: Vec<f64> = obs
+            .q
+            .iter()
+            .copied()
+            .chain(obs.q.iter().zip(obs.q_before).map(|(a, b)| a - b))
+            .zip(m.mean.iter().zip(&m.scale))
+            .map(|(v, (mu, s))| (v - mu) / s)
+            .collect();
+        let mut offsets = vec![0.0; m.horizon * m.n];
+        m.predict(
+            &x,
+            obs.stage,
+            m.bandwidth,
+            None,
+            &mut self.weights,
+            &mut offsets,
+        );
+        let mut prev = vec![0.0; m.n];
+        let actions = offsets
+            .chunks_exact(m.n)
+            .map(|o| {
+                let a: Vec<f64> = o.iter().zip(&prev).map(|(x, p)| x - p).collect();
+                prev.copy_from_slice(o);
+                a
+            })
+            .collect();
+        Chunk {
+            kind: ActionKind::Delta,
+            actions,
+            execute: m.execute,
+            gripper: None,
+        }
+    }
+
+    /// Distance (rad) from `q` to the nearest recorded configuration (replays not counted).
+    pub fn deviation(&self, q: &[f64]) -> f64 {
+        nearest_distance(self.model.demos.iter().flatten(), q)
+    }
+
+    /// Chunks produced while the robot was further than [`OOD_RADIUS`] from every recorded
+    /// configuration.
+    pub fn ood_chunks(&self) -> usize {
+        self.ood_chunks
+    }
+}
+
+impl Model {
     /// Mean squared error of predicting every sample's chunk from the other demonstrations.
-    fn cross_validation_error(&mut self, bandwidth: f64) -> f64 {
+    fn cross_validation_error(&self, bandwidth: f64, weights: &mut [f64]) -> f64 {
         let dims = 2 * self.n;
         let out = self.horizon * self.n;
         let mut prediction = vec![0.0; out];
         let (mut sum, mut count) = (0.0, 0usize);
         for i in 0..self.stages.len() {
-            let x: Vec<f64> = self.inputs[i * dims..(i + 1) * dims].to_vec();
-            let held_out = self.demo_of[i];
-            if !self.predict_standardised(
-                &x,
+            let x = &self.inputs[i * dims..(i + 1) * dims];
+            let held_out = Some(self.demo_of[i]);
+            if !self.predict(
+                x,
                 self.stages[i],
                 bandwidth,
-                Some(held_out),
+                held_out,
+                weights,
                 &mut prediction,
             ) {
                 continue;
@@ -295,13 +381,15 @@ impl KernelPolicy {
 
     /// Kernel-weighted mean of the training chunks for the standardised observation `x` at
     /// `stage` (samples of that stage; of every stage if none has it), leaving out
-    /// demonstration `skip`. False if no sample takes part.
-    fn predict_standardised(
-        &mut self,
+    /// demonstration `skip`; `weights` is scratch space, one per sample. False if no sample
+    /// takes part.
+    fn predict(
+        &self,
         x: &[f64],
         stage: usize,
         bandwidth: f64,
         skip: Option<usize>,
+        weights: &mut [f64],
         prediction: &mut [f64],
     ) -> bool {
         let dims = 2 * self.n;
@@ -312,10 +400,10 @@ impl KernelPolicy {
             .zip(&self.demo_of)
             .any(|(&s, &d)| s == stage && Some(d) != skip);
         let mut nearest = f64::INFINITY;
-        for i in 0..self.stages.len() {
+        for (i, w) in weights.iter_mut().enumerate() {
             let takes_part =
                 (!any_of_stage || self.stages[i] == stage) && Some(self.demo_of[i]) != skip;
-            self.weights[i] = if takes_part {
+            *w = if takes_part {
                 let r2: f64 = self.inputs[i * dims..(i + 1) * dims]
                     .iter()
                     .zip(x)
@@ -334,8 +422,7 @@ impl KernelPolicy {
         // from the data, where the mean tends to the nearest samples' chunks.
         let mut total = 0.0;
         prediction.iter_mut().for_each(|p| *p = 0.0);
-        for i in 0..self.stages.len() {
-            let r2 = self.weights[i];
+        for (i, &r2) in weights.iter().enumerate() {
             if r2.is_nan() {
                 continue;
             }
@@ -352,67 +439,19 @@ impl KernelPolicy {
         prediction.iter_mut().for_each(|p| *p /= total);
         true
     }
-
-    /// The chunk for `obs`: the predicted offsets of the next H configurations, as deltas from
-    /// the current joint angles.
-    pub fn act(&mut self, obs: &Observation) -> Chunk {
-        debug_assert!(obs.q.len() == self.n && obs.q_before.len() == self.n);
-        if self.deviation(obs.q) > self.ood_radius {
-            self.ood_chunks += 1;
-        }
-        let x: Vec<f64> = obs
-            .q
-            .iter()
-            .copied()
-            .chain(obs.q.iter().zip(obs.q_before).map(|(a, b)| a - b))
-            .zip(self.mean.iter().zip(&self.scale))
-            .map(|(v, (m, s))| (v - m) / s)
-            .collect();
-        let mut offsets = vec![0.0; self.horizon * self.n];
-        let b = self.bandwidth;
-        self.predict_standardised(&x, obs.stage, b, None, &mut offsets);
-        let mut prev = vec![0.0; self.n];
-        let actions = offsets
-            .chunks_exact(self.n)
-            .map(|o| {
-                let a: Vec<f64> = o.iter().zip(&prev).map(|(x, p)| x - p).collect();
-                prev.copy_from_slice(o);
-                a
-            })
-            .collect();
-        Chunk {
-            kind: ActionKind::Delta,
-            actions,
-            execute: self.execute,
-            gripper: None,
-        }
-    }
-
-    /// Distance (rad) from `q` to the nearest demonstrated configuration.
-    pub fn deviation(&self, q: &[f64]) -> f64 {
-        self.demos
-            .iter()
-            .flatten()
-            .map(|p| dist(p, q))
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// Chunks produced while the robot was further than `ood_radius` from every demonstrated
-    /// configuration.
-    pub fn ood_chunks(&self) -> usize {
-        self.ood_chunks
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A one-joint recording through `path` at `stage` throughout.
-    fn rec(path: &[f64], stage: usize) -> Recording {
+    /// Demonstration `demonstration`: one joint through `path`, at `stage` throughout.
+    fn rec(path: &[f64], stage: usize, demonstration: usize) -> Recording {
         Recording {
             path: path.iter().map(|&x| vec![x]).collect(),
             stages: vec![stage; path.len()],
+            demonstration,
+            pace: 1.0,
         }
     }
 
@@ -427,42 +466,37 @@ mod tests {
             .collect()
     }
 
-    fn obs(q: &[f64], before: &[f64], stage: usize) -> (Vec<f64>, Vec<f64>, usize) {
-        (q.to_vec(), before.to_vec(), stage)
-    }
-
-    fn act(p: &mut KernelPolicy, (q, b, stage): (Vec<f64>, Vec<f64>, usize)) -> Chunk {
-        p.act(&Observation {
-            q: &q,
-            q_before: &b,
+    fn act(p: &mut KernelPolicy, q: f64, before: f64, stage: usize) -> Vec<f64> {
+        offsets(&p.act(&Observation {
+            q: &[q],
+            q_before: &[before],
             stage,
-        })
+        }))
     }
 
     #[test]
     fn reproduces_its_training_chunks_exactly() {
         // Two identical demonstrations: every held-out one is predicted without error, so
-        // cross-validation keeps the narrowest width, where the neighbouring samples (0.71
-        // standard deviations away) weigh exp(-100).
+        // cross-validation keeps the narrowest width (0.025), where the neighbouring samples
+        // (0.71 standard deviations away: squared 0.5) weigh exp(-0.5 / 0.00125) = exp(-400).
         let path = [0.0, 1.0, 2.0, 3.0, 4.0];
-        let mut p = KernelPolicy::train(&[rec(&path, 0), rec(&path, 0)], 3, 2, &[]).unwrap();
+        let mut p = KernelPolicy::train(&[rec(&path, 0, 0), rec(&path, 0, 1)], 3, 2).unwrap();
         assert_eq!(p.bandwidth(), BANDWIDTHS[0]);
         assert!(p.cross_validation().next().unwrap().1 < 1e-24);
-        // At sample 1 (q = 1, one Δt after q = 0): the next three samples 2, 3, 4.
-        let c = act(&mut p, obs(&[1.0], &[0.0], 0));
+        assert_eq!((p.horizon(), p.execute(), p.paced()), (3, 2, false));
+        // At sample 1 (q = 1, one Δt after q = 0): the next three samples 2, 3, 4, as deltas.
+        let c = p.act(&Observation {
+            q: &[1.0],
+            q_before: &[0.0],
+            stage: 0,
+        });
         assert_eq!(c.execute, 2);
-        let o = offsets(&c);
-        for (got, want) in o.iter().zip([1.0, 2.0, 3.0]) {
-            assert!((got - want).abs() < 1e-12, "{o:?}");
+        assert_eq!(c.kind, ActionKind::Delta);
+        for (got, want) in offsets(&c).iter().zip([1.0, 2.0, 3.0]) {
+            assert!((got - want).abs() < 1e-12, "{c:?}");
         }
         // At the last sample the demonstration holds: offsets 0 (the path's end repeats).
-        let o = offsets(&act(&mut p, obs(&[4.0], &[3.0], 0)));
-        assert!(o.iter().all(|x| x.abs() < 1e-12), "{o:?}");
-        // From another place with the same observation of motion, the same offsets: the
-        // policy outputs deltas from where the robot is.
-        let mut q = p.clone();
-        let o2 = offsets(&act(&mut q, obs(&[4.0], &[3.0], 0)));
-        assert_eq!(o, o2);
+        assert!(act(&mut p, 4.0, 3.0, 0).iter().all(|x| x.abs() < 1e-12));
     }
 
     #[test]
@@ -471,16 +505,15 @@ mod tests {
         // last two observations tell them apart.
         let mut p = KernelPolicy::train(
             &[
-                rec(&[0.0, 1.0, 2.0, 3.0, 4.0], 0),
-                rec(&[4.0, 3.0, 2.0, 1.0, 0.0], 0),
+                rec(&[0.0, 1.0, 2.0, 3.0, 4.0], 0, 0),
+                rec(&[4.0, 3.0, 2.0, 1.0, 0.0], 0, 1),
             ],
             2,
             1,
-            &[],
         )
         .unwrap();
-        let up = offsets(&act(&mut p, obs(&[2.0], &[1.0], 0)));
-        let down = offsets(&act(&mut p, obs(&[2.0], &[3.0], 0)));
+        let up = act(&mut p, 2.0, 1.0, 0);
+        let down = act(&mut p, 2.0, 3.0, 0);
         assert!(up[0] > 0.5 && up[1] > up[0], "{up:?}");
         assert!(down[0] < -0.5 && down[1] < down[0], "{down:?}");
     }
@@ -490,24 +523,24 @@ mod tests {
         // Stage 0 moves up here; stage 1 moves down through the same place, at another pace.
         // At stage 1 the policy follows stage 1's data although stage 0's matches the
         // observation exactly.
+        let up = [0.0, 1.0, 2.0, 3.0, 4.0];
+        let down = [2.5, 2.0, 1.5, 1.0, 0.5];
         let mut p = KernelPolicy::train(
             &[
-                rec(&[0.0, 1.0, 2.0, 3.0, 4.0], 0),
-                rec(&[0.0, 1.0, 2.0, 3.0, 4.0], 0),
-                rec(&[2.5, 2.0, 1.5, 1.0, 0.5], 1),
-                rec(&[2.5, 2.0, 1.5, 1.0, 0.5], 1),
+                rec(&up, 0, 0),
+                rec(&up, 0, 1),
+                rec(&down, 1, 2),
+                rec(&down, 1, 3),
             ],
             2,
             1,
-            &[],
         )
         .unwrap();
-        let at = |p: &mut KernelPolicy, stage| offsets(&act(p, obs(&[2.0], &[1.0], stage)));
-        assert!(at(&mut p, 0)[0] > 0.99, "{:?}", at(&mut p, 0));
-        let s1 = at(&mut p, 1);
+        assert!(act(&mut p, 2.0, 1.0, 0)[0] > 0.99);
+        let s1 = act(&mut p, 2.0, 1.0, 1);
         assert!(s1[0] < -0.1 && s1[1] < s1[0], "{s1:?}");
         // A stage no demonstration has: every sample takes part (here the exact match).
-        assert!(at(&mut p, 7)[0] > 0.99);
+        assert!(act(&mut p, 2.0, 1.0, 7)[0] > 0.99);
     }
 
     #[test]
@@ -515,12 +548,13 @@ mod tests {
         // Nadaraya–Watson is a weighted mean: every predicted offset lies between the smallest
         // and the largest demonstrated one, also where every kernel weight would underflow.
         let demos = [
-            rec(&[0.0, 0.1, 0.3, 0.6, 1.0, 1.3, 1.5, 1.6], 0),
-            rec(&[0.05, 0.2, 0.35, 0.7, 1.05, 1.3, 1.55, 1.6], 0),
-            rec(&[-0.02, 0.1, 0.25, 0.55, 0.9, 1.25, 1.5, 1.62], 0),
+            rec(&[0.0, 0.1, 0.3, 0.6, 1.0, 1.3, 1.5, 1.6], 0, 0),
+            rec(&[0.05, 0.2, 0.35, 0.7, 1.05, 1.3, 1.55, 1.6], 0, 1),
+            rec(&[-0.02, 0.1, 0.25, 0.55, 0.9, 1.25, 1.5, 1.62], 0, 2),
         ];
-        let mut p = KernelPolicy::train(&demos, 4, 2, &[]).unwrap();
+        let mut p = KernelPolicy::train(&demos, 4, 2).unwrap();
         let (lo, hi) = p
+            .model
             .outputs
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
@@ -533,7 +567,7 @@ mod tests {
             let scale = 10f64.powi(i % 5);
             let q = scale * (rng.uniform() - 0.5) * 20.0;
             let b = q - scale * (rng.uniform() - 0.5) * 2.0;
-            let o = offsets(&act(&mut p, obs(&[q], &[b], 0)));
+            let o = act(&mut p, q, b, 0);
             for x in &o {
                 assert!(x.is_finite(), "case {i}: q = {q}, before = {b}: {o:?}");
                 assert!(
@@ -547,75 +581,90 @@ mod tests {
 
     #[test]
     fn replays_interpolate_the_recording_at_the_given_pace() {
-        let r = Recording {
-            path: vec![vec![0.0], vec![1.0], vec![3.0]],
-            stages: vec![0, 1, 1],
-        };
-        let half = replay(&r, 0.5);
-        assert_eq!(
-            half.path,
-            [0.0, 0.5, 1.0, 2.0, 3.0].map(|x| vec![x]).to_vec()
-        );
-        // Sample positions 0, 0.5, 1, 1.5, 2 round to recorded samples 0, 1, 1, 2, 2.
-        assert_eq!(half.stages, [0, 1, 1, 1, 1]);
+        let path: Vec<Vec<f64>> = [0.0, 1.0, 3.0].iter().map(|&x| vec![x]).collect();
+        let half = replay_path(&path, 0.5).unwrap();
+        assert_eq!(half, [0.0, 0.5, 1.0, 2.0, 3.0].map(|x| vec![x]).to_vec());
         // A pace that does not divide the recording ends on its last sample.
-        let p = replay(&r, 0.75);
-        assert_eq!(p.path.last(), Some(&vec![3.0]));
-        assert_eq!(p.path.len(), 4);
-        // Replays belong to their demonstration: held out with it in the cross-validation.
-        let pol = KernelPolicy::train(&[r.clone(), r], 2, 1, &[0.5, 0.25]).unwrap();
-        assert_eq!(pol.demo_of.iter().filter(|&&d| d == 0).count(), 3 + 5 + 9);
-        assert_eq!(pol.demo_of.len(), 2 * 17);
-        assert_eq!(
-            pol.demos.len(),
-            2,
-            "deviation is measured from the recordings"
-        );
+        let p = replay_path(&path, 0.75).unwrap();
+        assert_eq!(p.len(), 4);
+        assert_eq!(p.last(), Some(&vec![3.0]));
+        assert_eq!(replay_path(&path, 1.0).unwrap(), path);
+        for pace in [0.0, 0.005, -0.5, 1.5, f64::NAN, f64::INFINITY] {
+            assert!(matches!(replay_path(&path, pace), Err(TrainError::Pace(_))));
+        }
+    }
+
+    #[test]
+    fn a_demonstrations_copies_are_held_out_with_it() {
+        // Exact copies of each demonstration, labelled as replays of it: if the copies were
+        // not held out with their demonstration, each would predict it exactly and the
+        // narrow widths' errors would vanish. Held out together, the other demonstration's
+        // samples (and its copy's, doubling every weight alike) predict it, as without copies.
+        let a = rec(&[0.0, 1.0, 2.0, 3.0, 4.0], 0, 0);
+        let b = rec(&[0.0, 2.0, 4.0, 6.0, 8.0], 0, 1);
+        let copy = |r: &Recording| Recording {
+            pace: 0.5,
+            ..r.clone()
+        };
+        let plain = KernelPolicy::train(&[a.clone(), b.clone()], 2, 1).unwrap();
+        let with = KernelPolicy::train(&[a.clone(), copy(&a), b.clone(), copy(&b)], 2, 1).unwrap();
+        assert!(with.paced() && !plain.paced());
+        for ((w0, e0), (w1, e1)) in plain.cross_validation().zip(with.cross_validation()) {
+            assert_eq!(w0, w1);
+            assert!(e0 > 0.01, "width {w0}: {e0}");
+            assert!((e0 - e1).abs() <= 1e-12 * e0, "width {w0}: {e0} vs {e1}");
+        }
+        // Deviation is measured from the recordings, not the replays.
+        assert_eq!(with.model.demos.len(), 2);
     }
 
     #[test]
     fn refuses_what_it_cannot_learn_from() {
-        let one = [rec(&[0.0, 1.0], 0)];
+        let two = [rec(&[0.0, 1.0], 0, 0), rec(&[0.0, 1.0], 0, 1)];
         assert_eq!(
-            KernelPolicy::train(&one, 2, 1, &[]).unwrap_err(),
+            KernelPolicy::train(&two[..1], 2, 1).unwrap_err(),
             TrainError::TooFewDemonstrations(1)
         );
-        let mut bad = rec(&[0.0, 1.0], 0);
+        // Two recordings of one demonstration are still one demonstration.
+        let same = [rec(&[0.0, 1.0], 0, 3), rec(&[0.0, 1.0], 0, 3)];
+        assert_eq!(
+            KernelPolicy::train(&same, 2, 1).unwrap_err(),
+            TrainError::TooFewDemonstrations(1)
+        );
+        let mut bad = rec(&[0.0, 1.0], 0, 1);
         bad.stages.pop();
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0, 1.0], 0), bad], 2, 1, &[]).unwrap_err(),
+            KernelPolicy::train(&[two[0].clone(), bad], 2, 1).unwrap_err(),
+            TrainError::Malformed(1)
+        );
+        let mut going_back = rec(&[0.0, 1.0], 0, 1);
+        going_back.stages = vec![1, 0];
+        assert_eq!(
+            KernelPolicy::train(&[two[0].clone(), going_back], 2, 1).unwrap_err(),
             TrainError::Malformed(1)
         );
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0, f64::NAN], 0), rec(&[0.0, 1.0], 0)], 2, 1, &[])
-                .unwrap_err(),
-            TrainError::NotFinite(0)
-        );
-        assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0], 0), rec(&[0.0, 1.0], 0)], 2, 1, &[]).unwrap_err(),
+            KernelPolicy::train(&[rec(&[0.0], 0, 0), two[1].clone()], 2, 1).unwrap_err(),
             TrainError::Malformed(0)
         );
-        let going_back = Recording {
-            path: vec![vec![0.0], vec![1.0]],
-            stages: vec![1, 0],
-        };
         assert_eq!(
-            KernelPolicy::train(&[rec(&[0.0, 1.0], 0), going_back], 2, 1, &[]).unwrap_err(),
-            TrainError::Malformed(1)
+            KernelPolicy::train(&[rec(&[0.0, f64::NAN], 0, 0), two[1].clone()], 2, 1).unwrap_err(),
+            TrainError::NotFinite(0)
         );
-        let two = [rec(&[0.0, 1.0], 0), rec(&[0.0, 1.0], 0)];
         for (h, e) in [(0, 0), (2, 0), (2, 3)] {
             assert_eq!(
-                KernelPolicy::train(&two, h, e, &[]).unwrap_err(),
+                KernelPolicy::train(&two, h, e).unwrap_err(),
                 TrainError::Chunk {
                     horizon: h,
                     execute: e
                 }
             );
         }
-        for pace in [0.0, -0.5, f64::NAN, f64::INFINITY] {
+        for pace in [0.0, 0.005, 1.5, f64::NAN] {
+            let mut r = two[1].clone();
+            r.pace = pace;
             assert!(matches!(
-                KernelPolicy::train(&two, 2, 1, &[pace]),
+                KernelPolicy::train(&[two[0].clone(), r], 2, 1),
                 Err(TrainError::Pace(_))
             ));
         }
