@@ -7,12 +7,28 @@ fn pacs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_pacs"))
 }
 
+/// `pacs simulate ARGS --out DIR`, which must succeed (stderr shown if not).
+fn simulate(args: &[&str], dir: &std::path::Path) -> std::process::Output {
+    let out = pacs()
+        .arg("simulate")
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 #[test]
 fn simulate_writes_tables_plots_and_auditable_logs() {
     let dir = std::env::temp_dir().join(format!("pacs-sim-test-{}", std::process::id()));
-    let out = pacs()
-        .args([
-            "simulate",
+    let out = simulate(
+        &[
             "--task",
             "crowded",
             "--method",
@@ -23,15 +39,8 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
             // session 21's planner; OFF got faster and passes the others by chance).
             "--seed",
             "6",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
+        &dir,
     );
     // The disk the logs may take is stated first: 2 rollouts × 20 s × 0.75 MB/s = 30 MB.
     let err = String::from_utf8_lossy(&out.stderr);
@@ -84,9 +93,8 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
 #[test]
 fn pacs_logs_of_every_task_pass_the_audit_and_violating_off_logs_fail() {
     let dir = std::env::temp_dir().join(format!("pacs-sim-all-{}", std::process::id()));
-    let out = pacs()
-        .args([
-            "simulate",
+    simulate(
+        &[
             "--task",
             "all",
             "--method",
@@ -95,18 +103,11 @@ fn pacs_logs_of_every_task_pass_the_audit_and_violating_off_logs_fail() {
             "1",
             "--seed",
             "5",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
+        &dir,
     );
     let logs = dir.join("logs");
-    for task in ["sorting", "handover", "feeding", "crowded", "crowded"] {
+    for task in ["sorting", "handover", "feeding", "sphere", "crowded"] {
         let log = logs.join(format!("{task}-pacs-0005.jsonl"));
         let a = pacs().arg("audit").arg(&log).output().unwrap();
         assert_eq!(
@@ -151,9 +152,8 @@ fn simulate_rejects_unknown_task_and_method() {
 #[test]
 fn simulate_runs_the_learned_policy_and_says_so() {
     let dir = std::env::temp_dir().join(format!("pacs-sim-kernel-{}", std::process::id()));
-    let out = pacs()
-        .args([
-            "simulate",
+    let out = simulate(
+        &[
             "--task",
             "handover",
             "--method",
@@ -163,15 +163,8 @@ fn simulate_runs_the_learned_policy_and_says_so() {
             "--no-human",
             "--policy",
             "kernel",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
+        &dir,
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["policy"], "kernel");

@@ -215,10 +215,7 @@ impl Goal {
             Goal::Joint { q: g, tolerance } => {
                 q.iter().zip(g).all(|(a, b)| (a - b).abs() <= *tolerance)
             }
-            Goal::Tool(g) => {
-                let d = (0..3).map(|i| (tool[i] - g.point[i]).powi(2)).sum::<f64>();
-                d.sqrt() <= g.tolerance
-            }
+            Goal::Tool(g) => g.reached(tool),
         }
     }
 }

@@ -90,6 +90,29 @@ pub struct ToolGoal {
     pub name: &'static str,
 }
 
+impl ToolGoal {
+    /// Whether the tool centre point `tool` (m) is within the tolerance of the goal.
+    pub fn reached(&self, tool: &[f64; 3]) -> bool {
+        let d = (0..3)
+            .map(|i| (tool[i] - self.point[i]).powi(2))
+            .sum::<f64>();
+        d.sqrt() <= self.tolerance
+    }
+}
+
+/// The success sub-goals of `task`, in order.
+fn tool_goals(task: TaskKind) -> Vec<ToolGoal> {
+    let (tools, goal_idx) = tool_keyframes(task);
+    goal_idx
+        .iter()
+        .map(|&(k, name, tol)| ToolGoal {
+            point: tools[k],
+            tolerance: tol,
+            name,
+        })
+        .collect()
+}
+
 /// Everything one rollout needs besides the filter.
 pub struct Scenario {
     /// Task.
@@ -459,17 +482,14 @@ pub fn learned_policy(task: TaskKind, paced: bool) -> KernelPolicy {
 
 fn train_policy(task: TaskKind, paced: bool) -> KernelPolicy {
     let robot = fr3::fr3();
-    let (tools, goal_idx) = tool_keyframes(task);
+    let goals = tool_goals(task);
+    // The episode's rule: sub-goals in order, each reached within its tolerance.
     let stages = |path: &[Vec<f64>]| -> Vec<usize> {
         let mut stage = 0;
         path.iter()
             .map(|q| {
                 let tool = tool_point(&robot, q);
-                while let Some(&(k, _, tol)) = goal_idx.get(stage) {
-                    let d: f64 = (0..3).map(|i| (tool[i] - tools[k][i]).powi(2)).sum();
-                    if d.sqrt() > tol {
-                        break;
-                    }
+                while goals.get(stage).is_some_and(|g| g.reached(&tool)) {
                     stage += 1;
                 }
                 stage
@@ -509,15 +529,8 @@ pub const EXECUTE: usize = 8;
 pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
     let robot = fr3::fr3();
     let demos = cached_demonstrations(&robot, task);
-    let (tools, goal_idx) = tool_keyframes(task);
-    let goals = goal_idx
-        .iter()
-        .map(|&(k, name, tol)| ToolGoal {
-            point: tools[k],
-            tolerance: tol,
-            name,
-        })
-        .collect::<Vec<_>>();
+    let (tools, _) = tool_keyframes(task);
+    let goals = tool_goals(task);
     let mut rng = Rng::new(seed.wrapping_mul(7919).wrapping_add(task as u64 + 1));
     let start: Vec<f64> = fr3::Q_READY
         .iter()
