@@ -411,7 +411,7 @@ impl Handle {
     /// Hand `chunk` over (the GIL released). Without a real-time loop: planned from the current
     /// commanded state at once ([`Shield::set_chunk`]). While a real-time loop steps the shield:
     /// planned off the shield's lock from the state predicted a few steps ahead
-    /// ([`Shield::handover`]), offered, and awaited until a step takes it over (planned again if
+    /// ([`Shield::likely_handover`]), offered, and awaited until a step follows it (planned again if
     /// the commands went elsewhere) — the loop's steps never wait for the planner.
     fn hand_over(&self, chunk: &Chunk) -> Result<u64, Fail> {
         // One hand-over at a time per shield: the shield reports the state of its latest offer
@@ -436,22 +436,11 @@ impl Handle {
                 if !g.paced {
                     return g.set_chunk(chunk);
                 }
-                let now = g
-                    .shield
-                    .handover(0)
-                    .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?;
-                let n = self.dof;
-                if now.start.is_at_rest(n) {
-                    // At rest (e.g. stopped for a person) the robot stays where it is unless a
-                    // step verifies the old path: plan from here, taken over as soon as offered.
-                    now
-                } else {
-                    // Moving: where the commands will be if the next steps go as the latest
-                    // one did (along the path, or along the failsafe after a refused step).
-                    g.shield
-                        .likely_handover(lead)
-                        .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?
-                }
+                // Where the commands will be if the next steps go as the latest one did (the
+                // shield's one prediction rule, also the ChunkWorker's).
+                g.shield
+                    .likely_handover(lead)
+                    .ok_or((Kind::State, "set_chunk: shield not started".to_string()))?
             };
             let prepared = {
                 let mut planner = self
@@ -484,30 +473,24 @@ impl Handle {
                 }
                 Err(e) => return Err((Kind::State, format!("set_chunk: {e}"))),
             }
-            // The step time at which the shield installed the chunk (taken over: the commands
-            // follow it once a step verified it; dropped if that step did not).
-            let mut installed_at: Option<f64> = None;
+            // Wait for the shield's record of the offer's fate: followed (a step verified its
+            // first monitored step), dropped (that step did not), or stale.
             loop {
                 let mut g = lock()?;
                 match g.shield.offer_state() {
-                    OfferState::Taken(n) => {
-                        let following = g.shield.chunk_progress().is_some_and(|p| p.chunk >= n);
-                        if following || !g.paced {
-                            // Followed; or installed with nobody stepping (the next step tries it).
-                            g.log_chunk(true);
-                            return Ok(n);
-                        }
-                        let now = g.shield.time();
-                        match installed_at {
-                            None => installed_at = Some(now),
-                            Some(t0) if now > t0 => {
-                                // A step ran since and the commands do not follow the chunk: its
-                                // first step was not verified and the shield dropped it.
-                                dropped += 1;
-                                break;
-                            }
-                            Some(_) => {}
-                        }
+                    OfferState::Followed(n) => {
+                        g.log_chunk(true);
+                        return Ok(n);
+                    }
+                    OfferState::Taken(n) if !g.paced => {
+                        // Installed with nobody stepping: the next step tries it.
+                        g.log_chunk(true);
+                        return Ok(n);
+                    }
+                    OfferState::Taken(_) => {}
+                    OfferState::Dropped(_) => {
+                        dropped += 1;
+                        break;
                     }
                     OfferState::Stale => {
                         moved += 1;

@@ -100,8 +100,6 @@ pub struct ChunkWorker {
     /// The handover time (s) of the plan requested for `serial` and not back yet.
     in_flight: Option<f64>,
     state: WorkerState,
-    /// The shield's time when the latest offer was seen taken over.
-    installed_at: f64,
     planning: Option<Duration>,
     plans_received: u64,
     replans: u64,
@@ -202,7 +200,6 @@ impl ChunkWorker {
             serial: 0,
             in_flight: None,
             state: WorkerState::Idle,
-            installed_at: 0.0,
             planning: None,
             plans_received: 0,
             replans: 0,
@@ -346,35 +343,30 @@ impl ChunkWorker {
         }
     }
 
-    /// Track the offer: stale (then plan again from a newer handover), taken over, then
-    /// followed or dropped.
+    /// Track the offer as the shield records it ([`Shield::offer_state`]): stale (then plan
+    /// again from a newer handover), taken over, then followed or dropped.
     fn follow(&mut self, shield: &Shield) {
-        if self.state == WorkerState::Offered {
-            match shield.offer_state() {
-                OfferState::Taken(n) => {
-                    self.stale_streak = 0;
-                    self.state = WorkerState::Installed(n);
-                    self.installed_at = shield.time();
-                }
-                OfferState::Stale => return self.again(shield),
-                OfferState::None | OfferState::Waiting => return,
-            }
+        if !matches!(self.state, WorkerState::Offered | WorkerState::Installed(_)) {
+            return;
         }
-        if let WorkerState::Installed(n) = self.state {
-            let progress = shield.chunk_progress().map(|p| p.chunk);
-            if progress == Some(n) {
+        match shield.offer_state() {
+            OfferState::Taken(n) => {
+                self.stale_streak = 0;
+                self.state = WorkerState::Installed(n);
+            }
+            OfferState::Followed(n) => {
+                self.stale_streak = 0;
                 self.state = WorkerState::Taken(n);
-            } else if shield.time() > self.installed_at {
-                // A step ran since the take-over and the commands do not follow the chunk: its
-                // first step was not verified and the shield dropped it.
+            }
+            OfferState::Dropped(n) => {
+                self.stale_streak = 0;
                 self.state = WorkerState::Dropped(n);
             }
+            OfferState::Stale => self.again(shield),
+            OfferState::None | OfferState::Waiting => {}
         }
     }
 
-    /// Where the commands will be at the handover: the next `lead` steps are predicted to go as
-    /// the latest one did (verified: along the path; not verified: along the failsafe, so a
-    /// person who keeps the arm braking or at rest does not make every plan stale).
     /// Where the commands will be at the handover: the next `lead` steps are predicted to go as
     /// the latest one did (verified: along the path; not verified: along the failsafe, so a
     /// person who keeps the arm braking or at rest does not make every plan stale).

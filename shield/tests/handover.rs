@@ -66,13 +66,19 @@ fn an_offered_chunk_is_set_chunk_at_its_handover() {
             }
             cases += 1;
             match offered.offer_state() {
-                OfferState::Taken(n) => {
+                OfferState::Followed(n) => {
                     taken += 1;
                     assert_eq!(
                         offered.chunk_progress().unwrap().accepted,
                         n,
                         "the serial is the accepted count"
                     );
+                }
+                // Taken over, but its first monitored step was not verified (as `set_chunk`'s
+                // chunk in `sync`).
+                OfferState::Dropped(n) => {
+                    assert_eq!(offered.chunk_progress().unwrap().accepted, n);
+                    assert_ne!(offered.chunk_progress().unwrap().chunk, n);
                 }
                 OfferState::Stale => {
                     assert!(unverified, "dropped although every step was verified");
@@ -173,7 +179,9 @@ fn an_offer_past_its_handover_is_refused() {
 
 /// With a person walking up to the robot and away, offers with random leads are taken over or
 /// dropped; every command lies on an accepted chunk's trajectory and follows the previous one
-/// within the robot's limits.
+/// within the robot's limits. The shield's record of each chunk's fate is what its commands did:
+/// `Followed(n)` after the step that verified chunk n's first monitored step (the commands are
+/// on chunk n), `Dropped(n)` after the step that did not (they are not).
 #[test]
 fn offers_keep_the_commands_on_the_path_with_a_person_walking_in() {
     let h = human();
@@ -181,7 +189,7 @@ fn offers_keep_the_commands_on_the_path_with_a_person_walking_in() {
     let mut sh = shield(ChunkMotion::Continuous);
     let dt = sh.config().safety_step;
     let mut planner = sh.chunk_planner();
-    let (mut taken, mut stale) = (0, 0);
+    let (mut taken, mut stale, mut followed, mut dropped) = (0, 0, 0, 0);
     let mut prev: Option<Command> = None;
     let mut next_offer = 0;
     let mut last_state = OfferState::None;
@@ -198,6 +206,7 @@ fn offers_keep_the_commands_on_the_path_with_a_person_walking_in() {
         let kp = pacs_testkit::human_reaching(d + 0.3, 0.0, [d, 0.0, 0.6]);
         let m = HumanMeasurement::new(&h, t, &kp, None).unwrap();
         let cmd = sh.step(t, Some(&m)).unwrap();
+        let verified = cmd.diag.verified;
         let (traj, p) = sh.path();
         let on = p.joint_state(traj);
         assert_eq!(on.q[..7], cmd.state.q[..7], "command off the path at {t}");
@@ -206,17 +215,32 @@ fn offers_keep_the_commands_on_the_path_with_a_person_walking_in() {
         }
         prev = Some(cmd);
         let s = sh.offer_state();
+        let on = sh.chunk_progress().unwrap().chunk;
         if s != last_state {
             match s {
                 OfferState::Taken(_) => taken += 1,
+                OfferState::Followed(n) => {
+                    // Taken over at this step's start (or at the offer) and tried by it.
+                    assert!(verified, "followed without a verified step at {t}");
+                    assert_eq!(on, n, "followed, but the commands are on chunk {on} at {t}");
+                    followed += 1;
+                }
+                OfferState::Dropped(n) => {
+                    assert!(!verified, "dropped after a verified step at {t}");
+                    assert_ne!(on, n, "dropped, but the commands follow it at {t}");
+                    dropped += 1;
+                }
                 OfferState::Stale => stale += 1,
                 _ => {}
             }
             last_state = s;
         }
     }
-    eprintln!("taken {taken}, stale {stale}");
-    assert!(taken >= 5 && stale >= 1, "taken {taken}, stale {stale}");
+    eprintln!("taken at once {taken}, followed {followed}, dropped {dropped}, stale {stale}");
+    assert!(
+        followed >= 5 && dropped >= 1 && stale >= 1,
+        "followed {followed}, dropped {dropped}, stale {stale}"
+    );
 }
 
 /// Chunks handed over while the robot brakes for a person or speeds up again after one are

@@ -65,7 +65,10 @@ impl PreparedChunk {
     }
 }
 
-/// What became of the latest offered chunk ([`Shield::offer_state`]).
+/// What became of the latest chunk offered ([`Shield::offer`]) or set ([`Shield::set_chunk`])
+/// ([`Shield::offer_state`]). The shield records it where it decides it, so that callers
+/// (a [`crate::worker::ChunkWorker`], the Python `ShieldLoop`) need not infer it from the
+/// commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OfferState {
     /// No chunk offered yet.
@@ -73,9 +76,16 @@ pub enum OfferState {
     /// Waiting for the step at its handover time.
     Waiting,
     /// Taken over as the shield's fresh chunk, with this serial number (see
-    /// [`super::ChunkProgress::chunk`]).
+    /// [`super::ChunkProgress::chunk`]): the next step tries its first monitored step.
     Taken(u64),
-    /// Dropped: at its handover the commanded state was not the planned start.
+    /// Taken over, and the step that tried it verified its first monitored step: the commands
+    /// follow it (until a newer chunk takes over).
+    Followed(u64),
+    /// Taken over, but the step that tried it did not verify its first monitored step: the
+    /// shield dropped it and the commands kept their verified path or failsafe.
+    Dropped(u64),
+    /// Dropped before it was taken over: at its handover the commanded state was not the
+    /// planned start (plan it again from a newer handover).
     Stale,
 }
 

@@ -1,7 +1,7 @@
 //! One safety step of the shield: the latest measurement, the candidate (go, then brake) and the
 //! decision between it and the stored failsafe.
 
-use super::{Binding, Candidate, Command, Diagnostics, Shield, ShieldError, decide};
+use super::{Binding, Candidate, Command, Diagnostics, OfferState, Shield, ShieldError, decide};
 use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
 use pacs_reach::human::HumanMeasurement;
 
@@ -36,7 +36,8 @@ impl Shield {
         self.take_offer(t);
         self.time = t;
         // Candidate: a fresh chunk starting at the current state, else the current path.
-        let (cand_slot, cand_start, ramp) = match self.fresh.take() {
+        let tried = self.fresh.take();
+        let (cand_slot, cand_start, ramp) = match tried {
             Some(s) if self.at_rest() => {
                 // At rest the robot is at the new trajectory's start q(0), where q̇ = q̈ = 0 as
                 // well: it can take the intended timing at once (tried first), or adopt the new
@@ -90,6 +91,17 @@ impl Shield {
         self.failsafe = Some(next.failsafe);
         let verified = next.adopted;
         self.last_verified = verified;
+        if let Some(s) = tried {
+            // The fresh chunk had its one try: record its fate for the caller that handed it in.
+            let n = self.chunk_serial[s];
+            if self.offer_state == OfferState::Taken(n) {
+                self.offer_state = if verified {
+                    OfferState::Followed(n)
+                } else {
+                    OfferState::Dropped(n)
+                };
+            }
+        }
         diag.on_failsafe = !verified;
         diag.stop_time = next.failsafe.t0 + next.failsafe.profile.settle_time();
         diag.verified = verified;
