@@ -105,6 +105,67 @@ fn the_built_in_example_is_the_shipped_file() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// Inputs timed at or after the run's end never reach the shield: the summary lists them under
+/// `not_delivered` (and a warning names the chunks) instead of leaving them out of every count.
+#[test]
+fn inputs_after_the_end_are_reported_not_delivered() {
+    let mut scene = example();
+    let full = example();
+    let n_chunks = full["chunks"].as_array().unwrap().len();
+    let n_humans = full["human_measurements"].as_array().unwrap().len();
+    // Cut the run at 1.2 s: which inputs come later is counted from the file itself.
+    let end = 1.2;
+    scene["duration"] = serde_json::json!(end);
+    let later = |key: &str| {
+        full[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| {
+                let t = m["received"].as_f64().unwrap_or(m["t"].as_f64().unwrap());
+                t > end - 1e-3 + 1e-9
+            })
+            .map(|(i, _)| i)
+            .collect::<Vec<_>>()
+    };
+    let late_chunks = later("chunks");
+    let late_humans = later("human_measurements").len();
+    let late_objects = later("object_measurements").len();
+    assert!(!late_chunks.is_empty() && late_chunks.len() < n_chunks);
+    assert!(late_humans > 0 && late_humans < n_humans);
+    let (out, d) = run_scene("late", &scene);
+    assert!(out.status.success());
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["steps"], 1200);
+    assert_eq!(
+        summary["not_delivered"]["chunks"],
+        serde_json::json!(late_chunks)
+    );
+    assert_eq!(summary["not_delivered"]["human_measurements"], late_humans);
+    assert_eq!(
+        summary["not_delivered"]["object_measurements"],
+        late_objects
+    );
+    assert_eq!(
+        summary["chunks_accepted"].as_u64().unwrap() as usize
+            + summary["chunks_rejected"].as_array().unwrap().len()
+            + late_chunks.len(),
+        n_chunks
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("never handed to the shield"), "{err}");
+    // The full run delivers everything.
+    let (out, d2) = run_scene("all", &full);
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        summary["not_delivered"],
+        serde_json::json!({"chunks": [], "human_measurements": 0, "object_measurements": 0})
+    );
+    std::fs::remove_dir_all(&d).ok();
+    std::fs::remove_dir_all(&d2).ok();
+}
+
 #[test]
 fn a_person_at_the_arm_from_the_start_keeps_it_at_rest() {
     let mut scene = example();

@@ -327,6 +327,22 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         .flush()
         .map_err(|e| werr(&log_path, &e))?;
     cmd_out.flush().map_err(|e| werr(&cmd_path, &e))?;
+    // Inputs timed at or after the run's end never reached the shield: say so rather than
+    // leave them out of every count.
+    let (mut late_chunks, mut late_humans, mut late_objects) = (Vec::new(), 0usize, 0usize);
+    for (_, e) in &events[next..] {
+        match e {
+            Event::Chunk(i) => late_chunks.push(*i),
+            Event::Human(_) => late_humans += 1,
+            Event::Object(_) => late_objects += 1,
+        }
+    }
+    if !late_chunks.is_empty() {
+        eprintln!(
+            "pacs: warning: chunks {late_chunks:?} are timed at or after the run's end ({} s) and were never handed to the shield (extend `duration`)",
+            t0 + steps as f64 * dt
+        );
+    }
     Ok(json!({
         "scene": name,
         "steps": steps,
@@ -334,6 +350,11 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         "verified_fraction": verified as f64 / steps.max(1) as f64,
         "chunks_accepted": accepted,
         "chunks_rejected": rejected,
+        "not_delivered": {
+            "chunks": late_chunks,
+            "human_measurements": late_humans,
+            "object_measurements": late_objects,
+        },
         "max_step_us": max_step_us,
         "commands": cmd_path,
         "log": log_path,
