@@ -105,7 +105,7 @@ fn the_built_in_example_is_the_shipped_file() {
     std::fs::remove_dir_all(&d).ok();
 }
 
-/// Inputs timed at or after the run's end never reach the shield: the summary lists them under
+/// Inputs arriving after the last step never reach the shield: the summary lists them under
 /// `not_delivered` (and a warning names the chunks) instead of leaving them out of every count.
 #[test]
 fn inputs_after_the_end_are_reported_not_delivered() {
@@ -164,6 +164,78 @@ fn inputs_after_the_end_are_reported_not_delivered() {
     );
     std::fs::remove_dir_all(&d).ok();
     std::fs::remove_dir_all(&d2).ok();
+}
+
+/// A measurement that the others contradict — the right hand on the moving flange, stamped 1 ms
+/// before a measurement of the person 1.3 m away that arrives in the same step — is not hidden
+/// by the newer one: the runner logs every measurement it delivers, and the audit checks each
+/// against the human model beside its neighbours in time, so the run cannot pass. Before
+/// session 24 the runner kept only the newest of the step, its log was byte-identical to the
+/// unmodified run's, and the audit passed it. The unmodified run passes; a clock starting at
+/// 0.1 s (steps and stamps rounding differently) passes too (before, a measurement was handed
+/// over 1 ulp before its stamp, the shield ignored it, and the audit refused the log, exit 3).
+#[test]
+fn a_contradicting_measurement_cannot_hide_behind_a_newer_one() {
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let base = example();
+    let (out, d0) = run_scene("contradiction-base", &base);
+    assert!(out.status.success());
+    // Where the flange is at 0.599 s in the unmodified run.
+    let cmds = commands(&d0);
+    let c = cmds
+        .iter()
+        .find(|c| (c["t"].as_f64().unwrap() - 0.599).abs() < 1e-9)
+        .unwrap();
+    let q: Vec<f64> = serde_json::from_value(c["q"].clone()).unwrap();
+    let p = robot.capsules_world(&q).last().unwrap().1.p2();
+    let mut scene = base.clone();
+    let ms = scene["human_measurements"].as_array_mut().unwrap();
+    let k = ms
+        .iter()
+        .position(|m| (m["t"].as_f64().unwrap() - 0.6).abs() < 1e-12)
+        .unwrap();
+    let mut hand = ms[k].clone();
+    hand["t"] = serde_json::json!(0.599);
+    hand["keypoints"][5] = serde_json::json!([p.x, p.y, p.z]);
+    ms.insert(k, hand);
+    let audit = |d: &Path| {
+        pacs()
+            .args(["audit", "--json"])
+            .arg(d.join("out/log.jsonl"))
+            .output()
+            .unwrap()
+    };
+    let (out, d) = run_scene("contradiction", &scene);
+    assert!(out.status.success());
+    let a = audit(&d);
+    let report: Value = serde_json::from_slice(&a.stdout).unwrap();
+    let text = report.to_string();
+    assert_ne!(a.status.code(), Some(0), "{text}");
+    assert!(text.contains("human_exceeds_model"), "{text}");
+    assert_eq!(audit(&d0).status.code(), Some(0));
+    let mut late = base.clone();
+    let shift = |v: &mut Value| *v = serde_json::json!(v.as_f64().unwrap() + 0.1);
+    shift(&mut late["t0"]);
+    for key in ["chunks", "human_measurements", "object_measurements"] {
+        for m in late[key].as_array_mut().unwrap() {
+            shift(&mut m["t"]);
+            if m.get("received").is_some() {
+                shift(&mut m["received"]);
+            }
+        }
+    }
+    let (out, d1) = run_scene("contradiction-t0", &late);
+    assert!(out.status.success());
+    let a = audit(&d1);
+    assert_eq!(
+        a.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&a.stdout)
+    );
+    for d in [d, d0, d1] {
+        std::fs::remove_dir_all(&d).ok();
+    }
 }
 
 #[test]
@@ -233,6 +305,22 @@ fn bad_scenes_exit_3_naming_the_field() {
             "unknown",
             Box::new(|s| s["chunk"] = serde_json::json!([])),
             "unknown field `chunk`",
+        ),
+        // A clock that cannot resolve the step: at 10¹³ s floats are 2 ms apart.
+        (
+            "huge t0",
+            Box::new(|s| s["t0"] = serde_json::json!(1e13)),
+            "too large to resolve the safety step",
+        ),
+        (
+            "tiny step",
+            Box::new(|s| s["config"]["safety_step"] = serde_json::json!(1e-9)),
+            "safety_step",
+        ),
+        (
+            "short run",
+            Box::new(|s| s["duration"] = serde_json::json!(1e-4)),
+            "shorter than one safety step",
         ),
     ];
     for (name, edit, want) in cases {

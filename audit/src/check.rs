@@ -34,6 +34,9 @@ pub use crate::config::AuditConfig;
 pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
+/// Human measurements kept (newest by stamp) to check each record against its neighbours in
+/// time. A record older than all of them is checked against the oldest kept.
+pub const HUMAN_HISTORY: usize = 64;
 pub use crate::series::SERIES_BUCKETS;
 
 #[derive(Clone, Copy)]
@@ -122,9 +125,13 @@ pub struct Auditor {
     block_human: Option<usize>,
     humans: [Option<HumanMeasurement>; 2],
     latest_human: Option<usize>,
-    /// Pairs of consecutive human measurements that contradict the model (merged when they
-    /// chain), reported as `human_exceeds_model`.
+    /// Pairs of human measurements adjacent in stamp order, and of object measurements, that
+    /// contradict their model (merged when they chain), reported as `human_exceeds_model` /
+    /// `object_exceeds_model`.
     model_breaks: Vec<InconclusiveSpan>,
+    /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of a
+    /// record against its neighbours in time (records may arrive out of order).
+    human_history: std::collections::VecDeque<HumanMeasurement>,
     span_human: Option<usize>,
     span_index: u64,
     open: Vec<Option<OpenInterval>>,
@@ -259,6 +266,7 @@ impl Auditor {
             humans: [None, None],
             latest_human: None,
             model_breaks: Vec::new(),
+            human_history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span_human: None,
             span_index: 0,
             open: vec![None; slots * links],
@@ -295,6 +303,12 @@ impl Auditor {
     }
 
     /// A human measurement logged at `t`, taken at `t_meas` (s). Errors name the field and value.
+    ///
+    /// The measurement in use for the spans is the newest by stamp, as in the shield
+    /// (`HumanSlot::take`: an older or equal-stamp record arriving later is ignored); every
+    /// record, used or not, is checked against the human model beside its neighbours in time
+    /// ([`Self::check_human_model`]), so a record that contradicts the others cannot hide
+    /// behind a newer one.
     pub fn push_human(
         &mut self,
         t: f64,
@@ -313,6 +327,18 @@ impl Auditor {
         let m = HumanMeasurement::new(&self.human, t_meas, positions, None)
             .map_err(AuditError::Measurement)?;
         self.check_human_model(&m);
+        self.human_records += 1;
+        // Every human record after the last robot sample counts, used or not: keep the earliest
+        // measurement time (a record describing a time inside the log after its last sample).
+        self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
+        let newest = self
+            .latest_human
+            .and_then(|s| self.humans[s].as_ref())
+            .map(|h| h.time());
+        if newest.is_some_and(|tn| t_meas <= tn) {
+            // Not newer than the measurement in use: checked above, not used (as the shield).
+            return Ok(());
+        }
         // Check the pending spans first: afterwards only `span_human`'s slot is still needed.
         self.flush_block();
         self.block_human = self.span_human;
@@ -322,48 +348,44 @@ impl Auditor {
         };
         self.humans[slot] = Some(m);
         self.latest_human = Some(slot);
-        self.human_records += 1;
-        // Every human record after the last robot sample counts: keep the earliest measurement.
-        self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
         Ok(())
     }
 
-    /// Whether `m` and the latest human measurement are consistent with the human model: every
-    /// keypoint moved at most `v_max·|Δt| + 2·e_pos` (m) between the two stamps (both describe
-    /// the state `delay` earlier). A contradiction is recorded as `human_exceeds_model` over the
-    /// two stamps: the audit's occupancies assume the model, so a pass there would rest on an
-    /// assumption the log itself refutes.
+    /// Whether `m` is consistent with the human model beside its neighbours in time among the
+    /// kept measurements (the newest kept with a stamp ≤ `m`'s, and the oldest with a later
+    /// one): every keypoint moved at most `v_max·|Δt| + 2·e_pos` (m) between the two stamps
+    /// (both describe the state `delay` earlier). A contradiction is recorded as
+    /// `human_exceeds_model` over the two stamps: the audit's occupancies assume the model, so a
+    /// pass there would rest on an assumption the log itself refutes. `m` is then kept.
     fn check_human_model(&mut self, m: &HumanMeasurement) {
-        let Some(prev) = self.latest_human.and_then(|s| self.humans[s].as_ref()) else {
-            return;
-        };
-        // Conservative both ways: the distance rounded up, the allowance rounded down, so a
-        // contradiction is never missed by rounding (only one within an ulp is flagged too).
-        let (lo, hi) = (prev.time().min(m.time()), prev.time().max(m.time()));
-        let dt = sub_down(hi, lo).max(0.0);
-        let e2 = mul_down(2.0, self.human.measurement_error_pos());
-        let broke = m
-            .positions()
-            .iter()
-            .zip(prev.positions())
-            .zip(self.human.v_max())
-            .any(|((a, b), v)| {
-                let allowed = add_down(mul_down(*v, dt), e2);
-                dist3_up(&[a.x, a.y, a.z], &[b.x, b.y, b.z]) > allowed
-            });
-        if !broke {
-            return;
+        let at = self.human_history.partition_point(|h| h.time() <= m.time());
+        let before = at.checked_sub(1);
+        let after = (at < self.human_history.len()).then_some(at);
+        for k in before.into_iter().chain(after) {
+            if human_pair_breaks(&self.human, &self.human_history[k], m) {
+                let (t0, t1) = order(self.human_history[k].time(), m.time());
+                self.model_break(t0, t1, Reason::HumanExceedsModel);
+            }
         }
-        let (t0, t1) = (prev.time().min(m.time()), prev.time().max(m.time()));
+        self.human_history.insert(at, m.clone());
+        if self.human_history.len() > HUMAN_HISTORY {
+            self.human_history.pop_front();
+        }
+    }
+
+    /// Record a contradiction of a model between the stamps `t0 ≤ t1` (merged with the previous
+    /// one of the same reason where they chain).
+    fn model_break(&mut self, t0: f64, t1: f64, reason: Reason) {
         match self.model_breaks.last_mut() {
-            Some(last) if last.t_end >= t0 => {
+            Some(last) if last.reason == reason && last.t_end >= t0 && last.t_start <= t1 => {
+                last.t_start = last.t_start.min(t0);
                 last.t_end = last.t_end.max(t1);
                 last.spans += 1;
             }
             _ => self.model_breaks.push(InconclusiveSpan {
                 t_start: t0,
                 t_end: t1,
-                reason: Reason::HumanExceedsModel,
+                reason,
                 spans: 1,
             }),
         }
@@ -396,14 +418,26 @@ impl Auditor {
         if t_meas > t {
             return Err(AuditError::MeasurementFromFuture { t_meas, t });
         }
-        let o = &mut self.objects[k];
-        if o.latest.is_none_or(|m| m.time <= t_meas) {
-            o.latest = Some(ObjectMeasurement {
-                time: t_meas,
-                position,
-                velocity,
-            });
+        let m = ObjectMeasurement {
+            time: t_meas,
+            position,
+            velocity,
+        };
+        // Every record is checked against the newest one (older or newer, as it arrives); the
+        // newest by stamp is the one in use, as in the shield (`keep_newest`: the first of equal
+        // stamps stays).
+        let o = &self.objects[k];
+        if let Some(cur) = o.latest {
+            let (early, late) = if cur.time <= m.time {
+                (cur, m)
+            } else {
+                (m, cur)
+            };
+            if object_pair_breaks(&o.model, &early, &late) {
+                self.model_break(early.time, late.time, Reason::ObjectExceedsModel);
+            }
         }
+        m.keep_newest(&mut self.objects[k].latest);
         Ok(())
     }
 
@@ -522,6 +556,72 @@ impl Auditor {
         self.t_last = t;
         Ok(())
     }
+}
+
+/// `(min, max)` of two times.
+fn order(a: f64, b: f64) -> (f64, f64) {
+    (a.min(b), a.max(b))
+}
+
+/// Whether two measurements of one person contradict the human model: some keypoint moved
+/// farther than `v_max·|Δt| + 2·e_pos` (m) between their stamps. Conservative both ways: the
+/// distance rounded up, the allowance rounded down, so rounding never hides a contradiction
+/// (only one within an ulp is flagged too).
+fn human_pair_breaks(model: &HumanModel, a: &HumanMeasurement, b: &HumanMeasurement) -> bool {
+    let (lo, hi) = order(a.time(), b.time());
+    let dt = sub_down(hi, lo).max(0.0);
+    let e2 = mul_down(2.0, model.measurement_error_pos());
+    a.positions()
+        .iter()
+        .zip(b.positions())
+        .zip(model.v_max())
+        .any(|((p, q), v)| {
+            let allowed = add_down(mul_down(*v, dt), e2);
+            dist3_up(&[p.x, p.y, p.z], &[q.x, q.y, q.z]) > allowed
+        })
+}
+
+/// A Euclidean norm rounded down (the float result shrunk by more than its rounding error).
+fn norm3_down(v: [f64; 3]) -> f64 {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    n * (1.0 - 8.0 * f64::EPSILON)
+}
+
+/// Whether two measurements of one object, `early` stamped no later than `late`, contradict its
+/// model: the reference point moved farther than the model allows over `Δt` plus twice the
+/// position error. The model allows the smaller of `max_speed·Δt` (with a speed bound) and
+/// `(|v_early| + e_v)·Δt + a_max·Δt²/2` (with a measured velocity; `a_max` the norm of the
+/// acceleration set's bias plus its generators' and ball's, an upper bound of its norm); with
+/// neither it bounds nothing and no record can contradict it. The allowance is rounded down and
+/// the distance up: rounding never hides a contradiction.
+fn object_pair_breaks(
+    model: &ObjectModel,
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+) -> bool {
+    let dt = sub_down(late.time, early.time).max(0.0);
+    let by_speed = model.max_speed().map(|v| mul_down(v, dt));
+    let by_velocity = early.velocity.map(|v| {
+        // The allowance rounded down: the acceleration bound is a sum of norms rounded down,
+        // which stays below the true sum (each norm is an under-estimate).
+        let mut acc = norm3_down(model.acc_bias());
+        for g in model.acc_generators() {
+            acc = add_down(acc, norm3_down(*g));
+        }
+        acc = add_down(acc, model.max_acc());
+        let speed = add_down(norm3_down(v), model.vel_error());
+        add_down(
+            mul_down(speed, dt),
+            mul_down(mul_down(0.5, acc), mul_down(dt, dt)),
+        )
+    });
+    let allowed = match (by_speed, by_velocity) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(a), None) | (None, Some(a)) => a,
+        (None, None) => return false,
+    };
+    let allowed = add_down(allowed, mul_down(2.0, model.pos_error()));
+    dist3_up(&early.position, &late.position) > allowed
 }
 
 #[cfg(test)]

@@ -118,6 +118,11 @@ pub enum InconclusiveReason {
     /// and what was checked with the earlier one assumed it (`t_start`, `t_end`: the two
     /// measurement stamps).
     HumanExceedsModel,
+    /// Two measurements of an object lie farther apart than its model allows (its speed bound,
+    /// or the first one's velocity and the acceleration bound, over the time between them, plus
+    /// twice the position error): the object broke the model its occupancies assume
+    /// (`t_start`, `t_end`: the two measurement stamps).
+    ObjectExceedsModel,
 }
 
 impl InconclusiveReason {
@@ -135,6 +140,7 @@ impl InconclusiveReason {
             Self::StaleObject => "stale_object",
             Self::ObjectReachError => "object_reach_error",
             Self::HumanExceedsModel => "human_exceeds_model",
+            Self::ObjectExceedsModel => "object_exceeds_model",
         }
     }
 }

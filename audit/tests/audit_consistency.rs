@@ -361,3 +361,55 @@ fn accelerations_in_jsonl_and_csv() {
         .to_string();
     assert!(err.contains("ddq") && err.contains("line 2"), "{err}");
 }
+
+/// A human record arriving late (logged at 0.2 s, stamped 0.095 s) is checked against its
+/// neighbours in time (0.09 and 0.10 s), not only against the newest record (0.2 s), and it
+/// does not replace the newest as the measurement in use (the shield keeps the newest too). A
+/// spike 5 ms from its neighbours that the model forbids there but allows over the 105 ms to
+/// the newest (so the old check, against the latest record logged, let the log pass) makes the
+/// log inconclusive; the same record without the spike passes.
+#[test]
+fn a_late_human_record_is_checked_against_its_neighbours_in_time() {
+    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let model = HumanModel::builtin("default").unwrap();
+    let v = model.v_max().iter().cloned().fold(f64::INFINITY, f64::min);
+    let e = model.measurement_error_pos();
+    // Beyond the model against both neighbours (5 ms), within it against the newest (105 ms).
+    let (near, newest) = (v * 0.005 + 2.0 * e, v * 0.105 + 2.0 * e);
+    let dx_spike = 0.5 * (near + newest);
+    let log = |dx: f64| {
+        let x = 2.6 + dx;
+        let late: Vec<String> = (0..9)
+            .map(|i| format!("[{x},{},1]", i as f64 * 0.1))
+            .collect();
+        let late = format!("[{}]", late.join(","));
+        let mut text = format!("{}\n", header("ssm"));
+        for k in 0..=20 {
+            let t = k as f64 * 0.01;
+            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{far}}}\n");
+            if k == 20 {
+                text += &format!(
+                    "{{\"type\":\"human\",\"t\":{t},\"t_meas\":0.095,\"positions\":{late}}}\n"
+                );
+            }
+            text += &format!(
+                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n"
+            );
+        }
+        run(&text)
+    };
+    assert!(newest - near > 0.1, "v {v}, e {e}");
+    let spike = log(dx_spike);
+    assert_eq!(
+        spike.verdict,
+        Verdict::Inconclusive,
+        "{:?}",
+        spike.inconclusive
+    );
+    assert_eq!(reasons(&spike), ["human_exceeds_model"]);
+    let span = &spike.inconclusive[0];
+    assert_eq!((span.t_start, span.t_end), (0.09, 0.1));
+    assert_eq!(spike.metrics.human_records, 22);
+    let calm = log(0.0);
+    assert_eq!(calm.verdict, Verdict::Pass, "{:?}", calm.inconclusive);
+}

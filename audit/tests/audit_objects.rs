@@ -208,3 +208,69 @@ fn an_unmeasured_or_stale_object_is_inconclusive() {
         r.inconclusive
     );
 }
+
+/// The far-ball log of [`log`] with one more `b1` record logged at 0.1 s, stamped `stamp`, at
+/// `pos`, written just before the regular record of 0.1 s.
+fn log_with_extra(stamp: f64, pos: [f64; 3]) -> String {
+    let mut h = Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    h.objects.push(ObjectEntry {
+        id: "b1".into(),
+        object: ModelRef::Name("ball".into()),
+        contact: ObjectContact::Ssm,
+    });
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&h).unwrap();
+    for k in 0..=200 {
+        let t = k as f64 * 1e-3;
+        if k % 10 == 0 {
+            w.write_human(t, t, &standing(2.5, 0.0)).unwrap();
+            if k == 100 {
+                w.write_object(t, stamp, "b1", pos, Some([0.0; 3])).unwrap();
+            }
+            w.write_object(t, t, "b1", [3.0, 3.0, 0.5], Some([0.0; 3]))
+                .unwrap();
+        }
+        let mut q = Q_READY;
+        q[0] += 0.2 * t;
+        let mut dq = [0.0; 7];
+        dq[0] = 0.2;
+        w.write_robot(t, &q, Some(&dq)).unwrap();
+    }
+    String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+/// A ball record that the others contradict — on the flange 0.5 ms before a record 3 m away,
+/// which supersedes it — is checked against the newest record although no span uses it: the
+/// log cannot pass (`object_exceeds_model`). Before session 24 the superseded record was never
+/// looked at and the log passed. At the same stamp as the far record, the first record stays in
+/// use (as in the shield, `keep_newest`): the ball on the moving flange fails the log, and the
+/// contradiction is reported too. A record consistent with its neighbours (1 mm off, at rest)
+/// passes.
+#[test]
+fn a_ball_record_the_others_contradict_is_inconclusive_not_a_pass() {
+    let reasons = |r: &pacs_audit::RunResult| -> Vec<String> {
+        r.inconclusive
+            .iter()
+            .map(|s| s.reason.to_string())
+            .collect()
+    };
+    let r = run(&log_with_extra(0.0995, flange()), &AuditConfig::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
+    assert_eq!(reasons(&r), ["object_exceeds_model"]);
+    let s = &r.inconclusive[0];
+    assert_eq!((s.t_start, s.t_end), (0.09, 0.1), "{s:?}");
+    let r = run(&log_with_extra(0.1, flange()), &AuditConfig::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Fail, "{r:?}");
+    assert_eq!(reasons(&r), ["object_exceeds_model"]);
+    // The same records 1 mm apart (within twice the position error): consistent.
+    let r = run(
+        &log_with_extra(0.0995, [3.001, 3.0, 0.5]),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+}

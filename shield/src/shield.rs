@@ -64,7 +64,7 @@ pub enum FilterMode {
 /// Shield settings (units: s, m, rad/s², rad/s³).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShieldConfig {
-    /// Safety step α_s (s).
+    /// Safety step α_s (s), within [`SAFETY_STEP_RANGE`].
     pub safety_step: f64,
     /// Cartesian tracking error of the low-level controller (m), added to every robot capsule.
     pub tracking_error: f64,
@@ -137,6 +137,20 @@ impl Default for ShieldConfig {
 }
 
 pub use pacs_verify::iso15066::EnvShape;
+
+/// The safety steps α_s a shield accepts (s): 10 µs to 1 s. Below, a run's steps outnumber
+/// what a clock and a log can tell apart; above, one step of intended motion is no longer a
+/// small part of a braking manoeuvre.
+pub const SAFETY_STEP_RANGE: std::ops::RangeInclusive<f64> = 1e-5..=1.0;
+
+/// Whether a clock reading `t` (s) resolves a thousandth of the safety step `alpha` (s): the
+/// spacing of floats at `|t|` is at most `alpha / 1000`. Beyond that, `t₀ + k·α_s` no longer
+/// advances by α_s per step (at `|t|` = 10¹³ s a 1 ms step rounds to 0 or 2 ms), and every
+/// delay and age the shield computes from times is off by as much. Unix-time clocks (≈ 1.8·10⁹
+/// s) pass for α_s ≥ 0.4 ms.
+pub fn clock_resolves(t: f64, alpha: f64) -> bool {
+    t.is_finite() && f64::EPSILON * t.abs() <= alpha / 1000.0
+}
 
 /// How far (s) a step time may be from the expected grid time `t` (float rounding of
 /// `t_0 + k·α_s`): 1 ns, or 8 ulps of `t` for large (e.g. Unix-time) clocks.
@@ -408,8 +422,13 @@ impl Shield {
         let bad = |f: &str, v: f64| {
             ShieldError::Invalid(format!("shield config `{f}`: invalid value {v}"))
         };
-        if !(c.safety_step > 0.0 && c.safety_step.is_finite()) {
-            return Err(bad("safety_step", c.safety_step));
+        if !SAFETY_STEP_RANGE.contains(&c.safety_step) {
+            return Err(ShieldError::Invalid(format!(
+                "shield config `safety_step`: {} s is outside [{}, {}] s",
+                c.safety_step,
+                SAFETY_STEP_RANGE.start(),
+                SAFETY_STEP_RANGE.end()
+            )));
         }
         if !(c.velocity_tracking_error >= 0.0 && c.velocity_tracking_error.is_finite()) {
             return Err(bad("velocity_tracking_error", c.velocity_tracking_error));
@@ -620,6 +639,14 @@ impl Shield {
             return Err(ShieldError::Invalid(
                 "start: configuration outside the joint position limits".into(),
             ));
+        }
+        if !clock_resolves(t, self.config.safety_step) {
+            return Err(ShieldError::Invalid(format!(
+                "start: the time {t} s is too large to resolve the safety step ({} s): floats \
+                 at that magnitude are farther apart than a thousandth of it (count time from \
+                 the run's start)",
+                self.config.safety_step
+            )));
         }
         self.trajs = [Some(Trajectory::standstill(q)), None];
         self.chunk_serial = [0, 0];

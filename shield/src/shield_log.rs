@@ -44,13 +44,7 @@ impl<W: Write> ShieldLog<W> {
         if let Some(m) = meas
             && m.time() > self.last_meas
         {
-            self.last_meas = m.time();
-            self.positions.clear();
-            self.positions
-                .extend(m.positions().iter().map(|p| [p.x, p.y, p.z]));
-            // Step times k·α and command times t + α may differ by rounding: keep t monotone.
-            self.w
-                .write_human(t.max(self.last_t), m.time(), &self.positions)?;
+            self.human(t, m)?;
         }
         if let Some(q0) = self.pending.take() {
             let t0 = self.last_t;
@@ -76,12 +70,34 @@ impl<W: Write> ShieldLog<W> {
         if d.min_separation.is_finite() {
             fields.insert("min_separation".into(), d.min_separation.into());
         }
-        fields.insert("contact_energy".into(), d.contact_energy.into());
-        fields.insert("contact_threshold".into(), d.contact_threshold.into());
+        // JSON has no infinity or NaN (serde would write `null` where a number is promised):
+        // an energy bound that overflowed (or is NaN, which the shield treats as unbounded) is
+        // logged as the largest float, still an upper bound of every energy.
+        let bound = |x: f64| if x.is_finite() { x } else { f64::MAX };
+        fields.insert("contact_energy".into(), bound(d.contact_energy).into());
+        fields.insert(
+            "contact_threshold".into(),
+            bound(d.contact_threshold).into(),
+        );
         if let Ok(b) = serde_json::to_value(d.binding) {
             fields.insert("binding".into(), b);
         }
         self.w.write_shield(tc, &fields)
+    }
+
+    /// A human measurement delivered to the shield at step time `t` (s), written whether or not
+    /// the shield uses it (it keeps the newest by stamp): a runner that receives several in one
+    /// step, or one late, logs each, so that the audit checks every one against the human model
+    /// beside its neighbours in time (a record contradicting the others cannot hide behind a
+    /// newer one). [`Self::record`] then writes no copy of it.
+    pub fn human(&mut self, t: f64, m: &HumanMeasurement) -> Result<(), WriteError> {
+        self.last_meas = self.last_meas.max(m.time());
+        self.positions.clear();
+        self.positions
+            .extend(m.positions().iter().map(|p| [p.x, p.y, p.z]));
+        // Step times k·α and command times t + α may differ by rounding: keep t monotone.
+        self.w
+            .write_human(t.max(self.last_t), m.time(), &self.positions)
     }
 
     /// A measurement of the header's object `id`, given to the shield at step time `t` (s):

@@ -69,8 +69,10 @@ pub enum WorkerState {
     Planning,
     /// Planned and offered: waiting for the step at its handover.
     Offered,
-    /// Taken over by the shield as its chunk with this serial number: the next step tries it
-    /// (at rest it is followed at once, standing still if need be).
+    /// Taken over by the shield as its chunk with this serial number, and not tried yet: the
+    /// next step tries it. Seen only where the offer was taken over at once (its start is the
+    /// current commanded state, e.g. a robot at rest); an offer taken over at its handover step
+    /// is tried by that same step and goes straight to [`Self::Taken`] or [`Self::Dropped`].
     Installed(u64),
     /// The commands follow it: the shield's chunk with this serial number
     /// ([`crate::shield::ChunkProgress::chunk`]).
@@ -363,7 +365,15 @@ impl ChunkWorker {
                 self.state = WorkerState::Dropped(n);
             }
             OfferState::Stale => self.again(shield),
-            OfferState::None | OfferState::Waiting => {}
+            OfferState::Waiting => {}
+            // The shield was restarted (`Shield::start`), which forgets offers: a chunk taken
+            // over before is gone, one still offered was never taken over.
+            OfferState::None => {
+                self.state = match self.state {
+                    WorkerState::Installed(n) => WorkerState::Dropped(n),
+                    _ => WorkerState::Idle,
+                };
+            }
         }
     }
 

@@ -156,6 +156,19 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             "duration: {duration} s is outside (0, 3600]"
         )));
     }
+    if duration < cfg.safety_step {
+        return Err(input(format!(
+            "duration: {duration} s is shorter than one safety step ({} s)",
+            cfg.safety_step
+        )));
+    }
+    if !pacs_shield::shield::clock_resolves(t0 + duration, cfg.safety_step) {
+        return Err(input(format!(
+            "t0: {t0} s (to {} s) is too large to resolve the safety step ({} s): count time from the run's start",
+            t0 + duration,
+            cfg.safety_step
+        )));
+    }
     let env: Vec<_> = models
         .environment
         .iter()
@@ -267,7 +280,10 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     for k in 0..steps {
         let t = t0 + k as f64 * dt;
         let mut latest_human: Option<&HumanMeasurement> = None;
-        while next < events.len() && events[next].0 <= t + 1e-12 {
+        // Delivered at the first step at or after the arrival time, compared exactly: a
+        // measurement is never handed to the shield before its stamp (it would ignore it as
+        // from the future, while the log would say it was received).
+        while next < events.len() && events[next].0 <= t {
             match events[next].1 {
                 Event::Chunk(i) => match shield.set_chunk(&chunks[i]) {
                     Ok(()) => accepted += 1,
@@ -278,7 +294,11 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
                     }
                 },
                 Event::Human(i) => {
+                    // Every delivered measurement is logged (the audit checks each against the
+                    // model); the shield gets the newest of the step and keeps it if it is
+                    // newer than its own.
                     let m = &humans[i];
+                    log.human(t, m).map_err(|e| werr(&log_path, &e))?;
                     if latest_human.is_none_or(|l| l.time() < m.time()) {
                         latest_human = Some(m);
                     }
@@ -327,8 +347,8 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         .flush()
         .map_err(|e| werr(&log_path, &e))?;
     cmd_out.flush().map_err(|e| werr(&cmd_path, &e))?;
-    // Inputs timed at or after the run's end never reached the shield: say so rather than
-    // leave them out of every count.
+    // Inputs arriving after the last step never reached the shield: say so rather than leave
+    // them out of every count.
     let (mut late_chunks, mut late_humans, mut late_objects) = (Vec::new(), 0usize, 0usize);
     for (_, e) in &events[next..] {
         match e {
@@ -339,8 +359,8 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     }
     if !late_chunks.is_empty() {
         eprintln!(
-            "pacs: warning: chunks {late_chunks:?} are timed at or after the run's end ({} s) and were never handed to the shield (extend `duration`)",
-            t0 + steps as f64 * dt
+            "pacs: warning: chunks {late_chunks:?} are timed after the last step ({} s) and were never handed to the shield (extend `duration`)",
+            t0 + steps.saturating_sub(1) as f64 * dt
         );
     }
     Ok(json!({
