@@ -209,6 +209,33 @@ impl Inner {
             }
             _ => {}
         }
+        // Every measurement stamped at or before t is logged (the logged human's and every
+        // object's), also those the shield will not use: the audit checks each against its
+        // model beside its neighbours in time and uses the newest, as the shield does, so a
+        // measurement that the others contradict cannot hide behind a newer one.
+        if let Some(log) = &mut self.log {
+            let mut failed = None;
+            for (id, m) in &self.pending_humans {
+                if *id == 0
+                    && m.time() <= t
+                    && let Err(e) = log.human(t, m)
+                {
+                    failed = Some(e);
+                    break;
+                }
+            }
+            for (k, m) in &self.pending_objects {
+                if failed.is_none()
+                    && m.time <= t
+                    && let Err(e) = log.object(t, &self.object_ids[*k], m)
+                {
+                    failed = Some(e);
+                }
+            }
+            if let Some(e) = failed {
+                self.log_failed(e);
+            }
+        }
         // Hand over the measurements stamped at or before t: per human and object the newest
         // (the first of equal time stamps, as the shield keeps it; the shield ignores older
         // ones anyway); later ones keep waiting. Moved out of the queues: no allocation here.
@@ -233,7 +260,7 @@ impl Inner {
             };
             let (_, m) = self.pending_objects.remove(i);
             // The shield keeps the first of equal-time measurements and ignores older ones:
-            // hand over (and log) only strictly newer ones, so that the log shows what it used.
+            // hand over only strictly newer ones (all were logged above).
             if m.time <= self.object_latest[k] {
                 continue;
             }
@@ -241,11 +268,6 @@ impl Inner {
             self.shield
                 .measure_object(k, &m)
                 .map_err(|e| (Kind::State, e.to_string()))?;
-            if let Some(log) = &mut self.log
-                && let Err(e) = log.object(t, &self.object_ids[k], &m)
-            {
-                self.log_failed(e);
-            }
         }
         self.pending_objects.retain(|(_, m)| m.time > t);
         let cmd = self

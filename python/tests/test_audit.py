@@ -37,6 +37,34 @@ def test_a_shield_log_passes_the_audit(demo, tmp_path):
     assert (tmp_path / "report" / "report.html").stat().st_size > 1000
 
 
+def test_a_measurement_the_others_contradict_is_logged_and_not_a_pass(demo, tmp_path):
+    """A measurement of the person at the gripper, superseded in the same step by one 3 m away
+    (1 ms newer), is not used by the shield but is logged: the audit checks it against its
+    neighbours in time and cannot pass the run (before session 24 only the newest of a step was
+    logged, and the log passed)."""
+    from conftest import far_human
+
+    log = tmp_path / "hidden.jsonl"
+    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
+    s.start(0.0, demo.start)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    far = far_human(demo)
+    at_gripper = np.tile(demo.tool_point(demo.start), (9, 1))
+    for k in range(600):
+        t = k * 0.001
+        if k % 10 == 0:
+            if k == 300:
+                s.measure(t - 0.001, at_gripper)
+            s.measure(t, far)
+        s.step(t)
+    s.close()
+    (r,) = pacs.audit([log])
+    assert r.verdict != "pass", r.to_dict()
+    assert any(i["reason"] == "human_exceeds_model" for i in r.inconclusive), r.to_dict()
+    assert r.metrics["human_records"] == 61
+
+
 def moving_through(writer, q0, human, t_end=1.0, dt=0.001, speed=0.5):
     """Joint 1 turning at `speed` rad/s while a person stands at the start pose's gripper."""
     for k in range(int(t_end / dt) + 1):
