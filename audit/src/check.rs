@@ -2,7 +2,8 @@
 //!
 //! For a span `[t_i, t_{i+1}]` the robot's joint positions lie in a box derived from the two
 //! samples and the velocity limits, its velocities in a box derived from the acceleration limits;
-//! the human lies in the reachable occupancy of the latest measurement logged before `t_i`. A
+//! the human lies in the reachable occupancy of the newest measurement (by stamp) logged before
+//! `t_i`. A
 //! violation is *possible* if the enclosures admit one, *certain* if it holds at a recorded sample
 //! with the measured keypoints taken at face value. See `docs/audit.md` for the exact semantics.
 
@@ -34,8 +35,8 @@ pub use crate::config::AuditConfig;
 pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
-/// Human measurements kept (newest by stamp) to check each record against its neighbours in
-/// time. A record older than all of them is checked against the oldest kept.
+/// Human measurements (and, per object, object measurements) kept, the newest by stamp, to
+/// check each new record against every one of them.
 pub const HUMAN_HISTORY: usize = 64;
 pub use crate::series::SERIES_BUCKETS;
 
@@ -81,8 +82,11 @@ struct ObjectTrack {
     id: String,
     model: ObjectModel,
     contact: ObjectContact,
-    /// The latest measurement logged.
+    /// The measurement in use: the newest by stamp, the first of equal stamps (the shield's
+    /// [`ObjectMeasurement::keep_newest`]).
     latest: Option<ObjectMeasurement>,
+    /// The latest [`HUMAN_HISTORY`] measurements by stamp, for the model check of each record.
+    history: std::collections::VecDeque<ObjectMeasurement>,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -129,8 +133,8 @@ pub struct Auditor {
     /// contradict their model (merged when they chain), reported as `human_exceeds_model` /
     /// `object_exceeds_model`.
     model_breaks: Vec<InconclusiveSpan>,
-    /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of a
-    /// record against its neighbours in time (records may arrive out of order).
+    /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of
+    /// each record against them (records may arrive out of order).
     human_history: std::collections::VecDeque<HumanMeasurement>,
     span_human: Option<usize>,
     span_index: u64,
@@ -237,6 +241,7 @@ impl Auditor {
                 model: *model,
                 contact: *contact,
                 latest: None,
+                history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
                 span: None,
                 occ: None,
             })
@@ -351,22 +356,26 @@ impl Auditor {
         Ok(())
     }
 
-    /// Whether `m` is consistent with the human model beside its neighbours in time among the
-    /// kept measurements (the newest kept with a stamp ≤ `m`'s, and the oldest with a later
-    /// one): every keypoint moved at most `v_max·|Δt| + 2·e_pos` (m) between the two stamps
-    /// (both describe the state `delay` earlier). A contradiction is recorded as
-    /// `human_exceeds_model` over the two stamps: the audit's occupancies assume the model, so a
-    /// pass there would rest on an assumption the log itself refutes. `m` is then kept.
+    /// Whether `m` is consistent with the human model beside every kept measurement (the latest
+    /// [`HUMAN_HISTORY`] by stamp, in whatever order they arrived): every keypoint moved at most
+    /// `v_max·|Δt| + 2·e_pos` (m) between the two stamps (both describe the state `delay`
+    /// earlier). Checking every kept one, not only the neighbours in time, also catches a chain
+    /// of records each within `2·e_pos` of the previous (equal stamps) drifting away from the
+    /// first. A contradiction is recorded as `human_exceeds_model` over the stamps of `m` and of
+    /// the nearest contradicting record on each side in time ([`Nearest`]): the audit's
+    /// occupancies assume the model, so a pass there would rest on an assumption the log itself
+    /// refutes. `m` is then kept.
     fn check_human_model(&mut self, m: &HumanMeasurement) {
-        let at = self.human_history.partition_point(|h| h.time() <= m.time());
-        let before = at.checked_sub(1);
-        let after = (at < self.human_history.len()).then_some(at);
-        for k in before.into_iter().chain(after) {
-            if human_pair_breaks(&self.human, &self.human_history[k], m) {
-                let (t0, t1) = order(self.human_history[k].time(), m.time());
-                self.model_break(t0, t1, Reason::HumanExceedsModel);
+        let mut nearest = Nearest::new(m.time());
+        for h in &self.human_history {
+            if human_pair_breaks(&self.human, h, m) {
+                nearest.add(h.time());
             }
         }
+        for (t0, t1) in nearest.pairs() {
+            self.model_break(t0, t1, Reason::HumanExceedsModel);
+        }
+        let at = self.human_history.partition_point(|h| h.time() <= m.time());
         self.human_history.insert(at, m.clone());
         if self.human_history.len() > HUMAN_HISTORY {
             self.human_history.pop_front();
@@ -423,21 +432,31 @@ impl Auditor {
             position,
             velocity,
         };
-        // Every record is checked against the newest one (older or newer, as it arrives); the
+        // Every record is checked against every kept one (older or newer, as it arrives); the
         // newest by stamp is the one in use, as in the shield (`keep_newest`: the first of equal
         // stamps stays).
+        let mut nearest = Nearest::new(m.time);
         let o = &self.objects[k];
-        if let Some(cur) = o.latest {
+        for cur in &o.history {
             let (early, late) = if cur.time <= m.time {
-                (cur, m)
+                (cur, &m)
             } else {
-                (m, cur)
+                (&m, cur)
             };
-            if object_pair_breaks(&o.model, &early, &late) {
-                self.model_break(early.time, late.time, Reason::ObjectExceedsModel);
+            if object_pair_breaks(&o.model, early, late) {
+                nearest.add(cur.time);
             }
         }
-        m.keep_newest(&mut self.objects[k].latest);
+        for (t0, t1) in nearest.pairs() {
+            self.model_break(t0, t1, Reason::ObjectExceedsModel);
+        }
+        let o = &mut self.objects[k];
+        let at = o.history.partition_point(|h| h.time <= m.time);
+        o.history.insert(at, m);
+        if o.history.len() > HUMAN_HISTORY {
+            o.history.pop_front();
+        }
+        m.keep_newest(&mut o.latest);
         Ok(())
     }
 
@@ -563,6 +582,42 @@ fn order(a: f64, b: f64) -> (f64, f64) {
     (a.min(b), a.max(b))
 }
 
+/// The stamps of the records that contradict a new record at `t`, reduced to the nearest one at
+/// or before `t` and the nearest one after it: the break is reported over the shortest spans of
+/// time it is known to lie in.
+struct Nearest {
+    t: f64,
+    before: Option<f64>,
+    after: Option<f64>,
+}
+
+impl Nearest {
+    fn new(t: f64) -> Self {
+        Self {
+            t,
+            before: None,
+            after: None,
+        }
+    }
+
+    fn add(&mut self, s: f64) {
+        if s <= self.t {
+            self.before = Some(self.before.map_or(s, |b| b.max(s)));
+        } else {
+            self.after = Some(self.after.map_or(s, |a| a.min(s)));
+        }
+    }
+
+    /// `(t_start, t_end)` of each break found (none, one or two).
+    fn pairs(&self) -> impl Iterator<Item = (f64, f64)> + use<> {
+        let t = self.t;
+        self.before
+            .map(|b| order(b, t))
+            .into_iter()
+            .chain(self.after.map(|a| order(t, a)))
+    }
+}
+
 /// Whether two measurements of one person contradict the human model: some keypoint moved
 /// farther than `v_max·|Δt| + 2·e_pos` (m) between their stamps. Conservative both ways: the
 /// distance rounded up, the allowance rounded down, so rounding never hides a contradiction
@@ -581,10 +636,9 @@ fn human_pair_breaks(model: &HumanModel, a: &HumanMeasurement, b: &HumanMeasurem
         })
 }
 
-/// A Euclidean norm rounded down (the float result shrunk by more than its rounding error).
+/// A Euclidean norm rounded down (`pacs_reach::rounding::norm3_down`, harness a3).
 fn norm3_down(v: [f64; 3]) -> f64 {
-    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    n * (1.0 - 8.0 * f64::EPSILON)
+    pacs_reach::rounding::norm3_down(v[0], v[1], v[2])
 }
 
 /// Whether two measurements of one object, `early` stamped no later than `late`, contradict its

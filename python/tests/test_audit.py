@@ -65,6 +65,19 @@ def test_a_measurement_the_others_contradict_is_logged_and_not_a_pass(demo, tmp_
     assert r.metrics["human_records"] == 61
 
 
+def test_a_first_step_later_than_the_start_gives_an_auditable_log(demo, tmp_path):
+    """Started at 0 s, stepped from 0.5 s: the start sample is logged at the first step, after
+    its measurement (before session 24 it went before it in time and the audit refused the log
+    as going backwards)."""
+    log = tmp_path / "late_first_step.jsonl"
+    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
+    s.start(0.0, demo.start)
+    run(s, 300, t0=0.5, measure=away(demo))
+    s.close()
+    (r,) = pacs.audit([log])
+    assert r.verdict == "pass", r.to_dict()
+
+
 def moving_through(writer, q0, human, t_end=1.0, dt=0.001, speed=0.5):
     """Joint 1 turning at `speed` rad/s while a person stands at the start pose's gripper."""
     for k in range(int(t_end / dt) + 1):

@@ -95,9 +95,11 @@ impl<W: Write> ShieldLog<W> {
         self.positions.clear();
         self.positions
             .extend(m.positions().iter().map(|p| [p.x, p.y, p.z]));
-        // Step times k·α and command times t + α may differ by rounding: keep t monotone.
-        self.w
-            .write_human(t.max(self.last_t), m.time(), &self.positions)
+        // Step times k·α and command times t + α may differ by rounding: keep t monotone. The
+        // start sample, if still pending, follows at this time (the robot is at rest at q0 until
+        // the first command: a first step later than the start must not put it before).
+        self.last_t = t.max(self.last_t);
+        self.w.write_human(self.last_t, m.time(), &self.positions)
     }
 
     /// A measurement of the header's object `id`, given to the shield at step time `t` (s):
@@ -108,8 +110,9 @@ impl<W: Write> ShieldLog<W> {
         id: &str,
         m: &pacs_reach::object::ObjectMeasurement,
     ) -> Result<(), WriteError> {
+        self.last_t = t.max(self.last_t);
         self.w
-            .write_object(t.max(self.last_t), m.time, id, m.position, m.velocity)
+            .write_object(self.last_t, m.time, id, m.position, m.velocity)
     }
 
     /// A named event (`episode_start`, `success`, `failure`, ...).
