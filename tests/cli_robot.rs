@@ -215,8 +215,12 @@ fn urdf_robots_in_headers_configs_and_inputs_resolve_against_their_file() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report/report.json")).unwrap())
             .unwrap();
-    // The URDF names its robot `fr3` (the bad path below shows the URDF is what is read).
-    assert_eq!(report["runs"][0]["models"]["robot"], "fr3", "{report}");
+    // The URDF names its robot `fr3` (the bad path below shows the URDF is what is read); its
+    // model is not the built-in FR3's, and the report says so under that name.
+    assert_eq!(
+        report["runs"][0]["models"]["robot"], "fr3 (custom spec, not the built-in fr3)",
+        "{report}"
+    );
     // A wrong relative path names the resolved file.
     let bad = std::fs::read_to_string(sub.join("run.jsonl"))
         .unwrap()

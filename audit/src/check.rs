@@ -204,10 +204,30 @@ impl Auditor {
         let rcaps = vec![zero; ncaps];
         let n = models.robot.dof();
         let parts = models.human.body_parts().len();
+        // A name says which model was used only where the spec is that built-in's: an inline
+        // spec that reuses a built-in name (say "fr3" with other capsules) is labelled as such,
+        // so that a report never presents a modified model under a built-in's name.
+        let robot_name = models.robot.name();
+        let human_name = &models.human.spec().name;
         let names = ModelNames {
-            robot: models.robot.name().to_string(),
-            human: models.human.spec().name.clone(),
-            constraints: tc.name.clone(),
+            robot: label(
+                robot_name,
+                RobotModel::builtin(robot_name)
+                    .ok()
+                    .map(|b| b.spec() == models.robot.spec()),
+            ),
+            human: label(
+                human_name,
+                HumanModel::builtin(human_name)
+                    .ok()
+                    .map(|b| b.spec() == models.human.spec()),
+            ),
+            constraints: label(
+                &tc.name,
+                pacs_models::ConstraintSpec::builtin(&models.constraints.name)
+                    .ok()
+                    .map(|b| b == models.constraints),
+            ),
             robot_v_max: models.robot.limits().v_max().to_vec(),
             robot_a_max: models.robot.limits().a_max().to_vec(),
             human_v_max: models.human.v_max().to_vec(),
@@ -579,6 +599,17 @@ impl Auditor {
         self.samples += 1;
         self.t_last = t;
         Ok(())
+    }
+}
+
+/// A model's name for reports: the name where the spec is the built-in of that name
+/// (`same = Some(true)`), else marked as a custom spec (and, where a built-in has that name, as
+/// not being it).
+fn label(name: &str, same: Option<bool>) -> String {
+    match same {
+        Some(true) => name.to_string(),
+        Some(false) => format!("{name} (custom spec, not the built-in {name})"),
+        None => format!("{name} (custom spec)"),
     }
 }
 

@@ -466,3 +466,37 @@ fn a_chain_of_equal_stamp_records_cannot_drift_from_the_first() {
     );
     assert_eq!(reasons(&chain), ["human_exceeds_model"]);
 }
+
+/// A report names a model by its name only where the spec is that built-in's: an inline robot
+/// spec called "fr3" with other capsule radii, or a human spec called "default" with another
+/// measurement error, is labelled as a custom spec, so that an assessor never reads a modified
+/// model under a built-in's name.
+#[test]
+fn an_inline_spec_under_a_built_in_name_is_labelled_custom() {
+    let mut robot = serde_json::to_value(RobotModel::builtin("fr3").unwrap().spec()).unwrap();
+    let mut human = serde_json::to_value(HumanModel::builtin("default").unwrap().spec()).unwrap();
+    let body = format!("{HUMAN}\n{ROBOT}\n");
+    let names = |robot: &serde_json::Value, human: &serde_json::Value| {
+        let head = format!(
+            r#"{{"type":"header","format":"pacs-log","version":1,"robot":{robot},"human":{human},"constraints":"ssm"}}"#
+        );
+        let r = run(&format!("{head}\n{body}"));
+        (
+            r.models.robot.clone(),
+            r.models.human.clone(),
+            r.models.constraints.clone(),
+        )
+    };
+    // The built-ins' own specs inline: their names.
+    assert_eq!(
+        names(&robot, &human),
+        ("fr3".into(), "default".into(), "ssm".into())
+    );
+    robot["links"][1]["capsules"][0]["radius"] = serde_json::json!(0.0);
+    human["measurement_error_pos"] = serde_json::json!(0.05);
+    let (r, h, _) = names(&robot, &human);
+    assert_eq!(r, "fr3 (custom spec, not the built-in fr3)");
+    assert_eq!(h, "default (custom spec, not the built-in default)");
+    robot["name"] = serde_json::json!("my-arm");
+    assert_eq!(names(&robot, &human).0, "my-arm (custom spec)");
+}
