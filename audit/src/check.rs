@@ -23,7 +23,7 @@ use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach};
 use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_reach::rounding::{add_down, add_up, dist3_up, mul_down, sub_down};
+use pacs_reach::rounding::{add_down, add_up, dist3_up, mul_down, norm3_up, sub_down};
 use pacs_verify::iso15066::{
     ContactRule, EnvShape, ObjectRule, Outcome, frames_can_pinch, threshold,
 };
@@ -460,6 +460,9 @@ impl Auditor {
         // Every record is checked against every kept one (older or newer, as it arrives); the
         // newest by stamp is the one in use, as in the shield (`keep_newest`: the first of equal
         // stamps stays).
+        if object_record_breaks(&self.objects[k].model, &m) {
+            self.model_break(m.time, m.time, Reason::ObjectExceedsModel);
+        }
         let mut nearest = Nearest::new(m.time);
         let o = &self.objects[k];
         for cur in &o.history {
@@ -688,34 +691,63 @@ fn norm3_down(v: [f64; 3]) -> f64 {
     pacs_reach::rounding::norm3_down(v[0], v[1], v[2])
 }
 
+/// An upper bound of the norm of every acceleration in an object's acceleration set (m/s²):
+/// |bias| + Σ|generators| + `max_acc` (triangle inequality), each norm rounded down, so the
+/// bound is below the exact one by ulps at most (a check using it flags within-ulp cases too).
+fn object_acc_bound(model: &ObjectModel) -> f64 {
+    let mut acc = norm3_down(model.acc_bias());
+    for g in model.acc_generators() {
+        acc = add_down(acc, norm3_down(*g));
+    }
+    add_down(acc, model.max_acc())
+}
+
+/// Whether one measurement of an object contradicts its model: a measured velocity faster than
+/// the speed bound plus the velocity error (the true velocity is within `vel_error` of it and
+/// never faster than `max_speed`). Rounding never hides a contradiction.
+fn object_record_breaks(model: &ObjectModel, m: &ObjectMeasurement) -> bool {
+    match (model.max_speed(), m.velocity) {
+        (Some(vmax), Some(v)) => norm3_up(v[0], v[1], v[2]) > add_down(vmax, model.vel_error()),
+        _ => false,
+    }
+}
+
 /// Whether two measurements of one object, `early` stamped no later than `late`, contradict its
-/// model: the reference point moved farther than the model allows over `Δt` plus twice the
-/// position error. The model allows the smaller of `max_speed·Δt` (with a speed bound) and
-/// `(|v_early| + e_v)·Δt + a_max·Δt²/2` (with a measured velocity; `a_max` the norm of the
-/// acceleration set's bias plus its generators' and ball's, an upper bound of its norm); with
-/// neither it bounds nothing and no record can contradict it. The allowance is rounded down and
-/// the distance up: rounding never hides a contradiction.
+/// model (both describe the state `delay` before their stamps, so `Δt` is the stamps'
+/// difference):
+/// - velocities, where both are measured, farther apart than `a·Δt + 2·vel_error` (`a`:
+///   [`object_acc_bound`]);
+/// - positions farther apart than the model allows over `Δt` plus twice the position error:
+///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
+///   for each measured velocity `v` (forward from the early one, backward from the late one);
+///   with none of these the model bounds nothing and no pair contradicts it.
+///
+/// Allowances are rounded down and distances up: rounding never hides a contradiction.
 fn object_pair_breaks(
     model: &ObjectModel,
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
 ) -> bool {
     let dt = sub_down(late.time, early.time).max(0.0);
+    let acc = object_acc_bound(model);
+    let ev = model.vel_error();
+    if let (Some(a), Some(b)) = (early.velocity, late.velocity)
+        && dist3_up(&a, &b) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
+    {
+        return true;
+    }
     let by_speed = model.max_speed().map(|v| mul_down(v, dt));
-    let by_velocity = early.velocity.map(|v| {
-        // The allowance rounded down: the acceleration bound is a sum of norms rounded down,
-        // which stays below the true sum (each norm is an under-estimate).
-        let mut acc = norm3_down(model.acc_bias());
-        for g in model.acc_generators() {
-            acc = add_down(acc, norm3_down(*g));
-        }
-        acc = add_down(acc, model.max_acc());
-        let speed = add_down(norm3_down(v), model.vel_error());
-        add_down(
-            mul_down(speed, dt),
-            mul_down(mul_down(0.5, acc), mul_down(dt, dt)),
-        )
-    });
+    let by_velocity = [early.velocity, late.velocity]
+        .into_iter()
+        .flatten()
+        .map(|v| {
+            let speed = add_down(norm3_down(v), ev);
+            add_down(
+                mul_down(speed, dt),
+                mul_down(mul_down(0.5, acc), mul_down(dt, dt)),
+            )
+        })
+        .reduce(f64::min);
     let allowed = match (by_speed, by_velocity) {
         (Some(a), Some(b)) => a.min(b),
         (Some(a), None) | (None, Some(a)) => a,

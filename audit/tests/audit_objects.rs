@@ -212,6 +212,12 @@ fn an_unmeasured_or_stale_object_is_inconclusive() {
 /// The far-ball log of [`log`] with one more `b1` record logged at 0.1 s, stamped `stamp`, at
 /// `pos`, written just before the regular record of 0.1 s.
 fn log_with_extra(stamp: f64, pos: [f64; 3]) -> String {
+    log_with_extra_v(stamp, pos, [0.0; 3], [0.0; 3])
+}
+
+/// [`log_with_extra`] with the extra record's measured velocity `vel` and the regular records'
+/// `regular` (m/s).
+fn log_with_extra_v(stamp: f64, pos: [f64; 3], vel: [f64; 3], regular: [f64; 3]) -> String {
     let mut h = Header::new(
         ModelRef::Name("fr3".into()),
         ModelRef::Name("default".into()),
@@ -229,9 +235,9 @@ fn log_with_extra(stamp: f64, pos: [f64; 3]) -> String {
         if k % 10 == 0 {
             w.write_human(t, t, &standing(2.5, 0.0)).unwrap();
             if k == 100 {
-                w.write_object(t, stamp, "b1", pos, Some([0.0; 3])).unwrap();
+                w.write_object(t, stamp, "b1", pos, Some(vel)).unwrap();
             }
-            w.write_object(t, t, "b1", [3.0, 3.0, 0.5], Some([0.0; 3]))
+            w.write_object(t, t, "b1", [3.0, 3.0, 0.5], Some(regular))
                 .unwrap();
         }
         let mut q = Q_READY;
@@ -275,4 +281,41 @@ fn a_ball_record_the_others_contradict_is_inconclusive_not_a_pass() {
     )
     .unwrap();
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+}
+
+/// Measured velocities are checked too (the ball: speed ≤ 1 m/s, |a| ≤ 3 m/s², velocity error
+/// 2 cm/s): a record at 5 m/s breaks the speed bound (alone, or among records all at 5 m/s);
+/// one at 0.9 m/s, 9.5 ms after a record at rest, breaks the acceleration bound (at most
+/// 3·0.0095 + 2·0.02 ≈ 0.07 m/s of change); one at 0.01 m/s passes.
+#[test]
+fn a_ball_velocity_the_model_forbids_is_inconclusive_not_a_pass() {
+    for v in [5.0, 0.9] {
+        let r = run(
+            &log_with_extra_v(0.0995, [3.0, 3.0, 0.5], [v, 0.0, 0.0], [0.0; 3]),
+            &AuditConfig::default(),
+        )
+        .unwrap();
+        assert_eq!(r.verdict, Verdict::Inconclusive, "v {v}: {r:?}");
+        assert!(
+            r.inconclusive
+                .iter()
+                .all(|s| s.reason.to_string() == "object_exceeds_model"),
+            "v {v}: {:?}",
+            r.inconclusive
+        );
+    }
+    let r = run(
+        &log_with_extra_v(0.0995, [3.0, 3.0, 0.5], [0.01, 0.0, 0.0], [0.0; 3]),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    // Every record at 5 m/s, consistent with each other (same velocity) and with a ball that
+    // stays put... except for the speed bound, which each record alone breaks.
+    let r = run(
+        &log_with_extra_v(0.0995, [3.0, 3.0, 0.5], [5.0, 0.0, 0.0], [5.0, 0.0, 0.0]),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
 }
