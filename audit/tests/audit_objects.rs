@@ -299,7 +299,7 @@ fn a_ball_velocity_the_model_forbids_is_inconclusive_not_a_pass() {
         assert!(
             r.inconclusive
                 .iter()
-                .all(|s| s.reason.to_string() == "object_exceeds_model"),
+                .all(|s| s.reason == "object_exceeds_model"),
             "v {v}: {:?}",
             r.inconclusive
         );
