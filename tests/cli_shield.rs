@@ -317,6 +317,12 @@ fn bad_scenes_exit_3_naming_the_field() {
             Box::new(|s| s["config"]["safety_step"] = serde_json::json!(1e-9)),
             "safety_step",
         ),
+        // A rest speed that would let SSM accept contact with a moving robot.
+        (
+            "rest speed",
+            Box::new(|s| s["config"]["rest_speed"] = serde_json::json!(1.0)),
+            "rest_speed",
+        ),
         (
             "short run",
             Box::new(|s| s["duration"] = serde_json::json!(1e-4)),

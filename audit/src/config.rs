@@ -74,6 +74,8 @@ impl AuditConfig {
                 return Err(AuditError::Setting { field: f, value: v });
             }
         }
+        // The one rule's bound: a larger rest speed would let SSM pass a moving robot.
+        pacs_verify::iso15066::check_rest_speed(self.rest_speed).map_err(AuditError::Rule)?;
         if self.human_model == HumanReachModel::Acc {
             return Err(AuditError::AccModel);
         }

@@ -500,3 +500,32 @@ fn an_inline_spec_under_a_built_in_name_is_labelled_custom() {
     robot["name"] = serde_json::json!("my-arm");
     assert_eq!(names(&robot, &human).0, "my-arm (custom spec)");
 }
+
+/// Joint positions outside the robot's position limits contradict the robot model: the spans
+/// they bound are `exceeds_limits` (checked, never passed), as for samples moving faster than
+/// the limits. The same log within the limits passes.
+#[test]
+fn positions_outside_the_joint_limits_are_inconclusive_not_a_pass() {
+    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let log = |q3: f64| {
+        let mut text = format!("{}\n", header("ssm"));
+        for k in 0..=20 {
+            let t = k as f64 * 0.01;
+            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{far}}}\n");
+            text += &format!(
+                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,{q3},0.1,1.8,0.6]}}\n"
+            );
+        }
+        run(&text)
+    };
+    // FR3 joint 4 lies in [-3.0421, -0.1518] rad.
+    let outside = log(1.0);
+    assert_eq!(
+        outside.verdict,
+        Verdict::Inconclusive,
+        "{:?}",
+        outside.inconclusive
+    );
+    assert_eq!(reasons(&outside), ["exceeds_limits"]);
+    assert_eq!(log(-2.0).verdict, Verdict::Pass);
+}

@@ -462,6 +462,17 @@ pub enum WriteError {
     /// Accelerations without velocities (the format holds `ddq` only together with `dq`).
     #[error("ddq: accelerations are written only together with velocities (dq)")]
     AccelerationsWithoutVelocities,
+    /// A measurement stamped after the record's time (the audit refuses such a log: a
+    /// measurement cannot come from the future).
+    #[error(
+        "t_meas = {t_meas} s is after the record's t = {t} s (a measurement cannot come from the future)"
+    )]
+    FromFuture {
+        /// The measurement's stamp (s).
+        t_meas: f64,
+        /// The record's time (s).
+        t: f64,
+    },
     /// Serialization or I/O failed.
     #[error("write failed: {0}")]
     Io(#[from] std::io::Error),
@@ -572,6 +583,9 @@ impl<W: Write> LogWriter<W> {
         positions: &[[f64; 3]],
     ) -> Result<(), WriteError> {
         finite("t_meas", t_meas)?;
+        if t_meas > t {
+            return Err(WriteError::FromFuture { t_meas, t });
+        }
         self.begin(t)?;
         write!(
             self.out,
@@ -598,6 +612,9 @@ impl<W: Write> LogWriter<W> {
         velocity: Option<[f64; 3]>,
     ) -> Result<(), WriteError> {
         finite("t_meas", t_meas)?;
+        if t_meas > t {
+            return Err(WriteError::FromFuture { t_meas, t });
+        }
         self.begin(t)?;
         let id = serde_json::to_string(id).map_err(|e| WriteError::Io(std::io::Error::other(e)))?;
         write!(

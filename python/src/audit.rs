@@ -50,6 +50,8 @@ fn verdict_str(v: pacs_audit::Verdict) -> &'static str {
 pub struct PyRun {
     run: RunResult,
     path: PathBuf,
+    /// The log's SHA-256 and size when it was audited (a report refuses a log changed since).
+    hashed: InputFile,
     config: AuditConfig,
     config_path: Option<PathBuf>,
 }
@@ -144,13 +146,26 @@ pub fn audit(
     let (cfg, cfg_path) = audit_config(config)?;
     let mut out = Vec::with_capacity(list.len());
     for p in list {
+        // Hashed before and after the audit: the verdict belongs to exactly these bytes.
+        let hash = |p: &PathBuf| InputFile::hash(p).map_err(|e| input(format!("paths: {e}")));
+        let before = hash(&p)?;
         let r = py.detach(|| pacs_audit::audit_file(&p, &cfg));
         let run = r.map_err(|e| match e {
             pacs_log::LogError::Io { .. } => input(format!("{e}")),
             _ => input(e.to_string()),
         })?;
+        let after = hash(&p)?;
+        if after.sha256 != before.sha256 {
+            return Err(input(format!(
+                "paths: {} changed while it was audited (sha256 {} before, {} after); audit it again",
+                p.display(),
+                before.sha256,
+                after.sha256
+            )));
+        }
         out.push(PyRun {
             run,
+            hashed: before,
             path: p,
             config: cfg.clone(),
             config_path: cfg_path.clone(),
@@ -180,9 +195,20 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
             "runs: audited with different settings; report each audit call separately",
         ));
     }
+    // The report binds each verdict to the bytes that were audited: a log changed since its
+    // audit is refused (audit it again).
     let mut logs = Vec::with_capacity(runs.len());
     for r in &runs {
-        logs.push(InputFile::hash(&r.path).map_err(|e| input(format!("runs: {e}")))?);
+        let now = InputFile::hash(&r.path).map_err(|e| input(format!("runs: {e}")))?;
+        if now.sha256 != r.hashed.sha256 {
+            return Err(input(format!(
+                "runs: {} changed since it was audited (sha256 {} then, {} now): audit it again before reporting",
+                r.path.display(),
+                r.hashed.sha256,
+                now.sha256
+            )));
+        }
+        logs.push(r.hashed.clone());
     }
     let config = match &first.config_path {
         Some(p) => Some(InputFile::hash(p).map_err(|e| input(format!("config: {e}")))?),

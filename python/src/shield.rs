@@ -292,9 +292,28 @@ impl Inner {
     pub fn close(&mut self) -> Result<(), Fail> {
         if let Some(mut log) = self.log.take() {
             let t = self.now();
-            let r = log
-                .event(t, "end")
-                .map_err(|e| e.to_string())
+            // Measurements still waiting for a step but stamped within the run (at or before
+            // the last command's time: late frames of a camera with latency) are logged too:
+            // the audit checks them against the model and calls the run inconclusive if they
+            // describe a time it covers, instead of never seeing them.
+            let t_end = self
+                .last_t
+                .map_or(self.start_t, |l| l + self.shield.config().safety_step);
+            let mut r: Result<(), String> = Ok(());
+            for (id, m) in &self.pending_humans {
+                if r.is_ok() && *id == 0 && self.last_t.is_some() && m.time() <= t_end {
+                    r = log.human(t_end, m).map_err(|e| e.to_string());
+                }
+            }
+            for (k, m) in &self.pending_objects {
+                if r.is_ok() && self.last_t.is_some() && m.time <= t_end {
+                    r = log
+                        .object(t_end, &self.object_ids[*k], m)
+                        .map_err(|e| e.to_string());
+                }
+            }
+            let r = r
+                .and_then(|()| log.event(t, "end").map_err(|e| e.to_string()))
                 .and_then(|()| log.finish().map_err(|e| e.to_string()))
                 .and_then(|mut w| w.flush().map_err(|e| e.to_string()));
             if let Err(e) = r {
@@ -717,6 +736,13 @@ impl PyShield {
     ) -> PyResult<Self> {
         let s = scene(py, robot, side, humans, constraints, objects, environment)?;
         let settings: ShieldSettings = match config {
+            // A dict only: a list would fill the fields in order, silently.
+            Some(c) if !c.is_none() && !c.is_instance_of::<pyo3::types::PyDict>() => {
+                return Err(type_err(format!(
+                    "config: expected a dict of shield settings, got {}",
+                    show(c)
+                )));
+            }
             Some(c) if !c.is_none() => crate::convert::from_py(c, "config")?,
             _ => ShieldSettings::default(),
         };

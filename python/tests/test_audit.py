@@ -157,3 +157,59 @@ def test_log_writer_refuses_bad_records(demo, tmp_path):
         pacs.LogWriter(3)
     with pytest.raises(pacs.ArgumentTypeError, match="runs"):
         pacs.report([1], tmp_path)
+
+
+def test_a_report_refuses_a_log_changed_since_its_audit(demo, tmp_path):
+    """The report binds the verdict to the audited bytes: a log appended to after `audit` (here
+    with a robot sample) is refused by `report` instead of certified with the new file's hash."""
+    log = tmp_path / "shield.jsonl"
+    shield_run(demo, log, steps=300)
+    runs = pacs.audit(log)
+    assert runs[0].verdict == "pass"
+    with open(log, "a") as f:
+        f.write('{"type":"event","t":9.0,"name":"tampered"}\n')
+    with pytest.raises(pacs.InputError, match="changed since it was audited"):
+        pacs.report(runs, tmp_path / "report")
+    assert not (tmp_path / "report" / "report.json").exists()
+
+
+def test_late_measurements_pending_at_close_are_logged(demo, tmp_path):
+    """Frames that arrive after the last step but are stamped within the run (camera latency)
+    are logged by `close()`: one showing the person at the gripper makes the run inconclusive
+    instead of never reaching the audit."""
+    from conftest import far_human
+
+    log = tmp_path / "late.jsonl"
+    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
+    s.start(0.0, demo.start)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    far = far_human(demo)
+    for k in range(600):
+        t = k * 0.001
+        if k % 10 == 0:
+            s.measure(t, far)
+        s.step(t)
+    s.measure(0.5995, np.tile(demo.tool_point(demo.start), (9, 1)))
+    s.close()
+    (r,) = pacs.audit([log])
+    assert r.verdict != "pass", r.to_dict()
+    assert r.metrics["human_records"] == 61
+
+
+def test_settings_that_would_switch_checks_off_are_refused(tmp_path):
+    """A rest speed above 0.05 rad/s would let SSM accept contact with a moving robot: refused
+    by the shield and the audit. A config must be a dict (a list would fill fields in order)."""
+    with pytest.raises(pacs.InputError, match="rest_speed"):
+        pacs.Shield(robot="fr3", humans="default", constraints="sorting",
+                    config={"rest_speed": 1e300})
+    with pytest.raises(TypeError, match="config: expected a dict"):
+        pacs.Shield(config=["off"])
+    log = tmp_path / "any.jsonl"
+    with pacs.LogWriter(log, robot="fr3", human="default", constraints="sorting",
+                        objects=[{"id": "b", "object": "ball", "contact": "ssm"}]) as w:
+        w.robot(0.0, np.array([0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398]))
+        with pytest.raises(pacs.InputError, match="future"):
+            w.object(0.0, 1.0, "b", [0.0, 0.0, 0.0])
+    with pytest.raises(pacs.InputError, match="rest_speed"):
+        pacs.audit(log, config={"rest_speed": 1.0})

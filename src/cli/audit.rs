@@ -98,6 +98,19 @@ pub fn main(args: AuditArgs) -> ExitCode {
             }
         },
     };
+    // With a report: the logs' hashes before the audit, compared with those after it, so that a
+    // report never binds a verdict to bytes that were not the ones audited.
+    let hashed_before: Option<Vec<InputFile>> = if args.out.is_some() {
+        match args.logs.iter().map(|p| InputFile::hash(p)).collect() {
+            Ok(h) => Some(h),
+            Err(e) => {
+                eprintln!("pacs: error: {e}");
+                return ExitCode::from(EXIT_INVALID);
+            }
+        }
+    } else {
+        None
+    };
     let bar = indicatif::ProgressBar::new(args.logs.len() as u64);
     if !std::io::stderr().is_terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -161,6 +174,15 @@ pub fn main(args: AuditArgs) -> ExitCode {
                 return ExitCode::from(EXIT_INVALID);
             }
         };
+        for (before, after) in hashed_before.iter().flatten().zip(&logs) {
+            if before.sha256 != after.sha256 {
+                eprintln!(
+                    "pacs: error: {} changed while it was audited (sha256 {} before, {} after): no report written; audit it again",
+                    after.path, before.sha256, after.sha256
+                );
+                return ExitCode::from(EXIT_INVALID);
+            }
+        }
         let input = ReportInput {
             runs: &runs,
             logs,

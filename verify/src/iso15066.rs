@@ -85,8 +85,10 @@ pub enum RuleError {
         /// Body parts of the human model.
         parts: usize,
     },
-    /// `rest_speed` is negative or not finite.
-    #[error("rest_speed: value {0} must be finite and >= 0")]
+    /// `rest_speed` is negative, not finite, or above [`MAX_REST_SPEED`].
+    #[error(
+        "rest_speed: value {0} rad/s must be finite and within [0, 0.05] rad/s (a robot whose joints move faster is not at rest: a larger value would let SSM accept contact while it moves)"
+    )]
     RestSpeed(f64),
 }
 
@@ -148,6 +150,20 @@ pub fn threshold(c: Constraint, constrained: bool) -> f64 {
                 unconstrained
             }
         }
+    }
+}
+
+/// The largest joint speed (rad/s) that may count as "at rest" for SSM: 0.05 rad/s, about 6 cm/s
+/// at the FR3's reach. A larger `rest_speed` would let SSM accept contact with a moving robot,
+/// so the rule refuses it ([`RuleError::RestSpeed`]).
+pub const MAX_REST_SPEED: f64 = 0.05;
+
+/// `rest_speed` (rad/s) is finite and within `[0, MAX_REST_SPEED]`.
+pub fn check_rest_speed(rest_speed: f64) -> Result<(), RuleError> {
+    if (0.0..=MAX_REST_SPEED).contains(&rest_speed) {
+        Ok(())
+    } else {
+        Err(RuleError::RestSpeed(rest_speed))
     }
 }
 
@@ -303,9 +319,7 @@ impl ContactRule {
                 parts: (clampable.len() as f64).sqrt() as usize,
             });
         }
-        if !(rest_speed.is_finite() && rest_speed >= 0.0) {
-            return Err(RuleError::RestSpeed(rest_speed));
-        }
+        check_rest_speed(rest_speed)?;
         let clampable = (0..parts * parts)
             .map(|i| i / parts != i % parts && clampable[i])
             .collect();

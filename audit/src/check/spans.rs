@@ -22,7 +22,23 @@ impl Auditor {
     /// The span's joint boxes ([`span_boxes`]); not consistent if the samples contradict each
     /// other or the robot's limits (the span is then `exceeds_limits`).
     pub(super) fn boxes(&self, s0: &Sample, s1: &Sample) -> SpanEnclosure {
-        span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack)
+        let mut e = span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack);
+        // A sample outside the joint position limits contradicts the robot model as much as
+        // one moving faster than its limits: the span is inconsistent (`exceeds_limits`; it is
+        // still checked with its boxes, and can never pass). The same relative slack as for
+        // the other limits.
+        let lim = self.robot.limits();
+        let slack = self.cfg.limit_slack;
+        let within = |s: &Sample| {
+            (0..self.n).all(|j| {
+                let (lo, hi) = (lim.q_min()[j], lim.q_max()[j]);
+                s.q[j] >= lo - slack * lo.abs().max(1.0) && s.q[j] <= hi + slack * hi.abs().max(1.0)
+            })
+        };
+        if !(within(s0) && within(s1)) {
+            e.consistent = false;
+        }
+        e
     }
 
     /// Check the buffered spans (all using the human measurement `block_human`), keeping the

@@ -63,9 +63,7 @@ impl ObjectRule {
                 capsules: ncaps,
             });
         }
-        if !(rest_speed.is_finite() && rest_speed >= 0.0) {
-            return Err(RuleError::RestSpeed(rest_speed));
-        }
+        super::check_rest_speed(rest_speed)?;
         let mut capsule_link = vec![0; ncaps];
         for (l, &(s, e)) in reach.link_ranges().iter().enumerate() {
             for c in &mut capsule_link[s..e] {
