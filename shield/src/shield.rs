@@ -239,7 +239,9 @@ fn is_first(i: &usize) -> bool {
 /// Per-step diagnostics.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Diagnostics {
-    /// The intended step was verified (and executed).
+    /// The intended step was verified and executed. (In OFF mode every candidate is executed;
+    /// this says whether its monitored trajectory verified. Before session 24 it was true for
+    /// every executed step, also unverified ones.)
     pub verified: bool,
     /// The robot follows a failsafe (braking) this step.
     pub on_failsafe: bool,

@@ -173,6 +173,14 @@ fn ssm_never_moves_into_a_person_standing_at_the_tool() {
         off.moving_contact > 0,
         "OFF should collide in this scenario"
     );
+    // OFF executes every step but reports which ones verified: not those moving into the
+    // person (before session 24 every executed step said `verified`).
+    assert!(
+        off.verified < off.steps / 2,
+        "OFF reports {} of {} steps verified while moving into the person",
+        off.verified,
+        off.steps
+    );
 }
 
 #[test]

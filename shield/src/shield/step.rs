@@ -89,22 +89,25 @@ impl Shield {
         self.slot = next.slot;
         self.path = next.path;
         self.failsafe = Some(next.failsafe);
-        let verified = next.adopted;
-        self.last_verified = verified;
+        // Adopted: the candidate runs (verified; in OFF mode any candidate).
+        let adopted = next.adopted;
+        self.last_verified = adopted;
         if let Some(s) = tried {
             // The fresh chunk had its one try: record its fate for the caller that handed it in.
             let n = self.chunk_serial[s];
             if self.offer_state == OfferState::Taken(n) {
-                self.offer_state = if verified {
+                self.offer_state = if adopted {
                     OfferState::Followed(n)
                 } else {
                     OfferState::Dropped(n)
                 };
             }
         }
-        diag.on_failsafe = !verified;
+        diag.on_failsafe = !adopted;
         diag.stop_time = next.failsafe.t0 + next.failsafe.profile.settle_time();
-        diag.verified = verified;
+        // Verified and executed: in OFF mode a candidate runs whether or not it verified, and
+        // the flag says which (a diagnostic that never claims a check that failed).
+        diag.verified = adopted && cand.is_some_and(|c| c.verified);
         diag.path_speed = self.path.sd;
         self.time = t + alpha;
         Ok(Command {
