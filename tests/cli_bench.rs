@@ -4,7 +4,7 @@
 //! by default the chunks are planned on the planning thread, whose figures are reported too.
 
 use serde_json::Value;
-use std::process::Command;
+mod common;
 
 fn num(run: &Value, key: &str) -> f64 {
     let x = run[key]
@@ -30,15 +30,7 @@ fn ordered(run: &Value, keys: [&str; 4]) -> f64 {
 }
 
 fn bench(args: &[&str]) -> Vec<Value> {
-    let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::pacs_ok(args);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     v["runs"].as_array().unwrap().clone()
 }
@@ -157,10 +149,7 @@ fn bench_shield_refuses_zero_steps_and_lead() {
         &["bench", "shield", "--steps", "10", "--lead", "0"][..],
         &["bench", "cbf", "--steps", "0"][..],
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
-            .args(args)
-            .output()
-            .unwrap();
+        let out = common::pacs().args(args).output().unwrap();
         assert!(!out.status.success(), "{args:?} was accepted");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("must be at least 1"), "{args:?}: {err}");

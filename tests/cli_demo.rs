@@ -1,21 +1,16 @@
 //! `pacs demo` end to end: simulates, logs, audits and reports. PACS runs are safe against the
 //! ground truth and their logs audit `pass`; the OFF sorting run violates SSM and audits `fail`.
 
-use std::process::Command;
+mod common;
 
 #[test]
 fn demo_runs_audits_and_reports() {
     let out_dir = std::env::temp_dir().join(format!("pacs-demo-test-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_pacs"))
-        .args(["demo", "--out"])
-        .arg(&out_dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::pacs_ok([
+        std::ffi::OsStr::new("demo"),
+        "--out".as_ref(),
+        out_dir.as_ref(),
+    ]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let runs = v["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 4);

@@ -1,27 +1,17 @@
 //! `pacs simulate` end to end: rollouts, logs that `pacs audit` accepts, tables, plots; bad
 //! arguments exit 3.
 
-use std::process::Command;
+mod common;
 
-fn pacs() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pacs"))
-}
+use common::{pacs, pacs_ok};
 
 /// `pacs simulate ARGS --out DIR`, which must succeed (stderr shown if not).
 fn simulate(args: &[&str], dir: &std::path::Path) -> std::process::Output {
-    let out = pacs()
-        .arg("simulate")
-        .args(args)
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    let args = std::iter::once("simulate")
+        .chain(args.iter().copied())
+        .map(std::ffi::OsStr::new)
+        .chain([std::ffi::OsStr::new("--out"), dir.as_os_str()]);
+    pacs_ok(args)
 }
 
 #[test]

@@ -761,6 +761,17 @@ fn object_pair_breaks(
 mod tests {
     use super::*;
 
+    /// A seeded xorshift generator of uniform numbers in [0, 1).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut x = seed;
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// The fast accept in `human_pair_breaks` is sound: a pair it accepts is within the
     /// allowance by the outward-rounded test applied to the same pair scaled by a power of two
     /// into the unit range (exact scaling, where the rounded test's absolute error terms are
@@ -770,13 +781,7 @@ mod tests {
     #[test]
     fn the_fast_accept_of_a_human_pair_is_sound() {
         let model = HumanModel::builtin("default").unwrap();
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1du64);
         let (mut breaks, mut cases) = (0, 0);
         for i in 0..20_000 {
             let scale = 10f64.powf(-160.0 + 310.0 * next());
@@ -855,13 +860,7 @@ mod tests {
     fn reach_sphere_contains_the_robot_in_every_sampled_configuration() {
         let robot = RobotModel::builtin("fr3").unwrap();
         let s = pacs_verify::iso15066::workspace_ball(&robot, 0.0);
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15u64);
         for _ in 0..2000 {
             // Any configuration, not only within the limits.
             let q: Vec<f64> = (0..7)

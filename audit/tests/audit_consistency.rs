@@ -28,6 +28,40 @@ fn header(constraints: &str) -> String {
     )
 }
 
+/// The default human's nine keypoints in a column at x = 2.6 + `dx` (m), 0.1 m apart in y.
+fn person_at(dx: f64) -> String {
+    let x = 2.6 + dx;
+    let kp: Vec<String> = (0..9)
+        .map(|i| format!("[{x},{},1]", i as f64 / 10.0))
+        .collect();
+    format!("[{}]", kp.join(","))
+}
+
+/// A human record logged at `t`, stamped `t_meas` (default `t`), with keypoints `kp` (JSON).
+fn human_record(t: f64, t_meas: Option<f64>, kp: &str) -> String {
+    match t_meas {
+        Some(tm) => {
+            format!("{{\"type\":\"human\",\"t\":{t},\"t_meas\":{tm},\"positions\":{kp}}}\n")
+        }
+        None => format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{kp}}}\n"),
+    }
+}
+
+/// The audit of a log under `head`: 21 robot samples 10 ms apart at the joint positions `q`
+/// (rad, comma-separated), each preceded by the human records `humans(k, t)` returns.
+fn rest_log(head: &str, q: &str, humans: impl Fn(usize, f64) -> String) -> RunResult {
+    let mut text = format!("{head}\n");
+    for k in 0..=20 {
+        let t = k as f64 * 0.01;
+        text += &humans(k, t);
+        text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{q}]}}\n");
+    }
+    run(&text)
+}
+
+/// The joint positions of the logs at rest (rad).
+const AT_REST: &str = "0.3,-0.5,0.2,-2.0,0.1,1.8,0.6";
+
 #[test]
 fn velocities_contradicting_positions_never_pass_ssm() {
     let r = run(&format!("{}\n{HUMAN}\n{ROBOT}\n", header("ssm")));
@@ -174,7 +208,7 @@ fn pfl_uses_the_whole_robot_energy() {
 /// shows contact; only the second was remembered before.
 #[test]
 fn every_trailing_human_record_counts() {
-    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let far = person_at(0.0);
     let contact = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[0.9017,0.5819,0.6393],[0.7169,0.4626,0.6393],[0.4816,0.3108,0.6393],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
     let robots: String = (0..=10)
         .map(|k| {
@@ -209,24 +243,13 @@ fn every_trailing_human_record_counts() {
 /// is such a contradiction; a 1.5 cm one, 1.5 m/s, is not).
 #[test]
 fn a_human_faster_than_the_model_is_inconclusive_not_a_pass() {
-    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let far = person_at(0.0);
     // One record displaced by `dx` (m) along x, 10 ms after and before its neighbours.
     let log = |dx: f64| {
-        let x = 2.6 + dx;
-        let spike: Vec<String> = (0..9)
-            .map(|i| format!("[{x},{},1]", i as f64 * 0.1))
-            .collect();
-        let spike = format!("[{}]", spike.join(","));
-        let mut text = format!("{}\n", header("ssm"));
-        for k in 0..=20 {
-            let t = k as f64 * 0.01;
-            let kp = if k == 10 { spike.as_str() } else { far };
-            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{kp}}}\n");
-            text += &format!(
-                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n"
-            );
-        }
-        run(&text)
+        let spike = person_at(dx);
+        rest_log(&header("ssm"), AT_REST, |k, t| {
+            human_record(t, None, if k == 10 { &spike } else { &far })
+        })
     };
     let fast = log(1.5);
     assert_eq!(
@@ -373,7 +396,7 @@ fn accelerations_in_jsonl_and_csv() {
 /// log inconclusive; the same record without the spike passes.
 #[test]
 fn a_late_human_record_is_checked_against_its_neighbours_in_time() {
-    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let far = person_at(0.0);
     let model = HumanModel::builtin("default").unwrap();
     let v = model.v_max().iter().cloned().fold(f64::INFINITY, f64::min);
     let e = model.measurement_error_pos();
@@ -381,25 +404,14 @@ fn a_late_human_record_is_checked_against_its_neighbours_in_time() {
     let (near, newest) = (v * 0.005 + 2.0 * e, v * 0.105 + 2.0 * e);
     let dx_spike = 0.5 * (near + newest);
     let log = |dx: f64| {
-        let x = 2.6 + dx;
-        let late: Vec<String> = (0..9)
-            .map(|i| format!("[{x},{},1]", i as f64 * 0.1))
-            .collect();
-        let late = format!("[{}]", late.join(","));
-        let mut text = format!("{}\n", header("ssm"));
-        for k in 0..=20 {
-            let t = k as f64 * 0.01;
-            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{far}}}\n");
+        let late = person_at(dx);
+        rest_log(&header("ssm"), AT_REST, |k, t| {
+            let mut r = human_record(t, None, &far);
             if k == 20 {
-                text += &format!(
-                    "{{\"type\":\"human\",\"t\":{t},\"t_meas\":0.095,\"positions\":{late}}}\n"
-                );
+                r += &human_record(t, Some(0.095), &late);
             }
-            text += &format!(
-                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n"
-            );
-        }
-        run(&text)
+            r
+        })
     };
     assert!(newest - near > 0.1, "v {v}, e {e}");
     let spike = log(dx_spike);
@@ -431,29 +443,16 @@ fn a_chain_of_equal_stamp_records_cannot_drift_from_the_first() {
         r#"{{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":{spec},"constraints":"ssm"}}"#
     );
     let log = |links: usize| {
-        let mut text = format!("{head}\n");
-        for k in 0..=20 {
-            let t = k as f64 * 0.01;
+        rest_log(&head, AT_REST, |k, t| {
             let copies = match k {
                 10 => links + 1,
                 _ if k % 5 == 0 => 1,
                 _ => 0,
             };
-            for c in 0..copies {
-                let x = 2.6 + 1.5 * e * c as f64;
-                let kp: Vec<String> = (0..9)
-                    .map(|i| format!("[{x},{},1]", i as f64 * 0.1))
-                    .collect();
-                text += &format!(
-                    "{{\"type\":\"human\",\"t\":{t},\"positions\":[{}]}}\n",
-                    kp.join(",")
-                );
-            }
-            text += &format!(
-                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n"
-            );
-        }
-        run(&text)
+            (0..copies)
+                .map(|c| human_record(t, None, &person_at(1.5 * e * c as f64)))
+                .collect()
+        })
     };
     let one = log(1);
     assert_eq!(one.verdict, Verdict::Pass, "{:?}", one.inconclusive);
@@ -506,17 +505,10 @@ fn an_inline_spec_under_a_built_in_name_is_labelled_custom() {
 /// the limits. The same log within the limits passes.
 #[test]
 fn positions_outside_the_joint_limits_are_inconclusive_not_a_pass() {
-    let far = r#"[[2.6,0,1],[2.6,0.1,1],[2.6,0.2,1],[2.6,0.3,1],[2.6,0.4,1],[2.6,0.5,1],[2.6,0.6,1],[2.6,0.7,1],[2.6,0.8,1]]"#;
+    let far = person_at(0.0);
     let log = |q3: f64| {
-        let mut text = format!("{}\n", header("ssm"));
-        for k in 0..=20 {
-            let t = k as f64 * 0.01;
-            text += &format!("{{\"type\":\"human\",\"t\":{t},\"positions\":{far}}}\n");
-            text += &format!(
-                "{{\"type\":\"robot\",\"t\":{t},\"q\":[0.3,-0.5,0.2,{q3},0.1,1.8,0.6]}}\n"
-            );
-        }
-        run(&text)
+        let q = format!("0.3,-0.5,0.2,{q3},0.1,1.8,0.6");
+        rest_log(&header("ssm"), &q, |_, t| human_record(t, None, &far))
     };
     // FR3 joint 4 lies in [-3.0421, -0.1518] rad.
     let outside = log(1.0);

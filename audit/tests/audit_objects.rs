@@ -20,15 +20,14 @@ fn flange() -> [f64; 3] {
     [p.x, p.y, p.z]
 }
 
-/// 0.2 s of robot samples at 1 kHz (joint 1 turning at `speed` rad/s from the ready pose), the
-/// default human 2.5 m away (measured every 10 ms), and the ball `b1` at `ball` measured every 10 ms until `last_meas`
-/// (s); `contact` is the ball's constraint.
-fn log(
-    ball: [f64; 3],
+/// 0.2 s of robot samples at 1 kHz (joint 1 turning at `speed` rad/s from the ready pose) and
+/// the default human 2.5 m away (measured every 10 ms), with the ball `b1` declared under
+/// `contact`; `ball_records(w, k, t)` writes the ball's records of step `k` (before its robot
+/// sample).
+fn ball_log(
     contact: ObjectContact,
     speed: f64,
-    last_meas: f64,
-    declare_only: bool,
+    ball_records: impl Fn(&mut LogWriter<Vec<u8>>, usize, f64),
 ) -> String {
     let mut h = Header::new(
         ModelRef::Name("fr3".into()),
@@ -47,9 +46,7 @@ fn log(
         if k % 10 == 0 {
             w.write_human(t, t, &standing(2.5, 0.0)).unwrap();
         }
-        if !declare_only && k % 10 == 0 && t <= last_meas {
-            w.write_object(t, t, "b1", ball, Some([0.0; 3])).unwrap();
-        }
+        ball_records(&mut w, k, t);
         let mut q = Q_READY;
         q[0] += speed * t;
         let mut dq = [0.0; 7];
@@ -57,6 +54,22 @@ fn log(
         w.write_robot(t, &q, Some(&dq)).unwrap();
     }
     String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+/// [`ball_log`] with the ball at `ball`, at rest, measured every 10 ms until `last_meas` (s)
+/// (never with `declare_only`).
+fn log(
+    ball: [f64; 3],
+    contact: ObjectContact,
+    speed: f64,
+    last_meas: f64,
+    declare_only: bool,
+) -> String {
+    ball_log(contact, speed, |w, k, t| {
+        if !declare_only && k % 10 == 0 && t <= last_meas {
+            w.write_object(t, t, "b1", ball, Some([0.0; 3])).unwrap();
+        }
+    })
 }
 
 #[test]
@@ -218,35 +231,15 @@ fn log_with_extra(stamp: f64, pos: [f64; 3]) -> String {
 /// [`log_with_extra`] with the extra record's measured velocity `vel` and the regular records'
 /// `regular` (m/s).
 fn log_with_extra_v(stamp: f64, pos: [f64; 3], vel: [f64; 3], regular: [f64; 3]) -> String {
-    let mut h = Header::new(
-        ModelRef::Name("fr3".into()),
-        ModelRef::Name("default".into()),
-        ModelRef::Name("ssm".into()),
-    );
-    h.objects.push(ObjectEntry {
-        id: "b1".into(),
-        object: ModelRef::Name("ball".into()),
-        contact: ObjectContact::Ssm,
-    });
-    let mut w = LogWriter::new(Vec::new());
-    w.write_header(&h).unwrap();
-    for k in 0..=200 {
-        let t = k as f64 * 1e-3;
+    ball_log(ObjectContact::Ssm, 0.2, |w, k, t| {
+        if k == 100 {
+            w.write_object(t, stamp, "b1", pos, Some(vel)).unwrap();
+        }
         if k % 10 == 0 {
-            w.write_human(t, t, &standing(2.5, 0.0)).unwrap();
-            if k == 100 {
-                w.write_object(t, stamp, "b1", pos, Some(vel)).unwrap();
-            }
             w.write_object(t, t, "b1", [3.0, 3.0, 0.5], Some(regular))
                 .unwrap();
         }
-        let mut q = Q_READY;
-        q[0] += 0.2 * t;
-        let mut dq = [0.0; 7];
-        dq[0] = 0.2;
-        w.write_robot(t, &q, Some(&dq)).unwrap();
-    }
-    String::from_utf8(w.finish().unwrap()).unwrap()
+    })
 }
 
 /// A ball record that the others contradict — on the flange 0.5 ms before a record 3 m away,

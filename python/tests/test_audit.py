@@ -10,11 +10,17 @@ import pacs
 from conftest import away, run
 
 
-def shield_run(demo, path, steps=1500):
+def logged_shield(demo, path):
+    """A sorting shield logging to `path`, started at the demo's start with its first chunk."""
     s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=path)
     s.start(0.0, demo.start)
     deltas, h = demo.chunk(demo.start)
     s.set_chunk(deltas, t=0.0, h=h)
+    return s
+
+
+def shield_run(demo, path, steps=1500):
+    s = logged_shield(demo, path)
     run(s, steps, measure=away(demo))
     s.close()
     return s
@@ -45,10 +51,7 @@ def test_a_measurement_the_others_contradict_is_logged_and_not_a_pass(demo, tmp_
     from conftest import far_human
 
     log = tmp_path / "hidden.jsonl"
-    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
-    s.start(0.0, demo.start)
-    deltas, h = demo.chunk(demo.start)
-    s.set_chunk(deltas, t=0.0, h=h)
+    s = logged_shield(demo, log)
     far = far_human(demo)
     at_gripper = np.tile(demo.tool_point(demo.start), (9, 1))
     for k in range(600):
@@ -180,10 +183,7 @@ def test_late_measurements_pending_at_close_are_logged(demo, tmp_path):
     from conftest import far_human
 
     log = tmp_path / "late.jsonl"
-    s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
-    s.start(0.0, demo.start)
-    deltas, h = demo.chunk(demo.start)
-    s.set_chunk(deltas, t=0.0, h=h)
+    s = logged_shield(demo, log)
     far = far_human(demo)
     for k in range(600):
         t = k * 0.001

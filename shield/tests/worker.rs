@@ -262,6 +262,13 @@ fn a_burst_of_chunks_is_planned_newest_first_and_wait_returns() {
     assert_eq!(sh.chunk_progress().unwrap().accepted, 1);
 }
 
+/// Hand the worker the random chunk of `seed`, wait for its plan and offer it.
+fn hand_in(w: &mut ChunkWorker, sh: &mut Shield, seed: u64) {
+    w.set_chunk(sh, random_chunk(&mut Lcg(seed))).unwrap();
+    w.wait().unwrap();
+    w.poll(sh).unwrap();
+}
+
 /// A shield restarted under a worker (`Shield::start` forgets offers): a chunk taken over and
 /// not yet tried is reported dropped, one still offered leaves the worker idle, and the next
 /// chunk is handled as usual.
@@ -271,17 +278,13 @@ fn a_restart_forgets_the_workers_offer() {
     let mut sh = shield(ChunkMotion::Continuous);
     let mut w = ChunkWorker::spawn(&sh, 5).unwrap();
     // At rest: taken over at once, not yet tried.
-    w.set_chunk(&mut sh, random_chunk(&mut Lcg(1))).unwrap();
-    w.wait().unwrap();
-    w.poll(&mut sh).unwrap();
+    hand_in(&mut w, &mut sh, 1);
     assert_eq!(*w.state(), WorkerState::Installed(1));
     sh.start(0.0, &common::Q0).unwrap();
     w.poll(&mut sh).unwrap();
     assert_eq!(*w.state(), WorkerState::Dropped(1));
     // Moving: offered for a handover 5 steps ahead, then the restart.
-    w.set_chunk(&mut sh, random_chunk(&mut Lcg(2))).unwrap();
-    w.wait().unwrap();
-    w.poll(&mut sh).unwrap();
+    hand_in(&mut w, &mut sh, 2);
     let dt = sh.config().safety_step;
     for k in 0..50 {
         let t = k as f64 * dt;
@@ -294,9 +297,7 @@ fn a_restart_forgets_the_workers_offer() {
         "{:?}",
         w.state()
     );
-    w.set_chunk(&mut sh, random_chunk(&mut Lcg(3))).unwrap();
-    w.wait().unwrap();
-    w.poll(&mut sh).unwrap();
+    hand_in(&mut w, &mut sh, 3);
     assert_eq!(
         *w.state(),
         WorkerState::Offered,
@@ -306,9 +307,7 @@ fn a_restart_forgets_the_workers_offer() {
     w.poll(&mut sh).unwrap();
     assert_eq!(*w.state(), WorkerState::Idle);
     // The next chunk is taken over and followed.
-    w.set_chunk(&mut sh, random_chunk(&mut Lcg(4))).unwrap();
-    w.wait().unwrap();
-    w.poll(&mut sh).unwrap();
+    hand_in(&mut w, &mut sh, 4);
     let t = 0.05;
     let m = measure(&sh, t, &far);
     sh.step(t, Some(&m)).unwrap();
