@@ -356,11 +356,8 @@ impl Auditor {
         // Every human record after the last robot sample counts, used or not: keep the earliest
         // measurement time (a record describing a time inside the log after its last sample).
         self.unused_human_t_meas = Some(self.unused_human_t_meas.map_or(t_meas, |u| u.min(t_meas)));
-        let newest = self
-            .latest_human
-            .and_then(|s| self.humans[s].as_ref())
-            .map(|h| h.time());
-        if newest.is_some_and(|tn| t_meas <= tn) {
+        let in_use = self.latest_human.and_then(|s| self.humans[s].as_ref());
+        if !m.supersedes(in_use) {
             // Not newer than the measurement in use: checked above, not used (as the shield).
             return Ok(());
         }

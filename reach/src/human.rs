@@ -134,6 +134,14 @@ impl HumanMeasurement {
     pub fn time(&self) -> f64 {
         self.time
     }
+
+    /// Whether this measurement replaces `current` as the one in use: it is strictly newer (an
+    /// older or equal-stamp one arriving later is ignored; the first of equal stamps stays).
+    /// The one rule of the shield and the audit (as `ObjectMeasurement::keep_newest` for
+    /// objects).
+    pub fn supersedes(&self, current: Option<&HumanMeasurement>) -> bool {
+        current.is_none_or(|c| c.time < self.time)
+    }
     /// Measured positions (m).
     pub fn positions(&self) -> &[Point3<f64>] {
         &self.positions

@@ -387,7 +387,7 @@ impl HumanSlot {
 
     /// Replace the latest measurement if `m` is newer (older or equal-time ones are ignored).
     fn take(&mut self, m: &HumanMeasurement) {
-        if !(self.has_meas && self.meas.time() >= m.time()) {
+        if m.supersedes(self.has_meas.then_some(&self.meas)) {
             self.meas.assign_from(m);
             self.has_meas = true;
         }
