@@ -15,7 +15,10 @@ use std::io::{Read, Seek, SeekFrom};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Stream {
     Robot,
-    Human,
+    /// Keypoints of the log's only person (`None`) or of person `person_ids[i]`.
+    Human {
+        person: Option<u16>,
+    },
     /// A dynamic object's positions: `PoseStamped` (`stamped`) or `PoseArray` (first pose).
     Object {
         stamped: bool,
@@ -31,6 +34,7 @@ enum Body {
     },
     Human {
         t_meas: f64,
+        person: Option<u16>,
         positions: Vec<[f64; 3]>,
     },
     Event(String),
@@ -103,6 +107,10 @@ struct State {
     /// Model joint names (effective robot) and keypoint count (effective human).
     joints: Vec<String>,
     keypoints: usize,
+    /// Keypoint count of each person of the header, by id.
+    person_keypoints: Vec<(String, usize)>,
+    /// Ids of the people whose topics were seen (what `Stream::Human { person }` indexes).
+    person_ids: Vec<String>,
     schemas: HashMap<u16, (String, String)>,
     channels: HashMap<u16, (String, Stream)>,
     /// Whole seconds subtracted from every time stamp (the first message's log time).
@@ -192,6 +200,8 @@ impl<R: Read + Seek> McapReader<R> {
                 header_from,
                 joints: Vec::new(),
                 keypoints: 0,
+                person_keypoints: Vec::new(),
+                person_ids: Vec::new(),
                 schemas: HashMap::new(),
                 channels: HashMap::new(),
                 base_s: None,
@@ -316,7 +326,10 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
-        let Some(p) = self.next_inner()? else {
+        if self.next_inner()?.is_none() {
+            return Ok(None);
+        }
+        let Some(p) = self.current.as_ref() else {
             return Ok(None);
         };
         let t = p.t;
@@ -327,9 +340,14 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
                 dq: dq.as_deref(),
                 ddq: None,
             },
-            Body::Human { t_meas, positions } => Record::Human {
+            Body::Human {
+                t_meas,
+                person,
+                positions,
+            } => Record::Human {
                 t,
                 t_meas: *t_meas,
+                person: person.map(|i| self.st.person_ids[usize::from(i)].as_str()),
                 positions,
             },
             Body::Event(name) => Record::Event { t, name },

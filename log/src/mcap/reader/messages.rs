@@ -30,6 +30,11 @@ impl State {
             .map(|j| j.name.clone())
             .collect();
         self.keypoints = models.human.keypoint_count();
+        self.person_keypoints = models
+            .people
+            .iter()
+            .map(|(id, m)| (id.clone(), m.keypoint_count()))
+            .collect();
         self.header = Some(h);
         Ok(())
     }
@@ -123,7 +128,28 @@ impl State {
         let (stream, expected) = if topic == cfg.robot_topic {
             (Stream::Robot, JOINT_STATE)
         } else if topic == cfg.human_topic {
-            (Stream::Human, POSE_ARRAY)
+            (Stream::Human { person: None }, POSE_ARRAY)
+        } else if let Some(id) = cfg
+            .human_topics
+            .iter()
+            .find(|(_, t)| *t == topic)
+            .map(|(id, _)| id.clone())
+            .or_else(|| {
+                cfg.human_topics
+                    .is_empty()
+                    .then(|| crate::mcap::person_of_topic(topic).map(str::to_string))
+                    .flatten()
+            })
+        {
+            let i = match self.person_ids.iter().position(|p| *p == id) {
+                Some(i) => i,
+                None => {
+                    self.person_ids.push(id);
+                    self.person_ids.len() - 1
+                }
+            };
+            let i = u16::try_from(i).map_err(|_| self.err("more than 65535 person topics"))?;
+            (Stream::Human { person: Some(i) }, POSE_ARRAY)
         } else if topic == cfg.event_topic {
             (Stream::Event, STRING)
         } else if cfg.object_topics.values().any(|t| t == topic) {
@@ -298,15 +324,28 @@ impl State {
                     body: Body::Robot { q, dq },
                 }
             }
-            Stream::Human => {
+            Stream::Human { person } => {
                 self.pa
                     .decode(data)
                     .map_err(|e| self.err(format!("{}: PoseArray: {e}", self.what(h))))?;
                 let m = self.pa.positions.len();
-                if m != self.keypoints {
+                // The person's model's keypoint count (an id the header does not declare is
+                // reported by the audit, which knows the people).
+                let expected = match person {
+                    None => Some(self.keypoints),
+                    Some(i) => {
+                        let id = &self.person_ids[usize::from(i)];
+                        self.person_keypoints
+                            .iter()
+                            .find(|(p, _)| p == id)
+                            .map(|(_, k)| *k)
+                    }
+                };
+                if let Some(k) = expected
+                    && m != k
+                {
                     return Err(self.err(format!(
-                        "{}: wrong keypoint count: PoseArray has {m} poses, the human model has {} keypoints", self.what(h),
-                        self.keypoints
+                        "{}: wrong keypoint count: PoseArray has {m} poses, the human model has {k} keypoints", self.what(h),
                     )));
                 }
                 if let Some((i, c)) = self
@@ -330,6 +369,7 @@ impl State {
                     offset: 0,
                     body: Body::Human {
                         t_meas: self.secs(self.pa.stamp.nanos()),
+                        person,
                         positions,
                     },
                 }
