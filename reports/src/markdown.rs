@@ -55,6 +55,13 @@ pub fn report(input: &ReportInput) -> String {
                 .unwrap_or("n/a".into()),
         );
     }
+    s.push_str(
+        "\n### Evidence\n\n| log | people | audited span (s) | log complete |\n|---|---|---|---|\n",
+    );
+    for r in input.runs {
+        let [log, people, span, complete] = crate::evidence_row(r);
+        let _ = writeln!(s, "| `{log}` | {people} | {span} | {complete} |");
+    }
     let d = definitions();
     let _ = writeln!(
         s,

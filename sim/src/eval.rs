@@ -219,6 +219,7 @@ pub fn run_rollout(
         human: &scn.human,
         spec: &spec,
         script: scn.script.as_ref(),
+        others: &scn.others,
         objects: &scn.objects,
         policy,
         goals: &goals,
