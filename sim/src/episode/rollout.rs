@@ -216,6 +216,9 @@ pub fn run_setup(
     let mut success_at = None;
     let mut samples = Vec::new();
     let mut steps_run = 0usize;
+    // The last command's time (s): the last robot sample of the log, where its closing events go
+    // (the log's `end` event must not lie after its last sample).
+    let mut last_cmd_t = 0.0f64;
     let mut waypoints: Vec<Vec<f64>> = Vec::new();
     let mut tool = tool_point(robot, &q);
     let mut last_rec_tool = tool;
@@ -309,6 +312,7 @@ pub fn run_setup(
         if let Some(l) = log.as_mut() {
             l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
         }
+        last_cmd_t = cmd.t;
         q.copy_from_slice(&cmd.state.q[..n]);
         dq.copy_from_slice(&cmd.state.dq[..n]);
         tracking.apply(cmd.t, &mut q, &mut dq);
@@ -386,9 +390,8 @@ pub fn run_setup(
     }
     let steps_run = steps_run.max(1) as f64;
     let success = success_at.is_some();
-    let t_end = steps_run * cfg.dt;
     if let Some(mut l) = log {
-        l.event(t_end, if success { "success" } else { "failure" })
+        l.event(last_cmd_t, if success { "success" } else { "failure" })
             .map_err(invalid)?;
         l.finish().map_err(invalid)?;
     }
