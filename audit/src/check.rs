@@ -158,6 +158,11 @@ pub struct Auditor {
     min_separation: Option<f64>,
     success: Option<bool>,
     series: Series,
+    /// The person this auditor checks (a v2 log's person id; `None` for v1 logs): named in its
+    /// violations and person-related inconclusive spans.
+    person: Option<String>,
+    /// The violating samples by index, for merging the passes of several people.
+    track: Option<Box<crate::people::Tracks>>,
 }
 
 /// An energy bound as reported (JSON has no infinity): an unbounded energy is reported as
@@ -319,7 +324,26 @@ impl Auditor {
             robot: models.robot,
             human: models.human,
             names,
+            person: None,
+            track: None,
         })
+    }
+
+    /// An auditor of one person of a log (`person`: its id, named in the findings): the models
+    /// with that person's human model. With `track`, the violating samples are kept by index,
+    /// so that the passes of several people merge exactly (`crate::people`).
+    pub fn for_person(
+        models: LogModels,
+        cfg: AuditConfig,
+        person: &str,
+        track: bool,
+    ) -> Result<Self, AuditError> {
+        let mut a = Self::new(models, cfg)?;
+        a.person = Some(person.to_string());
+        if track {
+            a.track = Some(Box::default());
+        }
+        Ok(a)
     }
 
     /// Robot degrees of freedom.
@@ -418,6 +442,7 @@ impl Auditor {
                 t_end: t1,
                 reason,
                 spans: 1,
+                person: None,
             }),
         }
     }
@@ -613,6 +638,14 @@ fn label(name: &str, same: Option<bool>) -> String {
     }
 }
 
+/// Whether the stamps of a span `[t0, t1]` resolve its length (`pacs_log::time::clock_resolves`
+/// at the larger stamp, the shield's rule for its clock). A zero-length span needs no resolution
+/// (its samples are judged by their consistency; a log of only such spans is `no_time_covered`).
+pub(crate) fn stamps_resolve(t0: f64, t1: f64) -> bool {
+    let dt = t1 - t0;
+    dt <= 0.0 || pacs_log::time::clock_resolves(t0.abs().max(t1.abs()), dt)
+}
+
 /// `(min, max)` of two times.
 fn order(a: f64, b: f64) -> (f64, f64) {
     (a.min(b), a.max(b))
@@ -667,6 +700,12 @@ fn human_pair_breaks(model: &HumanModel, a: &HumanMeasurement, b: &HumanMeasurem
         .zip(b.positions())
         .zip(model.v_max())
         .any(|((p, q), v)| {
+            // Equal positions moved by 0 m, within any allowance (≥ 0): an exact duplicate of a
+            // record is no contradiction, even where outward rounding of a zero distance would
+            // exceed a zero allowance (no measurement error, equal stamps).
+            if p == q {
+                return false;
+            }
             let allowed = add_down(mul_down(*v, dt), e2);
             // Fast accept in plain floats: the squared distance carries a relative rounding
             // error of a few ε and the squared allowance (a lower bound already) one ε, far
@@ -729,9 +768,14 @@ fn object_pair_breaks(
     let acc = object_acc_bound(model);
     let ev = model.vel_error();
     if let (Some(a), Some(b)) = (early.velocity, late.velocity)
+        && a != b
         && dist3_up(&a, &b) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
     {
         return true;
+    }
+    // Equal positions are within any allowance (exact duplicates are no contradiction).
+    if early.position == late.position {
+        return false;
     }
     let by_speed = model.max_speed().map(|v| mul_down(v, dt));
     let by_velocity = [early.velocity, late.velocity]

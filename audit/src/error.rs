@@ -13,6 +13,34 @@ pub enum AuditError {
         /// The id.
         id: String,
     },
+    /// A human record names a person the header does not declare.
+    #[error("human record: id `{id}` is not a person of the header (header.humans: {declared})")]
+    UnknownPerson {
+        /// The id.
+        id: String,
+        /// The declared ids, comma-separated.
+        declared: String,
+    },
+    /// A human record without `id` in a log of several people.
+    #[error(
+        "human record: no `id`, and the header declares several people ({declared}): each human record names one"
+    )]
+    PersonMissing {
+        /// The declared ids, comma-separated.
+        declared: String,
+    },
+    /// A record after the `end` event the header promised last.
+    #[error(
+        "a {kind} record at t = {t} s after the `end` event at t = {end} s (the writer promised it last)"
+    )]
+    AfterEnd {
+        /// Record type.
+        kind: &'static str,
+        /// Its time (s).
+        t: f64,
+        /// The end event's time (s).
+        end: f64,
+    },
     /// A value is NaN or infinite.
     #[error("{field}: value {value} is not finite")]
     NotFinite {

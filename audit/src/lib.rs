@@ -16,12 +16,16 @@ pub mod claims;
 pub mod config;
 pub mod enclosure;
 pub mod error;
+pub mod people;
 pub mod series;
 pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
 pub use error::AuditError;
-pub use verdict::{ConstraintKind, InconclusiveReason, Metrics, RunResult, Verdict, Violation};
+pub use verdict::{
+    Completeness, ConstraintKind, Evidence, InconclusiveReason, Metrics, RunResult, Verdict,
+    Violation,
+};
 
 use pacs_log::{EqualTimeGroup, Header, Location, LogError, LogModels, Record, RecordReader};
 use std::path::Path;
@@ -39,8 +43,112 @@ pub fn parse_config(file: &str, text: &str) -> Result<AuditConfig, LogError> {
     Ok(cfg)
 }
 
+/// The checker of one log: one person (v1, or v2 with one person), or several
+/// ([`people::PeopleAuditor`]).
+enum Checker {
+    One {
+        auditor: Box<Auditor>,
+        /// A v2 log's person id (human records may name it), `None` for v1.
+        id: Option<String>,
+    },
+    Many(people::PeopleAuditor),
+}
+
+impl Checker {
+    fn new(header: &Header, models: LogModels, cfg: &AuditConfig) -> Result<Self, AuditError> {
+        if models.people.len() > 1 {
+            return Ok(Checker::Many(people::PeopleAuditor::new(&models, cfg)?));
+        }
+        let id = (header.version >= 2).then(|| models.people[0].0.clone());
+        let auditor = match &id {
+            Some(id) => Auditor::for_person(models, cfg.clone(), id, false)?,
+            None => Auditor::new(models, cfg.clone())?,
+        };
+        Ok(Checker::One {
+            auditor: Box::new(auditor),
+            id,
+        })
+    }
+
+    fn apply(&mut self, rec: Record<'_>) -> Result<(), AuditError> {
+        match (self, rec) {
+            (Checker::Many(p), Record::Robot { t, q, dq, ddq }) => {
+                p.push_robot_with_acc(t, q, dq, ddq)
+            }
+            (Checker::One { auditor, .. }, Record::Robot { t, q, dq, ddq }) => {
+                auditor.push_robot_with_acc(t, q, dq, ddq)
+            }
+            (
+                Checker::Many(p),
+                Record::Human {
+                    t,
+                    t_meas,
+                    person,
+                    positions,
+                },
+            ) => p.push_human(person, t, t_meas, positions),
+            (
+                Checker::One { auditor, id },
+                Record::Human {
+                    t,
+                    t_meas,
+                    person,
+                    positions,
+                },
+            ) => {
+                if let Some(p) = person
+                    && id.as_deref() != Some(p)
+                {
+                    return Err(AuditError::UnknownPerson {
+                        id: p.to_string(),
+                        declared: id.clone().unwrap_or_else(|| "none (v1)".into()),
+                    });
+                }
+                auditor.push_human(t, t_meas, positions)
+            }
+            (Checker::Many(p), Record::Event { name, .. }) => {
+                p.push_event(name);
+                Ok(())
+            }
+            (Checker::One { auditor, .. }, Record::Event { name, .. }) => {
+                auditor.push_event(name);
+                Ok(())
+            }
+            (_, Record::Shield { .. }) => Ok(()),
+            (
+                Checker::Many(p),
+                Record::Object {
+                    t,
+                    t_meas,
+                    id,
+                    position,
+                    velocity,
+                },
+            ) => p.push_object(t, t_meas, id, position, velocity),
+            (
+                Checker::One { auditor, .. },
+                Record::Object {
+                    t,
+                    t_meas,
+                    id,
+                    position,
+                    velocity,
+                },
+            ) => auditor.push_object(t, t_meas, id, position, velocity),
+        }
+    }
+
+    fn finish(self, log: &str, meta: serde_json::Map<String, serde_json::Value>) -> RunResult {
+        match self {
+            Checker::One { auditor, .. } => auditor.finish(log, meta),
+            Checker::Many(p) => p.finish(log, meta),
+        }
+    }
+}
+
 /// Audit every record of `reader` with `cfg`. Never returns `pass` unless every span between the
-/// first and last robot sample was checked. Errors name the file and line/offset.
+/// first and last robot sample was checked, for every person of the log, and (where the header
+/// promises an `end` event) the log reaches its end. Errors name the file and line/offset.
 pub fn audit_reader(
     reader: &mut dyn RecordReader,
     cfg: &AuditConfig,
@@ -50,33 +158,39 @@ pub fn audit_reader(
     let header_loc = reader.header_location();
     let models = LogModels::from_header(&header)
         .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
-    let mut auditor = Auditor::new(models, cfg.clone())
+    let mut checker = Checker::new(&header, models, cfg)
         .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
     let mut last_t = f64::NEG_INFINITY;
+    // The `end` event's time, once seen; and the last robot sample's.
+    let mut end: Option<f64> = None;
+    let mut last_robot: Option<f64> = None;
     // Records of one time stamp are applied in the canonical order (`order`): human
     // measurements, robot samples, events, then file order.
     let mut group = EqualTimeGroup::default();
     let mut apply = |rec: Record<'_>| -> Result<(), AuditError> {
-        match rec {
-            Record::Robot { t, q, dq, ddq } => auditor.push_robot_with_acc(t, q, dq, ddq),
-            Record::Human {
-                t,
-                t_meas,
-                positions,
-            } => auditor.push_human(t, t_meas, positions),
-            Record::Event { name, .. } => {
-                auditor.push_event(name);
-                Ok(())
-            }
-            Record::Shield { .. } => Ok(()),
-            Record::Object {
-                t,
-                t_meas,
-                id,
-                position,
-                velocity,
-            } => auditor.push_object(t, t_meas, id, position, velocity),
+        if let Some(e) = end {
+            let kind = match rec {
+                Record::Robot { .. } => "robot",
+                Record::Human { .. } => "human",
+                Record::Object { .. } => "object",
+                Record::Event { .. } => "event",
+                // Diagnostics may follow (at the end's time, they sort after events).
+                Record::Shield { .. } => return Ok(()),
+            };
+            return Err(AuditError::AfterEnd {
+                kind,
+                t: rec.t(),
+                end: e,
+            });
         }
+        match rec {
+            Record::Robot { t, .. } => last_robot = Some(t),
+            Record::Event { t, name } if header.end_event && name == pacs_log::END_EVENT => {
+                end = Some(t)
+            }
+            _ => {}
+        }
+        checker.apply(rec)
     };
     loop {
         let rec = reader.next_record()?;
@@ -96,13 +210,44 @@ pub fn audit_reader(
                 .map_err(|(loc, p)| LogError::input(&file, loc, p.to_string()))?;
         }
         last_t = t;
-        group.push(&rec, Location::File);
+        group
+            .push(&rec, Location::File)
+            .map_err(|p| LogError::input(&file, reader.location(), p))?;
         group.locate_last(reader.location());
     }
     group
         .drain(&mut apply)
         .map_err(|(loc, p)| LogError::input(&file, loc, p.to_string()))?;
-    Ok(auditor.finish(&file, header.meta))
+    let mut result = checker.finish(&file, header.meta.clone());
+    if header.end_event {
+        complete_or_not(&mut result, end, last_robot);
+    }
+    Ok(result)
+}
+
+/// Whether a log whose writer promised an `end` event is complete: the event is there and the
+/// robot samples reach it (`last_robot ≥ end`); otherwise the result gains an
+/// `incomplete_log` span from the last sample to the end (or to the last sample, when the end
+/// is missing) and can no longer pass.
+fn complete_or_not(result: &mut RunResult, end: Option<f64>, last_robot: Option<f64>) {
+    use verdict::{Completeness, InconclusiveSpan};
+    let complete = matches!((end, last_robot), (Some(e), Some(r)) if r >= e);
+    result.evidence.completeness = if complete {
+        Completeness::Complete
+    } else {
+        Completeness::Incomplete
+    };
+    if !complete {
+        let last = last_robot.unwrap_or(0.0);
+        result.inconclusive.push(InconclusiveSpan {
+            t_start: last,
+            t_end: end.unwrap_or(last).max(last),
+            reason: InconclusiveReason::IncompleteLog,
+            spans: 0,
+            person: None,
+        });
+        result.refresh_verdict();
+    }
 }
 
 /// Audit one log file: MCAP if it starts with the MCAP magic or its name ends in `.mcap`, a ROS 2

@@ -68,6 +68,9 @@ pub struct Violation {
     pub t_end: f64,
     /// SSM or PFL.
     pub constraint: ConstraintKind,
+    /// The person (a v2 log's person id; absent for v1 logs and for objects).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub person: Option<String>,
     /// Body part name (human model).
     pub body_part: String,
     /// Robot link name.
@@ -111,6 +114,18 @@ pub enum InconclusiveReason {
     NoObject,
     /// An object's measurement in use is older than `max_human_age` at the span's end.
     StaleObject,
+    /// The writer promised an `end` event (`end_event: true` in the header) and the log lacks it,
+    /// or its robot samples stop before it: the log was cut short, and what is missing was
+    /// never checked (`t_start`: the last robot sample; `t_end`: the end event's time, or the
+    /// last sample's if there is none).
+    IncompleteLog,
+    /// The span's time stamps cannot resolve its length (doubles near the stamps are more than a
+    /// thousandth of the span apart: `pacs_log::time::clock_resolves`, the shield's rule for its
+    /// clock); every age and bound computed from those stamps would be off by as much.
+    UnresolvedTime,
+    /// The robot samples all share one time stamp (≥ 2 samples, duration 0 s): the log covers no
+    /// time, and is no evidence of a run.
+    NoTimeCovered,
     /// An object's occupancy could not be computed (e.g. it overflows).
     ObjectReachError,
     /// Two human measurements lie farther apart than the model allows (keypoint speed bound ×
@@ -138,6 +153,9 @@ impl InconclusiveReason {
             Self::FewerThanTwoRobotSamples => "fewer_than_two_robot_samples",
             Self::NoObject => "no_object",
             Self::StaleObject => "stale_object",
+            Self::IncompleteLog => "incomplete_log",
+            Self::UnresolvedTime => "unresolved_time",
+            Self::NoTimeCovered => "no_time_covered",
             Self::ObjectReachError => "object_reach_error",
             Self::HumanExceedsModel => "human_exceeds_model",
             Self::ObjectExceedsModel => "object_exceeds_model",
@@ -168,6 +186,85 @@ pub struct InconclusiveSpan {
     pub reason: InconclusiveReason,
     /// Number of spans.
     pub spans: u64,
+    /// The person it concerns (a v2 log's person id, for the reasons about a person's
+    /// measurements: `no_human`, `stale_human`, `human_reach_error`, `human_exceeds_model`,
+    /// `human_record_after_last_robot_sample`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub person: Option<String>,
+}
+
+impl InconclusiveReason {
+    /// Whether the reason is about one person's measurements (and names the person).
+    pub fn about_a_person(self) -> bool {
+        matches!(
+            self,
+            Self::NoHuman
+                | Self::StaleHuman
+                | Self::HumanReachError
+                | Self::HumanExceedsModel
+                | Self::HumanRecordAfterLastRobotSample
+        )
+    }
+}
+
+/// Whether the log is the whole run: what its writer promised about its end, and whether the
+/// log keeps that promise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Completeness {
+    /// The writer promised an `end` event; it is there and the robot samples reach it.
+    Complete,
+    /// The writer promised an `end` event; it is missing or the samples stop before it
+    /// (`incomplete_log`: never `pass`).
+    Incomplete,
+    /// The writer promised nothing (v1 logs, ROS bags): the audited time span is all the
+    /// report can state.
+    NotPromised,
+}
+
+impl Default for Evidence {
+    fn default() -> Self {
+        Self {
+            t_start: 0.0,
+            t_end: 0.0,
+            completeness: Completeness::NotPromised,
+        }
+    }
+}
+
+impl RunResult {
+    /// The verdict (and `safe_success`) again from the findings, after findings were added.
+    pub fn refresh_verdict(&mut self) {
+        self.verdict =
+            Verdict::of_findings(!self.violations.is_empty(), !self.inconclusive.is_empty());
+        self.metrics.safe_success = self
+            .metrics
+            .success
+            .map(|s| safe_success(s, self.verdict == Verdict::Pass));
+    }
+}
+
+impl Completeness {
+    /// The snake_case name (as serialized).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Complete => "complete",
+            Self::Incomplete => "incomplete",
+            Self::NotPromised => "not_promised",
+        }
+    }
+}
+
+/// What the log covers: the audited time span and whether the log is the whole run (default:
+/// no samples, nothing promised).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Evidence {
+    /// First robot sample (s; 0 without samples).
+    pub t_start: f64,
+    /// Last robot sample (s; 0 without samples).
+    pub t_end: f64,
+    /// Whether the log is the whole run.
+    pub completeness: Completeness,
 }
 
 /// Per-log metrics.
@@ -233,6 +330,12 @@ pub struct RunResult {
     pub inconclusive: Vec<InconclusiveSpan>,
     /// Metrics.
     pub metrics: Metrics,
+    /// The audited time span and whether the log is the whole run.
+    #[serde(default)]
+    pub evidence: Evidence,
+    /// The people of the log (ids in header order; a v1 log's one person is `human`).
+    #[serde(default)]
+    pub people: Vec<String>,
     /// The header's `meta` object.
     pub meta: serde_json::Map<String, serde_json::Value>,
     /// Robot, human and task names, for the report.

@@ -10,50 +10,6 @@ use pacs_log::ModelRef;
 use pacs_models::constraints::RegionSpec;
 use pacs_models::{Capsule, Constraint, ConstraintSpec, HumanModel, RobotModel};
 
-fn fr3() -> RobotModel {
-    RobotModel::builtin("fr3").unwrap()
-}
-fn human() -> HumanModel {
-    HumanModel::builtin("default").unwrap()
-}
-
-/// Joint configuration with joint 1 at `a`.
-fn q_at(a: f64) -> [f64; 7] {
-    let mut q = Q_READY;
-    q[0] = a;
-    q
-}
-
-/// The world capsule of link `name` (first capsule) at q.
-fn link_capsule(q: &[f64], name: &str) -> Capsule {
-    robot_capsules(&fr3(), q)
-        .into_iter()
-        .find(|(n, _)| n == name)
-        .unwrap()
-        .1
-}
-
-/// Keypoints: the human standing far away, with the right hand moved to `hand`.
-fn reaching(hand: [f64; 3]) -> Vec<[f64; 3]> {
-    let mut kp = standing(2.5, 0.0);
-    // The arm points away from the robot's base axis.
-    let u = Vector3::new(hand[0], hand[1], 0.0).normalize();
-    kp[R_HAND] = hand;
-    kp[R_FORE] = offset(Point3::from(hand), u, 0.3);
-    kp[3] = offset(Point3::from(hand), u, 0.6);
-    kp
-}
-
-/// A right-hand position overlapping the `fr3_hand` capsule at q by `overlap` m, pushed away from
-/// the robot base along the horizontal direction.
-fn hand_contact(q: &[f64], overlap: f64) -> [f64; 3] {
-    let c = link_capsule(q, "fr3_hand");
-    let mid = nalgebra::center(&c.p1(), &c.p2());
-    let u = Vector3::new(mid.x, mid.y, 0.0);
-    let hand_r = human().body_parts()[5].thickness / 2.0;
-    offset(mid, u, c.radius() + hand_r - overlap)
-}
-
 fn gap_part(q: &[f64], kp: &[[f64; 3]], part: &str) -> f64 {
     let h = human_capsules(&human(), kp);
     let (_, hc) = h.iter().find(|(n, _)| n == part).unwrap();

@@ -1,11 +1,16 @@
-//! Streaming reader of the CSV form of log format v1 (see `docs/log-format.md`):
+//! Streaming reader of the CSV form of log formats v1 and v2 (see `docs/log-format.md`):
 //! line 1 is `#` followed by the JSON header; then one record per line:
-//! `robot,t,n,q_1..q_n[,dq_1..dq_n[,ddq_1..ddq_n]]`, `human,t,t_meas,x_1,y_1,z_1,...`, `event,t,name`,
+//! `robot,t,n,q_1..q_n[,dq_1..dq_n[,ddq_1..ddq_n]]`, `human,t,t_meas,x_1,y_1,z_1,...` (v2:
+//! `human,t,t_meas,id,x_1,...`), `event,t,name`,
 //! `shield,t,...`. Blank lines and lines starting with `#` after the header are skipped.
 
 use crate::error::{Location, LogError};
 use crate::format::{Header, Record, RecordReader};
 use std::io::BufRead;
+
+/// Largest joint count `n` a robot row may give (far above any model's; a larger `n` is refused
+/// before any arithmetic on it).
+const MAX_JOINTS: usize = 1024;
 
 /// Streaming CSV log reader; buffers are reused, so reading allocates nothing per robot sample.
 pub struct CsvReader<R: BufRead> {
@@ -59,6 +64,13 @@ impl<R: BufRead> CsvReader<R> {
                 file,
                 Location::File,
                 "missing header: the file is empty",
+            ));
+        }
+        if line.starts_with('\u{feff}') {
+            return Err(LogError::input(
+                file,
+                loc,
+                "the file starts with a UTF-8 byte order mark (EF BB BF); CSV logs are UTF-8 without BOM: remove it",
             ));
         }
         let Some(json) = line.trim().strip_prefix('#') else {
@@ -158,6 +170,11 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                     .trim()
                     .parse()
                     .map_err(|_| err(format!("n: `{}` is not a joint count", n_cell.trim())))?;
+                if n > MAX_JOINTS {
+                    return Err(err(format!(
+                        "n: {n} joints is more than any robot model holds (at most {MAX_JOINTS})"
+                    )));
+                }
                 self.q.clear();
                 self.dq.clear();
                 self.ddq.clear();
@@ -192,6 +209,19 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
             }
             "human" => {
                 let t_meas = t_meas_cell(&mut cells)?;
+                // Version 2 rows name the person: `human,t,t_meas,id,x_1,...`.
+                let person = if self.header.version >= 2 {
+                    self.name.clear();
+                    self.name.push_str(
+                        cells
+                            .next()
+                            .ok_or_else(|| err("missing column `id` (the person id)".into()))?
+                            .trim(),
+                    );
+                    true
+                } else {
+                    false
+                };
                 self.positions.clear();
                 let mut p = [0.0; 3];
                 let mut k = 0;
@@ -210,6 +240,7 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 Ok(Some(Record::Human {
                     t,
                     t_meas,
+                    person: person.then_some(self.name.as_str()),
                     positions: &self.positions,
                 }))
             }

@@ -17,7 +17,7 @@
 use crate::error::{Location, LogError};
 use crate::format::{Header, ModelOverrides, Record, RecordReader};
 use crate::mcap::{McapConfig, parse_header_json};
-use crate::ros::{Message, Messages, Pending, Stream, stream_of};
+use crate::ros::{Message, Messages, Pending, Stream};
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
 use std::collections::HashMap;
@@ -335,7 +335,7 @@ fn int(v: ValueRef<'_>, what: &str) -> Result<i64, String> {
 }
 
 /// Open one `.db3` file: its tables, and its topics checked against the configuration.
-fn open_part(path: PathBuf, cfg: &McapConfig) -> Result<Part, LogError> {
+fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     let name = path.display().to_string();
     check_size(&path, &name)?;
     let bad = |p: String| LogError::input(&name, Location::File, p);
@@ -367,7 +367,7 @@ fn open_part(path: PathBuf, cfg: &McapConfig) -> Result<Part, LogError> {
         let topic = text(cell(1)?, &at("name")).map_err(&bad)?;
         let typ = text(cell(2)?, &at("type")).map_err(&bad)?;
         let ser = text(cell(3)?, &at("serialization_format")).map_err(&bad)?;
-        let (stream, expected) = stream_of(cfg, &topic, Some(&typ));
+        let (stream, expected) = conv.stream_of(&topic, Some(&typ)).map_err(&bad)?;
         if stream != Stream::Ignored {
             let what = format!("topic `{topic}` (topics id {id})");
             if typ != expected {
@@ -547,11 +547,11 @@ impl Db3Reader {
                 crate::format::dir_of(path),
             )
         };
+        let mut conv = Messages::new(&name, cfg.clone(), overrides.clone());
         let parts = files
             .into_iter()
-            .map(|p| open_part(p, cfg))
+            .map(|p| open_part(p, &mut conv))
             .collect::<Result<Vec<_>, _>>()?;
-        let mut conv = Messages::new(&name, cfg.clone(), overrides.clone());
         match (header, &info.pacs_header) {
             (Some(h), _) => conv.set_header(h, Location::File)?,
             (None, Some(json)) => {
@@ -731,7 +731,10 @@ impl RecordReader for Db3Reader {
         loop {
             if let Some(p) = self.conv.pop_ready(self.done) {
                 self.current = Some(p);
-                return Ok(self.current.as_ref().map(Pending::record));
+                return Ok(self
+                    .current
+                    .as_ref()
+                    .map(|p| p.record(&self.conv.person_ids)));
             }
             if self.done {
                 return Ok(None);

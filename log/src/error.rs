@@ -75,7 +75,7 @@ pub enum HeaderError {
     #[error("header.format: `{0}`, expected `{format}`", format = crate::format::FORMAT)]
     Format(String),
     /// Unsupported `version`.
-    #[error("header.version: {0} is not supported (expected {version})", version = crate::format::VERSION)]
+    #[error("header.version: {0} is not supported (expected 1 or 2)")]
     Version(u32),
     /// The text is not JSON.
     #[error("invalid JSON: {0}")]

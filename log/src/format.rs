@@ -1,5 +1,5 @@
-//! Log format v1 (see `docs/log-format.md`): the header, the record view shared by all readers, and
-//! the JSON Lines writer the shield uses.
+//! Log format v2 (and v1, still read; see `docs/log-format.md`): the header, the record view shared
+//! by all readers, and the JSON Lines writer the shield uses.
 
 use crate::error::HeaderError;
 use pacs_models::object::{ObjectContact, ObjectModel, ObjectSpec};
@@ -10,8 +10,15 @@ use std::io::Write;
 
 /// The value of the header's `format` field.
 pub const FORMAT: &str = "pacs-log";
-/// The only supported format version.
-pub const VERSION: u32 = 1;
+/// The format version pacs writes: 2 (several people, each with an id; the end-event promise).
+pub const VERSION: u32 = 2;
+/// The versions read: 1 (one person, `human`) and 2 (`humans`).
+pub const VERSIONS: [u32; 2] = [1, 2];
+/// The person id of a v1 log's one person (v1 human records carry no id).
+pub const V1_PERSON: &str = "human";
+/// The name of the event a writer that promises it (`end_event: true`) logs last, at the end
+/// time of the run.
+pub const END_EVENT: &str = "end";
 
 /// A model given by built-in name or as an inline spec (the JSON forms the model loaders accept).
 /// Read by its shape — a string is a name, a table/object a spec — so a faulty inline spec
@@ -162,12 +169,20 @@ pub struct Header {
     pub kind: String,
     /// Always [`FORMAT`].
     pub format: String,
-    /// Always [`VERSION`].
+    /// 1 or 2 ([`VERSIONS`]).
     pub version: u32,
     /// Robot model (name, `{urdf, side}` relative to the log file, or spec).
     pub robot: RobotRef,
-    /// Human model (name or spec).
-    pub human: ModelRef<HumanSpec>,
+    /// Version 1: the one person's model (name or spec); absent in version 2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub human: Option<ModelRef<HumanSpec>>,
+    /// Version 2: the people, each with an id (what `human` records name) and a model.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub humans: Vec<PersonEntry>,
+    /// Version 2: the writer promises an `end` event ([`END_EVENT`]) as its last record, at the
+    /// time of the last robot sample; a log that lacks it was cut short (`incomplete_log`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub end_event: bool,
     /// Task constraints (preset name or spec).
     pub constraints: ModelRef<ConstraintSpec>,
     /// Static environment shapes (capsules, m) a body part can be clamped against.
@@ -182,7 +197,7 @@ pub struct Header {
 }
 
 impl Header {
-    /// A v1 header for the given models.
+    /// A v1 header for the given models (one person, no end-event promise).
     pub fn new(
         robot: impl Into<RobotRef>,
         human: ModelRef<HumanSpec>,
@@ -191,9 +206,11 @@ impl Header {
         Self {
             kind: "header".into(),
             format: FORMAT.into(),
-            version: VERSION,
+            version: 1,
             robot: robot.into(),
-            human,
+            human: Some(human),
+            humans: vec![],
+            end_event: false,
             constraints,
             environment: vec![],
             objects: vec![],
@@ -201,7 +218,57 @@ impl Header {
         }
     }
 
-    /// Check `type`, `format` and `version`; returns the problem otherwise.
+    /// A v2 header for the given people (`(id, model)`; ids unique), with the end-event
+    /// promise (what every pacs writer writes: [`Self::check`] validates it).
+    pub fn with_people(
+        robot: impl Into<RobotRef>,
+        people: Vec<PersonEntry>,
+        constraints: ModelRef<ConstraintSpec>,
+    ) -> Self {
+        Self {
+            kind: "header".into(),
+            format: FORMAT.into(),
+            version: VERSION,
+            robot: robot.into(),
+            human: None,
+            humans: people,
+            end_event: true,
+            constraints,
+            environment: vec![],
+            objects: vec![],
+            meta: Default::default(),
+        }
+    }
+
+    /// This header as version 2 with the end-event promise: a v1 header's one person becomes
+    /// person [`V1_PERSON`]. What pacs writers do with a header they are given.
+    pub fn promising_end(mut self) -> Self {
+        if let Some(h) = self.human.take() {
+            self.humans = vec![PersonEntry {
+                id: V1_PERSON.into(),
+                human: h,
+            }];
+        }
+        self.version = VERSION;
+        self.end_event = true;
+        self
+    }
+
+    /// The people of the log, `(id, model)` in header order: a v1 log's one person has id
+    /// [`V1_PERSON`].
+    pub fn people(&self) -> Vec<(&str, &ModelRef<HumanSpec>)> {
+        match &self.human {
+            Some(h) => vec![(V1_PERSON, h)],
+            None => self
+                .humans
+                .iter()
+                .map(|p| (p.id.as_str(), &p.human))
+                .collect(),
+        }
+    }
+
+    /// Check `type`, `format`, `version` and the fields of that version (v1: `human`; v2:
+    /// `humans`, at least one, ids unique and non-empty); returns the problem otherwise.
     pub fn check(&self) -> Result<(), HeaderError> {
         if self.kind != "header" {
             return Err(HeaderError::NotHeader(self.kind.clone()));
@@ -209,8 +276,50 @@ impl Header {
         if self.format != FORMAT {
             return Err(HeaderError::Format(self.format.clone()));
         }
-        if self.version != VERSION {
-            return Err(HeaderError::Version(self.version));
+        let fields = |m: &str| Err(HeaderError::Fields(m.to_string()));
+        match self.version {
+            1 => {
+                if self.human.is_none() {
+                    return fields(
+                        "header.human: missing (a version 1 header names one human model)",
+                    );
+                }
+                if !self.humans.is_empty() {
+                    return fields(
+                        "header.humans: version 1 has `human` (one person); several people need \"version\": 2",
+                    );
+                }
+                if self.end_event {
+                    return fields("header.end_event: a version 2 field (set \"version\": 2)");
+                }
+            }
+            2 => {
+                if self.human.is_some() {
+                    return fields(
+                        "header.human: a version 1 field; version 2 lists people in `humans`: [{\"id\": ..., \"human\": ...}]",
+                    );
+                }
+                if self.humans.is_empty() {
+                    return fields(
+                        "header.humans: missing or empty (version 2 lists at least one person: [{\"id\": ..., \"human\": ...}])",
+                    );
+                }
+                for (i, p) in self.humans.iter().enumerate() {
+                    if p.id.is_empty() || p.id.trim() != p.id || p.id.contains(',') {
+                        return Err(HeaderError::Fields(format!(
+                            "header.humans[{i}].id: {:?} is not a valid person id (non-empty, no surrounding spaces, no comma)",
+                            p.id
+                        )));
+                    }
+                    if let Some(j) = self.humans[..i].iter().position(|q| q.id == p.id) {
+                        return Err(HeaderError::Fields(format!(
+                            "header.humans[{i}].id: {:?} is also the id of header.humans[{j}] (two people with one id)",
+                            p.id
+                        )));
+                    }
+                }
+            }
+            v => return Err(HeaderError::Version(v)),
         }
         Ok(())
     }
@@ -245,12 +354,22 @@ pub struct ObjectEntry {
     pub contact: ObjectContact,
 }
 
+/// A person of a v2 header: the id its `human` records carry and its model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PersonEntry {
+    /// Person id (unique in the header; `human` records name it in `id`).
+    pub id: String,
+    /// The person's human model (built-in name or inline spec).
+    pub human: ModelRef<HumanSpec>,
+}
+
 /// Models that replace a header's (an audit config's `robot`, `human`, `constraints`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ModelOverrides {
     /// Robot model.
     pub robot: Option<RobotRef>,
-    /// Human model.
+    /// Human model (of every person of the log).
     pub human: Option<ModelRef<HumanSpec>>,
     /// Task constraints.
     pub constraints: Option<ModelRef<ConstraintSpec>>,
@@ -264,7 +383,12 @@ impl Header {
             h.robot = r.clone();
         }
         if let Some(x) = &o.human {
-            h.human = x.clone();
+            if h.human.is_some() {
+                h.human = Some(x.clone());
+            }
+            for p in &mut h.humans {
+                p.human = x.clone();
+            }
         }
         if let Some(c) = &o.constraints {
             h.constraints = c.clone();
@@ -278,9 +402,11 @@ impl Header {
 pub struct LogModels {
     /// Robot model.
     pub robot: RobotModel,
-    /// Human model.
+    /// The first person's human model (a v1 log's one person).
     pub human: HumanModel,
-    /// Constraint spec (resolved against `human` by the checker).
+    /// Every person: id and model, in header order (the first is `human`).
+    pub people: Vec<(String, HumanModel)>,
+    /// Constraint spec (resolved against every person's model by the checker).
     pub constraints: ConstraintSpec,
     /// Static environment capsules (m).
     pub environment: Vec<Capsule>,
@@ -296,21 +422,35 @@ impl LogModels {
             move |source| HeaderError::Model { field, source }
         };
         let robot = h.robot.load().map_err(model("header.robot"))?;
-        let human = match &h.human {
-            ModelRef::Name(n) => HumanModel::builtin(n),
-            ModelRef::Spec(s) => HumanModel::new((**s).clone()),
-        }
-        .map_err(model("header.human"))?;
         let constraints = match &h.constraints {
             ModelRef::Name(n) => ConstraintSpec::builtin(n),
             ModelRef::Spec(s) => Ok((**s).clone()),
         }
         .map_err(model("header.constraints"))?;
-        constraints
-            .resolve(&human)
-            .map_err(model("header.constraints"))?
-            .check_robot(&robot)
-            .map_err(model("header.robot"))?;
+        let mut people = Vec::new();
+        for (i, (id, r)) in h.people().into_iter().enumerate() {
+            let field = if h.human.is_some() {
+                "header.human".to_string()
+            } else {
+                format!("header.humans[{i}].human")
+            };
+            let human = match r {
+                ModelRef::Name(n) => HumanModel::builtin(n),
+                ModelRef::Spec(s) => HumanModel::new((**s).clone()),
+            }
+            .map_err(model(&field))?;
+            constraints
+                .resolve(&human)
+                .map_err(model("header.constraints"))?
+                .check_robot(&robot)
+                .map_err(model("header.robot"))?;
+            people.push((id.to_string(), human));
+        }
+        let Some(human) = people.first().map(|(_, m)| m.clone()) else {
+            return Err(HeaderError::Fields(
+                "header.humans: missing or empty".into(),
+            ));
+        };
         let mut environment = Vec::with_capacity(h.environment.len());
         for (i, c) in h.environment.iter().enumerate() {
             environment
@@ -350,6 +490,7 @@ impl LogModels {
         Ok(Self {
             robot,
             human,
+            people,
             constraints,
             environment,
             objects,
@@ -377,6 +518,8 @@ pub enum Record<'a> {
         t: f64,
         /// Measurement time stamp (s).
         t_meas: f64,
+        /// The person's id (v2 `id`; `None`: the log's only person).
+        person: Option<&'a str>,
         /// Keypoint positions (m).
         positions: &'a [[f64; 3]],
     },
@@ -575,11 +718,24 @@ impl<W: Write> LogWriter<W> {
         Ok(())
     }
 
-    /// A human measurement: log time `t`, measurement time `t_meas` (s), keypoints (m).
+    /// A human measurement: log time `t`, measurement time `t_meas` (s), keypoints (m), without
+    /// a person id (a v1 log, or a v2 log of one person).
     pub fn write_human(
         &mut self,
         t: f64,
         t_meas: f64,
+        positions: &[[f64; 3]],
+    ) -> Result<(), WriteError> {
+        self.write_person(t, t_meas, None, positions)
+    }
+
+    /// A measurement of person `id` (a v2 header's `humans[].id`; `None`: the only person):
+    /// log time `t`, measurement time `t_meas` (s), keypoints (m).
+    pub fn write_person(
+        &mut self,
+        t: f64,
+        t_meas: f64,
+        id: Option<&str>,
         positions: &[[f64; 3]],
     ) -> Result<(), WriteError> {
         finite("t_meas", t_meas)?;
@@ -589,8 +745,14 @@ impl<W: Write> LogWriter<W> {
         self.begin(t)?;
         write!(
             self.out,
-            "{{\"type\":\"human\",\"t\":{t:?},\"t_meas\":{t_meas:?},\"positions\":["
+            "{{\"type\":\"human\",\"t\":{t:?},\"t_meas\":{t_meas:?},"
         )?;
+        if let Some(id) = id {
+            self.out.write_all(b"\"id\":")?;
+            serde_json::to_writer(&mut self.out, id).map_err(std::io::Error::from)?;
+            self.out.write_all(b",")?;
+        }
+        self.out.write_all(b"\"positions\":[")?;
         for (i, p) in positions.iter().enumerate() {
             if i > 0 {
                 self.out.write_all(b",")?;
@@ -652,6 +814,11 @@ impl<W: Write> LogWriter<W> {
         serde_json::to_writer(&mut self.out, &m).map_err(std::io::Error::from)?;
         self.out.write_all(b"\n")?;
         Ok(())
+    }
+
+    /// The time (s) of the last record written (−∞ before the first).
+    pub fn last_time(&self) -> f64 {
+        self.last_t
     }
 
     /// Flush and return the inner writer.

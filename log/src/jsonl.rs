@@ -1,4 +1,4 @@
-//! Streaming JSON Lines reader of log format v1. Memory is bounded by the longest line; records
+//! Streaming JSON Lines reader of log formats v1 and v2. Memory is bounded by the longest line; records
 //! are parsed into reused buffers, so reading allocates nothing per robot sample.
 
 use crate::error::{Location, LogError};
@@ -292,6 +292,13 @@ impl<R: BufRead> JsonlReader<R> {
             }
         }
         let loc = Location::Line(line_no);
+        if line.starts_with('\u{feff}') {
+            return Err(LogError::input(
+                file,
+                loc,
+                "the file starts with a UTF-8 byte order mark (EF BB BF); JSON Lines logs are UTF-8 without BOM: remove it",
+            ));
+        }
         let value: serde_json::Value = serde_json::from_str(&line)
             .map_err(|e| LogError::input(file, loc, format!("invalid JSON: {e}")))?;
         if value.get("type").and_then(|t| t.as_str()) != Some("header") {
@@ -391,6 +398,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
             b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
         let allowed: &[&str] = match kind {
             Kind::Robot => &["q", "dq", "ddq"],
+            Kind::Human if self.header.version >= 2 => &["t_meas", "id", "positions"],
             Kind::Human => &["t_meas", "positions"],
             Kind::Object => &["t_meas", "id", "position", "velocity"],
             Kind::Event => &["name"],
@@ -453,6 +461,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
                 Record::Human {
                     t,
                     t_meas: b.t_meas.unwrap_or(t),
+                    person: b.has_id.then_some(b.id.as_str()),
                     positions: &b.positions,
                 }
             }

@@ -1,12 +1,13 @@
 //! # pacs-log
 //!
-//! The log format v1 (`docs/log-format.md`) of logged robot runs, independent of the checker that
+//! The log format v2 (and v1, still read; `docs/log-format.md`) of logged robot runs, independent of the checker that
 //! audits them:
 //! - [`format`]: the header (models by name or inline spec), the record view every reader yields,
 //!   the models a header refers to ([`LogModels`]) and the JSON Lines writer ([`LogWriter`]);
 //! - [`jsonl`], [`csv`], [`mcap`] (+ [`cdr`]): streaming readers of the three forms; [`db3`]: ROS 2
 //!   sqlite3 bags, with the MCAP form's topics and messages (one conversion for both, `ros`);
 //! - [`order`]: records of equal time in the one canonical order (human, robot, event, file order);
+//! - [`time`]: whether time stamps resolve a step (one rule for the shield and the audit);
 //! - [`error`]: input errors naming the file, line or offset, and the problem.
 
 pub mod cdr;
@@ -18,10 +19,11 @@ pub mod jsonl;
 pub mod mcap;
 pub mod order;
 mod ros;
+pub mod time;
 
 pub use error::{HeaderError, Location, LogError, McapConfigError};
 pub use format::{
-    FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, ObjectEntry, Record,
-    RecordReader, RobotRef, VERSION, WriteError, dir_of,
+    END_EVENT, FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, ObjectEntry,
+    PersonEntry, Record, RecordReader, RobotRef, V1_PERSON, VERSION, VERSIONS, WriteError, dir_of,
 };
-pub use order::EqualTimeGroup;
+pub use order::{EqualTimeGroup, MAX_EQUAL_TIME};

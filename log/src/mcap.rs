@@ -46,6 +46,18 @@ pub const MAX_PENDING: usize = 1 << 18;
 /// The MCAP magic bytes at the start (and end) of every MCAP file.
 pub const MAGIC: &[u8] = mcap::MAGIC;
 
+/// The default topic of person `id`'s keypoints (`PoseArray`) in a v2 recording:
+/// `/humans/ID/keypoints` (used where `mcap.human_topics` names no topic for the person).
+pub fn person_topic(id: &str) -> String {
+    format!("/humans/{id}/keypoints")
+}
+
+/// The person id of a default per-person topic (`/humans/ID/keypoints`), if `topic` is one.
+pub fn person_of_topic(topic: &str) -> Option<&str> {
+    let id = topic.strip_prefix("/humans/")?.strip_suffix("/keypoints")?;
+    (!id.is_empty() && !id.contains('/')).then_some(id)
+}
+
 /// Whether `prefix` (the first bytes of a file) starts with the MCAP magic.
 pub fn has_magic(prefix: &[u8]) -> bool {
     prefix.starts_with(MAGIC)
@@ -59,6 +71,11 @@ pub struct McapConfig {
     pub robot_topic: String,
     /// Topic of the human keypoints (`geometry_msgs/msg/PoseArray`). Default `/human/keypoints`.
     pub human_topic: String,
+    /// Per person of a v2 header (its id), the topic of its keypoints (`PoseArray`). Default
+    /// none: then person `ID` is read from `/humans/ID/keypoints` ([`person_topic`]), and
+    /// `human_topic` carries the measurements of a log's only person (no id).
+    #[serde(default)]
+    pub human_topics: std::collections::BTreeMap<String, String>,
     /// Topic of task events (`std_msgs/msg/String`). Default `/pacs/events`.
     pub event_topic: String,
     /// Per dynamic object of the header (its id), the topic of its position
@@ -75,6 +92,7 @@ impl Default for McapConfig {
         Self {
             robot_topic: "/joint_states".into(),
             human_topic: "/human/keypoints".into(),
+            human_topics: Default::default(),
             event_topic: "/pacs/events".into(),
             object_topics: Default::default(),
             reorder_window: 1.0,
@@ -98,6 +116,7 @@ impl McapConfig {
                 .values()
                 .map(|t| ("mcap.object_topics", t)),
         );
+        topics.extend(self.human_topics.values().map(|t| ("mcap.human_topics", t)));
         for (i, (f, t)) in topics.iter().enumerate() {
             if t.is_empty() {
                 return Err(McapConfigError::EmptyTopic(f));

@@ -7,6 +7,9 @@
 use crate::error::Location;
 use crate::format::Record;
 
+/// Most records one time stamp may hold (see [`EqualTimeGroup::push`]).
+pub const MAX_EQUAL_TIME: usize = 1 << 16;
+
 /// An owned copy of one record (buffers reused across groups).
 #[derive(Debug, Default)]
 struct Slot {
@@ -24,6 +27,7 @@ struct Slot {
     name: String,
     position: [f64; 3],
     velocity: Option<[f64; 3]>,
+    has_person: bool,
 }
 
 impl Slot {
@@ -40,11 +44,16 @@ impl Slot {
         self.has_ddq = false;
         match *rec {
             Record::Human {
-                t_meas, positions, ..
+                t_meas,
+                person,
+                positions,
+                ..
             } => {
                 self.rank = 0;
                 self.t_meas = t_meas;
                 self.positions.extend_from_slice(positions);
+                self.has_person = person.is_some();
+                self.name.push_str(person.unwrap_or(""));
             }
             Record::Object {
                 t_meas,
@@ -84,6 +93,7 @@ impl Slot {
             0 => Record::Human {
                 t: self.t,
                 t_meas: self.t_meas,
+                person: self.has_person.then_some(self.name.as_str()),
                 positions: &self.positions,
             },
             1 => Record::Robot {
@@ -122,14 +132,23 @@ impl EqualTimeGroup {
         (self.len > 0).then(|| self.slots[0].t)
     }
 
-    /// Buffer a copy of `rec` (found at `loc`).
-    pub fn push(&mut self, rec: &Record<'_>, loc: Location) {
+    /// Buffer a copy of `rec` (found at `loc`). At most [`MAX_EQUAL_TIME`] records share one
+    /// time stamp (memory stays flat, as in the MCAP reader): one more is refused with the
+    /// problem to report.
+    pub fn push(&mut self, rec: &Record<'_>, loc: Location) -> Result<(), String> {
+        if self.len >= MAX_EQUAL_TIME {
+            return Err(format!(
+                "more than {MAX_EQUAL_TIME} records at one time stamp t = {} s (a log whose records share one time covers no time; the audit holds at most {MAX_EQUAL_TIME} of them)",
+                rec.t()
+            ));
+        }
         if self.len == self.slots.len() {
             self.slots.push(Slot::default());
         }
         let seq = self.len;
         self.slots[self.len].fill(rec, seq, loc);
         self.len += 1;
+        Ok(())
     }
 
     /// Set where the last buffered record was found (once the reader is free to say).

@@ -25,38 +25,16 @@ use std::collections::BinaryHeap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Stream {
     Robot,
-    Human,
+    /// Keypoints of the log's only person (`None`) or of person [`Messages::person_ids`]`[i]`.
+    Human {
+        person: Option<u16>,
+    },
     /// A dynamic object's positions: `PoseStamped` (`stamped`) or `PoseArray` (first pose).
     Object {
         stamped: bool,
     },
     Event,
     Ignored,
-}
-
-/// The stream of `topic` and the message type it must have (`""` for ignored topics).
-/// `type_name` is the topic's message type where known: on an object topic, `PoseStamped`
-/// selects the stamped form (anything else is expected to be a `PoseArray`).
-pub(crate) fn stream_of(
-    cfg: &McapConfig,
-    topic: &str,
-    type_name: Option<&str>,
-) -> (Stream, &'static str) {
-    if topic == cfg.robot_topic {
-        (Stream::Robot, JOINT_STATE)
-    } else if topic == cfg.human_topic {
-        (Stream::Human, POSE_ARRAY)
-    } else if topic == cfg.event_topic {
-        (Stream::Event, STRING)
-    } else if cfg.object_topics.values().any(|t| t == topic) {
-        let stamped = type_name == Some(POSE_STAMPED);
-        (
-            Stream::Object { stamped },
-            if stamped { POSE_STAMPED } else { POSE_ARRAY },
-        )
-    } else {
-        (Stream::Ignored, "")
-    }
 }
 
 pub(crate) enum Body {
@@ -66,6 +44,7 @@ pub(crate) enum Body {
     },
     Human {
         t_meas: f64,
+        person: Option<u16>,
         positions: Vec<[f64; 3]>,
     },
     Event(String),
@@ -109,8 +88,8 @@ impl Pending {
         }
     }
 
-    /// The record view of this message.
-    pub(crate) fn record(&self) -> Record<'_> {
+    /// The record view of this message; `person_ids` are [`Messages::person_ids`].
+    pub(crate) fn record<'a>(&'a self, person_ids: &'a [String]) -> Record<'a> {
         let t = self.t;
         match &self.body {
             Body::Robot { q, dq } => Record::Robot {
@@ -119,9 +98,14 @@ impl Pending {
                 dq: dq.as_deref(),
                 ddq: None,
             },
-            Body::Human { t_meas, positions } => Record::Human {
+            Body::Human {
+                t_meas,
+                person,
+                positions,
+            } => Record::Human {
                 t,
                 t_meas: *t_meas,
+                person: person.map(|i| person_ids[usize::from(i)].as_str()),
                 positions,
             },
             Body::Event(name) => Record::Event { t, name },
@@ -172,6 +156,10 @@ pub(crate) struct Messages {
     /// Model joint names (effective robot) and keypoint count (effective human).
     joints: Vec<String>,
     keypoints: usize,
+    /// Keypoint count of each person of the header, by id.
+    person_keypoints: Vec<(String, usize)>,
+    /// Ids of the people whose topics were seen (what `Stream::Human { person }` indexes).
+    pub(crate) person_ids: Vec<String>,
     /// Whole seconds subtracted from every time stamp (the first message's log time).
     pub(crate) base_s: Option<i64>,
     heap: BinaryHeap<Pending>,
@@ -199,6 +187,8 @@ impl Messages {
             header: None,
             joints: Vec::new(),
             keypoints: 0,
+            person_keypoints: Vec::new(),
+            person_ids: Vec::new(),
             base_s: None,
             heap: BinaryHeap::new(),
             seq: 0,
@@ -226,8 +216,62 @@ impl Messages {
             .map(|j| j.name.clone())
             .collect();
         self.keypoints = models.human.keypoint_count();
+        self.person_keypoints = models
+            .people
+            .iter()
+            .map(|(id, m)| (id.clone(), m.keypoint_count()))
+            .collect();
         self.header = Some(h);
         Ok(())
+    }
+
+    /// The stream of `topic` and the message type it must have (`""` for ignored topics), or
+    /// what is wrong. `type_name` is the topic's message type where known: on an object topic,
+    /// `PoseStamped` selects the stamped form (anything else is expected to be a `PoseArray`).
+    /// A person's topic (`mcap.human_topics`, or `/humans/ID/keypoints` when that is empty)
+    /// registers the person's id.
+    pub(crate) fn stream_of(
+        &mut self,
+        topic: &str,
+        type_name: Option<&str>,
+    ) -> Result<(Stream, &'static str), String> {
+        let cfg = &self.cfg;
+        Ok(if topic == cfg.robot_topic {
+            (Stream::Robot, JOINT_STATE)
+        } else if topic == cfg.human_topic {
+            (Stream::Human { person: None }, POSE_ARRAY)
+        } else if let Some(id) = cfg
+            .human_topics
+            .iter()
+            .find(|(_, t)| *t == topic)
+            .map(|(id, _)| id.clone())
+            .or_else(|| {
+                cfg.human_topics
+                    .is_empty()
+                    .then(|| crate::mcap::person_of_topic(topic).map(str::to_string))
+                    .flatten()
+            })
+        {
+            let i = match self.person_ids.iter().position(|p| *p == id) {
+                Some(i) => i,
+                None => {
+                    self.person_ids.push(id);
+                    self.person_ids.len() - 1
+                }
+            };
+            let i = u16::try_from(i).map_err(|_| "more than 65535 person topics".to_string())?;
+            (Stream::Human { person: Some(i) }, POSE_ARRAY)
+        } else if topic == cfg.event_topic {
+            (Stream::Event, STRING)
+        } else if cfg.object_topics.values().any(|t| t == topic) {
+            let stamped = type_name == Some(POSE_STAMPED);
+            (
+                Stream::Object { stamped },
+                if stamped { POSE_STAMPED } else { POSE_ARRAY },
+            )
+        } else {
+            (Stream::Ignored, "")
+        })
     }
 
     /// Whether no message is waiting.
@@ -331,16 +375,29 @@ impl Messages {
                 }
                 (self.secs(js.stamp.nanos()), Body::Robot { q, dq })
             }
-            Stream::Human => {
+            Stream::Human { person } => {
                 self.pa
                     .decode(m.data)
                     .map_err(|e| err(format!("{}: PoseArray: {e}", what())))?;
                 let n = self.pa.positions.len();
-                if n != self.keypoints {
+                // The person's model's keypoint count (an id the header does not declare is
+                // reported by the audit, which knows the people).
+                let expected = match person {
+                    None => Some(self.keypoints),
+                    Some(i) => {
+                        let id = &self.person_ids[usize::from(i)];
+                        self.person_keypoints
+                            .iter()
+                            .find(|(p, _)| p == id)
+                            .map(|(_, k)| *k)
+                    }
+                };
+                if let Some(k) = expected
+                    && n != k
+                {
                     return Err(err(format!(
-                        "{}: wrong keypoint count: PoseArray has {n} poses, the human model has {} keypoints",
+                        "{}: wrong keypoint count: PoseArray has {n} poses, the human model has {k} keypoints",
                         what(),
-                        self.keypoints
                     )));
                 }
                 if let Some((i, c)) = self
@@ -359,7 +416,14 @@ impl Messages {
                 positions.clear();
                 positions.extend_from_slice(&self.pa.positions);
                 let t_meas = self.secs(self.pa.stamp.nanos());
-                (log_t, Body::Human { t_meas, positions })
+                (
+                    log_t,
+                    Body::Human {
+                        t_meas,
+                        person,
+                        positions,
+                    },
+                )
             }
             Stream::Object { stamped } => {
                 let id = self

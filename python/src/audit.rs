@@ -239,7 +239,8 @@ pub struct PyLogWriter {
     w: Option<LogWriter<BufWriter<File>>>,
     path: PathBuf,
     dof: usize,
-    keypoints: usize,
+    /// Person ids and keypoint counts, in header order.
+    people: Vec<(String, usize)>,
     object_ids: Vec<String>,
 }
 
@@ -277,13 +278,14 @@ impl PyLogWriter {
     ) -> PyResult<Self> {
         let s = scene(py, robot, side, human, constraints, objects, environment)?;
         let path = crate::convert::path(path, "path")?;
-        if s.humans.len() != 1 {
-            return Err(input(format!(
-                "human: a log names one human model (the audit checks the robot against its measurements); got {}",
-                s.humans.len()
-            )));
+        if s.humans.is_empty() {
+            return Err(input(
+                "human: a log names at least one human model (the audit checks the robot against their measurements); got None",
+            ));
         }
-        let mut header: Header = s.header;
+        // Version 2 with the end-event promise: `close()` writes the `end` event, so a log that
+        // was never closed audits `incomplete_log`.
+        let mut header: Header = s.header.promising_end();
         header.meta.insert("filter".into(), "python".into());
         if let Some(m) = meta.filter(|m| !m.is_none()) {
             let extra: serde_json::Map<String, serde_json::Value> = from_py(m, "meta")?;
@@ -300,7 +302,12 @@ impl PyLogWriter {
             w: None,
             path,
             dof: s.models.robot.dof(),
-            keypoints: s.models.human.keypoint_count(),
+            people: s
+                .models
+                .people
+                .iter()
+                .map(|(id, m)| (id.clone(), m.keypoint_count()))
+                .collect(),
             object_ids: s
                 .models
                 .objects
@@ -343,13 +350,46 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// A human measurement logged at `t`, taken at `t_meas` (s): keypoints (m, shape (K, 3)).
+    /// A human measurement logged at `t`, taken at `t_meas` (s): keypoints (m, shape (K, 3)) of
+    /// person `person` (an index or id of the writer's humans; default: the first).
+    #[pyo3(signature = (t, t_meas, positions, person=None))]
     fn human(
         &mut self,
         t: &Bound<'_, PyAny>,
         t_meas: &Bound<'_, PyAny>,
         positions: &Bound<'_, PyAny>,
+        person: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
+        let k = match person {
+            None => 0,
+            Some(p) if p.is_none() => 0,
+            Some(p) => {
+                if let Ok(i) = p.extract::<usize>() {
+                    if i >= self.people.len() {
+                        return Err(input(format!(
+                            "person: index {i} is out of range ({} people)",
+                            self.people.len()
+                        )));
+                    }
+                    i
+                } else {
+                    let id = text(p, "person")?;
+                    self.people
+                        .iter()
+                        .position(|(p, _)| *p == id)
+                        .ok_or_else(|| {
+                            input(format!(
+                                "person: no person `{id}` in the header (humans: {:?})",
+                                self.people
+                                    .iter()
+                                    .map(|(p, _)| p.as_str())
+                                    .collect::<Vec<_>>()
+                            ))
+                        })?
+                }
+            }
+        };
+        let (id, keypoints) = self.people[k].clone();
         let t = finite(t, "t")?;
         let tm = finite(t_meas, "t_meas")?;
         if tm > t {
@@ -357,8 +397,8 @@ impl PyLogWriter {
                 "t_meas: {tm} s is after the log time t = {t} s"
             )));
         }
-        let p = points(positions, "positions", Some(self.keypoints))?;
-        let r = self.writer()?.write_human(t, tm, &p);
+        let p = points(positions, "positions", Some(keypoints))?;
+        let r = self.writer()?.write_person(t, tm, Some(&id), &p);
         r.map_err(|e| self.werr(e))
     }
 
@@ -400,14 +440,24 @@ impl PyLogWriter {
     fn event(&mut self, t: &Bound<'_, PyAny>, name: &Bound<'_, PyAny>) -> PyResult<()> {
         let t = finite(t, "t")?;
         let name = text(name, "name")?;
+        if name == pacs_log::END_EVENT {
+            return Err(input(
+                "name: the `end` event is written by close() (the header promises it last)",
+            ));
+        }
         let r = self.writer()?.write_event(t, &name);
         r.map_err(|e| self.werr(e))
     }
 
     /// Flush and close the file (idempotent).
     fn close(&mut self) -> PyResult<()> {
-        if let Some(w) = self.w.take() {
+        if let Some(mut w) = self.w.take() {
             let path = self.path.display().to_string();
+            // The promised `end` event, at the last record's time.
+            let last = w.last_time();
+            let t_end = if last.is_finite() { last } else { 0.0 };
+            w.write_event(t_end, pacs_log::END_EVENT)
+                .map_err(|e| self.werr(e))?;
             let mut out = w.finish().map_err(|e| self.werr(e))?;
             out.flush()
                 .map_err(|e| err(Kind::Output, format!("{path}: {e}")))?;

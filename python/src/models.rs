@@ -128,7 +128,7 @@ pub fn constraints_ref(obj: &Bound<'_, PyAny>) -> PyResult<ModelRef<ConstraintSp
 
 /// A scene's models: the header they are logged with and the resolved models.
 pub struct SceneModels {
-    /// The log header naming every model (the first human's; the others are in `meta`).
+    /// The log header naming every model (several people: a v2 header listing them).
     pub header: Header,
     /// Resolved robot, first human, constraints, environment, objects.
     pub models: LogModels,
@@ -163,6 +163,7 @@ pub fn scene(
     };
     let humans = &humans;
     let mut human_refs = Vec::new();
+    let mut ids: Vec<Option<String>> = Vec::new();
     if humans.is_none() {
         // No human in the scene: the header still names the default model (no measurements).
     } else if humans.is_instance_of::<PyString>() || humans.cast::<PyDict>().is_ok() {
@@ -175,6 +176,26 @@ pub fn scene(
             ))
         })?;
         for (i, h) in list.iter().enumerate() {
+            // A person with an id: {"id": ..., "human": name or spec}.
+            if let Ok(d) = h.cast::<PyDict>()
+                && d.len() == 2
+                && d.contains("id")?
+                && d.contains("human")?
+            {
+                let id: String = d
+                    .get_item("id")?
+                    .map(|v| v.extract())
+                    .transpose()
+                    .map_err(|_| type_err(format!("humans[{i}].id: expected a string")))?
+                    .unwrap_or_default();
+                let model = d
+                    .get_item("human")?
+                    .ok_or_else(|| input(format!("humans[{i}].human: missing")))?;
+                ids.push(Some(id));
+                human_refs.push(human_ref(&model, &format!("humans[{i}].human"))?);
+                continue;
+            }
+            ids.push(None);
             human_refs.push(human_ref(h, &format!("humans[{i}]"))?);
         }
     }
@@ -182,7 +203,26 @@ pub fn scene(
         .first()
         .cloned()
         .unwrap_or_else(|| ModelRef::Name("default".into()));
-    let mut header = Header::new(robot, first, constraints);
+    // One person: a v1-style header (writers make it v2 with person `human`); several: v2, each
+    // with its id (given, else `human0`, `human1`, ...).
+    let mut header = if human_refs.len() > 1 {
+        let people = human_refs
+            .iter()
+            .zip(&ids)
+            .enumerate()
+            .map(|(i, (h, id))| pacs_log::PersonEntry {
+                id: id.clone().unwrap_or_else(|| format!("human{i}")),
+                human: h.clone(),
+            })
+            .collect();
+        let mut h = Header::with_people(robot, people, constraints);
+        h.end_event = false;
+        h.check()
+            .map_err(|e| input(e.to_string().replace("header.", "")))?;
+        h
+    } else {
+        Header::new(robot, first, constraints)
+    };
     if let Some(o) = objects.filter(|o| !o.is_none()) {
         header.objects = from_py::<Vec<ObjectEntry>>(o, "objects")?;
     }
@@ -203,12 +243,6 @@ pub fn scene(
     header
         .meta
         .insert("filter".into(), "pacs-shield (python)".into());
-    if human_refs.len() > 1 {
-        header.meta.insert(
-            "humans".into(),
-            serde_json::to_value(&human_refs).unwrap_or_default(),
-        );
-    }
     Ok(SceneModels {
         header,
         models,

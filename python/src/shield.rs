@@ -216,9 +216,8 @@ impl Inner {
         if let Some(log) = &mut self.log {
             let mut failed = None;
             for (id, m) in &self.pending_humans {
-                if *id == 0
-                    && m.time() <= t
-                    && let Err(e) = log.human(t, m)
+                if m.time() <= t
+                    && let Err(e) = log.person(t, *id, m)
                 {
                     failed = Some(e);
                     break;
@@ -301,8 +300,8 @@ impl Inner {
                 .map_or(self.start_t, |l| l + self.shield.config().safety_step);
             let mut r: Result<(), String> = Ok(());
             for (id, m) in &self.pending_humans {
-                if r.is_ok() && *id == 0 && self.last_t.is_some() && m.time() <= t_end {
-                    r = log.human(t_end, m).map_err(|e| e.to_string());
+                if r.is_ok() && self.last_t.is_some() && m.time() <= t_end {
+                    r = log.person(t_end, *id, m).map_err(|e| e.to_string());
                 }
             }
             for (k, m) in &self.pending_objects {
@@ -312,8 +311,9 @@ impl Inner {
                         .map_err(|e| e.to_string());
                 }
             }
+            // `finish` writes the `end` event the header promises.
+            let _ = t;
             let r = r
-                .and_then(|()| log.event(t, "end").map_err(|e| e.to_string()))
                 .and_then(|()| log.finish().map_err(|e| e.to_string()))
                 .and_then(|mut w| w.flush().map_err(|e| e.to_string()));
             if let Err(e) = r {
@@ -770,12 +770,6 @@ impl PyShield {
             Some(l) if !l.is_none() => Some(path(l, "log")?),
             _ => None,
         };
-        if log_path.is_some() && s.humans.len() > 1 {
-            return Err(input(format!(
-                "log: a scene with {} humans cannot be logged: log format v1 carries one human's measurements (the audit would not check the others)",
-                s.humans.len()
-            )));
-        }
         let dof = m.robot.dof();
         let safety_step = cfg.safety_step;
         let planner = shield.chunk_planner();

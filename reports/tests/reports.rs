@@ -26,6 +26,12 @@ fn run(name: &str, filter: &str, success: Option<bool>, viol: f64, verdict: Verd
             success,
             safe_success: success.map(|s| s && verdict == Verdict::Pass),
         },
+        evidence: pacs_audit::Evidence {
+            t_start: 0.0,
+            t_end: 0.099,
+            completeness: pacs_audit::Completeness::Complete,
+        },
+        people: vec!["human".into()],
         meta,
         models: ModelNames {
             robot: "fr3".into(),

@@ -148,9 +148,9 @@ pub const SAFETY_STEP_RANGE: std::ops::RangeInclusive<f64> = 1e-5..=1.0;
 /// advances by α_s per step (at `|t|` = 10¹³ s a 1 ms step rounds to 0 or 2 ms), and every
 /// delay and age the shield computes from times is off by as much. Unix-time clocks (≈ 1.8·10⁹
 /// s) pass for α_s ≥ 0.4 ms.
-pub fn clock_resolves(t: f64, alpha: f64) -> bool {
-    t.is_finite() && f64::EPSILON * t.abs() <= alpha / 1000.0
-}
+///
+/// The one rule, [`pacs_log::time::clock_resolves`], which the audit applies to every span too.
+pub use pacs_log::time::clock_resolves;
 
 /// How far (s) a step time may be from the expected grid time `t` (float rounding of
 /// `t_0 + k·α_s`): 1 ns, or 8 ulps of `t` for large (e.g. Unix-time) clocks.

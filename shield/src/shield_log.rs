@@ -1,6 +1,8 @@
-//! Writing a shield run as an audit log (format v1, `pacs_log`): the robot's commanded
-//! samples (positions, velocities and accelerations), the human measurements the shield received, and the shield's diagnostics, so that
-//! `pacs audit` can check the run offline.
+//! Writing a shield run as an audit log (format v2, `pacs_log`): the robot's commanded
+//! samples (positions, velocities and accelerations), every person's measurements the shield
+//! received (each with its person id), and the shield's diagnostics, so that `pacs audit` can
+//! check the run offline; the header promises an `end` event and [`ShieldLog::finish`] writes
+//! it, so that a log cut short is never audited as the whole run.
 
 use crate::shield::Command;
 use pacs_log::{Header, LogWriter, WriteError};
@@ -16,20 +18,31 @@ pub struct ShieldLog<W: Write> {
     /// The initial robot sample, written after the first measurement so that the first span
     /// already has a human record.
     pending: Option<Vec<f64>>,
+    /// Person ids of the header, in the shield's human order.
+    people: Vec<String>,
+    /// Whether the `end` event was written.
+    ended: bool,
 }
 
 impl<W: Write> ShieldLog<W> {
     /// Start a log with `header`; the robot is at rest at `q0` (rad) at time `t0` (s) (written
     /// with the first step, after its measurement).
+    ///
+    /// The header is written as version 2 with the end-event promise
+    /// ([`Header::promising_end`]: a v1 header's person becomes person `human`); its people are
+    /// the shield's humans in order (human `i` of the shield is `header.humans[i]`).
     pub fn new(out: W, header: &Header, t0: f64, q0: &[f64]) -> Result<Self, WriteError> {
+        let header = header.clone().promising_end();
         let mut w = LogWriter::new(out);
-        w.write_header(header)?;
+        w.write_header(&header)?;
         Ok(Self {
             w,
             last_meas: f64::NEG_INFINITY,
             last_t: t0,
             positions: Vec::new(),
             pending: Some(q0.to_vec()),
+            people: header.humans.iter().map(|p| p.id.clone()).collect(),
+            ended: false,
         })
     }
 
@@ -91,7 +104,20 @@ impl<W: Write> ShieldLog<W> {
     /// beside its neighbours in time (a record contradicting the others cannot hide behind a
     /// newer one). [`Self::record`] then writes no copy of it.
     pub fn human(&mut self, t: f64, m: &HumanMeasurement) -> Result<(), WriteError> {
-        self.last_meas = self.last_meas.max(m.time());
+        self.person(t, 0, m)
+    }
+
+    /// A measurement of the shield's human `index` (the header's `humans[index]`), delivered
+    /// at step time `t` (s): as [`Self::human`], with the person's id.
+    pub fn person(&mut self, t: f64, index: usize, m: &HumanMeasurement) -> Result<(), WriteError> {
+        let Some(id) = self.people.get(index) else {
+            return Err(WriteError::Order(
+                "a measurement of a human the log header does not declare",
+            ));
+        };
+        if index == 0 {
+            self.last_meas = self.last_meas.max(m.time());
+        }
         self.positions.clear();
         self.positions
             .extend(m.positions().iter().map(|p| [p.x, p.y, p.z]));
@@ -99,7 +125,8 @@ impl<W: Write> ShieldLog<W> {
         // start sample, if still pending, follows at this time (the robot is at rest at q0 until
         // the first command: a first step later than the start must not put it before).
         self.last_t = t.max(self.last_t);
-        self.w.write_human(self.last_t, m.time(), &self.positions)
+        self.w
+            .write_person(self.last_t, m.time(), Some(id), &self.positions)
     }
 
     /// A measurement of the header's object `id`, given to the shield at step time `t` (s):
@@ -115,19 +142,31 @@ impl<W: Write> ShieldLog<W> {
             .write_object(self.last_t, m.time, id, m.position, m.velocity)
     }
 
-    /// A named event (`episode_start`, `success`, `failure`, ...).
+    /// A named event (`episode_start`, `success`, `failure`, ...). The `end` event is
+    /// [`Self::finish`]'s: it is refused here.
     pub fn event(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
+        if name == pacs_log::END_EVENT {
+            return Err(WriteError::Order(
+                "the `end` event is written by ShieldLog::finish, last",
+            ));
+        }
         self.last_t = t.max(self.last_t);
         self.w.write_event(self.last_t, name)
     }
 
-    /// Flush and return the writer.
+    /// Write the `end` event (at the last record's time, which the last robot sample reaches
+    /// unless measurements were logged after it), flush and return the writer. A log not
+    /// finished this way lacks its end and audits `incomplete_log`.
     pub fn finish(mut self) -> Result<W, WriteError> {
         if let Some(q0) = self.pending.take() {
             let t0 = self.last_t;
             let zeros = vec![0.0; q0.len()];
             self.w
                 .write_robot_with_acc(t0, &q0, Some(&zeros), Some(&zeros))?;
+        }
+        if !self.ended {
+            self.ended = true;
+            self.w.write_event(self.last_t, pacs_log::END_EVENT)?;
         }
         self.w.finish()
     }

@@ -28,7 +28,12 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 struct Scene {
     robot: pacs_log::RobotRef,
-    human: ModelRef<HumanSpec>,
+    /// The one person's model (or `humans`).
+    #[serde(default)]
+    human: Option<ModelRef<HumanSpec>>,
+    /// Several people, each with an id that `human_measurements[].id` names.
+    #[serde(default)]
+    humans: Vec<pacs_log::PersonEntry>,
     constraints: ModelRef<ConstraintSpec>,
     #[serde(default)]
     environment: Vec<pacs_models::shape::CapsuleSpec>,
@@ -65,6 +70,9 @@ struct TimedChunk {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HumanEntry {
+    /// The person (an id of `humans`; may be omitted with one person).
+    #[serde(default)]
+    id: Option<String>,
     /// Measurement time stamp (s).
     t: f64,
     /// When the shield receives it (s; default `t`).
@@ -139,7 +147,25 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         )),
         other => other.clone(),
     };
-    let mut header = Header::new(robot_ref, scene.human.clone(), scene.constraints.clone());
+    let mut header = match (&scene.human, scene.humans.is_empty()) {
+        (Some(h), true) => Header::new(robot_ref, h.clone(), scene.constraints.clone()),
+        (None, false) => {
+            Header::with_people(robot_ref, scene.humans.clone(), scene.constraints.clone())
+        }
+        (Some(_), false) => {
+            return Err(input(format!(
+                "{name}: both `human` and `humans`: give one person as `human` or several as `humans`: [{{\"id\": ..., \"human\": ...}}]"
+            )));
+        }
+        (None, true) => {
+            return Err(input(format!(
+                "{name}: no person: give `human` (a model) or `humans`: [{{\"id\": ..., \"human\": ...}}]"
+            )));
+        }
+    };
+    header
+        .check()
+        .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
     header.environment = scene.environment.clone();
     header.objects = scene.objects.clone();
     header.meta.insert("filter".into(), "pacs-shield".into());
@@ -181,6 +207,11 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         cfg,
     )
     .map_err(|e| input(format!("{name}: {e}")))?;
+    for (id, human) in models.people.iter().skip(1) {
+        shield
+            .add_human(human.clone(), &models.constraints)
+            .map_err(|e| input(format!("humans `{id}`: {e}")))?;
+    }
     for (id, model, contact) in &models.objects {
         shield
             .add_object(*model, *contact)
@@ -218,9 +249,36 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     for (i, m) in scene.human_measurements.iter().enumerate() {
         let field = format!("human_measurements[{i}]");
         let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
-        let hm = HumanMeasurement::new(&models.human, t, &m.keypoints, None)
+        let ids = || {
+            models
+                .people
+                .iter()
+                .map(|(id, _)| id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let p = match &m.id {
+            Some(id) => models
+                .people
+                .iter()
+                .position(|(p, _)| p == id)
+                .ok_or_else(|| {
+                    input(format!(
+                        "{field}.id: `{id}` is not a person of the scene (humans: {})",
+                        ids()
+                    ))
+                })?,
+            None if models.people.len() == 1 => 0,
+            None => {
+                return Err(input(format!(
+                    "{field}.id: missing; the scene has several people ({}): each measurement names one",
+                    ids()
+                )));
+            }
+        };
+        let hm = HumanMeasurement::new(&models.people[p].1, t, &m.keypoints, None)
             .map_err(|e| input(format!("{field}.keypoints: {e}")))?;
-        humans.push(hm);
+        humans.push((p, hm));
         events.push((received, Event::Human(i)));
     }
     let mut objects = Vec::with_capacity(scene.object_measurements.len());
@@ -297,9 +355,13 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
                     // Every delivered measurement is logged (the audit checks each against the
                     // model); the shield gets the newest of the step and keeps it if it is
                     // newer than its own.
-                    let m = &humans[i];
-                    log.human(t, m).map_err(|e| werr(&log_path, &e))?;
-                    if latest_human.is_none_or(|l| l.time() < m.time()) {
+                    let (p, m) = &humans[i];
+                    log.person(t, *p, m).map_err(|e| werr(&log_path, &e))?;
+                    if *p > 0 {
+                        shield
+                            .measure_human(*p, m)
+                            .map_err(|e| input(format!("human_measurements[{i}]: {e}")))?;
+                    } else if latest_human.is_none_or(|l| l.time() < m.time()) {
                         latest_human = Some(m);
                     }
                 }
@@ -340,8 +402,6 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         serde_json::to_writer(&mut cmd_out, &line).map_err(|e| werr(&cmd_path, &e))?;
         writeln!(cmd_out).map_err(|e| werr(&cmd_path, &e))?;
     }
-    log.event(t0 + steps as f64 * dt, "end")
-        .map_err(|e| werr(&log_path, &e))?;
     log.finish()
         .map_err(|e| werr(&log_path, &e))?
         .flush()

@@ -20,6 +20,7 @@ impl Auditor {
                     t_end: t1,
                     reason,
                     spans: 1,
+                    person: None,
                 },
                 reason,
                 idx,
@@ -44,6 +45,7 @@ impl Auditor {
                 t_end: last.t,
                 reason: Reason::HumanRecordAfterLastRobotSample,
                 spans: 0,
+                person: None,
             });
             return;
         }
@@ -58,11 +60,17 @@ impl Auditor {
     }
 
     /// Close the audit: the verdict, intervals and metrics.
-    pub fn finish(
+    pub fn finish(self, log: &str, meta: serde_json::Map<String, serde_json::Value>) -> RunResult {
+        self.finish_tracked(log, meta).0
+    }
+
+    /// [`Self::finish`], with the violating samples by index where the auditor tracks them
+    /// ([`Self::for_person`]: one pass of several, merged by `crate::people`).
+    pub(crate) fn finish_tracked(
         mut self,
         log: &str,
         meta: serde_json::Map<String, serde_json::Value>,
-    ) -> RunResult {
+    ) -> (RunResult, Option<crate::people::Tracks>) {
         self.flush_block();
         let mut final_inconclusive = None;
         self.check_final_instant(&mut final_inconclusive);
@@ -78,9 +86,15 @@ impl Auditor {
         });
         if self.samples >= 2 && self.last_span_violated {
             self.violating_samples += 1;
+            if let Some(t) = &mut self.track {
+                t.violating.insert(self.samples - 1);
+            }
         }
         if self.samples >= 2 && self.last_span_certain {
             self.certain_samples += 1;
+            if let Some(t) = &mut self.track {
+                t.certain.insert(self.samples - 1);
+            }
         }
         let mut inconclusive: Vec<InconclusiveSpan> =
             self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
@@ -92,9 +106,27 @@ impl Auditor {
                 t_end: if self.samples == 1 { self.t_last } else { 0.0 },
                 reason: Reason::FewerThanTwoRobotSamples,
                 spans: 0,
+                person: None,
+            });
+        } else if self.t_last == self.t_first {
+            inconclusive.push(InconclusiveSpan {
+                t_start: self.t_first,
+                t_end: self.t_last,
+                reason: Reason::NoTimeCovered,
+                spans: 0,
+                person: None,
             });
         }
+        // Reasons about a person's measurements name the person (v2 logs).
+        if self.person.is_some() {
+            for s in &mut inconclusive {
+                if s.reason.about_a_person() {
+                    s.person.clone_from(&self.person);
+                }
+            }
+        }
         let verdict = Verdict::of_findings(!self.violations.is_empty(), !inconclusive.is_empty());
+        let track = self.track.take();
         let samples = self.samples;
         let metrics = Metrics {
             samples,
@@ -118,16 +150,23 @@ impl Auditor {
                 .success
                 .map(|s| crate::verdict::safe_success(s, verdict == Verdict::Pass)),
         };
-        RunResult {
+        let result = RunResult {
             log: log.to_string(),
             verdict,
             violations: self.violations,
             inconclusive,
             metrics,
+            evidence: crate::verdict::Evidence {
+                t_start: if samples > 0 { self.t_first } else { 0.0 },
+                t_end: if samples > 0 { self.t_last } else { 0.0 },
+                completeness: crate::verdict::Completeness::NotPromised,
+            },
+            people: self.person.iter().cloned().collect(),
             meta,
             models: self.names,
             series: self.series.buckets,
-        }
+        };
+        (result, track.map(|b| *b))
     }
 
     pub(super) fn close(&mut self, key: usize, o: OpenInterval) {
@@ -137,6 +176,11 @@ impl Auditor {
             t_start: o.v_start,
             t_end: o.v_end,
             constraint: o.kind,
+            person: if part < self.parts {
+                self.person.clone()
+            } else {
+                None
+            },
             body_part: match self.human.body_parts().get(part) {
                 Some(bp) => bp.name.clone(),
                 None => format!("object `{}`", self.objects[part - self.parts].id),

@@ -123,7 +123,7 @@ impl Auditor {
         let mut union: Option<SpanBoxes> = None;
         for i in 0..m - 1 {
             let (a, b) = (self.block[i], self.block[i + 1]);
-            if b.t - a.t > self.cfg.max_gap {
+            if b.t - a.t > self.cfg.max_gap || !stamps_resolve(a.t, b.t) {
                 return false;
             }
             let SpanEnclosure {
@@ -217,11 +217,19 @@ impl Auditor {
         self.series.buckets[bidx].at_rest &= rest;
         let mut certain = false;
         let finish_span = |this: &mut Self, violated: bool, certain: bool| {
+            // The span's first sample (span k starts at sample k − 1).
+            let sample = this.span_index - 1;
             if violated {
                 this.violating_samples += 1;
+                if let Some(t) = &mut this.track {
+                    t.violating.insert(sample);
+                }
             }
             if certain {
                 this.certain_samples += 1;
+                if let Some(t) = &mut this.track {
+                    t.certain.insert(sample);
+                }
             }
             this.last_span_violated = violated;
             this.last_span_certain = certain;
@@ -290,6 +298,14 @@ impl Auditor {
             }
         }
         let SpanEnclosure { boxes, consistent } = self.boxes(s0, s1);
+        if !stamps_resolve(t0, t1) {
+            // Checked below all the same (a violation found still fails the log), never passed.
+            self.mark_inconclusive(t0, t1, Reason::UnresolvedTime);
+            self.series.buckets[bidx].inconclusive = true;
+            if consistent {
+                self.inconclusive_duration += dt;
+            }
+        }
         if !consistent {
             self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
             self.inconclusive_duration += dt;

@@ -207,10 +207,13 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
-        let Some(p) = self.next_inner()? else {
+        if self.next_inner()?.is_none() {
             return Ok(None);
-        };
-        Ok(Some(p.record()))
+        }
+        Ok(self
+            .current
+            .as_ref()
+            .map(|p| p.record(&self.st.conv.person_ids)))
     }
 
     fn location(&self) -> Location {

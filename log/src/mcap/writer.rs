@@ -18,6 +18,8 @@ pub struct McapLogWriter<W: Write + Seek> {
     event: u16,
     /// Per object id of `cfg.object_topics`, its `PoseStamped` channel.
     objects: std::collections::BTreeMap<String, u16>,
+    /// Per person of a v2 header, its `PoseArray` channel.
+    people: std::collections::BTreeMap<String, u16>,
     seq: u32,
     joints: Vec<String>,
     frame_id: String,
@@ -38,6 +40,9 @@ pub enum McapWriteError {
     /// An object id without a topic in the config's `object_topics`.
     #[error("object `{0}` has no topic in mcap.object_topics")]
     UnknownObject(String),
+    /// A person id the header does not declare.
+    #[error("person `{0}` is not among the header's humans")]
+    UnknownPerson(String),
 }
 
 impl<W: Write + Seek> McapLogWriter<W> {
@@ -58,6 +63,11 @@ impl<W: Write + Seek> McapLogWriter<W> {
             metadata: md,
         })?;
         let none = std::collections::BTreeMap::new();
+        let people_ids: Vec<&str> = if header.version >= 2 {
+            header.humans.iter().map(|p| p.id.as_str()).collect()
+        } else {
+            vec![]
+        };
         let mut chan = |name: &str, def: &str, topic: &str| -> Result<u16, McapWriteError> {
             let s = w.add_schema(name, "ros2msg", def.as_bytes())?;
             Ok(w.add_channel(s, topic, "cdr", &none)?)
@@ -69,12 +79,23 @@ impl<W: Write + Seek> McapLogWriter<W> {
         for (id, topic) in &cfg.object_topics {
             objects.insert(id.clone(), chan(POSE_STAMPED, POSE_STAMPED_DEF, topic)?);
         }
+        // One channel per person: `mcap.human_topics`, else `/humans/ID/keypoints`.
+        let mut people = std::collections::BTreeMap::new();
+        for id in people_ids {
+            let topic = cfg
+                .human_topics
+                .get(id)
+                .cloned()
+                .unwrap_or_else(|| crate::mcap::person_topic(id));
+            people.insert(id.to_string(), chan(POSE_ARRAY, POSE_ARRAY_DEF, &topic)?);
+        }
         Ok(Self {
             w,
             robot,
             human,
             event,
             objects,
+            people,
             seq: 0,
             joints: joints.iter().map(|s| s.to_string()).collect(),
             frame_id: "world".into(),
@@ -122,6 +143,24 @@ impl<W: Write + Seek> McapLogWriter<W> {
         self.put(self.human, log_time, &data)
     }
 
+    /// A measurement of person `id` (a person of the v2 header given to [`Self::new`])
+    /// taken at `stamp` (ns), logged at `log_time` (ns), on the person's topic. An unknown id
+    /// is an error.
+    pub fn write_person(
+        &mut self,
+        id: &str,
+        stamp: i128,
+        log_time: i128,
+        positions: &[[f64; 3]],
+    ) -> Result<(), McapWriteError> {
+        let Some(&channel) = self.people.get(id) else {
+            return Err(McapWriteError::UnknownPerson(id.to_string()));
+        };
+        let st = Stamp::from_nanos(stamp).ok_or(McapWriteError::Time(stamp))?;
+        let data = CdrWriter::pose_array(st, &self.frame_id, positions);
+        self.put(channel, log_time, &data)
+    }
+
     /// A position of object `id` (a key of the config's `object_topics`) taken at `stamp` (ns),
     /// logged at `log_time` (ns), as a `PoseStamped`. An unknown id is an error.
     pub fn write_object(
@@ -151,8 +190,15 @@ impl<W: Write + Seek> McapLogWriter<W> {
             Record::Human {
                 t,
                 t_meas,
+                person: None,
                 positions,
             } => self.write_human(ns(t_meas), ns(t), positions),
+            Record::Human {
+                t,
+                t_meas,
+                person: Some(id),
+                positions,
+            } => self.write_person(id, ns(t_meas), ns(t), positions),
             Record::Object {
                 t,
                 t_meas,

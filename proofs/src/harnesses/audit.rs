@@ -21,6 +21,7 @@ fn violating_log<S: Source>(s: &mut S) -> Verdict {
     let models = LogModels {
         robot: robot.clone(),
         human: human.clone(),
+        people: vec![("human".into(), human.clone())],
         constraints: ConstraintSpec::builtin("ssm").expect("preset"),
         environment: vec![],
         objects: vec![],

@@ -87,9 +87,11 @@ pub fn run_setup(
         None => None,
     };
     let mut auditor = if truth_audit {
+        let exact = human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?;
         let models = LogModels {
             robot: robot.clone(),
-            human: human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?,
+            people: vec![(pacs_log::V1_PERSON.to_string(), exact.clone())],
+            human: exact,
             constraints: spec.clone(),
             environment: vec![],
             objects: objects

@@ -7,7 +7,7 @@ use crate::format::Header;
 use crate::mcap::METADATA_NAME;
 use crate::mcap::fields::{FieldError, Fields};
 use crate::mcap::header::parse_metadata;
-use crate::ros::{Message, Stream, stream_of};
+use crate::ros::{Message, Stream};
 use mcap::records::op;
 
 impl State {
@@ -114,7 +114,10 @@ impl State {
         message_encoding: &str,
     ) -> Result<(), LogError> {
         let schema = self.schemas.get(&schema_id).map(|(name, _)| name.as_str());
-        let (stream, expected) = stream_of(&self.conv.cfg, topic, schema);
+        let (stream, expected) = self
+            .conv
+            .stream_of(topic, schema)
+            .map_err(|p| self.err(p))?;
         if let Some((old, _)) = self.channels.get(&id) {
             if old != topic {
                 return Err(self.err(format!(
