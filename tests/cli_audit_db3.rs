@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::pacs;
+use common::{pacs, pacs_ok};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -26,16 +26,7 @@ fn s(p: &Path) -> String {
 #[test]
 fn bags_are_audited_with_their_exit_codes() {
     let f = fixtures();
-    let o = pacs()
-        .args(["audit", &s(&f.join("clean")), "--json"])
-        .output()
-        .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = pacs_ok(["audit", &s(&f.join("clean")), "--json"]);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["runs"][0]["verdict"], "pass");
     assert_eq!(v["runs"][0]["metrics"]["samples"], 101);
