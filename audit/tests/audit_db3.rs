@@ -385,3 +385,30 @@ fn the_header_in_custom_data_is_checked() {
         &["custom_data.pacs_header: header.version: 7 is not supported"],
     );
 }
+
+#[test]
+fn corrupted_bytes_are_an_error_or_a_result_never_a_panic() {
+    // Deterministic corruptions of the clean bag: a run of bytes overwritten at many places
+    // (SQLite's structure and the message payloads alike).
+    let full = std::fs::read(fixtures().join("clean/clean.db3")).unwrap();
+    let d = tempdir();
+    let p = d.join("bad.db3");
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut errors = 0;
+    for k in 0..300 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let mut b = full.clone();
+        let at = (x as usize) % b.len();
+        let len = 1 + (x >> 32) as usize % 16;
+        for (i, v) in b.iter_mut().skip(at).take(len).enumerate() {
+            *v = (x >> (i % 8 * 8)) as u8 ^ (k as u8);
+        }
+        std::fs::write(&p, &b).unwrap();
+        if audit(&p, None).is_err() {
+            errors += 1;
+        }
+    }
+    assert!(errors > 0);
+}

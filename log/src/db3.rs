@@ -341,6 +341,17 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     let bad = |p: String| LogError::input(&name, Location::File, p);
     let conn = open_ro(&path).map_err(&bad)?;
     let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
+    // SQLite's structural check of every page (b-trees, free list; about a third of the time of
+    // reading the messages): a damaged file is refused before anything is read from it, rather
+    // than read as far as the damage lets SQLite notice.
+    let check: String = conn
+        .query_row("PRAGMA quick_check(1)", [], |r| r.get(0))
+        .map_err(sql)?;
+    if check != "ok" {
+        return Err(bad(format!(
+            "damaged SQLite file (PRAGMA quick_check: {check})"
+        )));
+    }
     for table in ["topics", "messages"] {
         let n: i64 = conn
             .query_row(
