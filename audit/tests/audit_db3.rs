@@ -9,7 +9,7 @@ mod audit_common;
 use audit_common::{Q_READY, standing};
 use pacs_audit::{AuditConfig, RunResult, Verdict, open_log};
 use pacs_log::mcap::{McapConfig, McapLogWriter};
-use pacs_log::{Header, LogError, ModelRef, RobotRef};
+use pacs_log::{Header, LogError, ModelRef, PersonEntry, RobotRef};
 use std::path::{Path, PathBuf};
 
 const BASE_NS: i128 = 1_700_000_000 * 1_000_000_000;
@@ -33,8 +33,13 @@ fn audit(path: &Path, header: Option<&Header>) -> Result<RunResult, LogError> {
     pacs_audit::audit_reader(r.as_mut(), &cfg)
 }
 
-/// The fixtures' run (see make_db3_bags.py) written as MCAP with the library's writer, audited.
+/// The fixtures' run (see make_db3_bags.py) written as MCAP with the library's writer, audited;
+/// `people`: the two-person run (`op` far, `walker` stepping in at 0.6 s) with a v2 header.
 fn mcap_twin(violation: bool) -> RunResult {
+    twin(violation, false)
+}
+
+fn twin(violation: bool, people: bool) -> RunResult {
     let joints: Vec<String> = pacs_models::RobotModel::builtin("fr3")
         .unwrap()
         .joints()
@@ -43,10 +48,25 @@ fn mcap_twin(violation: bool) -> RunResult {
         .collect();
     let names: Vec<&str> = joints.iter().map(String::as_str).collect();
     let cfg = McapConfig::default();
+    let h = if people {
+        let person = |id: &str| PersonEntry {
+            id: id.into(),
+            human: ModelRef::Name("default".into()),
+        };
+        let mut h = Header::with_people(
+            RobotRef::Name("fr3".into()),
+            vec![person("op"), person("walker")],
+            ModelRef::Name("ssm".into()),
+        );
+        h.end_event = false;
+        h
+    } else {
+        header()
+    };
     let mut w = McapLogWriter::new(
         std::io::Cursor::new(Vec::new()),
         mcap::WriteOptions::default(),
-        &header(),
+        &h,
         &cfg,
         &names,
     )
@@ -54,10 +74,18 @@ fn mcap_twin(violation: bool) -> RunResult {
     for i in 0..=100i128 {
         let ns = i * STEP_NS;
         if i % 10 == 0 {
-            let x = if violation && i >= 50 { 0.45 } else { 2.5 };
             let meas = (ns - 20_000_000).max(0);
-            w.write_human(BASE_NS + meas, BASE_NS + ns, &standing(x, 0.0))
-                .unwrap();
+            if people {
+                w.write_person("op", BASE_NS + meas, BASE_NS + ns, &standing(2.5, 0.0))
+                    .unwrap();
+                let x = if i >= 60 { 0.45 } else { 2.5 };
+                w.write_person("walker", BASE_NS + meas, BASE_NS + ns, &standing(x, 0.0))
+                    .unwrap();
+            } else {
+                let x = if violation && i >= 50 { 0.45 } else { 2.5 };
+                w.write_human(BASE_NS + meas, BASE_NS + ns, &standing(x, 0.0))
+                    .unwrap();
+            }
         }
         let mut q = Q_READY;
         q[0] = 0.005 * i as f64;
@@ -148,6 +176,28 @@ fn violating_bag_fails_at_the_step_and_equals_mcap() {
         (0.38, 0.98)
     );
     same_result(&r, &mcap_twin(true));
+}
+
+#[test]
+fn two_people_on_their_topics_are_read_as_from_mcap() {
+    // A v2 header in custom_data; /humans/op/keypoints and /humans/walker/keypoints.
+    let r = audit(&fixtures().join("people"), None).unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    assert_eq!(r.metrics.samples, 101);
+    assert!(!r.violations.is_empty());
+    assert!(
+        r.violations
+            .iter()
+            .all(|v| v.person.as_deref() == Some("walker"))
+    );
+    let first = r
+        .violations
+        .iter()
+        .map(|v| v.t_start)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(first, 0.6, "walker steps in at t = 0.6 s");
+    assert_eq!(r.violations.len(), 44);
+    same_result(&r, &twin(true, true));
 }
 
 #[test]
