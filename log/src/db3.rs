@@ -443,10 +443,15 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
             .query([])
             .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
         let mut batch = Vec::with_capacity(BATCH);
-        while let Some(r) = rows
-            .next()
-            .map_err(|e| format!("reading messages: {}", sqlite_problem(&e)))?
-        {
+        let after = |last: Location| match last {
+            Location::Message(id) => format!(" after message id {id}"),
+            _ => String::new(),
+        };
+        while let Some(r) = rows.next().map_err(|e| {
+            let p = format!("reading messages{}: {}", after(last), sqlite_problem(&e));
+            last = Location::File;
+            p
+        })? {
             let cell = |i: usize| r.get_ref(i).map_err(|e| sqlite_problem(&e));
             let id = int(cell(0)?, "messages.id")?;
             last = Location::Message(id);
