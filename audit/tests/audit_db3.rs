@@ -239,6 +239,39 @@ fn a_lone_db3_finds_its_header_in_its_metadata_table_or_takes_one_given() {
     assert_eq!(r.models.constraints, "handover");
 }
 
+#[test]
+fn a_bag_in_humble_s_schema_reads_the_same() {
+    // ROS 2 Humble's sqlite3 storage (schema version 3): `topics` without
+    // `type_description_hash`, no `message_definitions`, no `metadata` table (so no custom_data:
+    // the header is given), and a version 5 metadata.yaml without custom_data.
+    let d = tempdir();
+    let bag = d.join("humble");
+    std::fs::create_dir_all(&bag).unwrap();
+    let db = bag.join("humble_0.db3");
+    std::fs::copy(fixtures().join("clean/clean.db3"), &db).unwrap();
+    sql(
+        &db,
+        "DROP TABLE message_definitions; DROP TABLE metadata; \
+         CREATE TABLE topics3(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, \
+           serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL); \
+         INSERT INTO topics3 SELECT id, name, type, serialization_format, offered_qos_profiles FROM topics; \
+         DROP TABLE topics; ALTER TABLE topics3 RENAME TO topics; \
+         UPDATE schema SET schema_version = 3, ros_distro = 'humble'; VACUUM;",
+    );
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n  \
+         duration:\n    nanoseconds: 1001000000\n  starting_time:\n    nanoseconds_since_epoch: 1700000000000000000\n  \
+         message_count: 113\n  topics_with_message_count: []\n  compression_format: \"\"\n  \
+         compression_mode: \"\"\n  relative_file_paths:\n    - humble_0.db3\n  files:\n    - path: humble_0.db3\n",
+    )
+    .unwrap();
+    let name = bag.display().to_string();
+    expect_err(audit(&bag, None), &name, &["missing header", "custom_data"]);
+    let r = audit(&bag, Some(&header())).unwrap();
+    same_result(&audit(&fixtures().join("clean"), None).unwrap(), &r);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad bags.
 
