@@ -23,6 +23,10 @@ if ! "$venv/bin/python" -c 'import maturin, numpy, pytest' 2>/dev/null; then
   "$venv/bin/pip" install -q --upgrade pip
   "$venv/bin/pip" install -q "maturin>=1.9,<2" "numpy>=1.21" "pytest>=7"
 fi
+# rosbags (an independent writer of ROS 2 bags) for the db3 tests, which skip without it.
+if ! "$venv/bin/python" -c 'import rosbags' 2>/dev/null; then
+  "$venv/bin/pip" install -q "rosbags>=0.11,<0.12"
+fi
 # maturin develop installs into the active virtualenv.
 VIRTUAL_ENV="$(cd "$venv" && pwd)" PATH="$(cd "$venv" && pwd)/bin:$PATH" \
   "$venv/bin/maturin" develop -q --release -m python/Cargo.toml

@@ -217,7 +217,9 @@ fn header_flag_and_topic_flags() {
     std::fs::write(&hj, serde_json::to_string(&header()).unwrap()).unwrap();
     let o = pacs(&["audit", &s(&j), "--header", &s(&hj)]);
     assert_eq!(o.status.code(), Some(3));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("MCAP logs only"));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("applies to MCAP logs and ROS 2 bags only")
+    );
 }
 
 #[test]

@@ -250,8 +250,9 @@ fn complete_or_not(result: &mut RunResult, end: Option<f64>, last_robot: Option<
     }
 }
 
-/// Audit one log file: MCAP if it starts with the MCAP magic or its name ends in `.mcap`, CSV
-/// form if the name ends in `.csv`, JSON Lines otherwise. The path as given names the log in
+/// Audit one log file: MCAP if it starts with the MCAP magic or its name ends in `.mcap`, a ROS 2
+/// sqlite3 bag if it is a directory with `metadata.yaml`, starts with the SQLite magic or its name
+/// ends in `.db3`, CSV form if the name ends in `.csv`, JSON Lines otherwise. The path as given names the log in
 /// messages and in the result.
 pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, LogError> {
     audit_file_with_header(path, cfg, None)
@@ -281,8 +282,34 @@ pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
     Ok(pacs_log::mcap::has_magic(&prefix))
 }
 
+/// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
+/// in `.db3` or one that starts with the SQLite magic.
+pub fn is_db3(path: &Path) -> Result<bool, LogError> {
+    use std::io::Read;
+    if pacs_log::db3::is_bag_dir(path)
+        || path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("db3"))
+    {
+        return Ok(true);
+    }
+    if path.is_dir() {
+        return Ok(false);
+    }
+    let name = path.display().to_string();
+    let io = |e| LogError::Io {
+        file: name.clone(),
+        source: e,
+    };
+    let f = std::fs::File::open(path).map_err(io)?;
+    let mut prefix = Vec::with_capacity(16);
+    f.take(16).read_to_end(&mut prefix).map_err(io)?;
+    Ok(pacs_log::db3::has_magic(&prefix))
+}
+
 /// [`audit_file`] with a pacs header given separately (`pacs audit --header`), which only MCAP
-/// logs accept: for them it replaces the `pacs` metadata record; for other logs it is an error.
+/// logs and sqlite3 bags accept: for them it replaces the `pacs` metadata record (the bag's
+/// `custom_data` header); for other logs it is an error.
 pub fn audit_file_with_header(
     path: &Path,
     cfg: &AuditConfig,
@@ -292,14 +319,32 @@ pub fn audit_file_with_header(
     audit_reader(reader.as_mut(), cfg)
 }
 
-/// Open a log for reading by its form (MCAP, CSV, JSON Lines; see [`audit_file`]), with a
-/// separate header for MCAP logs (`--header`; an error for other logs).
+/// Open a log for reading by its form (MCAP, sqlite3 bag, CSV, JSON Lines; see [`audit_file`]),
+/// with a separate header for MCAP logs and bags (`--header`; an error for other logs).
 pub fn open_log(
     path: &Path,
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<Box<dyn RecordReader>, LogError> {
     let name = path.display().to_string();
+    if path.is_dir() && !pacs_log::db3::is_bag_dir(path) {
+        return Err(LogError::input(
+            &name,
+            Location::File,
+            format!(
+                "a directory without {}: not a ROS 2 bag (give log files)",
+                pacs_log::db3::METADATA_FILE
+            ),
+        ));
+    }
+    if is_db3(path)? {
+        return Ok(Box::new(pacs_log::db3::Db3Reader::open(
+            path,
+            &cfg.mcap,
+            &cfg.overrides(),
+            header.cloned(),
+        )?));
+    }
     let mcap_log = is_mcap(path)?;
     let f = std::fs::File::open(path).map_err(|e| LogError::Io {
         file: name.clone(),
@@ -319,7 +364,7 @@ pub fn open_log(
         return Err(LogError::input(
             &name,
             Location::File,
-            "a separate header (--header) applies to MCAP logs only; this log carries its own",
+            "a separate header (--header) applies to MCAP logs and ROS 2 bags only; this log carries its own",
         ));
     }
     if path

@@ -11,6 +11,8 @@ pub enum Location {
     Line(u64),
     /// A byte offset (MCAP).
     Offset(u64),
+    /// The `id` of a row in a rosbag2 sqlite3 bag's `messages` table (db3).
+    Message(i64),
 }
 
 impl std::fmt::Display for Location {
@@ -19,6 +21,7 @@ impl std::fmt::Display for Location {
             Location::File => Ok(()),
             Location::Line(l) => write!(f, "line {l}: "),
             Location::Offset(o) => write!(f, "offset {o}: "),
+            Location::Message(id) => write!(f, "message id {id}: "),
         }
     }
 }

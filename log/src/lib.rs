@@ -4,18 +4,21 @@
 //! audits them:
 //! - [`format`]: the header (models by name or inline spec), the record view every reader yields,
 //!   the models a header refers to ([`LogModels`]) and the JSON Lines writer ([`LogWriter`]);
-//! - [`jsonl`], [`csv`], [`mcap`] (+ [`cdr`]): streaming readers of the three forms;
+//! - [`jsonl`], [`csv`], [`mcap`] (+ [`cdr`]): streaming readers of the three forms; [`db3`]: ROS 2
+//!   sqlite3 bags, with the MCAP form's topics and messages (one conversion for both, `ros`);
 //! - [`order`]: records of equal time in the one canonical order (human, robot, event, file order);
 //! - [`time`]: whether time stamps resolve a step (one rule for the shield and the audit);
 //! - [`error`]: input errors naming the file, line or offset, and the problem.
 
 pub mod cdr;
 pub mod csv;
+pub mod db3;
 pub mod error;
 pub mod format;
 pub mod jsonl;
 pub mod mcap;
 pub mod order;
+mod ros;
 pub mod time;
 
 pub use error::{HeaderError, Location, LogError, McapConfigError};

@@ -114,8 +114,9 @@ impl PyRun {
     }
 }
 
-/// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP) against the SSM and
-/// PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
+/// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP, ROS 2 sqlite3 bags:
+/// *.db3 or a bag directory with metadata.yaml, the header in custom_data `pacs_header`) against
+/// the SSM and PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
 /// `paths`: one path or a list; `config`: None, a dict of audit settings (max_gap,
 /// max_human_age, rest_speed, human_model, tracking_error, limit_slack, robot/human/constraints
 /// overrides; see docs/audit.md) or a TOML file. A run passes only if every span between its

@@ -42,19 +42,43 @@ pub const GIT_REVISION: &str = env!("PACS_GIT_REV");
 pub struct InputFile {
     /// Path as given.
     pub path: String,
-    /// SHA-256 of the file's bytes, lowercase hex.
+    /// SHA-256 of the file's bytes, lowercase hex. For a directory (a ROS 2 bag): the SHA-256 of
+    /// the `sha256sum`-style listing (`{sha256}  {name}\n`) of its files in name order.
     pub sha256: String,
     /// Size (bytes).
     pub bytes: u64,
 }
 
 impl InputFile {
-    /// Hash a file by streaming it (memory stays flat).
+    /// Hash a file by streaming it (memory stays flat); a directory (a ROS 2 bag) by its files
+    /// (see [`InputFile::sha256`]; subdirectories are not part of a bag and are left out).
     pub fn hash(path: &Path) -> Result<Self, ReportError> {
         let io = |e| ReportError::Io {
             path: path.to_path_buf(),
             source: e,
         };
+        if path.is_dir() {
+            let mut files = Vec::new();
+            for e in std::fs::read_dir(path).map_err(io)? {
+                let e = e.map_err(io)?;
+                if e.file_type().map_err(io)?.is_file() {
+                    files.push(e.file_name());
+                }
+            }
+            files.sort();
+            let mut listing = String::new();
+            let mut bytes = 0u64;
+            for f in files {
+                let one = Self::hash(&path.join(&f))?;
+                bytes += one.bytes;
+                listing.push_str(&format!("{}  {}\n", one.sha256, f.to_string_lossy()));
+            }
+            return Ok(Self {
+                path: path.display().to_string(),
+                sha256: hex(&Sha256::digest(listing.as_bytes())),
+                bytes,
+            });
+        }
         let mut f = std::fs::File::open(path).map_err(io)?;
         let mut h = Sha256::new();
         let mut buf = vec![0u8; 1 << 16];

@@ -14,7 +14,8 @@ use std::process::ExitCode;
 #[derive(clap::Args, Debug)]
 pub struct AuditArgs {
     /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
-    /// by its magic bytes or `*.mcap`; see docs/log-format.md).
+    /// by its magic bytes or `*.mcap`; or a ROS 2 sqlite3 bag: `*.db3` or a bag directory with
+    /// metadata.yaml; see docs/log-format.md).
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<PathBuf>,
     /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
@@ -32,15 +33,15 @@ pub struct AuditArgs {
     /// series, which Foxglove opens (topics in docs/audit.md).
     #[arg(long, value_name = "FILE.mcap")]
     pub scene: Option<PathBuf>,
-    /// MCAP logs only: the pacs header (JSON, or TOML for `*.toml`) instead of the logs' `pacs`
-    /// metadata records.
+    /// MCAP logs and ROS 2 bags only: the pacs header (JSON, or TOML for `*.toml`) instead of the
+    /// logs' `pacs` metadata records (bags: their custom_data `pacs_header`).
     #[arg(long, value_name = "FILE")]
     pub header: Option<PathBuf>,
-    /// MCAP logs only: topic of the robot's sensor_msgs/msg/JointState (overrides the config's
+    /// MCAP logs and ROS 2 bags only: topic of the robot's sensor_msgs/msg/JointState (overrides the config's
     /// `mcap.robot_topic`; default /joint_states).
     #[arg(long, value_name = "TOPIC")]
     pub robot_topic: Option<String>,
-    /// MCAP logs only: topic of the human keypoints, geometry_msgs/msg/PoseArray (overrides the
+    /// MCAP logs and ROS 2 bags only: topic of the human keypoints, geometry_msgs/msg/PoseArray (overrides the
     /// config's `mcap.human_topic`; default /human/keypoints).
     #[arg(long, value_name = "TOPIC")]
     pub human_topic: Option<String>,

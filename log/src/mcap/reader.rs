@@ -5,86 +5,12 @@ mod messages;
 
 use super::header::header_from_summary;
 use super::{METADATA_KEY, METADATA_NAME, McapConfig, RECORD_LIMIT};
-use crate::cdr::{JointStateMsg, PoseArray};
 use crate::error::{Location, LogError};
 use crate::format::{Header, ModelOverrides, Record, RecordReader};
+use crate::ros::{Messages, Pending, Stream};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 use std::io::{Read, Seek, SeekFrom};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Stream {
-    Robot,
-    /// Keypoints of the log's only person (`None`) or of person `person_ids[i]`.
-    Human {
-        person: Option<u16>,
-    },
-    /// A dynamic object's positions: `PoseStamped` (`stamped`) or `PoseArray` (first pose).
-    Object {
-        stamped: bool,
-    },
-    Event,
-    Ignored,
-}
-
-enum Body {
-    Robot {
-        q: Vec<f64>,
-        dq: Option<Vec<f64>>,
-    },
-    Human {
-        t_meas: f64,
-        person: Option<u16>,
-        positions: Vec<[f64; 3]>,
-    },
-    Event(String),
-    Object {
-        /// The header's object id.
-        id: String,
-        t_meas: f64,
-        position: [f64; 3],
-    },
-}
-
-struct Pending {
-    t: f64,
-    seq: u64,
-    offset: u64,
-    body: Body,
-}
-
-impl PartialEq for Pending {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == std::cmp::Ordering::Equal
-    }
-}
-impl Eq for Pending {}
-impl PartialOrd for Pending {
-    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Pending {
-    /// At equal times: human and object measurements first (a measurement logged at `t` is in use from the
-    /// robot sample at `t` on), then robot samples, then events.
-    fn rank(&self) -> u8 {
-        match self.body {
-            Body::Human { .. } | Body::Object { .. } => 0,
-            Body::Robot { .. } => 1,
-            Body::Event(_) => 2,
-        }
-    }
-}
-
-impl Ord for Pending {
-    /// Reversed (earliest time, then [`Pending::rank`], then earliest in the file, first) for the
-    /// max-heap.
-    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-        o.t.total_cmp(&self.t)
-            .then(o.rank().cmp(&self.rank()))
-            .then(o.seq.cmp(&self.seq))
-    }
-}
 
 /// Where the header came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,37 +23,14 @@ enum HeaderFrom {
 
 /// Everything but the byte source and the MCAP state machine (split for the borrow checker).
 struct State {
-    file: String,
     size: u64,
     pos: u64,
-    cfg: McapConfig,
-    overrides: ModelOverrides,
-    header: Option<Header>,
     header_from: Option<HeaderFrom>,
-    /// Model joint names (effective robot) and keypoint count (effective human).
-    joints: Vec<String>,
-    keypoints: usize,
-    /// Keypoint count of each person of the header, by id.
-    person_keypoints: Vec<(String, usize)>,
-    /// Ids of the people whose topics were seen (what `Stream::Human { person }` indexes).
-    person_ids: Vec<String>,
     schemas: HashMap<u16, (String, String)>,
     channels: HashMap<u16, (String, Stream)>,
-    /// Whole seconds subtracted from every time stamp (the first message's log time).
-    base_s: Option<i64>,
-    heap: BinaryHeap<Pending>,
-    seq: u64,
-    max_t: f64,
-    last_released: f64,
     done: bool,
-    js: JointStateMsg,
-    pa: PoseArray,
-    /// Cached name → model-order map of the last `JointState.name` list.
-    map_names: Vec<String>,
-    map: Vec<usize>,
-    f64_pool: Vec<Vec<f64>>,
-    pos_pool: Vec<Vec<[f64; 3]>>,
-    str_pool: Vec<String>,
+    /// The messages' conversion and time order (shared with the db3 reader).
+    conv: Messages,
 }
 
 /// Streaming reader of an MCAP log (a ROS 2 recording); see the module docs.
@@ -192,32 +95,13 @@ impl<R: Read + Seek> McapReader<R> {
             input,
             lin,
             st: State {
-                file: file.to_string(),
                 size,
                 pos: 0,
-                cfg: mcfg,
-                overrides: overrides.clone(),
-                header: None,
                 header_from,
-                joints: Vec::new(),
-                keypoints: 0,
-                person_keypoints: Vec::new(),
-                person_ids: Vec::new(),
                 schemas: HashMap::new(),
                 channels: HashMap::new(),
-                base_s: None,
-                heap: BinaryHeap::new(),
-                seq: 0,
-                max_t: f64::NEG_INFINITY,
-                last_released: f64::NEG_INFINITY,
                 done: false,
-                js: JointStateMsg::default(),
-                pa: PoseArray::default(),
-                map_names: Vec::new(),
-                map: Vec::new(),
-                f64_pool: Vec::new(),
-                pos_pool: Vec::new(),
-                str_pool: Vec::new(),
+                conv: Messages::new(file, mcfg, overrides.clone()),
             },
             current: None,
         };
@@ -225,10 +109,10 @@ impl<R: Read + Seek> McapReader<R> {
             r.st.set_header(h)?;
         }
         // Read until the header is known and the first message is queued (fixing the time base).
-        while r.st.heap.is_empty() && !r.st.done {
+        while r.st.conv.is_empty() && !r.st.done {
             r.pump()?;
         }
-        if r.st.header.is_none() {
+        if r.st.conv.header.is_none() {
             return Err(LogError::input(
                 file,
                 Location::File,
@@ -237,7 +121,7 @@ impl<R: Read + Seek> McapReader<R> {
                 ),
             ));
         }
-        if let (Some(h), Some(b)) = (r.st.header.as_mut(), r.st.base_s) {
+        if let (Some(h), Some(b)) = (r.st.conv.header.as_mut(), r.st.conv.base_s) {
             h.meta.insert("mcap_time_base_s".into(), b.into());
         }
         Ok(r)
@@ -254,7 +138,7 @@ impl<R: Read + Seek> McapReader<R> {
                 }
                 Some(Err(e)) => {
                     return Err(LogError::input(
-                        &st.file,
+                        &st.conv.file,
                         Location::Offset(st.pos),
                         mcap_problem(&e),
                     ));
@@ -276,7 +160,7 @@ impl<R: Read + Seek> McapReader<R> {
                             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                             Err(e) => {
                                 return Err(LogError::Io {
-                                    file: st.file.clone(),
+                                    file: st.conv.file.clone(),
                                     source: e,
                                 });
                             }
@@ -298,14 +182,10 @@ impl<R: Read + Seek> McapReader<R> {
     /// the header overrides of a late header.
     fn next_inner(&mut self) -> Result<Option<&Pending>, LogError> {
         if let Some(p) = self.current.take() {
-            self.st.recycle(p);
+            self.st.conv.recycle(p);
         }
         loop {
-            let ready = self.st.heap.peek().is_some_and(|top| {
-                self.st.done || top.t <= self.st.max_t - self.st.cfg.reorder_window
-            });
-            if ready && let Some(p) = self.st.heap.pop() {
-                self.st.last_released = p.t;
+            if let Some(p) = self.st.conv.pop_ready(self.st.done) {
                 self.current = Some(p);
                 return Ok(self.current.as_ref());
             }
@@ -321,6 +201,7 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
     fn header(&self) -> &Header {
         // `new` fails unless the header is known.
         self.st
+            .conv
             .header
             .as_ref()
             .expect("McapReader::new guarantees a header")
@@ -330,44 +211,16 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
         if self.next_inner()?.is_none() {
             return Ok(None);
         }
-        let Some(p) = self.current.as_ref() else {
-            return Ok(None);
-        };
-        let t = p.t;
-        Ok(Some(match &p.body {
-            Body::Robot { q, dq } => Record::Robot {
-                t,
-                q,
-                dq: dq.as_deref(),
-                ddq: None,
-            },
-            Body::Human {
-                t_meas,
-                person,
-                positions,
-            } => Record::Human {
-                t,
-                t_meas: *t_meas,
-                person: person.map(|i| self.st.person_ids[usize::from(i)].as_str()),
-                positions,
-            },
-            Body::Event(name) => Record::Event { t, name },
-            Body::Object {
-                id,
-                t_meas,
-                position,
-            } => Record::Object {
-                t,
-                t_meas: *t_meas,
-                id,
-                position: *position,
-                velocity: None,
-            },
-        }))
+        Ok(self
+            .current
+            .as_ref()
+            .map(|p| p.record(&self.st.conv.person_ids)))
     }
 
     fn location(&self) -> Location {
-        Location::Offset(self.current.as_ref().map_or(self.st.pos, |p| p.offset))
+        self.current
+            .as_ref()
+            .map_or(Location::Offset(self.st.pos), |p| p.loc)
     }
 
     fn header_location(&self) -> Location {
@@ -378,6 +231,6 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
     }
 
     fn file(&self) -> &str {
-        &self.st.file
+        &self.st.conv.file
     }
 }

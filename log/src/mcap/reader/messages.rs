@@ -1,42 +1,26 @@
 //! The records of the linear pass: schemas, channels (checked against the configured topics),
-//! the `pacs` metadata record, and messages decoded from CDR into pending records.
+//! the `pacs` metadata record, and messages handed to the shared conversion ([`crate::ros`]).
 
-use super::{Body, HeaderFrom, Pending, State, Stream};
-use crate::cdr;
+use super::{HeaderFrom, State};
 use crate::error::{Location, LogError};
-use crate::format::{Header, LogModels};
+use crate::format::Header;
+use crate::mcap::METADATA_NAME;
 use crate::mcap::fields::{FieldError, Fields};
 use crate::mcap::header::parse_metadata;
-use crate::mcap::{JOINT_STATE, MAX_PENDING, METADATA_NAME, POSE_ARRAY, POSE_STAMPED, STRING};
+use crate::ros::{Message, Stream};
 use mcap::records::op;
 
 impl State {
     fn err(&self, p: impl Into<String>) -> LogError {
-        LogError::input(&self.file, Location::Offset(self.pos), p)
+        LogError::input(&self.conv.file, Location::Offset(self.pos), p)
     }
 
     pub(super) fn set_header(&mut self, h: Header) -> Result<(), LogError> {
-        let eff = h.with_overrides(&self.overrides);
         let loc = match self.header_from {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
             _ => Location::File,
         };
-        let models = LogModels::from_header(&eff)
-            .map_err(|p| LogError::input(&self.file, loc, p.to_string()))?;
-        self.joints = models
-            .robot
-            .joints()
-            .iter()
-            .map(|j| j.name.clone())
-            .collect();
-        self.keypoints = models.human.keypoint_count();
-        self.person_keypoints = models
-            .people
-            .iter()
-            .map(|(id, m)| (id.clone(), m.keypoint_count()))
-            .collect();
-        self.header = Some(h);
-        Ok(())
+        self.conv.set_header(h, loc)
     }
 
     pub(super) fn record(&mut self, opcode: u8, data: &[u8]) -> Result<(), LogError> {
@@ -48,7 +32,7 @@ impl State {
         }
         let bad = |p: FieldError| {
             LogError::input(
-                &self.file,
+                &self.conv.file,
                 Location::Offset(self.pos),
                 format!("invalid MCAP record (opcode 0x{opcode:02x}): {p}"),
             )
@@ -94,11 +78,16 @@ impl State {
                         None => {
                             self.header_from = Some(HeaderFrom::Record(start));
                             let mut h = h.map_err(|p| {
-                                LogError::input(&self.file, Location::Offset(start), p.to_string())
+                                LogError::input(
+                                    &self.conv.file,
+                                    Location::Offset(start),
+                                    p.to_string(),
+                                )
                             })?;
                             // Relative {urdf, side} paths: relative to the MCAP file.
-                            h.robot
-                                .rebase(&crate::format::dir_of(std::path::Path::new(&self.file)));
+                            h.robot.rebase(&crate::format::dir_of(std::path::Path::new(
+                                &self.conv.file,
+                            )));
                             self.set_header(h)?;
                         }
                     }
@@ -124,47 +113,11 @@ impl State {
         topic: &str,
         message_encoding: &str,
     ) -> Result<(), LogError> {
-        let cfg = &self.cfg;
-        let (stream, expected) = if topic == cfg.robot_topic {
-            (Stream::Robot, JOINT_STATE)
-        } else if topic == cfg.human_topic {
-            (Stream::Human { person: None }, POSE_ARRAY)
-        } else if let Some(id) = cfg
-            .human_topics
-            .iter()
-            .find(|(_, t)| *t == topic)
-            .map(|(id, _)| id.clone())
-            .or_else(|| {
-                cfg.human_topics
-                    .is_empty()
-                    .then(|| crate::mcap::person_of_topic(topic).map(str::to_string))
-                    .flatten()
-            })
-        {
-            let i = match self.person_ids.iter().position(|p| *p == id) {
-                Some(i) => i,
-                None => {
-                    self.person_ids.push(id);
-                    self.person_ids.len() - 1
-                }
-            };
-            let i = u16::try_from(i).map_err(|_| self.err("more than 65535 person topics"))?;
-            (Stream::Human { person: Some(i) }, POSE_ARRAY)
-        } else if topic == cfg.event_topic {
-            (Stream::Event, STRING)
-        } else if cfg.object_topics.values().any(|t| t == topic) {
-            // Either pose message; which one is decided by the channel's schema below.
-            let stamped = self
-                .schemas
-                .get(&schema_id)
-                .is_some_and(|(name, _)| name == POSE_STAMPED);
-            (
-                Stream::Object { stamped },
-                if stamped { POSE_STAMPED } else { POSE_ARRAY },
-            )
-        } else {
-            (Stream::Ignored, "")
-        };
+        let schema = self.schemas.get(&schema_id).map(|(name, _)| name.as_str());
+        let (stream, expected) = self
+            .conv
+            .stream_of(topic, schema)
+            .map_err(|p| self.err(p))?;
         if let Some((old, _)) = self.channels.get(&id) {
             if old != topic {
                 return Err(self.err(format!(
@@ -205,25 +158,8 @@ impl State {
         Ok(())
     }
 
-    fn what(&self, h: &mcap::records::MessageHeader) -> String {
-        let topic = self
-            .channels
-            .get(&h.channel_id)
-            .map_or("?", |c| c.0.as_str());
-        format!(
-            "message on `{topic}` (log time {} ns, sequence {})",
-            h.log_time, h.sequence
-        )
-    }
-
-    /// Seconds since the time base of a time stamp in nanoseconds.
-    fn secs(&self, ns: i128) -> f64 {
-        let base = i128::from(self.base_s.unwrap_or(0)) * 1_000_000_000;
-        (ns - base) as f64 / 1e9
-    }
-
     fn message(&mut self, h: &mcap::records::MessageHeader, data: &[u8]) -> Result<(), LogError> {
-        let Some((_, stream)) = self.channels.get(&h.channel_id) else {
+        let Some((topic, stream)) = self.channels.get(&h.channel_id) else {
             return Err(self.err(format!(
                 "message on channel id {} which is not defined before it",
                 h.channel_id
@@ -233,231 +169,25 @@ impl State {
         if stream == Stream::Ignored {
             return Ok(());
         }
-        if self.header.is_none() {
-            let what = self.what(h);
-            return Err(self.err(format!(
-                "missing header: {what} comes before any metadata record named `{METADATA_NAME}` and the summary has none (give one with --header)"
-            )));
-        }
-        self.base_s
-            .get_or_insert((h.log_time / 1_000_000_000) as i64);
-        let log_t = self.secs(i128::from(h.log_time));
-        let pending = match stream {
-            Stream::Robot => {
-                self.js
-                    .decode(data)
-                    .map_err(|e| self.err(format!("{}: JointState: {e}", self.what(h))))?;
-                let js = &self.js;
-                let k = js.names.len();
-                let n = self.joints.len();
-                if k > 0 && js.position.len() != k {
-                    return Err(self.err(format!(
-                        "{}: JointState has {k} names but {} positions",
-                        self.what(h),
-                        js.position.len()
-                    )));
-                }
-                let vlen = js.velocity.len();
-                if vlen != 0 && vlen != js.position.len() {
-                    return Err(self.err(format!(
-                        "{}: JointState has {} positions but {vlen} velocities",
-                        self.what(h),
-                        js.position.len()
-                    )));
-                }
-                if k == 0 && js.position.len() != n {
-                    return Err(self.err(format!(
-                        "{}: wrong joint count: JointState has {} positions and no names, the robot model has {n} joints", self.what(h),
-                        js.position.len()
-                    )));
-                }
-                if k > 0 && self.map_names != js.names {
-                    let mut map = vec![usize::MAX; n];
-                    for (i, name) in js.names.iter().enumerate() {
-                        if let Some(j) = self.joints.iter().position(|x| x == name) {
-                            if map[j] != usize::MAX {
-                                return Err(self.err(format!(
-                                    "{}: joint `{name}` appears twice in JointState.name",
-                                    self.what(h)
-                                )));
-                            }
-                            map[j] = i;
-                        }
-                    }
-                    if let Some(j) = map.iter().position(|&i| i == usize::MAX) {
-                        return Err(self.err(format!(
-                            "{}: wrong joints: robot joint `{}` is missing from JointState.name",
-                            self.what(h),
-                            self.joints[j]
-                        )));
-                    }
-                    self.map = map;
-                    self.map_names.clone_from(&js.names);
-                }
-                let mut q = self.f64_pool.pop().unwrap_or_default();
-                let mut dq = (vlen > 0).then(|| self.f64_pool.pop().unwrap_or_default());
-                q.clear();
-                if let Some(d) = dq.as_mut() {
-                    d.clear();
-                }
-                for j in 0..n {
-                    let i = if k == 0 { j } else { self.map[j] };
-                    let (x, v) = (js.position[i], js.velocity.get(i).copied());
-                    for (f, val) in [("position", Some(x)), ("velocity", v)] {
-                        if let Some(val) = val.filter(|v| !v.is_finite()) {
-                            return Err(self.err(format!(
-                                "{}: JointState.{f}[{i}] (joint `{}`): value {val} is not finite",
-                                self.what(h),
-                                self.joints[j]
-                            )));
-                        }
-                    }
-                    q.push(x);
-                    if let (Some(d), Some(v)) = (dq.as_mut(), v) {
-                        d.push(v);
-                    }
-                }
-                Pending {
-                    t: self.secs(js.stamp.nanos()),
-                    seq: 0,
-                    offset: 0,
-                    body: Body::Robot { q, dq },
-                }
-            }
-            Stream::Human { person } => {
-                self.pa
-                    .decode(data)
-                    .map_err(|e| self.err(format!("{}: PoseArray: {e}", self.what(h))))?;
-                let m = self.pa.positions.len();
-                // The person's model's keypoint count (an id the header does not declare is
-                // reported by the audit, which knows the people).
-                let expected = match person {
-                    None => Some(self.keypoints),
-                    Some(i) => {
-                        let id = &self.person_ids[usize::from(i)];
-                        self.person_keypoints
-                            .iter()
-                            .find(|(p, _)| p == id)
-                            .map(|(_, k)| *k)
-                    }
-                };
-                if let Some(k) = expected
-                    && m != k
-                {
-                    return Err(self.err(format!(
-                        "{}: wrong keypoint count: PoseArray has {m} poses, the human model has {k} keypoints", self.what(h),
-                    )));
-                }
-                if let Some((i, c)) = self
-                    .pa
-                    .positions
-                    .iter()
-                    .enumerate()
-                    .find_map(|(i, p)| p.iter().find(|c| !c.is_finite()).map(|c| (i, *c)))
-                {
-                    return Err(self.err(format!(
-                        "{}: PoseArray.poses[{i}].position: value {c} is not finite",
-                        self.what(h)
-                    )));
-                }
-                let mut positions = self.pos_pool.pop().unwrap_or_default();
-                positions.clear();
-                positions.extend_from_slice(&self.pa.positions);
-                Pending {
-                    t: log_t,
-                    seq: 0,
-                    offset: 0,
-                    body: Body::Human {
-                        t_meas: self.secs(self.pa.stamp.nanos()),
-                        person,
-                        positions,
-                    },
-                }
-            }
-            Stream::Object { stamped } => {
-                let topic = self.channels.get(&h.channel_id).map(|c| c.0.as_str());
-                let id = self
-                    .cfg
-                    .object_topics
-                    .iter()
-                    .find(|(_, t)| Some(t.as_str()) == topic)
-                    .map(|(id, _)| id.clone())
-                    .unwrap_or_default();
-                let (stamp, position) = if stamped {
-                    let m = cdr::PoseStamped::decode(data)
-                        .map_err(|e| self.err(format!("{}: PoseStamped: {e}", self.what(h))))?;
-                    (m.stamp, m.position)
-                } else {
-                    self.pa
-                        .decode(data)
-                        .map_err(|e| self.err(format!("{}: PoseArray: {e}", self.what(h))))?;
-                    let Some(p) = self.pa.positions.first() else {
-                        return Err(self.err(format!(
-                            "{}: PoseArray for object `{id}` has no pose",
-                            self.what(h)
-                        )));
-                    };
-                    (self.pa.stamp, *p)
-                };
-                if let Some(c) = position.iter().find(|c| !c.is_finite()) {
-                    return Err(self.err(format!(
-                        "{}: object `{id}` position: value {c} is not finite",
-                        self.what(h)
-                    )));
-                }
-                Pending {
-                    t: log_t,
-                    seq: 0,
-                    offset: 0,
-                    body: Body::Object {
-                        id,
-                        t_meas: self.secs(stamp.nanos()),
-                        position,
-                    },
-                }
-            }
-            Stream::Event | Stream::Ignored => {
-                let mut s = self.str_pool.pop().unwrap_or_default();
-                cdr::decode_string(data, &mut s)
-                    .map_err(|e| self.err(format!("{}: String: {e}", self.what(h))))?;
-                Pending {
-                    t: log_t,
-                    seq: 0,
-                    offset: 0,
-                    body: Body::Event(s),
-                }
-            }
+        let what = || {
+            format!(
+                "message on `{topic}` (log time {} ns, sequence {})",
+                h.log_time, h.sequence
+            )
         };
-        if pending.t < self.last_released {
+        if self.conv.header.is_none() {
             return Err(self.err(format!(
-                "{}: out of time order: t = {} s is more than mcap.reorder_window = {} s before t = {} s of a message already read (raise mcap.reorder_window)", self.what(h),
-                pending.t, self.cfg.reorder_window, self.max_t
+                "missing header: {} comes before any metadata record named `{METADATA_NAME}` and the summary has none (give one with --header)",
+                what()
             )));
         }
-        if self.heap.len() >= MAX_PENDING {
-            return Err(self.err(format!(
-                "more than {MAX_PENDING} messages within mcap.reorder_window = {} s",
-                self.cfg.reorder_window
-            )));
-        }
-        self.max_t = self.max_t.max(pending.t);
-        self.seq += 1;
-        self.heap.push(Pending {
-            seq: self.seq,
-            offset: self.pos,
-            ..pending
-        });
-        Ok(())
-    }
-
-    pub(super) fn recycle(&mut self, p: Pending) {
-        match p.body {
-            Body::Robot { q, dq } => {
-                self.f64_pool.push(q);
-                self.f64_pool.extend(dq);
-            }
-            Body::Human { positions, .. } => self.pos_pool.push(positions),
-            Body::Event(s) | Body::Object { id: s, .. } => self.str_pool.push(s),
-        }
+        let m = Message {
+            stream,
+            topic,
+            log_time: h.log_time,
+            data,
+            loc: Location::Offset(self.pos),
+        };
+        self.conv.message(m, &what)
     }
 }

@@ -1,0 +1,773 @@
+//! Streaming reader of ROS 2 sqlite3 bags (`.db3`, the default storage of ROS 2 Humble's
+//! `ros2 bag record`; see `docs/log-format.md#ros-2-sqlite3-bags-db3`): one `.db3` file, or a bag
+//! directory with `metadata.yaml`.
+//!
+//! The topics, message types and CDR payloads are those of the MCAP form, converted by the same
+//! code ([`crate::ros`]): `messages.timestamp` (the receive time, ns) plays the MCAP log time.
+//! Each file's `messages` are read in `ORDER BY timestamp, id` (only rows of configured topics),
+//! streamed by a thread that owns the read-only SQLite connection and hands rows over in small
+//! batches through a bounded channel (memory stays flat); the files of a bag are read one after
+//! the other, in the order of `relative_file_paths`, and their messages put in time order within
+//! `mcap.reorder_window` like any others.
+//!
+//! The pacs header: given by the caller (`pacs audit --header`), or the JSON text in key
+//! [`CUSTOM_DATA_KEY`] of the bag's `custom_data` (in `metadata.yaml`, or for a lone `.db3` file in
+//! its `metadata` table, which rosbag2 writes since Iron).
+
+use crate::error::{Location, LogError};
+use crate::format::{Header, ModelOverrides, Record, RecordReader};
+use crate::mcap::{McapConfig, parse_header_json};
+use crate::ros::{Message, Messages, Pending, Stream};
+use rusqlite::types::ValueRef;
+use rusqlite::{Connection, OpenFlags};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+
+/// The 16 bytes every SQLite 3 database file starts with.
+pub const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
+/// The key of the bag's `custom_data` whose value is the pacs header's JSON text.
+pub const CUSTOM_DATA_KEY: &str = "pacs_header";
+/// The bag directory's metadata file.
+pub const METADATA_FILE: &str = "metadata.yaml";
+/// Largest `metadata.yaml` read, in bytes.
+const METADATA_LIMIT: u64 = 1 << 20;
+/// Deepest nesting of `metadata.yaml` accepted.
+const YAML_DEPTH: usize = 32;
+/// Rows per batch handed from the reading thread.
+const BATCH: usize = 256;
+/// Batches in flight between the reading thread and the reader.
+const BATCHES_IN_FLIGHT: usize = 4;
+
+/// Whether `prefix` (the first bytes of a file) starts with the SQLite 3 magic.
+pub fn has_magic(prefix: &[u8]) -> bool {
+    prefix.starts_with(SQLITE_MAGIC)
+}
+
+/// Whether `path` is a rosbag2 bag directory (a directory holding `metadata.yaml`).
+pub fn is_bag_dir(path: &Path) -> bool {
+    path.is_dir() && path.join(METADATA_FILE).is_file()
+}
+
+/// One row of `messages`.
+struct Row {
+    id: i64,
+    topic_id: i64,
+    timestamp: i64,
+    data: Vec<u8>,
+}
+
+enum Batch {
+    Rows(Vec<Row>),
+    End,
+    /// Why reading stopped (the row id reached, and the problem).
+    Err(Location, String),
+}
+
+/// The rows of one file, read by a thread (see the module docs).
+struct RowStream {
+    rx: Option<Receiver<Batch>>,
+    buf: std::vec::IntoIter<Row>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for RowStream {
+    fn drop(&mut self) {
+        // Closing the channel stops the thread at its next send.
+        self.rx = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// What is known about one `.db3` file after opening it.
+struct Part {
+    path: PathBuf,
+    name: String,
+    /// `topics.id` → (topic, stream) of every topic.
+    topics: HashMap<i64, (String, Stream)>,
+}
+
+impl Part {
+    fn configured_ids(&self) -> Vec<i64> {
+        let mut ids: Vec<i64> = self
+            .topics
+            .iter()
+            .filter(|(_, (_, s))| *s != Stream::Ignored)
+            .map(|(id, _)| *id)
+            .collect();
+        ids.sort_unstable();
+        ids
+    }
+}
+
+/// Streaming reader of a ROS 2 sqlite3 bag; see the module docs.
+pub struct Db3Reader {
+    /// The bag as given (file or directory): names the run and downstream errors.
+    name: String,
+    parts: Vec<Part>,
+    /// Index of the part being read (`parts.len()` when all are read).
+    part: usize,
+    rows: Option<RowStream>,
+    conv: Messages,
+    done: bool,
+    current: Option<Pending>,
+}
+
+/// The settings of a bag found in its metadata (`metadata.yaml` or a `metadata` table).
+#[derive(Debug, Default)]
+struct BagInfo {
+    storage: Option<String>,
+    files: Vec<String>,
+    compression_format: String,
+    compression_mode: String,
+    pacs_header: Option<String>,
+}
+
+/// Parse rosbag2 metadata YAML (aliases refused, nesting and size bounded): `metadata.yaml` has it
+/// under `rosbag2_bagfile_information`; a `metadata` table holds it bare (`bare` accepts both).
+/// Errors say what is wrong; the caller names the file.
+fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
+    use yaml_rust2::parser::{Event, Parser};
+    use yaml_rust2::{Yaml, YamlLoader};
+    // First pass over the events: no aliases (a loader expands them, which can blow up), bounded
+    // depth; then the loader builds the document.
+    let mut p = Parser::new_from_str(text);
+    let mut depth = 0usize;
+    loop {
+        let (ev, mark) = p.next_token().map_err(|e| format!("invalid YAML: {e}"))?;
+        match ev {
+            Event::StreamEnd => break,
+            Event::Alias(_) => {
+                return Err(format!(
+                    "line {}: YAML aliases are not supported",
+                    mark.line()
+                ));
+            }
+            Event::SequenceStart(..) | Event::MappingStart(..) => {
+                depth += 1;
+                if depth > YAML_DEPTH {
+                    return Err(format!(
+                        "line {}: nested deeper than {YAML_DEPTH} levels",
+                        mark.line()
+                    ));
+                }
+            }
+            Event::SequenceEnd | Event::MappingEnd => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    let docs = YamlLoader::load_from_str(text).map_err(|e| format!("invalid YAML: {e}"))?;
+    let [doc] = docs.as_slice() else {
+        return Err(format!("{} YAML documents, expected one", docs.len()));
+    };
+    let info = match &doc["rosbag2_bagfile_information"] {
+        i @ Yaml::Hash(_) => i,
+        _ if bare && matches!(doc, Yaml::Hash(_)) => doc,
+        _ => return Err("no mapping `rosbag2_bagfile_information`".into()),
+    };
+    let text_of = |key: &str| -> Result<String, String> {
+        match &info[key] {
+            Yaml::BadValue | Yaml::Null => Ok(String::new()),
+            Yaml::String(s) => Ok(s.clone()),
+            other => Err(format!(
+                "rosbag2_bagfile_information.{key}: expected a string, found {other:?}"
+            )),
+        }
+    };
+    let storage = Some(text_of("storage_identifier")?).filter(|s| !s.is_empty());
+    let mut files = Vec::new();
+    match &info["relative_file_paths"] {
+        Yaml::BadValue | Yaml::Null => {}
+        Yaml::Array(a) => {
+            for (i, f) in a.iter().enumerate() {
+                let Yaml::String(s) = f else {
+                    return Err(format!(
+                        "rosbag2_bagfile_information.relative_file_paths[{i}]: expected a string, found {f:?}"
+                    ));
+                };
+                files.push(s.clone());
+            }
+        }
+        other => {
+            return Err(format!(
+                "rosbag2_bagfile_information.relative_file_paths: expected a list, found {other:?}"
+            ));
+        }
+    }
+    let pacs_header = match &info["custom_data"] {
+        Yaml::BadValue | Yaml::Null => None,
+        Yaml::Hash(h) => match h.get(&Yaml::String(CUSTOM_DATA_KEY.into())) {
+            None => None,
+            Some(Yaml::String(s)) => Some(s.clone()),
+            Some(other) => {
+                return Err(format!(
+                    "rosbag2_bagfile_information.custom_data.{CUSTOM_DATA_KEY}: expected a string (the header's JSON text), found {other:?}"
+                ));
+            }
+        },
+        other => {
+            return Err(format!(
+                "rosbag2_bagfile_information.custom_data: expected a mapping, found {other:?}"
+            ));
+        }
+    };
+    Ok(BagInfo {
+        storage,
+        files,
+        compression_format: text_of("compression_format")?,
+        compression_mode: text_of("compression_mode")?,
+        pacs_header,
+    })
+}
+
+impl BagInfo {
+    /// Refuse what this reader does not read: another storage, compression.
+    fn check(&self) -> Result<(), String> {
+        if let Some(s) = self.storage.as_deref().filter(|s| *s != "sqlite3") {
+            return Err(format!(
+                "storage_identifier `{s}` is not supported here (expected `sqlite3`){}",
+                if s == "mcap" {
+                    "; audit the bag's .mcap file itself"
+                } else {
+                    ""
+                }
+            ));
+        }
+        let mode = self.compression_mode.to_ascii_lowercase();
+        if !(mode.is_empty() || mode == "none") || !self.compression_format.is_empty() {
+            return Err(format!(
+                "compressed bags are not supported (compression_mode `{}`, compression_format `{}`): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)",
+                self.compression_mode, self.compression_format
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn open_ro(path: &Path) -> Result<Connection, String> {
+    let c = Connection::open_with_flags(
+        path,
+        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+    )
+    .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+    // Reading never writes: refuse anything that would (e.g. a hot journal to roll back).
+    c.pragma_update(None, "query_only", true)
+        .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+    Ok(c)
+}
+
+/// What SQLite says, with a hint for the usual cause of each kind of failure.
+fn sqlite_problem(e: &rusqlite::Error) -> String {
+    use rusqlite::ErrorCode;
+    match e.sqlite_error_code() {
+        Some(ErrorCode::NotADatabase) => format!("not an SQLite database ({e})"),
+        Some(ErrorCode::DatabaseCorrupt) => {
+            format!("damaged or truncated SQLite file ({e})")
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// Check the SQLite header against the file length: a file shorter than the page count its header
+/// states is truncated (SQLite itself reads missing pages as zeros only where it reaches them).
+fn check_size(path: &Path, name: &str) -> Result<(), LogError> {
+    use std::io::Read;
+    let io = |e: std::io::Error| LogError::Io {
+        file: name.to_string(),
+        source: e,
+    };
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    let mut h = Vec::with_capacity(100);
+    (&mut f).take(100).read_to_end(&mut h).map_err(io)?;
+    let bad = |p: String| LogError::input(name, Location::File, p);
+    if !has_magic(&h) {
+        return Err(bad(
+            "not an SQLite database: the file does not start with `SQLite format 3\\0`".into(),
+        ));
+    }
+    if h.len() < 100 {
+        return Err(bad(format!(
+            "truncated file: {} bytes, shorter than the 100-byte SQLite header",
+            h.len()
+        )));
+    }
+    let be32 = |i: usize| u32::from_be_bytes([h[i], h[i + 1], h[i + 2], h[i + 3]]);
+    let page = match u16::from_be_bytes([h[16], h[17]]) {
+        1 => 65536u64,
+        p => u64::from(p),
+    };
+    // The in-header page count is valid when the change counter matches "version valid for".
+    let pages = u64::from(be32(28));
+    if be32(24) == be32(92) && pages > 0 && page.saturating_mul(pages) > len {
+        return Err(bad(format!(
+            "truncated file: the SQLite header states {pages} pages of {page} bytes ({} bytes), the file has {len} bytes",
+            page * pages
+        )));
+    }
+    Ok(())
+}
+
+/// A text cell, or why it is not one.
+fn text(v: ValueRef<'_>, what: &str) -> Result<String, String> {
+    match v {
+        ValueRef::Text(t) => std::str::from_utf8(t)
+            .map(str::to_string)
+            .map_err(|_| format!("{what}: not valid UTF-8")),
+        other => Err(format!(
+            "{what}: expected text, found {}",
+            other.data_type()
+        )),
+    }
+}
+
+/// An integer cell, or why it is not one.
+fn int(v: ValueRef<'_>, what: &str) -> Result<i64, String> {
+    match v {
+        ValueRef::Integer(i) => Ok(i),
+        other => Err(format!(
+            "{what}: expected an integer, found {}",
+            other.data_type()
+        )),
+    }
+}
+
+/// Open one `.db3` file: its tables, and its topics checked against the configuration.
+fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
+    let name = path.display().to_string();
+    check_size(&path, &name)?;
+    let bad = |p: String| LogError::input(&name, Location::File, p);
+    let conn = open_ro(&path).map_err(&bad)?;
+    let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
+    // SQLite's structural check of every page (b-trees, free list; about a third of the time of
+    // reading the messages): a damaged file is refused before anything is read from it, rather
+    // than read as far as the damage lets SQLite notice.
+    let check: String = conn
+        .query_row("PRAGMA quick_check(1)", [], |r| r.get(0))
+        .map_err(sql)?;
+    if check != "ok" {
+        return Err(bad(format!(
+            "damaged SQLite file (PRAGMA quick_check: {check})"
+        )));
+    }
+    for table in ["topics", "messages"] {
+        let n: i64 = conn
+            .query_row(
+                "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = ?1",
+                [table],
+                |r| r.get(0),
+            )
+            .map_err(sql)?;
+        if n == 0 {
+            return Err(bad(format!(
+                "not a rosbag2 sqlite3 bag: no table `{table}`"
+            )));
+        }
+    }
+    let mut stmt = conn
+        .prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id")
+        .map_err(|e| bad(format!("table `topics`: {}", sqlite_problem(&e))))?;
+    let mut rows = stmt.query([]).map_err(sql)?;
+    let mut topics = HashMap::new();
+    while let Some(r) = rows.next().map_err(sql)? {
+        let cell = |i: usize| r.get_ref(i).map_err(|e| bad(sqlite_problem(&e)));
+        let id = int(cell(0)?, "topics.id").map_err(&bad)?;
+        let at = |c: &str| format!("topics row id {id}: {c}");
+        let topic = text(cell(1)?, &at("name")).map_err(&bad)?;
+        let typ = text(cell(2)?, &at("type")).map_err(&bad)?;
+        let ser = text(cell(3)?, &at("serialization_format")).map_err(&bad)?;
+        let (stream, expected) = conv.stream_of(&topic, Some(&typ)).map_err(&bad)?;
+        if stream != Stream::Ignored {
+            let what = format!("topic `{topic}` (topics id {id})");
+            if typ != expected {
+                return Err(bad(format!(
+                    "{what}: unknown type `{typ}` (expected `{expected}`)"
+                )));
+            }
+            if ser != "cdr" {
+                return Err(bad(format!(
+                    "{what}: serialization format `{ser}` is not supported (expected `cdr`)"
+                )));
+            }
+        }
+        if topics.insert(id, (topic, stream)).is_some() {
+            return Err(bad(format!("table `topics`: id {id} appears twice")));
+        }
+    }
+    Ok(Part { path, name, topics })
+}
+
+/// The metadata YAML a `.db3` file keeps in its `metadata` table (rosbag2 since Iron, and
+/// `rosbags`), if it has one.
+fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
+    let bad = |p: String| LogError::input(name, Location::File, p);
+    let conn = open_ro(path).map_err(&bad)?;
+    let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
+    let n: i64 = conn
+        .query_row(
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'metadata'",
+            [],
+            |r| r.get(0),
+        )
+        .map_err(sql)?;
+    if n == 0 {
+        return Ok(None);
+    }
+    let mut stmt = conn
+        .prepare("SELECT metadata FROM metadata ORDER BY id DESC LIMIT 1")
+        .map_err(|e| bad(format!("table `metadata`: {}", sqlite_problem(&e))))?;
+    let mut rows = stmt.query([]).map_err(sql)?;
+    let Some(r) = rows.next().map_err(sql)? else {
+        return Ok(None);
+    };
+    let v = r.get_ref(0).map_err(sql)?;
+    text(v, "table `metadata`: metadata").map(Some).map_err(bad)
+}
+
+/// The thread body: stream the rows of `ids` in time order into `tx`.
+fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
+    let mut last = Location::File;
+    let r = (|| -> Result<(), String> {
+        let conn = open_ro(&path)?;
+        let list: Vec<String> = ids.iter().map(i64::to_string).collect();
+        let sql = format!(
+            "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
+            list.join(", ")
+        );
+        let mut stmt = conn
+            .prepare(&sql)
+            .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
+        let mut rows = stmt
+            .query([])
+            .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
+        let mut batch = Vec::with_capacity(BATCH);
+        let after = |last: Location| match last {
+            Location::Message(id) => format!(" after message id {id}"),
+            _ => String::new(),
+        };
+        while let Some(r) = rows.next().map_err(|e| {
+            let p = format!("reading messages{}: {}", after(last), sqlite_problem(&e));
+            last = Location::File;
+            p
+        })? {
+            let cell = |i: usize| r.get_ref(i).map_err(|e| sqlite_problem(&e));
+            let id = int(cell(0)?, "messages.id")?;
+            last = Location::Message(id);
+            let topic_id = int(cell(1)?, "messages.topic_id")?;
+            let timestamp = int(cell(2)?, "messages.timestamp")?;
+            let data = match cell(3)? {
+                ValueRef::Blob(b) => b.to_vec(),
+                other => {
+                    return Err(format!(
+                        "messages.data: expected a blob, found {}",
+                        other.data_type()
+                    ));
+                }
+            };
+            batch.push(Row {
+                id,
+                topic_id,
+                timestamp,
+                data,
+            });
+            if batch.len() == BATCH
+                && tx
+                    .send(Batch::Rows(std::mem::replace(
+                        &mut batch,
+                        Vec::with_capacity(BATCH),
+                    )))
+                    .is_err()
+            {
+                return Ok(());
+            }
+        }
+        if !batch.is_empty() && tx.send(Batch::Rows(batch)).is_err() {
+            return Ok(());
+        }
+        let _ = tx.send(Batch::End);
+        Ok(())
+    })();
+    if let Err(p) = r {
+        let _ = tx.send(Batch::Err(last, p));
+    }
+}
+
+impl Db3Reader {
+    /// Open a bag: a `.db3` file, or a directory with `metadata.yaml`. The header is `header` if
+    /// given, else the bag's `custom_data` key [`CUSTOM_DATA_KEY`]. Every file's tables and topics
+    /// are checked here; then messages are read up to the first one (fixing the time base).
+    pub fn open(
+        path: &Path,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
+        header: Option<Header>,
+    ) -> Result<Self, LogError> {
+        let name = path.display().to_string();
+        cfg.validate()
+            .map_err(|p| LogError::input(&name, Location::File, format!("invalid config: {p}")))?;
+        // The metadata: the directory's metadata.yaml, or a lone file's `metadata` table.
+        let (files, info, info_name, base_dir) = if path.is_dir() {
+            let meta = path.join(METADATA_FILE);
+            let meta_name = meta.display().to_string();
+            let bad = |p: String| LogError::input(&meta_name, Location::File, p);
+            let io = |e: std::io::Error| LogError::Io {
+                file: meta_name.clone(),
+                source: e,
+            };
+            let len = std::fs::metadata(&meta).map_err(io)?.len();
+            if len > METADATA_LIMIT {
+                return Err(bad(format!(
+                    "{len} bytes: larger than the {METADATA_LIMIT} bytes read"
+                )));
+            }
+            let text = std::fs::read_to_string(&meta).map_err(io)?;
+            let info = bag_info(&text, false).map_err(&bad)?;
+            info.check().map_err(&bad)?;
+            if info.files.is_empty() {
+                return Err(bad(
+                    "rosbag2_bagfile_information.relative_file_paths: no files".into(),
+                ));
+            }
+            let mut files = Vec::new();
+            for (i, f) in info.files.iter().enumerate() {
+                let p = path.join(f);
+                if !p.is_file() {
+                    return Err(bad(format!(
+                        "rosbag2_bagfile_information.relative_file_paths[{i}]: `{}` is not a file",
+                        p.display()
+                    )));
+                }
+                files.push(p);
+            }
+            (files, info, meta_name, path.to_path_buf())
+        } else {
+            check_size(path, &name)?;
+            let info = match db_metadata(path, &name)? {
+                None => BagInfo::default(),
+                Some(text) => {
+                    let bad = |p: String| {
+                        LogError::input(&name, Location::File, format!("table `metadata`: {p}"))
+                    };
+                    let info = bag_info(&text, true).map_err(bad)?;
+                    info.check().map_err(bad)?;
+                    info
+                }
+            };
+            let info_name = format!("{name} (table `metadata`)");
+            (
+                vec![path.to_path_buf()],
+                info,
+                info_name,
+                crate::format::dir_of(path),
+            )
+        };
+        let mut conv = Messages::new(&name, cfg.clone(), overrides.clone());
+        let parts = files
+            .into_iter()
+            .map(|p| open_part(p, &mut conv))
+            .collect::<Result<Vec<_>, _>>()?;
+        match (header, &info.pacs_header) {
+            (Some(h), _) => conv.set_header(h, Location::File)?,
+            (None, Some(json)) => {
+                let bad = |p: String| {
+                    LogError::input(
+                        &info_name,
+                        Location::File,
+                        format!("custom_data.{CUSTOM_DATA_KEY}: {p}"),
+                    )
+                };
+                let mut h = parse_header_json(json).map_err(|e| bad(e.to_string()))?;
+                // A {urdf, side} robot's relative paths are relative to the bag.
+                h.robot.rebase(&base_dir);
+                conv.file.clone_from(&info_name);
+                conv.set_header(h, Location::File)?;
+                conv.file.clone_from(&name);
+            }
+            (None, None) => {
+                return Err(LogError::input(
+                    &name,
+                    Location::File,
+                    format!(
+                        "missing header: a rosbag2 bag carries no pacs header unless its metadata has custom_data key `{CUSTOM_DATA_KEY}` (give one with --header)"
+                    ),
+                ));
+            }
+        }
+        let mut r = Self {
+            name,
+            parts,
+            part: 0,
+            rows: None,
+            conv,
+            done: false,
+            current: None,
+        };
+        while r.conv.is_empty() && !r.done {
+            r.pump()?;
+        }
+        if let (Some(h), Some(b)) = (r.conv.header.as_mut(), r.conv.base_s) {
+            h.meta.insert("db3_time_base_s".into(), b.into());
+        }
+        Ok(r)
+    }
+
+    /// The next row of the bag (moving on to the next file at the end of one), or `None` at the
+    /// end of the last file.
+    fn next_row(&mut self) -> Result<Option<Row>, LogError> {
+        loop {
+            if let Some(rows) = self.rows.as_mut() {
+                if let Some(row) = rows.buf.next() {
+                    return Ok(Some(row));
+                }
+                let part = &self.parts[self.part];
+                let got = rows.rx.as_ref().map(Receiver::recv);
+                match got {
+                    Some(Ok(Batch::Rows(b))) => rows.buf = b.into_iter(),
+                    Some(Ok(Batch::End)) => {
+                        self.rows = None;
+                        self.part += 1;
+                    }
+                    Some(Ok(Batch::Err(loc, p))) => {
+                        return Err(LogError::input(&part.name, loc, p));
+                    }
+                    _ => {
+                        return Err(LogError::input(
+                            &part.name,
+                            Location::File,
+                            "the thread reading the messages stopped before their end",
+                        ));
+                    }
+                }
+                continue;
+            }
+            let Some(part) = self.parts.get(self.part) else {
+                return Ok(None);
+            };
+            let ids = part.configured_ids();
+            if ids.is_empty() {
+                self.part += 1;
+                continue;
+            }
+            let (tx, rx) = sync_channel(BATCHES_IN_FLIGHT);
+            let path = part.path.clone();
+            let thread = std::thread::Builder::new()
+                .name("pacs-db3".into())
+                .spawn(move || read_rows(path, ids, tx))
+                .map_err(|e| LogError::Io {
+                    file: part.name.clone(),
+                    source: e,
+                })?;
+            self.rows = Some(RowStream {
+                rx: Some(rx),
+                buf: Vec::new().into_iter(),
+                thread: Some(thread),
+            });
+        }
+    }
+
+    /// Read one row of a configured topic into the conversion (or note the end).
+    fn pump(&mut self) -> Result<(), LogError> {
+        let Some(row) = self.next_row()? else {
+            self.done = true;
+            return Ok(());
+        };
+        let part = &self.parts[self.part];
+        let loc = Location::Message(row.id);
+        let Some((topic, stream)) = part.topics.get(&row.topic_id) else {
+            return Err(LogError::input(
+                &part.name,
+                loc,
+                format!("topic id {} is not in table `topics`", row.topic_id),
+            ));
+        };
+        let what = || {
+            format!(
+                "message id {} on `{topic}` (timestamp {} ns)",
+                row.id, row.timestamp
+            )
+        };
+        let Ok(log_time) = u64::try_from(row.timestamp) else {
+            return Err(LogError::input(
+                &part.name,
+                loc,
+                format!("{}: negative timestamp", what()),
+            ));
+        };
+        self.conv.file.clone_from(&part.name);
+        let m = Message {
+            stream: *stream,
+            topic,
+            log_time,
+            data: &row.data,
+            loc,
+        };
+        let r = self
+            .conv
+            .message(m, &what)
+            .map_err(|e| hint_compressed(e, &row.data));
+        self.conv.file.clone_from(&self.name);
+        r
+    }
+}
+
+/// A payload that starts with the zstd magic is a message-compressed bag's: say so.
+fn hint_compressed(e: LogError, data: &[u8]) -> LogError {
+    const ZSTD: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
+    match e {
+        LogError::Input {
+            file,
+            location,
+            problem,
+        } if data.starts_with(&ZSTD) => LogError::Input {
+            file,
+            location,
+            problem: format!(
+                "{problem} (the payload is zstd-compressed: compressed bags are not supported, decompress the bag first)"
+            ),
+        },
+        e => e,
+    }
+}
+
+impl RecordReader for Db3Reader {
+    fn header(&self) -> &Header {
+        // `open` fails unless the header is known.
+        self.conv
+            .header
+            .as_ref()
+            .expect("Db3Reader::open guarantees a header")
+    }
+
+    fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
+        if let Some(p) = self.current.take() {
+            self.conv.recycle(p);
+        }
+        loop {
+            if let Some(p) = self.conv.pop_ready(self.done) {
+                self.current = Some(p);
+                return Ok(self
+                    .current
+                    .as_ref()
+                    .map(|p| p.record(&self.conv.person_ids)));
+            }
+            if self.done {
+                return Ok(None);
+            }
+            self.pump()?;
+        }
+    }
+
+    fn location(&self) -> Location {
+        self.current.as_ref().map_or(Location::File, |p| p.loc)
+    }
+
+    fn header_location(&self) -> Location {
+        Location::File
+    }
+
+    fn file(&self) -> &str {
+        &self.name
+    }
+}

@@ -1,0 +1,42 @@
+"""ROS 2 sqlite3 bags written by rosbags (PyPI; an independent writer) audited by pacs.audit:
+a fresh bag directory, its lone .db3 file, and a bag with a violation; a report on a bag
+directory; a bag without a header is an InputError."""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+import pacs
+
+pytest.importorskip("rosbags")
+sys.path.insert(0, str(Path(__file__).parent / "fixtures"))
+import make_db3_bags as bags  # noqa: E402
+
+
+def test_a_fresh_clean_bag_passes(tmp_path):
+    bag = bags.write_bag(tmp_path / "clean", bags.messages(violation=False, mapped=False))
+    runs = pacs.audit(bag)
+    r = runs[0]
+    assert r.verdict == "pass", r.to_dict()
+    assert r.metrics["samples"] == bags.N + 1
+    assert r.metrics["duration"] == 1.0
+    assert r.meta["db3_time_base_s"] == 1_700_000_000
+    # The lone .db3 file (its header in the db's metadata table) gives the same run.
+    lone = pacs.audit(bag / "clean.db3")[0]
+    assert lone.verdict == "pass" and lone.metrics == r.metrics
+    assert pacs.report(runs, tmp_path / "report") == "pass"
+    assert (tmp_path / "report" / "report.json").exists()
+
+
+def test_a_fresh_bag_with_a_person_stepping_in_fails_at_the_step(tmp_path):
+    msgs = bags.messages(violation=True, mapped=True, near_from=60)
+    r = pacs.audit(bags.write_bag(tmp_path / "v", msgs))[0]
+    assert r.verdict == "fail"
+    assert min(v["t_start"] for v in r.violations) == 0.6
+
+
+def test_a_bag_without_a_header_is_an_input_error(tmp_path):
+    bag = bags.write_bag(tmp_path / "nohdr", bags.messages(violation=False, mapped=False), header=None)
+    with pytest.raises(pacs.InputError, match="missing header"):
+        pacs.audit(bag)
