@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The Python package's tests: build the extension into a venv (under the cargo target
-# directory; created on first use with maturin, numpy and pytest from PyPI) and run pytest.
+# directory; created on first use with maturin, numpy, pytest and dask[distributed] from PyPI)
+# and run pytest.
 #
 #   bash python/test.sh [PYTEST_ARGS...]
 #
@@ -22,6 +23,11 @@ if ! "$venv/bin/python" -c 'import maturin, numpy, pytest' 2>/dev/null; then
   "$python" -m venv "$venv"
   "$venv/bin/pip" install -q --upgrade pip
   "$venv/bin/pip" install -q "maturin>=1.9,<2" "numpy>=1.21" "pytest>=7"
+fi
+# Dask (pacs.fleet on a LocalCluster, python/tests/test_fleet.py): installed into an existing
+# venv too.
+if ! "$venv/bin/python" -c 'import dask.distributed' 2>/dev/null; then
+  "$venv/bin/pip" install -q "dask[distributed]>=2024.8,<2027"
 fi
 # maturin develop installs into the active virtualenv.
 VIRTUAL_ENV="$(cd "$venv" && pwd)" PATH="$(cd "$venv" && pwd)/bin:$PATH" \

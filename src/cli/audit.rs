@@ -14,7 +14,8 @@ use std::process::ExitCode;
 #[derive(clap::Args, Debug)]
 pub struct AuditArgs {
     /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
-    /// by its magic bytes or `*.mcap`; see docs/log-format.md).
+    /// by its magic bytes or `*.mcap`; see docs/log-format.md). A directory stands for its log
+    /// files (*.jsonl, *.csv, *.mcap, also in subdirectories), sorted by path (docs/fleet.md).
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<PathBuf>,
     /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
@@ -74,6 +75,14 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Str
 
 /// Run the audit; returns the process exit code.
 pub fn main(args: AuditArgs) -> ExitCode {
+    let mut args = args;
+    args.logs = match pacs_reports::fleet::expand_logs(&args.logs) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("pacs: error: {e}");
+            return ExitCode::from(EXIT_INVALID);
+        }
+    };
     let (cfg, cfg_file) = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {

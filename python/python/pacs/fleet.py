@@ -1,0 +1,224 @@
+"""A fleet's archive: many logs audited in parallel, locally or on a Dask cluster, with the fleet
+report; and simulation rollouts on the same cluster.
+
+>>> import pacs
+>>> runs, report = pacs.fleet.audit("archive/")                 # local threads
+>>> from dask.distributed import Client
+>>> with Client("tcp://scheduler:8786") as client:              # doctest: +SKIP
+...     runs, report = pacs.fleet.audit("archive/", client=client)
+...     sim = pacs.simulate(task="sorting", rollouts=100, client=client)
+
+The audit of each log, the fleet report (per robot, scene and UTC day: verdict counts, audited
+and violation time, worst runs) and the simulation's summary are the Rust code of
+``pacs audit DIR --out`` and ``pacs simulate``; this module only distributes the work. With a
+client, every log is audited on a worker (the workers must read the paths as given, e.g. on a
+shared file system) and the :class:`pacs.Run` objects come back pickled, whole. Results are the
+same with and without a client. See docs/fleet.md.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, NamedTuple, Sequence
+
+from . import _pacs
+from .errors import ArgumentTypeError, InputError
+
+__all__ = ["FleetAudit", "audit", "simulate"]
+
+
+class FleetAudit(NamedTuple):
+    """What :func:`audit` returns: the runs (in the order of the sorted log paths) and the
+    fleet report (a dict, equal to ``report.json["fleet"]`` of ``pacs audit DIR --out``)."""
+
+    runs: list
+    report: dict
+
+
+def _check_client(client: Any) -> None:
+    """``client`` must be None or a ``dask.distributed.Client``."""
+    if client is None:
+        return
+    try:
+        from dask.distributed import Client
+    except ImportError as e:
+        raise ArgumentTypeError(
+            f"client: a dask.distributed.Client is needed, but dask.distributed cannot be "
+            f"imported ({e}); pip install 'dask[distributed]' — got {client!r}"
+        ) from None
+    if not isinstance(client, Client):
+        raise ArgumentTypeError(
+            f"client: expected None or a dask.distributed.Client, got "
+            f"{type(client).__name__} {client!r}"
+        )
+
+
+def _threads(threads: Any) -> int:
+    if threads is None:
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # not Linux
+            return max(1, os.cpu_count() or 1)
+    if isinstance(threads, bool) or not isinstance(threads, int):
+        raise ArgumentTypeError(f"threads: expected None or an int, got {threads!r}")
+    if threads < 1:
+        raise InputError(f"threads: must be at least 1, got {threads}")
+    return threads
+
+
+# What workers run: module-level Python functions (pickled by reference to ``pacs.fleet``; the
+# extension's own functions are not importable under their ``__module__``).
+
+
+def _run_from_state(state: bytes) -> Any:
+    """Rebuild a :class:`pacs.Run` pickled by ``Run.__reduce__``."""
+    return _pacs._run_from_state(state)
+
+
+def _list_logs(paths: Any) -> list:
+    return _pacs._fleet_logs(paths)
+
+
+def _rollouts(**kwargs: Any) -> bytes:
+    return _pacs._simulate_rollouts(**kwargs)
+
+
+def _audit_one(path: str, config: Any) -> Any:
+    """The audit of one log (what a worker runs)."""
+    (run,) = _pacs.audit(path, config)
+    return run
+
+
+def audit(
+    paths: Any, client: Any = None, config: Any = None, threads: Any = None
+) -> FleetAudit:
+    """Audit many logs and build the fleet report.
+
+    ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv`` and ``*.mcap`` files, also in
+    subdirectories, sorted by path) or a list of them — as ``pacs audit`` takes them.
+    ``client``: None (the logs are audited here on ``threads`` threads, default: the usable
+    cores) or a ``dask.distributed.Client`` (one task per log; directories are listed on a
+    worker; the workers must be able to read the logs and use the same pacs version).
+    ``config``: the audit settings, as for :func:`pacs.audit`.
+
+    Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
+    sorted paths, and the fleet report. An invalid log raises :class:`pacs.InputError` naming
+    it (the first in path order); ``pacs.report(runs, dir)`` writes the full report.
+    """
+    _check_client(client)
+    if client is None:
+        logs = _pacs._fleet_logs(paths)
+        n = min(_threads(threads), len(logs))
+        with ThreadPoolExecutor(max_workers=n) as pool:
+            runs = list(pool.map(lambda p: _audit_one(p, config), logs))
+    else:
+        if threads is not None:
+            raise InputError("threads: set the workers' threads on the Dask cluster, not here")
+        logs = client.submit(_list_logs, paths, pure=False).result()
+        futures = client.map(_audit_one, logs, config=config, pure=False)
+        try:
+            runs = client.gather(futures)
+        finally:
+            for f in futures:
+                f.release()
+    return FleetAudit(runs, _pacs._fleet_report(runs))
+
+
+def _names(value: Any, name: str) -> list:
+    if isinstance(value, str):
+        names = [n.strip() for n in value.split(",") if n.strip()]
+    elif isinstance(value, Sequence) and all(isinstance(v, str) for v in value):
+        names = list(value)
+    else:
+        raise ArgumentTypeError(
+            f"{name}: expected a name, a comma-separated str or a list of str, got {value!r}"
+        )
+    if not names:
+        raise InputError(f"{name}: no name given")
+    return names
+
+
+def _count(value: Any, name: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ArgumentTypeError(f"{name}: expected an int, got {value!r}")
+    if value < least:
+        raise InputError(f"{name}: must be at least {least}, got {value}")
+    return value
+
+
+def simulate(
+    task: Any = "sorting",
+    method: Any = "pacs",
+    rollouts: int = 10,
+    seed: int = 1,
+    *,
+    client: Any = None,
+    partitions: Any = None,
+    with_human: bool = True,
+    chunk_motion: str = "continuous",
+    policy: str = "nearest",
+    log_dir: Any = None,
+    threads: Any = None,
+) -> dict:
+    """The simulation's evaluation (``pacs simulate``): ``rollouts`` rollouts per task and method,
+    rollout i with seed ``seed + i`` (the same people for every method).
+
+    ``task``, ``method``: a name, a comma-separated str, a list, or ``"all"``. ``client``: None
+    (here, on ``threads`` threads) or a ``dask.distributed.Client``: the seeds are split into
+    ``partitions`` contiguous ranges (default: one per worker thread, at most one per seed),
+    one task each; the merged result is identical to one local run with the same seeds.
+    ``log_dir``: write every rollout's audit log there (on a cluster: a directory the workers
+    share). Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
+    ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
+    """
+    _check_client(client)
+    tasks = _names(task, "task")
+    methods = _names(method, "method")
+    rollouts = _count(rollouts, "rollouts", 1)
+    seed = _count(seed, "seed", 0)
+    if not isinstance(with_human, bool):
+        raise ArgumentTypeError(f"with_human: expected True or False, got {with_human!r}")
+    for value, name in ((chunk_motion, "chunk_motion"), (policy, "policy")):
+        if not isinstance(value, str):
+            raise ArgumentTypeError(f"{name}: expected a str, got {value!r}")
+    if log_dir is not None:
+        log_dir = os.fspath(log_dir)
+    _pacs._simulate_check(tasks, methods, with_human, chunk_motion, policy)
+    common = dict(
+        tasks=tasks,
+        methods=methods,
+        with_human=with_human,
+        chunk_motion=chunk_motion,
+        policy=policy,
+        log_dir=log_dir,
+    )
+    if client is None:
+        if partitions is not None:
+            raise InputError("partitions: only with a client")
+        part = _pacs._simulate_rollouts(
+            seed=seed, rollouts=rollouts, threads=_threads(threads), **common
+        )
+        return _pacs._simulate_merge([part])
+    if threads is not None:
+        raise InputError("threads: set the workers' threads on the Dask cluster, not here")
+    if partitions is None:
+        partitions = max(1, sum(client.nthreads().values()))
+    partitions = min(_count(partitions, "partitions", 1), rollouts)
+    # Contiguous seed ranges of near-equal size: [seed + start, seed + start + size).
+    base, extra = divmod(rollouts, partitions)
+    ranges, start = [], 0
+    for i in range(partitions):
+        size = base + (1 if i < extra else 0)
+        ranges.append((seed + start, size))
+        start += size
+    futures = [
+        client.submit(_rollouts, seed=s, rollouts=n, threads=1, pure=False, **common)
+        for s, n in ranges
+    ]
+    try:
+        parts = client.gather(futures)
+    finally:
+        for f in futures:
+            f.release()
+    return _pacs._simulate_merge(parts)
