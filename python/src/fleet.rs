@@ -27,8 +27,9 @@ struct RunState {
     pacs: String,
     run: RunResult,
     /// `RunResult::series` and `ModelNames::specs` are not serialized with the run (they are
-    /// not part of `pacs audit --json`): carried beside it.
-    series: Vec<SeriesPoint>,
+    /// not part of `pacs audit --json`): carried beside it, the series by columns (a third of
+    /// the bytes of one map per point, and faster to decode on the client).
+    series: SeriesColumns,
     specs: serde_json::Value,
     path: PathBuf,
     hashed_path: String,
@@ -37,6 +38,67 @@ struct RunState {
     modified: Option<u64>,
     config: AuditConfig,
     config_path: Option<PathBuf>,
+}
+
+/// A plot series by columns.
+#[derive(Serialize, Deserialize, Default)]
+struct SeriesColumns {
+    t: Vec<f64>,
+    t_end: Vec<f64>,
+    min_separation: Vec<Option<f64>>,
+    energy_nominal: Vec<Option<f64>>,
+    energy_bound: Vec<Option<f64>>,
+    threshold: Vec<Option<f64>>,
+    /// Bit 0: violation, bit 1: inconclusive, bit 2: at rest.
+    flags: Vec<u8>,
+}
+
+impl SeriesColumns {
+    fn of(points: &[SeriesPoint]) -> Self {
+        let col = |f: fn(&SeriesPoint) -> Option<f64>| points.iter().map(f).collect();
+        Self {
+            t: points.iter().map(|p| p.t).collect(),
+            t_end: points.iter().map(|p| p.t_end).collect(),
+            min_separation: col(|p| p.min_separation),
+            energy_nominal: col(|p| p.energy_nominal),
+            energy_bound: col(|p| p.energy_bound),
+            threshold: col(|p| p.threshold),
+            flags: points
+                .iter()
+                .map(|p| {
+                    u8::from(p.violation) | u8::from(p.inconclusive) << 1 | u8::from(p.at_rest) << 2
+                })
+                .collect(),
+        }
+    }
+
+    fn points(&self) -> PyResult<Vec<SeriesPoint>> {
+        let n = self.t.len();
+        let lens = [
+            self.t_end.len(),
+            self.min_separation.len(),
+            self.energy_nominal.len(),
+            self.energy_bound.len(),
+            self.threshold.len(),
+            self.flags.len(),
+        ];
+        if lens.iter().any(|&l| l != n) {
+            return Err(input("state: the plot series' columns differ in length"));
+        }
+        Ok((0..n)
+            .map(|i| SeriesPoint {
+                t: self.t[i],
+                t_end: self.t_end[i],
+                min_separation: self.min_separation[i],
+                energy_nominal: self.energy_nominal[i],
+                energy_bound: self.energy_bound[i],
+                threshold: self.threshold[i],
+                violation: self.flags[i] & 1 != 0,
+                inconclusive: self.flags[i] & 2 != 0,
+                at_rest: self.flags[i] & 4 != 0,
+            })
+            .collect())
+    }
 }
 
 fn cbor<T: Serialize>(v: &T, what: &str) -> PyResult<Vec<u8>> {
@@ -55,8 +117,11 @@ pub fn reduce_run<'py>(
     let state = RunState {
         layout: STATE_LAYOUT,
         pacs: env!("CARGO_PKG_VERSION").into(),
-        run: r.run.clone(),
-        series: r.run.series.clone(),
+        run: RunResult {
+            series: Vec::new(),
+            ..r.run.clone()
+        },
+        series: SeriesColumns::of(&r.run.series),
         specs: r.run.models.specs.clone(),
         path: r.path.clone(),
         hashed_path: r.hashed.path.clone(),
@@ -91,7 +156,7 @@ pub fn _run_from_state(state: &Bound<'_, PyAny>) -> PyResult<PyRun> {
         )));
     }
     let mut run = s.run;
-    run.series = s.series;
+    run.series = s.series.points()?;
     run.models.specs = s.specs;
     Ok(PyRun {
         run,

@@ -85,21 +85,40 @@ def _rollouts(**kwargs: Any) -> bytes:
 
 
 def _audit_one(path: str, config: Any) -> Any:
-    """The audit of one log (what a worker runs)."""
+    """The audit of one log."""
     (run,) = _pacs.audit(path, config)
     return run
 
 
+def _audit_batch(paths: list, config: Any) -> list:
+    """The audits of consecutive logs (what a worker runs: one Dask task)."""
+    return [_audit_one(p, config) for p in paths]
+
+
+def _batches(logs: list, slots: int, batch: Any) -> list:
+    """``logs`` in consecutive batches: ``batch`` logs each, by default as many as give four
+    batches per worker thread (fewer, larger tasks cost the scheduler and the client less; four
+    per thread leave room to balance logs of different lengths)."""
+    if batch is None:
+        batch = max(1, -(-len(logs) // (4 * max(1, slots))))
+    elif isinstance(batch, bool) or not isinstance(batch, int):
+        raise ArgumentTypeError(f"batch: expected None or an int, got {batch!r}")
+    elif batch < 1:
+        raise InputError(f"batch: must be at least 1, got {batch}")
+    return [logs[i:i + batch] for i in range(0, len(logs), batch)]
+
+
 def audit(
-    paths: Any, client: Any = None, config: Any = None, threads: Any = None
+    paths: Any, client: Any = None, config: Any = None, threads: Any = None, batch: Any = None
 ) -> FleetAudit:
     """Audit many logs and build the fleet report.
 
     ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv`` and ``*.mcap`` files, also in
     subdirectories, sorted by path) or a list of them — as ``pacs audit`` takes them.
     ``client``: None (the logs are audited here on ``threads`` threads, default: the usable
-    cores) or a ``dask.distributed.Client`` (one task per log; directories are listed on a
-    worker; the workers must be able to read the logs and use the same pacs version).
+    cores) or a ``dask.distributed.Client`` (one task per ``batch`` consecutive logs, by
+    default four tasks per worker thread; directories are listed on a worker; the workers must
+    be able to read the logs and use the same pacs version).
     ``config``: the audit settings, as for :func:`pacs.audit`.
 
     Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
@@ -108,6 +127,8 @@ def audit(
     """
     _check_client(client)
     if client is None:
+        if batch is not None:
+            raise InputError("batch: only with a client")
         logs = _pacs._fleet_logs(paths)
         n = min(_threads(threads), len(logs))
         with ThreadPoolExecutor(max_workers=n) as pool:
@@ -116,9 +137,10 @@ def audit(
         if threads is not None:
             raise InputError("threads: set the workers' threads on the Dask cluster, not here")
         logs = client.submit(_list_logs, paths, pure=False).result()
-        futures = client.map(_audit_one, logs, config=config, pure=False)
+        batches = _batches(logs, sum(client.nthreads().values()), batch)
+        futures = client.map(_audit_batch, batches, config=config, pure=False)
         try:
-            runs = client.gather(futures)
+            runs = [r for part in client.gather(futures) for r in part]
         finally:
             for f in futures:
                 f.release()
