@@ -130,6 +130,10 @@ def test_dask_gives_the_same_runs_and_report_as_the_local_audit(archive, local, 
     assert json.dumps(on_dask.report) == json.dumps(local.report)
     # The runs came back whole: their reports (plot series, hashes, model parameters) are equal.
     assert report_files(on_dask.runs, tmp_path / "dask") == report_files(local.runs, tmp_path / "local")
+    # Any batch size: the same runs in the same order.
+    for batch in (1, 3):
+        assert as_json(pacs.fleet.audit(archive, client=client, batch=batch).runs) == \
+            as_json(local.runs)
     # A list of files in another order is audited in that order, as `pacs audit` does.
     files = [str(archive / f) for f in reversed(LOGS)]
     assert [r.log for r in pacs.fleet.audit(files, client=client).runs] == files
@@ -187,6 +191,12 @@ def test_bad_input_is_named(archive, client, tmp_path):
         pacs.fleet.audit(3)
     with pytest.raises(pacs.InputError, match="paths: no log given"):
         pacs.fleet.audit([])
+    with pytest.raises(pacs.InputError, match="batch: must be at least 1, got 0"):
+        pacs.fleet.audit(archive, client=client, batch=0)
+    with pytest.raises(pacs.InputError, match="batch: only with a client"):
+        pacs.fleet.audit(archive, batch=2)
+    with pytest.raises(pacs.InputError, match="threads: must be at least 1, got 0"):
+        pacs.fleet.audit(archive, threads=0)
     # An invalid log among good ones: the worker's error names it.
     bad = tmp_path / "bad"
     bad.mkdir()
