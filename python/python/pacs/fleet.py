@@ -91,21 +91,23 @@ def _audit_one(path: str, config: Any) -> Any:
 
 
 def _audit_batch(paths: list, config: Any) -> list:
-    """The audits of consecutive logs (what a worker runs: one Dask task)."""
+    """The audits of several logs (what a worker runs: one Dask task)."""
     return [_audit_one(p, config) for p in paths]
 
 
-def _batches(logs: list, slots: int, batch: Any) -> list:
-    """``logs`` in consecutive batches: ``batch`` logs each, by default as many as give four
-    batches per worker thread (fewer, larger tasks cost the scheduler and the client less; four
-    per thread leave room to balance logs of different lengths)."""
+def _batches(n: int, slots: int, batch: Any) -> list:
+    """The indices of ``n`` logs in batches of at most ``batch`` (by default as many batches as
+    four per worker thread: fewer, larger tasks cost the scheduler and the client less), each
+    batch every k-th log (k the number of batches), so that the batches mix the archive's
+    kinds of logs (sorted paths put like logs together) and take about equally long."""
     if batch is None:
-        batch = max(1, -(-len(logs) // (4 * max(1, slots))))
+        batch = max(1, -(-n // (4 * max(1, slots))))
     elif isinstance(batch, bool) or not isinstance(batch, int):
         raise ArgumentTypeError(f"batch: expected None or an int, got {batch!r}")
     elif batch < 1:
         raise InputError(f"batch: must be at least 1, got {batch}")
-    return [logs[i:i + batch] for i in range(0, len(logs), batch)]
+    k = -(-n // batch)
+    return [list(range(j, n, k)) for j in range(k)]
 
 
 def audit(
@@ -116,9 +118,9 @@ def audit(
     ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv`` and ``*.mcap`` files, also in
     subdirectories, sorted by path) or a list of them — as ``pacs audit`` takes them.
     ``client``: None (the logs are audited here on ``threads`` threads, default: the usable
-    cores) or a ``dask.distributed.Client`` (one task per ``batch`` consecutive logs, by
-    default four tasks per worker thread; directories are listed on a worker; the workers must
-    be able to read the logs and use the same pacs version).
+    cores) or a ``dask.distributed.Client`` (one task per batch of at most ``batch`` logs, by
+    default four tasks per worker thread, each batch every k-th log; directories are listed on
+    a worker; the workers must be able to read the logs and use the same pacs version).
     ``config``: the audit settings, as for :func:`pacs.audit`.
 
     Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
@@ -137,13 +139,18 @@ def audit(
         if threads is not None:
             raise InputError("threads: set the workers' threads on the Dask cluster, not here")
         logs = client.submit(_list_logs, paths, pure=False).result()
-        batches = _batches(logs, sum(client.nthreads().values()), batch)
-        futures = client.map(_audit_batch, batches, config=config, pure=False)
+        batches = _batches(len(logs), sum(client.nthreads().values()), batch)
+        futures = client.map(_audit_batch, [[logs[i] for i in b] for b in batches],
+                             config=config, pure=False)
         try:
-            runs = [r for part in client.gather(futures) for r in part]
+            parts = client.gather(futures)
         finally:
             for f in futures:
                 f.release()
+        runs = [None] * len(logs)
+        for b, part in zip(batches, parts):
+            for i, r in zip(b, part):
+                runs[i] = r
     return FleetAudit(runs, _pacs._fleet_report(runs))
 
 
