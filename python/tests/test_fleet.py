@@ -220,6 +220,14 @@ def test_simulate_on_dask_equals_the_local_run_of_the_same_seeds(client):
         assert json.dumps(on_dask) == json.dumps(here), partitions
     # Other seeds give other rollouts.
     assert json.dumps(pacs.simulate(**{**args, "seed": 4})) != json.dumps(here)
+    # The same seeds as a list, in any order, locally or split over the cluster.
+    listed = dict(task="sorting", method=["pacs", "off"], seeds=[7, 3, 5, 4, 6])
+    assert json.dumps(pacs.simulate(**listed)) == json.dumps(here)
+    assert json.dumps(pacs.simulate(**listed, client=client, partitions=2)) == json.dumps(here)
+    # Seeds with gaps: each rollout as in a run of its own seed.
+    gaps = pacs.simulate(task="sorting", method="pacs", seeds=[9, 3], client=client)
+    assert [r["seed"] for r in gaps["rollouts"]] == [3, 9]
+    assert gaps["rollouts"][0] == here["rollouts"][5]
 
 
 def test_simulate_names_bad_input(client):
@@ -235,5 +243,13 @@ def test_simulate_names_bad_input(client):
         pacs.simulate(rollouts=2, client=client, partitions=0)
     with pytest.raises(pacs.ArgumentTypeError, match="client: expected None or a dask.distributed.Client, got int 7"):
         pacs.simulate(client=7)
+    with pytest.raises(pacs.InputError, match="seeds: seed 3 is given twice"):
+        pacs.simulate(seeds=[3, 4, 3])
+    with pytest.raises(pacs.InputError, match="seeds: give either seeds or rollouts"):
+        pacs.simulate(seeds=[3], rollouts=2)
+    with pytest.raises(pacs.ArgumentTypeError, match=r"seeds\[1\]: expected an int, got 'x'"):
+        pacs.simulate(seeds=[3, "x"])
+    with pytest.raises(pacs.InputError, match=r"seeds\[0\]: must be at least 0, got -1"):
+        pacs.simulate(seeds=[-1])
     with pytest.raises(pacs.InputError, match="chunk_motion: unknown `smooth`"):
         pacs.simulate(chunk_motion="smooth")

@@ -80,10 +80,6 @@ def _list_logs(paths: Any) -> list:
     return _pacs._fleet_logs(paths)
 
 
-def _rollouts(**kwargs: Any) -> bytes:
-    return _pacs._simulate_rollouts(**kwargs)
-
-
 def _audit_one(path: str, config: Any) -> Any:
     """The audit of one log."""
     (run,) = _pacs.audit(path, config)
@@ -176,12 +172,52 @@ def _count(value: Any, name: str, least: int) -> int:
     return value
 
 
+def _seed_list(rollouts: Any, seed: Any, seeds: Any) -> list:
+    """The seeds to run, sorted: ``seeds`` as given (distinct ints >= 0), or ``seed`` ..
+    ``seed + rollouts - 1`` (defaults 10 and 1)."""
+    if seeds is None:
+        n = 10 if rollouts is None else _count(rollouts, "rollouts", 1)
+        first = 1 if seed is None else _count(seed, "seed", 0)
+        return list(range(first, first + n))
+    if rollouts is not None or seed is not None:
+        raise InputError("seeds: give either seeds or rollouts and seed, not both")
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise ArgumentTypeError(f"seeds: expected a list of ints, got {seeds!r}")
+    out = [_count(s, f"seeds[{i}]", 0) for i, s in enumerate(seeds)]
+    if not out:
+        raise InputError("seeds: no seed given")
+    seen = set()
+    for s in out:
+        if s in seen:
+            raise InputError(f"seeds: seed {s} is given twice")
+        seen.add(s)
+    return sorted(out)
+
+
+def _ranges(seeds: list) -> list:
+    """Sorted distinct seeds as contiguous ranges ``(first, count)``."""
+    out = []
+    for s in seeds:
+        if out and out[-1][0] + out[-1][1] == s:
+            out[-1] = (out[-1][0], out[-1][1] + 1)
+        else:
+            out.append((s, 1))
+    return out
+
+
+def _rollouts_of(ranges: list, threads: Any, common: dict) -> list:
+    """The encoded rollouts of seed ranges (what a worker runs: one Dask task)."""
+    return [_pacs._simulate_rollouts(seed=s, rollouts=n, threads=threads, **common)
+            for s, n in ranges]
+
+
 def simulate(
     task: Any = "sorting",
     method: Any = "pacs",
-    rollouts: int = 10,
-    seed: int = 1,
+    rollouts: Any = None,
+    seed: Any = None,
     *,
+    seeds: Any = None,
     client: Any = None,
     partitions: Any = None,
     with_human: bool = True,
@@ -190,13 +226,15 @@ def simulate(
     log_dir: Any = None,
     threads: Any = None,
 ) -> dict:
-    """The simulation's evaluation (``pacs simulate``): ``rollouts`` rollouts per task and method,
-    rollout i with seed ``seed + i`` (the same people for every method).
+    """The simulation's evaluation (``pacs simulate``): one rollout per seed for every task and
+    method (the same people for every method): the seeds ``seed`` .. ``seed + rollouts - 1``
+    (defaults 10 rollouts from seed 1, as ``pacs simulate``), or the list ``seeds``.
 
     ``task``, ``method``: a name, a comma-separated str, a list, or ``"all"``. ``client``: None
-    (here, on ``threads`` threads) or a ``dask.distributed.Client``: the seeds are split into
-    ``partitions`` contiguous ranges (default: one per worker thread, at most one per seed),
-    one task each; the merged result is identical to one local run with the same seeds.
+    (here, on ``threads`` threads) or a ``dask.distributed.Client``: the sorted seeds are split
+    into ``partitions`` consecutive parts (default: one per worker thread, at most one per
+    seed), one task each on one thread; the rollouts are merged in the evaluation's order and
+    summarised once, so the result is identical to one local run with the same seeds.
     ``log_dir``: write every rollout's audit log there (on a cluster: a directory the workers
     share). Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
     ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
@@ -204,8 +242,7 @@ def simulate(
     _check_client(client)
     tasks = _names(task, "task")
     methods = _names(method, "method")
-    rollouts = _count(rollouts, "rollouts", 1)
-    seed = _count(seed, "seed", 0)
+    seed_list = _seed_list(rollouts, seed, seeds)
     if not isinstance(with_human, bool):
         raise ArgumentTypeError(f"with_human: expected True or False, got {with_human!r}")
     for value, name in ((chunk_motion, "chunk_motion"), (policy, "policy")):
@@ -225,29 +262,24 @@ def simulate(
     if client is None:
         if partitions is not None:
             raise InputError("partitions: only with a client")
-        part = _pacs._simulate_rollouts(
-            seed=seed, rollouts=rollouts, threads=_threads(threads), **common
-        )
-        return _pacs._simulate_merge([part])
+        parts = _rollouts_of(_ranges(seed_list), _threads(threads), common)
+        return _pacs._simulate_merge(parts)
     if threads is not None:
         raise InputError("threads: set the workers' threads on the Dask cluster, not here")
     if partitions is None:
         partitions = max(1, sum(client.nthreads().values()))
-    partitions = min(_count(partitions, "partitions", 1), rollouts)
-    # Contiguous seed ranges of near-equal size: [seed + start, seed + start + size).
-    base, extra = divmod(rollouts, partitions)
-    ranges, start = [], 0
+    partitions = min(_count(partitions, "partitions", 1), len(seed_list))
+    # Consecutive parts of the sorted seeds, of near-equal size.
+    base, extra = divmod(len(seed_list), partitions)
+    chunks, start = [], 0
     for i in range(partitions):
         size = base + (1 if i < extra else 0)
-        ranges.append((seed + start, size))
+        chunks.append(seed_list[start:start + size])
         start += size
-    futures = [
-        client.submit(_rollouts, seed=s, rollouts=n, threads=1, pure=False, **common)
-        for s, n in ranges
-    ]
+    futures = [client.submit(_rollouts_of, _ranges(c), 1, common, pure=False) for c in chunks]
     try:
-        parts = client.gather(futures)
+        done = client.gather(futures)
     finally:
         for f in futures:
             f.release()
-    return _pacs._simulate_merge(parts)
+    return _pacs._simulate_merge([part for parts in done for part in parts])
