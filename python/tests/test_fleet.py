@@ -140,11 +140,11 @@ def test_dask_gives_the_same_runs_and_report_as_the_local_audit(archive, local, 
 
 
 def cli():
-    """The `pacs` binary of this checkout, built as `cargo test` builds it (a no-op after
-    ./test.sh's `cargo test --workspace`)."""
+    """The `pacs` binary of this checkout, built as `cargo test --workspace` builds it (so a
+    no-op after ./test.sh's `cargo test --workspace`; the same units, features unified over
+    the workspace)."""
     out = subprocess.run(
-        ["cargo", "test", "-q", "-p", "pacs", "--test", "cli_fleet", "--no-run",
-         "--message-format=json"],
+        ["cargo", "test", "-q", "--workspace", "--no-run", "--message-format=json"],
         cwd=ROOT, check=True, capture_output=True, text=True).stdout
     for line in out.splitlines():
         msg = json.loads(line)

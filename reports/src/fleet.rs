@@ -428,31 +428,29 @@ pub fn fleet(runs: &[RunResult], mtimes: &[Option<u64>]) -> Fleet {
         .enumerate()
         .map(|(i, r)| place(r, mtimes.get(i).copied().flatten()))
         .collect();
-    let mut keys: Vec<(&str, &str, &str)> = placed
-        .iter()
-        .map(|r| (r.robot.as_str(), r.scene.as_str(), r.day.as_str()))
+    // Members of each (robot, scene, day), in log order; keys sorted.
+    let mut members: std::collections::BTreeMap<(&str, &str, &str), Vec<usize>> =
+        std::collections::BTreeMap::new();
+    for (i, r) in placed.iter().enumerate() {
+        members
+            .entry((r.robot.as_str(), r.scene.as_str(), r.day.as_str()))
+            .or_default()
+            .push(i);
+    }
+    let groups = members
+        .into_iter()
+        .map(|(k, idx)| {
+            let mut counts = Counts::default();
+            idx.iter().for_each(|&i| counts.add(&placed[i]));
+            Group {
+                robot: k.0.to_string(),
+                scene: k.1.to_string(),
+                day: k.2.to_string(),
+                counts,
+                worst: worst(idx.iter().map(|&i| (i, &placed[i])), WORST_PER_GROUP),
+            }
+        })
         .collect();
-    keys.sort_unstable();
-    keys.dedup();
-    let groups =
-        keys.into_iter()
-            .map(|k| {
-                let members = || {
-                    placed.iter().enumerate().filter(move |(_, r)| {
-                        (r.robot.as_str(), r.scene.as_str(), r.day.as_str()) == k
-                    })
-                };
-                let mut counts = Counts::default();
-                members().for_each(|(_, r)| counts.add(r));
-                Group {
-                    robot: k.0.to_string(),
-                    scene: k.1.to_string(),
-                    day: k.2.to_string(),
-                    counts,
-                    worst: worst(members(), WORST_PER_GROUP),
-                }
-            })
-            .collect();
     let mut total = Counts::default();
     placed.iter().for_each(|r| total.add(r));
     Fleet {
