@@ -142,6 +142,7 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
             );
         }
         s.push_str("</table>");
+        s.push_str(&crate::fleet::html(&crate::fleet::of_input(input), esc));
     }
     for r in input.runs {
         let _ = write!(

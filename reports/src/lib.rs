@@ -3,9 +3,11 @@
 //! Certification reports from `pacs audit` results: `report.json` (provenance, SHA-256 of every
 //! input, models and assumptions, verdicts, violations, metrics, and the tests backing each check),
 //! a self-contained `report.html` (inline SVG plots, print-friendly) and `report.md`. Several logs
-//! add an aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`).
+//! add an aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`) and the fleet
+//! table per robot, scene and day ([`fleet`]).
 
 pub mod aggregate;
+pub mod fleet;
 pub mod html;
 pub mod markdown;
 pub mod pdf;
@@ -386,6 +388,7 @@ pub fn report_json(input: &ReportInput) -> Value {
         "verdict": overall(input.runs),
         "runs": runs,
         "aggregate": aggregate::aggregate(input.runs),
+        "fleet": fleet::of_input(input),
     })
 }
 

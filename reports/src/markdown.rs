@@ -87,6 +87,7 @@ pub fn report(input: &ReportInput) -> String {
                 aggregate::pct(Some(row.safety_violation))
             );
         }
+        s.push_str(&crate::fleet::markdown(&crate::fleet::of_input(input)));
     }
     for r in input.runs {
         let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);

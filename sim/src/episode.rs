@@ -16,10 +16,10 @@ use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_shield::shield::ShieldError;
 use pacs_shield::{ChunkMotion, FilterKind};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Which safety filter runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// No filter (intended trajectories, never brake).
@@ -139,7 +139,7 @@ pub struct Sample {
 }
 
 /// Result of one episode.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Episode {
     /// Method.
     pub method: Method,
@@ -185,7 +185,7 @@ pub struct Episode {
 /// no measurement error, no delay). `certain_fraction` is the paper's "Safety Viol." (steps whose
 /// recorded state violates); `violation_fraction` adds the steps where the audit cannot exclude
 /// a violation between samples (its bound assumes only the joint limits between 1 ms samples).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TruthAudit {
     /// Verdict.
     pub verdict: pacs_audit::Verdict,

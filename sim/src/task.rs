@@ -11,10 +11,10 @@ use crate::policy::kernel::replay_path;
 use crate::policy::{DemoSet, KernelPolicy, Recording};
 use pacs_models::object::ObjectContact;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One of the evaluation tasks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TaskKind {
     /// Pick a block and put it into a box while a person reaches across the table (SSM).

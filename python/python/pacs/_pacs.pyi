@@ -163,6 +163,26 @@ def audit(
 def report(runs: Sequence[Run], out_dir: PathLike) -> Literal["pass", "fail", "inconclusive"]: ...
 def robot_spec(robot: RobotArg, side: PathLike | None = None) -> dict[str, Any]: ...
 
+# pacs.fleet's Rust side (use pacs.fleet.audit / pacs.simulate).
+def _run_from_state(state: bytes) -> Run: ...
+def _fleet_logs(paths: PathLike | Sequence[PathLike]) -> list[str]: ...
+def _fleet_report(runs: Sequence[Run]) -> dict[str, Any]: ...
+def _simulate_check(
+    tasks: Sequence[str], methods: Sequence[str], with_human: bool, chunk_motion: str, policy: str
+) -> None: ...
+def _simulate_rollouts(
+    tasks: Sequence[str],
+    methods: Sequence[str],
+    seed: int,
+    rollouts: int,
+    with_human: bool,
+    chunk_motion: str,
+    policy: str,
+    log_dir: PathLike | None = None,
+    threads: int | None = None,
+) -> bytes: ...
+def _simulate_merge(parts: Sequence[bytes]) -> dict[str, Any]: ...
+
 class LogWriter:
     def __init__(
         self,
