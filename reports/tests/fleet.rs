@@ -16,6 +16,7 @@ fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> R
                 t_start: a,
                 t_end: b,
                 constraint: ConstraintKind::Ssm,
+                person: None,
                 body_part: "rHand".into(),
                 link: "fr3_link7".into(),
                 min_separation: -0.01,
@@ -39,6 +40,12 @@ fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> R
             success: None,
             safe_success: None,
         },
+        evidence: pacs_audit::Evidence {
+            t_start: 0.0,
+            t_end: 1.0,
+            completeness: pacs_audit::Completeness::Complete,
+        },
+        people: vec!["human".into()],
         meta: meta.as_object().cloned().unwrap_or_default(),
         models: ModelNames {
             robot: "fr3".into(),
