@@ -61,6 +61,13 @@ pub fn json_path_at(text: &str, line: usize, column: usize) -> Option<String> {
         }
         i += 1;
     }
+    // At an object's closing brace (`missing field`), the error is the object's, not its last
+    // key's.
+    if bytes.get(end) == Some(&b'}')
+        && let Some(Frame::Object { key, .. }) = stack.last_mut()
+    {
+        *key = None;
+    }
     let mut path = String::new();
     for f in &stack {
         match f {
@@ -129,5 +136,23 @@ mod tests {
             ]
         );
         assert_eq!(json_path_at("{}", 1, 1), None);
+        // A missing field is the object's error: its path, not its last key's.
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct Inner {
+            b: f64,
+            c: f64,
+        }
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct Outer {
+            a: Vec<Inner>,
+        }
+        let text = "{\"a\": [{\"b\": 1, \"c\": 2}, {\"b\": 1}]}";
+        let e = serde_json::from_str::<Outer>(text).unwrap_err();
+        assert_eq!(
+            describe_json_error(text, &e),
+            "a[1]: missing field `c` at line 1 column 33"
+        );
     }
 }
