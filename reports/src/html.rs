@@ -58,7 +58,7 @@ body{font-family:sans-serif;max-width:76em;margin:1em auto;padding:0 1em;color:#
 table{border-collapse:collapse;margin:.5em 0;font-size:88%;width:100%;table-layout:auto}
 th,td{border:1px solid #999;padding:2px 6px;text-align:left;vertical-align:top;overflow-wrap:break-word}
 th{word-break:normal;hyphens:auto}
-td.num,th.num{text-align:right;white-space:nowrap}
+td.num,th.num{text-align:right;white-space:nowrap}table.episodes th.num{white-space:normal}
 th{background:#eee}.v{font-weight:bold;padding:0 4px}.pass{color:#1b5e20}.fail{color:#b71c1c}.inconclusive{color:#e65100}
 code{font-size:90%;overflow-wrap:anywhere}.hash{font-size:75%}.note{font-size:85%;color:#333}
 section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:auto}
