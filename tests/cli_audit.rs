@@ -127,6 +127,14 @@ fn exit_codes_and_json_output() {
     assert_eq!(run["verdict"], "fail");
     assert_eq!(run["metrics"]["safe_success"], false);
     assert!(run["metrics"]["violation_fraction"].as_f64().unwrap() > 0.0);
+    // The episodes beside the intervals, each covering some of them.
+    let episodes = run["episodes"].as_array().unwrap();
+    assert!(!episodes.is_empty());
+    let merged: u64 = episodes
+        .iter()
+        .map(|e| e["intervals"].as_u64().unwrap())
+        .sum();
+    assert_eq!(merged as usize, run["violations"].as_array().unwrap().len());
     let viol = &run["violations"][0];
     for k in [
         "t_start",

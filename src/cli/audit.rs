@@ -142,7 +142,18 @@ pub fn main(args: AuditArgs) -> ExitCode {
     let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
     let mut out = std::io::stdout().lock();
     let written = if args.json {
-        serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs }))
+        // Each run with its violation episodes beside the intervals (as in report.json).
+        let runs_json: Vec<serde_json::Value> = runs
+            .iter()
+            .map(|r| {
+                let mut v = serde_json::to_value(r).unwrap_or_default();
+                v["episodes"] =
+                    serde_json::to_value(pacs_reports::episodes::episodes(&r.violations))
+                        .unwrap_or_default();
+                v
+            })
+            .collect();
+        serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs_json }))
             .map_err(std::io::Error::from)
             .and_then(|_| writeln!(out))
     } else {
