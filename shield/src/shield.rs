@@ -669,10 +669,23 @@ impl Shield {
 
     /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
-        if q.len() != self.dof || q.iter().any(|x| !x.is_finite()) || !t.is_finite() {
+        if q.len() != self.dof {
             return Err(ShieldError::Invalid(format!(
-                "start: need {} finite joint values and a finite time",
+                "start: {} joint values given, the robot has {} joints",
+                q.len(),
                 self.dof
+            )));
+        }
+        if let Some(i) = q.iter().position(|x| !x.is_finite()) {
+            return Err(ShieldError::Invalid(format!(
+                "start[{i}] (joint `{}`): {} is not a finite angle (rad)",
+                self.robot.joints()[i].name,
+                q[i]
+            )));
+        }
+        if !t.is_finite() {
+            return Err(ShieldError::Invalid(format!(
+                "start: the time {t} s is not finite"
             )));
         }
         let l = self.robot.limits();
