@@ -13,6 +13,7 @@ fn viol(t0: f64, t1: f64, kind: ConstraintKind, part: &str, link: &str, sep: f64
         t_start: t0,
         t_end: t1,
         constraint: kind,
+        person: None,
         body_part: part.into(),
         link: link.into(),
         min_separation: sep,
@@ -50,6 +51,8 @@ fn run(name: &str, verdict: Verdict, violations: Vec<Violation>, min_sep: f64) -
             success: Some(true),
             safe_success: Some(verdict == Verdict::Pass),
         },
+        evidence: pacs_audit::Evidence::default(),
+        people: vec!["human".into()],
         meta: serde_json::Map::new(),
         models: ModelNames {
             robot: "ur5e".into(),
@@ -342,4 +345,47 @@ fn user_given_values_are_assumptions() {
     assert!(markdown::report(&inp).contains("- robot `ur5e`: j_max = 5000 rad/s³ for every joint"));
     let pdf = String::from_utf8_lossy(&pacs_reports::pdf::report(&inp)).to_string();
     assert!(pdf.contains("a_max = 10 rad/s"));
+}
+
+/// A v2 log of two people: the intervals of each person are their own episodes, named by the
+/// person, even on one link at one time; the CSV carries the person of every interval.
+#[test]
+fn episodes_of_several_people_name_the_person() {
+    let mut v = Vec::new();
+    for (k, who) in ["operator", "visitor"].iter().enumerate() {
+        for i in 0..3 {
+            let t = 0.5 + i as f64 * 0.001;
+            let mut x = viol(
+                t,
+                t + 0.001,
+                ConstraintKind::Ssm,
+                "right hand",
+                "link7",
+                -0.01,
+            );
+            x.person = Some(who.to_string());
+            x.spans = 1 + k as u64;
+            v.push(x);
+        }
+    }
+    let e = episodes(&v);
+    assert_eq!(e.len(), 2);
+    let names: Vec<String> = e.iter().map(|e| episode_cells(e)[2].clone()).collect();
+    assert!(
+        names.contains(&"person `operator` (right hand)".to_string()),
+        "{names:?}"
+    );
+    assert!(
+        names.contains(&"person `visitor` (right hand)".to_string()),
+        "{names:?}"
+    );
+    let runs = vec![run("two.jsonl", Verdict::Fail, v, -0.01)];
+    let csv = violations_csv(&runs);
+    assert!(
+        csv.lines()
+            .nth(1)
+            .unwrap()
+            .contains(",SSM,operator,right hand,")
+    );
+    assert_eq!(csv.lines().filter(|l| l.contains(",visitor,")).count(), 3);
 }
