@@ -12,7 +12,7 @@
 //!
 //! The pacs header: given by the caller (`pacs audit --header`), or the JSON text in key
 //! [`CUSTOM_DATA_KEY`] of the bag's `custom_data` (in `metadata.yaml`, or for a lone `.db3` file in
-//! its `metadata` table, which rosbag2 writes since Iron).
+//! its `metadata` table, which newer rosbag2 releases and `rosbags` write).
 
 use crate::error::{Location, LogError};
 use crate::format::{Header, ModelOverrides, Record, RecordReader};
@@ -402,7 +402,7 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     Ok(Part { path, name, topics })
 }
 
-/// The metadata YAML a `.db3` file keeps in its `metadata` table (rosbag2 since Iron, and
+/// The metadata YAML a `.db3` file keeps in its `metadata` table (newer rosbag2 releases, and
 /// `rosbags`), if it has one.
 fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
     let bad = |p: String| LogError::input(name, Location::File, p);
