@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The Python package's tests: build the extension into a venv (under the cargo target
-# directory; created on first use with maturin, numpy and pytest from PyPI) and run pytest.
+# directory; created on first use with maturin, numpy, pytest and dask[distributed] from PyPI)
+# and run pytest.
 #
 #   bash python/test.sh [PYTEST_ARGS...]
 #
@@ -26,6 +27,11 @@ fi
 # rosbags (an independent writer of ROS 2 bags) for the db3 tests, which skip without it.
 if ! "$venv/bin/python" -c 'import rosbags' 2>/dev/null; then
   "$venv/bin/pip" install -q "rosbags>=0.11,<0.12"
+fi
+# Dask (pacs.fleet on a LocalCluster, python/tests/test_fleet.py): installed into an existing
+# venv too.
+if ! "$venv/bin/python" -c 'import dask.distributed' 2>/dev/null; then
+  "$venv/bin/pip" install -q "dask[distributed]>=2024.8,<2027"
 fi
 # maturin develop installs into the active virtualenv.
 VIRTUAL_ENV="$(cd "$venv" && pwd)" PATH="$(cd "$venv" && pwd)/bin:$PATH" \

@@ -340,3 +340,86 @@ fn bad_scenes_exit_3_naming_the_field() {
         std::fs::remove_dir_all(&d).ok();
     }
 }
+
+/// A scene with two people (`humans`): the shield takes both, the log lists both (format v2)
+/// with every measurement's person, ends with the promised `end` event and passes the audit;
+/// the same log cut at a line boundary (or without its end) exits 2, `incomplete_log`.
+#[test]
+fn two_people_are_logged_and_a_cut_log_is_never_a_pass() {
+    let mut scene = example();
+    let o = scene.as_object_mut().unwrap();
+    o.remove("human");
+    o.insert(
+        "humans".into(),
+        serde_json::json!([{"id": "operator", "human": "default"}, {"id": "visitor", "human": "default"}]),
+    );
+    // The visitor stands 3 m behind the robot, measured every 50 ms.
+    let mut ms: Vec<Value> = o["human_measurements"].as_array().unwrap().clone();
+    for m in &mut ms {
+        m["id"] = "operator".into();
+    }
+    for k in 0..48 {
+        let kp: Vec<[f64; 3]> = (0..9).map(|i| [-3.0, 0.1 * i as f64, 1.2]).collect();
+        ms.push(serde_json::json!({"id": "visitor", "t": 0.05 * k as f64, "keypoints": kp}));
+    }
+    o.insert("human_measurements".into(), Value::Array(ms));
+    let (out, d) = run_scene("two-people", &scene);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let log = std::fs::read_to_string(d.join("out/log.jsonl")).unwrap();
+    let lines: Vec<&str> = log.lines().collect();
+    let header: Value = serde_json::from_str(lines[0]).unwrap();
+    assert_eq!(header["version"], 2);
+    assert_eq!(header["end_event"], true);
+    assert_eq!(header["humans"][1]["id"], "visitor");
+    assert!(lines.last().unwrap().contains("\"name\":\"end\""));
+    let visitor = lines
+        .iter()
+        .filter(|l| l.contains("\"type\":\"human\"") && l.contains("\"id\":\"visitor\""))
+        .count();
+    assert_eq!(visitor, 48);
+    let audit = |p: &Path| pacs().args(["audit", "--json"]).arg(p).output().unwrap();
+    let a = audit(&d.join("out/log.jsonl"));
+    assert_eq!(
+        a.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&a.stdout),
+        String::from_utf8_lossy(&a.stderr)
+    );
+    for keep in [lines.len() * 3 / 10, lines.len() - 1] {
+        let cut = d.join(format!("cut{keep}.jsonl"));
+        let text: String = lines[..keep].iter().map(|l| format!("{l}\n")).collect();
+        std::fs::write(&cut, text).unwrap();
+        let a = audit(&cut);
+        assert_eq!(a.status.code(), Some(2), "cut after {keep} lines");
+        let s = String::from_utf8_lossy(&a.stdout);
+        assert!(s.contains("incomplete_log"), "{s}");
+    }
+    // An undeclared person in the scene is refused, naming the field.
+    assert_undeclared_person_refused(&scene, &d);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+fn assert_undeclared_person_refused(scene: &Value, d: &Path) {
+    let mut bad = scene.clone();
+    bad["human_measurements"][0]["id"] = "stranger".into();
+    let input = d.join("bad.json");
+    std::fs::write(&input, bad.to_string()).unwrap();
+    let out = pacs()
+        .args(["shield", "--input"])
+        .arg(&input)
+        .arg("--out")
+        .arg(d.join("bad-out"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("human_measurements[0].id") && e.contains("stranger"),
+        "{e}"
+    );
+}

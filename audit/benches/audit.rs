@@ -53,6 +53,7 @@ fn models(task: &str) -> LogModels {
     LogModels {
         robot: RobotModel::builtin("fr3").unwrap(),
         human: HumanModel::builtin("default").unwrap(),
+        people: vec![("human".into(), HumanModel::builtin("default").unwrap())],
         constraints: ConstraintSpec::builtin(task).unwrap(),
         environment: vec![],
         objects: vec![],

@@ -4,11 +4,11 @@
 mod audit_common;
 
 use audit_common::*;
-use nalgebra::{DVector, Point3, Vector3};
+use nalgebra::DVector;
 use pacs_audit::{AuditConfig, ConstraintKind, Verdict};
 use pacs_log::ModelRef;
 use pacs_models::constraints::RegionSpec;
-use pacs_models::{Capsule, Constraint, ConstraintSpec, HumanModel, RobotModel};
+use pacs_models::{Constraint, ConstraintSpec, HumanModel};
 
 fn gap_part(q: &[f64], kp: &[[f64; 3]], part: &str) -> f64 {
     let h = human_capsules(&human(), kp);

@@ -909,3 +909,36 @@ fn object_topics_are_audited() {
         r.inconclusive
     );
 }
+
+/// A record inside an uncompressed chunk whose length runs past the chunk's end (the fuzzers'
+/// 1 KB artifact, rebuilt: the `mcap` crate 0.26 underflows its count of the chunk's remaining
+/// bytes and, in release builds, parses the bytes after the chunk as its records) is refused
+/// before the linear pass, naming the offset; with every length in range, the same file passes.
+#[test]
+fn a_record_running_past_its_uncompressed_chunk_is_refused() {
+    let spec = Spec {
+        compression: None,
+        ..Spec::new()
+    };
+    let good = write_mcap(&spec, &header("ssm"), &short_run(good_robot, good_human));
+    let r = audit_bytes("ok.mcap", &good, &AuditConfig::default(), None).unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    // The first chunk (opcode 0x06) after the magic.
+    let u64_at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+    let mut pos = 8;
+    while good[pos] != 0x06 {
+        pos += 9 + u64_at(&good, pos + 1) as usize;
+    }
+    let body = pos + 9;
+    let clen = u32::from_le_bytes(good[body + 28..body + 32].try_into().unwrap()) as usize;
+    assert_eq!(clen, 0, "an uncompressed chunk");
+    let records_len_at = body + 32 + clen;
+    let records = u64_at(&good, records_len_at);
+    let first = records_len_at + 8;
+    // The first record inside the chunk claims all of the chunk and 100 bytes more.
+    let mut bad = good.clone();
+    bad[first + 1..first + 9].copy_from_slice(&(records - 9 + 100).to_le_bytes());
+    expect_bad(&bad, "runs past the chunk's end");
+    let e = audit_bytes("bad.mcap", &bad, &AuditConfig::default(), None).unwrap_err();
+    assert!(e.to_string().contains(&format!("offset {first}")), "{e}");
+}

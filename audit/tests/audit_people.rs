@@ -312,3 +312,34 @@ fn equal_time_records_are_capped() {
         "{e}"
     );
 }
+
+/// The fuzzers' seeds are valid logs that reach the audit (and pass): the fuzzers start from
+/// inputs that exercise the checks, not only the parsers (v1 and v2, JSON Lines and CSV).
+#[test]
+fn the_fuzz_seeds_reach_the_audit_and_pass() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus");
+    for (dir, n_min) in [("jsonl", 1), ("csv", 2)] {
+        let mut n = 0;
+        for e in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("close_")
+            {
+                continue; // a near-miss seed, not meant to pass
+            }
+            let r = pacs_audit::audit_file(&p, &AuditConfig::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            assert_eq!(
+                r.verdict,
+                Verdict::Pass,
+                "{}: {:?}",
+                p.display(),
+                r.inconclusive
+            );
+            n += 1;
+        }
+        assert!(n >= n_min, "{dir}: {n} seeds");
+    }
+}

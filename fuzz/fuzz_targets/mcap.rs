@@ -22,6 +22,9 @@ fuzz_target!(|data: &[u8]| {
         if run.verdict == Verdict::Pass {
             assert!(run.metrics.samples >= 2);
             assert!(run.inconclusive.is_empty());
+            // Evidence: a pass covers time and never comes from a log cut short.
+            assert!(run.evidence.t_end > run.evidence.t_start);
+            assert_ne!(run.evidence.completeness, pacs_audit::Completeness::Incomplete);
         }
     }
 });

@@ -15,6 +15,7 @@
 //! would need a longer window is an error, never silently reordered or dropped.
 
 mod fields;
+mod guard;
 mod header;
 mod reader;
 mod writer;

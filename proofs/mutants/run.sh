@@ -48,6 +48,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-verify --test object_rule --no-fail-fast >>"$log" 2>&1
     # The audit's input-consistency checks (x20: a human faster than the model).
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
+    # Several people, logs cut short, stamps that cannot resolve the samples (x60–x64).
+    cargo test -p pacs-audit --test audit_people --no-fail-fast >>"$log" 2>&1
     # The planner's checked stopping tail of Moving chunks (x21).
     cargo test -p pacs-motion --test trajectory --no-fail-fast >>"$log" 2>&1
     # The path-speed limits' derivative windows (x44: pieces cut by the window left out).

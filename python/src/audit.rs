@@ -48,12 +48,15 @@ fn verdict_str(v: pacs_audit::Verdict) -> &'static str {
 /// The audit result of one log: verdict, violations, unchecked spans and metrics.
 #[pyclass(name = "Run", module = "pacs", frozen)]
 pub struct PyRun {
-    run: RunResult,
-    path: PathBuf,
+    pub(crate) run: RunResult,
+    pub(crate) path: PathBuf,
     /// The log's SHA-256 and size when it was audited (a report refuses a log changed since).
-    hashed: InputFile,
-    config: AuditConfig,
-    config_path: Option<PathBuf>,
+    pub(crate) hashed: InputFile,
+    /// The log's modification time (Unix seconds) when it was audited: the fleet report's day
+    /// when the header states none (`pacs_reports::fleet::day`).
+    pub(crate) modified: Option<u64>,
+    pub(crate) config: AuditConfig,
+    pub(crate) config_path: Option<PathBuf>,
 }
 
 #[pymethods]
@@ -103,6 +106,15 @@ impl PyRun {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.run)
     }
+    /// Pickling (Dask, multiprocessing): the whole run — results, plot series, model
+    /// parameters, the audited bytes' SHA-256, the settings — rebuilt by
+    /// `pacs.fleet._run_from_state` (same pacs version only).
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, pyo3::types::PyBytes>,))> {
+        crate::fleet::reduce_run(py, self)
+    }
     fn __repr__(&self) -> String {
         format!(
             "Run(log={:?}, verdict={:?}, violations={}, inconclusive={})",
@@ -148,8 +160,12 @@ pub fn audit(
     let mut out = Vec::with_capacity(list.len());
     for p in list {
         // Hashed before and after the audit: the verdict belongs to exactly these bytes.
-        let hash = |p: &PathBuf| InputFile::hash(p).map_err(|e| input(format!("paths: {e}")));
+        let hash = |p: &PathBuf| {
+            py.detach(|| InputFile::hash(p))
+                .map_err(|e| input(format!("paths: {e}")))
+        };
         let before = hash(&p)?;
+        let modified = pacs_reports::fleet::modified(&p);
         let r = py.detach(|| pacs_audit::audit_file(&p, &cfg));
         let run = r.map_err(|e| match e {
             pacs_log::LogError::Io { .. } => input(format!("{e}")),
@@ -167,6 +183,7 @@ pub fn audit(
         out.push(PyRun {
             run,
             hashed: before,
+            modified,
             path: p,
             config: cfg.clone(),
             config_path: cfg_path.clone(),

@@ -1,12 +1,14 @@
 //! The `pacs._pacs` extension module behind the Python package `pacs` (python/python/pacs):
 //! the PACS shield ([`shield`]), its 1 kHz loop on a Rust thread ([`runner`]) and the offline
-//! audit with its log writer and reports ([`audit`]). Every invalid argument raises a
-//! `pacs.Error` subclass naming the argument and the value ([`errors`]); nothing panics across
-//! the boundary.
+//! audit with its log writer and reports ([`audit`]), and what `pacs.fleet` runs on workers
+//! ([`fleet`]: pickled runs, the fleet report, simulation rollouts in parts). Every invalid
+//! argument raises a `pacs.Error` subclass naming the argument and the value ([`errors`]);
+//! nothing panics across the boundary.
 
 mod audit;
 mod convert;
 mod errors;
+mod fleet;
 mod models;
 mod runner;
 mod shield;
@@ -27,5 +29,11 @@ fn _pacs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(audit::audit, m)?)?;
     m.add_function(wrap_pyfunction!(audit::report, m)?)?;
     m.add_function(wrap_pyfunction!(models::robot_spec, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_run_from_state, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_fleet_logs, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_fleet_report, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_simulate_check, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_simulate_rollouts, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_simulate_merge, m)?)?;
     Ok(())
 }

@@ -154,7 +154,7 @@ def test_log_writer_refuses_bad_records(demo, tmp_path):
             w.object(2.0, 2.0, "ball", [0, 0, 0])
     with pytest.raises(pacs.OutputError):
         pacs.LogWriter(tmp_path / "no" / "such" / "dir.jsonl")
-    with pytest.raises(pacs.InputError, match="human: a log names one human"):
+    with pytest.raises(pacs.InputError, match="human: a log names at least one human"):
         pacs.LogWriter(tmp_path / "n.jsonl", human=None)
     with pytest.raises(pacs.ArgumentTypeError, match="path"):
         pacs.LogWriter(3)

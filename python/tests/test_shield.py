@@ -155,8 +155,7 @@ def test_every_human_must_be_measured_and_each_can_stop_the_robot(demo):
         c = s.step(t)
     assert not c.verified and c.binding["kind"] == "ssm" and c.binding.get("human") == 1
     np.testing.assert_allclose(c.dq, 0.0, atol=1e-12)
-    with pytest.raises(pacs.InputError, match="2 humans cannot be logged"):
-        pacs.Shield(humans=["default", "default"], log="x.jsonl")
+    # Several people are logged too (format v2): python/tests/test_people.py.
 
 
 def test_humans_none_means_no_human(demo):

@@ -113,6 +113,19 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         );
     }
     s.push_str("</table><p class=\"note\">¹ The separation figure: over the checked spans and robot/body-part capsule pairs, the least lower bound of the core-segment distance minus the radii; &gt; 0: the robot's and the human's occupancies are provably at least this far apart; ≤ 0: contact possible. ² Safe success: the task succeeded (last <code>success</code>/<code>failure</code> event) and the audit verdict is pass.</p>");
+    s.push_str("<h2>Evidence</h2><table><tr><th>log</th><th>people</th><th>audited span (s)</th><th>log complete</th></tr>");
+    for r in input.runs {
+        let [log, people, span, complete] = crate::evidence_row(r);
+        let _ = write!(
+            s,
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&log),
+            esc(&people),
+            esc(&span),
+            esc(&complete)
+        );
+    }
+    s.push_str("</table>");
     if input.runs.len() > 1 {
         s.push_str("<h2>Aggregate (impact of safeguarding)</h2><table><tr><th>task</th><th>policy</th><th>filter</th><th class=\"num\">n (logs)</th><th class=\"num\">success</th><th class=\"num\">safe success</th><th class=\"num\">violation fraction (mean ± std)</th></tr>");
         for row in aggregate::aggregate(input.runs) {
@@ -129,6 +142,7 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
             );
         }
         s.push_str("</table>");
+        s.push_str(&crate::fleet::html(&crate::fleet::of_input(input), esc));
     }
     for r in input.runs {
         let _ = write!(

@@ -3,9 +3,11 @@
 //! Certification reports from `pacs audit` results: `report.json` (provenance, SHA-256 of every
 //! input, models and assumptions, verdicts, violations, metrics, and the tests backing each check),
 //! a self-contained `report.html` (inline SVG plots, print-friendly) and `report.md`. Several logs
-//! add an aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`).
+//! add an aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`) and the fleet
+//! table per robot, scene and day ([`fleet`]).
 
 pub mod aggregate;
+pub mod fleet;
 pub mod html;
 pub mod markdown;
 pub mod pdf;
@@ -282,7 +284,7 @@ pub const VIOLATION_COLUMNS: [&str; 10] = [
     "from (s)",
     "to (s)",
     "constraint",
-    "body part",
+    "person: body part",
     "link",
     "nominal separation (m)",
     "energy bound (J)",
@@ -306,7 +308,10 @@ pub fn violation_cells(v: &pacs_audit::Violation) -> [String; 10] {
         format!("{:.4}", v.t_start),
         format!("{:.4}", v.t_end),
         constraint_name(v.constraint),
-        v.body_part.clone(),
+        match &v.person {
+            Some(p) => format!("{p}: {}", v.body_part),
+            None => v.body_part.clone(),
+        },
         v.link.clone(),
         if v.min_separation.is_finite() {
             format!("{:.4}", v.min_separation)
@@ -323,6 +328,29 @@ pub fn violation_cells(v: &pacs_audit::Violation) -> [String; 10] {
 /// Overall verdict of the runs.
 pub fn overall(runs: &[RunResult]) -> Verdict {
     Verdict::combine(runs.iter().map(|r| r.verdict))
+}
+
+/// What a run's log covers, for the reports: the people, the audited time span (s) and whether
+/// the log is the whole run (`complete`: its writer promised an `end` event and the log reaches
+/// it; `incomplete`: cut short; `not promised`: the writer promised nothing, as ROS bags and v1
+/// logs, so only the span is stated).
+pub fn evidence_row(r: &RunResult) -> [String; 4] {
+    let e = &r.evidence;
+    let completeness = match e.completeness {
+        pacs_audit::Completeness::Complete => "complete (end event reached)",
+        pacs_audit::Completeness::Incomplete => "INCOMPLETE (cut short: never a pass)",
+        pacs_audit::Completeness::NotPromised => "not promised by the writer (span only)",
+    };
+    [
+        r.log.clone(),
+        if r.people.is_empty() {
+            "—".into()
+        } else {
+            r.people.join(", ")
+        },
+        format!("{:.3} – {:.3}", e.t_start, e.t_end),
+        completeness.into(),
+    ]
 }
 
 /// The `report.json` document.
@@ -343,6 +371,8 @@ pub fn report_json(input: &ReportInput) -> Value {
                 "violations": r.violations,
                 "inconclusive": r.inconclusive,
                 "metrics": r.metrics,
+                "evidence": r.evidence,
+                "people": r.people,
             })
         })
         .collect();
@@ -358,6 +388,7 @@ pub fn report_json(input: &ReportInput) -> Value {
         "verdict": overall(input.runs),
         "runs": runs,
         "aggregate": aggregate::aggregate(input.runs),
+        "fleet": fleet::of_input(input),
     })
 }
 

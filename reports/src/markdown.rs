@@ -55,6 +55,13 @@ pub fn report(input: &ReportInput) -> String {
                 .unwrap_or("n/a".into()),
         );
     }
+    s.push_str(
+        "\n### Evidence\n\n| log | people | audited span (s) | log complete |\n|---|---|---|---|\n",
+    );
+    for r in input.runs {
+        let [log, people, span, complete] = crate::evidence_row(r);
+        let _ = writeln!(s, "| `{log}` | {people} | {span} | {complete} |");
+    }
     let d = definitions();
     let _ = writeln!(
         s,
@@ -80,6 +87,7 @@ pub fn report(input: &ReportInput) -> String {
                 aggregate::pct(Some(row.safety_violation))
             );
         }
+        s.push_str(&crate::fleet::markdown(&crate::fleet::of_input(input)));
     }
     for r in input.runs {
         let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);

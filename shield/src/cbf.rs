@@ -76,6 +76,8 @@ pub struct CbfFilter {
     dq: [f64; MAX_DOF],
     ddq: [f64; MAX_DOF],
     meas: Option<HumanMeasurement>,
+    /// Further people ([`CbfFilter::add_human`]): each one's reach and newest measurement.
+    others: Vec<(HumanReach, Option<HumanMeasurement>)>,
     objects: Vec<(ObjectModel, Option<ObjectMeasurement>)>,
     started: bool,
 }
@@ -124,9 +126,33 @@ impl CbfFilter {
             dq: [0.0; MAX_DOF],
             ddq: [0.0; MAX_DOF],
             meas: None,
+            others: Vec::new(),
             objects: Vec::new(),
             started: false,
         })
+    }
+
+    /// Add another person (its body parts become barrier obstacles like the first's); returns
+    /// its index (the first person, given to [`Self::new`] and measured through
+    /// [`Self::step`], is 0).
+    pub fn add_human(&mut self, human: HumanModel) -> usize {
+        self.others
+            .push((HumanReach::new(human, HumanReachModel::Combined), None));
+        self.others.len()
+    }
+
+    /// A measurement of person `id` ≥ 1 (kept if newer than its latest).
+    pub fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
+        let n = self.others.len() + 1;
+        let Some((_, latest)) = id.checked_sub(1).and_then(|i| self.others.get_mut(i)) else {
+            return Err(ShieldError::Invalid(format!(
+                "human {id}: no such human ({n} in the scene; person 0 is measured through step)"
+            )));
+        };
+        if latest.as_ref().is_none_or(|c| c.time() < m.time()) {
+            *latest = Some(m.clone());
+        }
+        Ok(())
     }
 
     /// Start at rest at `q` (rad), time `t` (s).
@@ -237,6 +263,16 @@ impl CbfFilter {
         // leaves the step unconstrained against it and is reported as missing.
         let mut obstacles: Vec<Capsule> = Vec::new();
         if let (Some(hr), Some(m)) = (self.human.as_mut(), self.meas.as_ref()) {
+            match hr.occupancy(m, t.max(m.time() - hr.model().delay()), t + alpha) {
+                Ok(hcaps) => obstacles.extend(hcaps.iter().cloned()),
+                Err(_) => diag.binding = Binding::NoMeasurement,
+            }
+        }
+        for (hr, meas) in &mut self.others {
+            let Some(m) = meas.as_ref() else {
+                diag.binding = Binding::NoMeasurement;
+                continue;
+            };
             match hr.occupancy(m, t.max(m.time() - hr.model().delay()), t + alpha) {
                 Ok(hcaps) => obstacles.extend(hcaps.iter().cloned()),
                 Err(_) => diag.binding = Binding::NoMeasurement,

@@ -35,6 +35,15 @@ pub trait SafetyFilter {
     ) -> Result<usize, ShieldError>;
     /// Record a measurement of object `id` (a newer one replaces the latest).
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
+    /// Add another person with the task's constraints; returns its index (the first person,
+    /// given at construction and measured through [`Self::step`], is 0).
+    fn add_human(
+        &mut self,
+        human: HumanModel,
+        constraints: &ConstraintSpec,
+    ) -> Result<usize, ShieldError>;
+    /// Record a measurement of person `id` ≥ 1 (a newer one replaces the latest).
+    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError>;
     /// Intended time (s) left until the current chunk's last waypoint, if the filter follows a
     /// time-parameterised chunk ([`Shield::remaining`]); `None` otherwise.
     fn remaining(&self) -> Option<f64> {
@@ -65,6 +74,16 @@ impl SafetyFilter for Shield {
     }
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         Shield::measure_object(self, id, m)
+    }
+    fn add_human(
+        &mut self,
+        human: HumanModel,
+        constraints: &ConstraintSpec,
+    ) -> Result<usize, ShieldError> {
+        Shield::add_human(self, human, constraints)
+    }
+    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
+        Shield::measure_human(self, id, m)
     }
     fn remaining(&self) -> Option<f64> {
         Shield::remaining(self)
@@ -97,6 +116,16 @@ impl SafetyFilter for CbfFilter {
     }
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         CbfFilter::measure_object(self, id, m)
+    }
+    fn add_human(
+        &mut self,
+        human: HumanModel,
+        _constraints: &ConstraintSpec,
+    ) -> Result<usize, ShieldError> {
+        Ok(CbfFilter::add_human(self, human))
+    }
+    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
+        CbfFilter::measure_human(self, id, m)
     }
 }
 

@@ -16,10 +16,10 @@ use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_shield::shield::ShieldError;
 use pacs_shield::{ChunkMotion, FilterKind};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Which safety filter runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// No filter (intended trajectories, never brake).
@@ -139,7 +139,7 @@ pub struct Sample {
 }
 
 /// Result of one episode.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Episode {
     /// Method.
     pub method: Method,
@@ -185,7 +185,7 @@ pub struct Episode {
 /// no measurement error, no delay). `certain_fraction` is the paper's "Safety Viol." (steps whose
 /// recorded state violates); `violation_fraction` adds the steps where the audit cannot exclude
 /// a violation between samples (its bound assumes only the joint limits between 1 ms samples).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TruthAudit {
     /// Verdict.
     pub verdict: pacs_audit::Verdict,
@@ -230,6 +230,9 @@ pub struct Setup<'a> {
     pub spec: &'a ConstraintSpec,
     /// Ground-truth motion.
     pub script: &'a dyn HumanScript,
+    /// Further people (same human model), each measured by its own camera, logged with its id
+    /// and checked by the filter and the truth audit.
+    pub others: &'a [Box<dyn HumanScript>],
     /// Dynamic objects (each with its model, contact and true motion).
     pub objects: &'a [SimObject],
     /// The policy.
@@ -263,6 +266,13 @@ pub const REST_SPEED: f64 = 0.02;
 
 /// The audit-log header of an episode (models inline, objects with their contact, `meta` with
 /// task, policy, filter, human).
+/// The id of person `i` of a scene with several people (`human0`, `human1`, …: the filter's
+/// order; the Python `Shield` names unnamed people the same way).
+pub fn person_id(i: usize) -> String {
+    format!("human{i}")
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn log_header(
     label: &str,
     robot: &RobotModel,
@@ -270,13 +280,24 @@ pub fn log_header(
     spec: &ConstraintSpec,
     script: &dyn HumanScript,
     objects: &[SimObject],
+    others: usize,
     policy: &str,
 ) -> Header {
-    let mut h = Header::new(
-        ModelRef::Spec(Box::new(robot.spec().clone())),
-        ModelRef::Spec(Box::new(human.spec().clone())),
-        ModelRef::Spec(Box::new(spec.clone())),
-    );
+    let robot_ref = ModelRef::Spec(Box::new(robot.spec().clone()));
+    let human_ref = ModelRef::Spec(Box::new(human.spec().clone()));
+    let spec_ref = ModelRef::Spec(Box::new(spec.clone()));
+    let mut h = if others == 0 {
+        Header::new(robot_ref, human_ref, spec_ref)
+    } else {
+        // Several people: ids `human0`, `human1`, … (the filter's order).
+        let people = (0..=others)
+            .map(|i| pacs_log::PersonEntry {
+                id: person_id(i),
+                human: human_ref.clone(),
+            })
+            .collect();
+        Header::with_people(robot_ref, people, spec_ref)
+    };
     h.objects = objects
         .iter()
         .map(|o| pacs_log::ObjectEntry {
@@ -345,6 +366,7 @@ pub fn run_logged(
         human,
         spec,
         script,
+        others: &[],
         objects: &[],
         policy: &mut policy,
         goals: &goals,

@@ -12,7 +12,7 @@ use crate::task::{ConstraintMode, TaskKind, constraint_spec, native_mode, scenar
 use pacs_shield::ChunkMotion;
 use pacs_shield::shield::ShieldError;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// A method as evaluated: a filter and the constraints it enforces.
@@ -31,7 +31,7 @@ pub struct Variant {
 }
 
 /// Which policy stand-in an evaluation runs (`pacs simulate --policy`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PolicyKind {
     /// [`crate::policy::DemoSet`]: nearest demonstrated state from the joint angles, with a
@@ -132,7 +132,7 @@ pub enum EvalError {
 }
 
 /// One finished rollout.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Rollout {
     /// Task.
     pub task: TaskKind,
@@ -219,6 +219,7 @@ pub fn run_rollout(
         human: &scn.human,
         spec: &spec,
         script: scn.script.as_ref(),
+        others: &scn.others,
         objects: &scn.objects,
         policy,
         goals: &goals,
@@ -267,7 +268,7 @@ pub fn evaluate(
             }
         }
     }
-    let mut out: Vec<Rollout> = jobs
+    let out: Vec<Rollout> = jobs
         .par_iter()
         .map(|&(task, v, seed)| {
             let log = cfg
@@ -286,6 +287,16 @@ pub fn evaluate(
             Ok(r)
         })
         .collect::<Result<_, EvalError>>()?;
+    Ok(merge([out]))
+}
+
+/// Rollouts of one or several evaluations (e.g. seed ranges run on different machines, Python's
+/// `pacs.simulate` on Dask) in the order [`evaluate`] returns them: by task, method label and
+/// seed. Evaluations of disjoint seed ranges merged give exactly the rollouts, in the same
+/// order, of one evaluation of all the seeds (each rollout depends only on its task, method and
+/// seed), and so the same [`summarize`] rows.
+pub fn merge(parts: impl IntoIterator<Item = Vec<Rollout>>) -> Vec<Rollout> {
+    let mut out: Vec<Rollout> = parts.into_iter().flatten().collect();
     out.sort_by(|a, b| (a.task as u8, &a.method, a.seed).cmp(&(b.task as u8, &b.method, b.seed)));
-    Ok(out)
+    out
 }

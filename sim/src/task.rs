@@ -11,10 +11,10 @@ use crate::policy::kernel::replay_path;
 use crate::policy::{DemoSet, KernelPolicy, Recording};
 use pacs_models::object::ObjectContact;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One of the evaluation tasks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TaskKind {
     /// Pick a block and put it into a box while a person reaches across the table (SSM).
@@ -123,6 +123,8 @@ pub struct Scenario {
     pub human: HumanModel,
     /// Ground-truth motion of the human.
     pub script: Box<dyn HumanScript>,
+    /// Further people (same human model): the crowded task's passer-by.
+    pub others: Vec<Box<dyn HumanScript>>,
     /// Dynamic objects (models, contact under the task's native mode, true motions).
     pub objects: Vec<SimObject>,
     /// The policy (fresh, at the task's start).
@@ -633,12 +635,36 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
             (Box::new(person), vec![a, b], 20.0)
         }
     };
+    // The crowded task's second person: a passer-by who walks up to the table, reaches across
+    // it toward the sorting area and walks away (far away without people).
+    let others: Vec<Box<dyn HumanScript>> = match task {
+        TaskKind::Crowded => {
+            let arrive = rng.range(1.0, 3.0);
+            let reach = arrive + rng.range(0.5, 2.0);
+            let leave = reach + rng.range(1.5, 3.0);
+            let passer_by = crate::humans::WalkIn {
+                reach: if with_human {
+                    [rng.range(0.5, 0.65), rng.range(0.15, 0.3), FLOOR_Z + 0.95]
+                } else {
+                    [away, 1.0, FLOOR_Z + 0.95]
+                },
+                times: if with_human {
+                    [arrive, reach, leave]
+                } else {
+                    [1e6, 1e6, 1e6]
+                },
+            };
+            vec![Box::new(passer_by)]
+        }
+        _ => vec![],
+    };
     let policy = DemoSet::new(demos, HORIZON, EXECUTE, seed);
     Scenario {
         task,
         robot,
         human,
         script,
+        others,
         objects,
         policy,
         goals,

@@ -287,7 +287,26 @@ fn crowded_task_pacs_is_safe_against_person_and_spheres_and_its_log_audits() {
             .filter(|l| l.contains("\"type\":\"object\""))
             .count();
         assert!(object_records > 100, "{object_records} object records");
+        // Two people (the reacher and the passer-by), each measured and logged with its id.
+        let people: Vec<&str> = header["humans"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["id"].as_str().unwrap())
+            .collect();
+        assert_eq!(people, ["human0", "human1"]);
+        let passer_by = text
+            .lines()
+            .filter(|l| l.contains("\"type\":\"human\"") && l.contains("\"id\":\"human1\""))
+            .count();
+        assert!(passer_by > 100, "{passer_by} records of the passer-by");
         let audit = pacs_audit::audit_file(&path, &pacs_audit::AuditConfig::default()).unwrap();
+        assert_eq!(audit.people, ["human0", "human1"]);
+        // The log is the whole run: its `end` event reached by its samples.
+        assert_eq!(
+            audit.evidence.completeness,
+            pacs_audit::Completeness::Complete
+        );
         if method == "pacs" {
             assert!(r.episode.success, "pacs failed the crowded task");
             assert_eq!(r.episode.violation_fraction, 0.0);

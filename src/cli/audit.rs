@@ -15,7 +15,9 @@ use std::process::ExitCode;
 pub struct AuditArgs {
     /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
     /// by its magic bytes or `*.mcap`; or a ROS 2 sqlite3 bag: `*.db3` or a bag directory with
-    /// metadata.yaml; see docs/log-format.md).
+    /// metadata.yaml; see docs/log-format.md). Any other directory stands for its logs (*.jsonl,
+    /// *.csv, *.mcap, *.db3 and bag directories, also in subdirectories), sorted by path
+    /// (docs/fleet.md).
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<PathBuf>,
     /// Audit settings (TOML: max_gap, max_human_age, rest_speed, human_model, tracking_error,
@@ -75,6 +77,14 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Str
 
 /// Run the audit; returns the process exit code.
 pub fn main(args: AuditArgs) -> ExitCode {
+    let mut args = args;
+    args.logs = match pacs_reports::fleet::expand_logs(&args.logs) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("pacs: error: {e}");
+            return ExitCode::from(EXIT_INVALID);
+        }
+    };
     let (cfg, cfg_file) = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {

@@ -82,6 +82,7 @@ impl<R: Read + Seek> McapReader<R> {
             header = Some(h);
             header_from = Some(HeaderFrom::Record(off));
         }
+        super::guard::check_chunk_records(file, &mut input, size)?;
         input.seek(SeekFrom::Start(0)).map_err(io)?;
         let lin = LinearReader::new_with_options(
             LinearReaderOptions::default()

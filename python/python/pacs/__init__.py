@@ -22,6 +22,8 @@ Units everywhere: m, s, rad, rad/s, rad/s², kg, J.
 - :class:`ShieldLoop`: its 1 kHz step loop on a Rust thread;
 - :func:`audit`, :class:`Run`, :class:`LogWriter`, :func:`report`: the offline audit;
 - :class:`Demo`: the simulation's FR3 tasks and their demonstration policy;
+- :mod:`pacs.fleet`: a fleet's archive audited in parallel, locally or on Dask
+  (:func:`pacs.fleet.audit`), and :func:`simulate`, the simulation's evaluation (also on Dask);
 - :mod:`pacs.lerobot`: adapters for LeRobot-style policies, robots and processor pipelines;
 - :mod:`pacs.errors`: the exceptions (all subclasses of :class:`Error`).
 """
@@ -47,6 +49,8 @@ from ._pacs import (
     report,
     robot_spec,
 )
+from . import fleet
+from .fleet import simulate
 
 __all__ = [
     "Shield",
@@ -58,6 +62,8 @@ __all__ = [
     "report",
     "robot_spec",
     "Demo",
+    "fleet",
+    "simulate",
     "errors",
     "__version__",
     *errors.__all__,

@@ -16,6 +16,63 @@ use pacs_shield::ChunkMotion;
 use pacs_shield::shield::ShieldError;
 use pacs_shield::shield_log::ShieldLog;
 
+/// The truth audit: one person, or several (one pass each, merged).
+enum TruthAuditor {
+    One(Box<Auditor>),
+    Many(pacs_audit::people::PeopleAuditor),
+}
+
+impl TruthAuditor {
+    /// Person `i`'s true keypoints at `t` (s).
+    fn push_human(
+        &mut self,
+        i: usize,
+        t: f64,
+        kp: &[[f64; 3]],
+    ) -> Result<(), pacs_audit::AuditError> {
+        match self {
+            TruthAuditor::One(a) => a.push_human(t, t, kp),
+            TruthAuditor::Many(p) => p.push_human(Some(&super::person_id(i)), t, t, kp),
+        }
+    }
+    fn push_object(
+        &mut self,
+        t: f64,
+        t_meas: f64,
+        id: &str,
+        p: [f64; 3],
+        v: Option<[f64; 3]>,
+    ) -> Result<(), pacs_audit::AuditError> {
+        match self {
+            TruthAuditor::One(a) => a.push_object(t, t_meas, id, p, v),
+            TruthAuditor::Many(m) => m.push_object(t, t_meas, id, p, v),
+        }
+    }
+    fn push_robot(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        dq: Option<&[f64]>,
+    ) -> Result<(), pacs_audit::AuditError> {
+        match self {
+            TruthAuditor::One(a) => a.push_robot(t, q, dq),
+            TruthAuditor::Many(m) => m.push_robot_with_acc(t, q, dq, None),
+        }
+    }
+    fn push_event(&mut self, name: &str) {
+        match self {
+            TruthAuditor::One(a) => a.push_event(name),
+            TruthAuditor::Many(m) => m.push_event(name),
+        }
+    }
+    fn finish(self, log: &str) -> pacs_audit::RunResult {
+        match self {
+            TruthAuditor::One(a) => a.finish(log, serde_json::Map::new()),
+            TruthAuditor::Many(m) => m.finish(log, serde_json::Map::new()),
+        }
+    }
+}
+
 /// Smooth bounded tracking error: per joint `amp · sin(2π f t + φ)`, f ∈ [0.2, 1] Hz.
 struct Tracking {
     amp: f64,
@@ -64,6 +121,7 @@ pub fn run_setup(
         human,
         spec,
         script,
+        others,
         objects,
         policy,
         goals,
@@ -79,7 +137,16 @@ pub fn run_setup(
     } = out;
     let mut log = match log {
         Some(w) => {
-            let h = log_header(label, robot, human, spec, script, objects, policy.name());
+            let h = log_header(
+                label,
+                robot,
+                human,
+                spec,
+                script,
+                objects,
+                others.len(),
+                policy.name(),
+            );
             let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
             l.event(0.0, "episode_start").map_err(invalid)?;
             Some(l)
@@ -99,7 +166,20 @@ pub fn run_setup(
                 .map(|o| Ok((o.id.clone(), o.exact_model().map_err(invalid)?, o.contact)))
                 .collect::<Result<_, ShieldError>>()?,
         };
-        Some(Auditor::new(models, AuditConfig::default()).map_err(invalid)?)
+        Some(if others.is_empty() {
+            TruthAuditor::One(Box::new(
+                Auditor::new(models, AuditConfig::default()).map_err(invalid)?,
+            ))
+        } else {
+            let mut models = models;
+            models.people = (0..=others.len())
+                .map(|i| (super::person_id(i), models.human.clone()))
+                .collect();
+            TruthAuditor::Many(
+                pacs_audit::people::PeopleAuditor::new(&models, &AuditConfig::default())
+                    .map_err(invalid)?,
+            )
+        })
     } else {
         None
     };
@@ -110,8 +190,14 @@ pub fn run_setup(
     for o in objects {
         filter.add_object(o.model, o.contact)?;
     }
+    for _ in others {
+        filter.add_human(human.clone(), spec)?;
+    }
     filter.start(0.0, start)?;
     let mut camera = Camera::new(cfg.camera_period, cfg.seed);
+    let mut other_cameras: Vec<Camera> = (0..others.len())
+        .map(|i| Camera::new(cfg.camera_period, cfg.seed ^ (0xCA3E + i as u64)))
+        .collect();
     let mut object_cameras: Vec<ObjectCamera> = (0..objects.len())
         .map(|i| ObjectCamera::new(cfg.camera_period, cfg.seed ^ (0x0B1E + i as u64)))
         .collect();
@@ -130,6 +216,9 @@ pub fn run_setup(
     let mut success_at = None;
     let mut samples = Vec::new();
     let mut steps_run = 0usize;
+    // The last command's time (s): the last robot sample of the log, where its closing events go
+    // (the log's `end` event must not lie after its last sample).
+    let mut last_cmd_t = 0.0f64;
     let mut waypoints: Vec<Vec<f64>> = Vec::new();
     let mut tool = tool_point(robot, &q);
     let mut last_rec_tool = tool;
@@ -142,8 +231,12 @@ pub fn run_setup(
     let mut past = vec![q.clone(); action_every];
     let mut before = q.clone();
     if let Some(a) = auditor.as_mut() {
-        a.push_human(0.0, 0.0, &script.keypoints(0.0))
+        a.push_human(0, 0.0, &script.keypoints(0.0))
             .map_err(invalid)?;
+        for (i, o) in others.iter().enumerate() {
+            a.push_human(1 + i, 0.0, &o.keypoints(0.0))
+                .map_err(invalid)?;
+        }
         for o in objects {
             let (p, v) = o.script.state(0.0);
             a.push_object(0.0, 0.0, &o.id, p, Some(v))
@@ -199,6 +292,14 @@ pub fn run_setup(
         }
         since_chunk += 1;
         let m = camera.measure(human, script, t);
+        for (i, (o, cam)) in others.iter().zip(&mut other_cameras).enumerate() {
+            if let Some(om) = cam.measure(human, o.as_ref(), t) {
+                filter.measure_human(1 + i, &om)?;
+                if let Some(l) = log.as_mut() {
+                    l.person(t, 1 + i, &om).map_err(invalid)?;
+                }
+            }
+        }
         for (i, (o, cam)) in objects.iter().zip(&mut object_cameras).enumerate() {
             if let Some(om) = cam.measure(o, t) {
                 filter.measure_object(i, &om)?;
@@ -211,12 +312,17 @@ pub fn run_setup(
         if let Some(l) = log.as_mut() {
             l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
         }
+        last_cmd_t = cmd.t;
         q.copy_from_slice(&cmd.state.q[..n]);
         dq.copy_from_slice(&cmd.state.dq[..n]);
         tracking.apply(cmd.t, &mut q, &mut dq);
         let truth = script.keypoints(cmd.t);
+        let truths: Vec<Vec<[f64; 3]>> = others.iter().map(|o| o.keypoints(cmd.t)).collect();
         if let Some(a) = auditor.as_mut() {
-            a.push_human(cmd.t, cmd.t, &truth).map_err(invalid)?;
+            a.push_human(0, cmd.t, &truth).map_err(invalid)?;
+            for (i, tr) in truths.iter().enumerate() {
+                a.push_human(1 + i, cmd.t, tr).map_err(invalid)?;
+            }
             for o in objects {
                 let (p, v) = o.script.state(cmd.t);
                 a.push_object(cmd.t, cmd.t, &o.id, p, Some(v))
@@ -225,6 +331,11 @@ pub fn run_setup(
             a.push_robot(cmd.t, &q, Some(&dq)).map_err(invalid)?;
         }
         let (mut sep, mut viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
+        for tr in &truths {
+            let (s, v, _) = ground_truth(robot, human, &tc, &q, &dq, tr);
+            sep = sep.min(s);
+            viol |= v;
+        }
         if !objects.is_empty() {
             let caps: Vec<_> = robot
                 .capsules_world(&q)
@@ -279,15 +390,14 @@ pub fn run_setup(
     }
     let steps_run = steps_run.max(1) as f64;
     let success = success_at.is_some();
-    let t_end = steps_run * cfg.dt;
     if let Some(mut l) = log {
-        l.event(t_end, if success { "success" } else { "failure" })
+        l.event(last_cmd_t, if success { "success" } else { "failure" })
             .map_err(invalid)?;
         l.finish().map_err(invalid)?;
     }
     let truth_audit = auditor.map(|mut a| {
         a.push_event(if success { "success" } else { "failure" });
-        let r = a.finish("ground-truth", serde_json::Map::new());
+        let r = a.finish("ground-truth");
         let samples = r.metrics.samples.max(1) as f64;
         TruthAudit {
             verdict: r.verdict,

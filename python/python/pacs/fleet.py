@@ -1,0 +1,285 @@
+"""A fleet's archive: many logs audited in parallel, locally or on a Dask cluster, with the fleet
+report; and simulation rollouts on the same cluster.
+
+>>> import pacs
+>>> runs, report = pacs.fleet.audit("archive/")                 # local threads
+>>> from dask.distributed import Client
+>>> with Client("tcp://scheduler:8786") as client:              # doctest: +SKIP
+...     runs, report = pacs.fleet.audit("archive/", client=client)
+...     sim = pacs.simulate(task="sorting", rollouts=100, client=client)
+
+The audit of each log, the fleet report (per robot, scene and UTC day: verdict counts, audited
+and violation time, worst runs) and the simulation's summary are the Rust code of
+``pacs audit DIR --out`` and ``pacs simulate``; this module only distributes the work. With a
+client, every log is audited on a worker (the workers must read the paths as given, e.g. on a
+shared file system) and the :class:`pacs.Run` objects come back pickled, whole. Results are the
+same with and without a client. See docs/fleet.md.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, NamedTuple, Sequence
+
+from . import _pacs
+from .errors import ArgumentTypeError, InputError
+
+__all__ = ["FleetAudit", "audit", "simulate"]
+
+
+class FleetAudit(NamedTuple):
+    """What :func:`audit` returns: the runs (in the order of the sorted log paths) and the
+    fleet report (a dict, equal to ``report.json["fleet"]`` of ``pacs audit DIR --out``)."""
+
+    runs: list
+    report: dict
+
+
+def _check_client(client: Any) -> None:
+    """``client`` must be None or a ``dask.distributed.Client``."""
+    if client is None:
+        return
+    try:
+        from dask.distributed import Client
+    except ImportError as e:
+        raise ArgumentTypeError(
+            f"client: a dask.distributed.Client is needed, but dask.distributed cannot be "
+            f"imported ({e}); pip install 'dask[distributed]' — got {client!r}"
+        ) from None
+    if not isinstance(client, Client):
+        raise ArgumentTypeError(
+            f"client: expected None or a dask.distributed.Client, got "
+            f"{type(client).__name__} {client!r}"
+        )
+
+
+def _threads(threads: Any) -> int:
+    if threads is None:
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # not Linux
+            return max(1, os.cpu_count() or 1)
+    if isinstance(threads, bool) or not isinstance(threads, int):
+        raise ArgumentTypeError(f"threads: expected None or an int, got {threads!r}")
+    if threads < 1:
+        raise InputError(f"threads: must be at least 1, got {threads}")
+    return threads
+
+
+# What workers run: module-level Python functions (pickled by reference to ``pacs.fleet``; the
+# extension's own functions are not importable under their ``__module__``).
+
+
+def _run_from_state(state: bytes) -> Any:
+    """Rebuild a :class:`pacs.Run` pickled by ``Run.__reduce__``."""
+    return _pacs._run_from_state(state)
+
+
+def _list_logs(paths: Any) -> list:
+    return _pacs._fleet_logs(paths)
+
+
+def _audit_one(path: str, config: Any) -> Any:
+    """The audit of one log."""
+    (run,) = _pacs.audit(path, config)
+    return run
+
+
+def _audit_batch(paths: list, config: Any) -> list:
+    """The audits of several logs (what a worker runs: one Dask task)."""
+    return [_audit_one(p, config) for p in paths]
+
+
+def _batches(n: int, slots: int, batch: Any) -> list:
+    """The indices of ``n`` logs in batches of at most ``batch`` (by default as many batches as
+    four per worker thread: fewer, larger tasks cost the scheduler and the client less), each
+    batch every k-th log (k the number of batches), so that the batches mix the archive's
+    kinds of logs (sorted paths put like logs together) and take about equally long."""
+    if batch is None:
+        batch = max(1, -(-n // (4 * max(1, slots))))
+    elif isinstance(batch, bool) or not isinstance(batch, int):
+        raise ArgumentTypeError(f"batch: expected None or an int, got {batch!r}")
+    elif batch < 1:
+        raise InputError(f"batch: must be at least 1, got {batch}")
+    k = -(-n // batch)
+    return [list(range(j, n, k)) for j in range(k)]
+
+
+def audit(
+    paths: Any, client: Any = None, config: Any = None, threads: Any = None, batch: Any = None
+) -> FleetAudit:
+    """Audit many logs and build the fleet report.
+
+    ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv`` and ``*.mcap`` files, also in
+    subdirectories, sorted by path) or a list of them — as ``pacs audit`` takes them.
+    ``client``: None (the logs are audited here on ``threads`` threads, default: the usable
+    cores) or a ``dask.distributed.Client`` (one task per batch of at most ``batch`` logs, by
+    default four tasks per worker thread, each batch every k-th log; directories are listed on
+    a worker; the workers must be able to read the logs and use the same pacs version).
+    ``config``: the audit settings, as for :func:`pacs.audit`.
+
+    Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
+    sorted paths, and the fleet report. An invalid log raises :class:`pacs.InputError` naming
+    it (the first in path order); ``pacs.report(runs, dir)`` writes the full report.
+    """
+    _check_client(client)
+    if client is None:
+        if batch is not None:
+            raise InputError("batch: only with a client")
+        logs = _pacs._fleet_logs(paths)
+        n = min(_threads(threads), len(logs))
+        with ThreadPoolExecutor(max_workers=n) as pool:
+            runs = list(pool.map(lambda p: _audit_one(p, config), logs))
+    else:
+        if threads is not None:
+            raise InputError("threads: set the workers' threads on the Dask cluster, not here")
+        logs = client.submit(_list_logs, paths, pure=False).result()
+        batches = _batches(len(logs), sum(client.nthreads().values()), batch)
+        futures = client.map(_audit_batch, [[logs[i] for i in b] for b in batches],
+                             config=config, pure=False)
+        try:
+            parts = client.gather(futures)
+        finally:
+            for f in futures:
+                f.release()
+        runs = [None] * len(logs)
+        for b, part in zip(batches, parts):
+            for i, r in zip(b, part):
+                runs[i] = r
+    return FleetAudit(runs, _pacs._fleet_report(runs))
+
+
+def _names(value: Any, name: str) -> list:
+    if isinstance(value, str):
+        names = [n.strip() for n in value.split(",") if n.strip()]
+    elif isinstance(value, Sequence) and all(isinstance(v, str) for v in value):
+        names = list(value)
+    else:
+        raise ArgumentTypeError(
+            f"{name}: expected a name, a comma-separated str or a list of str, got {value!r}"
+        )
+    if not names:
+        raise InputError(f"{name}: no name given")
+    return names
+
+
+def _count(value: Any, name: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ArgumentTypeError(f"{name}: expected an int, got {value!r}")
+    if value < least:
+        raise InputError(f"{name}: must be at least {least}, got {value}")
+    return value
+
+
+def _seed_list(rollouts: Any, seed: Any, seeds: Any) -> list:
+    """The seeds to run, sorted: ``seeds`` as given (distinct ints >= 0), or ``seed`` ..
+    ``seed + rollouts - 1`` (defaults 10 and 1)."""
+    if seeds is None:
+        n = 10 if rollouts is None else _count(rollouts, "rollouts", 1)
+        first = 1 if seed is None else _count(seed, "seed", 0)
+        return list(range(first, first + n))
+    if rollouts is not None or seed is not None:
+        raise InputError("seeds: give either seeds or rollouts and seed, not both")
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise ArgumentTypeError(f"seeds: expected a list of ints, got {seeds!r}")
+    out = [_count(s, f"seeds[{i}]", 0) for i, s in enumerate(seeds)]
+    if not out:
+        raise InputError("seeds: no seed given")
+    seen = set()
+    for s in out:
+        if s in seen:
+            raise InputError(f"seeds: seed {s} is given twice")
+        seen.add(s)
+    return sorted(out)
+
+
+def _ranges(seeds: list) -> list:
+    """Sorted distinct seeds as contiguous ranges ``(first, count)``."""
+    out = []
+    for s in seeds:
+        if out and out[-1][0] + out[-1][1] == s:
+            out[-1] = (out[-1][0], out[-1][1] + 1)
+        else:
+            out.append((s, 1))
+    return out
+
+
+def _rollouts_of(ranges: list, threads: Any, common: dict) -> list:
+    """The encoded rollouts of seed ranges (what a worker runs: one Dask task)."""
+    return [_pacs._simulate_rollouts(seed=s, rollouts=n, threads=threads, **common)
+            for s, n in ranges]
+
+
+def simulate(
+    task: Any = "sorting",
+    method: Any = "pacs",
+    rollouts: Any = None,
+    seed: Any = None,
+    *,
+    seeds: Any = None,
+    client: Any = None,
+    partitions: Any = None,
+    with_human: bool = True,
+    chunk_motion: str = "continuous",
+    policy: str = "nearest",
+    log_dir: Any = None,
+    threads: Any = None,
+) -> dict:
+    """The simulation's evaluation (``pacs simulate``): one rollout per seed for every task and
+    method (the same people for every method): the seeds ``seed`` .. ``seed + rollouts - 1``
+    (defaults 10 rollouts from seed 1, as ``pacs simulate``), or the list ``seeds``.
+
+    ``task``, ``method``: a name, a comma-separated str, a list, or ``"all"``. ``client``: None
+    (here, on ``threads`` threads) or a ``dask.distributed.Client``: the sorted seeds are split
+    into ``partitions`` consecutive parts (default: one per worker thread, at most one per
+    seed), one task each on one thread; the rollouts are merged in the evaluation's order and
+    summarised once, so the result is identical to one local run with the same seeds.
+    ``log_dir``: write every rollout's audit log there (on a cluster: a directory the workers
+    share). Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
+    ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
+    """
+    _check_client(client)
+    tasks = _names(task, "task")
+    methods = _names(method, "method")
+    seed_list = _seed_list(rollouts, seed, seeds)
+    if not isinstance(with_human, bool):
+        raise ArgumentTypeError(f"with_human: expected True or False, got {with_human!r}")
+    for value, name in ((chunk_motion, "chunk_motion"), (policy, "policy")):
+        if not isinstance(value, str):
+            raise ArgumentTypeError(f"{name}: expected a str, got {value!r}")
+    if log_dir is not None:
+        log_dir = os.fspath(log_dir)
+    _pacs._simulate_check(tasks, methods, with_human, chunk_motion, policy)
+    common = dict(
+        tasks=tasks,
+        methods=methods,
+        with_human=with_human,
+        chunk_motion=chunk_motion,
+        policy=policy,
+        log_dir=log_dir,
+    )
+    if client is None:
+        if partitions is not None:
+            raise InputError("partitions: only with a client")
+        parts = _rollouts_of(_ranges(seed_list), _threads(threads), common)
+        return _pacs._simulate_merge(parts)
+    if threads is not None:
+        raise InputError("threads: set the workers' threads on the Dask cluster, not here")
+    if partitions is None:
+        partitions = max(1, sum(client.nthreads().values()))
+    partitions = min(_count(partitions, "partitions", 1), len(seed_list))
+    # Consecutive parts of the sorted seeds, of near-equal size.
+    base, extra = divmod(len(seed_list), partitions)
+    chunks, start = [], 0
+    for i in range(partitions):
+        size = base + (1 if i < extra else 0)
+        chunks.append(seed_list[start:start + size])
+        start += size
+    futures = [client.submit(_rollouts_of, _ranges(c), 1, common, pure=False) for c in chunks]
+    try:
+        done = client.gather(futures)
+    finally:
+        for f in futures:
+            f.release()
+    return _pacs._simulate_merge([part for parts in done for part in parts])

@@ -1,0 +1,361 @@
+//! What `pacs.fleet` (python/python/pacs/fleet.py) runs in Rust: the archive's log listing and
+//! the fleet report (`pacs_reports::fleet`, the one implementation `pacs audit DIR --out` uses),
+//! a `Run`'s state for pickling (so that runs audited on Dask workers come back whole: results,
+//! plot series, model parameters, the audited bytes' hash, the settings), and the simulation's
+//! rollouts in parts (a range of seeds each) with their merge into the summary.
+
+use crate::audit::PyRun;
+use crate::convert::{show, to_py};
+use crate::errors::{Kind, err, input, type_err};
+use pacs_audit::verdict::SeriesPoint;
+use pacs_audit::{AuditConfig, RunResult};
+use pacs_reports::InputFile;
+use pacs_sim::eval::{self, EvalConfig, METHOD_NAMES, Rollout, Variant};
+use pacs_sim::task::TaskKind;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyString};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Version of [`RunState`]'s layout; a state of another layout or pacs version is refused.
+const STATE_LAYOUT: u32 = 1;
+
+/// Everything a `Run` holds, as pickled (CBOR: floats, NaN and infinities round-trip exactly).
+#[derive(Serialize, Deserialize)]
+struct RunState {
+    layout: u32,
+    pacs: String,
+    run: RunResult,
+    /// `RunResult::series` and `ModelNames::specs` are not serialized with the run (they are
+    /// not part of `pacs audit --json`): carried beside it, the series by columns (a third of
+    /// the bytes of one map per point, and faster to decode on the client).
+    series: SeriesColumns,
+    specs: serde_json::Value,
+    path: PathBuf,
+    hashed_path: String,
+    sha256: String,
+    bytes: u64,
+    modified: Option<u64>,
+    config: AuditConfig,
+    config_path: Option<PathBuf>,
+}
+
+/// A plot series by columns.
+#[derive(Serialize, Deserialize, Default)]
+struct SeriesColumns {
+    t: Vec<f64>,
+    t_end: Vec<f64>,
+    min_separation: Vec<Option<f64>>,
+    energy_nominal: Vec<Option<f64>>,
+    energy_bound: Vec<Option<f64>>,
+    threshold: Vec<Option<f64>>,
+    /// Bit 0: violation, bit 1: inconclusive, bit 2: at rest.
+    flags: Vec<u8>,
+}
+
+impl SeriesColumns {
+    fn of(points: &[SeriesPoint]) -> Self {
+        let col = |f: fn(&SeriesPoint) -> Option<f64>| points.iter().map(f).collect();
+        Self {
+            t: points.iter().map(|p| p.t).collect(),
+            t_end: points.iter().map(|p| p.t_end).collect(),
+            min_separation: col(|p| p.min_separation),
+            energy_nominal: col(|p| p.energy_nominal),
+            energy_bound: col(|p| p.energy_bound),
+            threshold: col(|p| p.threshold),
+            flags: points
+                .iter()
+                .map(|p| {
+                    u8::from(p.violation) | u8::from(p.inconclusive) << 1 | u8::from(p.at_rest) << 2
+                })
+                .collect(),
+        }
+    }
+
+    fn points(&self) -> PyResult<Vec<SeriesPoint>> {
+        let n = self.t.len();
+        let lens = [
+            self.t_end.len(),
+            self.min_separation.len(),
+            self.energy_nominal.len(),
+            self.energy_bound.len(),
+            self.threshold.len(),
+            self.flags.len(),
+        ];
+        if lens.iter().any(|&l| l != n) {
+            return Err(input("state: the plot series' columns differ in length"));
+        }
+        Ok((0..n)
+            .map(|i| SeriesPoint {
+                t: self.t[i],
+                t_end: self.t_end[i],
+                min_separation: self.min_separation[i],
+                energy_nominal: self.energy_nominal[i],
+                energy_bound: self.energy_bound[i],
+                threshold: self.threshold[i],
+                violation: self.flags[i] & 1 != 0,
+                inconclusive: self.flags[i] & 2 != 0,
+                at_rest: self.flags[i] & 4 != 0,
+            })
+            .collect())
+    }
+}
+
+fn cbor<T: Serialize>(v: &T, what: &str) -> PyResult<Vec<u8>> {
+    let mut out = Vec::new();
+    ciborium::into_writer(v, &mut out)
+        .map_err(|e| err(Kind::Output, format!("{what}: cannot encode: {e}")))?;
+    Ok(out)
+}
+
+/// `Run.__reduce__`: rebuilt by `pacs.fleet._run_from_state(state)` (a Python function, so that
+/// pickle finds it by its module and name), which calls [`_run_from_state`].
+pub fn reduce_run<'py>(
+    py: Python<'py>,
+    r: &PyRun,
+) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+    let state = RunState {
+        layout: STATE_LAYOUT,
+        pacs: env!("CARGO_PKG_VERSION").into(),
+        run: RunResult {
+            series: Vec::new(),
+            ..r.run.clone()
+        },
+        series: SeriesColumns::of(&r.run.series),
+        specs: r.run.models.specs.clone(),
+        path: r.path.clone(),
+        hashed_path: r.hashed.path.clone(),
+        sha256: r.hashed.sha256.clone(),
+        bytes: r.hashed.bytes,
+        modified: r.modified,
+        config: r.config.clone(),
+        config_path: r.config_path.clone(),
+    };
+    let bytes = cbor(&state, "Run")?;
+    let f = py.import("pacs.fleet")?.getattr("_run_from_state")?;
+    Ok((f, (PyBytes::new(py, &bytes),)))
+}
+
+/// A `Run` from its pickled state (`Run.__reduce__`).
+#[pyfunction]
+pub fn _run_from_state(state: &Bound<'_, PyAny>) -> PyResult<PyRun> {
+    let b = state.cast::<PyBytes>().map_err(|_| {
+        type_err(format!(
+            "state: expected the bytes of Run.__reduce__, got {}",
+            show(state)
+        ))
+    })?;
+    let s: RunState = ciborium::from_reader(b.as_bytes())
+        .map_err(|e| input(format!("state: not a pacs Run state: {e}")))?;
+    if s.layout != STATE_LAYOUT || s.pacs != env!("CARGO_PKG_VERSION") {
+        return Err(input(format!(
+            "state: a Run pickled by pacs {} (layout {}); this is pacs {} (layout {STATE_LAYOUT}): use one pacs version on the client and the workers",
+            s.pacs,
+            s.layout,
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    let mut run = s.run;
+    run.series = s.series.points()?;
+    run.models.specs = s.specs;
+    Ok(PyRun {
+        run,
+        path: s.path,
+        hashed: InputFile {
+            path: s.hashed_path,
+            sha256: s.sha256,
+            bytes: s.bytes,
+        },
+        modified: s.modified,
+        config: s.config,
+        config_path: s.config_path,
+    })
+}
+
+/// Paths from one path or a list of them (argument `name`).
+fn path_list(paths: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<PathBuf>> {
+    let bad = || {
+        type_err(format!(
+            "{name}: expected a path or a list of paths, got {}",
+            show(paths)
+        ))
+    };
+    if paths.is_instance_of::<PyString>() {
+        return Ok(vec![paths.extract().map_err(|_| bad())?]);
+    }
+    if let Ok(p) = paths.extract::<PathBuf>() {
+        return Ok(vec![p]);
+    }
+    paths.extract().map_err(|_| bad())
+}
+
+/// The log files of `paths` (files as given, directories expanded to their sorted log files),
+/// as `pacs audit` takes them.
+#[pyfunction]
+pub fn _fleet_logs(paths: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    let list = path_list(paths, "paths")?;
+    if list.is_empty() {
+        return Err(input("paths: no log given"));
+    }
+    let logs = pacs_reports::fleet::expand_logs(&list).map_err(|e| input(format!("paths: {e}")))?;
+    logs.into_iter()
+        .map(|p| {
+            p.into_os_string().into_string().map_err(|p| {
+                input(format!(
+                    "paths: {} is not valid UTF-8",
+                    PathBuf::from(p).display()
+                ))
+            })
+        })
+        .collect()
+}
+
+/// The fleet report of audited runs (report.json's `fleet`), with each log's modification
+/// time as read when it was audited.
+#[pyfunction]
+pub fn _fleet_report<'py>(
+    py: Python<'py>,
+    runs: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let runs: Vec<PyRef<'_, PyRun>> = runs.extract().map_err(|_| {
+        type_err(format!(
+            "runs: expected a list of pacs.Run (from pacs.audit), got {}",
+            show(runs)
+        ))
+    })?;
+    let results: Vec<RunResult> = runs.iter().map(|r| r.run.clone()).collect();
+    let mtimes: Vec<Option<u64>> = runs.iter().map(|r| r.modified).collect();
+    to_py(py, &pacs_reports::fleet::fleet(&results, &mtimes))
+}
+
+/// A simulation as `pacs.simulate` describes it, checked.
+struct SimPlan {
+    tasks: Vec<TaskKind>,
+    variants: Vec<Variant>,
+    with_human: bool,
+}
+
+fn sim_plan(
+    tasks: &[String],
+    methods: &[String],
+    with_human: bool,
+    chunk_motion: &str,
+    policy: &str,
+) -> PyResult<SimPlan> {
+    let all_tasks: Vec<&str> = TaskKind::ALL.iter().map(|t| t.name()).collect();
+    let names = |given: &[String], all: &[&str], what: &str| -> PyResult<Vec<String>> {
+        if given.is_empty() {
+            return Err(input(format!("{what}: no name given")));
+        }
+        Ok(if given.len() == 1 && given[0] == "all" {
+            all.iter().map(|s| s.to_string()).collect()
+        } else {
+            given.to_vec()
+        })
+    };
+    let tasks = names(tasks, &all_tasks, "task")?
+        .iter()
+        .map(|t| t.parse().map_err(|e| input(format!("task: {e}"))))
+        .collect::<PyResult<Vec<TaskKind>>>()?;
+    let motion = match chunk_motion {
+        "continuous" => pacs_shield::ChunkMotion::Continuous,
+        "stop" => pacs_shield::ChunkMotion::Stop,
+        o => {
+            return Err(input(format!(
+                "chunk_motion: unknown `{o}` (continuous, stop)"
+            )));
+        }
+    };
+    let policy: eval::PolicyKind = policy.parse().map_err(|e| input(format!("policy: {e}")))?;
+    let variants = names(methods, &METHOD_NAMES, "method")?
+        .iter()
+        .map(|m| {
+            let mut v: Variant = m.parse().map_err(|e| input(format!("method: {e}")))?;
+            v.motion = motion;
+            v.policy = policy;
+            Ok(v)
+        })
+        .collect::<PyResult<Vec<Variant>>>()?;
+    Ok(SimPlan {
+        tasks,
+        variants,
+        with_human,
+    })
+}
+
+/// Check a simulation's names before any rollout runs (`pacs.simulate` calls it on the client).
+#[pyfunction]
+#[pyo3(signature = (tasks, methods, with_human, chunk_motion, policy))]
+pub fn _simulate_check(
+    tasks: Vec<String>,
+    methods: Vec<String>,
+    with_human: bool,
+    chunk_motion: &str,
+    policy: &str,
+) -> PyResult<()> {
+    sim_plan(&tasks, &methods, with_human, chunk_motion, policy).map(|_| ())
+}
+
+/// The rollouts of seeds `seed .. seed + rollouts` for every task and method (the simulation's
+/// evaluation, `pacs_sim::eval::evaluate`, on `threads` threads), encoded for `_simulate_merge`.
+/// Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (tasks, methods, seed, rollouts, with_human, chunk_motion, policy, log_dir=None, threads=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _simulate_rollouts<'py>(
+    py: Python<'py>,
+    tasks: Vec<String>,
+    methods: Vec<String>,
+    seed: u64,
+    rollouts: usize,
+    with_human: bool,
+    chunk_motion: &str,
+    policy: &str,
+    log_dir: Option<PathBuf>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, policy)?;
+    if threads == Some(0) {
+        return Err(input("threads: must be at least 1"));
+    }
+    let cfg = EvalConfig {
+        tasks: plan.tasks,
+        variants: plan.variants,
+        rollouts,
+        seed,
+        with_human: plan.with_human,
+        log_dir,
+        record_every: 0,
+    };
+    let done = py.detach(|| {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = threads {
+            b = b.num_threads(n);
+        }
+        let pool = b
+            .build()
+            .map_err(|e| err(Kind::State, format!("thread pool: {e}")))?;
+        pool.install(|| eval::evaluate(&cfg, &|_| {}))
+            .map_err(|e| match e {
+                eval::EvalError::Io { .. } => err(Kind::Output, e.to_string()),
+                other => input(other.to_string()),
+            })
+    })?;
+    Ok(PyBytes::new(py, &cbor(&done, "rollouts")?))
+}
+
+/// The summary of rollouts computed in parts (each from `_simulate_rollouts`): every rollout in
+/// the evaluation's order, then the evaluation's summary rows — what one evaluation of all the
+/// seeds gives. Returns `{"rows": [...], "rollouts": [...]}`.
+#[pyfunction]
+pub fn _simulate_merge<'py>(py: Python<'py>, parts: Vec<Vec<u8>>) -> PyResult<Bound<'py, PyAny>> {
+    let mut decoded = Vec::with_capacity(parts.len());
+    for (i, p) in parts.iter().enumerate() {
+        let r: Vec<Rollout> = ciborium::from_reader(p.as_slice())
+            .map_err(|e| input(format!("parts[{i}]: not encoded rollouts: {e}")))?;
+        decoded.push(r);
+    }
+    let rollouts = eval::merge(decoded);
+    let rows = eval::summarize(&rollouts);
+    to_py(py, &serde_json::json!({"rows": rows, "rollouts": rollouts}))
+}

@@ -1,0 +1,115 @@
+"""Several people in one audited run, and logs that cannot be cut short (log format v2)."""
+
+import json
+
+import numpy as np
+
+import pacs
+from conftest import far_human
+
+
+def two_person_shield(demo, path):
+    s = pacs.Shield(robot="fr3", humans=["default", "default"], constraints="sorting", log=path)
+    s.start(0.0, demo.start)
+    deltas, h = demo.chunk(demo.start)
+    s.set_chunk(deltas, t=0.0, h=h)
+    return s
+
+
+def two_person_run(demo, log, steps=600):
+    """Both people 3 m away (1 m apart), measured every 10 ms; the shield closed."""
+    s = two_person_shield(demo, log)
+    far = far_human(demo)
+    other = far + np.array([0.0, 1.0, 0.0])
+    for k in range(steps):
+        t = k * 0.001
+        if k % 10 == 0:
+            s.measure(t, far, human=0)
+            s.measure(t, other, human=1)
+        s.step(t)
+    s.close()
+
+
+def test_a_shield_with_two_people_is_logged_and_audited(demo, tmp_path):
+    log = tmp_path / "two.jsonl"
+    two_person_run(demo, log)
+    lines = log.read_text().splitlines()
+    header = json.loads(lines[0])
+    assert header["version"] == 2 and header["end_event"] is True
+    assert [p["id"] for p in header["humans"]] == ["human0", "human1"]
+    assert json.loads(lines[-1]) == {"type": "event", "t": json.loads(lines[-1])["t"], "name": "end"}
+    ids = {json.loads(l).get("id") for l in lines if '"type":"human"' in l}
+    assert ids == {"human0", "human1"}
+    (r,) = pacs.audit(log)
+    d = r.to_dict()
+    assert r.verdict == "pass", d["inconclusive"]
+    assert d["people"] == ["human0", "human1"]
+    assert d["evidence"]["completeness"] == "complete"
+
+
+def test_a_person_at_the_gripper_fails_and_is_named(demo, tmp_path):
+    log = tmp_path / "named.jsonl"
+    at_gripper = np.tile(demo.tool_point(demo.start), (9, 1))
+    far = far_human(demo)
+    people = [{"id": "operator", "human": "default"}, {"id": "visitor", "human": "default"}]
+    with pacs.LogWriter(log, robot="fr3", human=people, constraints="sorting") as w:
+        for k in range(301):
+            t = k * 0.001
+            if k % 10 == 0:
+                w.human(t, t, far, person="operator")
+                w.human(t, t, at_gripper, person=1)
+            q = demo.start.copy()
+            q[0] += 0.5 * t
+            w.robot(t, q, np.array([0.5, 0, 0, 0, 0, 0, 0.0]))
+    (r,) = pacs.audit(log)
+    assert r.verdict == "fail"
+    assert {v["person"] for v in r.violations} == {"visitor"}
+
+
+def test_a_log_cut_short_is_inconclusive_not_pass(demo, tmp_path):
+    log = tmp_path / "whole.jsonl"
+    two_person_run(demo, log, steps=400)
+    assert pacs.audit(log)[0].verdict == "pass"
+    lines = log.read_text().splitlines(keepends=True)
+    cut = tmp_path / "cut.jsonl"
+    for keep in (len(lines) // 3, len(lines) - 1):
+        cut.write_text("".join(lines[:keep]))
+        (r,) = pacs.audit(cut)
+        d = r.to_dict()
+        assert r.verdict != "pass"
+        assert d["evidence"]["completeness"] == "incomplete"
+        assert any(s["reason"] == "incomplete_log" for s in d["inconclusive"])
+
+
+def test_the_documented_loop_with_a_duplicate_measurement_passes(demo, tmp_path):
+    """docs/python.md measures at t = 0 twice (an exact duplicate): no contradiction."""
+    log = tmp_path / "doc.jsonl"
+    shield = pacs.Shield(robot="fr3", humans="default", constraints="sorting",
+                         config={"chunk_motion": "stop"}, log=log)
+    shield.start(0.0, demo.start)
+    shield.measure(0.0, demo.keypoints(0.0))
+    deltas, h = demo.chunk(demo.start)
+    shield.set_chunk(deltas, t=0.0, h=h)
+    for k in range(1000):
+        t = k * shield.safety_step
+        if k % 33 == 0:
+            shield.measure(t, demo.keypoints(t))
+        shield.step(t)
+    shield.close()
+    (r,) = pacs.audit(log)
+    assert r.verdict == "pass", r.to_dict()["inconclusive"]
+
+
+def test_a_log_writer_never_closed_is_incomplete(demo, tmp_path):
+    log = tmp_path / "open.jsonl"
+    w = pacs.LogWriter(log)
+    person = np.tile([3.0, 0.0, 1.0], (9, 1))
+    w.human(0.0, 0.0, person)
+    for k in range(11):
+        w.robot(k * 0.001, demo.start, np.zeros(7))
+    del w
+    import gc
+
+    gc.collect()
+    (r,) = pacs.audit(log)
+    assert r.verdict != "pass"

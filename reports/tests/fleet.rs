@@ -1,0 +1,248 @@
+//! The fleet report (`pacs_reports::fleet`): groups per robot / scene / day, verdict counts,
+//! violation time as the union of intervals, worst runs, where each day comes from.
+
+use pacs_audit::ConstraintKind;
+use pacs_audit::verdict::{Metrics, ModelNames, RunResult, Verdict, Violation};
+use pacs_reports::fleet::{self, expand_logs};
+use serde_json::{Value, json};
+
+fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> RunResult {
+    RunResult {
+        log: log.into(),
+        verdict,
+        violations: violations
+            .iter()
+            .map(|&(a, b)| Violation {
+                t_start: a,
+                t_end: b,
+                constraint: ConstraintKind::Ssm,
+                person: None,
+                body_part: "rHand".into(),
+                link: "fr3_link7".into(),
+                min_separation: -0.01,
+                energy: 0.0,
+                threshold: 0.0,
+                constrained: false,
+                certain: true,
+                spans: 1,
+            })
+            .collect(),
+        inconclusive: vec![],
+        metrics: Metrics {
+            samples: 1001,
+            human_records: 10,
+            duration: 1.0,
+            violation_fraction: violations.len() as f64 * 0.1,
+            violating_samples: 0,
+            certain_violating_samples: 0,
+            inconclusive_duration: 0.0,
+            min_separation: None,
+            success: None,
+            safe_success: None,
+        },
+        evidence: pacs_audit::Evidence {
+            t_start: 0.0,
+            t_end: 1.0,
+            completeness: pacs_audit::Completeness::Complete,
+        },
+        people: vec!["human".into()],
+        meta: meta.as_object().cloned().unwrap_or_default(),
+        models: ModelNames {
+            robot: "fr3".into(),
+            human: "default".into(),
+            constraints: "ssm".into(),
+            robot_v_max: vec![],
+            robot_a_max: vec![],
+            human_v_max: vec![],
+            human_measurement_error_pos: 0.0,
+            human_delay: 0.0,
+            environment_shapes: 0,
+            specs: Value::Null,
+        },
+        series: vec![],
+    }
+}
+
+#[test]
+fn violation_time_is_the_union_of_the_intervals() {
+    let r = run(
+        "a",
+        json!({}),
+        Verdict::Fail,
+        &[(0.5, 2.0), (0.0, 1.0), (3.0, 4.0), (3.25, 3.5)],
+    );
+    assert_eq!(fleet::violation_time(&r), 3.0);
+    assert_eq!(
+        fleet::violation_time(&run("b", json!({}), Verdict::Pass, &[])),
+        0.0
+    );
+}
+
+#[test]
+fn days_come_from_meta_date_start_time_time_base_then_mtime() {
+    let mtime = Some(1_795_824_000); // 2026-11-28T00:00:00Z
+    let day = |meta: Value| fleet::day(&run("x", meta, Verdict::Pass, &[]), mtime);
+    let d = |a: &str, b: &str| (a.to_string(), b.to_string());
+    assert_eq!(
+        day(json!({"date": "2026-01-02", "start_time": 0})),
+        d("2026-01-02", "meta.date")
+    );
+    assert_eq!(
+        day(json!({"start_time": "2026-11-28T23:30:00-05:00"})),
+        d("2026-11-29", "meta.start_time")
+    );
+    assert_eq!(
+        day(json!({"start_time": 1_700_000_000.5})),
+        d("2023-11-14", "meta.start_time")
+    );
+    assert_eq!(
+        day(json!({"mcap_time_base_s": 1_700_000_000})),
+        d("2023-11-14", "meta.mcap_time_base_s")
+    );
+    // A simulated clock's time base is not a date: the file's mtime is used.
+    assert_eq!(
+        day(json!({"mcap_time_base_s": 12})),
+        d("2026-11-28", "file_mtime")
+    );
+    assert_eq!(day(json!({})), d("2026-11-28", "file_mtime"));
+    assert_eq!(
+        fleet::day(&run("x", json!({}), Verdict::Pass, &[]), None).0,
+        "unknown"
+    );
+    // A stated date that cannot be read is not replaced by a guess.
+    let (day_, why) = day(json!({"date": "28.11.2026"}));
+    assert_eq!(day_, "invalid");
+    assert!(
+        why.contains("meta.date") && why.contains("28.11.2026"),
+        "{why}"
+    );
+    let (day_, why) = day(json!({"start_time": "yesterday"}));
+    assert_eq!(day_, "invalid");
+    assert!(
+        why.contains("meta.start_time") && why.contains("yesterday"),
+        "{why}"
+    );
+}
+
+#[test]
+fn groups_count_verdicts_and_list_the_worst_runs_whatever_the_input_order() {
+    let a1 = json!({"robot_id": "arm-1", "task": "sorting", "date": "2026-11-27"});
+    let a2 = json!({"robot_id": "arm-2", "scene": "cell-b", "date": "2026-11-27"});
+    let runs = vec![
+        run("l0", a1.clone(), Verdict::Pass, &[]),
+        run("l1", a1.clone(), Verdict::Fail, &[(0.0, 0.25)]),
+        run("l2", a1.clone(), Verdict::Fail, &[(0.0, 0.5)]),
+        run("l3", a1.clone(), Verdict::Inconclusive, &[]),
+        run("l4", a1, Verdict::Fail, &[(0.0, 0.25), (0.5, 0.75)]),
+        run("l5", a2, Verdict::Fail, &[(0.0, 0.125)]),
+        // No robot id or scene: the robot model's name and "-".
+        run("l6", json!({"date": "2026-11-28"}), Verdict::Pass, &[]),
+    ];
+    let f = fleet::fleet(&runs, &[None; 7]);
+    let keys: Vec<(&str, &str, &str)> = f
+        .groups
+        .iter()
+        .map(|g| (g.robot.as_str(), g.scene.as_str(), g.day.as_str()))
+        .collect();
+    assert_eq!(
+        keys,
+        [
+            ("arm-1", "sorting", "2026-11-27"),
+            ("arm-2", "cell-b", "2026-11-27"),
+            ("fr3", "-", "2026-11-28")
+        ]
+    );
+    let g = &f.groups[0];
+    assert_eq!(
+        (
+            g.counts.runs,
+            g.counts.pass,
+            g.counts.fail,
+            g.counts.inconclusive
+        ),
+        (5, 1, 3, 1)
+    );
+    assert_eq!(g.counts.violation_time_s, 1.25);
+    assert_eq!(g.counts.duration_s, 5.0);
+    // l2 and l4 both 0.5 s; l4 has two intervals, so the higher fraction: first. Then l2, l1.
+    let worst: Vec<&str> = g.worst.iter().map(|w| w.log.as_str()).collect();
+    assert_eq!(worst, ["l4", "l2", "l1"]);
+    assert_eq!(f.total.runs, 7);
+    assert_eq!(
+        (f.total.pass, f.total.fail, f.total.inconclusive),
+        (2, 4, 1)
+    );
+    assert_eq!(f.total.violation_time_s, 1.375);
+    let all_worst: Vec<&str> = f.worst.iter().map(|w| w.log.as_str()).collect();
+    assert_eq!(all_worst, ["l4", "l2", "l1", "l5"]);
+    assert!(f.groups[2].worst.is_empty());
+    // The runs keep the log order; groups and worst runs do not depend on it.
+    let mut reversed = runs.clone();
+    reversed.reverse();
+    let r = fleet::fleet(&reversed, &[None; 7]);
+    assert_eq!(
+        r.runs.iter().map(|x| x.log.as_str()).collect::<Vec<_>>(),
+        ["l6", "l5", "l4", "l3", "l2", "l1", "l0"]
+    );
+    assert_eq!(r.worst, f.worst);
+    for (a, b) in r.groups.iter().zip(&f.groups) {
+        assert_eq!(
+            (&a.robot, &a.scene, &a.day, &a.worst),
+            (&b.robot, &b.scene, &b.day, &b.worst)
+        );
+        assert_eq!(
+            (
+                a.counts.runs,
+                a.counts.pass,
+                a.counts.fail,
+                a.counts.inconclusive
+            ),
+            (
+                b.counts.runs,
+                b.counts.pass,
+                b.counts.fail,
+                b.counts.inconclusive
+            )
+        );
+    }
+    let md = fleet::markdown(&f);
+    assert!(md.contains("| arm-1 | sorting | 2026-11-27 | 5 | 1 | 3 | 1 | 5.000 | 1.250 | l4 (0.500); l2 (0.500); l1 (0.250) |"), "{md}");
+    assert!(md.contains("Days from meta.date: 7"), "{md}");
+}
+
+#[test]
+fn a_directory_expands_to_its_sorted_log_files() {
+    let d = std::env::temp_dir().join(format!("pacs-reports-fleet-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(d.join("b/c")).unwrap();
+    for f in [
+        "z.jsonl",
+        "a.CSV",
+        "b/c/m.mcap",
+        "b/x.jsonl",
+        "notes.txt",
+        "h.json",
+    ] {
+        std::fs::write(d.join(f), "").unwrap();
+    }
+    let single = d.join("notes.txt");
+    let got = expand_logs(&[single.clone(), d.clone()]).unwrap();
+    let want: Vec<_> = [
+        single,
+        d.join("a.CSV"),
+        d.join("b/c/m.mcap"),
+        d.join("b/x.jsonl"),
+        d.join("z.jsonl"),
+    ]
+    .into();
+    assert_eq!(got, want);
+    std::fs::create_dir_all(d.join("empty/sub")).unwrap();
+    let e = expand_logs(&[d.join("empty")]).unwrap_err();
+    assert!(
+        e.contains(&d.join("empty").display().to_string()) && e.contains("without log files"),
+        "{e}"
+    );
+    let e = expand_logs(&[d.join("missing")]).unwrap_err();
+    assert!(e.contains("missing") && e.contains("cannot read"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
