@@ -124,7 +124,7 @@ fn bad_bags_exit_3_naming_the_file_and_the_problem() {
         (&text, "not an SQLite database"),
         (&no_topics, "no table `topics`"),
         (&json, "serialization format `json` is not supported"),
-        (&empty_dir, "not a ROS 2 bag"),
+        (&empty_dir, "a directory without log files"),
     ] {
         let o = pacs().args(["audit", &s(p)]).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
