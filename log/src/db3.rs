@@ -12,11 +12,11 @@
 //!
 //! The pacs header: given by the caller (`pacs audit --header`), or the JSON text in key
 //! [`CUSTOM_DATA_KEY`] of the bag's `custom_data` (in `metadata.yaml`, or for a lone `.db3` file in
-//! its `metadata` table, which rosbag2 writes since Iron).
+//! its `metadata` table, which newer rosbag2 releases and `rosbags` write).
 
 use crate::error::{Location, LogError};
 use crate::format::{Header, ModelOverrides, Record, RecordReader};
-use crate::mcap::{McapConfig, parse_header_json};
+use crate::mcap::{McapConfig, RECORD_LIMIT, parse_header_json};
 use crate::ros::{Message, Messages, Pending, Stream};
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
@@ -34,8 +34,11 @@ pub const METADATA_FILE: &str = "metadata.yaml";
 const METADATA_LIMIT: u64 = 1 << 20;
 /// Deepest nesting of `metadata.yaml` accepted.
 const YAML_DEPTH: usize = 32;
-/// Rows per batch handed from the reading thread.
+/// Rows per batch handed from the reading thread (fewer when their payloads reach
+/// [`BATCH_BYTES`]).
 const BATCH: usize = 256;
+/// Payload bytes after which a batch is handed over.
+const BATCH_BYTES: usize = 1 << 20;
 /// Batches in flight between the reading thread and the reader.
 const BATCHES_IN_FLIGHT: usize = 4;
 
@@ -399,7 +402,7 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     Ok(Part { path, name, topics })
 }
 
-/// The metadata YAML a `.db3` file keeps in its `metadata` table (rosbag2 since Iron, and
+/// The metadata YAML a `.db3` file keeps in its `metadata` table (newer rosbag2 releases, and
 /// `rosbags`), if it has one.
 fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
     let bad = |p: String| LogError::input(name, Location::File, p);
@@ -443,6 +446,7 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
             .query([])
             .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
         let mut batch = Vec::with_capacity(BATCH);
+        let mut bytes = 0usize;
         let after = |last: Location| match last {
             Location::Message(id) => format!(" after message id {id}"),
             _ => String::new(),
@@ -458,6 +462,12 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
             let topic_id = int(cell(1)?, "messages.topic_id")?;
             let timestamp = int(cell(2)?, "messages.timestamp")?;
             let data = match cell(3)? {
+                ValueRef::Blob(b) if b.len() > RECORD_LIMIT => {
+                    return Err(format!(
+                        "messages.data: {} bytes, over the {RECORD_LIMIT}-byte message limit",
+                        b.len()
+                    ));
+                }
                 ValueRef::Blob(b) => b.to_vec(),
                 other => {
                     return Err(format!(
@@ -466,13 +476,14 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
                     ));
                 }
             };
+            bytes += data.len();
             batch.push(Row {
                 id,
                 topic_id,
                 timestamp,
                 data,
             });
-            if batch.len() == BATCH
+            if (batch.len() == BATCH || bytes >= BATCH_BYTES)
                 && tx
                     .send(Batch::Rows(std::mem::replace(
                         &mut batch,
@@ -481,6 +492,9 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
                     .is_err()
             {
                 return Ok(());
+            }
+            if batch.is_empty() {
+                bytes = 0;
             }
         }
         if !batch.is_empty() && tx.send(Batch::Rows(batch)).is_err() {
