@@ -146,7 +146,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         } else if stopped_at.is_none() && matches!(cmd.diag.binding, Binding::Ssm { .. }) {
             // The first step the person's possible contact refused: braking along the path.
-            stopped_at = Some((cmd.t, format!("{:?}", cmd.diag.binding)));
+            // Name the link and body part: `binding_json` puts the names beside the indices.
+            let b = shield.binding_json(&cmd.diag.binding);
+            let name = |k: &str| b[k].as_str().unwrap_or("?").to_string();
+            stopped_at = Some((
+                cmd.t,
+                format!(
+                    "SSM: {} could touch the person's {}",
+                    name("link_name"),
+                    name("body_part_name")
+                ),
+            ));
         }
         if !fast {
             // Pace at 1 kHz: wait for the next tick.

@@ -45,7 +45,7 @@ enum Command {
     /// audit the logs and write the certification report; print a summary.
     Demo {
         /// Output directory for logs and reports.
-        #[arg(long, value_name = "DIR", default_value = "pacs-out")]
+        #[arg(long, value_name = "DIR", default_value = "pacs-out/demo")]
         out: PathBuf,
     },
     /// Measure speed (use a release build: `cargo run --release -- bench shield`).
@@ -74,13 +74,13 @@ enum Command {
     /// to the table, a rolling ball, six chunks). Exit 3 on invalid input, naming the field.
     #[command(after_help = "Examples:
   pacs shield                                   # the built-in example scene
-  pacs shield --input examples/scene.json --out shield-out && pacs audit shield-out/log.jsonl")]
+  pacs shield --input examples/scene.json && pacs audit pacs-out/shield/log.jsonl")]
     Shield {
         /// Scene JSON file (default: built-in example).
         #[arg(long, value_name = "FILE")]
         input: Option<PathBuf>,
         /// Output directory for commands.jsonl and log.jsonl.
-        #[arg(long, value_name = "DIR", default_value = "pacs-shield")]
+        #[arg(long, value_name = "DIR", default_value = "pacs-out/shield")]
         out: PathBuf,
     },
     /// Simulate the paper's evaluation: tasks × methods × rollouts in parallel, scored against

@@ -127,6 +127,14 @@ fn exit_codes_and_json_output() {
     assert_eq!(run["verdict"], "fail");
     assert_eq!(run["metrics"]["safe_success"], false);
     assert!(run["metrics"]["violation_fraction"].as_f64().unwrap() > 0.0);
+    // The episodes beside the intervals, each covering some of them.
+    let episodes = run["episodes"].as_array().unwrap();
+    assert!(!episodes.is_empty());
+    let merged: u64 = episodes
+        .iter()
+        .map(|e| e["intervals"].as_u64().unwrap())
+        .sum();
+    assert_eq!(merged as usize, run["violations"].as_array().unwrap().len());
     let viol = &run["violations"][0];
     for k in [
         "t_start",
@@ -218,6 +226,24 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
         Some(1),
         "{}",
         String::from_utf8_lossy(&o.stderr)
+    );
+    // It says where the report went, and why the exit code is 1.
+    let err = String::from_utf8_lossy(&o.stderr);
+    let d = out.display();
+    assert!(
+        err.contains(&format!(
+            "pacs: report written: {d}/report.html, {d}/report.pdf, {d}/report.md, {d}/report.json, {d}/violations.csv (overall verdict FAIL: exit 1)"
+        )),
+        "{err}"
+    );
+    let csv = std::fs::read_to_string(out.join("violations.csv")).unwrap();
+    assert!(
+        csv.starts_with("log,t_start_s,t_end_s,constraint,"),
+        "{csv}"
+    );
+    assert!(
+        csv.lines().count() > 1,
+        "the failing log's intervals: {csv}"
     );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.starts_with("<!DOCTYPE html>"));
@@ -335,6 +361,42 @@ fn massless_moving_link_is_refused_for_pfl() {
     }
 }
 
+/// Issue 40: a header robot whose moving link has mass but no capsules could never be found
+/// touching anyone (it audited PASS): refused with exit 3, naming the link, under SSM too.
+#[test]
+fn uncovered_moving_link_in_the_header_is_refused() {
+    let mut spec = pacs_models::RobotModel::builtin("fr3")
+        .unwrap()
+        .spec()
+        .clone();
+    for l in spec.links.iter_mut().filter(|l| l.name == "fr3_hand") {
+        l.capsules.clear();
+    }
+    let d = tmpdir("uncovered");
+    let h = Header::new(
+        ModelRef::Spec(Box::new(spec)),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&h).unwrap();
+    w.write_human(0.0, 0.0, &pacs_testkit::keypoints_in_a_row(2.5))
+        .unwrap();
+    w.write_robot(0.0, &Q, None).unwrap();
+    w.write_robot(0.001, &Q, None).unwrap();
+    let path = d.join("uncovered.jsonl");
+    std::fs::write(&path, w.finish().unwrap()).unwrap();
+    let o = pacs(&["audit", &s(&path)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("moving links with mass and no capsules: `fr3_hand` (0.6544 kg)"),
+        "{err}"
+    );
+    assert!(err.contains("line 1"), "names the header line: {err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// Issue 11: a header robot with finite but astronomical offsets overflowed the checker (a panic
 /// in debug builds; in release the run came out inconclusive with `"min_separation": null` and
 /// the contact at the base unreported). The model is refused: exit 3 naming the header line and
@@ -375,5 +437,37 @@ fn astronomical_robot_in_the_header_is_refused() {
         "{err}"
     );
     assert!(o.stdout.is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 40: `1e400` or `NaN` in a log names the record's field (and the file line), not only
+/// a JSON column.
+#[test]
+fn non_finite_numbers_in_a_log_name_the_field() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/logs/clean_sorting.jsonl");
+    let text = std::fs::read_to_string(src).unwrap();
+    let d = tmpdir("nonfinite");
+    for (name, from, to, want) in [
+        (
+            "huge",
+            "\"q\": [0.0, -0.785, 0, -2.356,",
+            "\"q\": [0.0, -0.785, 1e400, -2.356,",
+            "line 4: invalid JSON record: q[2]: number out of range at line 1 column 52 (numbers must be finite: |x| ≤ 1.8e308)",
+        ),
+        (
+            "nan",
+            "\"dq\": [0.3, 0,",
+            "\"dq\": [NaN, 0,",
+            "line 4: invalid JSON record: dq[0]: expected value at line 1 column 84 (NaN and Infinity are not JSON: numbers must be finite)",
+        ),
+    ] {
+        assert!(text.contains(from), "{name}");
+        let path = d.join(format!("{name}.jsonl"));
+        std::fs::write(&path, text.replacen(from, to, 1)).unwrap();
+        let o = pacs(&["audit", &s(&path)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -39,5 +39,39 @@ fn demo_runs_audits_and_reports() {
     }
     let html = std::fs::read_to_string(out_dir.join("report.html")).unwrap();
     assert!(html.contains("<svg"), "report has plots");
+    // Issue 40: the sentences on stderr are read off the rows: one per run, never "hits the
+    // person" above a row with 0.0 % violations.
+    let err = String::from_utf8_lossy(&out.stderr);
+    for r in runs {
+        let (task, method) = (r["task"].as_str().unwrap(), r["method"].as_str().unwrap());
+        let f = r["safety_violation_fraction"].as_f64().unwrap();
+        let c = if task == "handover" { "PFL" } else { "SSM" };
+        let want = if f > 0.0 {
+            format!(
+                "  {task}, {}: {:.1} % of its steps violate {c} against the true human motion.",
+                method.to_uppercase(),
+                100.0 * f
+            )
+        } else {
+            format!(
+                "  {task}, {}: no step violates {c} against the true human motion",
+                method.to_uppercase()
+            )
+        };
+        assert!(err.contains(&want), "{want} not in {err}");
+    }
+    assert!(!err.contains("hits the person"), "{err}");
+    // The report's aggregate groups by the filter that ran: PACS and OFF apart.
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).unwrap())
+            .unwrap();
+    let filters: Vec<&str> = rep["aggregate"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["filter"].as_str().unwrap())
+        .collect();
+    assert_eq!(filters, ["pacs", "off", "pacs", "off"]);
+    assert!(out_dir.join("violations.csv").is_file());
     let _ = std::fs::remove_dir_all(&out_dir);
 }

@@ -93,6 +93,8 @@ fn capsules_are_fitted_to_meshes_and_the_side_file_loads() {
     ]));
     let fits = report["fits"].as_array().unwrap();
     assert_eq!(fits.len(), 1);
+    assert_eq!(report["loads"], true);
+    assert_eq!(report["missing"], serde_json::json!([]));
     assert_eq!(fits[0]["link"], "upper");
     assert_eq!(fits[0]["vertices"], 24);
     // A square tube of half-width 4 cm: its corners are 4√2 cm from the axis.
@@ -120,6 +122,51 @@ fn capsules_are_fitted_to_meshes_and_the_side_file_loads() {
         out.to_str().unwrap(),
     ]));
     assert_eq!(spec["name"], "arm");
+    // Without the user's limits the side file is written, and the keys still missing are named
+    // with the reason (the URDF gives no acceleration or jerk limit) on stdout and stderr.
+    let bare = dir.join("bare.toml");
+    std::fs::write(&bare, "").unwrap();
+    let out2 = dir.join("bare_capsules.json");
+    let o = pacs(&[
+        "robot",
+        "capsules",
+        "--urdf",
+        u,
+        "--side",
+        bare.to_str().unwrap(),
+        "--package-path",
+        ws.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+    let report = ok_json(o);
+    assert_eq!(report["loads"], false);
+    let keys: Vec<&str> = report["missing"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["key"].as_str().unwrap())
+        .collect();
+    assert_eq!(keys, ["a_max", "j_max"]);
+    assert!(
+        stderr.starts_with(&format!(
+            "{}: `pacs robot show` needs 2 more keys there:\n  a_max: no acceleration limit for joint shoulder: URDF before 1.2 has none",
+            out2.display()
+        )),
+        "{stderr}"
+    );
+    // ... and `robot show` refuses that file with the first of them.
+    let o = pacs(&[
+        "robot",
+        "show",
+        "--urdf",
+        u,
+        "--side",
+        out2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("a_max"));
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -323,5 +370,42 @@ fn urdf_robots_in_headers_configs_and_inputs_resolve_against_their_file() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// An inline robot (as in an input file or a log header) whose moving link has mass and no
+/// capsules is refused with exit 3, naming the link; marked `"frame": true` it is accepted.
+#[test]
+fn an_inline_robot_with_an_uncovered_moving_link_is_refused() {
+    let mut spec = ok_json(pacs(&["robot", "show", "fr3"]));
+    let links = spec["links"].as_array_mut().unwrap();
+    let l4 = links.iter_mut().find(|l| l["name"] == "fr3_link4").unwrap();
+    l4["capsules"] = serde_json::json!([]);
+    let dir = std::env::temp_dir().join(format!("pacs-cli-uncovered-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("fk.json");
+    let write = |spec: &serde_json::Value| {
+        std::fs::write(
+            &input,
+            serde_json::json!({"robot": spec, "q": [[0.0, -0.78, 0.0, -2.36, 0.0, 1.57, 0.78]]})
+                .to_string(),
+        )
+        .unwrap()
+    };
+    write(&spec);
+    let o = pacs(&["fk", "--input", input.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(3));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(
+            "robot `fr3`: moving links with mass and no capsules: `fr3_link4` (2.6155955791 kg)"
+        ),
+        "{stderr}"
+    );
+    let links = spec["links"].as_array_mut().unwrap();
+    let l4 = links.iter_mut().find(|l| l["name"] == "fr3_link4").unwrap();
+    l4["frame"] = serde_json::json!(true);
+    write(&spec);
+    ok_json(pacs(&["fk", "--input", input.to_str().unwrap()]));
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -59,6 +59,7 @@ fn the_example_scene_runs_and_its_log_passes_the_audit() {
     let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
     let lim = robot.limits();
     let mut unverified = 0;
+    let mut named = 0;
     for (k, c) in cmds.iter().enumerate() {
         let t = c["t"].as_f64().unwrap();
         assert!(
@@ -75,7 +76,33 @@ fn the_example_scene_runs_and_its_log_passes_the_audit() {
             );
         }
         unverified += (!c["verified"].as_bool().unwrap()) as usize;
+        // The binding names what its indices stand for.
+        let b = &c["binding"];
+        if let Some(l) = b["link"].as_u64() {
+            assert_eq!(
+                b["link_name"],
+                robot.links()[l as usize].name.as_str(),
+                "{b}"
+            );
+        }
+        if let Some(p) = b["body_part"].as_u64() {
+            let human = pacs_models::HumanModel::builtin("default").unwrap();
+            assert_eq!(
+                b["body_part_name"],
+                human.body_parts()[p as usize].name.as_str(),
+                "{b}"
+            );
+            named += 1;
+        }
+        if b["kind"] == "object" {
+            assert_eq!(b["object_id"], "ball", "{b}");
+        }
     }
+    assert!(named > 0, "some steps are bound by the person");
+    // The header records the filter that ran (the configured mode; default PACS).
+    let header = header_meta(&d);
+    assert_eq!(header["filter"], "pacs");
+    assert_eq!(header["tool"], "pacs shield");
     // The person walks up and the ball rolls past: some steps brake, most are verified.
     let frac = summary["verified_fraction"].as_f64().unwrap();
     assert!(frac > 0.5 && frac < 1.0, "verified fraction {frac}");
@@ -92,6 +119,32 @@ fn the_example_scene_runs_and_its_log_passes_the_audit() {
         String::from_utf8_lossy(&a.stdout)
     );
     std::fs::remove_dir_all(&d).ok();
+}
+
+/// `meta` of the header (first line) of `d/out/log.jsonl`.
+fn header_meta(d: &Path) -> Value {
+    let text = std::fs::read_to_string(d.join("out/log.jsonl")).unwrap();
+    let first: Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    first["meta"].clone()
+}
+
+/// `meta.filter` is the mode that ran, so reports never average PACS and OFF runs together
+/// (it was `"pacs-shield"` whatever `config.mode` said).
+#[test]
+fn the_log_header_names_the_mode_that_ran() {
+    for mode in ["off", "single-action"] {
+        let mut scene = example();
+        scene["config"]["mode"] = Value::from(mode);
+        scene["duration"] = Value::from(0.05);
+        let (out, d) = run_scene(&format!("mode-{mode}"), &scene);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(header_meta(&d)["filter"], mode);
+        std::fs::remove_dir_all(&d).ok();
+    }
 }
 
 #[test]
@@ -299,7 +352,7 @@ fn bad_scenes_exit_3_naming_the_field() {
         (
             "start",
             Box::new(|s| s["start"][3] = serde_json::json!(5.0)),
-            "start",
+            "start[3] (joint `fr3_joint4`): 5 rad is outside the joint position limits [-3.0421, -0.1518] rad",
         ),
         (
             "unknown",
@@ -422,4 +475,43 @@ fn assert_undeclared_person_refused(scene: &Value, d: &Path) {
         e.contains("human_measurements[0].id") && e.contains("stranger"),
         "{e}"
     );
+}
+
+/// Issue 40: a number JSON cannot hold (`1e400`) or a `NaN` literal in a scene names the field,
+/// not only the line and column.
+#[test]
+fn non_finite_numbers_in_a_scene_name_the_field() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scene.json");
+    let text = std::fs::read_to_string(p).unwrap();
+    for (name, from, to, want) in [
+        (
+            "huge",
+            "\"start\": [0.0, -0.785398,",
+            "\"start\": [0.0, 1e400,",
+            "invalid scene: start[1]: number out of range at line 9 column 22 (numbers must be finite: |x| ≤ 1.8e308)",
+        ),
+        (
+            "nan",
+            "{\"t\": 0.264, \"kind\": \"delta\", \"actions\": [[0.012,",
+            "{\"t\": 0.264, \"kind\": \"delta\", \"actions\": [[NaN,",
+            "invalid scene: chunks[1].actions[0][0]: expected value at line 14 column 48 (NaN and Infinity are not JSON: numbers must be finite)",
+        ),
+    ] {
+        assert!(text.contains(from), "{name}");
+        let d = dir(name);
+        std::fs::create_dir_all(&d).unwrap();
+        let input = d.join("scene.json");
+        std::fs::write(&input, text.replacen(from, to, 1)).unwrap();
+        let out = pacs()
+            .args(["shield", "--input"])
+            .arg(&input)
+            .arg("--out")
+            .arg(d.join("out"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+        std::fs::remove_dir_all(&d).ok();
+    }
 }

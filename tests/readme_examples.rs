@@ -36,6 +36,23 @@ fn run_all(what: &str, commands: &[String]) -> usize {
             out.status.code(),
             String::from_utf8_lossy(&out.stderr)
         );
+        // README's claim about every command's output (issue 40): JSON on stdout, except
+        // `pacs audit` without `--json`, which prints one line per log.
+        if what == "readme" {
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            if args[0] == "audit" && !args.contains(&"--json") {
+                assert_eq!(stdout.lines().count(), 1, "`pacs {cmd}`: {stdout}");
+                assert!(
+                    stdout.contains("violation episode(s)"),
+                    "`pacs {cmd}`: {stdout}"
+                );
+            } else {
+                assert!(
+                    serde_json::from_str::<serde_json::Value>(&stdout).is_ok(),
+                    "`pacs {cmd}` does not print JSON: {stdout}"
+                );
+            }
+        }
         ran += 1;
     }
     std::fs::remove_dir_all(&dir).ok();

@@ -300,8 +300,15 @@ pub struct SeriesPoint {
     pub t: f64,
     /// Bucket end (s).
     pub t_end: f64,
-    /// Lower bound (m) of the separation over the bucket's checked spans (None if none).
+    /// Lower bound (m) of the separation over the bucket's checked spans where the robot's
+    /// occupancy was computed (None if none).
     pub min_separation: Option<f64>,
+    /// Lower bound (m) of the separation over the bucket's spans where the people and objects
+    /// were all outside the robot's workspace ball, so only the distance to that ball was
+    /// computed: a coarse figure (always > 0), far below the true distance to the arm. Reports
+    /// draw it apart from `min_separation` (None if no such span).
+    #[serde(default)]
+    pub far_separation: Option<f64>,
     /// Nominal whole-robot kinetic energy (J) at the bucket's first sample.
     pub energy_nominal: Option<f64>,
     /// Largest sub-chain energy bound (J) over possible PFL contacts in the bucket.

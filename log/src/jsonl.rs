@@ -299,8 +299,10 @@ impl<R: BufRead> JsonlReader<R> {
                 "the file starts with a UTF-8 byte order mark (EF BB BF); JSON Lines logs are UTF-8 without BOM: remove it",
             ));
         }
-        let value: serde_json::Value = serde_json::from_str(&line)
-            .map_err(|e| LogError::input(file, loc, format!("invalid JSON: {e}")))?;
+        let value: serde_json::Value = serde_json::from_str(&line).map_err(|e| {
+            let e = pacs_models::describe_json_error(&line, &e);
+            LogError::input(file, loc, format!("invalid JSON: {e}"))
+        })?;
         if value.get("type").and_then(|t| t.as_str()) != Some("header") {
             return Err(LogError::input(
                 file,
@@ -384,7 +386,10 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         LineSeed(b)
             .deserialize(&mut de)
             .and_then(|()| de.end())
-            .map_err(|e| err(format!("invalid JSON record: {e}")))?;
+            .map_err(|e| {
+                let e = pacs_models::describe_json_error(&self.line, &e);
+                err(format!("invalid JSON record: {e}"))
+            })?;
         if let Some(d) = b.duplicate {
             return Err(err(format!("field `{d}` appears twice")));
         }

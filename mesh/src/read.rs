@@ -488,6 +488,21 @@ pub fn resolve(
                 tried.push(cand.display().to_string());
             }
         }
+        // The package is there but the file is not: say that, not "package not found".
+        let found: Vec<PathBuf> = package_paths
+            .iter()
+            .flat_map(|p| [p.join(pkg), p.clone()])
+            .filter(|d| d.file_name().and_then(|n| n.to_str()) == Some(pkg) && d.is_dir())
+            .collect();
+        if let Some(dir) = found.first() {
+            return Err(MeshError::Resolve {
+                what: format!(
+                    "mesh `{filename}`: package `{pkg}` is at {}, but it has no file `{sub}` (no {})",
+                    dir.display(),
+                    dir.join(sub).display()
+                ),
+            });
+        }
         return Err(MeshError::Resolve {
             what: format!(
                 "mesh `{filename}`: package `{pkg}` not found under the package paths [{}] (give --package-path DIR or set ROS_PACKAGE_PATH){}",

@@ -59,8 +59,7 @@ pub fn fit_urdf_meshes(
         let own = side
             .links
             .get(&link.name)
-            .and_then(|l| l.capsules.as_ref())
-            .is_some();
+            .is_some_and(|l| l.capsules.is_some() || l.frame == Some(true));
         if !has_mesh || own {
             continue;
         }

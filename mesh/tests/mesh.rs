@@ -359,5 +359,33 @@ fn urdf_mesh_collisions_become_reviewed_side_file_capsules() {
     )
     .unwrap();
     assert!(r.ends_with("toy_description/meshes/link1.stl"));
+    // Issue 40: a missing file in a package that is there is named as such, not as a missing
+    // package; a package nowhere on the paths is a missing package.
+    let e = resolve(
+        "package://toy_description/meshes/link9.stl",
+        Path::new("/"),
+        std::slice::from_ref(&pkg),
+    )
+    .unwrap_err()
+    .to_string();
+    assert_eq!(
+        e,
+        format!(
+            "mesh `package://toy_description/meshes/link9.stl`: package `toy_description` is at {}, but it has no file `meshes/link9.stl` (no {})",
+            pkg.display(),
+            pkg.join("meshes/link9.stl").display()
+        )
+    );
+    let e = resolve(
+        "package://other_description/meshes/link1.stl",
+        Path::new("/"),
+        std::slice::from_ref(&pkg),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("mesh `package://other_description/meshes/link1.stl`: package `other_description` not found under the package paths"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -67,6 +67,18 @@ pub enum ModelError {
         /// The link names.
         links: Vec<String>,
     },
+    /// Moving links with mass and no capsules, not marked `frame`: no contact with them could
+    /// ever be found, so SSM and PFL would pass whatever they hit.
+    #[error(
+        "robot `{robot}`: moving links with mass and no capsules: {} (no contact with them could ever be found; give them capsules — `pacs robot capsules` fits them to meshes — or, if a link has no body outside other links' capsules, mark it `\"frame\": true` in the model or `frame = true` under its `[links.NAME]` in the side file)",
+        links.iter().map(|(l, m)| format!("`{l}` ({m} kg)")).collect::<Vec<_>>().join(", ")
+    )]
+    UncoveredLinks {
+        /// Robot name.
+        robot: String,
+        /// The link names with their masses (kg).
+        links: Vec<(String, f64)>,
+    },
     /// A structural problem that is not a single value (empty chain, bad index...).
     #[error("invalid model: {0}")]
     Invalid(String),
@@ -123,7 +135,7 @@ pub(crate) fn positive(field: impl FnOnce() -> String, value: f64) -> Result<f64
 pub(crate) fn parse_json<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ModelError> {
     serde_json::from_str(text).map_err(|e| ModelError::Parse {
         format: "JSON",
-        message: e.to_string(),
+        message: crate::json_path::describe_json_error(text, &e),
     })
 }
 

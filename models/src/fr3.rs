@@ -188,6 +188,7 @@ pub fn fr3() -> RobotModel {
                 com: INERTIALS[i].1,
                 inertia: INERTIALS[i].2,
             }),
+            frame: false,
         })
         .collect();
     // Flange (link8) is 0.107 m along z of link7; the hand is rotated −π/4 about z.
@@ -216,6 +217,7 @@ pub fn fr3() -> RobotModel {
             com: [-0.0000376, 0.0119128, 0.0207260],
             inertia: [0.00186, 0.0, 0.0, 0.0003, -2e-05, 0.00174],
         }),
+        frame: false,
     });
     // Two fingers (0.0291 kg each) closed: combined CoM on the hand axis, parallel-axis terms added.
     let m_f = 0.0291;
@@ -238,12 +240,16 @@ pub fn fr3() -> RobotModel {
                 2.0 * 1.77e-06 + par,
             ],
         }),
+        // Closed, the fingers lie inside the hand's capsules (z 0.058..0.103 m, |y| < 0.03 m
+        // in the hand frame; the hand's second capsule reaches 0.05 m around z = 0.10 m).
+        frame: true,
     });
     let spec = RobotSpec {
         name: "fr3".into(),
         base: PoseSpec::default(),
         joints,
         links,
+        user_values: Vec::new(),
     };
     RobotModel::new(spec).expect("built-in FR3 model is valid")
 }

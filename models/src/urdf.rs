@@ -31,12 +31,14 @@
 //!
 //! [`LinkSpec`]: crate::robot::LinkSpec
 
+mod gaps;
 mod joints;
 pub(crate) mod links;
 mod pose;
 mod side_file;
 mod tree;
 
+pub use gaps::{SideFileGap, side_file_gaps};
 pub use links::collision_capsules;
 pub use pose::rpy_of;
 pub use side_file::{JointOverride, LinkOverride, SideFile};
@@ -72,11 +74,98 @@ pub fn load_urdf_files(
 
 /// Convert URDF text plus a side file into a (not yet validated) [`RobotSpec`].
 pub fn urdf_to_spec(urdf_text: &str, side: &SideFile) -> Result<RobotSpec, ModelError> {
-    let robot = urdf_rs::read_from_string(urdf_text).map_err(|e| ModelError::Parse {
-        format: "URDF",
-        message: e.to_string(),
-    })?;
+    let robot = parse_urdf(urdf_text)?;
     Tree::new(&robot, side)?.to_spec(side)
+}
+
+/// Parse URDF text; a parser error gets the line of the first unbalanced element where the
+/// XML is not well formed (the parser says only `No elements found` for a truncated file).
+pub(crate) fn parse_urdf(urdf_text: &str) -> Result<urdf_rs::Robot, ModelError> {
+    urdf_rs::read_from_string(urdf_text).map_err(|e| ModelError::Parse {
+        format: "URDF",
+        message: match xml_balance(urdf_text) {
+            Some(where_) => format!("{e}: {where_}"),
+            None => e.to_string(),
+        },
+    })
+}
+
+/// Where the elements of an XML text stop balancing: a closing tag that closes another element,
+/// or elements still open where the text ends (a truncated file). `None` if they balance.
+fn xml_balance(text: &str) -> Option<String> {
+    let mut open: Vec<(String, usize)> = Vec::new();
+    let line_at = |i: usize| 1 + text[..i].matches('\n').count();
+    let mut i = 0;
+    while let Some(k) = text[i..].find('<') {
+        let start = i + k;
+        let rest = &text[start..];
+        let skip = |end: &str| rest.find(end).map(|e| start + e + end.len());
+        let next = if rest.starts_with("<!--") {
+            skip("-->")
+        } else if rest.starts_with("<?") {
+            skip("?>")
+        } else if rest.starts_with("<![CDATA[") {
+            skip("]]>")
+        } else {
+            // A tag: find its end outside quoted attribute values.
+            let mut quote = None;
+            let end = rest.char_indices().skip(1).find_map(|(j, c)| {
+                match (quote, c) {
+                    (None, '"' | '\'') => quote = Some(c),
+                    (Some(q), c) if c == q => quote = None,
+                    (None, '>') => return Some(j),
+                    _ => {}
+                }
+                None
+            });
+            end.map(|end| {
+                let tag = &rest[1..end];
+                let name: String = tag
+                    .trim_start_matches('/')
+                    .chars()
+                    .take_while(|c| !c.is_whitespace() && *c != '/')
+                    .collect();
+                if tag.starts_with('/') {
+                    match open.pop() {
+                        Some((o, _)) if o == name => {}
+                        Some((o, l)) => {
+                            return Err(format!(
+                                "line {}: `</{name}>` closes `<{o}>` opened at line {l}",
+                                line_at(start)
+                            ));
+                        }
+                        None => {
+                            return Err(format!(
+                                "line {}: `</{name}>` closes no open element",
+                                line_at(start)
+                            ));
+                        }
+                    }
+                } else if !tag.starts_with('!') && !tag.ends_with('/') {
+                    open.push((name, line_at(start)));
+                }
+                Ok(start + end + 1)
+            })
+            .transpose()
+            .unwrap_or_else(|e| {
+                open.clear();
+                open.push((e, 0));
+                None
+            })
+        };
+        match next {
+            Some(n) => i = n,
+            None => break,
+        }
+    }
+    let lines = text.lines().count();
+    match open.as_slice() {
+        [] => None,
+        [(msg, 0)] => Some(msg.clone()),
+        [.., (name, l)] => Some(format!(
+            "`<{name}>` opened at line {l} is not closed where the text ends (line {lines}): is the file truncated?"
+        )),
+    }
 }
 
 /// Add the URDF joint/link name to a validation error's `joints[i]` / `links[i]` field.

@@ -309,12 +309,8 @@ fn leaf_and_tip_selection() {
         other => panic!("{other:?}"),
     }
     // Tip = link4: 4 joints; links beyond are frozen at 0 (clamped into limits) onto joint 4.
-    let side = SideFile {
-        tip: Some("fr3_link4".into()),
-        a_max: Some(10.0),
-        j_max: Some(5000.0),
-        ..Default::default()
-    };
+    let mut side = SideFile::parse(&read("fr3_side.toml")).unwrap();
+    side.tip = Some("fr3_link4".into());
     let r = load_urdf(&urdf, &side).unwrap();
     assert_eq!(r.dof(), 4);
     let l7 = &r.links()[r.link_index("fr3_link7").unwrap()];
@@ -609,7 +605,9 @@ fn side_inertial_and_frozen_at_override() {
 #[test]
 fn side_file_json_and_toml_round_trip() {
     let side = SideFile::parse(&read("fr3_side.toml")).unwrap();
-    assert_eq!(side.links.len(), 9);
+    // Nine links with capsules, the two fingers marked `frame = true`.
+    assert_eq!(side.links.len(), 11);
+    assert_eq!(side.links["fr3_leftfinger"].frame, Some(true));
     assert_eq!(side.a_max, Some(10.0));
     let json = serde_json::to_string(&side).unwrap();
     assert_eq!(SideFile::parse(&json).unwrap(), side);
@@ -666,4 +664,145 @@ fn mesh_collision_without_capsules_is_refused_naming_the_links() {
     let err = urdf_to_spec(&urdf, &side).unwrap_err().to_string();
     assert!(err.contains("mesh collision geometry"), "{err}");
     assert!(err.contains("`upper`") && err.contains("`fore`"), "{err}");
+}
+
+/// A moving URDF link with mass and no collision geometry is refused, naming it and its mass;
+/// `frame = true` in the side file accepts it (and is refused on a link with collisions).
+#[test]
+fn moving_link_with_mass_and_no_collision_is_refused_unless_a_frame() {
+    let mut side = SideFile::parse(&read("fr3_side.toml")).unwrap();
+    side.links.remove("fr3_link4");
+    let urdf = read("fr3.urdf");
+    match load_urdf(&urdf, &side) {
+        Err(e @ ModelError::UncoveredLinks { .. }) => {
+            let m = e.to_string();
+            assert!(
+                m.starts_with(
+                    "robot `fr3`: moving links with mass and no capsules: `fr3_link4` (2.6155955791 kg)"
+                ),
+                "{m}"
+            );
+            assert!(m.contains("frame = true"), "{m}");
+        }
+        other => panic!("{other:?}"),
+    }
+    side.links.insert(
+        "fr3_link4".into(),
+        pacs_models::urdf::LinkOverride {
+            frame: Some(true),
+            ..Default::default()
+        },
+    );
+    let r = load_urdf(&urdf, &side).unwrap();
+    let l4 = &r.links()[r.link_index("fr3_link4").unwrap()];
+    assert!(
+        l4.capsules.is_empty()
+            && r.spec()
+                .links
+                .iter()
+                .any(|l| l.name == "fr3_link4" && l.frame)
+    );
+    // Without the fingers' `frame` marks they are refused too (mass, no collision geometry).
+    let mut side = SideFile::parse(&read("fr3_side.toml")).unwrap();
+    side.links.remove("fr3_leftfinger");
+    match load_urdf(&urdf, &side) {
+        Err(ModelError::UncoveredLinks { links, .. }) => {
+            assert_eq!(links, vec![("fr3_leftfinger".to_string(), 0.0291)])
+        }
+        other => panic!("{other:?}"),
+    }
+    // `frame = true` on a link with URDF collision geometry is refused.
+    let planar = read("planar2.urdf");
+    let mut side: SideFile = serde_json::from_str(&read("planar2_side.json")).unwrap();
+    side.links.insert(
+        "fore".into(),
+        pacs_models::urdf::LinkOverride {
+            frame: Some(true),
+            ..Default::default()
+        },
+    );
+    match load_urdf(&planar, &side) {
+        Err(ModelError::Invalid(m)) => assert_eq!(
+            m,
+            "side file `links.fore.frame = true`, but the URDF gives the link 2 <collision> element(s); \
+             a link with collision geometry is not a frame (give `capsules` instead)"
+        ),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `side_file_gaps`: exactly the keys a side file still lacks, and none once it loads.
+#[test]
+fn side_file_gaps_name_the_missing_keys() {
+    use pacs_models::urdf::side_file_gaps;
+    let urdf = read("fr3.urdf");
+    // No tip among three leaves: only `tip` (the chain, and so its joints, is unknown).
+    let gaps = side_file_gaps(&urdf, &SideFile::default()).unwrap();
+    assert_eq!(gaps.len(), 1);
+    assert_eq!(gaps[0].key, "tip");
+    assert!(
+        gaps[0].why.starts_with(
+            "the URDF has 3 leaf links (fr3_hand_tcp, fr3_leftfinger, fr3_rightfinger)"
+        ),
+        "{}",
+        gaps[0].why
+    );
+    // Tip given, no acceleration or jerk limit (URDF < 1.2): both keys, naming the joints.
+    let full = SideFile::parse(&read("fr3_side.toml")).unwrap();
+    let mut side = full.clone();
+    side.a_max = None;
+    side.j_max = None;
+    let gaps = side_file_gaps(&urdf, &side).unwrap();
+    let keys: Vec<&str> = gaps.iter().map(|g| g.key.as_str()).collect();
+    assert_eq!(keys, ["a_max", "j_max"]);
+    assert!(
+        gaps[0].why.starts_with(
+            "no acceleration limit for joints fr3_joint1, fr3_joint2, fr3_joint3, fr3_joint4, \
+             fr3_joint5, fr3_joint6, fr3_joint7: URDF before 1.2 has none"
+        ),
+        "{}",
+        gaps[0].why
+    );
+    // A link left without capsules: its key.
+    let mut side = full.clone();
+    side.links.remove("fr3_hand");
+    let gaps = side_file_gaps(&urdf, &side).unwrap();
+    assert_eq!(gaps.len(), 1);
+    assert_eq!(gaps[0].key, "links.fr3_hand.capsules");
+    assert!(gaps[0].why.starts_with("moving link with mass (0.6544 kg)"));
+    // Continuous joint: its position limits, per joint.
+    let u = two("continuous", r#"<limit effort="1" velocity="1"/>"#);
+    let keys: Vec<String> = side_file_gaps(&u, &uniform())
+        .unwrap()
+        .into_iter()
+        .map(|g| g.key)
+        .collect();
+    assert_eq!(keys, ["joints.j1.q_min", "joints.j1.q_max"]);
+    // Complete: no gaps.
+    assert_eq!(side_file_gaps(&urdf, &full).unwrap(), vec![]);
+}
+
+/// Issue 40: a truncated URDF names the element left open and its line (the XML parser says
+/// only `No elements found`); a mismatched closing tag names both lines.
+#[test]
+fn truncated_urdf_names_the_open_element_and_its_line() {
+    let urdf = read("fr3.urdf");
+    let cut: String = urdf.lines().take(40).collect::<Vec<_>>().join("\n");
+    let side = SideFile::parse(&read("fr3_side.toml")).unwrap();
+    let e = load_urdf(&cut, &side).unwrap_err().to_string();
+    let robot_line = 1 + urdf.lines().position(|l| l.contains("<robot")).unwrap();
+    assert!(e.starts_with("cannot parse URDF: "), "{e}");
+    assert!(
+        e.ends_with("is not closed where the text ends (line 40): is the file truncated?"),
+        "{e}"
+    );
+    // The innermost open element is named with its line; `<robot>` is open too.
+    assert!(e.contains("opened at line"), "{e}");
+    assert!(robot_line < 40);
+    let bad = "<robot name=\"r\">\n  <link name=\"a\">\n  </joint>\n</robot>\n";
+    let e = load_urdf(bad, &side).unwrap_err().to_string();
+    assert!(
+        e.ends_with("line 3: `</joint>` closes `<link>` opened at line 2"),
+        "{e}"
+    );
 }

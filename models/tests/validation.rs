@@ -420,3 +420,69 @@ fn astronomical_reach_is_refused_naming_the_field() {
     s.base.xyz = [9e5, 0.0, 0.0];
     assert!(RobotModel::new(s).is_ok());
 }
+
+/// A moving link with mass and no capsules can never be found touching anyone: refused, naming
+/// the link and its mass, unless marked `frame` (which then must have no capsules).
+#[test]
+fn moving_link_with_mass_and_no_capsules_is_refused_unless_a_frame() {
+    for name in ["fr3_link4", "fr3_hand"] {
+        let mut s = spec();
+        let l = s.links.iter_mut().find(|l| l.name == name).unwrap();
+        l.capsules.clear();
+        let mass = l.inertial.unwrap().mass;
+        match RobotModel::new(s.clone()) {
+            Err(ModelError::UncoveredLinks { robot, links }) => {
+                assert_eq!(robot, "fr3");
+                assert_eq!(links, vec![(name.to_string(), mass)]);
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+        s.links.iter_mut().find(|l| l.name == name).unwrap().frame = true;
+        assert!(RobotModel::new(s).is_ok(), "{name} marked as a frame");
+    }
+    // The built-in's fingers are marked (inside the hand's capsules); unmarked they are refused.
+    let mut s = spec();
+    let f = s
+        .links
+        .iter_mut()
+        .find(|l| l.name == "fr3_fingers")
+        .unwrap();
+    assert!(f.frame);
+    f.frame = false;
+    assert!(matches!(
+        RobotModel::new(s),
+        Err(ModelError::UncoveredLinks { links, .. }) if links[0].0 == "fr3_fingers"
+    ));
+    // The base link does not move: mass without capsules is accepted there.
+    let mut s = spec();
+    s.links[0].capsules.clear();
+    assert_eq!(s.links[0].parent, "base");
+    assert!(RobotModel::new(s).is_ok());
+    // A massless link without capsules (a tool frame) is accepted.
+    let mut s = spec();
+    s.links[4].capsules.clear();
+    s.links[4].inertial = None;
+    assert!(RobotModel::new(s).is_ok());
+    // `frame` with capsules is a contradiction.
+    let mut s = spec();
+    s.links[4].frame = true;
+    match RobotModel::new(s) {
+        Err(ModelError::Invalid(m)) => assert_eq!(
+            m,
+            "links[4] (`fr3_link4`): `frame: true` marks a link without capsules, but it has 1"
+        ),
+        other => panic!("{other:?}"),
+    }
+    // In a JSON model the mark is `"frame": true`, and the error is the same.
+    let mut v = serde_json::to_value(spec()).unwrap();
+    v["links"][4]["capsules"] = serde_json::json!([]);
+    let e = RobotModel::from_json(&v.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("robot `fr3`: moving links with mass and no capsules: `fr3_link4` (2.6155955791 kg) (no contact"),
+        "{e}"
+    );
+    v["links"][4]["frame"] = serde_json::json!(true);
+    assert!(RobotModel::from_json(&v.to_string()).is_ok());
+}

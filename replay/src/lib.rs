@@ -349,6 +349,7 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
         m.insert("t_end".into(), p.t_end.into());
         for (k, v) in [
             ("min_separation_m", p.min_separation),
+            ("far_separation_m", p.far_separation),
             ("energy_bound_j", p.energy_bound),
             ("threshold_j", p.threshold),
             ("energy_nominal_j", p.energy_nominal),

@@ -1,5 +1,7 @@
 //! Aggregate table over several logs, grouped by `meta.task`, `meta.policy`, `meta.filter` (the
-//! paper's "Impact of safeguarding"): Success, Safe Success, Safety Viol. as mean ± std.
+//! paper's "Impact of safeguarding"): Success, Safe Success, Safety Viol. as mean ± std (the
+//! std n/a for a single log). `meta.filter` is the filter that ran (`pacs shield` writes its
+//! configured mode, `pacs simulate` its method), so PACS and OFF runs are never averaged together.
 
 use pacs_audit::RunResult;
 use serde::Serialize;
@@ -15,12 +17,13 @@ pub struct Row {
     pub filter: String,
     /// Number of logs.
     pub runs: usize,
-    /// Mean and sample std of success (0/1) over logs with an outcome (None if none).
-    pub success: Option<(f64, f64)>,
+    /// Mean and sample std of success (0/1) over logs with an outcome (None if none; the std
+    /// None for one log).
+    pub success: Option<(f64, Option<f64>)>,
     /// Mean and std of safe success (0/1) over logs with an outcome.
-    pub safe_success: Option<(f64, f64)>,
+    pub safe_success: Option<(f64, Option<f64>)>,
     /// Mean and std of the violation fraction over all logs.
-    pub safety_violation: (f64, f64),
+    pub safety_violation: (f64, Option<f64>),
 }
 
 fn meta_str(r: &RunResult, k: &str) -> String {
@@ -31,30 +34,38 @@ fn meta_str(r: &RunResult, k: &str) -> String {
     }
 }
 
-/// Mean and sample standard deviation (0 for a single value); None if empty.
-pub fn mean_std(xs: &[f64]) -> Option<(f64, f64)> {
+/// Mean and sample standard deviation (None for a single value: no spread to measure); None if
+/// empty.
+pub fn mean_std(xs: &[f64]) -> Option<(f64, Option<f64>)> {
     if xs.is_empty() {
         return None;
     }
     let n = xs.len() as f64;
     let mean = xs.iter().sum::<f64>() / n;
-    let var = if xs.len() > 1 {
-        xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)
-    } else {
-        0.0
-    };
-    Some((mean, var.sqrt()))
+    let std = (xs.len() > 1)
+        .then(|| (xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)).sqrt());
+    Some((mean, std))
+}
+
+/// The filter a run used: `meta.filter`, with the mode of `meta.shield_config` where the log
+/// has one (the Python `Shield` records its settings there and `"filter": "pacs-shield
+/// (python)"` whatever the mode; a missing `mode` is the default, `pacs`).
+pub fn filter_of(r: &RunResult) -> String {
+    let f = meta_str(r, "filter");
+    match r.meta.get("shield_config") {
+        Some(c) => format!(
+            "{f}, mode {}",
+            c.get("mode").and_then(|m| m.as_str()).unwrap_or("pacs")
+        ),
+        None => f,
+    }
 }
 
 /// Rows in order of first appearance.
 pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
     let mut keys: Vec<(String, String, String)> = Vec::new();
     for r in runs {
-        let k = (
-            meta_str(r, "task"),
-            meta_str(r, "policy"),
-            meta_str(r, "filter"),
-        );
+        let k = (meta_str(r, "task"), meta_str(r, "policy"), filter_of(r));
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -63,13 +74,7 @@ pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
         .map(|k| {
             let group: Vec<&RunResult> = runs
                 .iter()
-                .filter(|r| {
-                    (
-                        meta_str(r, "task"),
-                        meta_str(r, "policy"),
-                        meta_str(r, "filter"),
-                    ) == k
-                })
+                .filter(|r| (meta_str(r, "task"), meta_str(r, "policy"), filter_of(r)) == k)
                 .collect();
             let b = |x: bool| if x { 1.0 } else { 0.0 };
             let succ: Vec<f64> = group
@@ -88,16 +93,17 @@ pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
                 runs: group.len(),
                 success: mean_std(&succ),
                 safe_success: mean_std(&safe),
-                safety_violation: mean_std(&viol).unwrap_or((0.0, 0.0)),
+                safety_violation: mean_std(&viol).unwrap_or((0.0, None)),
             }
         })
         .collect()
 }
 
-/// "m ± s" with percentages.
-pub fn pct(v: Option<(f64, f64)>) -> String {
+/// "m ± s %" with percentages; "m % ± n/a" for one log, "n/a" for none.
+pub fn pct(v: Option<(f64, Option<f64>)>) -> String {
     match v {
-        Some((m, s)) => format!("{:.1} ± {:.1} %", 100.0 * m, 100.0 * s),
+        Some((m, Some(s))) => format!("{:.1} ± {:.1} %", 100.0 * m, 100.0 * s),
+        Some((m, None)) => format!("{:.1} % ± n/a", 100.0 * m),
         None => "n/a".into(),
     }
 }

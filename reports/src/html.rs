@@ -22,11 +22,6 @@ fn verdict_cell(v: Verdict) -> String {
     format!(r#"<span class="v {c}">{t}</span>"#)
 }
 
-fn opt(v: Option<f64>, unit: &str) -> String {
-    v.map(|x| format!("{x:.4} {unit}"))
-        .unwrap_or_else(|| "n/a".into())
-}
-
 /// The effective settings as a two-column table.
 fn settings_table(s: &mut String, settings: &serde_json::Value) {
     s.push_str("<table><tr><th>setting</th><th>value</th></tr>");
@@ -63,7 +58,7 @@ body{font-family:sans-serif;max-width:76em;margin:1em auto;padding:0 1em;color:#
 table{border-collapse:collapse;margin:.5em 0;font-size:88%;width:100%;table-layout:auto}
 th,td{border:1px solid #999;padding:2px 6px;text-align:left;vertical-align:top;overflow-wrap:break-word}
 th{word-break:normal;hyphens:auto}
-td.num,th.num{text-align:right;white-space:nowrap}
+td.num,th.num{text-align:right;white-space:nowrap}table.episodes th.num{white-space:normal}
 th{background:#eee}.v{font-weight:bold;padding:0 4px}.pass{color:#1b5e20}.fail{color:#b71c1c}.inconclusive{color:#e65100}
 code{font-size:90%;overflow-wrap:anywhere}.hash{font-size:75%}.note{font-size:85%;color:#333}
 section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:auto}
@@ -91,26 +86,45 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
             .unwrap_or_else(|| "defaults".into()),
     );
     settings_table(&mut s, &input.settings);
-    s.push_str("<h2>Summary</h2><table><tr><th>log (SHA-256)</th><th>constraints</th><th>verdict</th><th class=\"num\">samples</th><th class=\"num\">duration (s)</th><th class=\"num\">violation fraction</th><th class=\"num\">separation (m)¹</th><th class=\"num\">violations</th><th>success</th><th>safe success²</th></tr>");
+    s.push_str("<h2>Summary</h2><table><tr>");
+    for (i, h) in crate::SUMMARY_COLUMNS.iter().enumerate() {
+        let h = h.replace(" (1)", "¹").replace(" (2)", "²");
+        let class = if (3..=7).contains(&i) {
+            " class=\"num\""
+        } else {
+            ""
+        };
+        let _ = write!(s, "<th{class}>{h}</th>");
+    }
+    s.push_str("</tr>");
     for (r, f) in input.runs.iter().zip(&input.logs) {
-        let m = &r.metrics;
-        let _ = write!(
-            s,
-            "<tr><td><code>{}</code><br><code class=\"hash\">{}</code></td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{:.4}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
-            esc(&r.log),
-            f.sha256,
-            esc(&r.models.constraints),
-            verdict_cell(r.verdict),
-            m.samples,
-            m.duration,
-            m.violation_fraction,
-            opt(m.min_separation, ""),
-            r.violations.len(),
-            m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
-            m.safe_success
-                .map(|b| b.to_string())
-                .unwrap_or("n/a".into()),
-        );
+        s.push_str("<tr>");
+        for (i, c) in crate::summary_cells(r, f).iter().enumerate() {
+            match i {
+                0 => {
+                    let _ = write!(
+                        s,
+                        "<td><code>{}</code><br><code class=\"hash\">{}</code></td>",
+                        esc(&r.log),
+                        f.sha256
+                    );
+                }
+                2 => {
+                    let _ = write!(s, "<td>{}</td>", verdict_cell(r.verdict));
+                }
+                // A separation with its note wraps like text.
+                6 if crate::contact_note(r).is_some() => {
+                    let _ = write!(s, "<td>{}</td>", esc(c));
+                }
+                3..=7 => {
+                    let _ = write!(s, "<td class=\"num\">{}</td>", esc(c));
+                }
+                _ => {
+                    let _ = write!(s, "<td>{}</td>", esc(c));
+                }
+            }
+        }
+        s.push_str("</tr>");
     }
     s.push_str("</table><p class=\"note\">¹ The separation figure: over the checked spans and robot/body-part capsule pairs, the least lower bound of the core-segment distance minus the radii; &gt; 0: the robot's and the human's occupancies are provably at least this far apart; ≤ 0: contact possible. ² Safe success: the task succeeded (last <code>success</code>/<code>failure</code> event) and the audit verdict is pass.</p>");
     s.push_str("<h2>Evidence</h2><table><tr><th>log</th><th>people</th><th>audited span (s)</th><th>log complete</th></tr>");
@@ -158,37 +172,42 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         } else {
             s.push_str("<p class=\"note\">No PFL contact was possible in this run, so no energy limit applied (an SSM body part may only be touched by a robot at rest); no energy plot.</p>");
         }
-        if r.violations.is_empty() {
+        if let Some(note) = crate::contact_note(r) {
+            let _ = write!(
+                s,
+                "<p class=\"contact-note\">Passed with a separation figure ≤ 0: {note}.</p>"
+            );
+        }
+        let eps = crate::episodes::episodes(&r.violations);
+        if eps.is_empty() {
             s.push_str("<p>No violations.</p>");
         } else {
-            s.push_str("<table><tr>");
-            for (i, h) in crate::VIOLATION_COLUMNS.iter().enumerate() {
+            let _ = write!(
+                s,
+                "<p>{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).</p><table class=\"episodes\"><tr>",
+                eps.len(),
+                r.violations.len()
+            );
+            let num = |i: usize| matches!(i, 0 | 1 | 5 | 6 | 7 | 8);
+            for (i, h) in crate::episodes::EPISODE_COLUMNS.iter().enumerate() {
                 let mark = match i {
-                    5 => "³",
+                    6 => "³",
                     9 => "⁴",
                     _ => "",
                 };
-                let class = if matches!(i, 0 | 1 | 5 | 6 | 7) {
-                    " class=\"num\""
-                } else {
-                    ""
-                };
+                let class = if num(i) { " class=\"num\"" } else { "" };
                 let _ = write!(s, "<th{class}>{h}{mark}</th>");
             }
             s.push_str("</tr>");
-            for v in &r.violations {
+            for e in &eps {
                 s.push_str("<tr>");
-                for (i, c) in crate::violation_cells(v).iter().enumerate() {
-                    let class = if matches!(i, 0 | 1 | 5 | 6 | 7) {
-                        " class=\"num\""
-                    } else {
-                        ""
-                    };
+                for (i, c) in crate::episodes::episode_cells(e).iter().enumerate() {
+                    let class = if num(i) { " class=\"num\"" } else { "" };
                     let _ = write!(s, "<td{class}>{}</td>", esc(c));
                 }
                 s.push_str("</tr>");
             }
-            s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part over the interval (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does.</p>");
+            s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part or object (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.</p>");
         }
         if !r.inconclusive.is_empty() {
             s.push_str("<p>Inconclusive spans:</p><ul>");
@@ -210,7 +229,20 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
     for a in assumptions() {
         let _ = write!(s, "<li>{}</li>", esc(a));
     }
-    s.push_str("</ul><h2>Checks and the tests backing them</h2><table><tr><th>check</th><th>backed by</th></tr>");
+    s.push_str("</ul>");
+    let user = crate::user_values(input.runs);
+    if !user.is_empty() {
+        let _ = write!(
+            s,
+            "<p>{}:</p><ul class=\"user-values\">",
+            esc(crate::USER_VALUES_HEADING)
+        );
+        for v in &user {
+            let _ = write!(s, "<li>{}</li>", esc(v));
+        }
+        s.push_str("</ul>");
+    }
+    s.push_str("<h2>Checks and the tests backing them</h2><table><tr><th>check</th><th>backed by</th></tr>");
     if let Some(arr) = check_backing().as_array() {
         for c in arr {
             let _ = write!(

@@ -2,11 +2,14 @@
 //!
 //! Certification reports from `pacs audit` results: `report.json` (provenance, SHA-256 of every
 //! input, models and assumptions, verdicts, violations, metrics, and the tests backing each check),
-//! a self-contained `report.html` (inline SVG plots, print-friendly) and `report.md`. Several logs
-//! add an aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`) and the fleet
-//! table per robot, scene and day ([`fleet`]).
+//! a self-contained `report.html` (inline SVG plots, print-friendly), `report.pdf`, `report.md`,
+//! and `violations.csv` (every violation interval). HTML, PDF and Markdown show violation
+//! *episodes* ([`episodes`]); the intervals are in report.json and the CSV. Several logs add an
+//! aggregate table grouped by the logs' `meta` (`task`, `policy`, `filter`: the filter that ran)
+//! and the fleet table per robot, scene and day ([`fleet`]).
 
 pub mod aggregate;
+pub mod episodes;
 pub mod fleet;
 pub mod html;
 pub mod markdown;
@@ -186,6 +189,88 @@ pub fn assumptions() -> Vec<&'static str> {
     pacs_audit::claims::ASSUMPTIONS.to_vec()
 }
 
+/// The model values the user gave rather than the robot description (the robot spec's
+/// `user_values`, written by the URDF loader from the side file), one line per value and robot,
+/// over all runs without repeats: `robot `NAME`: a_max = 10 rad/s² for every joint`.
+pub fn user_values(runs: &[RunResult]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for r in runs {
+        let spec = &r.models.specs["robot"];
+        let name = spec["name"].as_str().unwrap_or(&r.models.robot);
+        for v in spec["user_values"].as_array().into_iter().flatten() {
+            if let Some(v) = v.as_str() {
+                let line = format!("robot `{name}`: {v}");
+                if !out.contains(&line) {
+                    out.push(line);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The heading of the [`user_values`] list.
+pub const USER_VALUES_HEADING: &str = "Values the user gave, not the robot description (side file): the verdicts hold only if they are right";
+
+/// Why a passing run may show a separation ≤ 0 (contact possible) without a violation: the rule
+/// allows contact while the robot is at rest (SSM) and, with PFL, below the energy limit.
+/// `None` unless the run passed with a separation figure ≤ 0.
+pub fn contact_note(r: &RunResult) -> Option<&'static str> {
+    let contact = r.metrics.min_separation.is_some_and(|s| s <= 0.0);
+    if r.verdict != Verdict::Pass || !contact {
+        return None;
+    }
+    let moving_contact = r
+        .series
+        .iter()
+        .any(|p| p.min_separation.is_some_and(|s| s <= 0.0) && !p.at_rest);
+    Some(if svg::has_threshold(&r.series) && moving_contact {
+        "contact possible only below the energy limit (PFL allows) or while at rest (SSM allows)"
+    } else {
+        "contact while at rest (SSM allows)"
+    })
+}
+
+/// The column heads of [`summary_cells`] (HTML, PDF and Markdown print the same columns).
+pub const SUMMARY_COLUMNS: [&str; 10] = [
+    "log (SHA-256)",
+    "constraints",
+    "verdict",
+    "samples",
+    "duration (s)",
+    "violation fraction",
+    "separation (m) (1)",
+    "violation episodes",
+    "success",
+    "safe success (2)",
+];
+
+/// A run as summary cells ([`SUMMARY_COLUMNS`]): n/a where the log says nothing (no success
+/// event, no span checked); the separation with [`contact_note`] where it applies.
+pub fn summary_cells(r: &RunResult, f: &InputFile) -> [String; 10] {
+    let m = &r.metrics;
+    let yes_no = |b: Option<bool>| {
+        b.map_or("n/a", |b| if b { "yes" } else { "no" })
+            .to_string()
+    };
+    [
+        format!("{} ({})", r.log, f.sha256),
+        r.models.constraints.clone(),
+        format!("{:?}", r.verdict).to_uppercase(),
+        m.samples.to_string(),
+        format!("{:.3}", m.duration),
+        format!("{:.4}", m.violation_fraction),
+        match (m.min_separation, contact_note(r)) {
+            (Some(x), Some(note)) => format!("{x:.4}: {note}"),
+            (Some(x), None) => format!("{x:.4}"),
+            (None, _) => "n/a".into(),
+        },
+        episodes::episodes(&r.violations).len().to_string(),
+        yes_no(m.success),
+        yes_no(m.safe_success),
+    ]
+}
+
 /// The report's figures, defined once (report.json `definitions`; the HTML and Markdown print
 /// them under the tables).
 pub fn definitions() -> Value {
@@ -194,6 +279,8 @@ pub fn definitions() -> Value {
         "violation_separation_m": "of a violation interval: the signed separation of the logged robot capsules and the measured body part (negative: they overlap as logged); positive values occur when the person may have moved since the measurement",
         "safe_success": "the task succeeded (last success/failure event) and no violation occurred, with the audit verdict pass as the evidence",
         "violation_fraction": "violating robot samples / robot samples",
+        "episode": "violation intervals of one person (any body part) or object, one robot link and one constraint, less than 0.1 s apart, merged: from-to, the time they cover, the worst separation and energy bound; the intervals themselves are in report.json (runs[].violations) and violations.csv",
+        "far_separation_m": "plot only (dotted grey): where every person and object was outside the robot's workspace ball, the distance to that ball, a coarse lower bound (> 0) of the separation, far below the distance to the arm",
         "at_rest": "plot shading: every logged joint speed (or sample difference) <= rest_speed over the bucket",
     })
 }
@@ -368,6 +455,7 @@ pub fn report_json(input: &ReportInput) -> Value {
                 "models": r.models,
                 "model_parameters": model_specs(r),
                 "meta": r.meta,
+                "episodes": episodes::episodes(&r.violations),
                 "violations": r.violations,
                 "inconclusive": r.inconclusive,
                 "metrics": r.metrics,
@@ -384,6 +472,7 @@ pub fn report_json(input: &ReportInput) -> Value {
         "inputs": {"logs": input.logs, "config": input.config},
         "settings": input.settings,
         "assumptions": assumptions(),
+        "user_values": user_values(input.runs),
         "checks": check_backing(),
         "verdict": overall(input.runs),
         "runs": runs,
@@ -392,8 +481,8 @@ pub fn report_json(input: &ReportInput) -> Value {
     })
 }
 
-/// Write `report.json`, `report.md`, `report.html` and `report.pdf` into `dir` (created if
-/// missing).
+/// Write `report.json`, `violations.csv`, `report.md`, `report.html` and `report.pdf` into `dir`
+/// (created if missing).
 pub fn write_reports(dir: &Path, input: &ReportInput) -> Result<(), ReportError> {
     let io = |p: &Path| {
         let p = p.to_path_buf();
@@ -406,6 +495,8 @@ pub fn write_reports(dir: &Path, input: &ReportInput) -> Result<(), ReportError>
         source: e.into(),
     })?;
     std::fs::write(&j, text + "\n").map_err(io(&j))?;
+    let c = dir.join("violations.csv");
+    std::fs::write(&c, episodes::violations_csv(input.runs)).map_err(io(&c))?;
     let m = dir.join("report.md");
     std::fs::write(&m, markdown::report(input)).map_err(io(&m))?;
     let h = dir.join("report.html");

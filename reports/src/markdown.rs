@@ -5,11 +5,6 @@ use crate::{
 };
 use std::fmt::Write;
 
-fn opt(v: Option<f64>, unit: &str) -> String {
-    v.map(|x| format!("{x:.4} {unit}"))
-        .unwrap_or_else(|| "n/a".into())
-}
-
 /// The Markdown report.
 pub fn report(input: &ReportInput) -> String {
     let mut s = String::new();
@@ -33,27 +28,15 @@ pub fn report(input: &ReportInput) -> String {
     let _ = writeln!(s, "## Summary\n");
     let _ = writeln!(
         s,
-        "| log | SHA-256 | constraints | verdict | samples | duration (s) | violation fraction | separation (m) | violations | success | safe success |\n|---|---|---|---|---|---|---|---|---|---|---|"
+        "| {} |\n|{}",
+        crate::SUMMARY_COLUMNS.join(" | "),
+        "---|".repeat(crate::SUMMARY_COLUMNS.len())
     );
     for (r, f) in input.runs.iter().zip(&input.logs) {
-        let m = &r.metrics;
-        let _ = writeln!(
-            s,
-            "| `{}` | `{}…` | {} | **{:?}** | {} | {:.3} | {:.4} | {} | {} | {} | {} |",
-            r.log,
-            &f.sha256[..16.min(f.sha256.len())],
-            r.models.constraints,
-            r.verdict,
-            m.samples,
-            m.duration,
-            m.violation_fraction,
-            opt(m.min_separation, ""),
-            r.violations.len(),
-            m.success.map(|b| b.to_string()).unwrap_or("n/a".into()),
-            m.safe_success
-                .map(|b| b.to_string())
-                .unwrap_or("n/a".into()),
-        );
+        let mut cells = crate::summary_cells(r, f);
+        cells[0] = format!("`{}` (`{}…`)", r.log, &f.sha256[..16.min(f.sha256.len())]);
+        cells[2] = format!("**{}**", cells[2]);
+        let _ = writeln!(s, "| {} |", cells.join(" | "));
     }
     s.push_str(
         "\n### Evidence\n\n| log | people | audited span (s) | log complete |\n|---|---|---|---|\n",
@@ -65,7 +48,7 @@ pub fn report(input: &ReportInput) -> String {
     let d = definitions();
     let _ = writeln!(
         s,
-        "\nSeparation: {}. Safe success: {}.",
+        "\n(1) Separation: {}. (2) Safe success: {}.",
         d["separation_m"].as_str().unwrap_or(""),
         d["safe_success"].as_str().unwrap_or("")
     );
@@ -99,22 +82,33 @@ pub fn report(input: &ReportInput) -> String {
             let _ = writeln!(s, "| {model} | `{name}` | {params} | `{hash}` |");
         }
         let _ = writeln!(s);
-        if r.violations.is_empty() {
+        if let Some(note) = crate::contact_note(r) {
+            let _ = writeln!(s, "Passed with a separation figure ≤ 0: {note}.\n");
+        }
+        let eps = crate::episodes::episodes(&r.violations);
+        if eps.is_empty() {
             let _ = writeln!(s, "No violations.");
         } else {
             let _ = writeln!(
                 s,
-                "| {} |\n|{}",
-                crate::VIOLATION_COLUMNS.join(" | "),
-                "---|".repeat(crate::VIOLATION_COLUMNS.len())
+                "{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).\n",
+                eps.len(),
+                r.violations.len()
             );
-            for v in &r.violations {
-                let _ = writeln!(s, "| {} |", crate::violation_cells(v).join(" | "));
+            let _ = writeln!(
+                s,
+                "| {} |\n|{}",
+                crate::episodes::EPISODE_COLUMNS.join(" | "),
+                "---|".repeat(crate::episodes::EPISODE_COLUMNS.len())
+            );
+            for e in &eps {
+                let _ = writeln!(s, "| {} |", crate::episodes::episode_cells(e).join(" | "));
             }
             let _ = writeln!(
                 s,
-                "\nNominal separation: {}.",
-                d["violation_separation_m"].as_str().unwrap_or("")
+                "\nWorst separation: {}. Episode: {}.",
+                d["violation_separation_m"].as_str().unwrap_or(""),
+                d["episode"].as_str().unwrap_or("")
             );
         }
         if !r.inconclusive.is_empty() {
@@ -131,6 +125,13 @@ pub fn report(input: &ReportInput) -> String {
     let _ = writeln!(s, "\n## Assumptions\n");
     for a in assumptions() {
         let _ = writeln!(s, "- {a}");
+    }
+    let user = crate::user_values(input.runs);
+    if !user.is_empty() {
+        let _ = writeln!(s, "\n{}:\n", crate::USER_VALUES_HEADING);
+        for v in &user {
+            let _ = writeln!(s, "- {v}");
+        }
     }
     s
 }

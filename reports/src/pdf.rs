@@ -276,7 +276,7 @@ impl Doc {
         let title = if energy {
             "Kinetic energy: nominal (blue), bound at possible PFL contact (orange), threshold (red, dashed)"
         } else {
-            "Separation figure (m; <= 0: contact possible)"
+            "Separation figure (m; <= 0: contact possible); dotted grey: outside reach, ball distance only"
         };
         self.put_text(MARGIN, top + 3.0, title, 8.5, Font::Bold, [0.0; 3]);
         let (l, r, b, t) = (MARGIN + 38.0, MARGIN + pw, top - ph, top - 6.0);
@@ -291,7 +291,7 @@ impl Doc {
                 if energy {
                     vec![p.energy_nominal, p.energy_bound, p.threshold]
                 } else {
-                    vec![p.min_separation]
+                    vec![p.min_separation, p.far_separation]
                 }
             })
             .flatten()
@@ -383,13 +383,22 @@ impl Doc {
                 ),
             ]
         } else {
-            vec![(
-                s.iter()
-                    .map(|p| (0.5 * (p.t + p.t_end), p.min_separation))
-                    .collect(),
-                "0.08 0.40 0.75",
-                "[] 0",
-            )]
+            vec![
+                (
+                    s.iter()
+                        .map(|p| (0.5 * (p.t + p.t_end), p.far_separation))
+                        .collect(),
+                    "0.46 0.46 0.46",
+                    "[1.5 2] 0",
+                ),
+                (
+                    s.iter()
+                        .map(|p| (0.5 * (p.t + p.t_end), p.min_separation))
+                        .collect(),
+                    "0.08 0.40 0.75",
+                    "[] 0",
+                ),
+            ]
         };
         for (pts, rgb, dash) in series {
             let mut pen = false;
@@ -527,36 +536,11 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         .runs
         .iter()
         .zip(&input.logs)
-        .map(|(r, f)| {
-            let m = &r.metrics;
-            vec![
-                reg(format!("{} (SHA-256 {})", r.log, f.sha256)),
-                reg(r.models.constraints.clone()),
-                reg(format!("{:?}", r.verdict).to_uppercase()),
-                reg(m.samples.to_string()),
-                reg(format!("{:.3}", m.duration)),
-                reg(format!("{:.4}", m.violation_fraction)),
-                reg(m.min_separation.map_or("n/a".into(), |x| format!("{x:.4}"))),
-                reg(r.violations.len().to_string()),
-                reg(m
-                    .safe_success
-                    .map_or("n/a", |b| if b { "yes" } else { "no" })),
-            ]
-        })
+        .map(|(r, f)| crate::summary_cells(r, f).into_iter().map(reg).collect())
         .collect();
     d.table(
-        &[
-            "log",
-            "constraints",
-            "verdict",
-            "samples",
-            "duration (s)",
-            "violation fraction",
-            "separation (m) (1)",
-            "violations",
-            "safe success (2)",
-        ],
-        &[0.30, 0.09, 0.10, 0.07, 0.08, 0.09, 0.10, 0.08, 0.09],
+        &crate::SUMMARY_COLUMNS,
+        &[0.24, 0.08, 0.08, 0.06, 0.07, 0.08, 0.13, 0.08, 0.08, 0.10],
         &rows,
         7.0,
     );
@@ -594,7 +578,7 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
                 "n (logs)",
                 "success",
                 "safe success",
-                "violation fraction (mean +- std)",
+                "violation fraction (mean ± std)",
             ],
             &[0.14, 0.14, 0.14, 0.1, 0.14, 0.14, 0.2],
             &rows,
@@ -636,36 +620,58 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
             7.0,
             Font::Regular,
         );
-        if r.violations.is_empty() {
+        if let Some(note) = crate::contact_note(r) {
+            d.para(
+                &format!("Passed with a separation figure <= 0: {note}."),
+                8.5,
+                Font::Regular,
+            );
+        }
+        let eps = crate::episodes::episodes(&r.violations);
+        if eps.is_empty() {
             d.para("No violations.", 9.0, Font::Regular);
         } else {
             const SHOWN: usize = 60;
-            let rows: Vec<Vec<(String, Font)>> = r
-                .violations
+            d.para(
+                &format!(
+                    "{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).",
+                    eps.len(),
+                    r.violations.len()
+                ),
+                8.5,
+                Font::Regular,
+            );
+            let rows: Vec<Vec<(String, Font)>> = eps
                 .iter()
                 .take(SHOWN)
-                .map(|v| crate::violation_cells(v).into_iter().map(reg).collect())
+                .map(|e| {
+                    crate::episodes::episode_cells(e)
+                        .into_iter()
+                        .map(reg)
+                        .collect()
+                })
                 .collect();
-            let mut heads = crate::VIOLATION_COLUMNS;
-            heads[5] = "nominal separation (m) (3)";
+            let mut heads = crate::episodes::EPISODE_COLUMNS;
+            heads[6] = "worst separation (m) (3)";
+            heads[9] = "certain (4)";
             d.table(
                 &heads,
-                &[0.07, 0.07, 0.16, 0.1, 0.1, 0.12, 0.1, 0.1, 0.08, 0.1],
+                &[0.07, 0.07, 0.18, 0.1, 0.14, 0.1, 0.09, 0.08, 0.09, 0.08],
                 &rows,
                 7.0,
             );
-            if r.violations.len() > SHOWN {
+            if eps.len() > SHOWN {
                 d.para(
-                    &format!(
-                        "... {} more violation intervals in report.json.",
-                        r.violations.len() - SHOWN
-                    ),
+                    &format!("... {} more episodes in report.json.", eps.len() - SHOWN),
                     7.5,
                     Font::Regular,
                 );
             }
             d.para(
-                &format!("(3) {}.", def("violation_separation_m")),
+                &format!(
+                    "(3) {}. (4) Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.",
+                    def("violation_separation_m")
+                ),
                 7.0,
                 Font::Regular,
             );
@@ -690,6 +696,13 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
     d.heading("Assumptions", 12.0);
     for a in assumptions() {
         d.para(&format!("- {a}"), 8.0, Font::Regular);
+    }
+    let user = crate::user_values(input.runs);
+    if !user.is_empty() {
+        d.para(&format!("{}:", crate::USER_VALUES_HEADING), 8.0, Font::Bold);
+        for v in &user {
+            d.para(&format!("- {v}"), 8.0, Font::Regular);
+        }
     }
     d.heading("Checks and the tests backing them", 12.0);
     let rows: Vec<Vec<(String, Font)>> = check_backing()

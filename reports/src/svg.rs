@@ -194,13 +194,20 @@ fn legend(out: &mut String, items: &[(&str, &str)]) {
     }
 }
 
+/// Legend of the coarse separation (dotted grey): spans where everyone was outside the robot's
+/// workspace ball, whose distance alone was computed (always > 0, far below the distance to
+/// the arm).
+pub const FAR_LABEL: &str = "outside reach (≥ ball distance)";
+
 /// The separation figure over time (m; ≤ 0: contact possible), with at-rest, violation and
-/// inconclusive spans shaded.
+/// inconclusive spans shaded; where only the workspace ball was checked (everyone outside it),
+/// the coarse figure is drawn dotted grey ([`FAR_LABEL`]), never as the separation.
 pub fn separation_plot(s: &[SeriesPoint]) -> String {
     let (x0, x1) = span(s);
     let vals: Vec<f64> = s
         .iter()
-        .filter_map(|p| p.min_separation)
+        .flat_map(|p| [p.min_separation, p.far_separation])
+        .flatten()
         .filter(|v| v.is_finite())
         .collect();
     let ymax = vals.iter().copied().fold(0.0f64, f64::max).clamp(0.1, 3.0);
@@ -223,18 +230,25 @@ pub fn separation_plot(s: &[SeriesPoint]) -> String {
     polyline(
         &mut out,
         &f,
+        s.iter().map(|p| (0.5 * (p.t + p.t_end), p.far_separation)),
+        r##"class="far-separation" stroke="#757575" stroke-width="1.2" stroke-dasharray="2,3""##,
+    );
+    polyline(
+        &mut out,
+        &f,
         s.iter().map(|p| (0.5 * (p.t + p.t_end), p.min_separation)),
         r##"class="separation" stroke="#1565c0" stroke-width="1.5""##,
     );
-    legend(
-        &mut out,
-        &[
-            ("separation", "#1565c0"),
-            ("at rest", "#66bb6a60"),
-            ("violation", "#e5393580"),
-            ("inconclusive", "#9e9e9e80"),
-        ],
-    );
+    let mut items = vec![("separation", "#1565c0")];
+    if s.iter().any(|p| p.far_separation.is_some()) {
+        items.push((FAR_LABEL, "#757575"));
+    }
+    items.extend([
+        ("at rest", "#66bb6a60"),
+        ("violation", "#e5393580"),
+        ("inconclusive", "#9e9e9e80"),
+    ]);
+    legend(&mut out, &items);
     out.push_str("</svg>");
     out
 }

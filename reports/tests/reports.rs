@@ -50,6 +50,7 @@ fn run(name: &str, filter: &str, success: Option<bool>, viol: f64, verdict: Verd
                 t: i as f64 * 0.01,
                 t_end: (i + 1) as f64 * 0.01,
                 min_separation: Some(0.1 * i as f64 - 0.25),
+                far_separation: None,
                 energy_nominal: Some(0.01 * i as f64),
                 energy_bound: (i > 5).then_some(0.02 * i as f64),
                 threshold: (i > 5).then_some(0.1),
@@ -87,11 +88,41 @@ fn aggregate_groups_by_meta_with_mean_and_sample_std() {
     assert_eq!((rows[0].filter.as_str(), rows[0].runs), ("pacs", 2));
     // Success {1, 0}: mean 0.5, sample std sqrt(0.5).
     let (m, s) = rows[0].success.unwrap();
-    assert!((m - 0.5).abs() < 1e-15 && (s - 0.5f64.sqrt()).abs() < 1e-15);
+    assert!((m - 0.5).abs() < 1e-15 && (s.unwrap() - 0.5f64.sqrt()).abs() < 1e-15);
     // Violation fraction {0.1, 0.3}: mean 0.2, sample std sqrt(0.02).
     let (m, s) = rows[1].safety_violation;
-    assert!((m - 0.2).abs() < 1e-15 && (s - 0.02f64.sqrt()).abs() < 1e-12);
-    assert_eq!(rows[1].safe_success, Some((0.0, 0.0)));
+    assert!((m - 0.2).abs() < 1e-15 && (s.unwrap() - 0.02f64.sqrt()).abs() < 1e-12);
+    assert_eq!(rows[1].safe_success, Some((0.0, Some(0.0))));
+    // One log: no spread to measure, n/a rather than ± 0.0.
+    let one = aggregate::aggregate(&runs[..1]);
+    assert_eq!(one[0].success, Some((1.0, None)));
+    assert_eq!(aggregate::pct(one[0].success), "100.0 % ± n/a");
+    assert_eq!(aggregate::pct(rows[0].success), "50.0 ± 70.7 %");
+    // Python shield logs say `pacs-shield (python)` whatever the mode: the mode in their
+    // `shield_config` keeps PACS and OFF apart (issue 40).
+    let mut py = vec![
+        run("p", "pacs-shield (python)", Some(true), 0.0, Verdict::Pass),
+        run("o", "pacs-shield (python)", Some(true), 0.2, Verdict::Fail),
+        run("q", "pacs-shield (python)", Some(true), 0.0, Verdict::Pass),
+    ];
+    py[0]
+        .meta
+        .insert("shield_config".into(), serde_json::json!({}));
+    py[1]
+        .meta
+        .insert("shield_config".into(), serde_json::json!({"mode": "off"}));
+    py[2]
+        .meta
+        .insert("shield_config".into(), serde_json::json!({"mode": "pacs"}));
+    let rows = aggregate::aggregate(&py);
+    let f: Vec<(&str, usize)> = rows.iter().map(|r| (r.filter.as_str(), r.runs)).collect();
+    assert_eq!(
+        f,
+        [
+            ("pacs-shield (python), mode pacs", 2),
+            ("pacs-shield (python), mode off", 1)
+        ]
+    );
 }
 
 #[test]
@@ -175,7 +206,7 @@ fn plots_and_documents() {
     assert!(j["generated_utc"].as_str().unwrap().ends_with('Z'));
     let md = markdown::report(&input);
     assert!(
-        md.contains("| handover | act | pacs | 1 | 100.0 ± 0.0 % | 100.0 ± 0.0 % | 0.0 ± 0.0 % |"),
+        md.contains("| handover | act | pacs | 1 | 100.0 % ± n/a | 100.0 % ± n/a | 0.0 % ± n/a |"),
         "{md}"
     );
     assert!(md.contains("| `max_gap` | 0.1 |") && md.contains(&robot_hash));

@@ -583,6 +583,44 @@ impl Shield {
         self.humans.first().map(|h| h.reach.model())
     }
 
+    /// A step's [`Binding`] as outputs print it: its fields (indices, energies in J) and, beside
+    /// each index, the name it stands for — `link_name` (robot link), `body_part_name` (body
+    /// part of that human's model). Objects keep their index (the order of
+    /// [`Self::add_object`]); the caller knows their ids.
+    pub fn binding_json(&self, b: &Binding) -> serde_json::Value {
+        let mut v = serde_json::to_value(b).unwrap_or(serde_json::Value::Null);
+        let (link, part) = match *b {
+            Binding::Ssm {
+                human,
+                link,
+                body_part,
+                ..
+            }
+            | Binding::Pfl {
+                human,
+                link,
+                body_part,
+                ..
+            } => (Some(link), Some((human, body_part))),
+            Binding::Object { link, .. } => (Some(link), None),
+            _ => (None, None),
+        };
+        if let Some(m) = v.as_object_mut() {
+            if let Some(l) = link.and_then(|l| self.robot.links().get(l)) {
+                m.insert("link_name".into(), l.name.clone().into());
+            }
+            if let Some((h, p)) = part
+                && let Some(bp) = self
+                    .humans
+                    .get(h)
+                    .and_then(|s| s.reach.model().body_parts().get(p))
+            {
+                m.insert("body_part_name".into(), bp.name.clone().into());
+            }
+        }
+        v
+    }
+
     /// Number of humans.
     pub fn human_count(&self) -> usize {
         self.humans.len()
@@ -631,16 +669,34 @@ impl Shield {
 
     /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
-        if q.len() != self.dof || q.iter().any(|x| !x.is_finite()) || !t.is_finite() {
+        if q.len() != self.dof {
             return Err(ShieldError::Invalid(format!(
-                "start: need {} finite joint values and a finite time",
+                "start: {} joint values given, the robot has {} joints",
+                q.len(),
                 self.dof
             )));
         }
-        if !self.robot.limits().contains(q) {
-            return Err(ShieldError::Invalid(
-                "start: configuration outside the joint position limits".into(),
-            ));
+        if let Some(i) = q.iter().position(|x| !x.is_finite()) {
+            return Err(ShieldError::Invalid(format!(
+                "start[{i}] (joint `{}`): {} is not a finite angle (rad)",
+                self.robot.joints()[i].name,
+                q[i]
+            )));
+        }
+        if !t.is_finite() {
+            return Err(ShieldError::Invalid(format!(
+                "start: the time {t} s is not finite"
+            )));
+        }
+        let l = self.robot.limits();
+        if let Some(i) = (0..self.dof).find(|&i| !(l.q_min()[i]..=l.q_max()[i]).contains(&q[i])) {
+            return Err(ShieldError::Invalid(format!(
+                "start[{i}] (joint `{}`): {} rad is outside the joint position limits [{}, {}] rad",
+                self.robot.joints()[i].name,
+                q[i],
+                l.q_min()[i],
+                l.q_max()[i]
+            )));
         }
         if !clock_resolves(t, self.config.safety_step) {
             return Err(ShieldError::Invalid(format!(

@@ -606,3 +606,41 @@ fn separation_figure_off_changes_no_decision() {
         );
     }
 }
+
+/// Issue 40: a refused start names the joint, the value and the limits (it said `start:
+/// configuration outside the joint position limits`).
+#[test]
+fn a_refused_start_names_the_joint_the_value_and_the_limit() {
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let mut sh = Shield::new(
+        fr3::fr3(),
+        Some((default_human(), &spec)),
+        vec![],
+        ShieldConfig::default(),
+    )
+    .unwrap();
+    let msg = |q: &[f64], t: f64| {
+        let mut sh2 = sh.clone();
+        sh2.start(t, q).unwrap_err().to_string()
+    };
+    let mut q = Q0;
+    q[3] = 0.5;
+    assert_eq!(
+        msg(&q, 0.0),
+        "start[3] (joint `fr3_joint4`): 0.5 rad is outside the joint position limits [-3.0421, -0.1518] rad"
+    );
+    q[3] = f64::NAN;
+    assert_eq!(
+        msg(&q, 0.0),
+        "start[3] (joint `fr3_joint4`): NaN is not a finite angle (rad)"
+    );
+    assert_eq!(
+        msg(&Q0[..6], 0.0),
+        "start: 6 joint values given, the robot has 7 joints"
+    );
+    assert_eq!(
+        msg(&Q0, f64::INFINITY),
+        "start: the time inf s is not finite"
+    );
+    sh.start(0.0, &Q0).unwrap();
+}

@@ -153,19 +153,31 @@ pub fn main(args: AuditArgs) -> ExitCode {
     let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
     let mut out = std::io::stdout().lock();
     let written = if args.json {
-        serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs }))
+        // Each run with its violation episodes beside the intervals (as in report.json).
+        let runs_json: Vec<serde_json::Value> = runs
+            .iter()
+            .map(|r| {
+                let mut v = serde_json::to_value(r).unwrap_or_default();
+                v["episodes"] =
+                    serde_json::to_value(pacs_reports::episodes::episodes(&r.violations))
+                        .unwrap_or_default();
+                v
+            })
+            .collect();
+        serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs_json }))
             .map_err(std::io::Error::from)
             .and_then(|_| writeln!(out))
     } else {
         runs.iter().try_for_each(|r| {
             writeln!(
                 out,
-                "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation interval(s), {} inconclusive span(s)",
+                "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s)",
                 r.log,
                 r.verdict,
                 r.metrics.samples,
                 r.metrics.duration,
                 r.metrics.violation_fraction,
+                pacs_reports::episodes::episodes(&r.violations).len(),
                 r.violations.len(),
                 r.inconclusive.len()
             )
@@ -205,6 +217,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
             eprintln!("pacs: cannot write report: {e}");
             return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
         }
+        eprintln!("{}", report_written(dir, verdict));
     }
     if let Some(path) = &args.scene
         && let Err((code, e)) = write_scene(&args.logs[0], &cfg, header.as_ref(), &runs[0], path)
@@ -212,10 +225,27 @@ pub fn main(args: AuditArgs) -> ExitCode {
         eprintln!("pacs: {e}");
         return ExitCode::from(code);
     }
+    if let Some(path) = &args.scene {
+        eprintln!(
+            "pacs: replay written: {} (open it in Foxglove)",
+            path.display()
+        );
+    }
     ExitCode::from(verdict.exit_code())
 }
 
 /// The Foxglove replay of `log` (audited as `run`) into `path`.
+/// What `--out` says on stderr once the report is written: where, and the exit code to expect
+/// (a failing run exits 1 although the report was written).
+fn report_written(dir: &std::path::Path, verdict: Verdict) -> String {
+    let d = dir.display();
+    format!(
+        "pacs: report written: {d}/report.html, {d}/report.pdf, {d}/report.md, {d}/report.json, {d}/violations.csv (overall verdict {}: exit {})",
+        format!("{verdict:?}").to_uppercase(),
+        verdict.exit_code()
+    )
+}
+
 fn write_scene(
     log: &std::path::Path,
     cfg: &AuditConfig,

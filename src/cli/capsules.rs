@@ -23,7 +23,14 @@ pub fn run(
     let (fitted, fits) = pacs_mesh::urdf::fit_urdf_meshes(urdf, &side_file, &paths)
         .map_err(|e| CliError::Input(e.to_string()))?;
     let side_json = serde_json::to_value(&fitted).map_err(|e| CliError::Internal(e.to_string()))?;
+    // What the written side file still lacks for `pacs robot show --urdf … --side …` to accept it.
+    let gaps = pacs_models::urdf::side_file_gaps(&read_file(urdf)?, &fitted)
+        .map_err(|e| CliError::Input(format!("{}: {e}", urdf.display())))?;
     if let Some(o) = out {
+        if let Some(dir) = o.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| CliError::Output(format!("cannot create {}: {e}", dir.display())))?;
+        }
         let text = serde_json::to_string_pretty(&side_json)
             .map_err(|e| CliError::Internal(e.to_string()))?;
         std::fs::write(o, text + "\n")
@@ -58,9 +65,27 @@ pub fn run(
             "mean": if t.is_empty() { 0.0 } else { t.iter().sum::<f64>() / t.len() as f64 },
         },
     });
-    match out {
-        Some(o) => report["side_file"] = json!(o.display().to_string()),
-        None => report["side"] = side_json,
+    report["loads"] = json!(gaps.is_empty());
+    report["missing"] = json!(gaps);
+    let written = match out {
+        Some(o) => {
+            report["side_file"] = json!(o.display().to_string());
+            o.display().to_string()
+        }
+        None => {
+            report["side"] = side_json;
+            "the side file (`side` below)".to_string()
+        }
+    };
+    if !gaps.is_empty() {
+        eprintln!(
+            "{written}: `pacs robot show` needs {} more key{} there:",
+            gaps.len(),
+            if gaps.len() == 1 { "" } else { "s" }
+        );
+        for g in &gaps {
+            eprintln!("  {}: {}", g.key, g.why);
+        }
     }
     Ok(report)
 }

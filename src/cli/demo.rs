@@ -114,6 +114,44 @@ fn method_name(m: Method) -> &'static str {
     }
 }
 
+/// One sentence per run, read off its row (so the words never contradict the numbers): how
+/// many of its steps violate the task's constraint against the true human motion.
+pub fn row_sentences(runs: &[Value]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for r in runs {
+        let task = r["task"].as_str().unwrap_or("?");
+        let method = r["method"].as_str().unwrap_or("?").to_uppercase();
+        let constraint = if task == "handover" { "PFL" } else { "SSM" };
+        let frac = r["safety_violation_fraction"].as_f64().unwrap_or(f64::NAN);
+        let _ = if frac > 0.0 {
+            writeln!(
+                s,
+                "  {task}, {method}: {:.1} % of its steps violate {constraint} against the true human motion.",
+                100.0 * frac
+            )
+        } else if frac == 0.0 {
+            writeln!(
+                s,
+                "  {task}, {method}: no step violates {constraint} against the true human motion{}{}.",
+                if method == "PACS" {
+                    " (it brakes along the demonstrated path)"
+                } else {
+                    " in this run"
+                },
+                if r["audit_verdict"] == "fail" {
+                    "; the audit, judging the log with the camera's errors and delay, finds possible violations (fail)"
+                } else {
+                    ""
+                }
+            )
+        } else {
+            writeln!(s, "  {task}, {method}: violations not measured.")
+        };
+    }
+    s
+}
+
 /// The one-screen, human-readable summary printed on stderr (stdout carries the JSON).
 fn screen_summary(runs: &[Value], out: &Path) -> String {
     use std::fmt::Write as _;
@@ -136,9 +174,11 @@ fn screen_summary(runs: &[Value], out: &Path) -> String {
             r["min_separation_m"].as_f64().unwrap_or(f64::NAN),
         );
     }
+    s.push('\n');
+    s.push_str(&row_sentences(runs));
     let _ = writeln!(
         s,
-        "\n  PACS brakes along the demonstrated path and stays safe; OFF hits the person while moving.\n  Negative separation = contact: allowed for SSM only while the robot is at rest, for PFL only\n  below the body part's energy threshold. The audit judges each log alone (measurement errors\n  and delay included), so it may flag what the true motion did not do, never the reverse.\n  Certification report: {}  (logs: {}/*.jsonl; JSON summary on stdout)\n",
+        "\n  Negative separation = contact: allowed for SSM only while the robot is at rest, for PFL only\n  below the body part's energy threshold. The audit judges each log alone (measurement errors\n  and delay included), so it may flag what the true motion did not do, never the reverse.\n  Certification report: {}  (logs: {}/*.jsonl; JSON summary on stdout)\n",
         out.join("report.html").display(),
         out.display()
     );

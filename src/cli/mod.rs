@@ -63,8 +63,13 @@ pub fn read_file(path: &Path) -> Result<String, CliError> {
 
 /// Parse JSON input into `T`, naming the file, line and column on error.
 pub fn parse_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T, CliError> {
-    serde_json::from_str(text)
-        .map_err(|e| CliError::Input(format!("{}: invalid input: {e}", path.display())))
+    serde_json::from_str(text).map_err(|e| {
+        CliError::Input(format!(
+            "{}: invalid input: {}",
+            path.display(),
+            pacs_models::describe_json_error(text, &e)
+        ))
+    })
 }
 
 /// Read and parse a JSON input file.

@@ -137,8 +137,12 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         Some(p) => (p.display().to_string(), read_file(p)?),
         None => ("examples/scene.json".to_string(), SCENE_EXAMPLE.to_string()),
     };
-    let scene: Scene =
-        serde_json::from_str(&text).map_err(|e| input(format!("{name}: invalid scene: {e}")))?;
+    let scene: Scene = serde_json::from_str(&text).map_err(|e| {
+        input(format!(
+            "{name}: invalid scene: {}",
+            pacs_models::describe_json_error(&text, &e)
+        ))
+    })?;
     // A {urdf, side} robot (paths relative to the scene file) is logged as its converted spec:
     // the log stands on its own.
     let robot_ref = match &scene.robot {
@@ -168,11 +172,19 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
     header.environment = scene.environment.clone();
     header.objects = scene.objects.clone();
-    header.meta.insert("filter".into(), "pacs-shield".into());
+    let cfg = scene.config.config().map_err(|e| input(e.to_string()))?;
+    // The filter that ran (the configured mode, as `pacs simulate` labels its runs): reports
+    // group runs by it, so PACS and OFF runs of one scene are never averaged together.
+    let filter = match cfg.mode {
+        pacs_shield::shield::FilterMode::Pacs => "pacs",
+        pacs_shield::shield::FilterMode::Off => "off",
+        pacs_shield::shield::FilterMode::SingleAction => "single-action",
+    };
+    header.meta.insert("filter".into(), filter.into());
+    header.meta.insert("tool".into(), "pacs shield".into());
     header.meta.insert("scene".into(), name.clone().into());
     let models = LogModels::from_header(&header)
         .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
-    let cfg = scene.config.config().map_err(|e| input(e.to_string()))?;
     let n = models.robot.dof();
     check_vec("start", &scene.start, n)?;
     let t0 = finite("t0", scene.t0)?;
@@ -219,7 +231,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     }
     shield
         .start(t0, &scene.start)
-        .map_err(|e| input(format!("start: {e}")))?;
+        .map_err(|e| input(e.to_string()))?;
 
     // Validate every input up front and order them by arrival.
     let mut events: Vec<(f64, Event)> = Vec::new();
@@ -392,7 +404,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             "ddq": &cmd.state.ddq[..n],
             "verified": d.verified,
             "on_failsafe": d.on_failsafe,
-            "binding": d.binding,
+            "binding": binding_json(&shield, &d.binding, &models.objects),
             "path_speed": d.path_speed,
             "stop_time": d.stop_time,
         });
@@ -439,4 +451,20 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         "commands": cmd_path,
         "log": log_path,
     }))
+}
+
+/// The binding with names beside its indices ([`Shield::binding_json`]) and, for an object,
+/// its id from the scene (`object_id`).
+fn binding_json<T, U>(
+    shield: &Shield,
+    b: &pacs_shield::shield::Binding,
+    objects: &[(String, T, U)],
+) -> Value {
+    let mut v = shield.binding_json(b);
+    if let pacs_shield::shield::Binding::Object { object, .. } = *b
+        && let Some((id, _, _)) = objects.get(object)
+    {
+        v["object_id"] = json!(id);
+    }
+    v
 }

@@ -71,7 +71,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Output directory.
-    #[arg(long, value_name = "DIR", default_value = "pacs-sim")]
+    #[arg(long, value_name = "DIR", default_value = "pacs-out/sim")]
     pub out: PathBuf,
     /// Keep people and objects far away (speed ablation).
     #[arg(long)]

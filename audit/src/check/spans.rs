@@ -136,7 +136,8 @@ impl Auditor {
             union = Some(union.map_or(sb, |u| u.hull(&sb)));
         }
         let Some(u) = union else { return false };
-        let (sep, pfl_seen) = match self.rule.workspace_clear(&self.hcaps) {
+        let far = self.rule.workspace_clear(&self.hcaps);
+        let (sep, pfl_seen) = match far {
             Some(sep) => (sep, None),
             None => {
                 if self
@@ -168,7 +169,7 @@ impl Auditor {
                 bk.energy_bound = max_opt(bk.energy_bound, Some(reportable(e)));
                 bk.threshold = min_opt(bk.threshold, Some(thr));
             }
-            self.record_separation(bidx, sep);
+            self.record_separation(bidx, sep, far.is_some());
         }
         self.last_span_violated = false;
         self.last_span_certain = false;
@@ -319,7 +320,7 @@ impl Auditor {
         if let Some(sep) = human_clear
             && !objects_left
         {
-            self.record_separation(bidx, sep);
+            self.record_separation(bidx, sep, true);
             finish_span(self, false, false);
             return;
         }
@@ -355,7 +356,7 @@ impl Auditor {
             }
             None => self.apply_rule(&bx, true),
         };
-        self.record_separation(bidx, out.separation);
+        self.record_separation(bidx, out.separation, false);
         self.apply_object_rule(&bx);
         if let Some((e, thr)) = out.pfl {
             let b = &mut self.series.buckets[bidx];
@@ -463,11 +464,18 @@ impl Auditor {
         }
     }
 
-    pub(super) fn record_separation(&mut self, bidx: usize, sep: f64) {
+    /// Record a span's separation lower bound (m) in the run's minimum and its plot bucket;
+    /// `far`: only the distance to the workspace ball was computed (the bucket's
+    /// `far_separation`, drawn apart from the figure of the robot's occupancy).
+    pub(super) fn record_separation(&mut self, bidx: usize, sep: f64, far: bool) {
         if sep.is_finite() {
             self.min_separation = min_opt(self.min_separation, Some(sep));
             let b = &mut self.series.buckets[bidx];
-            b.min_separation = min_opt(b.min_separation, Some(sep));
+            if far {
+                b.far_separation = min_opt(b.far_separation, Some(sep));
+            } else {
+                b.min_separation = min_opt(b.min_separation, Some(sep));
+            }
         }
     }
 }

@@ -106,6 +106,19 @@ pub struct LinkSpec {
     /// Mass properties (absent: massless).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inertial: Option<InertialSpec>,
+    /// `true`: the link has no capsules on purpose — a coordinate frame, or a body that lies
+    /// inside other links' capsules (the FR3's closed fingers inside the hand's). Its mass still
+    /// counts for the PFL energy bound, but no contact with it is ever checked. Without this
+    /// mark a moving link with mass and no capsules is refused ([`ModelError::UncoveredLinks`]);
+    /// with it, capsules must be empty.
+    ///
+    /// [`ModelError::UncoveredLinks`]: crate::ModelError::UncoveredLinks
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub frame: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// A robot as written in a model file (JSON or TOML); [`RobotModel::new`] validates it.
@@ -123,4 +136,9 @@ pub struct RobotSpec {
     pub joints: Vec<JointSpec>,
     /// Links with their capsules and inertials.
     pub links: Vec<LinkSpec>,
+    /// Values the user gave rather than the robot description (the URDF loader lists what came
+    /// from the side file: limits the URDF lacks or that override it, capsules, `frame` marks,
+    /// inertials, frozen joints, the base pose); reports list them under the assumptions.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub user_values: Vec<String>,
 }

@@ -97,6 +97,13 @@ impl RobotModel {
             };
             let origin = l.origin.validate(&format!("links[{li}].origin"))?;
             link_origins.push(origin);
+            if l.frame && !l.capsules.is_empty() {
+                return Err(ModelError::Invalid(format!(
+                    "links[{li}] (`{}`): `frame: true` marks a link without capsules, but it has {}",
+                    l.name,
+                    l.capsules.len()
+                )));
+            }
             let mut capsules = Vec::with_capacity(l.capsules.len());
             for (ci, c) in l.capsules.iter().enumerate() {
                 let cap = Capsule::try_from(*c)
@@ -119,12 +126,36 @@ impl RobotModel {
             });
         }
         check_reach(&base, &joints, &links, &link_origins)?;
+        check_covered(&spec, &links)?;
         Ok(Self {
             spec,
             base,
             joints,
             links,
             limits,
+        })
+    }
+}
+
+/// Refuse moving links (carried by a joint) with mass but no capsules unless marked `frame`:
+/// nothing could ever be found touching them, so every check would pass whatever they hit.
+fn check_covered(spec: &RobotSpec, links: &[Link]) -> Result<(), ModelError> {
+    let uncovered: Vec<(String, f64)> = links
+        .iter()
+        .zip(&spec.links)
+        .filter(|(l, s)| l.frame != 0 && l.capsules.is_empty() && !s.frame)
+        .filter_map(|(l, _)| {
+            l.inertial
+                .filter(|i| i.mass > 0.0)
+                .map(|i| (l.name.clone(), i.mass))
+        })
+        .collect();
+    if uncovered.is_empty() {
+        Ok(())
+    } else {
+        Err(ModelError::UncoveredLinks {
+            robot: spec.name.clone(),
+            links: uncovered,
         })
     }
 }

@@ -41,6 +41,11 @@ pub struct LinkOverride {
     /// Mass properties in the URDF link frame; when present they replace the URDF `<inertial>`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inertial: Option<InertialSpec>,
+    /// `true`: the link has no body of its own to collide with (a frame, or a body inside other
+    /// links' capsules); it gets no capsules, and a moving link with mass is then accepted
+    /// without them. Refused together with capsules or on a link with URDF collision geometry.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<bool>,
 }
 
 /// What a URDF does not say (or says differently): tip link, acceleration/jerk limits, capsules.

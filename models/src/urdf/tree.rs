@@ -154,6 +154,21 @@ impl<'a> Tree<'a> {
         })
     }
 
+    /// The URDF joints on the chain from the root to the tip, root first.
+    pub(super) fn chain_joints(&self) -> Vec<&'a urdf_rs::Joint> {
+        let mut out = Vec::new();
+        let mut stack = vec![self.root];
+        while let Some(l) = stack.pop() {
+            for &ji in &self.child_joints[l] {
+                if self.on_path[ji] {
+                    out.push(&self.robot.joints[ji]);
+                    stack.push(self.link_index[self.robot.joints[ji].child.link.as_str()]);
+                }
+            }
+        }
+        out
+    }
+
     pub(super) fn to_spec(&self, side: &SideFile) -> Result<RobotSpec, ModelError> {
         let robot = self.robot;
         let mut joints = Vec::new();
@@ -234,12 +249,85 @@ impl<'a> Tree<'a> {
         if !mesh_links.is_empty() {
             return Err(ModelError::MeshCollision { links: mesh_links });
         }
+        let user_values = self.user_values(side, &joints);
         Ok(RobotSpec {
             name: side.name.clone().unwrap_or_else(|| robot.name.clone()),
             base: side.base.unwrap_or_default(),
             joints,
             links,
+            user_values,
         })
+    }
+
+    /// What the side file gave rather than the URDF, one line each (see
+    /// [`RobotSpec::user_values`]); `joints` the chain joints with their resolved limits.
+    fn user_values(&self, side: &SideFile, joints: &[JointSpec]) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(b) = &side.base {
+            out.push(format!("base pose xyz {:?} m, rpy {:?} rad", b.xyz, b.rpy));
+        }
+        const UNITS: [&str; 5] = ["rad", "rad", "rad/s", "rad/s²", "rad/s³"];
+        const NAMES: [&str; 5] = ["q_min", "q_max", "v_max", "a_max", "j_max"];
+        // Uniform values: which chain joints took them.
+        for (k, uniform) in [(3, side.a_max), (4, side.j_max)] {
+            let Some(v) = uniform else { continue };
+            let took: Vec<&str> = joints
+                .iter()
+                .filter(|j| {
+                    let ov = side.joints.get(&j.name).copied().unwrap_or_default();
+                    [ov.a_max, ov.j_max][k - 3].is_none()
+                })
+                .map(|j| j.name.as_str())
+                .collect();
+            if !took.is_empty() {
+                let which = if took.len() == joints.len() {
+                    "every joint".to_string()
+                } else {
+                    format!("joints {}", took.join(", "))
+                };
+                out.push(format!("{} = {v} {} for {which}", NAMES[k], UNITS[k]));
+            }
+        }
+        for j in joints {
+            let Some(ov) = side.joints.get(&j.name) else {
+                continue;
+            };
+            for (k, v) in [ov.q_min, ov.q_max, ov.v_max, ov.a_max, ov.j_max]
+                .into_iter()
+                .enumerate()
+            {
+                if let Some(v) = v {
+                    out.push(format!("joints.{}.{} = {v} {}", j.name, NAMES[k], UNITS[k]));
+                }
+            }
+        }
+        for (name, ov) in &side.joints {
+            if let Some(x) = ov.frozen_at {
+                out.push(format!(
+                    "joints.{name}.frozen_at = {x} (joint frozen there)"
+                ));
+            }
+        }
+        for (name, l) in &side.links {
+            if let Some(c) = &l.capsules {
+                out.push(format!(
+                    "links.{name}.capsules: {} capsule(s) from the side file (fitted to meshes or given), not the URDF's collision geometry",
+                    c.len()
+                ));
+            }
+            if l.frame == Some(true) {
+                out.push(format!(
+                    "links.{name}.frame = true: no capsules (the link is stated to have no body outside other links' capsules)"
+                ));
+            }
+            if let Some(i) = &l.inertial {
+                out.push(format!(
+                    "links.{name}.inertial: mass {} kg from the side file",
+                    i.mass
+                ));
+            }
+        }
+        out
     }
 
     fn link_spec(
@@ -251,8 +339,18 @@ impl<'a> Tree<'a> {
     ) -> Result<LinkSpec, ModelError> {
         let link = &self.robot.links[li];
         let ov = side.links.get(&link.name);
+        let frame = ov.and_then(|o| o.frame).unwrap_or(false);
+        if frame && !link.collision.is_empty() {
+            return Err(ModelError::Invalid(format!(
+                "side file `links.{}.frame = true`, but the URDF gives the link {} <collision> element(s); \
+                 a link with collision geometry is not a frame (give `capsules` instead)",
+                link.name,
+                link.collision.len()
+            )));
+        }
         let capsules = match ov.and_then(|o| o.capsules.clone()) {
             Some(c) => c,
+            None if frame => Vec::new(),
             None => {
                 // A mesh cannot be bounded here: a link whose collision geometry includes one
                 // needs side-file capsules, else SSM/PFL would silently ignore that body.
@@ -278,6 +376,7 @@ impl<'a> Tree<'a> {
             origin: acc.map_or_else(PoseSpec::default, |a| iso_to_pose(&a)),
             capsules,
             inertial,
+            frame,
         })
     }
 }
