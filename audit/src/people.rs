@@ -253,6 +253,7 @@ fn merge_series(mut a: Vec<SeriesPoint>, b: &[SeriesPoint]) -> Vec<SeriesPoint> 
     }
     for (x, y) in a.iter_mut().zip(b) {
         x.min_separation = min_opt(x.min_separation, y.min_separation);
+        x.far_separation = min_opt(x.far_separation, y.far_separation);
         x.energy_bound = crate::series::max_opt(x.energy_bound, y.energy_bound);
         x.threshold = min_opt(x.threshold, y.threshold);
         x.violation |= y.violation;

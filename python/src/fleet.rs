@@ -46,6 +46,9 @@ struct SeriesColumns {
     t: Vec<f64>,
     t_end: Vec<f64>,
     min_separation: Vec<Option<f64>>,
+    /// The coarse far-range separation bound (m) of each bucket.
+    #[serde(default)]
+    far_separation: Vec<Option<f64>>,
     energy_nominal: Vec<Option<f64>>,
     energy_bound: Vec<Option<f64>>,
     threshold: Vec<Option<f64>>,
@@ -60,6 +63,7 @@ impl SeriesColumns {
             t: points.iter().map(|p| p.t).collect(),
             t_end: points.iter().map(|p| p.t_end).collect(),
             min_separation: col(|p| p.min_separation),
+            far_separation: col(|p| p.far_separation),
             energy_nominal: col(|p| p.energy_nominal),
             energy_bound: col(|p| p.energy_bound),
             threshold: col(|p| p.threshold),
@@ -77,6 +81,7 @@ impl SeriesColumns {
         let lens = [
             self.t_end.len(),
             self.min_separation.len(),
+            self.far_separation.len(),
             self.energy_nominal.len(),
             self.energy_bound.len(),
             self.threshold.len(),
@@ -90,6 +95,7 @@ impl SeriesColumns {
                 t: self.t[i],
                 t_end: self.t_end[i],
                 min_separation: self.min_separation[i],
+                far_separation: self.far_separation[i],
                 energy_nominal: self.energy_nominal[i],
                 energy_bound: self.energy_bound[i],
                 threshold: self.threshold[i],
