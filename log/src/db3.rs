@@ -696,12 +696,7 @@ impl Db3Reader {
                 format!("topic id {} is not in table `topics`", row.topic_id),
             ));
         };
-        let what = || {
-            format!(
-                "message id {} on `{topic}` (timestamp {} ns)",
-                row.id, row.timestamp
-            )
-        };
+        let what = || format!("message on `{topic}` (timestamp {} ns)", row.timestamp);
         let Ok(log_time) = u64::try_from(row.timestamp) else {
             return Err(LogError::input(
                 &part.name,

@@ -126,20 +126,46 @@ impl PyRun {
     }
 }
 
+/// The separate pacs header of `pacs.audit(..., header=)`: None, a dict (the header object) or a
+/// JSON/TOML file (as `pacs audit --header`).
+fn audit_header(h: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Header>> {
+    let Some(h) = h.filter(|h| !h.is_none()) else {
+        return Ok(None);
+    };
+    if h.cast::<pyo3::types::PyDict>().is_ok() {
+        let v: serde_json::Value = from_py(h, "header")?;
+        return pacs_log::mcap::header_from_value(v)
+            .map(Some)
+            .map_err(|e| input(format!("header: {e}")));
+    }
+    let p: PathBuf = h.extract().map_err(|_| {
+        type_err(format!(
+            "header: expected None, a dict or a path to a JSON/TOML header file, got {}",
+            show(h)
+        ))
+    })?;
+    pacs_log::mcap::load_header_file(&p)
+        .map(Some)
+        .map_err(|e| input(format!("header: {e}")))
+}
+
 /// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP, ROS 2 sqlite3 bags:
 /// *.db3 or a bag directory with metadata.yaml, the header in custom_data `pacs_header`) against
 /// the SSM and PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
+/// `header`: for MCAP logs and ROS 2 bags only, the pacs header (a dict, or a JSON/TOML file)
+/// instead of the logs' own (`pacs audit --header`; e.g. for ROS 2 Humble bags, which carry none).
 /// `paths`: one path or a list; `config`: None, a dict of audit settings (max_gap,
 /// max_human_age, rest_speed, human_model, tracking_error, limit_slack, robot/human/constraints
 /// overrides; see docs/audit.md) or a TOML file. A run passes only if every span between its
 /// first and last robot sample was checked. Invalid logs raise `pacs.InputError` naming the
 /// file, line and field. Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (paths, config=None))]
+#[pyo3(signature = (paths, config=None, header=None))]
 pub fn audit(
     py: Python<'_>,
     paths: &Bound<'_, PyAny>,
     config: Option<&Bound<'_, PyAny>>,
+    header: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<PyRun>> {
     let list: Vec<PathBuf> = if paths.is_instance_of::<PyString>() {
         vec![paths.extract()?]
@@ -157,6 +183,7 @@ pub fn audit(
         return Err(input("paths: no log given"));
     }
     let (cfg, cfg_path) = audit_config(config)?;
+    let header = audit_header(header)?;
     let mut out = Vec::with_capacity(list.len());
     for p in list {
         // Hashed before and after the audit: the verdict belongs to exactly these bytes.
@@ -166,7 +193,7 @@ pub fn audit(
         };
         let before = hash(&p)?;
         let modified = pacs_reports::fleet::modified(&p);
-        let r = py.detach(|| pacs_audit::audit_file(&p, &cfg));
+        let r = py.detach(|| pacs_audit::audit_file_with_header(&p, &cfg, header.as_ref()));
         let run = r.map_err(|e| match e {
             pacs_log::LogError::Io { .. } => input(format!("{e}")),
             _ => input(e.to_string()),

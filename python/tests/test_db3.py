@@ -2,6 +2,7 @@
 a fresh bag directory, its lone .db3 file, and a bag with a violation; a report on a bag
 directory; a bag without a header is an InputError."""
 
+import json
 import sys
 from pathlib import Path
 
@@ -36,7 +37,22 @@ def test_a_fresh_bag_with_a_person_stepping_in_fails_at_the_step(tmp_path):
     assert min(v["t_start"] for v in r.violations) == 0.6
 
 
-def test_a_bag_without_a_header_is_an_input_error(tmp_path):
+def test_a_bag_without_a_header_needs_one_given(tmp_path):
     bag = bags.write_bag(tmp_path / "nohdr", bags.messages(violation=False, mapped=False), header=None)
     with pytest.raises(pacs.InputError, match="missing header"):
         pacs.audit(bag)
+    # Given as a dict or a file (as `pacs audit --header`).
+    assert pacs.audit(bag, header=bags.HEADER)[0].verdict == "pass"
+    f = tmp_path / "header.json"
+    f.write_text(json.dumps(dict(bags.HEADER, constraints="handover")))
+    r = pacs.audit(bag, header=f)[0]
+    assert r.verdict == "pass" and r.models["constraints"] == "handover"
+    with pytest.raises(pacs.InputError, match="header: header.version: 7 is not supported"):
+        pacs.audit(bag, header=dict(bags.HEADER, version=7))
+    with pytest.raises(TypeError, match="header: expected None, a dict or a path"):
+        pacs.audit(bag, header=3)
+    # A JSON Lines log carries its own header.
+    log = tmp_path / "run.jsonl"
+    log.write_text(json.dumps(bags.HEADER) + "\n")
+    with pytest.raises(pacs.InputError, match="applies to MCAP logs and ROS 2 bags only"):
+        pacs.audit(log, header=bags.HEADER)
