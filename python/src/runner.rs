@@ -434,7 +434,11 @@ impl PyShieldLoop {
     fn latest(&self, py: Python<'_>) -> PyResult<Option<PyCommand>> {
         self.check_error(py)?;
         let o = self.out(py)?;
-        Ok(o.latest.map(|(cmd, progress)| PyCommand { cmd, progress }))
+        Ok(o.latest.map(|(cmd, progress)| PyCommand {
+            cmd,
+            progress,
+            names: self.h.names.clone(),
+        }))
     }
 
     /// The loop's current time (s): the time of the latest step.

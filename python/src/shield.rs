@@ -406,6 +406,62 @@ pub struct PyShield {
     pub h: Handle,
 }
 
+/// The names a [`Command`]'s binding indices stand for: robot links, each person's body parts
+/// and id, the objects' ids (shared by every command of a shield).
+#[derive(Debug, Default)]
+pub struct BindingNames {
+    /// Robot link names, by link index.
+    pub links: Vec<String>,
+    /// Per person (by index): its id and its body-part names.
+    pub people: Vec<(String, Vec<String>)>,
+    /// Object ids, by index.
+    pub objects: Vec<String>,
+}
+
+impl BindingNames {
+    /// The binding as a JSON object: its fields (indices, energies in J) and beside each index
+    /// the name it stands for: `link_name`, `body_part_name`, `person` (the person's id) and
+    /// `object_id` (as `pacs shield` writes them in `commands.jsonl`).
+    pub fn describe(&self, b: &pacs_shield::shield::Binding) -> serde_json::Value {
+        use pacs_shield::shield::Binding;
+        let mut v = serde_json::to_value(b).unwrap_or(serde_json::Value::Null);
+        let Some(m) = v.as_object_mut() else {
+            return v;
+        };
+        let (link, part, object) = match *b {
+            Binding::Ssm {
+                human,
+                link,
+                body_part,
+                ..
+            }
+            | Binding::Pfl {
+                human,
+                link,
+                body_part,
+                ..
+            } => (Some(link), Some((human, body_part)), None),
+            Binding::Object { link, object, .. } => (Some(link), None, Some(object)),
+            _ => (None, None, None),
+        };
+        if let Some(l) = link.and_then(|l| self.links.get(l)) {
+            m.insert("link_name".into(), l.clone().into());
+        }
+        if let Some((h, p)) = part
+            && let Some((id, parts)) = self.people.get(h)
+        {
+            m.insert("person".into(), id.clone().into());
+            if let Some(bp) = parts.get(p) {
+                m.insert("body_part_name".into(), bp.clone().into());
+            }
+        }
+        if let Some(id) = object.and_then(|o| self.objects.get(o)) {
+            m.insert("object_id".into(), id.clone().into());
+        }
+        v
+    }
+}
+
 /// What `Shield` and `ShieldLoop` share: the shield state and the immutable facts its
 /// arguments are checked against (read without the lock); the calls both classes offer.
 #[derive(Clone)]
@@ -417,6 +473,8 @@ pub struct Handle {
     pub humans: Vec<HumanModel>,
     /// Object ids, in index order.
     pub object_ids: Vec<String>,
+    /// The names a command's binding indices stand for.
+    pub names: Arc<BindingNames>,
     /// Plans chunks off the shield's lock while a real-time loop steps it.
     pub planner: Arc<Mutex<ChunkPlanner>>,
     /// The longest recent planning time (µs), for the handover's lead.
@@ -748,6 +806,22 @@ impl PyShield {
         };
         let cfg = settings.config().map_err(|e| input(e.to_string()))?;
         let m = &s.models;
+        // Person ids as the log names them: the header's (several people), else `human`.
+        let person_ids: Vec<String> = if s.header.humans.is_empty() {
+            vec![pacs_log::V1_PERSON.to_string()]
+        } else {
+            s.header.humans.iter().map(|p| p.id.clone()).collect()
+        };
+        let names = Arc::new(BindingNames {
+            links: m.robot.links().iter().map(|l| l.name.clone()).collect(),
+            people: s
+                .humans
+                .iter()
+                .zip(person_ids)
+                .map(|(h, id)| (id, h.body_parts().iter().map(|b| b.name.clone()).collect()))
+                .collect(),
+            objects: m.objects.iter().map(|(id, _, _)| id.clone()).collect(),
+        });
         let env = m
             .environment
             .iter()
@@ -779,6 +853,11 @@ impl PyShield {
             "shield_config".into(),
             serde_json::to_value(&settings).unwrap_or_default(),
         );
+        // The filter that ran (reports group runs by it), as `pacs shield` records it.
+        header.meta.insert("filter".into(), cfg.mode.label().into());
+        header
+            .meta
+            .insert("tool".into(), "pacs python Shield".into());
         Ok(Self {
             h: Handle {
                 inner: Arc::new(Mutex::new(Inner {
@@ -808,6 +887,7 @@ impl PyShield {
                 safety_step,
                 humans: s.humans,
                 object_ids,
+                names,
             },
         })
     }
@@ -892,7 +972,11 @@ impl PyShield {
             }
             g.step(t)
         })?;
-        Ok(PyCommand { cmd, progress })
+        Ok(PyCommand {
+            cmd,
+            progress,
+            names: self.h.names.clone(),
+        })
     }
 
     /// Which chunk the commands follow and how many of its actions were executed:
@@ -995,6 +1079,8 @@ impl PyShield {
 pub struct PyCommand {
     pub cmd: Command,
     pub progress: ChunkProgress,
+    /// What the binding's indices stand for.
+    pub names: Arc<BindingNames>,
 }
 
 #[pymethods]
@@ -1030,10 +1116,11 @@ impl PyCommand {
         self.cmd.diag.on_failsafe
     }
     /// What decided the step: {"kind": "none" | "no-measurement" | "no-profile" | "ssm" |
-    /// "pfl" | "object", ...indices, energies (J)}.
+    /// "pfl" | "object", ...indices, energies (J)}, with beside each index the name it stands
+    /// for: `link_name`, `person` (the person's id), `body_part_name`, `object_id`.
     #[getter]
     fn binding<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &self.cmd.diag.binding)
+        to_py(py, &self.names.describe(&self.cmd.diag.binding))
     }
     /// Lower bound of the robot–human separation over the first interval (m; inf without a
     /// human; negative: the occupancies may overlap).
@@ -1082,7 +1169,7 @@ impl PyCommand {
             "ddq": &self.cmd.state.ddq[..n],
             "verified": d.verified,
             "on_failsafe": d.on_failsafe,
-            "binding": d.binding,
+            "binding": self.names.describe(&d.binding),
             "min_separation": if d.min_separation.is_finite() { serde_json::json!(d.min_separation) } else { serde_json::json!("inf") },
             "contact_energy": d.contact_energy,
             "contact_threshold": d.contact_threshold,

@@ -113,3 +113,15 @@ def test_a_log_writer_never_closed_is_incomplete(demo, tmp_path):
     gc.collect()
     (r,) = pacs.audit(log)
     assert r.verdict != "pass"
+
+
+def test_the_log_records_the_filter_that_ran(demo, tmp_path):
+    """meta.filter is the configured mode (reports group runs by it), as `pacs shield` writes."""
+    for mode in ("pacs", "off"):
+        log = tmp_path / f"{mode}.jsonl"
+        s = pacs.Shield(config={"mode": mode}, log=log)
+        s.start(0.0, demo.start)
+        s.step(0.0)
+        s.close()
+        header = json.loads(log.read_text().splitlines()[0])
+        assert header["meta"]["filter"] == mode

@@ -154,6 +154,10 @@ def test_every_human_must_be_measured_and_each_can_stop_the_robot(demo):
             s.measure(t, at_gripper, human=1)
         c = s.step(t)
     assert not c.verified and c.binding["kind"] == "ssm" and c.binding.get("human") == 1
+    # Names beside the indices: the person's id, the link and the body part.
+    assert c.binding["person"] == "human1"
+    assert c.binding["link_name"].startswith("fr3_") and isinstance(c.binding["body_part_name"], str)
+    assert c.to_dict()["binding"] == c.binding
     np.testing.assert_allclose(c.dq, 0.0, atol=1e-12)
     # Several people are logged too (format v2): python/tests/test_people.py.
 

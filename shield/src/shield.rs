@@ -61,6 +61,18 @@ pub enum FilterMode {
     SingleAction,
 }
 
+impl FilterMode {
+    /// The mode's name as logs record the filter that ran (`meta.filter`: `pacs`, `off`,
+    /// `single-action`; reports group runs by it).
+    pub fn label(self) -> &'static str {
+        match self {
+            FilterMode::Pacs => "pacs",
+            FilterMode::Off => "off",
+            FilterMode::SingleAction => "single-action",
+        }
+    }
+}
+
 /// Shield settings (units: s, m, rad/s², rad/s³).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShieldConfig {

@@ -175,12 +175,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let cfg = scene.config.config().map_err(|e| input(e.to_string()))?;
     // The filter that ran (the configured mode, as `pacs simulate` labels its runs): reports
     // group runs by it, so PACS and OFF runs of one scene are never averaged together.
-    let filter = match cfg.mode {
-        pacs_shield::shield::FilterMode::Pacs => "pacs",
-        pacs_shield::shield::FilterMode::Off => "off",
-        pacs_shield::shield::FilterMode::SingleAction => "single-action",
-    };
-    header.meta.insert("filter".into(), filter.into());
+    header.meta.insert("filter".into(), cfg.mode.label().into());
     header.meta.insert("tool".into(), "pacs shield".into());
     header.meta.insert("scene".into(), name.clone().into());
     let models = LogModels::from_header(&header)
