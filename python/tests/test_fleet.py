@@ -149,8 +149,10 @@ def cli():
     for line in out.splitlines():
         msg = json.loads(line)
         target = msg.get("target", {})
+        # The binary itself, not the test harness cargo also builds from the bin target
+        # (same name and kind, `profile.test` true).
         if msg.get("reason") == "compiler-artifact" and target.get("name") == "pacs" \
-                and "bin" in target.get("kind", []):
+                and "bin" in target.get("kind", []) and not msg.get("profile", {}).get("test"):
             return msg["executable"]
     raise AssertionError("cargo built no `pacs` binary")
 
