@@ -417,6 +417,9 @@ pub fn overall(runs: &[RunResult]) -> Verdict {
     Verdict::combine(runs.iter().map(|r| r.verdict))
 }
 
+/// The column heads of [`evidence_row`] (HTML, PDF and Markdown).
+pub const EVIDENCE_COLUMNS: [&str; 4] = ["log", "people", "audited span (s)", "log complete"];
+
 /// What a run's log covers, for the reports: the people, the audited time span (s) and whether
 /// the log is the whole run (`complete`: its writer promised an `end` event and the log reaches
 /// it; `incomplete`: cut short; `not promised`: the writer promised nothing, as ROS bags and v1

@@ -554,6 +554,19 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         7.0,
         Font::Regular,
     );
+    // What each log covers: its people, the audited span and whether it is the whole run.
+    d.heading("Evidence", 12.0);
+    let rows: Vec<Vec<(String, Font)>> = input
+        .runs
+        .iter()
+        .map(|r| crate::evidence_row(r).into_iter().map(reg).collect())
+        .collect();
+    d.table(
+        &crate::EVIDENCE_COLUMNS,
+        &[0.4, 0.2, 0.15, 0.25],
+        &rows,
+        7.0,
+    );
     if input.runs.len() > 1 {
         d.heading("Aggregate (impact of safeguarding)", 12.0);
         let rows: Vec<Vec<(String, Font)>> = aggregate::aggregate(input.runs)

@@ -389,3 +389,32 @@ fn episodes_of_several_people_name_the_person() {
     );
     assert_eq!(csv.lines().filter(|l| l.contains(",visitor,")).count(), 3);
 }
+
+/// Every document states what each log covers: its people, the audited span and whether it is
+/// the whole run (an incomplete log says so in HTML, Markdown and PDF).
+#[test]
+fn every_document_states_the_evidence() {
+    let mut r = run("cut.jsonl", Verdict::Inconclusive, vec![], 0.2);
+    r.people = vec!["operator".into(), "visitor".into()];
+    r.evidence = pacs_audit::Evidence {
+        t_start: 0.0,
+        t_end: 0.719,
+        completeness: pacs_audit::Completeness::Incomplete,
+    };
+    let runs = vec![r];
+    let inp = input(&runs);
+    let h = html::report(&inp);
+    let md = markdown::report(&inp);
+    let pdf = String::from_utf8_lossy(&pacs_reports::pdf::report(&inp)).to_string();
+    for doc in [&h, &md] {
+        assert!(doc.contains("operator, visitor"), "{doc}");
+        assert!(doc.contains("0.000 – 0.719"));
+        assert!(doc.contains("INCOMPLETE (cut short: never a pass)"));
+    }
+    assert!(pdf.contains("(Evidence) Tj"));
+    assert!(pdf.contains("(operator, visitor) Tj"));
+    assert!(pdf.contains("INCOMPLETE"));
+    let j = report_json(&inp);
+    assert_eq!(j["runs"][0]["evidence"]["completeness"], "incomplete");
+    assert_eq!(j["runs"][0]["people"][1], "visitor");
+}
