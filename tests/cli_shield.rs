@@ -422,6 +422,17 @@ fn two_people_are_logged_and_a_cut_log_is_never_a_pass() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // A step bound by a person names that person (the operator walks up; the visitor is far).
+    let by_person: Vec<Value> = commands(&d)
+        .into_iter()
+        .map(|c| c["binding"].clone())
+        .filter(|b| b["kind"] == "ssm" || b["kind"] == "pfl")
+        .collect();
+    assert!(!by_person.is_empty());
+    assert!(
+        by_person.iter().all(|b| b["person"] == "operator"),
+        "{by_person:?}"
+    );
     let log = std::fs::read_to_string(d.join("out/log.jsonl")).unwrap();
     let lines: Vec<&str> = log.lines().collect();
     let header: Value = serde_json::from_str(lines[0]).unwrap();
@@ -453,28 +464,21 @@ fn two_people_are_logged_and_a_cut_log_is_never_a_pass() {
         assert!(s.contains("incomplete_log"), "{s}");
     }
     // An undeclared person in the scene is refused, naming the field.
-    assert_undeclared_person_refused(&scene, &d);
+    assert_undeclared_person_refused(&scene);
     std::fs::remove_dir_all(&d).ok();
 }
 
-fn assert_undeclared_person_refused(scene: &Value, d: &Path) {
+fn assert_undeclared_person_refused(scene: &Value) {
     let mut bad = scene.clone();
     bad["human_measurements"][0]["id"] = "stranger".into();
-    let input = d.join("bad.json");
-    std::fs::write(&input, bad.to_string()).unwrap();
-    let out = pacs()
-        .args(["shield", "--input"])
-        .arg(&input)
-        .arg("--out")
-        .arg(d.join("bad-out"))
-        .output()
-        .unwrap();
+    let (out, d) = run_scene("undeclared-person", &bad);
     assert_eq!(out.status.code(), Some(3));
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(
         e.contains("human_measurements[0].id") && e.contains("stranger"),
         "{e}"
     );
+    std::fs::remove_dir_all(&d).ok();
 }
 
 /// Issue 40: a number JSON cannot hold (`1e400`) or a `NaN` literal in a scene names the field,

@@ -13,7 +13,9 @@ use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use pacs_shield::settings::ShieldSettings;
-use pacs_shield::shield::{ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError};
+use pacs_shield::shield::{
+    BindingNames, ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError,
+};
 use pacs_shield::shield_log::ShieldLog;
 use pyo3::prelude::*;
 use std::fs::File;
@@ -406,62 +408,6 @@ pub struct PyShield {
     pub h: Handle,
 }
 
-/// The names a [`Command`]'s binding indices stand for: robot links, each person's body parts
-/// and id, the objects' ids (shared by every command of a shield).
-#[derive(Debug, Default)]
-pub struct BindingNames {
-    /// Robot link names, by link index.
-    pub links: Vec<String>,
-    /// Per person (by index): its id and its body-part names.
-    pub people: Vec<(String, Vec<String>)>,
-    /// Object ids, by index.
-    pub objects: Vec<String>,
-}
-
-impl BindingNames {
-    /// The binding as a JSON object: its fields (indices, energies in J) and beside each index
-    /// the name it stands for: `link_name`, `body_part_name`, `person` (the person's id) and
-    /// `object_id` (as `pacs shield` writes them in `commands.jsonl`).
-    pub fn describe(&self, b: &pacs_shield::shield::Binding) -> serde_json::Value {
-        use pacs_shield::shield::Binding;
-        let mut v = serde_json::to_value(b).unwrap_or(serde_json::Value::Null);
-        let Some(m) = v.as_object_mut() else {
-            return v;
-        };
-        let (link, part, object) = match *b {
-            Binding::Ssm {
-                human,
-                link,
-                body_part,
-                ..
-            }
-            | Binding::Pfl {
-                human,
-                link,
-                body_part,
-                ..
-            } => (Some(link), Some((human, body_part)), None),
-            Binding::Object { link, object, .. } => (Some(link), None, Some(object)),
-            _ => (None, None, None),
-        };
-        if let Some(l) = link.and_then(|l| self.links.get(l)) {
-            m.insert("link_name".into(), l.clone().into());
-        }
-        if let Some((h, p)) = part
-            && let Some((id, parts)) = self.people.get(h)
-        {
-            m.insert("person".into(), id.clone().into());
-            if let Some(bp) = parts.get(p) {
-                m.insert("body_part_name".into(), bp.clone().into());
-            }
-        }
-        if let Some(id) = object.and_then(|o| self.objects.get(o)) {
-            m.insert("object_id".into(), id.clone().into());
-        }
-        v
-    }
-}
-
 /// What `Shield` and `ShieldLoop` share: the shield state and the immutable facts its
 /// arguments are checked against (read without the lock); the calls both classes offer.
 #[derive(Clone)]
@@ -812,16 +758,7 @@ impl PyShield {
         } else {
             s.header.humans.iter().map(|p| p.id.clone()).collect()
         };
-        let names = Arc::new(BindingNames {
-            links: m.robot.links().iter().map(|l| l.name.clone()).collect(),
-            people: s
-                .humans
-                .iter()
-                .zip(person_ids)
-                .map(|(h, id)| (id, h.body_parts().iter().map(|b| b.name.clone()).collect()))
-                .collect(),
-            objects: m.objects.iter().map(|(id, _, _)| id.clone()).collect(),
-        });
+        let object_ids: Vec<String> = m.objects.iter().map(|(id, _, _)| id.clone()).collect();
         let env = m
             .environment
             .iter()
@@ -847,7 +784,7 @@ impl PyShield {
         let dof = m.robot.dof();
         let safety_step = cfg.safety_step;
         let planner = shield.chunk_planner();
-        let object_ids: Vec<String> = m.objects.iter().map(|(id, _, _)| id.clone()).collect();
+        let names = Arc::new(shield.binding_names(&person_ids, &object_ids));
         let mut header = s.header;
         header.meta.insert(
             "shield_config".into(),

@@ -47,6 +47,63 @@ use pacs_verify::iso15066::{ContactRule, ObjectRule};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+/// What a [`Binding`]'s indices stand for ([`Shield::binding_names`]): one implementation for
+/// every output that names them (`pacs shield`'s commands, the Python `Command.binding`).
+#[derive(Debug, Clone, Default)]
+pub struct BindingNames {
+    /// Robot link names, by link index.
+    pub links: Vec<String>,
+    /// Per human (by index): its id, if known, and its body-part names.
+    pub people: Vec<(Option<String>, Vec<String>)>,
+    /// Object ids, by index (empty: unknown).
+    pub objects: Vec<String>,
+}
+
+impl BindingNames {
+    /// The binding as a JSON object: its fields (indices, energies in J) and beside each index
+    /// the name it stands for — `link_name`, `person` (where the id is known), `body_part_name`,
+    /// `object_id` (where the ids are known).
+    pub fn describe(&self, b: &Binding) -> serde_json::Value {
+        let mut v = serde_json::to_value(b).unwrap_or(serde_json::Value::Null);
+        let Some(m) = v.as_object_mut() else {
+            return v;
+        };
+        let (link, part, object) = match *b {
+            Binding::Ssm {
+                human,
+                link,
+                body_part,
+                ..
+            }
+            | Binding::Pfl {
+                human,
+                link,
+                body_part,
+                ..
+            } => (Some(link), Some((human, body_part)), None),
+            Binding::Object { link, object, .. } => (Some(link), None, Some(object)),
+            _ => (None, None, None),
+        };
+        if let Some(l) = link.and_then(|l| self.links.get(l)) {
+            m.insert("link_name".into(), l.clone().into());
+        }
+        if let Some((h, p)) = part
+            && let Some((id, parts)) = self.people.get(h)
+        {
+            if let Some(id) = id {
+                m.insert("person".into(), id.clone().into());
+            }
+            if let Some(bp) = parts.get(p) {
+                m.insert("body_part_name".into(), bp.clone().into());
+            }
+        }
+        if let Some(id) = object.and_then(|o| self.objects.get(o)) {
+            m.insert("object_id".into(), id.clone().into());
+        }
+        v
+    }
+}
+
 /// Which filter runs behind the shield interface.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -595,42 +652,37 @@ impl Shield {
         self.humans.first().map(|h| h.reach.model())
     }
 
-    /// A step's [`Binding`] as outputs print it: its fields (indices, energies in J) and, beside
-    /// each index, the name it stands for — `link_name` (robot link), `body_part_name` (body
-    /// part of that human's model). Objects keep their index (the order of
-    /// [`Self::add_object`]); the caller knows their ids.
+    /// A step's [`Binding`] as outputs print it ([`BindingNames::describe`]), with the names
+    /// of this shield's links and body parts (no person or object ids: see
+    /// [`Self::binding_names`]). Allocates: for outputs, not the control loop.
     pub fn binding_json(&self, b: &Binding) -> serde_json::Value {
-        let mut v = serde_json::to_value(b).unwrap_or(serde_json::Value::Null);
-        let (link, part) = match *b {
-            Binding::Ssm {
-                human,
-                link,
-                body_part,
-                ..
-            }
-            | Binding::Pfl {
-                human,
-                link,
-                body_part,
-                ..
-            } => (Some(link), Some((human, body_part))),
-            Binding::Object { link, .. } => (Some(link), None),
-            _ => (None, None),
-        };
-        if let Some(m) = v.as_object_mut() {
-            if let Some(l) = link.and_then(|l| self.robot.links().get(l)) {
-                m.insert("link_name".into(), l.name.clone().into());
-            }
-            if let Some((h, p)) = part
-                && let Some(bp) = self
-                    .humans
-                    .get(h)
-                    .and_then(|s| s.reach.model().body_parts().get(p))
-            {
-                m.insert("body_part_name".into(), bp.name.clone().into());
-            }
+        self.binding_names(&[], &[]).describe(b)
+    }
+
+    /// The names a [`Binding`]'s indices stand for: the robot's links, each human's body parts
+    /// and its id (`person_ids[i]`, if given), the objects' ids (`object_ids`, in the order of
+    /// [`Self::add_object`]). Build once and describe every step's binding with it.
+    pub fn binding_names(&self, person_ids: &[String], object_ids: &[String]) -> BindingNames {
+        BindingNames {
+            links: self.robot.links().iter().map(|l| l.name.clone()).collect(),
+            people: self
+                .humans
+                .iter()
+                .enumerate()
+                .map(|(i, h)| {
+                    (
+                        person_ids.get(i).cloned(),
+                        h.reach
+                            .model()
+                            .body_parts()
+                            .iter()
+                            .map(|b| b.name.clone())
+                            .collect(),
+                    )
+                })
+                .collect(),
+            objects: object_ids.to_vec(),
         }
-        v
     }
 
     /// Number of humans.

@@ -331,6 +331,11 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             .map_err(|e| CliError::Output(format!("cannot create {}: {e}", p.display())))
     };
     let mut cmd_out = create(&cmd_path)?;
+    // What each command's binding indices stand for (built once): link and body-part names,
+    // the person's id in a scene of several people, the object's id.
+    let person_ids: Vec<String> = scene.humans.iter().map(|p| p.id.clone()).collect();
+    let object_ids: Vec<String> = models.objects.iter().map(|(id, _, _)| id.clone()).collect();
+    let names = shield.binding_names(&person_ids, &object_ids);
     let mut log = ShieldLog::new(create(&log_path)?, &header, t0, &scene.start)
         .map_err(|e| CliError::Internal(format!("{}: {e}", log_path.display())))?;
     let werr = |p: &Path, e: &dyn std::fmt::Display| {
@@ -399,7 +404,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             "ddq": &cmd.state.ddq[..n],
             "verified": d.verified,
             "on_failsafe": d.on_failsafe,
-            "binding": binding_json(&shield, &d.binding, &models.objects),
+            "binding": names.describe(&d.binding),
             "path_speed": d.path_speed,
             "stop_time": d.stop_time,
         });
@@ -446,20 +451,4 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         "commands": cmd_path,
         "log": log_path,
     }))
-}
-
-/// The binding with names beside its indices ([`Shield::binding_json`]) and, for an object,
-/// its id from the scene (`object_id`).
-fn binding_json<T, U>(
-    shield: &Shield,
-    b: &pacs_shield::shield::Binding,
-    objects: &[(String, T, U)],
-) -> Value {
-    let mut v = shield.binding_json(b);
-    if let pacs_shield::shield::Binding::Object { object, .. } = *b
-        && let Some((id, _, _)) = objects.get(object)
-    {
-        v["object_id"] = json!(id);
-    }
-    v
 }

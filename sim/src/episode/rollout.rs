@@ -19,7 +19,8 @@ use pacs_shield::shield_log::ShieldLog;
 /// The truth audit: one person, or several (one pass each, merged).
 enum TruthAuditor {
     One(Box<Auditor>),
-    Many(pacs_audit::people::PeopleAuditor),
+    /// The auditor and the people's ids (`human0`, `human1`, …), made once.
+    Many(pacs_audit::people::PeopleAuditor, Vec<String>),
 }
 
 impl TruthAuditor {
@@ -32,7 +33,7 @@ impl TruthAuditor {
     ) -> Result<(), pacs_audit::AuditError> {
         match self {
             TruthAuditor::One(a) => a.push_human(t, t, kp),
-            TruthAuditor::Many(p) => p.push_human(Some(&super::person_id(i)), t, t, kp),
+            TruthAuditor::Many(p, ids) => p.push_human(ids.get(i).map(String::as_str), t, t, kp),
         }
     }
     fn push_object(
@@ -45,7 +46,7 @@ impl TruthAuditor {
     ) -> Result<(), pacs_audit::AuditError> {
         match self {
             TruthAuditor::One(a) => a.push_object(t, t_meas, id, p, v),
-            TruthAuditor::Many(m) => m.push_object(t, t_meas, id, p, v),
+            TruthAuditor::Many(m, _) => m.push_object(t, t_meas, id, p, v),
         }
     }
     fn push_robot(
@@ -56,19 +57,19 @@ impl TruthAuditor {
     ) -> Result<(), pacs_audit::AuditError> {
         match self {
             TruthAuditor::One(a) => a.push_robot(t, q, dq),
-            TruthAuditor::Many(m) => m.push_robot_with_acc(t, q, dq, None),
+            TruthAuditor::Many(m, _) => m.push_robot_with_acc(t, q, dq, None),
         }
     }
     fn push_event(&mut self, name: &str) {
         match self {
             TruthAuditor::One(a) => a.push_event(name),
-            TruthAuditor::Many(m) => m.push_event(name),
+            TruthAuditor::Many(m, _) => m.push_event(name),
         }
     }
     fn finish(self, log: &str) -> pacs_audit::RunResult {
         match self {
             TruthAuditor::One(a) => a.finish(log, serde_json::Map::new()),
-            TruthAuditor::Many(m) => m.finish(log, serde_json::Map::new()),
+            TruthAuditor::Many(m, _) => m.finish(log, serde_json::Map::new()),
         }
     }
 }
@@ -178,6 +179,7 @@ pub fn run_setup(
             TruthAuditor::Many(
                 pacs_audit::people::PeopleAuditor::new(&models, &AuditConfig::default())
                     .map_err(invalid)?,
+                models.people.iter().map(|(id, _)| id.clone()).collect(),
             )
         })
     } else {
