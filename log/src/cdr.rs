@@ -44,6 +44,10 @@ pub enum CdrError {
         /// What is wrong.
         problem: &'static str,
     },
+    /// A time stamp's nanoseconds are not below 10⁹ (`builtin_interfaces/Time.nanosec` counts
+    /// the fraction of a second: a larger value would shift the stamp by up to 3.3 s).
+    #[error("field `header.stamp.nanosec`: {0} is not below 1000000000")]
+    BadNanosec(u32),
     /// More bytes follow the message than alignment padding explains.
     #[error("{0} unexpected bytes after the end of the message")]
     Trailing(usize),
@@ -221,6 +225,9 @@ impl Stamp {
 fn header<'a>(r: &mut CdrReader<'a>) -> Result<(Stamp, &'a str), CdrError> {
     let sec = r.i32("header.stamp.sec")?;
     let nanosec = r.u32("header.stamp.nanosec")?;
+    if nanosec >= 1_000_000_000 {
+        return Err(CdrError::BadNanosec(nanosec));
+    }
     let frame = r.string("header.frame_id")?;
     Ok((Stamp { sec, nanosec }, frame))
 }
@@ -472,5 +479,32 @@ impl Stamp {
         let sec = i32::try_from(ns.div_euclid(1_000_000_000)).ok()?;
         let nanosec = ns.rem_euclid(1_000_000_000) as u32;
         Some(Self { sec, nanosec })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stamp whose nanoseconds are not below 10⁹ is refused (it would shift the time by up to
+    /// 3.3 s and make a stale measurement look fresh); 10⁹ − 1 is read exactly.
+    #[test]
+    fn nanoseconds_of_a_second_or_more_are_refused() {
+        let mut js = JointStateMsg::default();
+        for (nanosec, ok) in [
+            (999_999_999u32, true),
+            (1_000_000_000, false),
+            (u32::MAX, false),
+        ] {
+            let st = Stamp { sec: 5, nanosec };
+            let data = CdrWriter::joint_state(st, &["j1"], &[0.0], &[], &[]);
+            let r = js.decode(&data);
+            assert_eq!(r.is_ok(), ok, "{nanosec}: {r:?}");
+            if ok {
+                assert_eq!(js.stamp.nanos(), 5_999_999_999);
+            } else {
+                assert_eq!(r.unwrap_err(), CdrError::BadNanosec(nanosec));
+            }
+        }
     }
 }

@@ -258,6 +258,9 @@ fn open_ro(path: &Path) -> Result<Connection, String> {
     // Reading never writes: refuse anything that would (e.g. a hot journal to roll back).
     c.pragma_update(None, "query_only", true)
         .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+    // The time-ordered query may sort: on disk, never an unbounded in-memory sorter.
+    c.pragma_update(None, "temp_store", "FILE")
+        .map_err(|e| format!("cannot open as SQLite: {e}"))?;
     Ok(c)
 }
 
@@ -566,6 +569,14 @@ impl Db3Reader {
                     };
                     let info = bag_info(&text, true).map_err(bad)?;
                     info.check().map_err(bad)?;
+                    // One part of a split bag is not the run: audit the bag directory.
+                    if info.files.len() > 1 {
+                        return Err(bad(format!(
+                            "this file is one of {} parts of a bag ({}): audit the bag directory (with its metadata.yaml), not one part",
+                            info.files.len(),
+                            info.files.join(", ")
+                        )));
+                    }
                     info
                 }
             };

@@ -240,6 +240,14 @@ impl Messages {
             (Stream::Robot, JOINT_STATE)
         } else if topic == cfg.human_topic {
             (Stream::Human { person: None }, POSE_ARRAY)
+        } else if topic == cfg.event_topic {
+            (Stream::Event, STRING)
+        } else if cfg.object_topics.values().any(|t| t == topic) {
+            let stamped = type_name == Some(POSE_STAMPED);
+            (
+                Stream::Object { stamped },
+                if stamped { POSE_STAMPED } else { POSE_ARRAY },
+            )
         } else if let Some(id) = cfg
             .human_topics
             .iter()
@@ -261,14 +269,6 @@ impl Messages {
             };
             let i = u16::try_from(i).map_err(|_| "more than 65535 person topics".to_string())?;
             (Stream::Human { person: Some(i) }, POSE_ARRAY)
-        } else if topic == cfg.event_topic {
-            (Stream::Event, STRING)
-        } else if cfg.object_topics.values().any(|t| t == topic) {
-            let stamped = type_name == Some(POSE_STAMPED);
-            (
-                Stream::Object { stamped },
-                if stamped { POSE_STAMPED } else { POSE_ARRAY },
-            )
         } else {
             (Stream::Ignored, "")
         })
