@@ -232,6 +232,25 @@ fn a_lone_db3_finds_its_header_in_its_metadata_table_or_takes_one_given() {
     let name = bare.display().to_string();
     expect_err(audit(&bare, None), &name, &["missing header", "--header"]);
     same_result(&dir, &audit(&bare, Some(&header())).unwrap());
+    // One part of a split bag (its metadata lists another part) is refused: not the whole run.
+    let part = d.join("part.db3");
+    std::fs::copy(&file, &part).unwrap();
+    sql(
+        &part,
+        "UPDATE metadata SET metadata = replace(metadata, \
+         'relative_file_paths:' || char(10) || '- clean.db3' || char(10), \
+         'relative_file_paths:' || char(10) || '- clean.db3' || char(10) || '- clean_1.db3' || char(10))",
+    );
+    let name = part.display().to_string();
+    expect_err(
+        audit(&part, None),
+        &name,
+        &[
+            "one of 2 parts of a bag",
+            "clean_1.db3",
+            "audit the bag directory",
+        ],
+    );
     // A given header wins over the bag's.
     let mut pfl = header();
     pfl.constraints = ModelRef::Name("handover".into());
