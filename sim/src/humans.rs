@@ -75,7 +75,10 @@ impl HumanScript for Handover {
 pub struct WalkIn {
     /// Point the hand reaches for (m).
     pub reach: [f64; 3],
-    /// Arrival, reach, and leave times (s).
+    /// Arrival, reach, and leave times (s): walks 1.3 m in from 2.5 m over `[0, arrive]`, moves
+    /// the right hand to `reach` over `[reach, reach + 1.2]`, back over `[leave, leave + 1.2]`,
+    /// and walks away over `[leave + 1.3, leave + 2.8]`. The default human model's speed limit
+    /// holds with `arrive ≥ 1.5` s.
     pub times: [f64; 3],
 }
 
@@ -83,9 +86,11 @@ impl HumanScript for WalkIn {
     fn keypoints(&self, t: f64) -> Vec<[f64; 3]> {
         let [t_arrive, t_reach, t_leave] = self.times;
         let walk_in = ease(t, 0.0, t_arrive);
-        let walk_out = ease(t, t_leave + 1.0, t_leave + 2.5);
+        let walk_out = ease(t, t_leave + 1.3, t_leave + 2.8);
         let x = 2.5 - 1.3 * walk_in + 1.3 * walk_out;
-        let arm = ease(t, t_reach, t_reach + 0.8) * (1.0 - ease(t, t_leave, t_leave + 0.8));
+        // The hand travels up to ≈ 1.15 m (table height, across the table) in 1.2 s: at most
+        // 1.5·1.15/1.2 ≈ 1.45 m/s at the ease's peak, within the default model's 2 m/s.
+        let arm = ease(t, t_reach, t_reach + 1.2) * (1.0 - ease(t, t_leave, t_leave + 1.2));
         let rest = [x - 0.05, -0.25, 0.95];
         standing(x, 0.0, lerp(rest, self.reach, arm))
     }
@@ -240,7 +245,9 @@ impl HumanScript for Reacher {
         let w = ease(t, 0.0, t_arrive) - ease(t, t_leave + 0.8, t_leave + 0.8 + t_arrive);
         let x = far + w * (self.stand[0] - far);
         let y = self.stand[1];
-        let arm = ease(t, t_reach, t_reach + 0.8) * (1.0 - ease(t, t_leave, t_leave + 0.8));
+        // The hand travels up to ≈ 1.15 m (table height, across the table) in 1.2 s: at most
+        // 1.5·1.15/1.2 ≈ 1.45 m/s at the ease's peak, within the default model's 2 m/s.
+        let arm = ease(t, t_reach, t_reach + 1.2) * (1.0 - ease(t, t_leave, t_leave + 1.2));
         let rest = [x - 0.05, y - 0.25, FLOOR_Z + 0.95];
         standing_on(x, y, FLOOR_Z, lerp(rest, self.reach, arm))
     }

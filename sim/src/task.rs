@@ -639,7 +639,8 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
     // it toward the sorting area and walks away (far away without people).
     let others: Vec<Box<dyn HumanScript>> = match task {
         TaskKind::Crowded => {
-            let arrive = rng.range(1.0, 3.0);
+            // 1.3 m in at least 1.5 s: at most 1.3 m/s at the ease's peak.
+            let arrive = rng.range(1.5, 3.0);
             let reach = arrive + rng.range(0.5, 2.0);
             let leave = reach + rng.range(1.5, 3.0);
             let passer_by = crate::humans::WalkIn {

@@ -12,7 +12,7 @@ fn v(s: &str) -> Variant {
 #[test]
 fn task_humans_respect_their_model_limits() {
     for task in TaskKind::ALL {
-        for seed in 0..6 {
+        for seed in 0..12 {
             let scn = scenario(task, seed, true);
             if task == TaskKind::Sphere {
                 continue; // the bystander stands still
@@ -20,38 +20,41 @@ fn task_humans_respect_their_model_limits() {
             let dt = 1e-3;
             let v_max = scn.human.v_max().to_vec();
             let a_max = scn.human.a_max().to_vec();
-            let mut p0 = scn.script.keypoints(0.0);
-            let mut p1 = scn.script.keypoints(dt);
-            for k in 2..(scn.max_time / dt) as usize {
-                let p2 = scn.script.keypoints(k as f64 * dt);
-                for i in 0..p0.len() {
-                    let d = |a: [f64; 3], b: [f64; 3]| {
-                        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
-                            .sqrt()
-                    };
-                    let v = d(p2[i], p1[i]) / dt;
-                    let acc = [
-                        (p2[i][0] - 2.0 * p1[i][0] + p0[i][0]) / (dt * dt),
-                        (p2[i][1] - 2.0 * p1[i][1] + p0[i][1]) / (dt * dt),
-                        (p2[i][2] - 2.0 * p1[i][2] + p0[i][2]) / (dt * dt),
-                    ];
-                    let a = d(acc, [0.0; 3]);
-                    assert!(
-                        v <= v_max[i],
-                        "{} seed {seed}: keypoint {i} at {v:.3} m/s (t = {:.3})",
-                        task.name(),
-                        k as f64 * dt
-                    );
-                    // Finite differences of the cubic ease jump at its ends; allow 1 % slack.
-                    assert!(
-                        a <= a_max[i] * 1.01,
-                        "{} seed {seed}: keypoint {i} at {a:.3} m/s² (t = {:.3})",
-                        task.name(),
-                        k as f64 * dt
-                    );
+            // Every person of the scene (the crowded task's passer-by too) obeys the one model.
+            for (person, script) in std::iter::once(&scn.script).chain(&scn.others).enumerate() {
+                let mut p0 = script.keypoints(0.0);
+                let mut p1 = script.keypoints(dt);
+                for k in 2..(scn.max_time / dt) as usize {
+                    let p2 = script.keypoints(k as f64 * dt);
+                    for i in 0..p0.len() {
+                        let d = |a: [f64; 3], b: [f64; 3]| {
+                            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+                                .sqrt()
+                        };
+                        let v = d(p2[i], p1[i]) / dt;
+                        let acc = [
+                            (p2[i][0] - 2.0 * p1[i][0] + p0[i][0]) / (dt * dt),
+                            (p2[i][1] - 2.0 * p1[i][1] + p0[i][1]) / (dt * dt),
+                            (p2[i][2] - 2.0 * p1[i][2] + p0[i][2]) / (dt * dt),
+                        ];
+                        let a = d(acc, [0.0; 3]);
+                        assert!(
+                            v <= v_max[i],
+                            "{} seed {seed} person {person}: keypoint {i} at {v:.3} m/s (t = {:.3})",
+                            task.name(),
+                            k as f64 * dt
+                        );
+                        // Finite differences of the cubic ease jump at its ends; allow 1 % slack.
+                        assert!(
+                            a <= a_max[i] * 1.01,
+                            "{} seed {seed} person {person}: keypoint {i} at {a:.3} m/s² (t = {:.3})",
+                            task.name(),
+                            k as f64 * dt
+                        );
+                    }
+                    p0 = p1;
+                    p1 = p2;
                 }
-                p0 = p1;
-                p1 = p2;
             }
         }
     }
