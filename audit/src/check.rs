@@ -35,6 +35,9 @@ pub use crate::config::AuditConfig;
 pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`).
 pub const BLOCK_SPANS: usize = 32;
+/// The smallest part of a block that [`Auditor::check_block`] is tried on after the whole block
+/// failed (halving from [`BLOCK_SPANS`]); smaller parts are checked span by span.
+pub const MIN_SUB_BLOCK: usize = 4;
 /// Human measurements (and, per object, object measurements) kept, the newest by stamp, to
 /// check each new record against every one of them.
 pub const HUMAN_HISTORY: usize = 64;
@@ -121,11 +124,23 @@ pub struct Auditor {
     scratch: Box<ReachScratch>,
     frames: Vec<Isometry3<f64>>,
     nom_caps: Vec<Capsule>,
+    /// The joint positions (rad) `nom_caps` were computed at (valid when `nom_key_valid`).
+    nom_key: [f64; MAX_DOF],
+    nom_key_valid: bool,
+    /// The nominal kinetic energy (J) at `nom_key` and the velocities (rad/s) it was computed for.
+    nom_energy: Option<(f64, [f64; MAX_DOF])>,
     hits: Vec<SpanHit>,
     // State.
     prev: Option<Sample>,
     /// Buffered samples whose spans all use the human measurement `block_human`.
     block: Vec<Sample>,
+    /// The enclosures of the block's spans (a buffer of `flush_block`).
+    block_encl: Vec<SpanEnclosure>,
+    /// The last spans checked one by one were mostly violating: skip the halves of the next
+    /// block that fails (speed only).
+    dense_violations: bool,
+    /// Use the block fast path (off: every span on its own, the reference it is tested against).
+    block_fast_path: bool,
     block_human: Option<usize>,
     humans: [Option<HumanMeasurement>; 2],
     latest_human: Option<usize>,
@@ -289,9 +304,15 @@ impl Auditor {
             scratch: Box::default(),
             frames: vec![Isometry3::identity(); n + 1],
             nom_caps: vec![zero; ncaps],
+            nom_key: [0.0; MAX_DOF],
+            nom_key_valid: false,
+            nom_energy: None,
             hits: Vec::with_capacity(slots * links),
             prev: None,
             block: Vec::with_capacity(BLOCK_SPANS + 1),
+            block_encl: Vec::with_capacity(BLOCK_SPANS),
+            dense_violations: false,
+            block_fast_path: true,
             block_human: None,
             humans: [None, None],
             latest_human: None,
@@ -344,6 +365,15 @@ impl Auditor {
             a.track = Some(Box::default());
         }
         Ok(a)
+    }
+
+    /// Check every span on its own, without the block fast path: the reference the fast path is
+    /// tested against (`audit/tests/audit_blocks.rs`: same verdict, violations and inconclusive
+    /// spans), several times slower.
+    #[doc(hidden)]
+    pub fn without_block_fast_path(mut self) -> Self {
+        self.block_fast_path = false;
+        self
     }
 
     /// Robot degrees of freedom.
@@ -607,14 +637,14 @@ impl Auditor {
             self.block_human = self.span_human;
         }
         self.block.push(s);
-        if !self.objects.is_empty() {
-            // With objects every span is checked as soon as it closes, with the object
-            // measurements in use for it (no block fast path: it does not know objects).
-            self.flush_block();
-        }
         if self.block.len() > BLOCK_SPANS {
             self.flush_block();
             self.block_human = self.latest_human;
+        }
+        // The next span uses the newest object measurements: if one changed, the block (whose
+        // spans all used `span`) is checked first, with the measurements it used.
+        if self.objects.iter().any(|o| o.span != o.latest) {
+            self.flush_block();
         }
         self.prev = Some(s);
         self.span_human = self.latest_human;

@@ -76,6 +76,12 @@ impl SpanBoxes {
             dq: self.dq.hull(&o.dq),
         }
     }
+
+    /// Grow `self` to [`Self::hull`] of both.
+    pub fn hull_in_place(&mut self, o: &SpanBoxes) {
+        self.q = self.q.hull(&o.q);
+        self.dq = self.dq.hull(&o.dq);
+    }
 }
 
 /// The enclosure of one span: the boxes (`None` if a bound is not finite: absurd samples) and

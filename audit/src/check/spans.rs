@@ -41,23 +41,70 @@ impl Auditor {
         e
     }
 
-    /// Check the buffered spans (all using the human measurement `block_human`), keeping the
-    /// last sample as the start of the next block.
+    /// Check the buffered spans (all using the human measurement `block_human` and the object
+    /// measurements in use for them), keeping the last sample as the start of the next block.
+    ///
+    /// Every span's enclosure is computed once; the spans are then checked by [`Self::check_spans`]
+    /// (block fast path, halves, span by span). The samples and enclosures are borrowed from
+    /// buffers taken out of `self` for the duration (no copies, no allocation after warm-up).
     pub(super) fn flush_block(&mut self) {
         let m = self.block.len();
         if m >= 2 {
             let slot = self.block_human;
-            // The block fast path checks body parts only: with objects, span by span.
-            if !(self.objects.is_empty() && self.check_block(slot)) {
-                for i in 0..m - 1 {
-                    let (a, b) = (self.block[i], self.block[i + 1]);
-                    self.check_span(&a, &b, slot);
-                }
+            let block = std::mem::take(&mut self.block);
+            let mut encl = std::mem::take(&mut self.block_encl);
+            encl.clear();
+            for i in 0..m - 1 {
+                encl.push(self.boxes(&block[i], &block[i + 1]));
             }
+            self.check_spans(&block, &encl, 0, m - 1, slot);
+            self.block = block;
+            self.block_encl = encl;
             let last = self.block[m - 1];
             self.block.clear();
             self.block.push(last);
         }
+    }
+
+    /// Check spans `lo..hi` of `block` (span `i` joins samples `i` and `i + 1`; `encl[i]` is its
+    /// enclosure), in order. First the block fast path over all of them ([`Self::check_block`]);
+    /// if that cannot prove them clean, the two halves the same way (down to
+    /// [`MIN_SUB_BLOCK`] spans), then span by span. Every path is sound on its own (a clean
+    /// block proves each of its spans clean; the span check is the reference), so the split only
+    /// changes the cost, and the separation figures recorded (each a lower bound). Where the
+    /// last spans checked one by one were mostly violating, the halves are skipped (they would
+    /// fail too).
+    fn check_spans(
+        &mut self,
+        block: &[Sample],
+        encl: &[SpanEnclosure],
+        lo: usize,
+        hi: usize,
+        slot: Option<usize>,
+    ) {
+        let count = hi - lo;
+        if !self.block_fast_path {
+            for i in lo..hi {
+                self.check_span_with(&block[i], &block[i + 1], &encl[i], slot);
+            }
+            return;
+        }
+        if count >= 2 && self.check_block(block, encl, lo, hi, slot) {
+            self.dense_violations = false;
+            return;
+        }
+        if count >= 2 * MIN_SUB_BLOCK && !self.dense_violations {
+            let mid = lo + count / 2;
+            self.check_spans(block, encl, lo, mid, slot);
+            self.check_spans(block, encl, mid, hi, slot);
+            return;
+        }
+        let before = self.violating_samples;
+        for i in lo..hi {
+            self.check_span_with(&block[i], &block[i + 1], &encl[i], slot);
+        }
+        let violating = self.violating_samples - before;
+        self.dense_violations = count >= MIN_SUB_BLOCK && 2 * violating >= count as u64;
     }
 
     /// The one ISO/TS 15066 rule ([`ContactRule::check`]) on the occupancies in `self.rcaps`
@@ -96,20 +143,27 @@ impl Auditor {
         })
     }
 
-    /// Fast path: one check over the union of the block's span boxes and the human occupancy
-    /// over the whole block (both supersets of every span's enclosures, so "no violation
-    /// possible" holds for every span). Returns false, having recorded nothing, if the block is
-    /// not provably clean; the caller then checks span by span.
-    pub(super) fn check_block(&mut self, slot: Option<usize>) -> bool {
-        let m = self.block.len();
-        if m < 3 {
+    /// Fast path over spans `lo..hi` of `block`: one check over the union of their span boxes,
+    /// with the human occupancy (and each object's) over the whole stretch — supersets of every
+    /// span's enclosures, so "no violation possible" holds for every span. Returns false, having
+    /// recorded nothing, if the stretch is not provably clean (or a span is not consistent, not
+    /// resolved, or past a gap or a stale measurement); the caller then checks smaller parts.
+    pub(super) fn check_block(
+        &mut self,
+        block: &[Sample],
+        encl: &[SpanEnclosure],
+        lo: usize,
+        hi: usize,
+        slot: Option<usize>,
+    ) -> bool {
+        if hi < lo + 2 {
             return false;
         }
         let Some(slot) = slot else { return false };
         let Some(meas) = self.humans[slot].as_ref() else {
             return false;
         };
-        let (t0, t1) = (self.block[0].t, self.block[m - 1].t);
+        let (t0, t1) = (block[lo].t, block[hi].t);
         if t1 - meas.time() > self.cfg.max_human_age {
             return false;
         }
@@ -121,22 +175,26 @@ impl Auditor {
             return false;
         }
         let mut union: Option<SpanBoxes> = None;
-        for i in 0..m - 1 {
-            let (a, b) = (self.block[i], self.block[i + 1]);
+        for i in lo..hi {
+            let (a, b) = (&block[i], &block[i + 1]);
             if b.t - a.t > self.cfg.max_gap || !stamps_resolve(a.t, b.t) {
                 return false;
             }
             let SpanEnclosure {
                 boxes: Some(sb),
                 consistent: true,
-            } = self.boxes(&a, &b)
+            } = &encl[i]
             else {
                 return false;
             };
-            union = Some(union.map_or(sb, |u| u.hull(&sb)));
+            match &mut union {
+                Some(u) => u.hull_in_place(sb),
+                None => union = Some(*sb),
+            }
         }
         let Some(u) = union else { return false };
         let far = self.rule.workspace_clear(&self.hcaps);
+        let mut robot_occupancy = false;
         let (sep, pfl_seen) = match far {
             Some(sep) => (sep, None),
             None => {
@@ -147,6 +205,7 @@ impl Auditor {
                 {
                     return false;
                 }
+                robot_occupancy = true;
                 let out = self.apply_rule(&u, false);
                 if out.violated {
                     return false;
@@ -154,15 +213,18 @@ impl Auditor {
                 (out.separation, out.pfl)
             }
         };
-        // Every span of the block is clean: per-span bookkeeping only.
-        for i in 0..m - 1 {
-            let (a, b) = (self.block[i], self.block[i + 1]);
+        if !self.objects_clear(&u, t0, t1, robot_occupancy) {
+            return false;
+        }
+        // Every span of the stretch is clean: per-span bookkeeping only.
+        for i in lo..hi {
+            let (a, b) = (&block[i], &block[i + 1]);
             self.span_index += 1;
             let (bidx, new_bucket) = self.series.bucket(a.t);
             if new_bucket {
-                self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(&a, &b));
+                self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(a, b));
             }
-            let rest = self.nominal_rest(&a, &b);
+            let rest = self.nominal_rest(a, b);
             self.series.buckets[bidx].at_rest &= rest;
             if let Some((e, thr)) = pfl_seen {
                 let bk = &mut self.series.buckets[bidx];
@@ -173,6 +235,60 @@ impl Auditor {
         }
         self.last_span_violated = false;
         self.last_span_certain = false;
+        true
+    }
+
+    /// Whether every object provably keeps the object rule over `[t0, t1]` with the robot in the
+    /// boxes `u`: each object's occupancy over the whole stretch, from the measurement in use for
+    /// all of its spans (`ObjectTrack::span`; blocks close when it changes), outside the
+    /// workspace ball or clear by [`ObjectRule::check`] against the robot occupancy of `u.q`
+    /// (computed here unless `have_robot`). False (nothing recorded) for a missing, stale or
+    /// unusable measurement: the span-by-span check reports those.
+    fn objects_clear(&mut self, u: &SpanBoxes, t0: f64, t1: f64, mut have_robot: bool) -> bool {
+        let n = self.n;
+        let mut energy_cache: Option<f64> = None;
+        for k in 0..self.objects.len() {
+            let o = &self.objects[k];
+            let Some(m) = o.span else { return false };
+            if t1 - m.time > self.cfg.max_human_age {
+                return false;
+            }
+            let Ok(occ) = pacs_reach::object::occupancy(&o.model, &m, t0, t1) else {
+                return false;
+            };
+            if self.object_rule.workspace_clear(&occ).is_some() {
+                continue;
+            }
+            if !have_robot {
+                if self
+                    .rreach
+                    .occupancy_with(&mut self.scratch, &u.q, &mut self.rcaps)
+                    .is_err()
+                {
+                    return false;
+                }
+                have_robot = true;
+            }
+            let contact = self.objects[k].contact;
+            let Self {
+                object_rule,
+                rreach,
+                scratch,
+                rcaps,
+                energies,
+                ..
+            } = self;
+            let energy = || {
+                *energy_cache.get_or_insert_with(|| span_energy(rreach, scratch, u, energies, n))
+            };
+            if object_rule
+                .check(rcaps, &u.dq, &occ, contact, energy, true)
+                .violation
+                .is_some()
+            {
+                return false;
+            }
+        }
         true
     }
 
@@ -209,7 +325,21 @@ impl Auditor {
         })
     }
 
+    /// Check one span on its own (its enclosure computed here).
     pub(super) fn check_span(&mut self, s0: &Sample, s1: &Sample, span_human: Option<usize>) {
+        let e = self.boxes(s0, s1);
+        self.check_span_with(s0, s1, &e, span_human);
+    }
+
+    /// Check the span `s0`–`s1` with its enclosure `encl` (`self.boxes(s0, s1)`): the reference
+    /// check, every violating pair collected and tested for certainty.
+    pub(super) fn check_span_with(
+        &mut self,
+        s0: &Sample,
+        s1: &Sample,
+        encl: &SpanEnclosure,
+        span_human: Option<usize>,
+    ) {
         self.span_index += 1;
         let (t0, t1) = (s0.t, s1.t);
         let dt = t1 - t0;
@@ -298,7 +428,7 @@ impl Auditor {
                 return;
             }
         }
-        let SpanEnclosure { boxes, consistent } = self.boxes(s0, s1);
+        let (boxes, consistent) = (&encl.boxes, encl.consistent);
         if !stamps_resolve(t0, t1) {
             // Checked below all the same (a violation found still fails the log), never passed.
             self.mark_inconclusive(t0, t1, Reason::UnresolvedTime);
