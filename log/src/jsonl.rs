@@ -7,6 +7,8 @@ use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess,
 use std::fmt;
 use std::io::BufRead;
 
+mod fast;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     Robot,
@@ -19,7 +21,7 @@ enum Kind {
 }
 
 /// Reused parse buffers of one line.
-#[derive(Default)]
+#[derive(Default, Debug)]
 struct LineBuffers {
     kind: Option<Kind>,
     kind_name: String,
@@ -87,6 +89,143 @@ enum Field {
     Other,
 }
 
+impl Field {
+    /// The field named `name`; the first unknown name of a line is kept in `unknown`.
+    fn of(name: &str, unknown: &mut String) -> Field {
+        match name {
+            "type" => Field::Type,
+            "t" => Field::T,
+            "t_meas" => Field::TMeas,
+            "q" => Field::Q,
+            "dq" => Field::Dq,
+            "ddq" => Field::Ddq,
+            "positions" => Field::Positions,
+            "name" => Field::Name,
+            "id" => Field::Id,
+            "position" => Field::Position,
+            "velocity" => Field::Velocity,
+            other => {
+                if unknown.is_empty() {
+                    unknown.push_str(other);
+                }
+                Field::Other
+            }
+        }
+    }
+}
+
+/// Where a field's value comes from: the serde_json parser (the reference, with its error
+/// messages) or the fast scanner ([`fast`]). One implementation of what each field means
+/// ([`LineBuffers::take`]) serves both.
+trait Values {
+    type Error;
+    fn string(&mut self, into: &mut String) -> Result<(), Self::Error>;
+    fn number(&mut self) -> Result<f64, Self::Error>;
+    fn numbers(&mut self, into: &mut Vec<f64>) -> Result<(), Self::Error>;
+    fn points(&mut self, into: &mut Vec<[f64; 3]>) -> Result<(), Self::Error>;
+    fn skip(&mut self) -> Result<(), Self::Error>;
+}
+
+impl LineBuffers {
+    /// Take the value of `field` from `v` into the buffers (a field seen twice is noted in
+    /// `duplicate`, the first one only).
+    fn take<V: Values>(&mut self, field: Field, v: &mut V) -> Result<(), V::Error> {
+        let b = self;
+        let mut dup = |seen: bool, name: &'static str| {
+            if seen && b.duplicate.is_none() {
+                b.duplicate = Some(name);
+            }
+        };
+        match field {
+            Field::Type => {
+                dup(b.kind.is_some(), "type");
+                v.string(&mut b.kind_name)?;
+                b.kind = Some(match b.kind_name.as_str() {
+                    "robot" => Kind::Robot,
+                    "human" => Kind::Human,
+                    "object" => Kind::Object,
+                    "shield" => Kind::Shield,
+                    "event" => Kind::Event,
+                    "header" => Kind::Header,
+                    _ => Kind::Unknown,
+                });
+            }
+            Field::T => {
+                dup(b.t.is_some(), "t");
+                b.t = Some(v.number()?);
+            }
+            Field::TMeas => {
+                dup(b.t_meas.is_some(), "t_meas");
+                b.t_meas = Some(v.number()?);
+            }
+            Field::Q => {
+                dup(b.has_q, "q");
+                v.numbers(&mut b.q)?;
+                b.has_q = true;
+            }
+            Field::Dq => {
+                dup(b.has_dq, "dq");
+                v.numbers(&mut b.dq)?;
+                b.has_dq = true;
+            }
+            Field::Ddq => {
+                dup(b.has_ddq, "ddq");
+                v.numbers(&mut b.ddq)?;
+                b.has_ddq = true;
+            }
+            Field::Positions => {
+                dup(b.has_positions, "positions");
+                v.points(&mut b.positions)?;
+                b.has_positions = true;
+            }
+            Field::Name => {
+                dup(b.has_name, "name");
+                v.string(&mut b.name)?;
+                b.has_name = true;
+            }
+            Field::Id => {
+                dup(b.has_id, "id");
+                v.string(&mut b.id)?;
+                b.has_id = true;
+            }
+            Field::Position => {
+                dup(b.has_position, "position");
+                v.numbers(&mut b.position)?;
+                b.has_position = true;
+            }
+            Field::Velocity => {
+                dup(b.has_velocity, "velocity");
+                v.numbers(&mut b.velocity)?;
+                b.has_velocity = true;
+            }
+            Field::Other => v.skip()?,
+        }
+        Ok(())
+    }
+}
+
+/// The serde_json side of [`Values`].
+struct SerdeValues<'m, 'de, A>(&'m mut A, std::marker::PhantomData<&'de ()>);
+
+impl<'de, A: MapAccess<'de>> Values for SerdeValues<'_, 'de, A> {
+    type Error = A::Error;
+    fn string(&mut self, into: &mut String) -> Result<(), A::Error> {
+        self.0.next_value_seed(StrInto(into))
+    }
+    fn number(&mut self) -> Result<f64, A::Error> {
+        self.0.next_value()
+    }
+    fn numbers(&mut self, into: &mut Vec<f64>) -> Result<(), A::Error> {
+        self.0.next_value_seed(VecInto(into))
+    }
+    fn points(&mut self, into: &mut Vec<[f64; 3]>) -> Result<(), A::Error> {
+        self.0.next_value_seed(VecInto(into))
+    }
+    fn skip(&mut self) -> Result<(), A::Error> {
+        self.0.next_value::<IgnoredAny>().map(|_| ())
+    }
+}
+
 struct FieldSeed<'b>(&'b mut String);
 
 impl<'de> DeserializeSeed<'de> for FieldSeed<'_> {
@@ -102,25 +241,7 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
         f.write_str("a field name")
     }
     fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Field, E> {
-        Ok(match v {
-            "type" => Field::Type,
-            "t" => Field::T,
-            "t_meas" => Field::TMeas,
-            "q" => Field::Q,
-            "dq" => Field::Dq,
-            "ddq" => Field::Ddq,
-            "positions" => Field::Positions,
-            "name" => Field::Name,
-            "id" => Field::Id,
-            "position" => Field::Position,
-            "velocity" => Field::Velocity,
-            other => {
-                if self.0.is_empty() {
-                    self.0.push_str(other);
-                }
-                Field::Other
-            }
-        })
+        Ok(Field::of(v, self.0))
     }
 }
 
@@ -185,80 +306,35 @@ impl<'de> Visitor<'de> for LineSeed<'_> {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let b = self.0;
         while let Some(field) = map.next_key_seed(FieldSeed(&mut b.unknown_field))? {
-            let mut dup = |seen: bool, name: &'static str| {
-                if seen && b.duplicate.is_none() {
-                    b.duplicate = Some(name);
-                }
-            };
-            match field {
-                Field::Type => {
-                    dup(b.kind.is_some(), "type");
-                    map.next_value_seed(StrInto(&mut b.kind_name))?;
-                    b.kind = Some(match b.kind_name.as_str() {
-                        "robot" => Kind::Robot,
-                        "human" => Kind::Human,
-                        "object" => Kind::Object,
-                        "shield" => Kind::Shield,
-                        "event" => Kind::Event,
-                        "header" => Kind::Header,
-                        _ => Kind::Unknown,
-                    });
-                }
-                Field::T => {
-                    dup(b.t.is_some(), "t");
-                    b.t = Some(map.next_value()?);
-                }
-                Field::TMeas => {
-                    dup(b.t_meas.is_some(), "t_meas");
-                    b.t_meas = Some(map.next_value()?);
-                }
-                Field::Q => {
-                    dup(b.has_q, "q");
-                    map.next_value_seed(VecInto(&mut b.q))?;
-                    b.has_q = true;
-                }
-                Field::Dq => {
-                    dup(b.has_dq, "dq");
-                    map.next_value_seed(VecInto(&mut b.dq))?;
-                    b.has_dq = true;
-                }
-                Field::Ddq => {
-                    dup(b.has_ddq, "ddq");
-                    map.next_value_seed(VecInto(&mut b.ddq))?;
-                    b.has_ddq = true;
-                }
-                Field::Positions => {
-                    dup(b.has_positions, "positions");
-                    map.next_value_seed(VecInto(&mut b.positions))?;
-                    b.has_positions = true;
-                }
-                Field::Name => {
-                    dup(b.has_name, "name");
-                    map.next_value_seed(StrInto(&mut b.name))?;
-                    b.has_name = true;
-                }
-                Field::Id => {
-                    dup(b.has_id, "id");
-                    map.next_value_seed(StrInto(&mut b.id))?;
-                    b.has_id = true;
-                }
-                Field::Position => {
-                    dup(b.has_position, "position");
-                    map.next_value_seed(VecInto(&mut b.position))?;
-                    b.has_position = true;
-                }
-                Field::Velocity => {
-                    dup(b.has_velocity, "velocity");
-                    map.next_value_seed(VecInto(&mut b.velocity))?;
-                    b.has_velocity = true;
-                }
-                Field::Other => {
-                    map.next_value::<IgnoredAny>()?;
-                }
-            }
+            b.take(field, &mut SerdeValues(&mut map, std::marker::PhantomData))?;
         }
         Ok(())
     }
+}
+
+/// Whether the fast scanner and serde_json read `line` alike: where the scanner takes the line,
+/// serde_json takes it too and every buffer holds the same value (bit for bit: compared by
+/// their `Debug` text, which tells `-0.0` from `0.0`). Lines the scanner does not take are left
+/// to serde_json and always agree. For tests and the `jsonl` fuzz target.
+#[doc(hidden)]
+pub fn fast_path_agrees(line: &str) -> bool {
+    let mut fast = LineBuffers::default();
+    if !fast::parse_line(line, &mut fast) {
+        return true;
+    }
+    let mut slow = LineBuffers::default();
+    let mut de = serde_json::Deserializer::from_str(line);
+    let ok = LineSeed(&mut slow)
+        .deserialize(&mut de)
+        .and_then(|()| de.end())
+        .is_ok();
+    ok && format!("{fast:?}") == format!("{slow:?}")
+}
+
+/// Whether the fast scanner takes `line` (for tests: the cases must reach it).
+#[doc(hidden)]
+pub fn fast_path_takes(line: &str) -> bool {
+    fast::parse_line(line, &mut LineBuffers::default())
 }
 
 /// Streaming reader of a JSON Lines log (see `docs/log-format.md`).
@@ -382,14 +458,19 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         }
         let b = &mut self.bufs;
         b.reset();
-        let mut de = serde_json::Deserializer::from_str(&self.line);
-        LineSeed(b)
-            .deserialize(&mut de)
-            .and_then(|()| de.end())
-            .map_err(|e| {
-                let e = pacs_models::describe_json_error(&self.line, &e);
-                err(format!("invalid JSON record: {e}"))
-            })?;
+        if !fast::parse_line(&self.line, b) {
+            // Not a line the fast scanner takes (or not JSON): serde_json decides, with its
+            // error message.
+            b.reset();
+            let mut de = serde_json::Deserializer::from_str(&self.line);
+            LineSeed(b)
+                .deserialize(&mut de)
+                .and_then(|()| de.end())
+                .map_err(|e| {
+                    let e = pacs_models::describe_json_error(&self.line, &e);
+                    err(format!("invalid JSON record: {e}"))
+                })?;
+        }
         if let Some(d) = b.duplicate {
             return Err(err(format!("field `{d}` appears twice")));
         }

@@ -1,0 +1,292 @@
+//! The fast scanner of JSON Lines records.
+//!
+//! Most lines of a log are robot and shield records: one flat JSON object of numbers, arrays of
+//! numbers and plain strings. This scanner reads exactly such lines, straight into the reader's
+//! buffers, through the same field logic as the serde_json path ([`LineBuffers::take`]). It
+//! accepts a subset of JSON and gives up ([`Bail`]) on anything else — a string with an escape or
+//! a control character, a number out of range, nesting deeper than [`MAX_DEPTH`], any syntax
+//! error — and the line is then parsed again by serde_json, which decides (with its error
+//! message). So a line the scanner takes is one serde_json also takes, with the same values:
+//!
+//! - the number grammar is JSON's (`-?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?`), checked
+//!   here before the standard library converts the text (correctly rounded, as serde_json with
+//!   `float_roundtrip`, which the workspace enables; `-0` is `-0.0` in both);
+//! - whitespace is JSON's (space, tab, line feed, carriage return), before and after any token;
+//! - nothing but whitespace may follow the object.
+//!
+//! `fast_path_agrees` (tests and the `jsonl` fuzz target) checks the claim line by line.
+
+use super::{Field, LineBuffers, Values};
+
+/// Nesting depth up to which skipped values (unknown fields) are scanned here; deeper values
+/// are left to serde_json.
+const MAX_DEPTH: usize = 32;
+
+/// The scanner does not take the line: serde_json decides.
+pub(super) struct Bail;
+
+struct Scanner<'a> {
+    /// The line's bytes (`text.as_bytes()`).
+    s: &'a [u8],
+    text: &'a str,
+    i: usize,
+}
+
+impl<'a> Scanner<'a> {
+    #[inline]
+    fn ws(&mut self) {
+        while let Some(&c) = self.s.get(self.i) {
+            if matches!(c, b' ' | b'\t' | b'\n' | b'\r') {
+                self.i += 1;
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// Skip whitespace, then consume `c` if it is next.
+    #[inline]
+    fn eat(&mut self, c: u8) -> bool {
+        self.ws();
+        if self.s.get(self.i) == Some(&c) {
+            self.i += 1;
+            true
+        } else {
+            false
+        }
+    }
+
+    #[inline]
+    fn digits(&mut self) -> usize {
+        let start = self.i;
+        while matches!(self.s.get(self.i), Some(b'0'..=b'9')) {
+            self.i += 1;
+        }
+        self.i - start
+    }
+
+    /// A string without escapes or control characters (its text between the quotes).
+    fn plain_str(&mut self) -> Result<&'a str, Bail> {
+        if !self.eat(b'"') {
+            return Err(Bail);
+        }
+        let start = self.i;
+        loop {
+            match *self.s.get(self.i).ok_or(Bail)? {
+                b'"' => break,
+                b'\\' | 0..=0x1f => return Err(Bail),
+                _ => self.i += 1,
+            }
+        }
+        let text = self.text.get(start..self.i).ok_or(Bail)?;
+        self.i += 1;
+        Ok(text)
+    }
+
+    /// A JSON number, finite as an f64.
+    fn num(&mut self) -> Result<f64, Bail> {
+        self.ws();
+        let start = self.i;
+        if self.s.get(self.i) == Some(&b'-') {
+            self.i += 1;
+        }
+        match self.s.get(self.i) {
+            Some(b'0') => self.i += 1,
+            Some(b'1'..=b'9') => {
+                self.digits();
+            }
+            _ => return Err(Bail),
+        }
+        if self.s.get(self.i) == Some(&b'.') {
+            self.i += 1;
+            if self.digits() == 0 {
+                return Err(Bail);
+            }
+        }
+        if matches!(self.s.get(self.i), Some(b'e' | b'E')) {
+            self.i += 1;
+            if matches!(self.s.get(self.i), Some(b'+' | b'-')) {
+                self.i += 1;
+            }
+            if self.digits() == 0 {
+                return Err(Bail);
+            }
+        }
+        // ASCII only from `start` on: the slice is on character boundaries.
+        let x: f64 = self
+            .text
+            .get(start..self.i)
+            .ok_or(Bail)?
+            .parse()
+            .map_err(|_| Bail)?;
+        if !x.is_finite() {
+            return Err(Bail);
+        }
+        Ok(x)
+    }
+
+    /// Any JSON value this scanner takes, validated and dropped.
+    fn skip_value(&mut self, depth: usize) -> Result<(), Bail> {
+        if depth > MAX_DEPTH {
+            return Err(Bail);
+        }
+        self.ws();
+        match *self.s.get(self.i).ok_or(Bail)? {
+            b'"' => self.plain_str().map(|_| ()),
+            b'[' => {
+                self.i += 1;
+                if self.eat(b']') {
+                    return Ok(());
+                }
+                loop {
+                    self.skip_value(depth + 1)?;
+                    if self.eat(b',') {
+                        continue;
+                    }
+                    return if self.eat(b']') { Ok(()) } else { Err(Bail) };
+                }
+            }
+            b'{' => {
+                self.i += 1;
+                if self.eat(b'}') {
+                    return Ok(());
+                }
+                loop {
+                    self.plain_str()?;
+                    if !self.eat(b':') {
+                        return Err(Bail);
+                    }
+                    self.skip_value(depth + 1)?;
+                    if self.eat(b',') {
+                        continue;
+                    }
+                    return if self.eat(b'}') { Ok(()) } else { Err(Bail) };
+                }
+            }
+            b't' => self.literal(b"true"),
+            b'f' => self.literal(b"false"),
+            b'n' => self.literal(b"null"),
+            _ => self.num().map(|_| ()),
+        }
+    }
+
+    fn literal(&mut self, word: &[u8]) -> Result<(), Bail> {
+        if self.s[self.i..].starts_with(word) {
+            self.i += word.len();
+            Ok(())
+        } else {
+            Err(Bail)
+        }
+    }
+}
+
+impl Values for Scanner<'_> {
+    type Error = Bail;
+
+    fn string(&mut self, into: &mut String) -> Result<(), Bail> {
+        let s = self.plain_str()?;
+        into.clear();
+        into.push_str(s);
+        Ok(())
+    }
+
+    fn number(&mut self) -> Result<f64, Bail> {
+        self.num()
+    }
+
+    fn numbers(&mut self, into: &mut Vec<f64>) -> Result<(), Bail> {
+        if !self.eat(b'[') {
+            return Err(Bail);
+        }
+        into.clear();
+        if self.eat(b']') {
+            return Ok(());
+        }
+        loop {
+            into.push(self.num()?);
+            if self.eat(b',') {
+                continue;
+            }
+            return if self.eat(b']') { Ok(()) } else { Err(Bail) };
+        }
+    }
+
+    fn points(&mut self, into: &mut Vec<[f64; 3]>) -> Result<(), Bail> {
+        if !self.eat(b'[') {
+            return Err(Bail);
+        }
+        into.clear();
+        if self.eat(b']') {
+            return Ok(());
+        }
+        loop {
+            if !self.eat(b'[') {
+                return Err(Bail);
+            }
+            let x = self.num()?;
+            let y = if self.eat(b',') {
+                self.num()?
+            } else {
+                return Err(Bail);
+            };
+            let z = if self.eat(b',') {
+                self.num()?
+            } else {
+                return Err(Bail);
+            };
+            if !self.eat(b']') {
+                return Err(Bail);
+            }
+            into.push([x, y, z]);
+            if self.eat(b',') {
+                continue;
+            }
+            return if self.eat(b']') { Ok(()) } else { Err(Bail) };
+        }
+    }
+
+    fn skip(&mut self) -> Result<(), Bail> {
+        self.skip_value(1)
+    }
+}
+
+/// Read `line` (one record, with its line end) into `b`, which must be reset. False if the
+/// scanner does not take the line; `b` is then partly filled and must be reset before the
+/// serde_json path reads it.
+pub(super) fn parse_line(line: &str, b: &mut LineBuffers) -> bool {
+    let mut sc = Scanner {
+        s: line.as_bytes(),
+        text: line,
+        i: 0,
+    };
+    scan(&mut sc, b).is_ok()
+}
+
+fn scan(sc: &mut Scanner<'_>, b: &mut LineBuffers) -> Result<(), Bail> {
+    if !sc.eat(b'{') {
+        return Err(Bail);
+    }
+    if !sc.eat(b'}') {
+        loop {
+            let key = sc.plain_str()?;
+            if !sc.eat(b':') {
+                return Err(Bail);
+            }
+            let field = Field::of(key, &mut b.unknown_field);
+            b.take(field, sc)?;
+            if sc.eat(b',') {
+                continue;
+            }
+            if sc.eat(b'}') {
+                break;
+            }
+            return Err(Bail);
+        }
+    }
+    sc.ws();
+    if sc.i == sc.s.len() {
+        Ok(())
+    } else {
+        Err(Bail)
+    }
+}

@@ -1,0 +1,147 @@
+//! The JSON Lines reader's fast scanner against serde_json: on records as pacs writes them, on
+//! every number literal JSON (and not JSON) can spell near the edges of f64, and on thousands of
+//! random edits of records, every line the scanner takes is one serde_json takes, with the same
+//! values bit for bit (`fast_path_agrees`); lines it does not take go to serde_json unchanged.
+
+use pacs_log::jsonl::{fast_path_agrees, fast_path_takes};
+
+const RECORDS: &[&str] = &[
+    "{\"type\":\"robot\",\"t\":0.001,\"q\":[0.012002984195271257,-0.7848432820745567,-0.0005283976453661861,-2.352341624880035,-0.013630849591725966,1.561103065746978,0.77970376188577],\"dq\":[-7.061073045433511e-5,2.9805773898642442e-5,0.0,0,-0,1e-300,5e-324],\"ddq\":[-0.14122146090867022,0.059611547797284885,0.04419561259462412,1,2,3,4]}\n",
+    "{\"binding\":{\"kind\":\"none\"},\"contact_energy\":0.0,\"contact_threshold\":0.0,\"min_separation\":0.5609422284033653,\"on_failsafe\":false,\"path_speed\":1.0,\"t\":0.001,\"type\":\"shield\",\"verified\":true}\n",
+    "{\"type\":\"human\",\"t\":0.0,\"t_meas\":0.0,\"id\":\"human0\",\"positions\":[[2.3571958824156165,-0.02747683684835855,0.6496117574809898],[2.343778997716555,0.018146379965176027,0.4018017933438838]]}\n",
+    "{\"type\":\"object\",\"t\":0.0,\"t_meas\":0.0,\"id\":\"sphere-b\",\"position\":[0.47393131955634177,-0.380406300279194,0.04728062528461232],\"velocity\":[-0.0029595973326424756,0.0785904491975051,-0.012240240762220795]}\n",
+    "{\"type\":\"event\",\"t\":7.949,\"name\":\"end\"}\n",
+    "  { \"type\" : \"robot\" , \"t\" : 1E+2 , \"q\" : [ 1 , 2.5e-3 ] }  \r\n",
+    "{\"type\":\"shield\",\"t\":1,\"x\":[{\"a\":[null,true,false,\"s\",{}]},[]],\"y\":{}}\n",
+    "{\"type\":\"robot\",\"t\":1,\"t\":2,\"q\":[]}\n",
+    "{}\n",
+];
+
+const NUMBERS: &[&str] = &[
+    "0",
+    "-0",
+    "0.0",
+    "-0.0",
+    "1",
+    "-1",
+    "01",
+    "-01",
+    "1.",
+    ".5",
+    "+1",
+    "1e5",
+    "1E5",
+    "1e+5",
+    "1e-5",
+    "1e",
+    "1e+",
+    "-",
+    "1.5e400",
+    "1e400",
+    "-1e400",
+    "1e-400",
+    "-1e-400",
+    "1.7976931348623157e308",
+    "1.7976931348623158e308",
+    "1.7976931348623159e308",
+    "2.2250738585072011e-308",
+    "2.2250738585072014e-308",
+    "4.9e-324",
+    "2.4703282292062327e-324",
+    "2.4703282292062328e-324",
+    "9007199254740993",
+    "-9007199254740993",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "-9223372036854775809",
+    "18446744073709551615",
+    "18446744073709551616",
+    "123456789012345678901234567890",
+    "0.30000000000000004",
+    "0.1000000000000000055511151231257827",
+    "3.141592653589793238462643383279",
+    "NaN",
+    "Infinity",
+    "-Infinity",
+    "1_0",
+    "0x10",
+    "1.0e00000000000000000001",
+    "0e0",
+    "-0e-0",
+    "00",
+    "1e-0",
+];
+
+/// xorshift64*.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+#[test]
+fn records_as_pacs_writes_them_take_the_fast_path_and_agree() {
+    for r in RECORDS {
+        assert!(fast_path_agrees(r), "{r}");
+    }
+    // The common records are taken (else the scanner would only cost time).
+    for r in &RECORDS[..6] {
+        assert!(fast_path_takes(r), "{r}");
+    }
+}
+
+#[test]
+fn every_number_literal_agrees_wherever_it_stands() {
+    let mut taken = 0;
+    for n in NUMBERS {
+        for line in [
+            format!("{{\"type\":\"robot\",\"t\":{n},\"q\":[{n},{n}]}}\n"),
+            format!("{{\"type\":\"human\",\"t\":0,\"positions\":[[{n},0,{n}]]}}\n"),
+            format!("{{\"type\":\"shield\",\"t\":0,\"other\":[{n},{{\"k\":{n}}}]}}\n"),
+        ] {
+            assert!(fast_path_agrees(&line), "{line}");
+            taken += fast_path_takes(&line) as usize;
+        }
+    }
+    assert!(taken > 60, "{taken}");
+}
+
+#[test]
+fn random_edits_of_records_agree() {
+    let alphabet: &[u8] = b"{}[],:.-+eE0123456789 \t\r\n\\\"uxntf/\x01";
+    let mut rng = Rng(0x5EED_1234_ABCD_0001);
+    let (mut taken, cases) = (0usize, 40_000);
+    for _ in 0..cases {
+        let mut line: Vec<u8> = RECORDS[rng.below(RECORDS.len())].as_bytes().to_vec();
+        for _ in 0..1 + rng.below(3) {
+            let at = rng.below(line.len() + 1);
+            match rng.below(4) {
+                0 if at < line.len() => {
+                    line.remove(at);
+                }
+                1 => line.insert(at, alphabet[rng.below(alphabet.len())]),
+                2 if at < line.len() => line[at] = alphabet[rng.below(alphabet.len())],
+                _ => {
+                    let n = NUMBERS[rng.below(NUMBERS.len())];
+                    let at = at.min(line.len());
+                    line.splice(at..at, n.bytes());
+                }
+            }
+        }
+        let Ok(text) = String::from_utf8(line) else {
+            continue;
+        };
+        assert!(fast_path_agrees(&text), "{text:?}");
+        taken += fast_path_takes(&text) as usize;
+    }
+    // Many edits keep a valid record (a digit changed, whitespace added): those reach the
+    // comparison.
+    assert!(taken > cases / 10, "{taken} of {cases}");
+}
