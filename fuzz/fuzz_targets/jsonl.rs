@@ -1,5 +1,6 @@
 //! Fuzz the JSON Lines reader and the audit behind it: any input must give a result or a typed
-//! error, never a panic; and a `pass` only for input that parsed completely.
+//! error, never a panic; and a `pass` only for input that parsed completely. Every line the
+//! reader's fast scanner takes must read as serde_json reads it (`fast_path_agrees`).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -7,6 +8,11 @@ use pacs_audit::{AuditConfig, Verdict, audit_reader};
 use pacs_log::jsonl::JsonlReader;
 
 fuzz_target!(|data: &[u8]| {
+    if let Ok(text) = std::str::from_utf8(data) {
+        for line in text.split_inclusive('\n') {
+            assert!(pacs_log::jsonl::fast_path_agrees(line), "{line:?}");
+        }
+    }
     let Ok(mut r) = JsonlReader::new("fuzz.jsonl", std::io::Cursor::new(data)) else {
         return;
     };
