@@ -471,6 +471,72 @@ fn bag_directory_errors_name_metadata_yaml() {
 }
 
 #[test]
+fn a_bag_directory_must_be_the_whole_recording() {
+    let meta = std::fs::read_to_string(fixtures().join("clean/metadata.yaml")).unwrap();
+    let db = fixtures().join("clean/clean.db3");
+    let bag = |text: &str| {
+        let d = tempdir();
+        std::fs::copy(&db, d.join("clean.db3")).unwrap();
+        std::fs::write(d.join("metadata.yaml"), text).unwrap();
+        d
+    };
+    // The untouched bag passes (the counts agree).
+    assert_eq!(audit(&bag(&meta), None).unwrap().verdict, Verdict::Pass);
+    // A .db3 in the directory that the metadata does not list would go unread.
+    let d = bag(&meta);
+    std::fs::copy(&db, d.join("clean_1.db3")).unwrap();
+    let name = d.join("metadata.yaml").display().to_string();
+    expect_err(
+        audit(&d, None),
+        &name,
+        &[
+            "clean_1.db3",
+            "not in rosbag2_bagfile_information.relative_file_paths",
+        ],
+    );
+    // The recorder counted more messages than the files hold: cut short.
+    assert!(meta.contains("- message_count: 101\n    topic_metadata:\n      name: /joint_states"));
+    let d = bag(&meta.replace("- message_count: 101", "- message_count: 102"));
+    let name = d.join("metadata.yaml").display().to_string();
+    expect_err(
+        audit(&d, None),
+        &name,
+        &[
+            "`/joint_states` has message_count 102",
+            "hold 101",
+            "cut short",
+        ],
+    );
+    // Rows deleted from the file (the metadata unchanged): cut short.
+    let d = bag(&meta);
+    sql(
+        &d.join("clean.db3"),
+        "DELETE FROM messages WHERE id IN (SELECT id FROM messages ORDER BY timestamp DESC LIMIT 30);",
+    );
+    let e = expect_err(
+        audit(&d, None),
+        &name_of(&d),
+        &["has message_count", "cut short"],
+    );
+    assert!(e.contains("hold"), "{e}");
+    // More messages than counted: the metadata is not this recording's.
+    let d = bag(&meta.replace("- message_count: 101", "- message_count: 100"));
+    expect_err(
+        audit(&d, None),
+        &name_of(&d),
+        &[
+            "has message_count 100",
+            "hold 101",
+            "does not describe these files",
+        ],
+    );
+}
+
+fn name_of(bag: &Path) -> String {
+    bag.join("metadata.yaml").display().to_string()
+}
+
+#[test]
 fn the_header_in_custom_data_is_checked() {
     let meta = std::fs::read_to_string(fixtures().join("clean/metadata.yaml")).unwrap();
     let d = tempdir();

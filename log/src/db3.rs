@@ -90,6 +90,8 @@ struct Part {
     name: String,
     /// `topics.id` → (topic, stream) of every topic.
     topics: HashMap<i64, (String, Stream)>,
+    /// `topics.id` → rows read of that topic.
+    counts: HashMap<i64, u64>,
 }
 
 impl Part {
@@ -116,6 +118,9 @@ pub struct Db3Reader {
     conv: Messages,
     done: bool,
     current: Option<Pending>,
+    /// The metadata's messages per topic (`topics_with_message_count`), and the metadata's name.
+    expected: Vec<(String, u64)>,
+    info_name: String,
 }
 
 /// The settings of a bag found in its metadata (`metadata.yaml` or a `metadata` table).
@@ -126,6 +131,8 @@ struct BagInfo {
     compression_format: String,
     compression_mode: String,
     pacs_header: Option<String>,
+    /// `topics_with_message_count`: messages per topic name, as the recorder counted them.
+    topic_counts: Vec<(String, u64)>,
 }
 
 /// Parse rosbag2 metadata YAML (aliases refused, nesting and size bounded): `metadata.yaml` has it
@@ -216,7 +223,34 @@ fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
             ));
         }
     };
+    let mut topic_counts = Vec::new();
+    match &info["topics_with_message_count"] {
+        Yaml::BadValue | Yaml::Null => {}
+        Yaml::Array(a) => {
+            for (i, t) in a.iter().enumerate() {
+                let field = format!("rosbag2_bagfile_information.topics_with_message_count[{i}]");
+                let Yaml::String(name) = &t["topic_metadata"]["name"] else {
+                    return Err(format!("{field}.topic_metadata.name: expected a string"));
+                };
+                let count = match &t["message_count"] {
+                    Yaml::Integer(c) if *c >= 0 => *c as u64,
+                    other => {
+                        return Err(format!(
+                            "{field}.message_count: expected a count (integer ≥ 0), found {other:?}"
+                        ));
+                    }
+                };
+                topic_counts.push((name.clone(), count));
+            }
+        }
+        other => {
+            return Err(format!(
+                "rosbag2_bagfile_information.topics_with_message_count: expected a list, found {other:?}"
+            ));
+        }
+    }
     Ok(BagInfo {
+        topic_counts,
         storage,
         files,
         compression_format: text_of("compression_format")?,
@@ -402,7 +436,12 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
             return Err(bad(format!("table `topics`: id {id} appears twice")));
         }
     }
-    Ok(Part { path, name, topics })
+    Ok(Part {
+        path,
+        name,
+        topics,
+        counts: HashMap::new(),
+    })
 }
 
 /// The metadata YAML a `.db3` file keeps in its `metadata` table (newer rosbag2 releases, and
@@ -558,6 +597,24 @@ impl Db3Reader {
                 }
                 files.push(p);
             }
+            // A part the metadata does not list would go unread: the metadata does not describe
+            // the recording in the directory.
+            let listed: Vec<PathBuf> = files.iter().filter_map(|p| p.canonicalize().ok()).collect();
+            let entries = std::fs::read_dir(path).map_err(|e| LogError::Io {
+                file: name.clone(),
+                source: e,
+            })?;
+            for e in entries.flatten() {
+                let p = e.path();
+                let is_db3 = p.extension().is_some_and(|x| x.eq_ignore_ascii_case("db3"));
+                if is_db3 && p.is_file() && !p.canonicalize().is_ok_and(|c| listed.contains(&c)) {
+                    return Err(bad(format!(
+                        "`{}` is in the bag directory but not in rosbag2_bagfile_information.relative_file_paths ({}): the metadata does not describe the whole recording",
+                        p.display(),
+                        info.files.join(", ")
+                    )));
+                }
+            }
             (files, info, meta_name, path.to_path_buf())
         } else {
             check_size(path, &name)?;
@@ -628,6 +685,8 @@ impl Db3Reader {
             conv,
             done: false,
             current: None,
+            expected: info.topic_counts,
+            info_name,
         };
         while r.conv.is_empty() && !r.done {
             r.pump()?;
@@ -696,8 +755,12 @@ impl Db3Reader {
     fn pump(&mut self) -> Result<(), LogError> {
         let Some(row) = self.next_row()? else {
             self.done = true;
-            return Ok(());
+            return self.check_counts();
         };
+        *self.parts[self.part]
+            .counts
+            .entry(row.topic_id)
+            .or_default() += 1;
         let part = &self.parts[self.part];
         let loc = Location::Message(row.id);
         let Some((topic, stream)) = part.topics.get(&row.topic_id) else {
@@ -729,6 +792,41 @@ impl Db3Reader {
             .map_err(|e| hint_compressed(e, &row.data));
         self.conv.file.clone_from(&self.name);
         r
+    }
+}
+
+impl Db3Reader {
+    /// At the end of the bag: every topic read must hold as many messages as the metadata's
+    /// `topics_with_message_count` says (fewer: a file was cut short or a part is missing; more:
+    /// the metadata is not this recording's). Topics not read (not configured) are not counted.
+    fn check_counts(&self) -> Result<(), LogError> {
+        for (topic, expected) in &self.expected {
+            let mut read = 0u64;
+            let mut configured = false;
+            for part in &self.parts {
+                for (id, (name, stream)) in &part.topics {
+                    if name == topic && *stream != Stream::Ignored {
+                        configured = true;
+                        read += part.counts.get(id).copied().unwrap_or(0);
+                    }
+                }
+            }
+            if configured && read != *expected {
+                return Err(LogError::input(
+                    &self.info_name,
+                    Location::File,
+                    format!(
+                        "topics_with_message_count: `{topic}` has message_count {expected}, the bag's files hold {read} of its messages ({})",
+                        if read < *expected {
+                            "a file was cut short or a part is missing: the bag is not the whole recording"
+                        } else {
+                            "the metadata does not describe these files"
+                        }
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
