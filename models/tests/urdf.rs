@@ -667,7 +667,8 @@ fn mesh_collision_without_capsules_is_refused_naming_the_links() {
 }
 
 /// A moving URDF link with mass and no collision geometry is refused, naming it and its mass;
-/// `frame = true` in the side file accepts it (and is refused on a link with collisions).
+/// `frame = true` in the side file accepts it only if its centre of mass lies in a capsule of
+/// another link on its joint (and is refused on a link with collisions).
 #[test]
 fn moving_link_with_mass_and_no_collision_is_refused_unless_a_frame() {
     let mut side = SideFile::parse(&read("fr3_side.toml")).unwrap();
@@ -693,14 +694,25 @@ fn moving_link_with_mass_and_no_collision_is_refused_unless_a_frame() {
             ..Default::default()
         },
     );
-    let r = load_urdf(&urdf, &side).unwrap();
-    let l4 = &r.links()[r.link_index("fr3_link4").unwrap()];
+    // The mark states the link has no body outside other links' capsules: a 2.6 kg link whose
+    // centre of mass lies outside every capsule of its joint cannot be marked away.
+    let m = load_urdf(&urdf, &side).unwrap_err().to_string();
     assert!(
-        l4.capsules.is_empty()
+        m.contains("(`fr3_link4`): `frame: true`")
+            && m.contains("centre of mass")
+            && m.contains("2.6155955791 kg")
+            && m.contains("outside every capsule"),
+        "{m}"
+    );
+    // The fingers' marks (in the side file) hold: their centres of mass lie in the hand's capsules.
+    let r = load_urdf(&urdf, &SideFile::parse(&read("fr3_side.toml")).unwrap()).unwrap();
+    let f = &r.links()[r.link_index("fr3_leftfinger").unwrap()];
+    assert!(
+        f.capsules.is_empty()
             && r.spec()
                 .links
                 .iter()
-                .any(|l| l.name == "fr3_link4" && l.frame)
+                .any(|l| l.name == "fr3_leftfinger" && l.frame)
     );
     // Without the fingers' `frame` marks they are refused too (mass, no collision geometry).
     let mut side = SideFile::parse(&read("fr3_side.toml")).unwrap();

@@ -422,7 +422,8 @@ fn astronomical_reach_is_refused_naming_the_field() {
 }
 
 /// A moving link with mass and no capsules can never be found touching anyone: refused, naming
-/// the link and its mass, unless marked `frame` (which then must have no capsules).
+/// the link and its mass, unless marked `frame` (which then must have no capsules, and its centre
+/// of mass must lie in a capsule of another link on its joint).
 #[test]
 fn moving_link_with_mass_and_no_capsules_is_refused_unless_a_frame() {
     for name in ["fr3_link4", "fr3_hand"] {
@@ -437,8 +438,46 @@ fn moving_link_with_mass_and_no_capsules_is_refused_unless_a_frame() {
             }
             other => panic!("{name}: {other:?}"),
         }
+        // Marked `frame`, it is refused all the same: its centre of mass lies outside every
+        // capsule of the other links on its joint (the mark's claim is false).
         s.links.iter_mut().find(|l| l.name == name).unwrap().frame = true;
-        assert!(RobotModel::new(s).is_ok(), "{name} marked as a frame");
+        let e = RobotModel::new(s.clone()).unwrap_err().to_string();
+        // (For the hand, the fingers' mark fails too: their mass lay in the hand's capsules.)
+        assert!(
+            e.contains("`frame: true`") && e.contains("outside every capsule"),
+            "{name}: {e}"
+        );
+        if name != "fr3_link4" {
+            continue;
+        }
+        // With its mass moved into a capsule of another link on the same joint, the mark holds.
+        let frame_of = |s: &pacs_models::RobotSpec, n: &str| {
+            s.links.iter().find(|l| l.name == n).unwrap().parent.clone()
+        };
+        let parent = frame_of(&s, name);
+        let host = s
+            .links
+            .iter()
+            .find(|l| l.name != name && l.parent == parent && !l.capsules.is_empty())
+            .map(|l| (l.origin.xyz, l.origin.rpy, l.capsules[0]));
+        let unrotated = |rpy: [f64; 3]| rpy == [0.0; 3];
+        if let Some((origin, rpy, c)) = host
+            && unrotated(rpy)
+            && unrotated(s.links.iter().find(|l| l.name == name).unwrap().origin.rpy)
+        {
+            // The host's first capsule end, in the joint frame (link origins here have no rotation).
+            let l = s.links.iter_mut().find(|l| l.name == name).unwrap();
+            let at = [
+                origin[0] + c.p1[0] - l.origin.xyz[0],
+                origin[1] + c.p1[1] - l.origin.xyz[1],
+                origin[2] + c.p1[2] - l.origin.xyz[2],
+            ];
+            l.inertial.as_mut().unwrap().com = at;
+            assert!(
+                RobotModel::new(s).is_ok(),
+                "{name} marked as a frame, mass inside"
+            );
+        }
     }
     // The built-in's fingers are marked (inside the hand's capsules); unmarked they are refused.
     let mut s = spec();
@@ -483,6 +522,15 @@ fn moving_link_with_mass_and_no_capsules_is_refused_unless_a_frame() {
         e.starts_with("robot `fr3`: moving links with mass and no capsules: `fr3_link4` (2.6155955791 kg) (no contact"),
         "{e}"
     );
+    // Marked, its mass still lies outside the other links' capsules: refused.
     v["links"][4]["frame"] = serde_json::json!(true);
-    assert!(RobotModel::from_json(&v.to_string()).is_ok());
+    let e = RobotModel::from_json(&v.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "links[4] (`fr3_link4`): `frame: true` states that the link has no body outside"
+        ),
+        "{e}"
+    );
 }

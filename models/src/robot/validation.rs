@@ -150,14 +150,50 @@ fn check_covered(spec: &RobotSpec, links: &[Link]) -> Result<(), ModelError> {
                 .map(|i| (l.name.clone(), i.mass))
         })
         .collect();
-    if uncovered.is_empty() {
-        Ok(())
-    } else {
-        Err(ModelError::UncoveredLinks {
+    if !uncovered.is_empty() {
+        return Err(ModelError::UncoveredLinks {
             robot: spec.name.clone(),
             links: uncovered,
-        })
+        });
     }
+    // A `frame` mark states that the link has no body outside other links' capsules; its mass
+    // must then at least sit inside one: the centre of mass within a capsule of another link on
+    // the same joint (a necessary condition, so a massive link cannot be marked away).
+    for (li, (l, s)) in links.iter().zip(&spec.links).enumerate() {
+        let Some(i) = l.inertial.filter(|i| i.mass > 0.0) else {
+            continue;
+        };
+        if !(s.frame && l.frame != 0) {
+            continue;
+        }
+        let inside = links
+            .iter()
+            .enumerate()
+            .filter(|(m, o)| *m != li && o.frame == l.frame)
+            .flat_map(|(_, o)| o.capsules.iter())
+            .any(|c| point_in_capsule(&i.com, c));
+        if !inside {
+            return Err(ModelError::Invalid(format!(
+                "links[{li}] (`{}`): `frame: true` states that the link has no body outside other links' capsules, but its centre of mass ({:.4}, {:.4}, {:.4}) m ({} kg) lies outside every capsule of the other links on its joint: give it capsules (`pacs robot capsules` fits them to meshes) instead of the mark",
+                l.name, i.com.x, i.com.y, i.com.z, i.mass
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `p` lies in the capsule `c` (distance to its axis at most the radius, with a relative
+/// allowance of 10⁻⁹ for rounding).
+fn point_in_capsule(p: &nalgebra::Point3<f64>, c: &crate::Capsule) -> bool {
+    let (a, b) = (c.p1(), c.p2());
+    let ab = b - a;
+    let l2 = ab.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).norm() <= c.radius() * (1.0 + 1e-9) + 1e-12
 }
 
 /// Refuse a model that reaches farther than [`MAX_REACH`] from the world origin (see there),
