@@ -12,6 +12,7 @@ use pacs_models::human::HumanModel;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_reach::stamped::Stamped;
 use pacs_shield::settings::ShieldSettings;
 use pacs_shield::shield::{
     BindingNames, ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError,
@@ -242,7 +243,7 @@ impl Inner {
         // ones anyway); later ones keep waiting. Moved out of the queues: no allocation here.
         let mut first: Option<HumanMeasurement> = None;
         for id in 0..self.humans {
-            let Some(i) = newest_due(&self.pending_humans, id, t, |m| m.time()) else {
+            let Some(i) = newest_due(&self.pending_humans, id, t) else {
                 continue;
             };
             let (_, m) = self.pending_humans.remove(i);
@@ -256,13 +257,13 @@ impl Inner {
         }
         self.pending_humans.retain(|(_, m)| m.time() > t);
         for k in 0..self.object_ids.len() {
-            let Some(i) = newest_due(&self.pending_objects, k, t, |m| m.time) else {
+            let Some(i) = newest_due(&self.pending_objects, k, t) else {
                 continue;
             };
             let (_, m) = self.pending_objects.remove(i);
             // The shield keeps the first of equal-time measurements and ignores older ones:
             // hand over only strictly newer ones (all were logged above).
-            if m.time <= self.object_latest[k] {
+            if !pacs_reach::stamp_supersedes(m.time, Some(self.object_latest[k])) {
                 continue;
             }
             self.object_latest[k] = m.time;
@@ -331,16 +332,11 @@ impl Inner {
 
 /// Index of the newest measurement of `id` in `queue` stamped at or before `t` (the first of
 /// equal time stamps).
-fn newest_due<M>(
-    queue: &[(usize, M)],
-    id: usize,
-    t: f64,
-    time: impl Fn(&M) -> f64,
-) -> Option<usize> {
+fn newest_due<M: Stamped>(queue: &[(usize, M)], id: usize, t: f64) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
     for (i, (j, m)) in queue.iter().enumerate() {
-        let tm = time(m);
-        if *j == id && tm <= t && best.is_none_or(|(_, tb)| tb < tm) {
+        let tm = m.t_meas();
+        if *j == id && tm <= t && pacs_reach::stamp_supersedes(tm, best.map(|(_, tb)| tb)) {
             best = Some((i, tm));
         }
     }

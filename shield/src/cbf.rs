@@ -149,9 +149,7 @@ impl CbfFilter {
                 "human {id}: no such human ({n} in the scene; person 0 is measured through step)"
             )));
         };
-        if latest.as_ref().is_none_or(|c| c.time() < m.time()) {
-            *latest = Some(m.clone());
-        }
+        pacs_reach::stamped::keep_newest(m, latest);
         Ok(())
     }
 
@@ -236,7 +234,7 @@ impl CbfFilter {
         let alpha = self.config.safety_step;
         if let Some(m) = measurement
             && m.time() <= t
-            && self.meas.as_ref().is_none_or(|c| c.time() < m.time())
+            && m.supersedes(self.meas.as_ref())
         {
             self.meas = Some(m.clone());
         }
