@@ -13,6 +13,7 @@ use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use pacs_reach::stamped::Stamped;
+use pacs_shield::ReplanPolicy;
 use pacs_shield::settings::ShieldSettings;
 use pacs_shield::shield::{
     BindingNames, ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError,
@@ -29,11 +30,8 @@ use std::time::{Duration, Instant};
 /// An error of the shield state, raised as `pacs.<kind>` once the GIL is held again.
 pub type Fail = (Kind, String);
 
-/// How often `set_chunk` plans a chunk again when the commands left the predicted path.
-const HANDOVER_ATTEMPTS: usize = 5;
-
-/// The longest handover lead (safety steps).
-const MAX_LEAD: usize = 200;
+/// How `set_chunk` plans a chunk again after a failed hand-over (attempts, lead).
+const REPLAN: ReplanPolicy = ReplanPolicy::DEFAULT;
 
 /// Measurements waiting for a step at or after their time stamp (per queue).
 const MAX_PENDING: usize = 4096;
@@ -468,7 +466,7 @@ impl Handle {
         };
         let mut lead = self.lead();
         let (mut late, mut moved, mut dropped) = (0, 0, 0);
-        for _ in 0..HANDOVER_ATTEMPTS {
+        for _ in 0..REPLAN.attempts {
             let ho = {
                 let mut g = lock()?;
                 if !g.started {
@@ -509,7 +507,7 @@ impl Handle {
                 Err(ShieldError::Stale { .. }) => {
                     // Planned too late: look further ahead.
                     late += 1;
-                    lead = (2 * lead).min(MAX_LEAD);
+                    lead = REPLAN.longer_lead(lead);
                     continue;
                 }
                 Err(e) => return Err((Kind::State, format!("set_chunk: {e}"))),
@@ -562,7 +560,8 @@ impl Handle {
         Err((
             Kind::Chunk,
             format!(
-                "set_chunk: not handed over in {HANDOVER_ATTEMPTS} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {dropped} times the chunk's first step was not verified, {late} times planning took longer than the lead; the robot keeps its verified motion"
+                "set_chunk: not handed over in {} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {dropped} times the chunk's first step was not verified, {late} times planning took longer than the lead; the robot keeps its verified motion",
+                REPLAN.attempts
             ),
         ))
     }
@@ -571,7 +570,7 @@ impl Handle {
     /// twice the recent longest planning time (decaying per chunk), plus one step (at least 2).
     fn lead(&self) -> usize {
         let plan_s = self.plan_us.load(Ordering::Relaxed) as f64 * 1e-6;
-        ((2.0 * plan_s / self.safety_step).ceil() as usize + 1).clamp(2, MAX_LEAD)
+        REPLAN.lead_for(plan_s, self.safety_step)
     }
 
     /// `measure` (see `Shield.measure`; `human` None: the first).

@@ -19,9 +19,11 @@
 pub mod bench;
 pub mod cbf;
 pub mod filter;
+pub mod replan;
 pub mod settings;
 pub mod shield;
 pub mod shield_log;
 pub mod worker;
 
 pub use filter::{ChunkMotion, FilterKind, SafetyFilter};
+pub use replan::ReplanPolicy;
