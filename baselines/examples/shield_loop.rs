@@ -6,7 +6,7 @@
 //! restricts the count to the step).
 
 use pacs_shield::ChunkMotion;
-use pacs_shield::bench::{shield_objects_scenario, shield_scenario_offloop, shield_scenario_with};
+use pacs_baselines::bench::{shield_objects_scenario, shield_scenario_offloop, shield_scenario_with};
 use pacs_shield::shield::FilterMode;
 
 fn main() {

@@ -15,7 +15,7 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::shield::{Binding, Command, Diagnostics, ShieldError};
+use pacs_shield::shield::{Binding, Command, Diagnostics, ShieldError};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,

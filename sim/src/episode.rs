@@ -15,7 +15,8 @@ use crate::task::ToolGoal;
 use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_shield::shield::ShieldError;
-use pacs_shield::{ChunkMotion, FilterKind};
+use pacs_baselines::FilterKind;
+use pacs_shield::ChunkMotion;
 use serde::{Deserialize, Serialize};
 
 /// Which safety filter runs.

@@ -3,7 +3,7 @@
 
 use super::CliError;
 use pacs_shield::ChunkMotion;
-use pacs_shield::bench::{
+use pacs_baselines::bench::{
     ChunkDelivery, StepStats, cbf_scenario, shield_objects_scenario_with, shield_scenario_delivered,
 };
 use pacs_shield::shield::FilterMode;
