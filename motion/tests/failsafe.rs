@@ -37,13 +37,3 @@ fn brakes_within_the_limits_and_never_later_than_following_to_the_end() {
     let last = brake_plan(&traj, &hw, end).unwrap();
     assert_eq!(last.stop_after(), 0.0);
 }
-
-#[test]
-fn from_mid_motion_braking_stops_before_the_end() {
-    let (hw, _) = limits();
-    let traj = trajectory();
-    let tb = 0.3 * traj.duration();
-    let plan = brake_plan(&traj, &hw, tb).unwrap();
-    assert!(plan.profile.is_some(), "the hardware limits leave margin to brake");
-    assert!(plan.stop_after() < traj.duration() - tb);
-}
