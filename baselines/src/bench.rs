@@ -4,14 +4,14 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use pacs_shield::ChunkMotion;
-use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
-use pacs_shield::worker::{ChunkWorker, WorkerState};
 use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::ChunkMotion;
+use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_shield::worker::{ChunkWorker, WorkerState};
 use std::time::Instant;
 
 /// How a scenario hands its chunks to the shield.

@@ -15,7 +15,6 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use pacs_shield::shield::{Binding, Command, Diagnostics, ShieldError};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
@@ -29,6 +28,7 @@ use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_closest_points};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::shield::{Binding, Command, Diagnostics, ShieldError};
 
 /// CBF settings.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -2,14 +2,14 @@
 //! [`SafetyFilter`], chosen by [`FilterKind`] — not a flag spread over several types.
 
 use crate::cbf::{CbfConfig, CbfFilter};
-use pacs_shield::ChunkMotion;
-use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_models::object::ObjectContact;
 use pacs_models::object::ObjectModel;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::Chunk;
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::ChunkMotion;
+use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use serde::{Deserialize, Serialize};
 
 /// What every online filter offers: start at rest, take chunks, one command per safety step.

@@ -351,9 +351,8 @@ impl Header {
         parsed: Result<Header, serde_json::Error>,
     ) -> Result<Header, crate::error::LogError> {
         use crate::error::LogError;
-        let mut header =
-            Self::validated(parsed.map_err(|e| HeaderError::Fields(e.to_string())))
-                .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        let mut header = Self::validated(parsed.map_err(|e| HeaderError::Fields(e.to_string())))
+            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
         header.robot.rebase(&dir_of(std::path::Path::new(file)));
         Ok(header)
     }

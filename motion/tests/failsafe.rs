@@ -24,7 +24,10 @@ fn brakes_within_the_limits_and_never_later_than_following_to_the_end() {
     for k in 0..=20 {
         let tb = end * k as f64 / 20.0;
         let plan = brake_plan(&traj, &hw, tb).expect("a trajectory ending at rest has a failsafe");
-        assert!(plan.delay >= 0.0 && plan.stop_after() <= end - tb + 1e-12, "t_b = {tb}");
+        assert!(
+            plan.delay >= 0.0 && plan.stop_after() <= end - tb + 1e-12,
+            "t_b = {tb}"
+        );
         if let Some(p) = plan.profile {
             // The profile starts on the intended timing at t_b + delay and settles at rest.
             let s0 = p.eval(0.0);

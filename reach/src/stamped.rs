@@ -71,7 +71,10 @@ mod tests {
         assert!(!stamp_supersedes(f64::NAN, Some(1.0)));
         assert!(!stamp_supersedes(1.0, Some(f64::NAN)));
         assert!(stamp_supersedes(f64::NAN, None));
-        assert!(!stamp_supersedes(f64::NEG_INFINITY, Some(f64::NEG_INFINITY)));
+        assert!(!stamp_supersedes(
+            f64::NEG_INFINITY,
+            Some(f64::NEG_INFINITY)
+        ));
     }
 
     #[test]

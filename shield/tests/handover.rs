@@ -642,4 +642,3 @@ fn chunks_of_tiny_moves_from_rest_plan() {
         assert!(traj.is_ok(), "case {i}: {:?}", traj.err());
     }
 }
-
