@@ -22,7 +22,7 @@ pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
 pub use error::AuditError;
-/// Log-form detection lives in `pacs-log` (re-exported for existing callers).
+/// Log-form detection, implemented in `pacs-log` (re-exported beside [`open_log`]).
 pub use pacs_log::{is_db3, is_mcap};
 pub use verdict::{
     Completeness, ConstraintKind, Evidence, InconclusiveReason, Metrics, RunResult, Verdict,
