@@ -119,7 +119,7 @@ enum BenchCommand {
         steps: usize,
         /// Safety steps between handing a chunk in and its handover (the planning thread's
         /// deadline: 1 ms each).
-        #[arg(long, default_value_t = pacs_shield::bench::BENCH_LEAD)]
+        #[arg(long, default_value_t = pacs_baselines::bench::BENCH_LEAD)]
         lead: usize,
         /// Plan every chunk inside the loop (`Shield::set_chunk`) instead of on the planning
         /// thread.
@@ -261,9 +261,9 @@ fn main() -> ExitCode {
         }) => {
             use std::io::IsTerminal;
             let delivery = if in_loop {
-                pacs_shield::bench::ChunkDelivery::InLoop
+                pacs_baselines::bench::ChunkDelivery::InLoop
             } else {
-                pacs_shield::bench::ChunkDelivery::Worker { lead }
+                pacs_baselines::bench::ChunkDelivery::Worker { lead }
             };
             cli::bench::shield(steps, delivery, std::io::stderr().is_terminal())
         }

@@ -22,6 +22,8 @@ pub mod verdict;
 
 pub use check::{AuditConfig, Auditor};
 pub use error::AuditError;
+/// Log-form detection, implemented in `pacs-log` (re-exported beside [`open_log`]).
+pub use pacs_log::{is_db3, is_mcap};
 pub use verdict::{
     Completeness, ConstraintKind, Evidence, InconclusiveReason, Metrics, RunResult, Verdict,
     Violation,
@@ -258,55 +260,6 @@ pub fn audit_file(path: &Path, cfg: &AuditConfig) -> Result<RunResult, LogError>
     audit_file_with_header(path, cfg, None)
 }
 
-/// Whether `path` is an MCAP file: its name ends in `.mcap` or it starts with the MCAP magic.
-pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
-    use std::io::Read;
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-    {
-        return Ok(true);
-    }
-    let name = path.display().to_string();
-    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
-        file: name.clone(),
-        source: e,
-    })?;
-    let mut prefix = Vec::with_capacity(8);
-    f.take(8)
-        .read_to_end(&mut prefix)
-        .map_err(|e| LogError::Io {
-            file: name,
-            source: e,
-        })?;
-    Ok(pacs_log::mcap::has_magic(&prefix))
-}
-
-/// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
-/// in `.db3` or one that starts with the SQLite magic.
-pub fn is_db3(path: &Path) -> Result<bool, LogError> {
-    use std::io::Read;
-    if pacs_log::db3::is_bag_dir(path)
-        || path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("db3"))
-    {
-        return Ok(true);
-    }
-    if path.is_dir() {
-        return Ok(false);
-    }
-    let name = path.display().to_string();
-    let io = |e| LogError::Io {
-        file: name.clone(),
-        source: e,
-    };
-    let f = std::fs::File::open(path).map_err(io)?;
-    let mut prefix = Vec::with_capacity(16);
-    f.take(16).read_to_end(&mut prefix).map_err(io)?;
-    Ok(pacs_log::db3::has_magic(&prefix))
-}
-
 /// [`audit_file`] with a pacs header given separately (`pacs audit --header`), which only MCAP
 /// logs and sqlite3 bags accept: for them it replaces the `pacs` metadata record (the bag's
 /// `custom_data` header); for other logs it is an error.
@@ -319,60 +272,13 @@ pub fn audit_file_with_header(
     audit_reader(reader.as_mut(), cfg)
 }
 
-/// Open a log for reading by its form (MCAP, sqlite3 bag, CSV, JSON Lines; see [`audit_file`]),
-/// with a separate header for MCAP logs and bags (`--header`; an error for other logs).
+/// Open a log for reading by its form with the audit's reader settings: [`pacs_log::open_log`]
+/// with `cfg`'s MCAP settings and model overrides (see [`audit_file`]); a separate header only
+/// for MCAP logs and bags (`--header`; an error for other logs).
 pub fn open_log(
     path: &Path,
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<Box<dyn RecordReader>, LogError> {
-    let name = path.display().to_string();
-    if path.is_dir() && !pacs_log::db3::is_bag_dir(path) {
-        return Err(LogError::input(
-            &name,
-            Location::File,
-            format!(
-                "a directory without {}: not a ROS 2 bag (give log files)",
-                pacs_log::db3::METADATA_FILE
-            ),
-        ));
-    }
-    if is_db3(path)? {
-        return Ok(Box::new(pacs_log::db3::Db3Reader::open(
-            path,
-            &cfg.mcap,
-            &cfg.overrides(),
-            header.cloned(),
-        )?));
-    }
-    let mcap_log = is_mcap(path)?;
-    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
-        file: name.clone(),
-        source: e,
-    })?;
-    let input = std::io::BufReader::with_capacity(1 << 16, f);
-    if mcap_log {
-        return Ok(Box::new(pacs_log::mcap::McapReader::new(
-            &name,
-            input,
-            &cfg.mcap,
-            &cfg.overrides(),
-            header.cloned(),
-        )?));
-    }
-    if header.is_some() {
-        return Err(LogError::input(
-            &name,
-            Location::File,
-            "a separate header (--header) applies to MCAP logs and ROS 2 bags only; this log carries its own",
-        ));
-    }
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
-    {
-        Ok(Box::new(pacs_log::csv::CsvReader::new(&name, input)?))
-    } else {
-        Ok(Box::new(pacs_log::jsonl::JsonlReader::new(&name, input)?))
-    }
+    pacs_log::open_log(path, &cfg.mcap, &cfg.overrides(), header)
 }

@@ -324,17 +324,34 @@ impl Header {
         Ok(())
     }
 
-    /// A header parsed by a reader (`parsed`), checked; errors name `file` and `loc`.
+    /// The one header validation every reader goes through: a header as parsed (`parsed`; a
+    /// parse error is [`HeaderError::Fields`]) is returned only if it passes [`Header::check`].
+    pub fn validated(parsed: Result<Header, HeaderError>) -> Result<Header, HeaderError> {
+        let header = parsed?;
+        header.check()?;
+        Ok(header)
+    }
+
+    /// A header from a parsed JSON value: it must have `"type": "header"`
+    /// ([`HeaderError::MissingType`]), then [`Header::validated`].
+    pub fn from_value(value: serde_json::Value) -> Result<Header, HeaderError> {
+        if value.get("type").and_then(|t| t.as_str()) != Some("header") {
+            return Err(HeaderError::MissingType);
+        }
+        Self::validated(
+            serde_json::from_value(value).map_err(|e| HeaderError::Fields(e.to_string())),
+        )
+    }
+
+    /// A header parsed by a reader (`parsed`), [`Header::validated`]; errors name `file` and
+    /// `loc`. A `{urdf, side}` robot's relative paths become relative to `file`'s directory.
     pub(crate) fn checked(
         file: &str,
         loc: crate::error::Location,
         parsed: Result<Header, serde_json::Error>,
     ) -> Result<Header, crate::error::LogError> {
         use crate::error::LogError;
-        let mut header =
-            parsed.map_err(|e| LogError::input(file, loc, format!("invalid header: {e}")))?;
-        header
-            .check()
+        let mut header = Self::validated(parsed.map_err(|e| HeaderError::Fields(e.to_string())))
             .map_err(|p| LogError::input(file, loc, p.to_string()))?;
         header.robot.rebase(&dir_of(std::path::Path::new(file)));
         Ok(header)

@@ -17,6 +17,7 @@ pub mod error;
 pub mod format;
 pub mod jsonl;
 pub mod mcap;
+pub mod open;
 pub mod order;
 mod ros;
 pub mod time;
@@ -26,4 +27,5 @@ pub use format::{
     END_EVENT, FORMAT, Header, LogModels, LogWriter, ModelOverrides, ModelRef, ObjectEntry,
     PersonEntry, Record, RecordReader, RobotRef, V1_PERSON, VERSION, VERSIONS, WriteError, dir_of,
 };
+pub use open::{is_db3, is_mcap, open_log};
 pub use order::{EqualTimeGroup, MAX_EQUAL_TIME};

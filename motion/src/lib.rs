@@ -8,6 +8,8 @@
 //!   baseline;
 //! - [`scaling`]: path-speed profiles from any path state (braking and resuming along the path) —
 //!   the one braking, run by the shield and by `pacs trajectory --brake-at`;
+//! - [`failsafe`]: the whole-trajectory failsafe of `pacs trajectory --brake-at` (the earliest
+//!   stop by that braking, [`failsafe::brake_plan`]);
 //! - [`profile`]: constant-jerk pieces, sound extrema and interval arithmetic;
 //! - [`anchors`]: the seeded FR3 chunk problem set of the trajectory anchors.
 //!
@@ -19,6 +21,7 @@
 pub mod anchors;
 pub mod chunk;
 pub mod error;
+pub mod failsafe;
 pub mod intended;
 pub mod profile;
 pub mod scaling;
@@ -27,6 +30,7 @@ pub mod trajectory;
 
 pub use chunk::{ActionKind, Chunk, OutOfLimits, Waypoints};
 pub use error::TrajectoryError;
+pub use failsafe::{BrakePlan, brake_plan};
 pub use intended::{PlanMethod, Planner, PlannerConfig};
 pub use profile::{LIMIT_REL_TOL, Piece, Range};
 pub use trajectory::{Bounds, EndCondition, JointState, Limits, Trajectory};

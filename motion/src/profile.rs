@@ -118,7 +118,15 @@ impl Piece {
     }
 }
 
-/// A closed interval [lo, hi]; `EMPTY` has lo = +∞, hi = −∞.
+/// A closed interval [lo, hi] that accumulates the padded extrema of constant-jerk pieces;
+/// `EMPTY` has lo = +∞, hi = −∞.
+///
+/// Guarantee: it only ever widens (`include_padded`, `union`), never narrows, and after
+/// [`Piece::extend_bounds`] / [`Piece::extend_deriv_bounds`] it contains the exact real value of
+/// the piece at every instant of the span (property test against `inari` in
+/// `motion/tests/range_inari.rs`). It is not [`pacs_reach::Interval`]: it must start empty and
+/// its ends are padded once per evaluation by the rounding bound of the module docs instead of
+/// being rounded outward per operation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Range {
     /// Lower end.
@@ -155,40 +163,5 @@ impl Range {
     #[inline]
     pub fn abs_max(&self) -> f64 {
         self.lo.abs().max(self.hi.abs())
-    }
-    /// Outward-rounded interval sum.
-    #[inline]
-    pub fn plus(self, o: Range) -> Range {
-        pad_out(Range {
-            lo: self.lo + o.lo,
-            hi: self.hi + o.hi,
-        })
-    }
-    /// Outward-rounded interval product.
-    #[inline]
-    pub fn times(self, o: Range) -> Range {
-        let p = [
-            self.lo * o.lo,
-            self.lo * o.hi,
-            self.hi * o.lo,
-            self.hi * o.hi,
-        ];
-        let lo = p[0].min(p[1]).min(p[2]).min(p[3]);
-        let hi = p[0].max(p[1]).max(p[2]).max(p[3]);
-        pad_out(Range { lo, hi })
-    }
-    /// Interval scaled by a constant (outward-rounded).
-    #[inline]
-    pub fn scale(self, c: f64) -> Range {
-        self.times(Range::point(c))
-    }
-}
-
-/// Widen an interval by one ulp-scale step on each side (covers one rounding of each end).
-#[inline]
-fn pad_out(r: Range) -> Range {
-    Range {
-        lo: r.lo - (r.lo.abs() * f64::EPSILON + f64::MIN_POSITIVE),
-        hi: r.hi + (r.hi.abs() * f64::EPSILON + f64::MIN_POSITIVE),
     }
 }

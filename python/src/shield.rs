@@ -12,6 +12,8 @@ use pacs_models::human::HumanModel;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_reach::stamped::Stamped;
+use pacs_shield::ReplanPolicy;
 use pacs_shield::settings::ShieldSettings;
 use pacs_shield::shield::{
     BindingNames, ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError,
@@ -28,11 +30,8 @@ use std::time::{Duration, Instant};
 /// An error of the shield state, raised as `pacs.<kind>` once the GIL is held again.
 pub type Fail = (Kind, String);
 
-/// How often `set_chunk` plans a chunk again when the commands left the predicted path.
-const HANDOVER_ATTEMPTS: usize = 5;
-
-/// The longest handover lead (safety steps).
-const MAX_LEAD: usize = 200;
+/// How `set_chunk` plans a chunk again after a failed hand-over (attempts, lead).
+const REPLAN: ReplanPolicy = ReplanPolicy::DEFAULT;
 
 /// Measurements waiting for a step at or after their time stamp (per queue).
 const MAX_PENDING: usize = 4096;
@@ -242,7 +241,7 @@ impl Inner {
         // ones anyway); later ones keep waiting. Moved out of the queues: no allocation here.
         let mut first: Option<HumanMeasurement> = None;
         for id in 0..self.humans {
-            let Some(i) = newest_due(&self.pending_humans, id, t, |m| m.time()) else {
+            let Some(i) = newest_due(&self.pending_humans, id, t) else {
                 continue;
             };
             let (_, m) = self.pending_humans.remove(i);
@@ -256,13 +255,13 @@ impl Inner {
         }
         self.pending_humans.retain(|(_, m)| m.time() > t);
         for k in 0..self.object_ids.len() {
-            let Some(i) = newest_due(&self.pending_objects, k, t, |m| m.time) else {
+            let Some(i) = newest_due(&self.pending_objects, k, t) else {
                 continue;
             };
             let (_, m) = self.pending_objects.remove(i);
             // The shield keeps the first of equal-time measurements and ignores older ones:
             // hand over only strictly newer ones (all were logged above).
-            if m.time <= self.object_latest[k] {
+            if !pacs_reach::stamp_supersedes(m.time, Some(self.object_latest[k])) {
                 continue;
             }
             self.object_latest[k] = m.time;
@@ -331,16 +330,11 @@ impl Inner {
 
 /// Index of the newest measurement of `id` in `queue` stamped at or before `t` (the first of
 /// equal time stamps).
-fn newest_due<M>(
-    queue: &[(usize, M)],
-    id: usize,
-    t: f64,
-    time: impl Fn(&M) -> f64,
-) -> Option<usize> {
+fn newest_due<M: Stamped>(queue: &[(usize, M)], id: usize, t: f64) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
     for (i, (j, m)) in queue.iter().enumerate() {
-        let tm = time(m);
-        if *j == id && tm <= t && best.is_none_or(|(_, tb)| tb < tm) {
+        let tm = m.t_meas();
+        if *j == id && tm <= t && pacs_reach::stamp_supersedes(tm, best.map(|(_, tb)| tb)) {
             best = Some((i, tm));
         }
     }
@@ -472,7 +466,7 @@ impl Handle {
         };
         let mut lead = self.lead();
         let (mut late, mut moved, mut dropped) = (0, 0, 0);
-        for _ in 0..HANDOVER_ATTEMPTS {
+        for _ in 0..REPLAN.attempts {
             let ho = {
                 let mut g = lock()?;
                 if !g.started {
@@ -513,7 +507,7 @@ impl Handle {
                 Err(ShieldError::Stale { .. }) => {
                     // Planned too late: look further ahead.
                     late += 1;
-                    lead = (2 * lead).min(MAX_LEAD);
+                    lead = REPLAN.longer_lead(lead);
                     continue;
                 }
                 Err(e) => return Err((Kind::State, format!("set_chunk: {e}"))),
@@ -566,7 +560,8 @@ impl Handle {
         Err((
             Kind::Chunk,
             format!(
-                "set_chunk: not handed over in {HANDOVER_ATTEMPTS} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {dropped} times the chunk's first step was not verified, {late} times planning took longer than the lead; the robot keeps its verified motion"
+                "set_chunk: not handed over in {} attempts: {moved} times the commands left the predicted path before the handover (steps not verified: a person near the robot?), {dropped} times the chunk's first step was not verified, {late} times planning took longer than the lead; the robot keeps its verified motion",
+                REPLAN.attempts
             ),
         ))
     }
@@ -575,7 +570,7 @@ impl Handle {
     /// twice the recent longest planning time (decaying per chunk), plus one step (at least 2).
     fn lead(&self) -> usize {
         let plan_s = self.plan_us.load(Ordering::Relaxed) as f64 * 1e-6;
-        ((2.0 * plan_s / self.safety_step).ceil() as usize + 1).clamp(2, MAX_LEAD)
+        REPLAN.lead_for(plan_s, self.safety_step)
     }
 
     /// `measure` (see `Shield.measure`; `human` None: the first).

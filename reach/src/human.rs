@@ -137,10 +137,9 @@ impl HumanMeasurement {
 
     /// Whether this measurement replaces `current` as the one in use: it is strictly newer (an
     /// older or equal-stamp one arriving later is ignored; the first of equal stamps stays).
-    /// The one rule of the shield and the audit (as `ObjectMeasurement::keep_newest` for
-    /// objects).
+    /// The one rule for every stamped measurement, [`crate::stamped::supersedes`].
     pub fn supersedes(&self, current: Option<&HumanMeasurement>) -> bool {
-        current.is_none_or(|c| c.time < self.time)
+        crate::stamped::supersedes(self, current)
     }
     /// Measured positions (m).
     pub fn positions(&self) -> &[Point3<f64>] {

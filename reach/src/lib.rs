@@ -23,8 +23,10 @@ pub mod lti;
 pub mod object;
 pub mod robot;
 pub mod rounding;
+pub mod stamped;
 pub mod zonotope;
 
 pub use error::ReachError;
 pub use interval::Interval;
 pub use joint_box::{JointBox, JointBoxError};
+pub use stamped::{Stamped, stamp_supersedes, supersedes};

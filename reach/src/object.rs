@@ -63,11 +63,10 @@ impl ObjectMeasurement {
     }
 
     /// Keep the newest of `latest` and `self`: `self` replaces it only if strictly newer (an
-    /// older or equal-time measurement arriving late is ignored).
+    /// older or equal-time measurement arriving late is ignored). The one rule for every stamped
+    /// measurement, [`crate::stamped::keep_newest`].
     pub fn keep_newest(self, latest: &mut Option<ObjectMeasurement>) {
-        if latest.is_none_or(|cur| cur.time < self.time) {
-            *latest = Some(self);
-        }
+        crate::stamped::keep_newest(&self, latest);
     }
 }
 

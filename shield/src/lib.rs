@@ -4,24 +4,26 @@
 //! - [`shield`]: the PACS shield (paper Algorithm 1; OFF and single-action by configuration):
 //!   every safety step a monitored trajectory (one intended step, then braking along the same
 //!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
-//! - [`cbf`]: the control-barrier-function baseline;
-//! - [`filter`]: PACS, OFF, single-action and CBF as kinds of one [`filter::SafetyFilter`];
+//! - [`chunk_motion`]: whether chunks end at rest or pass their last waypoint moving;
+//! - [`replan`]: the one re-plan policy for a chunk whose hand-over failed;
 //! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
-//! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop;
-//! - [`mod@bench`]: reproducible timing scenarios for `pacs bench`.
+//! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop.
+//!
+//! The baselines (CBF, the filter kinds behind one trait) and the bench scenarios are in
+//! `pacs-baselines`.
 //!
 //! Units: rad, rad/s, rad/s², rad/s³, s, m, J.
 
 // Joint loops index several fixed-size per-joint arrays at once; index loops read clearer.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bench;
-pub mod cbf;
-pub mod filter;
+pub mod chunk_motion;
+pub mod replan;
 pub mod settings;
 pub mod shield;
 pub mod shield_log;
 pub mod worker;
 
-pub use filter::{ChunkMotion, FilterKind, SafetyFilter};
+pub use chunk_motion::ChunkMotion;
+pub use replan::ReplanPolicy;

@@ -3,7 +3,7 @@
 //! place where user text becomes a [`ShieldConfig`] (the CLI's `pacs shield` and the Python
 //! package both call [`ShieldSettings::config`]).
 
-use crate::filter::ChunkMotion;
+use crate::chunk_motion::ChunkMotion;
 use crate::shield::{FilterMode, ShieldConfig, ShieldError};
 use pacs_motion::chunk::OutOfLimits;
 use serde::{Deserialize, Serialize};

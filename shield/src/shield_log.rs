@@ -55,7 +55,7 @@ impl<W: Write> ShieldLog<W> {
         cmd: &Command,
     ) -> Result<(), WriteError> {
         if let Some(m) = meas
-            && m.time() > self.last_meas
+            && pacs_reach::stamp_supersedes(m.time(), Some(self.last_meas))
         {
             self.human(t, m)?;
         }
@@ -115,8 +115,8 @@ impl<W: Write> ShieldLog<W> {
                 "a measurement of a human the log header does not declare",
             ));
         };
-        if index == 0 {
-            self.last_meas = self.last_meas.max(m.time());
+        if index == 0 && pacs_reach::stamp_supersedes(m.time(), Some(self.last_meas)) {
+            self.last_meas = m.time();
         }
         self.positions.clear();
         self.positions

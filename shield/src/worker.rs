@@ -32,6 +32,7 @@
 //! The loop's share of a chunk is `set_chunk` plus the `poll` that offers it; `pacs bench shield`
 //! measures both (`set_chunk_*_us` and the step figures, which include `poll`).
 
+use crate::replan::ReplanPolicy;
 use crate::shield::{Handover, OfferState, PreparedChunk, Shield, ShieldError};
 use pacs_motion::chunk::Chunk;
 use std::sync::mpsc::{
@@ -116,9 +117,6 @@ const QUEUE: usize = 4;
 
 /// How often the idle planning thread looks for work (adds at most this to a plan's latency).
 const POLL_INTERVAL: Duration = Duration::from_micros(200);
-
-/// Longest pause (safety steps) before planning a chunk again after offers went stale in a row.
-const MAX_BACKOFF: u64 = 63;
 
 impl ChunkWorker {
     /// Start the planning thread for `shield` (a copy of its planner and chunk settings), with
@@ -384,13 +382,13 @@ impl ChunkWorker {
         shield.likely_handover(self.lead)
     }
 
-    /// An offer went stale: plan the chunk again — at once the first time, then after
-    /// 1, 3, 7, … (at most [`MAX_BACKOFF`]) steps, so a loop whose steps keep alternating between
-    /// verified and not (an arm creeping past a person; neither prediction holds) does not plan
-    /// the chunk every few steps.
+    /// An offer went stale: plan the chunk again after [`ReplanPolicy::backoff`] steps (at once
+    /// the first time, then 1, 3, 7, … at most [`ReplanPolicy::max_backoff`]), so a loop whose
+    /// steps keep alternating between verified and not (an arm creeping past a person; neither
+    /// prediction holds) does not plan the chunk every few steps.
     fn again(&mut self, shield: &Shield) {
         self.stale_streak += 1;
-        let wait = ((1u64 << (self.stale_streak - 1).min(16)) - 1).min(MAX_BACKOFF);
+        let wait = ReplanPolicy::DEFAULT.backoff(self.stale_streak);
         self.state = WorkerState::Planning;
         self.in_flight = None;
         self.retry_at = Some(shield.time() + wait as f64 * shield.config().safety_step);

@@ -642,23 +642,3 @@ fn chunks_of_tiny_moves_from_rest_plan() {
         assert!(traj.is_ok(), "case {i}: {:?}", traj.err());
     }
 }
-
-/// The bench's planning-thread scenario exercises what it reports: every chunk is handed to the
-/// worker, planned on its thread and nearly every one followed (counts only; the times are
-/// measured by `pacs bench shield`).
-#[test]
-fn the_offloop_bench_scenario_offers_and_takes_over() {
-    use pacs_shield::shield::FilterMode;
-    let s = pacs_shield::bench::shield_scenario_offloop("sorting", FilterMode::Pacs, 3, 2000);
-    assert_eq!(s.steps, 2000);
-    assert_eq!(s.offers, 10, "a chunk every 200 steps");
-    // A chunk reversing the arm while it moves toward the walking person can fail its first
-    // step and be dropped, as with `set_chunk` (3 of 10 here); the rest are followed.
-    assert!(
-        s.offers_taken >= 6,
-        "{} of {} followed",
-        s.offers_taken,
-        s.offers
-    );
-    assert!(s.plan_max > 0.0 && s.chunk_max > 0.0);
-}

@@ -12,10 +12,11 @@ use crate::humans::HumanScript;
 use crate::objects::SimObject;
 use crate::policy::{DemoSet, Demonstration};
 use crate::task::ToolGoal;
+use pacs_baselines::FilterKind;
 use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
+use pacs_shield::ChunkMotion;
 use pacs_shield::shield::ShieldError;
-use pacs_shield::{ChunkMotion, FilterKind};
 use serde::{Deserialize, Serialize};
 
 /// Which safety filter runs.

@@ -2,10 +2,10 @@
 //! baseline on a fixed scenario.
 
 use super::CliError;
-use pacs_shield::ChunkMotion;
-use pacs_shield::bench::{
+use pacs_baselines::bench::{
     ChunkDelivery, StepStats, cbf_scenario, shield_objects_scenario_with, shield_scenario_delivered,
 };
+use pacs_shield::ChunkMotion;
 use pacs_shield::shield::FilterMode;
 use serde_json::{Value, json};
 

@@ -373,7 +373,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
                         shield
                             .measure_human(*p, m)
                             .map_err(|e| input(format!("human_measurements[{i}]: {e}")))?;
-                    } else if latest_human.is_none_or(|l| l.time() < m.time()) {
+                    } else if m.supersedes(latest_human) {
                         latest_human = Some(m);
                     }
                 }

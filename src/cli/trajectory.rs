@@ -2,9 +2,10 @@
 //! Contract: docs/trajectory.md.
 
 use super::{CliError, RobotRef, check_vec, read_json};
-use pacs_motion::scaling::{PathState, SpeedProfile, admissible};
+use pacs_motion::scaling::PathState;
 use pacs_motion::{
     Chunk, EndCondition, JointState, Limits, OutOfLimits, Planner, PlannerConfig, Trajectory,
+    brake_plan,
 };
 use serde::Deserialize;
 use serde_json::{Value, json};
@@ -217,55 +218,4 @@ pub fn run(path: &Path, brake_at: Option<f64>) -> Result<Value, CliError> {
         });
     }
     Ok(out)
-}
-
-/// The failsafe reported for `--brake-at t_b`: follow the intended timing for `delay` s, then the
-/// shield's path-speed braking (`profile`), or, with no profile, follow the intended trajectory
-/// to its end (where it is at rest).
-struct BrakePlan {
-    delay: f64,
-    profile: Option<SpeedProfile>,
-}
-
-impl BrakePlan {
-    fn stop_after(&self) -> f64 {
-        self.delay + self.profile.map_or(0.0, |p| p.settle_time())
-    }
-}
-
-/// The earliest-stopping failsafe from intended time `tb`: the shield's braking from `tb + δ`,
-/// δ over a growing grid (0, 1, 3, 7, 15, … ms) up to the trajectory's end (an instant where the
-/// intended motion leaves no acceleration margin admits no braking, and one with little margin
-/// only a slow one), or, for a trajectory that ends at rest, following it to its end.
-fn brake_plan(traj: &Trajectory, hw: &Limits, tb: f64) -> Option<BrakePlan> {
-    let end = traj.duration();
-    let mut best = (traj.end() == EndCondition::AtRest).then_some(BrakePlan {
-        delay: end - tb,
-        profile: None,
-    });
-    let (mut delay, mut step) = (0.0, 1e-3);
-    loop {
-        let s = (tb + delay).min(end);
-        if best.as_ref().is_some_and(|b| s - tb >= b.stop_after()) {
-            break;
-        }
-        if let Some(p) = admissible(traj, hw, PathState::intended(s), 0.0, None) {
-            let cand = BrakePlan {
-                delay: s - tb,
-                profile: Some(p),
-            };
-            if best
-                .as_ref()
-                .is_none_or(|b| cand.stop_after() < b.stop_after())
-            {
-                best = Some(cand);
-            }
-        }
-        if s >= end {
-            break;
-        }
-        delay += step;
-        step *= 2.0;
-    }
-    best
 }

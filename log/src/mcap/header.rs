@@ -15,15 +15,9 @@ pub fn parse_header_json(text: &str) -> Result<Header, HeaderError> {
     header_from_value(value)
 }
 
-/// A header from a parsed JSON value: must have `"type": "header"` and the v1 fields.
+/// A header from a parsed JSON value: [`Header::from_value`], the one header validation.
 pub fn header_from_value(value: serde_json::Value) -> Result<Header, HeaderError> {
-    if value.get("type").and_then(|t| t.as_str()) != Some("header") {
-        return Err(HeaderError::MissingType);
-    }
-    let header: Header =
-        serde_json::from_value(value).map_err(|e| HeaderError::Fields(e.to_string()))?;
-    header.check()?;
-    Ok(header)
+    Header::from_value(value)
 }
 
 /// Load a header side file (`pacs audit --header FILE`): JSON, or TOML when the name ends in

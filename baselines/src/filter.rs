@@ -2,15 +2,14 @@
 //! [`SafetyFilter`], chosen by [`FilterKind`] — not a flag spread over several types.
 
 use crate::cbf::{CbfConfig, CbfFilter};
-use crate::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_models::object::ObjectContact;
 use pacs_models::object::ObjectModel;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_motion::Chunk;
-use pacs_motion::intended::PlanMethod;
-use pacs_motion::trajectory::EndCondition;
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::ChunkMotion;
+use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use serde::{Deserialize, Serialize};
 
 /// What every online filter offers: start at rest, take chunks, one command per safety step.
@@ -126,37 +125,6 @@ impl SafetyFilter for CbfFilter {
     }
     fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
         CbfFilter::measure_human(self, id, m)
-    }
-}
-
-/// How chunk-following filters move from one chunk to the next.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ChunkMotion {
-    /// Every chunk is planned (per segment) to come to rest at its last executed waypoint; the
-    /// next chunk starts from wherever the robot is when it arrives.
-    #[default]
-    Stop,
-    /// Chunks are planned with the time-optimised spline and pass their last waypoint moving
-    /// toward the next chunk ([`EndCondition::Moving`], with a checked stopping tail in case no
-    /// next chunk comes); a control loop hands the next chunk over when
-    /// [`SafetyFilter::remaining`] drops to about one safety step.
-    Continuous,
-}
-
-impl ChunkMotion {
-    /// Apply to a shield configuration (chunk end and planner).
-    pub fn apply(self, cfg: &mut ShieldConfig) {
-        match self {
-            ChunkMotion::Stop => {
-                cfg.chunk_end = EndCondition::AtRest;
-                cfg.plan_method = PlanMethod::Segments;
-            }
-            ChunkMotion::Continuous => {
-                cfg.chunk_end = EndCondition::Moving;
-                cfg.plan_method = PlanMethod::Spline;
-            }
-        }
     }
 }
 

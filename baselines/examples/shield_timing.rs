@@ -1,7 +1,10 @@
 fn main() {
     for spec in ["sorting", "handover"] {
-        let s =
-            pacs_shield::bench::shield_scenario(spec, pacs_shield::shield::FilterMode::Pacs, 20000);
+        let s = pacs_baselines::bench::shield_scenario(
+            spec,
+            pacs_shield::shield::FilterMode::Pacs,
+            20000,
+        );
         println!(
             "{} median {:.1} us p90 {:.1} p99 {:.1} max {:.1} verified {:.3} chunk median {:.1} us max {:.1}",
             s.scenario,

@@ -15,7 +15,6 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::shield::{Binding, Command, Diagnostics, ShieldError};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
@@ -29,6 +28,7 @@ use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::geometry::{capsule_distance_lower_bound, segment_closest_points};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::shield::{Binding, Command, Diagnostics, ShieldError};
 
 /// CBF settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,9 +149,7 @@ impl CbfFilter {
                 "human {id}: no such human ({n} in the scene; person 0 is measured through step)"
             )));
         };
-        if latest.as_ref().is_none_or(|c| c.time() < m.time()) {
-            *latest = Some(m.clone());
-        }
+        pacs_reach::stamped::keep_newest(m, latest);
         Ok(())
     }
 
@@ -236,7 +234,7 @@ impl CbfFilter {
         let alpha = self.config.safety_step;
         if let Some(m) = measurement
             && m.time() <= t
-            && self.meas.as_ref().is_none_or(|c| c.time() < m.time())
+            && m.supersedes(self.meas.as_ref())
         {
             self.meas = Some(m.clone());
         }

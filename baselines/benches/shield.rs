@@ -2,11 +2,11 @@
 //! one CBF step. Run: `cargo bench -p pacs-shield --bench shield`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use pacs_baselines::bench::{back_and_forth, walking_human};
+use pacs_baselines::cbf::{CbfConfig, CbfFilter};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::Chunk;
 use pacs_reach::human::HumanMeasurement;
-use pacs_shield::bench::{back_and_forth, walking_human};
-use pacs_shield::cbf::{CbfConfig, CbfFilter};
 use pacs_shield::shield::{Shield, ShieldConfig};
 
 /// The measurement of the walking human at step `k` (built outside the timed routine).

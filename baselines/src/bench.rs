@@ -4,14 +4,14 @@
 // Joint-indexed loops over parallel fixed-size arrays read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::filter::ChunkMotion;
-use crate::shield::{FilterMode, Shield, ShieldConfig};
-use crate::worker::{ChunkWorker, WorkerState};
 use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
 use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::ChunkMotion;
+use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_shield::worker::{ChunkWorker, WorkerState};
 use std::time::Instant;
 
 /// How a scenario hands its chunks to the shield.
@@ -135,7 +135,7 @@ pub const RERUN_KEPT: usize = 32;
 struct StepNote {
     since_chunk: usize,
     verified: bool,
-    binding: crate::shield::Binding,
+    binding: pacs_shield::shield::Binding,
 }
 
 fn stats(
@@ -210,7 +210,7 @@ fn stats(
 
 fn note(
     since_chunk: usize,
-    cmd: Result<crate::shield::Command, crate::shield::ShieldError>,
+    cmd: Result<pacs_shield::shield::Command, pacs_shield::shield::ShieldError>,
 ) -> StepNote {
     match cmd {
         Ok(c) => StepNote {
@@ -221,7 +221,7 @@ fn note(
         Err(_) => StepNote {
             since_chunk,
             verified: false,
-            binding: crate::shield::Binding::NoProfile,
+            binding: pacs_shield::shield::Binding::NoProfile,
         },
     }
 }
@@ -626,7 +626,7 @@ mod tests {
             .map(|k| StepNote {
                 since_chunk: k % 200,
                 verified: k % 2 == 0,
-                binding: crate::shield::Binding::NoProfile,
+                binding: pacs_shield::shield::Binding::NoProfile,
             })
             .collect()
     }

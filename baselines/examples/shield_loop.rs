@@ -5,8 +5,10 @@
 //! (lead 3; the worker thread's instructions count too unless callgrind's `--toggle-collect`
 //! restricts the count to the step).
 
+use pacs_baselines::bench::{
+    shield_objects_scenario, shield_scenario_offloop, shield_scenario_with,
+};
 use pacs_shield::ChunkMotion;
-use pacs_shield::bench::{shield_objects_scenario, shield_scenario_offloop, shield_scenario_with};
 use pacs_shield::shield::FilterMode;
 
 fn main() {

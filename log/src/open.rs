@@ -1,0 +1,113 @@
+//! Opening a log by its form: MCAP, ROS 2 sqlite3 bag, CSV or JSON Lines, one reader behind
+//! [`RecordReader`].
+
+use crate::error::{Location, LogError};
+use crate::format::{Header, ModelOverrides, RecordReader};
+use crate::mcap::McapConfig;
+use std::io::Read;
+use std::path::Path;
+
+/// The first `n` bytes of `path` (fewer if the file is shorter); errors name the file.
+fn prefix(path: &Path, n: u64) -> Result<Vec<u8>, LogError> {
+    let io = |e| LogError::Io {
+        file: path.display().to_string(),
+        source: e,
+    };
+    let f = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::with_capacity(n as usize);
+    f.take(n).read_to_end(&mut bytes).map_err(io)?;
+    Ok(bytes)
+}
+
+/// Whether `path` is an MCAP file: its name ends in `.mcap` (without opening it) or it starts
+/// with the MCAP magic. Errors: the file cannot be opened or read.
+pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        return Ok(true);
+    }
+    Ok(crate::mcap::has_magic(&prefix(path, 8)?))
+}
+
+/// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
+/// in `.db3`, or a file that starts with the SQLite magic (another directory is not). Errors: the
+/// file cannot be opened or read.
+pub fn is_db3(path: &Path) -> Result<bool, LogError> {
+    if crate::db3::is_bag_dir(path)
+        || path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("db3"))
+    {
+        return Ok(true);
+    }
+    if path.is_dir() {
+        return Ok(false);
+    }
+    Ok(crate::db3::has_magic(&prefix(path, 16)?))
+}
+
+/// Open a log for reading by its form: a ROS 2 sqlite3 bag ([`is_db3`]), MCAP ([`is_mcap`]),
+/// CSV if the name ends in `.csv`, JSON Lines otherwise. `mcap` and `overrides` configure the
+/// ROS readers; `header` is a separate pacs header (`--header`), which only MCAP logs and bags
+/// accept (for them it replaces the recorded one; for other logs it is an error).
+///
+/// Guarantee: the one reader selection of every caller (audit, CLI, Python); the path as given
+/// names the log in every error. A directory that is not a bag is refused.
+pub fn open_log(
+    path: &Path,
+    mcap: &McapConfig,
+    overrides: &ModelOverrides,
+    header: Option<&Header>,
+) -> Result<Box<dyn RecordReader>, LogError> {
+    let name = path.display().to_string();
+    if path.is_dir() && !crate::db3::is_bag_dir(path) {
+        return Err(LogError::input(
+            &name,
+            Location::File,
+            format!(
+                "a directory without {}: not a ROS 2 bag (give log files)",
+                crate::db3::METADATA_FILE
+            ),
+        ));
+    }
+    if is_db3(path)? {
+        return Ok(Box::new(crate::db3::Db3Reader::open(
+            path,
+            mcap,
+            overrides,
+            header.cloned(),
+        )?));
+    }
+    let mcap_log = is_mcap(path)?;
+    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
+        file: name.clone(),
+        source: e,
+    })?;
+    let input = std::io::BufReader::with_capacity(1 << 16, f);
+    if mcap_log {
+        return Ok(Box::new(crate::mcap::McapReader::new(
+            &name,
+            input,
+            mcap,
+            overrides,
+            header.cloned(),
+        )?));
+    }
+    if header.is_some() {
+        return Err(LogError::input(
+            &name,
+            Location::File,
+            "a separate header (--header) applies to MCAP logs and ROS 2 bags only; this log carries its own",
+        ));
+    }
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        Ok(Box::new(crate::csv::CsvReader::new(&name, input)?))
+    } else {
+        Ok(Box::new(crate::jsonl::JsonlReader::new(&name, input)?))
+    }
+}
