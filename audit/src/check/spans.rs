@@ -484,10 +484,10 @@ impl Auditor {
                     pfl: None,
                 }
             }
-            None => self.apply_rule(&bx, true),
+            None => self.apply_rule(bx, true),
         };
         self.record_separation(bidx, out.separation, false);
-        self.apply_object_rule(&bx);
+        self.apply_object_rule(bx);
         if let Some((e, thr)) = out.pfl {
             let b = &mut self.series.buckets[bidx];
             b.energy_bound = max_opt(b.energy_bound, Some(reportable(e)));
