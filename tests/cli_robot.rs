@@ -374,7 +374,8 @@ fn urdf_robots_in_headers_configs_and_inputs_resolve_against_their_file() {
 }
 
 /// An inline robot (as in an input file or a log header) whose moving link has mass and no
-/// capsules is refused with exit 3, naming the link; marked `"frame": true` it is accepted.
+/// capsules is refused with exit 3, naming the link; marked `"frame": true` too (its centre of mass
+/// lies outside the other links' capsules); without mass it is accepted.
 #[test]
 fn an_inline_robot_with_an_uncovered_moving_link_is_refused() {
     let mut spec = ok_json(pacs(&["robot", "show", "fr3"]));
@@ -405,6 +406,19 @@ fn an_inline_robot_with_an_uncovered_moving_link_is_refused() {
     let links = spec["links"].as_array_mut().unwrap();
     let l4 = links.iter_mut().find(|l| l["name"] == "fr3_link4").unwrap();
     l4["frame"] = serde_json::json!(true);
+    write(&spec);
+    // Marked, its mass still lies outside every capsule of its joint: refused all the same.
+    let o = pacs(&["fk", "--input", input.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(3));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("(`fr3_link4`): `frame: true` states that the link has no body outside"),
+        "{stderr}"
+    );
+    // A massless frame (a tool point) is accepted.
+    let links = spec["links"].as_array_mut().unwrap();
+    let l4 = links.iter_mut().find(|l| l["name"] == "fr3_link4").unwrap();
+    l4.as_object_mut().unwrap().remove("inertial");
     write(&spec);
     ok_json(pacs(&["fk", "--input", input.to_str().unwrap()]));
     std::fs::remove_dir_all(&dir).ok();

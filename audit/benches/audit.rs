@@ -90,6 +90,42 @@ fn jsonl(s: &[Sample], x: f64, task: &str) -> Vec<u8> {
     w.finish().unwrap()
 }
 
+/// The same run as an MCAP file of a ROS 2 recording (`JointState` at 1 kHz, `PoseArray` at
+/// 30 Hz, CDR, the writer's default chunking and compression).
+fn mcap_log(s: &[Sample], x: f64, task: &str) -> Vec<u8> {
+    use pacs_log::mcap::{McapConfig, McapLogWriter};
+    let h = Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name(task.into()),
+    );
+    let names: Vec<String> = RobotModel::builtin("fr3")
+        .unwrap()
+        .joints()
+        .iter()
+        .map(|j| j.name.clone())
+        .collect();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut w = McapLogWriter::new(
+        std::io::Cursor::new(Vec::new()),
+        mcap::WriteOptions::default(),
+        &h,
+        &McapConfig::default(),
+        &names,
+    )
+    .unwrap();
+    let kp = standing(x);
+    let base: i128 = 1_700_000_000_000_000_000;
+    for (i, s) in s.iter().enumerate() {
+        let ns = base + (s.t * 1e9).round() as i128;
+        if i % 33 == 0 {
+            w.write_human(ns, ns, &kp).unwrap();
+        }
+        w.write_robot(ns, ns, &s.q, Some(&s.dq)).unwrap();
+    }
+    w.finish().unwrap().into_inner()
+}
+
 fn bench(c: &mut Criterion) {
     let s = samples();
     let mut g = c.benchmark_group("audit");
@@ -116,6 +152,22 @@ fn bench(c: &mut Criterion) {
                 pacs_log::jsonl::JsonlReader::new("bench", std::io::Cursor::new(&bytes[..]))
                     .unwrap();
             black_box(pacs_audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
+        })
+    });
+    let bytes = mcap_log(&s, 0.6, "handover");
+    eprintln!("mcap: {} bytes for {N} robot samples", bytes.len());
+    let cfg = AuditConfig::default();
+    g.bench_function("mcap_read_and_check_near_handover", |b| {
+        b.iter(|| {
+            let mut r = pacs_log::mcap::McapReader::new(
+                "bench",
+                std::io::Cursor::new(&bytes[..]),
+                &cfg.mcap,
+                &cfg.overrides(),
+                None,
+            )
+            .unwrap();
+            black_box(pacs_audit::audit_reader(&mut r, &cfg).unwrap())
         })
     });
     g.finish();

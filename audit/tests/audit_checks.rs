@@ -446,3 +446,60 @@ fn human_record_after_the_last_robot_sample_is_never_pass() {
         Verdict::Pass
     );
 }
+
+/// The plot series tells the coarse far-range figure from the robot's occupancy: with the person
+/// beyond the workspace ball, every bucket has `far_separation` (positive, and a lower bound of
+/// the true distance at each sample), no `min_separation`; with the person within reach, buckets
+/// have `min_separation` (a lower bound too) and no `far_separation`.
+#[test]
+fn far_and_near_separation_figures_are_drawn_apart() {
+    let robot = fr3();
+    let h = human();
+    for (x, far) in [(3.0, true), (0.9, false)] {
+        let kp = standing(x, 0.0);
+        let mut log = Log::new(ssm());
+        // The true distance at each sample (s, m).
+        let mut truth: Vec<(f64, f64)> = Vec::new();
+        for k in 0..=300 {
+            let t = k as f64 * 1e-3;
+            if k % 30 == 0 {
+                log.human(t, &kp);
+            }
+            let q = q_at(0.2 * t);
+            truth.push((t, min_gap(&robot, &q, &h, &kp)));
+            log.robot(t, &q, None);
+        }
+        let r = run(&log.text(), &AuditConfig::default()).unwrap();
+        let checked: Vec<_> = r.series.iter().filter(|p| !p.inconclusive).collect();
+        assert!(checked.len() > 10, "x = {x}: {} buckets", checked.len());
+        for p in checked {
+            let (fig, other) = if far {
+                (p.far_separation, p.min_separation)
+            } else {
+                (p.min_separation, p.far_separation)
+            };
+            let f = fig.unwrap_or_else(|| panic!("x = {x}: bucket at {} without its figure", p.t));
+            assert!(other.is_none(), "x = {x}: both figures at {}", p.t);
+            // A lower bound over the bucket's spans: at most the true distance at its samples.
+            let here = truth
+                .iter()
+                .filter(|(t, _)| *t >= p.t && *t <= p.t_end)
+                .map(|(_, d)| *d)
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                f <= here,
+                "x = {x}: {f} m above the true {here} m at {}",
+                p.t
+            );
+            if far {
+                assert!(f > 0.0, "x = {x}: far figure {f}");
+            }
+        }
+        let m = r.metrics.min_separation.unwrap();
+        let least = truth.iter().map(|(_, d)| *d).fold(f64::INFINITY, f64::min);
+        assert!(
+            m <= least,
+            "x = {x}: run minimum {m} above the true {least}"
+        );
+    }
+}

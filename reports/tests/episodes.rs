@@ -418,3 +418,42 @@ fn every_document_states_the_evidence() {
     assert_eq!(j["runs"][0]["evidence"]["completeness"], "incomplete");
     assert_eq!(j["runs"][0]["people"][1], "visitor");
 }
+
+/// A PFL episode's figures merge over its intervals: the largest energy bound, the smallest
+/// threshold, clamped if any interval was, certain if any was — whichever interval they come from.
+#[test]
+fn a_pfl_episode_keeps_its_worst_figures() {
+    let pfl = |t: f64, energy: f64, threshold: f64, constrained: bool, sep: f64| Violation {
+        energy,
+        threshold,
+        constrained,
+        ..viol(t, t + 0.01, ConstraintKind::Pfl, "chest", "link5", sep)
+    };
+    let e = episodes(&[
+        pfl(1.00, 3.0, 2.0, false, 0.01),
+        pfl(1.02, 5.0, 2.0, false, 0.02),
+        pfl(1.04, 4.0, 1.0, true, -0.001),
+        pfl(1.06, 2.5, 2.0, false, 0.03),
+    ]);
+    assert_eq!(e.len(), 1);
+    let ep = &e[0];
+    assert_eq!(ep.intervals, 4);
+    assert_eq!(ep.worst_energy_j, 5.0);
+    assert_eq!(ep.threshold_j, 1.0);
+    assert!(ep.clamped && ep.certain);
+    assert_eq!(ep.worst_separation_m, -0.001);
+    // The same intervals in another order merge to the same figures.
+    let mut shuffled = vec![
+        pfl(1.06, 2.5, 2.0, false, 0.03),
+        pfl(1.04, 4.0, 1.0, true, -0.001),
+        pfl(1.00, 3.0, 2.0, false, 0.01),
+        pfl(1.02, 5.0, 2.0, false, 0.02),
+    ];
+    let again = episodes(&shuffled);
+    assert_eq!(again, e);
+    // Without the clamped interval: not clamped, the free threshold, not certain.
+    shuffled.remove(1);
+    let free = &episodes(&shuffled)[0];
+    assert!(!free.clamped && !free.certain);
+    assert_eq!((free.worst_energy_j, free.threshold_j), (5.0, 2.0));
+}
