@@ -331,6 +331,13 @@ pub fn fast_path_agrees(line: &str) -> bool {
     ok && format!("{fast:?}") == format!("{slow:?}")
 }
 
+/// The fast scanner's value of the JSON number `text` (`None` if it does not take it). For
+/// tests.
+#[doc(hidden)]
+pub fn fast_path_value(text: &str) -> Option<f64> {
+    fast::number(text)
+}
+
 /// Whether the fast scanner takes `line` (for tests: the cases must reach it).
 #[doc(hidden)]
 pub fn fast_path_takes(line: &str) -> bool {

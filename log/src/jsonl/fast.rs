@@ -290,3 +290,14 @@ fn scan(sc: &mut Scanner<'_>, b: &mut LineBuffers) -> Result<(), Bail> {
         Err(Bail)
     }
 }
+
+/// The value of `text` if it is exactly one JSON number the scanner takes.
+pub(super) fn number(text: &str) -> Option<f64> {
+    let mut sc = Scanner {
+        s: text.as_bytes(),
+        text,
+        i: 0,
+    };
+    let x = sc.num().ok()?;
+    (sc.i == text.len()).then_some(x)
+}
