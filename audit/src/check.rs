@@ -151,6 +151,8 @@ pub struct Auditor {
     /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of
     /// each record against them (records may arrive out of order).
     human_history: std::collections::VecDeque<HumanMeasurement>,
+    /// The bounding box of each kept measurement's keypoints (same order as `human_history`).
+    human_boxes: std::collections::VecDeque<KeypointBox>,
     span_human: Option<usize>,
     span_index: u64,
     open: Vec<Option<OpenInterval>>,
@@ -318,6 +320,7 @@ impl Auditor {
             latest_human: None,
             model_breaks: Vec::new(),
             human_history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
+            human_boxes: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span_human: None,
             span_index: 0,
             open: vec![None; slots * links],
@@ -438,8 +441,18 @@ impl Auditor {
     /// refutes. `m` is then kept.
     fn check_human_model(&mut self, m: &HumanMeasurement) {
         let mut nearest = Nearest::new(m.time());
-        for h in &self.human_history {
-            if human_pair_breaks(&self.human, h, m) {
+        let mbox = KeypointBox::of(m);
+        let v_min = self
+            .human
+            .v_max()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let e2 = 2.0 * self.human.measurement_error_pos();
+        for (h, hbox) in self.human_history.iter().zip(&self.human_boxes) {
+            if !pair_within_boxes(v_min, e2, h, m, hbox, &mbox)
+                && human_pair_breaks(&self.human, h, m)
+            {
                 nearest.add(h.time());
             }
         }
@@ -451,10 +464,13 @@ impl Auditor {
         let at = self.human_history.partition_point(|h| h.time() <= m.time());
         if self.human_history.len() < HUMAN_HISTORY {
             self.human_history.insert(at, m.clone());
+            self.human_boxes.insert(at, mbox);
         } else if at > 0 {
             let mut slot = self.human_history.pop_front().expect("the history is full");
             slot.assign_from(m);
             self.human_history.insert(at - 1, slot);
+            self.human_boxes.pop_front();
+            self.human_boxes.insert(at - 1, mbox);
         }
     }
 
@@ -723,8 +739,9 @@ impl Nearest {
 /// (only one within an ulp is flagged too).
 fn human_pair_breaks(model: &HumanModel, a: &HumanMeasurement, b: &HumanMeasurement) -> bool {
     let (lo, hi) = order(a.time(), b.time());
-    let dt = sub_down(hi, lo).max(0.0);
-    let e2 = mul_down(2.0, model.measurement_error_pos());
+    // Plain floats for the fast accept below; outward-rounded bounds only where it does not
+    // decide.
+    let (dt_plain, e2_plain) = ((hi - lo).max(0.0), 2.0 * model.measurement_error_pos());
     a.positions()
         .iter()
         .zip(b.positions())
@@ -736,20 +753,74 @@ fn human_pair_breaks(model: &HumanModel, a: &HumanMeasurement, b: &HumanMeasurem
             if p == q {
                 return false;
             }
-            let allowed = add_down(mul_down(*v, dt), e2);
-            // Fast accept in plain floats: the squared distance carries a relative rounding
-            // error of a few ε and the squared allowance (a lower bound already) one ε, far
-            // inside the 1e-9 margin, so a pair accepted here is within the allowance exactly.
-            // Only where neither overflows (d² finite) nor underflows (allowance ≥ 1e-150, so
-            // its square is normal and an underflowed d² is far below it); everything else is
-            // decided by the outward-rounded distance.
+            // Fast accept in plain floats: the squared distance and the squared allowance (three
+            // rounded operations from exact values) each carry a relative rounding error of a few
+            // ε, far inside the 1e-9 margin, so a pair accepted here is within the allowance
+            // exactly. Only where neither overflows (d² finite) nor underflows (allowance ≥
+            // 1e-150, so its square is normal and an underflowed d² is far below it); everything
+            // else is decided by the outward-rounded distance and allowance.
+            let plain = v * dt_plain + e2_plain;
             let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
             let d2 = dx * dx + dy * dy + dz * dz;
-            if allowed >= 1e-150 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9) {
+            if plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9) {
                 return false;
             }
+            let dt = sub_down(hi, lo).max(0.0);
+            let allowed = add_down(
+                mul_down(*v, dt),
+                mul_down(2.0, model.measurement_error_pos()),
+            );
             dist3_up(&[p.x, p.y, p.z], &[q.x, q.y, q.z]) > allowed
         })
+}
+
+/// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
+/// x, max y, max z]`.
+#[derive(Debug, Clone, Copy)]
+struct KeypointBox([f64; 6]);
+
+impl KeypointBox {
+    fn of(m: &HumanMeasurement) -> Self {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in m.positions() {
+            for (k, x) in [p.x, p.y, p.z].into_iter().enumerate() {
+                b[k] = b[k].min(x);
+                b[k + 3] = b[k + 3].max(x);
+            }
+        }
+        Self(b)
+    }
+}
+
+/// A quick accept for [`human_pair_breaks`]: true only if no keypoint of `a` and `b` moved more
+/// than the least allowance of any keypoint (`v_min · |Δt| + e2`, `v_min` the least of the
+/// model's `v_max`, `e2` twice its position error), shown by the diagonal of the box holding both
+/// measurements' keypoints, which bounds every keypoint's displacement. In plain floats, with the
+/// margin and the range conditions of the fast accept in [`human_pair_breaks`] (relative rounding
+/// errors of a few ε, far inside 1e-9). False says nothing; the caller then applies
+/// [`human_pair_breaks`]. Property test `the_box_accept_of_a_human_pair_is_sound`.
+fn pair_within_boxes(
+    v_min: f64,
+    e2: f64,
+    a: &HumanMeasurement,
+    b: &HumanMeasurement,
+    ba: &KeypointBox,
+    bb: &KeypointBox,
+) -> bool {
+    let allowed = v_min * (a.time() - b.time()).abs() + e2;
+    let mut d2 = 0.0;
+    for k in 0..3 {
+        let e = ba.0[k + 3].max(bb.0[k + 3]) - ba.0[k].min(bb.0[k]);
+        d2 += e * e;
+    }
+    allowed >= 1e-150 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
 }
 
 /// A Euclidean norm rounded down (`pacs_reach::rounding::norm3_down`, harness a3).
@@ -841,6 +912,70 @@ mod tests {
             x ^= x << 17;
             (x >> 11) as f64 / (1u64 << 53) as f64
         }
+    }
+
+    /// The box accept never hides a contradiction: wherever `pair_within_boxes` accepts a pair,
+    /// `human_pair_breaks` (the reference) finds none; and it accepts most pairs far apart in
+    /// time (what it is for). 20 000 random pairs of the default model's keypoints, moved up to
+    /// 2× the allowance, at time differences from 0 to 2 s.
+    #[test]
+    fn the_box_accept_of_a_human_pair_is_sound() {
+        let model = HumanModel::builtin("default").unwrap();
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15u64);
+        let (mut accepted, mut far, mut far_accepted) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let dt = 2.0 * next() * next();
+            let size = 2.0 * next();
+            let base: Vec<[f64; 3]> = (0..9)
+                .map(|_| [next() * size, next() * size, 1.0 + next() * size])
+                .collect();
+            let reach = 2.0 * (2.0 * dt + 2.0 * model.measurement_error_pos()) * next();
+            let moved: Vec<[f64; 3]> = base
+                .iter()
+                .map(|p| {
+                    let d = [next() - 0.5, next() - 0.5, next() - 0.5];
+                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
+                    let len = reach * next();
+                    [
+                        p[0] + d[0] / n * len,
+                        p[1] + d[1] / n * len,
+                        p[2] + d[2] / n * len,
+                    ]
+                })
+                .collect();
+            let (Ok(a), Ok(b)) = (
+                HumanMeasurement::new(&model, 0.0, &base, None),
+                HumanMeasurement::new(&model, dt, &moved, None),
+            ) else {
+                continue;
+            };
+            let v_min = model.v_max().iter().copied().fold(f64::INFINITY, f64::min);
+            let e2 = 2.0 * model.measurement_error_pos();
+            let quick = pair_within_boxes(
+                v_min,
+                e2,
+                &a,
+                &b,
+                &KeypointBox::of(&a),
+                &KeypointBox::of(&b),
+            );
+            if quick {
+                accepted += 1;
+                assert!(
+                    !human_pair_breaks(&model, &a, &b),
+                    "dt {dt}, size {size}: accepted a contradicting pair"
+                );
+            }
+            // Far apart in time, a person of up to 0.5 m moved by at most a quarter of the
+            // allowance: the box diagonal is within it, so the box accepts.
+            let allowance = 2.0 * dt + 2.0 * model.measurement_error_pos();
+            if dt > 1.0 && size < 0.5 && reach < 0.25 * allowance {
+                far += 1;
+                far_accepted += quick as usize;
+            }
+        }
+        assert!(accepted > 1_000, "{accepted}");
+        assert!(far > 50 && far_accepted == far, "{far_accepted} of {far}");
     }
 
     /// The fast accept in `human_pair_breaks` is sound: a pair it accepts is within the
