@@ -1,4 +1,4 @@
-//! Issue 11: logged values that other logged values contradict are never trusted, the PFL energy
+//! Logged values that other logged values contradict are never trusted, the PFL energy
 //! is the whole robot's, pinches between adjacent links count, trailing human records count.
 //! Each case here passed (exit 0) before the fix.
 
@@ -261,7 +261,7 @@ fn a_human_faster_than_the_model_is_inconclusive_not_a_pass() {
     assert_eq!(reasons(&fast), ["human_exceeds_model"]);
     // From the record before the spike to the last one the spike contradicts: every record up
     // to 0.2 s is within 0.2 m of the others and 1.5 m from the spike (each is checked against
-    // every kept record; before session 24 only against the one logged before it: 0.09–0.11).
+    // every kept record, not only against the one logged before it, which would give 0.09–0.11).
     let span = &fast.inconclusive[0];
     assert_eq!((span.t_start, span.t_end), (0.09, 0.2));
     let slow = log(0.015);

@@ -141,7 +141,7 @@ fn bad_csv_input_is_rejected_with_its_line() {
     assert!(e.to_string().contains("missing header"));
 }
 
-/// Object rows (issue 14): `object,t,t_meas,id,x,y,z[,vx,vy,vz]`. A ball resting on the flange
+/// Object rows: `object,t,t_meas,id,x,y,z[,vx,vy,vz]`. A ball resting on the flange
 /// under `no_contact` fails; malformed rows name the problem and the line.
 #[test]
 fn object_rows_are_audited() {

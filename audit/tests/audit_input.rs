@@ -125,7 +125,7 @@ fn missing_or_bad_header() {
     expect_error(&lines(&[HEADER, HUMAN, HEADER]), Some(3), "second header");
 }
 
-/// Issue 17 item 3: an inline model with a missing or unknown field names that field, never
+/// An inline model with a missing or unknown field names that field, never
 /// "did not match any variant of untagged enum".
 #[test]
 fn inline_models_name_their_missing_or_unknown_field() {
@@ -223,7 +223,7 @@ fn writer_rejects_what_the_reader_would_reject() {
     );
 }
 
-/// Dynamic objects (issue 14): the log format carries them (header `objects`, `object` records,
+/// Dynamic objects: the log format carries them (header `objects`, `object` records,
 /// written by `LogWriter::write_object` and read back); an object record without a declared
 /// object is an error; a malformed one names its field.
 #[test]

@@ -857,7 +857,7 @@ fn fuzz_regression_huge_string_length_in_a_metadata_record() {
     assert!(e.to_string().starts_with("oom.mcap: "), "{e}");
 }
 
-/// Dynamic objects from MCAP (issue 14): an object's positions on its configured topic
+/// Dynamic objects from MCAP: an object's positions on its configured topic
 /// (`mcap.object_topics`, `geometry_msgs/msg/PoseStamped` here) are audited like JSON Lines
 /// `object` records: a ball on the flange fails `no_contact`; read without the topic mapping the
 /// object is never measured and the log is inconclusive (`no_object`), never a pass.

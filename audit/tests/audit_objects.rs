@@ -1,4 +1,4 @@
-//! Dynamic objects in the audit (issue 14): a log declares objects in its header and logs their
+//! Dynamic objects in the audit: a log declares objects in its header and logs their
 //! measurements as `object` records; every span is checked against each object with the object
 //! form of the one rule. A ball far away passes; a ball on the flange fails under `no_contact`
 //! (at rest too) and under `ssm` only while the arm moves; a declared but unmeasured object, or a
@@ -244,8 +244,8 @@ fn log_with_extra_v(stamp: f64, pos: [f64; 3], vel: [f64; 3], regular: [f64; 3])
 
 /// A ball record that the others contradict — on the flange 0.5 ms before a record 3 m away,
 /// which supersedes it — is checked against the newest record although no span uses it: the
-/// log cannot pass (`object_exceeds_model`). Before session 24 the superseded record was never
-/// looked at and the log passed. At the same stamp as the far record, the first record stays in
+/// log cannot pass (`object_exceeds_model`), although a check of only the records in use would
+/// pass it. At the same stamp as the far record, the first record stays in
 /// use (as in the shield, `keep_newest`): the ball on the moving flange fails the log, and the
 /// contradiction is reported too. A record consistent with its neighbours (1 mm off, at rest)
 /// passes.

@@ -359,7 +359,7 @@ fn urdf_mesh_collisions_become_reviewed_side_file_capsules() {
     )
     .unwrap();
     assert!(r.ends_with("toy_description/meshes/link1.stl"));
-    // Issue 40: a missing file in a package that is there is named as such, not as a missing
+    // A missing file in a package that is there is named as such, not as a missing
     // package; a package nowhere on the paths is a missing package.
     let e = resolve(
         "package://toy_description/meshes/link9.stl",

@@ -794,7 +794,7 @@ fn side_file_gaps_name_the_missing_keys() {
     assert_eq!(side_file_gaps(&urdf, &full).unwrap(), vec![]);
 }
 
-/// Issue 40: a truncated URDF names the element left open and its line (the XML parser says
+/// A truncated URDF names the element left open and its line (the XML parser says
 /// only `No elements found`); a mismatched closing tag names both lines.
 #[test]
 fn truncated_urdf_names_the_open_element_and_its_line() {

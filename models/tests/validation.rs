@@ -314,7 +314,7 @@ fn huge_axis_whose_norm_overflows_is_rejected() {
     assert!(v.is_infinite());
 }
 
-/// Issue 11: a model that would make a PFL check vacuous is refused, naming the links.
+/// A model that would make a PFL check vacuous is refused, naming the links.
 #[test]
 fn pfl_tasks_refuse_massless_moving_bodies() {
     use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
@@ -377,7 +377,7 @@ fn pfl_tasks_refuse_massless_moving_bodies() {
     assert!(!e.contains("`fr3_link0`"), "the base does not move: {e}");
 }
 
-/// Issue 11: a finite but astronomical offset (a unit mistake, `1e300`) would overflow forward
+/// A finite but astronomical offset (a unit mistake, `1e300`) would overflow forward
 /// kinematics and distances into `inf`/NaN (`pacs fk` printed `null`, the audit panicked or lost
 /// its violations). The model is refused, naming the first offending field; the value is the
 /// reach from the world origin up to it.

@@ -46,7 +46,7 @@ fn main() {
         }
         ls += (t.duration() / lower_bound(wp, &l.v[..7])).ln();
     }
-    // Item 2 of issue 15: replanning from a moving state vs planning the same waypoints from
+    // Replanning from a moving state vs planning the same waypoints from
     // rest at the same configuration; the third case hands over at the last waypoint of a
     // chunk planned to end moving (continuous chunks).
     let mut moving = Planner::new(

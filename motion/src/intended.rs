@@ -148,7 +148,7 @@ impl Planner {
     /// near its own coasting time, and a policy's new chunk often turns a little against the
     /// motion it interrupts (its first action pulls back towards the demonstrations): at
     /// 1 rad/s and 400 rad/s³ the exact plans then ring 8–55 mrad past the waypoints and take
-    /// 2–3× the time of the chunk's own pace (`sim`'s sorting task, session 21). Where the
+    /// 2–3× the time of the chunk's own pace (`sim`'s sorting task). Where the
     /// chunk continues the start's motion (cosine between q̇_0 and q̂_1 − q̂_0 above
     /// [`BLEND_MIN_COSINE`]; a chunk that reverses it must brake whatever it passes) and the
     /// exact plan fails or rings more than [`BLEND_RING`], the chunk is also planned through

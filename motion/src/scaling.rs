@@ -437,14 +437,14 @@ impl Extents {
         // `eval` clamps ṡ at 0 (rounding must not run the path backwards): the executed ṡ is
         // at most max(ṡ_hi, 0). Without this, a window whose raw ṡ lies below −1e-15
         // throughout (rounding at the end of a braking ramp) would get an upper end below the
-        // executed 0 (session 14, while splitting `f4_path_ranges_enclose` for Kani).
+        // executed 0 (found while splitting `f4_path_ranges_enclose` for Kani).
         sd_hi = sd_hi.max(0.0);
         // Padding for the float evaluation of the polynomials: relative to the value, plus
         // 1e-14 of the terms' magnitudes. Each evaluation (here and in `eval`) rounds at most
         // ~8 times (the time difference, two products and two sums per level), so it is within
         // 8u ≈ 9e-16 of the terms' sum of the exact polynomial; two evaluations differ by at
-        // most twice that. Session 14: with the relative padding alone, ṡ at an instant just
-        // inside a phase exceeded the range by 5e-16 (1 in 10⁶ random windows).
+        // most twice that. With the relative padding alone, ṡ at an instant just inside a phase
+        // exceeds the range by 5e-16 (1 in 10⁶ random windows).
         let pad = |x: f64| x.abs() * 1e-12 + 1e-15;
         let (err_s, err_sd, err_sdd) = (err_s * 1e-14, err_sd * 1e-14, err_sdd * 1e-14);
         let s_lo = a_s - pad(a_s) - err_s;
@@ -701,7 +701,7 @@ mod tests {
 
     /// `ranges` encloses `eval` at instants next to a phase boundary, where the phase before it
     /// and the one after it evaluate ṡ differently by rounding (the case f4's twin found at 10⁶
-    /// windows, session 14: ṡ 5e-16 above the range one ulp inside a phase, with padding
+    /// windows: ṡ 5e-16 above the range one ulp inside a phase, with padding
     /// relative to the value only). Windows from just before each boundary (a few ulps to 1e-6 s)
     /// to beyond it, on 20 000 planned profiles; also catches a `ranges` without the terms'
     /// padding or sampling a phase's end with the next phase's polynomial.

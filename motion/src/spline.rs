@@ -105,10 +105,10 @@ const STALL_RATIO: f64 = 0.97;
 /// chunk must be able to stop at its end (see `end_velocity`). The next chunk brakes on a spline
 /// whose jerk is constant per segment: its deceleration ramps up and down instead of holding the
 /// limit, which on average halves it and doubles the stopping distance of the time-optimal
-/// profile that `stopping_velocity` assumes. With the whole room (session 18–20) the robot reached
+/// profile that `stopping_velocity` assumes. With the whole room the robot reached
 /// the pauses of the simulation's demonstrations too fast: the next chunk could not stop in
-/// time, rang 20–90 mrad past the pause and took 0.6–0.9 s (session 21: with half the room the
-/// tasks without people ran 8–18 % faster).
+/// time, rang 20–90 mrad past the pause and took 0.6–0.9 s; with half the room the tasks without
+/// people run 8–18 % faster.
 const PAUSE_ROOM_FRACTION: f64 = 0.5;
 
 /// Smallest segment duration the optimiser uses (s): zero-length segments (repeated waypoints)

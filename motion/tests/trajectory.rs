@@ -665,7 +665,7 @@ fn sub_microradian_moves_are_held_without_drift() {
     }
 }
 
-/// Receding horizon along the same path (issue 15 item 2): the waypoints of a chunk not yet
+/// Receding horizon along the same path: the waypoints of a chunk not yet
 /// passed, replanned from the chunk's own state 33 ms / 100 ms into it, must not take much
 /// longer than the original plan's remaining time (the original's remainder is itself a
 /// feasible plan; a moving start along the path needs no braking). Every replan is checked
@@ -713,7 +713,7 @@ fn replanning_the_rest_of_a_chunk_from_its_own_moving_state_keeps_its_pace() {
 }
 
 /// The planning limits of the shield (0.8·a_max, 400 rad/s³), the start state and the chunk of
-/// the simulation's sorting case (session 21): the arm moves at 1.2 rad/s, and the next chunk
+/// the simulation's sorting case: the arm moves at 1.2 rad/s, and the next chunk
 /// turns a little against that motion (joint 4 moves 26 % slower relative to joint 2 than the
 /// start does: the policy's first action pulls back towards its data) and slows into a pause of
 /// the demonstration. `bend` adds 4 mrad to joint 7 in the first action and takes it back in the

@@ -82,7 +82,7 @@ pub mod stubs {
     /// for a positive finite `x`, else IEEE `√`'s result (`x` for ±0 and +∞, NaN below 0 and for
     /// NaN). Over-approximates IEEE `√` (the range contains `fl(fl(√x)²)`:
     /// `sqrt_square_range`'s doc and test) with one multiplier instead of the exact contract of
-    /// `pacs_reach::ieee::sqrt`, and, unlike session 13's stub (any value in `[0, x + 1]`),
+    /// `pacs_reach::ieee::sqrt`, and, unlike a stub of any value in `[0, x + 1]`,
     /// ties the root to `x` within 1e-12 relative, which claims on the planner's ramps need (e1: the last ramp
     /// brings s̈ back to 0 only if the peak s̈ is at least the start's).
     pub fn sqrt_by_square(x: f64) -> f64 {

@@ -460,9 +460,8 @@ impl HumanReach {
     /// Decided soundly: consistent only if an upper bound of the exact distance is at most a
     /// lower bound of the exact limit, so a measurement that contradicts the assumption by any
     /// amount, an ulp included, keeps the `vel` occupancy (which contains every `pos` motion:
-    /// those are speed-bounded too). Before session 14 a lower bound of the distance was
-    /// compared with an upper bound of the limit, which let contradictions of a few ulps use the
-    /// `pos` ball.
+    /// those are speed-bounded too). Comparing a lower bound of the distance with an upper bound
+    /// of the limit instead would let contradictions of a few ulps use the `pos` ball.
     fn extremity_consistent(&self, m: &HumanMeasurement, e: &Extremity) -> bool {
         let base = m.positions[e.base];
         let base = [base.x, base.y, base.z];

@@ -137,9 +137,9 @@ pub(crate) fn curve_enclosure(
 /// `[t_a, t_b]`: `t_a − time + delay` rounded down and clamped at 0 (the measured state at the
 /// earliest), `t_b − time + delay` rounded up and at least `τ_a`. (`occupancy` evaluates its
 /// precondition `t_a ≥ time − delay` in floating point: a query it accepts may lie, exactly,
-/// up to an ulp before the measured state; before session 15 `τ_b` was then negative, below
-/// `τ_a = 0`, and the enclosure covered `τ_m < 0` instead of the measured state — found by the
-/// twin of `j1_object_time_and_balls`.) The scalar steps of [`occupancy`] (this one and
+/// up to an ulp before the measured state; `τ_b` is then kept at least `τ_a = 0`, so the
+/// enclosure covers the measured state and not `τ_m < 0`: the case the twin of
+/// `j1_object_time_and_balls` found.) The scalar steps of [`occupancy`] (this one and
 /// the two radii below) are free functions of floats so that the proofs beside this module check
 /// them without an `ObjectModel`.
 #[inline(always)]
@@ -354,8 +354,8 @@ mod tests {
 
     /// The query the twin of `j1_object_time_and_balls` found: accepted by `occupancy`'s
     /// floating-point precondition, exactly a little before the measured state. The elapsed
-    /// range must still contain the measured state (τ = 0) and be ordered; before session 15
-    /// `τ_b` was −6.9e-17 (mutant: drop the `.max(tau_a)`).
+    /// range must still contain the measured state (τ = 0) and be ordered; without the
+    /// `.max(tau_a)` `τ_b` is −6.9e-17 (the mutant this test catches).
     #[test]
     fn a_query_an_ulp_before_the_measured_state_keeps_its_elapsed_range_ordered() {
         let (time, delay, t) = (2.7725560640097173, 0.1, 2.6725560640097172);

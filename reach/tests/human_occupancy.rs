@@ -387,7 +387,7 @@ fn arm_occupancy(
     HumanReach::new(h, kind).occupancy(&m, 0.0, 0.1).unwrap()[0]
 }
 
-/// Issue 11: `pos` trusts an extremity's length only where the measurement agrees with it. Arm
+/// `pos` trusts an extremity's length only where the measurement agrees with it. Arm
 /// of length 1.0 m, thickness 0.1 m, e_p 0.01 m: a hand measured up to 1.0 + 0.05 + 2·0.01 =
 /// 1.07 m from the shoulder gets the extremity ball; farther, the arm falls back to the `vel`
 /// capsule (which the length assumption would otherwise override).
@@ -411,7 +411,7 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
     }
 }
 
-/// The consistency test of `pos` is decided soundly at the boundary (session 14): with a limit
+/// The consistency test of `pos` is decided soundly at the boundary: with a limit
 /// that is a float exactly (length 0.75 + thickness/2 0.0625 + 2·e_p 0.0625 = 0.875 m), a hand
 /// measured one ulp beyond it contradicts the length and keeps the `vel` capsule (before, a
 /// lower bound of the distance against an upper bound of the limit gave it the extremity ball),

@@ -1,4 +1,4 @@
-//! Issue 40: what an assessor sees — violation intervals merged into episodes (the intervals in
+//! What an assessor sees — violation intervals merged into episodes (the intervals in
 //! report.json and violations.csv), PASS with contact explained, the same summary columns in
 //! HTML, PDF and Markdown, the coarse far-range separation drawn apart, user-given model values
 //! under the assumptions.

@@ -99,7 +99,7 @@ fn aggregate_groups_by_meta_with_mean_and_sample_std() {
     assert_eq!(aggregate::pct(one[0].success), "100.0 % ± n/a");
     assert_eq!(aggregate::pct(rows[0].success), "50.0 ± 70.7 %");
     // Python shield logs say `pacs-shield (python)` whatever the mode: the mode in their
-    // `shield_config` keeps PACS and OFF apart (issue 40).
+    // `shield_config` keeps PACS and OFF apart.
     let mut py = vec![
         run("p", "pacs-shield (python)", Some(true), 0.0, Verdict::Pass),
         run("o", "pacs-shield (python)", Some(true), 0.2, Verdict::Fail),
@@ -169,7 +169,7 @@ fn plots_and_documents() {
     assert_eq!(j["verdict"], "fail");
     assert_eq!(j["runs"][1]["sha256"], "11".repeat(32));
     assert_eq!(j["aggregate"].as_array().unwrap().len(), 2);
-    // Issue 11: the `pos` model's extremity-length assumption, and its fallback, are listed.
+    // The `pos` model's extremity-length assumption, and its fallback, are listed.
     let pos = "With human_model = pos: each extremity's keypoints stay within its length + \
                thickness/2 of its base keypoint; a measurement contradicting this by more than 2 \
                measurement_error_pos is not trusted (that extremity uses the speed-bounded \

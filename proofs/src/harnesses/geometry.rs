@@ -235,7 +235,7 @@ fn zonotope_capsule<S: Source>(s: &mut S) {
     );
     assert_eq!(z.distance_lower_bound(inflate, &cap), 0.0);
 }
-// Property test only (session 16): no Kani split verifies yet. The splits beside the code
+// Property test only: no Kani split verifies yet. The splits beside the code
 // (`reach/src/zonotope/proofs.rs`: `b4_support_up_member`, `b4_distance_bound_shared_point`) are
 // twins: `Zonotope3`'s float-array arguments are rejected by Bitwuzla's repairs and time out on
 // the SAT back end (proofs/README.md).

@@ -16,7 +16,7 @@
 //! position. A body-part point is a convex combination of its keypoints plus an offset ≤
 //! thickness/2.
 //!
-//! Property test only since session 15 (the whole claim: under Kani a one-arm `HumanModel` and
+//! Property test only (the whole claim: under Kani a one-arm `HumanModel` and
 //! the sampled motions timed out). Its Kani proofs are the per-model splits beside the code,
 //! `pacs_reach::human`'s `proofs.rs`: `c1_vel_reach`, `c1_pos_reach`, `c1_acc_ball_at`
 //! (proofs/README.md: what they leave to this twin).

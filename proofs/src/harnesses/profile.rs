@@ -103,7 +103,7 @@ fn braking<S: Source>(s: &mut S) {
         t2 - t1
     );
 }
-// Property test only since session 15 (a timeout under Kani, > 240 s even with `√` stubbed and
+// Property test only (a timeout under Kani, > 240 s even with `√` stubbed and
 // the limits at corners): its Kani proofs are the splits `e1_brake_plan_*` below, on the plan's
 // phases rather than on `eval` over time.
 harness!(
@@ -140,7 +140,7 @@ fn path_ranges<S: Source>(s: &mut S) {
     );
     assert!(e.sdd.abs() <= sdd_max, "|s̈({tau})| = {} > {sdd_max}", e.sdd);
 }
-// Property test only since session 15 (a timeout under Kani, the phase loop): its Kani proof is
+// Property test only (a timeout under Kani, the phase loop): its Kani proof is
 // the per-phase split `f4_path_ranges_phase` below.
 harness!(
     f4_path_ranges_enclose,
@@ -150,7 +150,7 @@ harness!(
 );
 
 // ---------------------------------------------------------------------------------------------
-// e1's Kani splits: the braking plan's phases (session 15).
+// e1's Kani splits: the braking plan's phases.
 
 /// Which branch of the braking plan a split covers (`SpeedProfile::plan` with target 0 from a
 /// consistent start, d = −1).
@@ -322,7 +322,7 @@ harness!(
 );
 
 // ---------------------------------------------------------------------------------------------
-// f4's Kani split: one phase of `ranges` (session 15).
+// f4's Kani split: one phase of `ranges`.
 
 /// One constant-jerk phase's ranges over a window inside it (claim C7, the part a model checker
 /// decides): for a phase `(t0, s, ṡ, s̈, j)` that is not the profile's last and a window
@@ -399,8 +399,7 @@ harness!(
 );
 
 // ---------------------------------------------------------------------------------------------
-// f5's Kani splits: one joint piece's bounds (`pacs_motion::profile::Piece::extend_bounds`,
-// session 15).
+// f5's Kani splits: one joint piece's bounds (`pacs_motion::profile::Piece::extend_bounds`).
 
 /// A joint piece and a window `[d0, d1]` of its local time, any `d` in it. The twin: any piece
 /// with q ∈ [−4, 4] rad, q̇ ∈ [−4, 4] rad/s, q̈ ∈ [−32, 32] rad/s², j ∈ [−1024, 1024] rad/s³ (or 0

@@ -229,7 +229,7 @@ fn rule_sound<S: Source>(s: &mut S) {
     }
 }
 
-// The whole claim is the twin's (session 6: a Kani timeout at 3 bits, the capsule geometry of 3 × 2
+// The whole claim is the twin's (a Kani timeout at 3 bits, the capsule geometry of 3 × 2
 // pairs); Kani checks it in parts: `i1_rule_judgement_sound` (the narrow phase for any masks
 // containing the true contacts), `i1_broad_phase_boxes_contain` (the broad phase's boxes), and
 // the capsule test's claims b1/b2.

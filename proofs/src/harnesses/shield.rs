@@ -190,7 +190,7 @@ fn decide_induction_branch<S: Source>(s: &mut S, branch: Option<bool>) {
 // over-approximation of `SpeedProfile::plan`: 1 to 4 phases, every field any finite `f64`):
 // `choose` only copies the profiles it is given and the claims compare bit patterns, so they
 // hold for every profile, planned or not, and every input at full width.
-// The whole induction step (Kani: 86.7–139.8 s, at or over the budget; session 16) is the
+// The whole induction step (Kani: 86.7–139.8 s, at or over the budget) is the
 // property test; Kani checks its two halves below.
 harness!(
     f1_shield_decision_induction,

@@ -144,7 +144,7 @@ fn dot_bounds_powers<S: Source>(s: &mut S) {
         assert_dot_bounds(n, a);
     }
 }
-// Property test only: under Kani it timed out at 300 s (session 16) with symbolic exponents and
+// Property test only: under Kani it timed out at 300 s with symbolic exponents and
 // with the fixed powers above.
 harness!(
     b1_dot_bounds_powers,

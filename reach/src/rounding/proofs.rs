@@ -127,7 +127,7 @@ fn sqrt<S: Source>(s: &mut S) {
     assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
 }
 // The whole claim as a property test (Kani: 210 s, over the budget; each end alone timed out at
-// 300 s, session 16). Kani checks the split `a2_sqrt_root_step` below.
+// 300 s). Kani checks the split `a2_sqrt_root_step` below.
 harness!(
     a2_sqrt_enclose,
     twin_only,
@@ -231,7 +231,7 @@ fn sum_squares_up<S: Source>(s: &mut S) {
     assert!(up <= t, "{x}² + {y}² + {z}² ≤ {up}, above T({sum}) = {t}");
 }
 // Not model-checked: Kani timed out on this float comparison (bitwuzla, 200 s at 8 bits,
-// 150 s at 3 bits, under load ≈ 4; session 15), see the doc above.
+// 150 s at 3 bits, under load ≈ 4), see the doc above.
 harness!(
     a3_sum_squares_up,
     twin_only,

@@ -240,7 +240,7 @@ fn separates_member<S: Source>(s: &mut S) {
         separated
     );
 }
-// Property test only (session 16): under Kani (one dimension, a constant zonotope, a full-width
+// Property test only: under Kani (one dimension, a constant zonotope, a full-width
 // direction) it timed out at 200–240 s on Bitwuzla (load 4–5); the exact-product test of
 // `Interval::scale` in `d·x` (integer significands) is the likely cost.
 harness!(
@@ -327,7 +327,7 @@ fn support_member<S: Source>(s: &mut S) {
         "support_up({d:?}) = {h} < d·p for p = {p:?} ∈ {z:?}"
     );
 }
-// Property test only (session 16): `Zonotope3`'s arguments are float arrays passed by value
+// Property test only: `Zonotope3`'s arguments are float arrays passed by value
 // (`new`, `support_up`), whose flattening Bitwuzla rejects ("expected bit-vector term … 'concat'",
 // a limit of `proofs/smt/bitwuzla_cli.py`'s repairs); CBMC's SAT back end timed out at 200 s.
 harness!(
@@ -374,7 +374,7 @@ fn distance_shared_point<S: Source>(s: &mut S) {
         [p[0] + w[0], p[1] + w[1], p[2] + w[2]]
     );
 }
-// Property test only (session 16), as `b4_support_up_member` (not run under Kani: the same
+// Property test only, as `b4_support_up_member` (not run under Kani: the same
 // float-array arguments). Its twin catches mutant `x39b` (the bound without `inflate`).
 harness!(
     b4_distance_bound_shared_point,
