@@ -30,4 +30,4 @@ pub mod worker;
 
 pub use chunk_motion::ChunkMotion;
 pub use replan::ReplanPolicy;
-pub use session::{InboxError, MeasurementInbox};
+pub use session::{Due, InboxError, MeasurementInbox};

@@ -83,6 +83,20 @@ pub struct MeasurementInbox<C = ()> {
     object_ids: Vec<String>,
     /// Person 0's measurement for the current step.
     current: Option<HumanMeasurement>,
+    /// Waiting measurements of people and of objects.
+    waiting_people: usize,
+    waiting_objects: usize,
+}
+
+/// What [`MeasurementInbox::due`] delivered at one step.
+#[derive(Debug)]
+pub struct Due<'a> {
+    /// Person 0's measurement for this step (`None` if none was due), for [`Shield::step`] and
+    /// [`ShieldLog::record`].
+    pub first: Option<&'a HumanMeasurement>,
+    /// The first log write that failed: every due input still reached the shield, but nothing
+    /// more was written to the log in this step.
+    pub log_error: Option<WriteError>,
 }
 
 impl<C> MeasurementInbox<C> {
@@ -94,6 +108,8 @@ impl<C> MeasurementInbox<C> {
             people,
             object_ids,
             current: None,
+            waiting_people: 0,
+            waiting_objects: 0,
         }
     }
 
@@ -123,7 +139,9 @@ impl<C> MeasurementInbox<C> {
                 count: self.people,
             });
         }
-        self.insert(arrival, Item::Person(person, m))
+        self.insert(arrival, Item::Person(person, m))?;
+        self.waiting_people += 1;
+        Ok(())
     }
 
     /// A measurement of object `object` (the shield's object index) arriving at `arrival` (s).
@@ -140,7 +158,9 @@ impl<C> MeasurementInbox<C> {
                 count: self.object_ids.len(),
             });
         }
-        self.insert(arrival, Item::Object(object, m))
+        self.insert(arrival, Item::Object(object, m))?;
+        self.waiting_objects += 1;
+        Ok(())
     }
 
     /// One of the runner's own inputs arriving at `arrival` (s), delivered to the callback of
@@ -161,18 +181,12 @@ impl<C> MeasurementInbox<C> {
 
     /// The number of measurements of people waiting.
     pub fn people_waiting(&self) -> usize {
-        self.queue
-            .iter()
-            .filter(|(_, i)| matches!(i, Item::Person(..)))
-            .count()
+        self.waiting_people
     }
 
     /// The number of object measurements waiting.
     pub fn objects_waiting(&self) -> usize {
-        self.queue
-            .iter()
-            .filter(|(_, i)| matches!(i, Item::Object(..)))
-            .count()
+        self.waiting_objects
     }
 
     /// The inputs still waiting, in delivery order, each with its arrival time (s).
@@ -195,32 +209,43 @@ impl<C> MeasurementInbox<C> {
     /// Deliver every input that arrived at or before the step time `t` (s), in arrival order
     /// (see the type's guarantees): measurements of people other than person 0 and of objects
     /// to `shield`, each measurement to `log` if given (at step time `t`), the runner's own
-    /// inputs to `other`. Returns person 0's measurement for this step (`None` if none was
-    /// due), for [`Shield::step`] and [`ShieldLog::record`].
+    /// inputs to `other` (with the log, unless a write failed). Returns person 0's measurement
+    /// for this step and the first log write that failed.
     ///
-    /// On an error the failing input has been taken out of the queue; those after it still
-    /// wait. Does not allocate.
+    /// A log write failure does not stop delivery (the log is left alone for the rest of the
+    /// step). On an error of the shield or of `other` the failing input has been taken out of
+    /// the queue; those after it still wait. Does not allocate.
     pub fn due<W, E>(
         &mut self,
         t: f64,
         shield: &mut Shield,
         mut log: Option<&mut ShieldLog<W>>,
         mut other: impl FnMut(&mut Shield, Option<&mut ShieldLog<W>>, C) -> Result<(), E>,
-    ) -> Result<Option<&HumanMeasurement>, E>
+    ) -> Result<Due<'_>, E>
     where
         W: Write,
         E: From<InboxError>,
     {
         self.current = None;
+        let mut log_error = None;
+        let mut write =
+            |log: &mut Option<&mut ShieldLog<W>>,
+             f: &mut dyn FnMut(&mut ShieldLog<W>) -> Result<(), WriteError>| {
+                if let Some(l) = log.as_deref_mut()
+                    && let Err(e) = f(l)
+                {
+                    log_error = Some(e);
+                    *log = None;
+                }
+            };
         while self.queue.front().is_some_and(|(a, _)| *a <= t) {
             let Some((_, item)) = self.queue.pop_front() else {
                 break;
             };
             match item {
                 Item::Person(p, m) => {
-                    if let Some(log) = log.as_deref_mut() {
-                        log.person(t, p, &m).map_err(InboxError::from)?;
-                    }
+                    self.waiting_people -= 1;
+                    write(&mut log, &mut |l| l.person(t, p, &m));
                     if p > 0 {
                         shield.measure_human(p, &m).map_err(InboxError::from)?;
                     } else if m.supersedes(self.current.as_ref()) {
@@ -228,16 +253,18 @@ impl<C> MeasurementInbox<C> {
                     }
                 }
                 Item::Object(k, m) => {
+                    self.waiting_objects -= 1;
                     shield.measure_object(k, &m).map_err(InboxError::from)?;
-                    if let Some(log) = log.as_deref_mut() {
-                        log.object(t, &self.object_ids[k], &m)
-                            .map_err(InboxError::from)?;
-                    }
+                    let id = &self.object_ids[k];
+                    write(&mut log, &mut |l| l.object(t, id, &m));
                 }
                 Item::Other(c) => other(shield, log.as_deref_mut(), c)?,
             }
         }
-        Ok(self.current.as_ref())
+        Ok(Due {
+            first: self.current.as_ref(),
+            log_error,
+        })
     }
 
     /// [`Self::due`] for an inbox without inputs of the runner's own.
@@ -246,7 +273,7 @@ impl<C> MeasurementInbox<C> {
         t: f64,
         shield: &mut Shield,
         log: Option<&mut ShieldLog<W>>,
-    ) -> Result<Option<&HumanMeasurement>, InboxError> {
+    ) -> Result<Due<'_>, InboxError> {
         self.due(t, shield, log, |_, _, _| Ok::<(), InboxError>(()))
     }
 }
@@ -355,19 +382,21 @@ mod tests {
                 inbox
                     .due(t, &mut sh, Some(&mut log), no_other)
                     .unwrap()
+                    .first
                     .is_none()
             );
         }
         let m = inbox
             .due(2.0 * DT, &mut sh, Some(&mut log), no_other)
             .unwrap();
-        assert_eq!(m.map(|m| m.time()), Some(2.0 * DT));
+        assert_eq!(m.first.map(|m| m.time()), Some(2.0 * DT));
         assert!(inbox.is_empty());
         // Delivered once.
         assert!(
             inbox
                 .due(3.0 * DT, &mut sh, Some(&mut log), no_other)
                 .unwrap()
+                .first
                 .is_none()
         );
         assert_eq!(logged(log).len(), 1);
@@ -386,7 +415,10 @@ mod tests {
         assert_eq!((inbox.people_waiting(), inbox.objects_waiting()), (1, 0));
         inbox.deliver::<Vec<u8>>(2.0 * DT, &mut sh, None).unwrap();
         assert_eq!(inbox.len(), 1);
-        let first = inbox.deliver::<Vec<u8>>(3.0 * DT, &mut sh, None).unwrap();
+        let first = inbox
+            .deliver::<Vec<u8>>(3.0 * DT, &mut sh, None)
+            .unwrap()
+            .first;
         assert!(
             first.is_none(),
             "person 1 is not the step's person-0 measurement"
@@ -406,7 +438,7 @@ mod tests {
         let m = inbox
             .due(5.0 * DT, &mut sh, Some(&mut log), no_other)
             .unwrap();
-        assert_eq!(m.map(|m| m.time()), Some(3.0 * DT));
+        assert_eq!(m.first.map(|m| m.time()), Some(3.0 * DT));
         let stamps: Vec<f64> = logged(log).iter().map(|r| r.2 / DT).collect();
         let rounded: Vec<i64> = stamps.iter().map(|s| s.round() as i64).collect();
         assert_eq!(rounded, [3, 1, 2, 3], "logged in arrival order, every one");
@@ -443,7 +475,8 @@ mod tests {
                 seen.push(c);
                 Ok::<(), InboxError>(())
             })
-            .unwrap();
+            .unwrap()
+            .first;
         assert_eq!(m.map(|m| m.time()), Some(0.5 * DT));
         assert_eq!(seen, [7]);
         let ids: Vec<String> = logged(log).into_iter().map(|r| r.1).collect();
@@ -465,5 +498,56 @@ mod tests {
         }
         assert!(inbox.is_empty());
         assert_eq!(inbox.queue.capacity(), cap, "the queue keeps its storage");
+    }
+
+    /// A writer that takes `budget` bytes, then fails.
+    struct Failing {
+        budget: usize,
+    }
+
+    impl Write for Failing {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if buf.len() > self.budget {
+                return Err(std::io::Error::other("disk full"));
+            }
+            self.budget -= buf.len();
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_failing_log_does_not_stop_delivery() {
+        let (mut sh, mut inbox, _) = setup();
+        let header = Header::with_people(
+            ModelRef::Name("fr3".into()),
+            vec![
+                PersonEntry {
+                    id: "a".into(),
+                    human: ModelRef::Name("default".into()),
+                },
+                PersonEntry {
+                    id: "b".into(),
+                    human: ModelRef::Name("default".into()),
+                },
+            ],
+            ModelRef::Name("sorting".into()),
+        );
+        let mut log =
+            ShieldLog::new(Failing { budget: 4096 }, &header, 0.0, &fr3::Q_READY).unwrap();
+        for _ in 0..64 {
+            inbox.push_person(0.0, 1, person(0.0)).unwrap();
+        }
+        inbox.push_person(0.0, 0, person(0.0)).unwrap();
+        let due = inbox
+            .due(0.0, &mut sh, Some(&mut log), |_, _, _: u32| {
+                Ok::<(), InboxError>(())
+            })
+            .unwrap();
+        assert!(due.log_error.is_some());
+        assert!(due.first.is_some(), "person 0 was still delivered");
+        assert!(inbox.is_empty());
     }
 }

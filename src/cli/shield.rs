@@ -350,6 +350,16 @@ enum Delivery {
     Cli(CliError),
 }
 
+impl Delivery {
+    /// The CLI's error for a failure at step time `t` (s).
+    fn at(self, t: f64) -> CliError {
+        match self {
+            Delivery::Cli(e) => e,
+            Delivery::Inbox(e) => input(format!("measurement at {t} s: {e}")),
+        }
+    }
+}
+
 impl From<InboxError> for Delivery {
     fn from(e: InboxError) -> Self {
         Delivery::Inbox(e)
@@ -439,13 +449,13 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             }
             Ok::<(), Delivery>(())
         };
-        let latest_human = inbox
+        let due = inbox
             .due(t, &mut shield, Some(&mut log), hand_over)
-            .map_err(|e| match e {
-                Delivery::Cli(e) => e,
-                Delivery::Inbox(InboxError::Log(e)) => werr(&log_path, &e),
-                Delivery::Inbox(e) => input(format!("measurement at {t} s: {e}")),
-            })?;
+            .map_err(|e| e.at(t))?;
+        if let Some(e) = due.log_error {
+            return Err(werr(&log_path, &e));
+        }
+        let latest_human = due.first;
         let clock = std::time::Instant::now();
         let cmd = shield
             .step(t, latest_human)
