@@ -69,8 +69,8 @@ pub enum Pending<'a, C> {
 ///   newest, so out-of-order stamps are decided by its rule); every delivered measurement is
 ///   written to the log, whether the shield uses it or not. The runner's own inputs
 ///   ([`Self::push_other`]) are handed to its callback in the same order.
-/// - **Cost**: [`Self::due`] does not allocate; pushes allocate only while the queue grows
-///   beyond its largest size so far.
+/// - **Cost**: [`Self::due`] does not allocate, apart from what the log writer does; pushes
+///   allocate only while the queue grows beyond its largest size so far.
 ///
 /// `C` is the runner's own timed input (a chunk index, for example); `()` when there is none.
 #[derive(Debug, Clone)]
@@ -214,7 +214,8 @@ impl<C> MeasurementInbox<C> {
     ///
     /// A log write failure does not stop delivery (the log is left alone for the rest of the
     /// step). On an error of the shield or of `other` the failing input has been taken out of
-    /// the queue; those after it still wait. Does not allocate.
+    /// the queue; those after it still wait. The inbox does not allocate here (the log
+    /// writer's object records do: they format the object's id).
     pub fn due<W, E>(
         &mut self,
         t: f64,
