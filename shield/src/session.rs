@@ -1,5 +1,5 @@
 //! The measurement side of a shield run, shared by every runner (the CLI, the Python binding):
-//! a [`MeasurementInbox`] holds timed human, person and object measurements (and, ordered
+//! a [`MeasurementInbox`] holds timed measurements of people and objects (and, ordered
 //! among them, the runner's own timed inputs such as chunk hand-overs) until the first safety
 //! step at or after their arrival time, then hands them to the [`Shield`] through its
 //! measurement calls and writes each to the run's [`ShieldLog`].
@@ -31,9 +31,10 @@ pub enum InboxError {
     /// The shield refused a delivered measurement.
     #[error(transparent)]
     Shield(#[from] ShieldError),
-    /// Writing a delivered measurement to the log failed.
-    #[error(transparent)]
-    Log(#[from] WriteError),
+    /// An arrival (s) before the measurement's time stamp (s): delivered then, it would reach
+    /// the shield from the future.
+    #[error("arrival time {arrival} s is before the time stamp {stamp} s")]
+    BeforeStamp { arrival: f64, stamp: f64 },
 }
 
 /// One waiting input.
@@ -113,10 +114,14 @@ impl<C> MeasurementInbox<C> {
         }
     }
 
-    /// Insert after every input arriving at or before `arrival` (s).
-    fn insert(&mut self, arrival: f64, item: Item<C>) -> Result<(), InboxError> {
+    /// Insert after every input arriving at or before `arrival` (s); a measurement stamped
+    /// `stamp` (s) must not arrive before it.
+    fn insert(&mut self, arrival: f64, stamp: f64, item: Item<C>) -> Result<(), InboxError> {
         if !arrival.is_finite() {
             return Err(InboxError::NotFinite(arrival));
+        }
+        if arrival < stamp {
+            return Err(InboxError::BeforeStamp { arrival, stamp });
         }
         let at = self
             .queue
@@ -126,7 +131,7 @@ impl<C> MeasurementInbox<C> {
     }
 
     /// A measurement of person `person` (the shield's human index) arriving at `arrival` (s).
-    /// Errors: a non-finite arrival, an unknown person.
+    /// Errors: a non-finite arrival, one before the measurement's stamp, an unknown person.
     pub fn push_person(
         &mut self,
         arrival: f64,
@@ -139,13 +144,13 @@ impl<C> MeasurementInbox<C> {
                 count: self.people,
             });
         }
-        self.insert(arrival, Item::Person(person, m))?;
+        self.insert(arrival, m.time(), Item::Person(person, m))?;
         self.waiting_people += 1;
         Ok(())
     }
 
     /// A measurement of object `object` (the shield's object index) arriving at `arrival` (s).
-    /// Errors: a non-finite arrival, an unknown object.
+    /// Errors: a non-finite arrival, one before the measurement's stamp, an unknown object.
     pub fn push_object(
         &mut self,
         arrival: f64,
@@ -158,7 +163,7 @@ impl<C> MeasurementInbox<C> {
                 count: self.object_ids.len(),
             });
         }
-        self.insert(arrival, Item::Object(object, m))?;
+        self.insert(arrival, m.time, Item::Object(object, m))?;
         self.waiting_objects += 1;
         Ok(())
     }
@@ -166,7 +171,7 @@ impl<C> MeasurementInbox<C> {
     /// One of the runner's own inputs arriving at `arrival` (s), delivered to the callback of
     /// [`Self::due`] in order with the measurements. Errors: a non-finite arrival.
     pub fn push_other(&mut self, arrival: f64, other: C) -> Result<(), InboxError> {
-        self.insert(arrival, Item::Other(other))
+        self.insert(arrival, f64::NEG_INFINITY, Item::Other(other))
     }
 
     /// The number of inputs waiting.
@@ -429,9 +434,9 @@ mod tests {
 
     #[test]
     fn out_of_order_stamps_are_all_logged_and_the_newest_is_used() {
-        let (mut sh, mut inbox, mut log) = setup();
+        // Stamps 3, 1, 2 ms arriving in that order, then an equal-stamp one; all due at 5 ms.
         // Arrival order 3, 1, 2 ms stamps; a late older one after them; all due at 5 ms.
-        for (arrival, stamp) in [(1.0, 3.0), (2.0, 1.0), (3.0, 2.0), (4.0, 3.0)] {
+        for (arrival, stamp) in [(3.0, 3.0), (3.5, 1.0), (4.0, 2.0), (4.5, 3.0)] {
             inbox
                 .push_person(arrival * DT, 0, person(stamp * DT))
                 .unwrap();
@@ -459,6 +464,10 @@ mod tests {
         assert!(matches!(
             inbox.push_object(f64::NAN, 0, object(DT)),
             Err(InboxError::NotFinite(_))
+        ));
+        assert!(matches!(
+            inbox.push_object(0.5 * DT, 0, object(DT)),
+            Err(InboxError::BeforeStamp { .. })
         ));
         let order: Vec<char> = inbox
             .pending()
