@@ -434,8 +434,8 @@ mod tests {
 
     #[test]
     fn out_of_order_stamps_are_all_logged_and_the_newest_is_used() {
+        let (mut sh, mut inbox, mut log) = setup();
         // Stamps 3, 1, 2 ms arriving in that order, then an equal-stamp one; all due at 5 ms.
-        // Arrival order 3, 1, 2 ms stamps; a late older one after them; all due at 5 ms.
         for (arrival, stamp) in [(3.0, 3.0), (3.5, 1.0), (4.0, 2.0), (4.5, 3.0)] {
             inbox
                 .push_person(arrival * DT, 0, person(stamp * DT))
