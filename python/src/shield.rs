@@ -12,8 +12,8 @@ use pacs_models::human::HumanModel;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
-use pacs_reach::stamped::Stamped;
 use pacs_shield::ReplanPolicy;
+use pacs_shield::session::{Due, MeasurementInbox, Pending};
 use pacs_shield::settings::ShieldSettings;
 use pacs_shield::shield::{
     BindingNames, ChunkPlanner, ChunkProgress, Command, OfferState, Shield, ShieldError,
@@ -33,15 +33,13 @@ pub type Fail = (Kind, String);
 /// How `set_chunk` plans a chunk again after a failed hand-over (attempts, lead).
 const REPLAN: ReplanPolicy = ReplanPolicy::DEFAULT;
 
-/// Measurements waiting for a step at or after their time stamp (per queue).
+/// Measurements waiting for a step at or after their time stamp (people's, objects').
 const MAX_PENDING: usize = 4096;
 
 /// Everything a shield needs between calls.
 pub struct Inner {
     pub shield: Shield,
     pub dof: usize,
-    pub humans: usize,
-    pub object_ids: Vec<String>,
     pub header: Header,
     pub log_path: Option<PathBuf>,
     pub log: Option<ShieldLog<BufWriter<File>>>,
@@ -49,13 +47,9 @@ pub struct Inner {
     pub log_error: Option<String>,
     /// The log was opened (a logging shield starts once).
     pub log_opened: bool,
-    /// Human measurements (human index, measurement) not yet handed to a step: each reaches
-    /// the shield at the first step at or after its time stamp.
-    pub pending_humans: Vec<(usize, HumanMeasurement)>,
-    /// Object measurements not yet handed to a step (the same rule).
-    pub pending_objects: Vec<(usize, ObjectMeasurement)>,
-    /// Per object, the time stamp of the newest measurement handed to the shield (and logged).
-    pub object_latest: Vec<f64>,
+    /// Human and object measurements not yet handed to a step: each arrives at its time stamp
+    /// and reaches the shield (and the log) at the first step at or after it.
+    pub inbox: MeasurementInbox,
     /// Time of the last step (s).
     pub last_t: Option<f64>,
     pub start_t: f64,
@@ -121,15 +115,12 @@ impl Inner {
 
     /// Record a log failure (the first one) and stop logging; the run goes on.
     fn log_failed(&mut self, e: impl std::fmt::Display) {
-        if self.log_error.is_none() {
-            let p = self
-                .log_path
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default();
-            self.log_error = Some(format!("log {p}: {e} (nothing was logged after this)"));
-        }
-        self.log = None;
+        log_failed(
+            &mut self.log,
+            &mut self.log_error,
+            self.log_path.as_ref(),
+            e,
+        );
     }
 
     /// Hand over a chunk (rows of `dof` values); returns its serial number.
@@ -168,16 +159,18 @@ impl Inner {
 
     /// Queue a human measurement (human index validated by the caller).
     pub fn measure(&mut self, id: usize, m: HumanMeasurement) -> Result<(), Fail> {
-        Self::queue_full(self.pending_humans.len(), "measure")?;
-        self.pending_humans.push((id, m));
-        Ok(())
+        Self::queue_full(self.inbox.people_waiting(), "measure")?;
+        self.inbox
+            .push_person(m.time(), id, m)
+            .map_err(|e| (Kind::Input, format!("measure: {e}")))
     }
 
     /// Queue an object measurement (object index validated by the caller).
     pub fn measure_object(&mut self, k: usize, m: ObjectMeasurement) -> Result<(), Fail> {
-        Self::queue_full(self.pending_objects.len(), "measure_object")?;
-        self.pending_objects.push((k, m));
-        Ok(())
+        Self::queue_full(self.inbox.objects_waiting(), "measure_object")?;
+        self.inbox
+            .push_object(m.time, k, m)
+            .map_err(|e| (Kind::Input, format!("measure_object: {e}")))
     }
 
     /// One safety step at `t` (s): the command for `t + α_s` and the chunk progress after it.
@@ -210,79 +203,38 @@ impl Inner {
             }
             _ => {}
         }
-        // Every measurement stamped at or before t is logged (the logged human's and every
-        // object's), also those the shield will not use: the audit checks each against its
+        // Every measurement stamped at or before t reaches the shield and is logged, also
+        // those the shield will not use (it keeps the newest): the audit checks each against its
         // model beside its neighbours in time and uses the newest, as the shield does, so a
         // measurement that the others contradict cannot hide behind a newer one.
-        if let Some(log) = &mut self.log {
-            let mut failed = None;
-            for (id, m) in &self.pending_humans {
-                if m.time() <= t
-                    && let Err(e) = log.person(t, *id, m)
-                {
-                    failed = Some(e);
-                    break;
-                }
-            }
-            for (k, m) in &self.pending_objects {
-                if failed.is_none()
-                    && m.time <= t
-                    && let Err(e) = log.object(t, &self.object_ids[*k], m)
-                {
-                    failed = Some(e);
-                }
-            }
-            if let Some(e) = failed {
-                self.log_failed(e);
-            }
+        let Inner {
+            inbox,
+            shield,
+            log,
+            log_error,
+            log_path,
+            ..
+        } = self;
+        let Due {
+            first,
+            log_error: failed,
+        } = inbox
+            .deliver(t, shield, log.as_mut())
+            .map_err(|e| (Kind::State, e.to_string()))?;
+        if let Some(e) = failed {
+            log_failed(log, log_error, log_path.as_ref(), e);
         }
-        // Hand over the measurements stamped at or before t: per human and object the newest
-        // (the first of equal time stamps, as the shield keeps it; the shield ignores older
-        // ones anyway); later ones keep waiting. Moved out of the queues: no allocation here.
-        let mut first: Option<HumanMeasurement> = None;
-        for id in 0..self.humans {
-            let Some(i) = newest_due(&self.pending_humans, id, t) else {
-                continue;
-            };
-            let (_, m) = self.pending_humans.remove(i);
-            if id == 0 {
-                first = Some(m);
-            } else {
-                self.shield
-                    .measure_human(id, &m)
-                    .map_err(|e| (Kind::State, e.to_string()))?;
-            }
-        }
-        self.pending_humans.retain(|(_, m)| m.time() > t);
-        for k in 0..self.object_ids.len() {
-            let Some(i) = newest_due(&self.pending_objects, k, t) else {
-                continue;
-            };
-            let (_, m) = self.pending_objects.remove(i);
-            // The shield keeps the first of equal-time measurements and ignores older ones:
-            // hand over only strictly newer ones (all were logged above).
-            if !pacs_reach::stamp_supersedes(m.time, Some(self.object_latest[k])) {
-                continue;
-            }
-            self.object_latest[k] = m.time;
-            self.shield
-                .measure_object(k, &m)
-                .map_err(|e| (Kind::State, e.to_string()))?;
-        }
-        self.pending_objects.retain(|(_, m)| m.time > t);
-        let cmd = self
-            .shield
-            .step(t, first.as_ref())
+        let cmd = shield
+            .step(t, first)
             .map_err(|e| (Kind::State, e.to_string()))?;
         self.last_t = Some(t);
-        if let Some(log) = &mut self.log
-            && let Err(e) = log.record(t, first.as_ref(), &cmd)
+        if let Some(l) = log.as_mut()
+            && let Err(e) = l.record(t, first, &cmd)
         {
             // The step happened: its command is returned; the log stops (reported by close).
-            self.log_failed(e);
+            log_failed(log, log_error, log_path.as_ref(), e);
         }
-        let progress = self
-            .shield
+        let progress = shield
             .chunk_progress()
             .ok_or((Kind::State, "step: shield not started".to_string()))?;
         Ok((cmd, progress))
@@ -300,17 +252,18 @@ impl Inner {
                 .last_t
                 .map_or(self.start_t, |l| l + self.shield.config().safety_step);
             let mut r: Result<(), String> = Ok(());
-            for (id, m) in &self.pending_humans {
-                if r.is_ok() && self.last_t.is_some() && m.time() <= t_end {
-                    r = log.person(t_end, *id, m).map_err(|e| e.to_string());
+            for (_, p) in self.inbox.pending() {
+                if r.is_err() || self.last_t.is_none() {
+                    break;
                 }
-            }
-            for (k, m) in &self.pending_objects {
-                if r.is_ok() && self.last_t.is_some() && m.time <= t_end {
-                    r = log
-                        .object(t_end, &self.object_ids[*k], m)
-                        .map_err(|e| e.to_string());
+                r = match p {
+                    Pending::Person(id, m) if m.time() <= t_end => log.person(t_end, id, m),
+                    Pending::Object(k, m) if m.time <= t_end => {
+                        log.object(t_end, &self.inbox.object_ids()[k], m)
+                    }
+                    _ => Ok(()),
                 }
+                .map_err(|e| e.to_string());
             }
             // `finish` writes the `end` event the header promises.
             let _ = t;
@@ -328,17 +281,20 @@ impl Inner {
     }
 }
 
-/// Index of the newest measurement of `id` in `queue` stamped at or before `t` (the first of
-/// equal time stamps).
-fn newest_due<M: Stamped>(queue: &[(usize, M)], id: usize, t: f64) -> Option<usize> {
-    let mut best: Option<(usize, f64)> = None;
-    for (i, (j, m)) in queue.iter().enumerate() {
-        let tm = m.t_meas();
-        if *j == id && tm <= t && pacs_reach::stamp_supersedes(tm, best.map(|(_, tb)| tb)) {
-            best = Some((i, tm));
-        }
+/// Record a log failure (the first one, in `log_error`) and stop logging (`log` cleared).
+fn log_failed<W>(
+    log: &mut Option<W>,
+    log_error: &mut Option<String>,
+    log_path: Option<&PathBuf>,
+    e: impl std::fmt::Display,
+) {
+    if log_error.is_none() {
+        let p = log_path
+            .map(|p| p.display().to_string())
+            .unwrap_or_default();
+        *log_error = Some(format!("log {p}: {e} (nothing was logged after this)"));
     }
-    best.map(|(i, _)| i)
+    *log = None;
 }
 
 /// Run `f` on the shield state with the GIL released (so that no thread ever waits for the
@@ -795,16 +751,12 @@ impl PyShield {
                 inner: Arc::new(Mutex::new(Inner {
                     shield,
                     dof,
-                    humans: s.humans.len(),
-                    object_ids: object_ids.clone(),
                     header,
                     log_path,
                     log: None,
                     log_error: None,
                     log_opened: false,
-                    pending_humans: Vec::new(),
-                    pending_objects: Vec::new(),
-                    object_latest: vec![f64::NEG_INFINITY; object_ids.len()],
+                    inbox: MeasurementInbox::new(s.humans.len(), object_ids.clone()),
                     last_t: None,
                     start_t: 0.0,
                     started: false,

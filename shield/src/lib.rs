@@ -6,6 +6,8 @@
 //!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
 //! - [`chunk_motion`]: whether chunks end at rest or pass their last waypoint moving;
 //! - [`replan`]: the one re-plan policy for a chunk whose hand-over failed;
+//! - [`session`]: what every runner shares: timed measurements delivered at the first safety
+//!   step at or after their arrival, to the shield and the log;
 //! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
 //! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop.
@@ -20,6 +22,7 @@
 
 pub mod chunk_motion;
 pub mod replan;
+pub mod session;
 pub mod settings;
 pub mod shield;
 pub mod shield_log;
@@ -27,3 +30,4 @@ pub mod worker;
 
 pub use chunk_motion::ChunkMotion;
 pub use replan::ReplanPolicy;
+pub use session::{Due, InboxError, MeasurementInbox};

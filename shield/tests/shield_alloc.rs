@@ -133,3 +133,57 @@ fn step_allocates_nothing() {
         );
     }
 }
+
+/// Measurements delivered by the inbox (late, several per step, a person and an object):
+/// delivery allocates nothing once the measurements are queued (the log writer is not part of
+/// it: its object records format the id).
+#[test]
+fn inbox_delivery_allocates_nothing() {
+    use pacs_shield::session::MeasurementInbox;
+    use pacs_shield::shield_log::ShieldLog;
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let cs = ConstraintSpec::builtin("sorting").unwrap();
+    let mut sh = Shield::new(
+        fr3::fr3(),
+        Some((human.clone(), &cs)),
+        vec![],
+        ShieldConfig::default(),
+    )
+    .unwrap();
+    let ball = ObjectModel::new(&default_ball()).unwrap();
+    sh.add_object(ball, ObjectContact::NoContact).unwrap();
+    sh.start(0.0, &fr3::Q_READY).unwrap();
+    let mut inbox: MeasurementInbox = MeasurementInbox::new(1, vec!["ball".into()]);
+    let kp: Vec<[f64; 3]> = (0..9).map(|i| [2.0, 0.1 * i as f64, 1.0]).collect();
+    for k in 0..1000 {
+        let t = k as f64 * 0.001;
+        let m = HumanMeasurement::new(&human, t, &kp, None).unwrap();
+        // Arrives 0, 0.4 or 0.8 ms late: some steps get none, some two.
+        inbox
+            .push_person(t + (k % 3) as f64 * 0.0004, 0, m)
+            .unwrap();
+        if k % 10 == 0 {
+            let o = ObjectMeasurement {
+                time: t,
+                position: [0.3, 0.6, 0.04],
+                velocity: None,
+            };
+            inbox.push_object(t + 0.0025, 0, o).unwrap();
+        }
+    }
+    let mut delivered = 0;
+    for k in 0..1000 {
+        let t = k as f64 * 0.001;
+        ARMED.with(|a| a.set(true));
+        let due = inbox
+            .deliver(t, &mut sh, None::<&mut ShieldLog<std::io::Sink>>)
+            .unwrap();
+        let first = due.first;
+        delivered += first.is_some() as usize;
+        let cmd = sh.step(t, first).expect("started");
+        ARMED.with(|a| a.set(false));
+        assert!(cmd.t > t);
+    }
+    assert_eq!(COUNT.load(Ordering::SeqCst), 0, "delivery allocated");
+    assert!(delivered > 600, "{delivered}");
+}

@@ -15,8 +15,9 @@ use pacs_models::human::HumanSpec;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
+use pacs_shield::session::{InboxError, MeasurementInbox, Pending};
 use pacs_shield::settings::ShieldSettings;
-use pacs_shield::shield::Shield;
+use pacs_shield::shield::{BindingNames, Command, Shield};
 use pacs_shield::shield_log::ShieldLog;
 use serde::Deserialize;
 use serde_json::{Value, json};
@@ -121,18 +122,21 @@ fn stamp_and_arrival(field: &str, t: f64, received: Option<f64>) -> Result<(f64,
     Ok((t, received))
 }
 
-/// One input event, in the order the shield receives it.
-enum Event {
-    Chunk(usize),
-    Human(usize),
-    Object(usize),
-}
-
 /// Built-in example scene (`examples/scene.json`).
 const SCENE_EXAMPLE: &str = include_str!("../../examples/scene.json");
 
-/// Run `pacs shield [--input F] [--out DIR]`: returns the summary printed on stdout.
-pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
+/// A scene read and checked: its name (the path shown in messages), the scene, the log header
+/// of the models it names, those models and the shield configuration.
+struct Loaded {
+    name: String,
+    scene: Scene,
+    header: Header,
+    models: LogModels,
+    cfg: pacs_shield::shield::ShieldConfig,
+}
+
+/// Read the scene (`None`: the built-in example) and build the log header of its models.
+fn load(path: Option<&Path>) -> Result<Loaded, CliError> {
     let (name, text) = match path {
         Some(p) => (p.display().to_string(), read_file(p)?),
         None => ("examples/scene.json".to_string(), SCENE_EXAMPLE.to_string()),
@@ -180,8 +184,19 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     header.meta.insert("scene".into(), name.clone().into());
     let models = LogModels::from_header(&header)
         .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
-    let n = models.robot.dof();
-    check_vec("start", &scene.start, n)?;
+    Ok(Loaded {
+        name,
+        scene,
+        header,
+        models,
+        cfg,
+    })
+}
+
+/// Check the start, the run's time span and build the shield of the scene, started at rest.
+fn build_shield(l: &Loaded) -> Result<Shield, CliError> {
+    let (scene, models, cfg, name) = (&l.scene, &l.models, l.cfg, &l.name);
+    check_vec("start", &scene.start, models.robot.dof())?;
     let t0 = finite("t0", scene.t0)?;
     let duration = finite("duration", scene.duration)?;
     if duration <= 0.0 || duration > 3600.0 {
@@ -227,13 +242,22 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     shield
         .start(t0, &scene.start)
         .map_err(|e| input(e.to_string()))?;
+    Ok(shield)
+}
 
-    // Validate every input up front and order them by arrival.
-    let mut events: Vec<(f64, Event)> = Vec::new();
+/// The scene's chunks, checked, and every timed input in the inbox (a chunk as its index);
+/// pushed chunks first, then human, then object measurements, each in file order, so that
+/// inputs arriving at one time reach the shield in that order.
+fn inputs(l: &Loaded) -> Result<(Vec<Chunk>, MeasurementInbox<usize>), CliError> {
+    let (scene, models) = (&l.scene, &l.models);
+    let n = models.robot.dof();
+    let object_ids = models.objects.iter().map(|(id, _, _)| id.clone()).collect();
+    let mut inbox = MeasurementInbox::new(models.people.len(), object_ids);
+    let pushed = |e: InboxError| CliError::Internal(format!("inputs: {e}"));
     let mut chunks = Vec::with_capacity(scene.chunks.len());
     for (i, c) in scene.chunks.iter().enumerate() {
         let field = format!("chunks[{i}]");
-        finite(&format!("{field}.t"), c.t)?;
+        let t = finite(&format!("{field}.t"), c.t)?;
         for (a, row) in c.actions.iter().enumerate() {
             check_vec(&format!("{field}.actions[{a}]"), row, n)?;
         }
@@ -250,45 +274,16 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
             execute: c.execute,
             gripper: None,
         });
-        events.push((c.t, Event::Chunk(i)));
+        inbox.push_other(t, i).map_err(pushed)?;
     }
-    let mut humans = Vec::with_capacity(scene.human_measurements.len());
     for (i, m) in scene.human_measurements.iter().enumerate() {
         let field = format!("human_measurements[{i}]");
         let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
-        let ids = || {
-            models
-                .people
-                .iter()
-                .map(|(id, _)| id.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let p = match &m.id {
-            Some(id) => models
-                .people
-                .iter()
-                .position(|(p, _)| p == id)
-                .ok_or_else(|| {
-                    input(format!(
-                        "{field}.id: `{id}` is not a person of the scene (humans: {})",
-                        ids()
-                    ))
-                })?,
-            None if models.people.len() == 1 => 0,
-            None => {
-                return Err(input(format!(
-                    "{field}.id: missing; the scene has several people ({}): each measurement names one",
-                    ids()
-                )));
-            }
-        };
+        let p = person_index(&field, m.id.as_deref(), models)?;
         let hm = HumanMeasurement::new(&models.people[p].1, t, &m.keypoints, None)
             .map_err(|e| input(format!("{field}.keypoints: {e}")))?;
-        humans.push((p, hm));
-        events.push((received, Event::Human(i)));
+        inbox.push_person(received, p, hm).map_err(pushed)?;
     }
-    let mut objects = Vec::with_capacity(scene.object_measurements.len());
     for (i, m) in scene.object_measurements.iter().enumerate() {
         let field = format!("object_measurements[{i}]");
         let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
@@ -309,18 +304,108 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
                 *x,
             )?;
         }
-        objects.push((
-            k,
-            ObjectMeasurement {
-                time: t,
-                position: m.position,
-                velocity: m.velocity,
-            },
-        ));
-        events.push((received, Event::Object(i)));
+        let om = ObjectMeasurement {
+            time: t,
+            position: m.position,
+            velocity: m.velocity,
+        };
+        inbox.push_object(received, k, om).map_err(pushed)?;
     }
-    events.sort_by(|a, b| a.0.total_cmp(&b.0)); // stable: file order for equal times
+    Ok((chunks, inbox))
+}
 
+/// The shield's index of the person a measurement names (`id`; may be omitted with one
+/// person); errors name `field`.
+fn person_index(field: &str, id: Option<&str>, models: &LogModels) -> Result<usize, CliError> {
+    let ids = || {
+        models
+            .people
+            .iter()
+            .map(|(id, _)| id.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match id {
+        Some(id) => models
+            .people
+            .iter()
+            .position(|(p, _)| p == id)
+            .ok_or_else(|| {
+                input(format!(
+                    "{field}.id: `{id}` is not a person of the scene (humans: {})",
+                    ids()
+                ))
+            }),
+        None if models.people.len() == 1 => Ok(0),
+        None => Err(input(format!(
+            "{field}.id: missing; the scene has several people ({}): each measurement names one",
+            ids()
+        ))),
+    }
+}
+
+/// A failure while inputs are delivered: the inbox's, or one of the CLI's own.
+enum Delivery {
+    Inbox(InboxError),
+    Cli(CliError),
+}
+
+impl Delivery {
+    /// The CLI's error for a failure at step time `t` (s).
+    fn at(self, t: f64) -> CliError {
+        match self {
+            Delivery::Cli(e) => e,
+            Delivery::Inbox(e) => input(format!("measurement at {t} s: {e}")),
+        }
+    }
+}
+
+impl From<InboxError> for Delivery {
+    fn from(e: InboxError) -> Self {
+        Delivery::Inbox(e)
+    }
+}
+
+/// One command as a JSON Lines record (`names`: what its binding's indices stand for).
+fn command_line(cmd: &Command, n: usize, names: &BindingNames) -> Value {
+    let d = &cmd.diag;
+    let mut line = json!({
+        "t": cmd.t,
+        "q": &cmd.state.q[..n],
+        "dq": &cmd.state.dq[..n],
+        "ddq": &cmd.state.ddq[..n],
+        "verified": d.verified,
+        "on_failsafe": d.on_failsafe,
+        "binding": names.describe(&d.binding),
+        "path_speed": d.path_speed,
+        "stop_time": d.stop_time,
+    });
+    if d.min_separation.is_finite() {
+        line["min_separation_m"] = json!(d.min_separation);
+    }
+    line
+}
+
+/// What is still waiting in the inbox: the chunks (their indices), the number of human and of
+/// object measurements.
+fn not_delivered(inbox: &MeasurementInbox<usize>) -> (Vec<usize>, usize, usize) {
+    let (mut chunks, mut humans, mut objects) = (Vec::new(), 0usize, 0usize);
+    for (_, e) in inbox.pending() {
+        match e {
+            Pending::Other(i) => chunks.push(*i),
+            Pending::Person(..) => humans += 1,
+            Pending::Object(..) => objects += 1,
+        }
+    }
+    (chunks, humans, objects)
+}
+
+/// Run `pacs shield [--input F] [--out DIR]`: returns the summary printed on stdout.
+pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
+    let l = load(path)?;
+    let mut shield = build_shield(&l)?;
+    let (chunks, mut inbox) = inputs(&l)?;
+    let (t0, n) = (l.scene.t0, l.models.robot.dof());
     std::fs::create_dir_all(out)
         .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
     let cmd_path = out.join("commands.jsonl");
@@ -333,61 +418,44 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let mut cmd_out = create(&cmd_path)?;
     // What each command's binding indices stand for (built once): link and body-part names,
     // the person's id in a scene of several people, the object's id.
-    let person_ids: Vec<String> = scene.humans.iter().map(|p| p.id.clone()).collect();
-    let object_ids: Vec<String> = models.objects.iter().map(|(id, _, _)| id.clone()).collect();
-    let names = shield.binding_names(&person_ids, &object_ids);
-    let mut log = ShieldLog::new(create(&log_path)?, &header, t0, &scene.start)
+    let person_ids: Vec<String> = l.scene.humans.iter().map(|p| p.id.clone()).collect();
+    let names = shield.binding_names(&person_ids, inbox.object_ids());
+    let mut log = ShieldLog::new(create(&log_path)?, &l.header, t0, &l.scene.start)
         .map_err(|e| CliError::Internal(format!("{}: {e}", log_path.display())))?;
     let werr = |p: &Path, e: &dyn std::fmt::Display| {
         CliError::Output(format!("cannot write {}: {e}", p.display()))
     };
 
     let dt = shield.config().safety_step;
-    let steps = (duration / dt).ceil() as usize;
-    let (mut next, mut verified, mut accepted) = (0usize, 0usize, 0usize);
+    let steps = (l.scene.duration / dt).ceil() as usize;
+    let (mut verified, mut accepted) = (0usize, 0usize);
     let mut rejected: Vec<Value> = Vec::new();
     let mut max_step_us: f64 = 0.0;
     for k in 0..steps {
         let t = t0 + k as f64 * dt;
-        let mut latest_human: Option<&HumanMeasurement> = None;
-        // Delivered at the first step at or after the arrival time, compared exactly: a
-        // measurement is never handed to the shield before its stamp (it would ignore it as
-        // from the future, while the log would say it was received).
-        while next < events.len() && events[next].0 <= t {
-            match events[next].1 {
-                Event::Chunk(i) => match shield.set_chunk(&chunks[i]) {
-                    Ok(()) => accepted += 1,
-                    Err(e) => {
+        // Every input reaches the shield at the first step at or after its arrival (never
+        // before: a measurement handed over before its stamp would be ignored as from the
+        // future while the log said it was received); every measurement is logged.
+        let hand_over = |shield: &mut Shield, log: Option<&mut ShieldLog<_>>, i: usize| {
+            match shield.set_chunk(&chunks[i]) {
+                Ok(()) => accepted += 1,
+                Err(e) => {
+                    if let Some(log) = log {
                         log.event(t, "chunk_rejected")
-                            .map_err(|e| werr(&log_path, &e))?;
-                        rejected.push(json!({"chunk": i, "t": t, "reason": e.to_string()}));
+                            .map_err(|e| Delivery::Cli(werr(&log_path, &e)))?;
                     }
-                },
-                Event::Human(i) => {
-                    // Every delivered measurement is logged (the audit checks each against the
-                    // model); the shield gets the newest of the step and keeps it if it is
-                    // newer than its own.
-                    let (p, m) = &humans[i];
-                    log.person(t, *p, m).map_err(|e| werr(&log_path, &e))?;
-                    if *p > 0 {
-                        shield
-                            .measure_human(*p, m)
-                            .map_err(|e| input(format!("human_measurements[{i}]: {e}")))?;
-                    } else if m.supersedes(latest_human) {
-                        latest_human = Some(m);
-                    }
-                }
-                Event::Object(i) => {
-                    let (k, m) = &objects[i];
-                    shield
-                        .measure_object(*k, m)
-                        .map_err(|e| input(format!("object_measurements[{i}]: {e}")))?;
-                    log.object(t, &models.objects[*k].0, m)
-                        .map_err(|e| werr(&log_path, &e))?;
+                    rejected.push(json!({"chunk": i, "t": t, "reason": e.to_string()}));
                 }
             }
-            next += 1;
+            Ok::<(), Delivery>(())
+        };
+        let due = inbox
+            .due(t, &mut shield, Some(&mut log), hand_over)
+            .map_err(|e| e.at(t))?;
+        if let Some(e) = due.log_error {
+            return Err(werr(&log_path, &e));
         }
+        let latest_human = due.first;
         let clock = std::time::Instant::now();
         let cmd = shield
             .step(t, latest_human)
@@ -396,22 +464,8 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         verified += cmd.diag.verified as usize;
         log.record(t, latest_human, &cmd)
             .map_err(|e| werr(&log_path, &e))?;
-        let d = &cmd.diag;
-        let mut line = json!({
-            "t": cmd.t,
-            "q": &cmd.state.q[..n],
-            "dq": &cmd.state.dq[..n],
-            "ddq": &cmd.state.ddq[..n],
-            "verified": d.verified,
-            "on_failsafe": d.on_failsafe,
-            "binding": names.describe(&d.binding),
-            "path_speed": d.path_speed,
-            "stop_time": d.stop_time,
-        });
-        if d.min_separation.is_finite() {
-            line["min_separation_m"] = json!(d.min_separation);
-        }
-        serde_json::to_writer(&mut cmd_out, &line).map_err(|e| werr(&cmd_path, &e))?;
+        serde_json::to_writer(&mut cmd_out, &command_line(&cmd, n, &names))
+            .map_err(|e| werr(&cmd_path, &e))?;
         writeln!(cmd_out).map_err(|e| werr(&cmd_path, &e))?;
     }
     log.finish()
@@ -421,14 +475,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     cmd_out.flush().map_err(|e| werr(&cmd_path, &e))?;
     // Inputs arriving after the last step never reached the shield: say so rather than leave
     // them out of every count.
-    let (mut late_chunks, mut late_humans, mut late_objects) = (Vec::new(), 0usize, 0usize);
-    for (_, e) in &events[next..] {
-        match e {
-            Event::Chunk(i) => late_chunks.push(*i),
-            Event::Human(_) => late_humans += 1,
-            Event::Object(_) => late_objects += 1,
-        }
-    }
+    let (late_chunks, late_humans, late_objects) = not_delivered(&inbox);
     if !late_chunks.is_empty() {
         eprintln!(
             "pacs: warning: chunks {late_chunks:?} are timed after the last step ({} s) and were never handed to the shield (extend `duration`)",
@@ -436,7 +483,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         );
     }
     Ok(json!({
-        "scene": name,
+        "scene": l.name,
         "steps": steps,
         "safety_step_s": dt,
         "verified_fraction": verified as f64 / steps.max(1) as f64,
