@@ -1,0 +1,383 @@
+//! Records checked against records: the consistency of each human or object measurement with
+//! the model beside the others kept (a record that the others contradict makes the audit
+//! inconclusive over the stamps between them; [`super::Auditor`]'s `push_human` and
+//! `push_object` call these). Every test is conservative: distances rounded up, allowances
+//! rounded down, and the quick accepts in plain floats only where their rounding error is far
+//! inside a 1e-9 margin, so rounding never hides a contradiction.
+
+use super::*;
+
+/// `(min, max)` of two times.
+pub(super) fn order(a: f64, b: f64) -> (f64, f64) {
+    (a.min(b), a.max(b))
+}
+
+/// The stamps of the records that contradict a new record at `t`, reduced to the nearest one at
+/// or before `t` and the nearest one after it: the break is reported over the shortest spans of
+/// time it is known to lie in.
+pub(super) struct Nearest {
+    t: f64,
+    before: Option<f64>,
+    after: Option<f64>,
+}
+
+impl Nearest {
+    pub(super) fn new(t: f64) -> Self {
+        Self {
+            t,
+            before: None,
+            after: None,
+        }
+    }
+
+    pub(super) fn add(&mut self, s: f64) {
+        if s <= self.t {
+            self.before = Some(self.before.map_or(s, |b| b.max(s)));
+        } else {
+            self.after = Some(self.after.map_or(s, |a| a.min(s)));
+        }
+    }
+
+    /// `(t_start, t_end)` of each break found (none, one or two).
+    pub(super) fn pairs(&self) -> impl Iterator<Item = (f64, f64)> + use<> {
+        let t = self.t;
+        self.before
+            .map(|b| order(b, t))
+            .into_iter()
+            .chain(self.after.map(|a| order(t, a)))
+    }
+}
+
+/// Whether two measurements of one person contradict the human model: some keypoint moved
+/// farther than `v_max·|Δt| + 2·e_pos` (m) between their stamps. Conservative both ways: the
+/// distance rounded up, the allowance rounded down, so rounding never hides a contradiction
+/// (only one within an ulp is flagged too).
+pub(super) fn human_pair_breaks(
+    model: &HumanModel,
+    a: &HumanMeasurement,
+    b: &HumanMeasurement,
+) -> bool {
+    let (lo, hi) = order(a.time(), b.time());
+    // Plain floats for the fast accept below; outward-rounded bounds only where it does not
+    // decide.
+    let (dt_plain, e2_plain) = ((hi - lo).max(0.0), 2.0 * model.measurement_error_pos());
+    a.positions()
+        .iter()
+        .zip(b.positions())
+        .zip(model.v_max())
+        .any(|((p, q), v)| {
+            // Equal positions moved by 0 m, within any allowance (≥ 0): an exact duplicate of a
+            // record is no contradiction, even where outward rounding of a zero distance would
+            // exceed a zero allowance (no measurement error, equal stamps).
+            if p == q {
+                return false;
+            }
+            // Fast accept in plain floats: the squared distance and the squared allowance (three
+            // rounded operations from exact values) each carry a relative rounding error of a few
+            // ε, far inside the 1e-9 margin, so a pair accepted here is within the allowance
+            // exactly. Only where neither overflows (d² finite) nor underflows (allowance ≥
+            // 1e-150, so its square is normal and an underflowed d² is far below it); everything
+            // else is decided by the outward-rounded distance and allowance.
+            let plain = v * dt_plain + e2_plain;
+            let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9) {
+                return false;
+            }
+            let dt = sub_down(hi, lo).max(0.0);
+            let allowed = add_down(
+                mul_down(*v, dt),
+                mul_down(2.0, model.measurement_error_pos()),
+            );
+            dist3_up(&[p.x, p.y, p.z], &[q.x, q.y, q.z]) > allowed
+        })
+}
+
+/// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
+/// x, max y, max z]`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct KeypointBox([f64; 6]);
+
+impl KeypointBox {
+    pub(super) fn of(m: &HumanMeasurement) -> Self {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in m.positions() {
+            for (k, x) in [p.x, p.y, p.z].into_iter().enumerate() {
+                b[k] = b[k].min(x);
+                b[k + 3] = b[k + 3].max(x);
+            }
+        }
+        Self(b)
+    }
+}
+
+/// A quick accept for [`human_pair_breaks`]: true only if no keypoint of `a` and `b` moved more
+/// than the least allowance of any keypoint (`v_min · |Δt| + e2`, `v_min` the least of the
+/// model's `v_max`, `e2` twice its position error), shown by the diagonal of the box holding both
+/// measurements' keypoints, which bounds every keypoint's displacement. In plain floats, with the
+/// margin and the range conditions of the fast accept in [`human_pair_breaks`] (relative rounding
+/// errors of a few ε, far inside 1e-9). False says nothing; the caller then applies
+/// [`human_pair_breaks`]. Property test `the_box_accept_of_a_human_pair_is_sound`.
+pub(super) fn pair_within_boxes(
+    v_min: f64,
+    e2: f64,
+    a: &HumanMeasurement,
+    b: &HumanMeasurement,
+    ba: &KeypointBox,
+    bb: &KeypointBox,
+) -> bool {
+    let allowed = v_min * (a.time() - b.time()).abs() + e2;
+    let mut d2 = 0.0;
+    for k in 0..3 {
+        let e = ba.0[k + 3].max(bb.0[k + 3]) - ba.0[k].min(bb.0[k]);
+        d2 += e * e;
+    }
+    allowed >= 1e-150 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
+}
+
+/// A Euclidean norm rounded down (`pacs_reach::rounding::norm3_down`, harness a3).
+pub(super) fn norm3_down(v: [f64; 3]) -> f64 {
+    pacs_reach::rounding::norm3_down(v[0], v[1], v[2])
+}
+
+/// An upper bound of the norm of every acceleration in an object's acceleration set (m/s²):
+/// |bias| + Σ|generators| + `max_acc` (triangle inequality), each norm rounded down, so the
+/// bound is below the exact one by ulps at most (a check using it flags within-ulp cases too).
+pub(super) fn object_acc_bound(model: &ObjectModel) -> f64 {
+    let mut acc = norm3_down(model.acc_bias());
+    for g in model.acc_generators() {
+        acc = add_down(acc, norm3_down(*g));
+    }
+    add_down(acc, model.max_acc())
+}
+
+/// Whether one measurement of an object contradicts its model: a measured velocity faster than
+/// the speed bound plus the velocity error (the true velocity is within `vel_error` of it and
+/// never faster than `max_speed`). Rounding never hides a contradiction.
+pub(super) fn object_record_breaks(model: &ObjectModel, m: &ObjectMeasurement) -> bool {
+    match (model.max_speed(), m.velocity) {
+        (Some(vmax), Some(v)) => norm3_up(v[0], v[1], v[2]) > add_down(vmax, model.vel_error()),
+        _ => false,
+    }
+}
+
+/// Whether two measurements of one object, `early` stamped no later than `late`, contradict its
+/// model (both describe the state `delay` before their stamps, so `Δt` is the stamps'
+/// difference):
+/// - velocities, where both are measured, farther apart than `a·Δt + 2·vel_error` (`a`:
+///   [`object_acc_bound`]);
+/// - positions farther apart than the model allows over `Δt` plus twice the position error:
+///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
+///   for each measured velocity `v` (forward from the early one, backward from the late one);
+///   with none of these the model bounds nothing and no pair contradicts it.
+///
+/// Allowances are rounded down and distances up: rounding never hides a contradiction.
+pub(super) fn object_pair_breaks(
+    model: &ObjectModel,
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+) -> bool {
+    let dt = sub_down(late.time, early.time).max(0.0);
+    let acc = object_acc_bound(model);
+    let ev = model.vel_error();
+    if let (Some(a), Some(b)) = (early.velocity, late.velocity)
+        && a != b
+        && dist3_up(&a, &b) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
+    {
+        return true;
+    }
+    // Equal positions are within any allowance (exact duplicates are no contradiction).
+    if early.position == late.position {
+        return false;
+    }
+    let by_speed = model.max_speed().map(|v| mul_down(v, dt));
+    let by_velocity = [early.velocity, late.velocity]
+        .into_iter()
+        .flatten()
+        .map(|v| {
+            let speed = add_down(norm3_down(v), ev);
+            add_down(
+                mul_down(speed, dt),
+                mul_down(mul_down(0.5, acc), mul_down(dt, dt)),
+            )
+        })
+        .reduce(f64::min);
+    let allowed = match (by_speed, by_velocity) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(a), None) | (None, Some(a)) => a,
+        (None, None) => return false,
+    };
+    let allowed = add_down(allowed, mul_down(2.0, model.pos_error()));
+    dist3_up(&early.position, &late.position) > allowed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A seeded xorshift generator of uniform numbers in [0, 1).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut x = seed;
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The box accept never hides a contradiction: wherever `pair_within_boxes` accepts a pair,
+    /// `human_pair_breaks` (the reference) finds none; and it accepts most pairs far apart in
+    /// time (what it is for). 20 000 random pairs of the default model's keypoints, moved up to
+    /// 2× the allowance, at time differences from 0 to 2 s.
+    #[test]
+    fn the_box_accept_of_a_human_pair_is_sound() {
+        let model = HumanModel::builtin("default").unwrap();
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15u64);
+        let (mut accepted, mut far, mut far_accepted) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let dt = 2.0 * next() * next();
+            let size = 2.0 * next();
+            let base: Vec<[f64; 3]> = (0..9)
+                .map(|_| [next() * size, next() * size, 1.0 + next() * size])
+                .collect();
+            let reach = 2.0 * (2.0 * dt + 2.0 * model.measurement_error_pos()) * next();
+            let moved: Vec<[f64; 3]> = base
+                .iter()
+                .map(|p| {
+                    let d = [next() - 0.5, next() - 0.5, next() - 0.5];
+                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
+                    let len = reach * next();
+                    [
+                        p[0] + d[0] / n * len,
+                        p[1] + d[1] / n * len,
+                        p[2] + d[2] / n * len,
+                    ]
+                })
+                .collect();
+            let (Ok(a), Ok(b)) = (
+                HumanMeasurement::new(&model, 0.0, &base, None),
+                HumanMeasurement::new(&model, dt, &moved, None),
+            ) else {
+                continue;
+            };
+            let v_min = model.v_max().iter().copied().fold(f64::INFINITY, f64::min);
+            let e2 = 2.0 * model.measurement_error_pos();
+            let quick = pair_within_boxes(
+                v_min,
+                e2,
+                &a,
+                &b,
+                &KeypointBox::of(&a),
+                &KeypointBox::of(&b),
+            );
+            if quick {
+                accepted += 1;
+                assert!(
+                    !human_pair_breaks(&model, &a, &b),
+                    "dt {dt}, size {size}: accepted a contradicting pair"
+                );
+            }
+            // Far apart in time, a person of up to 0.5 m moved by at most a quarter of the
+            // allowance: the box diagonal is within it, so the box accepts.
+            let allowance = 2.0 * dt + 2.0 * model.measurement_error_pos();
+            if dt > 1.0 && size < 0.5 && reach < 0.25 * allowance {
+                far += 1;
+                far_accepted += quick as usize;
+            }
+        }
+        assert!(accepted > 1_000, "{accepted}");
+        assert!(far > 50 && far_accepted == far, "{far_accepted} of {far}");
+    }
+
+    /// The fast accept in `human_pair_breaks` is sound: a pair it accepts is within the
+    /// allowance by the outward-rounded test applied to the same pair scaled by a power of two
+    /// into the unit range (exact scaling, where the rounded test's absolute error terms are
+    /// negligible). 20 000 random pairs at scales from 1e-160 to 1e150 m, a third of them with
+    /// a keypoint within a relative 1e-12 of the allowance, where rounding decides; where the
+    /// fast path does not accept, the answer is the rounded test's.
+    #[test]
+    fn the_fast_accept_of_a_human_pair_is_sound() {
+        let model = HumanModel::builtin("default").unwrap();
+        let mut next = uniform(0x2545_f491_4f6c_dd1du64);
+        let (mut breaks, mut cases) = (0, 0);
+        for i in 0..20_000 {
+            let scale = 10f64.powf(-160.0 + 310.0 * next());
+            let dt = scale * next();
+            let v = model.v_max()[0];
+            let base: Vec<[f64; 3]> = (0..9)
+                .map(|_| [next() * scale, next() * scale, next() * scale])
+                .collect();
+            let moved: Vec<[f64; 3]> = base
+                .iter()
+                .enumerate()
+                .map(|(j, p)| {
+                    // A direction, and a length: within the allowance (one case in three), at it
+                    // (±1e-12) for the first keypoint and half of it for the others, or anywhere
+                    // up to 2× for one keypoint.
+                    let d = [next() - 0.5, next() - 0.5, next() - 0.5];
+                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
+                    let len = match (i % 3, j) {
+                        (0, _) => v * dt * next(),
+                        (1, 0) => v * dt * (1.0 + 1e-12 * (2.0 * next() - 1.0)),
+                        (2, 0) => 2.0 * v * dt * next(),
+                        _ => 0.5 * v * dt,
+                    };
+                    [
+                        p[0] + d[0] / n * len,
+                        p[1] + d[1] / n * len,
+                        p[2] + d[2] / n * len,
+                    ]
+                })
+                .collect();
+            let (Ok(a), Ok(b)) = (
+                HumanMeasurement::new(&model, 0.0, &base, None),
+                HumanMeasurement::new(&model, dt, &moved, None),
+            ) else {
+                continue;
+            };
+            let got = human_pair_breaks(&model, &a, &b);
+            // The rounded test on the pair scaled by 2^k (exact) into the unit range.
+            let k = -(scale.log2().round() as i32);
+            let f = 2f64.powi(k);
+            let e2 = mul_down(2.0, model.measurement_error_pos());
+            let allowed = add_down(mul_down(v, sub_down(dt, 0.0).max(0.0)), e2) * f;
+            let reference = base.iter().zip(&moved).any(|(p, q)| {
+                let (ps, qs) = (
+                    [p[0] * f, p[1] * f, p[2] * f],
+                    [q[0] * f, q[1] * f, q[2] * f],
+                );
+                dist3_up(&ps, &qs) > allowed
+            });
+            if !got {
+                assert!(
+                    !reference,
+                    "case {i}, scale {scale}: accepted a pair beyond the allowance"
+                );
+            }
+            let rounded = base
+                .iter()
+                .zip(&moved)
+                .zip(model.v_max())
+                .any(|((p, q), v)| {
+                    dist3_up(p, q) > add_down(mul_down(*v, sub_down(dt, 0.0).max(0.0)), e2)
+                });
+            if got {
+                assert!(rounded, "case {i}: flagged what the rounded test does not");
+            }
+            breaks += got as usize;
+            cases += 1;
+        }
+        assert!(
+            cases > 19_000 && breaks > cases / 5 && breaks < cases / 2,
+            "{breaks} of {cases}"
+        );
+    }
+}
