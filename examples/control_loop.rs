@@ -138,7 +138,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cmd = shield.step(t, measurement.as_ref())?;
         step_us.push(clock.elapsed().as_secs_f64() * 1e6);
         // Send cmd.state.q / dq / ddq (rad, rad/s, rad/s²) for time cmd.t to the robot here.
-        last_q.copy_from_slice(&cmd.state.q[..cmd.dof]);
+        last_q.copy_from_slice(cmd.q());
         if cmd.diag.verified {
             verified += 1;
             if stopped_at.is_some() && resumed_at.is_none() && cmd.diag.path_speed > 0.5 {

@@ -67,7 +67,7 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
             }
             let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
             let cmd = f.step(t, Some(&m)).expect("started");
-            let q = &cmd.state.q[..7];
+            let q = cmd.q();
             if std::env::var("SHIELD_DEBUG").is_ok() && k % 100 == 0 {
                 eprintln!(
                     "cbf t={t:.2} q1={:.4} q2={:.4} sep={:.3} bind={:?} ok={}",
@@ -78,7 +78,7 @@ fn cbf_baseline_tracks_reference_and_leaves_the_path_near_a_person() {
                 off_path = off_path.max((q[i] - Q0[i]).abs());
             }
             if true_separation(&robot, &human, q, &script(cmd.t)) <= 0.0
-                && cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-9)
+                && cmd.dq().iter().any(|v| v.abs() > 1e-9)
             {
                 contacts += 1;
             }

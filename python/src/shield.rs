@@ -977,17 +977,17 @@ impl PyCommand {
     /// Joint positions (rad), shape (dof,).
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.cmd.state.q[..self.cmd.dof])
+        PyArray1::from_slice(py, self.cmd.q())
     }
     /// Joint velocities (rad/s), shape (dof,).
     #[getter]
     fn dq<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.cmd.state.dq[..self.cmd.dof])
+        PyArray1::from_slice(py, self.cmd.dq())
     }
     /// Joint accelerations (rad/s²), shape (dof,).
     #[getter]
     fn ddq<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.cmd.state.ddq[..self.cmd.dof])
+        PyArray1::from_slice(py, self.cmd.ddq())
     }
     /// The intended step was verified and is executed.
     #[getter]
@@ -1044,13 +1044,12 @@ impl PyCommand {
     }
     /// As a dict of plain values (arrays as lists).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.cmd.dof;
         let d = &self.cmd.diag;
         let v = serde_json::json!({
             "t": self.cmd.t,
-            "q": &self.cmd.state.q[..n],
-            "dq": &self.cmd.state.dq[..n],
-            "ddq": &self.cmd.state.ddq[..n],
+            "q": self.cmd.q(),
+            "dq": self.cmd.dq(),
+            "ddq": self.cmd.ddq(),
             "verified": d.verified,
             "on_failsafe": d.on_failsafe,
             "binding": self.names.describe(&d.binding),
@@ -1069,7 +1068,6 @@ impl PyCommand {
         Ok(out)
     }
     fn __repr__(&self) -> String {
-        let n = self.cmd.dof;
         format!(
             "Command(t={:.4}, verified={}, on_failsafe={}, path_speed={:.3}, chunk={}, passed={}, q={:?})",
             self.cmd.t,
@@ -1078,7 +1076,7 @@ impl PyCommand {
             self.cmd.diag.path_speed,
             self.progress.chunk,
             self.progress.passed,
-            &self.cmd.state.q[..n]
+            self.cmd.q()
         )
     }
 }

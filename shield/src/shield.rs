@@ -346,6 +346,23 @@ pub struct Command {
     pub diag: Diagnostics,
 }
 
+impl Command {
+    /// Commanded joint positions (rad), one per joint of the robot.
+    pub fn q(&self) -> &[f64] {
+        &self.state.q[..self.dof]
+    }
+
+    /// Commanded joint velocities (rad/s), one per joint of the robot.
+    pub fn dq(&self) -> &[f64] {
+        &self.state.dq[..self.dof]
+    }
+
+    /// Commanded joint accelerations (rad/s²), one per joint of the robot.
+    pub fn ddq(&self) -> &[f64] {
+        &self.state.ddq[..self.dof]
+    }
+}
+
 /// The PACS shield (also OFF and single-action, by configuration).
 #[derive(Clone)]
 pub struct Shield {

@@ -65,16 +65,11 @@ impl<W: Write> ShieldLog<W> {
             self.w
                 .write_robot_with_acc(t0, &q0, Some(&zeros), Some(&zeros))?;
         }
-        let n = cmd.dof;
         let tc = cmd.t.max(self.last_t);
         self.last_t = tc;
         // The commanded accelerations let the audit use the jerk limit between samples.
-        self.w.write_robot_with_acc(
-            tc,
-            &cmd.state.q[..n],
-            Some(&cmd.state.dq[..n]),
-            Some(&cmd.state.ddq[..n]),
-        )?;
+        self.w
+            .write_robot_with_acc(tc, cmd.q(), Some(cmd.dq()), Some(cmd.ddq()))?;
         let d = &cmd.diag;
         let mut fields = serde_json::Map::new();
         fields.insert("verified".into(), d.verified.into());

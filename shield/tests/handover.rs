@@ -56,8 +56,8 @@ fn an_offered_chunk_is_set_chunk_at_its_handover() {
                 assert!(
                     same(&a, &b),
                     "{motion:?}, lead {lead}: commands differ at t = {t}: {:?} vs {:?}",
-                    a.state.q[..7].to_vec(),
-                    b.state.q[..7].to_vec()
+                    a.q().to_vec(),
+                    b.q().to_vec()
                 );
             }
             if !offer_ok {
@@ -209,7 +209,7 @@ fn offers_keep_the_commands_on_the_path_with_a_person_walking_in() {
         let verified = cmd.diag.verified;
         let (traj, p) = sh.path();
         let on = p.joint_state(traj);
-        assert_eq!(on.q[..7], cmd.state.q[..7], "command off the path at {t}");
+        assert_eq!(&on.q[..7], cmd.q(), "command off the path at {t}");
         if let Some(p) = &prev {
             assert_continuous(p, &cmd);
         }

@@ -107,10 +107,10 @@ fn run_rolling(c: [f64; 3], v: [f64; 3], contact: ObjectContact, measure: bool) 
             sh.measure_object(id, &m).unwrap();
         }
         let cmd = sh.step(t, None).unwrap();
-        let q = &cmd.state.q[..7];
+        let q = cmd.q();
         let sep = separation(q, at(cmd.t));
         out.min_separation = out.min_separation.min(sep);
-        let moving = cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-12);
+        let moving = cmd.dq().iter().any(|v| v.abs() > 1e-12);
         if moving && sep <= 0.0 {
             out.moving_contact += 1;
         }

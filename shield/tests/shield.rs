@@ -108,15 +108,15 @@ fn run(
         let m = HumanMeasurement::new(&human, t, &truth_then, None).unwrap();
         let cmd = sh.step(t, Some(&m)).expect("started");
         let mut q = [0.0; 7];
-        q.copy_from_slice(&cmd.state.q[..7]);
-        let moving = cmd.state.dq[..7].iter().any(|v| v.abs() > 1e-12);
+        q.copy_from_slice(cmd.q());
+        let moving = cmd.dq().iter().any(|v| v.abs() > 1e-12);
         let sep = true_separation(&robot, &human, &q, &script(cmd.t));
         if moving && sep <= 0.0 {
             out.moving_contact += 1;
             if std::env::var("SHIELD_DEBUG").is_ok() {
                 eprintln!(
                     "CONTACT t={t:.3} sep={sep:.4} dq={:.2e} verified={} fs={} sd={:.4} bind={:?}",
-                    cmd.state.dq[..7].iter().fold(0.0f64, |a, b| a.max(b.abs())),
+                    cmd.dq().iter().fold(0.0f64, |a, b| a.max(b.abs())),
                     cmd.diag.verified,
                     cmd.diag.on_failsafe,
                     cmd.diag.path_speed,
@@ -256,8 +256,8 @@ fn pfl_contacts(
         }
         let m = HumanMeasurement::new(&human, t, &script(t - human.delay()), None).unwrap();
         let cmd = sh.step(t, Some(&m)).expect("started");
-        let q = &cmd.state.q[..7];
-        let dq = &cmd.state.dq[..7];
+        let q = cmd.q();
+        let dq = cmd.dq();
         progress = q[0] - Q0[0];
         // Ground truth: any body part in contact with a moving link?
         let kp = script(cmd.t);

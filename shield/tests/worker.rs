@@ -92,8 +92,8 @@ fn worker_chunks_are_set_chunk_at_their_handover() {
                 assert!(
                     same(&a, &b),
                     "{motion:?}, lead {lead}, step {k}: {:?} vs {:?}",
-                    a.state.q[..7].to_vec(),
-                    b.state.q[..7].to_vec()
+                    a.q().to_vec(),
+                    b.q().to_vec()
                 );
             }
             assert_eq!(w.replans(), 0, "no step failed, so no offer went stale");

@@ -267,14 +267,7 @@ fn episode(seed: u64, tally: &mut Tally, worker: bool) {
         last_traj = Some((times, path.s));
         // Ground truth at the command's time against the true person.
         let truth = script.keypoints(cmd.t);
-        let (sep, violation, _) = ground_truth(
-            &robot,
-            &human,
-            &tc,
-            &cmd.state.q[..7],
-            &cmd.state.dq[..7],
-            &truth,
-        );
+        let (sep, violation, _) = ground_truth(&robot, &human, &tc, cmd.q(), cmd.dq(), &truth);
         tally.min_separation = tally.min_separation.min(sep);
         assert!(
             !violation,

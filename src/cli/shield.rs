@@ -367,13 +367,13 @@ impl From<InboxError> for Delivery {
 }
 
 /// One command as a JSON Lines record (`names`: what its binding's indices stand for).
-fn command_line(cmd: &Command, n: usize, names: &BindingNames) -> Value {
+fn command_line(cmd: &Command, names: &BindingNames) -> Value {
     let d = &cmd.diag;
     let mut line = json!({
         "t": cmd.t,
-        "q": &cmd.state.q[..n],
-        "dq": &cmd.state.dq[..n],
-        "ddq": &cmd.state.ddq[..n],
+        "q": cmd.q(),
+        "dq": cmd.dq(),
+        "ddq": cmd.ddq(),
         "verified": d.verified,
         "on_failsafe": d.on_failsafe,
         "binding": names.describe(&d.binding),
@@ -405,7 +405,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let l = load(path)?;
     let mut shield = build_shield(&l)?;
     let (chunks, mut inbox) = inputs(&l)?;
-    let (t0, n) = (l.scene.t0, l.models.robot.dof());
+    let t0 = l.scene.t0;
     std::fs::create_dir_all(out)
         .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
     let cmd_path = out.join("commands.jsonl");
@@ -464,7 +464,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
         verified += cmd.diag.verified as usize;
         log.record(t, latest_human, &cmd)
             .map_err(|e| werr(&log_path, &e))?;
-        serde_json::to_writer(&mut cmd_out, &command_line(&cmd, n, &names))
+        serde_json::to_writer(&mut cmd_out, &command_line(&cmd, &names))
             .map_err(|e| werr(&cmd_path, &e))?;
         writeln!(cmd_out).map_err(|e| werr(&cmd_path, &e))?;
     }

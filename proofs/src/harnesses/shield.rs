@@ -463,10 +463,7 @@ mod real {
             }
             // Failing forever: at rest after the reported stop time, and it stays there.
             if fail_forever && cmd.t >= cmd.diag.stop_time + alpha {
-                assert!(
-                    cmd.state.dq[..7].iter().all(|v| *v == 0.0),
-                    "moving after stop time"
-                );
+                assert!(cmd.dq().iter().all(|v| *v == 0.0), "moving after stop time");
                 let q: [f64; 7] = std::array::from_fn(|i| cmd.state.q[i]);
                 match at_rest_since {
                     None => at_rest_since = Some(q),

@@ -51,9 +51,9 @@ pub fn shield(motion: ChunkMotion) -> Shield {
 
 pub fn same(a: &Command, b: &Command) -> bool {
     a.t == b.t
-        && a.state.q[..7] == b.state.q[..7]
-        && a.state.dq[..7] == b.state.dq[..7]
-        && a.state.ddq[..7] == b.state.ddq[..7]
+        && a.q() == b.q()
+        && a.dq() == b.dq()
+        && a.ddq() == b.ddq()
         && a.diag.verified == b.diag.verified
 }
 

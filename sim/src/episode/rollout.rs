@@ -315,8 +315,8 @@ pub fn run_setup(
             l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
         }
         last_cmd_t = cmd.t;
-        q.copy_from_slice(&cmd.state.q[..n]);
-        dq.copy_from_slice(&cmd.state.dq[..n]);
+        q.copy_from_slice(cmd.q());
+        dq.copy_from_slice(cmd.dq());
         tracking.apply(cmd.t, &mut q, &mut dq);
         let truth = script.keypoints(cmd.t);
         let truths: Vec<Vec<[f64; 3]>> = others.iter().map(|o| o.keypoints(cmd.t)).collect();
