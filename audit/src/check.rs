@@ -698,20 +698,22 @@ pub(crate) fn stamps_resolve(t0: f64, t1: f64) -> bool {
     dt <= 0.0 || pacs_log::time::clock_resolves(t0.abs().max(t1.abs()), dt)
 }
 
+/// A seeded xorshift generator of uniform numbers in [0, 1) (the unit tests of this module and
+/// its submodules).
+#[cfg(test)]
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut x = seed;
+    move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A seeded xorshift generator of uniform numbers in [0, 1).
-    fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut x = seed;
-        move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
 
     #[test]
     fn reach_sphere_contains_the_robot_in_every_sampled_configuration() {

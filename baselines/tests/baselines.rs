@@ -2,12 +2,10 @@
 //! leaves the path near a person; the shield's separation figure changes no decision on the
 //! bench's walking-human scenario; the bench's planning-thread scenario offers and takes over.
 
-use nalgebra::Point3;
 use pacs_baselines::bench::{back_and_forth, shield_scenario_offloop, walking_human};
 use pacs_baselines::cbf::{CbfConfig, CbfFilter};
-use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
+use pacs_models::{ConstraintSpec, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
-use pacs_reach::geometry::segment_distance_lower_bound;
 use pacs_reach::human::HumanMeasurement;
 use pacs_shield::ChunkMotion;
 use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
@@ -16,30 +14,7 @@ const Q0: [f64; 7] = fr3::Q_READY;
 
 const DELTA: [f64; 7] = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 
-/// Minimum exact distance between the robot's moving capsules at `q` and the true body parts.
-fn true_separation(
-    robot: &pacs_models::RobotModel,
-    human: &HumanModel,
-    q: &[f64],
-    kp: &[[f64; 3]],
-) -> f64 {
-    let caps = robot.capsules_world(q);
-    let mut d = f64::INFINITY;
-    for bp in human.body_parts() {
-        let a = Point3::from(kp[bp.from]);
-        let b = Point3::from(kp[bp.to]);
-        for (li, c) in &caps {
-            if robot.links()[*li].frame == 0 {
-                continue;
-            }
-            let s = segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2())
-                - c.radius()
-                - bp.thickness / 2.0;
-            d = d.min(s);
-        }
-    }
-    d
-}
+use pacs_testkit::true_separation;
 
 fn chunk(delta: [f64; 7], h: usize) -> Chunk {
     Chunk {

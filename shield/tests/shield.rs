@@ -10,30 +10,7 @@ use pacs_shield::shield::{EnvShape, FilterMode, Shield, ShieldConfig};
 
 const Q0: [f64; 7] = fr3::Q_READY;
 
-/// Minimum exact distance between the robot's moving capsules at `q` and the true body parts.
-fn true_separation(
-    robot: &pacs_models::RobotModel,
-    human: &HumanModel,
-    q: &[f64],
-    kp: &[[f64; 3]],
-) -> f64 {
-    let caps = robot.capsules_world(q);
-    let mut d = f64::INFINITY;
-    for bp in human.body_parts() {
-        let a = Point3::from(kp[bp.from]);
-        let b = Point3::from(kp[bp.to]);
-        for (li, c) in &caps {
-            if robot.links()[*li].frame == 0 {
-                continue;
-            }
-            let s = segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2())
-                - c.radius()
-                - bp.thickness / 2.0;
-            d = d.min(s);
-        }
-    }
-    d
-}
+use pacs_testkit::true_separation;
 
 fn chunk(delta: [f64; 7], h: usize) -> Chunk {
     Chunk {

@@ -31,6 +31,33 @@ pub fn keypoints_in_a_row(x: f64) -> Vec<[f64; 3]> {
     (0..9).map(|i| [x, 0.1 * i as f64 - 0.4, 1.0]).collect()
 }
 
+/// Least distance (m) between the robot's moving capsules at `q` (rad) and the body parts at the
+/// keypoints `kp` (m): the separation the tests score the shield and the baselines against.
+pub fn true_separation(
+    robot: &pacs_models::RobotModel,
+    human: &pacs_models::HumanModel,
+    q: &[f64],
+    kp: &[[f64; 3]],
+) -> f64 {
+    use nalgebra::Point3;
+    let caps = robot.capsules_world(q);
+    let mut d = f64::INFINITY;
+    for bp in human.body_parts() {
+        let a = Point3::from(kp[bp.from]);
+        let b = Point3::from(kp[bp.to]);
+        for (li, c) in &caps {
+            if robot.links()[*li].frame == 0 {
+                continue;
+            }
+            let s = pacs_reach::geometry::segment_distance_lower_bound(&a, &b, &c.p1(), &c.p2())
+                - c.radius()
+                - bp.thickness / 2.0;
+            d = d.min(s);
+        }
+    }
+    d
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -222,17 +222,6 @@ pub(super) fn object_pair_breaks(
 mod tests {
     use super::*;
 
-    /// A seeded xorshift generator of uniform numbers in [0, 1).
-    fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut x = seed;
-        move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     /// The box accept never hides a contradiction: wherever `pair_within_boxes` accepts a pair,
     /// `human_pair_breaks` (the reference) finds none; and it accepts most pairs far apart in
     /// time (what it is for). 20 000 random pairs of the default model's keypoints, moved up to

@@ -198,11 +198,7 @@ impl Auditor {
         let (sep, pfl_seen) = match far {
             Some(sep) => (sep, None),
             None => {
-                if self
-                    .rreach
-                    .occupancy_with(&mut self.scratch, &u.q, &mut self.rcaps)
-                    .is_err()
-                {
+                if !self.robot_occupancy(&u) {
                     return false;
                 }
                 robot_occupancy = true;
@@ -238,6 +234,14 @@ impl Auditor {
         true
     }
 
+    /// The robot occupancy of the position box `u.q` into `self.rcaps`; false where it cannot be
+    /// computed (non-finite boxes), and the stretch is then not provably clean.
+    fn robot_occupancy(&mut self, u: &SpanBoxes) -> bool {
+        self.rreach
+            .occupancy_with(&mut self.scratch, &u.q, &mut self.rcaps)
+            .is_ok()
+    }
+
     /// Whether every object provably keeps the object rule over `[t0, t1]` with the robot in the
     /// boxes `u`: each object's occupancy over the whole stretch, from the measurement in use for
     /// all of its spans (`ObjectTrack::span`; blocks close when it changes), outside the
@@ -260,11 +264,7 @@ impl Auditor {
                 continue;
             }
             if !have_robot {
-                if self
-                    .rreach
-                    .occupancy_with(&mut self.scratch, &u.q, &mut self.rcaps)
-                    .is_err()
-                {
+                if !self.robot_occupancy(u) {
                     return false;
                 }
                 have_robot = true;
