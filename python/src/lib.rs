@@ -6,9 +6,11 @@
 //! nothing panics across the boundary.
 
 mod audit;
+mod command;
 mod convert;
 mod errors;
 mod fleet;
+mod inputs;
 mod models;
 mod runner;
 mod shield;
@@ -21,7 +23,7 @@ use pyo3::prelude::*;
 fn _pacs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<shield::PyShield>()?;
-    m.add_class::<shield::PyCommand>()?;
+    m.add_class::<command::PyCommand>()?;
     m.add_class::<runner::PyShieldLoop>()?;
     m.add_class::<audit::PyRun>()?;
     m.add_class::<audit::PyLogWriter>()?;

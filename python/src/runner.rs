@@ -7,9 +7,10 @@
 //! mutex is held only for copies, and its only other user (the loop thread) never waits for the
 //! GIL. Neither can deadlock with the GIL.
 
+use crate::command::PyCommand;
 use crate::convert::{finite, flag, index, show};
 use crate::errors::{Kind, err, input, type_err};
-use crate::shield::{Fail, Handle, Inner, PyCommand, PyShield, with_inner};
+use crate::shield::{Fail, Handle, Inner, PyShield, step, with_inner};
 use numpy::{PyArray1, PyArrayMethods};
 use pacs_shield::shield::{ChunkProgress, Command};
 use pyo3::prelude::*;
@@ -105,8 +106,9 @@ fn run_steps(
     let t0 = match inner.lock() {
         Ok(mut g) => {
             // Wall-clock pacing: chunks are planned off the lock from then on.
-            g.paced = realtime && g.running == Some(id);
-            g.last_t.map_or(g.start_t, |t| t + alpha)
+            let paced = realtime && g.driver() == Some(id);
+            g.set_paced(paced);
+            g.next_step()
         }
         Err(_) => return,
     };
@@ -115,9 +117,9 @@ fn run_steps(
     impl Drop for Unpace<'_> {
         fn drop(&mut self) {
             if let Ok(mut g) = self.0.lock()
-                && (g.running == Some(self.1) || g.running.is_none())
+                && (g.driver() == Some(self.1) || g.driver().is_none())
             {
-                g.paced = false;
+                g.set_paced(false);
             }
         }
     }
@@ -144,11 +146,11 @@ fn run_steps(
         let r = match inner.lock() {
             // Only the loop that claimed the shield steps it (a stop() racing a start() may
             // have released the claim).
-            Ok(g) if g.running != Some(id) => Err((
+            Ok(g) if g.driver() != Some(id) => Err((
                 Kind::State,
                 "this ShieldLoop no longer owns the shield (stopped)".to_string(),
             )),
-            Ok(mut g) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| g.step(t)))
+            Ok(mut g) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| step(&mut g, t)))
                 .unwrap_or_else(|_| {
                     Err((
                         Kind::State,
@@ -203,13 +205,13 @@ impl PyShieldLoop {
     /// Make this loop the one that steps the shield (refused if another one does).
     fn claim(&self, py: Python<'_>) -> PyResult<()> {
         let id = self.id;
-        with_inner(py, &self.h.inner, move |g| match g.running {
+        with_inner(py, &self.h.inner, move |g| match g.driver() {
             Some(other) if other != id => Err((
                 Kind::State,
                 "ShieldLoop: another ShieldLoop runs this shield".into(),
             )),
             _ => {
-                g.running = Some(id);
+                g.set_driver(Some(id));
                 Ok(())
             }
         })
@@ -217,9 +219,9 @@ impl PyShieldLoop {
 
     fn release(&self) {
         if let Ok(mut g) = self.h.inner.lock()
-            && g.running == Some(self.id)
+            && g.driver() == Some(self.id)
         {
-            g.running = None;
+            g.set_driver(None);
         }
     }
 }
@@ -262,7 +264,7 @@ impl PyShieldLoop {
             _ => 0,
         };
         let h = s.borrow().h.clone();
-        let started = with_inner(py, &h.inner, |g| Ok(g.started))?;
+        let started = with_inner(py, &h.inner, |g| Ok(g.started()))?;
         if !started {
             return Err(err(
                 Kind::State,
@@ -342,9 +344,7 @@ impl PyShieldLoop {
         self.check_error(py)?;
         self.claim(py)?;
         let alpha = self.h.safety_step;
-        let now = with_inner(py, &self.h.inner, move |g| {
-            Ok(g.last_t.map_or(g.start_t, |x| x + alpha))
-        })?;
+        let now = with_inner(py, &self.h.inner, move |g| Ok(g.next_step()))?;
         if t < now {
             return Ok(());
         }

@@ -6,8 +6,9 @@
 //!   path) is verified with the one ISO/TS 15066 rule (`pacs_verify::iso15066`);
 //! - [`chunk_motion`]: whether chunks end at rest or pass their last waypoint moving;
 //! - [`replan`]: the one re-plan policy for a chunk whose hand-over failed;
-//! - [`session`]: what every runner shares: timed measurements delivered at the first safety
-//!   step at or after their arrival, to the shield and the log;
+//! - [`session`]: what every runner shares: a [`Session`] (one run: timed measurements delivered
+//!   at the first safety step at or after their arrival, to the shield and the log; steps on the
+//!   safety-step grid; chunks) and the [`PacedHandover`] of chunks while a real-time loop steps it;
 //! - [`settings`]: shield settings as users write them (scene files, the Python package);
 //! - [`shield_log`]: a shield run written as an audit log (`pacs-log` format v1);
 //! - [`worker`]: a planning thread that keeps chunk planning out of a real-time loop.
@@ -30,4 +31,4 @@ pub mod worker;
 
 pub use chunk_motion::ChunkMotion;
 pub use replan::ReplanPolicy;
-pub use session::{Due, InboxError, MeasurementInbox};
+pub use session::{Due, InboxError, MeasurementInbox, PacedHandover, Session, SessionError};

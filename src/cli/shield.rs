@@ -15,14 +15,14 @@ use pacs_models::human::HumanSpec;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
-use pacs_shield::session::{InboxError, MeasurementInbox, Pending};
+use pacs_shield::session::{MeasurementInbox, Pending, Session, SessionError};
 use pacs_shield::settings::ShieldSettings;
 use pacs_shield::shield::{BindingNames, Command, Shield};
-use pacs_shield::shield_log::ShieldLog;
 use serde::Deserialize;
 use serde_json::{Value, json};
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
 
 /// The scene file (see docs/cli.md, `pacs shield`).
 #[derive(Debug, Deserialize)]
@@ -193,7 +193,7 @@ fn load(path: Option<&Path>) -> Result<Loaded, CliError> {
     })
 }
 
-/// Check the start, the run's time span and build the shield of the scene, started at rest.
+/// Check the start and the run's time span and build the shield of the scene (not started).
 fn build_shield(l: &Loaded) -> Result<Shield, CliError> {
     let (scene, models, cfg, name) = (&l.scene, &l.models, l.cfg, &l.name);
     check_vec("start", &scene.start, models.robot.dof())?;
@@ -239,21 +239,17 @@ fn build_shield(l: &Loaded) -> Result<Shield, CliError> {
             .add_object(*model, *contact)
             .map_err(|e| input(format!("objects `{id}`: {e}")))?;
     }
-    shield
-        .start(t0, &scene.start)
-        .map_err(|e| input(e.to_string()))?;
     Ok(shield)
 }
 
-/// The scene's chunks, checked, and every timed input in the inbox (a chunk as its index);
-/// pushed chunks first, then human, then object measurements, each in file order, so that
-/// inputs arriving at one time reach the shield in that order.
-fn inputs(l: &Loaded) -> Result<(Vec<Chunk>, MeasurementInbox<usize>), CliError> {
+/// The scene's chunks, checked, in the order they are handed over (by time, file order for
+/// equal times), each with its time (s) and index; every measurement is put in `session`'s
+/// inbox (human, then object measurements, each in file order, so that measurements arriving
+/// at one time reach the shield in that order).
+fn inputs(l: &Loaded, session: &mut Session<Out>) -> Result<Vec<(f64, usize, Chunk)>, CliError> {
     let (scene, models) = (&l.scene, &l.models);
     let n = models.robot.dof();
-    let object_ids = models.objects.iter().map(|(id, _, _)| id.clone()).collect();
-    let mut inbox = MeasurementInbox::new(models.people.len(), object_ids);
-    let pushed = |e: InboxError| CliError::Internal(format!("inputs: {e}"));
+    let pushed = |e: SessionError| CliError::Internal(format!("inputs: {e}"));
     let mut chunks = Vec::with_capacity(scene.chunks.len());
     for (i, c) in scene.chunks.iter().enumerate() {
         let field = format!("chunks[{i}]");
@@ -268,21 +264,22 @@ fn inputs(l: &Loaded) -> Result<(Vec<Chunk>, MeasurementInbox<usize>), CliError>
                 c.actions.len()
             )));
         }
-        chunks.push(Chunk {
+        let chunk = Chunk {
             kind: c.kind,
             actions: c.actions.clone(),
             execute: c.execute,
             gripper: None,
-        });
-        inbox.push_other(t, i).map_err(pushed)?;
+        };
+        chunks.push((t, i, chunk));
     }
+    chunks.sort_by(|a, b| a.0.total_cmp(&b.0));
     for (i, m) in scene.human_measurements.iter().enumerate() {
         let field = format!("human_measurements[{i}]");
         let (t, received) = stamp_and_arrival(&field, m.t, m.received)?;
         let p = person_index(&field, m.id.as_deref(), models)?;
         let hm = HumanMeasurement::new(&models.people[p].1, t, &m.keypoints, None)
             .map_err(|e| input(format!("{field}.keypoints: {e}")))?;
-        inbox.push_person(received, p, hm).map_err(pushed)?;
+        session.measure_person_at(received, p, hm).map_err(pushed)?;
     }
     for (i, m) in scene.object_measurements.iter().enumerate() {
         let field = format!("object_measurements[{i}]");
@@ -309,9 +306,9 @@ fn inputs(l: &Loaded) -> Result<(Vec<Chunk>, MeasurementInbox<usize>), CliError>
             position: m.position,
             velocity: m.velocity,
         };
-        inbox.push_object(received, k, om).map_err(pushed)?;
+        session.measure_object_at(received, k, om).map_err(pushed)?;
     }
-    Ok((chunks, inbox))
+    Ok(chunks)
 }
 
 /// The shield's index of the person a measurement names (`id`; may be omitted with one
@@ -344,28 +341,6 @@ fn person_index(field: &str, id: Option<&str>, models: &LogModels) -> Result<usi
     }
 }
 
-/// A failure while inputs are delivered: the inbox's, or one of the CLI's own.
-enum Delivery {
-    Inbox(InboxError),
-    Cli(CliError),
-}
-
-impl Delivery {
-    /// The CLI's error for a failure at step time `t` (s).
-    fn at(self, t: f64) -> CliError {
-        match self {
-            Delivery::Cli(e) => e,
-            Delivery::Inbox(e) => input(format!("measurement at {t} s: {e}")),
-        }
-    }
-}
-
-impl From<InboxError> for Delivery {
-    fn from(e: InboxError) -> Self {
-        Delivery::Inbox(e)
-    }
-}
-
 /// One command as a JSON Lines record (`names`: what its binding's indices stand for).
 fn command_line(cmd: &Command, names: &BindingNames) -> Value {
     let d = &cmd.diag;
@@ -386,96 +361,98 @@ fn command_line(cmd: &Command, names: &BindingNames) -> Value {
     line
 }
 
-/// What is still waiting in the inbox: the chunks (their indices), the number of human and of
-/// object measurements.
-fn not_delivered(inbox: &MeasurementInbox<usize>) -> (Vec<usize>, usize, usize) {
-    let (mut chunks, mut humans, mut objects) = (Vec::new(), 0usize, 0usize);
-    for (_, e) in inbox.pending() {
-        match e {
-            Pending::Other(i) => chunks.push(*i),
-            Pending::Person(..) => humans += 1,
-            Pending::Object(..) => objects += 1,
-        }
-    }
-    (chunks, humans, objects)
+/// The measurements still waiting in the inbox: of people, of objects.
+fn not_delivered(inbox: &MeasurementInbox) -> (usize, usize) {
+    inbox.pending().fold((0, 0), |(h, o), (_, e)| match e {
+        Pending::Person(..) => (h + 1, o),
+        _ => (h, o + 1),
+    })
 }
+
+/// The log and command files' writer.
+type Out = BufWriter<File>;
 
 /// Run `pacs shield [--input F] [--out DIR]`: returns the summary printed on stdout.
 pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let l = load(path)?;
-    let mut shield = build_shield(&l)?;
-    let (chunks, mut inbox) = inputs(&l)?;
-    let t0 = l.scene.t0;
-    std::fs::create_dir_all(out)
-        .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
-    let cmd_path = out.join("commands.jsonl");
-    let log_path = out.join("log.jsonl");
-    let create = |p: &PathBuf| {
-        std::fs::File::create(p)
-            .map(std::io::BufWriter::new)
-            .map_err(|e| CliError::Output(format!("cannot create {}: {e}", p.display())))
-    };
-    let mut cmd_out = create(&cmd_path)?;
+    let shield = build_shield(&l)?;
+    let object_ids: Vec<String> = l.models.objects.iter().map(|o| o.0.clone()).collect();
     // What each command's binding indices stand for (built once): link and body-part names,
     // the person's id in a scene of several people, the object's id.
     let person_ids: Vec<String> = l.scene.humans.iter().map(|p| p.id.clone()).collect();
-    let names = shield.binding_names(&person_ids, inbox.object_ids());
-    let mut log = ShieldLog::new(create(&log_path)?, &l.header, t0, &l.scene.start)
-        .map_err(|e| CliError::Internal(format!("{}: {e}", log_path.display())))?;
+    let names = shield.binding_names(&person_ids, &object_ids);
+    // Every input of a scene file is known in advance: its size bounds the inbox.
+    let mut session = Session::new(shield, object_ids).with_max_waiting(usize::MAX);
+    let chunks = inputs(&l, &mut session)?;
+    let t0 = l.scene.t0;
+    std::fs::create_dir_all(out)
+        .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
+    let (cmd_path, log_path) = (out.join("commands.jsonl"), out.join("log.jsonl"));
+    let create = |p: &Path| File::create(p).map(BufWriter::new);
+    let cannot_create =
+        |p: &Path, e| CliError::Output(format!("cannot create {}: {e}", p.display()));
+    let mut cmd_out = create(&cmd_path).map_err(|e| cannot_create(&cmd_path, e))?;
     let werr = |p: &Path, e: &dyn std::fmt::Display| {
         CliError::Output(format!("cannot write {}: {e}", p.display()))
     };
-
-    let dt = shield.config().safety_step;
+    session
+        .start_logged(
+            t0,
+            &l.scene.start,
+            &l.header,
+            &log_path.display().to_string(),
+            || create(&log_path),
+        )
+        .map_err(|e| match e {
+            SessionError::LogCreate { error, .. } => cannot_create(&log_path, error),
+            SessionError::LogHeader { error, .. } => {
+                CliError::Internal(format!("{}: {error}", log_path.display()))
+            }
+            e => input(e.to_string()),
+        })?;
+    let dt = session.shield().config().safety_step;
     let steps = (l.scene.duration / dt).ceil() as usize;
-    let (mut verified, mut accepted) = (0usize, 0usize);
+    let (mut verified, mut accepted, mut next_chunk) = (0usize, 0usize, 0usize);
     let mut rejected: Vec<Value> = Vec::new();
     let mut max_step_us: f64 = 0.0;
     for k in 0..steps {
         let t = t0 + k as f64 * dt;
         // Every input reaches the shield at the first step at or after its arrival (never
         // before: a measurement handed over before its stamp would be ignored as from the
-        // future while the log said it was received); every measurement is logged.
-        let hand_over = |shield: &mut Shield, log: Option<&mut ShieldLog<_>>, i: usize| {
-            match shield.set_chunk(&chunks[i]) {
-                Ok(()) => accepted += 1,
-                Err(e) => {
-                    if let Some(log) = log {
-                        log.event(t, "chunk_rejected")
-                            .map_err(|e| Delivery::Cli(werr(&log_path, &e)))?;
-                    }
-                    rejected.push(json!({"chunk": i, "t": t, "reason": e.to_string()}));
+        // future while the log said it was received); every input is logged.
+        while let Some((_, i, chunk)) = chunks.get(next_chunk).filter(|c| c.0 <= t) {
+            next_chunk += 1;
+            match session.set_chunk(chunk) {
+                Ok(_) => accepted += 1,
+                Err(SessionError::ChunkRejected(e)) => {
+                    rejected.push(json!({"chunk": i, "t": t, "reason": e.to_string()}))
                 }
+                Err(e) => return Err(CliError::Internal(format!("chunk {i} at {t} s: {e}"))),
             }
-            Ok::<(), Delivery>(())
-        };
-        let due = inbox
-            .due(t, &mut shield, Some(&mut log), hand_over)
-            .map_err(|e| e.at(t))?;
-        if let Some(e) = due.log_error {
+        }
+        let clock = std::time::Instant::now();
+        let cmd = session.step(t).map_err(|e| match e {
+            SessionError::Delivery(e) => input(format!("measurement at {t} s: {e}")),
+            e => CliError::Internal(format!("step at {t} s: {e}")),
+        })?;
+        max_step_us = max_step_us.max(clock.elapsed().as_secs_f64() * 1e6);
+        if let Some(e) = session.log_failure() {
             return Err(werr(&log_path, &e));
         }
-        let latest_human = due.first;
-        let clock = std::time::Instant::now();
-        let cmd = shield
-            .step(t, latest_human)
-            .map_err(|e| CliError::Internal(format!("step at {t} s: {e}")))?;
-        max_step_us = max_step_us.max(clock.elapsed().as_secs_f64() * 1e6);
         verified += cmd.diag.verified as usize;
-        log.record(t, latest_human, &cmd)
-            .map_err(|e| werr(&log_path, &e))?;
         serde_json::to_writer(&mut cmd_out, &command_line(&cmd, &names))
             .map_err(|e| werr(&cmd_path, &e))?;
         writeln!(cmd_out).map_err(|e| werr(&cmd_path, &e))?;
     }
-    log.finish()
-        .map_err(|e| werr(&log_path, &e))?
-        .flush()
-        .map_err(|e| werr(&log_path, &e))?;
+    session.close().map_err(|e| match e {
+        SessionError::Log { error, .. } => werr(&log_path, &error),
+        e => CliError::Internal(e.to_string()),
+    })?;
     cmd_out.flush().map_err(|e| werr(&cmd_path, &e))?;
     // Inputs arriving after the last step never reached the shield: say so rather than leave
     // them out of every count.
-    let (late_chunks, late_humans, late_objects) = not_delivered(&inbox);
+    let late_chunks: Vec<usize> = chunks[next_chunk..].iter().map(|c| c.1).collect();
+    let (late_humans, late_objects) = not_delivered(session.inbox());
     if !late_chunks.is_empty() {
         eprintln!(
             "pacs: warning: chunks {late_chunks:?} are timed after the last step ({} s) and were never handed to the shield (extend `duration`)",

@@ -1,11 +1,7 @@
-//! The measurement side of a shield run, shared by every runner (the CLI, the Python binding):
-//! a [`MeasurementInbox`] holds timed measurements of people and objects (and, ordered
-//! among them, the runner's own timed inputs such as chunk hand-overs) until the first safety
-//! step at or after their arrival time, then hands them to the [`Shield`] through its
-//! measurement calls and writes each to the run's [`ShieldLog`].
-//!
-//! Which measurement is in use is not decided here: the shield keeps the newest by
-//! [`pacs_reach::stamped`]'s rule, and the inbox only decides *when* each one reaches it.
+//! The measurement inbox: timed measurements of people and objects (and, ordered among them,
+//! the runner's own timed inputs such as chunk hand-overs) held until the first safety step at or
+//! after their arrival time, then handed to the [`Shield`] through its measurement calls and
+//! written to the run's [`ShieldLog`].
 
 use crate::shield::{Shield, ShieldError};
 use crate::shield_log::ShieldLog;
