@@ -149,7 +149,16 @@ pub fn to_json(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
 /// A serde value from a JSON-like Python value; errors name `name` and the field.
 pub fn from_py<T: DeserializeOwned>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
     let text = to_json(obj, name)?;
-    serde_json::from_str(&text).map_err(|e| input(format!("{name}: {e}")))
+    serde_json::from_str(&text).map_err(|e| {
+        // Name the field inside the argument (`config.mode`), where serde_json points at one.
+        let inner = (e.line() > 0)
+            .then(|| pacs_models::json_path_at(&text, e.line(), e.column()))
+            .flatten();
+        match inner {
+            Some(p) => input(format!("{name}.{p}: {e}")),
+            None => input(format!("{name}: {e}")),
+        }
+    })
 }
 
 /// The JSON value as a Python object (`json.loads`).

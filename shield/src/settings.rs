@@ -4,17 +4,21 @@
 //! package both call [`ShieldSettings::config`]).
 
 use crate::chunk_motion::ChunkMotion;
-use crate::shield::{FilterMode, ShieldConfig, ShieldError};
+use crate::shield::{FilterMode, ShieldConfig};
 use pacs_motion::chunk::OutOfLimits;
+use pacs_reach::human::HumanReachModel;
 use serde::{Deserialize, Serialize};
+use thiserror::Error;
 
-/// Shield settings a user may override (the rest keep [`ShieldConfig::default`]).
+/// Shield settings a user may override (the rest keep [`ShieldConfig::default`]). Choices are
+/// typed: an unknown name is refused when the settings are read, with the field's path and the
+/// names allowed.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShieldSettings {
     /// `"pacs"`, `"off"` or `"single-action"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mode: Option<String>,
+    pub mode: Option<FilterMode>,
     /// Safety step α_s (s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub safety_step: Option<f64>,
@@ -29,76 +33,55 @@ pub struct ShieldSettings {
     pub rest_speed: Option<f64>,
     /// Human reachability model: `"combined"`, `"pos"`, `"vel"` or `"acc"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub human_model: Option<String>,
+    pub human_model: Option<HumanReachModel>,
     /// Waypoints outside the joint limits: `"reject"` the chunk or `"project"` them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub out_of_limits: Option<String>,
+    pub out_of_limits: Option<OutOfLimits>,
     /// `"stop"` (every chunk ends at rest; default) or `"continuous"` (chunks pass their last
     /// executed waypoint moving; see [`ChunkMotion`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub chunk_motion: Option<String>,
+    pub chunk_motion: Option<ChunkMotion>,
     /// Compute each step's separation figure (default `true`; a diagnostic costing 1.5–2 µs per
     /// step, see [`ShieldConfig::separation_figure`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separation_figure: Option<bool>,
 }
 
-fn invalid(msg: String) -> ShieldError {
-    ShieldError::Invalid(msg)
+/// A setting that is not finite.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("config.{field}: value {value} is not finite")]
+pub struct SettingError {
+    /// The field (`safety_step`, …).
+    pub field: &'static str,
+    /// Its value.
+    pub value: f64,
 }
 
-fn finite(field: &str, v: f64) -> Result<f64, ShieldError> {
-    if v.is_finite() {
-        Ok(v)
+fn finite(field: &'static str, value: f64) -> Result<f64, SettingError> {
+    if value.is_finite() {
+        Ok(value)
     } else {
-        Err(invalid(format!("config.{field}: value {v} is not finite")))
+        Err(SettingError { field, value })
     }
 }
 
 impl ShieldSettings {
     /// The shield configuration: the defaults with these overrides. Errors name the field
-    /// (`config.mode`, …) and the value; ranges are checked again by [`crate::shield::Shield::new`].
-    pub fn config(&self) -> Result<ShieldConfig, ShieldError> {
+    /// (`config.safety_step`, …) and the value; ranges are checked again by
+    /// [`crate::shield::Shield::new`].
+    pub fn config(&self) -> Result<ShieldConfig, SettingError> {
         let mut cfg = ShieldConfig::default();
-        if let Some(m) = &self.mode {
-            cfg.mode = match m.as_str() {
-                "pacs" => FilterMode::Pacs,
-                "off" => FilterMode::Off,
-                "single-action" => FilterMode::SingleAction,
-                o => {
-                    return Err(invalid(format!(
-                        "config.mode: unknown mode `{o}` (pacs, off, single-action)"
-                    )));
-                }
-            };
+        if let Some(m) = self.mode {
+            cfg.mode = m;
         }
-        if let Some(m) = &self.human_model {
-            cfg.human_model = m
-                .parse()
-                .map_err(|e| invalid(format!("config.human_model: {e}")))?;
+        if let Some(m) = self.human_model {
+            cfg.human_model = m;
         }
-        if let Some(m) = &self.out_of_limits {
-            cfg.out_of_limits = match m.as_str() {
-                "reject" => OutOfLimits::Reject,
-                "project" => OutOfLimits::Project,
-                o => {
-                    return Err(invalid(format!(
-                        "config.out_of_limits: unknown choice `{o}` (reject, project)"
-                    )));
-                }
-            };
+        if let Some(m) = self.out_of_limits {
+            cfg.out_of_limits = m;
         }
-        if let Some(m) = &self.chunk_motion {
-            let motion = match m.as_str() {
-                "stop" => ChunkMotion::Stop,
-                "continuous" => ChunkMotion::Continuous,
-                o => {
-                    return Err(invalid(format!(
-                        "config.chunk_motion: unknown choice `{o}` (stop, continuous)"
-                    )));
-                }
-            };
-            motion.apply(&mut cfg);
+        if let Some(m) = self.chunk_motion {
+            m.apply(&mut cfg);
         }
         if let Some(v) = self.safety_step {
             cfg.safety_step = finite("safety_step", v)?;
@@ -146,14 +129,6 @@ mod tests {
     #[test]
     fn errors_name_the_field_and_value() {
         let e = ShieldSettings {
-            mode: Some("fast".into()),
-            ..Default::default()
-        }
-        .config()
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("config.mode") && e.contains("fast"), "{e}");
-        let e = ShieldSettings {
             safety_step: Some(f64::NAN),
             ..Default::default()
         }
@@ -161,18 +136,25 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("config.safety_step") && e.contains("NaN"), "{e}");
-        let e = ShieldSettings {
-            chunk_motion: Some("smooth".into()),
-            ..Default::default()
+        // Unknown names are refused when read, naming the value and the choices.
+        for (text, bad, choices) in [
+            (r#"{"mode": "fast"}"#, "fast", "single-action"),
+            (r#"{"chunk_motion": "smooth"}"#, "smooth", "continuous"),
+            (r#"{"human_model": "x"}"#, "`x`", "combined"),
+            (r#"{"out_of_limits": "clip"}"#, "clip", "project"),
+            (r#"{"speed": 1}"#, "speed", "mode"),
+        ] {
+            let e = serde_json::from_str::<ShieldSettings>(text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(bad) && e.contains(choices), "{text}: {e}");
         }
-        .config()
-        .unwrap_err()
-        .to_string();
-        assert!(
-            e.contains("config.chunk_motion") && e.contains("smooth"),
-            "{e}"
-        );
-        let bad: Result<ShieldSettings, _> = serde_json::from_str(r#"{"speed": 1}"#);
-        assert!(bad.unwrap_err().to_string().contains("speed"));
+    }
+
+    #[test]
+    fn settings_are_written_as_read() {
+        let text = r#"{"mode":"single-action","human_model":"vel","out_of_limits":"project","chunk_motion":"continuous"}"#;
+        let s: ShieldSettings = serde_json::from_str(text).unwrap();
+        assert_eq!(serde_json::to_string(&s).unwrap(), text);
     }
 }
