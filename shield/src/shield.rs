@@ -309,8 +309,8 @@ fn is_first(i: &usize) -> bool {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Diagnostics {
     /// The intended step was verified and executed. (In OFF mode every candidate is executed;
-    /// this says whether its monitored trajectory verified. Before session 24 it was true for
-    /// every executed step, also unverified ones.)
+    /// this says whether its monitored trajectory verified, so an executed step may be
+    /// unverified.)
     pub verified: bool,
     /// The robot follows a failsafe (braking) this step.
     pub on_failsafe: bool,
