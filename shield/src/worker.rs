@@ -1,8 +1,8 @@
 //! A planning thread for a real-time loop: [`ChunkWorker`].
 //!
-//! Planning a chunk takes a large part of a 1 ms step or more (the spline's passes; measured in
-//! `docs/performance.md#chunk-planning-time`); a 1 kHz loop that planned inside its step would
-//! miss its deadline. [`Shield::set_chunk`] plans in the caller's thread and suits
+//! Planning a chunk (the spline's passes) takes too long to fit in a 1 ms step beside the
+//! verification (measured in `docs/performance.md#chunk-planning-time`); a 1 kHz loop that
+//! planned inside its step would miss its deadline. [`Shield::set_chunk`] plans in the caller's thread and suits
 //! simulations and loops with time to spare. A real-time loop hands its chunks to a
 //! `ChunkWorker` instead, which splits every re-plan across steps:
 //!

@@ -8,9 +8,9 @@
 //! elsewhere (a step was not verified, another chunk came first), the plan is dropped
 //! ([`OfferState::Stale`]) and the caller plans again from a new handover.
 //!
-//! Planning a chunk takes a large part of a 1 ms step or more (the spline's passes; measured in
-//! `docs/performance.md#chunk-planning-time`); a 1 kHz loop that planned in its own step would
-//! miss its deadline. With this split the loop's share is a comparison of two joint
+//! Planning a chunk (the spline's passes) takes too long to fit in a 1 ms step beside the
+//! verification (measured in `docs/performance.md#chunk-planning-time`); a 1 kHz loop that
+//! planned in its own step would miss its deadline. With this split the loop's share is a comparison of two joint
 //! states and a move of the trajectory into a slot (no allocation: the trajectory it replaces
 //! is kept until the next [`Shield::offer`], which drops it outside the step).
 
