@@ -24,7 +24,7 @@ use pacs::shield::worker::{ChunkWorker, WorkerState};
 use std::time::{Duration, Instant};
 
 /// Safety steps between asking for a handover and the step that takes the chunk over: 5 ms
-/// for planning (median ≈ 0.5 ms on a 2-core machine, rarely over 2 ms).
+/// for planning (planning times: `docs/performance.md#chunk-planning-time`).
 const LEAD: usize = 5;
 
 /// The default human's 9 keypoints (m) standing on the floor 0.75 m below the table top, torso

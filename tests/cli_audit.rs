@@ -318,7 +318,7 @@ fn csv_logs_are_audited_by_extension() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Issue 11: a PFL task with a robot whose moving link has capsules but no mass, or a robot with
+/// A PFL task with a robot whose moving link has capsules but no mass, or a robot with
 /// a massless moving body, is refused (exit 3) naming the link; the same robot is accepted for an
 /// SSM-only task (no energy involved).
 #[test]
@@ -361,8 +361,8 @@ fn massless_moving_link_is_refused_for_pfl() {
     }
 }
 
-/// Issue 40: a header robot whose moving link has mass but no capsules could never be found
-/// touching anyone (it audited PASS): refused with exit 3, naming the link, under SSM too.
+/// A header robot whose moving link has mass but no capsules could never be found touching
+/// anyone (it would audit PASS): refused with exit 3, naming the link, under SSM too.
 #[test]
 fn uncovered_moving_link_in_the_header_is_refused() {
     let mut spec = pacs_models::RobotModel::builtin("fr3")
@@ -397,10 +397,9 @@ fn uncovered_moving_link_in_the_header_is_refused() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Issue 11: a header robot with finite but astronomical offsets overflowed the checker (a panic
-/// in debug builds; in release the run came out inconclusive with `"min_separation": null` and
-/// the contact at the base unreported). The model is refused: exit 3 naming the header line and
-/// the field.
+/// A header robot with finite but astronomical offsets would overflow the checker (a panic in
+/// debug builds; in release an inconclusive run with `"min_separation": null` and the contact
+/// at the base unreported). The model is refused: exit 3 naming the header line and the field.
 #[test]
 fn astronomical_robot_in_the_header_is_refused() {
     let mut spec = pacs_models::RobotModel::builtin("fr3")
@@ -440,7 +439,7 @@ fn astronomical_robot_in_the_header_is_refused() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Issue 40: `1e400` or `NaN` in a log names the record's field (and the file line), not only
+/// `1e400` or `NaN` in a log names the record's field (and the file line), not only
 /// a JSON column.
 #[test]
 fn non_finite_numbers_in_a_log_name_the_field() {

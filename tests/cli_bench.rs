@@ -1,4 +1,4 @@
-//! `pacs bench shield` and `pacs bench cbf` (issue 15 item 1): every scenario reports the step's
+//! `pacs bench shield` and `pacs bench cbf`: every scenario reports the step's
 //! and `set_chunk`'s median, p99, p99.9 and maximum, the counts over 50 µs / 100 µs and the
 //! work-time figures, as finite numbers in order (median ≤ p99 ≤ p99.9 ≤ max), on a short run;
 //! by default the chunks are planned on the planning thread, whose figures are reported too.
@@ -133,7 +133,7 @@ fn bench_shield_in_loop_and_cbf_report_the_same_figures() {
             "{}",
             run["scenario"]
         );
-        // No planning thread: its figures are absent, not 0 (issue 40).
+        // No planning thread: its figures are absent, not 0.
         for k in ["planning_max_us", "offer_max_us", "chunks", "replans"] {
             assert!(run.get(k).is_none(), "{k} in {run}");
         }

@@ -39,7 +39,7 @@ fn demo_runs_audits_and_reports() {
     }
     let html = std::fs::read_to_string(out_dir.join("report.html")).unwrap();
     assert!(html.contains("<svg"), "report has plots");
-    // Issue 40: the sentences on stderr are read off the rows: one per run, never "hits the
+    // The sentences on stderr are read off the rows: one per run, never "hits the
     // person" above a row with 0.0 % violations.
     let err = String::from_utf8_lossy(&out.stderr);
     for r in runs {

@@ -362,7 +362,7 @@ fn builtin_examples_run_without_input() {
     assert_eq!(v["boxes"][0]["links"].as_array().unwrap().len(), 10);
 }
 
-/// Issue 11: a bound that overflows is an input error (exit 3, naming the field and value),
+/// A bound that overflows is an input error (exit 3, naming the field and value),
 /// never `null` where a number is promised.
 #[test]
 fn overflowing_bounds_are_input_errors_not_null() {
@@ -400,8 +400,8 @@ fn overflowing_bounds_are_input_errors_not_null() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Issue 11: `pacs fk` printed `null` for a robot whose offsets overflow (finite in the file,
-/// `inf` after summing). Every command that loads a robot refuses it: exit 3 naming the field.
+/// A robot whose offsets overflow (finite in the file, `inf` after summing) would make `pacs fk`
+/// print `null`. Every command that loads a robot refuses it: exit 3 naming the field.
 #[test]
 fn astronomical_robot_is_an_input_error_not_null() {
     let mut spec =
@@ -422,7 +422,7 @@ fn astronomical_robot_is_an_input_error_not_null() {
     }
 }
 
-/// Issue 11: a URDF link whose collision geometry is a mesh (no side-file capsules) would be
+/// A URDF link whose collision geometry is a mesh (no side-file capsules) would be
 /// invisible to every check; every command that loads the robot refuses it, naming the links.
 #[test]
 fn mesh_only_urdf_links_are_refused_by_every_command() {
@@ -558,7 +558,7 @@ fn reach_object_example_inline_and_errors() {
     invalid(pacs(&["object", "show", "rock"]), "built-in: ball");
 }
 
-/// Issue 17 item 3: an inline robot or human with a missing or unknown field names it; no
+/// An inline robot or human with a missing or unknown field names it; no
 /// "untagged enum" message reaches the user.
 #[test]
 fn inline_models_name_the_faulty_field() {

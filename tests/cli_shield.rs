@@ -1,4 +1,4 @@
-//! `pacs shield --input scene.json` end to end (issue 15): the shipped example runs, writes one
+//! `pacs shield --input scene.json` end to end: the shipped example runs, writes one
 //! command per safety step and a log `pacs audit` passes; the commands stay within the joint
 //! limits, stop for the person and resume; a person in the way from the start keeps the arm at
 //! rest; bad scenes exit 3 naming the field.
@@ -222,11 +222,11 @@ fn inputs_after_the_end_are_reported_not_delivered() {
 /// A measurement that the others contradict — the right hand on the moving flange, stamped 1 ms
 /// before a measurement of the person 1.3 m away that arrives in the same step — is not hidden
 /// by the newer one: the runner logs every measurement it delivers, and the audit checks each
-/// against the human model beside its neighbours in time, so the run cannot pass. Before
-/// session 24 the runner kept only the newest of the step, its log was byte-identical to the
-/// unmodified run's, and the audit passed it. The unmodified run passes; a clock starting at
-/// 0.1 s (steps and stamps rounding differently) passes too (before, a measurement was handed
-/// over 1 ulp before its stamp, the shield ignored it, and the audit refused the log, exit 3).
+/// against the human model beside its neighbours in time, so the run cannot pass (a runner that
+/// kept only the newest measurement of a step would write the unmodified run's log, which
+/// passes). The unmodified run passes; a clock starting at 0.1 s (steps and stamps rounding
+/// differently) passes too: no measurement is handed over before its stamp (one handed over
+/// 1 ulp early would be ignored by the shield, and the audit would refuse the log, exit 3).
 #[test]
 fn a_contradicting_measurement_cannot_hide_behind_a_newer_one() {
     let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
@@ -481,7 +481,7 @@ fn assert_undeclared_person_refused(scene: &Value) {
     std::fs::remove_dir_all(&d).ok();
 }
 
-/// Issue 40: a number JSON cannot hold (`1e400`) or a `NaN` literal in a scene names the field,
+/// A number JSON cannot hold (`1e400`) or a `NaN` literal in a scene names the field,
 /// not only the line and column.
 #[test]
 fn non_finite_numbers_in_a_scene_name_the_field() {

@@ -25,8 +25,8 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
             "off,pacs",
             "--rollouts",
             "1",
-            // A seed where OFF meets the person or a sphere (seeds 5, 6 and 10 of 1–10 with
-            // session 21's planner; OFF got faster and passes the others by chance).
+            // A seed where OFF meets the person or a sphere (OFF is fast and passes other seeds
+            // by chance).
             "--seed",
             "6",
         ],
@@ -77,7 +77,7 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Issue 11: the shield's own logs of every task pass the offline audit (PFL included: the logs
+/// The shield's own logs of every task pass the offline audit (PFL included: the logs
 /// carry the commanded accelerations, which the audit uses with the jerk limit), and OFF logs
 /// that truly violate the constraints fail.
 #[test]

@@ -1,4 +1,4 @@
-//! The documented commands run verbatim from a fresh clone (issue 17, item 6): every
+//! The documented commands run verbatim from a fresh clone: every
 //! `cargo run --release -- …` line of README.md's command blocks and every `pacs …` line of
 //! docs/cli.md's `sh` blocks (`&&`-chains split) is run with the built binary, in order (later
 //! lines may read what earlier ones wrote), from a scratch directory that sees the shipped
@@ -36,7 +36,7 @@ fn run_all(what: &str, commands: &[String]) -> usize {
             out.status.code(),
             String::from_utf8_lossy(&out.stderr)
         );
-        // README's claim about every command's output (issue 40): JSON on stdout, except
+        // README's claim about every command's output: JSON on stdout, except
         // `pacs audit` without `--json`, which prints one line per log.
         if what == "readme" {
             let stdout = String::from_utf8_lossy(&out.stdout);

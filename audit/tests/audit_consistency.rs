@@ -1,6 +1,6 @@
 //! Logged values that other logged values contradict are never trusted, the PFL energy
 //! is the whole robot's, pinches between adjacent links count, trailing human records count.
-//! Each case here passed (exit 0) before the fix.
+//! Each case here is a log that an audit without the check under test would pass (exit 0).
 
 use pacs_audit::enclosure::{Sample, span_boxes};
 use pacs_audit::{AuditConfig, ConstraintKind, RunResult, Verdict, audit_reader};
@@ -392,8 +392,8 @@ fn accelerations_in_jsonl_and_csv() {
 /// neighbours in time (0.09 and 0.10 s), not only against the newest record (0.2 s), and it
 /// does not replace the newest as the measurement in use (the shield keeps the newest too). A
 /// spike 5 ms from its neighbours that the model forbids there but allows over the 105 ms to
-/// the newest (so the old check, against the latest record logged, let the log pass) makes the
-/// log inconclusive; the same record without the spike passes.
+/// the newest (so a check against the latest record logged only would let the log pass) makes
+/// the log inconclusive; the same record without the spike passes.
 #[test]
 fn a_late_human_record_is_checked_against_its_neighbours_in_time() {
     let far = person_at(0.0);

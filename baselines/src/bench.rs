@@ -27,8 +27,8 @@ pub enum ChunkDelivery {
     Worker { lead: usize },
 }
 
-/// The lead of the bench's [`ChunkDelivery::Worker`] runs: 3 ms for planning, above the
-/// planning's worst case on a 2-core machine (≈ 1.2 ms).
+/// The lead of the bench's [`ChunkDelivery::Worker`] runs: 3 ms for planning (the planning
+/// times it is meant to cover: `docs/performance.md#chunk-planning-time`).
 pub const BENCH_LEAD: usize = 3;
 
 /// Timing statistics of a run (seconds per step).

@@ -46,8 +46,8 @@ def test_a_shield_log_passes_the_audit(demo, tmp_path):
 def test_a_measurement_the_others_contradict_is_logged_and_not_a_pass(demo, tmp_path):
     """A measurement of the person at the gripper, superseded in the same step by one 3 m away
     (1 ms newer), is not used by the shield but is logged: the audit checks it against its
-    neighbours in time and cannot pass the run (before session 24 only the newest of a step was
-    logged, and the log passed)."""
+    neighbours in time and cannot pass the run (a log of only the newest measurement of each
+    step would pass)."""
     from conftest import far_human
 
     log = tmp_path / "hidden.jsonl"
@@ -70,8 +70,8 @@ def test_a_measurement_the_others_contradict_is_logged_and_not_a_pass(demo, tmp_
 
 def test_a_first_step_later_than_the_start_gives_an_auditable_log(demo, tmp_path):
     """Started at 0 s, stepped from 0.5 s: the start sample is logged at the first step, after
-    its measurement (before session 24 it went before it in time and the audit refused the log
-    as going backwards)."""
+    its measurement (logged before it, it would go back in time and the audit would refuse the
+    log as going backwards)."""
     log = tmp_path / "late_first_step.jsonl"
     s = pacs.Shield(robot="fr3", humans="default", constraints="sorting", log=log)
     s.start(0.0, demo.start)

@@ -413,8 +413,8 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
 
 /// The consistency test of `pos` is decided soundly at the boundary: with a limit
 /// that is a float exactly (length 0.75 + thickness/2 0.0625 + 2·e_p 0.0625 = 0.875 m), a hand
-/// measured one ulp beyond it contradicts the length and keeps the `vel` capsule (before, a
-/// lower bound of the distance against an upper bound of the limit gave it the extremity ball),
+/// measured one ulp beyond it contradicts the length and keeps the `vel` capsule (a lower bound
+/// of the distance against an upper bound of the limit would give it the extremity ball),
 /// and a hand clearly inside (1e-9 m) keeps the extremity ball.
 #[test]
 fn pos_consistency_is_decided_soundly_at_the_limit() {

@@ -309,8 +309,8 @@ fn is_first(i: &usize) -> bool {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Diagnostics {
     /// The intended step was verified and executed. (In OFF mode every candidate is executed;
-    /// this says whether its monitored trajectory verified. Before session 24 it was true for
-    /// every executed step, also unverified ones.)
+    /// this says whether its monitored trajectory verified, so an executed step may be
+    /// unverified.)
     pub verified: bool,
     /// The robot follows a failsafe (braking) this step.
     pub on_failsafe: bool,
@@ -861,9 +861,9 @@ impl Shield {
     /// intended trajectory, which takes over as soon as one of its steps is verified. A chunk that
     /// cannot be planned is ignored (error returned; the robot keeps its verified motion).
     ///
-    /// Plans in the caller's thread (0.1–1 ms): for simulations and loops with time to spare. A
-    /// 1 kHz loop hands its chunks to a [`crate::worker::ChunkWorker`] instead, whose
-    /// `set_chunk` costs a few µs.
+    /// Plans in the caller's thread (the time: `docs/performance.md#chunk-planning-time`): for
+    /// simulations and loops with time to spare. A 1 kHz loop hands its chunks to a
+    /// [`crate::worker::ChunkWorker`] instead, whose `set_chunk` costs a few µs.
     pub fn set_chunk(&mut self, chunk: &Chunk) -> Result<(), ShieldError> {
         if !self.started {
             return Err(ShieldError::NotStarted);

@@ -1,7 +1,8 @@
 //! A planning thread for a real-time loop: [`ChunkWorker`].
 //!
-//! Planning a chunk takes 0.1–1 ms (the spline's passes); a 1 kHz loop that planned inside its
-//! step would miss its deadline. [`Shield::set_chunk`] plans in the caller's thread and suits
+//! Planning a chunk (the spline's passes) takes too long to fit in a 1 ms step beside the
+//! verification (measured in `docs/performance.md#chunk-planning-time`); a 1 kHz loop that
+//! planned inside its step would miss its deadline. [`Shield::set_chunk`] plans in the caller's thread and suits
 //! simulations and loops with time to spare. A real-time loop hands its chunks to a
 //! `ChunkWorker` instead, which splits every re-plan across steps:
 //!

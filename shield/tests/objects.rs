@@ -1,4 +1,4 @@
-//! The shield with dynamic objects (issue 14): a ball resting where the arm is going is never
+//! The shield with dynamic objects: a ball resting where the arm is going is never
 //! touched (`no_contact`) and never touched while moving (`ssm`); a far ball does not slow the
 //! robot; an object without a measurement keeps the robot at rest; bad measurements are errors.
 
@@ -194,7 +194,7 @@ fn bad_object_input_is_an_error() {
     assert!(e.to_string().contains("contact.pfl.threshold"), "{e}");
 }
 
-/// Two people (issue 14): the first far away and measured through `step`, the second reaching
+/// Two people: the first far away and measured through `step`, the second reaching
 /// for the tool and measured through `measure_human(1, …)`. SSM: the arm never moves while the
 /// second person's hand may touch it, the binding names human 1; with the second person far as
 /// well, the arm moves freely.
@@ -266,7 +266,7 @@ fn the_arm_follows_a_ball_rolling_away_along_its_path() {
     // moving. Each step checks the ball's occupancy over the whole monitored trajectory first;
     // where that touches the robot the interval's own (later, farther) occupancy decides. If
     // the whole one decided (the recompute left out), the arm lags: 910 verified steps and
-    // 0.45 rad instead of 1169 and 0.53 rad (session 19).
+    // 0.45 rad instead of 1169 and 0.53 rad.
     let c = flange_after(0.5);
     let n = (c[0] * c[0] + c[1] * c[1]).sqrt();
     let v = [-c[1] / n * 0.25, c[0] / n * 0.25, 0.0];

@@ -151,7 +151,7 @@ fn ssm_never_moves_into_a_person_standing_at_the_tool() {
         "OFF should collide in this scenario"
     );
     // OFF executes every step but reports which ones verified: not those moving into the
-    // person (before session 24 every executed step said `verified`).
+    // person (an executed step is not therefore `verified`).
     assert!(
         off.verified < off.steps / 2,
         "OFF reports {} of {} steps verified while moving into the person",
@@ -477,8 +477,8 @@ fn continuous_chunks_never_stop_without_a_human() {
     );
 }
 
-/// Issue 40: a refused start names the joint, the value and the limits (it said `start:
-/// configuration outside the joint position limits`).
+/// A refused start names the joint, the value and the limits, not only `start: configuration
+/// outside the joint position limits`.
 #[test]
 fn a_refused_start_names_the_joint_the_value_and_the_limit() {
     let spec = ConstraintSpec::builtin("sorting").unwrap();

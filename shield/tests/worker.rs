@@ -1,4 +1,4 @@
-//! `ChunkWorker` (issue 15 item 1): chunks planned on a thread take over exactly as
+//! `ChunkWorker`: chunks planned on a thread take over exactly as
 //! `Shield::set_chunk` at their handover step would, a stale offer is planned again, a refused
 //! chunk is reported, and nothing the thread does can put a command off the verified path.
 

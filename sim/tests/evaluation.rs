@@ -325,7 +325,7 @@ fn crowded_task_pacs_is_safe_against_person_and_spheres_and_its_log_audits() {
 
 /// Continuous chunk motion with people and objects present: PACS stays without a ground-truth
 /// violation, succeeds, its log does not fail the offline audit, and it finishes sooner than
-/// stopping at every chunk (the robot no longer waits for the policy's clock).
+/// stopping at every chunk (the robot does not wait for the policy's clock).
 #[test]
 fn continuous_chunk_motion_is_safe_and_faster_with_people() {
     use pacs_shield::ChunkMotion;
@@ -362,7 +362,7 @@ fn continuous_chunk_motion_is_safe_and_faster_with_people() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Issue 15 item 3: without people, PACS (continuous chunks) finishes every task at least 10 %
+/// Without people, PACS (continuous chunks) finishes every task at least 10 %
 /// sooner than `direct` (each action a target every 33 ms), with the same success: the mean
 /// duration over seeds 1–10, the rollouts of `docs/evaluation.md`'s speed table (handover's are
 /// bimodal: a test on a few seeds would depend on which).
@@ -394,8 +394,8 @@ fn without_people_pacs_is_at_least_ten_percent_faster_than_direct_on_every_task(
     }
 }
 
-/// Issue 15 item 4 with the policy learned from the demonstrations (`--policy kernel` and
-/// `kernel-paced`), handover without people, seed 1 (as `pacs simulate` runs it): continuous
+/// Chunk trajectories against single actions with the policy learned from the demonstrations
+/// (`--policy kernel` and `kernel-paced`), handover without people, seed 1 (as `pacs simulate` runs it): continuous
 /// chunks finish; single actions, planned rest-to-rest, never do, in the two ways a learned
 /// policy that observes its own motion fails (`docs/evaluation.md`): trained on the
 /// demonstrations as recorded, the standing robot matches no demonstrated state and the policy

@@ -1,4 +1,4 @@
-//! Faults (issue 15, item 5): seeded shield episodes in which the measurements drop out (single
+//! Faults: seeded shield episodes in which the measurements drop out (single
 //! frames and bursts of up to 150 ms), arrive late (up to 40 ms after their stamp), twice, out of
 //! order, or carry NaN; the step times jitter by up to ±0.2 ms; and some chunks are invalid (NaN
 //! or beyond the joint limits) and must be refused. In every episode:

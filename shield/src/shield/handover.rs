@@ -3,13 +3,14 @@
 //! on another thread (no lock on the shield), and [`Shield::offer`] hands the plan back. The
 //! step takes the plan over only if the commanded state at the handover is *bitwise* the state
 //! it was planned from — exactly the invariant of [`Shield::set_chunk`] (a fresh trajectory
-//! starts at the current commanded state), so the safety argument (C8) is unchanged: the fresh
+//! starts at the current commanded state), so the safety argument (C8) is the same: the fresh
 //! trajectory still runs only once one of its monitored steps is verified. If the commands went
 //! elsewhere (a step was not verified, another chunk came first), the plan is dropped
 //! ([`OfferState::Stale`]) and the caller plans again from a new handover.
 //!
-//! Planning costs 0.1–0.8 ms (the spline's two passes); a 1 kHz loop that planned in its own
-//! step would miss its deadline. With this split the loop's share is a comparison of two joint
+//! Planning a chunk (the spline's passes) takes too long to fit in a 1 ms step beside the
+//! verification (measured in `docs/performance.md#chunk-planning-time`); a 1 kHz loop that
+//! planned in its own step would miss its deadline. With this split the loop's share is a comparison of two joint
 //! states and a move of the trajectory into a slot (no allocation: the trajectory it replaces
 //! is kept until the next [`Shield::offer`], which drops it outside the step).
 
