@@ -97,10 +97,19 @@ impl CbfFilter {
         human: Option<HumanModel>,
         config: CbfConfig,
     ) -> Result<Self, ShieldError> {
-        if !(config.safety_step > 0.0 && config.gamma > 0.0 && config.kp >= 0.0) {
-            return Err(ShieldError::Invalid(
-                "cbf config: safety_step and gamma must be > 0, kp >= 0".into(),
-            ));
+        // NaN fails every comparison, so it is refused too.
+        for (field, value, ok) in [
+            (
+                "cbf safety_step (> 0 s)",
+                config.safety_step,
+                config.safety_step > 0.0,
+            ),
+            ("cbf gamma (> 0)", config.gamma, config.gamma > 0.0),
+            ("cbf kp (>= 0)", config.kp, config.kp >= 0.0),
+        ] {
+            if !ok {
+                return Err(ShieldError::Config { field, value });
+            }
         }
         let hw = Limits::from_joint_limits(robot.limits());
         let mut plan = hw;
@@ -145,9 +154,7 @@ impl CbfFilter {
     pub fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
         let n = self.others.len() + 1;
         let Some((_, latest)) = id.checked_sub(1).and_then(|i| self.others.get_mut(i)) else {
-            return Err(ShieldError::Invalid(format!(
-                "human {id}: no such human ({n} in the scene; person 0 is measured through step)"
-            )));
+            return Err(ShieldError::UnknownHuman { id, count: n });
         };
         pacs_reach::stamped::keep_newest(m, latest);
         Ok(())
@@ -156,10 +163,21 @@ impl CbfFilter {
     /// Start at rest at `q` (rad), time `t` (s).
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
         let n = self.robot.dof();
-        if q.len() != n || !self.robot.limits().contains(q) {
-            return Err(ShieldError::Invalid(
-                "cbf start: configuration invalid or outside limits".into(),
-            ));
+        if q.len() != n {
+            return Err(ShieldError::StartLength {
+                given: q.len(),
+                dof: n,
+            });
+        }
+        let l = self.robot.limits();
+        if let Some(index) = (0..n).find(|&i| !(l.q_min()[i]..=l.q_max()[i]).contains(&q[i])) {
+            return Err(ShieldError::StartOutsideLimits {
+                index,
+                joint: self.robot.joints()[index].name.clone(),
+                value: q[index],
+                min: l.q_min()[index],
+                max: l.q_max()[index],
+            });
         }
         self.q = [0.0; MAX_DOF];
         self.q[..n].copy_from_slice(q);
@@ -178,19 +196,20 @@ impl CbfFilter {
         self.objects.len() - 1
     }
 
+    /// Number of dynamic objects.
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+
     /// Record a measurement of object `id` (a newer one replaces the latest). Errors: unknown
     /// `id`, non-finite values.
     pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         if !m.is_finite() {
-            return Err(ShieldError::Invalid(format!(
-                "object {id}: measurement with a non-finite value"
-            )));
+            return Err(ShieldError::ObjectNotFinite(id));
         }
         let n = self.objects.len();
         let Some((_, latest)) = self.objects.get_mut(id) else {
-            return Err(ShieldError::Invalid(format!(
-                "object {id}: no such object ({n} added)"
-            )));
+            return Err(ShieldError::UnknownObject { id, count: n });
         };
         m.keep_newest(latest);
         Ok(())

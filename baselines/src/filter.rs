@@ -110,7 +110,10 @@ impl SafetyFilter for CbfFilter {
     ) -> Result<usize, ShieldError> {
         contact
             .validated()
-            .map_err(|e| ShieldError::Invalid(format!("object contact: {e}")))?;
+            .map_err(|error| ShieldError::ObjectContact {
+                index: self.object_count(),
+                error,
+            })?;
         Ok(CbfFilter::add_object(self, model))
     }
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {

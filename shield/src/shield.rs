@@ -24,12 +24,14 @@
 #![allow(clippy::needless_range_loop)]
 
 mod decision;
+mod error;
 mod handover;
 mod intervals;
 mod step;
 mod verification;
 
 pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, decide};
+pub use error::ShieldError;
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::{OccupancyIntervals, Piece, verify_fine};
 pub use verification::monitored_joint_boxes;
@@ -45,7 +47,6 @@ use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_verify::iso15066::{ContactRule, ObjectRule};
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 /// What a [`Binding`]'s indices stand for ([`Shield::binding_names`]): one implementation for
 /// every output that names them (`pacs shield`'s commands, the Python `Command.binding`).
@@ -225,26 +226,6 @@ pub use pacs_log::time::clock_resolves;
 /// `t_0 + k·α_s`): 1 ns, or 8 ulps of `t` for large (e.g. Unix-time) clocks.
 pub fn time_tolerance(t: f64) -> f64 {
     1e-9_f64.max(8.0 * f64::EPSILON * t.abs())
-}
-
-/// Errors of shield construction and chunk handling.
-#[derive(Debug, Error, Clone, PartialEq)]
-pub enum ShieldError {
-    /// Invalid configuration or model (names the field and value).
-    #[error("{0}")]
-    Invalid(String),
-    /// The shield must be started (at rest) first.
-    #[error("shield not started: call start(t, q) with the robot at rest")]
-    NotStarted,
-    /// The chunk could not be planned; it is ignored and the robot keeps its verified motion.
-    #[error("chunk ignored: {0}")]
-    Chunk(#[from] pacs_motion::error::TrajectoryError),
-    /// A chunk planned off the loop arrived after its handover time ([`Shield::offer`]): plan
-    /// it again from a newer [`Shield::handover`].
-    #[error(
-        "chunk ignored: planned for the step at {handover} s, the shield is already at {time} s"
-    )]
-    Stale { handover: f64, time: f64 },
 }
 
 /// What decided a step.
@@ -447,16 +428,11 @@ impl HumanSlot {
         env: Vec<EnvShape>,
         c: &ShieldConfig,
     ) -> Result<Self, ShieldError> {
-        let tc = spec
-            .resolve(&h)
-            .map_err(|e| ShieldError::Invalid(format!("constraints: {e}")))?;
-        tc.check_robot(robot)
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let tc = spec.resolve(&h).map_err(ShieldError::Constraints)?;
+        tc.check_robot(robot)?;
         let zeros = vec![[0.0; 3]; h.keypoint_count()];
-        let meas = HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
-        let rule = ContactRule::new(robot, reach, &h, &tc.per_part, env, c.rest_speed)
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let meas = HumanMeasurement::new(&h, 0.0, &zeros, Some(&zeros))?;
+        let rule = ContactRule::new(robot, reach, &h, &tc.per_part, env, c.rest_speed)?;
         let caps = vec![
             Capsule::new_unchecked(Default::default(), Default::default(), 0.0);
             h.body_parts().len()
@@ -507,16 +483,9 @@ impl Shield {
         config: ShieldConfig,
     ) -> Result<Self, ShieldError> {
         let c = &config;
-        let bad = |f: &str, v: f64| {
-            ShieldError::Invalid(format!("shield config `{f}`: invalid value {v}"))
-        };
+        let bad = |field: &'static str, value: f64| ShieldError::Config { field, value };
         if !SAFETY_STEP_RANGE.contains(&c.safety_step) {
-            return Err(ShieldError::Invalid(format!(
-                "shield config `safety_step`: {} s is outside [{}, {}] s",
-                c.safety_step,
-                SAFETY_STEP_RANGE.start(),
-                SAFETY_STEP_RANGE.end()
-            )));
+            return Err(ShieldError::SafetyStep(c.safety_step));
         }
         if !(c.velocity_tracking_error >= 0.0 && c.velocity_tracking_error.is_finite()) {
             return Err(bad("velocity_tracking_error", c.velocity_tracking_error));
@@ -558,14 +527,12 @@ impl Shield {
         let mut recovery_limits = hw;
         recovery_limits.v = plan.v;
         let recovery = Planner::new(recovery_limits, planner_config);
-        let reach = RobotReach::try_new(&robot, c.tracking_error)
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let reach = RobotReach::try_new(&robot, c.tracking_error)?;
         let humans = match human {
             None => Vec::new(),
             Some((h, spec)) => vec![HumanSlot::new(&robot, &reach, h, spec, env.clone(), c)?],
         };
-        let object_rule = ObjectRule::new(&robot, &reach, c.rest_speed)
-            .map_err(|e| ShieldError::Invalid(e.to_string()))?;
+        let object_rule = ObjectRule::new(&robot, &reach, c.rest_speed)?;
         Ok(Self {
             dof,
             hw,
@@ -621,7 +588,10 @@ impl Shield {
     ) -> Result<usize, ShieldError> {
         let contact = contact
             .validated()
-            .map_err(|e| ShieldError::Invalid(format!("object {}: {e}", self.objects.len())))?;
+            .map_err(|error| ShieldError::ObjectContact {
+                index: self.objects.len(),
+                error,
+            })?;
         self.objects.push(ObjectSlot {
             model,
             contact,
@@ -642,15 +612,11 @@ impl Shield {
     /// equal-time ones are ignored). Errors: unknown `id`, non-finite values.
     pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         if !m.is_finite() {
-            return Err(ShieldError::Invalid(format!(
-                "object {id}: measurement with a non-finite value"
-            )));
+            return Err(ShieldError::ObjectNotFinite(id));
         }
         let n = self.objects.len();
         let Some(slot) = self.objects.get_mut(id) else {
-            return Err(ShieldError::Invalid(format!(
-                "object {id}: no such object ({n} added)"
-            )));
+            return Err(ShieldError::UnknownObject { id, count: n });
         };
         m.keep_newest(&mut slot.meas);
         Ok(())
@@ -733,16 +699,15 @@ impl Shield {
     pub fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
         let n = self.humans.len();
         let Some(h) = self.humans.get_mut(id) else {
-            return Err(ShieldError::Invalid(format!(
-                "human {id}: no such human ({n} in the scene)"
-            )));
+            return Err(ShieldError::UnknownHuman { id, count: n });
         };
         let k = h.reach.model().keypoint_count();
         if m.positions().len() != k {
-            return Err(ShieldError::Invalid(format!(
-                "human {id}: measurement with {} keypoints, the model has {k}",
-                m.positions().len()
-            )));
+            return Err(ShieldError::KeypointCount {
+                id,
+                got: m.positions().len(),
+                expected: k,
+            });
         }
         h.take(m);
         Ok(())
@@ -751,41 +716,36 @@ impl Shield {
     /// Start at rest at `q` (rad) at time `t` (s). The shield only starts from rest.
     pub fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError> {
         if q.len() != self.dof {
-            return Err(ShieldError::Invalid(format!(
-                "start: {} joint values given, the robot has {} joints",
-                q.len(),
-                self.dof
-            )));
+            return Err(ShieldError::StartLength {
+                given: q.len(),
+                dof: self.dof,
+            });
         }
         if let Some(i) = q.iter().position(|x| !x.is_finite()) {
-            return Err(ShieldError::Invalid(format!(
-                "start[{i}] (joint `{}`): {} is not a finite angle (rad)",
-                self.robot.joints()[i].name,
-                q[i]
-            )));
+            return Err(ShieldError::StartNotFinite {
+                index: i,
+                joint: self.robot.joints()[i].name.clone(),
+                value: q[i],
+            });
         }
         if !t.is_finite() {
-            return Err(ShieldError::Invalid(format!(
-                "start: the time {t} s is not finite"
-            )));
+            return Err(ShieldError::StartTime(t));
         }
         let l = self.robot.limits();
         if let Some(i) = (0..self.dof).find(|&i| !(l.q_min()[i]..=l.q_max()[i]).contains(&q[i])) {
-            return Err(ShieldError::Invalid(format!(
-                "start[{i}] (joint `{}`): {} rad is outside the joint position limits [{}, {}] rad",
-                self.robot.joints()[i].name,
-                q[i],
-                l.q_min()[i],
-                l.q_max()[i]
-            )));
+            return Err(ShieldError::StartOutsideLimits {
+                index: i,
+                joint: self.robot.joints()[i].name.clone(),
+                value: q[i],
+                min: l.q_min()[i],
+                max: l.q_max()[i],
+            });
         }
         if !clock_resolves(t, self.config.safety_step) {
-            return Err(ShieldError::Invalid(format!(
-                "start: the time {t} s is too large to resolve the safety step ({} s): floats \
-                 at that magnitude are farther apart than a thousandth of it (count time from \
-                 the run's start)",
-                self.config.safety_step
-            )));
+            return Err(ShieldError::ClockUnresolved {
+                t,
+                safety_step: self.config.safety_step,
+            });
         }
         self.trajs = [Some(Trajectory::standstill(q)), None];
         self.chunk_serial = [0, 0];

@@ -127,9 +127,7 @@ impl ChunkWorker {
     /// planned again.
     pub fn spawn(shield: &Shield, lead: usize) -> Result<Self, ShieldError> {
         if lead == 0 {
-            return Err(ShieldError::Invalid(
-                "ChunkWorker lead must be at least 1 safety step".into(),
-            ));
+            return Err(ShieldError::ZeroLead);
         }
         let (jobs, job_rx) = sync_channel::<Job>(QUEUE);
         let (plan_tx, plans) = sync_channel::<Plan>(QUEUE);
@@ -191,7 +189,7 @@ impl ChunkWorker {
                     }
                 }
             })
-            .map_err(|e| ShieldError::Invalid(format!("cannot start the planning thread: {e}")))?;
+            .map_err(|e| ShieldError::PlanningThread(e.kind()))?;
         Ok(Self {
             lead,
             jobs,
@@ -236,7 +234,7 @@ impl ChunkWorker {
 
     /// Before each step (in the loop): offer a plan that came back, and plan the chunk again
     /// where its offer went stale. Returns the planner's error for a refused chunk (the robot
-    /// keeps its verified motion), or [`ShieldError::Invalid`] if the planning thread has ended.
+    /// keeps its verified motion), or [`ShieldError::PlanningThreadEnded`] if the planning thread has ended.
     pub fn poll(&mut self, shield: &mut Shield) -> Result<(), ShieldError> {
         if let Some(job) = self.queued.take() {
             self.send(job);
@@ -417,5 +415,5 @@ impl ChunkWorker {
 }
 
 fn thread_ended() -> ShieldError {
-    ShieldError::Invalid("the chunk planning thread has ended (it panicked)".into())
+    ShieldError::PlanningThreadEnded
 }

@@ -180,7 +180,7 @@ fn a_refused_chunk_is_reported_and_lead_zero_is_invalid() {
     let mut sh = shield(ChunkMotion::Continuous);
     assert!(matches!(
         ChunkWorker::spawn(&sh, 0),
-        Err(ShieldError::Invalid(_))
+        Err(ShieldError::ZeroLead)
     ));
     let mut w = ChunkWorker::spawn(&sh, 2).unwrap();
     let mut bad = random_chunk(&mut Lcg(9));

@@ -8,6 +8,7 @@ mod scoring;
 pub use rollout::run_setup;
 pub use scoring::{ground_truth, object_ground_truth};
 
+use crate::SimError;
 use crate::humans::HumanScript;
 use crate::objects::SimObject;
 use crate::policy::{DemoSet, Demonstration};
@@ -16,7 +17,6 @@ use pacs_baselines::FilterKind;
 use pacs_log::{Header, ModelRef};
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 use pacs_shield::ChunkMotion;
-use pacs_shield::shield::ShieldError;
 use serde::{Deserialize, Serialize};
 
 /// Which safety filter runs.
@@ -326,7 +326,7 @@ pub fn run(
     demo: &Demonstration,
     cfg: &EpisodeConfig,
     record_every: usize,
-) -> Result<Episode, ShieldError> {
+) -> Result<Episode, SimError> {
     run_logged(
         method,
         robot,
@@ -352,7 +352,7 @@ pub fn run_logged(
     cfg: &EpisodeConfig,
     record_every: usize,
     log: Option<&mut dyn std::io::Write>,
-) -> Result<Episode, ShieldError> {
+) -> Result<Episode, SimError> {
     let mut policy = DemoSet::from_demonstration(demo);
     let goals = [Goal::Joint {
         q: demo.goal().to_vec(),

@@ -10,7 +10,6 @@ pub use plots::{svg_paths, svg_separation};
 use crate::episode::{Episode, EpisodeConfig, Goal, Method, Outputs, Setup, run_setup};
 use crate::task::{ConstraintMode, TaskKind, constraint_spec, native_mode, scenario};
 use pacs_shield::ChunkMotion;
-use pacs_shield::shield::ShieldError;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -119,7 +118,7 @@ pub enum EvalError {
         /// Rollout seed.
         seed: u64,
         /// Cause.
-        source: ShieldError,
+        source: Box<crate::SimError>,
     },
     /// Writing an output failed.
     #[error("cannot write {path}: {source}")]
@@ -181,11 +180,11 @@ pub fn run_rollout(
     log: Option<&Path>,
     record_every: usize,
 ) -> Result<Rollout, EvalError> {
-    let err = |source| EvalError::Episode {
+    let err = |source: crate::SimError| EvalError::Episode {
         task: task.name(),
         method: v.label.clone(),
         seed,
-        source,
+        source: Box::new(source),
     };
     let mut scn = scenario(task, seed, with_human);
     scn.set_mode(variant_mode(task, v));

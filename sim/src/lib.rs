@@ -15,11 +15,14 @@
 //! a real controller's error).
 
 pub mod episode;
+pub mod error;
 pub mod eval;
 pub mod humans;
 pub mod objects;
 pub mod policy;
 pub mod task;
+
+pub use error::SimError;
 
 /// A name (task, method, variant) that is not one of the choices.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

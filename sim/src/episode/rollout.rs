@@ -5,6 +5,7 @@ use super::{
     Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
     object_ground_truth,
 };
+use crate::SimError;
 use crate::humans::Camera;
 use crate::objects::ObjectCamera;
 use crate::policy::Observation;
@@ -13,7 +14,6 @@ use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::LogModels;
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_shield::ChunkMotion;
-use pacs_shield::shield::ShieldError;
 use pacs_shield::shield_log::ShieldLog;
 
 /// The truth audit: one person, or several (one pass each, merged).
@@ -105,8 +105,8 @@ impl Tracking {
 /// safety steps of intended motion left (the last step before its last waypoint).
 const HANDOVER_STEPS: f64 = 1.5;
 
-fn invalid(e: impl std::fmt::Display) -> ShieldError {
-    ShieldError::Invalid(e.to_string())
+fn invalid(e: impl Into<SimError>) -> SimError {
+    e.into()
 }
 
 /// Run one episode of `setup` with `method` (Algorithm 1: a chunk every h·Δt, a safety step
@@ -116,7 +116,7 @@ pub fn run_setup(
     setup: Setup<'_>,
     cfg: &EpisodeConfig,
     out: Outputs<'_>,
-) -> Result<Episode, ShieldError> {
+) -> Result<Episode, SimError> {
     let Setup {
         robot,
         human,
@@ -165,7 +165,7 @@ pub fn run_setup(
             objects: objects
                 .iter()
                 .map(|o| Ok((o.id.clone(), o.exact_model().map_err(invalid)?, o.contact)))
-                .collect::<Result<_, ShieldError>>()?,
+                .collect::<Result<_, SimError>>()?,
         };
         Some(if others.is_empty() {
             TruthAuditor::One(Box::new(
