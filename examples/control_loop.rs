@@ -80,12 +80,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = RobotModel::builtin("fr3")?;
     let human = default_human().with_uncertainty(0.01, 0.1, 0.03)?;
     let constraints = ConstraintSpec::builtin("sorting")?; // SSM for every body part
-    let mut shield = Shield::new(
-        robot,
-        Some((human.clone(), &constraints)),
-        vec![],
-        ShieldConfig::default(),
-    )?;
+    let mut shield = Shield::builder(robot)
+        .person(human.clone(), &constraints)
+        .config(ShieldConfig::default())
+        .build()?;
     shield.start(0.0, &fr3::Q_READY)?;
     let dt = shield.config().safety_step; // 1 ms
     let steps = 2000;
@@ -130,12 +128,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             followed += matches!(last_state, WorkerState::Taken(_)) as usize;
         }
         // The camera: every 10 ms, stamped now, describing the person 30 ms ago (the model's
-        // delay), within 1 cm.
-        let measurement = (k % 10 == 0)
-            .then(|| HumanMeasurement::new(&human, t, &true_person(t - 0.03), None))
-            .transpose()?;
+        // delay), within 1 cm. Every person is measured the same way (`measure_human(index, …)`);
+        // the shield uses the newest measurement of each at every step.
+        if k % 10 == 0 {
+            let m = HumanMeasurement::new(&human, t, &true_person(t - 0.03), None)?;
+            shield.measure_human(0, &m)?;
+        }
         let clock = Instant::now();
-        let cmd = shield.step(t, measurement.as_ref())?;
+        let cmd = shield.step(t, None)?;
         step_us.push(clock.elapsed().as_secs_f64() * 1e6);
         // Send cmd.state.q / dq / ddq (rad, rad/s, rad/s²) for time cmd.t to the robot here.
         last_q.copy_from_slice(cmd.q());

@@ -20,9 +20,12 @@ impl Shield {
         }
     }
 
-    /// One safety step at time `t` (s; must follow the previous step by α_s) with the latest
-    /// human measurement, if any. Returns the command for time t + α_s; before
-    /// [`Shield::start`] there is no command to give ([`ShieldError::NotStarted`]).
+    /// One safety step at time `t` (s; must follow the previous step by α_s) with the newest
+    /// measurement of every person ([`Shield::measure_human`]) and object. `measurement`, if
+    /// given, is a measurement of person 0 taken now (the same as `measure_human(0, m)` before
+    /// the step, except that one stamped after `t` is ignored). Returns the command for time
+    /// t + α_s; before [`Shield::start`] there is no command to give
+    /// ([`ShieldError::NotStarted`]).
     pub fn step(
         &mut self,
         t: f64,
