@@ -214,7 +214,7 @@ pub fn audit_reader(
         last_t = t;
         group
             .push(&rec, Location::File)
-            .map_err(|p| LogError::input(&file, reader.location(), p))?;
+            .map_err(|p| LogError::input(&file, reader.location(), p.to_string()))?;
         group.locate_last(reader.location());
     }
     group

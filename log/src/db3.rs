@@ -65,7 +65,7 @@ enum Batch {
     Rows(Vec<Row>),
     End,
     /// Why reading stopped (the row id reached, and the problem).
-    Err(Location, String),
+    Err(Location, Db3Problem),
 }
 
 /// The rows of one file, read by a thread (see the module docs).
@@ -124,18 +124,18 @@ pub struct Db3Reader {
     info_name: String,
 }
 
-fn open_ro(path: &Path) -> Result<Connection, String> {
+fn open_ro(path: &Path) -> Result<Connection, Db3Problem> {
     let c = Connection::open_with_flags(
         path,
         OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
     )
-    .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+    .map_err(Db3Problem::Open)?;
     // Reading never writes: refuse anything that would (e.g. a hot journal to roll back).
     c.pragma_update(None, "query_only", true)
-        .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+        .map_err(Db3Problem::Open)?;
     // The time-ordered query may sort: on disk, never an unbounded in-memory sorter.
     c.pragma_update(None, "temp_store", "FILE")
-        .map_err(|e| format!("cannot open as SQLite: {e}"))?;
+        .map_err(Db3Problem::Open)?;
     Ok(c)
 }
 
@@ -191,27 +191,62 @@ fn check_size(path: &Path, name: &str) -> Result<(), LogError> {
     Ok(())
 }
 
+/// What is wrong with a bag's SQLite file (the caller names the file and the row).
+#[derive(Debug, thiserror::Error)]
+enum Db3Problem {
+    #[error("cannot open as SQLite: {0}")]
+    Open(rusqlite::Error),
+    #[error("{}{}", table.map(|t| format!("table `{t}`: ")).unwrap_or_default(), sqlite_problem(error))]
+    Sqlite {
+        table: Option<&'static str>,
+        error: rusqlite::Error,
+    },
+    #[error("reading messages{}: {}", after.map(|id| format!(" after message id {id}")).unwrap_or_default(), sqlite_problem(error))]
+    Reading {
+        after: Option<i64>,
+        error: rusqlite::Error,
+    },
+    #[error("{what}: not valid UTF-8")]
+    NotUtf8 { what: String },
+    #[error("{what}: expected {expected}, found {found}")]
+    CellType {
+        what: String,
+        expected: &'static str,
+        found: rusqlite::types::Type,
+    },
+    #[error("messages.data: {0} bytes, over the {RECORD_LIMIT}-byte message limit")]
+    TooLarge(usize),
+}
+
+impl Db3Problem {
+    fn sqlite(error: rusqlite::Error) -> Self {
+        Db3Problem::Sqlite { table: None, error }
+    }
+}
+
 /// A text cell, or why it is not one.
-fn text(v: ValueRef<'_>, what: &str) -> Result<String, String> {
+fn text(v: ValueRef<'_>, what: &str) -> Result<String, Db3Problem> {
     match v {
         ValueRef::Text(t) => std::str::from_utf8(t)
             .map(str::to_string)
-            .map_err(|_| format!("{what}: not valid UTF-8")),
-        other => Err(format!(
-            "{what}: expected text, found {}",
-            other.data_type()
-        )),
+            .map_err(|_| Db3Problem::NotUtf8 { what: what.into() }),
+        other => Err(Db3Problem::CellType {
+            what: what.into(),
+            expected: "text",
+            found: other.data_type(),
+        }),
     }
 }
 
 /// An integer cell, or why it is not one.
-fn int(v: ValueRef<'_>, what: &str) -> Result<i64, String> {
+fn int(v: ValueRef<'_>, what: &str) -> Result<i64, Db3Problem> {
     match v {
         ValueRef::Integer(i) => Ok(i),
-        other => Err(format!(
-            "{what}: expected an integer, found {}",
-            other.data_type()
-        )),
+        other => Err(Db3Problem::CellType {
+            what: what.into(),
+            expected: "an integer",
+            found: other.data_type(),
+        }),
     }
 }
 
@@ -220,7 +255,7 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     let name = path.display().to_string();
     check_size(&path, &name)?;
     let bad = |p: String| LogError::input(&name, Location::File, p);
-    let conn = open_ro(&path).map_err(&bad)?;
+    let conn = open_ro(&path).map_err(|e| bad(e.to_string()))?;
     let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
     // SQLite's structural check of every page (b-trees, free list; about a third of the time of
     // reading the messages): a damaged file is refused before anything is read from it, rather
@@ -254,12 +289,15 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
     let mut topics = HashMap::new();
     while let Some(r) = rows.next().map_err(sql)? {
         let cell = |i: usize| r.get_ref(i).map_err(|e| bad(sqlite_problem(&e)));
-        let id = int(cell(0)?, "topics.id").map_err(&bad)?;
+        let cell_bad = |e: Db3Problem| bad(e.to_string());
+        let id = int(cell(0)?, "topics.id").map_err(cell_bad)?;
         let at = |c: &str| format!("topics row id {id}: {c}");
-        let topic = text(cell(1)?, &at("name")).map_err(&bad)?;
-        let typ = text(cell(2)?, &at("type")).map_err(&bad)?;
-        let ser = text(cell(3)?, &at("serialization_format")).map_err(&bad)?;
-        let (stream, expected) = conv.stream_of(&topic, Some(&typ)).map_err(&bad)?;
+        let topic = text(cell(1)?, &at("name")).map_err(cell_bad)?;
+        let typ = text(cell(2)?, &at("type")).map_err(cell_bad)?;
+        let ser = text(cell(3)?, &at("serialization_format")).map_err(cell_bad)?;
+        let (stream, expected) = conv
+            .stream_of(&topic, Some(&typ))
+            .map_err(|e| bad(e.to_string()))?;
         if stream != Stream::Ignored {
             let what = format!("topic `{topic}` (topics id {id})");
             if typ != expected {
@@ -289,7 +327,7 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
 /// `rosbags`), if it has one.
 fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
     let bad = |p: String| LogError::input(name, Location::File, p);
-    let conn = open_ro(path).map_err(&bad)?;
+    let conn = open_ro(path).map_err(|e| bad(e.to_string()))?;
     let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
     let n: i64 = conn
         .query_row(
@@ -309,54 +347,55 @@ fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
         return Ok(None);
     };
     let v = r.get_ref(0).map_err(sql)?;
-    text(v, "table `metadata`: metadata").map(Some).map_err(bad)
+    text(v, "table `metadata`: metadata")
+        .map(Some)
+        .map_err(|e| bad(e.to_string()))
 }
 
 /// The thread body: stream the rows of `ids` in time order into `tx`.
 fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
     let mut last = Location::File;
-    let r = (|| -> Result<(), String> {
+    let r = (|| -> Result<(), Db3Problem> {
         let conn = open_ro(&path)?;
         let list: Vec<String> = ids.iter().map(i64::to_string).collect();
         let sql = format!(
             "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
             list.join(", ")
         );
-        let mut stmt = conn
-            .prepare(&sql)
-            .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
-        let mut rows = stmt
-            .query([])
-            .map_err(|e| format!("table `messages`: {}", sqlite_problem(&e)))?;
+        let mut stmt = conn.prepare(&sql).map_err(|error| Db3Problem::Sqlite {
+            table: Some("messages"),
+            error,
+        })?;
+        let mut rows = stmt.query([]).map_err(|error| Db3Problem::Sqlite {
+            table: Some("messages"),
+            error,
+        })?;
         let mut batch = Vec::with_capacity(BATCH);
         let mut bytes = 0usize;
-        let after = |last: Location| match last {
-            Location::Message(id) => format!(" after message id {id}"),
-            _ => String::new(),
-        };
-        while let Some(r) = rows.next().map_err(|e| {
-            let p = format!("reading messages{}: {}", after(last), sqlite_problem(&e));
+        while let Some(r) = rows.next().map_err(|error| {
+            let after = match last {
+                Location::Message(id) => Some(id),
+                _ => None,
+            };
             last = Location::File;
-            p
+            Db3Problem::Reading { after, error }
         })? {
-            let cell = |i: usize| r.get_ref(i).map_err(|e| sqlite_problem(&e));
+            let cell = |i: usize| r.get_ref(i).map_err(Db3Problem::sqlite);
             let id = int(cell(0)?, "messages.id")?;
             last = Location::Message(id);
             let topic_id = int(cell(1)?, "messages.topic_id")?;
             let timestamp = int(cell(2)?, "messages.timestamp")?;
             let data = match cell(3)? {
                 ValueRef::Blob(b) if b.len() > RECORD_LIMIT => {
-                    return Err(format!(
-                        "messages.data: {} bytes, over the {RECORD_LIMIT}-byte message limit",
-                        b.len()
-                    ));
+                    return Err(Db3Problem::TooLarge(b.len()));
                 }
                 ValueRef::Blob(b) => b.to_vec(),
                 other => {
-                    return Err(format!(
-                        "messages.data: expected a blob, found {}",
-                        other.data_type()
-                    ));
+                    return Err(Db3Problem::CellType {
+                        what: "messages.data".into(),
+                        expected: "a blob",
+                        found: other.data_type(),
+                    });
                 }
             };
             bytes += data.len();
@@ -420,8 +459,8 @@ impl Db3Reader {
                 )));
             }
             let text = std::fs::read_to_string(&meta).map_err(io)?;
-            let info = bag_info(&text, false).map_err(&bad)?;
-            info.check().map_err(&bad)?;
+            let info = bag_info(&text, false).map_err(|e| bad(e.to_string()))?;
+            info.check().map_err(|e| bad(e.to_string()))?;
             if info.files.is_empty() {
                 return Err(bad(
                     "rosbag2_bagfile_information.relative_file_paths: no files".into(),
@@ -465,8 +504,8 @@ impl Db3Reader {
                     let bad = |p: String| {
                         LogError::input(&name, Location::File, format!("table `metadata`: {p}"))
                     };
-                    let info = bag_info(&text, true).map_err(bad)?;
-                    info.check().map_err(bad)?;
+                    let info = bag_info(&text, true).map_err(|e| bad(e.to_string()))?;
+                    info.check().map_err(|e| bad(e.to_string()))?;
                     // One part of a split bag is not the run: audit the bag directory.
                     if info.files.len() > 1 {
                         return Err(bad(format!(
@@ -555,7 +594,7 @@ impl Db3Reader {
                         self.part += 1;
                     }
                     Some(Ok(Batch::Err(loc, p))) => {
-                        return Err(LogError::input(&part.name, loc, p));
+                        return Err(LogError::input(&part.name, loc, p.to_string()));
                     }
                     _ => {
                         return Err(LogError::input(

@@ -126,6 +126,16 @@ pub struct EqualTimeGroup {
     order: Vec<usize>,
 }
 
+/// More than [`MAX_EQUAL_TIME`] records share the time stamp `t` (s).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "more than {MAX_EQUAL_TIME} records at one time stamp t = {t} s (a log whose records share one time covers no time; the audit holds at most {MAX_EQUAL_TIME} of them)"
+)]
+pub struct TooManyAtOneTime {
+    /// The shared time stamp (s).
+    pub t: f64,
+}
+
 impl EqualTimeGroup {
     /// Time stamp of the buffered records, if any.
     pub fn time(&self) -> Option<f64> {
@@ -135,12 +145,9 @@ impl EqualTimeGroup {
     /// Buffer a copy of `rec` (found at `loc`). At most [`MAX_EQUAL_TIME`] records share one
     /// time stamp (memory stays flat, as in the MCAP reader): one more is refused with the
     /// problem to report.
-    pub fn push(&mut self, rec: &Record<'_>, loc: Location) -> Result<(), String> {
+    pub fn push(&mut self, rec: &Record<'_>, loc: Location) -> Result<(), TooManyAtOneTime> {
         if self.len >= MAX_EQUAL_TIME {
-            return Err(format!(
-                "more than {MAX_EQUAL_TIME} records at one time stamp t = {} s (a log whose records share one time covers no time; the audit holds at most {MAX_EQUAL_TIME} of them)",
-                rec.t()
-            ));
+            return Err(TooManyAtOneTime { t: rec.t() });
         }
         if self.len == self.slots.len() {
             self.slots.push(Slot::default());

@@ -21,6 +21,11 @@ use crate::format::{Header, LogModels, ModelOverrides, Record};
 use crate::mcap::{JOINT_STATE, MAX_PENDING, McapConfig, POSE_ARRAY, POSE_STAMPED, STRING};
 use std::collections::BinaryHeap;
 
+/// More than 65,535 person topics (a person's index is 16 bits).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("more than 65535 person topics")]
+pub(crate) struct TooManyPeople;
+
 /// What a topic carries, by the configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Stream {
@@ -234,7 +239,7 @@ impl Messages {
         &mut self,
         topic: &str,
         type_name: Option<&str>,
-    ) -> Result<(Stream, &'static str), String> {
+    ) -> Result<(Stream, &'static str), TooManyPeople> {
         let cfg = &self.cfg;
         Ok(if topic == cfg.robot_topic {
             (Stream::Robot, JOINT_STATE)
@@ -267,7 +272,7 @@ impl Messages {
                     self.person_ids.len() - 1
                 }
             };
-            let i = u16::try_from(i).map_err(|_| "more than 65535 person topics".to_string())?;
+            let i = u16::try_from(i).map_err(|_| TooManyPeople)?;
             (Stream::Human { person: Some(i) }, POSE_ARRAY)
         } else {
             (Stream::Ignored, "")

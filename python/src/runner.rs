@@ -70,9 +70,37 @@ pub struct PyShieldLoop {
     priority: i32,
 }
 
+/// Why the loop thread runs at normal priority although a real-time one was asked for.
+#[derive(Debug)]
+enum RtPriorityError {
+    /// The system refused SCHED_FIFO at this priority (1–99).
+    #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
+    Refused {
+        priority: i32,
+        error: std::io::Error,
+    },
+    /// Not a Linux system.
+    #[cfg_attr(target_os = "linux", allow(dead_code))]
+    Unsupported,
+}
+
+impl std::fmt::Display for RtPriorityError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RtPriorityError::Refused { priority, error } => write!(
+                f,
+                "SCHED_FIFO priority {priority} refused: {error} (needs CAP_SYS_NICE or an rtprio limit)"
+            ),
+            RtPriorityError::Unsupported => {
+                f.write_str("real-time priority is supported on Linux only")
+            }
+        }
+    }
+}
+
 /// Put the calling thread under SCHED_FIFO at `priority` (1–99).
 #[cfg(target_os = "linux")]
-fn set_rt_priority(priority: i32) -> Result<(), String> {
+fn set_rt_priority(priority: i32) -> Result<(), RtPriorityError> {
     let param = libc::sched_param {
         sched_priority: priority,
     };
@@ -81,16 +109,16 @@ fn set_rt_priority(priority: i32) -> Result<(), String> {
     if rc == 0 {
         Ok(())
     } else {
-        Err(format!(
-            "SCHED_FIFO priority {priority} refused: {} (needs CAP_SYS_NICE or an rtprio limit)",
-            std::io::Error::from_raw_os_error(rc)
-        ))
+        Err(RtPriorityError::Refused {
+            priority,
+            error: std::io::Error::from_raw_os_error(rc),
+        })
     }
 }
 
 #[cfg(not(target_os = "linux"))]
-fn set_rt_priority(_priority: i32) -> Result<(), String> {
-    Err("real-time priority is supported on Linux only".into())
+fn set_rt_priority(_priority: i32) -> Result<(), RtPriorityError> {
+    Err(RtPriorityError::Unsupported)
 }
 
 /// Step the shield from its current time for `steps` steps (None: until stopped) while loop
@@ -321,7 +349,7 @@ impl PyShieldLoop {
                     {
                         match set_rt_priority(priority) {
                             Ok(()) => o.rt_priority = priority,
-                            Err(e) => o.rt_error = Some(e),
+                            Err(e) => o.rt_error = Some(e.to_string()),
                         }
                     }
                     run_steps(id, &inner, &shared, true, None, alpha)

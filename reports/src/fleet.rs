@@ -41,11 +41,13 @@ const WALL_CLOCK_FROM: f64 = 946_684_800.0;
 /// subdirectories (symbolic links to directories are not followed), sorted by path; a bag
 /// directory given itself is one log. Errors name the path: one that cannot be read, or a directory
 /// without logs.
-pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
     let mut out = Vec::new();
     for p in paths {
-        let meta =
-            std::fs::metadata(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?;
+        let meta = std::fs::metadata(p).map_err(|error| ExpandError::Read {
+            path: p.clone(),
+            error,
+        })?;
         if !meta.is_dir() || is_bag_dir(p) {
             out.push(p.clone());
             continue;
@@ -53,11 +55,7 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
         let mut found = Vec::new();
         collect_logs(p, &mut found)?;
         if found.is_empty() {
-            return Err(format!(
-                "{}: a directory without log files (*.{} or ROS 2 bag directories)",
-                p.display(),
-                LOG_EXTENSIONS.join(", *.")
-            ));
+            return Err(ExpandError::NoLogs(p.clone()));
         }
         found.sort();
         out.extend(found);
@@ -65,15 +63,42 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     Ok(out)
 }
 
-fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), String> {
-    let entries =
-        std::fs::read_dir(dir).map_err(|e| format!("{}: cannot list: {e}", dir.display()))?;
-    for entry in entries {
-        let entry = entry.map_err(|e| format!("{}: cannot list: {e}", dir.display()))?;
+/// Why [`expand_logs`] could not list the logs; each names the path.
+#[derive(Debug, thiserror::Error)]
+pub enum ExpandError {
+    /// A path (or a directory entry's type) that cannot be read.
+    #[error("{}: cannot read: {error}", path.display())]
+    Read {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// A directory that cannot be listed.
+    #[error("{}: cannot list: {error}", path.display())]
+    List {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// A directory (with its subdirectories) without a log.
+    #[error(
+        "{}: a directory without log files (*.{} or ROS 2 bag directories)",
+        .0.display(),
+        LOG_EXTENSIONS.join(", *.")
+    )]
+    NoLogs(PathBuf),
+}
+
+fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
+    let list = |error| ExpandError::List {
+        path: dir.to_path_buf(),
+        error,
+    };
+    for entry in std::fs::read_dir(dir).map_err(list)? {
+        let entry = entry.map_err(list)?;
         let path = entry.path();
-        let kind = entry
-            .file_type()
-            .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        let kind = entry.file_type().map_err(|error| ExpandError::Read {
+            path: path.clone(),
+            error,
+        })?;
         if kind.is_dir() && is_bag_dir(&path) {
             // A bag directory is one log (its .db3 files are its parts).
             out.push(path);

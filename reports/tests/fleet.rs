@@ -237,12 +237,12 @@ fn a_directory_expands_to_its_sorted_log_files() {
     .into();
     assert_eq!(got, want);
     std::fs::create_dir_all(d.join("empty/sub")).unwrap();
-    let e = expand_logs(&[d.join("empty")]).unwrap_err();
+    let e = expand_logs(&[d.join("empty")]).unwrap_err().to_string();
     assert!(
         e.contains(&d.join("empty").display().to_string()) && e.contains("without log files"),
         "{e}"
     );
-    let e = expand_logs(&[d.join("missing")]).unwrap_err();
+    let e = expand_logs(&[d.join("missing")]).unwrap_err().to_string();
     assert!(e.contains("missing") && e.contains("cannot read"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -2,6 +2,7 @@
 //! in parallel, with an optional certification report. Exit codes: 0 all pass, 1 any fail,
 //! 2 any inconclusive and none fail, 3 invalid input (any log or the config), 70 internal error.
 
+use super::CliError;
 use pacs_audit::{AuditConfig, RunResult, Verdict};
 use pacs_log::LogError;
 use pacs_reports::{InputFile, ReportInput};
@@ -52,15 +53,16 @@ pub struct AuditArgs {
 /// Exit code for invalid input.
 const EXIT_INVALID: u8 = 3;
 
-fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), String> {
+fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), CliError> {
+    let invalid = |m: String| CliError::Input(m);
     let (mut cfg, hash) = match &args.config {
         None => (AuditConfig::default(), None),
         Some(p) => {
             let name = p.display().to_string();
-            let text =
-                std::fs::read_to_string(p).map_err(|e| format!("{name}: cannot read: {e}"))?;
-            let cfg = pacs_audit::parse_config(&name, &text).map_err(|e| e.to_string())?;
-            let hash = InputFile::hash(p).map_err(|e| e.to_string())?;
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| invalid(format!("{name}: cannot read: {e}")))?;
+            let cfg = pacs_audit::parse_config(&name, &text).map_err(|e| invalid(e.to_string()))?;
+            let hash = InputFile::hash(p).map_err(|e| invalid(e.to_string()))?;
             (cfg, Some(hash))
         }
     };
@@ -71,7 +73,7 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Str
         cfg.mcap.human_topic.clone_from(t);
     }
     cfg.validate()
-        .map_err(|p| format!("invalid settings: {p}"))?;
+        .map_err(|p| invalid(format!("invalid settings: {p}")))?;
     Ok((cfg, hash))
 }
 
@@ -88,7 +90,7 @@ pub fn main(args: AuditArgs) -> ExitCode {
     let (cfg, cfg_file) = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("pacs: error: {e}");
+            eprintln!("pacs: error: {}", e.message());
             return ExitCode::from(EXIT_INVALID);
         }
     };

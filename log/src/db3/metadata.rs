@@ -19,10 +19,51 @@ pub(super) struct BagInfo {
     pub(super) topic_counts: Vec<(String, u64)>,
 }
 
+/// Why a bag's metadata is refused (the caller names the file).
+#[derive(Debug, thiserror::Error)]
+pub(super) enum MetadataError {
+    #[error("invalid YAML: {0}")]
+    Yaml(#[from] yaml_rust2::ScanError),
+    #[error("line {0}: YAML aliases are not supported")]
+    Alias(usize),
+    #[error("line {0}: nested deeper than {YAML_DEPTH} levels")]
+    TooDeep(usize),
+    #[error("{0} YAML documents, expected one")]
+    Documents(usize),
+    #[error("no mapping `rosbag2_bagfile_information`")]
+    NoInformation,
+    /// `field` holds a value of the wrong kind (`found`: the value as parsed, if one was).
+    #[error("{field}: expected {expected}{}", found.as_deref().map(|f| format!(", found {f}")).unwrap_or_default())]
+    WrongType {
+        field: String,
+        expected: &'static str,
+        found: Option<String>,
+    },
+    #[error("storage_identifier `{storage}` is not supported here (expected `sqlite3`){}", if storage == "mcap" { "; audit the bag's .mcap file itself" } else { "" })]
+    Storage { storage: String },
+    #[error(
+        "compressed bags are not supported (compression_mode `{mode}`, compression_format `{format}`): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)"
+    )]
+    Compressed { mode: String, format: String },
+}
+
+/// A value of the wrong kind at `field`.
+fn wrong(
+    field: impl Into<String>,
+    expected: &'static str,
+    found: Option<&yaml_rust2::Yaml>,
+) -> MetadataError {
+    MetadataError::WrongType {
+        field: field.into(),
+        expected,
+        found: found.map(|f| format!("{f:?}")),
+    }
+}
+
 /// Parse rosbag2 metadata YAML (aliases refused, nesting and size bounded): `metadata.yaml` has it
 /// under `rosbag2_bagfile_information`; a `metadata` table holds it bare (`bare` accepts both).
 /// Errors say what is wrong; the caller names the file.
-pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
+pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError> {
     use yaml_rust2::parser::{Event, Parser};
     use yaml_rust2::{Yaml, YamlLoader};
     // First pass over the events: no aliases (a loader expands them, which can blow up), bounded
@@ -30,43 +71,39 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
     let mut p = Parser::new_from_str(text);
     let mut depth = 0usize;
     loop {
-        let (ev, mark) = p.next_token().map_err(|e| format!("invalid YAML: {e}"))?;
+        let (ev, mark) = p.next_token()?;
         match ev {
             Event::StreamEnd => break,
             Event::Alias(_) => {
-                return Err(format!(
-                    "line {}: YAML aliases are not supported",
-                    mark.line()
-                ));
+                return Err(MetadataError::Alias(mark.line()));
             }
             Event::SequenceStart(..) | Event::MappingStart(..) => {
                 depth += 1;
                 if depth > YAML_DEPTH {
-                    return Err(format!(
-                        "line {}: nested deeper than {YAML_DEPTH} levels",
-                        mark.line()
-                    ));
+                    return Err(MetadataError::TooDeep(mark.line()));
                 }
             }
             Event::SequenceEnd | Event::MappingEnd => depth = depth.saturating_sub(1),
             _ => {}
         }
     }
-    let docs = YamlLoader::load_from_str(text).map_err(|e| format!("invalid YAML: {e}"))?;
+    let docs = YamlLoader::load_from_str(text)?;
     let [doc] = docs.as_slice() else {
-        return Err(format!("{} YAML documents, expected one", docs.len()));
+        return Err(MetadataError::Documents(docs.len()));
     };
     let info = match &doc["rosbag2_bagfile_information"] {
         i @ Yaml::Hash(_) => i,
         _ if bare && matches!(doc, Yaml::Hash(_)) => doc,
-        _ => return Err("no mapping `rosbag2_bagfile_information`".into()),
+        _ => return Err(MetadataError::NoInformation),
     };
-    let text_of = |key: &str| -> Result<String, String> {
+    let text_of = |key: &str| -> Result<String, MetadataError> {
         match &info[key] {
             Yaml::BadValue | Yaml::Null => Ok(String::new()),
             Yaml::String(s) => Ok(s.clone()),
-            other => Err(format!(
-                "rosbag2_bagfile_information.{key}: expected a string, found {other:?}"
+            other => Err(wrong(
+                format!("rosbag2_bagfile_information.{key}"),
+                "a string",
+                Some(other),
             )),
         }
     };
@@ -77,16 +114,20 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
         Yaml::Array(a) => {
             for (i, f) in a.iter().enumerate() {
                 let Yaml::String(s) = f else {
-                    return Err(format!(
-                        "rosbag2_bagfile_information.relative_file_paths[{i}]: expected a string, found {f:?}"
+                    return Err(wrong(
+                        format!("rosbag2_bagfile_information.relative_file_paths[{i}]"),
+                        "a string",
+                        Some(f),
                     ));
                 };
                 files.push(s.clone());
             }
         }
         other => {
-            return Err(format!(
-                "rosbag2_bagfile_information.relative_file_paths: expected a list, found {other:?}"
+            return Err(wrong(
+                "rosbag2_bagfile_information.relative_file_paths",
+                "a list",
+                Some(other),
             ));
         }
     }
@@ -96,14 +137,18 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
             None => None,
             Some(Yaml::String(s)) => Some(s.clone()),
             Some(other) => {
-                return Err(format!(
-                    "rosbag2_bagfile_information.custom_data.{CUSTOM_DATA_KEY}: expected a string (the header's JSON text), found {other:?}"
+                return Err(wrong(
+                    format!("rosbag2_bagfile_information.custom_data.{CUSTOM_DATA_KEY}"),
+                    "a string (the header's JSON text)",
+                    Some(other),
                 ));
             }
         },
         other => {
-            return Err(format!(
-                "rosbag2_bagfile_information.custom_data: expected a mapping, found {other:?}"
+            return Err(wrong(
+                "rosbag2_bagfile_information.custom_data",
+                "a mapping",
+                Some(other),
             ));
         }
     };
@@ -114,13 +159,19 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
             for (i, t) in a.iter().enumerate() {
                 let field = format!("rosbag2_bagfile_information.topics_with_message_count[{i}]");
                 let Yaml::String(name) = &t["topic_metadata"]["name"] else {
-                    return Err(format!("{field}.topic_metadata.name: expected a string"));
+                    return Err(wrong(
+                        format!("{field}.topic_metadata.name"),
+                        "a string",
+                        None,
+                    ));
                 };
                 let count = match &t["message_count"] {
                     Yaml::Integer(c) if *c >= 0 => *c as u64,
                     other => {
-                        return Err(format!(
-                            "{field}.message_count: expected a count (integer ≥ 0), found {other:?}"
+                        return Err(wrong(
+                            format!("{field}.message_count"),
+                            "a count (integer ≥ 0)",
+                            Some(other),
                         ));
                     }
                 };
@@ -128,8 +179,10 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
             }
         }
         other => {
-            return Err(format!(
-                "rosbag2_bagfile_information.topics_with_message_count: expected a list, found {other:?}"
+            return Err(wrong(
+                "rosbag2_bagfile_information.topics_with_message_count",
+                "a list",
+                Some(other),
             ));
         }
     }
@@ -145,23 +198,18 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, String> {
 
 impl BagInfo {
     /// Refuse what this reader does not read: another storage, compression.
-    pub(super) fn check(&self) -> Result<(), String> {
+    pub(super) fn check(&self) -> Result<(), MetadataError> {
         if let Some(s) = self.storage.as_deref().filter(|s| *s != "sqlite3") {
-            return Err(format!(
-                "storage_identifier `{s}` is not supported here (expected `sqlite3`){}",
-                if s == "mcap" {
-                    "; audit the bag's .mcap file itself"
-                } else {
-                    ""
-                }
-            ));
+            return Err(MetadataError::Storage {
+                storage: s.to_string(),
+            });
         }
         let mode = self.compression_mode.to_ascii_lowercase();
         if !(mode.is_empty() || mode == "none") || !self.compression_format.is_empty() {
-            return Err(format!(
-                "compressed bags are not supported (compression_mode `{}`, compression_format `{}`): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)",
-                self.compression_mode, self.compression_format
-            ));
+            return Err(MetadataError::Compressed {
+                mode: self.compression_mode.clone(),
+                format: self.compression_format.clone(),
+            });
         }
         Ok(())
     }

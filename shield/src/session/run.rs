@@ -449,7 +449,7 @@ impl<W: Write> Session<W> {
     }
 
     /// What [`Self::close`] writes: late measurements stamped within the run, the `end` record.
-    fn write_tail(&self, mut log: ShieldLog<W>) -> Result<(), String> {
+    fn write_tail(&self, mut log: ShieldLog<W>) -> Result<(), WriteError> {
         // Late frames of a camera with latency (stamped at or before the last command's time):
         // the audit checks them against the model and calls the run inconclusive if they
         // describe a time it covers, instead of never seeing them.
@@ -462,12 +462,11 @@ impl<W: Write> Session<W> {
                         log.object(t_end, &self.inbox.object_ids()[k], m)
                     }
                     _ => Ok(()),
-                }
-                .map_err(|e| e.to_string())?;
+                }?;
             }
         }
-        let mut out = log.finish().map_err(|e| e.to_string())?;
-        out.flush().map_err(|e| e.to_string())
+        let mut out = log.finish()?;
+        Ok(out.flush()?)
     }
 }
 

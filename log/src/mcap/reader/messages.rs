@@ -117,7 +117,7 @@ impl State {
         let (stream, expected) = self
             .conv
             .stream_of(topic, schema)
-            .map_err(|p| self.err(p))?;
+            .map_err(|p| self.err(p.to_string()))?;
         if let Some((old, _)) = self.channels.get(&id) {
             if old != topic {
                 return Err(self.err(format!(
