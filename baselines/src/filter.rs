@@ -9,11 +9,13 @@ use pacs_motion::Chunk;
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use pacs_shield::ChunkMotion;
+use pacs_shield::session::MeasurementSink;
 use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use serde::{Deserialize, Serialize};
 
-/// What every online filter offers: start at rest, take chunks, one command per safety step.
-pub trait SafetyFilter {
+/// What every online filter offers: start at rest, take chunks and measurements (of every person
+/// and object, through [`MeasurementSink`]), one command per safety step.
+pub trait SafetyFilter: MeasurementSink {
     /// Start at rest at `q` (rad) at time `t` (s).
     fn start(&mut self, t: f64, q: &[f64]) -> Result<(), ShieldError>;
     /// Hand a new action chunk to the filter at time `t` (s); a chunk that cannot be planned is
@@ -32,8 +34,6 @@ pub trait SafetyFilter {
         model: ObjectModel,
         contact: ObjectContact,
     ) -> Result<usize, ShieldError>;
-    /// Record a measurement of object `id` (a newer one replaces the latest).
-    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
     /// Add another person with the task's constraints; returns its index (the first person,
     /// given at construction and measured through [`Self::step`], is 0).
     fn add_human(
@@ -41,8 +41,6 @@ pub trait SafetyFilter {
         human: HumanModel,
         constraints: &ConstraintSpec,
     ) -> Result<usize, ShieldError>;
-    /// Record a measurement of person `id` ≥ 1 (a newer one replaces the latest).
-    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError>;
     /// Intended time (s) left until the current chunk's last waypoint, if the filter follows a
     /// time-parameterised chunk ([`Shield::remaining`]); `None` otherwise.
     fn remaining(&self) -> Option<f64> {
@@ -71,18 +69,12 @@ impl SafetyFilter for Shield {
     ) -> Result<usize, ShieldError> {
         Shield::add_object(self, model, contact)
     }
-    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
-        Shield::measure_object(self, id, m)
-    }
     fn add_human(
         &mut self,
         human: HumanModel,
         constraints: &ConstraintSpec,
     ) -> Result<usize, ShieldError> {
         Shield::add_human(self, human, constraints)
-    }
-    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
-        Shield::measure_human(self, id, m)
     }
     fn remaining(&self) -> Option<f64> {
         Shield::remaining(self)
@@ -116,9 +108,6 @@ impl SafetyFilter for CbfFilter {
             })?;
         Ok(CbfFilter::add_object(self, model))
     }
-    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
-        CbfFilter::measure_object(self, id, m)
-    }
     fn add_human(
         &mut self,
         human: HumanModel,
@@ -126,8 +115,14 @@ impl SafetyFilter for CbfFilter {
     ) -> Result<usize, ShieldError> {
         Ok(CbfFilter::add_human(self, human))
     }
+}
+
+impl MeasurementSink for CbfFilter {
     fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
         CbfFilter::measure_human(self, id, m)
+    }
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        CbfFilter::measure_object(self, id, m)
     }
 }
 

@@ -31,7 +31,9 @@ pub mod worker;
 
 pub use chunk_motion::ChunkMotion;
 pub use replan::ReplanPolicy;
-pub use session::{Due, InboxError, MeasurementInbox, PacedHandover, Session, SessionError};
+pub use session::{
+    Due, InboxError, MeasurementInbox, MeasurementSink, PacedHandover, Session, SessionError,
+};
 pub use settings::ShieldSettings;
 pub use shield::{
     Binding, Command, Diagnostics, FilterMode, Shield, ShieldBuilder, ShieldConfig, ShieldError,

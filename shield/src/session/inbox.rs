@@ -12,6 +12,25 @@ use std::collections::VecDeque;
 use std::io::Write;
 use thiserror::Error;
 
+/// What takes delivered measurements: the shield, or any filter behind the same interface (the
+/// baselines). The receiver keeps the newest of each person and object
+/// ([`pacs_reach::stamped`]).
+pub trait MeasurementSink {
+    /// Record a measurement of person `id` (an older one than the latest is ignored).
+    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError>;
+    /// Record a measurement of object `id` (an older one than the latest is ignored).
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
+}
+
+impl MeasurementSink for Shield {
+    fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError> {
+        Shield::measure_human(self, id, m)
+    }
+    fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
+        Shield::measure_object(self, id, m)
+    }
+}
+
 /// Errors of [`MeasurementInbox`].
 #[derive(Debug, Error)]
 pub enum InboxError {
@@ -217,14 +236,15 @@ impl<C> MeasurementInbox<C> {
     /// step). On an error of the shield or of `other` the failing input has been taken out of
     /// the queue; those after it still wait. The inbox does not allocate here (the log
     /// writer's object records do: they format the object's id).
-    pub fn due<W, E>(
+    pub fn due<S, W, E>(
         &mut self,
         t: f64,
-        shield: &mut Shield,
+        shield: &mut S,
         mut log: Option<&mut ShieldLog<W>>,
-        mut other: impl FnMut(&mut Shield, Option<&mut ShieldLog<W>>, C) -> Result<(), E>,
+        mut other: impl FnMut(&mut S, Option<&mut ShieldLog<W>>, C) -> Result<(), E>,
     ) -> Result<Due<'_>, E>
     where
+        S: MeasurementSink + ?Sized,
         W: Write,
         E: From<InboxError>,
     {
@@ -270,10 +290,10 @@ impl<C> MeasurementInbox<C> {
     }
 
     /// [`Self::due`] for an inbox without inputs of the runner's own.
-    pub fn deliver<W: Write>(
+    pub fn deliver<S: MeasurementSink + ?Sized, W: Write>(
         &mut self,
         t: f64,
-        shield: &mut Shield,
+        shield: &mut S,
         log: Option<&mut ShieldLog<W>>,
     ) -> Result<Due<'_>, InboxError> {
         self.due(t, shield, log, |_, _, _| Ok::<(), InboxError>(()))
@@ -411,14 +431,16 @@ mod tests {
         inbox.push_person(2.5 * DT, 1, person(DT)).unwrap();
         inbox.push_object(0.5 * DT, 0, object(0.0)).unwrap();
         assert_eq!((inbox.people_waiting(), inbox.objects_waiting()), (1, 1));
-        inbox.deliver::<Vec<u8>>(0.0, &mut sh, None).unwrap();
+        inbox.deliver::<_, Vec<u8>>(0.0, &mut sh, None).unwrap();
         assert_eq!(inbox.len(), 2);
-        inbox.deliver::<Vec<u8>>(DT, &mut sh, None).unwrap();
+        inbox.deliver::<_, Vec<u8>>(DT, &mut sh, None).unwrap();
         assert_eq!((inbox.people_waiting(), inbox.objects_waiting()), (1, 0));
-        inbox.deliver::<Vec<u8>>(2.0 * DT, &mut sh, None).unwrap();
+        inbox
+            .deliver::<_, Vec<u8>>(2.0 * DT, &mut sh, None)
+            .unwrap();
         assert_eq!(inbox.len(), 1);
         let first = inbox
-            .deliver::<Vec<u8>>(3.0 * DT, &mut sh, None)
+            .deliver::<_, Vec<u8>>(3.0 * DT, &mut sh, None)
             .unwrap()
             .first;
         assert!(
@@ -499,7 +521,7 @@ mod tests {
         let cap = inbox.queue.capacity();
         for k in 0..64 {
             inbox
-                .deliver::<Vec<u8>>(k as f64 * DT, &mut sh, None)
+                .deliver::<_, Vec<u8>>(k as f64 * DT, &mut sh, None)
                 .unwrap();
         }
         assert!(inbox.is_empty());

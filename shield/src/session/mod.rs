@@ -17,6 +17,6 @@ mod inbox;
 mod paced;
 mod run;
 
-pub use inbox::{Due, InboxError, MeasurementInbox, Pending};
+pub use inbox::{Due, InboxError, MeasurementInbox, MeasurementSink, Pending};
 pub use paced::PacedHandover;
 pub use run::{MAX_WAITING, Session, SessionError};
