@@ -31,6 +31,8 @@ impl Shield {
     ) -> bool {
         let alpha = self.config.safety_step;
         let stop = alpha + brake.settle_time();
+        let m = Monitored { slot, go, brake, t };
+        let span = |k, ta, tb| Span { k, ta, tb };
         if self.humans.is_empty() && self.objects.is_empty() {
             return true;
         }
@@ -61,7 +63,7 @@ impl Shield {
                 self.coarse_skip -= 1;
             } else {
                 let mut coarse = *diag;
-                if self.check_interval(slot, go, brake, t, 0.0, stop, 0, &mut coarse) {
+                if self.check_interval(&m, span(0, 0.0, stop), &mut coarse) {
                     *diag = coarse;
                     self.coarse_backoff = COARSE_SKIP;
                     return true;
@@ -82,12 +84,12 @@ impl Shield {
         );
         if self.config.mode != FilterMode::Off {
             return verify_fine(intervals, |piece, ta, tb| match piece {
-                Piece::Interval(k) => self.check_interval(slot, go, brake, t, ta, tb, k, diag),
+                Piece::Interval(k) => self.check_interval(&m, span(k, ta, tb), diag),
                 // A merged piece reports like the coarse check (separation from its start on):
                 // its diagnostics are kept only if it verifies.
                 Piece::Before(_) => {
                     let mut merged = *diag;
-                    let ok = self.check_interval(slot, go, brake, t, ta, tb, 0, &mut merged);
+                    let ok = self.check_interval(&m, span(0, ta, tb), &mut merged);
                     if ok {
                         *diag = merged;
                     }
@@ -98,41 +100,24 @@ impl Shield {
         // Off: every interval is evaluated (diagnostics only).
         let mut ok = true;
         for (k, ta, tb) in intervals {
-            if !self.check_interval(slot, go, brake, t, ta, tb, k, diag) {
+            if !self.check_interval(&m, span(k, ta, tb), diag) {
                 ok = false;
             }
         }
         ok
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn check_interval(
-        &mut self,
-        slot: usize,
-        go: &SpeedProfile,
-        brake: &SpeedProfile,
-        t: f64,
-        ta: f64,
-        tb: f64,
-        k: usize,
-        diag: &mut Diagnostics,
-    ) -> bool {
-        let alpha = self.config.safety_step;
+    /// Check one occupancy interval `iv` of the monitored trajectory `m`: the joint boxes over
+    /// it, each person's and object's occupancy (broad phase: the robot's workspace ball), the
+    /// robot's occupancy and energy bound only where something is near, then the one rule for
+    /// every object and person. True iff verified; `diag` records what bound the step.
+    fn check_interval(&mut self, m: &Monitored<'_>, iv: Span, diag: &mut Diagnostics) -> bool {
         let n = self.dof;
-        let tr = self.trajs[slot].as_ref().expect("slot holds a trajectory");
-        let mut q_lo = [0.0; MAX_DOF];
-        let mut q_hi = [0.0; MAX_DOF];
-        let mut v_lo = [0.0; MAX_DOF];
-        let mut v_hi = [0.0; MAX_DOF];
-        monitored_joint_boxes(
-            tr,
-            go,
-            brake,
-            alpha,
-            (ta, tb),
-            (&mut q_lo[..n], &mut q_hi[..n]),
-            (&mut v_lo[..n], &mut v_hi[..n]),
-        );
+        let Some((q_box, v_box)) = self.interval_boxes(m, iv) else {
+            // Non-finite path ranges never verify.
+            return false;
+        };
+        let (wa, wb) = (m.t + iv.ta, m.t + iv.tb);
         let Self {
             reach,
             scratch,
@@ -147,68 +132,21 @@ impl Shield {
             config,
             ..
         } = self;
-        // Non-finite path ranges never verify.
-        let (Ok(q_box), Ok(v_box)) = (
-            JointBox::new(&q_lo[..n], &q_hi[..n]),
-            JointBox::new(&v_lo[..n], &v_hi[..n]),
-        ) else {
+        let Some(human_left) = humans_near(humans, wa, wb, iv.k, diag) else {
             return false;
         };
-        // Each human's occupancy; broad phase, stage 1: outside the robot's workspace ball.
-        // (`has_meas` marks the humans left for the narrow phase below.)
-        let mut human_left = false;
-        for h in humans.iter_mut() {
-            if h.reach
-                .occupancy_into(&h.meas, t + ta, t + tb, &mut h.caps)
-                .is_err()
-            {
-                diag.binding = Binding::NoMeasurement;
-                return false;
-            }
-            h.clear = match h.rule.workspace_clear(&h.caps) {
-                Some(sep) => {
-                    if k == 0 {
-                        diag.min_separation = diag.min_separation.min(sep);
-                    }
-                    true
-                }
-                None => {
-                    human_left = true;
-                    false
-                }
-            };
-        }
-        // Each object's occupancy, kept only where the workspace ball does not clear it. (That
-        // test only saves the robot occupancy: when a human needs it anyway, every object goes
-        // to the object rule, whose box test is as cheap.) It is the occupancy over the whole
-        // monitored trajectory where that contains this interval (always, in `verify`): a
-        // superset, so clearing it clears the interval; the interval's own, tighter occupancy is
-        // computed below only if the superset touches the robot.
-        let (wa, wb) = (t + ta, t + tb);
-        let mut objects_left = false;
-        for (o, ((own, pick), window)) in objects.iter().zip(
-            object_occ
-                .iter_mut()
-                .zip(object_pick.iter_mut())
-                .zip(object_window.iter()),
-        ) {
-            *pick = match window {
-                Some(w) if covers(w, wa, wb) => ObjectPick::Window,
-                _ => {
-                    *own = object_occupancy(o, wa, wb);
-                    ObjectPick::Own
-                }
-            };
-            let Some(occ) = pick.occupancy(own, window) else {
-                diag.binding = Binding::NoMeasurement;
-                return false;
-            };
-            if human_left || object_rule.workspace_clear(occ).is_none() {
-                objects_left = true;
-            } else {
-                *pick = ObjectPick::Cleared;
-            }
-        }
+        let mut objs = ObjectsAt {
+            objects,
+            rule: object_rule,
+            own: object_occ,
+            pick: object_pick,
+            window: object_window,
+            wa,
+            wb,
+        };
+        let Some(objects_left) = objs.near(human_left, diag) else {
+            return false;
+        };
         if !human_left && !objects_left {
             return true;
         }
@@ -234,20 +172,238 @@ impl Shield {
                 }
             })
         };
-        for (id, (o, ((own, pick), window))) in objects
+        if !objs.clear(robot_caps, &v_box, &mut energy, iv.k, diag) {
+            return false;
+        }
+        let figure = iv.k == 0 && config.separation_figure;
+        humans_clear(humans, robot_caps, &v_box, &mut energy, figure, iv.k, diag)
+    }
+
+    /// The joint position and velocity boxes of `m` over `iv` (claim C7,
+    /// [`monitored_joint_boxes`]); `None` where a range is not finite.
+    fn interval_boxes(&self, m: &Monitored<'_>, iv: Span) -> Option<(JointBox, JointBox)> {
+        let n = self.dof;
+        let tr = self.trajs[m.slot]
+            .as_ref()
+            .expect("slot holds a trajectory");
+        let mut q_lo = [0.0; MAX_DOF];
+        let mut q_hi = [0.0; MAX_DOF];
+        let mut v_lo = [0.0; MAX_DOF];
+        let mut v_hi = [0.0; MAX_DOF];
+        monitored_joint_boxes(
+            tr,
+            m.go,
+            m.brake,
+            self.config.safety_step,
+            (iv.ta, iv.tb),
+            (&mut q_lo[..n], &mut q_hi[..n]),
+            (&mut v_lo[..n], &mut v_hi[..n]),
+        );
+        let q_box = JointBox::new(&q_lo[..n], &q_hi[..n]).ok()?;
+        let v_box = JointBox::new(&v_lo[..n], &v_hi[..n]).ok()?;
+        Some((q_box, v_box))
+    }
+}
+
+/// The monitored trajectory a verification checks: the intended trajectory in `slot`, one
+/// intended step along the path-speed profile `go`, then braking along `brake`, from the step
+/// time `t` (s).
+#[derive(Clone, Copy)]
+pub(super) struct Monitored<'a> {
+    pub(super) slot: usize,
+    pub(super) go: &'a SpeedProfile,
+    pub(super) brake: &'a SpeedProfile,
+    pub(super) t: f64,
+}
+
+/// One occupancy interval `[t + ta, t + tb]` (s, relative to the step time), reported as
+/// interval `k` in the diagnostics.
+#[derive(Clone, Copy)]
+pub(super) struct Span {
+    pub(super) k: usize,
+    pub(super) ta: f64,
+    pub(super) tb: f64,
+}
+
+/// Each person's occupancy over `[wa, wb]` (s) into its slot, and the broad phase's first stage:
+/// a person outside the robot's workspace ball is cleared (`clear`; the separation figure of
+/// interval 0 recorded). Returns whether a person is left for the narrow phase; `None` (with
+/// [`Binding::NoMeasurement`]) where an occupancy cannot be computed.
+#[inline]
+fn humans_near(
+    humans: &mut [super::HumanSlot],
+    wa: f64,
+    wb: f64,
+    k: usize,
+    diag: &mut Diagnostics,
+) -> Option<bool> {
+    let mut left = false;
+    for h in humans.iter_mut() {
+        if h.reach
+            .occupancy_into(&h.meas, wa, wb, &mut h.caps)
+            .is_err()
+        {
+            diag.binding = Binding::NoMeasurement;
+            return None;
+        }
+        h.clear = match h.rule.workspace_clear(&h.caps) {
+            Some(sep) => {
+                if k == 0 {
+                    diag.min_separation = diag.min_separation.min(sep);
+                }
+                true
+            }
+            None => {
+                left = true;
+                false
+            }
+        };
+    }
+    Some(left)
+}
+
+/// The one rule for every person not cleared by the broad phase against the robot's occupancy
+/// `robot_caps` and velocity box `v_box` (energy bound by `energy`): true iff no contact the
+/// constraints forbid is possible. Records the separation figure (interval 0, where `figure`),
+/// the largest energy bound where contact is possible, and the first violation's binding.
+#[inline]
+fn humans_clear(
+    humans: &mut [super::HumanSlot],
+    robot_caps: &[pacs_models::Capsule],
+    v_box: &JointBox,
+    energy: &mut impl FnMut() -> f64,
+    figure: bool,
+    k: usize,
+    diag: &mut Diagnostics,
+) -> bool {
+    for (hid, h) in humans.iter_mut().enumerate() {
+        if h.clear {
+            continue;
+        }
+        let mut first = None;
+        let outcome = h
+            .rule
+            .check(robot_caps, v_box, &h.caps, &mut *energy, figure, |v| {
+                first = Some(*v);
+                ControlFlow::Break(())
+            });
+        // (Without the figure: 0 where contact is possible, +∞ otherwise.)
+        if k == 0 {
+            diag.min_separation = diag.min_separation.min(outcome.separation);
+        }
+        if let Some((e, thr)) = outcome.pfl
+            && e > diag.contact_energy
+        {
+            diag.contact_energy = e;
+            diag.contact_threshold = thr;
+        }
+        let Some(v) = first else { continue };
+        if matches!(diag.binding, Binding::None) {
+            diag.binding = match v.kind {
+                // (The body-part rule reports SSM or PFL only.)
+                ConstraintKind::Ssm | ConstraintKind::NoContact => Binding::Ssm {
+                    human: hid,
+                    link: v.link,
+                    body_part: v.part,
+                    interval: k,
+                },
+                ConstraintKind::Pfl => Binding::Pfl {
+                    human: hid,
+                    link: v.link,
+                    body_part: v.part,
+                    energy: v.energy,
+                    threshold: v.threshold,
+                    constrained: v.constrained,
+                },
+            };
+        }
+        return false;
+    }
+    true
+}
+
+/// The shield's objects over one occupancy interval `[wa, wb]` (s): their slots and the
+/// occupancies the interval checks (`own`, `pick`, `window`: the shield's parallel per-object
+/// buffers).
+struct ObjectsAt<'s> {
+    objects: &'s [ObjectSlot],
+    rule: &'s pacs_verify::iso15066::ObjectRule,
+    own: &'s mut [Option<ObjectOccupancy>],
+    pick: &'s mut [ObjectPick],
+    window: &'s [Option<ObjectOccupancy>],
+    wa: f64,
+    wb: f64,
+}
+
+impl ObjectsAt<'_> {
+    /// Pick each object's occupancy and clear those outside the robot's workspace ball. The
+    /// occupancy is the one over the whole monitored trajectory where that contains this
+    /// interval (always, in `verify`): a superset, so clearing it clears the interval; the
+    /// interval's own, tighter occupancy is computed in [`Self::clear`] only if the superset
+    /// touches the robot. (The workspace test only saves the robot occupancy: when a person
+    /// needs it anyway (`human_left`), every object goes to the object rule, whose box test is
+    /// as cheap.) Returns whether an object is left; `None` (with
+    /// [`Binding::NoMeasurement`]) where an occupancy is missing.
+    #[inline]
+    fn near(&mut self, human_left: bool, diag: &mut Diagnostics) -> Option<bool> {
+        let (wa, wb) = (self.wa, self.wb);
+        let mut left = false;
+        for (o, ((own, pick), window)) in self.objects.iter().zip(
+            self.own
+                .iter_mut()
+                .zip(self.pick.iter_mut())
+                .zip(self.window.iter()),
+        ) {
+            *pick = match window {
+                Some(w) if covers(w, wa, wb) => ObjectPick::Window,
+                _ => {
+                    *own = object_occupancy(o, wa, wb);
+                    ObjectPick::Own
+                }
+            };
+            let Some(occ) = pick.occupancy(own, window) else {
+                diag.binding = Binding::NoMeasurement;
+                return None;
+            };
+            if human_left || self.rule.workspace_clear(occ).is_none() {
+                left = true;
+            } else {
+                *pick = ObjectPick::Cleared;
+            }
+        }
+        Some(left)
+    }
+
+    /// The object rule for every object not cleared, against the robot's occupancy `robot_caps`
+    /// and velocity box `v_box` (energy bound by `energy`): true iff no object's contact
+    /// constraint may be violated. A violation with the whole trajectory's occupancy is decided
+    /// again with the interval's own. Records the first violation's binding.
+    #[inline]
+    fn clear(
+        &mut self,
+        robot_caps: &[pacs_models::Capsule],
+        v_box: &JointBox,
+        energy: &mut impl FnMut() -> f64,
+        k: usize,
+        diag: &mut Diagnostics,
+    ) -> bool {
+        let (wa, wb) = (self.wa, self.wb);
+        let rule = self.rule;
+        for (id, (o, ((own, pick), window))) in self
+            .objects
             .iter()
             .zip(
-                object_occ
+                self.own
                     .iter_mut()
-                    .zip(object_pick.iter())
-                    .zip(object_window.iter()),
+                    .zip(self.pick.iter())
+                    .zip(self.window.iter()),
             )
             .enumerate()
         {
             let Some(occ) = pick.occupancy(own, window) else {
                 continue; // cleared (a missing occupancy was refused above)
             };
-            let mut out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
+            let mut out = rule.check(robot_caps, v_box, occ, o.contact, &mut *energy, false);
             if out.violation.is_some() && *pick == ObjectPick::Window && occ.interval() != (wa, wb)
             {
                 // The whole trajectory's occupancy touches the robot: decide with this
@@ -257,7 +413,7 @@ impl Shield {
                     diag.binding = Binding::NoMeasurement;
                     return false;
                 };
-                out = object_rule.check(robot_caps, &v_box, occ, o.contact, &mut energy, false);
+                out = rule.check(robot_caps, v_box, occ, o.contact, &mut *energy, false);
             }
             if let Some(v) = out.violation {
                 if matches!(diag.binding, Binding::None) {
@@ -269,50 +425,6 @@ impl Shield {
                 }
                 return false;
             }
-        }
-        for (hid, h) in humans.iter_mut().enumerate() {
-            if h.clear {
-                continue;
-            }
-            let mut first = None;
-            let figure = k == 0 && config.separation_figure;
-            let outcome = h
-                .rule
-                .check(robot_caps, &v_box, &h.caps, &mut energy, figure, |v| {
-                    first = Some(*v);
-                    ControlFlow::Break(())
-                });
-            // (Without the figure: 0 where contact is possible, +∞ otherwise.)
-            if k == 0 {
-                diag.min_separation = diag.min_separation.min(outcome.separation);
-            }
-            if let Some((e, thr)) = outcome.pfl
-                && e > diag.contact_energy
-            {
-                diag.contact_energy = e;
-                diag.contact_threshold = thr;
-            }
-            let Some(v) = first else { continue };
-            if matches!(diag.binding, Binding::None) {
-                diag.binding = match v.kind {
-                    // (The body-part rule reports SSM or PFL only.)
-                    ConstraintKind::Ssm | ConstraintKind::NoContact => Binding::Ssm {
-                        human: hid,
-                        link: v.link,
-                        body_part: v.part,
-                        interval: k,
-                    },
-                    ConstraintKind::Pfl => Binding::Pfl {
-                        human: hid,
-                        link: v.link,
-                        body_part: v.part,
-                        energy: v.energy,
-                        threshold: v.threshold,
-                        constrained: v.constrained,
-                    },
-                };
-            }
-            return false;
         }
         true
     }
