@@ -79,83 +79,152 @@ fn load_config(args: &AuditArgs) -> Result<(AuditConfig, Option<InputFile>), Cli
 
 /// Run the audit; returns the process exit code.
 pub fn main(args: AuditArgs) -> ExitCode {
-    let mut args = args;
-    args.logs = match pacs_reports::fleet::expand_logs(&args.logs) {
-        Ok(l) => l,
-        Err(e) => {
-            eprintln!("pacs: error: {e}");
-            return ExitCode::from(EXIT_INVALID);
+    match run(args) {
+        Ok(code) => code,
+        Err(stop) => {
+            if let Some(m) = stop.message {
+                eprintln!("pacs: {m}");
+            }
+            ExitCode::from(stop.code)
         }
-    };
-    let (cfg, cfg_file) = match load_config(&args) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("pacs: error: {}", e.message());
-            return ExitCode::from(EXIT_INVALID);
-        }
-    };
+    }
+}
+
+/// Why the command stops early: what it prints after `pacs: ` (if not printed already) and its
+/// exit code.
+struct Stop {
+    code: u8,
+    message: Option<String>,
+}
+
+/// Invalid input (exit 3): `pacs: error: …`.
+fn invalid(e: impl std::fmt::Display) -> Stop {
+    Stop {
+        code: EXIT_INVALID,
+        message: Some(format!("error: {e}")),
+    }
+}
+
+/// An output that cannot be written (exit 74): `pacs: cannot write <what>: …`.
+fn cannot_write(what: &str, e: impl std::fmt::Display) -> Stop {
+    Stop {
+        code: super::EXIT_CANNOT_WRITE as u8,
+        message: Some(format!("cannot write {what}: {e}")),
+    }
+}
+
+/// The audit: its inputs checked, every log audited, the verdicts printed, the report and the
+/// replay written; returns the exit code of the combined verdict.
+fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
+    args.logs = pacs_reports::fleet::expand_logs(&args.logs).map_err(invalid)?;
+    let (cfg, cfg_file) = load_config(&args).map_err(|e| invalid(e.message()))?;
     if args.scene.is_some() && args.logs.len() != 1 {
-        eprintln!(
-            "pacs: error: --scene writes the replay of one log; {} logs given",
+        return Err(invalid(format!(
+            "--scene writes the replay of one log; {} logs given",
             args.logs.len()
-        );
-        return ExitCode::from(EXIT_INVALID);
+        )));
     }
     let header = match &args.header {
         None => None,
-        Some(p) => match pacs_log::mcap::load_header_file(p) {
-            Ok(h) => Some(h),
-            Err(e) => {
-                eprintln!("pacs: error: {e}");
-                return ExitCode::from(EXIT_INVALID);
-            }
-        },
+        Some(p) => Some(pacs_log::mcap::load_header_file(p).map_err(invalid)?),
     };
     // With a report: the logs' hashes before the audit, compared with those after it, so that a
     // report never binds a verdict to bytes that were not the ones audited.
-    let hashed_before: Option<Vec<InputFile>> = if args.out.is_some() {
-        match args.logs.iter().map(|p| InputFile::hash(p)).collect() {
-            Ok(h) => Some(h),
-            Err(e) => {
-                eprintln!("pacs: error: {e}");
-                return ExitCode::from(EXIT_INVALID);
+    let hashed_before = match args.out {
+        Some(_) => Some(hash_logs(&args.logs)?),
+        None => None,
+    };
+    let runs = audit_logs(&args.logs, &cfg, header.as_ref())?;
+    let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
+    print_runs(&runs, args.json).map_err(|e| cannot_write("output", e))?;
+    if let Some(dir) = &args.out {
+        let logs = hash_logs(&args.logs)?;
+        for (before, after) in hashed_before.iter().flatten().zip(&logs) {
+            if before.sha256 != after.sha256 {
+                return Err(invalid(format!(
+                    "{} changed while it was audited (sha256 {} before, {} after): no report written; audit it again",
+                    after.path, before.sha256, after.sha256
+                )));
             }
         }
-    } else {
-        None
-    };
-    let bar = indicatif::ProgressBar::new(args.logs.len() as u64);
+        let input = ReportInput {
+            runs: &runs,
+            logs,
+            config: cfg_file,
+            settings: serde_json::to_value(&cfg).unwrap_or_default(),
+            generated: pacs_reports::utc_now(),
+        };
+        pacs_reports::write_reports(dir, &input).map_err(|e| cannot_write("report", e))?;
+        eprintln!("{}", report_written(dir, verdict));
+    }
+    if let Some(path) = &args.scene {
+        write_scene(&args.logs[0], &cfg, header.as_ref(), &runs[0], path).map_err(
+            |(code, e)| Stop {
+                code,
+                message: Some(e),
+            },
+        )?;
+        eprintln!(
+            "pacs: replay written: {} (open it in Foxglove)",
+            path.display()
+        );
+    }
+    Ok(ExitCode::from(verdict.exit_code()))
+}
+
+/// The SHA-256 of every log (what a report binds its verdicts to).
+fn hash_logs(logs: &[PathBuf]) -> Result<Vec<InputFile>, Stop> {
+    logs.iter()
+        .map(|p| InputFile::hash(p))
+        .collect::<Result<_, _>>()
+        .map_err(invalid)
+}
+
+/// Audit every log in parallel (a progress bar on a terminal); every log that cannot be read is
+/// reported, then the command stops (exit 3).
+fn audit_logs(
+    logs: &[PathBuf],
+    cfg: &AuditConfig,
+    header: Option<&pacs_log::Header>,
+) -> Result<Vec<RunResult>, Stop> {
+    let bar = indicatif::ProgressBar::new(logs.len() as u64);
     if !std::io::stderr().is_terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let results: Vec<Result<RunResult, LogError>> = args
-        .logs
+    let results: Vec<Result<RunResult, LogError>> = logs
         .par_iter()
         .map(|p| {
-            let r = pacs_audit::audit_file_with_header(p, &cfg, header.as_ref());
+            let r = pacs_audit::audit_file_with_header(p, cfg, header);
             bar.inc(1);
             r
         })
         .collect();
     bar.finish_and_clear();
     let mut runs = Vec::with_capacity(results.len());
-    let mut invalid = false;
+    let mut refused = false;
     for r in results {
         match r {
             Ok(run) => runs.push(run),
             Err(e) => {
                 eprintln!("pacs: error: {e}");
-                invalid = true;
+                refused = true;
             }
         }
     }
-    if invalid {
-        return ExitCode::from(EXIT_INVALID);
+    if refused {
+        return Err(Stop {
+            code: EXIT_INVALID,
+            message: None,
+        });
     }
-    let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
+    Ok(runs)
+}
+
+/// Each run's verdict on stdout: a line per run, or (`json`) every run with its violation
+/// episodes beside the intervals (as in report.json).
+fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
     let mut out = std::io::stdout().lock();
-    let written = if args.json {
-        // Each run with its violation episodes beside the intervals (as in report.json).
+    if json {
         let runs_json: Vec<serde_json::Value> = runs
             .iter()
             .map(|r| {
@@ -167,73 +236,23 @@ pub fn main(args: AuditArgs) -> ExitCode {
             })
             .collect();
         serde_json::to_writer(&mut out, &serde_json::json!({ "runs": runs_json }))
-            .map_err(std::io::Error::from)
-            .and_then(|_| writeln!(out))
-    } else {
-        runs.iter().try_for_each(|r| {
-            writeln!(
-                out,
-                "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s)",
-                r.log,
-                r.verdict,
-                r.metrics.samples,
-                r.metrics.duration,
-                r.metrics.violation_fraction,
-                pacs_reports::episodes::episodes(&r.violations).len(),
-                r.violations.len(),
-                r.inconclusive.len()
-            )
-        })
-    };
-    if let Err(e) = written {
-        eprintln!("pacs: cannot write output: {e}");
-        return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
+            .map_err(std::io::Error::from)?;
+        return writeln!(out);
     }
-    if let Some(dir) = &args.out {
-        let logs: Result<Vec<InputFile>, _> =
-            args.logs.iter().map(|p| InputFile::hash(p)).collect();
-        let logs = match logs {
-            Ok(l) => l,
-            Err(e) => {
-                eprintln!("pacs: error: {e}");
-                return ExitCode::from(EXIT_INVALID);
-            }
-        };
-        for (before, after) in hashed_before.iter().flatten().zip(&logs) {
-            if before.sha256 != after.sha256 {
-                eprintln!(
-                    "pacs: error: {} changed while it was audited (sha256 {} before, {} after): no report written; audit it again",
-                    after.path, before.sha256, after.sha256
-                );
-                return ExitCode::from(EXIT_INVALID);
-            }
-        }
-        let input = ReportInput {
-            runs: &runs,
-            logs,
-            config: cfg_file,
-            settings: serde_json::to_value(&cfg).unwrap_or_default(),
-            generated: pacs_reports::utc_now(),
-        };
-        if let Err(e) = pacs_reports::write_reports(dir, &input) {
-            eprintln!("pacs: cannot write report: {e}");
-            return ExitCode::from(super::EXIT_CANNOT_WRITE as u8);
-        }
-        eprintln!("{}", report_written(dir, verdict));
-    }
-    if let Some(path) = &args.scene
-        && let Err((code, e)) = write_scene(&args.logs[0], &cfg, header.as_ref(), &runs[0], path)
-    {
-        eprintln!("pacs: {e}");
-        return ExitCode::from(code);
-    }
-    if let Some(path) = &args.scene {
-        eprintln!(
-            "pacs: replay written: {} (open it in Foxglove)",
-            path.display()
-        );
-    }
-    ExitCode::from(verdict.exit_code())
+    runs.iter().try_for_each(|r| {
+        writeln!(
+            out,
+            "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s)",
+            r.log,
+            r.verdict,
+            r.metrics.samples,
+            r.metrics.duration,
+            r.metrics.violation_fraction,
+            pacs_reports::episodes::episodes(&r.violations).len(),
+            r.violations.len(),
+            r.inconclusive.len()
+        )
+    })
 }
 
 /// The Foxglove replay of `log` (audited as `run`) into `path`.
