@@ -437,32 +437,12 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
-        loop {
-            self.line.clear();
-            let n = read_line(
-                &self.file,
-                &mut self.input,
-                &mut self.line,
-                self.line_no + 1,
-            )?;
-            if n == 0 {
-                return Ok(None);
-            }
-            self.line_no += 1;
-            if !self.line.trim().is_empty() {
-                break;
-            }
+        if !self.read_record_line()? {
+            return Ok(None);
         }
         let loc = Location::Line(self.line_no);
         let file = self.file.as_str();
         let err = |p: String| LogError::input(file, loc, p);
-        if !self.line.ends_with('\n') {
-            // The last line of a file must be complete: a writer killed mid-line leaves a prefix
-            // that may still parse (e.g. a shortened number), so an unterminated line is rejected.
-            return Err(err(
-                "truncated line (no newline at the end of the file)".into()
-            ));
-        }
         let b = &mut self.bufs;
         b.reset();
         if !fast::parse_line(&self.line, b) {
@@ -489,111 +469,154 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
         }
         let t =
             b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
-        let allowed: &[&str] = match kind {
-            Kind::Robot => &["q", "dq", "ddq"],
-            Kind::Human if self.header.version >= 2 => &["t_meas", "id", "positions"],
-            Kind::Human => &["t_meas", "positions"],
-            Kind::Object => &["t_meas", "id", "position", "velocity"],
-            Kind::Event => &["name"],
-            Kind::Shield => &[
-                "t_meas",
-                "q",
-                "dq",
-                "ddq",
-                "positions",
-                "name",
-                "id",
-                "position",
-                "velocity",
-            ],
-            Kind::Unknown | Kind::Header => {
-                return Err(err(format!("unknown record type `{}`", b.kind_name)));
+        check_fields(b, kind, self.header.version, &err)?;
+        record_of(b, kind, t, &err).map(Some)
+    }
+}
+
+impl<R: BufRead> JsonlReader<R> {
+    /// Read the next line that is not blank into `self.line`; false at the end of the file. The
+    /// last line of a file must be complete: a writer killed mid-line leaves a prefix that may
+    /// still parse (e.g. a shortened number), so an unterminated line is refused.
+    fn read_record_line(&mut self) -> Result<bool, LogError> {
+        loop {
+            self.line.clear();
+            let n = read_line(
+                &self.file,
+                &mut self.input,
+                &mut self.line,
+                self.line_no + 1,
+            )?;
+            if n == 0 {
+                return Ok(false);
             }
-        };
-        if kind != Kind::Shield {
-            if !b.unknown_field.is_empty() {
-                return Err(err(format!(
-                    "unknown field `{}` in a {} record",
-                    b.unknown_field, b.kind_name
-                )));
-            }
-            let present = [
-                ("t_meas", b.t_meas.is_some()),
-                ("q", b.has_q),
-                ("dq", b.has_dq),
-                ("ddq", b.has_ddq),
-                ("positions", b.has_positions),
-                ("name", b.has_name),
-                ("id", b.has_id),
-                ("position", b.has_position),
-                ("velocity", b.has_velocity),
-            ];
-            if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
-                return Err(err(format!(
-                    "unknown field `{f}` in a {} record",
-                    b.kind_name
-                )));
+            self.line_no += 1;
+            if !self.line.trim().is_empty() {
+                break;
             }
         }
-        Ok(Some(match kind {
-            Kind::Robot => {
-                if !b.has_q {
-                    return Err(err("robot record has no `q` field".into()));
-                }
-                Record::Robot {
-                    t,
-                    q: &b.q,
-                    dq: b.has_dq.then_some(&b.dq[..]),
-                    ddq: b.has_ddq.then_some(&b.ddq[..]),
-                }
-            }
-            Kind::Human => {
-                if !b.has_positions {
-                    return Err(err("human record has no `positions` field".into()));
-                }
-                Record::Human {
-                    t,
-                    t_meas: b.t_meas.unwrap_or(t),
-                    person: b.has_id.then_some(b.id.as_str()),
-                    positions: &b.positions,
-                }
-            }
-            Kind::Object => {
-                if !b.has_id {
-                    return Err(err("object record has no `id` field".into()));
-                }
-                let vec3 = |field: &str, v: &[f64]| -> Result<[f64; 3], LogError> {
-                    <[f64; 3]>::try_from(v).map_err(|_| {
-                        err(format!(
-                            "object record: `{field}` needs 3 values (m, m/s), found {}",
-                            v.len()
-                        ))
-                    })
-                };
-                if !b.has_position {
-                    return Err(err("object record has no `position` field".into()));
-                }
-                let position = vec3("position", &b.position)?;
-                let velocity = if b.has_velocity {
-                    Some(vec3("velocity", &b.velocity)?)
-                } else {
-                    None
-                };
-                Record::Object {
-                    t,
-                    t_meas: b.t_meas.unwrap_or(t),
-                    id: &b.id,
-                    position,
-                    velocity,
-                }
-            }
-            Kind::Event => {
-                if !b.has_name {
-                    return Err(err("event record has no `name` field".into()));
-                }
-                Record::Event { t, name: &b.name }
-            }
-            _ => Record::Shield { t },
-        }))
+        if !self.line.ends_with('\n') {
+            return Err(LogError::input(
+                &self.file,
+                Location::Line(self.line_no),
+                "truncated line (no newline at the end of the file)",
+            ));
+        }
+        Ok(true)
     }
+}
+
+/// Refuse a field a record of `kind` does not have (in format `version`); `shield` records
+/// (diagnostics) may carry any.
+fn check_fields(
+    b: &LineBuffers,
+    kind: Kind,
+    version: u32,
+    err: &impl Fn(String) -> LogError,
+) -> Result<(), LogError> {
+    let allowed: &[&str] = match kind {
+        Kind::Robot => &["q", "dq", "ddq"],
+        Kind::Human if version >= 2 => &["t_meas", "id", "positions"],
+        Kind::Human => &["t_meas", "positions"],
+        Kind::Object => &["t_meas", "id", "position", "velocity"],
+        Kind::Event => &["name"],
+        Kind::Shield => return Ok(()),
+        Kind::Unknown | Kind::Header => {
+            return Err(err(format!("unknown record type `{}`", b.kind_name)));
+        }
+    };
+    if !b.unknown_field.is_empty() {
+        return Err(err(format!(
+            "unknown field `{}` in a {} record",
+            b.unknown_field, b.kind_name
+        )));
+    }
+    let present = [
+        ("t_meas", b.t_meas.is_some()),
+        ("q", b.has_q),
+        ("dq", b.has_dq),
+        ("ddq", b.has_ddq),
+        ("positions", b.has_positions),
+        ("name", b.has_name),
+        ("id", b.has_id),
+        ("position", b.has_position),
+        ("velocity", b.has_velocity),
+    ];
+    if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
+        return Err(err(format!(
+            "unknown field `{f}` in a {} record",
+            b.kind_name
+        )));
+    }
+    Ok(())
+}
+
+/// The record of `kind` at `t` (s) the buffers hold; errors name a missing field or an object
+/// vector of the wrong length.
+fn record_of<'b>(
+    b: &'b LineBuffers,
+    kind: Kind,
+    t: f64,
+    err: &impl Fn(String) -> LogError,
+) -> Result<Record<'b>, LogError> {
+    Ok(match kind {
+        Kind::Robot => {
+            if !b.has_q {
+                return Err(err("robot record has no `q` field".into()));
+            }
+            Record::Robot {
+                t,
+                q: &b.q,
+                dq: b.has_dq.then_some(&b.dq[..]),
+                ddq: b.has_ddq.then_some(&b.ddq[..]),
+            }
+        }
+        Kind::Human => {
+            if !b.has_positions {
+                return Err(err("human record has no `positions` field".into()));
+            }
+            Record::Human {
+                t,
+                t_meas: b.t_meas.unwrap_or(t),
+                person: b.has_id.then_some(b.id.as_str()),
+                positions: &b.positions,
+            }
+        }
+        Kind::Object => {
+            if !b.has_id {
+                return Err(err("object record has no `id` field".into()));
+            }
+            let vec3 = |field: &str, v: &[f64]| -> Result<[f64; 3], LogError> {
+                <[f64; 3]>::try_from(v).map_err(|_| {
+                    err(format!(
+                        "object record: `{field}` needs 3 values (m, m/s), found {}",
+                        v.len()
+                    ))
+                })
+            };
+            if !b.has_position {
+                return Err(err("object record has no `position` field".into()));
+            }
+            let position = vec3("position", &b.position)?;
+            let velocity = if b.has_velocity {
+                Some(vec3("velocity", &b.velocity)?)
+            } else {
+                None
+            };
+            Record::Object {
+                t,
+                t_meas: b.t_meas.unwrap_or(t),
+                id: &b.id,
+                position,
+                velocity,
+            }
+        }
+        Kind::Event => {
+            if !b.has_name {
+                return Err(err("event record has no `name` field".into()));
+            }
+            Record::Event { t, name: &b.name }
+        }
+        _ => Record::Shield { t },
+    })
 }
