@@ -5,12 +5,12 @@
 #![allow(clippy::needless_range_loop)]
 
 use pacs_models::object::{ObjectContact, ObjectModel, default_ball};
-use pacs_models::{ConstraintSpec, default_human, fr3};
+use pacs_models::{ConstraintSpec, HumanModel, default_human, fr3};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_reach::human::HumanMeasurement;
 use pacs_reach::object::ObjectMeasurement;
 use pacs_shield::ChunkMotion;
-use pacs_shield::shield::{FilterMode, Shield, ShieldConfig};
+use pacs_shield::shield::{Command, FilterMode, Shield, ShieldConfig, ShieldError};
 use pacs_shield::worker::{ChunkWorker, WorkerState};
 use std::time::Instant;
 
@@ -408,20 +408,7 @@ fn run_walking_scenario(
     setup: impl FnOnce(&mut Shield),
     mut measure: impl FnMut(&mut Shield, f64),
 ) -> StepStats {
-    let robot = fr3::fr3();
-    let human = default_human()
-        .with_uncertainty(0.01, 0.1, 0.02)
-        .expect("valid");
-    let cs = ConstraintSpec::builtin(spec).expect("preset");
-    let mut cfg = ShieldConfig {
-        mode,
-        // As a real-time loop runs it: the separation figure (a diagnostic) off, except where the
-        // scenario name asks for it.
-        separation_figure: name.contains(WITH_FIGURE),
-        ..ShieldConfig::default()
-    };
-    motion.apply(&mut cfg);
-    let mut sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
+    let (mut sh, human, safety_step) = walking_shield(name, spec, mode, motion);
     setup(&mut sh);
     sh.start(0.0, &fr3::Q_READY).expect("start");
     let mut times = Vec::with_capacity(steps);
@@ -438,13 +425,9 @@ fn run_walking_scenario(
         ChunkDelivery::InLoop => None,
         ChunkDelivery::Worker { lead } => Some(ChunkWorker::spawn(&sh, lead).expect("lead ≥ 1")),
     };
-    let mut plan_times = Vec::new();
-    let mut offer_times = Vec::new();
-    let (mut offers, mut taken) = (0usize, 0usize);
-    let mut last_state = WorkerState::Idle;
-    let mut plans_seen = 0u64;
+    let mut tally = WorkerTally::new();
     for k in 0..steps {
-        let t = k as f64 * cfg.safety_step;
+        let t = k as f64 * safety_step;
         if k % 200 == 0 {
             let c = back_and_forth(sign);
             sign = -sign;
@@ -455,7 +438,7 @@ fn run_walking_scenario(
                 }
                 Some(w) => {
                     if w.set_chunk(&mut sh, c).is_ok() {
-                        offers += 1;
+                        tally.offers += 1;
                     }
                 }
             }
@@ -464,43 +447,13 @@ fn run_walking_scenario(
         // The worker's share of the step: offer a plan that came back (timed with the step).
         let mut poll = 0.0;
         if let Some(w) = worker.as_mut() {
-            if w.due(t) {
-                // Unpaced: the plan's handover is this step; a 1 kHz loop would have idled.
-                let _ = w.wait();
-            }
-            let t0 = Instant::now();
-            let _ = w.poll(&mut sh);
-            poll = t0.elapsed().as_secs_f64();
-            if w.plans() != plans_seen {
-                plans_seen = w.plans();
-                offer_times.push(poll);
-                if let Some(d) = w.last_planning() {
-                    plan_times.push(d.as_secs_f64());
-                }
-            }
-            let st = w.state().clone();
-            if st != last_state {
-                taken += matches!(st, WorkerState::Taken(_)) as usize;
-                last_state = st;
-            }
+            poll = tally.poll(w, &mut sh, t);
         }
         let m =
             HumanMeasurement::new(&human, t, &walking_human(t), None).expect("valid measurement");
-        // Two re-runs on copies first (their result is discarded), then the real step.
-        let mut fastest = f64::INFINITY;
         // The state before the step, kept below if the step is among the slowest (untimed).
         let snapshot = sh.clone();
-        for _ in 0..2 {
-            let mut copy = sh.clone();
-            let t0 = Instant::now();
-            measure(&mut copy, t);
-            let _ = std::hint::black_box(copy.step(t, Some(&m)));
-            fastest = fastest.min(t0.elapsed().as_secs_f64());
-        }
-        let t0 = Instant::now();
-        measure(&mut sh, t);
-        let cmd = sh.step(t, Some(&m));
-        let real = t0.elapsed().as_secs_f64();
+        let (cmd, real, fastest) = timed_step(&mut sh, t, &m, &mut measure);
         // Wall time: the poll and the step. Work: the step's (a poll cannot be re-run; its
         // offers are reported apart, `offer_*`).
         times.push(real + poll);
@@ -522,13 +475,77 @@ fn run_walking_scenario(
     }
     let mut out = stats(name, times, work, &notes, chunk_times);
     (out.floor_p999, out.floor_max, out.floor_over_50us) = floor_figures(&mut floor);
-    // Re-run the kept steps now, each from its copy, and give the slowest steps their re-runs.
-    for (_, k, t, snapshot) in &kept {
+    rerun_kept(&kept, &mut out, &human, &mut measure);
+    if let Some(w) = &worker {
+        tally.report(w, &mut out);
+    }
+    out
+}
+
+/// The walking-human scenarios' FR3 shield, not started: constraint preset `spec`, filter
+/// `mode`, chunk `motion`, the separation figure only where `name` asks for it; with the
+/// person's model (with measurement uncertainty) and the safety step (s).
+fn walking_shield(
+    name: &str,
+    spec: &str,
+    mode: FilterMode,
+    motion: ChunkMotion,
+) -> (Shield, HumanModel, f64) {
+    let robot = fr3::fr3();
+    let human = default_human()
+        .with_uncertainty(0.01, 0.1, 0.02)
+        .expect("valid");
+    let cs = ConstraintSpec::builtin(spec).expect("preset");
+    let mut cfg = ShieldConfig {
+        mode,
+        // As a real-time loop runs it: the separation figure (a diagnostic) off, except where the
+        // scenario name asks for it.
+        separation_figure: name.contains(WITH_FIGURE),
+        ..ShieldConfig::default()
+    };
+    motion.apply(&mut cfg);
+    let sh = Shield::new(robot, Some((human.clone(), &cs)), vec![], cfg).expect("valid shield");
+    (sh, human, cfg.safety_step)
+}
+
+/// One step at `t` (s) with the human measurement `m`, `measure` before it: two re-runs on
+/// copies of the shield first (their result is discarded), then the real step. The step's
+/// command, its time and the fastest re-run's (s).
+fn timed_step(
+    sh: &mut Shield,
+    t: f64,
+    m: &HumanMeasurement,
+    measure: &mut impl FnMut(&mut Shield, f64),
+) -> (Result<Command, ShieldError>, f64, f64) {
+    let mut fastest = f64::INFINITY;
+    for _ in 0..2 {
+        let mut copy = sh.clone();
+        let t0 = Instant::now();
+        measure(&mut copy, t);
+        let _ = std::hint::black_box(copy.step(t, Some(m)));
+        fastest = fastest.min(t0.elapsed().as_secs_f64());
+    }
+    let t0 = Instant::now();
+    measure(sh, t);
+    let cmd = sh.step(t, Some(m));
+    let real = t0.elapsed().as_secs_f64();
+    (cmd, real, fastest)
+}
+
+/// Re-run the kept steps (work time, step, time in s, the shield before it) now, each from its
+/// copy, and give the slowest steps of `out` the fastest of [`RERUN_TIMES`] re-runs (s).
+fn rerun_kept(
+    kept: &[(f64, usize, f64, Shield)],
+    out: &mut StepStats,
+    human: &HumanModel,
+    measure: &mut impl FnMut(&mut Shield, f64),
+) {
+    for (_, k, t, snapshot) in kept {
         let Some(slow) = out.slowest.iter_mut().find(|w| w.step == *k) else {
             continue;
         };
         let m =
-            HumanMeasurement::new(&human, *t, &walking_human(*t), None).expect("valid measurement");
+            HumanMeasurement::new(human, *t, &walking_human(*t), None).expect("valid measurement");
         let mut best = f64::INFINITY;
         for _ in 0..RERUN_TIMES {
             let mut copy = snapshot.clone();
@@ -539,19 +556,70 @@ fn run_walking_scenario(
         }
         slow.rerun = Some(best);
     }
-    if let Some(w) = &worker {
-        plan_times.sort_by(f64::total_cmp);
-        out.plan_median = quantile(&plan_times, 0.5);
-        out.plan_p99 = quantile(&plan_times, 0.99);
-        out.plan_max = plan_times.last().copied().unwrap_or(0.0);
-        offer_times.sort_by(f64::total_cmp);
-        out.offer_median = quantile(&offer_times, 0.5);
-        out.offer_max = offer_times.last().copied().unwrap_or(0.0);
-        out.offers = offers;
-        out.offers_taken = taken;
+}
+
+/// What a run's [`ChunkWorker`] did: its planning and offering times (s), the chunks handed in
+/// and taken over.
+struct WorkerTally {
+    plan_times: Vec<f64>,
+    offer_times: Vec<f64>,
+    offers: usize,
+    taken: usize,
+    last_state: WorkerState,
+    plans_seen: u64,
+}
+
+impl WorkerTally {
+    fn new() -> Self {
+        Self {
+            plan_times: Vec::new(),
+            offer_times: Vec::new(),
+            offers: 0,
+            taken: 0,
+            last_state: WorkerState::Idle,
+            plans_seen: 0,
+        }
+    }
+
+    /// The worker's share of the step at `t` (s): wait (untimed) for a plan due now, then poll,
+    /// which offers a plan that came back. The poll's time (s).
+    fn poll(&mut self, w: &mut ChunkWorker, sh: &mut Shield, t: f64) -> f64 {
+        if w.due(t) {
+            // Unpaced: the plan's handover is this step; a 1 kHz loop would have idled.
+            let _ = w.wait();
+        }
+        let t0 = Instant::now();
+        let _ = w.poll(sh);
+        let poll = t0.elapsed().as_secs_f64();
+        if w.plans() != self.plans_seen {
+            self.plans_seen = w.plans();
+            self.offer_times.push(poll);
+            if let Some(d) = w.last_planning() {
+                self.plan_times.push(d.as_secs_f64());
+            }
+        }
+        let st = w.state().clone();
+        if st != self.last_state {
+            self.taken += matches!(st, WorkerState::Taken(_)) as usize;
+            self.last_state = st;
+        }
+        poll
+    }
+
+    /// Into `out`: the planning and offering times' quantiles (s), the offers, the chunks taken
+    /// over and the worker's re-plans.
+    fn report(mut self, w: &ChunkWorker, out: &mut StepStats) {
+        self.plan_times.sort_by(f64::total_cmp);
+        out.plan_median = quantile(&self.plan_times, 0.5);
+        out.plan_p99 = quantile(&self.plan_times, 0.99);
+        out.plan_max = self.plan_times.last().copied().unwrap_or(0.0);
+        self.offer_times.sort_by(f64::total_cmp);
+        out.offer_median = quantile(&self.offer_times, 0.5);
+        out.offer_max = self.offer_times.last().copied().unwrap_or(0.0);
+        out.offers = self.offers;
+        out.offers_taken = self.taken;
         out.replans = w.replans() as usize;
     }
-    out
 }
 
 /// Position (m) and velocity (m/s) of a ball rolling back and forth on the table in front of the

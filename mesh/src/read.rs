@@ -205,29 +205,77 @@ fn attr(e: &quick_xml::events::BytesStart<'_>, name: &[u8]) -> Option<String> {
 
 /// COLLADA: positions of the instanced geometries through the node transforms, in metres.
 pub fn dae(path: &Path, s: &str) -> Result<Vec<Point3<f64>>, MeshError> {
-    let unsupported = |what: String| MeshError::Unsupported {
+    let doc = read_dae(path, s)?;
+    check_up_axis(path, doc.up_axis.as_deref())?;
+    let mut out = doc.scene_vertices(path)?;
+    for p in &mut out {
+        *p = Point3::from(p.coords * doc.unit);
+    }
+    Ok(out)
+}
+
+fn unsupported(path: &Path, what: String) -> MeshError {
+    MeshError::Unsupported {
         path: path.to_path_buf(),
         what,
-    };
+    }
+}
+
+/// What a COLLADA document says about its vertices, in file units.
+struct Dae {
+    /// Metres per file unit (`<unit meter>`, 1 if absent).
+    unit: f64,
+    up_axis: Option<String>,
+    /// float_array id -> values.
+    arrays: HashMap<String, Vec<f64>>,
+    /// source id -> float_array id (`!stride N` for an accessor that is not 3 components).
+    source_array: HashMap<String, String>,
+    /// geometry id -> its POSITION source ids.
+    geometry_positions: HashMap<String, Vec<String>>,
+    /// Instanced geometry ids with their node transforms accumulated from the scene root.
+    instances: Vec<(String, Matrix4<f64>)>,
+}
+
+/// A pass over a COLLADA document's XML: what it has read so far and where it is.
+struct DaeReader<'p> {
+    path: &'p Path,
+    doc: Dae,
+    /// Element stack (local names).
+    stack: Vec<String>,
+    cur_source: Option<String>,
+    cur_array: Option<String>,
+    cur_geometry: Option<String>,
+    in_vertices: bool,
+    /// Scene nodes: a stack of accumulated transforms.
+    nodes: Vec<Node>,
+    in_scene: bool,
+    /// The transform or `up_axis` element whose text comes next.
+    pending_text_for: Option<String>,
+}
+
+/// Read a COLLADA document's units, up axis, geometries and scene in one pass over its XML.
+fn read_dae(path: &Path, s: &str) -> Result<Dae, MeshError> {
     let mut rd = Reader::from_str(s);
     rd.config_mut().trim_text(true);
-    // Element stack (local names).
-    let mut stack: Vec<String> = Vec::new();
-    let mut unit = 1.0f64;
-    let mut up_axis: Option<String> = None;
-    // float_array id -> values; source id -> float_array id; vertices id -> source id
-    let mut arrays: HashMap<String, Vec<f64>> = HashMap::new();
-    let mut source_array: HashMap<String, String> = HashMap::new();
-    let mut cur_source: Option<String> = None;
-    let mut cur_array: Option<String> = None;
-    let mut geometry_positions: HashMap<String, Vec<String>> = HashMap::new();
-    let mut cur_geometry: Option<String> = None;
-    let mut in_vertices = false;
-    // Scene nodes: a stack of accumulated transforms; instanced geometries with their transform.
-    let mut nodes: Vec<Node> = Vec::new();
-    let mut instances: Vec<(String, Matrix4<f64>)> = Vec::new();
-    let mut in_scene = false;
-    let mut pending_text_for: Option<String> = None;
+    let mut st = DaeReader {
+        path,
+        doc: Dae {
+            unit: 1.0,
+            up_axis: None,
+            arrays: HashMap::new(),
+            source_array: HashMap::new(),
+            geometry_positions: HashMap::new(),
+            instances: Vec::new(),
+        },
+        stack: Vec::new(),
+        cur_source: None,
+        cur_array: None,
+        cur_geometry: None,
+        in_vertices: false,
+        nodes: Vec::new(),
+        in_scene: false,
+        pending_text_for: None,
+    };
     loop {
         let ev = rd.read_event().map_err(|e| {
             parse_err(
@@ -237,157 +285,238 @@ pub fn dae(path: &Path, s: &str) -> Result<Vec<Point3<f64>>, MeshError> {
         })?;
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
-                let empty = matches!(ev, Event::Empty(_));
-                let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
-                // A self-closing element has no content and no end event: it opens nothing.
-                let opens = !empty;
-                match name.as_str() {
-                    "unit" => {
-                        if let Some(m) = attr(e, b"meter") {
-                            unit = m.parse().map_err(|_| {
-                                parse_err(path, format!("<unit meter=\"{m}\"> is not a number"))
-                            })?;
-                            if !(unit.is_finite() && unit > 0.0) {
-                                return Err(parse_err(path, format!("<unit meter=\"{m}\">")));
-                            }
-                        }
-                    }
-                    "geometry" if opens => cur_geometry = attr(e, b"id"),
-                    "source" if opens => cur_source = attr(e, b"id"),
-                    "float_array" if opens => cur_array = attr(e, b"id"),
-                    "accessor" => {
-                        if let (Some(src), Some(a)) = (&cur_source, attr(e, b"source")) {
-                            let stride = attr(e, b"stride").unwrap_or_else(|| "1".into());
-                            if stride != "3" {
-                                // Only 3-component accessors are positions we read.
-                                source_array.insert(src.clone(), format!("!stride {stride}"));
-                            } else {
-                                source_array
-                                    .insert(src.clone(), a.trim_start_matches('#').to_string());
-                            }
-                        }
-                    }
-                    "vertices" if opens => in_vertices = true,
-                    "input" if in_vertices => {
-                        if attr(e, b"semantic").as_deref() == Some("POSITION")
-                            && let (Some(g), Some(src)) = (&cur_geometry, attr(e, b"source"))
-                        {
-                            geometry_positions
-                                .entry(g.clone())
-                                .or_default()
-                                .push(src.trim_start_matches('#').to_string());
-                        }
-                    }
-                    "visual_scene" if opens => {
-                        in_scene = true;
-                        nodes.clear();
-                        nodes.push(Node {
-                            transform: Matrix4::identity(),
-                        });
-                    }
-                    "node" if in_scene && opens => {
-                        let parent = nodes.last().map_or(Matrix4::identity(), |n| n.transform);
-                        nodes.push(Node { transform: parent });
-                    }
-                    "instance_geometry" if in_scene => {
-                        let url = attr(e, b"url").unwrap_or_default();
-                        let t = nodes.last().map_or(Matrix4::identity(), |n| n.transform);
-                        instances.push((url.trim_start_matches('#').to_string(), t));
-                    }
-                    "instance_node" if in_scene => {
-                        return Err(unsupported("<instance_node> (node references)".into()));
-                    }
-                    "instance_controller" if in_scene => {
-                        return Err(unsupported(
-                            "<instance_controller> (skinned or morphed meshes)".into(),
-                        ));
-                    }
-                    "skew" | "lookat" if in_scene => {
-                        return Err(unsupported(format!("<{name}> node transforms")));
-                    }
-                    "matrix" | "translate" | "rotate" | "scale" if in_scene && opens => {
-                        pending_text_for = Some(name.clone());
-                    }
-                    "up_axis" if opens => pending_text_for = Some(name.clone()),
-                    _ => {}
-                }
-                if opens {
-                    stack.push(name);
-                }
+                st.start(e, matches!(ev, Event::Empty(_)))?;
             }
             Event::Text(t) => {
                 let txt = t
                     .decode()
                     .map_err(|e| parse_err(path, format!("XML text: {e}")))?
                     .into_owned();
-                let top = stack.last().map(String::as_str).unwrap_or("");
-                if top == "float_array" {
-                    if let Some(id) = &cur_array {
-                        arrays.insert(
-                            id.clone(),
-                            floats(path, &format!("float_array `{id}`"), &txt)?,
-                        );
-                    }
-                } else if let Some(kind) = pending_text_for.take() {
-                    if kind == "up_axis" {
-                        up_axis = Some(txt.trim().to_string());
-                    } else {
-                        let v = floats(path, &format!("<{kind}>"), &txt)?;
-                        let m = node_transform(path, &kind, &v)?;
-                        if let Some(n) = nodes.last_mut() {
-                            n.transform *= m;
-                        }
-                    }
-                }
+                st.text(&txt)?;
             }
             Event::End(e) => {
                 let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
-                match name.as_str() {
-                    "geometry" => cur_geometry = None,
-                    "source" => cur_source = None,
-                    "float_array" => cur_array = None,
-                    "vertices" => in_vertices = false,
-                    "node" if in_scene => {
-                        nodes.pop();
-                    }
-                    "visual_scene" => in_scene = false,
-                    _ => {}
-                }
-                pending_text_for = None;
-                stack.pop();
+                st.end(&name);
             }
             Event::Eof => break,
             _ => {}
         }
     }
-    match up_axis.as_deref() {
-        Some("Z_UP") => {}
-        Some(a) => {
-            return Err(unsupported(format!(
-                "<up_axis>{a}</up_axis> (only Z_UP is read: tools disagree on how to rotate other axes; export with Z up or as STL)"
-            )));
+    Ok(st.doc)
+}
+
+impl DaeReader<'_> {
+    /// An element opens (or is self-closing, `empty`: it opens nothing).
+    fn start(
+        &mut self,
+        e: &quick_xml::events::BytesStart<'_>,
+        empty: bool,
+    ) -> Result<(), MeshError> {
+        let path = self.path;
+        let name = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+        // A self-closing element has no content and no end event: it opens nothing.
+        let opens = !empty;
+        let in_scene = self.in_scene;
+        match name.as_str() {
+            "unit" => {
+                if let Some(m) = attr(e, b"meter") {
+                    self.doc.unit = m.parse().map_err(|_| {
+                        parse_err(path, format!("<unit meter=\"{m}\"> is not a number"))
+                    })?;
+                    if !(self.doc.unit.is_finite() && self.doc.unit > 0.0) {
+                        return Err(parse_err(path, format!("<unit meter=\"{m}\">")));
+                    }
+                }
+            }
+            "geometry" if opens => self.cur_geometry = attr(e, b"id"),
+            "source" if opens => self.cur_source = attr(e, b"id"),
+            "float_array" if opens => self.cur_array = attr(e, b"id"),
+            "accessor" => {
+                if let (Some(src), Some(a)) = (&self.cur_source, attr(e, b"source")) {
+                    let stride = attr(e, b"stride").unwrap_or_else(|| "1".into());
+                    if stride != "3" {
+                        // Only 3-component accessors are positions we read.
+                        self.doc
+                            .source_array
+                            .insert(src.clone(), format!("!stride {stride}"));
+                    } else {
+                        self.doc
+                            .source_array
+                            .insert(src.clone(), a.trim_start_matches('#').to_string());
+                    }
+                }
+            }
+            "vertices" if opens => self.in_vertices = true,
+            "input" if self.in_vertices => {
+                if attr(e, b"semantic").as_deref() == Some("POSITION")
+                    && let (Some(g), Some(src)) = (&self.cur_geometry, attr(e, b"source"))
+                {
+                    self.doc
+                        .geometry_positions
+                        .entry(g.clone())
+                        .or_default()
+                        .push(src.trim_start_matches('#').to_string());
+                }
+            }
+            "visual_scene" if opens => {
+                self.in_scene = true;
+                self.nodes.clear();
+                self.nodes.push(Node {
+                    transform: Matrix4::identity(),
+                });
+            }
+            "node" if in_scene && opens => {
+                let parent = self
+                    .nodes
+                    .last()
+                    .map_or(Matrix4::identity(), |n| n.transform);
+                self.nodes.push(Node { transform: parent });
+            }
+            "instance_geometry" if in_scene => {
+                let url = attr(e, b"url").unwrap_or_default();
+                let t = self
+                    .nodes
+                    .last()
+                    .map_or(Matrix4::identity(), |n| n.transform);
+                self.doc
+                    .instances
+                    .push((url.trim_start_matches('#').to_string(), t));
+            }
+            "instance_node" if in_scene => {
+                return Err(unsupported(
+                    path,
+                    "<instance_node> (node references)".into(),
+                ));
+            }
+            "instance_controller" if in_scene => {
+                return Err(unsupported(
+                    path,
+                    "<instance_controller> (skinned or morphed meshes)".into(),
+                ));
+            }
+            "skew" | "lookat" if in_scene => {
+                return Err(unsupported(path, format!("<{name}> node transforms")));
+            }
+            "matrix" | "translate" | "rotate" | "scale" if in_scene && opens => {
+                self.pending_text_for = Some(name.clone());
+            }
+            "up_axis" if opens => self.pending_text_for = Some(name.clone()),
+            _ => {}
         }
-        None => {
-            return Err(unsupported(
-                "no <up_axis> (COLLADA's default is Y_UP, which tools rotate differently; export with <up_axis>Z_UP</up_axis> or as STL)".into(),
-            ));
+        if opens {
+            self.stack.push(name);
         }
+        Ok(())
     }
-    let positions = |g: &str| -> Result<Vec<Point3<f64>>, MeshError> {
+
+    /// Text inside the innermost open element: a float array's values, the up axis, or a node
+    /// transform applied to the innermost node.
+    fn text(&mut self, txt: &str) -> Result<(), MeshError> {
+        let path = self.path;
+        let top = self.stack.last().map(String::as_str).unwrap_or("");
+        if top == "float_array" {
+            if let Some(id) = &self.cur_array {
+                self.doc.arrays.insert(
+                    id.clone(),
+                    floats(path, &format!("float_array `{id}`"), txt)?,
+                );
+            }
+        } else if let Some(kind) = self.pending_text_for.take() {
+            if kind == "up_axis" {
+                self.doc.up_axis = Some(txt.trim().to_string());
+            } else {
+                let v = floats(path, &format!("<{kind}>"), txt)?;
+                let m = node_transform(path, &kind, &v)?;
+                if let Some(n) = self.nodes.last_mut() {
+                    n.transform *= m;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The element `name` closes.
+    fn end(&mut self, name: &str) {
+        match name {
+            "geometry" => self.cur_geometry = None,
+            "source" => self.cur_source = None,
+            "float_array" => self.cur_array = None,
+            "vertices" => self.in_vertices = false,
+            "node" if self.in_scene => {
+                self.nodes.pop();
+            }
+            "visual_scene" => self.in_scene = false,
+            _ => {}
+        }
+        self.pending_text_for = None;
+        self.stack.pop();
+    }
+}
+
+/// Only `Z_UP` is read: refuse other up axes and a missing one (COLLADA's default is `Y_UP`).
+fn check_up_axis(path: &Path, up_axis: Option<&str>) -> Result<(), MeshError> {
+    match up_axis {
+        Some("Z_UP") => Ok(()),
+        Some(a) => Err(unsupported(
+            path,
+            format!(
+                "<up_axis>{a}</up_axis> (only Z_UP is read: tools disagree on how to rotate other axes; export with Z up or as STL)"
+            ),
+        )),
+        None => Err(unsupported(
+            path,
+            "no <up_axis> (COLLADA's default is Y_UP, which tools rotate differently; export with <up_axis>Z_UP</up_axis> or as STL)".into(),
+        )),
+    }
+}
+
+impl Dae {
+    /// The vertices (file units) of the instanced geometries through their node transforms;
+    /// with no instance, every geometry in its own frame, by id.
+    fn scene_vertices(&self, path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
         let mut out = Vec::new();
-        for src in geometry_positions.get(g).into_iter().flatten() {
-            let arr = source_array.get(src).ok_or_else(|| {
+        if self.instances.is_empty() {
+            // No scene: every geometry in its own frame.
+            let mut ids: Vec<&String> = self.geometry_positions.keys().collect();
+            ids.sort();
+            for g in ids {
+                out.extend(self.positions(path, g)?);
+            }
+        } else {
+            for (g, t) in &self.instances {
+                if !self.geometry_positions.contains_key(g) {
+                    return Err(parse_err(
+                        path,
+                        format!("instance_geometry `#{g}` not found"),
+                    ));
+                }
+                for p in self.positions(path, g)? {
+                    out.push(Point3::from_homogeneous(t * p.to_homogeneous()).ok_or_else(
+                        || parse_err(path, format!("node transform of `#{g}` is not affine")),
+                    )?);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The POSITION vertices (file units) of geometry `g`, in its own frame.
+    fn positions(&self, path: &Path, g: &str) -> Result<Vec<Point3<f64>>, MeshError> {
+        let mut out = Vec::new();
+        for src in self.geometry_positions.get(g).into_iter().flatten() {
+            let arr = self.source_array.get(src).ok_or_else(|| {
                 parse_err(
                     path,
                     format!("geometry `{g}`: POSITION source `{src}` not found"),
                 )
             })?;
             if let Some(stride) = arr.strip_prefix("!stride ") {
-                return Err(unsupported(format!(
-                    "geometry `{g}`: POSITION source `{src}` with stride {stride}"
-                )));
+                return Err(unsupported(
+                    path,
+                    format!("geometry `{g}`: POSITION source `{src}` with stride {stride}"),
+                ));
             }
-            let v = arrays.get(arr.as_str()).ok_or_else(|| {
+            let v = self.arrays.get(arr.as_str()).ok_or_else(|| {
                 parse_err(
                     path,
                     format!("geometry `{g}`: float_array `{arr}` not found"),
@@ -405,36 +534,7 @@ pub fn dae(path: &Path, s: &str) -> Result<Vec<Point3<f64>>, MeshError> {
             out.extend(v.chunks_exact(3).map(|c| Point3::new(c[0], c[1], c[2])));
         }
         Ok(out)
-    };
-    let mut out = Vec::new();
-    if instances.is_empty() {
-        // No scene: every geometry in its own frame.
-        let mut ids: Vec<&String> = geometry_positions.keys().collect();
-        ids.sort();
-        for g in ids {
-            out.extend(positions(g)?);
-        }
-    } else {
-        for (g, t) in &instances {
-            if !geometry_positions.contains_key(g) {
-                return Err(parse_err(
-                    path,
-                    format!("instance_geometry `#{g}` not found"),
-                ));
-            }
-            for p in positions(g)? {
-                out.push(
-                    Point3::from_homogeneous(t * p.to_homogeneous()).ok_or_else(|| {
-                        parse_err(path, format!("node transform of `#{g}` is not affine"))
-                    })?,
-                );
-            }
-        }
     }
-    for p in &mut out {
-        *p = Point3::from(p.coords * unit);
-    }
-    Ok(out)
 }
 
 /// One COLLADA node transform element as a 4×4 matrix.

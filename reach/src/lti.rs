@@ -135,26 +135,7 @@ impl LtiReach {
         opts: ReachOptions,
     ) -> Result<Self, ReachError> {
         let n = sys.a.nrows();
-        if u.dim() != sys.b.ncols() {
-            return Err(ZonotopeError::DimensionMismatch {
-                what: "input set",
-                expected: sys.b.ncols(),
-                got: u.dim(),
-            }
-            .into());
-        }
-        if !(r.is_finite() && r >= 0.0) {
-            return Err(ReachError::Invalid {
-                what: "time step",
-                reason: "must be finite and >= 0",
-            });
-        }
-        if opts.taylor_terms == 0 || opts.max_order == 0 {
-            return Err(ReachError::Invalid {
-                what: "options",
-                reason: "taylor_terms and max_order must be >= 1",
-            });
-        }
+        check_arguments(sys, u, r, opts)?;
         let eta = opts.taylor_terms;
         let ri = pt(r);
         let ar = IntervalMatrix::from_matrix(&sys.a).scale(ri);
@@ -169,64 +150,10 @@ impl LtiReach {
         for i in 1..=eta + 2 {
             fact.push(fact[i - 1] * pt(i as f64));
         }
-        // Remainder E (row-wise bound; every entry of row j is within [-E_j, E_j]).
-        let mut abs_pow = abs_ar.clone();
-        for _ in 1..=eta {
-            abs_pow = abs_pow.mul(&abs_ar);
-        }
-        let mut e_row = vec![0.0; n];
-        if !abs_pow.is_zero() {
-            let mut eps_num = 0.0f64;
-            for i in 0..n {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s = add_up(s, abs_ar.get(i, j).hi());
-                }
-                eps_num = eps_num.max(s);
-            }
-            let eps = div_up(eps_num, eta as f64 + 2.0);
-            if eps >= 1.0 {
-                return Err(ReachError::StepTooLarge {
-                    step: r,
-                    terms: eta,
-                    norm: eps_num,
-                });
-            }
-            let w = abs_pow.scale(pt(1.0) / fact[eta + 1]);
-            for (i, er) in e_row.iter_mut().enumerate() {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s = add_up(s, w.get(i, j).hi());
-                }
-                *er = div_up(s, sub_down(1.0, eps));
-            }
-        }
+        let e_row = remainder_rows(&abs_ar, &fact, n, eta, r)?;
         let r_e: Vec<f64> = e_row.iter().map(|&e| mul_up(r, e)).collect();
-        // Φ = Σ P_i / i! + [−E, E]; Γ = Σ P_i r/(i+1)! + r[−E, E].
-        let mut phi = IntervalMatrix::zeros(n, n);
-        let mut gam = IntervalMatrix::zeros(n, n);
-        for i in 0..=eta {
-            phi.add_scaled(&pw[i], pt(1.0) / fact[i]);
-            gam.add_scaled(&pw[i], ri / fact[i + 1]);
-        }
-        phi.widen_rows(&e_row);
-        gam.widen_rows(&r_e);
-        // F = Σ_{i=2}^{η} [κ_i, 0] P_i / i! + [−E, E];  F_u = Σ_{i=1}^{η} [κ_{i+1}, 0] r P_i/(i+1)! + r[−E, E].
-        let mut f = IntervalMatrix::zeros(n, n);
-        let mut fu = IntervalMatrix::zeros(n, n);
-        for i in 1..=eta {
-            if pw[i].is_zero() {
-                continue;
-            }
-            if i >= 2 {
-                let k = kappa_interval(i);
-                f.add_scaled(&pw[i], k / fact[i]);
-            }
-            let k1 = kappa_interval(i + 1);
-            fu.add_scaled(&pw[i], k1 * ri / fact[i + 1]);
-        }
-        f.widen_rows(&e_row);
-        fu.widen_rows(&r_e);
+        let (phi, gam) = phi_and_gamma(&pw, &fact, n, ri, &e_row, &r_e);
+        let (f, fu) = correction_matrices(&pw, &fact, n, ri, &e_row, &r_e);
         let (phi_mid, phi_rad) = phi.mid_rad();
         if phi_mid
             .iter()
@@ -246,29 +173,8 @@ impl LtiReach {
             ut.generators().clone(),
             ut.error_box().clone(),
         )?;
-        // P̂₀ = ⊕_{i=0}^{η} (r P_i/(i+1)!) Ũ₀ ⊕ box(r E |Ũ₀|).
-        let mut p0 = Zonotope::point(DVector::zeros(n))?;
-        for (i, p) in pw.iter().enumerate() {
-            if p.is_zero() {
-                continue;
-            }
-            let m = p.scale(ri / fact[i + 1]);
-            p0 = p0.minkowski_sum(&m.map_zonotope(&u0)?)?;
-        }
-        let u0abs = u0.abs_bound();
-        let u0sum = u0abs.iter().fold(0.0, |a, &b| add_up(a, b));
-        p0.add_box(&DVector::from_fn(n, |i, _| mul_up(r_e[i], u0sum)));
-        // v = Γ ũ_c (interval vector).
-        let mut v_mid = DVector::zeros(n);
-        let mut v_rad = DVector::zeros(n);
-        for i in 0..n {
-            let mut acc = IZERO;
-            for j in 0..n {
-                acc += gam.get(i, j) * pt(uc[j]);
-            }
-            v_mid[i] = acc.mid();
-            v_rad[i] = acc.rad_up();
-        }
+        let p0 = centred_input_solution(&pw, &fact, n, ri, &r_e, &u0)?;
+        let (v_mid, v_rad) = gamma_times_centre(&gam, &uc, n);
         let ucabs = uc.abs();
         let mut input_box = mat_vec_up(&fu.mag(), &ucabs);
         for i in 0..n {
@@ -380,4 +286,173 @@ impl LtiReach {
         }
         Ok(())
     }
+}
+
+/// The errors [`LtiReach::new`] reports before computing anything: an input set `u` of the wrong
+/// dimension, a step `r` (s) not finite and ≥ 0, zero Taylor terms or order limit.
+fn check_arguments(
+    sys: &LtiSystem,
+    u: &Zonotope,
+    r: f64,
+    opts: ReachOptions,
+) -> Result<(), ReachError> {
+    if u.dim() != sys.b.ncols() {
+        return Err(ZonotopeError::DimensionMismatch {
+            what: "input set",
+            expected: sys.b.ncols(),
+            got: u.dim(),
+        }
+        .into());
+    }
+    if !(r.is_finite() && r >= 0.0) {
+        return Err(ReachError::Invalid {
+            what: "time step",
+            reason: "must be finite and >= 0",
+        });
+    }
+    if opts.taylor_terms == 0 || opts.max_order == 0 {
+        return Err(ReachError::Invalid {
+            what: "options",
+            reason: "taylor_terms and max_order must be >= 1",
+        });
+    }
+    Ok(())
+}
+
+/// The Taylor remainder `E` after `eta` terms, row by row (rounded up; every entry of row `j` is
+/// within `[−E_j, E_j]`), from `abs_ar = |A| r` (n × n) and the factorials `fact`; all zero if
+/// the interval power `(|A| r)^{η+1}` is. Refuses a step `r` (s) with `‖|A|r‖∞/(η+2) ≥ 1`.
+fn remainder_rows(
+    abs_ar: &IntervalMatrix,
+    fact: &[Interval],
+    n: usize,
+    eta: usize,
+    r: f64,
+) -> Result<Vec<f64>, ReachError> {
+    let mut abs_pow = abs_ar.clone();
+    for _ in 1..=eta {
+        abs_pow = abs_pow.mul(abs_ar);
+    }
+    let mut e_row = vec![0.0; n];
+    if !abs_pow.is_zero() {
+        let mut eps_num = 0.0f64;
+        for i in 0..n {
+            let mut s = 0.0;
+            for j in 0..n {
+                s = add_up(s, abs_ar.get(i, j).hi());
+            }
+            eps_num = eps_num.max(s);
+        }
+        let eps = div_up(eps_num, eta as f64 + 2.0);
+        if eps >= 1.0 {
+            return Err(ReachError::StepTooLarge {
+                step: r,
+                terms: eta,
+                norm: eps_num,
+            });
+        }
+        let w = abs_pow.scale(pt(1.0) / fact[eta + 1]);
+        for (i, er) in e_row.iter_mut().enumerate() {
+            let mut s = 0.0;
+            for j in 0..n {
+                s = add_up(s, w.get(i, j).hi());
+            }
+            *er = div_up(s, sub_down(1.0, eps));
+        }
+    }
+    Ok(e_row)
+}
+
+/// `Φ = Σ P_i / i! + [−E, E]` and `Γ = Σ P_i r/(i+1)! + r[−E, E]` from the powers
+/// `pw[i] = (Ar)^i`, the factorials `fact`, `ri = [r, r]` (s) and the remainder rows `E`, `r E`.
+fn phi_and_gamma(
+    pw: &[IntervalMatrix],
+    fact: &[Interval],
+    n: usize,
+    ri: Interval,
+    e_row: &[f64],
+    r_e: &[f64],
+) -> (IntervalMatrix, IntervalMatrix) {
+    let eta = pw.len() - 1; // pw holds P_0..=P_η
+    let mut phi = IntervalMatrix::zeros(n, n);
+    let mut gam = IntervalMatrix::zeros(n, n);
+    for i in 0..=eta {
+        phi.add_scaled(&pw[i], pt(1.0) / fact[i]);
+        gam.add_scaled(&pw[i], ri / fact[i + 1]);
+    }
+    phi.widen_rows(e_row);
+    gam.widen_rows(r_e);
+    (phi, gam)
+}
+
+/// The correction matrices `F = Σ_{i=2}^{η} [κ_i, 0] P_i / i! + [−E, E]` and
+/// `F_u = Σ_{i=1}^{η} [κ_{i+1}, 0] r P_i/(i+1)! + r[−E, E]` (arguments as [`phi_and_gamma`]).
+fn correction_matrices(
+    pw: &[IntervalMatrix],
+    fact: &[Interval],
+    n: usize,
+    ri: Interval,
+    e_row: &[f64],
+    r_e: &[f64],
+) -> (IntervalMatrix, IntervalMatrix) {
+    let eta = pw.len() - 1; // pw holds P_0..=P_η
+    let mut f = IntervalMatrix::zeros(n, n);
+    let mut fu = IntervalMatrix::zeros(n, n);
+    for i in 1..=eta {
+        if pw[i].is_zero() {
+            continue;
+        }
+        if i >= 2 {
+            let k = kappa_interval(i);
+            f.add_scaled(&pw[i], k / fact[i]);
+        }
+        let k1 = kappa_interval(i + 1);
+        fu.add_scaled(&pw[i], k1 * ri / fact[i + 1]);
+    }
+    f.widen_rows(e_row);
+    fu.widen_rows(r_e);
+    (f, fu)
+}
+
+/// `P̂₀(r) = ⊕_{i=0}^{η} (r P_i/(i+1)!) Ũ₀ ⊕ box(r E |Ũ₀|)`, the centred input solution, from the
+/// powers `pw[i] = (Ar)^i`, the factorials `fact`, `ri = [r, r]` (s), the rows `r E` and `Ũ₀`.
+fn centred_input_solution(
+    pw: &[IntervalMatrix],
+    fact: &[Interval],
+    n: usize,
+    ri: Interval,
+    r_e: &[f64],
+    u0: &Zonotope,
+) -> Result<Zonotope, ReachError> {
+    let mut p0 = Zonotope::point(DVector::zeros(n))?;
+    for (i, p) in pw.iter().enumerate() {
+        if p.is_zero() {
+            continue;
+        }
+        let m = p.scale(ri / fact[i + 1]);
+        p0 = p0.minkowski_sum(&m.map_zonotope(u0)?)?;
+    }
+    let u0abs = u0.abs_bound();
+    let u0sum = u0abs.iter().fold(0.0, |a, &b| add_up(a, b));
+    p0.add_box(&DVector::from_fn(n, |i, _| mul_up(r_e[i], u0sum)));
+    Ok(p0)
+}
+
+/// `v = Γ ũ_c` as an interval vector: its midpoints and radii (rounded up).
+fn gamma_times_centre(
+    gam: &IntervalMatrix,
+    uc: &DVector<f64>,
+    n: usize,
+) -> (DVector<f64>, DVector<f64>) {
+    let mut v_mid = DVector::zeros(n);
+    let mut v_rad = DVector::zeros(n);
+    for i in 0..n {
+        let mut acc = IZERO;
+        for j in 0..n {
+            acc += gam.get(i, j) * pt(uc[j]);
+        }
+        v_mid[i] = acc.mid();
+        v_rad[i] = acc.rad_up();
+    }
+    (v_mid, v_rad)
 }

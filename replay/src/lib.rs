@@ -25,7 +25,8 @@ use foxglove::{Context, PartialMetadata, Schema};
 use nalgebra::{Point3, UnitQuaternion, Vector3 as V3};
 use pacs_audit::RunResult;
 use pacs_log::{LogModels, Record, RecordReader};
-use pacs_models::Capsule;
+use pacs_models::human::BodyPart;
+use pacs_models::{Capsule, RobotModel};
 use pacs_reach::JointBox;
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
 use pacs_reach::robot::RobotReach;
@@ -212,163 +213,249 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
         .mcap_writer()
         .create(out)
         .map_err(|e| ReplayError::Write(e.to_string()))?;
-    let scene = |topic: &str| ctx.channel_builder(topic).build::<SceneUpdate>();
-    let ch = Channels {
-        robot: scene("/pacs/robot"),
-        human: scene("/pacs/human"),
-        human_occ: scene("/pacs/human_occupancy"),
-        robot_occ: scene("/pacs/robot_occupancy"),
-        violations: scene("/pacs/violations"),
-        metrics: ctx
-            .channel_builder("/pacs/metrics")
-            .message_encoding("json")
-            .schema(Schema::new(
-                "pacs.Metrics",
-                "jsonschema",
-                METRICS_SCHEMA.as_bytes().to_vec(),
-            ))
-            .build_raw()
-            .map_err(|e| ReplayError::Write(e.to_string()))?,
-    };
+    let ch = Channels::new(&ctx)?;
     let robot = &models.robot;
     let reach = RobotReach::try_new(robot, opts.tracking_error)
         .map_err(|e| ReplayError::Model(e.to_string()))?;
-    let mut human_reach = HumanReach::new(models.human.clone(), opts.human_model);
-    let parts = models.human.body_parts().to_vec();
     let n = robot.dof();
-    let mut counts = SceneCounts::default();
-    let mut t0: Option<f64> = None;
-    let ns_of = |t: f64, t0: f64| ((t - t0).max(0.0) * 1e9).round() as u64;
-    let mut latest: Option<HumanMeasurement> = None;
-    let mut next_frame = f64::NEG_INFINITY;
-    // Joint box of the samples since the last frame.
-    let (mut lo, mut hi) = (vec![f64::INFINITY; n], vec![f64::NEG_INFINITY; n]);
-    let mut marked = vec![false; run.violations.len()];
-    let (mut last, mut last_ns): (Vec<f64>, u64) = (Vec::with_capacity(n), 0);
+    let mut replay = Replay {
+        ch,
+        robot,
+        reach,
+        human_reach: HumanReach::new(models.human.clone(), opts.human_model),
+        parts: models.human.body_parts().to_vec(),
+        run,
+        opts,
+        counts: SceneCounts::default(),
+        t0: None,
+        latest: None,
+        next_frame: f64::NEG_INFINITY,
+        lo: vec![f64::INFINITY; n],
+        hi: vec![f64::NEG_INFINITY; n],
+        marked: vec![false; run.violations.len()],
+        last: Vec::with_capacity(n),
+        last_ns: 0,
+    };
     while let Some(rec) = reader.next_record()? {
         match rec {
             Record::Human {
                 t_meas, positions, ..
             } => {
                 let pts: Vec<[f64; 3]> = positions.to_vec();
-                latest = HumanMeasurement::new(&models.human, t_meas, &pts, None).ok();
+                replay.latest = HumanMeasurement::new(&models.human, t_meas, &pts, None).ok();
             }
-            Record::Robot { t, q, .. } => {
-                if q.len() != n {
-                    continue;
-                }
-                let origin = *t0.get_or_insert(t.min(0.0));
-                for i in 0..n {
-                    lo[i] = lo[i].min(q[i]);
-                    hi[i] = hi[i].max(q[i]);
-                }
-                if t < next_frame {
-                    continue;
-                }
-                next_frame = t + opts.frame_period;
-                let ns = ns_of(t, origin);
-                counts.frames += 1;
-                let violating = run
-                    .violations
-                    .iter()
-                    .any(|v| v.t_start <= t && t <= v.t_end);
-                let caps: Vec<Capsule> = robot
-                    .capsules_world(q)
-                    .into_iter()
-                    .map(|(_, c)| c)
-                    .collect();
-                let rgba = if violating { ROBOT_VIOLATING } else { ROBOT };
-                log_scene(&ch.robot, entity("robot", ns, &caps, rgba), ns);
-                counts.robot += 1;
-                if let Ok(b) = JointBox::new(&lo, &hi)
-                    && let Ok(occ) = reach.occupancy(&b)
-                {
-                    log_scene(
-                        &ch.robot_occ,
-                        entity("robot_occupancy", ns, &occ, ROBOT_OCC),
-                        ns,
-                    );
-                    counts.robot_occupancy += 1;
-                }
-                lo.fill(f64::INFINITY);
-                hi.fill(f64::NEG_INFINITY);
-                lo.copy_from_slice(q);
-                hi.copy_from_slice(q);
-                if let Some(m) = &latest {
-                    let kp = m.positions();
-                    let body: Vec<Capsule> = parts
-                        .iter()
-                        .filter_map(|bp| {
-                            Capsule::new(kp[bp.from], kp[bp.to], bp.thickness / 2.0).ok()
-                        })
-                        .collect();
-                    log_scene(&ch.human, entity("human", ns, &body, HUMAN), ns);
-                    counts.human += 1;
-                    if let Ok(occ) = human_reach.occupancy(m, t, t + opts.frame_period) {
-                        log_scene(
-                            &ch.human_occ,
-                            entity("human_occupancy", ns, &occ, HUMAN_OCC),
-                            ns,
-                        );
-                        counts.human_occupancy += 1;
-                    }
-                }
-                // Violation markers: each interval once, at the first frame at or after its
-                // start, on the named link.
-                for (k, v) in run.violations.iter().enumerate() {
-                    if !marked[k] && v.t_start <= t + 1e-12 {
-                        marked[k] = true;
-                        log_scene(&ch.violations, marker(robot, q, k, v, ns, opts), ns);
-                        counts.violations += 1;
-                    }
-                }
-                last.clear();
-                last.extend_from_slice(q);
-                last_ns = ns;
-            }
+            Record::Robot { t, q, .. } => replay.robot_sample(t, q),
             _ => {}
         }
     }
-    // Intervals starting after the last frame: at the last frame.
-    if !last.is_empty() {
-        for (k, v) in run.violations.iter().enumerate() {
-            if !marked[k] {
-                log_scene(
-                    &ch.violations,
-                    marker(robot, &last, k, v, last_ns, opts),
-                    last_ns,
-                );
-                counts.violations += 1;
-            }
-        }
-    }
-    let origin = t0.unwrap_or(0.0);
-    for p in &run.series {
-        let mut m = serde_json::Map::new();
-        m.insert("t".into(), p.t.into());
-        m.insert("t_end".into(), p.t_end.into());
-        for (k, v) in [
-            ("min_separation_m", p.min_separation),
-            ("far_separation_m", p.far_separation),
-            ("energy_bound_j", p.energy_bound),
-            ("threshold_j", p.threshold),
-            ("energy_nominal_j", p.energy_nominal),
-        ] {
-            if let Some(x) = v.filter(|x| x.is_finite()) {
-                m.insert(k.into(), x.into());
-            }
-        }
-        m.insert("violation".into(), p.violation.into());
-        m.insert("inconclusive".into(), p.inconclusive.into());
-        let bytes = serde_json::to_vec(&m).map_err(|e| ReplayError::Write(e.to_string()))?;
-        ch.metrics
-            .log_with_meta(&bytes, PartialMetadata::with_log_time(ns_of(p.t, origin)));
-        counts.metrics += 1;
-    }
+    replay.late_markers();
+    replay.metrics()?;
     let w = writer
         .close()
         .map_err(|e| ReplayError::Write(e.to_string()))?;
-    Ok((w, counts))
+    Ok((w, replay.counts))
+}
+
+/// Log time `t` (s) as MCAP time (ns) from the time origin `t0` (s); times before it are 0.
+fn ns_of(t: f64, t0: f64) -> u64 {
+    ((t - t0).max(0.0) * 1e9).round() as u64
+}
+
+impl Channels {
+    /// The replay's topics on `ctx`, in the order they are listed in the crate docs.
+    fn new(ctx: &Arc<Context>) -> Result<Self, ReplayError> {
+        let scene = |topic: &str| ctx.channel_builder(topic).build::<SceneUpdate>();
+        Ok(Channels {
+            robot: scene("/pacs/robot"),
+            human: scene("/pacs/human"),
+            human_occ: scene("/pacs/human_occupancy"),
+            robot_occ: scene("/pacs/robot_occupancy"),
+            violations: scene("/pacs/violations"),
+            metrics: ctx
+                .channel_builder("/pacs/metrics")
+                .message_encoding("json")
+                .schema(Schema::new(
+                    "pacs.Metrics",
+                    "jsonschema",
+                    METRICS_SCHEMA.as_bytes().to_vec(),
+                ))
+                .build_raw()
+                .map_err(|e| ReplayError::Write(e.to_string()))?,
+        })
+    }
+}
+
+/// A replay being written: its channels and models, and what the log has shown so far.
+struct Replay<'a> {
+    ch: Channels,
+    robot: &'a RobotModel,
+    reach: RobotReach,
+    human_reach: HumanReach,
+    parts: Vec<BodyPart>,
+    run: &'a RunResult,
+    opts: &'a SceneOptions,
+    counts: SceneCounts,
+    /// The log's time origin (s): the first robot sample's time, or 0 if that is later.
+    t0: Option<f64>,
+    /// The latest human measurement.
+    latest: Option<HumanMeasurement>,
+    /// Log time (s) of the next frame.
+    next_frame: f64,
+    /// Joint box (rad or m) of the samples since the last frame.
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    /// Which violation intervals have their marker.
+    marked: Vec<bool>,
+    /// The last frame's configuration and MCAP time (ns).
+    last: Vec<f64>,
+    last_ns: u64,
+}
+
+impl Replay<'_> {
+    /// A robot sample at log time `t` (s): into the joint box, and a frame if one is due.
+    /// Samples with the wrong number of joints are skipped.
+    fn robot_sample(&mut self, t: f64, q: &[f64]) {
+        let n = self.robot.dof();
+        if q.len() != n {
+            return;
+        }
+        let origin = *self.t0.get_or_insert(t.min(0.0));
+        for ((lo, hi), &x) in self.lo.iter_mut().zip(&mut self.hi).zip(q) {
+            *lo = lo.min(x);
+            *hi = hi.max(x);
+        }
+        if t < self.next_frame {
+            return;
+        }
+        self.next_frame = t + self.opts.frame_period;
+        let ns = ns_of(t, origin);
+        self.counts.frames += 1;
+        self.robot_frame(t, q, ns);
+        self.human_frame(t, ns);
+        self.violation_markers(t, q, ns);
+        self.last.clear();
+        self.last.extend_from_slice(q);
+        self.last_ns = ns;
+    }
+
+    /// The robot's capsules at `q` (red while a violation interval is open at `t`, s) and its
+    /// occupancy for the joint box of the samples since the last frame; the box restarts at `q`.
+    fn robot_frame(&mut self, t: f64, q: &[f64], ns: u64) {
+        let violating = self
+            .run
+            .violations
+            .iter()
+            .any(|v| v.t_start <= t && t <= v.t_end);
+        let caps: Vec<Capsule> = self
+            .robot
+            .capsules_world(q)
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect();
+        let rgba = if violating { ROBOT_VIOLATING } else { ROBOT };
+        log_scene(&self.ch.robot, entity("robot", ns, &caps, rgba), ns);
+        self.counts.robot += 1;
+        if let Ok(b) = JointBox::new(&self.lo, &self.hi)
+            && let Ok(occ) = self.reach.occupancy(&b)
+        {
+            log_scene(
+                &self.ch.robot_occ,
+                entity("robot_occupancy", ns, &occ, ROBOT_OCC),
+                ns,
+            );
+            self.counts.robot_occupancy += 1;
+        }
+        self.lo.fill(f64::INFINITY);
+        self.hi.fill(f64::NEG_INFINITY);
+        self.lo.copy_from_slice(q);
+        self.hi.copy_from_slice(q);
+    }
+
+    /// The latest measured body parts and the human's occupancy from them over the frame,
+    /// `t` to `t + frame_period` (s); nothing before the first measurement.
+    fn human_frame(&mut self, t: f64, ns: u64) {
+        let Some(m) = &self.latest else {
+            return;
+        };
+        let kp = m.positions();
+        let body: Vec<Capsule> = self
+            .parts
+            .iter()
+            .filter_map(|bp| Capsule::new(kp[bp.from], kp[bp.to], bp.thickness / 2.0).ok())
+            .collect();
+        log_scene(&self.ch.human, entity("human", ns, &body, HUMAN), ns);
+        self.counts.human += 1;
+        if let Ok(occ) = self.human_reach.occupancy(m, t, t + self.opts.frame_period) {
+            log_scene(
+                &self.ch.human_occ,
+                entity("human_occupancy", ns, &occ, HUMAN_OCC),
+                ns,
+            );
+            self.counts.human_occupancy += 1;
+        }
+    }
+
+    /// Violation markers: each interval once, at the first frame at or after its start, on the
+    /// named link.
+    fn violation_markers(&mut self, t: f64, q: &[f64], ns: u64) {
+        for (k, v) in self.run.violations.iter().enumerate() {
+            if !self.marked[k] && v.t_start <= t + 1e-12 {
+                self.marked[k] = true;
+                log_scene(
+                    &self.ch.violations,
+                    marker(self.robot, q, k, v, ns, self.opts),
+                    ns,
+                );
+                self.counts.violations += 1;
+            }
+        }
+    }
+
+    /// Intervals starting after the last frame: at the last frame (none without a frame).
+    fn late_markers(&mut self) {
+        if self.last.is_empty() {
+            return;
+        }
+        for (k, v) in self.run.violations.iter().enumerate() {
+            if !self.marked[k] {
+                log_scene(
+                    &self.ch.violations,
+                    marker(self.robot, &self.last, k, v, self.last_ns, self.opts),
+                    self.last_ns,
+                );
+                self.counts.violations += 1;
+            }
+        }
+    }
+
+    /// One `/pacs/metrics` message per plot bucket of the audit, at the bucket's start.
+    fn metrics(&mut self) -> Result<(), ReplayError> {
+        let origin = self.t0.unwrap_or(0.0);
+        for p in &self.run.series {
+            let mut m = serde_json::Map::new();
+            m.insert("t".into(), p.t.into());
+            m.insert("t_end".into(), p.t_end.into());
+            for (k, v) in [
+                ("min_separation_m", p.min_separation),
+                ("far_separation_m", p.far_separation),
+                ("energy_bound_j", p.energy_bound),
+                ("threshold_j", p.threshold),
+                ("energy_nominal_j", p.energy_nominal),
+            ] {
+                if let Some(x) = v.filter(|x| x.is_finite()) {
+                    m.insert(k.into(), x.into());
+                }
+            }
+            m.insert("violation".into(), p.violation.into());
+            m.insert("inconclusive".into(), p.inconclusive.into());
+            let bytes = serde_json::to_vec(&m).map_err(|e| ReplayError::Write(e.to_string()))?;
+            self.ch
+                .metrics
+                .log_with_meta(&bytes, PartialMetadata::with_log_time(ns_of(p.t, origin)));
+            self.counts.metrics += 1;
+        }
+        Ok(())
+    }
 }
 
 /// A violation interval's marker: a red sphere on the named link (at configuration `q`) and a

@@ -3,7 +3,7 @@
 use crate::{
     GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, overall, svg,
 };
-use pacs_audit::Verdict;
+use pacs_audit::{RunResult, Verdict};
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
@@ -37,7 +37,7 @@ fn settings_table(s: &mut String, settings: &serde_json::Value) {
 }
 
 /// A run's models with their parameters and hashes ([`crate::model_rows`]).
-fn models_table(s: &mut String, r: &pacs_audit::RunResult) {
+fn models_table(s: &mut String, r: &RunResult) {
     s.push_str("<table><tr><th>model</th><th>name</th><th>parameters</th><th>SHA-256 of the parameters</th></tr>");
     for [model, name, params, hash] in crate::model_rows(r) {
         let _ = write!(
@@ -50,10 +50,8 @@ fn models_table(s: &mut String, r: &pacs_audit::RunResult) {
     s.push_str("</table>");
 }
 
-/// The HTML report.
-pub fn report(input: &ReportInput) -> String {
-    let mut s = String::new();
-    s.push_str(r#"<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>pacs audit report</title><style>
+/// The document head: title and the inline stylesheet (screen and print).
+const HEAD: &str = r#"<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>pacs audit report</title><style>
 body{font-family:sans-serif;max-width:76em;margin:1em auto;padding:0 1em;color:#111;line-height:1.35}
 table{border-collapse:collapse;margin:.5em 0;font-size:88%;width:100%;table-layout:auto}
 th,td{border:1px solid #999;padding:2px 6px;text-align:left;vertical-align:top;overflow-wrap:break-word}
@@ -63,7 +61,30 @@ th{background:#eee}.v{font-weight:bold;padding:0 4px}.pass{color:#1b5e20}.fail{c
 code{font-size:90%;overflow-wrap:anywhere}.hash{font-size:75%}.note{font-size:85%;color:#333}
 section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:auto}
 @media print{body{max-width:none;font-size:10pt;margin:0}table{font-size:8pt}h2{break-after:avoid}tr{break-inside:avoid}a{color:inherit}}
-</style></head><body>"#);
+</style></head><body>"#;
+
+/// The HTML report.
+pub fn report(input: &ReportInput) -> String {
+    let mut s = String::new();
+    s.push_str(HEAD);
+    provenance(&mut s, input);
+    summary_table(&mut s, input);
+    evidence_table(&mut s, input.runs);
+    if input.runs.len() > 1 {
+        aggregate_section(&mut s, input);
+    }
+    for r in input.runs {
+        run_section(&mut s, r);
+    }
+    assumptions_section(&mut s, input.runs);
+    check_backing_table(&mut s);
+    s.push_str("</body></html>\n");
+    s
+}
+
+/// The title with the tool version, git revision and overall verdict, then the config file and
+/// the effective settings.
+fn provenance(s: &mut String, input: &ReportInput) {
     let _ = write!(
         s,
         "<h1>pacs audit certification report</h1><p>Generated {} by pacs {} (git <code>{}</code>). Overall verdict: {}</p>",
@@ -85,7 +106,11 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
             ))
             .unwrap_or_else(|| "defaults".into()),
     );
-    settings_table(&mut s, &input.settings);
+    settings_table(s, &input.settings);
+}
+
+/// One row per log ([`crate::summary_cells`]), with the footnotes on separation and safe success.
+fn summary_table(s: &mut String, input: &ReportInput) {
     s.push_str("<h2>Summary</h2><table><tr>");
     for (i, h) in crate::SUMMARY_COLUMNS.iter().enumerate() {
         let h = h.replace(" (1)", "¹").replace(" (2)", "²");
@@ -127,8 +152,12 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         s.push_str("</tr>");
     }
     s.push_str("</table><p class=\"note\">¹ The separation figure: over the checked spans and robot/body-part capsule pairs, the least lower bound of the core-segment distance minus the radii; &gt; 0: the robot's and the human's occupancies are provably at least this far apart; ≤ 0: contact possible. ² Safe success: the task succeeded (last <code>success</code>/<code>failure</code> event) and the audit verdict is pass.</p>");
+}
+
+/// What each log covers: its people, the audited span (s) and whether the log is complete.
+fn evidence_table(s: &mut String, runs: &[RunResult]) {
     s.push_str("<h2>Evidence</h2><table><tr><th>log</th><th>people</th><th>audited span (s)</th><th>log complete</th></tr>");
-    for r in input.runs {
+    for r in runs {
         let [log, people, span, complete] = crate::evidence_row(r);
         let _ = write!(
             s,
@@ -140,97 +169,119 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         );
     }
     s.push_str("</table>");
-    if input.runs.len() > 1 {
-        s.push_str("<h2>Aggregate (impact of safeguarding)</h2><table><tr><th>task</th><th>policy</th><th>filter</th><th class=\"num\">n (logs)</th><th class=\"num\">success</th><th class=\"num\">safe success</th><th class=\"num\">violation fraction (mean ± std)</th></tr>");
-        for row in aggregate::aggregate(input.runs) {
-            let _ = write!(
-                s,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
-                esc(&row.task),
-                esc(&row.policy),
-                esc(&row.filter),
-                row.runs,
-                aggregate::pct(row.success),
-                aggregate::pct(row.safe_success),
-                aggregate::pct(Some(row.safety_violation))
-            );
-        }
-        s.push_str("</table>");
-        s.push_str(&crate::fleet::html(&crate::fleet::of_input(input), esc));
-    }
-    for r in input.runs {
+}
+
+/// Success and violation fraction per task, policy and filter, then the fleet view (several
+/// logs only).
+fn aggregate_section(s: &mut String, input: &ReportInput) {
+    s.push_str("<h2>Aggregate (impact of safeguarding)</h2><table><tr><th>task</th><th>policy</th><th>filter</th><th class=\"num\">n (logs)</th><th class=\"num\">success</th><th class=\"num\">safe success</th><th class=\"num\">violation fraction (mean ± std)</th></tr>");
+    for row in aggregate::aggregate(input.runs) {
         let _ = write!(
             s,
-            "<section><h2><code>{}</code> {}</h2>",
-            esc(&r.log),
-            verdict_cell(r.verdict),
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
+            esc(&row.task),
+            esc(&row.policy),
+            esc(&row.filter),
+            row.runs,
+            aggregate::pct(row.success),
+            aggregate::pct(row.safe_success),
+            aggregate::pct(Some(row.safety_violation))
         );
-        models_table(&mut s, r);
-        s.push_str(&svg::separation_plot(&r.series));
-        if svg::has_threshold(&r.series) {
-            s.push_str(&svg::energy_plot(&r.series));
-        } else {
-            s.push_str("<p class=\"note\">No PFL contact was possible in this run, so no energy limit applied (an SSM body part may only be touched by a robot at rest); no energy plot.</p>");
-        }
-        if let Some(note) = crate::contact_note(r) {
-            let _ = write!(
-                s,
-                "<p class=\"contact-note\">Passed with a separation figure ≤ 0: {note}.</p>"
-            );
-        }
-        let eps = crate::episodes::episodes(&r.violations);
-        if eps.is_empty() {
-            s.push_str("<p>No violations.</p>");
-        } else {
-            let _ = write!(
-                s,
-                "<p>{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).</p><table class=\"episodes\"><tr>",
-                eps.len(),
-                r.violations.len()
-            );
-            let num = |i: usize| matches!(i, 0 | 1 | 5 | 6 | 7 | 8);
-            for (i, h) in crate::episodes::EPISODE_COLUMNS.iter().enumerate() {
-                let mark = match i {
-                    6 => "³",
-                    9 => "⁴",
-                    _ => "",
-                };
-                let class = if num(i) { " class=\"num\"" } else { "" };
-                let _ = write!(s, "<th{class}>{h}{mark}</th>");
-            }
-            s.push_str("</tr>");
-            for e in &eps {
-                s.push_str("<tr>");
-                for (i, c) in crate::episodes::episode_cells(e).iter().enumerate() {
-                    let class = if num(i) { " class=\"num\"" } else { "" };
-                    let _ = write!(s, "<td{class}>{}</td>", esc(c));
-                }
-                s.push_str("</tr>");
-            }
-            s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part or object (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.</p>");
-        }
-        if !r.inconclusive.is_empty() {
-            s.push_str("<p>Inconclusive spans:</p><ul>");
-            for i in &r.inconclusive {
-                let _ = write!(
-                    s,
-                    "<li>{:.4}–{:.4} s: {} ({} spans)</li>",
-                    i.t_start,
-                    i.t_end,
-                    esc(i.reason.as_str()),
-                    i.spans
-                );
-            }
-            s.push_str("</ul>");
-        }
-        s.push_str("</section>");
     }
+    s.push_str("</table>");
+    s.push_str(&crate::fleet::html(&crate::fleet::of_input(input), esc));
+}
+
+/// One log's section: verdict, models, the separation and energy plots, the contact note, the
+/// violation episodes and the inconclusive spans.
+fn run_section(s: &mut String, r: &RunResult) {
+    let _ = write!(
+        s,
+        "<section><h2><code>{}</code> {}</h2>",
+        esc(&r.log),
+        verdict_cell(r.verdict),
+    );
+    models_table(s, r);
+    s.push_str(&svg::separation_plot(&r.series));
+    if svg::has_threshold(&r.series) {
+        s.push_str(&svg::energy_plot(&r.series));
+    } else {
+        s.push_str("<p class=\"note\">No PFL contact was possible in this run, so no energy limit applied (an SSM body part may only be touched by a robot at rest); no energy plot.</p>");
+    }
+    if let Some(note) = crate::contact_note(r) {
+        let _ = write!(
+            s,
+            "<p class=\"contact-note\">Passed with a separation figure ≤ 0: {note}.</p>"
+        );
+    }
+    episodes_table(s, r);
+    inconclusive_list(s, r);
+    s.push_str("</section>");
+}
+
+/// A log's violation intervals merged into episodes ([`crate::episodes`]), with the footnotes on
+/// the separation and on certain violations; "No violations." if there are none.
+fn episodes_table(s: &mut String, r: &RunResult) {
+    let eps = crate::episodes::episodes(&r.violations);
+    if eps.is_empty() {
+        s.push_str("<p>No violations.</p>");
+        return;
+    }
+    let _ = write!(
+        s,
+        "<p>{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).</p><table class=\"episodes\"><tr>",
+        eps.len(),
+        r.violations.len()
+    );
+    let num = |i: usize| matches!(i, 0 | 1 | 5 | 6 | 7 | 8);
+    for (i, h) in crate::episodes::EPISODE_COLUMNS.iter().enumerate() {
+        let mark = match i {
+            6 => "³",
+            9 => "⁴",
+            _ => "",
+        };
+        let class = if num(i) { " class=\"num\"" } else { "" };
+        let _ = write!(s, "<th{class}>{h}{mark}</th>");
+    }
+    s.push_str("</tr>");
+    for e in &eps {
+        s.push_str("<tr>");
+        for (i, c) in crate::episodes::episode_cells(e).iter().enumerate() {
+            let class = if num(i) { " class=\"num\"" } else { "" };
+            let _ = write!(s, "<td{class}>{}</td>", esc(c));
+        }
+        s.push_str("</tr>");
+    }
+    s.push_str("</table><p class=\"note\">³ Signed separation of the logged robot capsules and the measured body part or object (negative: they overlap as logged); a violation can be possible at a positive value because the person may have moved since the measurement. ⁴ Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.</p>");
+}
+
+/// A log's inconclusive spans with their times (s), reasons and span counts (nothing if none).
+fn inconclusive_list(s: &mut String, r: &RunResult) {
+    if r.inconclusive.is_empty() {
+        return;
+    }
+    s.push_str("<p>Inconclusive spans:</p><ul>");
+    for i in &r.inconclusive {
+        let _ = write!(
+            s,
+            "<li>{:.4}–{:.4} s: {} ({} spans)</li>",
+            i.t_start,
+            i.t_end,
+            esc(i.reason.as_str()),
+            i.spans
+        );
+    }
+    s.push_str("</ul>");
+}
+
+/// The modelling assumptions, then the model values the user gave ([`crate::user_values`]).
+fn assumptions_section(s: &mut String, runs: &[RunResult]) {
     s.push_str("<h2>Assumptions</h2><ul>");
     for a in assumptions() {
         let _ = write!(s, "<li>{}</li>", esc(a));
     }
     s.push_str("</ul>");
-    let user = crate::user_values(input.runs);
+    let user = crate::user_values(runs);
     if !user.is_empty() {
         let _ = write!(
             s,
@@ -242,6 +293,10 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
         }
         s.push_str("</ul>");
     }
+}
+
+/// Each check the audit makes with the tests and harnesses backing it ([`check_backing`]).
+fn check_backing_table(s: &mut String) {
     s.push_str("<h2>Checks and the tests backing them</h2><table><tr><th>check</th><th>backed by</th></tr>");
     if let Some(arr) = check_backing().as_array() {
         for c in arr {
@@ -261,6 +316,5 @@ section{page-break-inside:avoid;break-inside:avoid}svg{max-width:100%;height:aut
             );
         }
     }
-    s.push_str("</table></body></html>\n");
-    s
+    s.push_str("</table>");
 }

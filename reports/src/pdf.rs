@@ -9,7 +9,9 @@ use crate::{
     GIT_REVISION, ReportInput, TOOL_VERSION, aggregate, assumptions, check_backing, definitions,
     overall,
 };
+use pacs_audit::RunResult;
 use pacs_audit::verdict::SeriesPoint;
+use serde_json::Value;
 use std::fmt::Write;
 
 const PAGE_W: f64 = 595.0;
@@ -268,7 +270,7 @@ impl Doc {
         self.gap(6.0);
     }
 
-    /// A plot of the series: `kind` 0 = separation, 1 = energy vs threshold.
+    /// A plot of the series: the kinetic energy and its threshold if `energy`, else the separation.
     fn plot(&mut self, s: &[SeriesPoint], energy: bool) {
         let (pw, ph) = (TEXT_W, 150.0);
         self.need(ph + 30.0);
@@ -280,38 +282,7 @@ impl Doc {
         };
         self.put_text(MARGIN, top + 3.0, title, 8.5, Font::Bold, [0.0; 3]);
         let (l, r, b, t) = (MARGIN + 38.0, MARGIN + pw, top - ph, top - 6.0);
-        let (x0, x1) = match (s.first(), s.last()) {
-            (Some(a), Some(z)) if z.t_end > a.t => (a.t, z.t_end),
-            (Some(a), _) => (a.t, a.t + 1.0),
-            _ => (0.0, 1.0),
-        };
-        let vals: Vec<f64> = s
-            .iter()
-            .flat_map(|p| {
-                if energy {
-                    vec![p.energy_nominal, p.energy_bound, p.threshold]
-                } else {
-                    vec![p.min_separation, p.far_separation]
-                }
-            })
-            .flatten()
-            .filter(|v| v.is_finite())
-            .collect();
-        let (mut y0, mut y1) = (
-            vals.iter().copied().fold(0.0f64, f64::min),
-            vals.iter().copied().fold(0.0f64, f64::max),
-        );
-        if !energy {
-            y1 = y1.clamp(0.1, 3.0);
-            y0 = y0.max(-1.0);
-        } else {
-            y1 = y1.max(1e-3);
-        }
-        let pad = 0.05 * (y1 - y0);
-        if y0 < 0.0 {
-            y0 -= pad;
-        }
-        y1 += pad;
+        let ((x0, x1), (y0, y1)) = plot_ranges(s, energy);
         let px = |x: f64| l + (x - x0) / (x1 - x0).max(1e-12) * (r - l);
         let py = |v: f64| b + (v.clamp(y0, y1) - y0) / (y1 - y0).max(1e-12) * (t - b);
         let o = self.out();
@@ -358,48 +329,7 @@ impl Doc {
             );
             labels.push((xx, b - 11.0, fmt_tick(x, xstep), false));
         }
-        let series: Vec<Line> = if energy {
-            vec![
-                (
-                    s.iter()
-                        .map(|p| (0.5 * (p.t + p.t_end), p.energy_nominal))
-                        .collect(),
-                    "0.08 0.40 0.75",
-                    "[] 0",
-                ),
-                (
-                    s.iter()
-                        .map(|p| (0.5 * (p.t + p.t_end), p.energy_bound))
-                        .collect(),
-                    "0.94 0.42 0.0",
-                    "[] 0",
-                ),
-                (
-                    s.iter()
-                        .map(|p| (0.5 * (p.t + p.t_end), p.threshold))
-                        .collect(),
-                    "0.72 0.11 0.11",
-                    "[4 2] 0",
-                ),
-            ]
-        } else {
-            vec![
-                (
-                    s.iter()
-                        .map(|p| (0.5 * (p.t + p.t_end), p.far_separation))
-                        .collect(),
-                    "0.46 0.46 0.46",
-                    "[1.5 2] 0",
-                ),
-                (
-                    s.iter()
-                        .map(|p| (0.5 * (p.t + p.t_end), p.min_separation))
-                        .collect(),
-                    "0.08 0.40 0.75",
-                    "[] 0",
-                ),
-            ]
-        };
+        let series = plot_lines(s, energy);
         for (pts, rgb, dash) in series {
             let mut pen = false;
             let _ = write!(o, "{rgb} RG 1 w {dash} d ");
@@ -493,6 +423,92 @@ impl Doc {
     }
 }
 
+/// The plotted time range (s) and value range (m or J) of the series: the values and 0 (for the
+/// separation, the top within 0.1..3 m and the bottom at least -1 m), padded by 5 % of the range
+/// (below only if the bottom is negative).
+fn plot_ranges(s: &[SeriesPoint], energy: bool) -> ((f64, f64), (f64, f64)) {
+    let (x0, x1) = match (s.first(), s.last()) {
+        (Some(a), Some(z)) if z.t_end > a.t => (a.t, z.t_end),
+        (Some(a), _) => (a.t, a.t + 1.0),
+        _ => (0.0, 1.0),
+    };
+    let vals: Vec<f64> = s
+        .iter()
+        .flat_map(|p| {
+            if energy {
+                vec![p.energy_nominal, p.energy_bound, p.threshold]
+            } else {
+                vec![p.min_separation, p.far_separation]
+            }
+        })
+        .flatten()
+        .filter(|v| v.is_finite())
+        .collect();
+    let (mut y0, mut y1) = (
+        vals.iter().copied().fold(0.0f64, f64::min),
+        vals.iter().copied().fold(0.0f64, f64::max),
+    );
+    if !energy {
+        y1 = y1.clamp(0.1, 3.0);
+        y0 = y0.max(-1.0);
+    } else {
+        y1 = y1.max(1e-3);
+    }
+    let pad = 0.05 * (y1 - y0);
+    if y0 < 0.0 {
+        y0 -= pad;
+    }
+    y1 += pad;
+    ((x0, x1), (y0, y1))
+}
+
+/// The plotted lines at the middle of each bucket: the nominal energy, its bound and the
+/// threshold (dashed) if `energy`, else the far-range bound (dotted) and the separation.
+fn plot_lines(s: &[SeriesPoint], energy: bool) -> Vec<Line<'static>> {
+    if energy {
+        vec![
+            (
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.energy_nominal))
+                    .collect(),
+                "0.08 0.40 0.75",
+                "[] 0",
+            ),
+            (
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.energy_bound))
+                    .collect(),
+                "0.94 0.42 0.0",
+                "[] 0",
+            ),
+            (
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.threshold))
+                    .collect(),
+                "0.72 0.11 0.11",
+                "[4 2] 0",
+            ),
+        ]
+    } else {
+        vec![
+            (
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.far_separation))
+                    .collect(),
+                "0.46 0.46 0.46",
+                "[1.5 2] 0",
+            ),
+            (
+                s.iter()
+                    .map(|p| (0.5 * (p.t + p.t_end), p.min_separation))
+                    .collect(),
+                "0.08 0.40 0.75",
+                "[] 0",
+            ),
+        ]
+    }
+}
+
 fn reg(s: impl Into<String>) -> (String, Font) {
     (s.into(), Font::Regular)
 }
@@ -505,7 +521,28 @@ fn mono(s: impl Into<String>) -> (String, Font) {
 pub fn report(input: &ReportInput) -> Vec<u8> {
     let mut d = Doc::new();
     let defs = definitions();
-    let def = |k: &str| defs[k].as_str().unwrap_or("").to_string();
+    front_matter(&mut d, input);
+    summary_table(&mut d, input, &defs);
+    evidence_table(&mut d, input.runs);
+    if input.runs.len() > 1 {
+        aggregate_table(&mut d, input.runs);
+    }
+    for r in input.runs {
+        run_section(&mut d, r, &defs);
+    }
+    assumptions_section(&mut d, input.runs);
+    check_backing_table(&mut d);
+    d.finish()
+}
+
+/// The text of the definition `k` ([`definitions`]), empty if there is none.
+fn def(defs: &Value, k: &str) -> String {
+    defs[k].as_str().unwrap_or("").to_string()
+}
+
+/// The title, the tool version, git revision and overall verdict, then the config file and the
+/// effective settings.
+fn front_matter(d: &mut Doc, input: &ReportInput) {
     d.para("pacs audit certification report", 16.0, Font::Bold);
     d.gap(4.0);
     d.para(
@@ -531,6 +568,10 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         .map(|(k, v)| vec![mono(k), reg(v)])
         .collect();
     d.table(&["setting", "value"], &[0.3, 0.7], &rows, 8.0);
+}
+
+/// One row per log ([`crate::summary_cells`]), with the footnotes on separation and safe success.
+fn summary_table(d: &mut Doc, input: &ReportInput, defs: &Value) {
     d.heading("Summary", 12.0);
     let rows: Vec<Vec<(String, Font)>> = input
         .runs
@@ -545,19 +586,21 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         7.0,
     );
     d.para(
-        &format!("(1) Separation: {}.", def("separation_m")),
+        &format!("(1) Separation: {}.", def(defs, "separation_m")),
         7.0,
         Font::Regular,
     );
     d.para(
-        &format!("(2) Safe success: {}.", def("safe_success")),
+        &format!("(2) Safe success: {}.", def(defs, "safe_success")),
         7.0,
         Font::Regular,
     );
-    // What each log covers: its people, the audited span and whether it is the whole run.
+}
+
+/// What each log covers: its people, the audited span and whether it is the whole run.
+fn evidence_table(d: &mut Doc, runs: &[RunResult]) {
     d.heading("Evidence", 12.0);
-    let rows: Vec<Vec<(String, Font)>> = input
-        .runs
+    let rows: Vec<Vec<(String, Font)>> = runs
         .iter()
         .map(|r| crate::evidence_row(r).into_iter().map(reg).collect())
         .collect();
@@ -567,156 +610,187 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         &rows,
         7.0,
     );
-    if input.runs.len() > 1 {
-        d.heading("Aggregate (impact of safeguarding)", 12.0);
-        let rows: Vec<Vec<(String, Font)>> = aggregate::aggregate(input.runs)
-            .into_iter()
-            .map(|a| {
-                vec![
-                    reg(a.task),
-                    reg(a.policy),
-                    reg(a.filter),
-                    reg(a.runs.to_string()),
-                    reg(aggregate::pct(a.success)),
-                    reg(aggregate::pct(a.safe_success)),
-                    reg(aggregate::pct(Some(a.safety_violation))),
-                ]
-            })
-            .collect();
-        d.table(
-            &[
-                "task",
-                "policy",
-                "filter",
-                "n (logs)",
-                "success",
-                "safe success",
-                "violation fraction (mean ± std)",
-            ],
-            &[0.14, 0.14, 0.14, 0.1, 0.14, 0.14, 0.2],
-            &rows,
-            7.5,
-        );
-    }
-    for r in input.runs {
-        d.heading(
-            &format!("{}: {}", r.log, format!("{:?}", r.verdict).to_uppercase()),
-            11.0,
-        );
-        let rows: Vec<Vec<(String, Font)>> = crate::model_rows(r)
-            .into_iter()
-            .map(|[model, name, params, hash]| vec![reg(model), reg(name), reg(params), mono(hash)])
-            .collect();
-        d.table(
-            &[
-                "model",
-                "name",
-                "parameters (all in report.json)",
-                "SHA-256 of the parameters",
-            ],
-            &[0.1, 0.12, 0.43, 0.35],
-            &rows,
-            7.0,
-        );
-        d.plot(&r.series, false);
-        if has_threshold(&r.series) {
-            d.plot(&r.series, true);
-        } else {
-            d.para(
-                "No PFL contact was possible in this run, so no energy limit applied; no energy plot.",
-                8.0,
-                Font::Regular,
-            );
-        }
+}
+
+/// Success and violation fraction per task, policy and filter ([`aggregate::aggregate`]).
+fn aggregate_table(d: &mut Doc, runs: &[RunResult]) {
+    d.heading("Aggregate (impact of safeguarding)", 12.0);
+    let rows: Vec<Vec<(String, Font)>> = aggregate::aggregate(runs)
+        .into_iter()
+        .map(|a| {
+            vec![
+                reg(a.task),
+                reg(a.policy),
+                reg(a.filter),
+                reg(a.runs.to_string()),
+                reg(aggregate::pct(a.success)),
+                reg(aggregate::pct(a.safe_success)),
+                reg(aggregate::pct(Some(a.safety_violation))),
+            ]
+        })
+        .collect();
+    d.table(
+        &[
+            "task",
+            "policy",
+            "filter",
+            "n (logs)",
+            "success",
+            "safe success",
+            "violation fraction (mean ± std)",
+        ],
+        &[0.14, 0.14, 0.14, 0.1, 0.14, 0.14, 0.2],
+        &rows,
+        7.5,
+    );
+}
+
+/// One log's section: verdict, models, the separation and energy plots, the contact note, the
+/// violation episodes and the inconclusive spans.
+fn run_section(d: &mut Doc, r: &RunResult, defs: &Value) {
+    d.heading(
+        &format!("{}: {}", r.log, format!("{:?}", r.verdict).to_uppercase()),
+        11.0,
+    );
+    models_table(d, r);
+    d.plot(&r.series, false);
+    if has_threshold(&r.series) {
+        d.plot(&r.series, true);
+    } else {
         d.para(
-            "Shading: green = robot at rest, red = violation possible, grey = inconclusive.",
-            7.0,
+            "No PFL contact was possible in this run, so no energy limit applied; no energy plot.",
+            8.0,
             Font::Regular,
         );
-        if let Some(note) = crate::contact_note(r) {
-            d.para(
-                &format!("Passed with a separation figure <= 0: {note}."),
-                8.5,
-                Font::Regular,
-            );
-        }
-        let eps = crate::episodes::episodes(&r.violations);
-        if eps.is_empty() {
-            d.para("No violations.", 9.0, Font::Regular);
-        } else {
-            const SHOWN: usize = 60;
-            d.para(
-                &format!(
-                    "{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).",
-                    eps.len(),
-                    r.violations.len()
-                ),
-                8.5,
-                Font::Regular,
-            );
-            let rows: Vec<Vec<(String, Font)>> = eps
-                .iter()
-                .take(SHOWN)
-                .map(|e| {
-                    crate::episodes::episode_cells(e)
-                        .into_iter()
-                        .map(reg)
-                        .collect()
-                })
-                .collect();
-            let mut heads = crate::episodes::EPISODE_COLUMNS;
-            heads[6] = "worst separation (m) (3)";
-            heads[9] = "certain (4)";
-            d.table(
-                &heads,
-                &[0.07, 0.07, 0.18, 0.1, 0.14, 0.1, 0.09, 0.08, 0.09, 0.08],
-                &rows,
-                7.0,
-            );
-            if eps.len() > SHOWN {
-                d.para(
-                    &format!("... {} more episodes in report.json.", eps.len() - SHOWN),
-                    7.5,
-                    Font::Regular,
-                );
-            }
-            d.para(
-                &format!(
-                    "(3) {}. (4) Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.",
-                    def("violation_separation_m")
-                ),
-                7.0,
-                Font::Regular,
-            );
-        }
-        if !r.inconclusive.is_empty() {
-            d.para("Inconclusive spans:", 8.5, Font::Bold);
-            for i in r.inconclusive.iter().take(40) {
-                d.para(
-                    &format!(
-                        "- {:.4}-{:.4} s: {} ({} spans)",
-                        i.t_start,
-                        i.t_end,
-                        i.reason.as_str(),
-                        i.spans
-                    ),
-                    8.0,
-                    Font::Regular,
-                );
-            }
-        }
     }
+    d.para(
+        "Shading: green = robot at rest, red = violation possible, grey = inconclusive.",
+        7.0,
+        Font::Regular,
+    );
+    if let Some(note) = crate::contact_note(r) {
+        d.para(
+            &format!("Passed with a separation figure <= 0: {note}."),
+            8.5,
+            Font::Regular,
+        );
+    }
+    episodes_table(d, r, defs);
+    inconclusive_list(d, r);
+}
+
+/// A run's models with their parameters and hashes ([`crate::model_rows`]).
+fn models_table(d: &mut Doc, r: &RunResult) {
+    let rows: Vec<Vec<(String, Font)>> = crate::model_rows(r)
+        .into_iter()
+        .map(|[model, name, params, hash]| vec![reg(model), reg(name), reg(params), mono(hash)])
+        .collect();
+    d.table(
+        &[
+            "model",
+            "name",
+            "parameters (all in report.json)",
+            "SHA-256 of the parameters",
+        ],
+        &[0.1, 0.12, 0.43, 0.35],
+        &rows,
+        7.0,
+    );
+}
+
+/// A log's violation intervals merged into episodes ([`crate::episodes`]), the first 60 shown,
+/// with the footnotes on the separation and on certain violations; "No violations." if none.
+fn episodes_table(d: &mut Doc, r: &RunResult, defs: &Value) {
+    let eps = crate::episodes::episodes(&r.violations);
+    if eps.is_empty() {
+        d.para("No violations.", 9.0, Font::Regular);
+        return;
+    }
+    const SHOWN: usize = 60;
+    d.para(
+        &format!(
+            "{} violation episode(s) from {} violation interval(s) (the intervals: report.json and violations.csv).",
+            eps.len(),
+            r.violations.len()
+        ),
+        8.5,
+        Font::Regular,
+    );
+    let rows: Vec<Vec<(String, Font)>> = eps
+        .iter()
+        .take(SHOWN)
+        .map(|e| {
+            crate::episodes::episode_cells(e)
+                .into_iter()
+                .map(reg)
+                .collect()
+        })
+        .collect();
+    let mut heads = crate::episodes::EPISODE_COLUMNS;
+    heads[6] = "worst separation (m) (3)";
+    heads[9] = "certain (4)";
+    d.table(
+        &heads,
+        &[0.07, 0.07, 0.18, 0.1, 0.14, 0.1, 0.09, 0.08, 0.09, 0.08],
+        &rows,
+        7.0,
+    );
+    if eps.len() > SHOWN {
+        d.para(
+            &format!("... {} more episodes in report.json.", eps.len() - SHOWN),
+            7.5,
+            Font::Regular,
+        );
+    }
+    d.para(
+        &format!(
+            "(3) {}. (4) Certain: the logged robot and the measured person themselves violate the constraint; possible: some motion the models allow does. An episode merges the intervals of one person or object, link and constraint less than 0.1 s apart.",
+            def(defs, "violation_separation_m")
+        ),
+        7.0,
+        Font::Regular,
+    );
+}
+
+/// The first 40 of a log's inconclusive spans with their times (s), reasons and span counts
+/// (nothing if none).
+fn inconclusive_list(d: &mut Doc, r: &RunResult) {
+    if r.inconclusive.is_empty() {
+        return;
+    }
+    d.para("Inconclusive spans:", 8.5, Font::Bold);
+    for i in r.inconclusive.iter().take(40) {
+        d.para(
+            &format!(
+                "- {:.4}-{:.4} s: {} ({} spans)",
+                i.t_start,
+                i.t_end,
+                i.reason.as_str(),
+                i.spans
+            ),
+            8.0,
+            Font::Regular,
+        );
+    }
+}
+
+/// The modelling assumptions, then the model values the user gave ([`crate::user_values`]).
+fn assumptions_section(d: &mut Doc, runs: &[RunResult]) {
     d.heading("Assumptions", 12.0);
     for a in assumptions() {
         d.para(&format!("- {a}"), 8.0, Font::Regular);
     }
-    let user = crate::user_values(input.runs);
+    let user = crate::user_values(runs);
     if !user.is_empty() {
         d.para(&format!("{}:", crate::USER_VALUES_HEADING), 8.0, Font::Bold);
         for v in &user {
             d.para(&format!("- {v}"), 8.0, Font::Regular);
         }
     }
+}
+
+/// Each check the audit makes with the tests and harnesses backing it ([`check_backing`]).
+fn check_backing_table(d: &mut Doc) {
     d.heading("Checks and the tests backing them", 12.0);
     let rows: Vec<Vec<(String, Font)>> = check_backing()
         .as_array()
@@ -742,7 +816,6 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
         })
         .unwrap_or_default();
     d.table(&["check", "backed by"], &[0.45, 0.55], &rows, 6.5);
-    d.finish()
 }
 
 #[cfg(test)]
