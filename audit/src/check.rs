@@ -232,68 +232,11 @@ impl Auditor {
         let rcaps = vec![zero; ncaps];
         let n = models.robot.dof();
         let parts = models.human.body_parts().len();
-        // A name says which model was used only where the spec is that built-in's: an inline
-        // spec that reuses a built-in name (say "fr3" with other capsules) is labelled as such,
-        // so that a report never presents a modified model under a built-in's name.
-        let robot_name = models.robot.name();
-        let human_name = &models.human.spec().name;
-        let names = ModelNames {
-            robot: label(
-                robot_name,
-                RobotModel::builtin(robot_name)
-                    .ok()
-                    .map(|b| b.spec() == models.robot.spec()),
-            ),
-            human: label(
-                human_name,
-                HumanModel::builtin(human_name)
-                    .ok()
-                    .map(|b| b.spec() == models.human.spec()),
-            ),
-            constraints: label(
-                &tc.name,
-                pacs_models::ConstraintSpec::builtin(&models.constraints.name)
-                    .ok()
-                    .map(|b| b == models.constraints),
-            ),
-            robot_v_max: models.robot.limits().v_max().to_vec(),
-            robot_a_max: models.robot.limits().a_max().to_vec(),
-            human_v_max: models.human.v_max().to_vec(),
-            human_measurement_error_pos: models.human.measurement_error_pos(),
-            human_delay: models.human.delay(),
-            environment_shapes: models.environment.len(),
-            specs: serde_json::json!({
-                "robot": models.robot.spec(),
-                "human": models.human.spec(),
-                "constraints": models.constraints,
-                "environment": models.environment.iter().map(|c| [
-                    c.p1().x, c.p1().y, c.p1().z, c.p2().x, c.p2().y, c.p2().z, c.radius()
-                ]).collect::<Vec<_>>(),
-                "objects": models.objects.iter().map(|(id, m, contact)| serde_json::json!({
-                    "id": id, "contact": contact,
-                    "shape_generators": m.shape_generators(), "shape_radius": m.shape_radius(),
-                    "max_acc": m.max_acc(), "acc_bias": m.acc_bias(),
-                    "acc_generators": m.acc_generators(), "max_speed": m.max_speed(),
-                    "pos_error": m.pos_error(), "vel_error": m.vel_error(), "delay": m.delay(),
-                })).collect::<Vec<_>>(),
-            }),
-        };
+        let names = model_names(&models, &tc.name);
         let links = models.robot.links().len();
         let object_rule =
             ObjectRule::new(&models.robot, &rreach, cfg.rest_speed).map_err(AuditError::Rule)?;
-        let objects: Vec<ObjectTrack> = models
-            .objects
-            .iter()
-            .map(|(id, model, contact)| ObjectTrack {
-                id: id.clone(),
-                model: *model,
-                contact: *contact,
-                latest: None,
-                history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
-                span: None,
-                occ: None,
-            })
-            .collect();
+        let objects = object_tracks(&models);
         let slots = parts + objects.len();
         Ok(Self {
             object_rule,
@@ -677,6 +620,74 @@ impl Auditor {
         self.t_last = t;
         Ok(())
     }
+}
+
+/// The names and specs of the models for the report (`constraints`: the resolved constraints'
+/// name).
+fn model_names(models: &LogModels, constraints: &str) -> ModelNames {
+    // A name says which model was used only where the spec is that built-in's: an inline
+    // spec that reuses a built-in name (say "fr3" with other capsules) is labelled as such,
+    // so that a report never presents a modified model under a built-in's name.
+    let robot_name = models.robot.name();
+    let human_name = &models.human.spec().name;
+    ModelNames {
+        robot: label(
+            robot_name,
+            RobotModel::builtin(robot_name)
+                .ok()
+                .map(|b| b.spec() == models.robot.spec()),
+        ),
+        human: label(
+            human_name,
+            HumanModel::builtin(human_name)
+                .ok()
+                .map(|b| b.spec() == models.human.spec()),
+        ),
+        constraints: label(
+            constraints,
+            pacs_models::ConstraintSpec::builtin(&models.constraints.name)
+                .ok()
+                .map(|b| b == models.constraints),
+        ),
+        robot_v_max: models.robot.limits().v_max().to_vec(),
+        robot_a_max: models.robot.limits().a_max().to_vec(),
+        human_v_max: models.human.v_max().to_vec(),
+        human_measurement_error_pos: models.human.measurement_error_pos(),
+        human_delay: models.human.delay(),
+        environment_shapes: models.environment.len(),
+        specs: serde_json::json!({
+            "robot": models.robot.spec(),
+            "human": models.human.spec(),
+            "constraints": models.constraints,
+            "environment": models.environment.iter().map(|c| [
+                c.p1().x, c.p1().y, c.p1().z, c.p2().x, c.p2().y, c.p2().z, c.radius()
+            ]).collect::<Vec<_>>(),
+            "objects": models.objects.iter().map(|(id, m, contact)| serde_json::json!({
+                "id": id, "contact": contact,
+                "shape_generators": m.shape_generators(), "shape_radius": m.shape_radius(),
+                "max_acc": m.max_acc(), "acc_bias": m.acc_bias(),
+                "acc_generators": m.acc_generators(), "max_speed": m.max_speed(),
+                "pos_error": m.pos_error(), "vel_error": m.vel_error(), "delay": m.delay(),
+            })).collect::<Vec<_>>(),
+        }),
+    }
+}
+
+/// The track of each of the log's dynamic objects (no measurement yet).
+fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
+    models
+        .objects
+        .iter()
+        .map(|(id, model, contact)| ObjectTrack {
+            id: id.clone(),
+            model: *model,
+            contact: *contact,
+            latest: None,
+            history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
+            span: None,
+            occ: None,
+        })
+        .collect()
 }
 
 /// A model's name for reports: the name where the spec is the built-in of that name

@@ -143,6 +143,23 @@ fn reach_band(k: f64, dt_hi: f64, delta_abs_min: f64) -> f64 {
     up(num / (4.0 * k), mag)
 }
 
+/// The box of a quantity with the values `a` and `b` at the ends of the span whose rate bound
+/// lets it change by at most `reach` over the span: within `(a + b ± reach)/2` at every
+/// instant, widened to contain both ends (contradicted samples), rounded outwards. Returns
+/// (lower, upper).
+#[inline(always)]
+fn ends_box(a: f64, b: f64, reach: f64) -> (f64, f64) {
+    let mag = a.abs() + b.abs();
+    (
+        down(0.5 * (a + b - reach), mag + reach)
+            .min(down(a, a.abs()))
+            .min(down(b, b.abs())),
+        up(0.5 * (a + b + reach), mag + reach)
+            .max(up(a, a.abs()))
+            .max(up(b, b.abs())),
+    )
+}
+
 /// The span's boxes and whether the samples are consistent (module docs). `slack` is the
 /// relative tolerance of the limit tests (the audit's `limit_slack`).
 ///
@@ -173,12 +190,7 @@ pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> Sp
         let mag_ab = a.abs() + b.abs();
         // Positions from v_max.
         let reach = v * dt_hi;
-        let mut p_lo = down(0.5 * (a + b - reach), mag_ab + reach)
-            .min(down(a, a.abs()))
-            .min(down(b, b.abs()));
-        let mut p_hi = up(0.5 * (a + b + reach), mag_ab + reach)
-            .max(up(a, a.abs()))
-            .max(up(b, b.abs()));
+        let (mut p_lo, mut p_hi) = ends_box(a, b, reach);
         let dpos = b - a;
         if down(dpos.abs(), mag_ab) > reach * rel {
             ok = false;
@@ -209,18 +221,7 @@ pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> Sp
             let (c, d) = (s0.dq[j], s1.dq[j]);
             let mag_cd = c.abs() + d.abs();
             let w = acc * dt_hi;
-            take(
-                (
-                    down(0.5 * (c + d - w), mag_cd + w)
-                        .min(down(c, c.abs()))
-                        .min(down(d, d.abs())),
-                    up(0.5 * (c + d + w), mag_cd + w)
-                        .max(up(c, c.abs()))
-                        .max(up(d, d.abs())),
-                ),
-                &mut v_lo,
-                &mut v_hi,
-            );
+            take(ends_box(c, d, w), &mut v_lo, &mut v_hi);
             if down(c.abs(), c.abs()) > v * rel || down(d.abs(), d.abs()) > v * rel {
                 ok = false;
             }

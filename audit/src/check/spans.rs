@@ -347,87 +347,36 @@ impl Auditor {
         let rest = self.nominal_rest(s0, s1);
         self.series.buckets[bidx].at_rest &= rest;
         let mut certain = false;
-        let finish_span = |this: &mut Self, violated: bool, certain: bool| {
-            // The span's first sample (span k starts at sample k − 1).
-            let sample = this.span_index - 1;
-            if violated {
-                this.violating_samples += 1;
-                if let Some(t) = &mut this.track {
-                    t.violating.insert(sample);
-                }
-            }
-            if certain {
-                this.certain_samples += 1;
-                if let Some(t) = &mut this.track {
-                    t.certain.insert(sample);
-                }
-            }
-            this.last_span_violated = violated;
-            this.last_span_certain = certain;
-            this.series.buckets[bidx].violation |= violated;
-        };
         if dt > self.cfg.max_gap {
-            self.mark_inconclusive(t0, t1, Reason::Gap);
-            self.inconclusive_duration += dt;
-            self.series.buckets[bidx].inconclusive = true;
-            finish_span(self, false, false);
+            self.skip_span(t0, t1, bidx, Reason::Gap);
             return;
         }
         let Some(slot) = span_human else {
-            self.mark_inconclusive(t0, t1, Reason::NoHuman);
-            self.inconclusive_duration += dt;
-            self.series.buckets[bidx].inconclusive = true;
-            finish_span(self, false, false);
+            self.skip_span(t0, t1, bidx, Reason::NoHuman);
             return;
         };
         let Some(m) = self.humans[slot].as_ref() else {
             // Unreachable by construction; never let an unchecked span pass.
             self.mark_inconclusive(t0, t1, Reason::NoHuman);
             self.inconclusive_duration += dt;
-            finish_span(self, false, false);
+            self.finish_span(bidx, false, false);
             return;
         };
         if t1 - m.time() > self.cfg.max_human_age {
-            self.mark_inconclusive(t0, t1, Reason::StaleHuman);
-            self.inconclusive_duration += dt;
-            self.series.buckets[bidx].inconclusive = true;
-            finish_span(self, false, false);
+            self.skip_span(t0, t1, bidx, Reason::StaleHuman);
             return;
         }
         if let Err(_e) = self.hreach.occupancy_into(m, t0, t1, &mut self.hcaps) {
-            self.mark_inconclusive(t0, t1, Reason::HumanReachError);
-            self.inconclusive_duration += dt;
-            self.series.buckets[bidx].inconclusive = true;
-            finish_span(self, false, false);
+            self.skip_span(t0, t1, bidx, Reason::HumanReachError);
             return;
         }
-        // Each object's occupancy over the span, from the measurement in use for it.
-        let mut objects_left = false;
-        for k in 0..self.objects.len() {
-            let o = &mut self.objects[k];
-            o.occ = None;
-            let reason = match o.span {
-                None => Some(Reason::NoObject),
-                Some(m) if t1 - m.time > self.cfg.max_human_age => Some(Reason::StaleObject),
-                Some(m) => match pacs_reach::object::occupancy(&o.model, &m, t0, t1) {
-                    Err(_) => Some(Reason::ObjectReachError),
-                    Ok(occ) => {
-                        if self.object_rule.workspace_clear(&occ).is_none() {
-                            o.occ = Some(occ);
-                            objects_left = true;
-                        }
-                        None
-                    }
-                },
-            };
-            if let Some(r) = reason {
-                self.mark_inconclusive(t0, t1, r);
-                self.inconclusive_duration += dt;
-                self.series.buckets[bidx].inconclusive = true;
-                finish_span(self, false, false);
+        let objects_left = match self.object_occupancies(t0, t1) {
+            Ok(left) => left,
+            Err(reason) => {
+                self.skip_span(t0, t1, bidx, reason);
                 return;
             }
-        }
+        };
         let (boxes, consistent) = (&encl.boxes, encl.consistent);
         if !stamps_resolve(t0, t1) {
             // Checked below all the same (a violation found still fails the log), never passed.
@@ -451,14 +400,14 @@ impl Auditor {
             && !objects_left
         {
             self.record_separation(bidx, sep, true);
-            finish_span(self, false, false);
+            self.finish_span(bidx, false, false);
             return;
         }
         // Robot occupancy over the span.
         let Some(bx) = boxes else {
             // Only non-finite boxes (absurd samples; already inconclusive) get here: never let
             // the span pass.
-            finish_span(self, false, false);
+            self.finish_span(bidx, false, false);
             return;
         };
         if self
@@ -471,7 +420,7 @@ impl Auditor {
                 self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
                 self.inconclusive_duration += dt;
             }
-            finish_span(self, false, false);
+            self.finish_span(bidx, false, false);
             return;
         }
         let out = match human_clear {
@@ -494,7 +443,7 @@ impl Auditor {
             b.threshold = min_opt(b.threshold, Some(thr));
         }
         if self.hits.is_empty() {
-            finish_span(self, false, false);
+            self.finish_span(bidx, false, false);
             return;
         }
         let violated = true;
@@ -513,6 +462,79 @@ impl Auditor {
                 h.certain = false;
             }
         }
+        self.extend_intervals(t0, t1);
+        self.finish_span(bidx, violated, certain);
+    }
+
+    /// A span that cannot be checked for `reason`: inconclusive (its duration counted, its plot
+    /// bucket marked), neither violated nor certain.
+    #[inline]
+    fn skip_span(&mut self, t0: f64, t1: f64, bidx: usize, reason: Reason) {
+        self.mark_inconclusive(t0, t1, reason);
+        self.inconclusive_duration += t1 - t0;
+        self.series.buckets[bidx].inconclusive = true;
+        self.finish_span(bidx, false, false);
+    }
+
+    /// Account the span just checked (the current `span_index`, plot bucket `bidx`): violated
+    /// and certain counts, the tracked sample sets, the last span's flags and the bucket.
+    #[inline]
+    fn finish_span(&mut self, bidx: usize, violated: bool, certain: bool) {
+        // The span's first sample (span k starts at sample k − 1).
+        let sample = self.span_index - 1;
+        if violated {
+            self.violating_samples += 1;
+            if let Some(t) = &mut self.track {
+                t.violating.insert(sample);
+            }
+        }
+        if certain {
+            self.certain_samples += 1;
+            if let Some(t) = &mut self.track {
+                t.certain.insert(sample);
+            }
+        }
+        self.last_span_violated = violated;
+        self.last_span_certain = certain;
+        self.series.buckets[bidx].violation |= violated;
+    }
+
+    /// Each object's occupancy over the span `t0`–`t1`, from the measurement in use for it (into
+    /// the object's `occ`; `None` where the workspace ball clears it): whether any object is
+    /// left for the object rule, or the reason the span cannot be checked (the objects after
+    /// the first such one are left as they were).
+    #[inline]
+    fn object_occupancies(&mut self, t0: f64, t1: f64) -> Result<bool, Reason> {
+        let mut objects_left = false;
+        for k in 0..self.objects.len() {
+            let o = &mut self.objects[k];
+            o.occ = None;
+            let reason = match o.span {
+                None => Some(Reason::NoObject),
+                Some(m) if t1 - m.time > self.cfg.max_human_age => Some(Reason::StaleObject),
+                Some(m) => match pacs_reach::object::occupancy(&o.model, &m, t0, t1) {
+                    Err(_) => Some(Reason::ObjectReachError),
+                    Ok(occ) => {
+                        if self.object_rule.workspace_clear(&occ).is_none() {
+                            o.occ = Some(occ);
+                            objects_left = true;
+                        }
+                        None
+                    }
+                },
+            };
+            if let Some(r) = reason {
+                return Err(r);
+            }
+        }
+        Ok(objects_left)
+    }
+
+    /// The violating pairs of the span `t0`–`t1` (`self.hits`) into the open violation
+    /// intervals: a pair's interval open since the previous span of the same kind is extended,
+    /// any other closed and a new one opened.
+    #[inline]
+    fn extend_intervals(&mut self, t0: f64, t1: f64) {
         let idx = self.span_index;
         for k in 0..self.hits.len() {
             let h = self.hits[k];
@@ -549,7 +571,6 @@ impl Auditor {
                 });
             }
         }
-        finish_span(self, violated, certain);
     }
 
     /// The object rule ([`ObjectRule::check`]) for every object whose occupancy is not cleared
