@@ -108,6 +108,99 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
+        if !self.next_data_line()? {
+            return Ok(None);
+        }
+        let row = Row {
+            file: self.file.as_str(),
+            loc: Location::Line(self.line_no),
+        };
+        if !self.line.ends_with('\n') {
+            return Err(row.err("truncated line (no newline at the end of the file)".into()));
+        }
+        let mut cells = self.line.trim_end_matches(['\n', '\r']).split(',');
+        let kind = cells.next().unwrap_or("").trim();
+        let t = num(
+            "t",
+            cells
+                .next()
+                .ok_or_else(|| row.err("missing column `t`".into()))?,
+        )
+        .map_err(|e| row.bad(e))?;
+        match kind {
+            "robot" => {
+                robot_values(&mut cells, &row, &mut self.q, &mut self.dq, &mut self.ddq)?;
+                Ok(Some(Record::Robot {
+                    t,
+                    q: &self.q,
+                    dq: (!self.dq.is_empty()).then_some(&self.dq[..]),
+                    ddq: (!self.ddq.is_empty()).then_some(&self.ddq[..]),
+                }))
+            }
+            "human" => {
+                let t_meas = t_meas_cell(&mut cells, &row)?;
+                // Version 2 rows name the person: `human,t,t_meas,id,x_1,...`.
+                let person = if self.header.version >= 2 {
+                    self.name.clear();
+                    self.name.push_str(
+                        cells
+                            .next()
+                            .ok_or_else(|| row.err("missing column `id` (the person id)".into()))?
+                            .trim(),
+                    );
+                    true
+                } else {
+                    false
+                };
+                human_positions(&mut cells, &row, &mut self.positions)?;
+                Ok(Some(Record::Human {
+                    t,
+                    t_meas,
+                    person: person.then_some(self.name.as_str()),
+                    positions: &self.positions,
+                }))
+            }
+            "event" => {
+                self.name.clear();
+                self.name.push_str(
+                    cells
+                        .next()
+                        .ok_or_else(|| row.err("missing column `name`".into()))?
+                        .trim(),
+                );
+                Ok(Some(Record::Event {
+                    t,
+                    name: &self.name,
+                }))
+            }
+            "object" => {
+                let t_meas = t_meas_cell(&mut cells, &row)?;
+                self.name.clear();
+                self.name.push_str(
+                    cells
+                        .next()
+                        .ok_or_else(|| row.err("missing column `id`".into()))?
+                        .trim(),
+                );
+                let (v, k) = object_values(&mut cells, &row)?;
+                Ok(Some(Record::Object {
+                    t,
+                    t_meas,
+                    id: &self.name,
+                    position: [v[0], v[1], v[2]],
+                    velocity: (k == 6).then_some([v[3], v[4], v[5]]),
+                }))
+            }
+            "shield" => Ok(Some(Record::Shield { t })),
+            other => Err(row.err(format!("unknown record type `{other}`"))),
+        }
+    }
+}
+
+impl<R: BufRead> CsvReader<R> {
+    /// Read the next line that holds a record into `line` (blank lines and `#` comments
+    /// skipped); false at the end of the file.
+    fn next_data_line(&mut self) -> Result<bool, LogError> {
         loop {
             self.line.clear();
             let n = self.input.read_line(&mut self.line).map_err(|e| {
@@ -125,174 +218,134 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 }
             })?;
             if n == 0 {
-                return Ok(None);
+                return Ok(false);
             }
             self.line_no += 1;
             let t = self.line.trim();
             if !t.is_empty() && !t.starts_with('#') {
-                break;
+                return Ok(true);
             }
-        }
-        let loc = Location::Line(self.line_no);
-        let file = self.file.as_str();
-        let err = |p: String| LogError::input(file, loc, p);
-        let bad = |p: CellError| LogError::input(file, loc, p.to_string());
-        if !self.line.ends_with('\n') {
-            return Err(err(
-                "truncated line (no newline at the end of the file)".into()
-            ));
-        }
-        let mut cells = self.line.trim_end_matches(['\n', '\r']).split(',');
-        let kind = cells.next().unwrap_or("").trim();
-        // The `t_meas` column of measurement rows (human, object).
-        let t_meas_cell = |cells: &mut std::str::Split<'_, char>| -> Result<f64, LogError> {
-            num(
-                "t_meas",
-                cells
-                    .next()
-                    .ok_or_else(|| err("missing column `t_meas`".into()))?,
-            )
-            .map_err(bad)
-        };
-        let t = num(
-            "t",
-            cells
-                .next()
-                .ok_or_else(|| err("missing column `t`".into()))?,
-        )
-        .map_err(bad)?;
-        match kind {
-            "robot" => {
-                let n_cell = cells
-                    .next()
-                    .ok_or_else(|| err("missing column `n`".into()))?;
-                let n: usize = n_cell
-                    .trim()
-                    .parse()
-                    .map_err(|_| err(format!("n: `{}` is not a joint count", n_cell.trim())))?;
-                if n > MAX_JOINTS {
-                    return Err(err(format!(
-                        "n: {n} joints is more than any robot model holds (at most {MAX_JOINTS})"
-                    )));
-                }
-                self.q.clear();
-                self.dq.clear();
-                self.ddq.clear();
-                for (i, c) in cells.enumerate() {
-                    if i < n {
-                        self.q.push(num(&format!("q[{i}]"), c).map_err(bad)?);
-                    } else if i < 2 * n {
-                        self.dq
-                            .push(num(&format!("dq[{}]", i - n), c).map_err(bad)?);
-                    } else {
-                        self.ddq
-                            .push(num(&format!("ddq[{}]", i - 2 * n), c).map_err(bad)?);
-                    }
-                }
-                if self.q.len() != n
-                    || (!self.dq.is_empty() && self.dq.len() != n)
-                    || (!self.ddq.is_empty() && self.ddq.len() != n)
-                {
-                    return Err(err(format!(
-                        "robot row: expected {n}, {} or {} values after n = {n}, found {}",
-                        2 * n,
-                        3 * n,
-                        self.q.len() + self.dq.len() + self.ddq.len()
-                    )));
-                }
-                Ok(Some(Record::Robot {
-                    t,
-                    q: &self.q,
-                    dq: (!self.dq.is_empty()).then_some(&self.dq[..]),
-                    ddq: (!self.ddq.is_empty()).then_some(&self.ddq[..]),
-                }))
-            }
-            "human" => {
-                let t_meas = t_meas_cell(&mut cells)?;
-                // Version 2 rows name the person: `human,t,t_meas,id,x_1,...`.
-                let person = if self.header.version >= 2 {
-                    self.name.clear();
-                    self.name.push_str(
-                        cells
-                            .next()
-                            .ok_or_else(|| err("missing column `id` (the person id)".into()))?
-                            .trim(),
-                    );
-                    true
-                } else {
-                    false
-                };
-                self.positions.clear();
-                let mut p = [0.0; 3];
-                let mut k = 0;
-                for (i, c) in cells.enumerate() {
-                    p[i % 3] = num(&format!("positions[{}][{}]", i / 3, i % 3), c).map_err(bad)?;
-                    k = i + 1;
-                    if k % 3 == 0 {
-                        self.positions.push(p);
-                    }
-                }
-                if k % 3 != 0 {
-                    return Err(err(format!(
-                        "human row: {k} coordinates is not a multiple of 3"
-                    )));
-                }
-                Ok(Some(Record::Human {
-                    t,
-                    t_meas,
-                    person: person.then_some(self.name.as_str()),
-                    positions: &self.positions,
-                }))
-            }
-            "event" => {
-                self.name.clear();
-                self.name.push_str(
-                    cells
-                        .next()
-                        .ok_or_else(|| err("missing column `name`".into()))?
-                        .trim(),
-                );
-                Ok(Some(Record::Event {
-                    t,
-                    name: &self.name,
-                }))
-            }
-            "object" => {
-                let t_meas = t_meas_cell(&mut cells)?;
-                self.name.clear();
-                self.name.push_str(
-                    cells
-                        .next()
-                        .ok_or_else(|| err("missing column `id`".into()))?
-                        .trim(),
-                );
-                let mut v = [0.0; 6];
-                let mut k = 0;
-                for (i, c) in cells.enumerate() {
-                    if i >= 6 {
-                        return Err(err(
-                            "object row: more than 6 values after the id (x,y,z[,vx,vy,vz])".into(),
-                        ));
-                    }
-                    let field = if i < 3 { "position" } else { "velocity" };
-                    v[i] = num(&format!("{field}[{}]", i % 3), c).map_err(bad)?;
-                    k = i + 1;
-                }
-                if k != 3 && k != 6 {
-                    return Err(err(format!(
-                        "object row: expected 3 (position) or 6 (position, velocity) values after the id, found {k}"
-                    )));
-                }
-                Ok(Some(Record::Object {
-                    t,
-                    t_meas,
-                    id: &self.name,
-                    position: [v[0], v[1], v[2]],
-                    velocity: (k == 6).then_some([v[3], v[4], v[5]]),
-                }))
-            }
-            "shield" => Ok(Some(Record::Shield { t })),
-            other => Err(err(format!("unknown record type `{other}`"))),
         }
     }
+}
+
+/// The row being read: errors name the file and the line.
+struct Row<'a> {
+    file: &'a str,
+    loc: Location,
+}
+
+impl Row<'_> {
+    /// A problem with the row.
+    fn err(&self, p: String) -> LogError {
+        LogError::input(self.file, self.loc, p)
+    }
+
+    /// A cell of the row that is not a finite number.
+    fn bad(&self, p: CellError) -> LogError {
+        LogError::input(self.file, self.loc, p.to_string())
+    }
+}
+
+/// The cells of a row after its kind.
+type Cells<'a> = std::str::Split<'a, char>;
+
+/// The `t_meas` column of measurement rows (human, object).
+fn t_meas_cell(cells: &mut Cells<'_>, row: &Row<'_>) -> Result<f64, LogError> {
+    num(
+        "t_meas",
+        cells
+            .next()
+            .ok_or_else(|| row.err("missing column `t_meas`".into()))?,
+    )
+    .map_err(|e| row.bad(e))
+}
+
+/// A robot row's values after `t`: the joint count `n`, then `n` positions and, optionally, `n`
+/// velocities and `n` accelerations (into `q`, `dq`, `ddq`; empty where not given).
+fn robot_values(
+    cells: &mut Cells<'_>,
+    row: &Row<'_>,
+    q: &mut Vec<f64>,
+    dq: &mut Vec<f64>,
+    ddq: &mut Vec<f64>,
+) -> Result<(), LogError> {
+    let n_cell = cells
+        .next()
+        .ok_or_else(|| row.err("missing column `n`".into()))?;
+    let n: usize = n_cell
+        .trim()
+        .parse()
+        .map_err(|_| row.err(format!("n: `{}` is not a joint count", n_cell.trim())))?;
+    if n > MAX_JOINTS {
+        return Err(row.err(format!(
+            "n: {n} joints is more than any robot model holds (at most {MAX_JOINTS})"
+        )));
+    }
+    q.clear();
+    dq.clear();
+    ddq.clear();
+    for (i, c) in cells.enumerate() {
+        if i < n {
+            q.push(num(&format!("q[{i}]"), c).map_err(|e| row.bad(e))?);
+        } else if i < 2 * n {
+            dq.push(num(&format!("dq[{}]", i - n), c).map_err(|e| row.bad(e))?);
+        } else {
+            ddq.push(num(&format!("ddq[{}]", i - 2 * n), c).map_err(|e| row.bad(e))?);
+        }
+    }
+    if q.len() != n || (!dq.is_empty() && dq.len() != n) || (!ddq.is_empty() && ddq.len() != n) {
+        return Err(row.err(format!(
+            "robot row: expected {n}, {} or {} values after n = {n}, found {}",
+            2 * n,
+            3 * n,
+            q.len() + dq.len() + ddq.len()
+        )));
+    }
+    Ok(())
+}
+
+/// A human row's keypoint coordinates (x, y, z per keypoint) into `positions`.
+fn human_positions(
+    cells: &mut Cells<'_>,
+    row: &Row<'_>,
+    positions: &mut Vec<[f64; 3]>,
+) -> Result<(), LogError> {
+    positions.clear();
+    let mut p = [0.0; 3];
+    let mut k = 0;
+    for (i, c) in cells.enumerate() {
+        p[i % 3] = num(&format!("positions[{}][{}]", i / 3, i % 3), c).map_err(|e| row.bad(e))?;
+        k = i + 1;
+        if k % 3 == 0 {
+            positions.push(p);
+        }
+    }
+    if k % 3 != 0 {
+        return Err(row.err(format!("human row: {k} coordinates is not a multiple of 3")));
+    }
+    Ok(())
+}
+
+/// An object row's values after the id: the position and, optionally, the velocity; returns
+/// them and their count (3 or 6).
+fn object_values(cells: &mut Cells<'_>, row: &Row<'_>) -> Result<([f64; 6], usize), LogError> {
+    let mut v = [0.0; 6];
+    let mut k = 0;
+    for (i, c) in cells.enumerate() {
+        if i >= 6 {
+            return Err(
+                row.err("object row: more than 6 values after the id (x,y,z[,vx,vy,vz])".into())
+            );
+        }
+        let field = if i < 3 { "position" } else { "velocity" };
+        v[i] = num(&format!("{field}[{}]", i % 3), c).map_err(|e| row.bad(e))?;
+        k = i + 1;
+    }
+    if k != 3 && k != 6 {
+        return Err(row.err(format!(
+            "object row: expected 3 (position) or 6 (position, velocity) values after the id, found {k}"
+        )));
+    }
+    Ok((v, k))
 }

@@ -298,186 +298,23 @@ impl Messages {
         m: Message<'_>,
         what: &dyn Fn() -> String,
     ) -> Result<(), LogError> {
-        let err = |p: String| LogError::input(&self.file, m.loc, p);
         self.base_s
             .get_or_insert((m.log_time / 1_000_000_000) as i64);
         let log_t = self.secs(i128::from(m.log_time));
         let pending = match m.stream {
-            Stream::Robot => {
-                self.js
-                    .decode(m.data)
-                    .map_err(|e| err(format!("{}: JointState: {e}", what())))?;
-                let js = &self.js;
-                let k = js.names.len();
-                let n = self.joints.len();
-                if k > 0 && js.position.len() != k {
-                    return Err(err(format!(
-                        "{}: JointState has {k} names but {} positions",
-                        what(),
-                        js.position.len()
-                    )));
-                }
-                let vlen = js.velocity.len();
-                if vlen != 0 && vlen != js.position.len() {
-                    return Err(err(format!(
-                        "{}: JointState has {} positions but {vlen} velocities",
-                        what(),
-                        js.position.len()
-                    )));
-                }
-                if k == 0 && js.position.len() != n {
-                    return Err(err(format!(
-                        "{}: wrong joint count: JointState has {} positions and no names, the robot model has {n} joints",
-                        what(),
-                        js.position.len()
-                    )));
-                }
-                if k > 0 && self.map_names != js.names {
-                    let mut map = vec![usize::MAX; n];
-                    for (i, name) in js.names.iter().enumerate() {
-                        if let Some(j) = self.joints.iter().position(|x| x == name) {
-                            if map[j] != usize::MAX {
-                                return Err(err(format!(
-                                    "{}: joint `{name}` appears twice in JointState.name",
-                                    what()
-                                )));
-                            }
-                            map[j] = i;
-                        }
-                    }
-                    if let Some(j) = map.iter().position(|&i| i == usize::MAX) {
-                        return Err(err(format!(
-                            "{}: wrong joints: robot joint `{}` is missing from JointState.name",
-                            what(),
-                            self.joints[j]
-                        )));
-                    }
-                    self.map = map;
-                    self.map_names.clone_from(&js.names);
-                }
-                let mut q = self.f64_pool.pop().unwrap_or_default();
-                let mut dq = (vlen > 0).then(|| self.f64_pool.pop().unwrap_or_default());
-                q.clear();
-                if let Some(d) = dq.as_mut() {
-                    d.clear();
-                }
-                for j in 0..n {
-                    let i = if k == 0 { j } else { self.map[j] };
-                    let (x, v) = (js.position[i], js.velocity.get(i).copied());
-                    for (f, val) in [("position", Some(x)), ("velocity", v)] {
-                        if let Some(val) = val.filter(|v| !v.is_finite()) {
-                            return Err(err(format!(
-                                "{}: JointState.{f}[{i}] (joint `{}`): value {val} is not finite",
-                                what(),
-                                self.joints[j]
-                            )));
-                        }
-                    }
-                    q.push(x);
-                    if let (Some(d), Some(v)) = (dq.as_mut(), v) {
-                        d.push(v);
-                    }
-                }
-                (self.secs(js.stamp.nanos()), Body::Robot { q, dq })
-            }
-            Stream::Human { person } => {
-                self.pa
-                    .decode(m.data)
-                    .map_err(|e| err(format!("{}: PoseArray: {e}", what())))?;
-                let n = self.pa.positions.len();
-                // The person's model's keypoint count (an id the header does not declare is
-                // reported by the audit, which knows the people).
-                let expected = match person {
-                    None => Some(self.keypoints),
-                    Some(i) => {
-                        let id = &self.person_ids[usize::from(i)];
-                        self.person_keypoints
-                            .iter()
-                            .find(|(p, _)| p == id)
-                            .map(|(_, k)| *k)
-                    }
-                };
-                if let Some(k) = expected
-                    && n != k
-                {
-                    return Err(err(format!(
-                        "{}: wrong keypoint count: PoseArray has {n} poses, the human model has {k} keypoints",
-                        what(),
-                    )));
-                }
-                if let Some((i, c)) = self
-                    .pa
-                    .positions
-                    .iter()
-                    .enumerate()
-                    .find_map(|(i, p)| p.iter().find(|c| !c.is_finite()).map(|c| (i, *c)))
-                {
-                    return Err(err(format!(
-                        "{}: PoseArray.poses[{i}].position: value {c} is not finite",
-                        what()
-                    )));
-                }
-                let mut positions = self.pos_pool.pop().unwrap_or_default();
-                positions.clear();
-                positions.extend_from_slice(&self.pa.positions);
-                let t_meas = self.secs(self.pa.stamp.nanos());
-                (
-                    log_t,
-                    Body::Human {
-                        t_meas,
-                        person,
-                        positions,
-                    },
-                )
-            }
-            Stream::Object { stamped } => {
-                let id = self
-                    .cfg
-                    .object_topics
-                    .iter()
-                    .find(|(_, t)| t.as_str() == m.topic)
-                    .map(|(id, _)| id.clone())
-                    .unwrap_or_default();
-                let (stamp, position) = if stamped {
-                    let p = cdr::PoseStamped::decode(m.data)
-                        .map_err(|e| err(format!("{}: PoseStamped: {e}", what())))?;
-                    (p.stamp, p.position)
-                } else {
-                    self.pa
-                        .decode(m.data)
-                        .map_err(|e| err(format!("{}: PoseArray: {e}", what())))?;
-                    let Some(p) = self.pa.positions.first() else {
-                        return Err(err(format!(
-                            "{}: PoseArray for object `{id}` has no pose",
-                            what()
-                        )));
-                    };
-                    (self.pa.stamp, *p)
-                };
-                if let Some(c) = position.iter().find(|c| !c.is_finite()) {
-                    return Err(err(format!(
-                        "{}: object `{id}` position: value {c} is not finite",
-                        what()
-                    )));
-                }
-                let t_meas = self.secs(stamp.nanos());
-                (
-                    log_t,
-                    Body::Object {
-                        id,
-                        t_meas,
-                        position,
-                    },
-                )
-            }
+            Stream::Robot => self.robot_message(&m, what)?,
+            Stream::Human { person } => self.human_message(&m, person, log_t, what)?,
+            Stream::Object { stamped } => self.object_message(&m, stamped, log_t, what)?,
             Stream::Event | Stream::Ignored => {
                 let mut s = self.str_pool.pop().unwrap_or_default();
-                cdr::decode_string(m.data, &mut s)
-                    .map_err(|e| err(format!("{}: String: {e}", what())))?;
+                cdr::decode_string(m.data, &mut s).map_err(|e| {
+                    LogError::input(&self.file, m.loc, format!("{}: String: {e}", what()))
+                })?;
                 (log_t, Body::Event(s))
             }
         };
         let (t, body) = pending;
+        let err = |p: String| LogError::input(&self.file, m.loc, p);
         if t < self.last_released {
             return Err(err(format!(
                 "{}: out of time order: t = {} s is more than mcap.reorder_window = {} s before t = {} s of a message already read (raise mcap.reorder_window)",
@@ -502,6 +339,201 @@ impl Messages {
             body,
         });
         Ok(())
+    }
+
+    /// A `JointState` on the robot topic: the time stamp and the positions (and velocities, if
+    /// any) in the model's joint order.
+    fn robot_message(
+        &mut self,
+        m: &Message<'_>,
+        what: &dyn Fn() -> String,
+    ) -> Result<(f64, Body), LogError> {
+        let err = |p: String| LogError::input(&self.file, m.loc, p);
+        self.js
+            .decode(m.data)
+            .map_err(|e| err(format!("{}: JointState: {e}", what())))?;
+        let js = &self.js;
+        let k = js.names.len();
+        let n = self.joints.len();
+        if k > 0 && js.position.len() != k {
+            return Err(err(format!(
+                "{}: JointState has {k} names but {} positions",
+                what(),
+                js.position.len()
+            )));
+        }
+        let vlen = js.velocity.len();
+        if vlen != 0 && vlen != js.position.len() {
+            return Err(err(format!(
+                "{}: JointState has {} positions but {vlen} velocities",
+                what(),
+                js.position.len()
+            )));
+        }
+        if k == 0 && js.position.len() != n {
+            return Err(err(format!(
+                "{}: wrong joint count: JointState has {} positions and no names, the robot model has {n} joints",
+                what(),
+                js.position.len()
+            )));
+        }
+        if k > 0 && self.map_names != js.names {
+            let mut map = vec![usize::MAX; n];
+            for (i, name) in js.names.iter().enumerate() {
+                if let Some(j) = self.joints.iter().position(|x| x == name) {
+                    if map[j] != usize::MAX {
+                        return Err(err(format!(
+                            "{}: joint `{name}` appears twice in JointState.name",
+                            what()
+                        )));
+                    }
+                    map[j] = i;
+                }
+            }
+            if let Some(j) = map.iter().position(|&i| i == usize::MAX) {
+                return Err(err(format!(
+                    "{}: wrong joints: robot joint `{}` is missing from JointState.name",
+                    what(),
+                    self.joints[j]
+                )));
+            }
+            self.map = map;
+            self.map_names.clone_from(&js.names);
+        }
+        let mut q = self.f64_pool.pop().unwrap_or_default();
+        let mut dq = (vlen > 0).then(|| self.f64_pool.pop().unwrap_or_default());
+        q.clear();
+        if let Some(d) = dq.as_mut() {
+            d.clear();
+        }
+        for j in 0..n {
+            let i = if k == 0 { j } else { self.map[j] };
+            let (x, v) = (js.position[i], js.velocity.get(i).copied());
+            for (f, val) in [("position", Some(x)), ("velocity", v)] {
+                if let Some(val) = val.filter(|v| !v.is_finite()) {
+                    return Err(err(format!(
+                        "{}: JointState.{f}[{i}] (joint `{}`): value {val} is not finite",
+                        what(),
+                        self.joints[j]
+                    )));
+                }
+            }
+            q.push(x);
+            if let (Some(d), Some(v)) = (dq.as_mut(), v) {
+                d.push(v);
+            }
+        }
+        Ok((self.secs(js.stamp.nanos()), Body::Robot { q, dq }))
+    }
+
+    /// A `PoseArray` on a human topic (the log's only person, or person `person`): the log time
+    /// `log_t` and the keypoints with their stamp.
+    fn human_message(
+        &mut self,
+        m: &Message<'_>,
+        person: Option<u16>,
+        log_t: f64,
+        what: &dyn Fn() -> String,
+    ) -> Result<(f64, Body), LogError> {
+        let err = |p: String| LogError::input(&self.file, m.loc, p);
+        self.pa
+            .decode(m.data)
+            .map_err(|e| err(format!("{}: PoseArray: {e}", what())))?;
+        let n = self.pa.positions.len();
+        // The person's model's keypoint count (an id the header does not declare is
+        // reported by the audit, which knows the people).
+        let expected = match person {
+            None => Some(self.keypoints),
+            Some(i) => {
+                let id = &self.person_ids[usize::from(i)];
+                self.person_keypoints
+                    .iter()
+                    .find(|(p, _)| p == id)
+                    .map(|(_, k)| *k)
+            }
+        };
+        if let Some(k) = expected
+            && n != k
+        {
+            return Err(err(format!(
+                "{}: wrong keypoint count: PoseArray has {n} poses, the human model has {k} keypoints",
+                what(),
+            )));
+        }
+        if let Some((i, c)) = self
+            .pa
+            .positions
+            .iter()
+            .enumerate()
+            .find_map(|(i, p)| p.iter().find(|c| !c.is_finite()).map(|c| (i, *c)))
+        {
+            return Err(err(format!(
+                "{}: PoseArray.poses[{i}].position: value {c} is not finite",
+                what()
+            )));
+        }
+        let mut positions = self.pos_pool.pop().unwrap_or_default();
+        positions.clear();
+        positions.extend_from_slice(&self.pa.positions);
+        let t_meas = self.secs(self.pa.stamp.nanos());
+        Ok((
+            log_t,
+            Body::Human {
+                t_meas,
+                person,
+                positions,
+            },
+        ))
+    }
+
+    /// A `PoseStamped` (`stamped`) or `PoseArray` (its first pose) on an object topic: the log
+    /// time `log_t` and the object's position with its stamp.
+    fn object_message(
+        &mut self,
+        m: &Message<'_>,
+        stamped: bool,
+        log_t: f64,
+        what: &dyn Fn() -> String,
+    ) -> Result<(f64, Body), LogError> {
+        let err = |p: String| LogError::input(&self.file, m.loc, p);
+        let id = self
+            .cfg
+            .object_topics
+            .iter()
+            .find(|(_, t)| t.as_str() == m.topic)
+            .map(|(id, _)| id.clone())
+            .unwrap_or_default();
+        let (stamp, position) = if stamped {
+            let p = cdr::PoseStamped::decode(m.data)
+                .map_err(|e| err(format!("{}: PoseStamped: {e}", what())))?;
+            (p.stamp, p.position)
+        } else {
+            self.pa
+                .decode(m.data)
+                .map_err(|e| err(format!("{}: PoseArray: {e}", what())))?;
+            let Some(p) = self.pa.positions.first() else {
+                return Err(err(format!(
+                    "{}: PoseArray for object `{id}` has no pose",
+                    what()
+                )));
+            };
+            (self.pa.stamp, *p)
+        };
+        if let Some(c) = position.iter().find(|c| !c.is_finite()) {
+            return Err(err(format!(
+                "{}: object `{id}` position: value {c} is not finite",
+                what()
+            )));
+        }
+        let t_meas = self.secs(stamp.nanos());
+        Ok((
+            log_t,
+            Body::Object {
+                id,
+                t_meas,
+                position,
+            },
+        ))
     }
 
     /// The next message in time order if it is ready: at least `reorder_window` older than the
