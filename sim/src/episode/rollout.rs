@@ -2,19 +2,22 @@
 //! camera, the log and the truth audit, and the episode's result.
 
 use super::{
-    Episode, EpisodeConfig, Method, Outputs, Sample, Setup, TruthAudit, ground_truth, log_header,
-    object_ground_truth,
+    Episode, EpisodeConfig, Goal, Method, Outputs, Sample, Setup, TruthAudit, ground_truth,
+    log_header, object_ground_truth,
 };
 use crate::SimError;
-use crate::humans::Camera;
-use crate::objects::ObjectCamera;
-use crate::policy::Observation;
+use crate::humans::{Camera, HumanScript};
+use crate::objects::{ObjectCamera, SimObject};
+use crate::policy::{Observation, TaskPolicy};
 use crate::task::tool_point;
 use pacs_audit::{AuditConfig, Auditor};
+use pacs_baselines::SafetyFilter;
 use pacs_log::LogModels;
+use pacs_models::{HumanModel, RobotModel, TaskConstraints};
 use pacs_motion::chunk::{ActionKind, Chunk};
 use pacs_shield::ChunkMotion;
 use pacs_shield::shield_log::ShieldLog;
+use std::io::Write;
 
 /// The truth audit: one person, or several (one pass each, merged).
 enum TruthAuditor {
@@ -117,10 +120,26 @@ pub fn run_setup(
     cfg: &EpisodeConfig,
     out: Outputs<'_>,
 ) -> Result<Episode, SimError> {
+    let Outputs {
+        log,
+        record_every,
+        truth_audit,
+    } = out;
+    let mut log = match log {
+        Some(w) => Some(start_log(&setup, w)?),
+        None => None,
+    };
+    let mut auditor = if truth_audit {
+        Some(TruthAuditor::new(&setup)?)
+    } else {
+        None
+    };
+    let tc = setup.spec.resolve(setup.human).map_err(invalid)?;
+    let mut filter = start_filter(method, &setup, cfg)?;
     let Setup {
         robot,
         human,
-        spec,
+        spec: _,
         script,
         others,
         objects,
@@ -131,43 +150,169 @@ pub fn run_setup(
         task,
         max_time,
     } = setup;
-    let Outputs {
-        log,
-        record_every,
-        truth_audit,
-    } = out;
-    let mut log = match log {
-        Some(w) => {
-            let h = log_header(
-                label,
-                robot,
-                human,
-                spec,
-                script,
-                objects,
-                others.len(),
-                policy.name(),
-            );
-            let mut l = ShieldLog::new(w, &h, 0.0, start).map_err(invalid)?;
-            l.event(0.0, "episode_start").map_err(invalid)?;
-            Some(l)
+    let mut cameras = Cameras::new(cfg, others.len(), objects.len());
+    let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);
+    let n = robot.dof();
+    let steps = (max_time / cfg.dt).round() as usize;
+    let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
+    let chunk_every = policy.execute() * action_every;
+    // Steps since the last chunk (the first chunk is due at once).
+    let mut since_chunk = chunk_every;
+    let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
+    // The last command's time (s): the last robot sample of the log, where its closing events go
+    // (the log's `end` event must not lie after its last sample).
+    let mut last_cmd_t = 0.0f64;
+    let mut waypoints: Vec<Vec<f64>> = Vec::new();
+    let mut tally = Tally::new(tool_point(robot, &q));
+    tracking.apply(0.0, &mut q, &mut dq);
+    // The actual joints over the last policy step Δt (one entry per safety step), so that a
+    // policy can observe q now and one Δt before (the paper's policies see two timesteps); at
+    // rest before the start.
+    let mut past = vec![q.clone(); action_every];
+    let mut before = q.clone();
+    if let Some(a) = auditor.as_mut() {
+        let truths = others.iter().map(|o| o.keypoints(0.0));
+        a.push_truth(0.0, &script.keypoints(0.0), truths, objects, &q, &dq)?;
+    }
+    for k in 0..steps {
+        tally.steps_run += 1;
+        let t = k as f64 * cfg.dt;
+        before.copy_from_slice(&past[k % action_every]);
+        past[k % action_every].copy_from_slice(&q);
+        let obs = Observation {
+            q: &q,
+            q_before: &before,
+            stage: tally.next_goal,
+        };
+        if method == Method::Direct {
+            let clock = (k, chunk_every, action_every);
+            send_direct_target(filter.as_mut(), policy, &obs, &mut waypoints, clock, t);
+        } else if since_chunk >= chunk_every
+            || (cfg.chunk_motion == ChunkMotion::Continuous
+                && since_chunk >= action_every
+                && filter
+                    .remaining()
+                    .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
+        {
+            since_chunk = 0;
+            let c = policy.act(&obs);
+            // An unplannable chunk is ignored by the filter (counted).
+            if filter.set_chunk(t, &c).is_err() {
+                tally.chunks_rejected += 1;
+            }
         }
-        None => None,
-    };
-    let mut auditor = if truth_audit {
+        since_chunk += 1;
+        let m = cameras.person.measure(human, script, t);
+        cameras.measure_others(human, others, objects, t, filter.as_mut(), log.as_mut())?;
+        let cmd = filter.step(t, m.as_ref())?;
+        if let Some(l) = log.as_mut() {
+            l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
+        }
+        last_cmd_t = cmd.t;
+        q.copy_from_slice(cmd.q());
+        dq.copy_from_slice(cmd.dq());
+        tracking.apply(cmd.t, &mut q, &mut dq);
+        let truth = script.keypoints(cmd.t);
+        let truths: Vec<Vec<[f64; 3]>> = others.iter().map(|o| o.keypoints(cmd.t)).collect();
+        if let Some(a) = auditor.as_mut() {
+            a.push_truth(cmd.t, &truth, truths.iter(), objects, &q, &dq)?;
+        }
+        let people = (human, &tc, truth.as_slice(), truths.as_slice());
+        let (separation, violation, energy) =
+            step_ground_truth(robot, people, objects, cmd.t, &q, &dq);
+        let step = Step {
+            t: cmd.t,
+            q: &q,
+            dq: &dq,
+            separation,
+            violation,
+            energy,
+            verified: cmd.diag.verified,
+        };
+        tally.score(robot, goals, &step, policy.deviation(&q));
+        if record_every > 0 && k % record_every == 0 {
+            tally.record(k, record_every as f64 * cfg.dt, &step);
+        }
+        if tally.success_at.is_some_and(|ts| cmd.t > ts + 0.2) {
+            break;
+        }
+    }
+    let success = tally.success_at.is_some();
+    if let Some(mut l) = log {
+        l.event(last_cmd_t, if success { "success" } else { "failure" })
+            .map_err(invalid)?;
+        l.finish().map_err(invalid)?;
+    }
+    let truth_audit = auditor.map(|a| a.verdict(success));
+    Ok(tally.episode(
+        method,
+        (label, script.name(), task),
+        &*policy,
+        truth_audit,
+        max_time,
+    ))
+}
+
+/// The episode's log on `w`: the header, then the `episode_start` event.
+fn start_log<'w>(
+    setup: &Setup<'_>,
+    w: &'w mut dyn Write,
+) -> Result<ShieldLog<&'w mut dyn Write>, SimError> {
+    let h = log_header(
+        setup.label,
+        setup.robot,
+        setup.human,
+        setup.spec,
+        setup.script,
+        setup.objects,
+        setup.others.len(),
+        setup.policy.name(),
+    );
+    let mut l = ShieldLog::new(w, &h, 0.0, setup.start).map_err(invalid)?;
+    l.event(0.0, "episode_start").map_err(invalid)?;
+    Ok(l)
+}
+
+/// The safety filter of `method` for the setup's robot, people and objects, started at rest at
+/// `setup.start`.
+fn start_filter(
+    method: Method,
+    setup: &Setup<'_>,
+    cfg: &EpisodeConfig,
+) -> Result<Box<dyn SafetyFilter + Send>, SimError> {
+    let (human, spec) = (setup.human, setup.spec);
+    let mut filter = method
+        .filter_kind()
+        .build_with(setup.robot, human, spec, cfg.chunk_motion)?;
+    for o in setup.objects {
+        filter.add_object(o.model, o.contact)?;
+    }
+    for _ in setup.others {
+        filter.add_human(human.clone(), spec)?;
+    }
+    filter.start(0.0, setup.start)?;
+    Ok(filter)
+}
+
+impl TruthAuditor {
+    /// The truth audit of `setup`: the exact human model (no measurement uncertainty) and the
+    /// objects' exact models; one pass per person where there are several.
+    fn new(setup: &Setup<'_>) -> Result<Self, SimError> {
+        let (robot, human, objects, others) =
+            (setup.robot, setup.human, setup.objects, setup.others);
         let exact = human.with_uncertainty(0.0, 0.0, 0.0).map_err(invalid)?;
         let models = LogModels {
             robot: robot.clone(),
             people: vec![(pacs_log::V1_PERSON.to_string(), exact.clone())],
             human: exact,
-            constraints: spec.clone(),
+            constraints: setup.spec.clone(),
             environment: vec![],
             objects: objects
                 .iter()
                 .map(|o| Ok((o.id.clone(), o.exact_model().map_err(invalid)?, o.contact)))
                 .collect::<Result<_, SimError>>()?,
         };
-        Some(if others.is_empty() {
+        Ok(if others.is_empty() {
             TruthAuditor::One(Box::new(
                 Auditor::new(models, AuditConfig::default()).map_err(invalid)?,
             ))
@@ -182,119 +327,75 @@ pub fn run_setup(
                 models.people.iter().map(|(id, _)| id.clone()).collect(),
             )
         })
-    } else {
-        None
-    };
-    let tc = spec.resolve(human).map_err(invalid)?;
-    let mut filter = method
-        .filter_kind()
-        .build_with(robot, human, spec, cfg.chunk_motion)?;
-    for o in objects {
-        filter.add_object(o.model, o.contact)?;
     }
-    for _ in others {
-        filter.add_human(human.clone(), spec)?;
-    }
-    filter.start(0.0, start)?;
-    let mut camera = Camera::new(cfg.camera_period, cfg.seed);
-    let mut other_cameras: Vec<Camera> = (0..others.len())
-        .map(|i| Camera::new(cfg.camera_period, cfg.seed ^ (0xCA3E + i as u64)))
-        .collect();
-    let mut object_cameras: Vec<ObjectCamera> = (0..objects.len())
-        .map(|i| ObjectCamera::new(cfg.camera_period, cfg.seed ^ (0x0B1E + i as u64)))
-        .collect();
-    let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);
-    let n = robot.dof();
-    let steps = (max_time / cfg.dt).round() as usize;
-    let action_every = (cfg.policy_dt / cfg.dt).round().max(1.0) as usize;
-    let chunk_every = policy.execute() * action_every;
-    // Steps since the last chunk (the first chunk is due at once).
-    let mut since_chunk = chunk_every;
-    let mut chunks_rejected = 0usize;
-    let (mut q, mut dq) = (start.to_vec(), vec![0.0; n]);
-    let (mut violations, mut verified, mut min_sep, mut max_dev) =
-        (0usize, 0usize, f64::INFINITY, 0.0f64);
-    let mut next_goal = 0usize;
-    let mut success_at = None;
-    let mut samples = Vec::new();
-    let mut steps_run = 0usize;
-    // The last command's time (s): the last robot sample of the log, where its closing events go
-    // (the log's `end` event must not lie after its last sample).
-    let mut last_cmd_t = 0.0f64;
-    let mut waypoints: Vec<Vec<f64>> = Vec::new();
-    let mut tool = tool_point(robot, &q);
-    let mut last_rec_tool = tool;
-    let mut prev_tool = tool;
-    let mut path_len = 0.0;
-    tracking.apply(0.0, &mut q, &mut dq);
-    // The actual joints over the last policy step Δt (one entry per safety step), so that a
-    // policy can observe q now and one Δt before (the paper's policies see two timesteps); at
-    // rest before the start.
-    let mut past = vec![q.clone(); action_every];
-    let mut before = q.clone();
-    if let Some(a) = auditor.as_mut() {
-        a.push_human(0, 0.0, &script.keypoints(0.0))
-            .map_err(invalid)?;
-        for (i, o) in others.iter().enumerate() {
-            a.push_human(1 + i, 0.0, &o.keypoints(0.0))
-                .map_err(invalid)?;
+
+    /// The true state at `t` (s): the first person's keypoints `truth`, the other people's
+    /// `others` in order, every object's true motion, and the robot's actual `q`, `dq`.
+    fn push_truth<K: AsRef<[[f64; 3]]>>(
+        &mut self,
+        t: f64,
+        truth: &[[f64; 3]],
+        others: impl Iterator<Item = K>,
+        objects: &[SimObject],
+        q: &[f64],
+        dq: &[f64],
+    ) -> Result<(), SimError> {
+        self.push_human(0, t, truth).map_err(invalid)?;
+        for (i, tr) in others.enumerate() {
+            self.push_human(1 + i, t, tr.as_ref()).map_err(invalid)?;
         }
         for o in objects {
-            let (p, v) = o.script.state(0.0);
-            a.push_object(0.0, 0.0, &o.id, p, Some(v))
-                .map_err(invalid)?;
+            let (p, v) = o.script.state(t);
+            self.push_object(t, t, &o.id, p, Some(v)).map_err(invalid)?;
         }
-        a.push_robot(0.0, &q, Some(&dq)).map_err(invalid)?;
+        self.push_robot(t, q, Some(dq)).map_err(invalid)
     }
-    for k in 0..steps {
-        steps_run += 1;
-        let t = k as f64 * cfg.dt;
-        before.copy_from_slice(&past[k % action_every]);
-        past[k % action_every].copy_from_slice(&q);
-        let obs = Observation {
-            q: &q,
-            q_before: &before,
-            stage: next_goal,
-        };
-        if method == Method::Direct {
-            if k % chunk_every == 0 {
-                let c = policy.act(&obs);
-                waypoints.clear();
-                let mut w = q.clone();
-                for a in c.actions.iter().take(c.execute) {
-                    w.iter_mut().zip(a).for_each(|(x, d)| *x += d);
-                    waypoints.push(w.clone());
-                }
-            }
-            if k % action_every == 0 {
-                let i = (k % chunk_every) / action_every;
-                if let Some(target) = waypoints.get(i) {
-                    let c = Chunk {
-                        kind: ActionKind::Absolute,
-                        actions: vec![target.clone()],
-                        execute: 1,
-                        gripper: None,
-                    };
-                    let _ = filter.set_chunk(t, &c);
-                }
-            }
-        } else if since_chunk >= chunk_every
-            || (cfg.chunk_motion == ChunkMotion::Continuous
-                && since_chunk >= action_every
-                && filter
-                    .remaining()
-                    .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
-        {
-            since_chunk = 0;
-            let c = policy.act(&obs);
-            // An unplannable chunk is ignored by the filter (counted).
-            if filter.set_chunk(t, &c).is_err() {
-                chunks_rejected += 1;
-            }
+
+    /// The audit's verdict, once the episode's `success` or failure event is in.
+    fn verdict(mut self, success: bool) -> TruthAudit {
+        self.push_event(if success { "success" } else { "failure" });
+        let r = self.finish("ground-truth");
+        let samples = r.metrics.samples.max(1) as f64;
+        TruthAudit {
+            verdict: r.verdict,
+            violation_fraction: r.metrics.violation_fraction,
+            certain_fraction: r.metrics.certain_violating_samples as f64 / samples,
         }
-        since_chunk += 1;
-        let m = camera.measure(human, script, t);
-        for (i, (o, cam)) in others.iter().zip(&mut other_cameras).enumerate() {
+    }
+}
+
+/// The cameras of an episode: the first person's, the other people's and the objects'.
+struct Cameras {
+    person: Camera,
+    others: Vec<Camera>,
+    objects: Vec<ObjectCamera>,
+}
+
+impl Cameras {
+    fn new(cfg: &EpisodeConfig, others: usize, objects: usize) -> Self {
+        Self {
+            person: Camera::new(cfg.camera_period, cfg.seed),
+            others: (0..others)
+                .map(|i| Camera::new(cfg.camera_period, cfg.seed ^ (0xCA3E + i as u64)))
+                .collect(),
+            objects: (0..objects)
+                .map(|i| ObjectCamera::new(cfg.camera_period, cfg.seed ^ (0x0B1E + i as u64)))
+                .collect(),
+        }
+    }
+
+    /// The other people's and the objects' measurements due at `t` (s), given to the filter and
+    /// logged (the first person's goes with the filter's step).
+    fn measure_others<W: Write>(
+        &mut self,
+        human: &HumanModel,
+        others: &[Box<dyn HumanScript>],
+        objects: &[SimObject],
+        t: f64,
+        filter: &mut dyn SafetyFilter,
+        mut log: Option<&mut ShieldLog<W>>,
+    ) -> Result<(), SimError> {
+        for (i, (o, cam)) in others.iter().zip(&mut self.others).enumerate() {
             if let Some(om) = cam.measure(human, o.as_ref(), t) {
                 filter.measure_human(1 + i, &om)?;
                 if let Some(l) = log.as_mut() {
@@ -302,7 +403,7 @@ pub fn run_setup(
                 }
             }
         }
-        for (i, (o, cam)) in objects.iter().zip(&mut object_cameras).enumerate() {
+        for (i, (o, cam)) in objects.iter().zip(&mut self.objects).enumerate() {
             if let Some(om) = cam.measure(o, t) {
                 filter.measure_object(i, &om)?;
                 if let Some(l) = log.as_mut() {
@@ -310,127 +411,214 @@ pub fn run_setup(
                 }
             }
         }
-        let cmd = filter.step(t, m.as_ref())?;
-        if let Some(l) = log.as_mut() {
-            l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
+        Ok(())
+    }
+}
+
+/// [`Method::Direct`] at safety step `k` of `clock` = (k, steps per chunk, steps per action):
+/// a chunk from the policy every chunk, its executed actions integrated into `waypoints` from
+/// the current joints, and the next waypoint sent to the filter as a target every action.
+fn send_direct_target(
+    filter: &mut dyn SafetyFilter,
+    policy: &mut dyn TaskPolicy,
+    obs: &Observation,
+    waypoints: &mut Vec<Vec<f64>>,
+    (k, chunk_every, action_every): (usize, usize, usize),
+    t: f64,
+) {
+    if k % chunk_every == 0 {
+        let c = policy.act(obs);
+        waypoints.clear();
+        let mut w = obs.q.to_vec();
+        for a in c.actions.iter().take(c.execute) {
+            w.iter_mut().zip(a).for_each(|(x, d)| *x += d);
+            waypoints.push(w.clone());
         }
-        last_cmd_t = cmd.t;
-        q.copy_from_slice(cmd.q());
-        dq.copy_from_slice(cmd.dq());
-        tracking.apply(cmd.t, &mut q, &mut dq);
-        let truth = script.keypoints(cmd.t);
-        let truths: Vec<Vec<[f64; 3]>> = others.iter().map(|o| o.keypoints(cmd.t)).collect();
-        if let Some(a) = auditor.as_mut() {
-            a.push_human(0, cmd.t, &truth).map_err(invalid)?;
-            for (i, tr) in truths.iter().enumerate() {
-                a.push_human(1 + i, cmd.t, tr).map_err(invalid)?;
-            }
-            for o in objects {
-                let (p, v) = o.script.state(cmd.t);
-                a.push_object(cmd.t, cmd.t, &o.id, p, Some(v))
-                    .map_err(invalid)?;
-            }
-            a.push_robot(cmd.t, &q, Some(&dq)).map_err(invalid)?;
+    }
+    if k % action_every == 0 {
+        let i = (k % chunk_every) / action_every;
+        if let Some(target) = waypoints.get(i) {
+            let c = Chunk {
+                kind: ActionKind::Absolute,
+                actions: vec![target.clone()],
+                execute: 1,
+                gripper: None,
+            };
+            let _ = filter.set_chunk(t, &c);
         }
-        let (mut sep, mut viol, energy) = ground_truth(robot, human, &tc, &q, &dq, &truth);
-        for tr in &truths {
-            let (s, v, _) = ground_truth(robot, human, &tc, &q, &dq, tr);
+    }
+}
+
+/// The ground truth of the robot's actual state `q`, `dq` at `t` (s): the least separation (m)
+/// from every person (`people` = the human model, the task's constraints, the first person's
+/// and the other people's true keypoints) and every object, whether any constraint is violated,
+/// and the robot's kinetic energy (J).
+fn step_ground_truth(
+    robot: &RobotModel,
+    (human, tc, truth, truths): (&HumanModel, &TaskConstraints, &[[f64; 3]], &[Vec<[f64; 3]>]),
+    objects: &[SimObject],
+    t: f64,
+    q: &[f64],
+    dq: &[f64],
+) -> (f64, bool, f64) {
+    let (mut sep, mut viol, energy) = ground_truth(robot, human, tc, q, dq, truth);
+    for tr in truths {
+        let (s, v, _) = ground_truth(robot, human, tc, q, dq, tr);
+        sep = sep.min(s);
+        viol |= v;
+    }
+    if !objects.is_empty() {
+        let caps: Vec<_> = robot
+            .capsules_world(q)
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect();
+        for o in objects {
+            let (s, v) = object_ground_truth(o, t, &caps, dq, energy);
             sep = sep.min(s);
             viol |= v;
         }
-        if !objects.is_empty() {
-            let caps: Vec<_> = robot
-                .capsules_world(&q)
-                .into_iter()
-                .map(|(_, c)| c)
-                .collect();
-            for o in objects {
-                let (s, v) = object_ground_truth(o, cmd.t, &caps, &dq, energy);
-                sep = sep.min(s);
-                viol |= v;
-            }
-        }
-        tool = tool_point(robot, &q);
-        min_sep = min_sep.min(sep);
-        max_dev = max_dev.max(policy.deviation(&q));
-        violations += viol as usize;
-        verified += cmd.diag.verified as usize;
-        while next_goal < goals.len() && goals[next_goal].reached(&q, &tool) {
-            next_goal += 1;
-        }
-        if success_at.is_none() && next_goal == goals.len() {
-            success_at = Some(cmd.t);
-        }
-        let dist =
-            |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
-        if success_at.is_none() {
-            path_len += dist(&tool, &prev_tool);
-        }
-        prev_tool = tool;
-        if record_every > 0 && k % record_every == 0 {
-            let speed = if k == 0 {
-                0.0
-            } else {
-                dist(&tool, &last_rec_tool) / (record_every as f64 * cfg.dt)
-            };
-            last_rec_tool = tool;
-            samples.push(Sample {
-                t: cmd.t,
-                q: q.clone(),
-                dq: dq.clone(),
-                separation: sep,
-                violation: viol,
-                energy,
-                verified: cmd.diag.verified,
-                tool,
-                tool_speed: speed,
-            });
-        }
-        if success_at.is_some_and(|ts| cmd.t > ts + 0.2) {
-            break;
+    }
+    (sep, viol, energy)
+}
+
+/// One safety step as scored: the command's time (s), the actual joints, the ground truth
+/// (separation in m, violation, kinetic energy in J) and whether the filter verified the step.
+struct Step<'a> {
+    t: f64,
+    q: &'a [f64],
+    dq: &'a [f64],
+    separation: f64,
+    violation: bool,
+    energy: f64,
+    verified: bool,
+}
+
+/// What an episode scores as it runs: safety steps, rejected chunks, ground-truth violations
+/// and separation, verified steps, the policy's deviation, the goals reached, the tool's path
+/// and the samples kept.
+struct Tally {
+    steps_run: usize,
+    chunks_rejected: usize,
+    violations: usize,
+    verified: usize,
+    min_sep: f64,
+    max_dev: f64,
+    next_goal: usize,
+    success_at: Option<f64>,
+    samples: Vec<Sample>,
+    /// The tool point now, at the last sample kept, and one step before (m).
+    tool: [f64; 3],
+    last_rec_tool: [f64; 3],
+    prev_tool: [f64; 3],
+    /// The tool's path until success (m).
+    path_len: f64,
+}
+
+/// Distance between two points (m).
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+}
+
+impl Tally {
+    /// Nothing scored yet, the tool at `tool` (m).
+    fn new(tool: [f64; 3]) -> Self {
+        Self {
+            steps_run: 0,
+            chunks_rejected: 0,
+            violations: 0,
+            verified: 0,
+            min_sep: f64::INFINITY,
+            max_dev: 0.0,
+            next_goal: 0,
+            success_at: None,
+            samples: Vec::new(),
+            tool,
+            last_rec_tool: tool,
+            prev_tool: tool,
+            path_len: 0.0,
         }
     }
-    let steps_run = steps_run.max(1) as f64;
-    let success = success_at.is_some();
-    if let Some(mut l) = log {
-        l.event(last_cmd_t, if success { "success" } else { "failure" })
-            .map_err(invalid)?;
-        l.finish().map_err(invalid)?;
-    }
-    let truth_audit = auditor.map(|mut a| {
-        a.push_event(if success { "success" } else { "failure" });
-        let r = a.finish("ground-truth");
-        let samples = r.metrics.samples.max(1) as f64;
-        TruthAudit {
-            verdict: r.verdict,
-            violation_fraction: r.metrics.violation_fraction,
-            certain_fraction: r.metrics.certain_violating_samples as f64 / samples,
+
+    /// Score `step`: its ground truth, the policy's `deviation` (rad) from its demonstrations,
+    /// whether the filter verified it, the goals it reaches (success once all are) and the
+    /// tool's path.
+    fn score(&mut self, robot: &RobotModel, goals: &[Goal], step: &Step<'_>, deviation: f64) {
+        self.tool = tool_point(robot, step.q);
+        self.min_sep = self.min_sep.min(step.separation);
+        self.max_dev = self.max_dev.max(deviation);
+        self.violations += step.violation as usize;
+        self.verified += step.verified as usize;
+        while self.next_goal < goals.len() && goals[self.next_goal].reached(step.q, &self.tool) {
+            self.next_goal += 1;
         }
-    });
-    let duration = success_at.unwrap_or(max_time);
-    Ok(Episode {
-        method,
-        variant: label.into(),
-        human: script.name().into(),
-        task: task.into(),
-        success,
-        safe_success: pacs_audit::verdict::safe_success(
+        if self.success_at.is_none() && self.next_goal == goals.len() {
+            self.success_at = Some(step.t);
+        }
+        if self.success_at.is_none() {
+            self.path_len += dist(&self.tool, &self.prev_tool);
+        }
+        self.prev_tool = self.tool;
+    }
+
+    /// Keep `step` (safety step `k`) as a sample, the tool's speed over `period` (s) since the
+    /// last one kept.
+    fn record(&mut self, k: usize, period: f64, step: &Step<'_>) {
+        let speed = if k == 0 {
+            0.0
+        } else {
+            dist(&self.tool, &self.last_rec_tool) / period
+        };
+        self.last_rec_tool = self.tool;
+        self.samples.push(Sample {
+            t: step.t,
+            q: step.q.to_vec(),
+            dq: step.dq.to_vec(),
+            separation: step.separation,
+            violation: step.violation,
+            energy: step.energy,
+            verified: step.verified,
+            tool: self.tool,
+            tool_speed: speed,
+        });
+    }
+
+    /// The episode's result: `names` = (method label, human script, task).
+    fn episode(
+        self,
+        method: Method,
+        (label, human, task): (&str, &str, &str),
+        policy: &dyn TaskPolicy,
+        truth_audit: Option<TruthAudit>,
+        max_time: f64,
+    ) -> Episode {
+        let steps_run = self.steps_run.max(1) as f64;
+        let success = self.success_at.is_some();
+        let duration = self.success_at.unwrap_or(max_time);
+        Episode {
+            method,
+            variant: label.into(),
+            human: human.into(),
+            task: task.into(),
             success,
-            violations == 0
-                && truth_audit
-                    .as_ref()
-                    .is_none_or(|a| a.certain_fraction == 0.0),
-        ),
-        violation_fraction: violations as f64 / steps_run,
-        truth_audit,
-        goals_reached: next_goal,
-        ood_chunks: policy.ood_chunks(),
-        chunks_rejected,
-        duration,
-        min_separation: min_sep,
-        max_deviation: max_dev,
-        verified_fraction: verified as f64 / steps_run,
-        mean_tool_speed: path_len / duration.max(1e-9),
-        samples,
-    })
+            safe_success: pacs_audit::verdict::safe_success(
+                success,
+                self.violations == 0
+                    && truth_audit
+                        .as_ref()
+                        .is_none_or(|a| a.certain_fraction == 0.0),
+            ),
+            violation_fraction: self.violations as f64 / steps_run,
+            truth_audit,
+            goals_reached: self.next_goal,
+            ood_chunks: policy.ood_chunks(),
+            chunks_rejected: self.chunks_rejected,
+            duration,
+            min_separation: self.min_sep,
+            max_deviation: self.max_dev,
+            verified_fraction: self.verified as f64 / steps_run,
+            mean_tool_speed: self.path_len / duration.max(1e-9),
+            samples: self.samples,
+        }
+    }
 }
