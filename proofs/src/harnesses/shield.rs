@@ -66,39 +66,7 @@ fn decide_induction_branch<S: Source>(s: &mut S, branch: Option<bool>) {
         slot = stored.slot;
     }
     for step in 0..STEPS {
-        let candidate = if s.bool() {
-            // A fresh chunk (other slot, from its start on the intended timing) or the current path.
-            let (cslot, start) = if s.bool() {
-                (1 - stored.slot, PathState::intended(0.0))
-            } else {
-                (slot, path)
-            };
-            let go = if start.is_intended() {
-                SpeedProfile::plan(start, 1.0, 0.0, 0.0)
-            } else {
-                SpeedProfile::plan(start, 1.0, acc, jerk)
-            };
-            // (Under Kani `plan` returns any profile whatever its start: no need to evaluate.)
-            let brake_start = if cfg!(kani) { start } else { go.eval(alpha) };
-            let brake = SpeedProfile::plan(brake_start, 0.0, acc, jerk);
-            if !cfg!(kani) {
-                // The range the Kani stub of `plan` draws from covers the planner's profiles.
-                for p in [&go, &brake] {
-                    assert!(
-                        crate::profile_in_stub_range(p),
-                        "{p:?} outside the stub's range"
-                    );
-                }
-            }
-            Some(Candidate {
-                slot: cslot,
-                go,
-                brake,
-                verified: s.bool(),
-            })
-        } else {
-            None
-        };
+        let candidate = any_candidate(s, (stored.slot, slot), path, (acc, jerk), alpha);
         // Kani checks the selection (`choose`: which profile, which time, which failsafe) for
         // any profiles and times; the twin also checks `decide`, its evaluation.
         let ch = choose(stored, candidate, FilterMode::Pacs, t, alpha);
@@ -186,6 +154,51 @@ fn decide_induction_branch<S: Source>(s: &mut S, branch: Option<bool>) {
     );
     assert_eq!(d.path.s, stored.profile.settle_s());
 }
+/// A step's candidate, if any: a fresh chunk (the slot other than the stored failsafe's
+/// (`slots.0`), from its start on the intended timing) or the current path (slot `slots.1`, at
+/// `path`), planned with the limits `(acc, jerk)`, its brake from the go profile's state at
+/// `alpha`; verified or not.
+fn any_candidate<S: Source>(
+    s: &mut S,
+    (stored_slot, slot): (usize, usize),
+    path: PathState,
+    (acc, jerk): (f64, f64),
+    alpha: f64,
+) -> Option<Candidate> {
+    if !s.bool() {
+        return None;
+    }
+    // A fresh chunk (other slot, from its start on the intended timing) or the current path.
+    let (cslot, start) = if s.bool() {
+        (1 - stored_slot, PathState::intended(0.0))
+    } else {
+        (slot, path)
+    };
+    let go = if start.is_intended() {
+        SpeedProfile::plan(start, 1.0, 0.0, 0.0)
+    } else {
+        SpeedProfile::plan(start, 1.0, acc, jerk)
+    };
+    // (Under Kani `plan` returns any profile whatever its start: no need to evaluate.)
+    let brake_start = if cfg!(kani) { start } else { go.eval(alpha) };
+    let brake = SpeedProfile::plan(brake_start, 0.0, acc, jerk);
+    if !cfg!(kani) {
+        // The range the Kani stub of `plan` draws from covers the planner's profiles.
+        for p in [&go, &brake] {
+            assert!(
+                crate::profile_in_stub_range(p),
+                "{p:?} outside the stub's range"
+            );
+        }
+    }
+    Some(Candidate {
+        slot: cslot,
+        go,
+        brake,
+        verified: s.bool(),
+    })
+}
+
 // Under Kani every planned profile is *any* profile (`stubs::any_speed_profile`, an
 // over-approximation of `SpeedProfile::plan`: 1 to 4 phases, every field any finite `f64`):
 // `choose` only copies the profiles it is given and the claims compare bit patterns, so they
