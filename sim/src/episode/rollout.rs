@@ -449,13 +449,22 @@ fn send_direct_target(
     }
 }
 
+/// The people as the ground truth sees them: the human model, the task's constraints, the first
+/// person's and the other people's true keypoints (m).
+type PeopleTruth<'a> = (
+    &'a HumanModel,
+    &'a TaskConstraints,
+    &'a [[f64; 3]],
+    &'a [Vec<[f64; 3]>],
+);
+
 /// The ground truth of the robot's actual state `q`, `dq` at `t` (s): the least separation (m)
 /// from every person (`people` = the human model, the task's constraints, the first person's
 /// and the other people's true keypoints) and every object, whether any constraint is violated,
 /// and the robot's kinetic energy (J).
 fn step_ground_truth(
     robot: &RobotModel,
-    (human, tc, truth, truths): (&HumanModel, &TaskConstraints, &[[f64; 3]], &[Vec<[f64; 3]>]),
+    (human, tc, truth, truths): PeopleTruth<'_>,
     objects: &[SimObject],
     t: f64,
     q: &[f64],
