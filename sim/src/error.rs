@@ -9,6 +9,9 @@ pub enum SimError {
     /// The filter refused a model, the start or an input.
     #[error(transparent)]
     Filter(#[from] pacs_shield::shield::ShieldError),
+    /// The measurement inbox refused a frame (or the filter refused a delivered one).
+    #[error(transparent)]
+    Delivery(#[from] pacs_shield::session::InboxError),
     /// A model of the scene is invalid (e.g. constraints that do not resolve for the person).
     #[error(transparent)]
     Model(#[from] pacs_models::ModelError),

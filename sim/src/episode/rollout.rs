@@ -15,7 +15,9 @@ use pacs_baselines::SafetyFilter;
 use pacs_log::LogModels;
 use pacs_models::{HumanModel, RobotModel, TaskConstraints};
 use pacs_motion::chunk::{ActionKind, Chunk};
+use pacs_reach::human::HumanMeasurement;
 use pacs_shield::ChunkMotion;
+use pacs_shield::session::MeasurementInbox;
 use pacs_shield::shield_log::ShieldLog;
 use std::io::Write;
 
@@ -150,7 +152,7 @@ pub fn run_setup(
         task,
         max_time,
     } = setup;
-    let mut cameras = Cameras::new(cfg, others.len(), objects.len());
+    let mut cameras = Cameras::new(cfg, others.len(), objects);
     let tracking = Tracking::new(cfg.tracking_error, robot.dof(), cfg.seed);
     let n = robot.dof();
     let steps = (max_time / cfg.dt).round() as usize;
@@ -202,11 +204,18 @@ pub fn run_setup(
             }
         }
         since_chunk += 1;
-        let m = cameras.person.measure(human, script, t);
-        cameras.measure_others(human, others, objects, t, filter.as_mut(), log.as_mut())?;
-        let cmd = filter.step(t, m.as_ref())?;
+        let m = cameras.measure(
+            human,
+            script,
+            others,
+            objects,
+            t,
+            filter.as_mut(),
+            log.as_mut(),
+        )?;
+        let cmd = filter.step(t, m)?;
         if let Some(l) = log.as_mut() {
-            l.record(t, m.as_ref(), &cmd).map_err(invalid)?;
+            l.record(t, m, &cmd).map_err(invalid)?;
         }
         last_cmd_t = cmd.t;
         q.copy_from_slice(cmd.q());
@@ -364,54 +373,66 @@ impl TruthAuditor {
     }
 }
 
-/// The cameras of an episode: the first person's, the other people's and the objects'.
+/// The cameras of an episode (the first person's, the other people's and the objects') and the
+/// measurement inbox that delivers their frames: the one delivery rule of every runner
+/// ([`MeasurementInbox`]; the frames arrive at their stamps).
 struct Cameras {
     person: Camera,
     others: Vec<Camera>,
     objects: Vec<ObjectCamera>,
+    inbox: MeasurementInbox,
 }
 
 impl Cameras {
-    fn new(cfg: &EpisodeConfig, others: usize, objects: usize) -> Self {
+    fn new(cfg: &EpisodeConfig, others: usize, objects: &[SimObject]) -> Self {
         Self {
             person: Camera::new(cfg.camera_period, cfg.seed),
             others: (0..others)
                 .map(|i| Camera::new(cfg.camera_period, cfg.seed ^ (0xCA3E + i as u64)))
                 .collect(),
-            objects: (0..objects)
+            objects: (0..objects.len())
                 .map(|i| ObjectCamera::new(cfg.camera_period, cfg.seed ^ (0x0B1E + i as u64)))
                 .collect(),
+            inbox: MeasurementInbox::new(
+                1 + others,
+                objects.iter().map(|o| o.id.clone()).collect(),
+            ),
         }
     }
 
-    /// The other people's and the objects' measurements due at `t` (s), given to the filter and
-    /// logged (the first person's goes with the filter's step).
-    fn measure_others<W: Write>(
+    /// Every camera's frame due at `t` (s), delivered through the inbox: the other people's and
+    /// the objects' to the filter, each to the log; returns the first person's, for the
+    /// filter's step (which logs it with the step's sample).
+    #[allow(clippy::too_many_arguments)]
+    fn measure<W: Write>(
         &mut self,
         human: &HumanModel,
+        script: &dyn HumanScript,
         others: &[Box<dyn HumanScript>],
         objects: &[SimObject],
         t: f64,
         filter: &mut dyn SafetyFilter,
-        mut log: Option<&mut ShieldLog<W>>,
-    ) -> Result<(), SimError> {
+        log: Option<&mut ShieldLog<W>>,
+    ) -> Result<Option<&HumanMeasurement>, SimError> {
         for (i, (o, cam)) in others.iter().zip(&mut self.others).enumerate() {
             if let Some(om) = cam.measure(human, o.as_ref(), t) {
-                filter.measure_human(1 + i, &om)?;
-                if let Some(l) = log.as_mut() {
-                    l.person(t, 1 + i, &om).map_err(invalid)?;
-                }
+                self.inbox.push_person(t, 1 + i, om)?;
             }
         }
         for (i, (o, cam)) in objects.iter().zip(&mut self.objects).enumerate() {
             if let Some(om) = cam.measure(o, t) {
-                filter.measure_object(i, &om)?;
-                if let Some(l) = log.as_mut() {
-                    l.object(t, &o.id, &om).map_err(invalid)?;
-                }
+                self.inbox.push_object(t, i, om)?;
             }
         }
-        Ok(())
+        // The first person's last: its record goes beside the step's sample, as the step logs it.
+        if let Some(m) = self.person.measure(human, script, t) {
+            self.inbox.push_person(t, 0, m)?;
+        }
+        let due = self.inbox.deliver(t, filter, log)?;
+        if let Some(e) = due.log_error {
+            return Err(SimError::Log(e));
+        }
+        Ok(due.first)
     }
 }
 
