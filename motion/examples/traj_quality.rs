@@ -1,7 +1,7 @@
 //! Quick quality/timing probe of the planner on the anchor set (development aid).
 use pacs_models::RobotModel;
 use pacs_motion::anchors::{anchor_set, lower_bound};
-use pacs_motion::{JointState, Limits, OutOfLimits, PlanMethod, Planner, PlannerConfig};
+use pacs_motion::{JointState, Limits, OutOfLimits, PlanMethod, Planner, PlannerConfig, Waypoints};
 use std::time::Instant;
 
 fn main() {
@@ -37,15 +37,34 @@ fn main() {
             )
         })
         .collect();
+    let (ls, fb) = quality(&mut pl, &set, &l);
+    moving_starts(&mut pl, &set, l, iters);
+    let moving_us = replan_same_path(&mut pl, &set);
+    planning_time(moving_us);
+    replan_vs_segments(&mut pl, &set, l);
+    timing(&mut pl, &set, (fb, iters, ls));
+}
+
+/// The problems: a start state and the chunk's waypoints.
+type Problems = [(JointState, Waypoints)];
+
+/// Fallbacks to the per-segment planner, and the sum of the log duration ratios over the lower
+/// bound.
+fn quality(pl: &mut Planner, set: &Problems, l: &Limits) -> (f64, usize) {
     let mut ls = 0.0;
     let mut fb = 0;
-    for (s, wp) in &set {
+    for (s, wp) in set {
         let t = pl.plan(s, wp).unwrap();
         if pl.last_method() != PlanMethod::Spline {
             fb += 1;
         }
         ls += (t.duration() / lower_bound(wp, &l.v[..7])).ln();
     }
+    (ls, fb)
+}
+
+/// Chunks planned from a moving state against the same waypoints planned from rest.
+fn moving_starts(pl: &mut Planner, set: &Problems, l: Limits, iters: usize) {
     // Replanning from a moving state vs planning the same waypoints from
     // rest at the same configuration; the third case hands over at the last waypoint of a
     // chunk planned to end moving (continuous chunks).
@@ -63,7 +82,7 @@ fn main() {
             let pl_ = if at_end.is_none() {
                 &mut moving
             } else {
-                &mut pl
+                &mut *pl
             };
             let t = pl_.plan(&w[0].0, &w[0].1).unwrap();
             let ts = at_end.unwrap_or(t.duration() - 1e-3).min(t.duration());
@@ -88,6 +107,11 @@ fn main() {
             worst
         );
     }
+}
+
+/// The same path replanned from a state 33 ms and 100 ms into it; returns the planning times
+/// from the moving states (µs).
+fn replan_same_path(pl: &mut Planner, set: &Problems) -> Vec<f64> {
     // The receding-horizon case: the next chunk continues the path the robot is on. Replan the
     // waypoints of the same chunk not yet passed from the state 33 ms / 100 ms into it, against
     // planning them from rest at that configuration, and against the original plan's remaining
@@ -96,7 +120,7 @@ fn main() {
     for dt in [0.033f64, 0.1] {
         let (mut lr, mut lo, mut worst, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
         let mut blends = 0usize;
-        for (s0, wp) in &set {
+        for (s0, wp) in set {
             let t = pl.plan(s0, wp).unwrap();
             if dt >= t.duration() {
                 continue;
@@ -133,6 +157,11 @@ fn main() {
             (lo / n.max(1) as f64).exp()
         );
     }
+    moving_us
+}
+
+/// The planning time from the moving states (µs): median, p99 and max.
+fn planning_time(mut moving_us: Vec<f64>) {
     moving_us.sort_by(f64::total_cmp);
     println!(
         "same path, planning time from the moving states: median {:.1} us, p99 {:.1} us, max {:.1} us",
@@ -140,6 +169,10 @@ fn main() {
         moving_us[moving_us.len() * 99 / 100],
         moving_us[moving_us.len() - 1]
     );
+}
+
+/// The spline planner against the per-segment planner on replans from moving states.
+fn replan_vs_segments(pl: &mut Planner, set: &Problems, l: Limits) {
     for dt in [0.033f64, 0.1] {
         let (mut fbm, mut lsm, mut lss) = (0, 0.0, 0.0);
         let mut seg = Planner::new(
@@ -166,9 +199,14 @@ fn main() {
             ((lsm - lss) / 199.0).exp()
         );
     }
+}
+
+/// The planning time from rest over five passes of the set, with the quality figures
+/// (`fb`, `iters`, `ls`).
+fn timing(pl: &mut Planner, set: &Problems, (fb, iters, ls): (usize, usize, f64)) {
     let mut times = Vec::new();
     for _ in 0..5 {
-        for (s, wp) in &set {
+        for (s, wp) in set {
             let t0 = Instant::now();
             let t = pl.plan(s, wp).unwrap();
             times.push(t0.elapsed().as_secs_f64() * 1e6);
