@@ -1,7 +1,9 @@
 //! `pacs.audit`, `pacs.Run`, `pacs.LogWriter`, `pacs.report`: the offline audit of logged runs
 //! against SSM and PFL from Python — the same code as `pacs audit`.
 
-use crate::convert::{Given, finite, from_py, path, points, show, text, to_py, vector};
+use crate::convert::{
+    Given, finite, from_py, optional_vec3, path, points, show, text, to_py, vec3, vector,
+};
 use crate::errors::{Kind, err, input, type_err};
 use crate::models::scene;
 use pacs_audit::{AuditConfig, RunResult};
@@ -467,17 +469,9 @@ impl PyLogWriter {
         }
         let t = finite(t, "t")?;
         let tm = finite(t_meas, "t_meas")?;
-        let p = vector(position, "position", 3)?;
-        let v = match velocity {
-            Some(v) if !v.is_none() => {
-                let v = vector(v, "velocity", 3)?;
-                Some([v[0], v[1], v[2]])
-            }
-            _ => None,
-        };
-        let r = self
-            .writer()?
-            .write_object(t, tm, &id, [p[0], p[1], p[2]], v);
+        let p = vec3(position, "position")?;
+        let v = optional_vec3(velocity, "velocity")?;
+        let r = self.writer()?.write_object(t, tm, &id, p, v);
         r.map_err(|e| self.werr(e))
     }
 

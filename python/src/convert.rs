@@ -104,6 +104,20 @@ pub fn vector(obj: &Bound<'_, PyAny>, name: &str, len: usize) -> PyResult<Vec<f6
     Ok(floats(obj, name, &[Some(len)])?.1)
 }
 
+/// A 3-vector (a position in m, a velocity in m/s, …), shape (3,).
+pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 3]> {
+    let v = vector(obj, name, 3)?;
+    Ok([v[0], v[1], v[2]])
+}
+
+/// An optional 3-vector: `None` where absent or Python `None`.
+pub fn optional_vec3(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<[f64; 3]>> {
+    match obj {
+        Some(v) if !v.is_none() => vec3(v, name).map(Some),
+        _ => Ok(None),
+    }
+}
+
 /// An (n, 3) array of points (m).
 pub fn points(obj: &Bound<'_, PyAny>, name: &str, n: Option<usize>) -> PyResult<Vec<[f64; 3]>> {
     let (_, v) = floats(obj, name, &[n, Some(3)])?;

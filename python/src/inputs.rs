@@ -1,7 +1,7 @@
 //! The shield's inputs as Python hands them over (chunks, measurements of people and objects),
 //! checked and converted, with errors naming the argument.
 
-use crate::convert::{finite, floats, index, points, show, vector};
+use crate::convert::{finite, floats, index, optional_vec3, points, show, vec3};
 use crate::errors::{input, type_err};
 use pacs_models::human::HumanModel;
 use pacs_reach::human::HumanMeasurement;
@@ -92,20 +92,12 @@ pub fn object_measurement(
         )));
     };
     let t = finite(t_meas, "t_meas")?;
-    let p = vector(position, "position", 3)?;
-    let v = match velocity {
-        Some(v) if !v.is_none() => {
-            let v = vector(v, "velocity", 3)?;
-            Some([v[0], v[1], v[2]])
-        }
-        _ => None,
-    };
     Ok((
         k,
         ObjectMeasurement {
             time: t,
-            position: [p[0], p[1], p[2]],
-            velocity: v,
+            position: vec3(position, "position")?,
+            velocity: optional_vec3(velocity, "velocity")?,
         },
     ))
 }

@@ -152,8 +152,16 @@ impl LtiReach {
         }
         let e_row = remainder_rows(&abs_ar, &fact, n, eta, r)?;
         let r_e: Vec<f64> = e_row.iter().map(|&e| mul_up(r, e)).collect();
-        let (phi, gam) = phi_and_gamma(&pw, &fact, n, ri, &e_row, &r_e);
-        let (f, fu) = correction_matrices(&pw, &fact, n, ri, &e_row, &r_e);
+        let series = Series {
+            pw: &pw,
+            fact: &fact,
+            n,
+            ri,
+            e_row: &e_row,
+            r_e: &r_e,
+        };
+        let (phi, gam) = phi_and_gamma(&series);
+        let (f, fu) = correction_matrices(&series);
         let (phi_mid, phi_rad) = phi.mid_rad();
         if phi_mid
             .iter()
@@ -173,7 +181,7 @@ impl LtiReach {
             ut.generators().clone(),
             ut.error_box().clone(),
         )?;
-        let p0 = centred_input_solution(&pw, &fact, n, ri, &r_e, &u0)?;
+        let p0 = centred_input_solution(&series, &u0)?;
         let (v_mid, v_rad) = gamma_times_centre(&gam, &uc, n);
         let ucabs = uc.abs();
         let mut input_box = mat_vec_up(&fu.mag(), &ucabs);
@@ -363,16 +371,29 @@ fn remainder_rows(
     Ok(e_row)
 }
 
-/// `Φ = Σ P_i / i! + [−E, E]` and `Γ = Σ P_i r/(i+1)! + r[−E, E]` from the powers
-/// `pw[i] = (Ar)^i`, the factorials `fact`, `ri = [r, r]` (s) and the remainder rows `E`, `r E`.
-fn phi_and_gamma(
-    pw: &[IntervalMatrix],
-    fact: &[Interval],
+/// The truncated Taylor series of `e^{Ar}` the discretisation sums: the powers `pw[i] = (Ar)^i`
+/// (i = 0..=η), the factorials `fact` (as intervals, up to (η+2)!), the dimension `n`, the step
+/// `ri = [r, r]` (s) and the remainder rows `E` (`e_row`) and `r E` (`r_e`), rounded up.
+#[derive(Clone, Copy)]
+struct Series<'a> {
+    pw: &'a [IntervalMatrix],
+    fact: &'a [Interval],
     n: usize,
     ri: Interval,
-    e_row: &[f64],
-    r_e: &[f64],
-) -> (IntervalMatrix, IntervalMatrix) {
+    e_row: &'a [f64],
+    r_e: &'a [f64],
+}
+
+/// `Φ = Σ P_i / i! + [−E, E]` and `Γ = Σ P_i r/(i+1)! + r[−E, E]` from the series `s`.
+fn phi_and_gamma(s: &Series<'_>) -> (IntervalMatrix, IntervalMatrix) {
+    let Series {
+        pw,
+        fact,
+        n,
+        ri,
+        e_row,
+        r_e,
+    } = *s;
     let eta = pw.len() - 1; // pw holds P_0..=P_η
     let mut phi = IntervalMatrix::zeros(n, n);
     let mut gam = IntervalMatrix::zeros(n, n);
@@ -386,15 +407,16 @@ fn phi_and_gamma(
 }
 
 /// The correction matrices `F = Σ_{i=2}^{η} [κ_i, 0] P_i / i! + [−E, E]` and
-/// `F_u = Σ_{i=1}^{η} [κ_{i+1}, 0] r P_i/(i+1)! + r[−E, E]` (arguments as [`phi_and_gamma`]).
-fn correction_matrices(
-    pw: &[IntervalMatrix],
-    fact: &[Interval],
-    n: usize,
-    ri: Interval,
-    e_row: &[f64],
-    r_e: &[f64],
-) -> (IntervalMatrix, IntervalMatrix) {
+/// `F_u = Σ_{i=1}^{η} [κ_{i+1}, 0] r P_i/(i+1)! + r[−E, E]` (from the series `s`).
+fn correction_matrices(s: &Series<'_>) -> (IntervalMatrix, IntervalMatrix) {
+    let Series {
+        pw,
+        fact,
+        n,
+        ri,
+        e_row,
+        r_e,
+    } = *s;
     let eta = pw.len() - 1; // pw holds P_0..=P_η
     let mut f = IntervalMatrix::zeros(n, n);
     let mut fu = IntervalMatrix::zeros(n, n);
@@ -415,15 +437,16 @@ fn correction_matrices(
 }
 
 /// `P̂₀(r) = ⊕_{i=0}^{η} (r P_i/(i+1)!) Ũ₀ ⊕ box(r E |Ũ₀|)`, the centred input solution, from the
-/// powers `pw[i] = (Ar)^i`, the factorials `fact`, `ri = [r, r]` (s), the rows `r E` and `Ũ₀`.
-fn centred_input_solution(
-    pw: &[IntervalMatrix],
-    fact: &[Interval],
-    n: usize,
-    ri: Interval,
-    r_e: &[f64],
-    u0: &Zonotope,
-) -> Result<Zonotope, ReachError> {
+/// series `s` and `Ũ₀`.
+fn centred_input_solution(s: &Series<'_>, u0: &Zonotope) -> Result<Zonotope, ReachError> {
+    let Series {
+        pw,
+        fact,
+        n,
+        ri,
+        r_e,
+        ..
+    } = *s;
     let mut p0 = Zonotope::point(DVector::zeros(n))?;
     for (i, p) in pw.iter().enumerate() {
         if p.is_zero() {

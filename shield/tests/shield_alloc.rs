@@ -187,3 +187,64 @@ fn inbox_delivery_allocates_nothing() {
     assert_eq!(COUNT.load(Ordering::SeqCst), 0, "delivery allocated");
     assert!(delivered > 600, "{delivered}");
 }
+
+/// A session's step (measurements through its inbox, the grid check, the shield's step) with no
+/// log allocates nothing once the measurements are queued: what a real-time loop runs.
+#[test]
+fn session_step_allocates_nothing() {
+    use pacs_shield::session::Session;
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let cs = ConstraintSpec::builtin("sorting").unwrap();
+    let ball = ObjectModel::new(&default_ball()).unwrap();
+    let sh = Shield::builder(fr3::fr3())
+        .person(human.clone(), &cs)
+        .person(human.clone(), &cs)
+        .object(ball, ObjectContact::NoContact)
+        .build()
+        .unwrap();
+    let mut s: Session<std::io::Sink> = Session::new(sh, vec!["ball".into()]);
+    s.start(0.0, &fr3::Q_READY).unwrap();
+    let chunk = Chunk {
+        kind: ActionKind::Delta,
+        actions: vec![vec![0.02; 7]; 16],
+        execute: 8,
+        gripper: None,
+    };
+    s.set_chunk(&chunk).unwrap();
+    for k in 0..1000 {
+        let t = k as f64 * 0.001;
+        for (p, x) in [(0, 2.0), (1, 0.6 + 0.4 * (3.0 * t).cos())] {
+            let kp: Vec<[f64; 3]> = (0..9).map(|i| [x, 0.1 * i as f64 - 0.4, 1.0]).collect();
+            let m = HumanMeasurement::new(&human, t, &kp, None).unwrap();
+            // Arriving 0 or 0.5 ms late.
+            s.measure_person_at(t + (k % 2) as f64 * 0.0005, p, m)
+                .unwrap();
+        }
+        if k % 10 == 0 {
+            let o = ObjectMeasurement {
+                time: t,
+                position: [0.3, 0.6, 0.04],
+                velocity: None,
+            };
+            s.measure_object(0, o).unwrap();
+        }
+    }
+    let (mut verified, mut failsafe) = (0, 0);
+    for k in 0..1000 {
+        let t = k as f64 * 0.001;
+        ARMED.with(|a| a.set(true));
+        let cmd = s.step(t).expect("on the grid");
+        ARMED.with(|a| a.set(false));
+        verified += cmd.diag.verified as usize;
+        failsafe += cmd.diag.on_failsafe as usize;
+    }
+    assert_eq!(
+        COUNT.load(Ordering::SeqCst),
+        0,
+        "the session's step allocated"
+    );
+    assert!(
+        verified > 0 && failsafe > 0,
+        "verified {verified}, failsafe {failsafe}"
+    );
+}

@@ -222,6 +222,16 @@ pub(super) fn object_pair_breaks(
 mod tests {
     use super::*;
 
+    /// `p` moved by `len` (m) along the direction `d` (any non-zero vector).
+    fn moved_along(p: &[f64; 3], d: [f64; 3], len: f64) -> [f64; 3] {
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
+        [
+            p[0] + d[0] / n * len,
+            p[1] + d[1] / n * len,
+            p[2] + d[2] / n * len,
+        ]
+    }
+
     /// The box accept never hides a contradiction: wherever `pair_within_boxes` accepts a pair,
     /// `human_pair_breaks` (the reference) finds none; and it accepts most pairs far apart in
     /// time (what it is for). 20 000 random pairs of the default model's keypoints, moved up to
@@ -242,13 +252,7 @@ mod tests {
                 .iter()
                 .map(|p| {
                     let d = [next() - 0.5, next() - 0.5, next() - 0.5];
-                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
-                    let len = reach * next();
-                    [
-                        p[0] + d[0] / n * len,
-                        p[1] + d[1] / n * len,
-                        p[2] + d[2] / n * len,
-                    ]
+                    moved_along(p, d, reach * next())
                 })
                 .collect();
             let (Ok(a), Ok(b)) = (
@@ -312,18 +316,13 @@ mod tests {
                     // (±1e-12) for the first keypoint and half of it for the others, or anywhere
                     // up to 2× for one keypoint.
                     let d = [next() - 0.5, next() - 0.5, next() - 0.5];
-                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
                     let len = match (i % 3, j) {
                         (0, _) => v * dt * next(),
                         (1, 0) => v * dt * (1.0 + 1e-12 * (2.0 * next() - 1.0)),
                         (2, 0) => 2.0 * v * dt * next(),
                         _ => 0.5 * v * dt,
                     };
-                    [
-                        p[0] + d[0] / n * len,
-                        p[1] + d[1] / n * len,
-                        p[2] + d[2] / n * len,
-                    ]
+                    moved_along(p, d, len)
                 })
                 .collect();
             let (Ok(a), Ok(b)) = (

@@ -37,13 +37,9 @@ pub enum InboxError {
     /// An arrival time (s) that is NaN or infinite: it could never be ordered against a step.
     #[error("arrival time {0} s is not finite")]
     NotFinite(f64),
-    /// A person index beyond the people the inbox was made for.
-    #[error("person {index}: no such person ({count} in the scene)")]
-    UnknownPerson { index: usize, count: usize },
-    /// An object index beyond the objects the inbox was made for.
-    #[error("object {index}: no such object ({count} in the scene)")]
-    UnknownObject { index: usize, count: usize },
-    /// The shield refused a delivered measurement.
+    /// The shield refused the measurement: pushed for a person or object index beyond those
+    /// the inbox was made for ([`ShieldError::UnknownHuman`], [`ShieldError::UnknownObject`],
+    /// the shield's own errors), or refused when delivered.
     #[error(transparent)]
     Shield(#[from] ShieldError),
     /// An arrival (s) before the measurement's time stamp (s): delivered then, it would reach
@@ -154,10 +150,11 @@ impl<C> MeasurementInbox<C> {
         m: HumanMeasurement,
     ) -> Result<(), InboxError> {
         if person >= self.people {
-            return Err(InboxError::UnknownPerson {
-                index: person,
+            return Err(ShieldError::UnknownHuman {
+                id: person,
                 count: self.people,
-            });
+            }
+            .into());
         }
         self.insert(arrival, m.time(), Item::Person(person, m))?;
         self.waiting_people += 1;
@@ -173,10 +170,11 @@ impl<C> MeasurementInbox<C> {
         m: ObjectMeasurement,
     ) -> Result<(), InboxError> {
         if object >= self.object_ids.len() {
-            return Err(InboxError::UnknownObject {
-                index: object,
+            return Err(ShieldError::UnknownObject {
+                id: object,
                 count: self.object_ids.len(),
-            });
+            }
+            .into());
         }
         self.insert(arrival, m.time, Item::Object(object, m))?;
         self.waiting_objects += 1;
@@ -477,7 +475,10 @@ mod tests {
         inbox.push_person(DT, 0, person(0.5 * DT)).unwrap();
         assert!(matches!(
             inbox.push_person(DT, 2, person(DT)),
-            Err(InboxError::UnknownPerson { index: 2, count: 2 })
+            Err(InboxError::Shield(ShieldError::UnknownHuman {
+                id: 2,
+                count: 2
+            }))
         ));
         assert!(matches!(
             inbox.push_object(f64::NAN, 0, object(DT)),
