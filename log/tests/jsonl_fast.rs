@@ -182,3 +182,55 @@ fn random_doubles_read_correctly_rounded() {
         }
     }
 }
+
+/// The scanner's exact fast path (a mantissa of at most 2⁵³ with a decimal exponent within ±22,
+/// one IEEE multiplication or division) and the numbers just outside it (2⁵³ + 1, 19 and 20
+/// significant digits, exponents ±23, leading and trailing zeros, exponent spellings): every
+/// value is the standard library's correctly rounded parse, bit for bit. 200,000 random
+/// literals around the boundaries.
+#[test]
+fn the_exact_fast_path_agrees_with_the_standard_parse() {
+    let mut rng = Rng(0xFA57_9A7B_0000_0003);
+    let edge_mantissas: [u64; 8] = [
+        0,
+        1,
+        (1 << 53) - 1,
+        1 << 53,
+        (1 << 53) + 1,
+        9_999_999_999_999_999_999,
+        1_000_000_000_000_000_000,
+        12_003_007_732_181_409,
+    ];
+    for case in 0..200_000 {
+        let m: u64 = match case % 4 {
+            0 => edge_mantissas[rng.below(edge_mantissas.len())],
+            1 => rng.next() >> (11 + rng.below(50)),
+            2 => rng.next() % 10_000_000_000_000_000_000,
+            _ => (1 << 53) - 8 + rng.below(16) as u64,
+        };
+        let e = rng.below(51) as i64 - 25;
+        let digits = m.to_string();
+        // m·10^e spelled with the point moved (`e` fraction digits when negative), with
+        // leading or trailing zeros, or with an exponent.
+        let lead = "0".repeat(rng.below(3));
+        let trail = "0".repeat(rng.below(3));
+        let sign = if rng.below(2) == 0 { "" } else { "-" };
+        let text = match rng.below(3) {
+            0 if e < 0 => {
+                let k = (-e) as usize;
+                let padded = format!("{}{digits}", "0".repeat(k.saturating_sub(digits.len()) + 1));
+                let (int, frac) = padded.split_at(padded.len() - k);
+                let int = int.trim_start_matches('0');
+                let int = if int.is_empty() { "0" } else { int };
+                format!("{sign}{int}.{frac}{trail}")
+            }
+            0 if m == 0 => format!("{sign}0"),
+            0 => format!("{sign}{digits}{}", "0".repeat(e as usize)),
+            1 => format!("{sign}{digits}e{e}"),
+            _ => format!("{sign}0.{lead}{digits}E{}", e + digits.len() as i64 + lead.len() as i64),
+        };
+        let want: f64 = text.parse().unwrap();
+        let got = pacs_log::jsonl::fast_path_value(&text);
+        assert_eq!(got.map(f64::to_bits), Some(want.to_bits()), "{text}");
+    }
+}
