@@ -31,6 +31,68 @@ const POW10_EXACT: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
+/// The significant digits of a number as they are scanned: the first [`MAX_SIG_DIGITS`] (leading
+/// zeros excluded by the caller) in `mant`; `inexact` once one more did not fit.
+#[derive(Default)]
+struct Mantissa {
+    mant: u64,
+    sig: u32,
+    inexact: bool,
+}
+
+impl Mantissa {
+    /// Scan the decimal digits of `s` from `i` on into the mantissa (eight at a time while they
+    /// fit); returns the index after the last digit.
+    #[inline]
+    fn digits(&mut self, s: &[u8], mut i: usize) -> usize {
+        while self.sig + 8 <= MAX_SIG_DIGITS {
+            let Some(chunk) = s.get(i..i + 8) else { break };
+            let mut word = [0u8; 8];
+            word.copy_from_slice(chunk);
+            let v = u64::from_le_bytes(word);
+            if !eight_digits(v) {
+                break;
+            }
+            self.mant = self.mant * 100_000_000 + eight_digits_value(v);
+            self.sig += 8;
+            i += 8;
+        }
+        while let Some(&c @ b'0'..=b'9') = s.get(i) {
+            if self.sig < MAX_SIG_DIGITS {
+                self.mant = self.mant * 10 + u64::from(c - b'0');
+                self.sig += 1;
+            } else {
+                self.inexact = true;
+            }
+            i += 1;
+        }
+        i
+    }
+}
+
+/// Whether all eight bytes of `v` (little endian) are ASCII digits: no byte is below `'0'`
+/// (subtracting 0x30 would borrow into its top bit) or above `'9'` (adding 0x46 would set it).
+#[inline(always)]
+fn eight_digits(v: u64) -> bool {
+    let below = v.wrapping_sub(0x3030_3030_3030_3030);
+    let above = v.wrapping_add(0x4646_4646_4646_4646);
+    (below | above) & 0x8080_8080_8080_8080 == 0
+}
+
+/// The value of eight ASCII digits (first digit in the lowest byte, the most significant),
+/// combined pairwise in three multiplications: digits → two-digit → four-digit → eight-digit
+/// groups. `eight_digits(v)` must hold.
+#[inline(always)]
+fn eight_digits_value(v: u64) -> u64 {
+    let d = v - 0x3030_3030_3030_3030;
+    // Bytes 2k: 10·digit(2k) + digit(2k+1) (each < 100, no carry into the next byte).
+    let pairs = (d * 10 + (d >> 8)) & 0x00FF_00FF_00FF_00FF;
+    // 16-bit lanes 2k: 100·pair(2k) + pair(2k+1) (< 10⁴).
+    let quads = (pairs * 100 + (pairs >> 16)) & 0x0000_FFFF_0000_FFFF;
+    // 10⁴·quad(0) + quad(1).
+    (quads & 0xFFFF) * 10_000 + (quads >> 32)
+}
+
 /// The scanner does not take the line: serde_json decides.
 pub(super) struct Bail;
 
@@ -106,38 +168,23 @@ impl<'a> Scanner<'a> {
         if neg {
             i += 1;
         }
-        let mut mant: u64 = 0;
-        let mut sig: u32 = 0;
-        let mut exp: i64 = 0;
-        // True once a significant digit did not fit (the fast path is off).
-        let mut inexact = false;
-        let mut take = |d: u8, mant: &mut u64| {
-            if *mant == 0 && d == 0 {
-                // A leading zero: no significant digit.
-            } else if sig < MAX_SIG_DIGITS {
-                *mant = *mant * 10 + u64::from(d);
-                sig += 1;
-            } else {
-                inexact = true;
-            }
-        };
+        let mut acc = Mantissa::default();
         match s.get(i) {
             Some(b'0') => i += 1,
-            Some(b'1'..=b'9') => {
-                while let Some(&c @ b'0'..=b'9') = s.get(i) {
-                    take(c - b'0', &mut mant);
-                    i += 1;
-                }
-            }
+            Some(b'1'..=b'9') => i = acc.digits(s, i),
             _ => return Err(Bail),
         }
+        let mut exp: i64 = 0;
         if s.get(i) == Some(&b'.') {
             i += 1;
             let first = i;
-            while let Some(&c @ b'0'..=b'9') = s.get(i) {
-                take(c - b'0', &mut mant);
-                i += 1;
+            if acc.mant == 0 {
+                // Leading zeros of the fraction: no significant digit.
+                while s.get(i) == Some(&b'0') {
+                    i += 1;
+                }
             }
+            i = acc.digits(s, i);
             if i == first {
                 return Err(Bail);
             }
@@ -169,7 +216,8 @@ impl<'a> Scanner<'a> {
             exp += if eneg { -e } else { e };
         }
         self.i = i;
-        if !inexact && mant <= (1 << 53) && (-22..=22).contains(&exp) {
+        let mant = acc.mant;
+        if !acc.inexact && mant <= (1 << 53) && (-22..=22).contains(&exp) {
             // `|exp| ≤ 22`: the index is in bounds.
             let p = POW10_EXACT[exp.unsigned_abs() as usize];
             let x = if exp >= 0 {
