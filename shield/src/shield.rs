@@ -31,10 +31,12 @@ mod handover;
 mod intervals;
 mod step;
 mod verification;
+#[cfg(kani)]
+mod proofs;
 
 pub use builder::ShieldBuilder;
 pub use command::{Binding, BindingNames, Command, Diagnostics};
-pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, decide};
+pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, chosen_by_rule, decide};
 pub use error::ShieldError;
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::{OccupancyIntervals, Piece, verify_fine};

@@ -4,7 +4,10 @@
 //! `--cfg kani_stub` and exists so that CI compiles the `#[cfg(kani)]` harnesses; nothing here is
 //! meant to run (calling [`any`] panics). Under real `cargo kani` this crate is not used.
 
-pub use kani_stub_macros::{proof, should_panic, solver, stub, unwind};
+pub use kani_stub_macros::{
+    ensures, modifies, proof, proof_for_contract, requires, should_panic, solver, stub, stub_verified,
+    unwind,
+};
 
 /// Types with a nondeterministic value (Kani: `kani::Arbitrary`).
 pub trait Arbitrary: Sized {

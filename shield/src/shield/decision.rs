@@ -70,7 +70,9 @@ pub struct Choice {
 /// executed state is read from the verified go step or from the stored failsafe. Harness
 /// `f1_shield_decision_induction` (property test; Kani: `f1_decision_adopted`, `f1_decision_kept` — any finite profiles, full-width times with
 /// `t ∈ [0, 100]` s, `α ∈ [1e-4, 0.01]` s, the failsafe started up to 1 s before); mutant `x2`
-/// caught.
+/// caught. Its Kani contract is [`chosen_by_rule`] (proven by `f3_choose_contract_adopted` and
+/// `f3_choose_contract_kept`; used in place of `choose` by `f3_shield_step_induction`).
+#[cfg_attr(kani, kani::ensures(|c: &Choice| chosen_by_rule(&stored, &candidate, mode, t, alpha, c)))]
 pub fn choose(
     stored: VerifiedFailsafe,
     candidate: Option<Candidate>,
@@ -97,6 +99,40 @@ pub fn choose(
             failsafe: stored,
             adopted: false,
         },
+    }
+}
+
+/// The selection rule of [`choose`] as a predicate on its result (its Kani contract): a verified
+/// candidate (any candidate in OFF mode) is executed — its go step at α, its brake the new
+/// failsafe from `t + α`, its slot — otherwise the stored failsafe is kept and continued to
+/// `t + α`. Profiles and times compare bit for bit.
+pub fn chosen_by_rule(
+    stored: &VerifiedFailsafe,
+    candidate: &Option<Candidate>,
+    mode: FilterMode,
+    t: f64,
+    alpha: f64,
+    c: &Choice,
+) -> bool {
+    match candidate {
+        Some(k) if k.verified || mode == FilterMode::Off => {
+            c.adopted
+                && c.slot == k.slot
+                && c.profile.same_bits(&k.go)
+                && c.tau.to_bits() == alpha.to_bits()
+                && c.failsafe.slot == k.slot
+                && c.failsafe.profile.same_bits(&k.brake)
+                && c.failsafe.t0.to_bits() == (t + alpha).to_bits()
+        }
+        _ => {
+            !c.adopted
+                && c.slot == stored.slot
+                && c.profile.same_bits(&stored.profile)
+                && c.tau.to_bits() == (t + alpha - stored.t0).to_bits()
+                && c.failsafe.slot == stored.slot
+                && c.failsafe.profile.same_bits(&stored.profile)
+                && c.failsafe.t0.to_bits() == stored.t0.to_bits()
+        }
     }
 }
 
