@@ -118,7 +118,7 @@ for solver in sat bitwuzla; do
   echo "=== solver $solver package $package" >>"$log"
   timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
     cargo kani -p "$package" --lib "${args[@]}" \
-    -Z unstable-options -Z stubbing --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1
+    -Z unstable-options -Z stubbing -Z function-contracts --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1
   c=$?
   [ "$c" -ne 0 ] && code=$c
 done
