@@ -252,3 +252,21 @@ fn f3_choose_contract_kept() {
     kani::assume(!candidate.is_some_and(|c| c.verified || mode == FilterMode::Off));
     let _: Choice = choose(stored, candidate, mode, t, alpha);
 }
+
+/// Any choice (every field any value): `stub_verified(choose)` draws the result from here and
+/// keeps those its contract allows.
+impl kani::Arbitrary for Choice {
+    fn any() -> Self {
+        Choice {
+            slot: kani::any(),
+            profile: any_profile(),
+            tau: kani::any(),
+            failsafe: VerifiedFailsafe {
+                slot: kani::any(),
+                profile: any_profile(),
+                t0: kani::any(),
+            },
+            adopted: kani::any(),
+        }
+    }
+}
