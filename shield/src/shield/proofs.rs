@@ -1,8 +1,8 @@
 //! Kani harnesses of the shield's induction step on the real [`Shield::step`] (claim C8,
 //! proofs/README.md § C8), and the proofs of the contract of [`choose`] it uses.
 //!
-//! `f3_shield_step_induction` runs the real `Shield::step` of a real shield (FR3, the default
-//! human, SSM) from *any* state of the induction invariant — any stored failsafe (any finite
+//! `f3_shield_step_induction` runs the real `Shield::step` of a real shield (one joint, one
+//! link; a person of two keypoints; SSM) from *any* state of the induction invariant — any stored failsafe (any finite
 //! profile, either slot, started up to 1 s before the step), any path state, a fresh chunk or
 //! none in the other slot, any chunk serials — with any measurement of the person (older, newer,
 //! from the future, or none) and any step time in [0, 100] s. What it replaces:
@@ -17,15 +17,17 @@
 //! slot, the failsafe changes only to the brake of a candidate whose last verification returned
 //! `true` (no unverified intended step is executed), that verification saw the newest
 //! measurement delivered at or before `t`, and otherwise the stored failsafe, its slot and the
-//! trajectory it lives on are kept. Mutants `x70_execute_before_verify` and
-//! `x71_verify_stale_measurement` make it fail.
+//! trajectory it lives on are kept. Mutants `x67_step_adopts_before_verify` and
+//! `x68_step_verifies_stale_measurement` make it fail.
 
 #![allow(dead_code)] // The harnesses are entry points of `cargo kani` only.
 
 use super::decision::Choice;
 use super::*;
-use pacs_models::default_human;
-use pacs_models::fr3::fr3;
+use pacs_models::human::BodyPartSpec;
+use pacs_models::robot::{InertialSpec, JointLimitSpec, JointSpec, LinkSpec, PoseSpec};
+use pacs_models::shape::CapsuleSpec;
+use pacs_models::{HumanSpec, RobotSpec};
 
 /// What the stand-in of `Shield::verify` saw in one step (its last two calls).
 #[derive(Clone, Copy)]
@@ -116,7 +118,69 @@ fn candidate_any(_sh: &Shield, _slot: usize, _start: PathState) -> Option<(Speed
     }
 }
 
-/// A measurement of the default human at `time` (keypoints at the origin: the step only
+/// One revolute joint and one link (a capsule with a mass): the smallest robot the shield takes.
+/// The step's decision does not depend on the robot beyond its trajectories (stubbed profiles
+/// over a standstill), so the smallest keeps the model checker's formula small.
+fn one_joint_robot() -> RobotModel {
+    let spec = RobotSpec {
+        name: "one".into(),
+        base: PoseSpec::default(),
+        joints: vec![JointSpec {
+            name: "j1".into(),
+            origin: PoseSpec::default(),
+            axis: [0.0, 0.0, 1.0],
+            limits: JointLimitSpec {
+                q_min: -1.0,
+                q_max: 1.0,
+                v_max: 1.0,
+                a_max: 10.0,
+                j_max: 1000.0,
+            },
+        }],
+        links: vec![LinkSpec {
+            name: "l1".into(),
+            parent: "j1".into(),
+            origin: PoseSpec::default(),
+            capsules: vec![CapsuleSpec {
+                p1: [0.0, 0.0, 0.0],
+                p2: [0.5, 0.0, 0.0],
+                radius: 0.05,
+            }],
+            inertial: Some(InertialSpec {
+                mass: 1.0,
+                com: [0.25, 0.0, 0.0],
+                inertia: [0.01, 0.0, 0.0, 0.01, 0.0, 0.01],
+            }),
+            frame: false,
+        }],
+        user_values: vec![],
+    };
+    RobotModel::new(spec).expect("a valid robot")
+}
+
+/// Two keypoints and one body part between them: the smallest person.
+fn two_point_human() -> HumanModel {
+    HumanModel::new(HumanSpec {
+        name: "two".into(),
+        keypoints: vec!["a".into(), "b".into()],
+        v_max: vec![2.0, 2.0],
+        a_max: vec![20.0, 20.0],
+        body_parts: vec![BodyPartSpec {
+            name: "arm".into(),
+            from: "a".into(),
+            to: "b".into(),
+            thickness: 0.1,
+        }],
+        measurement_error_pos: 0.0,
+        measurement_error_vel: 0.1,
+        delay: 0.0,
+        extremities: vec![],
+        clamping_pairs: vec![],
+    })
+    .expect("a valid human")
+}
+
+/// A measurement of `h` at `time` (keypoints at the origin: the step only
 /// compares stamps).
 fn measurement(h: &HumanModel, time: f64) -> HumanMeasurement {
     let zeros = vec![[0.0; 3]; h.keypoint_count()];
@@ -129,8 +193,8 @@ fn measurement(h: &HumanModel, time: f64) -> HumanMeasurement {
 #[kani::stub(Shield::candidate, candidate_any)]
 #[kani::stub_verified(choose)]
 fn f3_shield_step_induction() {
-    let robot = fr3();
-    let human = default_human();
+    let robot = one_joint_robot();
+    let human = two_point_human();
     let spec = ConstraintSpec::builtin("ssm").expect("built-in preset");
     let mut sh = Shield::new(robot, Some((human.clone(), &spec)), vec![], ShieldConfig::default())
         .expect("a valid shield");
