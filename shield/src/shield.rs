@@ -29,7 +29,7 @@ mod decision;
 mod error;
 mod handover;
 mod intervals;
-mod step;
+pub(crate) mod step;
 mod verification;
 #[cfg(kani)]
 mod proofs;
@@ -193,28 +193,16 @@ pub struct Shield {
     env: Vec<EnvShape>,
     config: ShieldConfig,
     trajs: [Option<Trajectory>; 2],
-    /// Serial number of the chunk each slot holds (0: the start's standstill; the n-th
-    /// accepted chunk is n).
-    chunk_serial: [u64; 2],
+    /// The state the induction is about: slot, path state and time of the command, the stored
+    /// verified failsafe, the fresh chunk, the offer's fate ([`step::StepState`]).
+    st: step::StepState,
     /// Chunks accepted so far.
     chunks_accepted: u64,
-    /// Current slot and path state at `time`.
-    slot: usize,
-    path: PathState,
-    time: f64,
-    started: bool,
-    /// Slot of a chunk planned from the current state (not yet verified).
-    fresh: Option<usize>,
     /// A chunk planned off the loop, waiting for its handover ([`Shield::offer`]).
     pending: Option<PreparedChunk>,
-    /// What became of the latest offer.
-    offer_state: OfferState,
     /// A trajectory replaced or dropped in a step, kept so the step frees nothing (dropped by
     /// the next `offer`/`set_chunk`).
     spare: Option<Trajectory>,
-    failsafe: Option<VerifiedFailsafe>,
-    /// Whether the latest step verified its candidate ([`Shield::last_verified`]).
-    last_verified: bool,
     /// Verifications left that skip the whole-trajectory check (it failed recently), and how
     /// many it skips after its next failure: `verification::COARSE_SKIP` after a pass, doubling
     /// (plus one) with each failure in a row up to `verification::COARSE_SKIP_MAX`. Only the cost
@@ -301,7 +289,7 @@ impl std::fmt::Debug for Shield {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Shield")
             .field("config", &self.config)
-            .field("time", &self.time)
+            .field("time", &self.st.time)
             .finish()
     }
 }
@@ -389,18 +377,20 @@ impl Shield {
             config,
             robot,
             trajs: [None, None],
-            chunk_serial: [0, 0],
+            st: step::StepState {
+                chunk_serial: [0, 0],
+                slot: 0,
+                path: PathState::rest(0.0),
+                time: 0.0,
+                started: false,
+                fresh: None,
+                offer_state: OfferState::None,
+                last_verified: true,
+                failsafe: None,
+            },
             chunks_accepted: 0,
-            slot: 0,
-            path: PathState::rest(0.0),
-            time: 0.0,
-            started: false,
-            fresh: None,
             pending: None,
-            offer_state: OfferState::None,
             spare: None,
-            last_verified: true,
-            failsafe: None,
             coarse_skip: 0,
             coarse_backoff: verification::COARSE_SKIP,
             objects: Vec::new(),
@@ -582,20 +572,20 @@ impl Shield {
             });
         }
         self.trajs = [Some(Trajectory::standstill(q)), None];
-        self.chunk_serial = [0, 0];
-        self.slot = 0;
-        self.path = PathState::rest(0.0);
-        self.time = t;
-        self.started = true;
-        self.fresh = None;
+        self.st.chunk_serial = [0, 0];
+        self.st.slot = 0;
+        self.st.path = PathState::rest(0.0);
+        self.st.time = t;
+        self.st.started = true;
+        self.st.fresh = None;
         self.pending = None;
         self.spare = None;
-        self.offer_state = OfferState::None;
-        self.last_verified = true;
+        self.st.offer_state = OfferState::None;
+        self.st.last_verified = true;
         // Standing still is the first verified failsafe.
-        self.failsafe = Some(VerifiedFailsafe {
+        self.st.failsafe = Some(VerifiedFailsafe {
             slot: 0,
-            profile: SpeedProfile::plan(self.path, 0.0, 1.0, 1.0),
+            profile: SpeedProfile::plan(self.st.path, 0.0, 1.0, 1.0),
             t0: t,
         });
         Ok(())
@@ -607,12 +597,12 @@ impl Shield {
 
     /// The last verified failsafe (after `start`).
     pub fn verified_failsafe(&self) -> Option<VerifiedFailsafe> {
-        self.failsafe
+        self.st.failsafe
     }
 
     /// The joint state of the last verified failsafe at absolute time `t` (after `start`).
     pub fn failsafe_state_at(&self, t: f64) -> Option<JointState> {
-        let f = self.failsafe?;
+        let f = self.st.failsafe?;
         self.trajs[f.slot].as_ref()?;
         Some(self.joint_state(f.slot, &f.profile.eval(t - f.t0)))
     }
@@ -622,7 +612,7 @@ impl Shield {
     /// `path.joint_state(trajectory)` — on the trajectory of an accepted chunk (or the start's
     /// standstill), never off it.
     pub fn path(&self) -> (&Trajectory, PathState) {
-        (self.traj(self.slot), self.path)
+        (self.traj(self.st.slot), self.st.path)
     }
 
     /// Intended time (s) left on the current trajectory until its last waypoint q̂_h is passed
@@ -630,7 +620,7 @@ impl Shield {
     /// [`Self::start`]. A control loop that hands the next chunk over when this drops to one
     /// safety step keeps a Moving trajectory ([`ShieldConfig::chunk_end`]) moving across chunks.
     pub fn remaining(&self) -> Option<f64> {
-        if !self.started {
+        if !self.st.started {
             return None;
         }
         let (traj, p) = self.path();
@@ -639,12 +629,12 @@ impl Shield {
 
     /// Current commanded joint state.
     pub fn state(&self) -> JointState {
-        self.joint_state(self.slot, &self.path)
+        self.joint_state(self.st.slot, &self.st.path)
     }
 
     /// Time (s) of the next step (the time the commanded state [`Self::state`] is for).
     pub fn time(&self) -> f64 {
-        self.time
+        self.st.time
     }
 
     fn joint_state(&self, slot: usize, p: &PathState) -> JointState {
@@ -659,7 +649,7 @@ impl Shield {
     /// simulations and loops with time to spare. A 1 kHz loop hands its chunks to a
     /// [`crate::worker::ChunkWorker`] instead, whose `set_chunk` costs a few µs.
     pub fn set_chunk(&mut self, chunk: &Chunk) -> Result<(), ShieldError> {
-        if !self.started {
+        if !self.st.started {
             return Err(ShieldError::NotStarted);
         }
         let start = self.state();
@@ -676,20 +666,20 @@ impl Shield {
     /// to know: the actions `passed..h` of chunk `chunk` are still ahead (or will never run if
     /// a newer chunk takes over).
     pub fn chunk_progress(&self) -> Option<ChunkProgress> {
-        if !self.started {
+        if !self.st.started {
             return None;
         }
         let (traj, p) = self.path();
         let times = traj.waypoint_times();
-        let passed = if self.chunk_serial[self.slot] == 0 {
+        let passed = if self.st.chunk_serial[self.st.slot] == 0 {
             0
         } else {
             times.iter().take_while(|&&tw| tw <= p.s).count()
         };
         Some(ChunkProgress {
-            chunk: self.chunk_serial[self.slot],
+            chunk: self.st.chunk_serial[self.st.slot],
             passed,
-            executed: if self.chunk_serial[self.slot] == 0 {
+            executed: if self.st.chunk_serial[self.st.slot] == 0 {
                 0
             } else {
                 times.len()

@@ -193,7 +193,7 @@ impl Shield {
     /// prediction [`crate::worker::ChunkWorker`] and the Python `ShieldLoop` plan from. `None`
     /// before [`Shield::start`].
     pub fn likely_handover(&self, lead: usize) -> Option<Handover> {
-        if self.last_verified {
+        if self.st.last_verified {
             self.handover(lead)
         } else {
             self.handover_on_failsafe(lead)
@@ -203,18 +203,18 @@ impl Shield {
     /// Whether the latest step verified its candidate (`true` before the first step: the start
     /// at rest is verified).
     pub fn last_verified(&self) -> bool {
-        self.last_verified
+        self.st.last_verified
     }
 
     fn predict(&self, lead: usize, verified: bool) -> Option<Handover> {
-        if !self.started {
+        if !self.st.started {
             return None;
         }
         let alpha = self.config.safety_step;
-        let (mut slot, mut path) = (self.slot, self.path);
-        let mut failsafe = self.failsafe?;
+        let (mut slot, mut path) = (self.st.slot, self.st.path);
+        let mut failsafe = self.st.failsafe?;
         if lead > 0
-            && let Some(s) = self.fresh
+            && let Some(s) = self.st.fresh
         {
             (slot, path) = (s, PathState::intended(0.0));
         }
@@ -222,13 +222,13 @@ impl Shield {
             // No candidate is chosen: every step follows the stored failsafe, and the last one
             // (at `time + (lead − 1)·α`) evaluates it once — O(1) for any lead.
             if lead > 0 {
-                let t = self.time + (lead - 1) as f64 * alpha;
+                let t = self.st.time + (lead - 1) as f64 * alpha;
                 let next = decide(failsafe, None, self.config.mode, t, alpha);
                 (slot, path) = (next.slot, next.path);
             }
         } else {
             for k in 0..lead {
-                let t = self.time + k as f64 * alpha;
+                let t = self.st.time + k as f64 * alpha;
                 // The step's own decision, with the candidate (where one exists) verified.
                 let cand = self.candidate(slot, path).map(|(go, brake)| Candidate {
                     slot,
@@ -241,7 +241,7 @@ impl Shield {
             }
         }
         Some(Handover {
-            t: self.time + lead as f64 * alpha,
+            t: self.st.time + lead as f64 * alpha,
             start: self.joint_state(slot, &path),
         })
     }
@@ -253,32 +253,32 @@ impl Shield {
     /// state. A newer offer replaces a waiting one. Errors: the handover is already past
     /// (the shield's time is beyond it and the state differs) — plan again from a newer one.
     pub fn offer(&mut self, chunk: PreparedChunk) -> Result<(), ShieldError> {
-        if !self.started {
+        if !self.st.started {
             return Err(ShieldError::NotStarted);
         }
         // Trajectories replaced in earlier steps are dropped here, outside the step.
         self.spare = None;
-        let tol = super::time_tolerance(self.time);
+        let tol = super::time_tolerance(self.st.time);
         if same_state(&self.state(), &chunk.handover.start, self.dof) {
             self.take_over(chunk.traj);
             self.pending = None;
             return Ok(());
         }
-        if chunk.handover.t < self.time - tol {
-            self.offer_state = OfferState::Stale;
+        if chunk.handover.t < self.st.time - tol {
+            self.st.offer_state = OfferState::Stale;
             return Err(ShieldError::Stale {
                 handover: chunk.handover.t,
-                time: self.time,
+                time: self.st.time,
             });
         }
         self.pending = Some(chunk);
-        self.offer_state = OfferState::Waiting;
+        self.st.offer_state = OfferState::Waiting;
         Ok(())
     }
 
     /// What became of the latest offered chunk.
     pub fn offer_state(&self) -> OfferState {
-        self.offer_state
+        self.st.offer_state
     }
 
     /// Withdraw a waiting offer (its caller gave up on it): no later step takes it over.
@@ -286,7 +286,7 @@ impl Shield {
     pub fn withdraw_offer(&mut self) -> bool {
         let waiting = self.pending.take().is_some();
         if waiting {
-            self.offer_state = OfferState::Stale;
+            self.st.offer_state = OfferState::Stale;
         }
         waiting
     }
@@ -302,19 +302,15 @@ impl Shield {
             self.take_over(p.traj);
         } else if t >= p.handover.t - tol {
             self.spare = self.pending.take().map(|p| p.traj);
-            self.offer_state = OfferState::Stale;
+            self.st.offer_state = OfferState::Stale;
         }
     }
 
     /// Install `traj` (planned from the current commanded state) as the fresh chunk in the slot
     /// the verified failsafe does not live on; the trajectory it replaces waits in `spare`.
     pub(super) fn take_over(&mut self, traj: Trajectory) {
-        let keep = self.failsafe.map(|f| f.slot).unwrap_or(self.slot);
-        let slot = if keep == 0 { 1 } else { 0 };
-        self.spare = self.trajs[slot].replace(traj);
         self.chunks_accepted += 1;
-        self.chunk_serial[slot] = self.chunks_accepted;
-        self.fresh = Some(slot);
-        self.offer_state = OfferState::Taken(self.chunks_accepted);
+        let slot = self.st.take_over_slot(self.chunks_accepted);
+        self.spare = self.trajs[slot].replace(traj);
     }
 }
