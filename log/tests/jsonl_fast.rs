@@ -227,7 +227,10 @@ fn the_exact_fast_path_agrees_with_the_standard_parse() {
             0 if m == 0 => format!("{sign}0"),
             0 => format!("{sign}{digits}{}", "0".repeat(e as usize)),
             1 => format!("{sign}{digits}e{e}"),
-            _ => format!("{sign}0.{lead}{digits}E{}", e + digits.len() as i64 + lead.len() as i64),
+            _ => format!(
+                "{sign}0.{lead}{digits}E{}",
+                e + digits.len() as i64 + lead.len() as i64
+            ),
         };
         let want: f64 = text.parse().unwrap();
         let got = pacs_log::jsonl::fast_path_value(&text);

@@ -29,10 +29,10 @@ mod decision;
 mod error;
 mod handover;
 mod intervals;
-pub(crate) mod step;
-mod verification;
 #[cfg(kani)]
 mod proofs;
+pub(crate) mod step;
+mod verification;
 
 pub use builder::ShieldBuilder;
 pub use command::{Binding, BindingNames, Command, Diagnostics};

@@ -5,8 +5,8 @@
 //! meant to run (calling [`any`] panics). Under real `cargo kani` this crate is not used.
 
 pub use kani_stub_macros::{
-    ensures, modifies, proof, proof_for_contract, requires, should_panic, solver, stub, stub_verified,
-    unwind,
+    ensures, modifies, proof, proof_for_contract, requires, should_panic, solver, stub,
+    stub_verified, unwind,
 };
 
 /// Types with a nondeterministic value (Kani: `kani::Arbitrary`).

@@ -67,7 +67,15 @@ fn any_in(lo: f64, hi: f64) -> f64 {
 fn any_profile() -> SpeedProfile {
     let n: usize = kani::any();
     kani::assume((1..=4).contains(&n));
-    let phase = || (any_finite(), any_finite(), any_finite(), any_finite(), any_finite());
+    let phase = || {
+        (
+            any_finite(),
+            any_finite(),
+            any_finite(),
+            any_finite(),
+            any_finite(),
+        )
+    };
     SpeedProfile::from_parts(
         [phase(), phase(), phase(), phase()],
         n,
@@ -221,7 +229,10 @@ fn f3_shield_step_induction() {
     // The command follows the stored failsafe's slot; the fresh chunk had its one try.
     assert!(st.slot == nf.slot, "the command left the failsafe's slot");
     assert!(st.fresh.is_none(), "a fresh chunk survived its one try");
-    assert!(st.time.to_bits() == (t + alpha).to_bits(), "the step's time");
+    assert!(
+        st.time.to_bits() == (t + alpha).to_bits(),
+        "the step's time"
+    );
     // Every verification saw the newest measurement delivered at or before t.
     if let Some(seen) = env.spy.last {
         let newest = match given {
@@ -234,7 +245,10 @@ fn f3_shield_step_induction() {
         );
         assert!(seen.t.to_bits() == t.to_bits(), "verified for another time");
     }
-    assert!(env.spy.calls <= 2, "more than two verifications in one step");
+    assert!(
+        env.spy.calls <= 2,
+        "more than two verifications in one step"
+    );
     if adopted && mode != FilterMode::Off {
         // No unverified intended step is executed: the last verification of this step returned
         // true, on the candidate whose brake is the new failsafe from t + α.
