@@ -178,6 +178,29 @@ fn any_mode() -> FilterMode {
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
 fn f3_shield_step_induction() {
+    step_induction(None);
+}
+
+/// The induction step where the candidate is adopted (with `f3_step_kept`: the whole step,
+/// split by outcome to fit the budget).
+#[kani::proof]
+#[kani::unwind(6)]
+#[kani::stub_verified(choose)]
+fn f3_step_adopted() {
+    step_induction(Some(true));
+}
+
+/// The induction step where the stored failsafe is kept.
+#[kani::proof]
+#[kani::unwind(6)]
+#[kani::stub_verified(choose)]
+fn f3_step_kept() {
+    step_induction(Some(false));
+}
+
+/// The body of the f3 harnesses: one step of `run_step` from any state of the invariant (module
+/// docs); `outcome`, if given, restricts the proof to steps that adopt (`true`) or keep.
+fn step_induction(outcome: Option<bool>) {
     let t = any_in(0.0, 100.0);
     let alpha = any_in(1e-4, 0.01);
     let mode = any_mode();
@@ -226,6 +249,9 @@ fn f3_shield_step_induction() {
     let st = env.st;
     let nf = st.failsafe.expect("a failsafe after every step");
     let adopted = !cmd.diag.on_failsafe;
+    if let Some(o) = outcome {
+        kani::assume(adopted == o);
+    }
     // The command follows the stored failsafe's slot; the fresh chunk had its one try.
     assert!(st.slot == nf.slot, "the command left the failsafe's slot");
     assert!(st.fresh.is_none(), "a fresh chunk survived its one try");
