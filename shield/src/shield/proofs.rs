@@ -233,6 +233,8 @@ fn step_induction(outcome: Option<bool>) {
         meas: kani::any::<bool>().then(|| any_in(-10.0, 100.0)),
         offer: kani::any(),
         take_it: kani::any(),
+        // Chunks accepted so far: any count that leaves room for one more (a take-over writes
+        // serial `accepted + 1`, into the slot the failsafe does not use).
         accepted: serials[0].max(serials[1]) % (u64::MAX / 2),
         spy: Spy {
             calls: 0,
