@@ -49,48 +49,63 @@ impl Nearest {
 }
 
 /// Whether two measurements of one person contradict the human model: some keypoint moved
-/// farther than `v_max·|Δt| + 2·e_pos` (m) between their stamps. Conservative both ways: the
-/// distance rounded up, the allowance rounded down, so rounding never hides a contradiction
-/// (only one within an ulp is flagged too).
+/// farther than `v_max·|Δt| + 2·e_pos` (m) between their stamps ([`keypoint_breaks`] for each
+/// keypoint and its own `v_max`).
 pub(super) fn human_pair_breaks(
     model: &HumanModel,
     a: &HumanMeasurement,
     b: &HumanMeasurement,
 ) -> bool {
     let (lo, hi) = order(a.time(), b.time());
-    // Plain floats for the fast accept below; outward-rounded bounds only where it does not
-    // decide.
-    let (dt_plain, e2_plain) = ((hi - lo).max(0.0), 2.0 * model.measurement_error_pos());
+    let e_pos = model.measurement_error_pos();
     a.positions()
         .iter()
         .zip(b.positions())
         .zip(model.v_max())
-        .any(|((p, q), v)| {
-            // Equal positions moved by 0 m, within any allowance (≥ 0): an exact duplicate of a
-            // record is no contradiction, even where outward rounding of a zero distance would
-            // exceed a zero allowance (no measurement error, equal stamps).
-            if p == q {
-                return false;
-            }
-            // Fast accept in plain floats: the squared distance and the squared allowance (three
-            // rounded operations from exact values) each carry a relative rounding error of a few
-            // ε, far inside the 1e-9 margin, so a pair accepted here is within the allowance
-            // exactly. Only where neither overflows (d² finite) nor underflows (allowance ≥
-            // 1e-150, so its square is normal and an underflowed d² is far below it); everything
-            // else is decided by the outward-rounded distance and allowance.
-            let plain = v * dt_plain + e2_plain;
-            let (dx, dy, dz) = (p.x - q.x, p.y - q.y, p.z - q.z);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            if plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9) {
-                return false;
-            }
-            let dt = sub_down(hi, lo).max(0.0);
-            let allowed = add_down(
-                mul_down(*v, dt),
-                mul_down(2.0, model.measurement_error_pos()),
-            );
-            dist3_up(&[p.x, p.y, p.z], &[q.x, q.y, q.z]) > allowed
-        })
+        .any(|((p, q), &v)| keypoint_breaks([p.x, p.y, p.z], [q.x, q.y, q.z], v, lo, hi, e_pos))
+}
+
+/// Whether one keypoint, at `p` at one stamp and at `q` at the other (m; stamps `lo ≤ hi`, s),
+/// moved farther than `v·(hi − lo) + 2·e_pos` (m; `v` its speed bound, m/s, `e_pos` the
+/// position error, m, both ≥ 0).
+///
+/// # Soundness
+/// Claim C9 (the audit's record-against-record consistency): false only if
+/// `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos` exactly. Conservative both ways: the distance rounded up,
+/// the allowance rounded down, so rounding never hides a contradiction (one within an ulp is
+/// flagged too). Harness `h3_keypoint_pair_sound` (Kani on grids of dyadic values, where the
+/// decision's terms are exact and only `√` is the contract's; the twin at full width with the
+/// exact oracle); mutant `x64` fails it.
+#[inline(always)]
+pub(crate) fn keypoint_breaks(
+    p: [f64; 3],
+    q: [f64; 3],
+    v: f64,
+    lo: f64,
+    hi: f64,
+    e_pos: f64,
+) -> bool {
+    // Equal positions moved by 0 m, within any allowance (≥ 0): an exact duplicate of a record
+    // is no contradiction, even where outward rounding of a zero distance would exceed a zero
+    // allowance (no measurement error, equal stamps).
+    if p == q {
+        return false;
+    }
+    // Fast accept in plain floats: the squared distance and the squared allowance (three rounded
+    // operations from exact values) each carry a relative rounding error of a few ε, far inside
+    // the 1e-9 margin, so a pair accepted here is within the allowance exactly. Only where
+    // neither overflows (d² finite) nor underflows (allowance ≥ 1e-150, so its square is normal
+    // and an underflowed d² is far below it); everything else is decided by the outward-rounded
+    // distance and allowance.
+    let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
+    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    if plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9) {
+        return false;
+    }
+    let dt = sub_down(hi, lo).max(0.0);
+    let allowed = add_down(mul_down(v, dt), mul_down(2.0, e_pos));
+    dist3_up(&p, &q) > allowed
 }
 
 /// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
@@ -121,10 +136,8 @@ impl KeypointBox {
 /// A quick accept for [`human_pair_breaks`]: true only if no keypoint of `a` and `b` moved more
 /// than the least allowance of any keypoint (`v_min · |Δt| + e2`, `v_min` the least of the
 /// model's `v_max`, `e2` twice its position error), shown by the diagonal of the box holding both
-/// measurements' keypoints, which bounds every keypoint's displacement. In plain floats, with the
-/// margin and the range conditions of the fast accept in [`human_pair_breaks`] (relative rounding
-/// errors of a few ε, far inside 1e-9). False says nothing; the caller then applies
-/// [`human_pair_breaks`]. Property test `the_box_accept_of_a_human_pair_is_sound`.
+/// measurements' keypoints, which bounds every keypoint's displacement ([`boxes_within`]). False
+/// says nothing; the caller then applies [`human_pair_breaks`].
 pub(super) fn pair_within_boxes(
     v_min: f64,
     e2: f64,
@@ -133,10 +146,28 @@ pub(super) fn pair_within_boxes(
     ba: &KeypointBox,
     bb: &KeypointBox,
 ) -> bool {
-    let allowed = v_min * (a.time() - b.time()).abs() + e2;
+    boxes_within(v_min, e2, (a.time() - b.time()).abs(), &ba.0, &bb.0)
+}
+
+/// Whether every point of the box `ba` is within `v_min·dt + e2` (m) of every point of `bb`
+/// (boxes `[min x, min y, min z, max x, max y, max z]`, m; `dt` the stamps' distance, s): the
+/// diagonal of the box holding both, in plain floats, with the margin and the range conditions
+/// of the fast accept in [`keypoint_breaks`] (relative rounding errors of a few ε, far inside
+/// 1e-9).
+///
+/// # Soundness
+/// Claim C9 (the fast accept of the consistency check): true only if `‖p − q‖ ≤ v_min·dt + e2`
+/// exactly for every `p` in `ba` and `q` in `bb` (so no keypoint pair the accept skips breaks
+/// [`keypoint_breaks`]'s allowance, whose speed bound is ≥ `v_min`). Harness
+/// `h3_box_accept_sound` (Kani on grids of dyadic values; the twin at full width with the exact
+/// oracle); mutant `x66` fails it. Property test `the_box_accept_of_a_human_pair_is_sound`
+/// (against [`human_pair_breaks`]).
+#[inline]
+pub(crate) fn boxes_within(v_min: f64, e2: f64, dt: f64, ba: &[f64; 6], bb: &[f64; 6]) -> bool {
+    let allowed = v_min * dt + e2;
     let mut d2 = 0.0;
     for k in 0..3 {
-        let e = ba.0[k + 3].max(bb.0[k + 3]) - ba.0[k].min(bb.0[k]);
+        let e = ba[k + 3].max(bb[k + 3]) - ba[k].min(bb[k]);
         d2 += e * e;
     }
     allowed >= 1e-150 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
@@ -160,36 +191,81 @@ pub(super) fn object_acc_bound(model: &ObjectModel) -> f64 {
 
 /// Whether one measurement of an object contradicts its model: a measured velocity faster than
 /// the speed bound plus the velocity error (the true velocity is within `vel_error` of it and
-/// never faster than `max_speed`). Rounding never hides a contradiction.
+/// never faster than `max_speed`). Rounding never hides a contradiction ([`velocity_breaks`]).
 pub(super) fn object_record_breaks(model: &ObjectModel, m: &ObjectMeasurement) -> bool {
     match (model.max_speed(), m.velocity) {
-        (Some(vmax), Some(v)) => norm3_up(v[0], v[1], v[2]) > add_down(vmax, model.vel_error()),
+        (Some(vmax), Some(v)) => velocity_breaks(v, vmax, model.vel_error()),
         _ => false,
+    }
+}
+
+/// Whether a measured velocity `v` (m/s) is faster than `vmax + ev` (m/s, both ≥ 0).
+///
+/// # Soundness
+/// Claim C9: false only if `‖v‖ ≤ vmax + ev` exactly (the norm rounded up, the bound down).
+/// Harness `h3_object_record_sound`; mutant `x57` fails it.
+#[inline]
+pub(crate) fn velocity_breaks(v: [f64; 3], vmax: f64, ev: f64) -> bool {
+    norm3_up(v[0], v[1], v[2]) > add_down(vmax, ev)
+}
+
+/// What [`object_pair_breaks`] needs of an object model: the bound of every acceleration
+/// ([`object_acc_bound`], m/s²), the speed bound (m/s) if any, and the velocity and position
+/// errors (m/s, m), all ≥ 0.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ObjectBounds {
+    pub(crate) acc: f64,
+    pub(crate) max_speed: Option<f64>,
+    pub(crate) vel_error: f64,
+    pub(crate) pos_error: f64,
+}
+
+impl ObjectBounds {
+    pub(crate) fn of(model: &ObjectModel) -> Self {
+        Self {
+            acc: object_acc_bound(model),
+            max_speed: model.max_speed(),
+            vel_error: model.vel_error(),
+            pos_error: model.pos_error(),
+        }
     }
 }
 
 /// Whether two measurements of one object, `early` stamped no later than `late`, contradict its
 /// model (both describe the state `delay` before their stamps, so `Δt` is the stamps'
-/// difference):
-/// - velocities, where both are measured, farther apart than `a·Δt + 2·vel_error` (`a`:
-///   [`object_acc_bound`]);
-/// - positions farther apart than the model allows over `Δt` plus twice the position error:
-///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
-///   for each measured velocity `v` (forward from the early one, backward from the late one);
-///   with none of these the model bounds nothing and no pair contradicts it.
-///
-/// Allowances are rounded down and distances up: rounding never hides a contradiction.
+/// difference); [`object_pair_breaks_with`] on the model's [`ObjectBounds`].
 pub(super) fn object_pair_breaks(
     model: &ObjectModel,
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
 ) -> bool {
+    object_pair_breaks_with(&ObjectBounds::of(model), early, late)
+}
+
+/// Whether two measurements of one object (`early` stamped no later than `late`) contradict the
+/// bounds `b`:
+/// - velocities, where both are measured, farther apart than `a·Δt + 2·vel_error`;
+/// - positions farther apart than the model allows over `Δt` plus twice the position error:
+///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
+///   for each measured velocity `v` (forward from the early one, backward from the late one);
+///   with none of these the model bounds nothing and no pair contradicts it.
+///
+/// # Soundness
+/// Claim C9: false only if each of these holds exactly (allowances rounded down, distances and
+/// norms bounded from the safe side: rounding never hides a contradiction). Harness
+/// `h3_object_pair_sound` (Kani on grids of dyadic values; the twin at full width with the
+/// exact oracle); mutants `x56` (the velocity test dropped) and `x53` (the check dropped in the
+/// auditor, by the audit's tests) fail.
+pub(crate) fn object_pair_breaks_with(
+    b: &ObjectBounds,
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+) -> bool {
     let dt = sub_down(late.time, early.time).max(0.0);
-    let acc = object_acc_bound(model);
-    let ev = model.vel_error();
-    if let (Some(a), Some(b)) = (early.velocity, late.velocity)
-        && a != b
-        && dist3_up(&a, &b) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
+    let (acc, ev) = (b.acc, b.vel_error);
+    if let (Some(a), Some(v)) = (early.velocity, late.velocity)
+        && a != v
+        && dist3_up(&a, &v) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
     {
         return true;
     }
@@ -197,7 +273,7 @@ pub(super) fn object_pair_breaks(
     if early.position == late.position {
         return false;
     }
-    let by_speed = model.max_speed().map(|v| mul_down(v, dt));
+    let by_speed = b.max_speed.map(|v| mul_down(v, dt));
     let by_velocity = [early.velocity, late.velocity]
         .into_iter()
         .flatten()
@@ -214,9 +290,12 @@ pub(super) fn object_pair_breaks(
         (Some(a), None) | (None, Some(a)) => a,
         (None, None) => return false,
     };
-    let allowed = add_down(allowed, mul_down(2.0, model.pos_error()));
+    let allowed = add_down(allowed, mul_down(2.0, b.pos_error));
     dist3_up(&early.position, &late.position) > allowed
 }
+
+#[cfg(any(test, kani))]
+mod proofs;
 
 #[cfg(test)]
 mod tests {

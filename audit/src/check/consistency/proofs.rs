@@ -1,0 +1,364 @@
+//! Harnesses of claim C9's record-against-record consistency checks (`h3`), beside the checks:
+//! a record the others contradict makes the audit inconclusive, so a check that misses a
+//! contradiction lets a log pass on occupancies whose model the log itself refutes.
+//!
+//! - `h3_keypoint_pair_sound`: [`keypoint_breaks`] false ⇒ `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos`.
+//!   Mutant `x64` (equal stamps exempt) fails it.
+//! - `h3_box_accept_sound`: [`boxes_within`] true ⇒ every point of one box is within
+//!   `v_min·dt + e2` of every point of the other. Mutant `x66` (one box's extent) fails it.
+//! - `h3_object_record_sound`: [`velocity_breaks`] false ⇒ `‖v‖ ≤ vmax + ev`. Mutant `x57`.
+//! - `h3_object_pair_sound`: [`object_pair_breaks_with`] false ⇒ the velocity test and each
+//!   position allowance hold. Mutant `x56` (the velocity test dropped) fails it.
+//!
+//! Under Kani every input lies on a grid of dyadic values (coordinates multiples of 1/16 m in
+//! [−4, 4], speeds of 1/4 m/s, errors of 1/64, times of 1/256 s up to 2 s): every difference,
+//! square and allowance of the claim is then a float computed exactly, so a claim compares the
+//! code's decision with the real quantities themselves, and only `√` is abstract (the contract of
+//! `pacs_reach::ieee::sqrt`: any root within an ulp). What the grid leaves to the twins (any
+//! tame floats, the claim decided by the exact oracles of `pacs_reach::exact` against an
+//! allowance rounded up): the rounding of the code's terms — the outward rounding of the slow
+//! paths and the 1e-9 margin of the plain-float fast accepts.
+
+// Proof functions are entry points of the model checker, not called from the crate.
+#![cfg_attr(kani, allow(dead_code))]
+
+use super::*;
+use pacs_proof_kit::{Source, harness};
+use pacs_reach::exact::{dist3_le, norm3_le, tame};
+use pacs_reach::rounding::{add_up, mul_up, sub_up};
+
+/// `n / 2^shift` for an integer `n` in `[−max, max]` (`signed`) or `[0, max]`.
+fn grid<S: Source>(s: &mut S, max: usize, shift: i32, signed: bool) -> f64 {
+    let n = s.index(max + 1) as f64;
+    // 2^−shift from its bits (no `powi`: an LLVM intrinsic the model checker lacks).
+    let x = n * f64::from_bits(((1023 - shift) as u64) << 52);
+    if signed && s.bool() { -x } else { x }
+}
+
+/// A coordinate (m): on the grid of 1/16 in [−4, 4] under Kani, any tame value in [−10, 10] in
+/// the twin.
+fn coordinate<S: Source>(s: &mut S) -> f64 {
+    if cfg!(kani) {
+        grid(s, 64, 4, true)
+    } else {
+        s.f64_in(-10.0, 10.0)
+    }
+}
+
+/// A point (m), as [`coordinate`].
+fn point<S: Source>(s: &mut S) -> [f64; 3] {
+    [coordinate(s), coordinate(s), coordinate(s)]
+}
+
+/// A point near `p` (m): within `r·f` of it for a factor `f` up to 1.5 (so that the twin often
+/// lands near the allowance `r`, where rounding decides); any grid point under Kani.
+fn near<S: Source>(s: &mut S, p: [f64; 3], r: f64) -> [f64; 3] {
+    if cfg!(kani) {
+        point(s)
+    } else if s.bool() {
+        let f = s.f64_in(0.0, 1.5);
+        let d = s.in_ball(r * f);
+        [p[0] + d[0], p[1] + d[1], p[2] + d[2]]
+    } else {
+        point(s)
+    }
+}
+
+/// A speed (m/s): multiples of 1/4 up to 3 under Kani, any tame value in [0, 3] in the twin.
+fn speed<S: Source>(s: &mut S) -> f64 {
+    if cfg!(kani) {
+        grid(s, 12, 2, false)
+    } else {
+        s.f64_in(0.0, 3.0)
+    }
+}
+
+/// A measurement error (m or m/s): multiples of 1/64 up to 1/8 under Kani, any tame value in
+/// [0, 0.2] in the twin.
+fn error<S: Source>(s: &mut S) -> f64 {
+    if cfg!(kani) {
+        grid(s, 8, 6, false)
+    } else {
+        s.f64_in(0.0, 0.2)
+    }
+}
+
+/// A time stamp (s): multiples of 1/256 up to 2 under Kani, any tame value in [0, 10] in the
+/// twin.
+fn stamp<S: Source>(s: &mut S) -> f64 {
+    if cfg!(kani) {
+        grid(s, 512, 8, false)
+    } else {
+        s.f64_in(0.0, 10.0)
+    }
+}
+
+/// `x·y + z` for non-negative terms: exactly under Kani (on the grids above every such term is a
+/// float), rounded up in the twin (a1, a2), so that a claim `‖d‖ ≤` it is implied by the exact
+/// one (and is the exact one under Kani).
+fn mul_add_up(x: f64, y: f64, z: f64) -> f64 {
+    if cfg!(kani) {
+        x * y + z
+    } else {
+        add_up(mul_up(x, y), z)
+    }
+}
+
+/// `hi − lo` exactly under Kani (grid), rounded up in the twin.
+fn span_up(lo: f64, hi: f64) -> f64 {
+    if cfg!(kani) { hi - lo } else { sub_up(hi, lo) }
+}
+
+/// True only if `‖p − q‖ ≤ r` exactly: under Kani the squares (exact on the grid: r a
+/// multiple of 2⁻¹⁰ below 64, so `r²` has at most 32 bits), in the twin the exact oracle.
+fn dist_within(p: &[f64; 3], q: &[f64; 3], r: f64) -> bool {
+    if cfg!(kani) {
+        let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+        r >= 0.0 && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r * r
+    } else {
+        dist3_le(p, q, r)
+    }
+}
+
+/// True only if `‖v‖ ≤ r` exactly, as [`dist_within`].
+fn norm_within(v: &[f64; 3], r: f64) -> bool {
+    if cfg!(kani) {
+        r >= 0.0 && v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= r * r
+    } else {
+        norm3_le(v[0], v[1], v[2], r)
+    }
+}
+
+fn keypoint_pair<S: Source>(s: &mut S) {
+    let (v, e_pos) = (speed(s), error(s));
+    let (a, b) = (stamp(s), stamp(s));
+    let (lo, hi) = order(a, b);
+    let allowance = mul_add_up(v, span_up(lo, hi), 2.0 * e_pos);
+    let p = point(s);
+    let q = near(s, p, allowance);
+    if !s.assume(
+        [v, e_pos, a, b]
+            .iter()
+            .chain(&p)
+            .chain(&q)
+            .all(|&x| tame(x)),
+    ) {
+        return;
+    }
+    if !keypoint_breaks(p, q, v, lo, hi, e_pos) {
+        assert!(
+            dist_within(&p, &q, allowance),
+            "{p:?} → {q:?} over [{lo}, {hi}] s at {v} m/s, e_pos {e_pos} m: beyond {allowance} m, not flagged"
+        );
+    }
+}
+harness!(
+    h3_keypoint_pair_sound,
+    unwind = 2,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    keypoint_pair
+);
+
+/// A box `[min x, min y, min z, max x, max y, max z]` and a point of it.
+fn box_and_member<S: Source>(s: &mut S) -> ([f64; 6], [f64; 3]) {
+    let (u, w) = (point(s), point(s));
+    let bx = [
+        u[0].min(w[0]),
+        u[1].min(w[1]),
+        u[2].min(w[2]),
+        u[0].max(w[0]),
+        u[1].max(w[1]),
+        u[2].max(w[2]),
+    ];
+    let mut m = [0.0; 3];
+    for k in 0..3 {
+        m[k] = if cfg!(kani) {
+            // Any grid point of the box.
+            let x = coordinate(s);
+            s.assume(x >= bx[k] && x <= bx[k + 3]);
+            x
+        } else {
+            match s.index(3) {
+                0 => bx[k],
+                1 => bx[k + 3],
+                _ => s.f64_in(bx[k], bx[k + 3]),
+            }
+        };
+    }
+    (bx, m)
+}
+
+fn box_accept<S: Source>(s: &mut S) {
+    let (v_min, e2) = (speed(s), 2.0 * error(s));
+    let dt = span_up(0.0, stamp(s));
+    let (ba, p) = box_and_member(s);
+    let (bb, q) = box_and_member(s);
+    if !s.assume(
+        [v_min, e2, dt]
+            .iter()
+            .chain(&ba)
+            .chain(&bb)
+            .all(|&x| tame(x)),
+    ) {
+        return;
+    }
+    if boxes_within(v_min, e2, dt, &ba, &bb) {
+        let allowance = mul_add_up(v_min, dt, e2);
+        assert!(
+            dist_within(&p, &q, allowance),
+            "boxes {ba:?}, {bb:?} accepted at {v_min} m/s over {dt} s (+{e2} m), but {p:?} and {q:?} are farther apart than {allowance} m"
+        );
+    }
+}
+harness!(
+    h3_box_accept_sound,
+    unwind = 4,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    box_accept
+);
+
+fn object_record<S: Source>(s: &mut S) {
+    let (vmax, ev) = (speed(s), error(s));
+    let bound = mul_add_up(1.0, vmax, ev);
+    let v = near(s, [0.0; 3], bound);
+    if !s.assume([vmax, ev].iter().chain(&v).all(|&x| tame(x))) {
+        return;
+    }
+    if !velocity_breaks(v, vmax, ev) {
+        assert!(
+            norm_within(&v, bound),
+            "velocity {v:?} faster than {vmax} + {ev} m/s, not flagged"
+        );
+    }
+}
+harness!(
+    h3_object_record_sound,
+    unwind = 2,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    object_record
+);
+
+/// A measured velocity (m/s) or none. Under Kani along one axis (`‖v‖` is then the grid value
+/// `|v_k|` itself, so the position allowance built from it is exact); any direction in the twin.
+fn velocity<S: Source>(s: &mut S) -> Option<[f64; 3]> {
+    if !s.bool() {
+        return None;
+    }
+    Some(if cfg!(kani) {
+        let mut v = [0.0; 3];
+        v[s.index(3)] = grid(s, 12, 2, true);
+        v
+    } else {
+        near(s, [0.0; 3], 3.0)
+    })
+}
+
+/// `‖v‖` from below: exact under Kani (one non-zero coordinate on the grid, [`velocity`]),
+/// `norm3_down` in the twin (claim C1, harnesses a3). An allowance built from it is at most the
+/// real one, so a claim against it implies the claim against the real one.
+fn speed_from_below(v: &[f64; 3]) -> f64 {
+    if cfg!(kani) {
+        v[0].abs() + v[1].abs() + v[2].abs()
+    } else {
+        norm3_down(*v)
+    }
+}
+
+fn object_pair<S: Source>(s: &mut S) {
+    let b = ObjectBounds {
+        acc: if cfg!(kani) {
+            grid(s, 64, 2, false)
+        } else {
+            s.f64_in(0.0, 16.0)
+        },
+        max_speed: if s.bool() { Some(speed(s)) } else { None },
+        vel_error: error(s),
+        pos_error: error(s),
+    };
+    let (t0, t1) = (stamp(s), stamp(s));
+    let (early_t, late_t) = order(t0, t1);
+    let dt = span_up(early_t, late_t);
+    let early = ObjectMeasurement {
+        time: early_t,
+        position: point(s),
+        velocity: velocity(s),
+    };
+    let vb = mul_add_up(b.acc, dt, 2.0 * b.vel_error);
+    let late_v = match early.velocity {
+        Some(v) if !cfg!(kani) && s.bool() => Some(near(s, v, vb)),
+        _ => velocity(s),
+    };
+    let reach = mul_add_up(b.max_speed.unwrap_or(3.0), dt, 2.0 * b.pos_error);
+    let late = ObjectMeasurement {
+        time: late_t,
+        position: near(s, early.position, reach),
+        velocity: late_v,
+    };
+    let values = [
+        b.acc,
+        b.max_speed.unwrap_or(0.0),
+        b.vel_error,
+        b.pos_error,
+        t0,
+        t1,
+    ];
+    let vs = [early.velocity, late.velocity].map(|v| v.unwrap_or([0.0; 3]));
+    if !s.assume(
+        values
+            .iter()
+            .chain(&early.position)
+            .chain(&late.position)
+            .chain(vs.iter().flatten())
+            .all(|&x| tame(x)),
+    ) {
+        return;
+    }
+    if object_pair_breaks_with(&b, &early, &late) {
+        return;
+    }
+    // The velocities, where both are measured, within a·Δt + 2·vel_error.
+    if let (Some(va), Some(vl)) = (early.velocity, late.velocity) {
+        assert!(
+            dist_within(&va, &vl, vb),
+            "velocities {va:?} → {vl:?} over {dt} s differ by more than {vb} m/s, not flagged"
+        );
+    }
+    let (p, q) = (&early.position, &late.position);
+    // Within the speed bound's allowance.
+    if let Some(vmax) = b.max_speed {
+        let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error);
+        assert!(
+            dist_within(p, q, allowed),
+            "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, not flagged"
+        );
+    }
+    // Within each measured velocity's allowance (|v| + ev)·Δt + a·Δt²/2 + 2·pos_error, with
+    // |v| from below.
+    for v in [early.velocity, late.velocity].into_iter().flatten() {
+        let speed = speed_from_below(&v) + b.vel_error;
+        let half_a = if cfg!(kani) {
+            0.5 * b.acc
+        } else {
+            mul_up(0.5, b.acc)
+        };
+        let allowed = mul_add_up(
+            speed,
+            dt,
+            mul_add_up(half_a, mul_add_up(dt, dt, 0.0), 2.0 * b.pos_error),
+        );
+        assert!(
+            dist_within(p, q, allowed),
+            "{p:?} → {q:?} over {dt} s beyond {allowed} m with velocity {v:?}, not flagged"
+        );
+    }
+}
+harness!(
+    h3_object_pair_sound,
+    unwind = 3,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    object_pair
+);
