@@ -187,3 +187,41 @@ harness!(
     cases = crate::DEFAULT_CASES,
     verdict_of_findings
 );
+
+/// The rest-speed cap of the one rule (claim C9 and C8′: SSM allows contact only while every
+/// joint speed is at most `rest_speed`, so a larger setting would let SSM pass a moving robot):
+/// for any float `r` (NaN and ±∞ included), `check_rest_speed(r)` — which the rule's
+/// constructors and the audit's [`AuditConfig::validate`] call — accepts `r` only within
+/// `[0, MAX_REST_SPEED]`, and an audit config with `rest_speed = r` validates only then too.
+/// Mutant `x58` (the cap lifted) fails it.
+fn rest_speed_capped<S: Source>(s: &mut S) {
+    use pacs_verify::iso15066::{MAX_REST_SPEED, check_rest_speed};
+    let r = match s.index(3) {
+        0 => s.f64_full(-1.0, 1.0),
+        // Near the cap (in the twin; any float of the range under Kani).
+        1 => s.f64_full(0.9 * MAX_REST_SPEED, 1.1 * MAX_REST_SPEED),
+        // Any bit pattern: NaN, ±∞, every magnitude.
+        _ => f64::from_bits(s.index(usize::MAX) as u64),
+    };
+    let within = (0.0..=MAX_REST_SPEED).contains(&r);
+    if check_rest_speed(r).is_ok() {
+        assert!(within, "rest speed {r} rad/s accepted above the cap");
+    }
+    let cfg = AuditConfig {
+        rest_speed: r,
+        ..AuditConfig::default()
+    };
+    if cfg.validate().is_ok() {
+        assert!(
+            within,
+            "an audit config with rest speed {r} rad/s validated"
+        );
+    }
+}
+harness!(
+    h3_rest_speed_capped,
+    unwind = 8,
+    bits = 52,
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    rest_speed_capped
+);

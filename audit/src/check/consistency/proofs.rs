@@ -27,6 +27,85 @@ use pacs_proof_kit::{Source, harness};
 use pacs_reach::exact::{dist3_le, norm3_le, tame};
 use pacs_reach::rounding::{add_up, mul_up, sub_up};
 
+/// The calls of `dist3_up` a harness with [`any_dist_recorded`] saw, up to two: for each its
+/// arguments' bit patterns and its result's. Scalar statics: CBMC's SMT encoding of arrays in
+/// statics is rejected by Bitwuzla ("expected bit-vector term … to 'concat'").
+#[cfg(kani)]
+mod record {
+    use std::sync::atomic::AtomicU64;
+    macro_rules! slots {
+        ($($name:ident),*) => { $(pub static $name: AtomicU64 = AtomicU64::new(0);)* };
+    }
+    slots!(
+        COUNT, A0, A1, A2, A3, A4, A5, AR, B0, B1, B2, B3, B4, B5, BR
+    );
+    pub fn slot(k: u64) -> [&'static AtomicU64; 7] {
+        if k == 0 {
+            [&A0, &A1, &A2, &A3, &A4, &A5, &AR]
+        } else {
+            [&B0, &B1, &B2, &B3, &B4, &B5, &BR]
+        }
+    }
+}
+
+/// Stub of `pacs_reach::rounding::dist3_up` for the h3 proofs: any `r ≥ 0` (+∞ included),
+/// recorded with the arguments. Over-approximates `dist3_up` (whose result is ≥ 0), so a claim
+/// proved for every such `r` holds for the real one; that the real one is ≥ the exact distance
+/// is claim C1 (`a3_dist_up_encloses`, Kani split `a3_dist_up_sqrt_inflate`), composed in the
+/// docs of the harnesses.
+#[cfg(kani)]
+pub(crate) fn any_dist_recorded(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    use std::sync::atomic::Ordering::Relaxed;
+    let r: f64 = kani::any();
+    kani::assume(r >= 0.0);
+    let k = record::COUNT.load(Relaxed);
+    if k < 2 {
+        let slot = record::slot(k);
+        slot[0].store(a[0].to_bits(), Relaxed);
+        slot[1].store(a[1].to_bits(), Relaxed);
+        slot[2].store(a[2].to_bits(), Relaxed);
+        slot[3].store(b[0].to_bits(), Relaxed);
+        slot[4].store(b[1].to_bits(), Relaxed);
+        slot[5].store(b[2].to_bits(), Relaxed);
+        slot[6].store(r.to_bits(), Relaxed);
+        record::COUNT.store(k + 1, Relaxed);
+    }
+    r
+}
+
+/// The upper bound of `‖a − b‖` the code took: under Kani the result [`any_dist_recorded`]
+/// recorded for exactly these arguments (None if the code took none), in the twin
+/// `dist3_up(a, b)` itself (deterministic).
+fn dist_taken(a: &[f64; 3], b: &[f64; 3]) -> Option<f64> {
+    #[cfg(kani)]
+    {
+        use std::sync::atomic::Ordering::Relaxed;
+        let n = record::COUNT.load(Relaxed);
+        let is = |k: u64| {
+            let slot = record::slot(k);
+            k < n
+                && slot[0].load(Relaxed) == a[0].to_bits()
+                && slot[1].load(Relaxed) == a[1].to_bits()
+                && slot[2].load(Relaxed) == a[2].to_bits()
+                && slot[3].load(Relaxed) == b[0].to_bits()
+                && slot[4].load(Relaxed) == b[1].to_bits()
+                && slot[5].load(Relaxed) == b[2].to_bits()
+        };
+        let r = |k: u64| f64::from_bits(record::slot(k)[6].load(Relaxed));
+        if is(0) {
+            Some(r(0))
+        } else if is(1) {
+            Some(r(1))
+        } else {
+            None
+        }
+    }
+    #[cfg(not(kani))]
+    {
+        Some(dist3_up(a, b))
+    }
+}
+
 /// `n / 2^shift` for an integer `n` in `[−max, max]` (`signed`) or `[0, max]`.
 fn grid<S: Source>(s: &mut S, max: usize, shift: i32, signed: bool) -> f64 {
     let n = s.index(max + 1) as f64;
@@ -136,16 +215,36 @@ fn keypoint_pair<S: Source>(s: &mut S) {
     let allowance = mul_add_up(v, span_up(lo, hi), 2.0 * e_pos);
     let p = point(s);
     let q = near(s, p, allowance);
-    if !s.assume(
-        [v, e_pos, a, b]
-            .iter()
-            .chain(&p)
-            .chain(&q)
-            .all(|&x| tame(x)),
-    ) {
+    // Grid values are tame by construction (and the check would unroll under Kani).
+    if !cfg!(kani)
+        && !s.assume(
+            [v, e_pos, a, b]
+                .iter()
+                .chain(&p)
+                .chain(&q)
+                .all(|&x| tame(x)),
+        )
+    {
         return;
     }
-    if !keypoint_breaks(p, q, v, lo, hi, e_pos) {
+    if keypoint_breaks(p, q, v, lo, hi, e_pos) {
+        return;
+    }
+    if cfg!(kani) {
+        // On the grid (every term exact) the code's own two tests, against the real allowance:
+        // the squared distance within its square (the plain-float fast accept), or the upper
+        // bound of the distance the code took (any value, `any_dist_recorded`) within it; with
+        // `dist3_up ≥ ‖p − q‖` (C1) either gives the claim. Asking the solver for
+        // `‖p − q‖² ≤ allowance²` through the root's contract instead timed out (300 s).
+        let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+        let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        assert!(
+            p == q
+                || d2 <= allowance * allowance
+                || dist_taken(&p, &q).is_some_and(|r| r <= allowance),
+            "{p:?} → {q:?} over [{lo}, {hi}] s at {v} m/s, e_pos {e_pos} m: beyond {allowance} m, not flagged"
+        );
+    } else {
         assert!(
             dist_within(&p, &q, allowance),
             "{p:?} → {q:?} over [{lo}, {hi}] s at {v} m/s, e_pos {e_pos} m: beyond {allowance} m, not flagged"
@@ -154,8 +253,9 @@ fn keypoint_pair<S: Source>(s: &mut S) {
 }
 harness!(
     h3_keypoint_pair_sound,
-    unwind = 2,
+    unwind = 4,
     bits = 52,
+    stub = (pacs_reach::rounding::dist3_up => any_dist_recorded),
     cases = pacs_proof_kit::DEFAULT_CASES,
     keypoint_pair
 );
@@ -173,18 +273,14 @@ fn box_and_member<S: Source>(s: &mut S) -> ([f64; 6], [f64; 3]) {
     ];
     let mut m = [0.0; 3];
     for k in 0..3 {
-        m[k] = if cfg!(kani) {
-            // Any grid point of the box.
-            let x = coordinate(s);
-            s.assume(x >= bx[k] && x <= bx[k + 3]);
-            x
-        } else {
-            match s.index(3) {
+        // The twin's members (under Kani the claim is on the box's diagonal, see the caller).
+        if !cfg!(kani) {
+            m[k] = match s.index(3) {
                 0 => bx[k],
                 1 => bx[k + 3],
                 _ => s.f64_in(bx[k], bx[k + 3]),
-            }
-        };
+            };
+        }
     }
     (bx, m)
 }
@@ -194,17 +290,40 @@ fn box_accept<S: Source>(s: &mut S) {
     let dt = span_up(0.0, stamp(s));
     let (ba, p) = box_and_member(s);
     let (bb, q) = box_and_member(s);
-    if !s.assume(
-        [v_min, e2, dt]
-            .iter()
-            .chain(&ba)
-            .chain(&bb)
-            .all(|&x| tame(x)),
-    ) {
+    // Grid values are tame by construction (and the check would unroll under Kani).
+    if !cfg!(kani)
+        && !s.assume(
+            [v_min, e2, dt]
+                .iter()
+                .chain(&ba)
+                .chain(&bb)
+                .all(|&x| tame(x)),
+        )
+    {
         return;
     }
-    if boxes_within(v_min, e2, dt, &ba, &bb) {
-        let allowance = mul_add_up(v_min, dt, e2);
+    if !boxes_within(v_min, e2, dt, &ba, &bb) {
+        return;
+    }
+    let allowance = mul_add_up(v_min, dt, e2);
+    if cfg!(kani) {
+        // On the grid the claim in two steps, the second on the real terms: every member of
+        // either box lies in the box holding both, so `|p_k − q_k| ≤ ext_k` on each axis (real
+        // geometry), and the diagonal of that box, `√Σ ext_k²`, is within the allowance (the
+        // code's decision; exact squares). Together `‖p − q‖ ≤ allowance` (squares are monotone
+        // on [0, ∞)). The claim on the members themselves (`‖p − q‖² ≤ allowance²`) asks the
+        // solver for that monotonicity across 53-bit multipliers: a timeout at 300 s.
+        let mut diag2 = 0.0;
+        for k in 0..3 {
+            let ext = ba[k + 3].max(bb[k + 3]) - ba[k].min(bb[k]);
+            diag2 += ext * ext;
+        }
+        let _ = (p, q);
+        assert!(
+            diag2 <= allowance * allowance,
+            "boxes {ba:?}, {bb:?} accepted at {v_min} m/s over {dt} s (+{e2} m), but their diagonal² {diag2} exceeds {allowance}²"
+        );
+    } else {
         assert!(
             dist_within(&p, &q, allowance),
             "boxes {ba:?}, {bb:?} accepted at {v_min} m/s over {dt} s (+{e2} m), but {p:?} and {q:?} are farther apart than {allowance} m"
@@ -223,7 +342,8 @@ fn object_record<S: Source>(s: &mut S) {
     let (vmax, ev) = (speed(s), error(s));
     let bound = mul_add_up(1.0, vmax, ev);
     let v = near(s, [0.0; 3], bound);
-    if !s.assume([vmax, ev].iter().chain(&v).all(|&x| tame(x))) {
+    // Grid values are tame by construction (and the check would unroll under Kani).
+    if !cfg!(kani) && !s.assume([vmax, ev].iter().chain(&v).all(|&x| tame(x))) {
         return;
     }
     if !velocity_breaks(v, vmax, ev) {
@@ -235,7 +355,7 @@ fn object_record<S: Source>(s: &mut S) {
 }
 harness!(
     h3_object_record_sound,
-    unwind = 2,
+    unwind = 4,
     bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     object_record
@@ -306,14 +426,17 @@ fn object_pair<S: Source>(s: &mut S) {
         t1,
     ];
     let vs = [early.velocity, late.velocity].map(|v| v.unwrap_or([0.0; 3]));
-    if !s.assume(
-        values
-            .iter()
-            .chain(&early.position)
-            .chain(&late.position)
-            .chain(vs.iter().flatten())
-            .all(|&x| tame(x)),
-    ) {
+    // Grid values are tame by construction (and the check would unroll under Kani).
+    if !cfg!(kani)
+        && !s.assume(
+            values
+                .iter()
+                .chain(&early.position)
+                .chain(&late.position)
+                .chain(vs.iter().flatten())
+                .all(|&x| tame(x)),
+        )
+    {
         return;
     }
     if object_pair_breaks_with(&b, &early, &late) {
@@ -322,7 +445,7 @@ fn object_pair<S: Source>(s: &mut S) {
     // The velocities, where both are measured, within a·Δt + 2·vel_error.
     if let (Some(va), Some(vl)) = (early.velocity, late.velocity) {
         assert!(
-            dist_within(&va, &vl, vb),
+            within_taken(&va, &vl, vb),
             "velocities {va:?} → {vl:?} over {dt} s differ by more than {vb} m/s, not flagged"
         );
     }
@@ -331,7 +454,7 @@ fn object_pair<S: Source>(s: &mut S) {
     if let Some(vmax) = b.max_speed {
         let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error);
         assert!(
-            dist_within(p, q, allowed),
+            within_taken(p, q, allowed),
             "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, not flagged"
         );
     }
@@ -350,15 +473,27 @@ fn object_pair<S: Source>(s: &mut S) {
             mul_add_up(half_a, mul_add_up(dt, dt, 0.0), 2.0 * b.pos_error),
         );
         assert!(
-            dist_within(p, q, allowed),
+            within_taken(p, q, allowed),
             "{p:?} → {q:?} over {dt} s beyond {allowed} m with velocity {v:?}, not flagged"
         );
     }
 }
+
+/// The claim `‖a − b‖ ≤ r` after a check that did not flag: in the twin exactly
+/// ([`dist_within`]); under Kani (grid) the squared distance within `r²` (exact), equal points,
+/// or the upper bound of the distance the code took within `r` (with C1, the claim).
+fn within_taken(a: &[f64; 3], b: &[f64; 3], r: f64) -> bool {
+    if cfg!(kani) {
+        a == b || dist_within(a, b, r) || dist_taken(a, b).is_some_and(|d| d <= r)
+    } else {
+        dist_within(a, b, r)
+    }
+}
 harness!(
     h3_object_pair_sound,
-    unwind = 3,
+    unwind = 4,
     bits = 52,
+    stub = (pacs_reach::rounding::dist3_up => any_dist_recorded),
     cases = pacs_proof_kit::DEFAULT_CASES,
     object_pair
 );
