@@ -264,8 +264,7 @@ pub(crate) fn object_pair_breaks_with(
     let dt = sub_down(late.time, early.time).max(0.0);
     let (acc, ev) = (b.acc, b.vel_error);
     if let (Some(a), Some(v)) = (early.velocity, late.velocity)
-        && a != v
-        && dist3_up(&a, &v) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
+        && velocities_break(&a, &v, acc, dt, ev)
     {
         return true;
     }
@@ -292,6 +291,19 @@ pub(crate) fn object_pair_breaks_with(
     };
     let allowed = add_down(allowed, mul_down(2.0, b.pos_error));
     dist3_up(&early.position, &late.position) > allowed
+}
+
+/// Whether two measured velocities `a`, `v` (m/s) of one object, stamped `dt` (s, at most the
+/// stamps' real difference) apart, differ by more than `acc·dt + 2·ev` (`acc`: the bound of
+/// every acceleration, m/s²; `ev`: the velocity error, m/s; all ≥ 0).
+///
+/// # Soundness
+/// Claim C9: false only if `‖a − v‖ ≤ acc·dt + 2·ev` exactly (the distance rounded up, the
+/// allowance down). Harness `h3_object_pair_sound` (Kani: this test, on grids of dyadic values;
+/// the twin: the whole [`object_pair_breaks_with`]); mutant `x56` fails it.
+#[inline]
+pub(crate) fn velocities_break(a: &[f64; 3], v: &[f64; 3], acc: f64, dt: f64, ev: f64) -> bool {
+    a != v && dist3_up(a, v) > add_down(mul_down(acc, dt), mul_down(2.0, ev))
 }
 
 #[cfg(any(test, kani))]

@@ -8,7 +8,8 @@
 //!   `v_min·dt + e2` of every point of the other. Mutant `x66` (one box's extent) fails it.
 //! - `h3_object_record_sound`: [`velocity_breaks`] false ⇒ `‖v‖ ≤ vmax + ev`. Mutant `x57`.
 //! - `h3_object_pair_sound`: [`object_pair_breaks_with`] false ⇒ the velocity test and each
-//!   position allowance hold. Mutant `x56` (the velocity test dropped) fails it.
+//!   position allowance hold (under Kani the velocity test, [`velocities_break`]). Mutant `x56`
+//!   (the velocity test dropped) fails it.
 //!
 //! Under Kani every input lies on a grid of dyadic values (coordinates multiples of 1/16 m in
 //! [−4, 4], speeds of 1/4 m/s, errors of 1/64, times of 1/256 s up to 2 s): every difference,
@@ -387,7 +388,30 @@ fn speed_from_below(v: &[f64; 3]) -> f64 {
     }
 }
 
+/// Under Kani: the velocity test of [`object_pair_breaks_with`] ([`velocities_break`]), on the
+/// grid. The whole pair (positions too, through `Option<[f64; 3]>` velocities) is the twin's:
+/// Bitwuzla rejects CBMC's encoding of it ("expected bit-vector term … to 'concat'"), and the
+/// SAT back end timed out at 200 s.
+fn object_velocities<S: Source>(s: &mut S) {
+    let (acc, ev) = (grid(s, 64, 2, false), error(s));
+    let (t0, t1) = (stamp(s), stamp(s));
+    let (lo, hi) = order(t0, t1);
+    let dt = hi - lo;
+    let (a, v) = (point(s), point(s));
+    if !velocities_break(&a, &v, acc, dt, ev) {
+        let allowed = acc * dt + 2.0 * ev;
+        assert!(
+            within_taken(&a, &v, allowed),
+            "velocities {a:?} → {v:?} over {dt} s differ by more than {allowed} m/s, not flagged"
+        );
+    }
+}
+
 fn object_pair<S: Source>(s: &mut S) {
+    if cfg!(kani) {
+        object_velocities(s);
+        return;
+    }
     let b = ObjectBounds {
         acc: if cfg!(kani) {
             grid(s, 64, 2, false)
