@@ -44,8 +44,9 @@
 #![cfg_attr(kani, allow(dead_code))]
 use super::frames::*;
 use super::lanes::*;
+use super::{NORM_PAD, RAD_UP, RobotReach};
 use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod};
-use crate::rounding::{TRIG_PAD, add_up, mul_up};
+use crate::rounding::{TRIG_PAD, add_up, dist3_up, mul_up};
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::Greater;
 
@@ -321,4 +322,205 @@ harness!(
     twin_only,
     cases = pacs_proof_kit::DEFAULT_CASES,
     affine_encloses
+);
+
+/// The roots a proof with [`any_root_logged`] saw: up to eight calls of `ieee::sqrt`, each with
+/// its radicand's and its result's bit patterns. Scalar statics: CBMC's SMT encoding of arrays
+/// in statics is rejected by Bitwuzla ("expected bit-vector term … to 'concat'").
+#[cfg(kani)]
+mod root_log {
+    use std::sync::atomic::AtomicU64;
+    macro_rules! slots {
+        ($($name:ident),*) => { $(pub static $name: AtomicU64 = AtomicU64::new(0);)* };
+    }
+    slots!(
+        COUNT, X0, X1, X2, X3, X4, X5, X6, X7, R0, R1, R2, R3, R4, R5, R6, R7
+    );
+    /// `(radicand, root)` of call `k` (< 8).
+    pub fn slot(k: u64) -> (&'static AtomicU64, &'static AtomicU64) {
+        match k {
+            0 => (&X0, &R0),
+            1 => (&X1, &R1),
+            2 => (&X2, &R2),
+            3 => (&X3, &R3),
+            4 => (&X4, &R4),
+            5 => (&X5, &R5),
+            6 => (&X6, &R6),
+            _ => (&X7, &R7),
+        }
+    }
+}
+
+/// Stub of [`crate::ieee::sqrt`] for `d1_mean_value_sums`: for a positive finite `x` any `r` in
+/// `[0, 1e160)`, logged with `x` (the first eight calls); IEEE results otherwise. As
+/// `any_root_recorded` (a3): over-approximates IEEE `√`; the root's accuracy (the contract of
+/// `ieee::sqrt`) enters only in the composition written in the harness's doc.
+#[cfg(kani)]
+pub(crate) fn any_root_logged(x: f64) -> f64 {
+    use std::sync::atomic::Ordering::Relaxed;
+    if x.is_nan() || x < 0.0 {
+        return f64::NAN;
+    }
+    if x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    let r: f64 = kani::any();
+    kani::assume((0.0..1.0e160).contains(&r));
+    let k = root_log::COUNT.load(Relaxed);
+    if k < 8 {
+        let (xs, rs) = root_log::slot(k);
+        xs.store(x.to_bits(), Relaxed);
+        rs.store(r.to_bits(), Relaxed);
+        root_log::COUNT.store(k + 1, Relaxed);
+    }
+    r
+}
+
+/// The root the code took of call `k`, checked to be of the radicand `expected` (bitwise): under
+/// Kani the logged one (a call with another radicand, or none, fails the claim), in the twin
+/// the library root of `expected` (`√` is deterministic). A radicand of 0 takes no root under
+/// Kani's stub (it returns 0 without logging), so calls are counted over positive radicands.
+fn root_taken(k: u64, expected: f64) -> f64 {
+    #[cfg(kani)]
+    {
+        use std::sync::atomic::Ordering::Relaxed;
+        let (xs, rs) = root_log::slot(k);
+        assert!(
+            k < root_log::COUNT.load(Relaxed) && xs.load(Relaxed) == expected.to_bits(),
+            "root {k}: not of the radicand {expected}"
+        );
+        f64::from_bits(rs.load(Relaxed))
+    }
+    #[cfg(not(kani))]
+    {
+        let _ = k;
+        crate::ieee::sqrt(expected)
+    }
+}
+
+/// A value on the grid `n / 2^shift`, `n` in `[−max, max]` (`signed`) or `[0, max]`, under Kani;
+/// any value in that range in the twin.
+fn grid_or_any<S: Source>(s: &mut S, max: usize, shift: i32, signed: bool) -> f64 {
+    let scale = f64::from_bits(((1023 - shift) as u64) << 52);
+    if cfg!(kani) {
+        let x = s.index(max + 1) as f64 * scale;
+        if signed && s.bool() { -x } else { x }
+    } else {
+        let m = max as f64 * scale;
+        s.f64_in(if signed { -m } else { 0.0 }, m)
+    }
+}
+
+/// The mean-value sums of the robot occupancy's second enclosure
+/// ([`RobotReach::mean_value_sums`], claim C4), for the first `k ≤ 4` joints (one chunk of lanes)
+/// and two points `p_e` given as box enclosures (midpoint ± radius per coordinate) against the
+/// joint origins `o_j` (likewise):
+///
+/// - the radicand of joint j's root is `D_j = Σ_i d_ji²`, with `d_ji = |p_i − o_ji| + p_w,i +
+///   o_w,ji` (midpoints and radii), the sup of `|p_i − o_i|` over the two boxes: for members at
+///   any vertex `|p_i − o_i| ≤ d_ji`, so `D_j ≥ ‖p − o_j‖²`;
+/// - the result is the round-to-nearest evaluation of `Σ_{j<k} δ_j·r_j` (lanes added pairwise)
+///   with `r_j` the root of `D_j`, bit for bit.
+///
+/// Under Kani on grids of dyadic values (midpoints of 1/16 in [−4, 4], radii of 1/64 up to 1/4,
+/// half-widths δ of 1/64 up to 1), where every `d_ji` and `D_j` is exact, with `√` by
+/// [`any_root_logged`] (any root, logged with its radicand). Composition (module doc of
+/// [`super`]): with the contract of `ieee::sqrt` each `r_j ≥ √D_j·(1 − 2⁻⁵²)`, and the rounded
+/// sum of `k ≤ 16` products is within a relative `γ` of the exact one, which `RAD_UP` and the
+/// pad of `occupancy_into` cover; so `(e_centre + mv)·RAD_UP + pad ≥ Σ_j δ_j·‖p − o_j‖` (the
+/// mean-value bound of the displacement). The twin checks that final inequality at full width
+/// (members at random vertices, distances rounded up). Mutant `x5` (δ/2 for the half-width)
+/// fails both.
+fn mean_value<S: Source>(s: &mut S) {
+    let k = s.index(LANES + 1);
+    let mut f = Frames::default();
+    let (mut om, mut ow) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+    let mut delta = [0.0; LANES];
+    for j in 0..LANES {
+        for i in 0..3 {
+            om[i][j] = grid_or_any(s, 64, 4, true);
+            ow[i][j] = grid_or_any(s, 16, 6, false);
+        }
+        delta[j] = grid_or_any(s, 64, 6, false);
+    }
+    let (mut pm, mut pw) = ([[0.0; 3]; 2], [[0.0; 3]; 2]);
+    for e in 0..2 {
+        for i in 0..3 {
+            pm[e][i] = grid_or_any(s, 64, 4, true);
+            pw[e][i] = grid_or_any(s, 16, 6, false);
+        }
+    }
+    for i in 0..3 {
+        f.om[i][0] = Lanes3(simd::new(om[i]));
+        f.ow[i][0] = Lanes3(simd::new(ow[i]));
+    }
+    let mut dl = [Lanes3::default(); JCH];
+    dl[0] = Lanes3(simd::new(delta));
+    let lanes = |x: [f64; 3]| Lanes3(simd::new([x[0], x[1], x[2], 0.0]));
+    let p = [0, 1].map(|e| VecEnc {
+        m: lanes(pm[e]),
+        e: Lanes3::default(),
+        w: lanes(pw[e]),
+    });
+    let mv = RobotReach::mean_value_sums(&f, &dl, [&p[0], &p[1]], k);
+    let mut call = 0;
+    for e in 0..2 {
+        let mut terms = [0.0; LANES];
+        let mut truth = 0.0;
+        for j in 0..LANES {
+            // The sup distance per coordinate, and a member pair at a vertex within it.
+            let mut d2 = 0.0;
+            let (mut pp, mut op) = ([0.0; 3], [0.0; 3]);
+            for i in 0..3 {
+                let d = ((pm[e][i] - om[i][j]).abs() + pw[e][i]) + ow[i][j];
+                d2 += d * d;
+                let sp = if s.bool() { 1.0 } else { -1.0 };
+                let so = if s.bool() { 1.0 } else { -1.0 };
+                pp[i] = pm[e][i] + sp * pw[e][i];
+                op[i] = om[i][j] + so * ow[i][j];
+                if cfg!(kani) {
+                    let gap = pp[i] - op[i];
+                    assert!(gap.abs() <= d, "coordinate {i}: |{gap}| above the sup {d}");
+                }
+            }
+            // The code takes no root at all for k = 0 (no chunk).
+            let r = if k > 0 && d2 > 0.0 {
+                let r = root_taken(call, d2);
+                call += 1;
+                r
+            } else {
+                0.0
+            };
+            let mask = if j < k { 1.0 } else { 0.0 };
+            terms[j] = 0.0 + r * (delta[j] * mask);
+            if j < k {
+                // An upper bound of δ_j·‖p − o_j‖ for the member pair (twin only).
+                truth = add_up(truth, mul_up(delta[j], dist3_up(&pp, &op)));
+            }
+        }
+        let sum = (terms[0] + terms[1]) + (terms[2] + terms[3]);
+        if cfg!(kani) {
+            assert!(
+                mv[e].to_bits() == sum.to_bits(),
+                "point {e}: the sum {} is not Σ δ_j·r_j = {sum} (k = {k})",
+                mv[e]
+            );
+        } else if k > 0 {
+            // The mean-value bound as `occupancy_into` pads it (e_centre = 0 here).
+            let w: f64 = delta[..k].iter().fold(1.0, |a, &d| add_up(a, d));
+            let bound = mv[e] * RAD_UP + mul_up(NORM_PAD, w);
+            assert!(
+                truth <= bound,
+                "point {e}: Σ δ_j·‖p − o_j‖ ≤ {truth} above the padded sum {bound} (k = {k})"
+            );
+        }
+    }
+}
+harness!(
+    d1_mean_value_sums,
+    unwind = 5,
+    bits = 52,
+    stub = (crate::ieee::sqrt => any_root_logged),
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    mean_value
 );
