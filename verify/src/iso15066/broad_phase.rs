@@ -63,12 +63,24 @@ impl Aabb {
 ///
 /// # Soundness
 /// Contains the capsule: its ends bound the exact `min(a, b) − r` below and `max(a, b) + r` above
-/// for any finite endpoints and radius. Harness `i1_broad_phase_boxes_contain` (Kani and twin).
-/// So two capsules that share a point have overlapping boxes, and the rule's broad phase only
-/// skips provably disjoint pairs.
+/// for any finite endpoints and radius. Its Kani contract is [`box_contains_capsule`] (proven on
+/// this function by `i1_broad_phase_box_contract`; the twin `i1_broad_phase_boxes_contain` checks
+/// it for every axis at full width). So two capsules that share a point have overlapping boxes,
+/// and the rule's broad phase only skips provably disjoint pairs.
+#[cfg_attr(kani, kani::ensures(|b: &([f64; 3], [f64; 3])| box_contains_capsule(c, b)))]
 pub fn broad_phase_box(c: &Capsule) -> ([f64; 3], [f64; 3]) {
     let b = Aabb::of(c);
     (b.lo, b.hi)
+}
+
+/// The contract of [`broad_phase_box`]: on each axis the box `(lo, hi)` reaches at least to
+/// `sub_down(min(a, b), r)` below and `add_up(max(a, b), r)` above (endpoints `a`, `b`, radius
+/// `r` of `c`), which bound the exact `min(a, b) − r` and `max(a, b) + r` (claim C1, a1), so the
+/// box contains the capsule.
+pub fn box_contains_capsule(c: &Capsule, b: &([f64; 3], [f64; 3])) -> bool {
+    use pacs_reach::rounding::{add_up, sub_down};
+    let (p, q, r) = (c.p1(), c.p2(), c.radius());
+    (0..3).all(|k| b.0[k] <= sub_down(p[k].min(q[k]), r) && b.1[k] >= add_up(p[k].max(q[k]), r))
 }
 
 /// A ball around the base origin containing every link capsule for every configuration: a point
