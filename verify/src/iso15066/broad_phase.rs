@@ -64,8 +64,9 @@ impl Aabb {
 /// # Soundness
 /// Contains the capsule: its ends bound the exact `min(a, b) − r` below and `max(a, b) + r` above
 /// for any finite endpoints and radius. Its Kani contract is [`box_contains_capsule`] (proven on
-/// this function by `i1_broad_phase_box_contract`; the twin `i1_broad_phase_boxes_contain` checks
-/// it for every axis at full width). So two capsules that share a point have overlapping boxes,
+/// this function by `i1_broad_phase_box_contract` for capsules on the first axis with 20-bit
+/// significands at any exponent; the twin `i1_broad_phase_boxes_contain` checks it for every axis
+/// at full width). So two capsules that share a point have overlapping boxes,
 /// and the rule's broad phase only skips provably disjoint pairs.
 #[cfg_attr(kani, kani::ensures(|b: &([f64; 3], [f64; 3])| box_contains_capsule(c, b)))]
 pub fn broad_phase_box(c: &Capsule) -> ([f64; 3], [f64; 3]) {
