@@ -81,8 +81,8 @@ mod finish;
 mod spans;
 
 use consistency::{
-    KeypointBox, Nearest, human_pair_breaks, object_pair_breaks, object_record_breaks,
-    pair_within_boxes,
+    KeypointBox, Nearest, ObjectBounds, human_pair_breaks, object_pair_breaks,
+    object_record_breaks, pair_within_boxes,
 };
 
 /// A dynamic object of the log: its model, allowed contact and measurements.
@@ -90,6 +90,9 @@ use consistency::{
 struct ObjectTrack {
     id: String,
     model: ObjectModel,
+    /// What the record-against-record check needs of `model` (its acceleration bound: norms of
+    /// the bias and generators), computed once.
+    bounds: ObjectBounds,
     contact: ObjectContact,
     /// The measurement in use: the newest by stamp, the first of equal stamps (the shield's
     /// [`ObjectMeasurement::keep_newest`]).
@@ -488,7 +491,7 @@ impl Auditor {
             } else {
                 (&m, cur)
             };
-            if object_pair_breaks(&o.model, early, late) {
+            if object_pair_breaks(&o.bounds, early, late) {
                 nearest.add(cur.time);
             }
         }
@@ -681,6 +684,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
         .map(|(id, model, contact)| ObjectTrack {
             id: id.clone(),
             model: *model,
+            bounds: ObjectBounds::of(model),
             contact: *contact,
             latest: None,
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),

@@ -74,8 +74,8 @@ pub(super) fn human_pair_breaks(
 /// `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos` exactly. Conservative both ways: the distance rounded up,
 /// the allowance rounded down, so rounding never hides a contradiction (one within an ulp is
 /// flagged too). Harness `h3_keypoint_pair_sound` (Kani on grids of dyadic values, where the
-/// decision's terms are exact and only `√` is the contract's; the twin at full width with the
-/// exact oracle); mutant `x64` fails it.
+/// decision's terms are exact, with `dist3_up` any upper bound (C1 makes it one); the twin at
+/// full width with the exact oracle); mutant `x64` fails it.
 #[inline(always)]
 pub(crate) fn keypoint_breaks(
     p: [f64; 3],
@@ -232,18 +232,8 @@ impl ObjectBounds {
 }
 
 /// Whether two measurements of one object, `early` stamped no later than `late`, contradict its
-/// model (both describe the state `delay` before their stamps, so `Δt` is the stamps'
-/// difference); [`object_pair_breaks_with`] on the model's [`ObjectBounds`].
-pub(super) fn object_pair_breaks(
-    model: &ObjectModel,
-    early: &ObjectMeasurement,
-    late: &ObjectMeasurement,
-) -> bool {
-    object_pair_breaks_with(&ObjectBounds::of(model), early, late)
-}
-
-/// Whether two measurements of one object (`early` stamped no later than `late`) contradict the
-/// bounds `b`:
+/// model's bounds `b` (both describe the state `delay` before their stamps, so `Δt` is the
+/// stamps' difference):
 /// - velocities, where both are measured, farther apart than `a·Δt + 2·vel_error`;
 /// - positions farther apart than the model allows over `Δt` plus twice the position error:
 ///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
@@ -253,10 +243,11 @@ pub(super) fn object_pair_breaks(
 /// # Soundness
 /// Claim C9: false only if each of these holds exactly (allowances rounded down, distances and
 /// norms bounded from the safe side: rounding never hides a contradiction). Harness
-/// `h3_object_pair_sound` (Kani on grids of dyadic values; the twin at full width with the
-/// exact oracle); mutants `x56` (the velocity test dropped) and `x53` (the check dropped in the
-/// auditor, by the audit's tests) fail.
-pub(crate) fn object_pair_breaks_with(
+/// `h3_object_pair_sound`: its twin checks the whole function at full width with the exact
+/// oracle, its Kani proof the velocity test ([`velocities_break`], on grids of dyadic values);
+/// mutants `x56` (the velocity test dropped) and `x53` (the check dropped in the auditor, by the
+/// audit's tests) fail.
+pub(crate) fn object_pair_breaks(
     b: &ObjectBounds,
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
@@ -300,7 +291,7 @@ pub(crate) fn object_pair_breaks_with(
 /// # Soundness
 /// Claim C9: false only if `‖a − v‖ ≤ acc·dt + 2·ev` exactly (the distance rounded up, the
 /// allowance down). Harness `h3_object_pair_sound` (Kani: this test, on grids of dyadic values;
-/// the twin: the whole [`object_pair_breaks_with`]); mutant `x56` fails it.
+/// the twin: the whole [`object_pair_breaks`]); mutant `x56` fails it.
 #[inline]
 pub(crate) fn velocities_break(a: &[f64; 3], v: &[f64; 3], acc: f64, dt: f64, ev: f64) -> bool {
     a != v && dist3_up(a, v) > add_down(mul_down(acc, dt), mul_down(2.0, ev))

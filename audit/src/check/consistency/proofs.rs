@@ -7,18 +7,21 @@
 //! - `h3_box_accept_sound`: [`boxes_within`] true ⇒ every point of one box is within
 //!   `v_min·dt + e2` of every point of the other. Mutant `x66` (one box's extent) fails it.
 //! - `h3_object_record_sound`: [`velocity_breaks`] false ⇒ `‖v‖ ≤ vmax + ev`. Mutant `x57`.
-//! - `h3_object_pair_sound`: [`object_pair_breaks_with`] false ⇒ the velocity test and each
+//! - `h3_object_pair_sound`: [`object_pair_breaks`] false ⇒ the velocity test and each
 //!   position allowance hold (under Kani the velocity test, [`velocities_break`]). Mutant `x56`
 //!   (the velocity test dropped) fails it.
 //!
 //! Under Kani every input lies on a grid of dyadic values (coordinates multiples of 1/16 m in
 //! [−4, 4], speeds of 1/4 m/s, errors of 1/64, times of 1/256 s up to 2 s): every difference,
 //! square and allowance of the claim is then a float computed exactly, so a claim compares the
-//! code's decision with the real quantities themselves, and only `√` is abstract (the contract of
-//! `pacs_reach::ieee::sqrt`: any root within an ulp). What the grid leaves to the twins (any
-//! tame floats, the claim decided by the exact oracles of `pacs_reach::exact` against an
-//! allowance rounded up): the rounding of the code's terms — the outward rounding of the slow
-//! paths and the 1e-9 margin of the plain-float fast accepts.
+//! code's decision with the real quantities themselves. What stays abstract: `dist3_up` in the
+//! keypoint and object-pair proofs (any value ≥ 0, recorded with its arguments:
+//! [`any_dist_recorded`]; C1 makes the real one an upper bound of the distance), `√` in the
+//! object-record proof (the contract of `pacs_reach::ieee::sqrt`: any root within an ulp). What
+//! the grid leaves to the twins (any tame floats, the claim decided by the exact oracles of
+//! `pacs_reach::exact` against an allowance rounded up): the rounding of the code's terms — the
+//! outward rounding of the slow paths and the 1e-9 margin of the plain-float fast accepts — and,
+//! for the object pair, everything but the velocity test.
 
 // Proof functions are entry points of the model checker, not called from the crate.
 #![cfg_attr(kani, allow(dead_code))]
@@ -209,6 +212,13 @@ fn norm_within(v: &[f64; 3], r: f64) -> bool {
     }
 }
 
+/// Whether every input is tame (the exact oracles' precondition), as an assumption of the twin;
+/// true under Kani, whose grid values are tame by construction (and where the check would be
+/// unrolled for nothing).
+fn tame_inputs<'a, S: Source>(s: &mut S, values: impl IntoIterator<Item = &'a f64>) -> bool {
+    cfg!(kani) || s.assume(values.into_iter().all(|&x| tame(x)))
+}
+
 fn keypoint_pair<S: Source>(s: &mut S) {
     let (v, e_pos) = (speed(s), error(s));
     let (a, b) = (stamp(s), stamp(s));
@@ -216,16 +226,7 @@ fn keypoint_pair<S: Source>(s: &mut S) {
     let allowance = mul_add_up(v, span_up(lo, hi), 2.0 * e_pos);
     let p = point(s);
     let q = near(s, p, allowance);
-    // Grid values are tame by construction (and the check would unroll under Kani).
-    if !cfg!(kani)
-        && !s.assume(
-            [v, e_pos, a, b]
-                .iter()
-                .chain(&p)
-                .chain(&q)
-                .all(|&x| tame(x)),
-        )
-    {
+    if !tame_inputs(s, [v, e_pos, a, b].iter().chain(&p).chain(&q)) {
         return;
     }
     if keypoint_breaks(p, q, v, lo, hi, e_pos) {
@@ -291,16 +292,7 @@ fn box_accept<S: Source>(s: &mut S) {
     let dt = span_up(0.0, stamp(s));
     let (ba, p) = box_and_member(s);
     let (bb, q) = box_and_member(s);
-    // Grid values are tame by construction (and the check would unroll under Kani).
-    if !cfg!(kani)
-        && !s.assume(
-            [v_min, e2, dt]
-                .iter()
-                .chain(&ba)
-                .chain(&bb)
-                .all(|&x| tame(x)),
-        )
-    {
+    if !tame_inputs(s, [v_min, e2, dt].iter().chain(&ba).chain(&bb)) {
         return;
     }
     if !boxes_within(v_min, e2, dt, &ba, &bb) {
@@ -343,8 +335,7 @@ fn object_record<S: Source>(s: &mut S) {
     let (vmax, ev) = (speed(s), error(s));
     let bound = mul_add_up(1.0, vmax, ev);
     let v = near(s, [0.0; 3], bound);
-    // Grid values are tame by construction (and the check would unroll under Kani).
-    if !cfg!(kani) && !s.assume([vmax, ev].iter().chain(&v).all(|&x| tame(x))) {
+    if !tame_inputs(s, [vmax, ev].iter().chain(&v)) {
         return;
     }
     if !velocity_breaks(v, vmax, ev) {
@@ -362,33 +353,12 @@ harness!(
     object_record
 );
 
-/// A measured velocity (m/s) or none. Under Kani along one axis (`‖v‖` is then the grid value
-/// `|v_k|` itself, so the position allowance built from it is exact); any direction in the twin.
+/// A measured velocity (m/s) or none, any direction (the twin's).
 fn velocity<S: Source>(s: &mut S) -> Option<[f64; 3]> {
-    if !s.bool() {
-        return None;
-    }
-    Some(if cfg!(kani) {
-        let mut v = [0.0; 3];
-        v[s.index(3)] = grid(s, 12, 2, true);
-        v
-    } else {
-        near(s, [0.0; 3], 3.0)
-    })
+    s.bool().then(|| near(s, [0.0; 3], 3.0))
 }
 
-/// `‖v‖` from below: exact under Kani (one non-zero coordinate on the grid, [`velocity`]),
-/// `norm3_down` in the twin (claim C1, harnesses a3). An allowance built from it is at most the
-/// real one, so a claim against it implies the claim against the real one.
-fn speed_from_below(v: &[f64; 3]) -> f64 {
-    if cfg!(kani) {
-        v[0].abs() + v[1].abs() + v[2].abs()
-    } else {
-        norm3_down(*v)
-    }
-}
-
-/// Under Kani: the velocity test of [`object_pair_breaks_with`] ([`velocities_break`]), on the
+/// Under Kani: the velocity test of [`object_pair_breaks`] ([`velocities_break`]), on the
 /// grid. The whole pair (positions too, through `Option<[f64; 3]>` velocities) is the twin's:
 /// Bitwuzla rejects CBMC's encoding of it ("expected bit-vector term … to 'concat'"), and the
 /// SAT back end timed out at 200 s.
@@ -407,17 +377,14 @@ fn object_velocities<S: Source>(s: &mut S) {
     }
 }
 
+/// The whole [`object_pair_breaks`] (the twin; under Kani [`object_velocities`]).
 fn object_pair<S: Source>(s: &mut S) {
     if cfg!(kani) {
         object_velocities(s);
         return;
     }
     let b = ObjectBounds {
-        acc: if cfg!(kani) {
-            grid(s, 64, 2, false)
-        } else {
-            s.f64_in(0.0, 16.0)
-        },
+        acc: s.f64_in(0.0, 16.0),
         max_speed: if s.bool() { Some(speed(s)) } else { None },
         vel_error: error(s),
         pos_error: error(s),
@@ -432,7 +399,7 @@ fn object_pair<S: Source>(s: &mut S) {
     };
     let vb = mul_add_up(b.acc, dt, 2.0 * b.vel_error);
     let late_v = match early.velocity {
-        Some(v) if !cfg!(kani) && s.bool() => Some(near(s, v, vb)),
+        Some(v) if s.bool() => Some(near(s, v, vb)),
         _ => velocity(s),
     };
     let reach = mul_add_up(b.max_speed.unwrap_or(3.0), dt, 2.0 * b.pos_error);
@@ -450,20 +417,11 @@ fn object_pair<S: Source>(s: &mut S) {
         t1,
     ];
     let vs = [early.velocity, late.velocity].map(|v| v.unwrap_or([0.0; 3]));
-    // Grid values are tame by construction (and the check would unroll under Kani).
-    if !cfg!(kani)
-        && !s.assume(
-            values
-                .iter()
-                .chain(&early.position)
-                .chain(&late.position)
-                .chain(vs.iter().flatten())
-                .all(|&x| tame(x)),
-        )
-    {
+    let positions = early.position.iter().chain(&late.position);
+    if !tame_inputs(s, values.iter().chain(positions).chain(vs.iter().flatten())) {
         return;
     }
-    if object_pair_breaks_with(&b, &early, &late) {
+    if object_pair_breaks(&b, &early, &late) {
         return;
     }
     // The velocities, where both are measured, within a·Δt + 2·vel_error.
@@ -483,14 +441,11 @@ fn object_pair<S: Source>(s: &mut S) {
         );
     }
     // Within each measured velocity's allowance (|v| + ev)·Δt + a·Δt²/2 + 2·pos_error, with
-    // |v| from below.
+    // |v| from below (`norm3_down`, claim C1, harnesses a3): an allowance at most the real one,
+    // so the claim against it implies the claim against the real one.
     for v in [early.velocity, late.velocity].into_iter().flatten() {
-        let speed = speed_from_below(&v) + b.vel_error;
-        let half_a = if cfg!(kani) {
-            0.5 * b.acc
-        } else {
-            mul_up(0.5, b.acc)
-        };
+        let speed = norm3_down(v) + b.vel_error;
+        let half_a = mul_up(0.5, b.acc);
         let allowed = mul_add_up(
             speed,
             dt,
