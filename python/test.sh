@@ -7,12 +7,14 @@
 #
 # The extension is built with the release profile, as `pip install ./python` builds it (the
 # real-time loop tests need release speed).
-# PACS_TEST_LEROBOT=1 also runs the tests against LeRobot's real classes (if lerobot is
-# installed in that venv: `pip install lerobot` pulls torch).
+# PACS_TEST_LEROBOT=1 also runs the tests against LeRobot's real classes (ACT, diffusion,
+# the processor pipeline), installing lerobot 0.6 into the venv if it lacks it (it pulls
+# torch: ≈ 5.5 GB; lerobot 0.6 needs Python >= 3.12, so use a venv of its own:
+#   PYTHON=python3.12 PACS_PYTHON_VENV=/tmp/pacs-lerobot-venv PACS_TEST_LEROBOT=1 bash python/test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 target_dir="${CARGO_TARGET_DIR:-target}"
-venv="$target_dir/python-venv"
+venv="${PACS_PYTHON_VENV:-$target_dir/python-venv}"
 python="${PYTHON:-python3}"
 if ! "$python" -c 'import sys; assert sys.version_info >= (3, 10)' 2>/dev/null; then
   echo "python/test.sh: needs Python >= 3.10 as \`$python\` (set PYTHON=...)" >&2
@@ -32,6 +34,14 @@ fi
 # venv too.
 if ! "$venv/bin/python" -c 'import dask.distributed' 2>/dev/null; then
   "$venv/bin/pip" install -q "dask[distributed]>=2024.8,<2027"
+fi
+if [ "${PACS_TEST_LEROBOT:-}" = 1 ] && ! "$venv/bin/python" -c 'import lerobot' 2>/dev/null; then
+  if ! "$venv/bin/python" -c 'import sys; assert sys.version_info >= (3, 12)' 2>/dev/null; then
+    echo "python/test.sh: PACS_TEST_LEROBOT=1 needs lerobot 0.6, which needs Python >= 3.12;" \
+      "$venv has $("$venv/bin/python" -V 2>&1) (set PYTHON=python3.12 and PACS_PYTHON_VENV=DIR)" >&2
+    exit 1
+  fi
+  "$venv/bin/pip" install -q "lerobot[diffusion]>=0.6,<0.7"
 fi
 # maturin develop installs into the active virtualenv.
 VIRTUAL_ENV="$(cd "$venv" && pwd)" PATH="$(cd "$venv" && pwd)/bin:$PATH" \

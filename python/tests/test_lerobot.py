@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 import pacs
-from pacs.lerobot import ShieldActionStep, ShieldedPolicyLoop
+from collections import deque
+
+from pacs.lerobot import ObservationHistory, ShieldActionStep, ShieldedPolicyLoop
 from conftest import far_human
 
 KEYS = [f"joint{i + 1}.pos" for i in range(7)]
@@ -78,6 +80,93 @@ def test_shielded_policy_loop_runs_chunks_through_the_shield(demo):
     q = np.radians([robot.q[k] for k in KEYS])
     assert np.linalg.norm(q - demo.start) > 0.05
     assert demo.deviation(q) < 0.05
+
+
+class QueuedPolicy:
+    """Shaped like LeRobot's DiffusionPolicy (0.6): reset() empties one observation queue per
+    key (length n_obs_steps) and the action queue; predict_action_chunk stacks the queues (as
+    LeRobot's does once they are filled) and fails on a history of the wrong length, as
+    LeRobot's ``generate_actions`` asserts. Records every history it was asked with."""
+
+    def __init__(self, demo, n_obs_steps=2):
+        self.demo, self.n_obs_steps = demo, n_obs_steps
+        self.seen = []
+        self._queues = None
+
+    def reset(self):
+        self._queues = {
+            "observation.state": deque(maxlen=self.n_obs_steps),
+            "action": deque(maxlen=8),
+        }
+
+    def predict_action_chunk(self, batch):
+        assert any(len(q) > 0 for q in self._queues.values()), "queues never filled"
+        stacked = {k: np.stack(list(self._queues[k]), axis=1) for k in batch if k in self._queues}
+        state = stacked["observation.state"]  # (B, n_obs_steps, 7)
+        assert state.shape == (1, self.n_obs_steps, 7), state.shape
+        self.seen.append(state[0].copy())
+        q = state[0, -1]
+        deltas, _ = self.demo.chunk(q)
+        return (q + np.cumsum(deltas, axis=0))[None]
+
+
+def test_the_loop_fills_a_policys_observation_history(demo):
+    """A history-stacking policy (n_obs_steps = 2) gets, at every chunk, the observations of
+    the last two ticks (the first one repeated at the start, as LeRobot's select_action does);
+    without the history (history="none") it fails as LeRobot's diffusion policy did."""
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    policy = QueuedPolicy(demo)
+    observed = []
+
+    def preprocess(obs):
+        state = np.array([[obs[k] for k in KEYS]])
+        observed.append(state[0])
+        return {"observation.state": state, "action": np.zeros((1, 7))}
+
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS, n_action_steps=8, fps=30.0,
+                            preprocess=preprocess, humans=lambda t: (t, person)) as loop:
+        loop.run(2.0)
+    assert len(policy.seen) >= 4 and not loop.rejected
+    # The first chunk: the first observation twice.
+    np.testing.assert_array_equal(policy.seen[0], [observed[0], observed[0]])
+    # Every later chunk: the previous tick's and this tick's observations, in order. Match
+    # each history to the tick whose observation ends it.
+    for hist in policy.seen[1:]:
+        i = next(i for i in range(1, len(observed)) if np.array_equal(observed[i], hist[1])
+                 and np.array_equal(observed[i - 1], hist[0]))
+        assert i >= 1
+    # The robot moved between chunks, so the two frames of a later history differ.
+    assert any(not np.array_equal(h[0], h[1]) for h in policy.seen[1:])
+    assert len(policy._queues["action"]) == 0  # the action key is never queued
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    with pytest.raises(AssertionError, match="never filled"):
+        with ShieldedPolicyLoop(QueuedPolicy(demo), FakeRobot(demo.start), shield, KEYS,
+                                preprocess=preprocess, history="none",
+                                humans=lambda t: (t, person)) as loop:
+            loop.run(0.1)
+
+
+def test_observation_history_follows_lerobots_rule():
+    class P:
+        def __init__(self):
+            self._queues = {"observation.state": deque(maxlen=3), "action": deque(maxlen=4)}
+
+    p = P()
+    h = ObservationHistory(p)
+    out = h.feed({"observation.state": 1, "other": 9, "action": 5})
+    assert out == {"observation.state": 1, "other": 9}
+    assert list(p._queues["observation.state"]) == [1, 1, 1]
+    h.feed({"observation.state": 2})
+    h.feed({"observation.state": 3})
+    h.feed({"observation.state": 4})
+    assert list(p._queues["observation.state"]) == [2, 3, 4]
+    assert h.depth() == {"observation.state": 3}
+    assert ObservationHistory(object()).feed({"a": 1}) == {"a": 1}  # no queues: untouched
 
 
 def test_a_select_action_policy_becomes_one_action_chunks(demo):
@@ -257,4 +346,61 @@ def test_a_real_lerobot_policy_through_the_shield(demo):
     assert np.linalg.norm(q - demo.start) > 1e-3
     sent = np.array([[a[k] for k in KEYS] for a in robot.sent])
     # FR3 joint speed limits ≤ 2.62 rad/s: no jump between 30 Hz commands beyond that.
+    assert np.max(np.abs(np.diff(sent, axis=0))) <= 2.62 / 30 + 1e-9
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_a_real_diffusion_policy_through_the_shield(demo):
+    """LeRobot's DiffusionPolicy (random weights, the small state configuration: n_obs_steps =
+    2, horizon 16, 8 executed actions, DDIM at 4 steps) with a (B, state) batch per tick: the
+    loop fills its two-frame history, so predict_action_chunk runs (lerobot 0.6.1 asserted on
+    such a batch before) and its chunks drive the robot through the shield."""
+    torch = pytest.importorskip("torch")
+    diffusion = pytest.importorskip("lerobot.policies.diffusion.modeling_diffusion")
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
+
+    torch.manual_seed(0)
+    cfg = DiffusionConfig(
+        input_features={
+            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
+            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
+        },
+        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+        n_obs_steps=2, horizon=16, n_action_steps=8, down_dims=(32, 64, 128),
+        noise_scheduler_type="DDIM", num_inference_steps=4, device="cpu",
+    )
+    policy = diffusion.DiffusionPolicy(cfg).eval()
+    frames = []
+
+    def preprocess(obs):
+        q = torch.tensor([[obs[k] for k in KEYS]], dtype=torch.float32)
+        frames.append(q)
+        return {"observation.state": q, "observation.environment_state": torch.zeros(1, 3)}
+
+    # Without the history LeRobot's own predict_action_chunk fails on this batch.
+    policy.reset()
+    with pytest.raises(Exception):
+        policy.predict_action_chunk(preprocess({k: 0.0 for k in KEYS}))
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    with torch.no_grad(), ShieldedPolicyLoop(
+        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=8, fps=30.0,
+        preprocess=preprocess, postprocess=lambda a: 0.002 * torch.clamp(a, -1, 1),
+        humans=lambda t: (t, person),
+    ) as loop:
+        loop.run(1.0)
+        depth = loop.history.depth()
+    assert depth == {"observation.state": 2, "observation.environment_state": 2}
+    assert loop.executed()["accepted"] >= 3 and not loop.rejected
+    # The queue holds the last two frames, in order.
+    last = list(policy._queues["observation.state"])
+    assert torch.equal(last[1], frames[-1]) and torch.equal(last[0], frames[-2])
+    q = np.array([robot.q[k] for k in KEYS])
+    assert np.linalg.norm(q - demo.start) > 1e-4
+    sent = np.array([[a[k] for k in KEYS] for a in robot.sent])
     assert np.max(np.abs(np.diff(sent, axis=0))) <= 2.62 / 30 + 1e-9

@@ -12,6 +12,14 @@ like them (lerobot itself is optional: it pulls torch).
 - :class:`ShieldedPolicyLoop`: policy → chunks → shield (1 kHz) → ``robot.send_action``, in real
   time or in simulated time; tells which actions of each chunk were executed (and the left-over
   actions real-time chunking needs).
+- Observation history: policies that stack several past observations (LeRobot's
+  ``DiffusionPolicy`` with ``n_obs_steps`` > 1, VQ-BeT, TD-MPC, multi-task DiT) keep them in
+  ``policy._queues``, which only their ``select_action`` fills. The loop fills them itself on
+  every tick, the way ``select_action`` does (LeRobot's ``populate_queues``: the first
+  observation repeated to the queue's length, then one per tick), so ``predict_action_chunk``
+  sees the last ``n_obs_steps`` observations; policies without observation queues (ACT) are
+  called with the current observation alone. Run the loop at the policy's training frame rate
+  (``fps``): one observation per tick is one frame of history.
 - :class:`ShieldActionStep`: a ``RobotActionProcessorStep``-style step for a LeRobot robot
   pipeline: every action the pipeline passes goes through a running :class:`pacs.ShieldLoop`,
   and the robot receives the shield's command instead.
@@ -32,7 +40,7 @@ import numpy as np
 from ._pacs import Shield, ShieldLoop
 from .errors import ArgumentTypeError, ChunkRejected, InputError, NotStartedError
 
-__all__ = ["ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
+__all__ = ["ObservationHistory", "ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
 
 _UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
 
@@ -51,6 +59,75 @@ def to_numpy(x: Any) -> np.ndarray:
         return np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError) as e:
         raise ArgumentTypeError(f"expected an array of numbers, got {type(x).__name__}: {e}") from e
+
+
+def _populate_queues(queues: Any, batch: Mapping[str, Any]) -> None:
+    """LeRobot's ``populate_queues`` rule (lerobot.policies.utils, 0.4-0.6), in place: every key
+    of ``batch`` that has a queue enters it; an empty (just reset) queue is filled to its length
+    with copies of the first observation."""
+    for key, value in batch.items():
+        if key not in queues:
+            continue
+        q = queues[key]
+        if q.maxlen is None:
+            raise InputError(f"policy._queues[{key!r}]: an observation queue without a length")
+        if len(q) != q.maxlen:
+            while len(q) != q.maxlen:
+                q.append(value)
+        else:
+            q.append(value)
+
+
+class ObservationHistory:
+    """Feeds a LeRobot policy's observation queues (``policy._queues``: a dict of deques of
+    length ``n_obs_steps``, one per observation key, plus the action queue) with one
+    observation per call, exactly as the policy's own ``select_action`` does before it predicts:
+    camera images stacked under ``observation.images`` (or the first one as
+    ``observation.image``) when the policy queues them that way, the action key never queued.
+    A policy without such queues (ACT, or any non-LeRobot policy) is left alone.
+
+    ``feed(batch)`` returns the batch to pass to ``predict_action_chunk`` (the one with the
+    stacked images, which LeRobot's ``predict_action_chunk`` reads its queue keys from).
+    """
+
+    OBS_IMAGES = "observation.images"
+    OBS_IMAGE = "observation.image"
+    ACTION = "action"
+
+    def __init__(self, policy: Any) -> None:
+        self.policy = policy
+
+    def queues(self) -> Any:
+        q = getattr(self.policy, "_queues", None)
+        return q if isinstance(q, Mapping) or hasattr(q, "keys") else None
+
+    def feed(self, batch: Any) -> Any:
+        queues = self.queues()
+        if queues is None or not isinstance(batch, Mapping):
+            return batch
+        batch = {k: v for k, v in batch.items() if k != self.ACTION}
+        images = list(getattr(getattr(self.policy, "config", None), "image_features", None) or [])
+        if images and self.OBS_IMAGES in queues and self.OBS_IMAGES not in batch:
+            import torch  # only LeRobot policies with cameras get here
+
+            missing = [k for k in images if k not in batch]
+            if missing:
+                raise InputError(f"policy input: no camera key {missing[0]!r} (preprocess)")
+            batch[self.OBS_IMAGES] = torch.stack([batch[k] for k in images], dim=-4)
+        elif images and self.OBS_IMAGE in queues and self.OBS_IMAGE not in batch:
+            if images[0] not in batch:
+                raise InputError(f"policy input: no camera key {images[0]!r} (preprocess)")
+            batch[self.OBS_IMAGE] = batch[images[0]]
+        observed = {k: v for k, v in batch.items() if k in queues and k != self.ACTION}
+        _populate_queues(queues, observed)
+        return batch
+
+    def depth(self) -> dict[str, int]:
+        """How many observations each observation queue holds (``{}`` without queues)."""
+        queues = self.queues()
+        if queues is None:
+            return {}
+        return {k: len(v) for k, v in queues.items() if k != self.ACTION}
 
 
 class ShieldedPolicyLoop:
@@ -89,6 +166,10 @@ class ShieldedPolicyLoop:
             mapped to their column in the policy's action vector: sent with the current
             chunk's action at the shield's progress along it (unfiltered: the shield does not
             model them). Other ``.pos`` keys of the observation are sent back unchanged.
+        history: ``"auto"`` (default): every tick, the preprocessed observation enters the
+            policy's observation queues (``policy._queues``, LeRobot's convention) when it has
+            them, as its ``select_action`` would; ``"none"``: never (the policy keeps its own
+            history, or ``preprocess`` stacks frames itself).
 
     A chunk the shield rejects (``pacs.ChunkRejected``) is recorded in ``rejected`` (time,
     reason) and the policy is asked again at the next tick; the robot keeps its verified motion.
@@ -112,6 +193,7 @@ class ShieldedPolicyLoop:
         realtime: bool = False,
         replan_margin: int = 0,
         extra_keys: Mapping[str, int] | None = None,
+        history: str = "auto",
     ) -> None:
         if not hasattr(policy, "predict_action_chunk") and not hasattr(policy, "select_action"):
             raise ArgumentTypeError(
@@ -136,6 +218,8 @@ class ShieldedPolicyLoop:
             )
         if action_kind not in ("absolute", "delta"):
             raise InputError(f"action_kind: {action_kind!r} (absolute, delta)")
+        if history not in ("auto", "none"):
+            raise InputError(f"history: {history!r} (auto, none)")
         if not (fps > 0 and math.isfinite(fps)):
             raise InputError(f"fps: {fps} is not a positive rate (Hz)")
         self.policy, self.robot, self.shield = policy, robot, shield
@@ -150,7 +234,13 @@ class ShieldedPolicyLoop:
         self.replan_margin = replan_margin
         self.extra_keys = dict(extra_keys or {})
         if hasattr(policy, "reset"):
-            policy.reset()  # a new episode
+            policy.reset()  # a new episode: empty observation and action queues
+        # A select_action-only policy keeps its own history (its select_action fills it).
+        self.history = (
+            ObservationHistory(policy)
+            if history == "auto" and hasattr(policy, "predict_action_chunk")
+            else None
+        )
         self.loop = ShieldLoop(shield, realtime=realtime)
         self.loop.start()
         self.rejected: list[tuple[float, str]] = []
@@ -175,8 +265,14 @@ class ShieldedPolicyLoop:
             self.loop.run_until(t)
 
     # -- chunks -------------------------------------------------------------------------
-    def _policy_chunk(self, obs: Mapping[str, Any]) -> np.ndarray:
+    def _policy_batch(self, obs: Mapping[str, Any]) -> Any:
+        """The policy's input for this tick, its observation history updated with it."""
         batch = self.preprocess(obs) if self.preprocess is not None else obs
+        if self.history is not None:
+            batch = self.history.feed(batch)
+        return batch
+
+    def _policy_chunk(self, batch: Any) -> np.ndarray:
         post = self.postprocess if self.postprocess is not None else (lambda x: x)
         if hasattr(self.policy, "predict_action_chunk"):
             a = to_numpy(post(self.policy.predict_action_chunk(batch)))
@@ -237,8 +333,9 @@ class ShieldedPolicyLoop:
             if m is not None:
                 t_meas, positions = m
                 self.loop.measure(t_meas, positions)
+        batch = self._policy_batch(obs)
         if self._needs_chunk():
-            a = self._policy_chunk(obs)
+            a = self._policy_chunk(batch)
             joints = a[:, self.action_indices] * self.scale
             h = self.n_action_steps if self.n_action_steps is not None else len(joints)
             h = min(h, len(joints))
