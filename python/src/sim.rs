@@ -164,3 +164,66 @@ impl PyDemo {
         Ok(self.sc.policy.deviation(&q))
     }
 }
+
+/// `count` teleoperation-like demonstrations of `task` (`pacs_sim::teleop`): pauses, changes of
+/// pace, hesitations near the person, small detours within the task's tolerance, within the
+/// robot's operated limits. Each is a dict of numpy arrays sampled at `fps` (Hz): `q` (T, 7)
+/// rad, `action` (T, 7) rad (the joint-position delta to the next sample, zero at the end),
+/// `stage` (T,) sub-goals reached, `person` (T, 3) m (keypoint centroid), `person_distance`
+/// (T,) m (tool to nearest keypoint), `pace` (T,) (fraction of the nominal pace), `timestamp`
+/// (T,) s; and `task`, `seed`, `fps`, `pauses`, `hesitations`, `detours`, `goals`.
+#[pyfunction]
+#[pyo3(signature = (task="sorting", count=50, seed=0, fps=30.0))]
+pub fn teleop_demonstrations<'py>(
+    py: Python<'py>,
+    task: &str,
+    count: usize,
+    seed: u64,
+    fps: f64,
+) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+    use pacs_sim::teleop;
+    use pyo3::types::PyDict;
+    let kind: TaskKind = task.parse().map_err(|_| {
+        input(format!(
+            "task: unknown task `{task}` (sorting, handover, feeding, sphere, crowded)"
+        ))
+    })?;
+    let demos = py
+        .detach(|| teleop::teleop_demonstrations(kind, count, seed, fps))
+        .map_err(|e| input(e.to_string()))?;
+    let goals = pacs_sim::task::scenario(kind, seed, true).goals.len();
+    let mut out = Vec::with_capacity(demos.len());
+    for d in demos {
+        let n = d.q.len();
+        let action: Vec<Vec<f64>> = (0..n)
+            .map(|k| match d.q.get(k + 1) {
+                Some(next) => next.iter().zip(&d.q[k]).map(|(b, a)| b - a).collect(),
+                None => vec![0.0; d.q[k].len()],
+            })
+            .collect();
+        let person: Vec<Vec<f64>> = d.person.iter().map(|p| p.to_vec()).collect();
+        let stage: Vec<i64> = d.stage.iter().map(|&s| s as i64).collect();
+        let timestamp: Vec<f64> = (0..n).map(|k| k as f64 * d.dt).collect();
+        let dict = PyDict::new(py);
+        let arr2 = |v: &Vec<Vec<f64>>| PyArray2::from_vec2(py, v).map_err(|e| input(e.to_string()));
+        dict.set_item("q", arr2(&d.q)?)?;
+        dict.set_item("action", arr2(&action)?)?;
+        dict.set_item("stage", PyArray1::from_slice(py, &stage))?;
+        dict.set_item("person", arr2(&person)?)?;
+        dict.set_item(
+            "person_distance",
+            PyArray1::from_slice(py, &d.person_distance),
+        )?;
+        dict.set_item("pace", PyArray1::from_slice(py, &d.pace))?;
+        dict.set_item("timestamp", PyArray1::from_slice(py, &timestamp))?;
+        dict.set_item("task", kind.name())?;
+        dict.set_item("seed", d.seed)?;
+        dict.set_item("fps", fps)?;
+        dict.set_item("pauses", d.pauses)?;
+        dict.set_item("hesitations", d.hesitations)?;
+        dict.set_item("detours", d.detours)?;
+        dict.set_item("goals", goals)?;
+        out.push(dict);
+    }
+    Ok(out)
+}

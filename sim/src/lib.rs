@@ -8,6 +8,9 @@
 //! - [`policy`]: the [`policy::TaskPolicy`] trait, a nearest-neighbour demonstration policy that
 //!   emits chunks of joint deltas from the current joint angles only, and a policy learned from
 //!   the demonstrations by kernel regression on the last two observations;
+//! - [`teleop`]: demonstrations with the variety of human teleoperation (pauses, changes of
+//!   pace, hesitations near people, small detours), within the operated limits, for training
+//!   learned policies;
 //! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy, a human and
 //!   objects, with ground-truth safety metrics (exact geometry against the true human and objects).
 //!
@@ -21,6 +24,7 @@ pub mod humans;
 pub mod objects;
 pub mod policy;
 pub mod task;
+pub mod teleop;
 
 pub use error::SimError;
 

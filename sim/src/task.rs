@@ -101,7 +101,7 @@ impl ToolGoal {
 }
 
 /// The success sub-goals of `task`, in order.
-fn tool_goals(task: TaskKind) -> Vec<ToolGoal> {
+pub(crate) fn tool_goals(task: TaskKind) -> Vec<ToolGoal> {
     let (tools, goal_idx) = tool_keyframes(task);
     goal_idx
         .iter()
@@ -241,18 +241,38 @@ fn dense_path(
     tools: &[[f64; 3]],
     counts: &[usize],
 ) -> Vec<Vec<f64>> {
+    dense_path_with_detours(robot, start, tools, counts, &[])
+}
+
+/// [`dense_path`] with a detour on segment k: the tool leaves the straight line by
+/// `sin(π·e)·detours[k]` (m) at eased progress `e`, so it bends away and back smoothly and
+/// still ends on the waypoint (segments without an entry go straight).
+pub(crate) fn dense_path_with_detours(
+    robot: &RobotModel,
+    start: &[f64],
+    tools: &[[f64; 3]],
+    counts: &[usize],
+    detours: &[[f64; 3]],
+) -> Vec<Vec<f64>> {
     let mut path = vec![start.to_vec()];
     let mut from = tool_point(robot, start);
     for (k, to) in tools.iter().enumerate() {
         let m = counts[k].max(1);
+        let bump = detours.get(k).copied();
         for s in 1..=m {
             let u = s as f64 / m as f64;
             let e = u * u * (3.0 - 2.0 * u);
-            let target = [
+            let mut target = [
                 from[0] + e * (to[0] - from[0]),
                 from[1] + e * (to[1] - from[1]),
                 from[2] + e * (to[2] - from[2]),
             ];
+            if let Some(b) = bump {
+                let w = (std::f64::consts::PI * e).sin();
+                for i in 0..3 {
+                    target[i] += w * b[i];
+                }
+            }
             let (q, _) = solve_ik(robot, path.last().expect("non-empty"), target);
             path.push(q);
         }
@@ -262,11 +282,11 @@ fn dense_path(
 }
 
 /// A success sub-goal at a tool waypoint: (waypoint index, name, tolerance in m).
-type GoalAt = (usize, &'static str, f64);
+pub(crate) type GoalAt = (usize, &'static str, f64);
 
 /// Tool waypoints (m) of a task's demonstration, in order, and the goal names of those that are
 /// success sub-goals.
-fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
+pub(crate) fn tool_keyframes(task: TaskKind) -> (Vec<[f64; 3]>, Vec<GoalAt>) {
     match task {
         TaskKind::Sorting | TaskKind::Sphere | TaskKind::Crowded => (
             vec![

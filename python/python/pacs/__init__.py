@@ -22,6 +22,8 @@ Units everywhere: m, s, rad, rad/s, rad/s², kg, J.
 - :class:`ShieldLoop`: its 1 kHz step loop on a Rust thread;
 - :func:`audit`, :class:`Run`, :class:`LogWriter`, :func:`report`: the offline audit;
 - :class:`Demo`: the simulation's FR3 tasks and their demonstration policy;
+  :func:`teleop_demonstrations`: demonstrations of those tasks with the variety of human
+  teleoperation (pauses, changes of pace, hesitations near people, detours), for training;
 - :mod:`pacs.fleet`: a fleet's archive audited in parallel, locally or on Dask
   (:func:`pacs.fleet.audit`), and :func:`simulate`, the simulation's evaluation (also on Dask);
 - :mod:`pacs.lerobot`: adapters for LeRobot-style policies, robots and processor pipelines;
@@ -48,6 +50,7 @@ from ._pacs import (
     audit,
     report,
     robot_spec,
+    teleop_demonstrations,
 )
 from . import fleet
 from .fleet import simulate
@@ -62,6 +65,7 @@ __all__ = [
     "report",
     "robot_spec",
     "Demo",
+    "teleop_demonstrations",
     "fleet",
     "simulate",
     "errors",

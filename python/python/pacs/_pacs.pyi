@@ -213,6 +213,10 @@ class LogWriter:
     def __enter__(self) -> "LogWriter": ...
     def __exit__(self, *args: Any) -> bool: ...
 
+def teleop_demonstrations(
+    task: str = "sorting", count: int = 50, seed: int = 0, fps: float = 30.0
+) -> list[dict[str, Any]]: ...
+
 class Demo:
     def __init__(
         self, task: str | None = "sorting", seed: int | None = 0, with_human: bool | None = True

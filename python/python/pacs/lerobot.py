@@ -20,6 +20,9 @@ like them (lerobot itself is optional: it pulls torch).
   sees the last ``n_obs_steps`` observations; policies without observation queues (ACT) are
   called with the current observation alone. Run the loop at the policy's training frame rate
   (``fps``): one observation per tick is one frame of history.
+- :func:`write_dataset`: demonstrations (:func:`pacs.teleop_demonstrations`) written as a
+  LeRobot dataset (``LeRobotDataset.create`` / ``add_frame`` / ``save_episode``), the training
+  data of a LeRobot policy; :func:`environment_state` is its ``observation.environment_state``.
 - :class:`ShieldActionStep`: a ``RobotActionProcessorStep``-style step for a LeRobot robot
   pipeline: every action the pipeline passes goes through a running :class:`pacs.ShieldLoop`,
   and the robot receives the shield's command instead.
@@ -40,7 +43,14 @@ import numpy as np
 from ._pacs import Shield, ShieldLoop
 from .errors import ArgumentTypeError, ChunkRejected, InputError, NotStartedError
 
-__all__ = ["ObservationHistory", "ShieldedPolicyLoop", "ShieldActionStep", "to_numpy"]
+__all__ = [
+    "ObservationHistory",
+    "ShieldedPolicyLoop",
+    "ShieldActionStep",
+    "environment_state",
+    "write_dataset",
+    "to_numpy",
+]
 
 _UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
 
@@ -386,6 +396,93 @@ class ShieldedPolicyLoop:
     def __exit__(self, *exc) -> bool:
         self.close()
         return False
+
+
+#: Names of ``observation.environment_state``'s entries in datasets from :func:`write_dataset`.
+ENVIRONMENT_STATE_NAMES = ["stage", "person_x", "person_y", "person_z", "person_distance"]
+
+
+def environment_state(stage: float, person: Any, person_distance: float) -> np.ndarray:
+    """``observation.environment_state`` as :func:`write_dataset` records it (float32, shape
+    (5,)): the sub-goals reached so far, the person's keypoint centroid (m, world frame) and the
+    tool's distance to the person's nearest keypoint (m). Compute it the same way at inference."""
+    p = to_numpy(person).reshape(-1)
+    if p.shape != (3,):
+        raise InputError(f"person: expected a point (3,), got shape {p.shape}")
+    return np.array([float(stage), *p, float(person_distance)], dtype=np.float32)
+
+
+def write_dataset(
+    demos: Sequence[Mapping[str, Any]],
+    root: str,
+    *,
+    repo_id: str | None = None,
+    task: str | None = None,
+    joint_names: Sequence[str] | None = None,
+) -> Any:
+    """Write demonstrations (the dicts of :func:`pacs.teleop_demonstrations`: ``q``,
+    ``action``, ``stage``, ``person``, ``person_distance``, ``fps``, ``task``) as a LeRobot
+    dataset under ``root`` (a new directory), one episode per demonstration, without videos:
+
+    - ``observation.state`` (7,): joint positions (rad);
+    - ``observation.environment_state`` (5,): :func:`environment_state`;
+    - ``action`` (7,): the joint-position delta to the next frame (rad; run such a policy with
+      ``ShieldedPolicyLoop(..., action_kind="delta")``).
+
+    Needs lerobot (≥ 0.4). Returns the ``LeRobotDataset``. ``repo_id`` defaults to
+    ``"pacs/<task>-teleop"``, ``task`` (the language instruction of every frame) to the task's
+    name; the frame rate is the demonstrations' ``fps`` (an integer, as LeRobot requires)."""
+    try:
+        from lerobot.datasets.lerobot_dataset import LeRobotDataset
+    except Exception as e:  # noqa: BLE001 - lerobot absent or of another layout
+        raise ArgumentTypeError(
+            f"write_dataset needs lerobot (pip install 'lerobot>=0.4'): {e}"
+        ) from e
+    if not demos:
+        raise InputError("demos: no demonstrations to write")
+    fps = demos[0].get("fps")
+    if fps is None or float(fps) != round(float(fps)) or not 1 <= float(fps) <= 1000:
+        raise InputError(f"demos[0]['fps']: {fps!r} is not an integer frame rate (Hz)")
+    fps = int(round(float(fps)))
+    name = str(demos[0].get("task", "demo"))
+    dof = to_numpy(demos[0]["q"]).shape[1]
+    joints = list(joint_names) if joint_names is not None else [f"joint{i + 1}" for i in range(dof)]
+    if len(joints) != dof:
+        raise InputError(f"joint_names: {len(joints)} names for {dof} joints")
+    features = {
+        "observation.state": {"dtype": "float32", "shape": (dof,), "names": joints},
+        "observation.environment_state": {
+            "dtype": "float32",
+            "shape": (len(ENVIRONMENT_STATE_NAMES),),
+            "names": ENVIRONMENT_STATE_NAMES,
+        },
+        "action": {"dtype": "float32", "shape": (dof,), "names": [f"d_{j}" for j in joints]},
+    }
+    ds = LeRobotDataset.create(
+        repo_id or f"pacs/{name}-teleop", fps, features, root=root, use_videos=False
+    )
+    instruction = task or name
+    for i, d in enumerate(demos):
+        if float(d.get("fps", fps)) != fps:
+            raise InputError(f"demos[{i}]['fps']: {d.get('fps')} differs from {fps}")
+        q, a = to_numpy(d["q"]), to_numpy(d["action"])
+        stage, person, dist = (
+            to_numpy(d["stage"]), to_numpy(d["person"]), to_numpy(d["person_distance"])
+        )
+        n = len(q)
+        if q.shape != (n, dof) or a.shape != (n, dof) or len(stage) != n or len(dist) != n \
+                or person.shape != (n, 3):
+            raise InputError(f"demos[{i}]: arrays of different lengths or widths")
+        for k in range(n):
+            ds.add_frame({
+                "observation.state": q[k].astype(np.float32),
+                "observation.environment_state": environment_state(stage[k], person[k], dist[k]),
+                "action": a[k].astype(np.float32),
+                "task": instruction,
+            })
+        ds.save_episode()
+    ds.finalize()
+    return ds
 
 
 try:  # LeRobot's base class and registry, when installed.

@@ -1,0 +1,441 @@
+//! Demonstrations with the variety of human teleoperation, for training learned policies (the
+//! paper's diffusion policies learn from 200 teleoperated demonstrations per task).
+//!
+//! [`task::demonstrations`](crate::task::demonstrations) are machine-made: six per task, one
+//! constant pace, the tool on eased straight lines. A person teleoperating the arm does not
+//! move like that. Each demonstration made here varies as such recordings do:
+//! - **detours**: the tool bends away from the straight line between two waypoints (by 1–3 cm,
+//!   sideways and up, smoothly, and back onto the line), and every waypoint is jittered: a
+//!   sub-goal within 40 % of its success tolerance, the others by up to 1.2 cm;
+//! - **changes of pace**: each segment runs at its own pace (0.55–1.15 of the nominal one), and
+//!   the pace changes gradually (at most [`PACE_RATE`] per second);
+//! - **pauses**: 0–2 per demonstration, 0.2–1.0 s each, at random times;
+//! - **hesitations near people**: while the tool point is within [`HESITATE_DISTANCE`] of the
+//!   person (the scenario's true keypoints at that time), the demonstrator slows to 25–45 % of
+//!   the pace, and stops for 0.2–0.5 s when the person first comes that close.
+//!
+//! Every demonstration is recorded at `1/fps` and stays within the limits the robot is operated
+//! at (joint velocities within the robot's, accelerations within the shield's intended fraction
+//! of the robot's: [`within_operated_limits`]); one that would not is recorded again at a lower
+//! nominal pace. Each reaches every sub-goal of its task, in order. Deterministic in `seed`.
+
+use crate::humans::Rng;
+use crate::task::{
+    TaskKind, demo_acceleration_limits, dense_path_with_detours, scenario, solve_ik,
+    tool_keyframes, tool_point,
+};
+use pacs_models::{RobotModel, fr3};
+
+/// Tool-to-person distance (m) below which the demonstrator hesitates.
+pub const HESITATE_DISTANCE: f64 = 0.3;
+
+/// Largest change of the pace (fraction of the nominal pace) per second.
+pub const PACE_RATE: f64 = 2.5;
+
+/// Largest joint step (rad) between two samples of the fine geometric path.
+const FINE_STEP: f64 = 0.004;
+
+/// Nominal largest joint speed (rad/s) along the path at pace 1.
+const NOMINAL_SPEED: f64 = 0.9;
+
+/// Recordings per demonstration at most, each at 85 % of the last one's nominal pace.
+const ATTEMPTS: usize = 8;
+
+/// One teleoperation-like demonstration, sampled every `dt` seconds from rest to rest.
+#[derive(Debug, Clone)]
+pub struct TeleopDemo {
+    /// The task.
+    pub task: TaskKind,
+    /// The scenario seed whose person the demonstrator saw (and the variety's seed).
+    pub seed: u64,
+    /// Sample period (s).
+    pub dt: f64,
+    /// Joint positions (rad), one per sample.
+    pub q: Vec<Vec<f64>>,
+    /// Sub-goals reached so far at each sample (in order, by the episode's rule).
+    pub stage: Vec<usize>,
+    /// The person's keypoint centroid (m, world frame) at each sample.
+    pub person: Vec<[f64; 3]>,
+    /// Distance (m) from the tool point to the person's nearest keypoint at each sample.
+    pub person_distance: Vec<f64>,
+    /// The demonstrator's pace at each sample (fraction of the nominal pace; 0 = paused).
+    pub pace: Vec<f64>,
+    /// Pauses (not counting hesitation stops).
+    pub pauses: usize,
+    /// Times the demonstrator hesitated because the person came within [`HESITATE_DISTANCE`].
+    pub hesitations: usize,
+    /// Segments with a detour.
+    pub detours: usize,
+}
+
+impl TeleopDemo {
+    /// Duration (s).
+    pub fn duration(&self) -> f64 {
+        (self.q.len().saturating_sub(1)) as f64 * self.dt
+    }
+}
+
+/// Errors of [`teleop_demonstrations`].
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum TeleopError {
+    /// `fps` not in [10, 1000].
+    #[error("fps: {0} is not a frame rate in [10, 1000] Hz")]
+    Fps(f64),
+    /// A demonstration stayed beyond the operated limits at every attempt.
+    #[error("{task}: demonstration {seed} beyond the operated limits after {ATTEMPTS} recordings")]
+    Limits {
+        /// Task name.
+        task: &'static str,
+        /// Its seed.
+        seed: u64,
+    },
+    /// A demonstration missed a sub-goal (the IK could not reach a waypoint).
+    #[error("{task}: demonstration {seed} reached {reached} of {goals} sub-goals")]
+    Goals {
+        /// Task name.
+        task: &'static str,
+        /// Its seed.
+        seed: u64,
+        /// Sub-goals reached.
+        reached: usize,
+        /// Sub-goals of the task.
+        goals: usize,
+    },
+}
+
+/// `count` teleoperation-like demonstrations of `task` (seeds `seed`, `seed + 1`, …), sampled
+/// at `fps` (Hz).
+pub fn teleop_demonstrations(
+    task: TaskKind,
+    count: usize,
+    seed: u64,
+    fps: f64,
+) -> Result<Vec<TeleopDemo>, TeleopError> {
+    if !(10.0..=1000.0).contains(&fps) {
+        return Err(TeleopError::Fps(fps));
+    }
+    (0..count as u64)
+        .map(|i| teleop_demonstration(task, seed.wrapping_add(i), 1.0 / fps))
+        .collect()
+}
+
+/// The variety one demonstration is drawn with.
+struct Variety {
+    tools: Vec<[f64; 3]>,
+    detours: Vec<[f64; 3]>,
+    segment_pace: Vec<f64>,
+    pauses: Vec<(f64, f64)>,
+    hesitation_pace: f64,
+    hesitation_stop: f64,
+}
+
+fn variety(task: TaskKind, rng: &mut Rng) -> Variety {
+    let (nominal, goals) = tool_keyframes(task);
+    let tools: Vec<[f64; 3]> = nominal
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let r = goals.iter().find(|g| g.0 == k).map_or(0.012, |g| 0.4 * g.2);
+            let j = rng.in_ball(r);
+            [p[0] + j[0], p[1] + j[1], p[2] + j[2]]
+        })
+        .collect();
+    let detours = (0..tools.len())
+        .map(|_| {
+            if rng.uniform() < 0.35 {
+                let side = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                [0.0, side * rng.range(0.01, 0.03), rng.range(0.0, 0.015)]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let segment_pace = (0..tools.len()).map(|_| rng.range(0.55, 1.15)).collect();
+    let n_pauses = (rng.uniform() * 3.0) as usize;
+    let pauses = (0..n_pauses)
+        .map(|_| (rng.uniform(), rng.range(0.2, 1.0)))
+        .collect();
+    Variety {
+        tools,
+        detours,
+        segment_pace,
+        pauses,
+        hesitation_pace: rng.range(0.25, 0.45),
+        hesitation_stop: rng.range(0.2, 0.5),
+    }
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn teleop_demonstration(task: TaskKind, seed: u64, dt: f64) -> Result<TeleopDemo, TeleopError> {
+    let robot = fr3::fr3();
+    let sc = scenario(task, seed, true);
+    let mut rng = Rng::new(seed.wrapping_mul(0x7E1E_0F).wrapping_add(task as u64 + 17));
+    let v = variety(task, &mut rng);
+    let start = fr3::Q_READY.to_vec();
+    // Fine samples per segment from the joint distance between the IK keyframes.
+    let mut keyframes = vec![start.clone()];
+    for p in &v.tools {
+        let (q, _) = solve_ik(&robot, keyframes.last().expect("non-empty"), *p);
+        keyframes.push(q);
+    }
+    let counts: Vec<usize> = keyframes
+        .windows(2)
+        .map(|w| {
+            let d = w[0]
+                .iter()
+                .zip(&w[1])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            ((1.5 * d / FINE_STEP).ceil() as usize).max(40)
+        })
+        .collect();
+    let path = dense_path_with_detours(&robot, &start, &v.tools, &counts, &v.detours);
+    // The segment each fine sample belongs to.
+    let mut segment = vec![0usize];
+    for (k, &c) in counts.iter().enumerate() {
+        segment.extend(std::iter::repeat_n(k, c.max(1)));
+    }
+    let a_max = demo_acceleration_limits(&robot);
+    let v_max = robot.limits().v_max().to_vec();
+    let mut nominal = nominal_rate(&path);
+    for _ in 0..ATTEMPTS {
+        let demo = time_path(&robot, &sc, &v, &path, &segment, nominal, dt, task, seed);
+        if within_operated_limits(&demo.q, dt, &v_max, &a_max) {
+            let goals = sc.goals.len();
+            let reached = demo.stage.last().copied().unwrap_or(0);
+            if reached < goals {
+                return Err(TeleopError::Goals {
+                    task: task.name(),
+                    seed,
+                    reached,
+                    goals,
+                });
+            }
+            return Ok(demo);
+        }
+        nominal *= 0.85;
+    }
+    Err(TeleopError::Limits {
+        task: task.name(),
+        seed,
+    })
+}
+
+/// Fine samples per second at pace 1: the largest joint step between fine samples taken at
+/// [`NOMINAL_SPEED`].
+fn nominal_rate(path: &[Vec<f64>]) -> f64 {
+    let step = path
+        .windows(2)
+        .flat_map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| (a - b).abs()))
+        .fold(0.0, f64::max);
+    NOMINAL_SPEED / step.max(1e-6)
+}
+
+/// The configuration at fine-path coordinate `s` (linear between fine samples).
+fn at(path: &[Vec<f64>], s: f64) -> Vec<f64> {
+    let last = (path.len() - 1) as f64;
+    let s = s.clamp(0.0, last);
+    let i = (s.floor() as usize).min(path.len() - 2);
+    let f = s - i as f64;
+    path[i]
+        .iter()
+        .zip(&path[i + 1])
+        .map(|(a, b)| a + f * (b - a))
+        .collect()
+}
+
+/// Walk the fine path in time steps of `dt`, the pace following the demonstrator's target
+/// pace (segment pace, pauses, hesitations near the person) at most [`PACE_RATE`] per second.
+#[allow(clippy::too_many_arguments)]
+fn time_path(
+    robot: &RobotModel,
+    sc: &crate::task::Scenario,
+    v: &Variety,
+    path: &[Vec<f64>],
+    segment: &[usize],
+    nominal: f64,
+    dt: f64,
+    task: TaskKind,
+    seed: u64,
+) -> TeleopDemo {
+    let last = (path.len() - 1) as f64;
+    // Pauses at fractions of the path (so they happen whatever the pace).
+    let mut pauses: Vec<(f64, f64)> = v.pauses.iter().map(|&(f, d)| (f * last, d)).collect();
+    pauses.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut next_pause = 0;
+    let mut stop_until = f64::NEG_INFINITY;
+    let (mut s, mut pace, mut t) = (0.0f64, 0.0f64, 0.0f64);
+    let mut near_before = false;
+    let (mut n_pauses, mut hesitations) = (0, 0);
+    let mut demo = TeleopDemo {
+        task,
+        seed,
+        dt,
+        q: Vec::new(),
+        stage: Vec::new(),
+        person: Vec::new(),
+        person_distance: Vec::new(),
+        pace: Vec::new(),
+        pauses: 0,
+        hesitations: 0,
+        detours: v
+            .detours
+            .iter()
+            .filter(|d| d.iter().any(|x| *x != 0.0))
+            .count(),
+    };
+    let mut stage = 0;
+    // Hard cap: the slowest walk (every pause, hesitation all the way) well within it.
+    let max_samples = ((last / (nominal * 0.05) + 60.0) / dt) as usize;
+    for _ in 0..max_samples {
+        let q = at(path, s);
+        let tool = tool_point(robot, &q);
+        let keypoints = sc.script.keypoints(t);
+        let d = keypoints
+            .iter()
+            .map(|k| dist(k, &tool))
+            .fold(f64::INFINITY, f64::min);
+        let n = keypoints.len().max(1) as f64;
+        let mut c = [0.0; 3];
+        for k in &keypoints {
+            for i in 0..3 {
+                c[i] += k[i] / n;
+            }
+        }
+        while stage < sc.goals.len() && sc.goals[stage].reached(&tool) {
+            stage += 1;
+        }
+        demo.q.push(q);
+        demo.stage.push(stage);
+        demo.person.push(c);
+        demo.person_distance.push(d);
+        demo.pace.push(pace);
+        if s >= last {
+            break;
+        }
+        // The demonstrator's target pace now.
+        let near = d < HESITATE_DISTANCE;
+        if near && !near_before {
+            hesitations += 1;
+            stop_until = stop_until.max(t + v.hesitation_stop);
+        }
+        near_before = near;
+        if next_pause < pauses.len() && s >= pauses[next_pause].0 {
+            stop_until = stop_until.max(t + pauses[next_pause].1);
+            next_pause += 1;
+            n_pauses += 1;
+        }
+        let seg = segment[(s.floor() as usize).min(segment.len() - 1)];
+        let mut target = v.segment_pace[seg.min(v.segment_pace.len() - 1)];
+        if near {
+            target *= v.hesitation_pace;
+        }
+        if t < stop_until {
+            target = 0.0;
+        }
+        let step = PACE_RATE * dt;
+        pace = if target > pace {
+            (pace + step).min(target)
+        } else {
+            (pace - step).max(target)
+        };
+        // At the end of the path the eased segments bring the robot to rest.
+        s = (s + pace * nominal * dt).min(last);
+        t += dt;
+    }
+    demo.pauses = n_pauses;
+    demo.hesitations = hesitations;
+    demo
+}
+
+/// Whether the joint path `q` (one sample per `dt` s) stays within the joint speeds `v_max`
+/// (rad/s, first differences) and accelerations `a_max` (rad/s², second differences), and
+/// starts and ends at rest (the first and last steps below `a_max·dt²`).
+pub fn within_operated_limits(q: &[Vec<f64>], dt: f64, v_max: &[f64], a_max: &[f64]) -> bool {
+    let n = v_max.len().min(a_max.len());
+    let speeds = q
+        .windows(2)
+        .all(|w| (0..n).all(|i| (w[1][i] - w[0][i]).abs() <= v_max[i] * dt));
+    let accels = q.windows(3).all(|w| {
+        (0..n).all(|i| ((w[2][i] - 2.0 * w[1][i] + w[0][i]) / (dt * dt)).abs() <= a_max[i])
+    });
+    let rest = |a: &[f64], b: &[f64]| (0..n).all(|i| (a[i] - b[i]).abs() <= a_max[i] * dt * dt);
+    let ends = q.len() >= 2 && rest(&q[0], &q[1]) && rest(&q[q.len() - 2], &q[q.len() - 1]);
+    speeds && accels && ends
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demonstrations_vary_like_teleoperation_and_stay_within_the_operated_limits() {
+        let robot = fr3::fr3();
+        let a_max = demo_acceleration_limits(&robot);
+        let v_max = robot.limits().v_max().to_vec();
+        for task in [TaskKind::Sorting, TaskKind::Handover] {
+            let demos = teleop_demonstrations(task, 12, 1, 30.0).expect("demos");
+            assert_eq!(demos.len(), 12);
+            let goals = crate::task::tool_goals(task).len();
+            for d in &demos {
+                assert!(within_operated_limits(&d.q, d.dt, &v_max, &a_max));
+                assert_eq!(*d.stage.last().unwrap(), goals, "{task:?} {}", d.seed);
+                assert!(d.stage.windows(2).all(|w| w[1] >= w[0]));
+                assert_eq!(d.q.len(), d.person.len());
+                assert_eq!(d.q.len(), d.pace.len());
+            }
+            // Variety: durations differ, pauses and detours occur.
+            let durations: Vec<f64> = demos.iter().map(TeleopDemo::duration).collect();
+            let (lo, hi) = durations
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+            assert!(hi > 1.2 * lo, "{task:?}: durations {durations:?}");
+            assert!(demos.iter().any(|d| d.pauses > 0));
+            assert!(demos.iter().any(|d| d.detours > 0));
+            assert!(
+                demos
+                    .iter()
+                    .any(|d| d.pace.iter().skip(1).any(|p| *p == 0.0))
+            );
+        }
+        // The handover partner is approached: the demonstrator hesitates there.
+        let demos = teleop_demonstrations(TaskKind::Handover, 6, 1, 30.0).unwrap();
+        assert!(demos.iter().all(|d| d.hesitations > 0));
+    }
+
+    #[test]
+    fn demonstrations_are_deterministic_in_the_seed() {
+        let a = teleop_demonstrations(TaskKind::Feeding, 2, 7, 30.0).unwrap();
+        let b = teleop_demonstrations(TaskKind::Feeding, 2, 7, 30.0).unwrap();
+        assert_eq!(a[1].q, b[1].q);
+        let c = teleop_demonstrations(TaskKind::Feeding, 1, 8, 30.0).unwrap();
+        assert_eq!(a[1].q, c[0].q);
+        assert_ne!(a[0].q, a[1].q);
+    }
+
+    #[test]
+    fn bad_frame_rates_are_refused() {
+        assert_eq!(
+            teleop_demonstrations(TaskKind::Sorting, 1, 0, 0.0).unwrap_err(),
+            TeleopError::Fps(0.0)
+        );
+        assert!(teleop_demonstrations(TaskKind::Sorting, 1, 0, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn the_limit_check_catches_a_jump_and_a_start_in_motion() {
+        let v_max = vec![1.0; 2];
+        let a_max = vec![10.0; 2];
+        let dt = 0.01;
+        let rest = vec![vec![0.0, 0.0]; 4];
+        assert!(within_operated_limits(&rest, dt, &v_max, &a_max));
+        let mut jump = rest.clone();
+        jump[2][1] = 0.2; // 2 rad/s
+        assert!(!within_operated_limits(&jump, dt, &v_max, &a_max));
+        let moving: Vec<Vec<f64>> = (0..4).map(|k| vec![0.005 * k as f64, 0.0]).collect();
+        assert!(!within_operated_limits(&moving, dt, &v_max, &a_max));
+    }
+}
