@@ -365,3 +365,193 @@ pub fn _simulate_merge<'py>(py: Python<'py>, parts: Vec<Vec<u8>>) -> PyResult<Bo
     let rows = eval::summarize(&rollouts);
     to_py(py, &serde_json::json!({"rows": rows, "rollouts": rollouts}))
 }
+
+/// A Python policy object as the simulation's [`TaskPolicy`]: `policy.act(obs)` returns the
+/// chunk of joint-position deltas (H, 7) (rad); `obs` is a dict of `task`, `seed` (the
+/// rollout's), `t` (s), `q`, `q_before`
+/// (rad, now and one policy step earlier), `stage`, `person`, `person_before` ((K, 3) m) and
+/// `tool`, `tool_before` (m). `policy.n_action_steps` (or `h`) is the executed actions per chunk
+/// (default 8). The deviation is measured against the task's built-in demonstrations. A Python
+/// error inside `act` ends the rollout's chunks (a zero chunk: the robot holds) and is raised
+/// after the rollout.
+struct PyTaskPolicy<'a> {
+    obj: &'a Py<PyAny>,
+    demos: pacs_sim::policy::DemoSet,
+    robot: pacs_models::RobotModel,
+    execute: usize,
+    ood: usize,
+    error: Option<PyErr>,
+    task: &'static str,
+    seed: u64,
+}
+
+impl PyTaskPolicy<'_> {
+    fn call(&self, obs: &pacs_sim::policy::Observation) -> PyResult<Vec<Vec<f64>>> {
+        use numpy::{PyArray1, PyArray2};
+        Python::attach(|py| {
+            let d = pyo3::types::PyDict::new(py);
+            let pts = |p: &[[f64; 3]]| -> PyResult<Bound<'_, PyAny>> {
+                let v: Vec<Vec<f64>> = p.iter().map(|x| x.to_vec()).collect();
+                if v.is_empty() {
+                    Ok(numpy::PyArray2::<f64>::zeros(py, [0, 3], false).into_any())
+                } else {
+                    Ok(PyArray2::from_vec2(py, &v)
+                        .map_err(|e| input(e.to_string()))?
+                        .into_any())
+                }
+            };
+            d.set_item("task", self.task)?;
+            d.set_item("seed", self.seed)?;
+            d.set_item("t", obs.t)?;
+            d.set_item("q", PyArray1::from_slice(py, obs.q))?;
+            d.set_item("q_before", PyArray1::from_slice(py, obs.q_before))?;
+            d.set_item("stage", obs.stage)?;
+            d.set_item("person", pts(obs.person)?)?;
+            d.set_item("person_before", pts(obs.person_before)?)?;
+            let tool = pacs_sim::task::tool_point(&self.robot, obs.q);
+            let tool_before = pacs_sim::task::tool_point(&self.robot, obs.q_before);
+            d.set_item("tool", tool.to_vec())?;
+            d.set_item("tool_before", tool_before.to_vec())?;
+            let out = self.obj.bind(py).call_method1("act", (d,))?;
+            let a: Vec<Vec<f64>> = out
+                .call_method0("tolist")
+                .unwrap_or(out)
+                .extract()
+                .map_err(|e| input(format!("policy.act: expected an (H, 7) array: {e}")))?;
+            let n = obs.q.len();
+            if a.is_empty()
+                || a.iter()
+                    .any(|r| r.len() != n || r.iter().any(|x| !x.is_finite()))
+            {
+                return Err(input(format!(
+                    "policy.act: expected a non-empty (H, {n}) array of finite deltas (rad)"
+                )));
+            }
+            Ok(a)
+        })
+    }
+}
+
+impl pacs_sim::policy::TaskPolicy for PyTaskPolicy<'_> {
+    fn act(&mut self, obs: &pacs_sim::policy::Observation) -> pacs_motion::chunk::Chunk {
+        use pacs_motion::chunk::{ActionKind, Chunk};
+        let hold = |n: usize| Chunk {
+            kind: ActionKind::Delta,
+            actions: vec![vec![0.0; n]],
+            execute: 1,
+            gripper: None,
+        };
+        if self.error.is_some() {
+            return hold(obs.q.len());
+        }
+        if self.demos.deviation(obs.q) > pacs_sim::policy::OOD_RADIUS {
+            self.ood += 1;
+        }
+        match self.call(obs) {
+            Ok(actions) => {
+                let execute = self.execute.min(actions.len()).max(1);
+                Chunk {
+                    kind: ActionKind::Delta,
+                    actions,
+                    execute,
+                    gripper: None,
+                }
+            }
+            Err(e) => {
+                self.error = Some(e);
+                hold(obs.q.len())
+            }
+        }
+    }
+    fn deviation(&self, q: &[f64]) -> f64 {
+        self.demos.deviation(q)
+    }
+    fn ood_chunks(&self) -> usize {
+        self.ood
+    }
+    fn name(&self) -> &'static str {
+        "external"
+    }
+    fn execute(&self) -> usize {
+        self.execute
+    }
+}
+
+/// Rollouts of a Python policy object (see [`PyTaskPolicy`]) for every task × method × seed,
+/// one after another on this thread (`policy.reset()`, if present, before each); encoded as
+/// `_simulate_rollouts` encodes them (merge with `_simulate_merge`).
+#[pyfunction]
+#[pyo3(signature = (policy, tasks, methods, seeds, with_human, chunk_motion, log_dir=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _simulate_external<'py>(
+    py: Python<'py>,
+    policy: Py<PyAny>,
+    tasks: Vec<String>,
+    methods: Vec<String>,
+    seeds: Vec<u64>,
+    with_human: bool,
+    chunk_motion: &str,
+    log_dir: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, "nearest")?;
+    let b = policy.bind(py);
+    if !b.hasattr("act")? {
+        return Err(type_err(
+            "policy: needs act(obs) -> (H, 7) joint-position deltas (rad)",
+        ));
+    }
+    let execute = ["n_action_steps", "h"]
+        .iter()
+        .find_map(|k| b.getattr(*k).ok().and_then(|v| v.extract::<usize>().ok()))
+        .unwrap_or(8);
+    if execute == 0 {
+        return Err(input("policy.n_action_steps: must be at least 1"));
+    }
+    if let Some(d) = &log_dir {
+        std::fs::create_dir_all(d)
+            .map_err(|e| err(Kind::Output, format!("{}: {e}", d.display())))?;
+    }
+    let mut out = Vec::new();
+    for &task in &plan.tasks {
+        for v in &plan.variants {
+            for &seed in &seeds {
+                if b.hasattr("reset")? {
+                    b.call_method0("reset")?;
+                }
+                let log = log_dir
+                    .as_ref()
+                    .map(|d| d.join(format!("{}-{}-{seed:04}.jsonl", task.name(), v.label)));
+                let scn = pacs_sim::task::scenario(task, seed, plan.with_human);
+                let mut p = PyTaskPolicy {
+                    obj: &policy,
+                    demos: scn.policy,
+                    robot: scn.robot,
+                    execute,
+                    ood: 0,
+                    error: None,
+                    task: task.name(),
+                    seed,
+                };
+                let r = py.detach(|| {
+                    eval::run_rollout_with(
+                        task,
+                        v,
+                        seed,
+                        plan.with_human,
+                        log.as_deref(),
+                        0,
+                        &mut p,
+                    )
+                });
+                if let Some(e) = p.error.take() {
+                    return Err(e);
+                }
+                out.push(r.map_err(|e| match e {
+                    eval::EvalError::Io { .. } => err(Kind::Output, e.to_string()),
+                    other => input(other.to_string()),
+                })?);
+            }
+        }
+    }
+    Ok(PyBytes::new(py, &cbor(&out, "rollouts")?))
+}

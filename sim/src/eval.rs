@@ -43,6 +43,9 @@ pub enum PolicyKind {
     /// [`PolicyKind::Kernel`], also trained on the demonstrations replayed at
     /// [`crate::task::REPLAY_PACES`] of their pace.
     KernelPaced,
+    /// A policy the caller supplies ([`run_rollout_with`]; Python's `pacs.simulate(policy=…)`
+    /// with a policy object, e.g. a LeRobot diffusion policy). Not selectable by name.
+    External,
 }
 
 impl std::str::FromStr for PolicyKind {
@@ -180,6 +183,39 @@ pub fn run_rollout(
     log: Option<&Path>,
     record_every: usize,
 ) -> Result<Rollout, EvalError> {
+    rollout_of(task, v, seed, with_human, log, record_every, None)
+}
+
+/// Run one rollout of `policy`, a policy the caller supplies (its rows and rollouts say
+/// [`PolicyKind::External`]; `v.policy` is ignored). The scene, the filter, the people, the
+/// objects, the scoring and the log are those of [`run_rollout`]; the rollout's deviation from
+/// the demonstrations is measured against the task's built-in demonstrations.
+#[allow(clippy::too_many_arguments)]
+pub fn run_rollout_with(
+    task: TaskKind,
+    v: &Variant,
+    seed: u64,
+    with_human: bool,
+    log: Option<&Path>,
+    record_every: usize,
+    policy: &mut dyn crate::policy::TaskPolicy,
+) -> Result<Rollout, EvalError> {
+    let v = Variant {
+        policy: PolicyKind::External,
+        ..v.clone()
+    };
+    rollout_of(task, &v, seed, with_human, log, record_every, Some(policy))
+}
+
+fn rollout_of(
+    task: TaskKind,
+    v: &Variant,
+    seed: u64,
+    with_human: bool,
+    log: Option<&Path>,
+    record_every: usize,
+    external: Option<&mut dyn crate::policy::TaskPolicy>,
+) -> Result<Rollout, EvalError> {
     let err = |source: crate::SimError| EvalError::Episode {
         task: task.name(),
         method: v.label.clone(),
@@ -206,9 +242,10 @@ pub fn run_rollout(
         None => None,
     };
     let mut learned;
-    let policy: &mut dyn crate::policy::TaskPolicy = match v.policy {
-        PolicyKind::Nearest => &mut scn.policy,
-        PolicyKind::Kernel | PolicyKind::KernelPaced => {
+    let policy: &mut dyn crate::policy::TaskPolicy = match (external, v.policy) {
+        (Some(p), _) => p,
+        (None, PolicyKind::Nearest | PolicyKind::External) => &mut scn.policy,
+        (None, PolicyKind::Kernel | PolicyKind::KernelPaced) => {
             learned = crate::task::learned_policy(task, v.policy == PolicyKind::KernelPaced);
             &mut learned
         }

@@ -30,6 +30,13 @@ pub struct Observation<'a> {
     /// How many of the task's sub-goals have been reached (the gripper's state: empty before
     /// the pick, holding after it), as a real policy sees it in its observations.
     pub stage: usize,
+    /// Episode time (s).
+    pub t: f64,
+    /// The person's keypoints now (m, world frame; the simulation's truth, as a policy's own
+    /// perception would report them; empty where the scene has no person).
+    pub person: &'a [[f64; 3]],
+    /// The person's keypoints one policy step Δt earlier (m; as `person` at the start).
+    pub person_before: &'a [[f64; 3]],
 }
 
 /// Distance (rad, Euclidean in joint space) from `q` to the nearest of `configurations`.

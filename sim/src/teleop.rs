@@ -172,7 +172,7 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 fn teleop_demonstration(task: TaskKind, seed: u64, dt: f64) -> Result<TeleopDemo, TeleopError> {
     let robot = fr3::fr3();
     let sc = scenario(task, seed, true);
-    let mut rng = Rng::new(seed.wrapping_mul(0x7E1E_0F).wrapping_add(task as u64 + 17));
+    let mut rng = Rng::new(seed.wrapping_mul(0x007E_1E0F).wrapping_add(task as u64 + 17));
     let v = variety(task, &mut rng);
     let start = fr3::Q_READY.to_vec();
     // Fine samples per segment from the joint distance between the IK keyframes.

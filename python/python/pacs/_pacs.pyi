@@ -183,6 +183,15 @@ def _simulate_rollouts(
     log_dir: PathLike | None = None,
     threads: int | None = None,
 ) -> bytes: ...
+def _simulate_external(
+    policy: Any,
+    tasks: Sequence[str],
+    methods: Sequence[str],
+    seeds: Sequence[int],
+    with_human: bool,
+    chunk_motion: str,
+    log_dir: str | None = None,
+) -> bytes: ...
 def _simulate_merge(parts: Sequence[bytes]) -> dict[str, Any]: ...
 
 class LogWriter:

@@ -211,6 +211,26 @@ def _rollouts_of(ranges: list, threads: Any, common: dict) -> list:
             for s, n in ranges]
 
 
+def _seed_parts(seed_list: list, partitions: Any, client: Any) -> list:
+    """Consecutive parts of the sorted seeds, of near-equal size: ``partitions`` of them
+    (default one per worker thread), at most one per seed."""
+    if partitions is None:
+        partitions = max(1, sum(client.nthreads().values()))
+    partitions = min(_count(partitions, "partitions", 1), len(seed_list))
+    base, extra = divmod(len(seed_list), partitions)
+    chunks, start = [], 0
+    for i in range(partitions):
+        size = base + (1 if i < extra else 0)
+        chunks.append(seed_list[start:start + size])
+        start += size
+    return chunks
+
+
+def _external_of(policy: Any, seeds: list, common: dict) -> list:
+    """The encoded rollouts of a policy object on some seeds (what a worker runs)."""
+    return [_pacs._simulate_external(policy, seeds=list(seeds), **common)]
+
+
 def simulate(
     task: Any = "sorting",
     method: Any = "pacs",
@@ -222,7 +242,7 @@ def simulate(
     partitions: Any = None,
     with_human: bool = True,
     chunk_motion: str = "continuous",
-    policy: str = "nearest",
+    policy: Any = "nearest",
     log_dir: Any = None,
     threads: Any = None,
 ) -> dict:
@@ -236,7 +256,18 @@ def simulate(
     seed), one task each on one thread; the rollouts are merged in the evaluation's order and
     summarised once, so the result is identical to one local run with the same seeds.
     ``log_dir``: write every rollout's audit log there (on a cluster: a directory the workers
-    share). Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
+    share).
+
+    ``policy``: a built-in policy's name (``"nearest"``, ``"kernel"``, ``"kernel-paced"``) or a
+    policy object with ``act(obs) -> (H, 7)`` joint-position deltas (rad) and optionally
+    ``n_action_steps`` (executed actions per chunk, default 8) and ``reset()`` (called before
+    each rollout): e.g. :class:`pacs.lerobot.SimulationPolicy` around a LeRobot policy. ``obs``
+    is a dict: ``task`` and ``seed`` (the rollout's), ``t`` (s), ``q`` and ``q_before`` (rad, now and one policy step of 33 ms
+    earlier), ``stage`` (sub-goals reached), ``person`` and ``person_before`` ((K, 3) m),
+    ``tool`` and ``tool_before`` (m). A policy object runs its rollouts one after another on
+    the calling thread (``threads`` must be None), or, with a ``client``, on the workers (the
+    policy is pickled to them; each partition runs one after another); rows and rollouts say
+    ``policy: "external"``. Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
     ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
     """
     _check_client(client)
@@ -245,12 +276,35 @@ def simulate(
     seed_list = _seed_list(rollouts, seed, seeds)
     if not isinstance(with_human, bool):
         raise ArgumentTypeError(f"with_human: expected True or False, got {with_human!r}")
-    for value, name in ((chunk_motion, "chunk_motion"), (policy, "policy")):
-        if not isinstance(value, str):
-            raise ArgumentTypeError(f"{name}: expected a str, got {value!r}")
+    external = not isinstance(policy, str)
+    if external and not hasattr(policy, "act"):
+        raise ArgumentTypeError(
+            f"policy: expected a name or an object with act(obs), got {type(policy).__name__}"
+        )
+    if not isinstance(chunk_motion, str):
+        raise ArgumentTypeError(f"chunk_motion: expected a str, got {chunk_motion!r}")
     if log_dir is not None:
         log_dir = os.fspath(log_dir)
-    _pacs._simulate_check(tasks, methods, with_human, chunk_motion, policy)
+    _pacs._simulate_check(
+        tasks, methods, with_human, chunk_motion, "nearest" if external else policy
+    )
+    if external:
+        if threads is not None:
+            raise InputError("threads: a policy object runs its rollouts on one thread")
+        ext = dict(tasks=tasks, methods=methods, with_human=with_human,
+                   chunk_motion=chunk_motion, log_dir=log_dir)
+        if client is None:
+            if partitions is not None:
+                raise InputError("partitions: only with a client")
+            return _pacs._simulate_merge(_external_of(policy, seed_list, ext))
+        chunks = _seed_parts(seed_list, partitions, client)
+        futures = [client.submit(_external_of, policy, c, ext, pure=False) for c in chunks]
+        try:
+            done = client.gather(futures)
+        finally:
+            for f in futures:
+                f.release()
+        return _pacs._simulate_merge([part for parts in done for part in parts])
     common = dict(
         tasks=tasks,
         methods=methods,
@@ -266,16 +320,7 @@ def simulate(
         return _pacs._simulate_merge(parts)
     if threads is not None:
         raise InputError("threads: set the workers' threads on the Dask cluster, not here")
-    if partitions is None:
-        partitions = max(1, sum(client.nthreads().values()))
-    partitions = min(_count(partitions, "partitions", 1), len(seed_list))
-    # Consecutive parts of the sorted seeds, of near-equal size.
-    base, extra = divmod(len(seed_list), partitions)
-    chunks, start = [], 0
-    for i in range(partitions):
-        size = base + (1 if i < extra else 0)
-        chunks.append(seed_list[start:start + size])
-        start += size
+    chunks = _seed_parts(seed_list, partitions, client)
     futures = [client.submit(_rollouts_of, _ranges(c), 1, common, pure=False) for c in chunks]
     try:
         done = client.gather(futures)

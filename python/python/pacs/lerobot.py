@@ -23,6 +23,9 @@ like them (lerobot itself is optional: it pulls torch).
 - :func:`write_dataset`: demonstrations (:func:`pacs.teleop_demonstrations`) written as a
   LeRobot dataset (``LeRobotDataset.create`` / ``add_frame`` / ``save_episode``), the training
   data of a LeRobot policy; :func:`environment_state` is its ``observation.environment_state``.
+- :class:`SimulationPolicy`: a LeRobot policy as the simulation's policy
+  (``pacs.simulate(policy=SimulationPolicy(...))``): OFF / PACS / single-action / CBF
+  rollouts of a learned policy on the built-in scenes, scored against the true people.
 - :class:`ShieldActionStep`: a ``RobotActionProcessorStep``-style step for a LeRobot robot
   pipeline: every action the pipeline passes goes through a running :class:`pacs.ShieldLoop`,
   and the robot receives the shield's command instead.
@@ -49,6 +52,7 @@ __all__ = [
     "ShieldActionStep",
     "environment_state",
     "write_dataset",
+    "SimulationPolicy",
     "to_numpy",
 ]
 
@@ -483,6 +487,101 @@ def write_dataset(
         ds.save_episode()
     ds.finalize()
     return ds
+
+
+def _frame_environment(stage: float, person: Any, tool: Any) -> np.ndarray:
+    """:func:`environment_state` from the person's keypoints (K, 3) and the tool point."""
+    k = to_numpy(person).reshape(-1, 3)
+    if len(k) == 0:
+        raise InputError("obs: the scene has no person (environment_state needs one)")
+    d = float(np.min(np.linalg.norm(k - to_numpy(tool).reshape(1, 3), axis=1)))
+    return environment_state(stage, k.mean(axis=0), d)
+
+
+class SimulationPolicy:
+    """A LeRobot policy trained on :func:`write_dataset` data, as the simulation's policy
+    (``pacs.simulate(task, method, policy=SimulationPolicy(...))``, the protocol of
+    :func:`pacs.simulate`'s ``policy`` objects).
+
+    Each ``act(obs)`` builds the two frames the policy saw in training — ``observation.state``
+    (q) and ``observation.environment_state`` (:func:`environment_state` of the stage, the
+    person and the tool) one policy step before and now —, resets the policy, feeds both
+    frames through :class:`ObservationHistory` (LeRobot's own queue rule, so a policy with
+    ``n_obs_steps`` = 2 sees exactly those two frames), predicts a chunk with
+    ``predict_action_chunk`` and returns it un-normalized (the postprocessor) as joint-position
+    deltas (H, 7) rad. ``n_action_steps`` is the policy config's (the executed actions per
+    chunk).
+
+    Args:
+        policy: a LeRobot ``PreTrainedPolicy`` (e.g. ``DiffusionPolicy``) with
+            ``n_obs_steps`` ≤ 2.
+        preprocess, postprocess: LeRobot's processor pipelines (``make_pre_post_processors``),
+            or None (inputs and outputs un-normalized).
+    """
+
+    def __init__(self, policy: Any, preprocess: Any = None, postprocess: Any = None) -> None:
+        if not hasattr(policy, "predict_action_chunk"):
+            raise ArgumentTypeError("policy: needs predict_action_chunk(batch)")
+        cfg = getattr(policy, "config", None)
+        self.n_obs_steps = int(getattr(cfg, "n_obs_steps", 1))
+        if self.n_obs_steps > 2:
+            raise InputError(
+                f"policy.config.n_obs_steps: {self.n_obs_steps}; the simulation observes two frames"
+            )
+        self.n_action_steps = int(getattr(cfg, "n_action_steps", 8))
+        self.policy, self.preprocess, self.postprocess = policy, preprocess, postprocess
+        self.history = ObservationHistory(policy)
+
+    @classmethod
+    def from_pretrained(cls, path: str) -> "SimulationPolicy":
+        """Load a policy and its processors saved by LeRobot (``save_pretrained``), on CPU."""
+        from lerobot.policies.factory import get_policy_class, make_pre_post_processors
+        from lerobot.configs.policies import PreTrainedConfig
+
+        cfg = PreTrainedConfig.from_pretrained(path)
+        cfg.device = "cpu"
+        policy = get_policy_class(cfg.type).from_pretrained(path, config=cfg).eval()
+        pre, post = make_pre_post_processors(
+            cfg, pretrained_path=path,
+            preprocessor_overrides={"device_processor": {"device": "cpu"}},
+        )
+        return cls(policy, pre, post)
+
+    def frames(self, obs: Mapping[str, Any]) -> list[dict[str, np.ndarray]]:
+        """The two observation frames (before, now) of a simulation observation."""
+        out = []
+        for q, person, tool in (
+            (obs["q_before"], obs["person_before"], obs["tool_before"]),
+            (obs["q"], obs["person"], obs["tool"]),
+        ):
+            out.append({
+                "observation.state": to_numpy(q).astype(np.float32),
+                "observation.environment_state": _frame_environment(obs["stage"], person, tool),
+            })
+        return out
+
+    def reset(self) -> None:
+        if hasattr(self.policy, "reset"):
+            self.policy.reset()
+
+    def act(self, obs: Mapping[str, Any]) -> np.ndarray:
+        import torch
+
+        self.reset()
+        batch = None
+        with torch.no_grad():
+            for frame in self.frames(obs):
+                b = {k: torch.from_numpy(v) for k, v in frame.items()}
+                if self.preprocess is not None:
+                    b = self.preprocess(b)
+                else:
+                    b = {k: v[None] for k, v in b.items()}
+                batch = self.history.feed(b)
+            a = self.policy.predict_action_chunk(batch)
+            if self.postprocess is not None:
+                a = self.postprocess(a)
+        a = to_numpy(a)
+        return a[0] if a.ndim == 3 else a
 
 
 try:  # LeRobot's base class and registry, when installed.

@@ -181,21 +181,38 @@ pub fn run_setup(
         let t = k as f64 * cfg.dt;
         before.copy_from_slice(&past[k % action_every]);
         past[k % action_every].copy_from_slice(&q);
+        let direct = method == Method::Direct;
+        let chunk_due = if direct {
+            k % chunk_every == 0
+        } else {
+            since_chunk >= chunk_every
+                || (cfg.chunk_motion == ChunkMotion::Continuous
+                    && since_chunk >= action_every
+                    && filter
+                        .remaining()
+                        .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
+        };
+        // The person as the policy perceives them (only when it is asked for a chunk).
+        let (person, person_before) = if chunk_due {
+            (
+                script.keypoints(t),
+                script.keypoints((t - cfg.policy_dt).max(0.0)),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let obs = Observation {
             q: &q,
             q_before: &before,
             stage: tally.next_goal,
+            t,
+            person: &person,
+            person_before: &person_before,
         };
-        if method == Method::Direct {
+        if direct {
             let clock = (k, chunk_every, action_every);
             send_direct_target(filter.as_mut(), policy, &obs, &mut waypoints, clock, t);
-        } else if since_chunk >= chunk_every
-            || (cfg.chunk_motion == ChunkMotion::Continuous
-                && since_chunk >= action_every
-                && filter
-                    .remaining()
-                    .is_some_and(|r| r < HANDOVER_STEPS * cfg.dt))
-        {
+        } else if chunk_due {
             since_chunk = 0;
             let c = policy.act(&obs);
             // An unplannable chunk is ignored by the filter (counted).

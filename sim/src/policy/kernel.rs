@@ -471,6 +471,9 @@ mod tests {
             q: &[q],
             q_before: &[before],
             stage,
+            t: 0.0,
+            person: &[],
+            person_before: &[],
         }))
     }
 
@@ -489,6 +492,9 @@ mod tests {
             q: &[1.0],
             q_before: &[0.0],
             stage: 0,
+            t: 0.0,
+            person: &[],
+            person_before: &[],
         });
         assert_eq!(c.execute, 2);
         assert_eq!(c.kind, ActionKind::Delta);
