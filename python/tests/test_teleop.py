@@ -97,3 +97,64 @@ def test_demonstrations_as_a_lerobot_dataset(tmp_path):
         frame["observation.environment_state"].numpy(),
         environment_state(d["stage"][5], d["person"][5], d["person_distance"][5]), atol=1e-6)
     assert frame["task"] == "handover"
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_a_lerobot_diffusion_policy_in_the_simulation(tmp_path):
+    """A tiny untrained DiffusionPolicy (with processors from the demonstrations' statistics),
+    saved and loaded the LeRobot way, runs in pacs.simulate through OFF and PACS; the PACS log
+    is audited; the policy sees the two frames the simulation observes."""
+    torch = pytest.importorskip("torch")
+    from lerobot.configs.types import FeatureType, NormalizationMode, PolicyFeature
+    from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
+    from lerobot.policies.diffusion.modeling_diffusion import DiffusionPolicy
+    from lerobot.policies.factory import make_pre_post_processors
+    from pacs.lerobot import SimulationPolicy
+
+    torch.manual_seed(0)
+    demos = pacs.teleop_demonstrations("sorting", count=3, seed=1)
+    q = np.concatenate([d["q"] for d in demos]).astype(np.float32)
+    env = np.stack([environment_state(s, p, r) for d in demos
+                    for s, p, r in zip(d["stage"], d["person"], d["person_distance"])])
+    a = np.concatenate([d["action"] for d in demos]).astype(np.float32)
+
+    def stats(x):
+        return {"min": x.min(0), "max": x.max(0), "mean": x.mean(0), "std": x.std(0) + 1e-6}
+
+    cfg = DiffusionConfig(
+        input_features={
+            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
+            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(5,)),
+        },
+        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+        n_obs_steps=2, horizon=16, n_action_steps=8, down_dims=(32, 64, 128),
+        noise_scheduler_type="DDIM", num_inference_steps=3, device="cpu",
+        normalization_mapping={"STATE": NormalizationMode.MIN_MAX,
+                               "ENV": NormalizationMode.MIN_MAX,
+                               "ACTION": NormalizationMode.MIN_MAX},
+    )
+    pre, post = make_pre_post_processors(
+        cfg, dataset_stats={"observation.state": stats(q),
+                            "observation.environment_state": stats(env), "action": stats(a)})
+    model = tmp_path / "model"
+    DiffusionPolicy(cfg).save_pretrained(model)
+    pre.save_pretrained(model)
+    post.save_pretrained(model)
+    policy = SimulationPolicy.from_pretrained(str(model))
+    assert policy.n_action_steps == 8
+    seen = []
+    feed = policy.history.feed
+
+    def spy(batch):
+        out = feed(batch)
+        seen.append(len(policy.policy._queues["observation.state"]))
+        return out
+
+    policy.history.feed = spy
+    out = pacs.simulate("sorting", "off,pacs", seeds=[1], policy=policy, log_dir=tmp_path / "logs")
+    assert [r["method"] for r in out["rollouts"]] == ["off", "pacs"]
+    assert seen and all(n == 2 for n in seen)
+    (run,) = pacs.audit(out["rollouts"][1]["log"])
+    assert run.verdict in ("pass", "fail", "inconclusive")
+    assert out["rollouts"][1]["episode"]["violation_fraction"] == 0.0
