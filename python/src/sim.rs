@@ -227,3 +227,77 @@ pub fn teleop_demonstrations<'py>(
     }
     Ok(out)
 }
+
+/// A recording `q` (T, 7) rad sampled at `fps` (Hz) replayed along its own path with the
+/// shield's braking and resuming path-speed profiles (`pacs_sim::teleop::paced_replay`): brake
+/// to rest at each of `pauses` ((path time s, hold s)), slow to the pace of each of `slows`
+/// ((from s, to s, pace in (0, 1))), resume; within the FR3's operated limits. Returns `q`
+/// (N, 7) rad, `source` (N,) (fractional sample index into the recording) and `pace` (N,).
+#[pyfunction]
+#[pyo3(signature = (q, fps=30.0, pauses=Vec::new(), slows=Vec::new()))]
+pub fn paced_replay<'py>(
+    py: Python<'py>,
+    q: &Bound<'py, PyAny>,
+    fps: f64,
+    pauses: Vec<(f64, f64)>,
+    slows: Vec<(f64, f64, f64)>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    use pacs_sim::teleop::{PaceEvent, paced_replay};
+    if !(fps > 0.0 && fps.is_finite()) {
+        return Err(input(format!("fps: {fps} is not a frame rate (Hz)")));
+    }
+    let rows: Vec<Vec<f64>> = q
+        .call_method0("tolist")
+        .unwrap_or_else(|_| q.clone())
+        .extract()
+        .map_err(|e| {
+            input(format!(
+                "q: expected a (T, 7) array of joint positions: {e}"
+            ))
+        })?;
+    if let Some((i, r)) = rows
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.len() != 7 || r.iter().any(|x| !x.is_finite()))
+    {
+        return Err(input(format!(
+            "q[{i}]: expected 7 finite joint positions (rad), got {} values",
+            r.len()
+        )));
+    }
+    let mut events: Vec<PaceEvent> = pauses
+        .iter()
+        .map(|&(at, hold)| PaceEvent::Pause { at, hold })
+        .collect();
+    events.extend(
+        slows
+            .iter()
+            .map(|&(from, to, pace)| PaceEvent::Slow { from, to, pace }),
+    );
+    let robot = pacs_models::fr3::fr3();
+    let a_max = pacs_sim::task::demo_acceleration_limits(&robot);
+    let v_max = robot.limits().v_max().to_vec();
+    let r = paced_replay(&rows, 1.0 / fps, &events, &v_max, &a_max).map_err(|e| {
+        let n = pauses.len();
+        input(match e {
+            pacs_sim::teleop::ReplayError::Event(i) if i < n => {
+                format!("pauses[{i}]: times must be finite and ≥ 0, the hold > 0")
+            }
+            pacs_sim::teleop::ReplayError::Event(i) => {
+                format!(
+                    "slows[{}]: finite times ≥ 0 with from < to, a pace in (0, 1)",
+                    i - n
+                )
+            }
+            other => format!("q: {other}"),
+        })
+    })?;
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item(
+        "q",
+        PyArray2::from_vec2(py, &r.q).map_err(|e| input(e.to_string()))?,
+    )?;
+    d.set_item("source", PyArray1::from_slice(py, &r.source))?;
+    d.set_item("pace", PyArray1::from_slice(py, &r.pace))?;
+    Ok(d)
+}

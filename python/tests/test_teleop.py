@@ -158,3 +158,34 @@ def test_a_lerobot_diffusion_policy_in_the_simulation(tmp_path):
     (run,) = pacs.audit(out["rollouts"][1]["log"])
     assert run.verdict in ("pass", "fail", "inconclusive")
     assert out["rollouts"][1]["episode"]["violation_fraction"] == 0.0
+
+
+def test_paced_replays_keep_the_path_and_the_operated_limits():
+    from pacs.lerobot import paced_replays
+
+    demos = pacs.teleop_demonstrations("handover", count=4, seed=2)
+    reps = paced_replays(demos, per_demo=2, seed=1)
+    assert len(reps) == 8 and [r["replay_of"] for r in reps] == [0, 0, 1, 1, 2, 2, 3, 3]
+    dt = 1.0 / 30.0
+    for r in reps:
+        d = demos[r["replay_of"]]
+        q = r["q"]
+        assert len(q) > len(d["q"])  # slower somewhere
+        np.testing.assert_allclose(q[:-1] + r["action"][:-1], q[1:], atol=1e-12)
+        assert np.all(np.abs(np.diff(q, axis=0)) <= V_MAX * dt + 1e-12)
+        assert (np.abs(np.diff(q, n=2, axis=0)) / dt**2).max() <= A_OPERATED + 1e-9
+        np.testing.assert_array_equal(q[-1], d["q"][-1])
+        assert r["stage"][-1] == d["stage"][-1] and np.all(np.diff(r["stage"]) >= 0)
+        if r["events"]["pauses"]:
+            (at, hold), = r["events"]["pauses"]
+            stopped = np.sum(r["pace"] == 0.0) * dt
+            assert abs(stopped - hold) <= 0.1 + 2 * dt
+        else:
+            (_, _, pace), = r["events"]["slows"]
+            assert np.isclose(r["pace"], pace).sum() >= 5
+    with pytest.raises(pacs.InputError, match=r"pauses\[0\]"):
+        pacs.paced_replay(demos[0]["q"], pauses=[(1.0, -1.0)])
+    with pytest.raises(pacs.InputError, match=r"slows\[0\]"):
+        pacs.paced_replay(demos[0]["q"], slows=[(2.0, 1.0, 0.5)])
+    with pytest.raises(pacs.InputError, match=r"q\[0\]"):
+        pacs.paced_replay(np.zeros((3, 6)))

@@ -172,7 +172,10 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 fn teleop_demonstration(task: TaskKind, seed: u64, dt: f64) -> Result<TeleopDemo, TeleopError> {
     let robot = fr3::fr3();
     let sc = scenario(task, seed, true);
-    let mut rng = Rng::new(seed.wrapping_mul(0x007E_1E0F).wrapping_add(task as u64 + 17));
+    let mut rng = Rng::new(
+        seed.wrapping_mul(0x007E_1E0F)
+            .wrapping_add(task as u64 + 17),
+    );
     let v = variety(task, &mut rng);
     let start = fr3::Q_READY.to_vec();
     // Fine samples per segment from the joint distance between the IK keyframes.
@@ -367,6 +370,185 @@ pub fn within_operated_limits(q: &[Vec<f64>], dt: f64, v_max: &[f64], a_max: &[f
     speeds && accels && ends
 }
 
+/// A change of pace applied to a recorded demonstration by [`paced_replay`], at path time
+/// (s of the recording's own timing).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PaceEvent {
+    /// Brake to a stop when the path reaches `at` (s), stay stopped for `hold` (s), resume.
+    Pause {
+        /// Path time (s) where braking begins.
+        at: f64,
+        /// Time (s) at rest.
+        hold: f64,
+    },
+    /// Slow to `pace` (0 < pace < 1 of the recorded pace) from path time `from` to `to` (s),
+    /// then return to the recorded pace.
+    Slow {
+        /// Path time (s) where slowing begins.
+        from: f64,
+        /// Path time (s) where the recorded pace resumes.
+        to: f64,
+        /// The reduced pace.
+        pace: f64,
+    },
+}
+
+/// A demonstration replayed along its own path with changes of pace ([`paced_replay`]).
+#[derive(Debug, Clone)]
+pub struct PacedReplay {
+    /// Joint positions (rad), one per `dt`.
+    pub q: Vec<Vec<f64>>,
+    /// The path position of each sample as a (fractional) index into the recording.
+    pub source: Vec<f64>,
+    /// Path speed at each sample (1 = the recording's pace).
+    pub pace: Vec<f64>,
+}
+
+/// Errors of [`paced_replay`].
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ReplayError {
+    /// Fewer than two samples, or rows of different widths.
+    #[error("the recording needs at least two samples of equal width")]
+    Recording,
+    /// `dt` not positive and finite.
+    #[error("dt: {0} is not a positive sample period (s)")]
+    Dt(f64),
+    /// An event with a non-finite or negative time, a hold ≤ 0, or a pace outside (0, 1).
+    #[error("events[{0}]: times must be finite and ≥ 0, a hold > 0, a pace in (0, 1), from < to")]
+    Event(usize),
+    /// The replay stayed beyond the operated limits with the gentlest ramps tried.
+    #[error("the replay exceeds the operated limits even with the gentlest ramps")]
+    Limits,
+}
+
+/// Path acceleration (1/s) and jerk (1/s²) of [`paced_replay`]'s first attempt; each retry
+/// halves both.
+const REPLAY_RAMPS: (f64, f64) = (2.0, 10.0);
+
+/// Replay the recording `q` (one sample per `dt` s) along its own path, braking, holding,
+/// slowing and resuming as `events` say, with the path-speed profiles the shield brakes and
+/// resumes with ([`SpeedProfile::plan`](pacs_motion::scaling::SpeedProfile::plan): time-optimal
+/// jerk-limited ramps of the path speed). The path is the recording's, linear between samples:
+/// the replay passes through the same configurations, only the timing changes. Ramps start at
+/// 2 /s path acceleration and 10 /s² path jerk and are halved until the replay stays within
+/// `v_max`/`a_max` ([`within_operated_limits`], which a recording within them meets at pace 1).
+pub fn paced_replay(
+    q: &[Vec<f64>],
+    dt: f64,
+    events: &[PaceEvent],
+    v_max: &[f64],
+    a_max: &[f64],
+) -> Result<PacedReplay, ReplayError> {
+    if q.len() < 2 || q.iter().any(|r| r.len() != q[0].len()) {
+        return Err(ReplayError::Recording);
+    }
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(ReplayError::Dt(dt));
+    }
+    for (i, e) in events.iter().enumerate() {
+        let ok = match *e {
+            PaceEvent::Pause { at, hold } => {
+                at.is_finite() && at >= 0.0 && hold > 0.0 && hold.is_finite()
+            }
+            PaceEvent::Slow { from, to, pace } => {
+                from.is_finite()
+                    && to.is_finite()
+                    && from >= 0.0
+                    && from < to
+                    && pace > 0.0
+                    && pace < 1.0
+            }
+        };
+        if !ok {
+            return Err(ReplayError::Event(i));
+        }
+    }
+    let (mut acc, mut jerk) = REPLAY_RAMPS;
+    for _ in 0..8 {
+        let r = replay_with(q, dt, events, acc, jerk);
+        if within_operated_limits(&r.q, dt, v_max, a_max) {
+            return Ok(r);
+        }
+        acc *= 0.5;
+        jerk *= 0.5;
+    }
+    Err(ReplayError::Limits)
+}
+
+fn replay_with(q: &[Vec<f64>], dt: f64, events: &[PaceEvent], acc: f64, jerk: f64) -> PacedReplay {
+    use pacs_motion::scaling::{PathState, SpeedProfile};
+    let end = (q.len() - 1) as f64 * dt;
+    let at_path = |s: f64| -> Vec<f64> {
+        let x = (s / dt).clamp(0.0, (q.len() - 1) as f64);
+        let i = (x.floor() as usize).min(q.len() - 2);
+        let f = x - i as f64;
+        q[i].iter()
+            .zip(&q[i + 1])
+            .map(|(a, b)| a + f * (b - a))
+            .collect()
+    };
+    // Per event: (trigger path time, target pace, hold after reaching it).
+    #[derive(Clone, Copy)]
+    enum Next {
+        Idle,
+        Holding(f64),
+    }
+    let mut triggers: Vec<(f64, f64, f64)> = Vec::new();
+    for e in events {
+        match *e {
+            PaceEvent::Pause { at, hold } => triggers.push((at, 0.0, hold)),
+            PaceEvent::Slow { from, to, pace } => {
+                triggers.push((from, pace, 0.0));
+                triggers.push((to, 1.0, 0.0));
+            }
+        }
+    }
+    triggers.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut next: usize = 0;
+    let mut profile = SpeedProfile::plan(PathState::intended(0.0), 1.0, acc, jerk);
+    let mut t0 = 0.0;
+    let mut state = Next::Idle;
+    let (mut out, mut source, mut pace) = (Vec::new(), Vec::new(), Vec::new());
+    let mut t = 0.0;
+    // Bounded: every event at most stops the path for its hold and the ramps.
+    let holds: f64 = triggers.iter().map(|x| x.2).sum();
+    let max_steps = ((end * 4.0 + holds + 10.0 * triggers.len() as f64 + 10.0) / dt) as usize;
+    for _ in 0..max_steps {
+        let st = profile.eval(t - t0);
+        out.push(at_path(st.s));
+        source.push((st.s / dt).min((q.len() - 1) as f64));
+        pace.push(st.sd);
+        if st.s >= end {
+            break;
+        }
+        match state {
+            Next::Holding(until) if t >= until => {
+                profile = SpeedProfile::plan(st, 1.0, acc, jerk);
+                t0 = t;
+                state = Next::Idle;
+            }
+            Next::Holding(_) => {}
+            Next::Idle => {
+                if st.sd == 0.0 && st.sdd == 0.0 && profile.settle_time() <= t - t0 && t > 0.0 {
+                    // Stopped by a pause: hold.
+                    let hold = triggers[next.saturating_sub(1)].2;
+                    state = Next::Holding(t + hold);
+                } else if next < triggers.len() && st.s >= triggers[next].0 {
+                    profile = SpeedProfile::plan(st, triggers[next].1, acc, jerk);
+                    t0 = t;
+                    next += 1;
+                }
+            }
+        }
+        t += dt;
+    }
+    PacedReplay {
+        q: out,
+        source,
+        pace,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -437,5 +619,67 @@ mod tests {
         assert!(!within_operated_limits(&jump, dt, &v_max, &a_max));
         let moving: Vec<Vec<f64>> = (0..4).map(|k| vec![0.005 * k as f64, 0.0]).collect();
         assert!(!within_operated_limits(&moving, dt, &v_max, &a_max));
+    }
+
+    #[test]
+    fn a_paced_replay_keeps_the_path_and_changes_only_the_timing() {
+        let robot = fr3::fr3();
+        let a_max = demo_acceleration_limits(&robot);
+        let v_max = robot.limits().v_max().to_vec();
+        let d = &teleop_demonstrations(TaskKind::Sorting, 1, 3, 30.0).unwrap()[0];
+        let end = d.duration();
+        let events = [
+            PaceEvent::Pause {
+                at: 0.3 * end,
+                hold: 1.0,
+            },
+            PaceEvent::Slow {
+                from: 0.6 * end,
+                to: 0.8 * end,
+                pace: 0.4,
+            },
+        ];
+        let r = paced_replay(&d.q, d.dt, &events, &v_max, &a_max).unwrap();
+        assert!(within_operated_limits(&r.q, d.dt, &v_max, &a_max));
+        // Longer by at least the hold and the slow window's lost time; the same end.
+        assert!(r.q.len() as f64 * d.dt > end + 1.0 + 0.2 * end * 0.6 * 0.9);
+        assert_eq!(r.q.last().unwrap(), d.q.last().unwrap());
+        // Stopped for about the hold (at the pause's place), never moving backwards.
+        let stopped = r.pace.iter().filter(|p| **p == 0.0).count() as f64 * d.dt;
+        assert!((stopped - 1.0).abs() <= 0.1 + 2.0 * d.dt, "{stopped}");
+        assert!(r.source.windows(2).all(|w| w[1] >= w[0]));
+        let slow: Vec<f64> = r
+            .source
+            .iter()
+            .zip(&r.pace)
+            .filter(|(s, _)| **s * d.dt > 0.7 * end && **s * d.dt < 0.78 * end)
+            .map(|(_, p)| *p)
+            .collect();
+        assert!(
+            !slow.is_empty() && slow.iter().all(|p| (*p - 0.4).abs() < 1e-9),
+            "{slow:?}"
+        );
+        // Every replayed configuration lies on the recorded path (between two samples).
+        for (x, s) in r.q.iter().zip(&r.source) {
+            let i = (s.floor() as usize).min(d.q.len() - 2);
+            for j in 0..7 {
+                let (a, b) = (d.q[i][j], d.q[i + 1][j]);
+                assert!(x[j] >= a.min(b) - 1e-12 && x[j] <= a.max(b) + 1e-12);
+            }
+        }
+        // Without events: the recording itself (pace 1 from rest).
+        let same = paced_replay(&d.q, d.dt, &[], &v_max, &a_max).unwrap();
+        assert!(same.q.len() >= d.q.len());
+        assert_eq!(
+            paced_replay(
+                &d.q,
+                d.dt,
+                &[PaceEvent::Pause { at: 1.0, hold: 0.0 }],
+                &v_max,
+                &a_max
+            )
+            .unwrap_err(),
+            ReplayError::Event(0)
+        );
     }
 }

@@ -51,6 +51,7 @@ from ._pacs import (
     report,
     robot_spec,
     teleop_demonstrations,
+    paced_replay,
 )
 from . import fleet
 from .fleet import simulate
@@ -66,6 +67,7 @@ __all__ = [
     "robot_spec",
     "Demo",
     "teleop_demonstrations",
+    "paced_replay",
     "fleet",
     "simulate",
     "errors",

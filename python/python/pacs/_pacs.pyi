@@ -226,6 +226,13 @@ def teleop_demonstrations(
     task: str = "sorting", count: int = 50, seed: int = 0, fps: float = 30.0
 ) -> list[dict[str, Any]]: ...
 
+def paced_replay(
+    q: npt.ArrayLike,
+    fps: float = 30.0,
+    pauses: Sequence[tuple[float, float]] = ...,
+    slows: Sequence[tuple[float, float, float]] = ...,
+) -> dict[str, npt.NDArray[np.float64]]: ...
+
 class Demo:
     def __init__(
         self, task: str | None = "sorting", seed: int | None = 0, with_human: bool | None = True

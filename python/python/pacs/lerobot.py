@@ -23,6 +23,9 @@ like them (lerobot itself is optional: it pulls torch).
 - :func:`write_dataset`: demonstrations (:func:`pacs.teleop_demonstrations`) written as a
   LeRobot dataset (``LeRobotDataset.create`` / ``add_frame`` / ``save_episode``), the training
   data of a LeRobot policy; :func:`environment_state` is its ``observation.environment_state``.
+- :func:`paced_replays`: a dataset transform: each demonstration also replayed along its own
+  path with the braking, holding, slowing and resuming profiles PACS uses, so a policy learns
+  that being slowed or stopped on its path is in distribution.
 - :class:`SimulationPolicy`: a LeRobot policy as the simulation's policy
   (``pacs.simulate(policy=SimulationPolicy(...))``): OFF / PACS / single-action / CBF
   rollouts of a learned policy on the built-in scenes, scored against the true people.
@@ -52,6 +55,7 @@ __all__ = [
     "ShieldActionStep",
     "environment_state",
     "write_dataset",
+    "paced_replays",
     "SimulationPolicy",
     "to_numpy",
 ]
@@ -487,6 +491,58 @@ def write_dataset(
         ds.save_episode()
     ds.finalize()
     return ds
+
+
+def paced_replays(
+    demos: Sequence[Mapping[str, Any]],
+    *,
+    per_demo: int = 1,
+    seed: int = 0,
+    hold: tuple[float, float] = (0.3, 1.5),
+    pace: tuple[float, float] = (0.2, 0.6),
+) -> list[dict]:
+    """Path-consistent slowed and paused replays of demonstrations (the dicts of
+    :func:`pacs.teleop_demonstrations`, or any with ``q`` (T, 7) rad and ``fps``), for training.
+
+    Each demonstration gets ``per_demo`` replays along its own path
+    (:func:`pacs.paced_replay`: the shield's jerk-limited path-speed profiles, within the FR3's
+    operated limits): alternately one pause (brake to rest at a random point, hold
+    ``hold`` s, resume) and one slow passage (a random fifth to a third of the path at ``pace``
+    of the recorded pace). Per-frame fields of the recording (``stage``, ``person``,
+    ``person_distance``) follow the replay's place on the path (the nearest recorded frame);
+    ``action`` is recomputed as the delta to the next replayed frame. Returns new dicts (the
+    originals are not included), each with ``replay_of`` (the source's index), ``events``.
+    """
+    from . import _pacs
+
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, d in enumerate(demos):
+        q = to_numpy(d["q"])
+        fps = float(d.get("fps", 30.0))
+        end = (len(q) - 1) / fps
+        for r in range(per_demo):
+            if r % 2 == 0:
+                at = float(rng.uniform(0.15, 0.85) * end)
+                events = {"pauses": [(at, float(rng.uniform(*hold)))], "slows": []}
+            else:
+                span = float(rng.uniform(0.2, 0.33) * end)
+                start = float(rng.uniform(0.05, 0.95 * end - span))
+                events = {"pauses": [], "slows": [(start, start + span, float(rng.uniform(*pace)))]}
+            rep = _pacs.paced_replay(q, fps=fps, **events)
+            src = np.clip(np.rint(rep["source"]).astype(int), 0, len(q) - 1)
+            new = dict(d)
+            new["q"] = rep["q"]
+            new["action"] = np.vstack([np.diff(rep["q"], axis=0), np.zeros((1, q.shape[1]))])
+            for key in ("stage", "person", "person_distance"):
+                if key in d:
+                    new[key] = to_numpy(d[key])[src] if key != "stage" else np.asarray(d[key])[src]
+            new["pace"] = rep["pace"]
+            new["timestamp"] = np.arange(len(rep["q"])) / fps
+            new["replay_of"] = i
+            new["events"] = events
+            out.append(new)
+    return out
 
 
 def _frame_environment(stage: float, person: Any, tool: Any) -> np.ndarray:
