@@ -662,9 +662,9 @@ mod tests {
         // Every replayed configuration lies on the recorded path (between two samples).
         for (x, s) in r.q.iter().zip(&r.source) {
             let i = (s.floor() as usize).min(d.q.len() - 2);
-            for j in 0..7 {
+            for (j, xj) in x.iter().enumerate() {
                 let (a, b) = (d.q[i][j], d.q[i + 1][j]);
-                assert!(x[j] >= a.min(b) - 1e-12 && x[j] <= a.max(b) + 1e-12);
+                assert!(*xj >= a.min(b) - 1e-12 && *xj <= a.max(b) + 1e-12);
             }
         }
         // Without events: the recording itself (pace 1 from rest).
