@@ -382,7 +382,8 @@ struct PyTaskPolicy<'a> {
     ood: usize,
     error: Option<PyErr>,
     task: &'static str,
-    seed: u64,
+    /// The rollout's seed (set before each rollout by whoever runs them).
+    seed: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl PyTaskPolicy<'_> {
@@ -401,7 +402,7 @@ impl PyTaskPolicy<'_> {
                 }
             };
             d.set_item("task", self.task)?;
-            d.set_item("seed", self.seed)?;
+            d.set_item("seed", self.seed.load(std::sync::atomic::Ordering::Relaxed))?;
             d.set_item("t", obs.t)?;
             d.set_item("q", PyArray1::from_slice(py, obs.q))?;
             d.set_item("q_before", PyArray1::from_slice(py, obs.q_before))?;
@@ -530,7 +531,7 @@ pub fn _simulate_external<'py>(
                     ood: 0,
                     error: None,
                     task: task.name(),
-                    seed,
+                    seed: std::sync::Arc::new(seed.into()),
                 };
                 let r = py.detach(|| {
                     eval::run_rollout_with(
@@ -554,4 +555,106 @@ pub fn _simulate_external<'py>(
         }
     }
     Ok(PyBytes::new(py, &cbor(&out, "rollouts")?))
+}
+
+/// The tolerance tool (`pacs_sim::tolerance`): interrupted rollouts of a policy (a built-in
+/// name or a policy object, as `_simulate_external` runs it) against their undisturbed twins.
+/// Returns the runs as a list of dicts.
+#[pyfunction]
+#[pyo3(signature = (policy, task, method, seeds, at, holds))]
+pub fn _tolerance<'py>(
+    py: Python<'py>,
+    policy: Py<PyAny>,
+    task: &str,
+    method: &str,
+    seeds: Vec<u64>,
+    at: Vec<f64>,
+    holds: Vec<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let name: Option<String> = policy.bind(py).extract().ok();
+    let plan = sim_plan(
+        &[task.to_string()],
+        &[method.to_string()],
+        true,
+        "continuous",
+        name.as_deref().unwrap_or("nearest"),
+    )?;
+    let (kind, v) = (plan.tasks[0], &plan.variants[0]);
+    if !matches!(v.method, pacs_sim::episode::Method::Pacs) {
+        return Err(input(format!(
+            "method: `{method}` does not brake along the path; the tolerance tool runs PACS \
+             (pacs, pacs-ssm, pacs-pfl)"
+        )));
+    }
+    if let Some((i, f)) = at
+        .iter()
+        .enumerate()
+        .find(|(_, f)| !(0.0..=1.0).contains(*f))
+    {
+        return Err(input(format!(
+            "at[{i}]: {f} is not a fraction of the rollout in [0, 1]"
+        )));
+    }
+    if let Some((i, h)) = holds
+        .iter()
+        .enumerate()
+        .find(|(_, h)| !(**h > 0.0 && h.is_finite()))
+    {
+        return Err(input(format!("holds[{i}]: {h} is not a positive time (s)")));
+    }
+    let err_of = |e: eval::EvalError| match e {
+        eval::EvalError::Io { .. } => err(Kind::Output, e.to_string()),
+        other => input(other.to_string()),
+    };
+    let runs = if name.is_some() {
+        py.detach(|| {
+            pacs_sim::tolerance::tolerance(kind, v, &seeds, &at, &holds, None, &mut |_| {})
+        })
+        .map_err(err_of)?
+    } else {
+        let b = policy.bind(py);
+        if !b.hasattr("act")? {
+            return Err(type_err(
+                "policy: a built-in policy's name or an object with act(obs)",
+            ));
+        }
+        let execute = ["n_action_steps", "h"]
+            .iter()
+            .find_map(|k| b.getattr(*k).ok().and_then(|v| v.extract::<usize>().ok()))
+            .unwrap_or(8)
+            .max(1);
+        let scn = pacs_sim::task::scenario(kind, seeds.first().copied().unwrap_or(0), true);
+        let mut p = PyTaskPolicy {
+            obj: &policy,
+            demos: scn.policy,
+            robot: scn.robot,
+            execute,
+            ood: 0,
+            error: None,
+            task: kind.name(),
+            seed: std::sync::Arc::new(0.into()),
+        };
+        let seed_now = p.seed.clone();
+        let has_reset = b.hasattr("reset")?;
+        let mut reset_error: Option<PyErr> = None;
+        let r = py.detach(|| {
+            let obj = &policy;
+            let mut reset = |seed: u64| {
+                seed_now.store(seed, std::sync::atomic::Ordering::Relaxed);
+                if has_reset {
+                    if let Err(e) =
+                        Python::attach(|py| obj.bind(py).call_method0("reset").map(|_| ()))
+                    {
+                        reset_error.get_or_insert(e);
+                    }
+                }
+            };
+            pacs_sim::tolerance::tolerance(kind, v, &seeds, &at, &holds, Some(&mut p), &mut reset)
+        });
+        if let Some(e) = reset_error.or(p.error.take()) {
+            return Err(e);
+        }
+        r.map_err(err_of)?
+    };
+    to_py(py, &runs)
 }

@@ -40,5 +40,6 @@ fn _pacs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fleet::_simulate_rollouts, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_simulate_merge, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_simulate_external, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_tolerance, m)?)?;
     Ok(())
 }

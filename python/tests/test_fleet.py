@@ -325,3 +325,45 @@ def test_a_policy_objects_errors_are_raised():
         pacs.simulate("sorting", "pacs", seeds=[1], policy=3)
     with pytest.raises(pacs.InputError, match="threads: a policy object"):
         pacs.simulate("sorting", "pacs", seeds=[1], policy=Wrong(), threads=2)
+
+
+def test_tolerance_stops_the_robot_and_measures_success(tmp_path):
+    """The intruder's hand stops the shield on the policy's own path; the nearest-neighbour
+    policy (it sees only the joint angles) still finishes; a policy object that returns its
+    chunks gives the same runs; the one-page plot is written; bad input is named."""
+    svg = tmp_path / "t.svg"
+    res = pacs.tolerance("nearest", "sorting", holds=[0.5, 2.0], at=[0.4], seeds=[1, 2],
+                         plot=svg)
+    assert [r["hold_s"] for r in res["rows"]] == [0.0, 0.5, 2.0]
+    assert [r["rollouts"] for r in res["rows"]] == [2, 2, 2]
+    assert all(r["success"] == 1.0 for r in res["rows"])
+    for run in res["runs"]:
+        assert run["stopped"] > 0.3 * run["hold"] and run["violation_fraction"] == 0.0
+        assert run["duration"] >= run["baseline_duration"]
+    by_hold = {r["hold_s"]: r for r in res["rows"]}
+    assert by_hold[2.0]["mean_stopped_s"] > by_hold[0.5]["mean_stopped_s"]
+    assert by_hold[2.0]["mean_extra_duration_s"] > 0.5
+    text = svg.read_text()
+    assert text.startswith("<svg") and "Tolerance to being stopped" in text
+    obj = pacs.tolerance(DemoSetPolicy(), "sorting", holds=[0.5, 2.0], at=[0.4], seeds=[1, 2])
+    assert obj["runs"] == res["runs"]
+    with pytest.raises(pacs.InputError, match="does not brake along the path"):
+        pacs.tolerance("nearest", "sorting", method="off", seeds=[1])
+    with pytest.raises(pacs.InputError, match=r"at\[0\]: 1.5"):
+        pacs.tolerance("nearest", "sorting", at=[1.5], seeds=[1])
+    with pytest.raises(pacs.InputError, match=r"holds\[1\]"):
+        pacs.tolerance("nearest", "sorting", holds=[1.0, -1.0], seeds=[1])
+
+
+def test_the_tolerance_cli(tmp_path):
+    out = tmp_path / "tol"
+    p = subprocess.run([sys.executable, "-m", "pacs", "tolerance", "--policy", "nearest",
+                        "--rollouts", "1", "--holds", "1", "--at", "0.5", "--out", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert "hold    1 s: success 1.00" in p.stdout
+    assert json.loads((out / "tolerance.json").read_text())["rows"][1]["hold_s"] == 1.0
+    assert (out / "tolerance.svg").exists()
+    bad = subprocess.run([sys.executable, "-m", "pacs", "tolerance", "--method", "cbf",
+                          "--rollouts", "1", "--out", str(out)], capture_output=True, text=True)
+    assert bad.returncode == 2 and "does not brake" in bad.stderr

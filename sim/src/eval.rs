@@ -183,7 +183,11 @@ pub fn run_rollout(
     log: Option<&Path>,
     record_every: usize,
 ) -> Result<Rollout, EvalError> {
-    rollout_of(task, v, seed, with_human, log, record_every, None)
+    let scene = Scene {
+        with_human,
+        extra_people: Vec::new(),
+    };
+    rollout_of(task, v, seed, scene, log, record_every, None)
 }
 
 /// Run one rollout of `policy`, a policy the caller supplies (its rows and rollouts say
@@ -204,17 +208,50 @@ pub fn run_rollout_with(
         policy: PolicyKind::External,
         ..v.clone()
     };
-    rollout_of(task, &v, seed, with_human, log, record_every, Some(policy))
+    let scene = Scene {
+        with_human,
+        extra_people: Vec::new(),
+    };
+    rollout_of(task, &v, seed, scene, log, record_every, Some(policy))
+}
+
+/// What a rollout's scene adds to the task's: people present or far away, and further
+/// scripted people (the tolerance tool's intruder, [`crate::tolerance`]).
+pub struct Scene {
+    /// People and objects present (false: far away).
+    pub with_human: bool,
+    /// Further people, seen by the filter and scored like the scene's own, not observed by
+    /// the policy.
+    pub extra_people: Vec<Box<dyn crate::humans::HumanScript>>,
+}
+
+/// [`run_rollout`] or [`run_rollout_with`] in a [`Scene`] with further people.
+pub fn run_rollout_in(
+    task: TaskKind,
+    v: &Variant,
+    seed: u64,
+    scene: Scene,
+    record_every: usize,
+    policy: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
+) -> Result<Rollout, EvalError> {
+    let v = match policy {
+        Some(_) => Variant {
+            policy: PolicyKind::External,
+            ..v.clone()
+        },
+        None => v.clone(),
+    };
+    rollout_of(task, &v, seed, scene, None, record_every, policy)
 }
 
 fn rollout_of(
     task: TaskKind,
     v: &Variant,
     seed: u64,
-    with_human: bool,
+    scene: Scene,
     log: Option<&Path>,
     record_every: usize,
-    external: Option<&mut dyn crate::policy::TaskPolicy>,
+    external: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
 ) -> Result<Rollout, EvalError> {
     let err = |source: crate::SimError| EvalError::Episode {
         task: task.name(),
@@ -222,7 +259,8 @@ fn rollout_of(
         seed,
         source: Box::new(source),
     };
-    let mut scn = scenario(task, seed, with_human);
+    let mut scn = scenario(task, seed, scene.with_human);
+    scn.others.extend(scene.extra_people);
     scn.set_mode(variant_mode(task, v));
     let spec = constraint_spec(task, variant_mode(task, v));
     let goals: Vec<Goal> = scn.goals.iter().copied().map(Goal::Tool).collect();

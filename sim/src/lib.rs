@@ -11,6 +11,8 @@
 //! - [`teleop`]: demonstrations with the variety of human teleoperation (pauses, changes of
 //!   pace, hesitations near people, small detours), within the operated limits, for training
 //!   learned policies;
+//! - [`tolerance`]: whether a policy still succeeds when the shield brakes, holds and resumes
+//!   along its path (an intruder's hand stops the robot on the policy's own rollouts);
 //! - [`episode`]: runs a filter (PACS, OFF, single-action, CBF) against a policy, a human and
 //!   objects, with ground-truth safety metrics (exact geometry against the true human and objects).
 //!
@@ -25,6 +27,7 @@ pub mod objects;
 pub mod policy;
 pub mod task;
 pub mod teleop;
+pub mod tolerance;
 
 pub use error::SimError;
 

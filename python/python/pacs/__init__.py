@@ -26,6 +26,8 @@ Units everywhere: m, s, rad, rad/s, rad/s², kg, J.
   teleoperation (pauses, changes of pace, hesitations near people, detours), for training;
 - :mod:`pacs.fleet`: a fleet's archive audited in parallel, locally or on Dask
   (:func:`pacs.fleet.audit`), and :func:`simulate`, the simulation's evaluation (also on Dask);
+- :func:`tolerance`: does a policy still succeed when PACS slows or stops it along its path
+  (also ``python -m pacs tolerance``)?
 - :mod:`pacs.lerobot`: adapters for LeRobot-style policies, robots and processor pipelines;
 - :mod:`pacs.errors`: the exceptions (all subclasses of :class:`Error`).
 """
@@ -55,6 +57,7 @@ from ._pacs import (
 )
 from . import fleet
 from .fleet import simulate
+from ._tolerance import tolerance
 
 __all__ = [
     "Shield",
@@ -70,6 +73,7 @@ __all__ = [
     "paced_replay",
     "fleet",
     "simulate",
+    "tolerance",
     "errors",
     "__version__",
     *errors.__all__,

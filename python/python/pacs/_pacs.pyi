@@ -192,6 +192,14 @@ def _simulate_external(
     chunk_motion: str,
     log_dir: str | None = None,
 ) -> bytes: ...
+def _tolerance(
+    policy: Any,
+    task: str,
+    method: str,
+    seeds: Sequence[int],
+    at: Sequence[float],
+    holds: Sequence[float],
+) -> list[dict[str, Any]]: ...
 def _simulate_merge(parts: Sequence[bytes]) -> dict[str, Any]: ...
 
 class LogWriter:
