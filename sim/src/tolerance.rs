@@ -231,7 +231,7 @@ mod tests {
             &[0.4],
             &[0.5, 2.0],
             None,
-            &mut || {},
+            &mut |_| {},
         )
         .unwrap();
         assert_eq!(runs.len(), 2);
