@@ -641,12 +641,11 @@ pub fn _tolerance<'py>(
             let obj = &policy;
             let mut reset = |seed: u64| {
                 seed_now.store(seed, std::sync::atomic::Ordering::Relaxed);
-                if has_reset {
-                    if let Err(e) =
+                if has_reset
+                    && let Err(e) =
                         Python::attach(|py| obj.bind(py).call_method0("reset").map(|_| ()))
-                    {
-                        reset_error.get_or_insert(e);
-                    }
+                {
+                    reset_error.get_or_insert(e);
                 }
             };
             pacs_sim::tolerance::tolerance(kind, v, &seeds, &at, &holds, Some(&mut p), &mut reset)
