@@ -4,6 +4,9 @@ single-action and CBF, scored against the true people and objects (every PACS lo
 
     # 1. demonstrations (50 per task) as a LeRobot dataset, and a policy trained on them only
     python python/examples/diffusion_policy.py train --task sorting --out policies/sorting
+    # the same with two paced (paused / slowed) replays per demonstration added
+    python python/examples/diffusion_policy.py train --task sorting --replays 2 \
+        --out policies/sorting-paced
     # 2. rollouts of the trained policy (10 seeds per method; --client for a Dask scheduler)
     python python/examples/diffusion_policy.py evaluate --policy policies/sorting/model \\
         --task sorting --rollouts 10 --out policies/sorting/eval
@@ -26,7 +29,7 @@ import time
 import numpy as np
 
 import pacs
-from pacs.lerobot import SimulationPolicy, environment_state, write_dataset
+from pacs.lerobot import SimulationPolicy, environment_state, paced_replays, write_dataset
 
 
 def windows(demos, n_obs, horizon, drop_last):
@@ -64,6 +67,9 @@ def train(args):
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     demos = pacs.teleop_demonstrations(args.task, count=args.demos, seed=args.demo_seed)
+    if args.replays:
+        # Path-consistent paused and slowed replays (PACS's braking and resuming profiles).
+        demos = demos + paced_replays(demos, per_demo=args.replays, seed=args.seed)
     if not args.no_dataset:
         ds_root = out / "dataset"
         if not ds_root.exists():
@@ -142,7 +148,7 @@ def train(args):
     post.save_pretrained(model)
     info = {
         "task": args.task, "demonstrations": len(demos), "frames": int(len(state)),
-        "demo_seed": args.demo_seed, "steps": args.steps, "batch_size": args.batch_size,
+        "demo_seed": args.demo_seed, "replays_per_demo": args.replays, "steps": args.steps, "batch_size": args.batch_size,
         "seconds": round(time.time() - t0, 1), "final_loss": float(np.mean(losses[-100:])),
         "parameters": sum(p.numel() for p in policy.parameters()),
         "command": "python python/examples/diffusion_policy.py train " + " ".join(
@@ -216,6 +222,9 @@ def main():
     t.add_argument("--demo-seed", type=int, default=1000,
                    help="first demonstration's scene seed (default 1000: disjoint from the "
                         "evaluation's seeds 1..)")
+    t.add_argument("--replays", type=int, default=0,
+                   help="paced replays per demonstration added to the training data "
+                        "(pacs.lerobot.paced_replays; default 0)")
     t.add_argument("--steps", type=int, default=6000, help="gradient steps (default 6000)")
     t.add_argument("--batch-size", type=int, default=64)
     t.add_argument("--seed", type=int, default=0, help="torch / sampling seed")

@@ -1,6 +1,7 @@
 """Teleoperation-like demonstrations (pacs.teleop_demonstrations) and their LeRobot dataset
 (pacs.lerobot.write_dataset, with lerobot installed and PACS_TEST_LEROBOT=1)."""
 
+import json
 import os
 
 import numpy as np
@@ -189,3 +190,30 @@ def test_paced_replays_keep_the_path_and_the_operated_limits():
         pacs.paced_replay(demos[0]["q"], slows=[(2.0, 1.0, 0.5)])
     with pytest.raises(pacs.InputError, match=r"q\[0\]"):
         pacs.paced_replay(np.zeros((3, 6)))
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_the_diffusion_policy_example_runs_verbatim(tmp_path):
+    """python/examples/diffusion_policy.py train and evaluate, as documented, at toy sizes."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "diffusion_policy.py"
+    out = tmp_path / "sorting"
+    run = lambda *a: subprocess.run([sys.executable, str(script), *a], capture_output=True,
+                                    text=True, timeout=900)
+    p = run("train", "--task", "sorting", "--out", str(out), "--demos", "3", "--replays", "1",
+            "--steps", "3", "--log-every", "1")
+    assert p.returncode == 0, p.stderr[-2000:]
+    info = json.loads((out / "training.json").read_text())
+    assert info["demonstrations"] == 6 and info["steps"] == 3
+    assert (out / "model" / "model.safetensors").exists() and (out / "dataset").exists()
+    p = run("evaluate", "--policy", str(out / "model"), "--task", "sorting", "--method", "pacs",
+            "--rollouts", "1", "--out", str(out / "eval"))
+    assert p.returncode == 0, p.stderr[-2000:]
+    summary = json.loads((out / "eval" / "summary.json").read_text())
+    (row,) = summary["rows"]
+    assert row["method"] == "pacs" and row["rollouts"] == 1
+    assert sum(row["audit_verdicts"].values()) == 1
