@@ -561,7 +561,8 @@ pub fn _simulate_external<'py>(
 /// name or a policy object, as `_simulate_external` runs it) against their undisturbed twins.
 /// Returns the runs as a list of dicts.
 #[pyfunction]
-#[pyo3(signature = (policy, task, method, seeds, at, holds))]
+#[pyo3(signature = (policy, task, method, seeds, at, holds, progress=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn _tolerance<'py>(
     py: Python<'py>,
     policy: Py<PyAny>,
@@ -570,7 +571,16 @@ pub fn _tolerance<'py>(
     seeds: Vec<u64>,
     at: Vec<f64>,
     holds: Vec<f64>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // `progress(done, total)` after each rollout (Python errors in it are ignored).
+    let mut tell = |done: usize, total: usize| {
+        if let Some(f) = &progress {
+            Python::attach(|py| {
+                let _ = f.bind(py).call1((done, total));
+            });
+        }
+    };
     let name: Option<String> = policy.bind(py).extract().ok();
     let plan = sim_plan(
         &[task.to_string()],
@@ -602,15 +612,18 @@ pub fn _tolerance<'py>(
     {
         return Err(input(format!("holds[{i}]: {h} is not a positive time (s)")));
     }
+    let grid = pacs_sim::tolerance::Interruptions {
+        seeds: &seeds,
+        at: &at,
+        holds: &holds,
+    };
     let err_of = |e: eval::EvalError| match e {
         eval::EvalError::Io { .. } => err(Kind::Output, e.to_string()),
         other => input(other.to_string()),
     };
     let runs = if name.is_some() {
-        py.detach(|| {
-            pacs_sim::tolerance::tolerance(kind, v, &seeds, &at, &holds, None, &mut |_| {})
-        })
-        .map_err(err_of)?
+        py.detach(|| pacs_sim::tolerance::tolerance(kind, v, &grid, None, &mut |_| {}, &mut tell))
+            .map_err(err_of)?
     } else {
         let b = policy.bind(py);
         if !b.hasattr("act")? {
@@ -648,7 +661,7 @@ pub fn _tolerance<'py>(
                     reset_error.get_or_insert(e);
                 }
             };
-            pacs_sim::tolerance::tolerance(kind, v, &seeds, &at, &holds, Some(&mut p), &mut reset)
+            pacs_sim::tolerance::tolerance(kind, v, &grid, Some(&mut p), &mut reset, &mut tell)
         });
         if let Some(e) = reset_error.or(p.error.take()) {
             return Err(e);

@@ -115,22 +115,35 @@ pub const AT_REST: f64 = 0.005;
 /// Record every n-th safety step of the undisturbed rollout (10 ms).
 const RECORD: usize = 10;
 
+/// Which interrupted rollouts [`tolerance`] runs: every seed × `at` × `hold`.
+#[derive(Debug, Clone, Copy)]
+pub struct Interruptions<'a> {
+    /// Rollout seeds.
+    pub seeds: &'a [u64],
+    /// When the intruder's hand rises, as fractions of the undisturbed rollout's duration.
+    pub at: &'a [f64],
+    /// How long (s) the hand is held.
+    pub holds: &'a [f64],
+}
+
 /// Interrupted rollouts of `task` under `variant` (a PACS method) for every seed × `at` ×
-/// `hold`, each against its undisturbed twin. `policy`: a caller's policy, or None for the
+/// `hold` of `grid`, each against its undisturbed twin. `policy`: a caller's policy, or None for the
 /// variant's built-in policy; `reset(seed)` is called before each rollout (a caller's policy
-/// starts each rollout afresh).
+/// starts each rollout afresh); `progress(done, total)` after each rollout.
 pub fn tolerance(
     task: TaskKind,
     variant: &Variant,
-    seeds: &[u64],
-    at: &[f64],
-    holds: &[f64],
+    grid: &Interruptions,
     mut policy: Option<&mut (dyn TaskPolicy + '_)>,
     reset: &mut dyn FnMut(u64),
+    progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<ToleranceRun>, EvalError> {
+    let Interruptions { seeds, at, holds } = grid;
     let robot = fr3::fr3();
     let mut out = Vec::new();
-    for &seed in seeds {
+    let total = seeds.len() * (1 + at.len() * holds.len());
+    let mut done = 0;
+    for &seed in *seeds {
         reset(seed);
         let base = run_rollout_in(
             task,
@@ -143,8 +156,10 @@ pub fn tolerance(
             RECORD,
             policy.as_deref_mut(),
         )?;
+        done += 1;
+        progress(done, total);
         let ep = &base.episode;
-        for &f in at {
+        for &f in *at {
             let t_reach = (f * ep.duration).max(WALK);
             // The tool where the undisturbed rollout had it when the hand starts to rise.
             let sample = ep
@@ -152,7 +167,7 @@ pub fn tolerance(
                 .iter()
                 .min_by(|a, b| (a.t - t_reach).abs().total_cmp(&(b.t - t_reach).abs()));
             let tool = sample.map_or_else(|| tool_point(&robot, &fr3::Q_READY), |s| s.tool);
-            for &hold in holds {
+            for &hold in *holds {
                 reset(seed);
                 let intruder = Intruder {
                     stand: [tool[0] + STAND_OFF, tool[1]],
@@ -173,6 +188,8 @@ pub fn tolerance(
                     policy.as_deref_mut(),
                 )?;
                 out.push(summarize(&base, &r, seed, f, hold, (from, until)));
+                done += 1;
+                progress(done, total);
             }
         }
     }
@@ -224,14 +241,18 @@ mod tests {
     #[test]
     fn an_intruder_stops_the_shield_and_the_demonstration_policy_still_succeeds() {
         let v: Variant = "pacs".parse().unwrap();
+        let grid = Interruptions {
+            seeds: &[1],
+            at: &[0.4],
+            holds: &[0.5, 2.0],
+        };
         let runs = tolerance(
             TaskKind::Sorting,
             &v,
-            &[1],
-            &[0.4],
-            &[0.5, 2.0],
+            &grid,
             None,
             &mut |_| {},
+            &mut |_, _| {},
         )
         .unwrap();
         assert_eq!(runs.len(), 2);

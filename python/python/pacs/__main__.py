@@ -25,6 +25,14 @@ def _floats(s: str) -> list:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers: {e}") from None
 
 
+def _progress(done: int, total: int) -> None:
+    """A one-line progress bar on stderr."""
+    width = 30
+    filled = width * done // max(total, 1)
+    print(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} rollouts", end="",
+          file=sys.stderr, flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m pacs", description=__doc__.splitlines()[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -53,7 +61,9 @@ def main(argv=None) -> int:
         os.makedirs(args.out, exist_ok=True)
         result = tolerance(policy, args.task, holds=args.holds, at=args.at,
                            rollouts=args.rollouts, seed=args.seed, method=args.method,
-                           plot=os.path.join(args.out, "tolerance.svg"))
+                           plot=os.path.join(args.out, "tolerance.svg"),
+                           progress=_progress)
+        print(file=sys.stderr)
     except (InputError, ArgumentTypeError) as e:
         print(f"python -m pacs tolerance: {e}", file=sys.stderr)
         return 2

@@ -199,6 +199,7 @@ def _tolerance(
     seeds: Sequence[int],
     at: Sequence[float],
     holds: Sequence[float],
+    progress: Any = None,
 ) -> list[dict[str, Any]]: ...
 def _simulate_merge(parts: Sequence[bytes]) -> dict[str, Any]: ...
 

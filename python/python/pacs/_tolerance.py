@@ -44,6 +44,7 @@ def tolerance(
     seeds: Sequence[int] | None = None,
     method: str = "pacs",
     plot: str | os.PathLike | None = None,
+    progress: Any = None,
 ) -> dict:
     """Does ``policy`` still succeed on ``task`` when PACS slows or stops it along its path?
 
@@ -61,7 +62,7 @@ def tolerance(
     success and duration, the time the robot stood still and moved slowly while the hand was
     there, deviation, ground-truth violation fraction), and per hold the success rate with a
     95 % Wilson interval, next to the undisturbed rollouts'. ``plot``: also write a one-page
-    SVG of it there.
+    SVG of it there. ``progress``: called as ``progress(done, total)`` after each rollout.
     """
     if seeds is None:
         if isinstance(rollouts, bool) or not isinstance(rollouts, int) or rollouts < 1:
@@ -71,7 +72,7 @@ def tolerance(
     holds_f, at_f = _floats(holds, "holds"), _floats(at, "at")
     if not isinstance(task, str):
         raise ArgumentTypeError(f"task: expected a task name, got {task!r}")
-    runs = _pacs._tolerance(policy, task, method, seeds, at_f, holds_f)
+    runs = _pacs._tolerance(policy, task, method, seeds, at_f, holds_f, progress)
     base = {r["seed"]: r["baseline_success"] for r in runs}
     n_base = len(base)
     k_base = sum(base.values())
