@@ -29,6 +29,7 @@ import time
 import numpy as np
 
 import pacs
+from pacs._tolerance import wilson_interval
 from pacs.lerobot import SimulationPolicy, environment_state, paced_replays, write_dataset
 
 
@@ -159,15 +160,6 @@ def train(args):
     print(json.dumps(info, indent=2))
 
 
-def wilson(k, n, z=1.96):
-    if n == 0:
-        return [0.0, 1.0]
-    p = k / n
-    c = (p + z * z / (2 * n)) / (1 + z * z / n)
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return [max(0.0, c - h), min(1.0, c + h)]
-
-
 def evaluate(args):
     import torch
 
@@ -193,7 +185,7 @@ def evaluate(args):
         audited = pacs.audit(logs) if method.startswith("pacs") and logs else []
         rows.append({
             "method": method, "rollouts": len(rs), "success": ok / len(rs),
-            "success_wilson95": wilson(ok, len(rs)),
+            "success_wilson95": wilson_interval(ok, len(rs)),
             "rollouts_with_violation": sum(r["episode"]["violation_fraction"] > 0 for r in rs),
             "mean_violation_fraction": float(np.mean(
                 [r["episode"]["violation_fraction"] for r in rs])),

@@ -478,6 +478,18 @@ impl pacs_sim::policy::TaskPolicy for PyTaskPolicy<'_> {
     }
 }
 
+/// A policy object's executed actions per chunk: its `n_action_steps` (or `h`), default 8.
+fn policy_execute(b: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let execute = ["n_action_steps", "h"]
+        .iter()
+        .find_map(|k| b.getattr(*k).ok().and_then(|v| v.extract::<usize>().ok()))
+        .unwrap_or(8);
+    if execute == 0 {
+        return Err(input("policy.n_action_steps: must be at least 1"));
+    }
+    Ok(execute)
+}
+
 /// Rollouts of a Python policy object (see [`PyTaskPolicy`]) for every task × method × seed,
 /// one after another on this thread (`policy.reset()`, if present, before each); encoded as
 /// `_simulate_rollouts` encodes them (merge with `_simulate_merge`).
@@ -501,13 +513,7 @@ pub fn _simulate_external<'py>(
             "policy: needs act(obs) -> (H, 7) joint-position deltas (rad)",
         ));
     }
-    let execute = ["n_action_steps", "h"]
-        .iter()
-        .find_map(|k| b.getattr(*k).ok().and_then(|v| v.extract::<usize>().ok()))
-        .unwrap_or(8);
-    if execute == 0 {
-        return Err(input("policy.n_action_steps: must be at least 1"));
-    }
+    let execute = policy_execute(b)?;
     if let Some(d) = &log_dir {
         std::fs::create_dir_all(d)
             .map_err(|e| err(Kind::Output, format!("{}: {e}", d.display())))?;
@@ -631,11 +637,7 @@ pub fn _tolerance<'py>(
                 "policy: a built-in policy's name or an object with act(obs)",
             ));
         }
-        let execute = ["n_action_steps", "h"]
-            .iter()
-            .find_map(|k| b.getattr(*k).ok().and_then(|v| v.extract::<usize>().ok()))
-            .unwrap_or(8)
-            .max(1);
+        let execute = policy_execute(b)?;
         let scn = pacs_sim::task::scenario(kind, seeds.first().copied().unwrap_or(0), true);
         let mut p = PyTaskPolicy {
             obj: &policy,

@@ -183,11 +183,15 @@ pub fn run_rollout(
     log: Option<&Path>,
     record_every: usize,
 ) -> Result<Rollout, EvalError> {
-    let scene = Scene {
-        with_human,
-        extra_people: Vec::new(),
-    };
-    rollout_of(task, v, seed, scene, log, record_every, None)
+    rollout_of(
+        task,
+        v,
+        seed,
+        Scene::of(with_human),
+        log,
+        record_every,
+        None,
+    )
 }
 
 /// Run one rollout of `policy`, a policy the caller supplies (its rows and rollouts say
@@ -208,11 +212,15 @@ pub fn run_rollout_with(
         policy: PolicyKind::External,
         ..v.clone()
     };
-    let scene = Scene {
-        with_human,
-        extra_people: Vec::new(),
-    };
-    rollout_of(task, &v, seed, scene, log, record_every, Some(policy))
+    rollout_of(
+        task,
+        &v,
+        seed,
+        Scene::of(with_human),
+        log,
+        record_every,
+        Some(policy),
+    )
 }
 
 /// What a rollout's scene adds to the task's: people present or far away, and further
@@ -223,6 +231,16 @@ pub struct Scene {
     /// Further people, seen by the filter and scored like the scene's own, not observed by
     /// the policy.
     pub extra_people: Vec<Box<dyn crate::humans::HumanScript>>,
+}
+
+impl Scene {
+    /// The task's scene, people present or far away, nobody added.
+    pub fn of(with_human: bool) -> Self {
+        Self {
+            with_human,
+            extra_people: Vec::new(),
+        }
+    }
 }
 
 /// [`run_rollout`] or [`run_rollout_with`] in a [`Scene`] with further people.

@@ -33,12 +33,12 @@ pub fn standing(x: f64, y: f64, hand: [f64; 3]) -> Vec<[f64; 3]> {
 }
 
 /// Smooth step 0 → 1 over [a, b] (cubic ease; |slope| ≤ 1.5/(b − a)).
-fn ease(t: f64, a: f64, b: f64) -> f64 {
+pub(crate) fn ease(t: f64, a: f64, b: f64) -> f64 {
     let u = ((t - a) / (b - a)).clamp(0.0, 1.0);
     u * u * (3.0 - 2.0 * u)
 }
 
-fn lerp(a: [f64; 3], b: [f64; 3], w: f64) -> [f64; 3] {
+pub(crate) fn lerp(a: [f64; 3], b: [f64; 3], w: f64) -> [f64; 3] {
     [
         a[0] + w * (b[0] - a[0]),
         a[1] + w * (b[1] - a[1]),

@@ -326,6 +326,34 @@ const DEMO_SPREAD: f64 = 0.012;
 /// default `EpisodeConfig::policy_dt` is this constant).
 pub const DEMO_DT: f64 = 0.033;
 
+/// Samples per tool segment of a dense path from `start` through `tools` (m): the largest joint
+/// distance (rad) between consecutive IK keyframes, × 1.5 (the ease's peak speed) / `spacing`
+/// (rad per sample), at least `min`.
+pub(crate) fn segment_counts(
+    robot: &RobotModel,
+    start: &[f64],
+    tools: &[[f64; 3]],
+    spacing: f64,
+    min: usize,
+) -> Vec<usize> {
+    let mut keyframes = vec![start.to_vec()];
+    for p in tools {
+        let (q, _) = solve_ik(robot, keyframes.last().expect("non-empty"), *p);
+        keyframes.push(q);
+    }
+    keyframes
+        .windows(2)
+        .map(|w| {
+            let d = w[0]
+                .iter()
+                .zip(&w[1])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            ((1.5 * d / spacing).ceil() as usize).max(min)
+        })
+        .collect()
+}
+
 /// Build the demonstrations of `task` (deterministic: the same "training data" for every
 /// rollout). Joint paths through IK solutions of jittered tool waypoints, eased, ≈ 0.03 rad
 /// (0.05 rad for Handover) between samples at most, and never faster than the robot is operated:
@@ -345,22 +373,7 @@ pub fn demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>>> 
         0.03
     };
     // Nominal keyframes and sample counts from the nominal joint distances.
-    let mut nominal = vec![start.clone()];
-    for p in &tools {
-        let (q, _) = solve_ik(robot, nominal.last().expect("non-empty"), *p);
-        nominal.push(q);
-    }
-    let mut counts: Vec<usize> = nominal
-        .windows(2)
-        .map(|w| {
-            let d = w[0]
-                .iter()
-                .zip(&w[1])
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            ((1.5 * d / spacing).ceil() as usize).max(8)
-        })
-        .collect();
+    let mut counts = segment_counts(robot, &start, &tools, spacing, 8);
     // The same jitter for every attempt: only the pace changes.
     let mut rng = Rng::new(0xDE30 + task as u64);
     let jittered: Vec<Vec<[f64; 3]>> = (0..DEMOS)

@@ -21,7 +21,7 @@
 
 use crate::humans::Rng;
 use crate::task::{
-    TaskKind, demo_acceleration_limits, dense_path_with_detours, scenario, solve_ik,
+    TaskKind, demo_acceleration_limits, dense_path_with_detours, scenario, segment_counts,
     tool_keyframes, tool_point,
 };
 use pacs_models::{RobotModel, fr3};
@@ -179,22 +179,7 @@ fn teleop_demonstration(task: TaskKind, seed: u64, dt: f64) -> Result<TeleopDemo
     let v = variety(task, &mut rng);
     let start = fr3::Q_READY.to_vec();
     // Fine samples per segment from the joint distance between the IK keyframes.
-    let mut keyframes = vec![start.clone()];
-    for p in &v.tools {
-        let (q, _) = solve_ik(&robot, keyframes.last().expect("non-empty"), *p);
-        keyframes.push(q);
-    }
-    let counts: Vec<usize> = keyframes
-        .windows(2)
-        .map(|w| {
-            let d = w[0]
-                .iter()
-                .zip(&w[1])
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            ((1.5 * d / FINE_STEP).ceil() as usize).max(40)
-        })
-        .collect();
+    let counts = segment_counts(&robot, &start, &v.tools, FINE_STEP, 40);
     let path = dense_path_with_detours(&robot, &start, &v.tools, &counts, &v.detours);
     // The segment each fine sample belongs to.
     let mut segment = vec![0usize];

@@ -13,7 +13,7 @@
 //! scene), so what changes for the policy is only the timing of its own motion.
 
 use crate::eval::{EvalError, Rollout, Scene, Variant, run_rollout_in};
-use crate::humans::{FLOOR_Z, HumanScript, standing_on};
+use crate::humans::{FLOOR_Z, HumanScript, ease, lerp, standing_on};
 use crate::policy::TaskPolicy;
 use crate::task::{TaskKind, tool_point};
 use pacs_models::fr3;
@@ -39,19 +39,6 @@ pub struct Intruder {
     pub t_reach: f64,
     /// How long (s) the hand stays at `reach`.
     pub hold: f64,
-}
-
-fn ease(t: f64, a: f64, b: f64) -> f64 {
-    let u = ((t - a) / (b - a)).clamp(0.0, 1.0);
-    u * u * (3.0 - 2.0 * u)
-}
-
-fn lerp(a: [f64; 3], b: [f64; 3], w: f64) -> [f64; 3] {
-    [
-        a[0] + w * (b[0] - a[0]),
-        a[1] + w * (b[1] - a[1]),
-        a[2] + w * (b[2] - a[2]),
-    ]
 }
 
 impl Intruder {
@@ -149,10 +136,7 @@ pub fn tolerance(
             task,
             variant,
             seed,
-            Scene {
-                with_human: true,
-                extra_people: Vec::new(),
-            },
+            Scene::of(true),
             RECORD,
             policy.as_deref_mut(),
         )?;

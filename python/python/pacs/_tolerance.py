@@ -11,10 +11,11 @@ from typing import Any, Sequence
 from . import _pacs
 from .errors import ArgumentTypeError, InputError
 
-__all__ = ["tolerance", "tolerance_svg"]
+__all__ = ["tolerance", "tolerance_svg", "wilson_interval"]
 
 
-def _wilson(k: int, n: int, z: float = 1.96) -> list[float]:
+def wilson_interval(k: int, n: int, z: float = 1.96) -> list[float]:
+    """The Wilson score interval (95 % for z = 1.96) of k successes in n trials."""
     if n == 0:
         return [0.0, 1.0]
     p = k / n
@@ -78,7 +79,7 @@ def tolerance(
     k_base = sum(base.values())
     rows = [{
         "hold_s": 0.0, "rollouts": n_base, "success": k_base / n_base,
-        "success_wilson95": _wilson(k_base, n_base), "mean_stopped_s": 0.0,
+        "success_wilson95": wilson_interval(k_base, n_base), "mean_stopped_s": 0.0,
         "mean_extra_duration_s": 0.0,
     }]
     for h in holds_f:
@@ -86,7 +87,7 @@ def tolerance(
         k = sum(r["success"] for r in rs)
         rows.append({
             "hold_s": h, "rollouts": len(rs), "success": k / len(rs),
-            "success_wilson95": _wilson(k, len(rs)),
+            "success_wilson95": wilson_interval(k, len(rs)),
             "mean_stopped_s": sum(r["stopped"] for r in rs) / len(rs),
             "mean_extra_duration_s": sum(r["duration"] - r["baseline_duration"] for r in rs)
             / len(rs),

@@ -226,6 +226,17 @@ def _seed_parts(seed_list: list, partitions: Any, client: Any) -> list:
     return chunks
 
 
+def _gather_merge(client: Any, tasks: list) -> dict:
+    """Run each ``(function, *args)`` as one Dask task; the merged rollouts of all."""
+    futures = [client.submit(*t, pure=False) for t in tasks]
+    try:
+        done = client.gather(futures)
+    finally:
+        for f in futures:
+            f.release()
+    return _pacs._simulate_merge([part for parts in done for part in parts])
+
+
 def _external_of(policy: Any, seeds: list, common: dict) -> list:
     """The encoded rollouts of a policy object on some seeds (what a worker runs)."""
     return [_pacs._simulate_external(policy, seeds=list(seeds), **common)]
@@ -298,13 +309,7 @@ def simulate(
                 raise InputError("partitions: only with a client")
             return _pacs._simulate_merge(_external_of(policy, seed_list, ext))
         chunks = _seed_parts(seed_list, partitions, client)
-        futures = [client.submit(_external_of, policy, c, ext, pure=False) for c in chunks]
-        try:
-            done = client.gather(futures)
-        finally:
-            for f in futures:
-                f.release()
-        return _pacs._simulate_merge([part for parts in done for part in parts])
+        return _gather_merge(client, [(_external_of, policy, c, ext) for c in chunks])
     common = dict(
         tasks=tasks,
         methods=methods,
@@ -321,10 +326,4 @@ def simulate(
     if threads is not None:
         raise InputError("threads: set the workers' threads on the Dask cluster, not here")
     chunks = _seed_parts(seed_list, partitions, client)
-    futures = [client.submit(_rollouts_of, _ranges(c), 1, common, pure=False) for c in chunks]
-    try:
-        done = client.gather(futures)
-    finally:
-        for f in futures:
-            f.release()
-    return _pacs._simulate_merge([part for parts in done for part in parts])
+    return _gather_merge(client, [(_rollouts_of, _ranges(c), 1, common) for c in chunks])
