@@ -386,7 +386,23 @@ struct PyTaskPolicy<'a> {
     seed: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
-impl PyTaskPolicy<'_> {
+impl<'a> PyTaskPolicy<'a> {
+    /// The policy object `obj` for `task`'s rollouts (the demonstrations its deviation is
+    /// measured against are the task's built-in ones), starting with `seed`.
+    fn new(obj: &'a Py<PyAny>, task: TaskKind, seed: u64, execute: usize) -> Self {
+        let scn = pacs_sim::task::scenario(task, seed, true);
+        Self {
+            obj,
+            demos: scn.policy,
+            robot: scn.robot,
+            execute,
+            ood: 0,
+            error: None,
+            task: task.name(),
+            seed: std::sync::Arc::new(seed.into()),
+        }
+    }
+
     fn call(&self, obs: &pacs_sim::policy::Observation) -> PyResult<Vec<Vec<f64>>> {
         use numpy::{PyArray1, PyArray2};
         Python::attach(|py| {
@@ -528,17 +544,7 @@ pub fn _simulate_external<'py>(
                 let log = log_dir
                     .as_ref()
                     .map(|d| d.join(format!("{}-{}-{seed:04}.jsonl", task.name(), v.label)));
-                let scn = pacs_sim::task::scenario(task, seed, plan.with_human);
-                let mut p = PyTaskPolicy {
-                    obj: &policy,
-                    demos: scn.policy,
-                    robot: scn.robot,
-                    execute,
-                    ood: 0,
-                    error: None,
-                    task: task.name(),
-                    seed: std::sync::Arc::new(seed.into()),
-                };
+                let mut p = PyTaskPolicy::new(&policy, task, seed, execute);
                 let r = py.detach(|| {
                     eval::run_rollout_with(
                         task,
@@ -638,17 +644,7 @@ pub fn _tolerance<'py>(
             ));
         }
         let execute = policy_execute(b)?;
-        let scn = pacs_sim::task::scenario(kind, seeds.first().copied().unwrap_or(0), true);
-        let mut p = PyTaskPolicy {
-            obj: &policy,
-            demos: scn.policy,
-            robot: scn.robot,
-            execute,
-            ood: 0,
-            error: None,
-            task: kind.name(),
-            seed: std::sync::Arc::new(0.into()),
-        };
+        let mut p = PyTaskPolicy::new(&policy, kind, seeds.first().copied().unwrap_or(0), execute);
         let seed_now = p.seed.clone();
         let has_reset = b.hasattr("reset")?;
         let mut reset_error: Option<PyErr> = None;
