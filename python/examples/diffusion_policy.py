@@ -173,8 +173,13 @@ def evaluate(args):
 
         client = Client(args.client)
     t0 = time.time()
+    def progress(done, total):
+        print(f"\r{done}/{total} rollouts ({time.time() - t0:.0f} s)", end="", flush=True)
+
     result = pacs.simulate(args.task, args.method, rollouts=args.rollouts, seed=args.seed,
-                           policy=policy, client=client, log_dir=out / "logs")
+                           policy=policy, client=client, log_dir=out / "logs",
+                           progress=None if client else progress)
+    print()
     rows = []
     by_method = {}
     for r in result["rollouts"]:

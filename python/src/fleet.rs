@@ -508,9 +508,10 @@ fn policy_execute(b: &Bound<'_, PyAny>) -> PyResult<usize> {
 
 /// Rollouts of a Python policy object (see [`PyTaskPolicy`]) for every task × method × seed,
 /// one after another on this thread (`policy.reset()`, if present, before each); encoded as
-/// `_simulate_rollouts` encodes them (merge with `_simulate_merge`).
+/// `_simulate_rollouts` encodes them (merge with `_simulate_merge`). `progress(done, total)`
+/// after each rollout, if given.
 #[pyfunction]
-#[pyo3(signature = (policy, tasks, methods, seeds, with_human, chunk_motion, log_dir=None))]
+#[pyo3(signature = (policy, tasks, methods, seeds, with_human, chunk_motion, log_dir=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _simulate_external<'py>(
     py: Python<'py>,
@@ -521,7 +522,9 @@ pub fn _simulate_external<'py>(
     with_human: bool,
     chunk_motion: &str,
     log_dir: Option<PathBuf>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyBytes>> {
+    let total = tasks.len().max(1) * methods.len().max(1) * seeds.len();
     let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, "nearest")?;
     let b = policy.bind(py);
     if !b.hasattr("act")? {
@@ -563,6 +566,9 @@ pub fn _simulate_external<'py>(
                     eval::EvalError::Io { .. } => err(Kind::Output, e.to_string()),
                     other => input(other.to_string()),
                 })?);
+                if let Some(f) = &progress {
+                    f.bind(py).call1((out.len(), total))?;
+                }
             }
         }
     }

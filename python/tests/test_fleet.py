@@ -300,7 +300,9 @@ def test_a_policy_object_runs_as_the_built_in_policy_does(client):
     args = dict(task="sorting", method=["off", "pacs"], seeds=[1, 2])
     built_in = pacs.simulate(**args, policy="nearest")
     p = DemoSetPolicy()
-    external = pacs.simulate(**args, policy=p)
+    ticks = []
+    external = pacs.simulate(**args, policy=p, progress=lambda d, n: ticks.append((d, n)))
+    assert ticks == [(1, 4), (2, 4), (3, 4), (4, 4)]
     assert p.calls >= 8
     assert [r["policy"] for r in external["rollouts"]] == ["external"] * 4
     assert same_rollouts(external, built_in)

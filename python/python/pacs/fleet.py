@@ -237,9 +237,9 @@ def _gather_merge(client: Any, tasks: list) -> dict:
     return _pacs._simulate_merge([part for parts in done for part in parts])
 
 
-def _external_of(policy: Any, seeds: list, common: dict) -> list:
+def _external_of(policy: Any, seeds: list, common: dict, progress: Any = None) -> list:
     """The encoded rollouts of a policy object on some seeds (what a worker runs)."""
-    return [_pacs._simulate_external(policy, seeds=list(seeds), **common)]
+    return [_pacs._simulate_external(policy, seeds=list(seeds), progress=progress, **common)]
 
 
 def simulate(
@@ -256,6 +256,7 @@ def simulate(
     policy: Any = "nearest",
     log_dir: Any = None,
     threads: Any = None,
+    progress: Any = None,
 ) -> dict:
     """The simulation's evaluation (``pacs simulate``): one rollout per seed for every task and
     method (the same people for every method): the seeds ``seed`` .. ``seed + rollouts - 1``
@@ -278,7 +279,8 @@ def simulate(
     ``tool`` and ``tool_before`` (m). A policy object runs its rollouts one after another on
     the calling thread (``threads`` must be None), or, with a ``client``, on the workers (the
     policy is pickled to them; each partition runs one after another); rows and rollouts say
-    ``policy: "external"``. Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
+    ``policy: "external"``. ``progress``: with a policy object run here, called as
+    ``progress(done, total)`` after each rollout. Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
     ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
     """
     _check_client(client)
@@ -307,7 +309,7 @@ def simulate(
         if client is None:
             if partitions is not None:
                 raise InputError("partitions: only with a client")
-            return _pacs._simulate_merge(_external_of(policy, seed_list, ext))
+            return _pacs._simulate_merge(_external_of(policy, seed_list, ext, progress))
         chunks = _seed_parts(seed_list, partitions, client)
         return _gather_merge(client, [(_external_of, policy, c, ext) for c in chunks])
     common = dict(
