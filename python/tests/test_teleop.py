@@ -156,6 +156,10 @@ def test_a_lerobot_diffusion_policy_in_the_simulation(tmp_path):
     out = pacs.simulate("sorting", "off,pacs", seeds=[1], policy=policy, log_dir=tmp_path / "logs")
     assert [r["method"] for r in out["rollouts"]] == ["off", "pacs"]
     assert seen and all(n == 2 for n in seen)
+    # Sampling noise seeded per rollout and call: the same rollouts when run again.
+    again = pacs.simulate("sorting", "off,pacs", seeds=[1], policy=policy)
+    assert json.dumps([r["episode"] for r in again["rollouts"]]) == \
+        json.dumps([r["episode"] for r in out["rollouts"]])
     (run,) = pacs.audit(out["rollouts"][1]["log"])
     assert run.verdict in ("pass", "fail", "inconclusive")
     assert out["rollouts"][1]["episode"]["violation_fraction"] == 0.0

@@ -566,7 +566,8 @@ class SimulationPolicy:
     ``n_obs_steps`` = 2 sees exactly those two frames), predicts a chunk with
     ``predict_action_chunk`` and returns it un-normalized (the postprocessor) as joint-position
     deltas (H, 7) rad. ``n_action_steps`` is the policy config's (the executed actions per
-    chunk).
+    chunk). The sampling noise (a diffusion policy's) is seeded from the rollout's seed and the
+    call's index in the rollout (``torch.manual_seed``), so a rollout is reproducible.
 
     Args:
         policy: a LeRobot ``PreTrainedPolicy`` (e.g. ``DiffusionPolicy``) with
@@ -587,6 +588,8 @@ class SimulationPolicy:
         self.n_action_steps = int(getattr(cfg, "n_action_steps", 8))
         self.policy, self.preprocess, self.postprocess = policy, preprocess, postprocess
         self.history = ObservationHistory(policy)
+        self._key: Any = None
+        self._calls = 0
 
     @classmethod
     def from_pretrained(cls, path: str) -> "SimulationPolicy":
@@ -620,10 +623,21 @@ class SimulationPolicy:
         if hasattr(self.policy, "reset"):
             self.policy.reset()
 
+    def _seed(self, obs: Mapping[str, Any]) -> int:
+        """A seed for this call's sampling noise: the rollout's seed and the number of calls
+        since the rollout began (t = 0), so a rollout is the same whenever it is run (locally,
+        on Dask, or again as the tolerance tool's twin)."""
+        key = (obs.get("task"), obs.get("seed"))
+        if key != self._key or float(obs.get("t", 0.0)) == 0.0:
+            self._key, self._calls = key, 0
+        self._calls += 1
+        return (int(obs.get("seed") or 0) * 1_000_003 + self._calls) % (2**63)
+
     def act(self, obs: Mapping[str, Any]) -> np.ndarray:
         import torch
 
         self.reset()
+        torch.manual_seed(self._seed(obs))
         batch = None
         with torch.no_grad():
             for frame in self.frames(obs):
