@@ -162,6 +162,16 @@ def test_a_lerobot_diffusion_policy_in_the_simulation(tmp_path):
         json.dumps([r["episode"] for r in out["rollouts"]])
     (run,) = pacs.audit(out["rollouts"][1]["log"])
     assert run.verdict in ("pass", "fail", "inconclusive")
+    # On a Dask cluster (the policy, torch modules and processors, pickled to the workers):
+    # the same rollouts.
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        on_dask = pacs.simulate("sorting", "off,pacs", seeds=[1, 2], policy=policy,
+                                client=client, partitions=2)
+    local = pacs.simulate("sorting", "off,pacs", seeds=[1, 2], policy=policy)
+    assert json.dumps(on_dask) == json.dumps(local)
     assert out["rollouts"][1]["episode"]["violation_fraction"] == 0.0
 
 

@@ -574,11 +574,20 @@ class SimulationPolicy:
             ``n_obs_steps`` ≤ 2.
         preprocess, postprocess: LeRobot's processor pipelines (``make_pre_post_processors``),
             or None (inputs and outputs un-normalized).
+        threads: torch CPU threads during a call (default 1; restored after it). A float
+            reduction's order depends on the thread count, so the same rollout on another count
+            (Dask workers run one) can differ in the last bits and then diverge; one thread by
+            default makes a rollout the same everywhere.
     """
 
-    def __init__(self, policy: Any, preprocess: Any = None, postprocess: Any = None) -> None:
+    def __init__(
+        self, policy: Any, preprocess: Any = None, postprocess: Any = None, threads: int = 1
+    ) -> None:
         if not hasattr(policy, "predict_action_chunk"):
             raise ArgumentTypeError("policy: needs predict_action_chunk(batch)")
+        if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+            raise InputError(f"threads: must be a positive int, got {threads!r}")
+        self.threads = threads
         cfg = getattr(policy, "config", None)
         self.n_obs_steps = int(getattr(cfg, "n_obs_steps", 1))
         if self.n_obs_steps > 2:
@@ -592,7 +601,7 @@ class SimulationPolicy:
         self._calls = 0
 
     @classmethod
-    def from_pretrained(cls, path: str) -> "SimulationPolicy":
+    def from_pretrained(cls, path: str, threads: int = 1) -> "SimulationPolicy":
         """Load a policy and its processors saved by LeRobot (``save_pretrained``), on CPU."""
         from lerobot.policies.factory import get_policy_class, make_pre_post_processors
         from lerobot.configs.policies import PreTrainedConfig
@@ -604,7 +613,7 @@ class SimulationPolicy:
             cfg, pretrained_path=path,
             preprocessor_overrides={"device_processor": {"device": "cpu"}},
         )
-        return cls(policy, pre, post)
+        return cls(policy, pre, post, threads=threads)
 
     def frames(self, obs: Mapping[str, Any]) -> list[dict[str, np.ndarray]]:
         """The two observation frames (before, now) of a simulation observation."""
@@ -639,17 +648,22 @@ class SimulationPolicy:
         self.reset()
         torch.manual_seed(self._seed(obs))
         batch = None
-        with torch.no_grad():
-            for frame in self.frames(obs):
-                b = {k: torch.from_numpy(v) for k, v in frame.items()}
-                if self.preprocess is not None:
-                    b = self.preprocess(b)
-                else:
-                    b = {k: v[None] for k, v in b.items()}
-                batch = self.history.feed(b)
-            a = self.policy.predict_action_chunk(batch)
-            if self.postprocess is not None:
-                a = self.postprocess(a)
+        before = torch.get_num_threads()
+        torch.set_num_threads(self.threads)
+        try:
+            with torch.no_grad():
+                for frame in self.frames(obs):
+                    b = {k: torch.from_numpy(v) for k, v in frame.items()}
+                    if self.preprocess is not None:
+                        b = self.preprocess(b)
+                    else:
+                        b = {k: v[None] for k, v in b.items()}
+                    batch = self.history.feed(b)
+                a = self.policy.predict_action_chunk(batch)
+                if self.postprocess is not None:
+                    a = self.postprocess(a)
+        finally:
+            torch.set_num_threads(before)
         a = to_numpy(a)
         return a[0] if a.ndim == 3 else a
 
