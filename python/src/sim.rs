@@ -2,7 +2,7 @@
 //! demonstration policy, for examples and tests of Python policy loops without a robot.
 
 use crate::convert::{finite, flag, index, text, to_py, vector};
-use crate::errors::input;
+use crate::errors::{input, type_err};
 use numpy::{PyArray1, PyArray2};
 use pacs_sim::policy::ChunkPolicy;
 use pacs_sim::task::{Scenario, TaskKind, constraint_spec, native_mode, scenario, tool_point};
@@ -173,16 +173,24 @@ impl PyDemo {
 /// (T,) m (tool to nearest keypoint), `pace` (T,) (fraction of the nominal pace), `timestamp`
 /// (T,) s; and `task`, `seed`, `fps`, `pauses`, `hesitations`, `detours`, `goals`.
 #[pyfunction]
-#[pyo3(signature = (task="sorting", count=50, seed=0, fps=30.0))]
+#[pyo3(signature = (task=None, count=None, seed=None, fps=None))]
 pub fn teleop_demonstrations<'py>(
     py: Python<'py>,
-    task: &str,
-    count: usize,
-    seed: u64,
-    fps: f64,
+    task: Option<&Bound<'py, PyAny>>,
+    count: Option<&Bound<'py, PyAny>>,
+    seed: Option<&Bound<'py, PyAny>>,
+    fps: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
     use pacs_sim::teleop;
     use pyo3::types::PyDict;
+    let task = task.map_or(Ok("sorting".to_string()), |t| text(t, "task"))?;
+    let count = count.map_or(Ok(50), |c| index(c, "count"))?;
+    if count == 0 {
+        return Err(input("count: must be at least 1"));
+    }
+    let seed = seed.map_or(Ok(0), |s| index(s, "seed"))? as u64;
+    let fps = fps.map_or(Ok(30.0), |f| finite(f, "fps"))?;
+    let task = task.as_str();
     let kind: TaskKind = task.parse().map_err(|_| {
         input(format!(
             "task: unknown task `{task}` (sorting, handover, feeding, sphere, crowded)"
@@ -234,15 +242,34 @@ pub fn teleop_demonstrations<'py>(
 /// ((from s, to s, pace in (0, 1))), resume; within the FR3's operated limits. Returns `q`
 /// (N, 7) rad, `source` (N,) (fractional sample index into the recording) and `pace` (N,).
 #[pyfunction]
-#[pyo3(signature = (q, fps=30.0, pauses=Vec::new(), slows=Vec::new()))]
+#[pyo3(signature = (q, fps=None, pauses=None, slows=None))]
 pub fn paced_replay<'py>(
     py: Python<'py>,
     q: &Bound<'py, PyAny>,
-    fps: f64,
-    pauses: Vec<(f64, f64)>,
-    slows: Vec<(f64, f64, f64)>,
+    fps: Option<&Bound<'py, PyAny>>,
+    pauses: Option<&Bound<'py, PyAny>>,
+    slows: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
     use pacs_sim::teleop::{PaceEvent, paced_replay};
+    let fps = fps.map_or(Ok(30.0), |f| finite(f, "fps"))?;
+    let pauses: Vec<(f64, f64)> = match pauses {
+        Some(p) => p.extract().map_err(|_| {
+            type_err(format!(
+                "pauses: expected a list of (at_s, hold_s) pairs, got {}",
+                crate::convert::show(p)
+            ))
+        })?,
+        None => Vec::new(),
+    };
+    let slows: Vec<(f64, f64, f64)> = match slows {
+        Some(p) => p.extract().map_err(|_| {
+            type_err(format!(
+                "slows: expected a list of (from_s, to_s, pace) triples, got {}",
+                crate::convert::show(p)
+            ))
+        })?,
+        None => Vec::new(),
+    };
     if !(fps > 0.0 && fps.is_finite()) {
         return Err(input(format!("fps: {fps} is not a frame rate (Hz)")));
     }

@@ -231,3 +231,26 @@ def test_the_diffusion_policy_example_runs_verbatim(tmp_path):
     (row,) = summary["rows"]
     assert row["method"] == "pacs" and row["rollouts"] == 1
     assert sum(row["audit_verdicts"].values()) == 1
+
+
+def test_bad_arguments_of_the_learning_tools_are_named():
+    cases = [
+        (lambda: pacs.teleop_demonstrations("sorting", count=-1), pacs.InputError,
+         "count: value -1 is negative"),
+        (lambda: pacs.teleop_demonstrations("sorting", count="x"), pacs.ArgumentTypeError,
+         "count: expected an int, got 'x'"),
+        (lambda: pacs.teleop_demonstrations("sorting", count=0), pacs.InputError,
+         "count: must be at least 1"),
+        (lambda: pacs.teleop_demonstrations(3), pacs.ArgumentTypeError, "task: expected a str"),
+        (lambda: pacs.paced_replay(np.zeros((5, 7)), pauses=[(1,)]), pacs.ArgumentTypeError,
+         r"pauses: expected a list of \(at_s, hold_s\) pairs"),
+        (lambda: pacs.paced_replay(np.zeros((5, 7)), fps="a"), pacs.ArgumentTypeError,
+         "fps: expected a number"),
+        (lambda: pacs.tolerance("nearest", "sorting", seeds=[-1]), pacs.InputError,
+         r"seeds\[0\]: must be at least 0"),
+        (lambda: pacs.tolerance("nearest", "sorting", rollouts=0), pacs.InputError,
+         "rollouts: must be at least 1"),
+    ]
+    for call, kind, message in cases:
+        with pytest.raises(kind, match=message):
+            call()

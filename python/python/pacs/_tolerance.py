@@ -66,11 +66,10 @@ def tolerance(
     extra duration over the rollouts that succeeded both ways (``extra_duration_pairs`` of them). ``plot``: also write a one-page
     SVG of it there. ``progress``: called as ``progress(done, total)`` after each rollout.
     """
-    if seeds is None:
-        if isinstance(rollouts, bool) or not isinstance(rollouts, int) or rollouts < 1:
-            raise InputError(f"rollouts: must be a positive int, got {rollouts!r}")
-        seeds = list(range(int(seed), int(seed) + rollouts))
-    seeds = [int(s) for s in seeds]
+    from .fleet import _seed_list
+
+    seeds = _seed_list(None if seeds is not None else rollouts,
+                       None if seeds is not None else seed, seeds)
     holds_f, at_f = _floats(holds, "holds"), _floats(at, "at")
     if not isinstance(task, str):
         raise ArgumentTypeError(f"task: expected a task name, got {task!r}")
