@@ -524,8 +524,8 @@ pub fn _simulate_external<'py>(
     log_dir: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyBytes>> {
-    let total = tasks.len().max(1) * methods.len().max(1) * seeds.len();
     let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, "nearest")?;
+    let total = plan.tasks.len() * plan.variants.len() * seeds.len();
     let b = policy.bind(py);
     if !b.hasattr("act")? {
         return Err(type_err(
@@ -549,14 +549,14 @@ pub fn _simulate_external<'py>(
                     .map(|d| d.join(format!("{}-{}-{seed:04}.jsonl", task.name(), v.label)));
                 let mut p = PyTaskPolicy::new(&policy, task, seed, execute);
                 let r = py.detach(|| {
-                    eval::run_rollout_with(
+                    eval::run_rollout_in(
                         task,
                         v,
                         seed,
-                        plan.with_human,
+                        eval::Scene::of(plan.with_human),
                         log.as_deref(),
                         0,
-                        &mut p,
+                        Some(&mut p),
                     )
                 });
                 if let Some(e) = p.error.take() {
@@ -577,7 +577,7 @@ pub fn _simulate_external<'py>(
 
 /// The tolerance tool (`pacs_sim::tolerance`): interrupted rollouts of a policy (a built-in
 /// name or a policy object, as `_simulate_external` runs it) against their undisturbed twins.
-/// Returns the runs as a list of dicts.
+/// Returns `{"runs": [...], "rows": [...]}` (`pacs_sim::tolerance::rows`).
 #[pyfunction]
 #[pyo3(signature = (policy, task, method, seeds, at, holds, progress=None))]
 #[allow(clippy::too_many_arguments)]
@@ -672,5 +672,6 @@ pub fn _tolerance<'py>(
         }
         r.map_err(err_of)?
     };
-    to_py(py, &runs)
+    let rows = pacs_sim::tolerance::rows(&runs, &holds);
+    to_py(py, &serde_json::json!({"runs": runs, "rows": rows}))
 }

@@ -43,7 +43,7 @@ pub enum PolicyKind {
     /// [`PolicyKind::Kernel`], also trained on the demonstrations replayed at
     /// [`crate::task::REPLAY_PACES`] of their pace.
     KernelPaced,
-    /// A policy the caller supplies ([`run_rollout_with`]; Python's `pacs.simulate(policy=…)`
+    /// A policy the caller supplies ([`run_rollout_in`]; Python's `pacs.simulate(policy=…)`
     /// with a policy object, e.g. a LeRobot diffusion policy). Not selectable by name.
     External,
 }
@@ -123,6 +123,18 @@ pub enum EvalError {
         /// Cause.
         source: Box<crate::SimError>,
     },
+    /// A variant names the caller's policy ([`PolicyKind::External`]) and none was given.
+    #[error(
+        "{task} / {method} rollout {seed}: the variant runs the caller's policy, and none was given"
+    )]
+    NoPolicy {
+        /// Task.
+        task: &'static str,
+        /// Method label.
+        method: String,
+        /// Rollout seed.
+        seed: u64,
+    },
     /// Writing an output failed.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -194,35 +206,6 @@ pub fn run_rollout(
     )
 }
 
-/// Run one rollout of `policy`, a policy the caller supplies (its rows and rollouts say
-/// [`PolicyKind::External`]; `v.policy` is ignored). The scene, the filter, the people, the
-/// objects, the scoring and the log are those of [`run_rollout`]; the rollout's deviation from
-/// the demonstrations is measured against the task's built-in demonstrations.
-#[allow(clippy::too_many_arguments)]
-pub fn run_rollout_with(
-    task: TaskKind,
-    v: &Variant,
-    seed: u64,
-    with_human: bool,
-    log: Option<&Path>,
-    record_every: usize,
-    policy: &mut dyn crate::policy::TaskPolicy,
-) -> Result<Rollout, EvalError> {
-    let v = Variant {
-        policy: PolicyKind::External,
-        ..v.clone()
-    };
-    rollout_of(
-        task,
-        &v,
-        seed,
-        Scene::of(with_human),
-        log,
-        record_every,
-        Some(policy),
-    )
-}
-
 /// What a rollout's scene adds to the task's: people present or far away, and further
 /// scripted people (the tolerance tool's intruder, [`crate::tolerance`]).
 pub struct Scene {
@@ -243,12 +226,18 @@ impl Scene {
     }
 }
 
-/// [`run_rollout`] or [`run_rollout_with`] in a [`Scene`] with further people.
+/// Run one rollout in `scene` (the task's, with further people if any) of `policy`, a policy
+/// the caller supplies (its rows and rollouts then say [`PolicyKind::External`]; `v.policy` is
+/// ignored), or of `v.policy` when None. The filter, the scoring and the log are those of
+/// [`run_rollout`]; a caller's policy's deviation is measured against the task's built-in
+/// demonstrations (its `TaskPolicy::deviation`).
+#[allow(clippy::too_many_arguments)]
 pub fn run_rollout_in(
     task: TaskKind,
     v: &Variant,
     seed: u64,
     scene: Scene,
+    log: Option<&Path>,
     record_every: usize,
     policy: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
 ) -> Result<Rollout, EvalError> {
@@ -259,7 +248,7 @@ pub fn run_rollout_in(
         },
         None => v.clone(),
     };
-    rollout_of(task, &v, seed, scene, None, record_every, policy)
+    rollout_of(task, &v, seed, scene, log, record_every, policy)
 }
 
 fn rollout_of(
@@ -300,7 +289,14 @@ fn rollout_of(
     let mut learned;
     let policy: &mut dyn crate::policy::TaskPolicy = match (external, v.policy) {
         (Some(p), _) => p,
-        (None, PolicyKind::Nearest | PolicyKind::External) => &mut scn.policy,
+        (None, PolicyKind::Nearest) => &mut scn.policy,
+        (None, PolicyKind::External) => {
+            return Err(EvalError::NoPolicy {
+                task: task.name(),
+                method: v.label.clone(),
+                seed,
+            });
+        }
         (None, PolicyKind::Kernel | PolicyKind::KernelPaced) => {
             learned = crate::task::learned_policy(task, v.policy == PolicyKind::KernelPaced);
             &mut learned
@@ -391,4 +387,20 @@ pub fn merge(parts: impl IntoIterator<Item = Vec<Rollout>>) -> Vec<Rollout> {
     let mut out: Vec<Rollout> = parts.into_iter().flatten().collect();
     out.sort_by(|a, b| (a.task as u8, &a.method, a.seed).cmp(&(b.task as u8, &b.method, b.seed)));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_variant_naming_the_callers_policy_without_one_is_refused() {
+        let v = Variant {
+            policy: PolicyKind::External,
+            ..("pacs".parse::<Variant>().unwrap())
+        };
+        let e = run_rollout(TaskKind::Sorting, &v, 1, true, None, 0).unwrap_err();
+        assert!(matches!(e, EvalError::NoPolicy { seed: 1, .. }), "{e}");
+        assert!(e.to_string().contains("none was given"));
+    }
 }

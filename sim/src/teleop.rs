@@ -190,8 +190,9 @@ fn teleop_demonstration(task: TaskKind, seed: u64, dt: f64) -> Result<TeleopDemo
     let v_max = robot.limits().v_max().to_vec();
     let mut nominal = nominal_rate(&path);
     for _ in 0..ATTEMPTS {
-        let demo = time_path(&robot, &sc, &v, &path, &segment, nominal, dt, task, seed);
-        if within_operated_limits(&demo.q, dt, &v_max, &a_max) {
+        let (demo, finished) = time_path(&robot, &sc, &v, &path, &segment, nominal, dt, task, seed);
+        // A walk cut off by its sample cap is recorded again (slower), never returned short.
+        if finished && within_operated_limits(&demo.q, dt, &v_max, &a_max) {
             let goals = sc.goals.len();
             let reached = demo.stage.last().copied().unwrap_or(0);
             if reached < goals {
@@ -237,6 +238,7 @@ fn at(path: &[Vec<f64>], s: f64) -> Vec<f64> {
 
 /// Walk the fine path in time steps of `dt`, the pace following the demonstrator's target
 /// pace (segment pace, pauses, hesitations near the person) at most [`PACE_RATE`] per second.
+/// Returns the recording and whether it reached the path's end within its sample cap.
 #[allow(clippy::too_many_arguments)]
 fn time_path(
     robot: &RobotModel,
@@ -248,7 +250,7 @@ fn time_path(
     dt: f64,
     task: TaskKind,
     seed: u64,
-) -> TeleopDemo {
+) -> (TeleopDemo, bool) {
     let last = (path.len() - 1) as f64;
     // Pauses at fractions of the path (so they happen whatever the pace).
     let mut pauses: Vec<(f64, f64)> = v.pauses.iter().map(|&(f, d)| (f * last, d)).collect();
@@ -276,6 +278,7 @@ fn time_path(
             .count(),
     };
     let mut stage = 0;
+    let mut finished = false;
     // Hard cap: the slowest walk (every pause, hesitation all the way) well within it.
     let max_samples = ((last / (nominal * 0.05) + 60.0) / dt) as usize;
     for _ in 0..max_samples {
@@ -302,6 +305,7 @@ fn time_path(
         demo.person_distance.push(d);
         demo.pace.push(pace);
         if s >= last {
+            finished = true;
             break;
         }
         // The demonstrator's target pace now.
@@ -336,7 +340,7 @@ fn time_path(
     }
     demo.pauses = n_pauses;
     demo.hesitations = hesitations;
-    demo
+    (demo, finished)
 }
 
 /// Whether the joint path `q` (one sample per `dt` s) stays within the joint speeds `v_max`
@@ -401,6 +405,9 @@ pub enum ReplayError {
     /// An event with a non-finite or negative time, a hold ≤ 0, or a pace outside (0, 1).
     #[error("events[{0}]: times must be finite and ≥ 0, a hold > 0, a pace in (0, 1), from < to")]
     Event(usize),
+    /// The replay did not reach the recording's end within its step cap (paces too slow).
+    #[error("the replay does not reach the recording's end within 4× its duration plus the holds")]
+    Unfinished,
     /// The replay stayed beyond the operated limits with the gentlest ramps tried.
     #[error("the replay exceeds the operated limits even with the gentlest ramps")]
     Limits,
@@ -449,8 +456,13 @@ pub fn paced_replay(
         }
     }
     let (mut acc, mut jerk) = REPLAY_RAMPS;
+    let last = (q.len() - 1) as f64;
     for _ in 0..8 {
         let r = replay_with(q, dt, events, acc, jerk);
+        // Slower ramps only take longer: a replay its step cap cut short stays short.
+        if r.source.last().is_none_or(|s| *s < last) {
+            return Err(ReplayError::Unfinished);
+        }
         if within_operated_limits(&r.q, dt, v_max, a_max) {
             return Ok(r);
         }
@@ -654,6 +666,16 @@ mod tests {
         }
         // Without events: the recording itself (pace 1 from rest).
         let same = paced_replay(&d.q, d.dt, &[], &v_max, &a_max).unwrap();
+        // A pace so slow the replay cannot end within its cap is refused, not cut short.
+        let crawl = [PaceEvent::Slow {
+            from: 0.0,
+            to: end,
+            pace: 1e-3,
+        }];
+        assert_eq!(
+            paced_replay(&d.q, d.dt, &crawl, &v_max, &a_max).unwrap_err(),
+            ReplayError::Unfinished
+        );
         assert!(same.q.len() >= d.q.len());
         assert_eq!(
             paced_replay(

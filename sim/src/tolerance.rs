@@ -12,7 +12,7 @@
 //! people, but the policy does not observe it (its observations are those of the undisturbed
 //! scene), so what changes for the policy is only the timing of its own motion.
 
-use crate::eval::{EvalError, Rollout, Scene, Variant, run_rollout_in};
+use crate::eval::{EvalError, Rollout, Scene, Variant, run_rollout_in, wilson95};
 use crate::humans::{FLOOR_Z, HumanScript, ease, lerp, standing_on};
 use crate::policy::TaskPolicy;
 use crate::task::{TaskKind, tool_point};
@@ -137,6 +137,7 @@ pub fn tolerance(
             variant,
             seed,
             Scene::of(true),
+            None,
             RECORD,
             policy.as_deref_mut(),
         )?;
@@ -168,6 +169,7 @@ pub fn tolerance(
                         with_human: true,
                         extra_people: vec![Box::new(intruder)],
                     },
+                    None,
                     RECORD,
                     policy.as_deref_mut(),
                 )?;
@@ -178,6 +180,79 @@ pub fn tolerance(
         }
     }
     Ok(out)
+}
+
+/// The tolerance runs per hold time: the first row the undisturbed rollouts (hold 0, one per
+/// seed), then one per hold of `holds`, in order.
+#[derive(Debug, Clone, Serialize)]
+pub struct ToleranceRow {
+    /// How long (s) the hand was held (0: undisturbed).
+    #[serde(rename = "hold_s")]
+    pub hold: f64,
+    /// Rollouts in the row.
+    pub rollouts: usize,
+    /// Fraction that succeeded.
+    pub success: f64,
+    /// Its 95 % Wilson interval.
+    #[serde(rename = "success_wilson95")]
+    pub success_ci95: [f64; 2],
+    /// Mean time (s) at rest while the hand was there.
+    #[serde(rename = "mean_stopped_s")]
+    pub mean_stopped: f64,
+    /// Mean extra duration (s) over the pairs that succeeded both ways (a failure runs to the
+    /// time limit, so its duration says nothing about the delay); 0 without such pairs.
+    #[serde(rename = "mean_extra_duration_s")]
+    pub mean_extra_duration: f64,
+    /// How many pairs that mean is over.
+    pub extra_duration_pairs: usize,
+}
+
+/// [`ToleranceRow`]s of `runs` (from [`tolerance`] with these `holds`).
+pub fn rows(runs: &[ToleranceRun], holds: &[f64]) -> Vec<ToleranceRow> {
+    let mean = |v: &[f64]| {
+        if v.is_empty() {
+            0.0
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    let mut seen: Vec<(u64, bool)> = Vec::new();
+    for r in runs {
+        if !seen.iter().any(|(s, _)| *s == r.seed) {
+            seen.push((r.seed, r.baseline_success));
+        }
+    }
+    let k = seen.iter().filter(|(_, ok)| *ok).count();
+    let frac = |k: usize, n: usize| if n == 0 { 0.0 } else { k as f64 / n as f64 };
+    let mut out = vec![ToleranceRow {
+        hold: 0.0,
+        rollouts: seen.len(),
+        success: frac(k, seen.len()),
+        success_ci95: wilson95(frac(k, seen.len()), seen.len()),
+        mean_stopped: 0.0,
+        mean_extra_duration: 0.0,
+        extra_duration_pairs: k,
+    }];
+    for &h in holds {
+        let rs: Vec<&ToleranceRun> = runs.iter().filter(|r| r.hold == h).collect();
+        let ok = rs.iter().filter(|r| r.success).count();
+        let extra: Vec<f64> = rs
+            .iter()
+            .filter(|r| r.success && r.baseline_success)
+            .map(|r| r.duration - r.baseline_duration)
+            .collect();
+        let stopped: Vec<f64> = rs.iter().map(|r| r.stopped).collect();
+        out.push(ToleranceRow {
+            hold: h,
+            rollouts: rs.len(),
+            success: frac(ok, rs.len()),
+            success_ci95: wilson95(frac(ok, rs.len()), rs.len()),
+            mean_stopped: mean(&stopped),
+            mean_extra_duration: mean(&extra),
+            extra_duration_pairs: extra.len(),
+        });
+    }
+    out
 }
 
 fn summarize(
@@ -253,6 +328,42 @@ mod tests {
         // The nearest-neighbour policy sees only the joint angles: being stopped keeps it on
         // its path, and it finishes.
         assert!(runs.iter().all(|r| r.success));
+    }
+
+    #[test]
+    fn rows_count_each_seed_once_and_average_only_pairs_that_succeeded() {
+        let run = |seed, hold, base_ok, ok, dur| ToleranceRun {
+            seed,
+            at: 0.5,
+            hold,
+            baseline_success: base_ok,
+            baseline_duration: 10.0,
+            success: ok,
+            duration: dur,
+            stopped: hold,
+            slowed: 0.0,
+            max_deviation: 0.0,
+            violation_fraction: 0.0,
+        };
+        let runs = [
+            run(1, 1.0, true, true, 12.0),
+            run(1, 2.0, true, false, 20.0),
+            run(2, 1.0, false, true, 14.0),
+            run(2, 2.0, false, false, 20.0),
+        ];
+        let r = rows(&runs, &[1.0, 2.0]);
+        assert_eq!(r.len(), 3);
+        assert_eq!((r[0].rollouts, r[0].success), (2, 0.5));
+        assert_eq!(r[0].success_ci95, wilson95(0.5, 2));
+        assert_eq!((r[1].rollouts, r[1].success), (2, 1.0));
+        // Only seed 1 succeeded both ways at hold 1: +2 s; seed 2's baseline failed.
+        assert_eq!(
+            (r[1].mean_extra_duration, r[1].extra_duration_pairs),
+            (2.0, 1)
+        );
+        assert_eq!((r[2].success, r[2].extra_duration_pairs), (0.0, 0));
+        assert_eq!(r[2].mean_extra_duration, 0.0);
+        assert_eq!(r[2].mean_stopped, 2.0);
     }
 
     #[test]

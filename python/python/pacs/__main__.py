@@ -56,7 +56,12 @@ def main(argv=None) -> int:
     if os.path.isdir(policy):
         from .lerobot import SimulationPolicy
 
-        policy = SimulationPolicy.from_pretrained(policy)
+        try:
+            policy = SimulationPolicy.from_pretrained(policy)
+        except ImportError as e:
+            print(f"python -m pacs tolerance: --policy {args.policy}: a LeRobot policy directory "
+                  f"needs lerobot (pip install 'lerobot>=0.6'): {e}", file=sys.stderr)
+            return 1
     try:
         os.makedirs(args.out, exist_ok=True)
         result = tolerance(policy, args.task, holds=args.holds, at=args.at,

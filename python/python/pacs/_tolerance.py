@@ -11,17 +11,7 @@ from typing import Any, Sequence
 from . import _pacs
 from .errors import ArgumentTypeError, InputError
 
-__all__ = ["tolerance", "tolerance_svg", "wilson_interval"]
-
-
-def wilson_interval(k: int, n: int, z: float = 1.96) -> list[float]:
-    """The Wilson score interval (95 % for z = 1.96) of k successes in n trials."""
-    if n == 0:
-        return [0.0, 1.0]
-    p = k / n
-    c = (p + z * z / (2 * n)) / (1 + z * z / n)
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return [max(0.0, c - h), min(1.0, c + h)]
+__all__ = ["tolerance", "tolerance_svg"]
 
 
 def _floats(x: Any, name: str) -> list[float]:
@@ -63,8 +53,9 @@ def tolerance(
     success and duration, the time the robot stood still and moved slowly while the hand was
     there, deviation, ground-truth violation fraction), and per hold the success rate with a
     95 % Wilson interval, next to the undisturbed rollouts', the mean time at rest and the mean
-    extra duration over the rollouts that succeeded both ways (``extra_duration_pairs`` of them). ``plot``: also write a one-page
-    SVG of it there. ``progress``: called as ``progress(done, total)`` after each rollout.
+    extra duration over the rollouts that succeeded both ways (``extra_duration_pairs`` of
+    them; ``pacs_sim::tolerance::rows``). ``plot``: also write a one-page SVG of it there.
+    ``progress``: called as ``progress(done, total)`` after each rollout.
     """
     from .fleet import _seed_list
 
@@ -73,28 +64,8 @@ def tolerance(
     holds_f, at_f = _floats(holds, "holds"), _floats(at, "at")
     if not isinstance(task, str):
         raise ArgumentTypeError(f"task: expected a task name, got {task!r}")
-    runs = _pacs._tolerance(policy, task, method, seeds, at_f, holds_f, progress)
-    base = {r["seed"]: r["baseline_success"] for r in runs}
-    n_base = len(base)
-    k_base = sum(base.values())
-    rows = [{
-        "hold_s": 0.0, "rollouts": n_base, "success": k_base / n_base,
-        "success_wilson95": wilson_interval(k_base, n_base), "mean_stopped_s": 0.0,
-        "mean_extra_duration_s": 0.0, "extra_duration_pairs": k_base,
-    }]
-    for h in holds_f:
-        rs = [r for r in runs if r["hold"] == h]
-        both = [r for r in rs if r["success"] and r["baseline_success"]]
-        k = sum(r["success"] for r in rs)
-        rows.append({
-            "hold_s": h, "rollouts": len(rs), "success": k / len(rs),
-            "success_wilson95": wilson_interval(k, len(rs)),
-            "mean_stopped_s": sum(r["stopped"] for r in rs) / len(rs),
-            # Over the pairs that succeeded both ways (a failure runs to the time limit).
-            "mean_extra_duration_s": sum(r["duration"] - r["baseline_duration"] for r in both)
-            / max(len(both), 1),
-            "extra_duration_pairs": len(both),
-        })
+    res = _pacs._tolerance(policy, task, method, seeds, at_f, holds_f, progress)
+    runs, rows = res["runs"], res["rows"]
     name = policy if isinstance(policy, str) else type(policy).__name__
     out = {"task": task, "policy": name, "method": method, "seeds": seeds, "at": at_f,
            "runs": runs, "rows": rows}

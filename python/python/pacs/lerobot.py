@@ -89,10 +89,8 @@ def _populate_queues(queues: Any, batch: Mapping[str, Any]) -> None:
         q = queues[key]
         if q.maxlen is None:
             raise InputError(f"policy._queues[{key!r}]: an observation queue without a length")
-        if len(q) != q.maxlen:
-            while len(q) != q.maxlen:
-                q.append(value)
-        else:
+        q.append(value)
+        while len(q) < q.maxlen:  # just reset: the first observation fills the history
             q.append(value)
 
 
@@ -290,6 +288,11 @@ class ShieldedPolicyLoop:
             batch = self.history.feed(batch)
         return batch
 
+    def _keeps_history(self) -> bool:
+        """Whether the policy has observation queues to feed every tick (else its input is
+        prepared only when a chunk is asked for)."""
+        return self.history is not None and self.history.queues() is not None
+
     def _policy_chunk(self, batch: Any) -> np.ndarray:
         post = self.postprocess if self.postprocess is not None else (lambda x: x)
         if hasattr(self.policy, "predict_action_chunk"):
@@ -351,9 +354,9 @@ class ShieldedPolicyLoop:
             if m is not None:
                 t_meas, positions = m
                 self.loop.measure(t_meas, positions)
-        batch = self._policy_batch(obs)
+        batch = self._policy_batch(obs) if self._keeps_history() else None
         if self._needs_chunk():
-            a = self._policy_chunk(batch)
+            a = self._policy_chunk(batch if batch is not None else self._policy_batch(obs))
             joints = a[:, self.action_indices] * self.scale
             h = self.n_action_steps if self.n_action_steps is not None else len(joints)
             h = min(h, len(joints))
