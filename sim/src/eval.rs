@@ -195,7 +195,7 @@ pub fn run_rollout(
     log: Option<&Path>,
     record_every: usize,
 ) -> Result<Rollout, EvalError> {
-    rollout_of(
+    run_rollout_in(
         task,
         v,
         seed,
@@ -228,7 +228,7 @@ impl Scene {
 
 /// Run one rollout in `scene` (the task's, with further people if any) of `policy`, a policy
 /// the caller supplies (its rows and rollouts then say [`PolicyKind::External`]; `v.policy` is
-/// ignored), or of `v.policy` when None. The filter, the scoring and the log are those of
+/// ignored), or of `v.policy` when `external` is None. The filter, the scoring and the log are those of
 /// [`run_rollout`]; a caller's policy's deviation is measured against the task's built-in
 /// demonstrations (its `TaskPolicy::deviation`).
 #[allow(clippy::too_many_arguments)]
@@ -239,27 +239,15 @@ pub fn run_rollout_in(
     scene: Scene,
     log: Option<&Path>,
     record_every: usize,
-    policy: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
+    external: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
 ) -> Result<Rollout, EvalError> {
-    let v = match policy {
+    let v = &match external {
         Some(_) => Variant {
             policy: PolicyKind::External,
             ..v.clone()
         },
         None => v.clone(),
     };
-    rollout_of(task, &v, seed, scene, log, record_every, policy)
-}
-
-fn rollout_of(
-    task: TaskKind,
-    v: &Variant,
-    seed: u64,
-    scene: Scene,
-    log: Option<&Path>,
-    record_every: usize,
-    external: Option<&mut (dyn crate::policy::TaskPolicy + '_)>,
-) -> Result<Rollout, EvalError> {
     let err = |source: crate::SimError| EvalError::Episode {
         task: task.name(),
         method: v.label.clone(),
