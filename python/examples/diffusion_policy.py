@@ -7,9 +7,14 @@ single-action and CBF, scored against the true people and objects (every PACS lo
     # the same with two paced (paused / slowed) replays per demonstration added
     python python/examples/diffusion_policy.py train --task sorting --replays 2 \
         --out policies/sorting-paced
-    # 2. rollouts of the trained policy (10 seeds per method; --client for a Dask scheduler)
+    # 2. rollouts of the trained policy (10 seeds per method; --client for a Dask scheduler):
+    #    summary.json, summary.svg (success per method, 95 % Wilson intervals), the logs
     python python/examples/diffusion_policy.py evaluate --policy policies/sorting/model \\
         --task sorting --rollouts 10 --out policies/sorting/eval
+    # 3. two evaluations compared method by method: each success with its Wilson interval and
+    #    their difference with Newcombe's 95 % interval (it excludes 0: the result changed)
+    python python/examples/diffusion_policy.py compare policies/sorting/eval \\
+        policies/sorting-paced/eval --out policies/compare
 
 Needs lerobot 0.6 (``pip install 'lerobot[diffusion]>=0.6,<0.7'``, Python >= 3.12; it pulls
 torch) and pacs. Nothing is downloaded: the weights are trained here from the simulation's
@@ -196,8 +201,151 @@ def evaluate(args):
     summary = {"task": args.task, "policy": args.policy, "seconds": round(time.time() - t0, 1),
                "rows": rows}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out / "summary.svg").write_text(summary_svg([summary], [args.policy]))
     (out / "rollouts.json").write_text(json.dumps(result["rollouts"], indent=1, default=str))
     print(json.dumps(summary, indent=2))
+
+
+# The paper's Table I (robomimic, 100 rollouts per cell, the average over Lift, Can and Square):
+# the reference points drawn in summary.svg.
+PAPER_AVERAGE = {"off": 0.70, "pacs": 0.69, "pacs-pfl": 0.72, "single-action": 0.41,
+                 "single-action-pfl": 0.44, "cbf": 0.04}
+
+
+def wilson95(successes, n):
+    """The 95 % Wilson score interval of `successes` out of `n` (z = 1.959964)."""
+    if n == 0:
+        return (0.0, 1.0)
+    z = 1.959963984540054
+    p = successes / n
+    d = 1 + z * z / n
+    c = (p + z * z / (2 * n)) / d
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return (max(0.0, c - h), min(1.0, c + h))
+
+
+def newcombe95(s1, n1, s2, n2):
+    """Newcombe's hybrid score interval (his method 10, 1998) for p1 - p2 of two independent
+    proportions, from each one's Wilson interval: (difference, lower, upper)."""
+    p1, p2 = s1 / n1, s2 / n2
+    (l1, u1), (l2, u2) = wilson95(s1, n1), wilson95(s2, n2)
+    d = p1 - p2
+    return (d, d - math.sqrt((p1 - l1) ** 2 + (u2 - p2) ** 2),
+            d + math.sqrt((u1 - p1) ** 2 + (p2 - l2) ** 2))
+
+
+def successes(row):
+    """The count of successful rollouts of an evaluation row."""
+    return int(round(row["success"] * row["rollouts"]))
+
+
+def summary_svg(summaries, labels):
+    """One page: success per method (points with 95 % Wilson intervals) for each evaluation in
+    `summaries` (their `rows`), the paper's averages as grey ticks."""
+    import html
+
+    methods = []
+    for s in summaries:
+        for r in s["rows"]:
+            if r["method"] not in methods:
+                methods.append(r["method"])
+    order = ["off", "pacs", "pacs-pfl", "single-action", "single-action-pfl", "cbf"]
+    methods.sort(key=lambda m: (order.index(m) if m in order else len(order), m))
+    w, h, left, top, ph = 760, 470, 80, 80, 300
+    pw = w - left - 40
+    colours = ["#1f5fa8", "#b5462b", "#2b8a3e", "#7048a8"]
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
+             f'viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="13">',
+             '<rect width="100%" height="100%" fill="white"/>',
+             f'<text x="{w / 2}" y="30" text-anchor="middle" font-size="18">Task success per '
+             f'method: {html.escape(summaries[0]["task"])}</text>',
+             f'<text x="{w / 2}" y="52" text-anchor="middle">points: success rate; bars: 95 % '
+             f'Wilson interval; grey ticks: the paper\'s robomimic average</text>']
+    bottom = top + ph
+    for i in range(6):
+        y = bottom - ph * i / 5
+        parts.append(f'<line x1="{left}" y1="{y}" x2="{left + pw}" y2="{y}" stroke="#ddd"/>')
+        parts.append(f'<text x="{left - 8}" y="{y + 4}" text-anchor="end">{i / 5:.1f}</text>')
+    parts.append(f'<text transform="translate({left - 50},{top + ph / 2}) rotate(-90)" '
+                 f'text-anchor="middle">success</text>')
+    slot = pw / max(len(methods), 1)
+    for m_i, m in enumerate(methods):
+        cx = left + slot * (m_i + 0.5)
+        parts.append(f'<text x="{cx}" y="{bottom + 20}" text-anchor="middle">'
+                     f'{html.escape(m)}</text>')
+        if m in PAPER_AVERAGE:
+            y = bottom - ph * PAPER_AVERAGE[m]
+            parts.append(f'<line x1="{cx - slot * 0.4}" y1="{y}" x2="{cx + slot * 0.4}" '
+                         f'y2="{y}" stroke="#999" stroke-width="3"/>')
+        for k, s in enumerate(summaries):
+            row = next((r for r in s["rows"] if r["method"] == m), None)
+            if row is None:
+                continue
+            x = cx + (k - (len(summaries) - 1) / 2) * 18
+            lo, hi = row["success_wilson95"]
+            c = colours[k % len(colours)]
+            parts.append(f'<line x1="{x}" y1="{bottom - ph * lo}" x2="{x}" '
+                         f'y2="{bottom - ph * hi}" stroke="{c}" stroke-width="2"/>')
+            parts.append(f'<circle cx="{x}" cy="{bottom - ph * row["success"]}" r="5" '
+                         f'fill="{c}"/>')
+    for k, (s, label) in enumerate(zip(summaries, labels)):
+        n = {r["rollouts"] for r in s["rows"]}
+        parts.append(f'<text x="{left}" y="{bottom + 50 + 18 * k}" '
+                     f'fill="{colours[k % len(colours)]}">● {html.escape(label)} '
+                     f'({"/".join(str(x) for x in sorted(n))} rollouts per method)</text>')
+    parts.append("</svg>")
+    return "\n".join(parts)
+
+
+def compare(args):
+    """Compare evaluations (each a directory or summary.json `evaluate` wrote) with the first."""
+    paths = [pathlib.Path(p) for p in args.evaluations]
+    paths = [p / "summary.json" if p.is_dir() else p for p in paths]
+    summaries = []
+    for p in paths:
+        if not p.exists():
+            raise SystemExit(f"compare: {p}: no such file (run `evaluate --out DIR` first)")
+        summaries.append(json.loads(p.read_text()))
+    labels = [str(p.parent) for p in paths]
+    base = summaries[0]
+    lines = ["| method | " + " | ".join(f"{html_free(l)} success [95 % Wilson]" for l in labels)
+             + " | " + " | ".join(f"difference {i + 1} − 1 [Newcombe 95 %]"
+                                  for i in range(1, len(labels))) + " |",
+             "|---" * (2 * len(labels)) + "|"]
+    result = []
+    for row in base["rows"]:
+        m = row["method"]
+        cells, diffs = [], []
+        for s in summaries:
+            r = next((x for x in s["rows"] if x["method"] == m), None)
+            cells.append("—" if r is None else
+                         f"{r['success']:.2f} [{r['success_wilson95'][0]:.2f}, "
+                         f"{r['success_wilson95'][1]:.2f}] (n = {r['rollouts']})")
+            if r is not None and s is not base:
+                d, lo, hi = newcombe95(successes(r), r["rollouts"], successes(row),
+                                       row["rollouts"])
+                diffs.append(f"{d:+.2f} [{lo:+.2f}, {hi:+.2f}]"
+                             + (" **changed**" if lo > 0 or hi < 0 else ""))
+                result.append({"method": m, "evaluation": labels[summaries.index(s)],
+                               "difference": d, "newcombe95": [lo, hi],
+                               "changed": lo > 0 or hi < 0})
+            elif s is not base:
+                diffs.append("—")
+        lines.append(f"| {m} | " + " | ".join(cells) + " | " + " | ".join(diffs) + " |")
+    table = "\n".join(lines)
+    print(table)
+    if args.out:
+        out = pathlib.Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "compare.md").write_text(table + "\n")
+        (out / "compare.json").write_text(json.dumps(
+            {"evaluations": labels, "differences": result}, indent=2))
+        (out / "compare.svg").write_text(summary_svg(summaries, labels))
+
+
+def html_free(text):
+    """A table cell's text without Markdown's column separator."""
+    return text.replace("|", "/")
 
 
 def main():
@@ -230,8 +378,14 @@ def main():
     e.add_argument("--seed", type=int, default=1)
     e.add_argument("--client", default=None, help="a Dask scheduler address (default: here)")
     e.add_argument("--out", required=True)
+    c = sub.add_parser("compare", help="evaluations compared method by method (Newcombe 95 %% "
+                                         "intervals of the differences in success)")
+    c.add_argument("evaluations", nargs="+",
+                   help="directories (or summary.json files) `evaluate` wrote; the first is "
+                        "the reference")
+    c.add_argument("--out", default=None, help="directory: compare.md, compare.json, compare.svg")
     args = ap.parse_args()
-    {"train": train, "evaluate": evaluate}[args.cmd](args)
+    {"train": train, "evaluate": evaluate, "compare": compare}[args.cmd](args)
 
 
 if __name__ == "__main__":

@@ -254,3 +254,51 @@ def test_bad_arguments_of_the_learning_tools_are_named():
     for call, kind, message in cases:
         with pytest.raises(kind, match=message):
             call()
+
+
+def test_the_example_compares_evaluations_with_newcombe_intervals(tmp_path):
+    """`diffusion_policy.py compare`: each method's success with its Wilson interval and the
+    difference's Newcombe interval (method 10), checked against Newcombe (1998)'s own examples:
+    56/70 vs 48/80 → [0.0524, 0.3339], 9/10 vs 3/10 → [0.1705, 0.8090], 5/56 vs 0/29 →
+    [−0.0381, 0.1926]."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "diffusion_policy.py"
+
+    def summary(rows):
+        return {"task": "sorting", "policy": "p", "rows": [
+            {"method": m, "rollouts": n, "success": k / n,
+             "success_wilson95": list(pacs_wilson(k, n))} for m, k, n in rows]}
+
+    def pacs_wilson(k, n):
+        z = 1.959963984540054
+        p = k / n
+        d = 1 + z * z / n
+        c = (p + z * z / (2 * n)) / d
+        h = z * (p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5 / d
+        return max(0.0, c - h), min(1.0, c + h)
+
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    (a / "summary.json").write_text(json.dumps(summary(
+        [("off", 48, 80), ("pacs", 3, 10), ("cbf", 0, 29)])))
+    (b / "summary.json").write_text(json.dumps(summary(
+        [("off", 56, 70), ("pacs", 9, 10), ("cbf", 5, 56)])))
+    p = subprocess.run([sys.executable, str(script), "compare", str(a), str(b), "--out",
+                        str(tmp_path / "cmp")], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr[-2000:]
+    out = json.loads((tmp_path / "cmp" / "compare.json").read_text())
+    got = {d["method"]: d for d in out["differences"]}
+    for m, lo, hi, changed in [("off", 0.0524, 0.3339, True), ("pacs", 0.1705, 0.8090, True),
+                               ("cbf", -0.0381, 0.1926, False)]:
+        assert got[m]["newcombe95"] == pytest.approx([lo, hi], abs=5e-5), m
+        assert got[m]["changed"] is changed
+    assert "**changed**" in p.stdout and "0.80 [0.69, 0.88] (n = 70)" in p.stdout
+    svg = (tmp_path / "cmp" / "compare.svg").read_text()
+    assert svg.startswith("<svg") and svg.count("<circle") == 6
+    p = subprocess.run([sys.executable, str(script), "compare", str(tmp_path / "nowhere")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode != 0 and "no such file" in p.stderr
