@@ -7,7 +7,8 @@ single-action and CBF, scored against the true people and objects (every PACS lo
     # the same with two paced (paused / slowed) replays per demonstration added
     python python/examples/diffusion_policy.py train --task sorting --replays 2 \
         --out policies/sorting-paced
-    # 2. rollouts of the trained policy (10 seeds per method; --client for a Dask scheduler):
+    # 2. rollouts of the trained policy (10 seeds per method; --workers N for N local processes,
+    #    --client for a Dask scheduler):
     #    summary.json, summary.svg (success per method, 95 % Wilson intervals), the logs
     python python/examples/diffusion_policy.py evaluate --policy policies/sorting/model \\
         --task sorting --rollouts 10 --out policies/sorting/eval
@@ -171,11 +172,18 @@ def evaluate(args):
     policy = SimulationPolicy.from_pretrained(args.policy)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    client = None
+    client = cluster = None
     if args.client:
         from dask.distributed import Client
 
         client = Client(args.client)
+    elif args.workers > 1:
+        # A Dask cluster on this machine: one process per worker, one thread each (the policy
+        # runs one torch thread per call, so a rollout is the same on any worker).
+        from dask.distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True)
+        client = Client(cluster)
     t0 = time.time()
     def progress(done, total):
         print(f"\r{done}/{total} rollouts ({time.time() - t0:.0f} s)", end="", flush=True)
@@ -184,6 +192,9 @@ def evaluate(args):
                            policy=policy, client=client, log_dir=out / "logs",
                            progress=None if client else progress)
     print()
+    if cluster is not None:
+        client.close()
+        cluster.close()
     # The evaluation's own rows (success with its 95 % Wilson interval, durations, ...), with
     # the rollouts that truly violated and the audit of every PACS log added.
     rows = []
@@ -234,6 +245,12 @@ def newcombe95(s1, n1, s2, n2):
             d + math.sqrt((u1 - p1) ** 2 + (p2 - l2) ** 2))
 
 
+def interval(row):
+    """A row's 95 % Wilson interval of success (`success_ci95`, as `pacs.simulate` writes it;
+    `success_wilson95` in summaries of earlier versions)."""
+    return row["success_ci95"] if "success_ci95" in row else row["success_wilson95"]
+
+
 def successes(row):
     """The count of successful rollouts of an evaluation row."""
     return int(round(row["success"] * row["rollouts"]))
@@ -282,7 +299,7 @@ def summary_svg(summaries, labels):
             if row is None:
                 continue
             x = cx + (k - (len(summaries) - 1) / 2) * 18
-            lo, hi = row["success_wilson95"]
+            lo, hi = interval(row)
             c = colours[k % len(colours)]
             parts.append(f'<line x1="{x}" y1="{bottom - ph * lo}" x2="{x}" '
                          f'y2="{bottom - ph * hi}" stroke="{c}" stroke-width="2"/>')
@@ -319,8 +336,8 @@ def compare(args):
         for s in summaries:
             r = next((x for x in s["rows"] if x["method"] == m), None)
             cells.append("—" if r is None else
-                         f"{r['success']:.2f} [{r['success_wilson95'][0]:.2f}, "
-                         f"{r['success_wilson95'][1]:.2f}] (n = {r['rollouts']})")
+                         f"{r['success']:.2f} [{interval(r)[0]:.2f}, "
+                         f"{interval(r)[1]:.2f}] (n = {r['rollouts']})")
             if r is not None and s is not base:
                 d, lo, hi = newcombe95(successes(r), r["rollouts"], successes(row),
                                        row["rollouts"])
@@ -377,6 +394,9 @@ def main():
     e.add_argument("--rollouts", type=int, default=10)
     e.add_argument("--seed", type=int, default=1)
     e.add_argument("--client", default=None, help="a Dask scheduler address (default: here)")
+    e.add_argument("--workers", type=int, default=1,
+                   help="without --client: rollouts in parallel on a Dask cluster of this many "
+                        "local processes (default 1: in this process)")
     e.add_argument("--out", required=True)
     c = sub.add_parser("compare", help="evaluations compared method by method (Newcombe 95 %% "
                                          "intervals of the differences in success)")

@@ -231,6 +231,8 @@ def test_the_diffusion_policy_example_runs_verbatim(tmp_path):
     (row,) = summary["rows"]
     assert row["method"] == "pacs" and row["rollouts"] == 1
     assert sum(row["audit_verdicts"].values()) == 1
+    svg = (out / "eval" / "summary.svg").read_text()
+    assert svg.startswith("<svg") and svg.count("<circle") == 1
 
 
 def test_bad_arguments_of_the_learning_tools_are_named():
@@ -270,7 +272,7 @@ def test_the_example_compares_evaluations_with_newcombe_intervals(tmp_path):
     def summary(rows):
         return {"task": "sorting", "policy": "p", "rows": [
             {"method": m, "rollouts": n, "success": k / n,
-             "success_wilson95": list(pacs_wilson(k, n))} for m, k, n in rows]}
+             "success_ci95": list(pacs_wilson(k, n))} for m, k, n in rows]}
 
     def pacs_wilson(k, n):
         z = 1.959963984540054
