@@ -186,6 +186,83 @@ def test_a_select_action_policy_becomes_one_action_chunks(demo):
     assert robot.q["joint1.pos"] > demo.start[0]
 
 
+def test_chunk_array_reads_batch_major_and_time_major_chunks():
+    """(1, H, A) as most LeRobot policies return a chunk, (H, 1, A) as TD-MPC's planner does:
+    both are the same (H, A) chunk; anything else for one observation is refused."""
+    from pacs.lerobot import chunk_array
+
+    c = np.arange(5 * 7, dtype=float).reshape(5, 7)
+    assert np.array_equal(chunk_array(c[None]), c)
+    assert np.array_equal(chunk_array(c[:, None, :]), c)
+    assert np.array_equal(chunk_array(c), c)
+    assert np.array_equal(chunk_array(c[:1][None]), c[:1])
+    for bad in (np.zeros((2, 5, 7)), np.zeros(7), np.zeros((1, 1, 5, 7))):
+        with pytest.raises(pacs.InputError, match="action chunk of shape"):
+            chunk_array(bad)
+
+
+def test_a_time_major_chunk_is_executed_whole(demo):
+    """A policy returning (H, 1, A) chunks (TD-MPC's layout): every action of the chunk is
+    kept, not only the first (each chunk stored with H rows, and the robot follows them)."""
+
+    class TimeMajorPolicy:
+        def __init__(self):
+            self.calls = 0
+
+        def predict_action_chunk(self, batch):
+            self.calls += 1
+            return np.full((5, 1, 7), 0.004)  # (H, B, A): five deltas of 4 mrad
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    policy = TimeMajorPolicy()
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS, action_kind="delta", n_action_steps=5,
+                            fps=30.0, humans=lambda t: (t, person)) as loop:
+        loop.run(1.0)
+    assert loop.chunks and all(c.shape == (5, 7) for c in loop.chunks.values())
+    # Five actions per chunk: about one chunk per 5/30 s (not one per tick).
+    assert policy.calls <= 8
+    assert robot.q["joint1.pos"] > demo.start[0] + 0.01
+
+
+def test_a_policy_without_chunks_falls_back_to_select_action(demo):
+    """A LeRobot-shaped policy that inherits predict_action_chunk but raises
+    NotImplementedError (as GaussianActor does) is driven by select_action, on a fresh episode
+    (reset), one action per chunk; its own select_action keeps its history (not fed twice)."""
+
+    class SingleOnly:
+        def __init__(self):
+            self.resets = 0
+            self._queues = {"observation.state": deque(maxlen=1)}
+
+        def reset(self):
+            self.resets += 1
+            self._queues["observation.state"].clear()
+
+        def predict_action_chunk(self, batch):
+            raise NotImplementedError("this policy does not support action chunking")
+
+        def select_action(self, batch):
+            self._queues["observation.state"].append(batch["joint1.pos"])
+            q = np.array([batch[k] for k in KEYS])
+            return (q + 0.01)[None]
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    policy = SingleOnly()
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS,
+                            humans=lambda t: (t, person)) as loop:
+        loop.run(0.5)
+        assert loop.history is None and not loop.chunking
+    assert policy.resets == 2  # the new episode, then the switch to select_action
+    assert all(c.shape == (1, 7) for c in loop.chunks.values())
+    assert robot.q["joint1.pos"] > demo.start[0]
+
+
 def test_rejected_chunks_are_recorded_and_the_loop_goes_on(demo):
     class WildPolicy:
         def __init__(self):
@@ -404,3 +481,55 @@ def test_a_real_diffusion_policy_through_the_shield(demo):
     assert np.linalg.norm(q - demo.start) > 1e-4
     sent = np.array([[a[k] for k in KEYS] for a in robot.sent])
     assert np.max(np.abs(np.diff(sent, axis=0))) <= 2.62 / 30 + 1e-9
+
+
+@pytest.mark.skipif(os.environ.get("PACS_TEST_LEROBOT") != "1",
+                    reason="PACS_TEST_LEROBOT=1 tests against the installed lerobot (pulls torch)")
+def test_a_real_tdmpc_policy_keeps_its_whole_chunk(demo):
+    """LeRobot's TDMPCPolicy (tiny, random weights, horizon 5 = n_action_steps): its planner
+    returns time-major (horizon, B, A) chunks; the loop keeps all five actions of each (it kept
+    only the first before), with its observation history filled."""
+    torch = pytest.importorskip("torch")
+    tdmpc = pytest.importorskip("lerobot.policies.tdmpc.modeling_tdmpc")
+    from lerobot.configs.types import FeatureType, PolicyFeature
+    from lerobot.policies.tdmpc.configuration_tdmpc import TDMPCConfig
+
+    torch.manual_seed(0)
+    cfg = TDMPCConfig(
+        input_features={
+            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
+            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
+        },
+        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+        horizon=5, n_action_steps=5, n_action_repeats=1, state_encoder_hidden_dim=32,
+        latent_dim=16, mlp_dim=32, q_ensemble_size=2, n_gaussian_samples=16, n_pi_samples=4,
+        n_elites=4, cem_iterations=2, device="cpu",
+    )
+    policy = tdmpc.TDMPCPolicy(cfg).eval()
+    shapes = []
+    plan = policy.predict_action_chunk
+
+    def spy(batch):
+        out = plan(batch)
+        shapes.append(tuple(out.shape))
+        return out
+
+    policy.predict_action_chunk = spy
+
+    def preprocess(obs):
+        q = torch.tensor([[obs[k] for k in KEYS]], dtype=torch.float32)
+        return {"observation.state": q, "observation.environment_state": torch.zeros(1, 3)}
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    with torch.no_grad(), ShieldedPolicyLoop(
+        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=5, fps=30.0,
+        preprocess=preprocess, postprocess=lambda a: 0.002 * torch.clamp(a, -1, 1),
+        humans=lambda t: (t, person),
+    ) as loop:
+        loop.run(1.0)
+    assert shapes and all(sh == (5, 1, 7) for sh in shapes)  # time-major
+    assert all(c.shape == (5, 7) for c in loop.chunks.values())
+    assert len(shapes) <= 8 and not loop.rejected

@@ -58,6 +58,7 @@ __all__ = [
     "paced_replays",
     "SimulationPolicy",
     "to_numpy",
+    "chunk_array",
 ]
 
 _UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
@@ -77,6 +78,30 @@ def to_numpy(x: Any) -> np.ndarray:
         return np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError) as e:
         raise ArgumentTypeError(f"expected an array of numbers, got {type(x).__name__}: {e}") from e
+
+
+def chunk_array(x: Any) -> np.ndarray:
+    """A policy's action chunk for one observation as an (H, A) array: (1, H, A) batch-major,
+    as most LeRobot policies return it, or (H, 1, A) time-major, as TD-MPC's planner does
+    (LeRobot's own ``select_action`` takes its actions along the first axis); (H, A) as is.
+    The adapters always pass a batch of one observation, so the batch axis is the one of
+    length 1 (a (1, 1, A) chunk is one action either way)."""
+    a = to_numpy(x)
+    if a.ndim == 3:
+        if a.shape[0] == 1:
+            a = a[0]
+        elif a.shape[1] == 1:
+            a = a[:, 0]
+        else:
+            raise InputError(
+                f"policy: action chunk of shape {a.shape} for one observation: expected "
+                "(1, H, A) or, time-major, (H, 1, A)"
+            )
+    if a.ndim != 2:
+        raise InputError(
+            f"policy: action chunk of shape {a.shape}, expected (H, A), (1, H, A) or (H, 1, A)"
+        )
+    return a
 
 
 def _populate_queues(queues: Any, batch: Mapping[str, Any]) -> None:
@@ -251,11 +276,12 @@ class ShieldedPolicyLoop:
         self.extra_keys = dict(extra_keys or {})
         if hasattr(policy, "reset"):
             policy.reset()  # a new episode: empty observation and action queues
+        # Chunks from predict_action_chunk while the policy has it (and does not raise
+        # NotImplementedError), else one action per chunk from select_action.
+        self.chunking = hasattr(policy, "predict_action_chunk")
         # A select_action-only policy keeps its own history (its select_action fills it).
         self.history = (
-            ObservationHistory(policy)
-            if history == "auto" and hasattr(policy, "predict_action_chunk")
-            else None
+            ObservationHistory(policy) if history == "auto" and self.chunking else None
         )
         self.loop = ShieldLoop(shield, realtime=realtime)
         self.loop.start()
@@ -295,17 +321,28 @@ class ShieldedPolicyLoop:
 
     def _policy_chunk(self, batch: Any) -> np.ndarray:
         post = self.postprocess if self.postprocess is not None else (lambda x: x)
-        if hasattr(self.policy, "predict_action_chunk"):
-            a = to_numpy(post(self.policy.predict_action_chunk(batch)))
-            if a.ndim == 3:
-                a = a[0]
-        else:
+        if self.chunking:
+            try:
+                raw = self.policy.predict_action_chunk(batch)
+            except NotImplementedError:
+                # A policy that inherits predict_action_chunk but acts one action at a time
+                # (LeRobot's base class raises, e.g. GaussianActor): from now on select_action,
+                # which keeps its own history, on a fresh episode.
+                self.chunking = False
+                self.history = None
+                if hasattr(self.policy, "reset"):
+                    self.policy.reset()
+                raw = None
+            if raw is not None:
+                a = chunk_array(post(raw))
+        if not self.chunking:
             a = to_numpy(post(self.policy.select_action(batch)))
             if a.ndim == 2:
                 a = a[0]
+            if a.ndim != 1:
+                raise InputError(f"policy: select_action returned shape {a.shape}, expected (A,) "
+                                 "or (1, A)")
             a = a[None, :]
-        if a.ndim != 2:
-            raise InputError(f"policy: action chunk of shape {a.shape}, expected (H, A) or (B, H, A)")
         if max(self.action_indices) >= a.shape[1]:
             raise InputError(
                 f"policy: action dimension {a.shape[1]} has no column {max(self.action_indices)}"
@@ -667,8 +704,7 @@ class SimulationPolicy:
                     a = self.postprocess(a)
         finally:
             torch.set_num_threads(before)
-        a = to_numpy(a)
-        return a[0] if a.ndim == 3 else a
+        return chunk_array(a)
 
 
 try:  # LeRobot's base class and registry, when installed.
