@@ -227,6 +227,40 @@ def test_a_time_major_chunk_is_executed_whole(demo):
     assert robot.q["joint1.pos"] > demo.start[0] + 0.01
 
 
+def test_action_only_queues_are_not_fed_every_tick(demo):
+    """A policy whose queues hold actions only (LeRobot's VLA classes) gains nothing from the
+    history: its input is prepared only when a chunk is asked for, not every tick."""
+
+    class ActionQueuePolicy:
+        def __init__(self):
+            self._queues = {"action": deque(maxlen=8)}
+            self.calls = 0
+
+        def reset(self):
+            self._queues["action"].clear()
+
+        def predict_action_chunk(self, batch):
+            self.calls += 1
+            return np.full((1, 8, 7), 0.002)
+
+    prepared = []
+
+    def preprocess(obs):
+        prepared.append(obs["joint1.pos"])
+        return obs
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    policy = ActionQueuePolicy()
+    with ShieldedPolicyLoop(policy, robot, shield, KEYS, action_kind="delta", n_action_steps=8,
+                            preprocess=preprocess, humans=lambda t: (t, person)) as loop:
+        loop.run(1.0)
+    assert policy.calls >= 2 and len(prepared) == policy.calls
+    assert len(robot.sent) >= 25  # every tick still sent a command
+
+
 def test_a_policy_without_chunks_falls_back_to_select_action(demo):
     """A LeRobot-shaped policy that inherits predict_action_chunk but raises
     NotImplementedError (as GaussianActor does) is driven by select_action, on a fresh episode

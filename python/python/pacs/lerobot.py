@@ -181,8 +181,9 @@ class ShieldedPolicyLoop:
     send the shield's command to the robot.
 
     Args:
-        policy: has ``predict_action_chunk(batch)`` (→ (B, H, A) or (H, A)) or
-            ``select_action(batch)`` (→ (B, A) or (A,)); optional ``reset()``.
+        policy: has ``predict_action_chunk(batch)`` (→ (1, H, A), time-major (H, 1, A) or
+            (H, A): :func:`chunk_array`) or ``select_action(batch)`` (→ (1, A) or (A,));
+            optional ``reset()``.
         robot: has ``get_observation() -> dict`` and ``send_action(dict) -> dict``.
         shield: a started :class:`pacs.Shield` (its time is the loop's time).
         joint_keys: the robot's joint keys in the shield's joint order (e.g.
@@ -316,8 +317,12 @@ class ShieldedPolicyLoop:
 
     def _keeps_history(self) -> bool:
         """Whether the policy has observation queues to feed every tick (else its input is
-        prepared only when a chunk is asked for)."""
-        return self.history is not None and self.history.queues() is not None
+        prepared only when a chunk is asked for: also for policies whose queues hold actions
+        only, as LeRobot's VLA classes)."""
+        if self.history is None:
+            return False
+        queues = self.history.queues()
+        return queues is not None and any(k != ObservationHistory.ACTION for k in queues)
 
     def _policy_chunk(self, batch: Any) -> np.ndarray:
         post = self.postprocess if self.postprocess is not None else (lambda x: x)
