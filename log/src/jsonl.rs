@@ -7,6 +7,7 @@ use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess,
 use std::fmt;
 use std::io::BufRead;
 
+mod decimal;
 mod fast;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -237,3 +237,48 @@ fn the_exact_fast_path_agrees_with_the_standard_parse() {
         assert_eq!(got.map(f64::to_bits), Some(want.to_bits()), "{text}");
     }
 }
+
+/// The wide-product conversion (16–19 significant digits, decimal exponents −60..60, where the
+/// exact path does not apply; plus mantissas at powers of two and halfway-looking digit
+/// patterns): every value the scanner returns is the standard library's correctly rounded
+/// parse, bit for bit. 1,000,000 literals (`PACS_JSONL_CASES` for more).
+#[test]
+fn the_wide_product_agrees_with_the_standard_parse() {
+    let cases: usize = std::env::var("PACS_JSONL_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_000_000);
+    let mut rng = Rng(0x1DE5_9A7B_0000_0004);
+    for case in 0..cases {
+        let m: u64 = match case % 5 {
+            0 => 1_000_000_000_000_000 + rng.next() % 9_000_000_000_000_000, // 16–19 digits
+            1 => rng.next() % 10_000_000_000_000_000_000,
+            2 => (1u64 << (54 + rng.below(10)))
+                .wrapping_add(rng.below(3) as u64)
+                .wrapping_sub(1),
+            3 => {
+                // A double's shortest digits, padded to 17–19 digits with 5s and 0s.
+                let x = f64::from_bits(0x3F00_0000_0000_0000 + (rng.next() >> 12));
+                let d = format!("{x:e}");
+                let (mant, _) = d.split_once('e').unwrap();
+                let mut digits: String = mant.chars().filter(char::is_ascii_digit).collect();
+                digits.push(if rng.below(2) == 0 { '5' } else { '0' });
+                while digits.len() < 17 {
+                    digits.push('0');
+                }
+                digits.truncate(19);
+                digits.parse().unwrap()
+            }
+            _ => rng.next() >> rng.below(12),
+        };
+        let e = rng.below(121) as i64 - 60;
+        let sign = if rng.below(2) == 0 { "" } else { "-" };
+        let text = format!("{sign}{m}e{e}");
+        let want: f64 = text.parse().unwrap();
+        if !want.is_finite() {
+            continue;
+        }
+        let got = pacs_log::jsonl::fast_path_value(&text);
+        assert_eq!(got.map(f64::to_bits), Some(want.to_bits()), "{text}");
+    }
+}

@@ -153,8 +153,12 @@ impl<'a> Scanner<'a> {
     ///   `|e| ≤ 22`, both `m` and `10^|e|` are doubles exactly, so the one IEEE multiplication or
     ///   division `m·10^e` rounds the exact value once, to nearest: the correctly rounded result,
     ///   the same bits as the standard library's parse;
-    /// - every other number (more significant digits, a larger mantissa or exponent) goes to the
-    ///   standard library's correctly rounded parse of its text.
+    /// - **wide product** (`decimal::to_f64`): a mantissa of at most 19 digits with a decimal
+    ///   exponent in [−54, 55] times a 128-bit power of five, rounded from both ends of its
+    ///   error bracket; taken where both ends give the same double (the correctly rounded one);
+    /// - every other number (more significant digits, a larger exponent, an undecided bracket,
+    ///   a subnormal or overflowing result) goes to the standard library's correctly rounded
+    ///   parse of its text.
     ///
     /// Both give what serde_json gives with `float_roundtrip` (tests
     /// `random_doubles_read_correctly_rounded` and
@@ -225,6 +229,12 @@ impl<'a> Scanner<'a> {
             } else {
                 mant as f64 / p
             };
+            return Ok(if neg { -x } else { x });
+        }
+        // At most 19 significant digits: one wide product, where it decides.
+        if !acc.inexact
+            && let Some(x) = super::decimal::to_f64(mant, exp)
+        {
             return Ok(if neg { -x } else { x });
         }
         // ASCII only from `start` on: the slice is on character boundaries.
