@@ -1,13 +1,17 @@
-//! Train the learned policies of every task (`pacs simulate --policy kernel` and
-//! `kernel-paced`) and print their cross-validation:
+//! Train the learned policies of every task (`pacs simulate --policy kernel`, `kernel-paced`
+//! and `kernel-shield-paced`) and print their cross-validation:
 //! `cargo run --release -p pacs-sim --example learned_policy`.
-use pacs_sim::task::{TaskKind, learned_policy};
+use pacs_sim::task::{Replays, TaskKind, learned_policy};
 
 fn main() {
     for task in TaskKind::ALL {
-        for (paced, name) in [(false, "kernel"), (true, "kernel-paced")] {
+        for (replays, name) in [
+            (Replays::None, "kernel"),
+            (Replays::Constant, "kernel-paced"),
+            (Replays::Shield, "kernel-shield-paced"),
+        ] {
             let start = std::time::Instant::now();
-            let p = learned_policy(task, paced);
+            let p = learned_policy(task, replays);
             println!(
                 "{} ({name}): kernel width {} standard deviations, trained in {:.2} s",
                 task.name(),

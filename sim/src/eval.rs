@@ -43,6 +43,9 @@ pub enum PolicyKind {
     /// [`PolicyKind::Kernel`], also trained on the demonstrations replayed at
     /// [`crate::task::REPLAY_PACES`] of their pace.
     KernelPaced,
+    /// [`PolicyKind::Kernel`], also trained on the demonstrations replayed with the shield's
+    /// braking and resuming along their paths ([`crate::task::Replays::Shield`]).
+    KernelShieldPaced,
     /// A policy the caller supplies ([`run_rollout_in`]; Python's `pacs.simulate(policy=…)`
     /// with a policy object, e.g. a LeRobot diffusion policy). Not selectable by name.
     External,
@@ -55,10 +58,11 @@ impl std::str::FromStr for PolicyKind {
             "nearest" => Ok(Self::Nearest),
             "kernel" => Ok(Self::Kernel),
             "kernel-paced" => Ok(Self::KernelPaced),
+            "kernel-shield-paced" => Ok(Self::KernelShieldPaced),
             o => Err(crate::UnknownName {
                 kind: "policy",
                 given: o.into(),
-                choices: "nearest, kernel, kernel-paced".into(),
+                choices: "nearest, kernel, kernel-paced, kernel-shield-paced".into(),
             }),
         }
     }
@@ -285,8 +289,14 @@ pub fn run_rollout_in(
                 seed,
             });
         }
-        (None, PolicyKind::Kernel | PolicyKind::KernelPaced) => {
-            learned = crate::task::learned_policy(task, v.policy == PolicyKind::KernelPaced);
+        (None, PolicyKind::Kernel | PolicyKind::KernelPaced | PolicyKind::KernelShieldPaced) => {
+            use crate::task::Replays;
+            let replays = match v.policy {
+                PolicyKind::KernelPaced => Replays::Constant,
+                PolicyKind::KernelShieldPaced => Replays::Shield,
+                _ => Replays::None,
+            };
+            learned = crate::task::learned_policy(task, replays);
             &mut learned
         }
     };

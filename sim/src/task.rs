@@ -7,7 +7,7 @@
 
 use crate::humans::{Bystander, Diner, FLOOR_Z, HumanScript, Offerer, Reacher, Rng};
 use crate::objects::{RollingSphere, SimObject, sphere_spec};
-use crate::policy::kernel::replay_path;
+use crate::policy::kernel::{MIN_PACE, replay_path};
 use crate::policy::{DemoSet, KernelPolicy, Recording};
 use pacs_models::object::ObjectContact;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel, default_human, fr3};
@@ -496,26 +496,80 @@ fn cached_demonstrations(robot: &RobotModel, task: TaskKind) -> Vec<Vec<Vec<f64>
 /// demonstrator's recordings contain.
 pub const REPLAY_PACES: [f64; 2] = [0.5, 0.25];
 
+/// Which replays of its demonstrations a learned policy ([`learned_policy`]) is also trained on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Replays {
+    /// None: the demonstrations only (`--policy kernel`).
+    None,
+    /// Each demonstration at the constant paces [`REPLAY_PACES`] ([`replay_path`];
+    /// `kernel-paced`).
+    Constant,
+    /// Each demonstration with the shield's own braking and resuming along its path
+    /// ([`crate::teleop::paced_replay`], the transform `pacs.lerobot.paced_replays` applies to a
+    /// user's dataset; `kernel-shield-paced`): one replay with a pause (braking to rest at
+    /// 15–85 % of the path, held [`SHIELD_REPLAY_HOLD`] s, resuming) and one with a slow passage
+    /// (a fifth to a third of the path at [`SHIELD_REPLAY_PACE`] of the recorded pace).
+    Shield,
+}
+
+/// Range of the hold (s) of a [`Replays::Shield`] pause (as `pacs.lerobot.paced_replays`).
+pub const SHIELD_REPLAY_HOLD: (f64, f64) = (0.3, 1.5);
+/// Range of the pace of a [`Replays::Shield`] slow passage (as `pacs.lerobot.paced_replays`).
+pub const SHIELD_REPLAY_PACE: (f64, f64) = (0.2, 0.6);
+
+/// The two [`Replays::Shield`] replays of a demonstration `path` (one configuration per
+/// [`DEMO_DT`]), events drawn from `rng`; a replay the planner cannot make is left out. Each
+/// with its mean pace (recorded duration over replayed duration, in [`MIN_PACE`]..1).
+fn shield_replays(
+    robot: &RobotModel,
+    path: &[Vec<f64>],
+    rng: &mut Rng,
+) -> Vec<(Vec<Vec<f64>>, f64)> {
+    use crate::teleop::{PaceEvent, paced_replay};
+    let end = (path.len().saturating_sub(1)) as f64 * DEMO_DT;
+    let pause = PaceEvent::Pause {
+        at: rng.range(0.15, 0.85) * end,
+        hold: rng.range(SHIELD_REPLAY_HOLD.0, SHIELD_REPLAY_HOLD.1),
+    };
+    let span = rng.range(0.2, 0.33) * end;
+    let from = rng.range(0.05 * end, (0.95 * end - span).max(0.05 * end));
+    let slow = PaceEvent::Slow {
+        from,
+        to: from + span,
+        pace: rng.range(SHIELD_REPLAY_PACE.0, SHIELD_REPLAY_PACE.1),
+    };
+    let lim = robot.limits();
+    [pause, slow]
+        .into_iter()
+        .filter_map(|e| paced_replay(path, DEMO_DT, &[e], lim.v_max(), lim.a_max()).ok())
+        .filter(|r| r.q.len() > path.len())
+        .map(|r| {
+            let pace = ((path.len() - 1) as f64 / (r.q.len() - 1) as f64).clamp(MIN_PACE, 0.999);
+            (r.q, pace)
+        })
+        .collect()
+}
+
 /// The policy learned from `task`'s demonstrations ([`KernelPolicy`]), with their replays at
 /// [`REPLAY_PACES`] if `paced`; trained once per task per process (the same training data for
 /// every rollout; clones share it). Each configuration's stage, recorded or replayed, is the
 /// number of sub-goals its tool point has reached, in order, by the episode's own rule (within
 /// the goal's tolerance).
-pub fn learned_policy(task: TaskKind, paced: bool) -> KernelPolicy {
+pub fn learned_policy(task: TaskKind, replays: Replays) -> KernelPolicy {
     use std::collections::HashMap;
     use std::sync::{Arc, Mutex, OnceLock};
-    type Cache = Mutex<HashMap<(TaskKind, bool), Arc<OnceLock<KernelPolicy>>>>;
+    type Cache = Mutex<HashMap<(TaskKind, Replays), Arc<OnceLock<KernelPolicy>>>>;
     static CACHE: OnceLock<Cache> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
     // One cell per key: concurrent rollouts wait for one training instead of each training.
     let cell = match cache.lock() {
-        Ok(mut c) => c.entry((task, paced)).or_default().clone(),
+        Ok(mut c) => c.entry((task, replays)).or_default().clone(),
         Err(_) => Arc::new(OnceLock::new()),
     };
-    cell.get_or_init(|| train_policy(task, paced)).clone()
+    cell.get_or_init(|| train_policy(task, replays)).clone()
 }
 
-fn train_policy(task: TaskKind, paced: bool) -> KernelPolicy {
+fn train_policy(task: TaskKind, replays: Replays) -> KernelPolicy {
     let robot = fr3::fr3();
     let goals = tool_goals(task);
     // The episode's rule: sub-goals in order, each reached within its tolerance.
@@ -531,9 +585,24 @@ fn train_policy(task: TaskKind, paced: bool) -> KernelPolicy {
             })
             .collect()
     };
-    let paces: &[f64] = if paced { &REPLAY_PACES } else { &[] };
+    let paces: &[f64] = if replays == Replays::Constant {
+        &REPLAY_PACES
+    } else {
+        &[]
+    };
+    let mut rng = Rng::new(0x5EED_0000 + task as u64);
     let mut recordings = Vec::new();
     for (demonstration, path) in cached_demonstrations(&robot, task).into_iter().enumerate() {
+        if replays == Replays::Shield {
+            for (replay, pace) in shield_replays(&robot, &path, &mut rng) {
+                recordings.push(Recording {
+                    stages: stages(&replay),
+                    path: replay,
+                    demonstration,
+                    pace,
+                });
+            }
+        }
         for &pace in paces {
             let replay = replay_path(&path, pace).expect("REPLAY_PACES within [MIN_PACE, 1]");
             recordings.push(Recording {
@@ -704,5 +773,81 @@ pub fn scenario(task: TaskKind, seed: u64, with_human: bool) -> Scenario {
         goals,
         start,
         max_time,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Distance (rad, max-norm) from `q` to the polyline `path`.
+    fn distance_to_path(path: &[Vec<f64>], q: &[f64]) -> f64 {
+        path.windows(2)
+            .map(|w| {
+                // The closest point of the segment in the Euclidean sense, then the max-norm.
+                let d: Vec<f64> = w[1].iter().zip(&w[0]).map(|(b, a)| b - a).collect();
+                let len2: f64 = d.iter().map(|x| x * x).sum();
+                let u = if len2 > 0.0 {
+                    let dot: f64 = q
+                        .iter()
+                        .zip(&w[0])
+                        .zip(&d)
+                        .map(|((q, a), d)| (q - a) * d)
+                        .sum();
+                    (dot / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                w[0].iter()
+                    .zip(&d)
+                    .zip(q)
+                    .map(|((a, d), q)| (a + u * d - q).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Every task's demonstrations get their two shield replays (a pause, a slow passage): each
+    /// longer than its recording, from its first to its last configuration through the
+    /// recording's own configurations (every sample within 1e-9 rad of the recorded polyline),
+    /// within the FR3's operated limits, and with a mean pace in [MIN_PACE, 1).
+    #[test]
+    fn shield_replays_follow_their_demonstration() {
+        let robot = fr3::fr3();
+        let lim = robot.limits();
+        for task in TaskKind::ALL {
+            let mut rng = Rng::new(7);
+            for path in cached_demonstrations(&robot, task) {
+                let replays = shield_replays(&robot, &path, &mut rng);
+                assert_eq!(replays.len(), 2, "{task:?}");
+                for (q, pace) in replays {
+                    assert!(q.len() > path.len() && (MIN_PACE..1.0).contains(&pace));
+                    assert_eq!(q.first(), path.first());
+                    let last = q.last().expect("non-empty");
+                    let end = path.last().expect("non-empty");
+                    assert!(last.iter().zip(end).all(|(a, b)| (a - b).abs() < 1e-9));
+                    for r in &q {
+                        assert!(distance_to_path(&path, r) < 1e-9, "{task:?}: off the path");
+                    }
+                    assert!(crate::teleop::within_operated_limits(
+                        &q,
+                        DEMO_DT,
+                        lim.v_max(),
+                        lim.a_max()
+                    ));
+                }
+            }
+        }
+    }
+
+    /// `kernel-shield-paced` is trained on the recordings and their shield replays: a paced
+    /// model, and another model than `kernel`'s.
+    #[test]
+    fn the_shield_paced_policy_sees_its_replays() {
+        let plain = learned_policy(TaskKind::Sorting, Replays::None);
+        let shield = learned_policy(TaskKind::Sorting, Replays::Shield);
+        assert!(!plain.paced() && shield.paced());
+        let cv = |p: &KernelPolicy| p.cross_validation().map(|(_, e)| e).collect::<Vec<_>>();
+        assert_ne!(cv(&plain), cv(&shield));
     }
 }

@@ -443,3 +443,22 @@ fn pacs_stays_safe_when_the_learned_policy_leaves_its_data() {
     let audit = e.truth_audit.expect("truth audit");
     assert_eq!(audit.certain_fraction, 0.0);
 }
+
+/// `--policy kernel-shield-paced` names the policy trained also on the shield's paced replays;
+/// an unknown name lists it among the choices; a PACS rollout with it runs and stays safe.
+#[test]
+fn the_shield_paced_policy_is_selectable() {
+    use pacs_sim::eval::PolicyKind;
+    assert_eq!(
+        "kernel-shield-paced".parse::<PolicyKind>().ok(),
+        Some(PolicyKind::KernelShieldPaced)
+    );
+    let e = "kernel-shield".parse::<PolicyKind>().unwrap_err();
+    assert!(e.to_string().contains("kernel-shield-paced"), "{e}");
+    let mut variant = v("pacs");
+    variant.motion = pacs_shield::ChunkMotion::Continuous;
+    variant.policy = PolicyKind::KernelShieldPaced;
+    let r = run_rollout(TaskKind::Sorting, &variant, 1, true, None, 0).unwrap();
+    assert_eq!(r.policy, PolicyKind::KernelShieldPaced);
+    assert_eq!(r.episode.violation_fraction, 0.0);
+}

@@ -47,7 +47,9 @@ policy, the rows, the summary path, the plot paths and the log directory.
 
 Policies (--policy): nearest (default; the hand-written nearest-neighbour stand-in), kernel
 (kernel regression learned from the demonstrations, observing the last two timesteps),
-kernel-paced (the same, also trained on the demonstrations replayed at 1/2 and 1/4 pace).
+kernel-paced (the same, also trained on the demonstrations replayed at 1/2 and 1/4 pace),
+kernel-shield-paced (the same, also trained on the demonstrations replayed with the shield's
+braking and resuming: one pause and one slow passage each, as pacs.lerobot.paced_replays).
 
 Examples:
   pacs simulate --task sorting --method off,pacs,cbf --rollouts 20
@@ -87,7 +89,8 @@ pub struct SimulateArgs {
     /// learned from the demonstrations, observing the last two timesteps and the sub-goals
     /// reached; its kernel width chosen by leave-one-demonstration-out cross-validation) or
     /// `kernel-paced` (the same, also trained on every demonstration replayed at 1/2 and 1/4
-    /// of its pace).
+    /// of its pace) or `kernel-shield-paced` (the same, also trained on every demonstration
+    /// replayed with the shield's braking and resuming: a pause, a slow passage).
     #[arg(long, value_name = "P", default_value = "nearest")]
     pub policy: String,
     /// Do not write per-rollout audit logs (each is a few MB).

@@ -5,7 +5,7 @@
 
 ``tolerance``: does a policy still succeed when PACS slows or stops it along its path
 (:func:`pacs.tolerance`)? ``--policy`` is a built-in policy's name (nearest, kernel,
-kernel-paced) or a LeRobot policy directory (``save_pretrained``; needs lerobot). Writes
+kernel-paced, kernel-shield-paced) or a LeRobot policy directory (``save_pretrained``; needs lerobot). Writes
 ``tolerance.json`` and the one-page plot ``tolerance.svg`` into ``--out``.
 Exit codes: 0 done, 2 bad input, 1 other errors.
 """

@@ -46,7 +46,7 @@ def tolerance(
     brakes along the path (to rest under SSM), holds and resumes; the policy does not observe
     the intruder, so only the timing of its own motion changes.
 
-    ``policy``: a built-in policy's name (``"nearest"``, ``"kernel"``, ``"kernel-paced"``) or a
+    ``policy``: a built-in policy's name (``"nearest"``, ``"kernel"``, ``"kernel-paced"``, ``"kernel-shield-paced"``) or a
     policy object as :func:`pacs.simulate` takes (``act(obs)``, e.g.
     :class:`pacs.lerobot.SimulationPolicy`). Returns ``{"task", "policy", "runs": [...],
     "rows": [...]}``: every interrupted rollout (seed, at, hold, baseline and interrupted

@@ -270,7 +270,7 @@ def simulate(
     ``log_dir``: write every rollout's audit log there (on a cluster: a directory the workers
     share).
 
-    ``policy``: a built-in policy's name (``"nearest"``, ``"kernel"``, ``"kernel-paced"``) or a
+    ``policy``: a built-in policy's name (``"nearest"``, ``"kernel"``, ``"kernel-paced"``, ``"kernel-shield-paced"``) or a
     policy object with ``act(obs) -> (H, 7)`` joint-position deltas (rad) and optionally
     ``n_action_steps`` (executed actions per chunk, default 8) and ``reset()`` (called before
     each rollout): e.g. :class:`pacs.lerobot.SimulationPolicy` around a LeRobot policy. ``obs``
