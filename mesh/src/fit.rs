@@ -208,6 +208,11 @@ fn hull_volume(pts: &[Point3<f64>]) -> f64 {
 }
 
 /// Fit a capsule containing every point of `pts` (m). `what` names the mesh in errors.
+///
+/// The least-volume capsule among those along the coordinate axes, the principal axes, an
+/// approximate diameter and the ball about the centroid (length 0); its radius is then never
+/// larger than that ball's (property test `every_vertex_is_inside_the_fitted_capsule`). Every
+/// point is checked against the final segment and the radius covers the farthest.
 pub fn fit_capsule(pts: &[Point3<f64>], what: &str) -> Result<FittedCapsule, MeshError> {
     if pts.is_empty() {
         return Err(MeshError::Empty {
@@ -248,14 +253,22 @@ pub fn fit_capsule(pts: &[Point3<f64>], what: &str) -> Result<FittedCapsule, Mes
     if (b - a).norm() > 0.0 {
         axes.push((b - a).normalize());
     }
-    let mut best: Option<(Point3<f64>, Point3<f64>, f64, f64)> = None;
+    // The ball about the centroid is a candidate too (a capsule of length 0): the least volume
+    // then never exceeds its volume, so the radius never exceeds the ball's.
+    let ball = local.iter().map(|p| p.coords.norm()).fold(0.0f64, f64::max);
+    let mut best: Option<(Point3<f64>, Point3<f64>, f64, f64)> = Some((
+        Point3::origin(),
+        Point3::origin(),
+        ball,
+        capsule_volume(ball, 0.0),
+    ));
     for d in &axes {
         let fit = fit_axis(&local, d);
         if best.is_none_or(|b| fit.3 < b.3) {
             best = Some(fit);
         }
     }
-    let (q1, q2, r, _) = best.expect("at least the coordinate axes");
+    let (q1, q2, r, _) = best.expect("at least the centroid ball");
     let (p1, p2) = (
         Point3::from(q1.coords + mean),
         Point3::from(q2.coords + mean),
