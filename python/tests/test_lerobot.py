@@ -16,6 +16,20 @@ from conftest import far_human
 KEYS = [f"joint{i + 1}.pos" for i in range(7)]
 
 
+def _state_features(action_dim=7):
+    """LeRobot feature dicts of the tests' state-only policies: ``observation.state`` (7) and
+    ``observation.environment_state`` (3) in, ``action`` (``action_dim``) out."""
+    from lerobot.configs.types import FeatureType, PolicyFeature
+
+    return (
+        {
+            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
+            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
+        },
+        {"action": PolicyFeature(type=FeatureType.ACTION, shape=(action_dim,))},
+    )
+
+
 class DemoPolicy:
     """A PreTrainedPolicy-shaped wrapper of the simulation's demonstration policy:
     predict_action_chunk(batch) -> (B, H, A) absolute joint targets (degrees)."""
@@ -469,16 +483,12 @@ def test_a_real_diffusion_policy_through_the_shield(demo):
     such a batch before) and its chunks drive the robot through the shield."""
     torch = pytest.importorskip("torch")
     diffusion = pytest.importorskip("lerobot.policies.diffusion.modeling_diffusion")
-    from lerobot.configs.types import FeatureType, PolicyFeature
     from lerobot.policies.diffusion.configuration_diffusion import DiffusionConfig
 
     torch.manual_seed(0)
+    inputs, outputs = _state_features()
     cfg = DiffusionConfig(
-        input_features={
-            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
-            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
-        },
-        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+        input_features=inputs, output_features=outputs,
         n_obs_steps=2, horizon=16, n_action_steps=8, down_dims=(32, 64, 128),
         noise_scheduler_type="DDIM", num_inference_steps=4, device="cpu",
     )
@@ -525,16 +535,12 @@ def test_a_real_tdmpc_policy_keeps_its_whole_chunk(demo):
     only the first before), with its observation history filled."""
     torch = pytest.importorskip("torch")
     tdmpc = pytest.importorskip("lerobot.policies.tdmpc.modeling_tdmpc")
-    from lerobot.configs.types import FeatureType, PolicyFeature
     from lerobot.policies.tdmpc.configuration_tdmpc import TDMPCConfig
 
     torch.manual_seed(0)
+    inputs, outputs = _state_features()
     cfg = TDMPCConfig(
-        input_features={
-            "observation.state": PolicyFeature(type=FeatureType.STATE, shape=(7,)),
-            "observation.environment_state": PolicyFeature(type=FeatureType.ENV, shape=(3,)),
-        },
-        output_features={"action": PolicyFeature(type=FeatureType.ACTION, shape=(7,))},
+        input_features=inputs, output_features=outputs,
         horizon=5, n_action_steps=5, n_action_repeats=1, state_encoder_hidden_dim=32,
         latent_dim=16, mlp_dim=32, q_ensemble_size=2, n_gaussian_samples=16, n_pi_samples=4,
         n_elites=4, cem_iterations=2, device="cpu",
