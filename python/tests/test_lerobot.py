@@ -30,6 +30,24 @@ def _state_features(action_dim=7):
     )
 
 
+def _run_torch_deltas(demo, policy, preprocess, n_action_steps, seconds=1.0):
+    """One second of a torch policy's chunks (as deltas, 0.002 × its clamped output) through
+    a shield at 30 Hz, the person far away; returns the finished loop and the robot."""
+    import torch
+
+    shield = pacs.Shield()
+    shield.start(0.0, demo.start)
+    robot = FakeRobot(demo.start)
+    person = far_human(demo)
+    with torch.no_grad(), ShieldedPolicyLoop(
+        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=n_action_steps,
+        fps=30.0, preprocess=preprocess, postprocess=lambda a: 0.002 * torch.clamp(a, -1, 1),
+        humans=lambda t: (t, person),
+    ) as loop:
+        loop.run(seconds)
+    return loop, robot
+
+
 class DemoPolicy:
     """A PreTrainedPolicy-shaped wrapper of the simulation's demonstration policy:
     predict_action_chunk(batch) -> (B, H, A) absolute joint targets (degrees)."""
@@ -505,17 +523,8 @@ def test_a_real_diffusion_policy_through_the_shield(demo):
     with pytest.raises(Exception):
         policy.predict_action_chunk(preprocess({k: 0.0 for k in KEYS}))
 
-    shield = pacs.Shield()
-    shield.start(0.0, demo.start)
-    robot = FakeRobot(demo.start)
-    person = far_human(demo)
-    with torch.no_grad(), ShieldedPolicyLoop(
-        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=8, fps=30.0,
-        preprocess=preprocess, postprocess=lambda a: 0.002 * torch.clamp(a, -1, 1),
-        humans=lambda t: (t, person),
-    ) as loop:
-        loop.run(1.0)
-        depth = loop.history.depth()
+    loop, robot = _run_torch_deltas(demo, policy, preprocess, n_action_steps=8)
+    depth = loop.history.depth()
     assert depth == {"observation.state": 2, "observation.environment_state": 2}
     assert loop.executed()["accepted"] >= 3 and not loop.rejected
     # The queue holds the last two frames, in order.
@@ -560,16 +569,7 @@ def test_a_real_tdmpc_policy_keeps_its_whole_chunk(demo):
         q = torch.tensor([[obs[k] for k in KEYS]], dtype=torch.float32)
         return {"observation.state": q, "observation.environment_state": torch.zeros(1, 3)}
 
-    shield = pacs.Shield()
-    shield.start(0.0, demo.start)
-    robot = FakeRobot(demo.start)
-    person = far_human(demo)
-    with torch.no_grad(), ShieldedPolicyLoop(
-        policy, robot, shield, KEYS, action_kind="delta", n_action_steps=5, fps=30.0,
-        preprocess=preprocess, postprocess=lambda a: 0.002 * torch.clamp(a, -1, 1),
-        humans=lambda t: (t, person),
-    ) as loop:
-        loop.run(1.0)
+    loop, _ = _run_torch_deltas(demo, policy, preprocess, n_action_steps=5)
     assert shapes and all(sh == (5, 1, 7) for sh in shapes)  # time-major
     assert all(c.shape == (5, 7) for c in loop.chunks.values())
     assert len(shapes) <= 8 and not loop.rejected
