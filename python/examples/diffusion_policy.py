@@ -223,23 +223,11 @@ PAPER_AVERAGE = {"off": 0.70, "pacs": 0.69, "pacs-pfl": 0.72, "single-action": 0
                  "single-action-pfl": 0.44, "cbf": 0.04}
 
 
-def wilson95(successes, n):
-    """The 95 % Wilson score interval of `successes` out of `n` (z = 1.959964)."""
-    if n == 0:
-        return (0.0, 1.0)
-    z = 1.959963984540054
-    p = successes / n
-    d = 1 + z * z / n
-    c = (p + z * z / (2 * n)) / d
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return (max(0.0, c - h), min(1.0, c + h))
-
-
-def newcombe95(s1, n1, s2, n2):
+def newcombe95(p1, ci1, p2, ci2):
     """Newcombe's hybrid score interval (his method 10, 1998) for p1 - p2 of two independent
-    proportions, from each one's Wilson interval: (difference, lower, upper)."""
-    p1, p2 = s1 / n1, s2 / n2
-    (l1, u1), (l2, u2) = wilson95(s1, n1), wilson95(s2, n2)
+    proportions, from each one's 95 % Wilson interval (`ci1`, `ci2`: the rows' `success_ci95`,
+    computed by the evaluation): (difference, lower, upper)."""
+    (l1, u1), (l2, u2) = ci1, ci2
     d = p1 - p2
     return (d, d - math.sqrt((p1 - l1) ** 2 + (u2 - p2) ** 2),
             d + math.sqrt((u1 - p1) ** 2 + (p2 - l2) ** 2))
@@ -249,11 +237,6 @@ def interval(row):
     """A row's 95 % Wilson interval of success (`success_ci95`, as `pacs.simulate` writes it;
     `success_wilson95` in summaries of earlier versions)."""
     return row["success_ci95"] if "success_ci95" in row else row["success_wilson95"]
-
-
-def successes(row):
-    """The count of successful rollouts of an evaluation row."""
-    return int(round(row["success"] * row["rollouts"]))
 
 
 def summary_svg(summaries, labels):
@@ -333,21 +316,21 @@ def compare(args):
     for row in base["rows"]:
         m = row["method"]
         cells, diffs = [], []
-        for s in summaries:
+        for k, s in enumerate(summaries):
             r = next((x for x in s["rows"] if x["method"] == m), None)
             cells.append("—" if r is None else
                          f"{r['success']:.2f} [{interval(r)[0]:.2f}, "
                          f"{interval(r)[1]:.2f}] (n = {r['rollouts']})")
-            if r is not None and s is not base:
-                d, lo, hi = newcombe95(successes(r), r["rollouts"], successes(row),
-                                       row["rollouts"])
-                diffs.append(f"{d:+.2f} [{lo:+.2f}, {hi:+.2f}]"
-                             + (" **changed**" if lo > 0 or hi < 0 else ""))
-                result.append({"method": m, "evaluation": labels[summaries.index(s)],
-                               "difference": d, "newcombe95": [lo, hi],
-                               "changed": lo > 0 or hi < 0})
-            elif s is not base:
+            if k == 0:
+                continue
+            if r is None:
                 diffs.append("—")
+                continue
+            d, lo, hi = newcombe95(r["success"], interval(r), row["success"], interval(row))
+            diffs.append(f"{d:+.2f} [{lo:+.2f}, {hi:+.2f}]"
+                         + (" **changed**" if lo > 0 or hi < 0 else ""))
+            result.append({"method": m, "evaluation": labels[k], "difference": d,
+                           "newcombe95": [lo, hi], "changed": lo > 0 or hi < 0})
         lines.append(f"| {m} | " + " | ".join(cells) + " | " + " | ".join(diffs) + " |")
     table = "\n".join(lines)
     print(table)

@@ -30,6 +30,7 @@ fn _pacs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sim::PyDemo>()?;
     m.add_function(wrap_pyfunction!(sim::teleop_demonstrations, m)?)?;
     m.add_function(wrap_pyfunction!(sim::paced_replay, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::replay_event, m)?)?;
     m.add_function(wrap_pyfunction!(audit::audit, m)?)?;
     m.add_function(wrap_pyfunction!(audit::report, m)?)?;
     m.add_function(wrap_pyfunction!(models::robot_spec, m)?)?;

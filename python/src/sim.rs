@@ -241,6 +241,75 @@ pub fn teleop_demonstrations<'py>(
 /// to rest at each of `pauses` ((path time s, hold s)), slow to the pace of each of `slows`
 /// ((from s, to s, pace in (0, 1))), resume; within the FR3's operated limits. Returns `q`
 /// (N, 7) rad, `source` (N,) (fractional sample index into the recording) and `pace` (N,).
+/// The event of training replay `k` of a recording lasting `end_s` s, drawn with `seed`
+/// (`pacs_sim::teleop::replay_event`: even `k` a pause with a hold in `hold` s, odd `k` a slow
+/// passage at a pace in `pace`; default ranges `REPLAY_HOLD`, `REPLAY_PACE`), as the keyword
+/// arguments of `paced_replay`: `{"pauses": [...], "slows": [...]}`.
+#[pyfunction]
+#[pyo3(signature = (end_s, k, seed, hold=None, pace=None))]
+pub fn replay_event<'py>(
+    py: Python<'py>,
+    end_s: &Bound<'py, PyAny>,
+    k: &Bound<'py, PyAny>,
+    seed: &Bound<'py, PyAny>,
+    hold: Option<(f64, f64)>,
+    pace: Option<(f64, f64)>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    use pacs_sim::teleop::{PaceEvent, REPLAY_HOLD, REPLAY_PACE};
+    let end = finite(end_s, "end_s")?;
+    if end <= 0.0 {
+        return Err(input(format!("end_s: {end} is not a duration (s)")));
+    }
+    let k = index(k, "k")?;
+    let seed = index(seed, "seed")? as u64;
+    let hold = hold.unwrap_or(REPLAY_HOLD);
+    let pace = pace.unwrap_or(REPLAY_PACE);
+    if !(hold.0 > 0.0 && hold.0 <= hold.1 && hold.1.is_finite()) {
+        return Err(input(format!(
+            "hold: {hold:?} is not a range of holds (s) > 0"
+        )));
+    }
+    if !(pace.0 > 0.0 && pace.0 <= pace.1 && pace.1 < 1.0) {
+        return Err(input(format!(
+            "pace: {pace:?} is not a range of paces in (0, 1)"
+        )));
+    }
+    let mut rng = pacs_sim::humans::Rng::new(seed);
+    let e = pacs_sim::teleop::replay_event(end, k, hold, pace, &mut rng);
+    let d = pyo3::types::PyDict::new(py);
+    let none2: Vec<(f64, f64)> = Vec::new();
+    let none3: Vec<(f64, f64, f64)> = Vec::new();
+    match e {
+        PaceEvent::Pause { at, hold } => {
+            d.set_item("pauses", vec![(at, hold)])?;
+            d.set_item("slows", none3)?;
+        }
+        PaceEvent::Slow { from, to, pace } => {
+            d.set_item("pauses", none2)?;
+            d.set_item("slows", vec![(from, to, pace)])?;
+        }
+    }
+    Ok(d)
+}
+
+/// A list of event tuples (`what`, e.g. "(at_s, hold_s) pairs") of the argument `name`; empty
+/// when not given.
+fn events<'py, T: pyo3::conversion::FromPyObjectOwned<'py>>(
+    v: Option<&Bound<'py, PyAny>>,
+    name: &str,
+    what: &str,
+) -> PyResult<Vec<T>> {
+    match v {
+        Some(p) => p.extract().map_err(|_| {
+            type_err(format!(
+                "{name}: expected a list of {what}, got {}",
+                crate::convert::show(p)
+            ))
+        }),
+        None => Ok(Vec::new()),
+    }
+}
+
 #[pyfunction]
 #[pyo3(signature = (q, fps=None, pauses=None, slows=None))]
 pub fn paced_replay<'py>(
@@ -252,24 +321,8 @@ pub fn paced_replay<'py>(
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
     use pacs_sim::teleop::{PaceEvent, paced_replay};
     let fps = fps.map_or(Ok(30.0), |f| finite(f, "fps"))?;
-    let pauses: Vec<(f64, f64)> = match pauses {
-        Some(p) => p.extract().map_err(|_| {
-            type_err(format!(
-                "pauses: expected a list of (at_s, hold_s) pairs, got {}",
-                crate::convert::show(p)
-            ))
-        })?,
-        None => Vec::new(),
-    };
-    let slows: Vec<(f64, f64, f64)> = match slows {
-        Some(p) => p.extract().map_err(|_| {
-            type_err(format!(
-                "slows: expected a list of (from_s, to_s, pace) triples, got {}",
-                crate::convert::show(p)
-            ))
-        })?,
-        None => Vec::new(),
-    };
+    let pauses: Vec<(f64, f64)> = events(pauses, "pauses", "(at_s, hold_s) pairs")?;
+    let slows: Vec<(f64, f64, f64)> = events(slows, "slows", "(from_s, to_s, pace) triples")?;
     if !(fps > 0.0 && fps.is_finite()) {
         return Err(input(format!("fps: {fps} is not a frame rate (Hz)")));
     }

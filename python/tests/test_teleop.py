@@ -191,13 +191,22 @@ def test_paced_replays_keep_the_path_and_the_operated_limits():
         assert (np.abs(np.diff(q, n=2, axis=0)) / dt**2).max() <= A_OPERATED + 1e-9
         np.testing.assert_array_equal(q[-1], d["q"][-1])
         assert r["stage"][-1] == d["stage"][-1] and np.all(np.diff(r["stage"]) >= 0)
+        end = (len(d["q"]) - 1) * dt
         if r["events"]["pauses"]:
             (at, hold), = r["events"]["pauses"]
+            # The one recipe (pacs_sim::teleop::replay_event): 15-85 % of the way, 0.3-1.5 s.
+            assert 0.15 * end <= at <= 0.85 * end and 0.3 <= hold <= 1.5
             stopped = np.sum(r["pace"] == 0.0) * dt
             assert abs(stopped - hold) <= 0.1 + 2 * dt
         else:
-            (_, _, pace), = r["events"]["slows"]
+            (start, stop, pace), = r["events"]["slows"]
+            assert 0.2 <= pace <= 0.6 and 0.2 * end <= stop - start <= 0.33 * end + 1e-9
+            assert 0.05 * end <= start and stop <= 0.95 * end + 1e-9
             assert np.isclose(r["pace"], pace).sum() >= 5
+    with pytest.raises(pacs.InputError, match=r"pace: \(0\.5, 1\.5\)"):
+        paced_replays(demos[:1], pace=(0.5, 1.5))
+    with pytest.raises(pacs.InputError, match="hold"):
+        paced_replays(demos[:1], hold=(0.0, 1.0))
     with pytest.raises(pacs.InputError, match=r"pauses\[0\]"):
         pacs.paced_replay(demos[0]["q"], pauses=[(1.0, -1.0)])
     with pytest.raises(pacs.InputError, match=r"slows\[0\]"):

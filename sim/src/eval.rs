@@ -51,6 +51,18 @@ pub enum PolicyKind {
     External,
 }
 
+impl PolicyKind {
+    /// The replays a learned kind is also trained on (`Replays::None` for the others, which
+    /// are not trained).
+    fn replays(self) -> crate::task::Replays {
+        match self {
+            Self::KernelPaced => crate::task::Replays::Constant,
+            Self::KernelShieldPaced => crate::task::Replays::Shield,
+            Self::Nearest | Self::Kernel | Self::External => crate::task::Replays::None,
+        }
+    }
+}
+
 impl std::str::FromStr for PolicyKind {
     type Err = crate::UnknownName;
     fn from_str(s: &str) -> Result<Self, crate::UnknownName> {
@@ -290,13 +302,7 @@ pub fn run_rollout_in(
             });
         }
         (None, PolicyKind::Kernel | PolicyKind::KernelPaced | PolicyKind::KernelShieldPaced) => {
-            use crate::task::Replays;
-            let replays = match v.policy {
-                PolicyKind::KernelPaced => Replays::Constant,
-                PolicyKind::KernelShieldPaced => Replays::Shield,
-                _ => Replays::None,
-            };
-            learned = crate::task::learned_policy(task, replays);
+            learned = crate::task::learned_policy(task, v.policy.replays());
             &mut learned
         }
     };

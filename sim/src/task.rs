@@ -506,41 +506,25 @@ pub enum Replays {
     Constant,
     /// Each demonstration with the shield's own braking and resuming along its path
     /// ([`crate::teleop::paced_replay`], the transform `pacs.lerobot.paced_replays` applies to a
-    /// user's dataset; `kernel-shield-paced`): one replay with a pause (braking to rest at
-    /// 15–85 % of the path, held [`SHIELD_REPLAY_HOLD`] s, resuming) and one with a slow passage
-    /// (a fifth to a third of the path at [`SHIELD_REPLAY_PACE`] of the recorded pace).
+    /// user's dataset; `kernel-shield-paced`): one replay with a pause and one with a slow
+    /// passage ([`crate::teleop::replay_event`]).
     Shield,
 }
 
-/// Range of the hold (s) of a [`Replays::Shield`] pause (as `pacs.lerobot.paced_replays`).
-pub const SHIELD_REPLAY_HOLD: (f64, f64) = (0.3, 1.5);
-/// Range of the pace of a [`Replays::Shield`] slow passage (as `pacs.lerobot.paced_replays`).
-pub const SHIELD_REPLAY_PACE: (f64, f64) = (0.2, 0.6);
-
 /// The two [`Replays::Shield`] replays of a demonstration `path` (one configuration per
-/// [`DEMO_DT`]), events drawn from `rng`; a replay the planner cannot make is left out. Each
-/// with its mean pace (recorded duration over replayed duration, in [`MIN_PACE`]..1).
+/// [`DEMO_DT`]): a pause and a slow passage ([`crate::teleop::replay_event`]), events drawn
+/// from `rng`; a replay the planner cannot make is left out. Each with its mean pace (recorded
+/// duration over replayed duration, in [`MIN_PACE`]..1).
 fn shield_replays(
     robot: &RobotModel,
     path: &[Vec<f64>],
     rng: &mut Rng,
 ) -> Vec<(Vec<Vec<f64>>, f64)> {
-    use crate::teleop::{PaceEvent, paced_replay};
+    use crate::teleop::{REPLAY_HOLD, REPLAY_PACE, paced_replay, replay_event};
     let end = (path.len().saturating_sub(1)) as f64 * DEMO_DT;
-    let pause = PaceEvent::Pause {
-        at: rng.range(0.15, 0.85) * end,
-        hold: rng.range(SHIELD_REPLAY_HOLD.0, SHIELD_REPLAY_HOLD.1),
-    };
-    let span = rng.range(0.2, 0.33) * end;
-    let from = rng.range(0.05 * end, (0.95 * end - span).max(0.05 * end));
-    let slow = PaceEvent::Slow {
-        from,
-        to: from + span,
-        pace: rng.range(SHIELD_REPLAY_PACE.0, SHIELD_REPLAY_PACE.1),
-    };
     let lim = robot.limits();
-    [pause, slow]
-        .into_iter()
+    (0..2)
+        .map(|k| replay_event(end, k, REPLAY_HOLD, REPLAY_PACE, rng))
         .filter_map(|e| paced_replay(path, DEMO_DT, &[e], lim.v_max(), lim.a_max()).ok())
         .filter(|r| r.q.len() > path.len())
         .map(|r| {

@@ -382,6 +382,39 @@ pub enum PaceEvent {
     },
 }
 
+/// Range of the hold (s) of a training replay's pause ([`replay_event`]).
+pub const REPLAY_HOLD: (f64, f64) = (0.3, 1.5);
+/// Range of the pace (fraction of the recorded one) of a training replay's slow passage
+/// ([`replay_event`]).
+pub const REPLAY_PACE: (f64, f64) = (0.2, 0.6);
+
+/// The event of training replay `k` of a recording lasting `end` s (the one recipe of the
+/// training transform: `kernel-shield-paced` and `pacs.lerobot.paced_replays`): even `k` a
+/// pause — braking to rest at 15–85 % of the recording, held for a time in `hold` (s) —, odd
+/// `k` a slow passage over a fifth to a third of it at a pace in `pace`.
+pub fn replay_event(
+    end: f64,
+    k: usize,
+    hold: (f64, f64),
+    pace: (f64, f64),
+    rng: &mut Rng,
+) -> PaceEvent {
+    if k.is_multiple_of(2) {
+        PaceEvent::Pause {
+            at: rng.range(0.15, 0.85) * end,
+            hold: rng.range(hold.0, hold.1),
+        }
+    } else {
+        let span = rng.range(0.2, 0.33) * end;
+        let from = rng.range(0.05 * end, (0.95 * end - span).max(0.05 * end));
+        PaceEvent::Slow {
+            from,
+            to: from + span,
+            pace: rng.range(pace.0, pace.1),
+        }
+    }
+}
+
 /// A demonstration replayed along its own path with changes of pace ([`paced_replay`]).
 #[derive(Debug, Clone)]
 pub struct PacedReplay {

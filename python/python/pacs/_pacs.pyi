@@ -242,6 +242,14 @@ def paced_replay(
     slows: Sequence[tuple[float, float, float]] = ...,
 ) -> dict[str, npt.NDArray[np.float64]]: ...
 
+def replay_event(
+    end_s: float,
+    k: int,
+    seed: int,
+    hold: tuple[float, float] | None = None,
+    pace: tuple[float, float] | None = None,
+) -> dict[str, list[tuple[float, ...]]]: ...
+
 class Demo:
     def __init__(
         self, task: str | None = "sorting", seed: int | None = 0, with_human: bool | None = True

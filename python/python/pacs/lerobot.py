@@ -326,6 +326,7 @@ class ShieldedPolicyLoop:
 
     def _policy_chunk(self, batch: Any) -> np.ndarray:
         post = self.postprocess if self.postprocess is not None else (lambda x: x)
+        raw = None
         if self.chunking:
             try:
                 raw = self.policy.predict_action_chunk(batch)
@@ -337,10 +338,9 @@ class ShieldedPolicyLoop:
                 self.history = None
                 if hasattr(self.policy, "reset"):
                     self.policy.reset()
-                raw = None
-            if raw is not None:
-                a = chunk_array(post(raw))
-        if not self.chunking:
+        if self.chunking:
+            a = chunk_array(post(raw))
+        else:
             a = to_numpy(post(self.policy.select_action(batch)))
             if a.ndim == 2:
                 a = a[0]
@@ -543,37 +543,34 @@ def paced_replays(
     *,
     per_demo: int = 1,
     seed: int = 0,
-    hold: tuple[float, float] = (0.3, 1.5),
-    pace: tuple[float, float] = (0.2, 0.6),
+    hold: tuple[float, float] | None = None,
+    pace: tuple[float, float] | None = None,
 ) -> list[dict]:
     """Path-consistent slowed and paused replays of demonstrations (the dicts of
     :func:`pacs.teleop_demonstrations`, or any with ``q`` (T, 7) rad and ``fps``), for training.
 
     Each demonstration gets ``per_demo`` replays along its own path
     (:func:`pacs.paced_replay`: the shield's jerk-limited path-speed profiles, within the FR3's
-    operated limits): alternately one pause (brake to rest at a random point, hold
-    ``hold`` s, resume) and one slow passage (a random fifth to a third of the path at ``pace``
-    of the recorded pace). Per-frame fields of the recording (``stage``, ``person``,
+    operated limits): alternately one pause (brake to rest at 15–85 % of the recording, hold
+    for a time in ``hold`` s, default (0.3, 1.5), resume) and one slow passage (a fifth to a
+    third of the recording at a pace in ``pace``, default (0.2, 0.6), of the recorded one) —
+    the recipe of ``pacs_sim::teleop::replay_event``, which also trains the built-in
+    ``kernel-shield-paced`` policy; replay ``r`` of demonstration ``i`` draws its event from
+    ``seed``, ``i`` and ``r``. Per-frame fields of the recording (``stage``, ``person``,
     ``person_distance``) follow the replay's place on the path (the nearest recorded frame);
     ``action`` is recomputed as the delta to the next replayed frame. Returns new dicts (the
     originals are not included), each with ``replay_of`` (the source's index), ``events``.
     """
     from . import _pacs
 
-    rng = np.random.default_rng(seed)
     out = []
     for i, d in enumerate(demos):
         q = to_numpy(d["q"])
         fps = float(d.get("fps", 30.0))
         end = (len(q) - 1) / fps
         for r in range(per_demo):
-            if r % 2 == 0:
-                at = float(rng.uniform(0.15, 0.85) * end)
-                events = {"pauses": [(at, float(rng.uniform(*hold)))], "slows": []}
-            else:
-                span = float(rng.uniform(0.2, 0.33) * end)
-                start = float(rng.uniform(0.05, 0.95 * end - span))
-                events = {"pauses": [], "slows": [(start, start + span, float(rng.uniform(*pace)))]}
+            events = _pacs.replay_event(end, r, (seed * 1_000_003 + i * 1_009 + r) % 2**63,
+                                        hold=hold, pace=pace)
             rep = _pacs.paced_replay(q, fps=fps, **events)
             src = np.clip(np.rint(rep["source"]).astype(int), 0, len(q) - 1)
             new = dict(d)
