@@ -10,7 +10,7 @@
 // Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::enclosure::{Sample, SpanBoxes, SpanEnclosure, span_boxes};
+use crate::enclosure::{Sample, SpanBoxes, SpanEnclosure, span_boxes_into};
 use crate::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, Verdict, Violation,
 };

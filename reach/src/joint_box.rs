@@ -116,14 +116,66 @@ impl JointBox {
         (self.lo[j], self.hi[j])
     }
 
+    /// The box with no joints (a placeholder to [`Self::assign`] into).
+    pub const EMPTY: JointBox = JointBox {
+        n: 0,
+        lo: [0.0; MAX_DOF],
+        hi: [0.0; MAX_DOF],
+    };
+
+    /// Replace the bounds in place with `[lo_j, hi_j]`: [`Self::new`] without building and moving
+    /// a new box (for loops that fill one box per step). The same checks; on error `self` is
+    /// unchanged. Entries beyond the new count are zero, as after [`Self::new`], so equal boxes
+    /// compare equal however they were built.
+    ///
+    /// # Errors
+    /// As [`Self::new`].
+    #[inline]
+    pub fn assign(&mut self, lo: &[f64], hi: &[f64]) -> Result<(), JointBoxError> {
+        if lo.len() != hi.len() {
+            return Err(JointBoxError::LengthMismatch {
+                lo: lo.len(),
+                hi: hi.len(),
+            });
+        }
+        let n = lo.len();
+        if n > MAX_DOF {
+            return Err(JointBoxError::TooManyJoints(n));
+        }
+        for j in 0..n {
+            let (l, h) = (lo[j], hi[j]);
+            if !(l.is_finite() && h.is_finite() && l <= h) {
+                return Err(JointBoxError::Invalid {
+                    joint: j,
+                    lo: l,
+                    hi: h,
+                });
+            }
+        }
+        self.lo[..n].copy_from_slice(lo);
+        self.hi[..n].copy_from_slice(hi);
+        if self.n > n {
+            self.lo[n..self.n].fill(0.0);
+            self.hi[n..self.n].fill(0.0);
+        }
+        self.n = n;
+        Ok(())
+    }
+
     /// The smallest box containing both (same number of joints; `self`'s count otherwise).
     pub fn hull(&self, o: &JointBox) -> JointBox {
         let mut h = *self;
-        for j in 0..self.n.min(o.n) {
-            h.lo[j] = self.lo[j].min(o.lo[j]);
-            h.hi[j] = self.hi[j].max(o.hi[j]);
-        }
+        h.hull_in_place(o);
         h
+    }
+
+    /// Grow `self` in place to [`Self::hull`] of both (no copy of the box).
+    #[inline]
+    pub fn hull_in_place(&mut self, o: &JointBox) {
+        for j in 0..self.n.min(o.n) {
+            self.lo[j] = self.lo[j].min(o.lo[j]);
+            self.hi[j] = self.hi[j].max(o.hi[j]);
+        }
     }
 
     /// Whether `q` (one value per joint) lies in the box.
@@ -169,5 +221,38 @@ mod tests {
                 .to_string(),
             "joint box: joint 1: need finite lo <= hi, got [2, 1]"
         );
+    }
+
+    #[test]
+    fn assign_equals_new_and_leaves_the_box_alone_on_error() {
+        let mut b = JointBox::new(&[0.0, -1.0, 2.0], &[0.5, -1.0, 3.0]).unwrap();
+        let before = b;
+        let bad: [(&[f64], &[f64]); 4] = [
+            (&[0.0], &[0.0, 1.0]),
+            (&[0.0, 2.0], &[1.0, 1.0]),
+            (&[f64::INFINITY], &[f64::INFINITY]),
+            (&[0.0; MAX_DOF + 1], &[0.0; MAX_DOF + 1]),
+        ];
+        for (lo, hi) in bad {
+            assert_eq!(b.assign(lo, hi), JointBox::new(lo, hi).map(|_| ()));
+            assert_eq!(b, before);
+        }
+        // Fewer joints than before: the same box (entries beyond the count zeroed) as `new`.
+        b.assign(&[-0.25, 0.0], &[0.25, 1.0]).unwrap();
+        assert_eq!(b, JointBox::new(&[-0.25, 0.0], &[0.25, 1.0]).unwrap());
+        let mut e = JointBox::EMPTY;
+        assert_eq!(e.dof(), 0);
+        e.assign(&[1.0; 7], &[2.0; 7]).unwrap();
+        assert_eq!(e, JointBox::new(&[1.0; 7], &[2.0; 7]).unwrap());
+    }
+
+    #[test]
+    fn hull_in_place_is_the_hull() {
+        let a = JointBox::new(&[0.0, -1.0], &[0.5, -1.0]).unwrap();
+        let c = JointBox::new(&[-0.5, -0.5], &[0.25, 2.0]).unwrap();
+        let mut h = a;
+        h.hull_in_place(&c);
+        assert_eq!(h, JointBox::new(&[-0.5, -1.0], &[0.5, 2.0]).unwrap());
+        assert_eq!(h, a.hull(&c));
     }
 }

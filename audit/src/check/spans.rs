@@ -19,10 +19,17 @@ fn span_energy(
 }
 
 impl Auditor {
-    /// The span's joint boxes ([`span_boxes`]); not consistent if the samples contradict each
+    /// The span's joint boxes ([`crate::enclosure::span_boxes`]); not consistent if the samples contradict each
     /// other or the robot's limits (the span is then `exceeds_limits`).
     pub(super) fn boxes(&self, s0: &Sample, s1: &Sample) -> SpanEnclosure {
-        let mut e = span_boxes(self.robot.limits(), s0, s1, self.cfg.limit_slack);
+        let mut e = SpanEnclosure::EMPTY;
+        self.boxes_into(s0, s1, &mut e);
+        e
+    }
+
+    /// [`Self::boxes`] written into `e` in place.
+    fn boxes_into(&self, s0: &Sample, s1: &Sample, e: &mut SpanEnclosure) {
+        span_boxes_into(self.robot.limits(), s0, s1, self.cfg.limit_slack, e);
         // A sample outside the joint position limits contradicts the robot model as much as
         // one moving faster than its limits: the span is inconsistent (`exceeds_limits`; it is
         // still checked with its boxes, and can never pass). The same relative slack as for
@@ -38,7 +45,6 @@ impl Auditor {
         if !(within(s0) && within(s1)) {
             e.consistent = false;
         }
-        e
     }
 
     /// Check the buffered spans (all using the human measurement `block_human` and the object
@@ -53,9 +59,10 @@ impl Auditor {
             let slot = self.block_human;
             let block = std::mem::take(&mut self.block);
             let mut encl = std::mem::take(&mut self.block_encl);
-            encl.clear();
-            for i in 0..m - 1 {
-                encl.push(self.boxes(&block[i], &block[i + 1]));
+            // Resized, not cleared: each entry is overwritten in place.
+            encl.resize(m - 1, SpanEnclosure::EMPTY);
+            for (i, e) in encl.iter_mut().enumerate() {
+                self.boxes_into(&block[i], &block[i + 1], e);
             }
             self.check_spans(&block, &encl, 0, m - 1, slot);
             self.block = block;
