@@ -95,11 +95,15 @@ pub struct SpanEnclosure {
 }
 
 impl SpanEnclosure {
-    /// No boxes, not consistent: a placeholder to fill with [`span_boxes_into`].
-    pub const EMPTY: SpanEnclosure = SpanEnclosure {
-        boxes: None,
-        consistent: false,
-    };
+    /// No boxes, not consistent: a placeholder to fill with [`span_boxes_into`] (a function, as
+    /// [`JointBox::empty`]).
+    #[inline]
+    pub fn empty() -> SpanEnclosure {
+        SpanEnclosure {
+            boxes: None,
+            consistent: false,
+        }
+    }
 }
 
 /// Relative pad of every bound below: each is a short expression (≤ 12 rounded operations) of
@@ -179,14 +183,29 @@ fn ends_box(a: f64, b: f64, reach: f64) -> (f64, f64) {
 /// span, any positions), `h2_bang_bang_enclosed` and `h2_jerk_enclosed` (one extreme motion each,
 /// any instant); mutant `x11` caught (also by Kani).
 pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> SpanEnclosure {
-    let mut e = SpanEnclosure::EMPTY;
-    span_boxes_into(lim, s0, s1, slack, &mut e);
-    e
+    let mut b = Bounds::zero();
+    let ok = span_bounds(lim, s0, s1, slack, &mut b);
+    let n = lim.dof();
+    // Any non-finite bound (absurd inputs) makes the span unusable as evidence.
+    let boxes = match (
+        JointBox::new(&b.q_lo[..n], &b.q_hi[..n]),
+        JointBox::new(&b.dq_lo[..n], &b.dq_hi[..n]),
+    ) {
+        (Ok(q), Ok(dq)) => Some(SpanBoxes { q, dq }),
+        _ => None,
+    };
+    SpanEnclosure {
+        consistent: ok && boxes.is_some(),
+        boxes,
+    }
 }
 
 /// [`span_boxes`] written into `out` in place (whatever `out` held before): the audit fills one
-/// enclosure per span of a block into reused storage instead of moving ≈ 0.5 kB per span.
-/// The same computation; its guarantees are [`span_boxes`]'s (which is this function).
+/// enclosure per span of a block into reused storage instead of moving ≈ 0.5 kB per span. The
+/// same bounds ([`span_bounds`]) and the same result (test
+/// `the_in_place_enclosure_is_span_boxes`); its guarantees are [`span_boxes`]'s. (The Kani
+/// harnesses run [`span_boxes`]: a write through the `Option`'s payload is what CBMC's SMT
+/// encoding cannot give Bitwuzla.)
 #[inline]
 pub fn span_boxes_into(
     lim: &JointLimits,
@@ -195,9 +214,52 @@ pub fn span_boxes_into(
     slack: f64,
     out: &mut SpanEnclosure,
 ) {
+    let mut b = Bounds::zero();
+    let ok = span_bounds(lim, s0, s1, slack, &mut b);
     let n = lim.dof();
-    let (mut q_lo, mut q_hi) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
-    let (mut dq_lo, mut dq_hi) = ([0.0; MAX_DOF], [0.0; MAX_DOF]);
+    let sb = out.boxes.get_or_insert_with(|| SpanBoxes {
+        q: JointBox::empty(),
+        dq: JointBox::empty(),
+    });
+    let finite = sb.q.assign(&b.q_lo[..n], &b.q_hi[..n]).is_ok()
+        && sb.dq.assign(&b.dq_lo[..n], &b.dq_hi[..n]).is_ok();
+    if !finite {
+        out.boxes = None;
+    }
+    out.consistent = ok && finite;
+}
+
+/// The bounds of the span's boxes per joint (rad, rad/s), before they are checked finite.
+struct Bounds {
+    q_lo: [f64; MAX_DOF],
+    q_hi: [f64; MAX_DOF],
+    dq_lo: [f64; MAX_DOF],
+    dq_hi: [f64; MAX_DOF],
+}
+
+impl Bounds {
+    #[inline(always)]
+    fn zero() -> Bounds {
+        Bounds {
+            q_lo: [0.0; MAX_DOF],
+            q_hi: [0.0; MAX_DOF],
+            dq_lo: [0.0; MAX_DOF],
+            dq_hi: [0.0; MAX_DOF],
+        }
+    }
+}
+
+/// The computation of [`span_boxes`]: the bounds of the boxes into `out` and whether the samples
+/// are consistent (module docs). Shared by [`span_boxes`] and [`span_boxes_into`].
+#[inline(always)]
+fn span_bounds(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut Bounds) -> bool {
+    let n = lim.dof();
+    let Bounds {
+        q_lo,
+        q_hi,
+        dq_lo,
+        dq_hi,
+    } = out;
     // Δ ∈ [dt_lo, dt_hi] (time stamps within one ulp each, one rounded subtraction).
     let dt = s1.t - s0.t;
     let dt_err = PAD * (s0.t.abs() + s1.t.abs()) + TINY;
@@ -316,15 +378,65 @@ pub fn span_boxes_into(
         (q_lo[j], q_hi[j]) = (p_lo, p_hi);
         (dq_lo[j], dq_hi[j]) = (v_lo, v_hi);
     }
-    // Any non-finite bound (absurd inputs) makes the span unusable as evidence.
-    let b = out.boxes.get_or_insert(SpanBoxes {
-        q: JointBox::EMPTY,
-        dq: JointBox::EMPTY,
-    });
-    let finite =
-        b.q.assign(&q_lo[..n], &q_hi[..n]).is_ok() && b.dq.assign(&dq_lo[..n], &dq_hi[..n]).is_ok();
-    if !finite {
-        out.boxes = None;
+    ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pacs_models::RobotModel;
+    use proptest::prelude::*;
+
+    /// A sample of 7 joints from the test's values: positions, velocities, accelerations.
+    fn sample(t: f64, v: &[f64], has_dq: bool, has_ddq: bool) -> Sample {
+        let mut s = Sample {
+            t,
+            q: [0.0; MAX_DOF],
+            dq: [0.0; MAX_DOF],
+            ddq: [0.0; MAX_DOF],
+            has_dq,
+            has_ddq: has_dq && has_ddq,
+        };
+        for j in 0..7 {
+            (s.q[j], s.dq[j], s.ddq[j]) = (v[j], v[7 + j], v[14 + j]);
+        }
+        s
     }
-    out.consistent = ok && finite;
+
+    /// Values from ordinary motion to absurd ones (non-finite bounds: no boxes).
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            8 => -3.0..3.0f64,
+            1 => prop::num::f64::ANY,
+            1 => Just(f64::MAX),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+
+        /// `span_boxes_into` gives `span_boxes`'s result whatever the reused storage held
+        /// before (boxes, none, another span's).
+        #[test]
+        fn the_in_place_enclosure_is_span_boxes(
+            v0 in prop::collection::vec(value(), 21),
+            v1 in prop::collection::vec(value(), 21),
+            dt in prop_oneof![Just(0.0), 1e-4..0.05f64, Just(1e300)],
+            flags in 0u8..8,
+            before in 0u8..3,
+        ) {
+            let robot = RobotModel::builtin("fr3").unwrap();
+            let lim = robot.limits();
+            let (dq, ddq) = (flags & 1 == 1, flags & 2 == 2);
+            let s0 = sample(1.0, &v0, dq, ddq);
+            let s1 = sample(1.0 + dt, &v1, dq || flags & 4 == 4, ddq);
+            let mut out = match before {
+                0 => SpanEnclosure::empty(),
+                1 => span_boxes(lim, &s1, &s0, 1e-9),
+                _ => span_boxes(lim, &sample(0.0, &[0.1; 21], true, false), &sample(0.001, &[0.1; 21], true, false), 1e-9),
+            };
+            span_boxes_into(lim, &s0, &s1, 1e-9, &mut out);
+            prop_assert_eq!(out, span_boxes(lim, &s0, &s1, 1e-9));
+        }
+    }
 }

@@ -52,7 +52,15 @@ impl Auditor {
             self.nom_key_valid = true;
             self.nom_energy = None;
         }
+        // The energy decides PFL hits and objects only: not computed for SSM-only hits (it is
+        // then never read; NaN would compare false everywhere it could be).
+        let parts = self.parts;
+        let needs_energy = self
+            .hits
+            .iter()
+            .any(|h| h.part >= parts || h.kind == ConstraintKind::Pfl);
         let energy = match self.nom_energy {
+            _ if !needs_energy => f64::NAN,
             Some((e, key)) if same(&key[..n], &dq[..n]) => e,
             _ => {
                 let e = self.robot.kinetic_energy(&s.q[..n], &dq[..n]);

@@ -22,7 +22,7 @@ impl Auditor {
     /// The span's joint boxes ([`crate::enclosure::span_boxes`]); not consistent if the samples contradict each
     /// other or the robot's limits (the span is then `exceeds_limits`).
     pub(super) fn boxes(&self, s0: &Sample, s1: &Sample) -> SpanEnclosure {
-        let mut e = SpanEnclosure::EMPTY;
+        let mut e = SpanEnclosure::empty();
         self.boxes_into(s0, s1, &mut e);
         e
     }
@@ -60,7 +60,7 @@ impl Auditor {
             let block = std::mem::take(&mut self.block);
             let mut encl = std::mem::take(&mut self.block_encl);
             // Resized, not cleared: each entry is overwritten in place.
-            encl.resize(m - 1, SpanEnclosure::EMPTY);
+            encl.resize(m - 1, SpanEnclosure::empty());
             for (i, e) in encl.iter_mut().enumerate() {
                 self.boxes_into(&block[i], &block[i + 1], e);
             }
