@@ -70,7 +70,7 @@ struct OpenInterval {
 }
 
 use crate::error::AuditError;
-use crate::series::{Series, max_opt, min_opt};
+use crate::series::{NominalAt, Series, max_opt, min_opt};
 use crate::verdict::InconclusiveReason as Reason;
 
 // The span checks (block fast path, span by span) and the certain check live in submodules
@@ -295,6 +295,7 @@ impl Auditor {
                 t0: 0.0,
                 width: 1e-3,
                 buckets: Vec::with_capacity(SERIES_BUCKETS + 1),
+                nominal: Vec::with_capacity(SERIES_BUCKETS + 1),
             },
             environment: models.environment,
             robot: models.robot,

@@ -4,6 +4,7 @@
 //! so memory stays bounded for logs of any length.
 
 use crate::verdict::SeriesPoint;
+use pacs_models::robot::MAX_DOF;
 
 /// Maximum number of plot buckets per log.
 pub const SERIES_BUCKETS: usize = 1024;
@@ -12,6 +13,18 @@ pub(crate) struct Series {
     pub(crate) t0: f64,
     pub(crate) width: f64,
     pub(crate) buckets: Vec<SeriesPoint>,
+    /// Per bucket, the joint state its `energy_nominal` is evaluated at (the first span checked
+    /// in it), kept and merged like the bucket; the energies are computed once at the end, for
+    /// the buckets that remain (at most [`SERIES_BUCKETS`], where merging would otherwise
+    /// compute and discard one per new bucket).
+    pub(crate) nominal: Vec<Option<NominalAt>>,
+}
+
+/// A joint state (rad, rad/s) whose nominal kinetic energy a plot bucket shows.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct NominalAt {
+    pub(crate) q: [f64; MAX_DOF],
+    pub(crate) dq: [f64; MAX_DOF],
 }
 
 fn empty_point(t: f64, t_end: f64) -> SeriesPoint {
@@ -58,6 +71,7 @@ impl Series {
                         self.t0 + k * self.width,
                         self.t0 + (k + 1.0) * self.width,
                     ));
+                    self.nominal.push(None);
                     new = true;
                 }
                 return (idx, new);
@@ -87,8 +101,12 @@ impl Series {
                     }
                 };
                 self.buckets[i] = merged;
+                // As `energy_nominal` above: the first bucket's state, else the second's.
+                self.nominal[i] =
+                    self.nominal[2 * i].or(self.nominal.get(2 * i + 1).copied().flatten());
             }
             self.buckets.truncate(n.div_ceil(2));
+            self.nominal.truncate(n.div_ceil(2));
             self.width *= 2.0;
         }
     }

@@ -150,6 +150,15 @@ impl Auditor {
                 .success
                 .map(|s| crate::verdict::safe_success(s, verdict == Verdict::Pass)),
         };
+        // The plots' nominal energies, once per remaining bucket.
+        let n = self.n;
+        for (b, at) in self.series.buckets.iter_mut().zip(&self.series.nominal) {
+            if let Some(at) = at {
+                b.energy_nominal = Some(reportable(
+                    self.robot.kinetic_energy(&at.q[..n], &at.dq[..n]),
+                ));
+            }
+        }
         let result = RunResult {
             log: log.to_string(),
             verdict,

@@ -225,7 +225,7 @@ impl Auditor {
             self.span_index += 1;
             let (bidx, new_bucket) = self.series.bucket(a.t);
             if new_bucket {
-                self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(a, b));
+                self.series.nominal[bidx] = Some(self.nominal_state(a, b));
             }
             let rest = self.nominal_rest(a, b);
             self.series.buckets[bidx].at_rest &= rest;
@@ -299,8 +299,9 @@ impl Auditor {
         true
     }
 
-    /// Nominal whole-robot kinetic energy (J) at `a` (velocity logged, else the span's mean).
-    pub(super) fn nominal_energy(&self, a: &Sample, b: &Sample) -> f64 {
+    /// The joint state whose nominal whole-robot kinetic energy (J) a plot bucket shows: `a`
+    /// with its logged velocity, else the span's mean velocity.
+    pub(super) fn nominal_state(&self, a: &Sample, b: &Sample) -> NominalAt {
         let n = self.n;
         let dt = b.t - a.t;
         let mut dq = [0.0; MAX_DOF];
@@ -313,7 +314,7 @@ impl Auditor {
                 0.0
             };
         }
-        reportable(self.robot.kinetic_energy(&a.q[..n], &dq[..n]))
+        NominalAt { q: a.q, dq }
     }
 
     /// Whether the robot is nominally at rest over the span `a`–`b` (for the plots only): the
@@ -399,7 +400,7 @@ impl Auditor {
             self.series.buckets[bidx].inconclusive = true;
         }
         if new_bucket {
-            self.series.buckets[bidx].energy_nominal = Some(self.nominal_energy(s0, s1));
+            self.series.nominal[bidx] = Some(self.nominal_state(s0, s1));
         }
         // Broad phase, stage 1: every body part (and object) outside the robot's workspace ball.
         let human_clear = self.rule.workspace_clear(&self.hcaps);
