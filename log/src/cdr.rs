@@ -135,6 +135,15 @@ impl<'a> CdrReader<'a> {
     /// A `string`: returns the text without its NUL terminator.
     pub fn string(&mut self, field: &'static str) -> Result<&'a str, CdrError> {
         let at = self.at();
+        let text = self.string_bytes(field)?;
+        utf8(text, field, at)
+    }
+
+    /// A string's bytes without its NUL, checked as [`Self::string`] except for UTF-8 (for a
+    /// caller that compares them with a string it holds before validating them: bytes equal to a
+    /// `str`'s are valid UTF-8).
+    pub fn string_bytes(&mut self, field: &'static str) -> Result<&'a [u8], CdrError> {
+        let at = self.at();
         let len = self.u32(field)? as usize;
         if len == 0 {
             return Err(CdrError::BadString {
@@ -152,11 +161,7 @@ impl<'a> CdrReader<'a> {
                 problem: "string does not end with NUL",
             });
         }
-        std::str::from_utf8(text).map_err(|_| CdrError::BadString {
-            field,
-            at,
-            problem: "string is not valid UTF-8",
-        })
+        Ok(text)
     }
 
     /// A sequence length, checked against the remaining bytes given the smallest encoded element
@@ -247,6 +252,15 @@ pub struct JointStateMsg {
     pub effort: Vec<f64>,
 }
 
+/// `text` as a `str`, or the error of a string `field` at byte `at` that is not UTF-8.
+fn utf8<'a>(text: &'a [u8], field: &'static str, at: usize) -> Result<&'a str, CdrError> {
+    std::str::from_utf8(text).map_err(|_| CdrError::BadString {
+        field,
+        at,
+        problem: "string is not valid UTF-8",
+    })
+}
+
 impl JointStateMsg {
     /// Decode `data` (a CDR `JointState`) into `self`, reusing its buffers.
     pub fn decode(&mut self, data: &[u8]) -> Result<(), CdrError> {
@@ -257,14 +271,18 @@ impl JointStateMsg {
         let n = r.seq_len("name", 5)?;
         self.names.truncate(n);
         for i in 0..n {
-            let s = r.string("name")?;
-            if let Some(slot) = self.names.get_mut(i) {
-                if slot != s {
+            // The names repeat from message to message: bytes equal to the name held are
+            // valid UTF-8 and need neither validation nor a copy.
+            let at = r.at();
+            let bytes = r.string_bytes("name")?;
+            match self.names.get_mut(i) {
+                Some(slot) if slot.as_bytes() == bytes => {}
+                Some(slot) => {
+                    let s = utf8(bytes, "name", at)?;
                     slot.clear();
                     slot.push_str(s);
                 }
-            } else {
-                self.names.push(s.to_string());
+                None => self.names.push(utf8(bytes, "name", at)?.to_string()),
             }
         }
         r.f64_seq("position", &mut self.position)?;

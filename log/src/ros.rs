@@ -19,7 +19,7 @@ use crate::cdr::{self, JointStateMsg, PoseArray};
 use crate::error::{Location, LogError};
 use crate::format::{Header, LogModels, ModelOverrides, Record};
 use crate::mcap::{JOINT_STATE, MAX_PENDING, McapConfig, POSE_ARRAY, POSE_STAMPED, STRING};
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, VecDeque};
 
 /// More than 65,535 person topics (a person's index is 16 bits).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -167,6 +167,10 @@ pub(crate) struct Messages {
     pub(crate) person_ids: Vec<String>,
     /// Whole seconds subtracted from every time stamp (the first message's log time).
     pub(crate) base_s: Option<i64>,
+    /// Messages waiting for their turn: those that arrived in order (each after the last one
+    /// queued here, the usual case) in `run`, in order; the others in `heap`. The next message
+    /// is the earlier of the two fronts.
+    run: VecDeque<Pending>,
     heap: BinaryHeap<Pending>,
     seq: u64,
     max_t: f64,
@@ -195,6 +199,7 @@ impl Messages {
             person_keypoints: Vec::new(),
             person_ids: Vec::new(),
             base_s: None,
+            run: VecDeque::new(),
             heap: BinaryHeap::new(),
             seq: 0,
             max_t: f64::NEG_INFINITY,
@@ -281,7 +286,7 @@ impl Messages {
 
     /// Whether no message is waiting.
     pub(crate) fn is_empty(&self) -> bool {
-        self.heap.is_empty()
+        self.heap.is_empty() && self.run.is_empty()
     }
 
     /// Seconds since the time base of a time stamp in nanoseconds.
@@ -324,7 +329,7 @@ impl Messages {
                 self.max_t
             )));
         }
-        if self.heap.len() >= MAX_PENDING {
+        if self.heap.len() + self.run.len() >= MAX_PENDING {
             return Err(err(format!(
                 "more than {MAX_PENDING} messages within mcap.reorder_window = {} s",
                 self.cfg.reorder_window
@@ -332,12 +337,18 @@ impl Messages {
         }
         self.max_t = self.max_t.max(t);
         self.seq += 1;
-        self.heap.push(Pending {
+        let p = Pending {
             t,
             seq: self.seq,
             loc: m.loc,
             body,
-        });
+        };
+        // `Pending`'s order is reversed (for the max-heap): `a > b` means `a` goes first.
+        if self.run.back().is_none_or(|last| p < *last) {
+            self.run.push_back(p);
+        } else {
+            self.heap.push(p);
+        }
         Ok(())
     }
 
@@ -539,11 +550,21 @@ impl Messages {
     /// The next message in time order if it is ready: at least `reorder_window` older than the
     /// latest message read, or any message once the input is `done`.
     pub(crate) fn pop_ready(&mut self, done: bool) -> Option<Pending> {
-        let ready = self
-            .heap
-            .peek()
-            .is_some_and(|top| done || top.t <= self.max_t - self.cfg.reorder_window);
-        let p = if ready { self.heap.pop() } else { None }?;
+        let from_run = match (self.run.front(), self.heap.peek()) {
+            (Some(a), Some(b)) => a > b,
+            (a, _) => a.is_some(),
+        };
+        let first = if from_run {
+            self.run.front()
+        } else {
+            self.heap.peek()
+        };
+        let ready = first.is_some_and(|p| done || p.t <= self.max_t - self.cfg.reorder_window);
+        let p = match (ready, from_run) {
+            (false, _) => None,
+            (true, true) => self.run.pop_front(),
+            (true, false) => self.heap.pop(),
+        }?;
         self.last_released = p.t;
         Some(p)
     }
