@@ -122,6 +122,9 @@ pub struct Auditor {
     rreach: RobotReach,
     hreach: HumanReach,
     n: usize,
+    /// Per joint, the position band a sample must lie in (rad): the limits widened by the
+    /// relative `limit_slack` (at least `limit_slack` rad), computed once.
+    q_band: [(f64, f64); MAX_DOF],
     parts: usize,
     links: usize,
     cap_local: Vec<Capsule>,
@@ -241,6 +244,17 @@ impl Auditor {
             ObjectRule::new(&models.robot, &rreach, cfg.rest_speed).map_err(AuditError::Rule)?;
         let objects = object_tracks(&models);
         let slots = parts + objects.len();
+        let mut q_band = [(0.0, 0.0); MAX_DOF];
+        {
+            let (lim, slack) = (models.robot.limits(), cfg.limit_slack);
+            for (j, band) in q_band.iter_mut().enumerate().take(n) {
+                let (lo, hi) = (lim.q_min()[j], lim.q_max()[j]);
+                *band = (
+                    lo - slack * lo.abs().max(1.0),
+                    hi + slack * hi.abs().max(1.0),
+                );
+            }
+        }
         Ok(Self {
             object_rule,
             objects,
@@ -248,6 +262,7 @@ impl Auditor {
             rreach,
             cfg,
             n,
+            q_band,
             parts,
             links,
             cap_local,

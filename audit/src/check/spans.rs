@@ -34,12 +34,10 @@ impl Auditor {
         // one moving faster than its limits: the span is inconsistent (`exceeds_limits`; it is
         // still checked with its boxes, and can never pass). The same relative slack as for
         // the other limits.
-        let lim = self.robot.limits();
-        let slack = self.cfg.limit_slack;
         let within = |s: &Sample| {
             (0..self.n).all(|j| {
-                let (lo, hi) = (lim.q_min()[j], lim.q_max()[j]);
-                s.q[j] >= lo - slack * lo.abs().max(1.0) && s.q[j] <= hi + slack * hi.abs().max(1.0)
+                let (lo, hi) = self.q_band[j];
+                s.q[j] >= lo && s.q[j] <= hi
             })
         };
         if !(within(s0) && within(s1)) {
