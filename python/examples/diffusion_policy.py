@@ -188,9 +188,34 @@ def evaluate(args):
     def progress(done, total):
         print(f"\r{done}/{total} rollouts ({time.time() - t0:.0f} s)", end="", flush=True)
 
-    result = pacs.simulate(args.task, args.method, rollouts=args.rollouts, seed=args.seed,
-                           policy=policy, client=client, log_dir=out / "logs",
-                           progress=None if client else progress)
+    # One method at a time, each method's rows and rollouts saved to partial.json as it ends:
+    # a long evaluation that stops (a full disk, a reboot) resumes with --resume from the
+    # methods it finished. A rollout depends only on its task, method and seed, so the rows are
+    # those of one call with every method.
+    methods = [m.strip() for m in args.method.split(",") if m.strip()]
+    key = {"task": args.task, "policy": str(args.policy), "rollouts": args.rollouts,
+           "seed": args.seed}
+    partial_path = out / "partial.json"
+    result = {"rows": [], "rollouts": []}
+    if args.resume and partial_path.exists():
+        saved = json.loads(partial_path.read_text())
+        if saved.get("key") != key:
+            raise SystemExit(f"{partial_path}: made by another evaluation ({saved.get('key')}), "
+                             f"not {key}; remove it or use another --out")
+        result = {"rows": saved["rows"], "rollouts": saved["rollouts"]}
+        print(f"resuming: {', '.join(r['method'] for r in result['rows'])} already done")
+    for m in methods:
+        if any(r["method"] == m for r in result["rows"]):
+            continue
+        part = pacs.simulate(args.task, m, rollouts=args.rollouts, seed=args.seed,
+                             policy=policy, client=client, log_dir=out / "logs",
+                             progress=None if client else progress)
+        result["rows"] += part["rows"]
+        result["rollouts"] += part["rollouts"]
+        partial_path.write_text(json.dumps({"key": key, **result}, default=str))
+    # The evaluation's order (`pacs.simulate`'s): by method, each method's rollouts by seed.
+    result["rows"].sort(key=lambda r: r["method"])
+    result["rollouts"].sort(key=lambda r: r["method"])
     print()
     if cluster is not None:
         client.close()
@@ -381,6 +406,9 @@ def main():
                    help="without --client: rollouts in parallel on a Dask cluster of this many "
                         "local processes (default 1: in this process)")
     e.add_argument("--out", required=True)
+    e.add_argument("--resume", action="store_true",
+                   help="keep the methods OUT/partial.json already holds (an evaluation that "
+                        "stopped) and run only the others")
     c = sub.add_parser("compare", help="evaluations compared method by method (Newcombe 95 %% "
                                          "intervals of the differences in success)")
     c.add_argument("evaluations", nargs="+",

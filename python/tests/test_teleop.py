@@ -242,6 +242,18 @@ def test_the_diffusion_policy_example_runs_verbatim(tmp_path):
     assert sum(row["audit_verdicts"].values()) == 1
     svg = (out / "eval" / "summary.svg").read_text()
     assert svg.startswith("<svg") and svg.count("<circle") == 1
+    # --resume keeps the methods partial.json holds and runs only the others.
+    p = run("evaluate", "--policy", str(out / "model"), "--task", "sorting", "--method",
+            "pacs,off", "--rollouts", "1", "--out", str(out / "eval"), "--resume")
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "resuming: pacs already done" in p.stdout
+    summary = json.loads((out / "eval" / "summary.json").read_text())
+    assert [r["method"] for r in summary["rows"]] == ["off", "pacs"]
+    assert summary["rows"][1] == row
+    # Another evaluation's partial results are refused, not mixed in.
+    p = run("evaluate", "--policy", str(out / "model"), "--task", "sorting", "--method", "pacs",
+            "--rollouts", "2", "--out", str(out / "eval"), "--resume")
+    assert p.returncode != 0 and "made by another evaluation" in p.stderr
 
 
 def test_bad_arguments_of_the_learning_tools_are_named():
