@@ -54,7 +54,9 @@ mod object;
 
 pub use broad_phase::{box_contains_capsule, broad_phase_box, workspace_ball};
 pub use environment::EnvShape;
-pub use object::{ObjectOutcome, ObjectRule, ObjectViolation, contact_violates};
+pub use object::{
+    ObjectOutcome, ObjectRule, ObjectViolation, contact_allowed_only_within_rule, contact_violates,
+};
 
 use broad_phase::Aabb;
 use pacs_models::{Capsule, Constraint, HumanModel, RobotModel};
@@ -136,6 +138,12 @@ pub fn frames_can_pinch(a: usize, b: usize) -> bool {
 
 /// The threshold (J) for a contact with constraint `c`: SSM 0; PFL the unconstrained threshold,
 /// or `min(constrained, unconstrained)` for a possible clamping contact.
+///
+/// # Soundness
+/// Its Kani contract is [`threshold_within_limits`] (proven on this function for every
+/// constraint, flag and threshold, NaN included, by `i1_threshold_contract`): never above a
+/// limit that applies, so a clamp is never judged against the free-contact limit alone.
+#[cfg_attr(kani, kani::ensures(|r: &f64| threshold_within_limits(c, constrained, *r)))]
 #[inline]
 pub fn threshold(c: Constraint, constrained: bool) -> f64 {
     match c {
@@ -149,6 +157,25 @@ pub fn threshold(c: Constraint, constrained: bool) -> f64 {
             } else {
                 unconstrained
             }
+        }
+    }
+}
+
+/// The contract of [`threshold`]: the threshold `r` (J) for constraint `c` is 0 under SSM; under
+/// PFL it is one of the two limits (or NaN only if both are) and never above the unconstrained
+/// limit, nor above the constrained one for a possible clamp (`constrained`), except where that
+/// limit is NaN (a NaN limit is ignored by `min`; the rule judges a NaN threshold a violation).
+pub fn threshold_within_limits(c: Constraint, constrained: bool, r: f64) -> bool {
+    match c {
+        Constraint::Ssm => r == 0.0 && r.is_sign_positive(),
+        Constraint::Pfl {
+            unconstrained: u,
+            constrained: cons,
+        } => {
+            let one_of = r.to_bits() == u.to_bits()
+                || (constrained && r.to_bits() == cons.to_bits())
+                || (r.is_nan() && u.is_nan() && (!constrained || cons.is_nan()));
+            one_of && (u.is_nan() || r <= u) && (!constrained || cons.is_nan() || r <= cons)
         }
     }
 }

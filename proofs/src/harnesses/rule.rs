@@ -395,3 +395,109 @@ harness!(
     cases = crate::DEFAULT_CASES,
     broad_phase_boxes
 );
+
+// ---------------------------------------------------------------------------------------------
+// The rule's decision atoms: the threshold a contact is judged against, and an object contact's
+// decision. Both carry Kani function contracts, proven here on the real functions.
+
+/// A threshold or energy (J): any float under Kani (NaN, ±∞, subnormals included); in the twin
+/// special values or any finite magnitude.
+fn any_joules<S: Source>(s: &mut S) -> f64 {
+    if cfg!(kani) {
+        return kani_any_f64();
+    }
+    match s.index(6) {
+        0 => f64::NAN,
+        1 => f64::INFINITY,
+        2 => -0.0,
+        3 => 0.0,
+        4 => s.f64_in(0.0, 10.0),
+        _ => s.f64_in(-1e300, 1e300),
+    }
+}
+
+#[cfg(kani)]
+fn kani_any_f64() -> f64 {
+    kani::any()
+}
+
+#[cfg(not(kani))]
+fn kani_any_f64() -> f64 {
+    unreachable!("Kani only")
+}
+
+/// A constraint: SSM or PFL with any two thresholds.
+fn any_constraint<S: Source>(s: &mut S) -> Constraint {
+    if s.bool() {
+        Constraint::Ssm
+    } else {
+        Constraint::Pfl {
+            unconstrained: any_joules(s),
+            constrained: any_joules(s),
+        }
+    }
+}
+
+/// An object's contact rule: no contact, SSM, or PFL with any threshold.
+fn any_object_contact<S: Source>(s: &mut S) -> pacs_models::object::ObjectContact {
+    use pacs_models::object::ObjectContact;
+    match s.index(3) {
+        0 => ObjectContact::NoContact,
+        1 => ObjectContact::Ssm,
+        _ => ObjectContact::Pfl {
+            threshold: any_joules(s),
+        },
+    }
+}
+
+/// (i1, the decision atoms) For any constraint and clamp flag, the threshold `threshold` returns
+/// is within the limits that apply (`threshold_within_limits`); for any object contact rule,
+/// rest flag and energy, `contact_violates` reports no violation only where the rule allows the
+/// contact (`contact_allowed_only_within_rule`). The claims of both functions' Kani contracts,
+/// proven on the real functions by `i1_threshold_contract` and `i1_object_decision_contract`.
+fn decision_atoms<S: Source>(s: &mut S) {
+    use pacs_verify::iso15066::{
+        contact_allowed_only_within_rule, contact_violates, threshold, threshold_within_limits,
+    };
+    let c = any_constraint(s);
+    let clamp = s.bool();
+    let r = threshold(c, clamp);
+    assert!(
+        threshold_within_limits(c, clamp, r),
+        "threshold {r} for {c:?} (clamp {clamp}) is above a limit that applies"
+    );
+    let contact = any_object_contact(s);
+    let at_rest = s.bool();
+    let e = any_joules(s);
+    let out = contact_violates(contact, at_rest, || e);
+    assert!(
+        contact_allowed_only_within_rule(contact, at_rest, out),
+        "{contact:?} at rest {at_rest} with energy {e}: {out:?} lets a contact pass"
+    );
+}
+
+harness!(
+    i1_decision_atoms_within_rule,
+    unwind = 2,
+    cases = crate::DEFAULT_CASES,
+    decision_atoms
+);
+
+/// `threshold`'s Kani contract (`threshold_within_limits`), proven on the real function for every
+/// constraint, clamp flag and pair of thresholds (any floats).
+#[cfg(kani)]
+#[kani::proof_for_contract(pacs_verify::iso15066::threshold)]
+fn i1_threshold_contract() {
+    let c = any_constraint(&mut crate::KaniSource { bits: 52 });
+    let _ = pacs_verify::iso15066::threshold(c, kani::any());
+}
+
+/// `contact_violates`'s Kani contract (`contact_allowed_only_within_rule`), proven on the real
+/// function for every contact rule, rest flag, threshold and energy (any floats).
+#[cfg(kani)]
+#[kani::proof_for_contract(pacs_verify::iso15066::contact_violates)]
+fn i1_object_decision_contract() {
+    let contact = any_object_contact(&mut crate::KaniSource { bits: 52 });
+    let e: f64 = kani::any();
+    let _ = pacs_verify::iso15066::contact_violates(contact, kani::any(), || e);
+}

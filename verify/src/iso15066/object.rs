@@ -157,6 +157,12 @@ impl ObjectRule {
 /// for PFL; NaN counts as +∞) exceeds the threshold. Returns (violation, the energy used, 0 for
 /// SSM and no-contact). The one decision for objects: [`ObjectRule::check`] applies it to
 /// reachable sets, the simulation's ground truth to exact states.
+///
+/// # Soundness
+/// Its Kani contract is [`contact_allowed_only_within_rule`] (proven on this function for every
+/// contact kind, rest flag, threshold and energy, NaN included, by
+/// `i1_object_decision_contract`): no violation only where the rule allows the contact.
+#[cfg_attr(kani, kani::ensures(|r: &(bool, f64)| contact_allowed_only_within_rule(contact, at_rest, *r)))]
 pub fn contact_violates(
     contact: ObjectContact,
     at_rest: bool,
@@ -171,4 +177,20 @@ pub fn contact_violates(
             (e > threshold || threshold.is_nan(), e)
         }
     }
+}
+
+/// The contract of [`contact_violates`]: a result `(violated, energy)` that reports no violation
+/// only where the object's rule allows the contact: never under `no_contact`, under `ssm` only
+/// `at_rest`, under `pfl` only with an energy (the bound used, not NaN) at most the threshold.
+pub fn contact_allowed_only_within_rule(
+    contact: ObjectContact,
+    at_rest: bool,
+    (violated, energy): (bool, f64),
+) -> bool {
+    violated
+        || match contact {
+            ObjectContact::NoContact => false,
+            ObjectContact::Ssm => at_rest,
+            ObjectContact::Pfl { threshold } => energy <= threshold,
+        }
 }
