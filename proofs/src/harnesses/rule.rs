@@ -438,6 +438,23 @@ fn any_constraint<S: Source>(s: &mut S) -> Constraint {
     }
 }
 
+/// A joint velocity box (rad/s) of up to `max_dof` joints with any finite bounds (`lo ≤ hi`).
+fn any_velocity_box<S: Source>(s: &mut S, max_dof: usize) -> JointBox {
+    let n = s.index(max_dof + 1);
+    let (mut lo, mut hi) = ([0.0; 7], [0.0; 7]);
+    for j in 0..n {
+        let (a, b) = (any_joules(s), any_joules(s));
+        (lo[j], hi[j]) = if a <= b { (a, b) } else { (b, a) };
+    }
+    match JointBox::new(&lo[..n], &hi[..n]) {
+        Ok(b) => b,
+        Err(_) => {
+            s.assume(false);
+            JointBox::empty()
+        }
+    }
+}
+
 /// An object's contact rule: no contact, SSM, or PFL with any threshold.
 fn any_object_contact<S: Source>(s: &mut S) -> pacs_models::object::ObjectContact {
     use pacs_models::object::ObjectContact;
@@ -451,13 +468,16 @@ fn any_object_contact<S: Source>(s: &mut S) -> pacs_models::object::ObjectContac
 }
 
 /// (i1, the decision atoms) For any constraint and clamp flag, the threshold `threshold` returns
-/// is within the limits that apply (`threshold_within_limits`); for any object contact rule,
+/// is within the limits that apply (`threshold_within_limits`); `at_rest` holds only for a
+/// velocity box whose every speed is within the rest speed (`every_speed_within`; the twin, up
+/// to 7 joints: under Kani `i1_at_rest_contract`); for any object contact rule,
 /// rest flag and energy, `contact_violates` reports no violation only where the rule allows the
 /// contact (`contact_allowed_only_within_rule`). The claims of both functions' Kani contracts,
 /// proven on the real functions by `i1_threshold_contract` and `i1_object_decision_contract`.
 fn decision_atoms<S: Source>(s: &mut S) {
     use pacs_verify::iso15066::{
-        contact_allowed_only_within_rule, contact_violates, threshold, threshold_within_limits,
+        contact_allowed_only_within_rule, contact_violates, every_speed_within, threshold,
+        threshold_within_limits,
     };
     let c = any_constraint(s);
     let clamp = s.bool();
@@ -466,6 +486,16 @@ fn decision_atoms<S: Source>(s: &mut S) {
         threshold_within_limits(c, clamp, r),
         "threshold {r} for {c:?} (clamp {clamp}) is above a limit that applies"
     );
+    // Under Kani `at_rest` is `i1_at_rest_contract`'s (the velocity box makes this body too
+    // slow for MiniSat, and Bitwuzla rejects CBMC's encoding of the box's float arrays).
+    if !cfg!(kani) {
+        let dq = any_velocity_box(s, 7);
+        let rest = any_joules(s);
+        assert!(
+            !pacs_verify::iso15066::at_rest(&dq, rest) || every_speed_within(&dq, rest),
+            "at rest with {dq:?} against rest speed {rest}"
+        );
+    }
     let contact = any_object_contact(s);
     let at_rest = s.bool();
     let e = any_joules(s);
@@ -500,4 +530,14 @@ fn i1_object_decision_contract() {
     let contact = any_object_contact(&mut crate::KaniSource { bits: 52 });
     let e: f64 = kani::any();
     let _ = pacs_verify::iso15066::contact_violates(contact, kani::any(), || e);
+}
+
+/// `at_rest`'s Kani contract (`every_speed_within`), proven on the real function for velocity
+/// boxes of up to 3 joints with any finite bounds and any rest speed (any float).
+#[cfg(kani)]
+#[kani::proof_for_contract(pacs_verify::iso15066::at_rest)]
+#[kani::unwind(5)]
+fn i1_at_rest_contract() {
+    let dq = any_velocity_box(&mut crate::KaniSource { bits: 52 }, 3);
+    let _ = pacs_verify::iso15066::at_rest(&dq, kani::any());
 }
