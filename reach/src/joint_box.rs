@@ -136,6 +136,8 @@ impl JointBox {
     /// # Errors
     /// As [`Self::new`].
     #[inline]
+    // Element by element on purpose (below).
+    #[allow(clippy::manual_memcpy)]
     pub fn assign(&mut self, lo: &[f64], hi: &[f64]) -> Result<(), JointBoxError> {
         if lo.len() != hi.len() {
             return Err(JointBoxError::LengthMismatch {
