@@ -34,6 +34,39 @@ pub enum JointBoxError {
     },
 }
 
+/// One check of [`JointBox::new`] and [`JointBox::assign`]: as many lower as upper bounds.
+#[inline]
+fn same_length(lo: &[f64], hi: &[f64]) -> Result<(), JointBoxError> {
+    if lo.len() == hi.len() {
+        Ok(())
+    } else {
+        Err(JointBoxError::LengthMismatch {
+            lo: lo.len(),
+            hi: hi.len(),
+        })
+    }
+}
+
+/// One check of every constructor: at most [`MAX_DOF`] joints.
+#[inline]
+fn joint_count(dof: usize) -> Result<(), JointBoxError> {
+    if dof > MAX_DOF {
+        Err(JointBoxError::TooManyJoints(dof))
+    } else {
+        Ok(())
+    }
+}
+
+/// One check of every constructor, per joint: finite bounds with `lo ≤ hi`.
+#[inline]
+fn valid_joint(joint: usize, lo: f64, hi: f64) -> Result<(), JointBoxError> {
+    if lo.is_finite() && hi.is_finite() && lo <= hi {
+        Ok(())
+    } else {
+        Err(JointBoxError::Invalid { joint, lo, hi })
+    }
+}
+
 /// `[lo_j, hi_j]` for each of `dof()` joints: finite, `lo_j ≤ hi_j`, `dof() ≤ MAX_DOF`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointBox {
@@ -48,12 +81,7 @@ impl JointBox {
     /// # Errors
     /// Different lengths, more than [`MAX_DOF`] joints, a non-finite bound or `lo_j > hi_j`.
     pub fn new(lo: &[f64], hi: &[f64]) -> Result<Self, JointBoxError> {
-        if lo.len() != hi.len() {
-            return Err(JointBoxError::LengthMismatch {
-                lo: lo.len(),
-                hi: hi.len(),
-            });
-        }
+        same_length(lo, hi)?;
         Self::from_fn(lo.len(), |j| (lo[j], hi[j]))
     }
 
@@ -65,9 +93,7 @@ impl JointBox {
         dof: usize,
         mut bounds: impl FnMut(usize) -> (f64, f64),
     ) -> Result<Self, JointBoxError> {
-        if dof > MAX_DOF {
-            return Err(JointBoxError::TooManyJoints(dof));
-        }
+        joint_count(dof)?;
         let mut b = Self {
             n: dof,
             lo: [0.0; MAX_DOF],
@@ -75,9 +101,7 @@ impl JointBox {
         };
         for j in 0..dof {
             let (lo, hi) = bounds(j);
-            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-                return Err(JointBoxError::Invalid { joint: j, lo, hi });
-            }
+            valid_joint(j, lo, hi)?;
             b.lo[j] = lo;
             b.hi[j] = hi;
         }
@@ -139,25 +163,11 @@ impl JointBox {
     // Element by element on purpose (below).
     #[allow(clippy::manual_memcpy)]
     pub fn assign(&mut self, lo: &[f64], hi: &[f64]) -> Result<(), JointBoxError> {
-        if lo.len() != hi.len() {
-            return Err(JointBoxError::LengthMismatch {
-                lo: lo.len(),
-                hi: hi.len(),
-            });
-        }
+        same_length(lo, hi)?;
         let n = lo.len();
-        if n > MAX_DOF {
-            return Err(JointBoxError::TooManyJoints(n));
-        }
+        joint_count(n)?;
         for j in 0..n {
-            let (l, h) = (lo[j], hi[j]);
-            if !(l.is_finite() && h.is_finite() && l <= h) {
-                return Err(JointBoxError::Invalid {
-                    joint: j,
-                    lo: l,
-                    hi: h,
-                });
-            }
+            valid_joint(j, lo[j], hi[j])?;
         }
         // Element by element, not `copy_from_slice`/`fill`: their memcpy/memset of float arrays
         // is what CBMC's SMT encoding cannot give Bitwuzla (the audit's h2 harnesses run
