@@ -50,10 +50,14 @@ fn samples() -> Vec<Sample> {
 }
 
 fn models(task: &str) -> LogModels {
+    models_with(task, HumanModel::builtin("default").unwrap())
+}
+
+fn models_with(task: &str, human: HumanModel) -> LogModels {
     LogModels {
         robot: RobotModel::builtin("fr3").unwrap(),
-        human: HumanModel::builtin("default").unwrap(),
-        people: vec![("human".into(), HumanModel::builtin("default").unwrap())],
+        human: human.clone(),
+        people: vec![("human".into(), human)],
         constraints: ConstraintSpec::builtin(task).unwrap(),
         environment: vec![],
         objects: vec![],
@@ -66,6 +70,35 @@ fn run_core(s: &[Sample], x: f64, task: &str) -> pacs_audit::RunResult {
     for (i, s) in s.iter().enumerate() {
         if i % 33 == 0 {
             a.push_human(s.t, s.t, &kp).unwrap();
+        }
+        a.push_robot(s.t, &s.q, Some(&s.dq)).unwrap();
+    }
+    a.finish("bench", Default::default())
+}
+
+/// The default human with a 2 cm position error, measured at 100 Hz with a deterministic
+/// jitter of up to ±1 cm per axis (within the error): records differ by more than the person
+/// may move between them, so the records just before the one in use are not covered by it and
+/// each violating span is judged against them too (the audit's "every measurement still
+/// usable"; up to 100 records are younger than `max_human_age`, 64 are kept).
+fn run_noisy(s: &[Sample], x: f64, task: &str) -> pacs_audit::RunResult {
+    let mut spec = HumanModel::builtin("default").unwrap().spec().clone();
+    spec.measurement_error_pos = 0.02;
+    let human = HumanModel::new(spec).unwrap();
+    let mut a = Auditor::new(models_with(task, human), AuditConfig::default()).unwrap();
+    let mut kp = standing(x);
+    let mut seed: u64 = 1;
+    for (i, s) in s.iter().enumerate() {
+        if i % 10 == 0 {
+            let mut rec = kp.clone();
+            for p in rec.iter_mut().flatten() {
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                *p += ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.02;
+            }
+            a.push_human(s.t, s.t, &rec).unwrap();
+            kp = standing(x);
         }
         a.push_robot(s.t, &s.q, Some(&s.dq)).unwrap();
     }
@@ -144,6 +177,14 @@ fn bench(c: &mut Criterion) {
         );
         g.bench_function(name, |b| b.iter(|| black_box(run_core(&s, x, task))));
     }
+    let r = run_noisy(&s, 0.6, "ssm");
+    eprintln!(
+        "check_near_ssm_noisy: verdict {:?}, violation fraction {:.3}",
+        r.verdict, r.metrics.violation_fraction
+    );
+    g.bench_function("check_near_ssm_noisy", |b| {
+        b.iter(|| black_box(run_noisy(&s, 0.6, "ssm")))
+    });
     let bytes = jsonl(&s, 0.6, "handover");
     eprintln!("jsonl: {} bytes for {N} robot samples", bytes.len());
     g.bench_function("jsonl_read_and_check_near_handover", |b| {

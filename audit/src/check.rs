@@ -131,6 +131,14 @@ pub struct Auditor {
     // Buffers.
     rcaps: Vec<Capsule>,
     hcaps: Vec<Capsule>,
+    /// The human occupancy from another measurement than the span's (see
+    /// `clear_by_other_measurements`), and the (part, link) pairs it leaves violating.
+    alt_hcaps: Vec<Capsule>,
+    alt_pairs: Vec<(usize, usize)>,
+    /// Indices into `human_history` of the records that may clear what the one in `humans`
+    /// slot `alt_humans_for` shows (`collect_other_human_records`); `None` once either changes.
+    alt_humans: Vec<usize>,
+    alt_humans_for: Option<usize>,
     energies: Vec<f64>,
     /// Robot-occupancy scratch (the energy bound of the same box reuses its frames).
     scratch: Box<ReachScratch>,
@@ -269,6 +277,10 @@ impl Auditor {
             rule,
             rcaps,
             hcaps: vec![zero; parts],
+            alt_hcaps: vec![zero; parts],
+            alt_pairs: Vec::with_capacity(slots * links),
+            alt_humans: Vec::with_capacity(HUMAN_HISTORY),
+            alt_humans_for: None,
             energies: vec![0.0; n + 1],
             scratch: Box::default(),
             frames: vec![Isometry3::identity(); n + 1],
@@ -408,6 +420,8 @@ impl Auditor {
     /// occupancies assume the model, so a pass there would rest on an assumption the log itself
     /// refutes. `m` is then kept.
     fn check_human_model(&mut self, m: &HumanMeasurement) {
+        // The kept records change: the candidates for clearing spans are collected anew.
+        self.alt_humans_for = None;
         let mut nearest = Nearest::new(m.time());
         let mbox = KeypointBox::of(m);
         let v_min = self

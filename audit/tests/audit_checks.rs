@@ -503,3 +503,74 @@ fn far_and_near_separation_figures_are_drawn_apart() {
         );
     }
 }
+
+/// A person standing at `x` (m) in front of the arm (joint 1 turning at 0.05 rad/s from the
+/// ready pose, SSM), measured every 10 ms with a model of 1 cm position error and 0.5 m/s;
+/// record `i` (stamp `i`·10 ms) is moved by `offset(i)` (m, along x towards the arm and along
+/// y), within the 2 cm that two records may differ by.
+fn shifted_person_log(x: f64, offset: &dyn Fn(usize) -> (f64, f64)) -> String {
+    let mut spec = human().spec().clone();
+    spec.v_max = vec![0.5; spec.keypoints.len()];
+    spec.measurement_error_pos = 0.01;
+    let mut log = Log::with_human(ModelRef::Spec(Box::new(spec)), ssm());
+    for k in 0..=200 {
+        let t = k as f64 * 1e-3;
+        if k % 10 == 0 {
+            let (dx, dy) = offset(k / 10);
+            log.human(t, &standing(x - dx, dy));
+        }
+        let mut q = Q_READY;
+        q[0] += 0.05 * t;
+        let mut dq = [0.0; 7];
+        dq[0] = 0.05;
+        log.robot(t, &q, Some(&dq));
+    }
+    log.text()
+}
+
+/// As for objects (`audit_objects::an_earlier_measurement_clears_a_span_the_newest_cannot`):
+/// a (body part, link) pair that the occupancy of an earlier measurement still in use clears
+/// is clear, even where the newest one, shifted within the measurement error, reaches the
+/// arm; where every measurement still usable for a span reports a pair, the log fails.
+#[test]
+fn an_earlier_person_measurement_clears_a_span_the_newest_cannot() {
+    let verdict = |x: f64, offset: &dyn Fn(usize) -> (f64, f64)| {
+        let r = run(&shifted_person_log(x, offset), &AuditConfig::default()).unwrap();
+        assert!(r.inconclusive.is_empty(), "x {x}: {:?}", r.inconclusive);
+        r.verdict
+    };
+    let still = |_: usize| (0.0, 0.0);
+    // The least distance that passes unshifted, to 0.25 mm.
+    let (mut lo, mut hi) = (0.0, 2.5);
+    assert_eq!(verdict(lo, &still), Verdict::Fail);
+    assert_eq!(verdict(hi, &still), Verdict::Pass);
+    while hi - lo > 2.5e-4 {
+        let mid = 0.5 * (lo + hi);
+        if verdict(mid, &still) == Verdict::Pass {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    // 7 mm more: the record 10 ms older than a span's newest reaches at most 5 mm further.
+    let x = hi + 0.007;
+    assert_eq!(verdict(x, &still), Verdict::Pass);
+    // The record of 0.1 s 15 mm closer: the spans it is the newest for are cleared by the
+    // record of 0.09 s.
+    assert_eq!(
+        verdict(x, &|i| if i == 10 { (0.015, 0.0) } else { (0.0, 0.0) }),
+        Verdict::Pass
+    );
+    // Every record from 0.05 s on 15 mm closer, alternately 4 mm to either side (so that the
+    // record before the one in use is not covered by it, and is tried): it reports the same
+    // pairs, and the log fails.
+    let zigzag = |i: usize| {
+        if i >= 5 {
+            (0.015, if i.is_multiple_of(2) { 0.004 } else { -0.004 })
+        } else {
+            (0.0, 0.0)
+        }
+    };
+    assert_eq!(verdict(x, &zigzag), Verdict::Fail);
+    assert_eq!(verdict(x, &|_| (0.015, 0.0)), Verdict::Fail);
+}

@@ -168,7 +168,10 @@ fn violating_bag_fails_at_the_step_and_equals_mcap() {
         .map(|v| v.t_start)
         .fold(f64::INFINITY, f64::min);
     assert_eq!(first, 0.5, "the person steps in at t = 0.5 s");
-    assert_eq!(r.violations.len(), 55);
+    // Intervals per (body part, link): the last two spans of each 0.1 s are cleared by the
+    // record the camera took at their start, logged 20 ms later (its occupancy, tighter than the
+    // older record's in use then, holds the person too).
+    assert_eq!(r.violations.len(), 44);
     // The step from 2.5 m to 0.45 m is faster than the human model allows.
     assert_eq!(r.inconclusive.len(), 1);
     assert_eq!(
@@ -196,7 +199,7 @@ fn two_people_on_their_topics_are_read_as_from_mcap() {
         .map(|v| v.t_start)
         .fold(f64::INFINITY, f64::min);
     assert_eq!(first, 0.6, "walker steps in at t = 0.6 s");
-    assert_eq!(r.violations.len(), 44);
+    assert_eq!(r.violations.len(), 35);
     same_result(&r, &twin(true, true));
 }
 

@@ -312,3 +312,62 @@ fn a_ball_velocity_the_model_forbids_is_inconclusive_not_a_pass() {
     .unwrap();
     assert_eq!(r.verdict, Verdict::Inconclusive, "{r:?}");
 }
+
+/// The ball at rest `clear` (m) from the robot's surface below the hand (the robot at rest at
+/// the ready pose, `no_contact`), measured every 10 ms; the records stamped in `near` (s, as
+/// multiples of 10 ms) are `shift` (m) closer to the hand, within twice the position error of
+/// the others, so all records stay consistent with the ball's model.
+fn shifted_ball_log(clear: f64, shift: f64, near: impl Fn(usize) -> bool) -> String {
+    let robot = pacs_models::RobotModel::builtin("fr3").unwrap();
+    let hand = robot.capsules_world(&Q_READY).last().unwrap().1;
+    let below = |d: f64| {
+        let p = hand.p2();
+        [p.x, p.y, p.z - hand.radius() - 0.04 - d]
+    };
+    ball_log(ObjectContact::NoContact, 0.0, |w, k, t| {
+        if k % 10 == 0 {
+            let d = if near(k / 10) { clear - shift } else { clear };
+            w.write_object(t, t, "b1", below(d), Some([0.0; 3]))
+                .unwrap();
+        }
+    })
+}
+
+/// The truth lies in the occupancy of every measurement still in use, not only the newest's:
+/// a span that an earlier measurement clears is clear, even where the newest one, shifted
+/// 8 mm towards the hand (within the 2 × 5 mm that two records of the ball may differ by),
+/// reaches the hand. This is what the shield relies on while braking on a failsafe it verified
+/// against an earlier measurement (a diffusion-policy rollout on Crowded failed the audit so).
+/// Where every measurement still usable for a span reaches the hand, the log still fails.
+#[test]
+fn an_earlier_measurement_clears_a_span_the_newest_cannot() {
+    let verdict = |clear: f64, near: &dyn Fn(usize) -> bool| {
+        let r = run(
+            &shifted_ball_log(clear, 0.008, near),
+            &AuditConfig::default(),
+        )
+        .unwrap();
+        assert!(
+            r.inconclusive.is_empty(),
+            "clear {clear}: {:?}",
+            r.inconclusive
+        );
+        r.verdict
+    };
+    // The least clearance (1 mm steps) at which the ball, never shifted, passes.
+    let clear = (1..100)
+        .map(|mm| mm as f64 * 1e-3)
+        .find(|&c| verdict(c, &|_| false) == Verdict::Pass)
+        .unwrap();
+    // 2 mm more: the 0.09 s record, 10 ms older at the spans that follow the shifted one,
+    // still clears them (its reach grows by less than that in 10 ms).
+    let clear = clear + 0.002;
+    assert_eq!(verdict(clear, &|_| false), Verdict::Pass);
+    // One record shifted (at 0.1 s): the spans it is the newest for reach the hand by its
+    // occupancy, and are cleared by the one of 0.09 s.
+    assert_eq!(verdict(clear, &|i| i == 10), Verdict::Pass);
+    // Every record from 0.05 s on shifted: the unshifted ones before grow too old to clear
+    // the later spans, which every measurement still usable reports.
+    assert_eq!(verdict(clear, &|i| i >= 5), Verdict::Fail);
+    assert_eq!(verdict(clear, &|_| true), Verdict::Fail);
+}

@@ -46,6 +46,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-audit --test audit_objects --no-fail-fast >>"$log" 2>&1
     # The object rule's decision-only mode (x43: the box test inverted).
     cargo test -p pacs-verify --test object_rule --no-fail-fast >>"$log" 2>&1
+    # The audit's span checks with a person (x74: a pair cleared by a measurement reporting it).
+    cargo test -p pacs-audit --test audit_checks --no-fail-fast >>"$log" 2>&1
     # The audit's input-consistency checks (x20: a human faster than the model).
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
     # Several people, logs cut short, stamps that cannot resolve the samples (x60–x64).

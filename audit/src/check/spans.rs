@@ -3,6 +3,23 @@
 
 use super::*;
 
+/// Whether the older record `a` cannot clear anything the newer `u` shows, by a test in plain
+/// floats: every keypoint of `u` lies within `v_max·(t_u − t_a)` of `a`'s, so (with the speed
+/// bound, which is all a log without human velocities gives) each of `a`'s balls over any later
+/// interval contains `u`'s, and so do its capsules. A cost filter only: skipping a record never
+/// clears a pair, so an inexact answer (rounding, another reach model) costs completeness at
+/// worst, never soundness. Where a person stands still with a model of no position error, every
+/// older record is skipped so (the audit of a log with many violating spans stays as fast).
+fn older_keypoints_cover(model: &HumanModel, a: &HumanMeasurement, u: &HumanMeasurement) -> bool {
+    let dt = u.time() - a.time();
+    dt >= 0.0
+        && a.positions()
+            .iter()
+            .zip(u.positions())
+            .zip(model.v_max())
+            .all(|((p, q), v)| (p - q).norm_squared() <= (v * dt) * (v * dt))
+}
+
 /// Upper bound (J) of the whole robot's kinetic energy over the span's boxes (+∞ if it cannot be
 /// bounded). Same joint box as the occupancy in `rcaps`: the scratch's frames are reused.
 fn span_energy(
@@ -448,6 +465,9 @@ impl Auditor {
             b.energy_bound = max_opt(b.energy_bound, Some(reportable(e)));
             b.threshold = min_opt(b.threshold, Some(thr));
         }
+        if !self.hits.is_empty() {
+            self.clear_by_other_measurements(t0, t1, bx, slot);
+        }
         if self.hits.is_empty() {
             self.finish_span(bidx, false, false);
             return;
@@ -470,6 +490,140 @@ impl Auditor {
         }
         self.extend_intervals(t0, t1);
         self.finish_span(bidx, violated, certain);
+    }
+
+    /// Drop from `self.hits` every pair that another measurement still usable for the span
+    /// `t0`–`t1` clears: a person's other kept records (the latest [`HUMAN_HISTORY`] by stamp),
+    /// an object's likewise, each no older than `max_human_age` at `t1` and not describing a
+    /// state after the span's start (its occupancy is then defined; others are skipped), and
+    /// consistent with the measurement in use (`human_pair_breaks`, `object_pair_breaks`: of
+    /// two records that contradict each other one is wrong, and a violation the one in use
+    /// shows stands; the log is inconclusive for the contradiction as well).
+    ///
+    /// # Soundness
+    /// The audit's occupancies assume every measurement within the model's errors (and the
+    /// record-against-record checks make any log that contradicts this inconclusive); then the
+    /// true person (object) lies, at every instant of the span, in the occupancy from *each*
+    /// such measurement, not only from the newest. The rule's decision is per pair and monotone
+    /// in the occupancy (claim C8′: a pair it does not report cannot truly violate while the
+    /// truth lies in the occupancy judged), so a pair that the rule clears on any one of them
+    /// cannot truly violate; a pair stays only while every measurement tried reports it. This is
+    /// what lets a log pass whose robot brakes on a failsafe the shield verified against an
+    /// earlier measurement, when a newer one's occupancy reaches further (by up to its
+    /// measurement error) than the earlier one's. Test `audit_objects::
+    /// an_earlier_measurement_clears_a_span_the_newest_cannot`; mutant `x73` (a pair dropped
+    /// when *some* other measurement still reports it) caught.
+    fn clear_by_other_measurements(&mut self, t0: f64, t1: f64, b: &SpanBoxes, slot: usize) {
+        let n = self.n;
+        let parts = self.parts;
+        let max_age = self.cfg.max_human_age;
+        if self.hits.iter().any(|h| h.part < parts) {
+            if self.alt_humans_for != Some(slot) {
+                self.collect_other_human_records(slot);
+            }
+            for c in 0..self.alt_humans.len() {
+                let h = &self.human_history[self.alt_humans[c]];
+                if t1 - h.time() > max_age {
+                    break; // newest first: every later one is older still
+                }
+                if self
+                    .hreach
+                    .occupancy_into(h, t0, t1, &mut self.alt_hcaps)
+                    .is_err()
+                {
+                    continue;
+                }
+                let Self {
+                    rule,
+                    rreach,
+                    scratch,
+                    rcaps,
+                    alt_hcaps,
+                    alt_pairs,
+                    energies,
+                    hits,
+                    ..
+                } = self;
+                alt_pairs.clear();
+                let energy = || span_energy(rreach, scratch, b, energies, n);
+                rule.check(rcaps, &b.dq, alt_hcaps, energy, false, |v| {
+                    alt_pairs.push((v.part, v.link));
+                    ControlFlow::Continue(())
+                });
+                hits.retain(|x| x.part >= parts || alt_pairs.contains(&(x.part, x.link)));
+                if !hits.iter().any(|h| h.part < parts) {
+                    break;
+                }
+            }
+        }
+        for k in 0..self.objects.len() {
+            if !self.hits.iter().any(|h| h.part == parts + k) {
+                continue;
+            }
+            let Self {
+                object_rule,
+                objects,
+                rreach,
+                scratch,
+                rcaps,
+                energies,
+                hits,
+                ..
+            } = self;
+            let o = &objects[k];
+            let mut energy_cache: Option<f64> = None;
+            for m in o.history.iter().rev() {
+                if t1 - m.time > max_age {
+                    break;
+                }
+                let usable = match &o.span {
+                    Some(u) if u.time <= m.time => u != m && !object_pair_breaks(&o.bounds, u, m),
+                    Some(u) => !object_pair_breaks(&o.bounds, m, u),
+                    None => false,
+                };
+                if !usable {
+                    continue;
+                }
+                let Ok(occ) = pacs_reach::object::occupancy(&o.model, m, t0, t1) else {
+                    continue;
+                };
+                let energy = || {
+                    *energy_cache
+                        .get_or_insert_with(|| span_energy(rreach, scratch, b, energies, n))
+                };
+                let cleared = object_rule.workspace_clear(&occ).is_some()
+                    || object_rule
+                        .check(rcaps, &b.dq, &occ, o.contact, energy, false)
+                        .violation
+                        .is_none();
+                if cleared {
+                    hits.retain(|h| h.part != parts + k);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// The kept records of the person that may clear what the record in use (`slot`) shows,
+    /// newest first, into `alt_humans` (valid until the records or the one in use change):
+    /// not the one in use, not covered by it (`older_keypoints_cover`, a cost filter), and not
+    /// contradicting it (`human_pair_breaks`: of two records that contradict each other one is
+    /// wrong, and a violation the one in use shows stands; the log is inconclusive as well).
+    fn collect_other_human_records(&mut self, slot: usize) {
+        self.alt_humans.clear();
+        self.alt_humans_for = Some(slot);
+        let Some(u) = self.humans[slot].as_ref() else {
+            return;
+        };
+        for i in (0..self.human_history.len()).rev() {
+            let h = &self.human_history[i];
+            if u != h
+                && !older_keypoints_cover(&self.human, h, u)
+                && !human_pair_breaks(&self.human, u, h)
+            {
+                self.alt_humans.push(i);
+            }
+        }
     }
 
     /// A span that cannot be checked for `reason`: inconclusive (its duration counted, its plot
