@@ -103,6 +103,10 @@ struct ObjectTrack {
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
     occ: Option<ObjectOccupancy>,
+    /// The records that may clear what the one in `others_for` shows (`spans.rs`,
+    /// `collect_other_object_records`); `others_for` is reset when a record arrives.
+    others: Vec<ObjectMeasurement>,
+    others_for: Option<ObjectMeasurement>,
 }
 
 /// Streaming auditor of one log: feed records in time order, then [`Auditor::finish`].
@@ -529,6 +533,7 @@ impl Auditor {
             self.model_break(t0, t1, Reason::ObjectExceedsModel);
         }
         let o = &mut self.objects[k];
+        o.others_for = None;
         let at = o.history.partition_point(|h| h.time <= m.time);
         o.history.insert(at, m);
         if o.history.len() > HUMAN_HISTORY {
@@ -720,6 +725,8 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span: None,
             occ: None,
+            others: Vec::with_capacity(8),
+            others_for: None,
         })
         .collect()
 }

@@ -3,6 +3,34 @@
 
 use super::*;
 
+/// How many other records of a person or object a possibly violating span is judged against
+/// (the newest usable ones; `Auditor::clear_by_other_measurements`). A bound on the work per
+/// span only: fewer records can clear fewer spans, never more.
+const OTHER_RECORDS: usize = 8;
+
+/// The kept records of object `o` that may clear what the record in use (`o.span`) shows,
+/// newest first, at most [`OTHER_RECORDS`], into `o.others` (valid until its records or the one
+/// in use change): not the one in use and not contradicting it (`object_pair_breaks`, as for
+/// people).
+fn collect_other_object_records(o: &mut ObjectTrack) {
+    o.others.clear();
+    o.others_for = o.span;
+    let Some(u) = o.span else { return };
+    for m in o.history.iter().rev() {
+        let consistent = if u.time <= m.time {
+            u != *m && !object_pair_breaks(&o.bounds, &u, m)
+        } else {
+            !object_pair_breaks(&o.bounds, m, &u)
+        };
+        if consistent {
+            o.others.push(*m);
+            if o.others.len() == OTHER_RECORDS {
+                return;
+            }
+        }
+    }
+}
+
 /// Whether the older record `a` cannot clear anything the newer `u` shows, by a test in plain
 /// floats: every keypoint of `u` lies within `v_max·(t_u − t_a)` of `a`'s, so (with the speed
 /// bound, which is all a log without human velocities gives) each of `a`'s balls over any later
@@ -570,19 +598,15 @@ impl Auditor {
                 hits,
                 ..
             } = self;
+            let o = &mut objects[k];
+            if o.others_for != o.span {
+                collect_other_object_records(o);
+            }
             let o = &objects[k];
             let mut energy_cache: Option<f64> = None;
-            for m in o.history.iter().rev() {
+            for m in &o.others {
                 if t1 - m.time > max_age {
-                    break;
-                }
-                let usable = match &o.span {
-                    Some(u) if u.time <= m.time => u != m && !object_pair_breaks(&o.bounds, u, m),
-                    Some(u) => !object_pair_breaks(&o.bounds, m, u),
-                    None => false,
-                };
-                if !usable {
-                    continue;
+                    break; // newest first: every later one is older still
                 }
                 let Ok(occ) = pacs_reach::object::occupancy(&o.model, m, t0, t1) else {
                     continue;
@@ -605,7 +629,8 @@ impl Auditor {
     }
 
     /// The kept records of the person that may clear what the record in use (`slot`) shows,
-    /// newest first, into `alt_humans` (valid until the records or the one in use change):
+    /// newest first (at most [`OTHER_RECORDS`]), into `alt_humans` (valid until the records or
+    /// the one in use change):
     /// not the one in use, not covered by it (`older_keypoints_cover`, a cost filter), and not
     /// contradicting it (`human_pair_breaks`: of two records that contradict each other one is
     /// wrong, and a violation the one in use shows stands; the log is inconclusive as well).
@@ -622,6 +647,9 @@ impl Auditor {
                 && !human_pair_breaks(&self.human, u, h)
             {
                 self.alt_humans.push(i);
+                if self.alt_humans.len() == OTHER_RECORDS {
+                    return;
+                }
             }
         }
     }
