@@ -26,6 +26,13 @@ macro_rules! arbitrary {
 }
 arbitrary!(bool, u8, u16, u32, u64, usize, i16, i32, i64, f32, f64);
 
+/// Arrays of nondeterministic values (Kani implements `Arbitrary` for `[T; N]` too).
+impl<T: Arbitrary, const N: usize> Arbitrary for [T; N] {
+    fn any() -> Self {
+        std::array::from_fn(|_| T::any())
+    }
+}
+
 /// A nondeterministic value of type `T` (Kani: `kani::any`).
 pub fn any<T: Arbitrary>() -> T {
     T::any()
