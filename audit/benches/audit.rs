@@ -12,20 +12,7 @@ use std::hint::black_box;
 const N: usize = 10_000;
 const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
 
-/// Human standing `x` m in front of the base (keypoints of the default model).
-fn standing(x: f64) -> Vec<[f64; 3]> {
-    vec![
-        [x, 0.2, 1.4],
-        [x - 0.1, 0.25, 1.15],
-        [x - 0.2, 0.25, 0.95],
-        [x, -0.2, 1.4],
-        [x - 0.1, -0.25, 1.15],
-        [x - 0.2, -0.25, 0.95],
-        [x, 0.0, 1.45],
-        [x, 0.0, 0.95],
-        [x, 0.0, 1.65],
-    ]
-}
+use pacs_testkit::standing_arms_forward as standing;
 
 struct Sample {
     t: f64,
@@ -37,13 +24,7 @@ fn samples() -> Vec<Sample> {
     (0..N)
         .map(|i| {
             let t = i as f64 * 1e-3;
-            let mut q = Q;
-            let mut dq = [0.0; 7];
-            for j in 0..7 {
-                let w = 0.5 + 0.1 * j as f64;
-                q[j] += 0.3 * (w * t).sin();
-                dq[j] = 0.3 * w * (w * t).cos();
-            }
+            let (q, dq) = pacs_testkit::sinusoidal_joints(Q, 0.5, 0.1, t);
             Sample { t, q, dq }
         })
         .collect()

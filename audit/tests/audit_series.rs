@@ -7,32 +7,14 @@ use pacs_audit::{AuditConfig, Auditor};
 use pacs_log::LogModels;
 use pacs_models::{ConstraintSpec, HumanModel, RobotModel};
 
-const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+use pacs_testkit::{sinusoidal_joints, standing_arms_forward as standing};
 
-/// The default human's keypoints standing `x` m in front of the base.
-fn standing(x: f64) -> Vec<[f64; 3]> {
-    vec![
-        [x, 0.2, 1.4],
-        [x - 0.1, 0.25, 1.15],
-        [x - 0.2, 0.25, 0.95],
-        [x, -0.2, 1.4],
-        [x - 0.1, -0.25, 1.15],
-        [x - 0.2, -0.25, 0.95],
-        [x, 0.0, 1.45],
-        [x, 0.0, 0.95],
-        [x, 0.0, 1.65],
-    ]
-}
+const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
 
 /// Sample `i` at 1 kHz: every joint on its own sinusoid, with its logged velocity.
 fn sample(i: usize) -> (f64, [f64; 7], [f64; 7]) {
     let t = i as f64 * 1e-3;
-    let (mut q, mut dq) = (Q, [0.0; 7]);
-    for j in 0..7 {
-        let w = 0.7 + 0.13 * j as f64;
-        q[j] += 0.3 * (w * t).sin();
-        dq[j] = 0.3 * w * (w * t).cos();
-    }
+    let (q, dq) = sinusoidal_joints(Q, 0.7, 0.13, t);
     (t, q, dq)
 }
 

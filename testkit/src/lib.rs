@@ -31,6 +31,35 @@ pub fn keypoints_in_a_row(x: f64) -> Vec<[f64; 3]> {
     (0..9).map(|i| [x, 0.1 * i as f64 - 0.4, 1.0]).collect()
 }
 
+/// The default human standing `x` m in front of the base, both arms reaching 0.1–0.2 m
+/// towards it (forearms and hands nearer than the shoulders): the audit's bench and series
+/// tests.
+pub fn standing_arms_forward(x: f64) -> Vec<[f64; 3]> {
+    vec![
+        [x, 0.2, 1.4],
+        [x - 0.1, 0.25, 1.15],
+        [x - 0.2, 0.25, 0.95],
+        [x, -0.2, 1.4],
+        [x - 0.1, -0.25, 1.15],
+        [x - 0.2, -0.25, 0.95],
+        [x, 0.0, 1.45],
+        [x, 0.0, 0.95],
+        [x, 0.0, 1.65],
+    ]
+}
+
+/// A 7-joint motion with every joint on its own sinusoid about `q0` (rad): joint `j` at
+/// `q0_j + 0.3·sin(w_j t)` with `w_j = w0 + dw·j` (rad/s), and its velocity (rad/s) at `t` (s).
+pub fn sinusoidal_joints(q0: [f64; 7], w0: f64, dw: f64, t: f64) -> ([f64; 7], [f64; 7]) {
+    let (mut q, mut dq) = (q0, [0.0; 7]);
+    for j in 0..7 {
+        let w = w0 + dw * j as f64;
+        q[j] += 0.3 * (w * t).sin();
+        dq[j] = 0.3 * w * (w * t).cos();
+    }
+    (q, dq)
+}
+
 /// Least distance (m) between the robot's moving capsules at `q` (rad) and the body parts at the
 /// keypoints `kp` (m): the separation the tests score the shield and the baselines against.
 pub fn true_separation(

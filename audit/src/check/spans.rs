@@ -538,9 +538,12 @@ impl Auditor {
     /// cannot truly violate; a pair stays only while every measurement tried reports it. This is
     /// what lets a log pass whose robot brakes on a failsafe the shield verified against an
     /// earlier measurement, when a newer one's occupancy reaches further (by up to its
-    /// measurement error) than the earlier one's. Test `audit_objects::
-    /// an_earlier_measurement_clears_a_span_the_newest_cannot`; mutant `x73` (a pair dropped
-    /// when *some* other measurement still reports it) caught.
+    /// measurement error) than the earlier one's. Tests
+    /// `audit_objects::an_earlier_measurement_clears_a_span_the_newest_cannot` and
+    /// `audit_checks::an_earlier_person_measurement_clears_a_span_the_newest_cannot` (mutants
+    /// `x73`, `x74`: a pair dropped when another measurement still reports it); a contradicting
+    /// record clears nothing: `audit_checks::one_sample_human_spike_is_caught`,
+    /// `audit_objects::a_ball_record_the_others_contradict_is_inconclusive_not_a_pass`.
     fn clear_by_other_measurements(&mut self, t0: f64, t1: f64, b: &SpanBoxes, slot: usize) {
         let n = self.n;
         let parts = self.parts;
