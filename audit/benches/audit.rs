@@ -140,6 +140,15 @@ fn mcap_log(s: &[Sample], x: f64, task: &str) -> Vec<u8> {
     w.finish().unwrap().into_inner()
 }
 
+/// With `PACS_BENCH_DUMP=DIR`, write the benched log to `DIR/name` (to profile `pacs audit` on
+/// exactly the bytes benched, e.g. under callgrind).
+fn dump(name: &str, bytes: &[u8]) {
+    if let Some(dir) = std::env::var_os("PACS_BENCH_DUMP") {
+        let path = std::path::Path::new(&dir).join(name);
+        std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let s = samples();
     let mut g = c.benchmark_group("audit");
@@ -168,6 +177,7 @@ fn bench(c: &mut Criterion) {
     });
     let bytes = jsonl(&s, 0.6, "handover");
     eprintln!("jsonl: {} bytes for {N} robot samples", bytes.len());
+    dump("near_handover.jsonl", &bytes);
     g.bench_function("jsonl_read_and_check_near_handover", |b| {
         b.iter(|| {
             let mut r =
@@ -178,6 +188,7 @@ fn bench(c: &mut Criterion) {
     });
     let bytes = mcap_log(&s, 0.6, "handover");
     eprintln!("mcap: {} bytes for {N} robot samples", bytes.len());
+    dump("near_handover.mcap", &bytes);
     let cfg = AuditConfig::default();
     g.bench_function("mcap_read_and_check_near_handover", |b| {
         b.iter(|| {

@@ -10,7 +10,7 @@
 // Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::enclosure::{Sample, SpanBoxes, SpanEnclosure, span_boxes_into};
+use crate::enclosure::{Sample, SpanBoxes, SpanEnclosure, SpanLimits, span_boxes_into};
 use crate::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, Verdict, Violation,
 };
@@ -129,6 +129,8 @@ pub struct Auditor {
     /// Per joint, the position band a sample must lie in (rad): the limits widened by the
     /// relative `limit_slack` (at least `limit_slack` rad), computed once.
     q_band: [(f64, f64); MAX_DOF],
+    /// The joints' rate limits as the span enclosures read them, prepared once.
+    span_limits: SpanLimits,
     parts: usize,
     links: usize,
     cap_local: Vec<Capsule>,
@@ -275,6 +277,7 @@ impl Auditor {
             cfg,
             n,
             q_band,
+            span_limits: SpanLimits::new(models.robot.limits()),
             parts,
             links,
             cap_local,

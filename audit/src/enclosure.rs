@@ -184,8 +184,9 @@ fn ends_box(a: f64, b: f64, reach: f64) -> (f64, f64) {
 /// any instant); mutant `x11` caught (also by Kani).
 pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> SpanEnclosure {
     let mut b = Bounds::zero();
-    let ok = span_bounds(lim, s0, s1, slack, &mut b);
-    let n = lim.dof();
+    let lim = SpanLimits::new(lim);
+    let ok = span_bounds(&lim, s0, s1, slack, &mut b);
+    let n = lim.n;
     // Any non-finite bound (absurd inputs) makes the span unusable as evidence.
     let boxes = match (
         JointBox::new(&b.q_lo[..n], &b.q_hi[..n]),
@@ -200,15 +201,15 @@ pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> Sp
     }
 }
 
-/// [`span_boxes`] written into `out` in place (whatever `out` held before): the audit fills one
-/// enclosure per span of a block into reused storage instead of moving ≈ 0.5 kB per span. The
-/// same bounds ([`span_bounds`]) and the same result (test
-/// `the_in_place_enclosure_is_span_boxes`); its guarantees are [`span_boxes`]'s. (The Kani
-/// harnesses run [`span_boxes`]: a write through the `Option`'s payload is what CBMC's SMT
-/// encoding cannot give Bitwuzla.)
+/// [`span_boxes`] written into `out` in place (whatever `out` held before), with the limits
+/// prepared once ([`SpanLimits::new`]): the audit fills one enclosure per span of a block into
+/// reused storage instead of moving ≈ 0.5 kB per span. The same bounds ([`span_bounds`]) and
+/// the same result (test `the_in_place_enclosure_is_span_boxes`); its guarantees are
+/// [`span_boxes`]'s. (The Kani harnesses run [`span_boxes`]: a write through the `Option`'s
+/// payload is what CBMC's SMT encoding cannot give Bitwuzla.)
 #[inline]
 pub fn span_boxes_into(
-    lim: &JointLimits,
+    lim: &SpanLimits,
     s0: &Sample,
     s1: &Sample,
     slack: f64,
@@ -216,7 +217,7 @@ pub fn span_boxes_into(
 ) {
     let mut b = Bounds::zero();
     let ok = span_bounds(lim, s0, s1, slack, &mut b);
-    let n = lim.dof();
+    let n = lim.n;
     let sb = out.boxes.get_or_insert_with(|| SpanBoxes {
         q: JointBox::empty(),
         dq: JointBox::empty(),
@@ -227,6 +228,46 @@ pub fn span_boxes_into(
         out.boxes = None;
     }
     out.consistent = ok && finite;
+}
+
+/// The rate limits the enclosures use, per joint in lanes of [`LANES`]: `v_max` (rad/s), `a_max`
+/// (rad/s²) and `j_max` (rad/s³) of the model's joints, then 1.0 in the lanes up to a multiple
+/// of [`LANES`] (computed and discarded, so that every joint is evaluated the same vector way).
+#[derive(Debug, Clone)]
+pub struct SpanLimits {
+    v: [f64; MAX_DOF],
+    a: [f64; MAX_DOF],
+    j: [f64; MAX_DOF],
+    /// The robot's joints.
+    n: usize,
+    /// `n` rounded up to a multiple of [`LANES`] (at most [`MAX_DOF`]).
+    lanes: usize,
+}
+
+/// Joints evaluated at once (four doubles in an AVX register).
+const LANES: usize = 4;
+const _: () = assert!(MAX_DOF.is_multiple_of(LANES));
+
+impl SpanLimits {
+    /// The limits of `lim` (at most [`MAX_DOF`] joints, as every robot model).
+    pub fn new(lim: &JointLimits) -> SpanLimits {
+        let n = lim.dof().min(MAX_DOF);
+        let mut l = SpanLimits {
+            v: [1.0; MAX_DOF],
+            a: [1.0; MAX_DOF],
+            j: [1.0; MAX_DOF],
+            n,
+            lanes: n.div_ceil(LANES) * LANES,
+        };
+        // Element by element (a memcpy of float arrays is what CBMC's SMT encoding cannot give
+        // Bitwuzla; the h2 harnesses run through here).
+        for k in 0..n {
+            l.v[k] = lim.v_max()[k];
+            l.a[k] = lim.a_max()[k];
+            l.j[k] = lim.j_max()[k];
+        }
+        l
+    }
 }
 
 /// The bounds of the span's boxes per joint (rad, rad/s), before they are checked finite.
@@ -251,134 +292,175 @@ impl Bounds {
 
 /// The computation of [`span_boxes`]: the bounds of the boxes into `out` and whether the samples
 /// are consistent (module docs). Shared by [`span_boxes`] and [`span_boxes_into`].
+///
+/// Every joint is computed the same way, without branches that differ between joints (the
+/// logged derivatives are the same for all joints of a sample, so each combination has its own
+/// loop, [`joint_bounds`]): the compiler evaluates four joints at once. A span is consistent
+/// only if every joint is; an inconsistent span gets the hull boxes for every joint.
 #[inline(always)]
-fn span_bounds(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut Bounds) -> bool {
-    let n = lim.dof();
-    let Bounds {
-        q_lo,
-        q_hi,
-        dq_lo,
-        dq_hi,
-    } = out;
+fn span_bounds(lim: &SpanLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut Bounds) -> bool {
     // Δ ∈ [dt_lo, dt_hi] (time stamps within one ulp each, one rounded subtraction).
     let dt = s1.t - s0.t;
     let dt_err = PAD * (s0.t.abs() + s1.t.abs()) + TINY;
     let dt_hi = dt + dt_err;
-    let dt_lo = (dt - dt_err).max(0.0);
-    let (h_lo, h_hi) = (0.5 * dt_lo, 0.5 * dt_hi);
+    let span = Span {
+        dt,
+        dt_lo: (dt - dt_err).max(0.0),
+        dt_hi,
+        rel: 1.0 + slack,
+        slack,
+    };
     let both_dq = s0.has_dq && s1.has_dq;
     let both_ddq = both_dq && s0.has_ddq && s1.has_ddq;
-    let rel = 1.0 + slack;
-    let mut ok = dt_hi.is_finite();
+    match (both_dq, both_ddq) {
+        (false, _) => joint_bounds::<false, false>(lim, s0, s1, &span, out),
+        (true, false) => joint_bounds::<true, false>(lim, s0, s1, &span, out),
+        (true, true) => joint_bounds::<true, true>(lim, s0, s1, &span, out),
+    }
+}
+
+/// The span's duration and the limit tests' tolerance, shared by every joint.
+struct Span {
+    /// `t₁ − t₀` as computed (s).
+    dt: f64,
+    /// Bounds of the true duration (s): `dt_lo ≤ Δ ≤ dt_hi`, `dt_lo ≥ 0`.
+    dt_lo: f64,
+    dt_hi: f64,
+    /// `1 + slack`.
+    rel: f64,
+    /// The relative slack of the limit tests.
+    slack: f64,
+}
+
+/// [`span_bounds`] for every joint, with velocities logged at both ends (`DQ`) and
+/// accelerations too (`DDQ`, only with `DQ`). Writes both the intersection boxes (consistent
+/// span) and, if any joint is inconsistent, the hull boxes; returns whether every joint is
+/// consistent. Lanes beyond the robot's joints (up to a multiple of [`LANES`]) are computed
+/// alike and ignored: their flags do not count, their bounds are never read.
+#[inline(always)]
+fn joint_bounds<const DQ: bool, const DDQ: bool>(
+    lim: &SpanLimits,
+    s0: &Sample,
+    s1: &Sample,
+    sp: &Span,
+    out: &mut Bounds,
+) -> bool {
+    let n = lim.lanes;
+    let (v_max, a_max, j_max) = (&lim.v[..n], &lim.a[..n], &lim.j[..n]);
+    let (q0, q1) = (&s0.q[..n], &s1.q[..n]);
+    let (dq0, dq1) = (&s0.dq[..n], &s1.dq[..n]);
+    let (ddq0, ddq1) = (&s0.ddq[..n], &s1.ddq[..n]);
+    let Span {
+        dt,
+        dt_lo,
+        dt_hi,
+        rel,
+        slack,
+    } = *sp;
+    let (h_lo, h_hi) = (0.5 * dt_lo, 0.5 * dt_hi);
+    // The mean velocity (b − a)/Δ is attained somewhere in the span (needs Δ > 0).
+    let has_mean = dt_lo > 0.0;
+    // Per joint: the hull boxes (used only if some joint is inconsistent).
+    let mut hull = Bounds::zero();
+    let mut bad_lane = [false; MAX_DOF];
     for j in 0..n {
-        let (v, acc, jerk) = (lim.v_max()[j], lim.a_max()[j], lim.j_max()[j]);
-        let (a, b) = (s0.q[j], s1.q[j]);
+        let (v, acc, jerk) = (v_max[j], a_max[j], j_max[j]);
+        let (a, b) = (q0[j], q1[j]);
         let mag_ab = a.abs() + b.abs();
         // Positions from v_max.
         let reach = v * dt_hi;
-        let (mut p_lo, mut p_hi) = ends_box(a, b, reach);
+        let (p_lo, p_hi) = ends_box(a, b, reach);
         let dpos = b - a;
-        if down(dpos.abs(), mag_ab) > reach * rel {
-            ok = false;
-        }
-        // The mean velocity (b − a)/Δ is attained somewhere in the span: q̇ ∈ mean ± AΔ.
-        let mean_box = || {
-            if dt_lo > 0.0 {
-                let (n_lo, n_hi) = (down(dpos, mag_ab), up(dpos, mag_ab));
-                let m_hi = (n_hi / dt_lo).max(n_hi / dt_hi);
-                let m_lo = (n_lo / dt_lo).min(n_lo / dt_hi);
-                let w = acc * dt_hi;
-                Some((down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w)))
-            } else {
-                None
-            }
+        let mut bad_j = down(dpos.abs(), mag_ab) > reach * rel;
+        // q̇ ∈ mean ± AΔ (where Δ > 0).
+        let (m_lo, m_hi) = {
+            let (n_lo, n_hi) = (down(dpos, mag_ab), up(dpos, mag_ab));
+            let m_hi = (n_hi / dt_lo).max(n_hi / dt_hi);
+            let m_lo = (n_lo / dt_lo).min(n_lo / dt_hi);
+            let w = acc * dt_hi;
+            (down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w))
         };
-        // Velocity box: the intersection of the candidates, starting from the limits.
+        // Velocity box: the intersection of the candidates, starting from the limits; their
+        // hull (the mean's box included) for a contradicted span.
         let (mut v_lo, mut v_hi) = (-v, v);
-        let (mut hull_lo, mut hull_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut take = |(lo, hi): (f64, f64), v_lo: &mut f64, v_hi: &mut f64| {
-            *v_lo = v_lo.max(lo);
-            *v_hi = v_hi.min(hi);
-            hull_lo = hull_lo.min(lo);
-            hull_hi = hull_hi.max(hi);
+        let (mut hv_lo, mut hv_hi) = if has_mean {
+            (m_lo, m_hi)
+        } else {
+            (f64::INFINITY, f64::NEG_INFINITY)
         };
-        let mut pos_dq: Option<(f64, f64)> = None;
-        if both_dq {
-            let (c, d) = (s0.dq[j], s1.dq[j]);
+        let (mut i_lo, mut i_hi) = (p_lo, p_hi);
+        let (mut hp_lo, mut hp_hi) = (p_lo, p_hi);
+        if DQ {
+            let (c, d) = (dq0[j], dq1[j]);
             let mag_cd = c.abs() + d.abs();
             let w = acc * dt_hi;
-            take(ends_box(c, d, w), &mut v_lo, &mut v_hi);
-            if down(c.abs(), c.abs()) > v * rel || down(d.abs(), d.abs()) > v * rel {
-                ok = false;
-            }
+            let (e_lo, e_hi) = ends_box(c, d, w);
+            (v_lo, v_hi) = (v_lo.max(e_lo), v_hi.min(e_hi));
+            (hv_lo, hv_hi) = (hv_lo.min(e_lo), hv_hi.max(e_hi));
+            bad_j |= down(c.abs(), c.abs()) > v * rel;
+            bad_j |= down(d.abs(), d.abs()) > v * rel;
             let dv = d - c;
             let dv_min = down(dv.abs(), mag_cd).max(0.0);
-            if dv_min > w * rel {
-                ok = false;
-            }
+            bad_j |= dv_min > w * rel;
             // Displacement reachable between the two velocities under |q̈| ≤ A:
             // |b − a − Δ(c + d)/2| ≤ (A²Δ² − (d − c)²)/(4A).
             let r = dpos - dt * 0.5 * (c + d);
             let r_min =
                 r.abs() - (PAD * (mag_ab + dt_hi * mag_cd) + TINY) - 0.5 * mag_cd * (dt_hi - dt_lo);
-            if r_min > reach_band(acc, dt_hi, dv_min) + slack * acc * dt_hi * dt_hi {
-                ok = false;
-            }
+            bad_j |= r_min > reach_band(acc, dt_hi, dv_min) + slack * acc * dt_hi * dt_hi;
             // Positions from velocities and A: envelopes from both ends.
             let (l0, h0) = envelope(a, c, acc, h_lo, h_hi);
             let (l1, h1) = envelope(b, -d, acc, h_lo, h_hi);
-            pos_dq = Some((l0.min(l1), h0.max(h1)));
-            if both_ddq {
-                let (e0, e1) = (s0.ddq[j], s1.ddq[j]);
+            let (l, h) = (l0.min(l1), h0.max(h1));
+            (i_lo, i_hi) = (p_lo.max(l), p_hi.min(h));
+            (hp_lo, hp_hi) = (p_lo.min(l), p_hi.max(h));
+            if DDQ {
+                let (e0, e1) = (ddq0[j], ddq1[j]);
                 let mag_e = e0.abs() + e1.abs();
-                if down(e0.abs(), e0.abs()) > acc * rel || down(e1.abs(), e1.abs()) > acc * rel {
-                    ok = false;
-                }
+                bad_j |= down(e0.abs(), e0.abs()) > acc * rel;
+                bad_j |= down(e1.abs(), e1.abs()) > acc * rel;
                 let de = e1 - e0;
                 let de_min = down(de.abs(), mag_e).max(0.0);
-                if de_min > jerk * dt_hi * rel {
-                    ok = false;
-                }
+                bad_j |= de_min > jerk * dt_hi * rel;
                 let r = dv - dt * 0.5 * (e0 + e1);
                 let r_min = r.abs()
                     - (PAD * (mag_cd + dt_hi * mag_e) + TINY)
                     - 0.5 * mag_e * (dt_hi - dt_lo);
-                if r_min > reach_band(jerk, dt_hi, de_min) + slack * jerk * dt_hi * dt_hi {
-                    ok = false;
-                }
+                bad_j |= r_min > reach_band(jerk, dt_hi, de_min) + slack * jerk * dt_hi * dt_hi;
                 let (l0, h0) = envelope(c, e0, jerk, h_lo, h_hi);
                 let (l1, h1) = envelope(d, -e1, jerk, h_lo, h_hi);
-                take((l0.min(l1), h0.max(h1)), &mut v_lo, &mut v_hi);
+                let (l, h) = (l0.min(l1), h0.max(h1));
+                (v_lo, v_hi) = (v_lo.max(l), v_hi.min(h));
+                (hv_lo, hv_hi) = (hv_lo.min(l), hv_hi.max(h));
             }
-        } else if let Some(m) = mean_box() {
-            take(m, &mut v_lo, &mut v_hi);
+        } else if has_mean {
+            (v_lo, v_hi) = (v_lo.max(m_lo), v_hi.min(m_hi));
         }
-        let (i_lo, i_hi) = match pos_dq {
-            Some((l, h)) => (p_lo.max(l), p_hi.min(h)),
-            None => (p_lo, p_hi),
-        };
-        if ok && v_lo <= v_hi && i_lo <= i_hi {
-            (p_lo, p_hi) = (i_lo, i_hi);
+        // Comparisons with NaN are false: a NaN bound makes the joint inconsistent.
+        bad_lane[j] = bad_j || !(v_lo <= v_hi && i_lo <= i_hi);
+        (out.q_lo[j], out.q_hi[j]) = (i_lo, i_hi);
+        (out.dq_lo[j], out.dq_hi[j]) = (v_lo, v_hi);
+        // Contradicted: the hull of every enclosure (it covers what Δq implies), no clipping
+        // to the limits; the velocity limits where no candidate applies.
+        (hull.q_lo[j], hull.q_hi[j]) = (hp_lo, hp_hi);
+        (hull.dq_lo[j], hull.dq_hi[j]) = if hv_lo <= hv_hi {
+            (hv_lo, hv_hi)
         } else {
-            ok = false;
-            // Contradicted: the hull of every enclosure (it covers what Δq implies), no
-            // clipping to the limits.
-            if let Some((l, h)) = pos_dq {
-                (p_lo, p_hi) = (p_lo.min(l), p_hi.max(h));
-            }
-            if both_dq && let Some(m) = mean_box() {
-                take(m, &mut v_lo, &mut v_hi);
-            }
-            (v_lo, v_hi) = if hull_lo <= hull_hi {
-                (hull_lo, hull_hi)
-            } else {
-                (-v, v)
-            };
-        }
-        (q_lo[j], q_hi[j]) = (p_lo, p_hi);
-        (dq_lo[j], dq_hi[j]) = (v_lo, v_hi);
+            (-v, v)
+        };
     }
-    ok
+    // A duration without a finite bound: no joint's enclosure holds.
+    let mut bad = !dt_hi.is_finite();
+    for &b in &bad_lane[..lim.n] {
+        bad |= b;
+    }
+    if bad {
+        for j in 0..n {
+            (out.q_lo[j], out.q_hi[j]) = (hull.q_lo[j], hull.q_hi[j]);
+            (out.dq_lo[j], out.dq_hi[j]) = (hull.dq_lo[j], hull.dq_hi[j]);
+        }
+    }
+    !bad
 }
 
 #[cfg(test)]
@@ -435,8 +517,30 @@ mod tests {
                 1 => span_boxes(lim, &s1, &s0, 1e-9),
                 _ => span_boxes(lim, &sample(0.0, &[0.1; 21], true, false), &sample(0.001, &[0.1; 21], true, false), 1e-9),
             };
-            span_boxes_into(lim, &s0, &s1, 1e-9, &mut out);
+            span_boxes_into(&SpanLimits::new(lim), &s0, &s1, 1e-9, &mut out);
             prop_assert_eq!(out, span_boxes(lim, &s0, &s1, 1e-9));
+        }
+
+        /// Values beyond the robot's joints (the lanes the enclosure computes and ignores)
+        /// change neither the boxes nor the verdict on consistency, whatever they hold.
+        #[test]
+        fn lanes_beyond_the_joints_change_nothing(
+            v0 in prop::collection::vec(value(), 21),
+            v1 in prop::collection::vec(value(), 21),
+            junk in prop::collection::vec(value(), 6),
+            dt in prop_oneof![1e-4..0.05f64, Just(0.0)],
+            flags in 0u8..4,
+        ) {
+            let robot = RobotModel::builtin("fr3").unwrap();
+            let lim = robot.limits();
+            let (dq, ddq) = (flags & 1 == 1, flags & 2 == 2);
+            let (s0, s1) = (sample(1.0, &v0, dq, ddq), sample(1.0 + dt, &v1, dq, ddq));
+            let clean = span_boxes(lim, &s0, &s1, 1e-9);
+            let (mut d0, mut d1) = (s0, s1);
+            // Lane 7 completes the second group of four joints.
+            (d0.q[7], d0.dq[7], d0.ddq[7]) = (junk[0], junk[1], junk[2]);
+            (d1.q[7], d1.dq[7], d1.ddq[7]) = (junk[3], junk[4], junk[5]);
+            prop_assert_eq!(span_boxes(lim, &d0, &d1, 1e-9), clean);
         }
     }
 }

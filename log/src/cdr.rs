@@ -250,6 +250,13 @@ pub struct JointStateMsg {
     pub velocity: Vec<f64>,
     /// `effort` (ignored by the audit).
     pub effort: Vec<f64>,
+    /// The encoded `name` sequence of the last message decoded (count, strings, padding), where
+    /// it started in the body and the byte order: a message repeating those bytes at that place
+    /// in that order has the same names (the decoding reads nothing else), so it is not decoded
+    /// again. Empty while `names` does not hold a whole decoded sequence.
+    names_raw: Vec<u8>,
+    names_at: usize,
+    names_little: bool,
 }
 
 /// `text` as a `str`, or the error of a string `field` at byte `at` that is not UTF-8.
@@ -267,6 +274,28 @@ impl JointStateMsg {
         let mut r = CdrReader::new(data)?;
         let (stamp, _) = header(&mut r)?;
         self.stamp = stamp;
+        let start = r.pos;
+        let end = start + self.names_raw.len();
+        if !self.names_raw.is_empty()
+            && start == self.names_at
+            && r.little == self.names_little
+            && r.body.get(start..end) == Some(&self.names_raw[..])
+        {
+            r.pos = end;
+        } else {
+            self.names_raw.clear();
+            self.decode_names(&mut r)?;
+            self.names_raw.extend_from_slice(&r.body[start..r.pos]);
+            (self.names_at, self.names_little) = (start, r.little);
+        }
+        r.f64_seq("position", &mut self.position)?;
+        r.f64_seq("velocity", &mut self.velocity)?;
+        r.f64_seq("effort", &mut self.effort)?;
+        r.finish()
+    }
+
+    /// The `name` sequence at the cursor into `names`.
+    fn decode_names(&mut self, r: &mut CdrReader<'_>) -> Result<(), CdrError> {
         // Each string needs at least its 4-byte length and a NUL.
         let n = r.seq_len("name", 5)?;
         self.names.truncate(n);
@@ -285,10 +314,7 @@ impl JointStateMsg {
                 None => self.names.push(utf8(bytes, "name", at)?.to_string()),
             }
         }
-        r.f64_seq("position", &mut self.position)?;
-        r.f64_seq("velocity", &mut self.velocity)?;
-        r.f64_seq("effort", &mut self.effort)?;
-        r.finish()
+        Ok(())
     }
 }
 
@@ -524,5 +550,89 @@ mod tests {
                 assert_eq!(r.unwrap_err(), CdrError::BadNanosec(nanosec));
             }
         }
+    }
+
+    /// Names repeated from the message before are taken without decoding them again; names
+    /// that change, the same name bytes at another place (another frame id's length) or in the
+    /// other byte order, and a message after one whose names failed, are decoded again.
+    #[test]
+    fn joint_names_are_reused_only_where_the_bytes_mean_the_same() {
+        let st = Stamp { sec: 1, nanosec: 0 };
+        let mut js = JointStateMsg::default();
+        let ab = CdrWriter::joint_state(st, &["a", "b"], &[1.0, 2.0], &[], &[]);
+        js.decode(&ab).unwrap();
+        assert_eq!(js.names, ["a", "b"]);
+        js.decode(&ab).unwrap();
+        assert_eq!(js.names, ["a", "b"]);
+        assert_eq!(js.position, [1.0, 2.0]);
+        let cd = CdrWriter::joint_state(st, &["c", "d"], &[3.0, 4.0], &[], &[]);
+        js.decode(&cd).unwrap();
+        assert_eq!(js.names, ["c", "d"]);
+        // The same name bytes after a longer frame id: decoded where they stand.
+        let mut w = CdrWriter::new();
+        w.header(st, "base").u32(2).string("c").string("e");
+        w.f64_seq(&[5.0, 6.0]).f64_seq(&[]).f64_seq(&[]);
+        js.decode(&w.into_bytes()).unwrap();
+        assert_eq!(js.names, ["c", "e"]);
+        // The bytes of the last names in a big-endian message (everything else big-endian):
+        // their count reads as 2²⁵, which does not fit.
+        js.decode(&ab).unwrap();
+        let names = &ab[4 + 16..4 + 34];
+        let mut be = vec![0, 0, 0, 0];
+        be.extend_from_slice(&1i32.to_be_bytes());
+        be.extend_from_slice(&0u32.to_be_bytes());
+        be.extend_from_slice(&1u32.to_be_bytes());
+        be.extend_from_slice(&[0, 0, 0, 0]);
+        be.extend_from_slice(names);
+        be.extend_from_slice(&[0, 0]);
+        be.extend_from_slice(&2u32.to_be_bytes());
+        be.extend_from_slice(&[0, 0, 0, 0]);
+        be.extend_from_slice(&1.0f64.to_be_bytes());
+        be.extend_from_slice(&2.0f64.to_be_bytes());
+        be.extend_from_slice(&0u32.to_be_bytes());
+        be.extend_from_slice(&0u32.to_be_bytes());
+        assert!(
+            matches!(
+                js.decode(&be),
+                Err(CdrError::Truncated { field: "name", .. })
+            ),
+            "{:?}",
+            js.decode(&be)
+        );
+        // The same bytes one further on (a one-character frame id: the names start at body
+        // byte 14, not 13): the count is read after two bytes of padding, from the middle of
+        // the bytes (2⁹, which does not fit).
+        js.decode(&ab).unwrap();
+        let raw = &ab[4 + 13..4 + 34];
+        assert_eq!(raw[..3], [0, 0, 0]);
+        let mut w = CdrWriter::new();
+        w.header(st, "x");
+        let mut moved = w.into_bytes();
+        assert_eq!(moved.len(), 4 + 14);
+        moved.extend_from_slice(raw);
+        // Body byte 35: one byte of padding, then the position count and values (40 ≡ 0 mod
+        // 8), velocity and effort empty.
+        moved.push(0);
+        moved.extend_from_slice(&2u32.to_le_bytes());
+        moved.extend_from_slice(&1.0f64.to_le_bytes());
+        moved.extend_from_slice(&2.0f64.to_le_bytes());
+        moved.extend_from_slice(&[0; 8]);
+        assert!(
+            matches!(
+                js.decode(&moved),
+                Err(CdrError::Truncated { field: "name", .. })
+            ),
+            "{:?}",
+            js.decode(&moved)
+        );
+        // A message whose names fail leaves nothing to reuse: its first name was written
+        // over the held ones before the second failed.
+        js.decode(&cd).unwrap();
+        let mut bad = ab.clone();
+        let nul = bad.windows(2).position(|w| w == b"b\0").unwrap() + 1;
+        bad[nul] = b'x';
+        assert!(js.decode(&bad).is_err());
+        js.decode(&cd).unwrap();
+        assert_eq!(js.names, ["c", "d"]);
     }
 }

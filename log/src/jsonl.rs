@@ -406,22 +406,61 @@ impl<R: BufRead> JsonlReader<R> {
     }
 }
 
+/// Append the next line of `input` to `line` (through its `\n`, or to the end of the input) and
+/// return its length in bytes (0 at the end), as `BufRead::read_line`; the line end is found with
+/// `memchr` (vectorized) in the reader's buffer, and the line is refused if it is not UTF-8.
 fn read_line<R: BufRead>(
     file: &str,
     input: &mut R,
     line: &mut String,
     line_no: u64,
 ) -> Result<usize, LogError> {
-    input.read_line(line).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::InvalidData {
-            LogError::input(file, Location::Line(line_no), "line is not valid UTF-8")
-        } else {
-            LogError::Io {
-                file: file.to_string(),
-                source: e,
+    let io = |e: std::io::Error| LogError::Io {
+        file: file.to_string(),
+        source: e,
+    };
+    let mut bytes = std::mem::take(line).into_bytes();
+    let start = bytes.len();
+    loop {
+        let buf = match input.fill_buf() {
+            Ok(buf) => buf,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(io(e)),
+        };
+        if buf.is_empty() {
+            break;
+        }
+        match memchr::memchr(b'\n', buf) {
+            Some(i) => {
+                bytes.extend_from_slice(&buf[..=i]);
+                input.consume(i + 1);
+                break;
+            }
+            None => {
+                let n = buf.len();
+                bytes.extend_from_slice(buf);
+                input.consume(n);
             }
         }
-    })
+    }
+    let n = bytes.len() - start;
+    match String::from_utf8(bytes) {
+        Ok(s) => {
+            *line = s;
+            Ok(n)
+        }
+        Err(e) => {
+            let mut bytes = e.into_bytes();
+            bytes.truncate(start);
+            // The bytes kept were a `String`'s.
+            *line = String::from_utf8(bytes).unwrap_or_default();
+            Err(LogError::input(
+                file,
+                Location::Line(line_no),
+                "line is not valid UTF-8",
+            ))
+        }
+    }
 }
 
 impl<R: BufRead> RecordReader for JsonlReader<R> {

@@ -70,6 +70,18 @@ const NUMBERS: &[&str] = &[
     "-0e-0",
     "00",
     "1e-0",
+    // Around the bound below which a skipped number is taken without converting it.
+    "1e300",
+    "1e308",
+    "1e309",
+    "12e307",
+    "99e307",
+    "0.001e310",
+    "0000000000000000000001e308",
+    "-1e308",
+    "1e-2000",
+    "1e99999999999999999999",
+    "1e-99999999999999999999",
 ];
 
 /// xorshift64*.

@@ -74,7 +74,7 @@ impl Auditor {
 
     /// [`Self::boxes`] written into `e` in place.
     fn boxes_into(&self, s0: &Sample, s1: &Sample, e: &mut SpanEnclosure) {
-        span_boxes_into(self.robot.limits(), s0, s1, self.cfg.limit_slack, e);
+        span_boxes_into(&self.span_limits, s0, s1, self.cfg.limit_slack, e);
         // A sample outside the joint position limits contradicts the robot model as much as
         // one moving faster than its limits: the span is inconsistent (`exceeds_limits`; it is
         // still checked with its boxes, and can never pass). The same relative slack as for

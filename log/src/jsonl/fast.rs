@@ -291,8 +291,55 @@ impl<'a> Scanner<'a> {
             b't' => self.literal(b"true"),
             b'f' => self.literal(b"false"),
             b'n' => self.literal(b"null"),
-            _ => self.num().map(|_| ()),
+            _ => self.skip_num(),
         }
+    }
+
+    /// A JSON number whose value is not needed (a skipped field): its grammar is checked as in
+    /// [`Self::num`] and nothing is converted. serde_json ignores such a number the same way
+    /// (`IgnoredAny` checks the grammar, not the range: `1e400` in a skipped field is taken by
+    /// both).
+    fn skip_num(&mut self) -> Result<(), Bail> {
+        self.ws();
+        let s = self.s;
+        let mut i = self.i;
+        if s.get(i) == Some(&b'-') {
+            i += 1;
+        }
+        match s.get(i) {
+            Some(b'0') => i += 1,
+            Some(b'1'..=b'9') => {
+                while let Some(b'0'..=b'9') = s.get(i) {
+                    i += 1;
+                }
+            }
+            _ => return Err(Bail),
+        }
+        if s.get(i) == Some(&b'.') {
+            i += 1;
+            let frac = i;
+            while let Some(b'0'..=b'9') = s.get(i) {
+                i += 1;
+            }
+            if i == frac {
+                return Err(Bail);
+            }
+        }
+        if matches!(s.get(i), Some(b'e' | b'E')) {
+            i += 1;
+            if matches!(s.get(i), Some(b'-' | b'+')) {
+                i += 1;
+            }
+            let digits = i;
+            while let Some(b'0'..=b'9') = s.get(i) {
+                i += 1;
+            }
+            if i == digits {
+                return Err(Bail);
+            }
+        }
+        self.i = i;
+        Ok(())
     }
 
     fn literal(&mut self, word: &[u8]) -> Result<(), Bail> {
