@@ -30,6 +30,19 @@ pub struct PathState {
     pub sdd: f64,
 }
 
+/// Any path state (every field any value, NaN included): `stub_verified(SpeedProfile::eval)` draws
+/// the result from here and keeps those the contract allows.
+#[cfg(kani)]
+impl kani::Arbitrary for PathState {
+    fn any() -> Self {
+        PathState {
+            s: kani::any(),
+            sd: kani::any(),
+            sdd: kani::any(),
+        }
+    }
+}
+
 impl PathState {
     /// Bitwise equality of all three fields (a copy equals its original even where a field is
     /// NaN, which `==` would deny): what "the same state" means in the shield's proofs.
@@ -269,6 +282,16 @@ impl SpeedProfile {
     }
 
     /// State at time `tau` (s) after the profile start (τ ≥ 0; constant target speed after settling).
+    ///
+    /// Guarantee (its Kani contract): the path speed is never negative, for any profile of
+    /// finite fields and any `tau` not above 10²⁸⁰ s (NaN and −∞ included: they are read as 0).
+    /// The bound keeps `tau − t₀` finite for every finite phase start, so no intermediate is NaN
+    /// (Kani checks that too); the shield evaluates at most a second or so past a profile's start.
+    /// Proven on this function by `f3_eval_contract` (shield/src/shield/proofs.rs); the shield's
+    /// step harnesses (`f3_*step*`) use the contract in its place, as they assert nothing of the
+    /// executed state's values.
+    #[cfg_attr(kani, kani::requires(!(tau > 1e280)))]
+    #[cfg_attr(kani, kani::ensures(|p: &PathState| p.sd >= 0.0))]
     #[inline]
     pub fn eval(&self, tau: f64) -> PathState {
         let mut p = self.eval_raw(tau);
@@ -697,6 +720,40 @@ mod tests {
                 prev = x;
             }
         }
+    }
+
+    /// `eval` never reads a negative path speed (its Kani contract, `f3_eval_contract`): where a
+    /// phase's polynomial dips below 0 — by rounding near a stop, here by a profile whose first
+    /// phase decelerates past it — the speed read is 0 (catches mutant `x75`, a clamp at −1).
+    #[test]
+    fn a_negative_path_speed_is_read_as_zero() {
+        let phase = |t0, sd, sdd| Phase {
+            t0,
+            s: 0.0,
+            sd,
+            sdd,
+            jerk: 0.0,
+        };
+        let p = SpeedProfile {
+            phases: [
+                phase(0.0, 0.1, -1.0),
+                phase(1.0, 0.0, 0.0),
+                phase(2.0, 0.0, 0.0),
+                phase(3.0, 0.0, 0.0),
+            ],
+            n: 2,
+            settle: 1.0,
+            target: 0.0,
+            acc: 1.0,
+            jerk: 1.0,
+        };
+        // Raw: ṡ = 0.1 − 0.5 at τ = 0.5, ṡ = 0.1 − 0.9 at τ = 0.9.
+        for tau in [0.5, 0.9] {
+            let e = p.eval(tau);
+            assert_eq!(e.sd, 0.0, "ṡ at {tau}");
+            assert_eq!(e.sdd, -1.0);
+        }
+        assert_eq!(p.eval(0.05).sd, 0.1 - 0.05);
     }
 
     /// `ranges` encloses `eval` at instants next to a phase boundary, where the phase before it

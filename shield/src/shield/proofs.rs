@@ -18,7 +18,10 @@
 //! - `take_measurement`: the newest-stamp rule of the shield (`stamped::supersedes`);
 //! - `at_rest`: any answer.
 //!
-//! [`choose`] is replaced by its verified contract [`chosen_by_rule`] (`stub_verified`).
+//! [`choose`] is replaced by its verified contract [`chosen_by_rule`] (`stub_verified`), and
+//! [`SpeedProfile::eval`] (the executed state read from the chosen profile) by its verified
+//! contract (a path speed ≥ 0, `f3_eval_contract`): the harnesses assert nothing of the executed
+//! state's values, and evaluating a symbolic cubic was most of their solver time.
 //!
 //! It proves the induction step: after the step the command follows the new stored failsafe's
 //! slot and no fresh chunk is left; in PACS and single-action modes the failsafe changes only to
@@ -177,6 +180,7 @@ fn any_mode() -> FilterMode {
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
+#[kani::stub_verified(SpeedProfile::eval)]
 fn f3_shield_step_induction() {
     step_induction(None);
 }
@@ -186,6 +190,7 @@ fn f3_shield_step_induction() {
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
+#[kani::stub_verified(SpeedProfile::eval)]
 fn f3_step_adopted() {
     step_induction(Some(true));
 }
@@ -194,6 +199,7 @@ fn f3_step_adopted() {
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
+#[kani::stub_verified(SpeedProfile::eval)]
 fn f3_step_kept() {
     step_induction(Some(false));
 }
@@ -322,6 +328,17 @@ fn choose_inputs() -> (VerifiedFailsafe, Option<Candidate>, FilterMode, f64, f64
         verified: kani::any(),
     });
     (stored, candidate, any_mode(), t, alpha)
+}
+
+/// The contract of [`SpeedProfile::eval`] (the path speed is never negative) on the real
+/// function, for any finite profile of 1 to 4 phases and any `tau` its precondition admits
+/// (up to 10²⁸⁰ s, NaN and −∞ included).
+#[kani::proof_for_contract(SpeedProfile::eval)]
+#[kani::unwind(5)]
+fn f3_eval_contract() {
+    let p = any_profile();
+    let tau: f64 = kani::any();
+    let _ = p.eval(tau);
 }
 
 /// `choose`'s contract where the candidate is adopted.
