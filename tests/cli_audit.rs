@@ -2,16 +2,13 @@
 
 use pacs_log::{Header, LogWriter, ModelRef};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pacs-cli-audit-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> pacs_testkit::ScratchDir {
+    pacs_testkit::ScratchDir::new("cli-audit", name)
 }
 
 /// A 0.2 s log at 1 kHz, joint 1 moving at 0.3 rad/s, human at `x` (m) from the base.
@@ -54,7 +51,7 @@ fn s(p: &Path) -> String {
 }
 
 struct Logs {
-    dir: PathBuf,
+    dir: pacs_testkit::ScratchDir,
     pass: String,
     fail: String,
     inconclusive: String,

@@ -12,11 +12,8 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("python/tests/fixtures/db3")
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pacs-cli-db3-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> pacs_testkit::ScratchDir {
+    pacs_testkit::ScratchDir::new("cli-db3", name)
 }
 
 fn s(p: &Path) -> String {

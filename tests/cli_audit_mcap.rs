@@ -5,7 +5,7 @@ use pacs_log::mcap::{McapConfig, McapLogWriter};
 use pacs_log::{Header, LogWriter, ModelRef};
 use serde_json::Value;
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 const Q: [f64; 7] = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
@@ -19,11 +19,8 @@ const JOINTS: [&str; 7] = [
     "fr3_joint7",
 ];
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pacs-cli-mcap-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> pacs_testkit::ScratchDir {
+    pacs_testkit::ScratchDir::new("cli-mcap", name)
 }
 
 fn header() -> Header {

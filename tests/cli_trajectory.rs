@@ -7,12 +7,7 @@ fn run(input: &Value, brake_at: Option<f64>) -> (i32, Value, String) {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     (input.to_string(), brake_at.map(f64::to_bits)).hash(&mut h);
-    let dir = std::env::temp_dir().join(format!(
-        "pacs-cli-traj-{}-{}",
-        std::process::id(),
-        h.finish()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = pacs_testkit::ScratchDir::new("cli-traj", &h.finish().to_string());
     let path = dir.join("in.json");
     std::fs::write(&path, serde_json::to_string(input).unwrap()).unwrap();
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_pacs"));

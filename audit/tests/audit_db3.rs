@@ -117,17 +117,10 @@ fn same_result(a: &RunResult, b: &RunResult) {
     assert_eq!(a, b);
 }
 
-fn tempdir() -> PathBuf {
+fn tempdir() -> pacs_testkit::ScratchDir {
     use std::sync::atomic::{AtomicUsize, Ordering};
     static N: AtomicUsize = AtomicUsize::new(0);
-    let d = std::env::temp_dir().join(format!(
-        "pacs-db3-{}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    pacs_testkit::ScratchDir::new("db3", &N.fetch_add(1, Ordering::Relaxed).to_string())
 }
 
 fn expect_err(r: Result<RunResult, LogError>, file: &str, words: &[&str]) -> String {
@@ -351,7 +344,8 @@ fn a_configured_topic_must_be_cdr_of_the_expected_type() {
             "serialization format `json` is not supported (expected `cdr`)",
         ],
     );
-    let p = copy_clean(&tempdir());
+    let scratch = tempdir();
+    let p = copy_clean(&scratch);
     sql(
         &p,
         "UPDATE topics SET type = 'sensor_msgs/msg/Imu' WHERE name = '/joint_states'",
@@ -362,7 +356,8 @@ fn a_configured_topic_must_be_cdr_of_the_expected_type() {
         &["unknown type `sensor_msgs/msg/Imu` (expected `sensor_msgs/msg/JointState`)"],
     );
     // A topic that is not configured may be anything.
-    let p = copy_clean(&tempdir());
+    let scratch = tempdir();
+    let p = copy_clean(&scratch);
     sql(
         &p,
         "UPDATE topics SET serialization_format = 'json', type = 'x', name = '/other' WHERE name = '/pacs/events'",
@@ -404,7 +399,8 @@ fn bad_messages_are_errors_naming_the_message() {
         ),
     ];
     for (stmt, words) in cases {
-        let p = copy_clean(&tempdir());
+        let scratch = tempdir();
+        let p = copy_clean(&scratch);
         sql(&p, stmt);
         expect_err(audit(&p, None), &p.display().to_string(), words);
     }

@@ -100,3 +100,47 @@ mod tests {
         assert!((row[8][1] - 0.4).abs() < 1e-15);
     }
 }
+
+/// A directory for one test's files, unique to the process and `name`, emptied when created and
+/// removed (with its contents) when dropped, so that test runs leave nothing behind in the
+/// system's temporary directory. Dereferences to its path.
+#[derive(Debug)]
+pub struct ScratchDir(std::path::PathBuf);
+
+impl ScratchDir {
+    /// `TMPDIR/pacs-PREFIX-PID-NAME`, created empty.
+    ///
+    /// # Panics
+    /// If the directory cannot be created (a test fixture: the test cannot run).
+    pub fn new(prefix: &str, name: &str) -> ScratchDir {
+        let d = std::env::temp_dir().join(format!("pacs-{prefix}-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d)
+            .unwrap_or_else(|e| panic!("cannot create {}: {e}", d.display()));
+        ScratchDir(d)
+    }
+
+    /// The directory's path.
+    pub fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for ScratchDir {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for ScratchDir {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
