@@ -170,7 +170,6 @@ fn exit_codes_and_json_output() {
         err.contains(&l.bad) && err.contains("line ") && err.contains("time goes backwards"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&l.dir);
 }
 
 #[test]
@@ -200,7 +199,6 @@ fn invalid_files_and_config_exit_3() {
             .code(),
         Some(0)
     );
-    let _ = std::fs::remove_dir_all(&l.dir);
 }
 
 #[test]
@@ -280,7 +278,6 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
         assert_eq!(logs_in[0]["sha256"], it.next().unwrap());
         assert_eq!(rep["inputs"]["config"]["sha256"], it.next().unwrap());
     }
-    let _ = std::fs::remove_dir_all(&l.dir);
 }
 
 #[test]
@@ -312,7 +309,6 @@ fn csv_logs_are_audited_by_extension() {
     assert_eq!(o.status.code(), Some(3));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.csv: line 3: q[0]"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A PFL task with a robot whose moving link has capsules but no mass, or a robot with
@@ -391,7 +387,6 @@ fn uncovered_moving_link_in_the_header_is_refused() {
         "{err}"
     );
     assert!(err.contains("line 1"), "names the header line: {err}");
-    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// A header robot with finite but astronomical offsets would overflow the checker (a panic in
@@ -433,7 +428,6 @@ fn astronomical_robot_in_the_header_is_refused() {
         "{err}"
     );
     assert!(o.stdout.is_empty());
-    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// `1e400` or `NaN` in a log names the record's field (and the file line), not only
@@ -465,5 +459,4 @@ fn non_finite_numbers_in_a_log_name_the_field() {
         assert_eq!(o.status.code(), Some(3), "{name}: {err}");
         assert!(err.contains(want), "{name}: {err}");
     }
-    let _ = std::fs::remove_dir_all(&d);
 }

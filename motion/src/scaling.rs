@@ -286,7 +286,8 @@ impl SpeedProfile {
     /// Guarantee (its Kani contract): the path speed is never negative, for any profile of
     /// finite fields and any `tau` not above 10²⁸⁰ s (NaN and −∞ included: they are read as 0).
     /// The bound keeps `tau − t₀` finite for every finite phase start, so no intermediate is NaN
-    /// (Kani checks that too); the shield evaluates at most a second or so past a profile's start.
+    /// (Kani checks that too); the shield evaluates a profile at most as long after its start as
+    /// the run has lasted, far below it.
     /// Proven on this function by `f3_eval_contract` (shield/src/shield/proofs.rs); the shield's
     /// step harnesses (`f3_*step*`) use the contract in its place, as they assert nothing of the
     /// executed state's values.

@@ -87,20 +87,6 @@ pub fn true_separation(
     d
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fixtures_have_the_default_humans_nine_keypoints() {
-        assert_eq!(human_reaching(1.0, 0.0, [0.5, 0.0, 1.0]).len(), 9);
-        let row = keypoints_in_a_row(2.0);
-        assert_eq!(row.len(), 9);
-        assert_eq!(row[0], [2.0, -0.4, 1.0]);
-        assert!((row[8][1] - 0.4).abs() < 1e-15);
-    }
-}
-
 /// A directory for one test's files, unique to the process and `name`, emptied when created and
 /// removed (with its contents) when dropped, so that test runs leave nothing behind in the
 /// system's temporary directory. Dereferences to its path.
@@ -118,11 +104,6 @@ impl ScratchDir {
         std::fs::create_dir_all(&d)
             .unwrap_or_else(|e| panic!("cannot create {}: {e}", d.display()));
         ScratchDir(d)
-    }
-
-    /// The directory's path.
-    pub fn path(&self) -> &std::path::Path {
-        &self.0
     }
 }
 
@@ -142,5 +123,19 @@ impl AsRef<std::path::Path> for ScratchDir {
 impl Drop for ScratchDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixtures_have_the_default_humans_nine_keypoints() {
+        assert_eq!(human_reaching(1.0, 0.0, [0.5, 0.0, 1.0]).len(), 9);
+        let row = keypoints_in_a_row(2.0);
+        assert_eq!(row.len(), 9);
+        assert_eq!(row[0], [2.0, -0.4, 1.0]);
+        assert!((row[8][1] - 0.4).abs() < 1e-15);
     }
 }

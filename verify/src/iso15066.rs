@@ -199,10 +199,9 @@ pub fn check_rest_speed(rest_speed: f64) -> Result<(), RuleError> {
 ///
 /// # Soundness
 /// Its Kani contract is [`every_speed_within`]: `true` only if no velocity in the box is faster
-/// than `rest_speed`. Checked by the twin `i1_decision_atoms_within_rule` (up to 7 joints); the
-/// Kani proof of the claim on this function, `i1_at_rest_within` (plain proof, boxes of 7
-/// joints, any floats; Bitwuzla, in CI) and its `proof_for_contract` form `i1_at_rest_contract`
-/// (the same inputs; Bitwuzla, in CI); mutant `x72` fails both.
+/// than `rest_speed`. Checked by the twin `i1_decision_atoms_within_rule` (up to 7 joints) and
+/// proven on this function by `i1_at_rest_contract` (`proof_for_contract`, boxes of 7 joints
+/// from any floats; Bitwuzla, in CI); mutant `x72` fails both.
 #[cfg_attr(kani, kani::ensures(|r: &bool| !*r || every_speed_within(dq, rest_speed)))]
 #[inline]
 pub fn at_rest(dq: &JointBox, rest_speed: f64) -> bool {

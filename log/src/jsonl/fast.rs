@@ -302,41 +302,39 @@ impl<'a> Scanner<'a> {
     fn skip_num(&mut self) -> Result<(), Bail> {
         self.ws();
         let s = self.s;
+        // The index after the run of ASCII digits from `i`.
+        let digits = |mut i: usize| {
+            while let Some(b'0'..=b'9') = s.get(i) {
+                i += 1;
+            }
+            i
+        };
         let mut i = self.i;
         if s.get(i) == Some(&b'-') {
             i += 1;
         }
-        match s.get(i) {
-            Some(b'0') => i += 1,
-            Some(b'1'..=b'9') => {
-                while let Some(b'0'..=b'9') = s.get(i) {
-                    i += 1;
-                }
-            }
+        i = match s.get(i) {
+            Some(b'0') => i + 1,
+            Some(b'1'..=b'9') => digits(i),
             _ => return Err(Bail),
-        }
+        };
         if s.get(i) == Some(&b'.') {
-            i += 1;
-            let frac = i;
-            while let Some(b'0'..=b'9') = s.get(i) {
-                i += 1;
-            }
-            if i == frac {
+            let end = digits(i + 1);
+            if end == i + 1 {
                 return Err(Bail);
             }
+            i = end;
         }
         if matches!(s.get(i), Some(b'e' | b'E')) {
             i += 1;
             if matches!(s.get(i), Some(b'-' | b'+')) {
                 i += 1;
             }
-            let digits = i;
-            while let Some(b'0'..=b'9') = s.get(i) {
-                i += 1;
-            }
-            if i == digits {
+            let end = digits(i);
+            if end == i {
                 return Err(Bail);
             }
+            i = end;
         }
         self.i = i;
         Ok(())

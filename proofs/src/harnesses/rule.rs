@@ -519,31 +519,11 @@ fn i1_object_decision_contract() {
     let _ = pacs_verify::iso15066::contact_violates(contact, kani::any(), || e);
 }
 
-/// `at_rest`'s contract claim (`every_speed_within`) as a plain proof (no contract
-/// instrumentation) on the real function: boxes of exactly 7 joints with any bounds a box
-/// admits (finite, `lo ≤ hi`; any floats, filtered by `JointBox::new`), any rest speed. (A
-/// symbolic joint count, slicing the arrays, gives an encoding Bitwuzla rejects; fewer joints
-/// are the twin's.)
-#[cfg(kani)]
-#[kani::proof]
-#[kani::unwind(9)]
-fn i1_at_rest_within() {
-    let lo: [f64; 7] = kani::any();
-    let hi: [f64; 7] = kani::any();
-    let r: f64 = kani::any();
-    if let Ok(dq) = JointBox::new(&lo, &hi) {
-        assert!(
-            !pacs_verify::iso15066::at_rest(&dq, r)
-                || pacs_verify::iso15066::every_speed_within(&dq, r),
-            "at rest with a speed above the rest speed"
-        );
-    }
-}
-
 /// `at_rest`'s Kani contract (`every_speed_within`), proven on the real function for every
 /// 7-joint velocity box any floats give (`JointBox::new` keeps the finite ones with `lo ≤ hi`)
 /// and any rest speed (any float). Plain float arrays, not `KaniSource`: drawn through it the
-/// box's arrays get an encoding Bitwuzla rejects.
+/// box's arrays get an encoding Bitwuzla rejects. (A symbolic joint count, slicing the arrays,
+/// is rejected too; fewer joints are the twin's, `i1_decision_atoms_within_rule`.)
 #[cfg(kani)]
 #[kani::proof_for_contract(pacs_verify::iso15066::at_rest)]
 #[kani::unwind(9)]
