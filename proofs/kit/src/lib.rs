@@ -139,6 +139,25 @@ impl Source for KaniSource {
     }
 }
 
+/// `v` itself. Under Kani a fresh symbolic array whose elements are assumed to have `v`'s bits:
+/// an array passed by value that is built from computed floats reaches CBMC's SMT back end as a
+/// `concat` of float terms, which Bitwuzla rejects (`proofs/smt/bitwuzla_cli.py` repairs float
+/// *symbols* and literals there, not compound terms); a symbol with the same bits is the same
+/// value to the code under proof.
+#[inline]
+pub fn pinned3(v: [f64; 3]) -> [f64; 3] {
+    #[cfg(kani)]
+    {
+        let w: [f64; 3] = kani::any();
+        kani::assume(w[0].to_bits() == v[0].to_bits());
+        kani::assume(w[1].to_bits() == v[1].to_bits());
+        kani::assume(w[2].to_bits() == v[2].to_bits());
+        w
+    }
+    #[cfg(not(kani))]
+    v
+}
+
 /// Seeded pseudo-random inputs (SplitMix64) with a bias toward boundary values.
 #[derive(Debug, Clone)]
 pub struct RandomSource {

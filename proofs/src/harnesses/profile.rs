@@ -465,9 +465,8 @@ fn piece_vel_acc<S: Source>(s: &mut S) {
 /// `−v/a`, no square root): after `extend_bounds(d0, d1)`, q(d) lies in them for every d in
 /// `[d0, d1]`. Under Kani the piece q = 0, q̇ = 2, q̈ = −4 over [0.25, 1] s: q has its maximum
 /// 0.5 at d = 0.5 s, above the ends' 0.375 and 0 (mutant x32, the extremum of q skipped when
-/// j = 0, fails). The cubic case (the
-/// roots of q̇ by the stable quadratic formula, with `√`) is the twin's
-/// (`f5_piece_position_cubic`) and f5's.
+/// j = 0, fails). The cubic case (the roots of q̇ by the stable quadratic formula, with `√`) is
+/// `f5_piece_position_cubic` (mutant x76, the second root skipped, fails it).
 fn piece_position_quadratic<S: Source>(s: &mut S) {
     piece_position(s, false)
 }
@@ -477,12 +476,25 @@ fn piece_position_cubic<S: Source>(s: &mut S) {
 }
 
 fn piece_position<S: Source>(s: &mut S, cubic: bool) {
-    let kani_piece = Piece {
-        t: 0.0,
-        q: 0.0,
-        v: 2.0,
-        a: -4.0,
-        j: 0.0,
+    let kani_piece = if cubic {
+        // q̇ = (d − ½)(d − 3/2): the stable quadratic formula's roots ½ and 3/2 (discriminant 1,
+        // `√` by its stub), q's maximum 1/6 at d = ½ inside [¼, 1], above the ends' 25/192 and
+        // 1/12.
+        Piece {
+            t: 0.0,
+            q: 0.0,
+            v: 0.75,
+            a: -2.0,
+            j: 2.0,
+        }
+    } else {
+        Piece {
+            t: 0.0,
+            q: 0.0,
+            v: 2.0,
+            a: -4.0,
+            j: 0.0,
+        }
     };
     let (piece, d0, d1, d) = piece_window(s, cubic, (kani_piece, 0.25, 1.0));
     let mut r = [Range::EMPTY; 3];
@@ -513,9 +525,13 @@ harness!(
     piece_position_quadratic
 );
 
+// Under Kani the cubic piece above, `√` (of the discriminant 1) by `stubs::sqrt_by_square`: any
+// root within 1e-12 relative of 1, so the roots of q̇ are near, not at, ½ and 3/2.
 harness!(
     f5_piece_position_cubic,
-    twin_only,
+    unwind = 3,
+    bits = 8,
+    stub = (pacs_reach::ieee::sqrt => crate::stubs::sqrt_by_square),
     cases = crate::DEFAULT_CASES,
     piece_position_cubic
 );

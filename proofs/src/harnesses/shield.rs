@@ -203,11 +203,13 @@ fn any_candidate<S: Source>(
 // over-approximation of `SpeedProfile::plan`: 1 to 4 phases, every field any finite `f64`):
 // `choose` only copies the profiles it is given and the claims compare bit patterns, so they
 // hold for every profile, planned or not, and every input at full width.
-// The whole induction step (Kani: 86.7–139.8 s, at or over the budget) is the
-// property test; Kani checks its two halves below.
+// The whole induction step verifies under Kani but over the 120 s budget (86.7–139.8 s before
+// `choose` carried its contract): not in CI, where Kani checks its two halves below.
 harness!(
     f1_shield_decision_induction,
-    twin_only,
+    unwind = 6,
+    bits = 52,
+    stub = (pacs_motion::scaling::SpeedProfile::plan => crate::stubs::any_speed_profile),
     cases = crate::DEFAULT_CASES,
     decide_induction
 );

@@ -38,7 +38,7 @@ use super::*;
 use crate::exact::cmp_prod;
 use nalgebra::Point3;
 use pacs_models::shape::Capsule;
-use pacs_proof_kit::{Source, harness};
+use pacs_proof_kit::{Source, harness, pinned3};
 use std::cmp::Ordering;
 
 /// `n / 2^shift` for an integer `n` in `[−max, max]` (`signed`) or `[0, max]`.
@@ -264,7 +264,7 @@ fn grid3<S: Source>(s: &mut S, signed: bool) -> [f64; 3] {
 ///
 /// Under Kani the zonotope is the constant `c = (3/4, −1/2, 5/16)`, `g = (−5/8, 7/8, 1/4)`,
 /// `e = (1/8, 1/16, 1/4)` (the member stays symbolic).
-fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3, [f64; 3]) {
+fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3<1>, [f64; 3]) {
     let (c, g, e) = if cfg!(kani) {
         (
             [0.75, -0.5, 0.3125],
@@ -280,8 +280,12 @@ fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3, [f64; 3]) {
         // Exact: multiples of 2⁻⁶ below 2¹⁰.
         p[i] = c[i] + b.times(g[i]) + Coefficient::any(s).times(e[i]);
     }
-    let z = Zonotope3::new(c, &[g], e).expect("valid zonotope");
-    (z, p)
+    // `from_parts` is `check_parts` then `assemble`.
+    assert!(
+        Zonotope3::<1>::check_parts(c, &[g], e).is_ok(),
+        "valid zonotope"
+    );
+    (Zonotope3::<1>::assemble(c, &[g], e), p)
 }
 
 /// `u·v` for the factor `u` of index `k` of a direction (see [`direction`]): one of `0, ±1,
@@ -314,11 +318,11 @@ fn support_member<S: Source>(s: &mut S) {
     let Some((lambda, u)) = direction(s) else {
         return;
     };
-    let d = [
+    let d = pinned3([
         factor(u[0], lambda),
         factor(u[1], lambda),
         factor(u[2], lambda),
-    ];
+    ]);
     let h = z.support_up(d);
     // u·p exactly: multiples of 2⁻³⁶ below 2¹², a float.
     let up = factor(u[0], p[0]) + factor(u[1], p[1]) + factor(u[2], p[2]);
@@ -358,15 +362,15 @@ fn distance_shared_point<S: Source>(s: &mut S) {
     // q = p + w ∈ Z ⊕ B(inflate), and |q − p1| = |v| ≤ r: q lies in the capsule.
     let p1 = [p[0] + w[0] + v[0], p[1] + w[1] + v[1], p[2] + w[2] + v[2]];
     let p2 = if s.bool() { p1 } else { grid3(s, true) };
-    let cap = Capsule::new_unchecked(Point3::from(p1), Point3::from(p2), r);
+    let cap = Capsule::new_unchecked(Point3::from(pinned3(p1)), Point3::from(pinned3(p2)), r);
     let Some((lambda, u)) = direction(s) else {
         return;
     };
-    let n = [
+    let n = pinned3([
         factor(u[0], lambda),
         factor(u[1], lambda),
         factor(u[2], lambda),
-    ];
+    ]);
     let lb = z.distance_bound_along(inflate, &cap, n);
     assert!(
         lb == 0.0,

@@ -57,6 +57,16 @@ impl<const N: usize> Zonotope3<N> {
     /// Build a zonotope of capacity `N` from centre, generators (at most `N`) and error box
     /// radius `e ≥ 0` ([`Zonotope3::new`] for the default capacity).
     pub fn from_parts(c: [f64; 3], gens: &[[f64; 3]], e: [f64; 3]) -> Result<Self, ZonotopeError> {
+        Self::check_parts(c, gens, e)?;
+        Ok(Self::assemble(c, gens, e))
+    }
+
+    /// The checks of [`Self::from_parts`]: at most `N` generators, every number finite, `e ≥ 0`.
+    pub(crate) fn check_parts(
+        c: [f64; 3],
+        gens: &[[f64; 3]],
+        e: [f64; 3],
+    ) -> Result<(), ZonotopeError> {
         if gens.len() > N {
             return Err(ZonotopeError::DimensionMismatch {
                 what: "Zonotope3 generators",
@@ -74,6 +84,13 @@ impl<const N: usize> Zonotope3<N> {
                 reason: "radii must be >= 0",
             });
         }
+        Ok(())
+    }
+
+    /// The zonotope of parts that passed [`Self::check_parts`] (the proofs beside this module
+    /// build it this way: a `Result` carrying the float arrays reaches the model checker's SMT
+    /// back end as a `concat` of float terms, which Bitwuzla rejects).
+    pub(crate) fn assemble(c: [f64; 3], gens: &[[f64; 3]], e: [f64; 3]) -> Self {
         let mut g = [[0.0; 3]; N];
         g[..gens.len()].copy_from_slice(gens);
         let mut abs_sum = e;
@@ -82,13 +99,13 @@ impl<const N: usize> Zonotope3<N> {
                 abs_sum[i] += gk[i].abs();
             }
         }
-        Ok(Self {
+        Self {
             c,
             g,
             len: gens.len(),
             e,
             abs_sum,
-        })
+        }
     }
 
     /// The general-dimension form (same set).
