@@ -56,18 +56,9 @@ def code_harnesses():
     return found
 
 
-CLAIMS = {
-    "C1": "Sound arithmetic: every rounding helper and interval operation encloses the exact result",
-    "C2": "Conservative intersection: capsule and zonotope tests never call touching sets disjoint",
-    "C3": "Human occupancy contains every motion the measurements allow",
-    "C4": "Robot occupancy contains the links over the joint boxes",
-    "C4′": "Object occupancy contains every motion the measurements allow",
-    "C5": "The energy bound dominates the kinetic energy over the boxes",
-    "C6": "The failsafe (braking along the path) reaches rest within its limits",
-    "C7": "Verification covers the monitored trajectory: intervals, path ranges, joint boxes",
-    "C8": "Induction: the shield only ever executes a verified step or the verified failsafe",
-    "C8′": "The one ISO/TS 15066 rule (SSM, PFL, clamping) decides soundly",
-    "C9": "The audit never passes a log with a violation",
+# The statements of the theorem and the solver guards; C1-C9's are the README's headings
+# ("### C1 Sound arithmetic (docs/...)"), read by `claim_statements`.
+STATEMENTS = {
     "theorem": "The robot is always on a verified monitored trajectory, and each such trajectory is "
     "safe: C8 on C1–C8′ (the step harnesses on the real `Shield::step`)",
     "solver": "The solver path itself (integer semantics, nested arrays)",
@@ -90,7 +81,16 @@ def short(text, limit=150):
     return cut.rstrip() + " …"
 
 
-def claims_table(rows, code, ci):
+def claim_statements(text):
+    """Claim -> statement: the README's `### Cn ...` headings (without their parenthesised
+    references), and `STATEMENTS`."""
+    out = dict(STATEMENTS)
+    for m in re.finditer(r"^### (C[1-9]′?) (.*?)(?: \(.*\))?$", text, re.M):
+        out[m.group(1)] = m.group(2).strip()
+    return out
+
+
+def claims_table(rows, code, ci, statements):
     """The generated claims table (Markdown lines)."""
     per_claim = {}
     for names, claim, result, time, _ in rows:
@@ -112,7 +112,7 @@ def claims_table(rows, code, ci):
             else:
                 kind = "Kani, not in CI"
                 note = short(time) or "—"
-            head = f"**{c}** {CLAIMS.get(c, '')}" if first else ""
+            head = f"**{c}** {statements.get(c, '')}" if first else ""
             out.append(f"| {head} | `{n}` | {kind} | {note.replace('|', '/')} |")
             first = False
     out += ["", END]
@@ -196,8 +196,8 @@ def main():
             problems.append(
                 f"README.md:{in_table[n][1]}: twin-only {n} must say 'property test only' and why"
             )
-    table = claims_table(rows, code, ci)
     text = README.read_text(encoding="utf-8")
+    table = claims_table(rows, code, ci, claim_statements(text))
     if START in text and END in text:
         i, j = text.index(START), text.index(END) + len(END)
         if "--write" in sys.argv:
