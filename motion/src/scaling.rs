@@ -116,14 +116,18 @@ impl Phase {
 /// target (within 1e-15), else ramp toward the target to the peak `up` (at most `max(acc, u0)`),
 /// hold it, and ramp back to s̈ = 0. `plan`'s arithmetic, as a function for the proofs
 /// (`pacs-proofs`: e1's Kani splits, on the ramps rather than on the evaluated profile).
+///
+/// # Soundness
+/// Braking contract (claim C6, [`ramps_brake_to_rest`]): for a braking start in the shield's
+/// ranges ([`braking_start`]) and target 0, the ramps bring the path to rest without a jump and
+/// within the limits. Proven by `e1_plan_ramps_contract_plateau` and
+/// `e1_plan_ramps_contract_ramps` (`proof_for_contract`; Kani covers the inputs those harnesses
+/// draw: A = 1, J = 8, s̈₀ = 0, the two branches), tested over the whole ranges by
+/// `e1_brake_plan_plateau`/`e1_brake_plan_ramps`' twins and
+/// `the_braking_ramps_keep_their_contract` (every branch, boundaries included).
 #[doc(hidden)]
-pub fn plan_ramps(
-    a0: f64,
-    v0: f64,
-    target: f64,
-    acc: f64,
-    jerk: f64,
-) -> ((f64, f64), (f64, f64), (f64, f64)) {
+#[cfg_attr(kani, kani::ensures(|r: &Ramps| !(target == 0.0 && braking_start(a0, v0, acc, jerk)) || ramps_brake_to_rest(a0, v0, acc, jerk, *r)))]
+pub fn plan_ramps(a0: f64, v0: f64, target: f64, acc: f64, jerk: f64) -> Ramps {
     let none = (0.0, 0.0);
     if !(jerk > 0.0 && acc > 0.0) {
         return (none, none, none);
@@ -150,6 +154,53 @@ pub fn plan_ramps(
         (0.0, plateau),
         (-d * jerk, up / jerk),
     )
+}
+
+/// Three constant-jerk ramps `(jerk, duration)` in order ([`plan_ramps`]).
+pub type Ramps = ((f64, f64), (f64, f64), (f64, f64));
+
+/// A braking start in the shield's ranges (the precondition of [`plan_ramps`]' braking
+/// contract): path acceleration limit `acc` ∈ [0.05, 50] 1/s², jerk limit `jerk` ∈ [0.05, 500]
+/// 1/s³ (the shield's caps: [`ACC_CAP`], [`JERK_CAP`]), path speed `v0` ∈ [0, 1.5] 1/s, path
+/// acceleration `a0` ∈ [−acc, acc], and consistent: a decelerating start can bring s̈ to 0 before
+/// ṡ reaches 0 (`v0 ≥ a0²/(2·jerk)` when `a0 < 0`; [`admissible`] rejects the profiles of the
+/// other starts, which would run the path backwards).
+pub fn braking_start(a0: f64, v0: f64, acc: f64, jerk: f64) -> bool {
+    (0.05..=50.0).contains(&acc)
+        && (0.05..=500.0).contains(&jerk)
+        && (0.0..=1.5).contains(&v0)
+        && (-acc..=acc).contains(&a0)
+        && (a0 >= 0.0 || v0 >= a0 * a0 / (2.0 * jerk))
+}
+
+/// The braking contract of [`plan_ramps`] on its result `r` from s̈₀ = `a0`, ṡ₀ = `v0`: applied
+/// in order in floating point (ṡ += Δ(s̈ + Δ·j/2), s̈ += Δ·j; a duration ≤ 0 is skipped, never
+/// NaN), every kept ramp is finite with jerk ±`jerk` or 0 and ends with ṡ ≥ −tol_ṡ,
+/// |s̈| ≤ max(`acc`, |s̈₀|)(1 + 10⁻⁹) and s̈ ≤ tol_s̈ (braking only slows down after its first
+/// ramp), and the last ends at rest: |s̈| ≤ tol_s̈ = 10⁻⁹(1 + acc + |s̈₀|), |ṡ| ≤ tol_ṡ =
+/// 10⁻⁹(1 + ṡ₀ + acc + |s̈₀|) — no jump to rest. With s̈ linear on a ramp, the ramp ends bound s̈
+/// everywhere on it, and ṡ from below (real arithmetic).
+pub fn ramps_brake_to_rest(a0: f64, v0: f64, acc: f64, jerk: f64, r: Ramps) -> bool {
+    const EPS: f64 = 1e-9;
+    let a_max = acc.max(a0.abs()) * (1.0 + EPS);
+    let tol_sdd = EPS * (1.0 + acc + a0.abs());
+    let tol_sd = EPS * (1.0 + v0 + acc + a0.abs());
+    let (mut sd, mut sdd) = (v0, a0);
+    for (j, dur) in [r.0, r.1, r.2] {
+        if dur > 0.0 {
+            if !(dur.is_finite() && (j == jerk || j == -jerk || j == 0.0)) {
+                return false;
+            }
+            sd += dur * (sdd + 0.5 * dur * j);
+            sdd += dur * j;
+            if !(sd >= -tol_sd && sdd.abs() <= a_max && sdd <= tol_sdd) {
+                return false;
+            }
+        } else if dur.is_nan() {
+            return false;
+        }
+    }
+    sdd.abs() <= tol_sdd && sd.abs() <= tol_sd
 }
 
 /// One phase of a [`SpeedProfile`] as raw parts: `(t0, s, ṡ, s̈, jerk)` — the start time (s),
@@ -689,6 +740,46 @@ pub fn admissible(
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// A value in `[lo, hi]`, often at its ends.
+    fn within(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
+        prop_oneof![Just(lo), Just(hi), lo..=hi, lo..=hi, lo..=hi]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 100_000,
+            max_global_rejects: 10_000_000,
+            ..ProptestConfig::default()
+        })]
+        /// The twin of `plan_ramps`' braking contract over the whole ranges of
+        /// [`braking_start`], every branch (single ramp, two ramps, plateau) and its boundaries:
+        /// starts at the consistency boundary `v0 = a0²/(2J)` and at the plateau boundary
+        /// `J·v0 + a0²/2 = A²` are drawn on purpose.
+        #[test]
+        fn the_braking_ramps_keep_their_contract(
+            acc in within(0.05, 50.0),
+            jerk in within(0.05, 500.0),
+            v in within(0.0, 1.5),
+            a_frac in prop_oneof![Just(0.0f64), Just(1.0), Just(-1.0), -1.0f64..=1.0],
+            edge in 0usize..3,
+        ) {
+            let a0 = a_frac * acc;
+            let v0 = match edge {
+                // On the consistency boundary (a decelerating start that just reaches rest).
+                1 if a0 < 0.0 => a0 * a0 / (2.0 * jerk),
+                // On the plateau boundary: J·v0 + a0²/2 = A².
+                2 => (acc * acc - 0.5 * a0 * a0) / jerk,
+                _ => v,
+            };
+            prop_assume!(braking_start(a0, v0, acc, jerk));
+            let r = plan_ramps(a0, v0, 0.0, acc, jerk);
+            prop_assert!(
+                ramps_brake_to_rest(a0, v0, acc, jerk, r),
+                "ramps {r:?} from s̈₀ {a0}, ṡ₀ {v0}, A {acc}, J {jerk}"
+            );
+        }
+    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(10_000))]

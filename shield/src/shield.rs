@@ -39,7 +39,9 @@ pub use command::{Binding, BindingNames, Command, Diagnostics};
 pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, chosen_by_rule, decide};
 pub use error::ShieldError;
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
-pub use intervals::{OccupancyIntervals, Piece, verify_fine};
+pub use intervals::{
+    OccupancyIntervals, Piece, interval_end, interval_inputs, interval_within, verify_fine,
+};
 pub use verification::monitored_joint_boxes;
 
 use pacs_models::object::{ObjectContact, ObjectModel};

@@ -223,33 +223,11 @@ fn brake_plan<S: Source>(s: &mut S, case: BrakeCase) {
     let a_max = acc.max(start.sdd.abs()) * (1.0 + EPS);
     let tol_sdd = EPS * (1.0 + acc + start.sdd.abs());
     let tol_sd = EPS * (1.0 + start.sd + acc + start.sdd.abs());
-    let (r0, r1, r2) = pacs_motion::scaling::plan_ramps(start.sdd, start.sd, 0.0, acc, jerk);
-    let ramps = [r0, r1, r2];
-    let (mut sd, mut sdd) = (start.sd, start.sdd);
-    for k in 0..3 {
-        let (j, dur) = ramps[k];
-        if dur > 0.0 {
-            assert!(dur.is_finite(), "ramp {k} lasts {dur}");
-            assert!(j == jerk || j == -jerk || j == 0.0, "jerk {j} on ramp {k}");
-            sd += dur * (sdd + 0.5 * dur * j);
-            sdd += dur * j;
-            assert!(sd >= -tol_sd, "ṡ = {sd} < 0 after ramp {k}");
-            assert!(
-                sdd.abs() <= a_max,
-                "|s̈| = {sdd} above {a_max} after ramp {k}"
-            );
-            assert!(sdd <= tol_sdd, "s̈ = {sdd} > 0 after ramp {k}");
-        } else {
-            assert!(!dur.is_nan(), "ramp {k} lasts NaN");
-        }
-    }
+    let ramps = pacs_motion::scaling::plan_ramps(start.sdd, start.sd, 0.0, acc, jerk);
+    // The claim is `plan_ramps`' braking contract (one implementation of it).
     assert!(
-        sdd.abs() <= tol_sdd,
-        "the ramps end at s̈ = {sdd} (a jump to rest)"
-    );
-    assert!(
-        sd.abs() <= tol_sd,
-        "the ramps end at ṡ = {sd} (a jump to rest)"
+        pacs_motion::scaling::ramps_brake_to_rest(start.sdd, start.sd, acc, jerk, ramps),
+        "the ramps {ramps:?} break the braking contract from {start:?}, A {acc}, J {jerk}"
     );
     if cfg!(kani) {
         return;
@@ -320,6 +298,38 @@ harness!(
     cases = crate::DEFAULT_CASES,
     brake_plan_ramps
 );
+
+/// `plan_ramps`' braking contract (`ramps_brake_to_rest`, claim C6) proven on the real function
+/// (`proof_for_contract`) for the inputs `brake_start` draws under Kani in the plateau branch
+/// (A = 1, J = 8, s̈₀ = 0, any 4-bit ṡ₀ with J·ṡ₀ > A²(1 + 10⁻⁹)); `√` by `sqrt_by_square`.
+/// The contract over the whole ranges of `braking_start` is the twins' (e1's splits and
+/// motion's `the_braking_ramps_keep_their_contract`).
+#[cfg(kani)]
+#[kani::proof_for_contract(pacs_motion::scaling::plan_ramps)]
+#[kani::unwind(5)]
+#[kani::stub(pacs_reach::ieee::sqrt, crate::stubs::sqrt_by_square)]
+fn e1_plan_ramps_contract_plateau() {
+    plan_ramps_under_contract(BrakeCase::Plateau);
+}
+
+/// As `e1_plan_ramps_contract_plateau`, in the two-ramp branch (ṡ₀ = 1/16, the `√` stub's root
+/// free).
+#[cfg(kani)]
+#[kani::proof_for_contract(pacs_motion::scaling::plan_ramps)]
+#[kani::unwind(5)]
+#[kani::stub(pacs_reach::ieee::sqrt, crate::stubs::sqrt_by_square)]
+fn e1_plan_ramps_contract_ramps() {
+    plan_ramps_under_contract(BrakeCase::Ramps);
+}
+
+/// One call of `plan_ramps` from `brake_start`'s Kani inputs in branch `case`.
+#[cfg(kani)]
+fn plan_ramps_under_contract(case: BrakeCase) {
+    let mut s = crate::KaniSource { bits: 4 };
+    if let Some((acc, jerk, start)) = brake_start(&mut s, case) {
+        let _ = pacs_motion::scaling::plan_ramps(start.sdd, start.sd, 0.0, acc, jerk);
+    }
+}
 
 // ---------------------------------------------------------------------------------------------
 // f4's Kani split: one phase of `ranges`.

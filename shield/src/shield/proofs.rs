@@ -374,3 +374,51 @@ impl kani::Arbitrary for Choice {
         }
     }
 }
+
+/// The contract of [`interval_end`] (claim C7) on the real function, for any interval index and
+/// limit and any `ta`, `dur`, `α_s`, `stop` its precondition admits (`dur = +∞` included).
+#[kani::proof_for_contract(interval_end)]
+fn f2_interval_end_contract() {
+    let (k, ta, dur, alpha, stop, max) = (
+        kani::any(),
+        kani::any(),
+        kani::any(),
+        kani::any(),
+        kani::any(),
+        kani::any(),
+    );
+    let _: f64 = interval_end(k, ta, dur, alpha, stop, max);
+}
+
+/// The occupancy intervals cover the monitored trajectory (claim C7) given only [`interval_end`]'s
+/// contract: for any finite `0 < α_s ≤ stop`, any finite first duration > 0 and any `max_intervals` in
+/// 1..=12, [`OccupancyIntervals`] yields intervals `0, 1, …` that are contiguous from 0, start
+/// with `[0, α_s]`, number at most `max(max, 2)` and end at `stop`. `interval_end` is replaced by
+/// its verified contract (every call's precondition is checked here), so the iterator's own
+/// bookkeeping (the start of each interval, `done`, the limit) is what is proven.
+#[kani::proof]
+#[kani::stub_verified(interval_end)]
+#[kani::unwind(15)]
+fn f2_intervals_cover_by_contract() {
+    let alpha = any_finite();
+    let stop = any_finite();
+    kani::assume(alpha > 0.0 && alpha <= stop);
+    // The shield's validated `first_interval` (positive, finite).
+    let first = any_finite();
+    kani::assume(first > 0.0);
+    let max: usize = kani::any();
+    kani::assume((1..=12).contains(&max));
+    let (mut next_ta, mut count, mut last_tb) = (0.0, 0usize, f64::NAN);
+    for (k, ta, tb) in OccupancyIntervals::new(alpha, stop, first, max) {
+        assert!(k == count, "interval index");
+        assert!(ta == next_ta, "a gap or overlap");
+        assert!(ta <= tb, "an empty interval");
+        assert!(k > 0 || tb == alpha, "interval 0 is the intended step");
+        count += 1;
+        assert!(count <= max.max(2), "more than max_intervals");
+        next_ta = tb;
+        last_tb = tb;
+    }
+    assert!(count >= 1, "no interval");
+    assert!(last_tb == stop, "the intervals end before standstill");
+}
