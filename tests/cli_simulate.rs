@@ -128,6 +128,9 @@ fn simulate_rejects_unknown_task_and_method() {
         ["--task", "juggling"],
         ["--method", "pacs-magic"],
         ["--rollouts", "0"],
+        ["--time-limit", "0"],
+        ["--time-limit", "NaN"],
+        ["--time-limit", "4000"],
     ] {
         let out = pacs().arg("simulate").args(args).output().unwrap();
         assert_eq!(out.status.code(), Some(3), "{args:?}");
@@ -173,4 +176,40 @@ fn simulate_runs_the_learned_policy_and_says_so() {
     assert_eq!(out.status.code(), Some(3));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--policy") && err.contains("oracle"), "{err}");
+}
+
+/// `--time-limit`: every rollout ends there (Sorting takes seconds: at 0.3 s nothing succeeds
+/// and each duration is the limit).
+#[test]
+fn simulate_honours_the_time_limit() {
+    let dir = std::env::temp_dir().join(format!("pacs-sim-limit-{}", std::process::id()));
+    let out = simulate(
+        &[
+            "--task",
+            "sorting",
+            "--method",
+            "off,pacs",
+            "--rollouts",
+            "2",
+            "--time-limit",
+            "0.3",
+            "--no-logs",
+        ],
+        &dir,
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        assert_eq!(row["success"], 0.0, "{row}");
+    }
+    let text = std::fs::read_to_string(dir.join("rollouts.json")).unwrap();
+    let rollouts: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let rollouts = rollouts.as_array().unwrap();
+    assert_eq!(rollouts.len(), 4);
+    for r in rollouts {
+        assert_eq!(r["episode"]["duration"], 0.3, "{r}");
+        assert_eq!(r["episode"]["success"], false, "{r}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -306,7 +306,7 @@ pub fn _simulate_check(
 /// evaluation, `pacs_sim::eval::evaluate`, on `threads` threads), encoded for `_simulate_merge`.
 /// Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (tasks, methods, seed, rollouts, with_human, chunk_motion, policy, log_dir=None, threads=None))]
+#[pyo3(signature = (tasks, methods, seed, rollouts, with_human, chunk_motion, policy, log_dir=None, threads=None, time_limit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _simulate_rollouts<'py>(
     py: Python<'py>,
@@ -319,11 +319,13 @@ pub fn _simulate_rollouts<'py>(
     policy: &str,
     log_dir: Option<PathBuf>,
     threads: Option<usize>,
+    time_limit: Option<f64>,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, policy)?;
     if threads == Some(0) {
         return Err(input("threads: must be at least 1"));
     }
+    let time_limit = checked_time_limit(time_limit)?;
     let cfg = EvalConfig {
         tasks: plan.tasks,
         variants: plan.variants,
@@ -332,6 +334,7 @@ pub fn _simulate_rollouts<'py>(
         with_human: plan.with_human,
         log_dir,
         record_every: 0,
+        time_limit,
     };
     let done = py.detach(|| {
         let mut b = rayon::ThreadPoolBuilder::new();
@@ -506,12 +509,19 @@ fn policy_execute(b: &Bound<'_, PyAny>) -> PyResult<usize> {
     Ok(execute)
 }
 
+/// `time_limit` (s) as the simulation accepts it, or an `InputError` naming the argument.
+fn checked_time_limit(time_limit: Option<f64>) -> PyResult<Option<f64>> {
+    time_limit
+        .map(|t| eval::check_time_limit(t).map_err(|e| input(format!("time_limit: {e}"))))
+        .transpose()
+}
+
 /// Rollouts of a Python policy object (see [`PyTaskPolicy`]) for every task × method × seed,
 /// one after another on this thread (`policy.reset()`, if present, before each); encoded as
 /// `_simulate_rollouts` encodes them (merge with `_simulate_merge`). `progress(done, total)`
 /// after each rollout, if given.
 #[pyfunction]
-#[pyo3(signature = (policy, tasks, methods, seeds, with_human, chunk_motion, log_dir=None, progress=None))]
+#[pyo3(signature = (policy, tasks, methods, seeds, with_human, chunk_motion, log_dir=None, progress=None, time_limit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _simulate_external<'py>(
     py: Python<'py>,
@@ -523,8 +533,10 @@ pub fn _simulate_external<'py>(
     chunk_motion: &str,
     log_dir: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
+    time_limit: Option<f64>,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let plan = sim_plan(&tasks, &methods, with_human, chunk_motion, "nearest")?;
+    let time_limit = checked_time_limit(time_limit)?;
     let total = plan.tasks.len() * plan.variants.len() * seeds.len();
     let b = policy.bind(py);
     if !b.hasattr("act")? {
@@ -553,7 +565,7 @@ pub fn _simulate_external<'py>(
                         task,
                         v,
                         seed,
-                        eval::Scene::of(plan.with_human),
+                        eval::Scene::of(plan.with_human).with_time_limit(time_limit),
                         log.as_deref(),
                         0,
                         Some(&mut p),

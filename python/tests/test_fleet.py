@@ -256,6 +256,30 @@ def test_simulate_names_bad_input(client):
         pacs.simulate(seeds=[-1])
     with pytest.raises(pacs.InputError, match="chunk_motion: unknown `smooth`"):
         pacs.simulate(chunk_motion="smooth")
+    for bad in (0, -1.0, float("nan"), float("inf"), 3600.5):
+        with pytest.raises(pacs.InputError, match=r"time_limit: expected seconds in \(0, 3600\]"):
+            pacs.simulate(rollouts=1, time_limit=bad)
+        with pytest.raises(pacs.InputError, match="time_limit: expected seconds"):
+            pacs.simulate(rollouts=1, time_limit=bad, policy=DemoSetPolicy())
+    with pytest.raises(pacs.ArgumentTypeError, match="time_limit: expected seconds, got '5'"):
+        pacs.simulate(time_limit="5")
+
+
+def test_simulate_time_limit_ends_every_rollout_there(client):
+    """Sorting takes seconds: at a 0.3 s limit every rollout fails there, with the built-in
+    policy (locally and on Dask) and with a policy object alike; a limit above the task's own
+    changes no rollout that ended before it."""
+    args = dict(task="sorting", method=["off", "pacs"], rollouts=2)
+    for run in (pacs.simulate(**args, time_limit=0.3),
+                pacs.simulate(**args, time_limit=0.3, client=client),
+                pacs.simulate(**args, time_limit=0.3, policy=DemoSetPolicy())):
+        assert len(run["rollouts"]) == 4
+        for r in run["rollouts"]:
+            assert r["episode"]["duration"] == 0.3 and not r["episode"]["success"], r["episode"]
+    own, longer = pacs.simulate(**args), pacs.simulate(**args, time_limit=40)
+    for a, b in zip(own["rollouts"], longer["rollouts"]):
+        if a["episode"]["success"]:
+            assert a == b
 
 
 class DemoSetPolicy:

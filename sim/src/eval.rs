@@ -151,6 +151,12 @@ pub enum EvalError {
         /// Rollout seed.
         seed: u64,
     },
+    /// An input of the evaluation is invalid (e.g. a time limit that is not positive).
+    #[error("{reason}")]
+    Input {
+        /// What is wrong, with the value.
+        reason: String,
+    },
     /// Writing an output failed.
     #[error("cannot write {path}: {source}")]
     Io {
@@ -195,7 +201,25 @@ pub struct EvalConfig {
     pub log_dir: Option<PathBuf>,
     /// Keep every n-th step for plots (0: none).
     pub record_every: usize,
+    /// Every rollout's time limit (s); `None`: each task's own ([`crate::task::Scenario`]'s
+    /// `max_time`: 20 s, feeding 60 s). A rollout that has not succeeded by then fails.
+    pub time_limit: Option<f64>,
 }
+
+/// A rollout time limit given by a user: finite and positive (s), at most [`MAX_TIME_LIMIT`].
+/// The error says what was expected and the value (the caller names the option).
+pub fn check_time_limit(t: f64) -> Result<f64, String> {
+    if t.is_finite() && t > 0.0 && t <= MAX_TIME_LIMIT {
+        Ok(t)
+    } else {
+        Err(format!(
+            "expected seconds in (0, {MAX_TIME_LIMIT}], got {t}"
+        ))
+    }
+}
+
+/// The longest rollout time limit accepted (s): one hour of 1 ms steps.
+pub const MAX_TIME_LIMIT: f64 = 3600.0;
 
 /// The constraint spec a variant enforces on `task` (and is scored against).
 pub fn variant_mode(task: TaskKind, v: &Variant) -> ConstraintMode {
@@ -230,15 +254,24 @@ pub struct Scene {
     /// Further people, seen by the filter and scored like the scene's own, not observed by
     /// the policy.
     pub extra_people: Vec<Box<dyn crate::humans::HumanScript>>,
+    /// The rollout's time limit (s); `None`: the task's own.
+    pub time_limit: Option<f64>,
 }
 
 impl Scene {
-    /// The task's scene, people present or far away, nobody added.
+    /// The task's scene, people present or far away, nobody added, the task's time limit.
     pub fn of(with_human: bool) -> Self {
         Self {
             with_human,
             extra_people: Vec::new(),
+            time_limit: None,
         }
+    }
+
+    /// The same scene with the time limit `limit` (s; `None`: the task's own).
+    pub fn with_time_limit(mut self, limit: Option<f64>) -> Self {
+        self.time_limit = limit;
+        self
     }
 }
 
@@ -272,6 +305,11 @@ pub fn run_rollout_in(
     };
     let mut scn = scenario(task, seed, scene.with_human);
     scn.others.extend(scene.extra_people);
+    if let Some(limit) = scene.time_limit {
+        scn.max_time = check_time_limit(limit).map_err(|e| EvalError::Input {
+            reason: format!("time limit: {e}"),
+        })?;
+    }
     scn.set_mode(variant_mode(task, v));
     let spec = constraint_spec(task, variant_mode(task, v));
     let goals: Vec<Goal> = scn.goals.iter().copied().map(Goal::Tool).collect();
@@ -367,13 +405,14 @@ pub fn evaluate(
                 .log_dir
                 .as_ref()
                 .map(|d| d.join(format!("{}-{}-{seed:04}.jsonl", task.name(), v.label)));
-            let r = run_rollout(
+            let r = run_rollout_in(
                 task,
                 v,
                 seed,
-                cfg.with_human,
+                Scene::of(cfg.with_human).with_time_limit(cfg.time_limit),
                 log.as_deref(),
                 cfg.record_every,
+                None,
             )?;
             progress(&r);
             Ok(r)

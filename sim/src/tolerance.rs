@@ -168,6 +168,7 @@ pub fn tolerance(
                     Scene {
                         with_human: true,
                         extra_people: vec![Box::new(intruder)],
+                        time_limit: None,
                     },
                     None,
                     RECORD,

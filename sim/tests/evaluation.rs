@@ -462,3 +462,52 @@ fn the_shield_paced_policy_is_selectable() {
     assert_eq!(r.policy, PolicyKind::KernelShieldPaced);
     assert_eq!(r.episode.violation_fraction, 0.0);
 }
+
+#[test]
+fn a_time_limit_ends_every_rollout_at_that_time() {
+    use pacs_sim::eval::{EvalError, Scene, check_time_limit, run_rollout_in};
+    let with_limit = |method: &str, limit: f64| {
+        run_rollout_in(
+            TaskKind::Sorting,
+            &v(method),
+            1,
+            Scene::of(true).with_time_limit(Some(limit)),
+            None,
+            0,
+            None,
+        )
+        .unwrap()
+    };
+    for method in ["off", "pacs"] {
+        // Sorting takes seconds: cut at 0.5 s, the rollout fails there.
+        let short = with_limit(method, 0.5);
+        assert!(!short.episode.success, "{method}: succeeded within 0.5 s");
+        assert_eq!(short.episode.duration, 0.5, "{method}");
+        // A longer limit changes nothing before the task's own (the rollout depends only on
+        // its task, method and seed until it ends).
+        let own = run_rollout(TaskKind::Sorting, &v(method), 1, true, None, 0).unwrap();
+        let long = with_limit(method, 40.0);
+        assert_eq!(own.episode.success, long.episode.success, "{method}");
+        if own.episode.success {
+            assert_eq!(own.episode.duration, long.episode.duration, "{method}");
+        }
+    }
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 3600.5] {
+        assert!(check_time_limit(bad).is_err(), "{bad} accepted");
+        let r = run_rollout_in(
+            TaskKind::Sorting,
+            &v("off"),
+            1,
+            Scene::of(true).with_time_limit(Some(bad)),
+            None,
+            0,
+            None,
+        );
+        assert!(
+            matches!(&r, Err(EvalError::Input { reason }) if reason.contains("time limit")),
+            "{bad}: {:?}",
+            r.map(|r| r.episode.duration)
+        );
+    }
+    assert_eq!(check_time_limit(3600.0), Ok(3600.0));
+}

@@ -99,6 +99,11 @@ pub struct SimulateArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Every rollout's time limit in seconds (default: each task's own, 20 s; feeding 60 s).
+    /// A rollout that has not reached all its sub-goals by then fails; its duration counts as
+    /// the limit.
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
 }
 
 fn parse_list<T: std::str::FromStr<Err = pacs_sim::UnknownName>>(
@@ -155,6 +160,9 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
     if args.threads == Some(0) {
         return Err(CliError::Input("--threads: must be at least 1".into()));
     }
+    if let Some(t) = args.time_limit {
+        eval::check_time_limit(t).map_err(|e| CliError::Input(format!("--time-limit: {e}")))?;
+    }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::Output(format!("cannot create {}: {e}", args.out.display())))?;
     let cfg = EvalConfig {
@@ -165,13 +173,17 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
         with_human: !args.no_human,
         log_dir: (!args.no_logs).then(|| args.out.join("logs")),
         record_every: 10,
+        time_limit: args.time_limit,
     };
     let total = (cfg.tasks.len() * cfg.variants.len() * cfg.rollouts) as u64;
     if let Some(dir) = &cfg.log_dir {
         // Upper bound: every rollout runs to its task's time limit.
         let seconds: f64 = tasks
             .iter()
-            .map(|&t| pacs_sim::task::scenario(t, 0, true).max_time)
+            .map(|&t| {
+                args.time_limit
+                    .unwrap_or_else(|| pacs_sim::task::scenario(t, 0, true).max_time)
+            })
             .sum::<f64>()
             * (cfg.variants.len() * cfg.rollouts) as f64;
         eprintln!(
@@ -208,6 +220,7 @@ pub fn run(args: &SimulateArgs) -> Result<Value, CliError> {
         .install(|| eval::evaluate(&cfg, &progress))
         .map_err(|e| match e {
             eval::EvalError::Io { .. } => CliError::Output(e.to_string()),
+            eval::EvalError::Input { .. } => CliError::Input(e.to_string()),
             other => CliError::Internal(other.to_string()),
         })?;
     bar.finish_and_clear();

@@ -257,6 +257,7 @@ def simulate(
     log_dir: Any = None,
     threads: Any = None,
     progress: Any = None,
+    time_limit: Any = None,
 ) -> dict:
     """The simulation's evaluation (``pacs simulate``): one rollout per seed for every task and
     method (the same people for every method): the seeds ``seed`` .. ``seed + rollouts - 1``
@@ -280,7 +281,9 @@ def simulate(
     the calling thread (``threads`` must be None), or, with a ``client``, on the workers (the
     policy is pickled to them; each partition runs one after another); rows and rollouts say
     ``policy: "external"``. ``progress``: with a policy object run here, called as
-    ``progress(done, total)`` after each rollout. Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
+    ``progress(done, total)`` after each rollout. ``time_limit``: every rollout's time limit in
+    seconds (default: each task's own, 20 s, feeding 60 s; ``pacs simulate --time-limit``); a
+    rollout that has not reached all its sub-goals by then fails. Returns ``{"rows": [...], "rollouts": [...]}``: the summary rows (summary.json of
     ``pacs simulate``) and every rollout (rollouts.json), in the evaluation's order.
     """
     _check_client(client)
@@ -298,6 +301,10 @@ def simulate(
         raise ArgumentTypeError(f"chunk_motion: expected a str, got {chunk_motion!r}")
     if log_dir is not None:
         log_dir = os.fspath(log_dir)
+    if time_limit is not None:
+        if isinstance(time_limit, bool) or not isinstance(time_limit, (int, float)):
+            raise ArgumentTypeError(f"time_limit: expected seconds, got {time_limit!r}")
+        time_limit = float(time_limit)
     _pacs._simulate_check(
         tasks, methods, with_human, chunk_motion, "nearest" if external else policy
     )
@@ -305,7 +312,7 @@ def simulate(
         if threads is not None:
             raise InputError("threads: a policy object runs its rollouts on one thread")
         ext = dict(tasks=tasks, methods=methods, with_human=with_human,
-                   chunk_motion=chunk_motion, log_dir=log_dir)
+                   chunk_motion=chunk_motion, log_dir=log_dir, time_limit=time_limit)
         if client is None:
             if partitions is not None:
                 raise InputError("partitions: only with a client")
@@ -319,6 +326,7 @@ def simulate(
         chunk_motion=chunk_motion,
         policy=policy,
         log_dir=log_dir,
+        time_limit=time_limit,
     )
     if client is None:
         if partitions is not None:
