@@ -218,6 +218,39 @@ def test_a_select_action_policy_becomes_one_action_chunks(demo):
     assert robot.q["joint1.pos"] > demo.start[0]
 
 
+def test_normalization_stats_floor_the_span_of_constant_features():
+    """A feature the demonstrations hold constant (joint 7 at 0.7854 rad) gets the floor span
+    about its value, so an inference-time deviation of 0.015 rad normalizes to a bounded value
+    (LeRobot's MIN_MAX: 2·(x − min)/(max − min) − 1), not to ±10⁶; a feature that varies more
+    than the floor keeps its own range; the std is floored at a quarter of the span."""
+    from pacs.lerobot import normalization_stats
+
+    rng = np.random.default_rng(3)
+    x = np.column_stack([rng.uniform(-1.0, 2.0, 500), np.full(500, 0.7854),
+                         0.09 + rng.uniform(0.0, 1e-3, 500)])
+    st = normalization_stats(x, [0.5, 0.5, 0.5])
+    assert st["min"][0] == pytest.approx(x[:, 0].min(), abs=1e-6)
+    assert st["max"][0] == pytest.approx(x[:, 0].max(), abs=1e-6)
+    assert st["min"][1] == pytest.approx(0.7854 - 0.25, abs=1e-6)
+    assert st["max"][1] == pytest.approx(0.7854 + 0.25, abs=1e-6)
+    assert (st["max"] - st["min"] >= 0.5 - 1e-6).all()
+    assert (st["min"] <= x.min(0)).all() and (st["max"] >= x.max(0)).all()
+    normalized = 2 * (0.7854 + 0.015 - st["min"][1]) / (st["max"][1] - st["min"][1]) - 1
+    assert abs(normalized) < 0.1
+    assert st["std"][1] == pytest.approx(0.125) and st["std"][0] == pytest.approx(x[:, 0].std(), rel=1e-5)
+    assert st["mean"][2] == pytest.approx(x[:, 2].mean(), abs=1e-6) and st["count"][0] == 500
+    assert all(v.dtype == np.float32 for k, v in st.items() if k != "count")
+    # A scalar span applies to every feature.
+    assert (normalization_stats(x, 1.0)["max"] - normalization_stats(x, 1.0)["min"] >= 1.0 - 1e-6).all()
+    for bad, match in (([[np.nan, 1.0]], "x: expected a finite"), (np.zeros((0, 2)), "x: expected"),
+                       (np.zeros(3), "x: expected")):
+        with pytest.raises(pacs.InputError, match=match):
+            normalization_stats(bad, 0.5)
+    for span in (0.0, -1.0, np.inf, [0.5, 0.5]):
+        with pytest.raises((pacs.InputError, ValueError)):
+            normalization_stats(x, span)
+
+
 def test_chunk_array_reads_batch_major_and_time_major_chunks():
     """(1, H, A) as most LeRobot policies return a chunk, (H, 1, A) as TD-MPC's planner does:
     both are the same (H, A) chunk; anything else for one observation is refused."""

@@ -54,6 +54,7 @@ __all__ = [
     "ShieldedPolicyLoop",
     "ShieldActionStep",
     "environment_state",
+    "normalization_stats",
     "write_dataset",
     "paced_replays",
     "SimulationPolicy",
@@ -463,6 +464,38 @@ def environment_state(stage: float, person: Any, person_distance: float) -> np.n
     if p.shape != (3,):
         raise InputError(f"person: expected a point (3,), got shape {p.shape}")
     return np.array([float(stage), *p, float(person_distance)], dtype=np.float32)
+
+
+def normalization_stats(x: Any, min_span: Any) -> dict:
+    """Statistics of the rows of ``x`` (N, D) for LeRobot's normalizers (``min``, ``max``,
+    ``mean``, ``std``, ``count``), with every feature's ``[min, max]`` widened about its
+    midpoint to a span of at least ``min_span`` (a scalar or one per feature, in the feature's
+    unit) and ``std`` floored at ``min_span / 4``.
+
+    Why: LeRobot's MIN_MAX normalizer divides by ``max - min`` (by 1e-8 where they are equal),
+    so a feature the demonstrations hold (nearly) constant — a joint that never moves, a seated
+    person's height — maps a deviation of a millimetre at inference to ±10⁵: the policy is far
+    out of its training distribution at its first step. (Measured: with the raw ranges the
+    feeding policy's demonstrations hold joint 7 at 0.7854 rad and the person's centroid height
+    at 0.09 m; the evaluation's start jitter of 0.015 rad sent it driving joint 1 into its limit
+    in half the seeds.) With a span floor, such a feature keeps a bounded, informative scale.
+    """
+    a = np.asarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[0] == 0 or not np.isfinite(a).all():
+        raise InputError(f"x: expected a finite (N, D) array with N >= 1, got shape {a.shape}")
+    span = np.broadcast_to(np.asarray(min_span, dtype=np.float64), (a.shape[1],))
+    if not (np.isfinite(span).all() and (span > 0).all()):
+        raise InputError(f"min_span: expected positive finite spans, got {min_span!r}")
+    lo, hi = a.min(0), a.max(0)
+    mid, half = (lo + hi) / 2, np.maximum(hi - lo, span) / 2
+    f32 = np.float32
+    # float32 ends rounded outward: the range contains every row.
+    lo32, hi32 = (mid - half).astype(f32), (mid + half).astype(f32)
+    lo32 = np.where(lo32 > mid - half, np.nextafter(lo32, f32(-np.inf)), lo32)
+    hi32 = np.where(hi32 < mid + half, np.nextafter(hi32, f32(np.inf)), hi32)
+    return {"min": lo32, "max": hi32,
+            "mean": a.mean(0).astype(f32), "std": np.maximum(a.std(0), span / 4).astype(f32),
+            "count": np.array([a.shape[0]])}
 
 
 def write_dataset(
