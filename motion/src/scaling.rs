@@ -118,8 +118,8 @@ impl Phase {
 /// (`pacs-proofs`: e1's Kani splits, on the ramps rather than on the evaluated profile).
 ///
 /// # Soundness
-/// Braking contract (claim C6, [`ramps_brake_to_rest`]): for a braking start in the shield's
-/// ranges ([`braking_start`]) and target 0, the ramps bring the path to rest without a jump and
+/// Braking contract (claim C6, [`ramps_brake_to_rest`]): for a braking start the contract
+/// covers ([`braking_start`]) and target 0, the ramps bring the path to rest without a jump and
 /// within the limits. Proven by `e1_plan_ramps_contract_plateau` and
 /// `e1_plan_ramps_contract_ramps` (`proof_for_contract`; Kani covers the inputs those harnesses
 /// draw: A = 1, J = 8, s̈₀ = 0, the two branches), tested over the whole ranges by
@@ -159,17 +159,20 @@ pub fn plan_ramps(a0: f64, v0: f64, target: f64, acc: f64, jerk: f64) -> Ramps {
 /// Three constant-jerk ramps `(jerk, duration)` in order ([`plan_ramps`]).
 pub type Ramps = ((f64, f64), (f64, f64), (f64, f64));
 
-/// A braking start in the shield's ranges (the precondition of [`plan_ramps`]' braking
-/// contract): path acceleration limit `acc` ∈ [0.05, 50] 1/s², jerk limit `jerk` ∈ [0.05, 500]
-/// 1/s³ (the shield's caps: [`ACC_CAP`], [`JERK_CAP`]), path speed `v0` ∈ [0, 1.5] 1/s, path
-/// acceleration `a0` ∈ [−acc, acc], and consistent: a decelerating start can bring s̈ to 0 before
-/// ṡ reaches 0 (`v0 ≥ a0²/(2·jerk)` when `a0 < 0`; [`admissible`] rejects the profiles of the
-/// other starts, which would run the path backwards).
+/// A braking start the contract of [`plan_ramps`] covers: path acceleration limit `acc` ∈
+/// [10⁻⁴, 50] 1/s² and jerk limit `jerk` ∈ [10⁻⁴, 500] 1/s³ (above the shield's caps
+/// [`ACC_CAP`], [`JERK_CAP`], which [`admissible`] lowers further), path speed `v0` ∈ [0, 2] 1/s,
+/// path acceleration `a0` ∈ [−3·acc, 3·acc] (a start may carry more than the limit it brakes
+/// with), and consistent: a decelerating start can bring s̈ to 0 before ṡ reaches 0
+/// (`v0 ≥ a0²/(2·jerk)` when `a0 < 0`; [`admissible`] rejects the profiles of the other starts,
+/// which would run the path backwards). Starts beyond these ranges (a limit below 10⁻⁴, a
+/// larger `a0` or `v0`) are outside the contract: the shield still verifies whatever braking it
+/// plans over its sound path ranges (claim C7), but the no-jump-to-rest claim is not made there.
 pub fn braking_start(a0: f64, v0: f64, acc: f64, jerk: f64) -> bool {
-    (0.05..=50.0).contains(&acc)
-        && (0.05..=500.0).contains(&jerk)
-        && (0.0..=1.5).contains(&v0)
-        && (-acc..=acc).contains(&a0)
+    (1e-4..=50.0).contains(&acc)
+        && (1e-4..=500.0).contains(&jerk)
+        && (0.0..=2.0).contains(&v0)
+        && (-3.0 * acc..=3.0 * acc).contains(&a0)
         && (a0 >= 0.0 || v0 >= a0 * a0 / (2.0 * jerk))
 }
 
@@ -753,15 +756,16 @@ mod tests {
             ..ProptestConfig::default()
         })]
         /// The twin of `plan_ramps`' braking contract over the whole ranges of
-        /// [`braking_start`], every branch (single ramp, two ramps, plateau) and its boundaries:
+        /// [`braking_start`] (the limits also log-uniform down to 10⁻⁴),
+        /// every branch (single ramp, two ramps, plateau) and its boundaries:
         /// starts at the consistency boundary `v0 = a0²/(2J)` and at the plateau boundary
         /// `J·v0 + a0²/2 = A²` are drawn on purpose.
         #[test]
         fn the_braking_ramps_keep_their_contract(
-            acc in within(0.05, 50.0),
-            jerk in within(0.05, 500.0),
-            v in within(0.0, 1.5),
-            a_frac in prop_oneof![Just(0.0f64), Just(1.0), Just(-1.0), -1.0f64..=1.0],
+            acc in prop_oneof![within(1e-4, 50.0), (-4.0f64..1.7).prop_map(|e| 10f64.powf(e).min(50.0))],
+            jerk in prop_oneof![within(1e-4, 500.0), (-4.0f64..2.7).prop_map(|e| 10f64.powf(e).min(500.0))],
+            v in within(0.0, 2.0),
+            a_frac in prop_oneof![Just(0.0f64), Just(1.0), Just(-1.0), Just(3.0), Just(-3.0), -3.0f64..=3.0],
             edge in 0usize..3,
         ) {
             let a0 = a_frac * acc;

@@ -35,8 +35,8 @@ import time
 import numpy as np
 
 import pacs
-from pacs.lerobot import (SimulationPolicy, environment_state, normalization_stats,
-                          paced_replays, write_dataset)
+from pacs.lerobot import (ENVIRONMENT_STATE_SPAN, STATE_SPAN, SimulationPolicy,
+                          environment_state, normalization_stats, paced_replays, write_dataset)
 
 
 def windows(demos, n_obs, horizon, drop_last):
@@ -55,11 +55,6 @@ def windows(demos, n_obs, horizon, drop_last):
             act_idx.append(offset + np.clip(a, 0, n - 1))
         offset += n
     return np.array(obs_idx), np.array(act_idx), np.array(pad)
-
-
-# Span floors of the observations' normalization ranges (rad; sub-goals, m, m, m, m).
-STATE_SPAN = 0.5
-ENV_SPAN = [2.0, 0.5, 0.5, 0.5, 0.5]
 
 
 def stats_of(x):
@@ -107,10 +102,9 @@ def train(args):
                                "ACTION": NormalizationMode.MIN_MAX},
     )
     # The observations' ranges with a span floor (`normalization_stats`: a joint or a person
-    # coordinate the demonstrations hold still must not be scaled by 1/1e-8): 0.5 rad per joint;
-    # stage 2 (sub-goals), 0.5 m for the person's centroid and the tool's distance to them.
+    # coordinate the demonstrations hold still must not be scaled by 1/1e-8).
     stats = {"observation.state": normalization_stats(state, STATE_SPAN),
-             "observation.environment_state": normalization_stats(env, ENV_SPAN),
+             "observation.environment_state": normalization_stats(env, ENVIRONMENT_STATE_SPAN),
              "action": stats_of(action)}
     pre, post = make_pre_post_processors(cfg, dataset_stats=stats)
     policy = DiffusionPolicy(cfg)

@@ -240,14 +240,18 @@ def test_normalization_stats_floor_the_span_of_constant_features():
     assert st["std"][1] == pytest.approx(0.125) and st["std"][0] == pytest.approx(x[:, 0].std(), rel=1e-5)
     assert st["mean"][2] == pytest.approx(x[:, 2].mean(), abs=1e-6) and st["count"][0] == 500
     assert all(v.dtype == np.float32 for k, v in st.items() if k != "count")
+    # The floors for write_dataset's observations fit them, one per feature.
+    from pacs.lerobot import ENVIRONMENT_STATE_SPAN, STATE_SPAN, environment_state
+    assert len(ENVIRONMENT_STATE_SPAN) == environment_state(1, [0.5, 0.0, 0.4], 0.3).shape[0]
+    assert np.isscalar(STATE_SPAN) and STATE_SPAN > 0
     # A scalar span applies to every feature.
     assert (normalization_stats(x, 1.0)["max"] - normalization_stats(x, 1.0)["min"] >= 1.0 - 1e-6).all()
     for bad, match in (([[np.nan, 1.0]], "x: expected a finite"), (np.zeros((0, 2)), "x: expected"),
                        (np.zeros(3), "x: expected")):
         with pytest.raises(pacs.InputError, match=match):
             normalization_stats(bad, 0.5)
-    for span in (0.0, -1.0, np.inf, [0.5, 0.5]):
-        with pytest.raises((pacs.InputError, ValueError)):
+    for span in (0.0, -1.0, np.inf, [0.5, 0.5], [[0.5, 0.5, 0.5]]):
+        with pytest.raises(pacs.InputError, match="min_span: expected a positive finite span or 3"):
             normalization_stats(x, span)
 
 

@@ -478,20 +478,35 @@ fn a_time_limit_ends_every_rollout_at_that_time() {
         )
         .unwrap()
     };
+    let mut succeeded = 0;
     for method in ["off", "pacs"] {
         // Sorting takes seconds: cut at 0.5 s, the rollout fails there.
         let short = with_limit(method, 0.5);
         assert!(!short.episode.success, "{method}: succeeded within 0.5 s");
         assert_eq!(short.episode.duration, 0.5, "{method}");
         // A longer limit changes nothing before the task's own (the rollout depends only on
-        // its task, method and seed until it ends).
+        // its task, method and seed until it ends): a success stays the same success; a
+        // failure may only become a success after the task's own limit.
         let own = run_rollout(TaskKind::Sorting, &v(method), 1, true, None, 0).unwrap();
+        let own_limit = scenario(TaskKind::Sorting, 1, true).max_time;
         let long = with_limit(method, 40.0);
-        assert_eq!(own.episode.success, long.episode.success, "{method}");
         if own.episode.success {
+            succeeded += 1;
+            assert!(long.episode.success, "{method}");
             assert_eq!(own.episode.duration, long.episode.duration, "{method}");
+        } else {
+            assert_eq!(own.episode.duration, own_limit, "{method}");
+            assert!(
+                !long.episode.success || long.episode.duration > own_limit,
+                "{method}: a success at {} s the task's own {own_limit} s did not see",
+                long.episode.duration
+            );
         }
     }
+    assert!(
+        succeeded > 0,
+        "no rollout succeeded: the comparison above says nothing"
+    );
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 3600.5] {
         assert!(check_time_limit(bad).is_err(), "{bad} accepted");
         let r = run_rollout_in(

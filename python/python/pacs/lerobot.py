@@ -55,6 +55,8 @@ __all__ = [
     "ShieldActionStep",
     "environment_state",
     "normalization_stats",
+    "STATE_SPAN",
+    "ENVIRONMENT_STATE_SPAN",
     "write_dataset",
     "paced_replays",
     "SimulationPolicy",
@@ -456,6 +458,13 @@ class ShieldedPolicyLoop:
 ENVIRONMENT_STATE_NAMES = ["stage", "person_x", "person_y", "person_z", "person_distance"]
 
 
+# The span floors of :func:`normalization_stats` for the observations :func:`write_dataset`
+# records: 0.5 rad per joint; the sub-goals reached (0–2), the person's centroid and the tool's
+# distance to the person (0.5 m each).
+STATE_SPAN = 0.5
+ENVIRONMENT_STATE_SPAN = (2.0, 0.5, 0.5, 0.5, 0.5)
+
+
 def environment_state(stage: float, person: Any, person_distance: float) -> np.ndarray:
     """``observation.environment_state`` as :func:`write_dataset` records it (float32, shape
     (5,)): the sub-goals reached so far, the person's keypoint centroid (m, world frame) and the
@@ -470,22 +479,24 @@ def normalization_stats(x: Any, min_span: Any) -> dict:
     """Statistics of the rows of ``x`` (N, D) for LeRobot's normalizers (``min``, ``max``,
     ``mean``, ``std``, ``count``), with every feature's ``[min, max]`` widened about its
     midpoint to a span of at least ``min_span`` (a scalar or one per feature, in the feature's
-    unit) and ``std`` floored at ``min_span / 4``.
+    unit; the float32 ends rounded outward, so the range holds every row) and ``std`` floored at
+    ``min_span / 4``.
 
-    Why: LeRobot's MIN_MAX normalizer divides by ``max - min`` (by 1e-8 where they are equal),
-    so a feature the demonstrations hold (nearly) constant — a joint that never moves, a seated
+    LeRobot's MIN_MAX normalizer divides by ``max - min`` (by 1e-8 where they are equal), so a
+    feature the demonstrations hold (nearly) constant — a joint that never moves, a seated
     person's height — maps a deviation of a millimetre at inference to ±10⁵: the policy is far
-    out of its training distribution at its first step. (Measured: with the raw ranges the
-    feeding policy's demonstrations hold joint 7 at 0.7854 rad and the person's centroid height
-    at 0.09 m; the evaluation's start jitter of 0.015 rad sent it driving joint 1 into its limit
-    in half the seeds.) With a span floor, such a feature keeps a bounded, informative scale.
+    out of its training distribution at its first step. With a span floor such a feature keeps
+    a bounded scale. :data:`STATE_SPAN` and :data:`ENVIRONMENT_STATE_SPAN` are the floors for
+    :func:`write_dataset`'s observations.
     """
     a = np.asarray(x, dtype=np.float64)
     if a.ndim != 2 or a.shape[0] == 0 or not np.isfinite(a).all():
         raise InputError(f"x: expected a finite (N, D) array with N >= 1, got shape {a.shape}")
-    span = np.broadcast_to(np.asarray(min_span, dtype=np.float64), (a.shape[1],))
-    if not (np.isfinite(span).all() and (span > 0).all()):
-        raise InputError(f"min_span: expected positive finite spans, got {min_span!r}")
+    span = np.asarray(min_span, dtype=np.float64)
+    if span.shape not in ((), (a.shape[1],)) or not (np.isfinite(span).all() and (span > 0).all()):
+        raise InputError(f"min_span: expected a positive finite span or {a.shape[1]} of them, "
+                         f"got {min_span!r}")
+    span = np.broadcast_to(span, (a.shape[1],))
     lo, hi = a.min(0), a.max(0)
     mid, half = (lo + hi) / 2, np.maximum(hi - lo, span) / 2
     f32 = np.float32
