@@ -26,6 +26,20 @@ pub enum ReachError {
         /// Upper bound of `‖|A| r‖∞`.
         norm: f64,
     },
+    /// A human occupancy was asked for an interval that starts before the measured state
+    /// (`time − delay`) by more than a rounding: a typed error, formatted only when shown, since
+    /// the audit asks every still-usable measurement and expects this for the newer ones.
+    #[error("interval [{t_a}, {t_b}] starts before the measured state (time {time} - delay {delay})")]
+    BeforeMeasurement {
+        /// Interval start (s).
+        t_a: f64,
+        /// Interval end (s).
+        t_b: f64,
+        /// The measurement's time stamp (s).
+        time: f64,
+        /// The model's sensor delay (s).
+        delay: f64,
+    },
     /// An argument is outside its valid range.
     #[error("invalid {what}: {reason}")]
     Invalid {

@@ -296,10 +296,12 @@ impl HumanReach {
         let delay = self.model.delay();
         let (lo, hi) = elapsed_range(m.time, delay, t_a, t_b);
         if lo < -1e-9 {
-            return Err(ReachError::Input(format!(
-                "interval [{t_a}, {t_b}] starts before the measured state (time {} - delay {delay})",
-                m.time
-            )));
+            return Err(ReachError::BeforeMeasurement {
+                t_a,
+                t_b,
+                time: m.time,
+                delay,
+            });
         }
         let back = if lo < 0.0 { -lo } else { 0.0 };
         Ok((lo.max(0.0), hi, back))

@@ -448,3 +448,28 @@ fn invalid_inputs_are_errors() {
     let mut r = HumanReach::new(h, HumanReachModel::Acc);
     assert!(r.occupancy(&m, 1.0, 1.1).is_err(), "acc without velocities");
 }
+
+#[test]
+fn an_interval_before_the_measured_state_is_a_typed_error_naming_its_values() {
+    // Measured at 1.0 s with a 0.05 s delay: the true state is at 0.95 s, so [0.9, 1.0] starts
+    // 0.05 s before it (the audit asks newer records and expects this error; it is typed, so
+    // nothing is formatted until it is shown). 1e-10 s before it is a rounding and allowed.
+    let h = single(0.1, 0.2, 0.05, 2.0, 10.0, 0.1);
+    let m = HumanMeasurement::new(&h, 1.0, &[[0.0; 3]], None).unwrap();
+    let mut reach = HumanReach::new(h.clone(), HumanReachModel::Vel);
+    let e = reach.occupancy(&m, 0.9, 1.0).unwrap_err();
+    assert_eq!(
+        e,
+        pacs_reach::ReachError::BeforeMeasurement {
+            t_a: 0.9,
+            t_b: 1.0,
+            time: 1.0,
+            delay: 0.05
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "interval [0.9, 1] starts before the measured state (time 1 - delay 0.05)"
+    );
+    assert!(reach.occupancy(&m, 0.95 - 1e-10, 1.0).is_ok());
+}
