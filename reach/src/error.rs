@@ -29,7 +29,9 @@ pub enum ReachError {
     /// A human occupancy was asked for an interval that starts before the measured state
     /// (`time − delay`) by more than a rounding: a typed error, formatted only when shown, since
     /// the audit asks every still-usable measurement and expects this for the newer ones.
-    #[error("interval [{t_a}, {t_b}] starts before the measured state (time {time} - delay {delay})")]
+    #[error(
+        "interval [{t_a}, {t_b}] starts before the measured state (time {time} - delay {delay})"
+    )]
     BeforeMeasurement {
         /// Interval start (s).
         t_a: f64,

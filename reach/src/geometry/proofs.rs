@@ -83,8 +83,8 @@ fn assert_dot_bounds([n0, n1, n2]: [f64; 3], [a0, a1, a2]: [f64; 3]) {
     assert!(sum_le_zero(&below[..n]), "dot lower bound {lo} above n·a");
     assert!(sum_le_zero(&above[..n]), "dot upper bound {hi} below n·a");
 }
-// The whole claim as a property test (Kani: a timeout in four forms, 150–200 s, and in the split
-// `b1_dot_bounds_powers` below, 300 s).
+// The whole claim as a property test (Kani: a timeout in four forms, 150–200 s); Kani checks the
+// split `b1_dot_bounds_grid` below.
 harness!(
     b1_dot_bounds_enclose,
     twin_only,
@@ -92,65 +92,56 @@ harness!(
     dot_bounds_enclose
 );
 
-/// `±2^e`, `e` in `[-60, 10]`: exact to multiply by.
-fn power_of_two<S: Source>(s: &mut S) -> f64 {
-    let e = s.index(71) as u64;
-    let p = f64::from_bits((1023 - 60 + e) << 52);
-    if s.bool() { -p } else { p }
+/// `2^-k` (`k ≤ 1022`) from its bits (no `powi`: an LLVM intrinsic the model checker lacks).
+fn pow2_neg(k: u32) -> f64 {
+    f64::from_bits(u64::from(1023 - k) << 52)
 }
 
-/// Split of `b1_dot_bounds_enclose` meant for Kani (a timeout there: property test only): the
-/// claim with the normal `n` made of signed
-/// powers of two (`±2^e`, `e ∈ [−60, 10]`, any per coordinate) and `a` with 3 significand bits
-/// (the twin: any tame `a`). The products are then exact (a power-of-two scaling), and the sum of
-/// three of them at exponents up to 70 apart rounds, which is what `dot_bounds`' error term
-/// covers: a `dot_bounds` without it (mutant `x7`) fails. Stated as a sufficient float-only
-/// condition (TwoSums and a1's `add_up`; a failure of it would be a false alarm, never a missed
-/// violation). Left to the twin of the whole claim: products that round themselves (any `n`).
-fn dot_bounds_powers<S: Source>(s: &mut S) {
-    // Under Kani fixed powers (symbolic exponents timed out at 300 s): 1, −2⁻³⁰, 2⁻⁶⁰, where
-    // the sum rounds for most 3-bit `a`.
-    let n = if cfg!(kani) {
-        [1.0, -9.313225746154785e-10, 8.673617379884035e-19]
-    } else {
-        [power_of_two(s), power_of_two(s), power_of_two(s)]
-    };
-    let (Some(a0), Some(a1), Some(a2)) = (short(s, 1e3, 3), short(s, 1e3, 3), short(s, 1e3, 3))
-    else {
-        return;
-    };
-    let a = [a0, a1, a2];
-    let (lo, hi) = dot_bounds(&Vector3::from(n), &Point3::from(a));
-    // The products are exact (powers of two), so two TwoSums write the exact n·a as
-    // t + f₁ + f₂ (t the rounded sum). With t − lo = u + v and hi − t = u′ + v′ exactly
-    // (TwoSum), n·a − lo = u + v + f₁ + f₂ ≥ u − (|v| + |f₁| + |f₂|): the bound is sound if u
-    // covers the three error terms summed upward (a1's `add_up`); the same for hi.
-    let (p0, p1, p2) = (n[0] * a0, n[1] * a1, n[2] * a2);
-    let (t1, f1) = two_sum(p0, p1);
-    let (t, f2) = two_sum(t1, p2);
-    let slack = |u: f64, v: f64| add_up(add_up(v.abs(), f1.abs()), f2.abs()) <= u;
-    let (u, v) = two_sum(t, -lo);
-    assert!(
-        slack(u, v),
-        "dot lower bound {lo}: {t} − {lo} = {u} + {v} vs {f1}, {f2}"
-    );
-    let (u, v) = two_sum(hi, -t);
-    assert!(
-        slack(u, v),
-        "dot upper bound {hi}: {hi} − {t} = {u} + {v} vs {f1}, {f2}"
-    );
-    // The twin also decides the claim with the exact oracle of `b1_dot_bounds_enclose`.
-    if !cfg!(kani) {
-        assert_dot_bounds(n, a);
+/// `2⁶²`: the scale of [`dot_bounds_grid`]'s integer oracle.
+const GRID_SCALE: f64 = 4_611_686_018_427_387_904.0;
+
+/// Split of `b1_dot_bounds_enclose` for Kani, with an integer oracle: `n_i = N_i·2^−s_i` and
+/// `a_i = A_i/4` (`|A_i| ≤ 28`), so the exact `n·a` is the integer `Σ N_i·A_i·2^(60 − s_i)`
+/// times `2⁻⁶²` (below 2⁷⁵: exact in `i128`), while the float sum of products up to 2⁶⁰ apart
+/// rounds — what `dot_bounds`' error term covers (mutant `x7`, no error term, fails: Kani
+/// 1.8 s). The bounds scaled by `2⁶²` are exact (a power of two, no overflow), and
+/// `lo·2⁶² ≤ S ⟺ ⌊lo·2⁶²⌋ ≤ S` for the integer `S`, so the claim is decided on bit-vectors and
+/// the solver's floating-point work is `dot_bounds`' own. Under Kani `n` is made of signed
+/// powers of two (`N_i = ±1`, `s_i ∈ {0, 30, 60}`, any per coordinate: the products are exact
+/// and the sum rounds); with `|N_i| ≤ 255` it timed out at 300 s, with any `s_i ∈ [0, 60]`
+/// too. The twin draws `|N_i| ≤ 255` and any `s_i ∈ [0, 60]`; full-width significands, where
+/// the products round themselves, are the twin of the whole claim's.
+fn dot_bounds_grid<S: Source>(s: &mut S) {
+    let (mut n, mut a, mut exact) = ([0.0; 3], [0.0; 3], 0i128);
+    for i in 0..3 {
+        let (big_n, shift) = if cfg!(kani) {
+            (if s.bool() { 1 } else { -1 }, 30 * s.index(3) as u32)
+        } else {
+            (s.index(511) as i64 - 255, s.index(61) as u32)
+        };
+        let big_a = s.index(57) as i64 - 28;
+        n[i] = big_n as f64 * pow2_neg(shift);
+        a[i] = big_a as f64 * 0.25;
+        exact += i128::from(big_n * big_a) << (60 - shift);
     }
+    let (lo, hi) = dot_bounds(&Vector3::from(n), &Point3::from(a));
+    // |lo|, |hi| < 2²⁰: scaled below 2⁸², where the casts are exact.
+    let (lo_s, hi_s) = (lo * GRID_SCALE, hi * GRID_SCALE);
+    assert!(
+        (lo_s.floor() as i128) <= exact,
+        "dot lower bound {lo} above n·a = {exact}·2⁻⁶² (n = {n:?}, a = {a:?})"
+    );
+    assert!(
+        (hi_s.ceil() as i128) >= exact,
+        "dot upper bound {hi} below n·a = {exact}·2⁻⁶² (n = {n:?}, a = {a:?})"
+    );
 }
-// Property test only: under Kani it timed out at 300 s with symbolic exponents and
-// with the fixed powers above.
 harness!(
-    b1_dot_bounds_powers,
-    twin_only,
+    b1_dot_bounds_grid,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
-    dot_bounds_powers
+    dot_bounds_grid
 );
 
 /// The margin of two capsules (`margin`, used by `capsule_separation_lower_bound`,
