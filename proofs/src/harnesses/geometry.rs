@@ -235,10 +235,9 @@ fn zonotope_capsule<S: Source>(s: &mut S) {
     );
     assert_eq!(z.distance_lower_bound(inflate, &cap), 0.0);
 }
-// Property test only: no Kani split verifies yet. The splits beside the code
-// (`reach/src/zonotope/proofs.rs`: `b4_support_up_member`, `b4_distance_bound_shared_point`) are
-// twins: `Zonotope3`'s float-array arguments are rejected by Bitwuzla's repairs and time out on
-// the SAT back end (proofs/README.md).
+// Property test only. Of the splits beside the code (`reach/src/zonotope/proofs.rs`), Kani
+// proves `b4_support_up_member` (the support function's outward rounding, on a grid);
+// `b4_distance_bound_shared_point` times out under Kani and is a twin (proofs/README.md).
 harness!(
     b4_zonotope_capsule_conservative,
     twin_only,

@@ -14,11 +14,13 @@
 //! - `b3_separates_member` (twin only): no direction `d` separates a member of a zonotope with
 //!   one generator and an error box ([`separates_of`]: `d·x` rounded down against the support
 //!   function rounded up).
-//! - `b4_support_up_member` (twin only): [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for every
-//!   member `p` of a zonotope with one generator and an error box and every direction `d = λu`,
-//!   `λ` any float and `u` a vector of `0, ±1, ±2⁻³⁰` (components of very different magnitudes,
-//!   so the support function's sums round); `u·p` is exact on the grid and `λ·(u·p)` is compared
-//!   with integer significands ([`crate::exact::cmp_prod`]).
+//! - `b4_support_up_member` (Kani and twin): [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for
+//!   every member `p` of a zonotope with one generator and an error box and every direction
+//!   `d = λu` with `u` a vector of `0, ±1, ±2^−SMALL_EXP` (components of very different
+//!   magnitudes, so the support function's sums round). Under Kani `λ = ±1`, `2⁻⁶⁰` and `d·p`
+//!   an integer times `2⁻⁶⁶`; in the twin `λ` any float, `2⁻³⁰`, `u·p` exact on the grid and
+//!   `λ·(u·p)` compared with integer significands ([`crate::exact::cmp_prod`]). Mutant `x78`
+//!   (no outward rounding, no error term) fails both.
 //! - `b4_distance_bound_shared_point` (twin only): [`Zonotope3::distance_bound_along`] is 0 for
 //!   any such direction when `Z ⊕ B(inflate)` and the capsule share a point: `q = z + w` (`z` a
 //!   member, `|w| ≤ inflate`) with `|q − p₁| ≤ r` (`p₁` the capsule's first end). Mutant `x39b`
@@ -288,10 +290,15 @@ fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3<1>, [f64; 3]) {
     (Zonotope3::<1>::assemble(c, &[g], e), p)
 }
 
+/// The small factor's exponent: `2⁻³⁰` in the twins (with any `λ`, the sums round), `2⁻⁶⁰`
+/// under Kani (`λ = ±1` there, so the spread of magnitudes is what makes the sums round: with
+/// `2⁻³⁰` every sum of the constant zonotope's terms was exact and mutant `x78` survived).
+const SMALL_EXP: u64 = if cfg!(kani) { 60 } else { 30 };
+
 /// `u·v` for the factor `u` of index `k` of a direction (see [`direction`]): one of `0, ±1,
-/// ±2⁻³⁰`, selected rather than multiplied (exact for the grid values and `λ` here).
+/// ±2^−SMALL_EXP`, selected rather than multiplied (exact for the grid values and `λ` here).
 fn factor(k: usize, v: f64) -> f64 {
-    let small = f64::from_bits((1023 - 30) << 52);
+    let small = f64::from_bits((1023 - SMALL_EXP) << 52);
     match k {
         0 => 0.0,
         1 => v,
@@ -306,7 +313,11 @@ fn factor(k: usize, v: f64) -> f64 {
 /// `u·p` is exact on the grid, while sums of terms of such different magnitudes round.
 /// Returns `(λ, indices of u)`.
 fn direction<S: Source>(s: &mut S) -> Option<(f64, [usize; 3])> {
-    let lambda = s.f64_in(-4.0, 4.0);
+    let lambda = if cfg!(kani) {
+        if s.bool() { 1.0 } else { -1.0 }
+    } else {
+        s.f64_in(-4.0, 4.0)
+    };
     if !s.assume(lambda == 0.0 || lambda.abs() >= 1e-200) {
         return None;
     }
@@ -324,19 +335,43 @@ fn support_member<S: Source>(s: &mut S) {
         factor(u[2], lambda),
     ]);
     let h = z.support_up(d);
-    // u·p exactly: multiples of 2⁻³⁶ below 2¹², a float.
-    let up = factor(u[0], p[0]) + factor(u[1], p[1]) + factor(u[2], p[2]);
-    assert!(
-        cmp_prod(lambda, up, h) != Ordering::Greater,
-        "support_up({d:?}) = {h} < d·p for p = {p:?} ∈ {z:?}"
-    );
+    if cfg!(kani) {
+        // λ = ±1 and u_i ∈ {0, ±1, ±2⁻⁶⁰}: d·p is an integer times 2⁻⁶⁶ (p a multiple of 2⁻⁶
+        // below 2¹⁰), exact in i128; h·2⁶⁶ is exact (a power of two, no overflow) and
+        // `d·p ≤ h ⟺ d·p·2⁶⁶ ≤ ⌈h·2⁶⁶⌉`. A float `u·p` would round here.
+        let mut exact = 0i128;
+        for i in 0..3 {
+            let units = (p[i] * 64.0) as i128;
+            exact += match u[i] {
+                0 => 0,
+                1 => units << 60,
+                2 => -(units << 60),
+                3 => units,
+                _ => -units,
+            };
+        }
+        if lambda < 0.0 {
+            exact = -exact;
+        }
+        const SCALE: f64 = 73_786_976_294_838_206_464.0; // 2⁶⁶
+        assert!(
+            ((h * SCALE).ceil() as i128) >= exact,
+            "support_up({d:?}) = {h} < d·p = {exact}·2⁻⁶⁶ for p = {p:?} ∈ {z:?}"
+        );
+    } else {
+        // u·p exactly: multiples of 2⁻³⁶ below 2¹², a float.
+        let up = factor(u[0], p[0]) + factor(u[1], p[1]) + factor(u[2], p[2]);
+        assert!(
+            cmp_prod(lambda, up, h) != Ordering::Greater,
+            "support_up({d:?}) = {h} < d·p for p = {p:?} ∈ {z:?}"
+        );
+    }
 }
-// Property test only: `Zonotope3`'s arguments are float arrays passed by value
-// (`new`, `support_up`), whose flattening Bitwuzla rejects ("expected bit-vector term … 'concat'",
-// a limit of `proofs/smt/bitwuzla_cli.py`'s repairs); CBMC's SAT back end timed out at 200 s.
+// Kani (λ = ±1, the integer oracle: 9.0 s) and twin (any λ).
 harness!(
     b4_support_up_member,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     support_member
 );
@@ -378,8 +413,8 @@ fn distance_shared_point<S: Source>(s: &mut S) {
         [p[0] + w[0], p[1] + w[1], p[2] + w[2]]
     );
 }
-// Property test only, as `b4_support_up_member` (not run under Kani: the same
-// float-array arguments). Its twin catches mutant `x39b` (the bound without `inflate`).
+// Property test only: under Kani a timeout at 300 s, also with `λ = ±1` (its `norm3_up` and two
+// support functions). Its twin catches mutant `x39b` (the bound without `inflate`).
 harness!(
     b4_distance_bound_shared_point,
     twin_only,
