@@ -11,9 +11,11 @@
 //!   a multiple of 1/16 in `[−1, 1]` (`e ≥ 0`) and the coefficients `0, ±1/2, ±1`; the twin: one
 //!   or two dimensions, multiples of 2⁻⁸ up to 256, coefficients multiples of 1/4. Mutant `x37b`
 //!   (the hull without the error box) fails it.
-//! - `b3_separates_member` (twin only): no direction `d` separates a member of a zonotope with
-//!   one generator and an error box ([`separates_of`]: `d·x` rounded down against the support
-//!   function rounded up).
+//! - `b3_separates_member` (Kani and twin): no direction `d` separates a member of a zonotope
+//!   with one generator and an error box ([`separates_of`]: `d·x` rounded down against the
+//!   support function rounded up). Under Kani two dimensions, the constant zonotope of
+//!   [`grid_plane`] and `d = λu` with `λ = ±1`, `u_i ∈ {0, ±1, ±2⁻⁶⁰}`; the twins any
+//!   direction. Mutant `x79` (`support_up_of` without rounding) fails it under Kani only.
 //! - `b4_support_up_member` (Kani and twin): [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for
 //!   every member `p` of a zonotope with one generator and an error box and every direction
 //!   `d = λu` with `u` a vector of `0, ±1, ±2^−SMALL_EXP` (components of very different
@@ -220,11 +222,12 @@ harness!(
 );
 
 fn separates_member<S: Source>(s: &mut S) {
-    let n = if cfg!(kani) { 1 } else { 1 + s.index(2) };
+    let n = if cfg!(kani) { 2 } else { 1 + s.index(2) };
     let (z, x) = grid_plane(s, n, 1, true);
-    // Kani: any direction of full width (its products with the zonotope's numbers round); the
-    // twins also directions λu (sums of terms of very different magnitudes round).
-    let d = if cfg!(kani) || s.bool() {
+    // Kani: directions λu with λ = ±1 and u_i ∈ {0, ±1, ±2⁻⁶⁰} in two dimensions (the sums of
+    // terms of such different magnitudes round); the twins: any direction of full width (its
+    // products with the zonotope's numbers round) or λu with any λ.
+    let d = if !cfg!(kani) && s.bool() {
         Pair(s.f64_full(-4.0, 4.0), s.f64_full(-4.0, 4.0))
     } else {
         let Some((lambda, u)) = direction(s) else {
@@ -242,12 +245,13 @@ fn separates_member<S: Source>(s: &mut S) {
         separated
     );
 }
-// Property test only: under Kani (one dimension, a constant zonotope, a full-width
-// direction) it timed out at 200–240 s on Bitwuzla (load 4–5); the exact-product test of
-// `Interval::scale` in `d·x` (integer significands) is the likely cost.
+// Kani (two dimensions, a constant zonotope, λ = ±1: 22.6 s; mutant x79, which the twin misses,
+// FAILED in 34.2 s) and twin. With one dimension and a full-width direction Kani timed out at
+// 200–240 s (the exact-product test of `Interval::scale` in `d·x` the likely cost).
 harness!(
     b3_separates_member,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     separates_member
 );
