@@ -274,6 +274,84 @@ def repair_array_elements(text: str) -> str:
     return ELEMENT_EQUATION.sub(split, text)
 
 
+FLOAT_ARRAY = re.compile(
+    r"^\(declare-fun (\|[^|]*\||[^\s()]+) \(\) \(Array \(_ BitVec \d+\) \(_ FloatingPoint (\d+) (\d+)\)\)\)$",
+    re.M,
+)
+ELEMENT_SELECT = re.compile(r"\(select \?far (\(_ bv\d+ \d+\))\)")
+FAR_LET = "(let ((?far "
+
+
+def repair_float_array_concats(text: str) -> str:
+    """Replace every `(let ((?far A)) (concat (select ?far k₁) … (select ?far kₙ)))` — the bits of
+    a float array `A` passed by value (a `[f64; 4]`: CBMC flattens it so, as a function
+    argument or as a member of a flattened struct) — by a fresh bit-vector `T` of the same width,
+    with `A[kᵢ] = to_fp(bits of T)` for each element, the first element of the concat in the
+    highest bits (SMT-LIB's `concat`). Bitwuzla rejects float arguments of `concat`. `T` is
+    exactly the concat of the elements' bits, except that a NaN element may stand for any NaN
+    bit pattern (as in `repair_float_sorts`), so `unsat` stays sound. Anything but a concat of
+    selects of one float array is left as it is (Bitwuzla then rejects it: an error, never a
+    wrong answer). Harnesses `z4_solver_float_array_arguments` (order-dependent true claims
+    through such arrays are proved) and `z5_float_array_order_is_checked` (a claim that holds
+    only for a permuted order is refuted) run in CI."""
+    arrays = {m.group(1): (int(m.group(2)), int(m.group(3))) for m in FLOAT_ARRAY.finditer(text)}
+    if not arrays or FAR_LET not in text:
+        return text
+    twins = {}  # (array, indices) -> twin name
+    out = []
+    last = 0
+    i = text.find(FAR_LET)
+    while i >= 0:
+        # The let expression's extent (balanced parentheses; no strings or comments inside).
+        depth, j = 0, i
+        while True:
+            c = text[j]
+            if c == "(":
+                depth += 1
+            elif c == ")":
+                depth -= 1
+                if depth == 0:
+                    break
+            j += 1
+        expr = text[i : j + 1]
+        k = expr.index("))", len(FAR_LET))
+        array = expr[len(FAR_LET) : k]
+        body = expr[k + 2 : -1].strip()
+        indices = ELEMENT_SELECT.findall(body)
+        rest = ELEMENT_SELECT.sub("", body).replace("(concat", "").replace(")", "").strip()
+        if array in arrays and indices and not rest:
+            key = (array, tuple(indices))
+            if key not in twins:
+                twins[key] = "|%s__bits%d|" % (array.strip("|"), len(twins))
+            out.append(text[last:i])
+            out.append(twins[key])
+            last = j + 1
+        i = text.find(FAR_LET, j + 1)
+    if not twins:
+        return text
+    out.append(text[last:])
+    result = "".join(out)
+    declarations = []
+    links = []
+    for (array, indices), twin in twins.items():
+        e, sig = arrays[array]
+        w = e + sig
+        top = w * len(indices)
+        declarations.append("(declare-fun %s () (_ BitVec %d))\n" % (twin, top))
+        for n, index in enumerate(indices):
+            hi = top - 1 - n * w
+            links.append(
+                "(assert (= (select %s %s) ((_ to_fp %d %d) ((_ extract %d %d) %s))))\n"
+                % (array, index, e, sig, hi, hi - w + 1, twin)
+            )
+    first = min(p for p in (result.find("\n(declare-fun"), result.find("\n(define-fun")) if p >= 0)
+    result = result[: first + 1] + "".join(declarations) + result[first + 1 :]
+    check = result.find("(check-sat")
+    if check < 0:
+        return result + "".join(links)
+    return result[:check] + "".join(links) + result[check:]
+
+
 ZERO_WIDTH = re.compile(r"^\(declare-fun (\|[^|]*\||[^\s()]+) \(\) \(_ BitVec 0\)\)$", re.M)
 
 
@@ -301,7 +379,42 @@ def die_with_parent() -> None:
         pass  # not Linux: no orphan protection
 
 
+def self_test() -> int:
+    """Check `repair_float_array_concats` on a small input (exact output; `.ci/run` runs it, no
+    solver needed): the element order, one twin per distinct expression, and a bit-vector array
+    left alone."""
+    text = (
+        "(declare-fun array.1 () (Array (_ BitVec 64) (_ FloatingPoint 11 53)))\n"
+        "(declare-fun array.2 () (Array (_ BitVec 64) (_ BitVec 8)))\n"
+        "(declare-fun |s| () (_ BitVec 128))\n"
+        "(assert (= (let ((?far array.1)) (concat (select ?far (_ bv1 64)) (select ?far (_ bv0 64)))) |s|))\n"
+        "(assert (= (let ((?far array.1)) (concat (select ?far (_ bv1 64)) (select ?far (_ bv0 64)))) |s|))\n"
+        "(assert (= (let ((?far array.2)) (concat (select ?far (_ bv1 64)) (select ?far (_ bv0 64)))) (_ bv0 16)))\n"
+        "(check-sat)\n"
+    )
+    want = (
+        "(declare-fun array.1 () (Array (_ BitVec 64) (_ FloatingPoint 11 53)))\n"
+        "(declare-fun |array.1__bits0| () (_ BitVec 128))\n"
+        "(declare-fun array.2 () (Array (_ BitVec 64) (_ BitVec 8)))\n"
+        "(declare-fun |s| () (_ BitVec 128))\n"
+        "(assert (= |array.1__bits0| |s|))\n"
+        "(assert (= |array.1__bits0| |s|))\n"
+        "(assert (= (let ((?far array.2)) (concat (select ?far (_ bv1 64)) (select ?far (_ bv0 64)))) (_ bv0 16)))\n"
+        "(assert (= (select array.1 (_ bv1 64)) ((_ to_fp 11 53) ((_ extract 127 64) |array.1__bits0|))))\n"
+        "(assert (= (select array.1 (_ bv0 64)) ((_ to_fp 11 53) ((_ extract 63 0) |array.1__bits0|))))\n"
+        "(check-sat)\n"
+    )
+    got = repair_float_array_concats(text)
+    if got != want:
+        print("bitwuzla_cli.py self-test FAILED:\n--- got\n%s--- want\n%s" % (got, want), file=sys.stderr)
+        return 1
+    print("bitwuzla_cli.py: self-test passed")
+    return 0
+
+
 def main() -> int:
+    if sys.argv[1:] == ["--self-test"]:
+        return self_test()
     die_with_parent()
     import bitwuzla
 
@@ -310,7 +423,9 @@ def main() -> int:
         print("usage: bitwuzla FILE.smt2", file=sys.stderr)
         return 2
     with open(files[0]) as f:
-        text = repair_float_sorts(repair_array_elements(repair_overflow_results(f.read())))
+        text = repair_float_sorts(
+            repair_float_array_concats(repair_array_elements(repair_overflow_results(f.read())))
+        )
     terms = bitwuzla.TermManager()
     options = bitwuzla.Options()
     options.set(bitwuzla.Option.PRODUCE_MODELS, True)

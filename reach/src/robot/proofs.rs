@@ -15,13 +15,15 @@
 //!   |sin q − ŝ| ≤ 1 + |ŝ|) makes that the claim of the doc; the twin also checks it against
 //!   libm at points of the interval. Mutant `x35d` (w_s with the two terms' factors swapped)
 //!   fails it.
-//! - `d1_rotation_mul_mid` (property test only): one entry of [`RotationEnclosure::mul`] for
-//!   whole 3×3 enclosures and members at random vertices: |(A′·B′)ᵢⱼ − mᵢⱼ| ≤ eᵢⱼ and ≤ wᵢⱼ,
-//!   exactly (TwoProduct, double-double sums); with radii 0 the γ term's claim. Mutant `x36d`
-//!   (the γ term dropped) fails it.
-//! - `d1_affine_encloses` (property test only): one coordinate of [`RotationEnclosure::affine`]
-//!   (A·v + t) for members A′ = Aₘ ± A_r, t′ = tₘ ± t_r: |A′·v + t′ − m| ≤ r for r = e, w.
-//!   Dropping the inflation of `w`, or `t.w`, fails it.
+//! - `d1_rotation_mul_mid`: one entry of [`RotationEnclosure::mul`]. Under Kani the γ term's
+//!   claim (radii 0: the midpoint's rounding within `e` and `w`) on a grid of `0, ±1, ±2⁻³⁰,
+//!   ±2⁻⁶⁰` ([`rotation_mul_grid`], an integer oracle); the twin also whole 3×3 enclosures and
+//!   members at random vertices: |(A′·B′)ᵢⱼ − mᵢⱼ| ≤ eᵢⱼ and ≤ wᵢⱼ, exactly (TwoProduct,
+//!   double-double sums). Mutant `x36d` (the γ term dropped) fails it, Kani and twin.
+//! - `d1_affine_encloses`: one coordinate of [`RotationEnclosure::affine`] (A·v + t): under
+//!   Kani the γ term's claim on the same grid ([`affine_grid`]); the twin also members
+//!   A′ = Aₘ ± A_r, t′ = tₘ ± t_r: |A′·v + t′ − m| ≤ r for r = e, w. Mutant `x80` (the γ term
+//!   dropped) fails it, Kani and twin; dropping the inflation of `w`, or `t.w`, fails the twin.
 //!
 //! Under Kani `d1_centre_trig_radii`'s inputs are ŝ, ĉ with 4-bit significands (0 or of
 //! magnitude ≥ 2⁻¹⁶) and δ a power of two (0 or ≥ 2⁻¹⁰): every product and sum of the oracle is
@@ -29,11 +31,11 @@
 //! rounds (`TRIG_PAD`, `RAD_UP` have full significands). Its twin draws full-width ŝ, ĉ, δ
 //! (and, half the time, libm's values at a centre q_c and a point q of the box, against libm's
 //! sin q, cos q) and bounds the real bound from above with the outward-rounded helpers (claim
-//! C1). `mul` and `affine` work on 3×3 matrices in four lanes ([`super::lanes`]); under Kani
-//! `d1_rotation_mul_mid` timed out (one entry, 4-bit factors: Bitwuzla could not parse CBMC's
-//! encoding of the by-value `[f64; 4]` arguments, and the SAT back end timed out at 300 s; with
-//! a local repair of that encoding Bitwuzla timed out at 240 s, also with a single symbolic
-//! product), so they are property tests.
+//! C1). `mul` and `affine` work on 3×3 matrices in four lanes ([`super::lanes`]); CBMC's
+//! encoding of the by-value `[f64; 4]` lanes reaches Bitwuzla through
+//! `bitwuzla_cli.py::repair_float_array_concats`. With 4-bit factors of any exponent (instead of
+//! the grid) `d1_rotation_mul_mid` timed out at 240 s, also with a single symbolic product, and
+//! the SAT back end at 300 s, also on the grid.
 //!
 //! Left to the twin of `d1_robot_link_enlargement`: the chain itself (frames composed by `mul`
 //! over 7 joints, the Rodrigues and z-axis local transforms), the wide-box chain over
@@ -184,6 +186,11 @@ fn within(parts: &[f64], mid: f64, r: f64) -> bool {
 /// r = w, decided exactly (TwoProduct and double-double sums). With radii 0 it is the γ term's
 /// claim (the midpoint's rounding); mutant `x36d` (γ dropped) fails it.
 fn rotation_mul_mid<S: Source>(s: &mut S) {
+    // Under Kani the grid form below; the twin draws it a quarter of the time.
+    if cfg!(kani) || s.index(4) == 0 {
+        rotation_mul_grid(s);
+        return;
+    }
     let mut am = [[0.0; 3]; 3];
     let mut bm = [[0.0; 3]; 3];
     let (mut ae, mut aw, mut be, mut bw) =
@@ -241,20 +248,119 @@ fn rotation_mul_mid<S: Source>(s: &mut S) {
         );
     }
 }
-// Property test only: under Kani `mul` on 3×3 enclosures in four lanes timed out (below and
-// `proofs/README.md`), even with one symbolic product.
+// Kani on the grid (47.8 s at load 3; x36d FAILED in 56.8 s) and twin.
 harness!(
     d1_rotation_mul_mid,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     rotation_mul_mid
 );
+
+/// `(x, x·2⁶⁰)` for `x` one of `0, ±1, ±2⁻³⁰, ±2⁻⁶⁰`.
+fn spread<S: Source>(s: &mut S) -> (f64, i128) {
+    let k = s.index(7);
+    let e: u32 = [0, 0, 0, 30, 30, 60, 60][k];
+    let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+    if k == 0 {
+        return (0.0, 0);
+    }
+    let x = sign * f64::from_bits(u64::from(1023 - e) << 52);
+    let units = 1i128 << (60 - e);
+    (x, if sign < 0.0 { -units } else { units })
+}
+
+/// `2¹²⁰`: the scale of [`rotation_mul_grid`]'s integer oracle.
+const SCALE_120: f64 = 1_329_227_995_784_915_872_903_807_060_280_344_576.0;
+
+/// Under Kani, the γ term's claim of [`rotation_mul_mid`] (radii 0: the midpoint's rounding)
+/// on a grid: row 0 of A and column 0 of B of `0, ±1, ±2⁻³⁰, ±2⁻⁶⁰`, the other entries 0, so
+/// the products are exact and their sum rounds; `(A·B)₀₀` is an integer times 2⁻¹²⁰ (exact in
+/// `i128`), `m₀₀·2¹²⁰` an integer (every partial sum is a multiple of 2⁻¹²⁰ below 4), and
+/// `|S − m| ≤ r ⟺ |S − m·2¹²⁰| ≤ ⌊r·2¹²⁰⌋`.
+fn rotation_mul_grid<S: Source>(s: &mut S) {
+    let (mut am, mut bm) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+    let mut exact = 0i128;
+    for k in 0..3 {
+        let (a, au) = spread(s);
+        let (b, bu) = spread(s);
+        am[0][k] = a;
+        bm[k][0] = b;
+        exact += au * bu;
+    }
+    let zero = [[0.0; 3]; 3];
+    let a = RotationEnclosure {
+        m: mat(am),
+        e: mat(zero),
+        w: mat(zero),
+    };
+    let b = RotationEnclosure {
+        m: mat(bm),
+        e: mat(zero),
+        w: mat(zero),
+    };
+    let p = a.mul(&b);
+    let mid = (entry(&p.m, 0, 0) * SCALE_120) as i128;
+    for (r, what) in [(&p.e, "e"), (&p.w, "w")] {
+        let rad = (entry(r, 0, 0) * SCALE_120).floor() as i128;
+        assert!(
+            (exact - mid).abs() <= rad,
+            "entry (0, 0): A·B = {exact}·2⁻¹²⁰ farther than {what} from the midpoint"
+        );
+    }
+}
+
+/// Under Kani, the γ term's claim of [`affine_encloses`] (radii 0: the midpoint's rounding) on
+/// a grid: row 0 of A, `v` and `t₀` of `0, ±1, ±2⁻³⁰, ±2⁻⁶⁰` (the other entries 0), so the
+/// products are exact and the sum rounds; `(A·v + t)₀` is an integer times 2⁻¹²⁰, decided as in
+/// [`rotation_mul_grid`].
+fn affine_grid<S: Source>(s: &mut S) {
+    let mut am = [[0.0; 3]; 3];
+    let (mut v, mut tm) = ([0.0; 3], [0.0; 3]);
+    let mut exact = 0i128;
+    for k in 0..3 {
+        let (a, au) = spread(s);
+        let (x, xu) = spread(s);
+        am[0][k] = a;
+        v[k] = x;
+        exact += au * xu;
+    }
+    let (t, tu) = spread(s);
+    tm[0] = t;
+    exact += tu << 60;
+    let zero = [[0.0; 3]; 3];
+    let a = RotationEnclosure {
+        m: mat(am),
+        e: mat(zero),
+        w: mat(zero),
+    };
+    let lanes = |x: [f64; 3]| Lanes3(simd::new([x[0], x[1], x[2], 0.0]));
+    let t = VecEnc {
+        m: lanes(tm),
+        e: lanes([0.0; 3]),
+        w: lanes([0.0; 3]),
+    };
+    let out = a.affine(&t, lanes(v));
+    let mid = (out.m.arr()[0] * SCALE_120) as i128;
+    for (r, what) in [(out.e, "e"), (out.w, "w")] {
+        let rad = (r.arr()[0] * SCALE_120).floor() as i128;
+        assert!(
+            (exact - mid).abs() <= rad,
+            "coordinate 0: A·v + t = {exact}·2⁻¹²⁰ farther than {what} from the midpoint"
+        );
+    }
+}
 
 /// One coordinate of [`RotationEnclosure::affine`] (A·v + t for an exact v): for an enclosure A
 /// and a vector enclosure t (midpoints in [−4, 4], radii `e ≤ w` up to 1/4 or 0), any v in
 /// [−4, 4]³ and members A′ = Aₘ ± A_r, t′ = tₘ ± t_r at a random vertex,
 /// |(A′·v + t′)ᵢ − mᵢ| ≤ rᵢ for r = e and r = w, decided exactly.
 fn affine_encloses<S: Source>(s: &mut S) {
+    // Under Kani the grid form below; the twin draws it a quarter of the time.
+    if cfg!(kani) || s.index(4) == 0 {
+        affine_grid(s);
+        return;
+    }
     let mut am = [[0.0; 3]; 3];
     let (mut ae, mut aw) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
     let (mut tm, mut te, mut tw, mut v) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
@@ -315,10 +421,11 @@ fn affine_encloses<S: Source>(s: &mut S) {
         );
     }
 }
-// Property test only, as `d1_rotation_mul_mid` (the same four-lane operations under Kani).
+// Kani on the grid (42.3 s at load 3; x80 FAILED in 23.0 s) and twin.
 harness!(
     d1_affine_encloses,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     affine_encloses
 );
