@@ -44,6 +44,7 @@
 //! full-width ŝ, ĉ and half-widths that are not powers of two.
 // Proof functions are entry points of the model checker, not called from the crate.
 #![cfg_attr(kani, allow(dead_code))]
+use super::RobotReach;
 use super::frames::*;
 use super::lanes::*;
 use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod};
@@ -349,6 +350,92 @@ fn affine_grid<S: Source>(s: &mut S) {
             "coordinate 0: A·v + t = {exact}·2⁻¹²⁰ farther than {what} from the midpoint"
         );
     }
+}
+
+/// Offsets with integer norms (5, 1, 3, 7): a point this far from a joint origin has an exact
+/// distance, whose square root the `√` contract pins to within an ulp.
+const PYTHAGOREAN: [([f64; 3], f64); 4] = [
+    ([3.0, 4.0, 0.0], 5.0),
+    ([0.0, 0.0, 1.0], 1.0),
+    ([1.0, 2.0, 2.0], 3.0),
+    ([2.0, 3.0, 6.0], 7.0),
+];
+
+/// `1 − 2⁻⁴⁰`: the slack of [`mean_value_one_joint`] for the roots (within an ulp each) and the
+/// round-to-nearest sums (the code's pad, applied after, covers them in the whole claim).
+const MEAN_VALUE_SLACK: f64 = 1.0 - 1.0 / 1_099_511_627_776.0;
+
+/// One joint's term of [`RobotReach::mean_value_sums`] (the mean-value bound
+/// `Σ_{j<k} δ_j·sup‖p − o_j‖`), for both points: with one joint (`k = 1`), its origin at a
+/// fixed point with radius 0, each point at `o + offset/8` for an offset of integer norm
+/// ([`PYTHAGOREAN`], radius 0) and `δ` any multiple of 1/16 in [0, 1], each sum is at least
+/// `δ·‖p − o‖·(1 − 2⁻⁴⁰)` — every term counted in full (the distances and products are exact
+/// here; `√` is the IEEE contract under Kani, any root within an ulp). A thin split whose
+/// strength is mutant `x5` (δ halved in the sum), which the whole-claim twin
+/// `d1_robot_link_enlargement` and this split's twin both catch.
+fn mean_value_one_joint<S: Source>(s: &mut S) {
+    let mut f = Frames::default();
+    let o = [0.5, -0.25, 0.125];
+    // Every lane holds the origin (lanes ≥ k are masked out of the sum; with the same origin
+    // their radicands are the same exact square).
+    for (i, &x) in o.iter().enumerate() {
+        f.om[i][0] = Lanes3(simd::new([x; 4]));
+    }
+    let delta_j = s.index(17) as f64 * 0.0625;
+    let mut delta = [Lanes3::default(); JCH];
+    delta[0] = Lanes3(simd::new([delta_j, 0.0, 0.0, 0.0]));
+    let point = |s: &mut S| {
+        // Under Kani the offset (3, 4, 0) (every radicand (5/8)², see `sqrt_of_square`).
+        let (off, norm) = PYTHAGOREAN[if cfg!(kani) { 0 } else { s.index(4) }];
+        let sign = |b: bool| if b { -0.125 } else { 0.125 };
+        let m = [
+            o[0] + sign(s.bool()) * off[0],
+            o[1] + sign(s.bool()) * off[1],
+            o[2] + sign(s.bool()) * off[2],
+        ];
+        let enc = VecEnc {
+            m: Lanes3(simd::new([m[0], m[1], m[2], 0.0])),
+            ..VecEnc::default()
+        };
+        (enc, norm * 0.125)
+    };
+    let ((p0, d0), (p1, d1)) = (point(s), point(s));
+    let sums = RobotReach::mean_value_sums(&f, &delta, [&p0, &p1], 1);
+    for (sum, d) in [(sums[0], d0), (sums[1], d1)] {
+        let need = delta_j * d * MEAN_VALUE_SLACK;
+        assert!(
+            sum >= need,
+            "mean-value sum {sum} below δ·‖p − o‖ = {delta_j}·{d} (less the slack)"
+        );
+    }
+}
+harness!(
+    d1_mean_value_one_joint,
+    unwind = 5,
+    bits = 52,
+    stub = (crate::ieee::sqrt => sqrt_of_square),
+    cases = pacs_proof_kit::DEFAULT_CASES,
+    mean_value_one_joint
+);
+
+/// Stub of [`crate::ieee::sqrt`] for [`mean_value_one_joint`]: IEEE `√` of the exact square
+/// `(5/8)²` is `5/8` (a correctly rounded root of an exact square is exact); any other radicand
+/// gets the IEEE contract of `ieee::sqrt` (any root within an ulp).
+#[cfg(kani)]
+fn sqrt_of_square(x: f64) -> f64 {
+    if x == 0.390625 {
+        return 0.625;
+    }
+    if x.is_nan() || x < 0.0 {
+        return f64::NAN;
+    }
+    if x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    let r: f64 = kani::any();
+    kani::assume(r > 0.0 && r < 1.0e160);
+    kani::assume(crate::ieee::sqrt_contract(x, r));
+    r
 }
 
 /// One coordinate of [`RotationEnclosure::affine`] (A·v + t for an exact v): for an enclosure A
