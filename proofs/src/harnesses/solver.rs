@@ -184,6 +184,7 @@ fn four_lanes() -> Option<[f64; 4]> {
 /// Lanes beside an integer in a struct, kept in an array and read back at a symbolic index
 /// (CBMC then flattens the struct, the float array's `concat` inside it, into the elements of a
 /// bit-vector array: the form `d1_affine_encloses` produces).
+#[cfg(kani)]
 #[derive(Clone, Copy)]
 struct Tagged {
     tag: u64,
