@@ -262,7 +262,7 @@ harness!(
 fn spread<S: Source>(s: &mut S) -> (f64, i128) {
     let k = s.index(7);
     let e: u32 = [0, 0, 0, 30, 30, 60, 60][k];
-    let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     if k == 0 {
         return (0.0, 0);
     }
