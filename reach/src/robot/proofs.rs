@@ -160,6 +160,24 @@ fn mat(rows: [[f64; 3]; 3]) -> Mat3Lanes {
     Mat3Lanes([c(0), c(1), c(2)])
 }
 
+/// The enclosure with midpoint `m` and radii `e`, `w` (rows).
+fn enclosure(m: [[f64; 3]; 3], e: [[f64; 3]; 3], w: [[f64; 3]; 3]) -> RotationEnclosure {
+    RotationEnclosure {
+        m: mat(m),
+        e: mat(e),
+        w: mat(w),
+    }
+}
+
+/// The grid harnesses' integer oracle: `|S − m| ≤ r` for the exact `S·2⁻¹²⁰` (an integer `S`),
+/// the midpoint `m` and radius `r` the code computed. `m·2¹²⁰` must be an integer (it is on the
+/// grid: asserted, not assumed); then `|S − m·2¹²⁰| ≤ r·2¹²⁰ ⟺ |S − m·2¹²⁰| ≤ ⌊r·2¹²⁰⌋`.
+fn within_grid_units(exact: i128, mid: f64, rad: f64) -> bool {
+    let mid_s = mid * SCALE_120;
+    assert!(mid_s == mid_s.floor(), "midpoint {mid} off the 2⁻¹²⁰ grid");
+    (exact - mid_s as i128).abs() <= (rad * SCALE_120).floor() as i128
+}
+
 /// Entry `(i, j)` of a matrix.
 fn entry(m: &Mat3Lanes, i: usize, j: usize) -> f64 {
     m.0[j].arr()[i]
@@ -212,16 +230,7 @@ fn rotation_mul_mid<S: Source>(s: &mut S) {
     if !s.assume(all.iter().flatten().flatten().all(|&x| tame(x))) {
         return;
     }
-    let a = RotationEnclosure {
-        m: mat(am),
-        e: mat(ae),
-        w: mat(aw),
-    };
-    let b = RotationEnclosure {
-        m: mat(bm),
-        e: mat(be),
-        w: mat(bw),
-    };
+    let (a, b) = (enclosure(am, ae, aw), enclosure(bm, be, bw));
     let p = a.mul(&b);
     let (i, j) = (s.index(3), s.index(3));
     let mid = entry(&p.m, i, j);
@@ -290,22 +299,11 @@ fn rotation_mul_grid<S: Source>(s: &mut S) {
         exact += au * bu;
     }
     let zero = [[0.0; 3]; 3];
-    let a = RotationEnclosure {
-        m: mat(am),
-        e: mat(zero),
-        w: mat(zero),
-    };
-    let b = RotationEnclosure {
-        m: mat(bm),
-        e: mat(zero),
-        w: mat(zero),
-    };
-    let p = a.mul(&b);
-    let mid = (entry(&p.m, 0, 0) * SCALE_120) as i128;
+    let p = enclosure(am, zero, zero).mul(&enclosure(bm, zero, zero));
+    let mid = entry(&p.m, 0, 0);
     for (r, what) in [(&p.e, "e"), (&p.w, "w")] {
-        let rad = (entry(r, 0, 0) * SCALE_120).floor() as i128;
         assert!(
-            (exact - mid).abs() <= rad,
+            within_grid_units(exact, mid, entry(r, 0, 0)),
             "entry (0, 0): A·B = {exact}·2⁻¹²⁰ farther than {what} from the midpoint"
         );
     }
@@ -329,12 +327,7 @@ fn affine_grid<S: Source>(s: &mut S) {
     let (t, tu) = spread(s);
     tm[0] = t;
     exact += tu << 60;
-    let zero = [[0.0; 3]; 3];
-    let a = RotationEnclosure {
-        m: mat(am),
-        e: mat(zero),
-        w: mat(zero),
-    };
+    let a = enclosure(am, [[0.0; 3]; 3], [[0.0; 3]; 3]);
     let lanes = |x: [f64; 3]| Lanes3(simd::new([x[0], x[1], x[2], 0.0]));
     let t = VecEnc {
         m: lanes(tm),
@@ -342,11 +335,10 @@ fn affine_grid<S: Source>(s: &mut S) {
         w: lanes([0.0; 3]),
     };
     let out = a.affine(&t, lanes(v));
-    let mid = (out.m.arr()[0] * SCALE_120) as i128;
+    let mid = out.m.arr()[0];
     for (r, what) in [(out.e, "e"), (out.w, "w")] {
-        let rad = (r.arr()[0] * SCALE_120).floor() as i128;
         assert!(
-            (exact - mid).abs() <= rad,
+            within_grid_units(exact, mid, r.arr()[0]),
             "coordinate 0: A·v + t = {exact}·2⁻¹²⁰ farther than {what} from the midpoint"
         );
     }
@@ -426,16 +418,7 @@ fn sqrt_of_square(x: f64) -> f64 {
     if x == 0.390625 {
         return 0.625;
     }
-    if x.is_nan() || x < 0.0 {
-        return f64::NAN;
-    }
-    if x == 0.0 || x == f64::INFINITY {
-        return x;
-    }
-    let r: f64 = kani::any();
-    kani::assume(r > 0.0 && r < 1.0e160);
-    kani::assume(crate::ieee::sqrt_contract(x, r));
-    r
+    crate::ieee::any_root(x)
 }
 
 /// One coordinate of [`RotationEnclosure::affine`] (A·v + t for an exact v): for an enclosure A
@@ -470,11 +453,7 @@ fn affine_encloses<S: Source>(s: &mut S) {
     if !s.assume(flat.iter().flatten().flatten().all(|&x| tame(x))) {
         return;
     }
-    let a = RotationEnclosure {
-        m: mat(am),
-        e: mat(ae),
-        w: mat(aw),
-    };
+    let a = enclosure(am, ae, aw);
     let lanes = |x: [f64; 3]| Lanes3(simd::new([x[0], x[1], x[2], 0.0]));
     let t = VecEnc {
         m: lanes(tm),

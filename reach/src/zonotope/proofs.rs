@@ -345,7 +345,9 @@ fn support_member<S: Source>(s: &mut S) {
         // `d·p ≤ h ⟺ d·p·2⁶⁶ ≤ ⌈h·2⁶⁶⌉`. A float `u·p` would round here.
         let mut exact = 0i128;
         for i in 0..3 {
-            let units = (p[i] * 64.0) as i128;
+            let scaled = p[i] * 64.0;
+            assert!(scaled == scaled.floor(), "member {p:?} off the 2⁻⁶ grid");
+            let units = scaled as i128;
             exact += match u[i] {
                 0 => 0,
                 1 => units << 60,
