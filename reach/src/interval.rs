@@ -116,9 +116,10 @@ impl Interval {
     /// float stays a point).
     ///
     /// # Soundness
-    /// Claim C1: contains `x·k` for every member `x`. Kani: `a4_interval_scale_ends` (the ends
+    /// Claim C1: contains `x·k` for every member `x`. Kani: `a4_interval_scale_sqr_enclose`
+    /// (the whole claim on a grid where products round), `a4_interval_scale_ends` (the ends
     /// against `mul_down`/`mul_up`, which a2 proves exact bounds), `a4_interval_scale_point`;
-    /// property test `a4_interval_scale_sqr_enclose` (all beside this module).
+    /// property test: the twin of `a4_interval_scale_sqr_enclose` (all beside this module).
     #[inline(always)]
     pub fn scale(self, x: f64) -> Interval {
         if self.lo == self.hi
@@ -159,7 +160,8 @@ impl Interval {
     ///
     /// # Soundness
     /// Claim C1: contains `x²` for every member `x`. Kani: `a4_interval_sqr_cases` (the case
-    /// logic, on exact squares); property test `a4_interval_scale_sqr_enclose` (the rounding).
+    /// logic, on exact squares), `a4_interval_scale_sqr_enclose` (the rounding, on a grid where
+    /// squares round; mutant `x81`); its twin at full width.
     #[inline]
     pub fn sqr(self) -> Interval {
         if self.lo >= 0.0 {
@@ -203,7 +205,8 @@ impl Add for Interval {
     ///
     /// # Soundness
     /// Claim C1: contains `x + y` for all members. Kani: `a4_interval_add_lower`,
-    /// `a4_interval_add_upper`; property test `a4_interval_add_sub_enclose`.
+    /// `a4_interval_add_upper`, `a4_interval_add_sub_enclose` (the whole claim on a grid where
+    /// sums round; mutant `x82`) and its twin.
     #[inline(always)]
     fn add(self, o: Interval) -> Interval {
         if self.lo == self.hi
@@ -243,8 +246,9 @@ impl Mul for Interval {
     ///
     /// # Soundness
     /// Claim C1: contains `x·y` for all members. Kani: `a4_interval_mul_corners` (the ends
-    /// against `mul_down`/`mul_up` of every corner, which a2 proves exact bounds); property test
-    /// `a4_interval_mul_enclose`; mutant `x3` caught.
+    /// against `mul_down`/`mul_up` of every corner, which a2 proves exact bounds),
+    /// `a4_interval_mul_enclose` (the whole claim on a grid where products round) and its twin;
+    /// mutant `x3` caught.
     #[inline(always)]
     fn mul(self, o: Interval) -> Interval {
         if self.lo == self.hi {

@@ -62,6 +62,60 @@ fn member<S: Source>(s: &mut S, a: Interval) -> f64 {
     s.f64_in(a.lo(), a.hi())
 }
 
+/// `2⁵²` and `2¹⁰⁴`: the scales of the grid harnesses' integer oracles (powers of two, so a
+/// float times them is exact).
+pub(crate) const SCALE_52: f64 = 4_503_599_627_370_496.0;
+pub(crate) const SCALE_104: f64 = SCALE_52 * SCALE_52;
+
+/// A value of the rounding grid with its integer `N` (the value is `N·2⁻⁵²` exactly): 0, or
+/// `±(2⁵² + m)·2^(e − 52)`. Under Kani `m ∈ {0, 1, 2}` and `e ∈ {0, 1}` — significands with
+/// only their two lowest bits free, so sums of values of different exponents and products of
+/// values with `m ≠ 0` round (what the claims are about) while the solver's multipliers stay
+/// small; in the twin any `m < 2⁵²` and `e ∈ [0, 8]` (full-width significands). `|N| < 2⁶¹`:
+/// products of two `N` are below 2¹²², exact in `i128`.
+pub(crate) fn grid_value<S: Source>(s: &mut S) -> (f64, i128) {
+    let zero = s.index(8) == 0;
+    // The twin draws Kani's grid half of the time, full-width significands otherwise.
+    let (m, e) = if cfg!(kani) || s.bool() {
+        (s.index(3) as i128, s.index(2) as u32)
+    } else {
+        (
+            (s.f64_in(0.0, 4_503_599_627_370_495.0) as u64) as i128,
+            s.index(9) as u32,
+        )
+    };
+    let n = ((1i128 << 52) + m) << e;
+    let n = if zero {
+        0
+    } else if s.bool() {
+        -n
+    } else {
+        n
+    };
+    // `|n| < 2⁶¹` with at most 53 significant bits: the conversion and the scaling are exact.
+    (n as f64 / SCALE_52, n)
+}
+
+/// An interval with grid ends and a grid member of it: `(a, x, N_x)`.
+fn grid_interval_member<S: Source>(s: &mut S) -> Option<(Interval, f64, i128)> {
+    let mut v = [grid_value(s), grid_value(s), grid_value(s)];
+    if !cfg!(kani) {
+        // The twin orders its draws (rejecting five of six would waste them); Kani assumes.
+        v.sort_by_key(|&(_, n)| n);
+        v.swap(1, 2);
+    }
+    let [(p, _), (q, _), (x, nx)] = v;
+    s.assume(p <= q && p <= x && x <= q).then_some(())?;
+    Some((Interval::new(p, q)?, x, nx))
+}
+
+/// `r` scaled by `scale` (a power of two) contains the integer `exact`: the ends of `r` times
+/// the scale are exact (no overflow below 2¹²⁷), and `lo·scale ≤ S ⟺ ⌊lo·scale⌋ ≤ S` for an
+/// integer `S` (and `≥` with `⌈·⌉`), so the comparison is exact on integers.
+fn grid_contains(r: Interval, scale: f64, exact: i128) -> bool {
+    ((r.lo() * scale).floor() as i128) <= exact && ((r.hi() * scale).ceil() as i128) >= exact
+}
+
 fn inside_sum(r: Interval, x: f64, y: f64) -> bool {
     cmp_sum(x, y, r.lo()) != Less && cmp_sum(x, y, r.hi()) != Greater
 }
@@ -71,22 +125,39 @@ fn inside_prod(r: Interval, x: f64, y: f64) -> bool {
 }
 
 /// Interval `+`, `−` and negation contain the exact result for every pair of members (the
-/// whole claim, property test only; the Kani proofs are the per-end splits below).
+/// whole claim). Kani checks it on the rounding grid ([`grid_value`]: ends and members of
+/// both operands, an integer oracle); the twin draws the grid with full-width significands and
+/// any intervals in ±1e3 (with [`cmp_sum`] as the oracle). The per-end splits below prove the
+/// two ends at 27-bit operands.
 fn interval_add_sub<S: Source>(s: &mut S) {
-    let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0)) else {
+    if !cfg!(kani)
+        && let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0))
+    {
+        let (x, y) = (member(s, a), member(s, b));
+        if s.assume(tame(x) && tame(y)) {
+            assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
+            assert!((-a).contains(-x));
+            assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
+        }
+    }
+    let (Some((a, x, nx)), Some((b, y, ny))) = (grid_interval_member(s), grid_interval_member(s))
+    else {
         return;
     };
-    let (x, y) = (member(s, a), member(s, b));
-    if !s.assume(tame(x) && tame(y)) {
-        return;
-    }
-    assert!(inside_sum(a + b, x, y), "{a:?} + {b:?} ∌ {x} + {y}");
+    assert!(
+        grid_contains(a + b, SCALE_52, nx + ny),
+        "{a:?} + {b:?} ∌ {x} + {y}"
+    );
     assert!((-a).contains(-x));
-    assert!(inside_sum(a - b, x, -y), "{a:?} - {b:?} ∌ {x} - {y}");
+    assert!(
+        grid_contains(a - b, SCALE_52, nx - ny),
+        "{a:?} - {b:?} ∌ {x} - {y}"
+    );
 }
 harness!(
     a4_interval_add_sub_enclose,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     interval_add_sub
 );
@@ -160,21 +231,33 @@ harness!(
     interval_add_upper
 );
 
-/// Interval `×` contains the exact product for every pair of members (the whole claim,
-/// property test only; the Kani proofs are the per-end splits below).
+/// Interval `×` contains the exact product for every pair of members (the whole claim). Kani
+/// checks it on the rounding grid ([`grid_value`]: ends and members of both operands, points
+/// included, an integer oracle); the twin draws the grid with full-width significands and any
+/// intervals in ±1e3 (with [`cmp_prod`] as the oracle). [`interval_mul_corners`] proves the
+/// composition at 4- and 3-bit ends.
 fn interval_mul<S: Source>(s: &mut S) {
-    let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0)) else {
+    if !cfg!(kani)
+        && let (Some(a), Some(b)) = (interval(s, 1e3, 10.0), interval(s, 1e3, 10.0))
+    {
+        let (x, y) = (member(s, a), member(s, b));
+        if s.assume(tame(x) && tame(y)) {
+            assert!(inside_prod(a * b, x, y), "{a:?} * {b:?} ∌ {x} * {y}");
+        }
+    }
+    let (Some((a, x, nx)), Some((b, y, ny))) = (grid_interval_member(s), grid_interval_member(s))
+    else {
         return;
     };
-    let (x, y) = (member(s, a), member(s, b));
-    if !s.assume(tame(x) && tame(y)) {
-        return;
-    }
-    assert!(inside_prod(a * b, x, y), "{a:?} * {b:?} ∌ {x} * {y}");
+    assert!(
+        grid_contains(a * b, SCALE_104, nx * ny),
+        "{a:?} * {b:?} ∌ {x} * {y}"
+    );
 }
 harness!(
     a4_interval_mul_enclose,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     interval_mul
 );
@@ -230,28 +313,43 @@ harness!(
     interval_mul_corners
 );
 
-/// `scale` and `sqr` contain the exact product / square of every member (the whole claim,
-/// property test only; the Kani proofs are the splits below).
+/// `scale` and `sqr` contain the exact product / square of every member (the whole claim), and
+/// a square's lower end is ≥ 0, and 0 where the interval holds 0. Kani checks it on the rounding
+/// grid ([`grid_value`]: the ends, the member and `k`, an integer oracle); the twin draws the
+/// grid with full-width significands and any intervals and `k` in ±1e3 (with [`cmp_prod`]).
+/// The splits below prove the composition at 8- and 3-bit operands.
 fn interval_scale_sqr<S: Source>(s: &mut S) {
-    let Some(a) = interval(s, 1e3, 10.0) else {
+    if !cfg!(kani)
+        && let Some(a) = interval(s, 1e3, 10.0)
+    {
+        let x = member(s, a);
+        let k = s.f64_in(-1e3, 1e3);
+        if s.assume(tame(x) && tame(k)) {
+            assert!(
+                inside_prod(a.scale(k), x, k),
+                "{a:?}.scale({k}) ∌ {x} * {k}"
+            );
+            let sq = a.sqr();
+            assert!(inside_prod(sq, x, x), "{a:?}.sqr() ∌ {x}²");
+            assert!(sq.lo() >= 0.0 && (!a.contains(0.0) || sq.lo() == 0.0));
+        }
+    }
+    let Some((a, x, nx)) = grid_interval_member(s) else {
         return;
     };
-    let x = member(s, a);
-    let k = s.f64_in(-1e3, 1e3);
-    if !s.assume(tame(x) && tame(k)) {
-        return;
-    }
+    let (k, nk) = grid_value(s);
     assert!(
-        inside_prod(a.scale(k), x, k),
+        grid_contains(a.scale(k), SCALE_104, nx * nk),
         "{a:?}.scale({k}) ∌ {x} * {k}"
     );
     let sq = a.sqr();
-    assert!(inside_prod(sq, x, x), "{a:?}.sqr() ∌ {x}²");
+    assert!(grid_contains(sq, SCALE_104, nx * nx), "{a:?}.sqr() ∌ {x}²");
     assert!(sq.lo() >= 0.0 && (!a.contains(0.0) || sq.lo() == 0.0));
 }
 harness!(
     a4_interval_scale_sqr_enclose,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     interval_scale_sqr
 );

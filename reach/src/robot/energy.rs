@@ -63,8 +63,9 @@ pub(super) mod energy_iv {
     /// # Soundness
     /// For `mass`, `lambda_max`, `v2`, `w2` ≥ 0 and finite (no overflow): the result is ≥ the
     /// exact ½·m·v2 + ½·λ̄·w2 (five roundings, each losing at most a factor 1 − u, and underflow
-    /// below `TINY_E`). Harnesses `g1_link_energy_rounds_up` (property test, any inputs) and
-    /// `g1_link_energy_exact_products` (Kani: 4-bit significands); mutant `x29` caught.
+    /// below `TINY_E`). Harnesses `g1_link_energy_rounds_up` (Kani on a grid where the products
+    /// round; its twin any inputs) and `g1_link_energy_exact_products` (Kani: 3-bit
+    /// significands); mutant `x29` caught by both.
     #[inline(always)]
     pub fn link_energy(mass: f64, lambda_max: f64, v2: f64, w2: f64) -> f64 {
         (0.5 * mass * v2 + 0.5 * lambda_max * w2) * INFLATE + TINY_E

@@ -7,6 +7,7 @@
 #![cfg_attr(kani, allow(dead_code))]
 use super::energy_iv::link_energy;
 use crate::exact::{sum_le_zero, tame, two_prod, two_sum};
+use crate::interval::proofs::{SCALE_104, grid_value};
 use pacs_proof_kit::{Source, harness};
 
 /// A tame float in `[0, m]` (0 or magnitude ≥ 1e-100: see [`crate::exact`]).
@@ -15,11 +16,36 @@ fn non_negative<S: Source>(s: &mut S, m: f64) -> Option<f64> {
     s.assume(tame(x)).then_some(x)
 }
 
-/// One link's energy bound `link_energy(m, λ̄, v2, w2)` is at least the exact ½·m·v2 + ½·λ̄·w2
-/// (masses up to 10³ kg, moments up to 10² kg·m², squared speeds up to 10⁶), decided exactly
-/// (TwoProduct splits each product into an exact pair, the double-double sum decides the sign).
-/// Catches mutant `x29_link_energy_without_inflate` (the sum not inflated: it rounds down).
+/// One link's energy bound `link_energy(m, λ̄, v2, w2)` is at least the exact ½·m·v2 + ½·λ̄·w2.
+/// Kani checks it on the rounding grid (`grid_value` of the interval proofs: values `N·2⁻⁵²`
+/// whose products round, `|N|` below 2⁶¹; the exact ½·m·v2 + ½·λ̄·w2 is the integer
+/// `N_m·N_v2 + N_λ·N_w2` times 2⁻¹⁰⁵, and `e ≥ E·2⁻¹⁰⁵ ⟺ ⌊e·2¹⁰⁵⌋ ≥ E`: decided on integers);
+/// the twin draws that grid with full-width significands, and any masses up to 10³ kg, moments
+/// up to 10² kg·m² and squared speeds up to 10⁶, decided exactly (TwoProduct splits each
+/// product into an exact pair, the double-double sum decides the sign). Catches mutant
+/// `x29_link_energy_without_inflate` (the sum not inflated: it rounds down).
 fn link_energy_rounds_up<S: Source>(s: &mut S) {
+    if !cfg!(kani) {
+        link_energy_any_range(s);
+    }
+    let [(m, nm), (l, nl), (v2, nv), (w2, nw)] = [(); 4].map(|()| {
+        let (x, n) = grid_value(s);
+        (x.abs(), n.abs())
+    });
+    let e = link_energy(m, l, v2, w2);
+    // Values below 2⁹, so e < 2¹⁹: scaled by 2¹⁰⁵ below 2¹²⁴, exact in `i128`.
+    let exact = nm * nv + nl * nw;
+    assert!(
+        (e * SCALE_105).floor() as i128 >= exact,
+        "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2 = {exact}·2⁻¹⁰⁵"
+    );
+}
+
+/// `2¹⁰⁵`: the scale of [`link_energy_rounds_up`]'s integer oracle.
+const SCALE_105: f64 = 2.0 * SCALE_104;
+
+/// The twin's part of [`link_energy_rounds_up`] over the whole ranges.
+fn link_energy_any_range<S: Source>(s: &mut S) {
     let (Some(m), Some(l), Some(v2), Some(w2)) = (
         non_negative(s, 1e3),
         non_negative(s, 1e2),
@@ -49,12 +75,10 @@ fn link_energy_rounds_up<S: Source>(s: &mut S) {
         "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2"
     );
 }
-// Kani: timeout at 300 s (8-bit significands, Bitwuzla and SAT, load 4–6), where the oracle
-// still contained TwoProduct and the double-double sum: the Kani proof is the split
-// `g1_link_energy_exact_products` below.
 harness!(
     g1_link_energy_rounds_up,
-    twin_only,
+    unwind = 5,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     link_energy_rounds_up
 );
