@@ -24,8 +24,9 @@ const DOT_REL: f64 = 1e-15;
 /// Claim C2: `lo ≤ n·a ≤ hi` exactly, for finite `n`, `a` without overflow (a three-term dot
 /// product is within γ₃·Σ|nᵢaᵢ| of the exact value; `DOT_REL` exceeds γ₃ with margin for the
 /// rounding of the bound, `MIN_POSITIVE` covers underflow). Harness `b1_dot_bounds_enclose`
-/// (beside this module; property test), its Kani split `b1_dot_bounds_grid` (exact products
-/// whose sum rounds); mutant `x7` caught by both.
+/// (beside this module; Kani on a grid where the products and their sum round, its twin any
+/// vectors) and the Kani split `b1_dot_bounds_grid` (exact products of wider range whose sum
+/// rounds); mutant `x7` caught by both.
 #[inline]
 pub(crate) fn dot_bounds(n: &Vector3<f64>, a: &Point3<f64>) -> (f64, f64) {
     let d = n.x * a.x + n.y * a.y + n.z * a.z;

@@ -86,7 +86,8 @@ pub fn div_down(x: f64, y: f64) -> f64 {
 /// # Soundness
 /// Claim C1: ≥ the exact √x, given `ieee::sqrt`'s contract (`prev(r)² ≤ x ≤ next(r)²`, tested
 /// against the library). Harness `a2_sqrt_root_step` (Kani: the result is `next(r)` of the root
-/// `r` of `x` itself; mutant `x42`) and the twin `a2_sqrt_enclose` (the whole claim, exact oracle).
+/// `r` of `x` itself; mutant `x42`) and `a2_sqrt_enclose` (the whole claim; Kani on a grid of
+/// values with irrational roots, its twin any `x` against the exact oracle).
 #[inline(always)]
 pub fn sqrt_up(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_up()
@@ -95,7 +96,8 @@ pub fn sqrt_up(x: f64) -> f64 {
 ///
 /// # Soundness
 /// Claim C1: ≤ the exact √x, given `ieee::sqrt`'s contract. Harness `a2_sqrt_root_step` (Kani:
-/// at most `prev(r)`, never below 0; mutant `x30`) and the twin `a2_sqrt_enclose`.
+/// at most `prev(r)`, never below 0; mutant `x30`) and `a2_sqrt_enclose` (Kani on a grid, and
+/// its twin).
 #[inline(always)]
 pub fn sqrt_down(x: f64) -> f64 {
     crate::ieee::sqrt(x.max(0.0)).next_down().max(0.0)
@@ -117,10 +119,10 @@ pub const SQRT_TINY: f64 = 1e-150;
 /// Upper bound of the Euclidean norm of `(x, y, z)` (see [`INFLATE`], [`SQRT_TINY`]).
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact norm. Harness `a3_norm_up_encloses` (property test); Kani proves the
-/// `√`-and-inflation step (`a3_norm_up_sqrt_inflate`), the sum of squares is the twin's
-/// (`a3_sum_squares_up`); mutant
-/// `x1` caught.
+/// Claim C1: ≥ the exact norm, given `ieee::sqrt`'s contract. Harness `a3_norm_up_encloses`
+/// (Kani on a grid where squares and sums round, an integer oracle; its twin any coordinates);
+/// Kani proves the `√`-and-inflation step at 8 bits (`a3_norm_up_sqrt_inflate`); mutant `x1`
+/// caught.
 #[inline]
 pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
     crate::ieee::sqrt(x * x + y * y + z * z) * INFLATE + SQRT_TINY
@@ -129,8 +131,9 @@ pub fn norm3_up(x: f64, y: f64, z: f64) -> f64 {
 /// Lower bound of the Euclidean norm of `(x, y, z)`.
 ///
 /// # Soundness
-/// Claim C1: ≤ the exact norm. Harness `a3_norm_down_encloses` (property test); Kani proves
-/// the `√` step (`a3_norm_down_sqrt`; the radicand is a chain of a1/a2 helpers); mutant `x30`.
+/// Claim C1: ≤ the exact norm, given `ieee::sqrt`'s contract. Harness `a3_norm_down_encloses`
+/// (Kani on a grid where squares and sums round; its twin any coordinates); Kani proves the `√`
+/// step at 8 bits (`a3_norm_down_sqrt`); mutant `x30`.
 #[inline]
 pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
     sqrt_down(add_down(
@@ -142,8 +145,9 @@ pub fn norm3_down(x: f64, y: f64, z: f64) -> f64 {
 /// Upper bound of the distance between two points.
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact distance. Harness `a3_dist_up_encloses` (property test); Kani proves
-/// the coordinate bounds and the `√`-and-inflation step (`a3_dist_up_sqrt_inflate`).
+/// Claim C1: ≥ the exact distance, given `ieee::sqrt`'s contract. Harness `a3_dist_up_encloses`
+/// (Kani on a grid where differences, squares and sums round; its twin any points); Kani proves
+/// the coordinate bounds and the `√`-and-inflation step at 6 bits (`a3_dist_up_sqrt_inflate`).
 #[inline]
 pub fn dist3_up(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     // |fl(a-b)| may be below |a-b| by half an ulp per coordinate; bound it from both sides.

@@ -8,6 +8,7 @@
 #![cfg_attr(kani, allow(dead_code))]
 use super::*;
 use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod, two_sum};
+use crate::interval::proofs::grid_value_of;
 use crate::rounding::add_up;
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::{Greater, Less};
@@ -32,11 +33,19 @@ fn exact_prod_parts(x: f64, y: f64) -> (f64, f64) {
 
 /// `dot_bounds(n, a)` encloses the exact dot product: `lo ≤ n·a ≤ hi`, decided exactly (each
 /// product split into `p + e`, the sum of the parts by a double-double sum with an error bound:
-/// [`sum_le_zero`] is true only if the sum is proved ≤ 0). Under Kani `n` has 8 and `a` 3
-/// significand bits: the products are exact, and the sum of three of them (different exponents)
-/// still rounds, which is what the error term covers (mutant `x7`, no error term, must fail);
-/// the rounding of the products themselves is the twin's (full width).
+/// [`sum_le_zero`] is true only if the sum is proved ≤ 0) in the twin, over any tame vectors in
+/// ±1e3; Kani checks it on the rounding grid ([`dot_bounds_rounding_grid`], which the twin draws
+/// too, with full-width significands), where the products and their sum round (mutant `x7`, no
+/// error term, must fail). With 8- and 3-bit inputs and this oracle it timed out.
 fn dot_bounds_enclose<S: Source>(s: &mut S) {
+    if !cfg!(kani) {
+        dot_bounds_any(s);
+    }
+    dot_bounds_rounding_grid(s);
+}
+
+/// The twin's part of [`dot_bounds_enclose`]: any tame vectors in ±1e3.
+fn dot_bounds_any<S: Source>(s: &mut S) {
     let (Some(n0), Some(n1), Some(n2)) = (short(s, 1e3, 8), short(s, 1e3, 8), short(s, 1e3, 8))
     else {
         return;
@@ -46,6 +55,32 @@ fn dot_bounds_enclose<S: Source>(s: &mut S) {
         return;
     };
     assert_dot_bounds([n0, n1, n2], [a0, a1, a2]);
+}
+
+/// `2¹⁰⁴`: the scale of [`dot_bounds_rounding_grid`]'s integer oracle.
+const SCALE_104: f64 = 20_282_409_603_651_670_423_947_251_286_016.0;
+
+/// [`dot_bounds_enclose`] on a4's rounding grid (`crate::interval::proofs::grid_value_of`):
+/// every coordinate `N·2⁻⁵²`, under Kani `±(1 + m·2⁻⁵²)` (`m ≤ 2`) or 0, so the products round
+/// as well as their sums (what `dot_bounds`' error term covers); the exact `n·a` is the integer
+/// `Σ N_n·N_a` times 2⁻¹⁰⁴ (below 2¹²⁶ also for the twin's full-width grid), and `lo ≤ n·a ⟺
+/// ⌊lo·2¹⁰⁴⌋ ≤ Σ N_n·N_a` (the scaling is exact): decided on integers.
+fn dot_bounds_rounding_grid<S: Source>(s: &mut S) {
+    let (mut n, mut a, mut exact) = ([0.0; 3], [0.0; 3], 0i128);
+    for i in 0..3 {
+        let ((x, nx), (y, ny)) = (grid_value_of(s, 1), grid_value_of(s, 1));
+        (n[i], a[i]) = (x, y);
+        exact += nx * ny;
+    }
+    let (lo, hi) = dot_bounds(&Vector3::from(n), &Point3::from(a));
+    assert!(
+        ((lo * SCALE_104).floor() as i128) <= exact,
+        "dot lower bound {lo} above n·a = {exact}·2⁻¹⁰⁴ (n = {n:?}, a = {a:?})"
+    );
+    assert!(
+        ((hi * SCALE_104).ceil() as i128) >= exact,
+        "dot upper bound {hi} below n·a = {exact}·2⁻¹⁰⁴ (n = {n:?}, a = {a:?})"
+    );
 }
 
 /// The claim of [`dot_bounds_enclose`] for given vectors.
@@ -83,11 +118,12 @@ fn assert_dot_bounds([n0, n1, n2]: [f64; 3], [a0, a1, a2]: [f64; 3]) {
     assert!(sum_le_zero(&below[..n]), "dot lower bound {lo} above n·a");
     assert!(sum_le_zero(&above[..n]), "dot upper bound {hi} below n·a");
 }
-// The whole claim as a property test (Kani: a timeout in four forms, 150–200 s); Kani checks the
-// split `b1_dot_bounds_grid` below.
+// Kani: the rounding grid (over symbolic widths a timeout in four forms, 150–200 s); the split
+// `b1_dot_bounds_grid` below takes exact products of wider range.
 harness!(
     b1_dot_bounds_enclose,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     dot_bounds_enclose
 );

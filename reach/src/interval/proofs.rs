@@ -74,10 +74,15 @@ pub(crate) const SCALE_104: f64 = SCALE_52 * SCALE_52;
 /// small; in the twin any `m < 2⁵²` and `e ∈ [0, 8]` (full-width significands). `|N| < 2⁶¹`:
 /// products of two `N` are below 2¹²², exact in `i128`.
 pub(crate) fn grid_value<S: Source>(s: &mut S) -> (f64, i128) {
+    grid_value_of(s, 2)
+}
+
+/// [`grid_value`] with `e < exponents` under Kani (1 or 2).
+pub(crate) fn grid_value_of<S: Source>(s: &mut S, exponents: usize) -> (f64, i128) {
     let zero = s.index(8) == 0;
     // The twin draws Kani's grid half of the time, full-width significands otherwise.
     let (m, e) = if cfg!(kani) || s.bool() {
-        (s.index(3) as i128, s.index(2) as u32)
+        (s.index(3) as i128, s.index(exponents) as u32)
     } else {
         (
             (s.f64_in(0.0, 4_503_599_627_370_495.0) as u64) as i128,

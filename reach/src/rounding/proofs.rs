@@ -9,6 +9,7 @@
 use super::*;
 use crate::exact::{cmp_prod, cmp_quot, cmp_sqrt, cmp_sum, dist3_le, norm3_ge, norm3_le, tame};
 use crate::interval::Interval;
+use crate::interval::proofs::{SCALE_104, grid_value, grid_value_of};
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::{Greater, Less};
 
@@ -120,18 +121,36 @@ harness!(
 );
 
 /// sqrt up/down bound the exact square root (under Kani: of any value meeting the IEEE contract
-/// of `pacs_reach::ieee::sqrt`).
+/// of `pacs_reach::ieee::sqrt`). Kani checks it on a4's rounding grid (`x = N·2⁻⁵²`, whose roots
+/// are mostly irrational; `r² ≥ N·2⁵²·2⁻¹⁰⁴` decided on integers by [`square_vs`]); over any
+/// tame `x` it took 210 s once (over the budget) and timed out at 300–600 s since, each end alone
+/// too. The twin draws the grid with full-width significands and any tame `x` in ±1e6 (with
+/// [`cmp_sqrt`]). The split `a2_sqrt_root_step` below proves the step from the root at full
+/// width.
 fn sqrt<S: Source>(s: &mut S) {
-    let Some(x) = num(s, 1e6) else { return };
-    let a = x.abs();
-    assert!(cmp_sqrt(a, sqrt_up(a)) != Greater, "sqrt_up({a})");
-    assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
+    if !cfg!(kani)
+        && let Some(x) = num(s, 1e6)
+    {
+        let a = x.abs();
+        assert!(cmp_sqrt(a, sqrt_up(a)) != Greater, "sqrt_up({a})");
+        assert!(cmp_sqrt(a, sqrt_down(a)) != Less, "sqrt_down({a})");
+    }
+    let (x, n) = grid_value(s);
+    let (a, e) = (x.abs(), n.unsigned_abs() << 52);
+    let (up, down) = (sqrt_up(a), sqrt_down(a));
+    assert!(
+        e == 0 || (up.is_finite() && up > 0.0 && square_vs(up, e).0),
+        "sqrt_up({a}) = {up}"
+    );
+    assert!(
+        down >= 0.0 && (down == 0.0 || (down.is_finite() && square_vs(down, e).1)),
+        "sqrt_down({a}) = {down}"
+    );
 }
-// The whole claim as a property test (Kani: 210 s, over the budget, once; a 600 s timeout beside
-// other jobs on 2026-11-30; each end alone timed out at 300 s). Kani checks the split `a2_sqrt_root_step` below.
 harness!(
     a2_sqrt_enclose,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     sqrt
 );
@@ -180,21 +199,121 @@ fn vector<S: Source>(s: &mut S, m: f64) -> Option<[f64; 3]> {
     Some([num(s, m)?, num(s, m)?, num(s, m)?])
 }
 
-/// norm3_up bounds the exact Euclidean norm from above. Property test only (the Kani proof
-/// timed out: three squares summed against a `√` contract); its Kani proofs are the splits
-/// `a3_sum_squares_up` and `a3_norm_up_sqrt_inflate` below.
-fn norm_up<S: Source>(s: &mut S) {
-    let Some([x, y, z]) = vector(s, 1e6) else {
-        return;
-    };
-    assert!(
-        norm3_le(x, y, z, norm3_up(x, y, z)),
-        "norm3_up({x}, {y}, {z})"
+/// A vector of a4's rounding grid (`crate::interval::proofs::grid_value`) with the integers of
+/// its coordinates (each coordinate is `N·2⁻⁵²` exactly).
+fn grid_vector<S: Source>(s: &mut S, exponents: usize) -> ([f64; 3], [i128; 3]) {
+    let g = |s: &mut S| grid_value_of(s, exponents);
+    let [(x, nx), (y, ny), (z, nz)] = [g(s), g(s), g(s)];
+    ([x, y, z], [nx, ny, nz])
+}
+
+/// `Σ nᵢ²` for `|nᵢ| < 2⁶²` (below 2¹²⁶, exact in `u128`).
+fn sum_of_squares(n: [i128; 3]) -> u128 {
+    let (a, b, c) = (
+        n[0].unsigned_abs(),
+        n[1].unsigned_abs(),
+        n[2].unsigned_abs(),
     );
+    a * a + b * b + c * c
+}
+
+/// `r = R·2^q` for a finite `r > 0`: its integer significand `R < 2⁵³` and exponent `q`.
+fn significand_exponent(r: f64) -> (u128, i64) {
+    let bits = r.to_bits();
+    let (exp, mant) = ((bits >> 52) & 0x7ff, bits & ((1 << 52) - 1));
+    if exp == 0 {
+        (u128::from(mant), -1074)
+    } else {
+        (u128::from(mant | (1 << 52)), exp as i64 - 1075)
+    }
+}
+
+/// How `r²` compares with `E·2⁻¹⁰⁴` for `E = Σ nᵢ²` (`|nᵢ| < 2⁶²`), decided exactly on integers:
+/// `r = R·2^q`, so `r² ≥ E·2⁻¹⁰⁴ ⟺ R²·2^t ≥ E` with `t = 2q + 104`; `R² < 2¹⁰⁶` and `E < 2¹²⁶`.
+/// For `t ≥ 0` the product is formed (below 2¹²⁷) unless `t > 21`, where `R² ≥ 2¹⁰⁴` puts it
+/// above every `E`; for `t < 0` `R² ≥ E·2^k ⟺ ⌊R²/2^k⌋ ≥ E` and `R² ≤ E·2^k ⟺ ⌈R²/2^k⌉ ≤ E`
+/// (`E·2^k` is a multiple of `2^k`). `r` finite and > 0.
+fn square_vs(r: f64, e: u128) -> (bool, bool) {
+    let (big_r, q) = significand_exponent(r);
+    let (sq, t) = (big_r * big_r, 2 * q + 104);
+    if t > 21 {
+        // R ≥ 2⁵² here (t > 21 needs a normal r), so R²·2^t ≥ 2¹²⁶ > E.
+        (true, false)
+    } else if t >= 0 {
+        let lhs = sq << t;
+        (lhs >= e, lhs <= e)
+    } else if t <= -107 {
+        // R²/2^k < 1 ≤ E, or E = 0.
+        (e == 0, true)
+    } else {
+        let k = (-t) as u32;
+        ((sq >> k) >= e, ((sq + (1 << k) - 1) >> k) <= e)
+    }
+}
+
+/// `r ≥ √(Σ nᵢ²)·2⁻⁵²` exactly ([`square_vs`]).
+fn norm_at_least(r: f64, n: [i128; 3]) -> bool {
+    let e = sum_of_squares(n);
+    r >= 0.0 && (e == 0 || (r.is_finite() && r > 0.0 && square_vs(r, e).0))
+}
+
+/// `r ≤ √(Σ nᵢ²)·2⁻⁵²` exactly ([`square_vs`]); true for `r ≤ 0`.
+fn norm_at_most(r: f64, n: [i128; 3]) -> bool {
+    let e = sum_of_squares(n);
+    r <= 0.0 || (r.is_finite() && e > 0 && square_vs(r, e).1)
+}
+
+/// The norm oracles decide exactly at the edges: `1` against the norm 1 and its neighbours,
+/// and `√5·2⁻⁵²` (a tiny distance of the grid) against its correctly rounded neighbours.
+#[cfg(test)]
+#[test]
+fn the_norm_oracles_are_exact() {
+    let one = [1i128 << 52, 0, 0];
+    assert!(norm_at_least(1.0, one) && norm_at_most(1.0, one));
+    assert!(!norm_at_least(1.0f64.next_down(), one) && norm_at_most(1.0f64.next_down(), one));
+    assert!(norm_at_least(1.0f64.next_up(), one) && !norm_at_most(1.0f64.next_up(), one));
+    let tiny = [1, 0, 2];
+    let r = 5f64.sqrt() * f64::EPSILON; // √5·2⁻⁵², rounded once (not exact)
+    let (lo, hi) = if r * r < 5.0 * f64::EPSILON * f64::EPSILON {
+        (r, r.next_up())
+    } else {
+        (r.next_down(), r)
+    };
+    assert!(!norm_at_least(lo, tiny) && norm_at_most(lo, tiny));
+    assert!(norm_at_least(hi, tiny) && !norm_at_most(hi, tiny));
+    assert!(norm_at_least(0.0, [0; 3]) && norm_at_most(0.0, [0; 3]));
+    assert!(!norm_at_least(0.0, tiny) && norm_at_most(0.0, tiny));
+    // Large: |n| = 2⁶¹ − 1 on every axis (E near 3·2¹²²).
+    let big = [(1i128 << 61) - 1; 3];
+    let r = ((3.0f64).sqrt() * ((1u64 << 61) - 1) as f64) / 4_503_599_627_370_496.0;
+    assert!(
+        norm_at_least(r.next_up().next_up(), big) && !norm_at_least(r.next_down().next_down(), big)
+    );
+}
+
+/// norm3_up bounds the exact Euclidean norm from above. Kani checks it on a4's rounding grid
+/// (coordinates `N·2⁻⁵²` whose squares and sums round; `√` by its contract, `ieee::sqrt` under
+/// Kani; the exact norm compared on integers, [`norm_at_least`]); at symbolic widths it timed
+/// out (three squares summed against the `√` contract). The twin draws that grid with
+/// full-width significands and any tame coordinates in ±1e6 (with [`norm3_le`]). The splits
+/// `a3_sum_squares_up` and `a3_norm_up_sqrt_inflate` below prove the composition's parts.
+fn norm_up<S: Source>(s: &mut S) {
+    if !cfg!(kani)
+        && let Some([x, y, z]) = vector(s, 1e6)
+    {
+        assert!(
+            norm3_le(x, y, z, norm3_up(x, y, z)),
+            "norm3_up({x}, {y}, {z})"
+        );
+    }
+    let ([x, y, z], n) = grid_vector(s, 1);
+    let r = norm3_up(x, y, z);
+    assert!(norm_at_least(r, n), "norm3_up({x}, {y}, {z}) = {r}");
 }
 harness!(
     a3_norm_up_encloses,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     norm_up
 );
@@ -217,12 +336,24 @@ fn widened(sum: f64) -> f64 {
 /// (tame coordinates: a non-zero square is ≥ 1e-200). Margin: `U ≤ S(1 + 11u)` roughly (five
 /// roundings to nearest and three `next_up`s, each ≤ 2u), `T ≥ S(1 + 30u)`; with no widening
 /// (`T = S`) the claim fails. A lemma about the expression `norm3_up` evaluates (the code itself
-/// is called by split (ii), which ties its radicand to this `S`). Property test only: Kani timed
-/// out on it (a float comparison of two rounded chains over exponents 1e-200 … 1e12).
+/// is called by split (ii), which ties its radicand to this `S`). Kani checks it on a4's rounding
+/// grid (one exponent: coordinates `±(1 + m·2⁻⁵²)` or 0, whose squares and sums round), where it
+/// also checks the consequence the composition uses, the exact `x² + y² + z² ≤ T(S)` (on
+/// integers: `⌊T·2¹⁰⁴⌋ ≥ Σ N²`); over symbolic widths it timed out (a float comparison of two
+/// rounded chains over exponents 1e-200 … 1e12: 200 s at 8 bits, 150 s at 3 bits). The twin
+/// draws the grid with full-width significands and any tame coordinates in ±1e6.
 fn sum_squares_up<S: Source>(s: &mut S) {
-    let Some([x, y, z]) = vector(s, 1e6) else {
-        return;
-    };
+    if !cfg!(kani)
+        && let Some([x, y, z]) = vector(s, 1e6)
+    {
+        let sum = x * x + y * y + z * z;
+        if sum != 0.0 {
+            let up = add_up(add_up(mul_up(x, x), mul_up(y, y)), mul_up(z, z));
+            let t = widened(sum);
+            assert!(up <= t, "{x}² + {y}² + {z}² ≤ {up}, above T({sum}) = {t}");
+        }
+    }
+    let ([x, y, z], n) = grid_vector(s, 1);
     let sum = x * x + y * y + z * z;
     if sum == 0.0 {
         return;
@@ -230,12 +361,16 @@ fn sum_squares_up<S: Source>(s: &mut S) {
     let up = add_up(add_up(mul_up(x, x), mul_up(y, y)), mul_up(z, z));
     let t = widened(sum);
     assert!(up <= t, "{x}² + {y}² + {z}² ≤ {up}, above T({sum}) = {t}");
+    // Coordinates below 2⁹ (the twin; 2² under Kani): t < 2²⁰, t·2¹⁰⁴ below 2¹²⁴, exact.
+    assert!(
+        (t * SCALE_104).floor() as u128 >= sum_of_squares(n),
+        "{x}² + {y}² + {z}² above T({sum}) = {t}"
+    );
 }
-// Not model-checked: Kani timed out on this float comparison (bitwuzla, 200 s at 8 bits,
-// 150 s at 3 bits, under load ≈ 4), see the doc above.
 harness!(
     a3_sum_squares_up,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     sum_squares_up
 );
@@ -338,20 +473,26 @@ harness!(
     norm_up_sqrt_inflate
 );
 
-/// norm3_down bounds the exact Euclidean norm from below. Property test only; Kani: the split
-/// `a3_norm_down_sqrt` below (its radicand is a chain of a1/a2 helpers).
+/// norm3_down bounds the exact Euclidean norm from below. Kani checks it on a4's rounding grid
+/// (as [`norm_up`], with [`norm_at_most`]); the twin also over any tame coordinates in ±1e6
+/// (with [`norm3_ge`]). The split `a3_norm_down_sqrt` below proves the `√` step at 8 bits.
 fn norm_down<S: Source>(s: &mut S) {
-    let Some([x, y, z]) = vector(s, 1e6) else {
-        return;
-    };
-    assert!(
-        norm3_ge(x, y, z, norm3_down(x, y, z)),
-        "norm3_down({x}, {y}, {z})"
-    );
+    if !cfg!(kani)
+        && let Some([x, y, z]) = vector(s, 1e6)
+    {
+        assert!(
+            norm3_ge(x, y, z, norm3_down(x, y, z)),
+            "norm3_down({x}, {y}, {z})"
+        );
+    }
+    let ([x, y, z], n) = grid_vector(s, 2);
+    let r = norm3_down(x, y, z);
+    assert!(norm_at_most(r, n), "norm3_down({x}, {y}, {z}) = {r}");
 }
 harness!(
     a3_norm_down_encloses,
-    twin_only,
+    unwind = 2,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     norm_down
 );
@@ -412,17 +553,26 @@ harness!(
     norm_down_sqrt
 );
 
-/// dist3_up bounds the exact distance of two points from above. Property test only; Kani: the
-/// split `a3_dist_up_sqrt_inflate` below.
+/// dist3_up bounds the exact distance of two points from above. Kani checks it on a4's
+/// rounding grid (both points' coordinates; their differences round; the exact distance on
+/// integers, [`norm_at_least`] of `N_a − N_b`); the twin also over any tame points in ±1e3
+/// (with [`dist3_le`]). The split `a3_dist_up_sqrt_inflate` below proves the coordinate bounds
+/// and the `√` step at 6 bits.
 fn dist_up<S: Source>(s: &mut S) {
-    let (Some(a), Some(b)) = (vector(s, 1e3), vector(s, 1e3)) else {
-        return;
-    };
-    assert!(dist3_le(&a, &b, dist3_up(&a, &b)), "dist3_up({a:?}, {b:?})");
+    if !cfg!(kani)
+        && let (Some(a), Some(b)) = (vector(s, 1e3), vector(s, 1e3))
+    {
+        assert!(dist3_le(&a, &b, dist3_up(&a, &b)), "dist3_up({a:?}, {b:?})");
+    }
+    let ((a, na), (b, nb)) = (grid_vector(s, 1), grid_vector(s, 1));
+    let r = dist3_up(&a, &b);
+    let d = [na[0] - nb[0], na[1] - nb[1], na[2] - nb[2]];
+    assert!(norm_at_least(r, d), "dist3_up({a:?}, {b:?}) = {r}");
 }
 harness!(
     a3_dist_up_encloses,
-    twin_only,
+    unwind = 4,
+    bits = 52,
     cases = pacs_proof_kit::DEFAULT_CASES,
     dist_up
 );
