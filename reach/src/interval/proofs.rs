@@ -69,20 +69,28 @@ pub(crate) const SCALE_104: f64 = SCALE_52 * SCALE_52;
 
 /// A value of the rounding grid with its integer `N` (the value is `N·2⁻⁵²` exactly): 0, or
 /// `±(2⁵² + m)·2^(e − 52)`. Under Kani `m ∈ {0, 1, 2}` and `e ∈ {0, 1}` — significands with
-/// only their two lowest bits free, so sums of values of different exponents and products of
-/// values with `m ≠ 0` round (what the claims are about) while the solver's multipliers stay
-/// small; in the twin any `m < 2⁵²` and `e ∈ [0, 8]` (full-width significands). `|N| < 2⁶¹`:
-/// products of two `N` are below 2¹²², exact in `i128`.
+/// only their two lowest bits free, so products of values with `m ≠ 0` round, and so do sums
+/// of values of different exponents where the smaller one has `m = 1` (`(1 + 2⁻⁵²) + 2`: what
+/// the claims are about), while the solver's multipliers stay small; in the twin any `m < 2⁵²`
+/// and `e ∈ [0, 8]` (full-width significands). `|N| < 2⁶¹`: products of two `N` are below
+/// 2¹²², exact in `i128`.
 pub(crate) fn grid_value<S: Source>(s: &mut S) -> (f64, i128) {
-    grid_value_of(s, 2)
+    grid_value_of(s, 2, false)
 }
 
-/// [`grid_value`] with `e < exponents` under Kani (1 or 2).
-pub(crate) fn grid_value_of<S: Source>(s: &mut S, exponents: usize) -> (f64, i128) {
+/// [`grid_value`] with `e < exponents` under Kani (1 or 2), and with `middle` also `m = 2²⁶`:
+/// `(1 + 2⁻²⁶)² = 1 + 2⁻²⁵ + 2⁻⁵²` is a float with its last bit set, so sums of squares round
+/// on the one-exponent grid too (squares of `1 + m·2⁻⁵²`, `m ≤ 2`, round to even multiples of
+/// 2⁻⁵², whose sums in [2, 4) are exact).
+pub(crate) fn grid_value_of<S: Source>(s: &mut S, exponents: usize, middle: bool) -> (f64, i128) {
     let zero = s.index(8) == 0;
     // The twin draws Kani's grid half of the time, full-width significands otherwise.
     let (m, e) = if cfg!(kani) || s.bool() {
-        (s.index(3) as i128, s.index(exponents) as u32)
+        let m = match s.index(if middle { 4 } else { 3 }) {
+            3 => 1 << 26,
+            i => i as i128,
+        };
+        (m, s.index(exponents) as u32)
     } else {
         (
             (s.f64_in(0.0, 4_503_599_627_370_495.0) as u64) as i128,
@@ -116,9 +124,13 @@ fn grid_interval_member<S: Source>(s: &mut S) -> Option<(Interval, f64, i128)> {
 
 /// `r` scaled by `scale` (a power of two) contains the integer `exact`: the ends of `r` times
 /// the scale are exact (no overflow below 2¹²⁷), and `lo·scale ≤ S ⟺ ⌊lo·scale⌋ ≤ S` for an
-/// integer `S` (and `≥` with `⌈·⌉`), so the comparison is exact on integers.
+/// integer `S` (and `≥` with `⌈·⌉`), so the comparison is exact on integers. A NaN end (which
+/// would cast to 0) is never accepted.
 fn grid_contains(r: Interval, scale: f64, exact: i128) -> bool {
-    ((r.lo() * scale).floor() as i128) <= exact && ((r.hi() * scale).ceil() as i128) >= exact
+    !r.lo().is_nan()
+        && !r.hi().is_nan()
+        && ((r.lo() * scale).floor() as i128) <= exact
+        && ((r.hi() * scale).ceil() as i128) >= exact
 }
 
 fn inside_sum(r: Interval, x: f64, y: f64) -> bool {

@@ -139,7 +139,7 @@ fn sqrt<S: Source>(s: &mut S) {
     let (a, e) = (x.abs(), n.unsigned_abs() << 52);
     let (up, down) = (sqrt_up(a), sqrt_down(a));
     assert!(
-        e == 0 || (up.is_finite() && up > 0.0 && square_vs(up, e).0),
+        up >= 0.0 && (e == 0 || (up.is_finite() && up > 0.0 && square_vs(up, e).0)),
         "sqrt_up({a}) = {up}"
     );
     assert!(
@@ -201,8 +201,8 @@ fn vector<S: Source>(s: &mut S, m: f64) -> Option<[f64; 3]> {
 
 /// A vector of a4's rounding grid (`crate::interval::proofs::grid_value`) with the integers of
 /// its coordinates (each coordinate is `N·2⁻⁵²` exactly).
-fn grid_vector<S: Source>(s: &mut S, exponents: usize) -> ([f64; 3], [i128; 3]) {
-    let g = |s: &mut S| grid_value_of(s, exponents);
+fn grid_vector<S: Source>(s: &mut S, exponents: usize, middle: bool) -> ([f64; 3], [i128; 3]) {
+    let g = |s: &mut S| grid_value_of(s, exponents, middle);
     let [(x, nx), (y, ny), (z, nz)] = [g(s), g(s), g(s)];
     ([x, y, z], [nx, ny, nz])
 }
@@ -243,8 +243,8 @@ fn square_vs(r: f64, e: u128) -> (bool, bool) {
         let lhs = sq << t;
         (lhs >= e, lhs <= e)
     } else if t <= -107 {
-        // R²/2^k < 1 ≤ E, or E = 0.
-        (e == 0, true)
+        // 0 < R²/2^k < 1: below every E ≥ 1, above E = 0.
+        (e == 0, e != 0)
     } else {
         let k = (-t) as u32;
         ((sq >> k) >= e, ((sq + (1 << k) - 1) >> k) <= e)
@@ -282,6 +282,10 @@ fn the_norm_oracles_are_exact() {
     assert!(!norm_at_least(lo, tiny) && norm_at_most(lo, tiny));
     assert!(norm_at_least(hi, tiny) && !norm_at_most(hi, tiny));
     assert!(norm_at_least(0.0, [0; 3]) && norm_at_most(0.0, [0; 3]));
+    // A tiny positive r against E = 0 and E = 1 (the branch t ≤ −107).
+    assert_eq!(square_vs(1e-17, 0), (true, false));
+    assert_eq!(square_vs(1e-17, 1), (false, true));
+    assert!(!norm_at_most(1e-17, [0; 3]) && norm_at_least(1e-17, [0; 3]));
     assert!(!norm_at_least(0.0, tiny) && norm_at_most(0.0, tiny));
     // Large: |n| = 2⁶¹ − 1 on every axis (E near 3·2¹²²).
     let big = [(1i128 << 61) - 1; 3];
@@ -292,7 +296,8 @@ fn the_norm_oracles_are_exact() {
 }
 
 /// norm3_up bounds the exact Euclidean norm from above. Kani checks it on a4's rounding grid
-/// (coordinates `N·2⁻⁵²` whose squares and sums round; `√` by its contract, `ieee::sqrt` under
+/// (one exponent with the middle bit, `grid_value_of(s, 1, true)`: coordinates whose squares
+/// and sums round; `√` by its contract, `ieee::sqrt` under
 /// Kani; the exact norm compared on integers, [`norm_at_least`]); at symbolic widths it timed
 /// out (three squares summed against the `√` contract). The twin draws that grid with
 /// full-width significands and any tame coordinates in ±1e6 (with [`norm3_le`]). The splits
@@ -306,7 +311,7 @@ fn norm_up<S: Source>(s: &mut S) {
             "norm3_up({x}, {y}, {z})"
         );
     }
-    let ([x, y, z], n) = grid_vector(s, 1);
+    let ([x, y, z], n) = grid_vector(s, 1, true);
     let r = norm3_up(x, y, z);
     assert!(norm_at_least(r, n), "norm3_up({x}, {y}, {z}) = {r}");
 }
@@ -337,7 +342,8 @@ fn widened(sum: f64) -> f64 {
 /// roundings to nearest and three `next_up`s, each ≤ 2u), `T ≥ S(1 + 30u)`; with no widening
 /// (`T = S`) the claim fails. A lemma about the expression `norm3_up` evaluates (the code itself
 /// is called by split (ii), which ties its radicand to this `S`). Kani checks it on a4's rounding
-/// grid (one exponent: coordinates `±(1 + m·2⁻⁵²)` or 0, whose squares and sums round), where it
+/// grid (one exponent with the middle bit: coordinates `±(1 + m·2⁻⁵²)`, `m ∈ {0, 1, 2, 2²⁶}`, or
+/// 0, whose squares and sums round), where it
 /// also checks the consequence the composition uses, the exact `x² + y² + z² ≤ T(S)` (on
 /// integers: `⌊T·2¹⁰⁴⌋ ≥ Σ N²`); over symbolic widths it timed out (a float comparison of two
 /// rounded chains over exponents 1e-200 … 1e12: 200 s at 8 bits, 150 s at 3 bits). The twin
@@ -353,7 +359,7 @@ fn sum_squares_up<S: Source>(s: &mut S) {
             assert!(up <= t, "{x}² + {y}² + {z}² ≤ {up}, above T({sum}) = {t}");
         }
     }
-    let ([x, y, z], n) = grid_vector(s, 1);
+    let ([x, y, z], n) = grid_vector(s, 1, true);
     let sum = x * x + y * y + z * z;
     if sum == 0.0 {
         return;
@@ -474,7 +480,9 @@ harness!(
 );
 
 /// norm3_down bounds the exact Euclidean norm from below. Kani checks it on a4's rounding grid
-/// (as [`norm_up`], with [`norm_at_most`]); the twin also over any tame coordinates in ±1e6
+/// with two exponents (with [`norm_at_most`]; on the one-exponent grid with the middle bit
+/// mutant `x30` survived: the radicand's own downward roundings hid it); the twin also over any
+/// tame coordinates in ±1e6
 /// (with [`norm3_ge`]). The split `a3_norm_down_sqrt` below proves the `√` step at 8 bits.
 fn norm_down<S: Source>(s: &mut S) {
     if !cfg!(kani)
@@ -485,7 +493,7 @@ fn norm_down<S: Source>(s: &mut S) {
             "norm3_down({x}, {y}, {z})"
         );
     }
-    let ([x, y, z], n) = grid_vector(s, 2);
+    let ([x, y, z], n) = grid_vector(s, 2, false);
     let r = norm3_down(x, y, z);
     assert!(norm_at_most(r, n), "norm3_down({x}, {y}, {z}) = {r}");
 }
@@ -564,7 +572,7 @@ fn dist_up<S: Source>(s: &mut S) {
     {
         assert!(dist3_le(&a, &b, dist3_up(&a, &b)), "dist3_up({a:?}, {b:?})");
     }
-    let ((a, na), (b, nb)) = (grid_vector(s, 1), grid_vector(s, 1));
+    let ((a, na), (b, nb)) = (grid_vector(s, 1, false), grid_vector(s, 1, false));
     let r = dist3_up(&a, &b);
     let d = [na[0] - nb[0], na[1] - nb[1], na[2] - nb[2]];
     assert!(norm_at_least(r, d), "dist3_up({a:?}, {b:?}) = {r}");

@@ -36,7 +36,7 @@ fn link_energy_rounds_up<S: Source>(s: &mut S) {
     // Values below 2⁹, so e < 2¹⁹: scaled by 2¹⁰⁵ below 2¹²⁴, exact in `i128`.
     let exact = nm * nv + nl * nw;
     assert!(
-        (e * SCALE_105).floor() as i128 >= exact,
+        !e.is_nan() && (e * SCALE_105).floor() as i128 >= exact,
         "link_energy({m}, {l}, {v2}, {w2}) = {e} below ½·m·v2 + ½·λ̄·w2 = {exact}·2⁻¹⁰⁵"
     );
 }
