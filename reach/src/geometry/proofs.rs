@@ -8,7 +8,7 @@
 #![cfg_attr(kani, allow(dead_code))]
 use super::*;
 use crate::exact::{cmp_sum, sum_le_zero, tame, two_prod, two_sum};
-use crate::interval::proofs::grid_value_of;
+use crate::interval::proofs::{SCALE_104, grid_value_of};
 use crate::rounding::add_up;
 use pacs_proof_kit::{Source, harness};
 use std::cmp::Ordering::{Greater, Less};
@@ -56,9 +56,6 @@ fn dot_bounds_any<S: Source>(s: &mut S) {
     };
     assert_dot_bounds([n0, n1, n2], [a0, a1, a2]);
 }
-
-/// `2¹⁰⁴`: the scale of [`dot_bounds_rounding_grid`]'s integer oracle.
-const SCALE_104: f64 = 20_282_409_603_651_670_423_947_251_286_016.0;
 
 /// [`dot_bounds_enclose`] on a4's rounding grid (`crate::interval::proofs::grid_value_of`):
 /// every coordinate `N·2⁻⁵²`, under Kani `±(1 + m·2⁻⁵²)` (`m ≤ 2`) or 0, so the products round

@@ -289,7 +289,7 @@ fn the_norm_oracles_are_exact() {
     assert!(!norm_at_least(0.0, tiny) && norm_at_most(0.0, tiny));
     // Large: |n| = 2⁶¹ − 1 on every axis (E near 3·2¹²²).
     let big = [(1i128 << 61) - 1; 3];
-    let r = ((3.0f64).sqrt() * ((1u64 << 61) - 1) as f64) / 4_503_599_627_370_496.0;
+    let r = ((3.0f64).sqrt() * ((1u64 << 61) - 1) as f64) / crate::interval::proofs::SCALE_52;
     assert!(
         norm_at_least(r.next_up().next_up(), big) && !norm_at_least(r.next_down().next_down(), big)
     );
