@@ -579,3 +579,102 @@ fn corrupted_bytes_are_an_error_or_a_result_never_a_panic() {
     }
     assert!(errors > 0);
 }
+
+/// `bag`'s `.db3` file `db` with its free list damaged (the header names page 2, in use, as a
+/// free-list trunk with one leaf): SQLite's `quick_check` complains, the rows read as before.
+fn damage_free_list(db: &Path) {
+    let mut b = std::fs::read(db).unwrap();
+    b[32..36].copy_from_slice(&2u32.to_be_bytes());
+    b[36..40].copy_from_slice(&1u32.to_be_bytes());
+    std::fs::write(db, b).unwrap();
+}
+
+#[test]
+fn rows_that_account_for_the_metadata_s_count_need_no_structural_check() {
+    // Every row 1..=113 read once, the metadata counting 113 for the file: the file is read
+    // whole, so damage outside the rows read (here the free list) does not stop the audit.
+    let d = tempdir();
+    for f in ["clean.db3", "metadata.yaml"] {
+        std::fs::copy(fixtures().join("clean").join(f), d.join(f)).unwrap();
+    }
+    damage_free_list(&d.join("clean.db3"));
+    let clean = audit(&fixtures().join("clean"), None).unwrap();
+    same_result(&clean, &audit(&d, None).unwrap());
+    // The lone file keeps its count in its `metadata` table: the same.
+    same_result(&clean, &audit(&d.join("clean.db3"), None).unwrap());
+    // Without a count (no `metadata` table) the structural check runs before reading, and
+    // refuses the damaged file.
+    let lone = d.join("lone.db3");
+    std::fs::copy(fixtures().join("clean/clean.db3"), &lone).unwrap();
+    sql(&lone, "DROP TABLE metadata; VACUUM;");
+    same_result(&clean, &audit(&lone, Some(&header())).unwrap());
+    damage_free_list(&lone);
+    expect_err(
+        audit(&lone, Some(&header())),
+        &lone.display().to_string(),
+        &["damaged SQLite file (PRAGMA quick_check:", "freelist"],
+    );
+}
+
+#[test]
+fn rows_that_do_not_account_for_the_count_are_checked_after_reading() {
+    // Rows deleted (ids missing from 1..=113) and the free list damaged: the rows do not
+    // account, so SQLite's structural check runs at the end of the file and refuses it.
+    let d = tempdir();
+    for f in ["clean.db3", "metadata.yaml"] {
+        std::fs::copy(fixtures().join("clean").join(f), d.join(f)).unwrap();
+    }
+    sql(
+        &d.join("clean.db3"),
+        "DELETE FROM messages WHERE id IN (SELECT id FROM messages ORDER BY timestamp LIMIT 30 OFFSET 40);",
+    );
+    damage_free_list(&d.join("clean.db3"));
+    expect_err(
+        audit(&d, None),
+        &d.join("clean.db3").display().to_string(),
+        &[
+            "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count",
+            "freelist",
+        ],
+    );
+    // A row of the time index lost (the index's root swapped for one built without row 41):
+    // the rows read do not account, and the structural check names the index.
+    let d = tempdir();
+    for f in ["clean.db3", "metadata.yaml"] {
+        std::fs::copy(fixtures().join("clean").join(f), d.join(f)).unwrap();
+    }
+    let db = d.join("clean.db3");
+    sql(
+        &db,
+        "CREATE TABLE m2(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, \
+           timestamp INTEGER NOT NULL, data BLOB NOT NULL); \
+         INSERT INTO m2 SELECT * FROM messages WHERE id != 41; \
+         CREATE INDEX i2 ON m2 (timestamp ASC);",
+    );
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let root = |n: &str| -> i64 {
+        c.query_row(
+            "SELECT rootpage FROM sqlite_master WHERE name = ?1",
+            [n],
+            |r| r.get(0),
+        )
+        .unwrap()
+    };
+    let (a, b) = (root("timestamp_idx"), root("i2"));
+    c.execute_batch(&format!(
+        "PRAGMA writable_schema = ON; \
+         UPDATE sqlite_master SET rootpage = {b} WHERE name = 'timestamp_idx'; \
+         UPDATE sqlite_master SET rootpage = {a} WHERE name = 'i2'; \
+         PRAGMA writable_schema = OFF;"
+    ))
+    .unwrap();
+    drop(c);
+    expect_err(
+        audit(&d, None),
+        &db.display().to_string(),
+        &[
+            "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count",
+            "wrong # of entries in index",
+        ],
+    );
+}

@@ -24,7 +24,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
+mod account;
 mod metadata;
+use account::RowAccount;
 use metadata::{BagInfo, bag_info};
 
 /// The 16 bytes every SQLite 3 database file starts with.
@@ -53,16 +55,25 @@ pub fn is_bag_dir(path: &Path) -> bool {
     path.is_dir() && path.join(METADATA_FILE).is_file()
 }
 
-/// One row of `messages`.
+/// One row of `messages`; its payload is `data` of its batch's bytes.
+#[derive(Clone)]
 struct Row {
     id: i64,
     topic_id: i64,
     timestamp: i64,
-    data: Vec<u8>,
+    data: std::ops::Range<usize>,
+}
+
+/// Rows handed over at once, their payloads one after the other in `bytes` (one allocation per
+/// batch, not per row).
+#[derive(Default)]
+struct Rows {
+    rows: Vec<Row>,
+    bytes: Vec<u8>,
 }
 
 enum Batch {
-    Rows(Vec<Row>),
+    Rows(Rows),
     End,
     /// Why reading stopped (the row id reached, and the problem).
     Err(Location, Db3Problem),
@@ -71,7 +82,9 @@ enum Batch {
 /// The rows of one file, read by a thread (see the module docs).
 struct RowStream {
     rx: Option<Receiver<Batch>>,
-    buf: std::vec::IntoIter<Row>,
+    /// The batch being read, and its next row.
+    batch: Rows,
+    next: usize,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
@@ -93,6 +106,9 @@ struct Part {
     topics: HashMap<i64, (String, Stream)>,
     /// `topics.id` → rows read of that topic.
     counts: HashMap<i64, u64>,
+    /// The rows the file holds (every topic) by the metadata's count, when its completeness is
+    /// checked by accounting ([`account`]) rather than by `quick_check` before reading.
+    accounted_rows: Option<u64>,
 }
 
 impl Part {
@@ -216,6 +232,10 @@ enum Db3Problem {
     },
     #[error("messages.data: {0} bytes, over the {RECORD_LIMIT}-byte message limit")]
     TooLarge(usize),
+    #[error(
+        "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count, and PRAGMA quick_check: {0})"
+    )]
+    Damaged(String),
 }
 
 impl Db3Problem {
@@ -250,24 +270,25 @@ fn int(v: ValueRef<'_>, what: &str) -> Result<i64, Db3Problem> {
     }
 }
 
+/// SQLite's structural check of every page (b-trees, free list), `Ok(None)` if the file passes,
+/// else SQLite's first complaint.
+fn quick_check(conn: &Connection) -> Result<Option<String>, rusqlite::Error> {
+    let check: String = conn.query_row("PRAGMA quick_check(1)", [], |r| r.get(0))?;
+    Ok((check != "ok").then_some(check))
+}
+
 /// Open one `.db3` file: its tables, and its topics checked against the configuration.
-fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
+/// `counted_rows`: the rows the metadata says the file holds (every topic), if it says.
+fn open_part(
+    path: PathBuf,
+    counted_rows: Option<u64>,
+    conv: &mut Messages,
+) -> Result<Part, LogError> {
     let name = path.display().to_string();
     check_size(&path, &name)?;
     let bad = |p: String| LogError::input(&name, Location::File, p);
     let conn = open_ro(&path).map_err(|e| bad(e.to_string()))?;
     let sql = |e: rusqlite::Error| bad(sqlite_problem(&e));
-    // SQLite's structural check of every page (b-trees, free list; about a third of the time of
-    // reading the messages): a damaged file is refused before anything is read from it, rather
-    // than read as far as the damage lets SQLite notice.
-    let check: String = conn
-        .query_row("PRAGMA quick_check(1)", [], |r| r.get(0))
-        .map_err(sql)?;
-    if check != "ok" {
-        return Err(bad(format!(
-            "damaged SQLite file (PRAGMA quick_check: {check})"
-        )));
-    }
     for table in ["topics", "messages"] {
         let n: i64 = conn
             .query_row(
@@ -315,11 +336,32 @@ fn open_part(path: PathBuf, conv: &mut Messages) -> Result<Part, LogError> {
             return Err(bad(format!("table `topics`: id {id} appears twice")));
         }
     }
+    // Completeness: accounting for the rows `1..=N` while reading, where the metadata counts
+    // them and the table's largest id (its own b-tree's last row, not the index) agrees;
+    // otherwise SQLite's structural check of every page now, so that a damaged file is refused
+    // before anything is read from it rather than read as far as the damage lets SQLite notice.
+    let accounted_rows = match counted_rows {
+        Some(n) if n <= account::MAX_ACCOUNTED_ROWS => {
+            let last: Option<i64> = conn
+                .query_row("SELECT max(id) FROM messages", [], |r| r.get(0))
+                .map_err(sql)?;
+            (last.unwrap_or(0) == n as i64).then_some(n)
+        }
+        _ => None,
+    };
+    if accounted_rows.is_none()
+        && let Some(complaint) = quick_check(&conn).map_err(sql)?
+    {
+        return Err(bad(format!(
+            "damaged SQLite file (PRAGMA quick_check: {complaint})"
+        )));
+    }
     Ok(Part {
         path,
         name,
         topics,
         counts: HashMap::new(),
+        accounted_rows,
     })
 }
 
@@ -352,16 +394,27 @@ fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
         .map_err(|e| bad(e.to_string()))
 }
 
-/// The thread body: stream the rows of `ids` in time order into `tx`.
-fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
+/// The thread body: stream the rows of the topics `ids` in time order into `tx`. With
+/// `accounted_rows`, every row is read (the payloads of other topics are not) and accounted
+/// for ([`account`]); a file whose rows do not account is checked by `quick_check` at the end.
+fn read_rows(path: PathBuf, ids: Vec<i64>, accounted_rows: Option<u64>, tx: SyncSender<Batch>) {
     let mut last = Location::File;
     let r = (|| -> Result<(), Db3Problem> {
         let conn = open_ro(&path)?;
         let list: Vec<String> = ids.iter().map(i64::to_string).collect();
-        let sql = format!(
-            "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
-            list.join(", ")
-        );
+        let mut account = accounted_rows.and_then(RowAccount::new);
+        // One scan of the time index either way (SQLite tests `topic_id` on the table's row).
+        let sql = if account.is_some() {
+            format!(
+                "SELECT id, topic_id, timestamp, CASE WHEN topic_id IN ({0}) THEN data END, topic_id IN ({0}) FROM messages ORDER BY timestamp, id",
+                list.join(", ")
+            )
+        } else {
+            format!(
+                "SELECT id, topic_id, timestamp, data, 1 FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
+                list.join(", ")
+            )
+        };
         let mut stmt = conn.prepare(&sql).map_err(|error| Db3Problem::Sqlite {
             table: Some("messages"),
             error,
@@ -370,8 +423,11 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
             table: Some("messages"),
             error,
         })?;
-        let mut batch = Vec::with_capacity(BATCH);
-        let mut bytes = 0usize;
+        let fresh = || Rows {
+            rows: Vec::with_capacity(BATCH),
+            bytes: Vec::with_capacity(BATCH * 256),
+        };
+        let mut batch = fresh();
         while let Some(r) = rows.next().map_err(|error| {
             let after = match last {
                 Location::Message(id) => Some(id),
@@ -382,6 +438,12 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
         })? {
             let cell = |i: usize| r.get_ref(i).map_err(Db3Problem::sqlite);
             let id = int(cell(0)?, "messages.id")?;
+            if let Some(a) = account.as_mut() {
+                a.see(id);
+            }
+            if int(cell(4)?, "configured")? == 0 {
+                continue;
+            }
             last = Location::Message(id);
             let topic_id = int(cell(1)?, "messages.topic_id")?;
             let timestamp = int(cell(2)?, "messages.timestamp")?;
@@ -389,7 +451,11 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
                 ValueRef::Blob(b) if b.len() > RECORD_LIMIT => {
                     return Err(Db3Problem::TooLarge(b.len()));
                 }
-                ValueRef::Blob(b) => b.to_vec(),
+                ValueRef::Blob(b) => {
+                    let start = batch.bytes.len();
+                    batch.bytes.extend_from_slice(b);
+                    start..batch.bytes.len()
+                }
                 other => {
                     return Err(Db3Problem::CellType {
                         what: "messages.data".into(),
@@ -398,28 +464,29 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, tx: SyncSender<Batch>) {
                     });
                 }
             };
-            bytes += data.len();
-            batch.push(Row {
+            batch.rows.push(Row {
                 id,
                 topic_id,
                 timestamp,
                 data,
             });
-            if (batch.len() == BATCH || bytes >= BATCH_BYTES)
+            if (batch.rows.len() == BATCH || batch.bytes.len() >= BATCH_BYTES)
                 && tx
-                    .send(Batch::Rows(std::mem::replace(
-                        &mut batch,
-                        Vec::with_capacity(BATCH),
-                    )))
+                    .send(Batch::Rows(std::mem::replace(&mut batch, fresh())))
                     .is_err()
             {
                 return Ok(());
             }
-            if batch.is_empty() {
-                bytes = 0;
-            }
         }
-        if !batch.is_empty() && tx.send(Batch::Rows(batch)).is_err() {
+        // Rows that do not account for `1..=N` (gaps left by an editing tool, or damage): the
+        // file must pass SQLite's structural check after all.
+        if account.as_ref().is_some_and(|a| !a.complete())
+            && let Some(complaint) = quick_check(&conn).map_err(Db3Problem::sqlite)?
+        {
+            last = Location::File;
+            return Err(Db3Problem::Damaged(complaint));
+        }
+        if !batch.rows.is_empty() && tx.send(Batch::Rows(batch)).is_err() {
             return Ok(());
         }
         let _ = tx.send(Batch::End);
@@ -526,9 +593,25 @@ impl Db3Reader {
             )
         };
         let mut conv = Messages::new(&name, cfg.clone(), overrides.clone());
+        // Each file's row count from the metadata (by its listed path; a lone file by the one
+        // count its `metadata` table holds).
+        let counted = |i: usize| -> Option<u64> {
+            match info.files.get(i) {
+                Some(f) if path.is_dir() => info
+                    .file_counts
+                    .iter()
+                    .find(|(p, _)| p == f)
+                    .map(|(_, n)| *n),
+                _ => match info.file_counts.as_slice() {
+                    [(_, n)] => Some(*n),
+                    _ => None,
+                },
+            }
+        };
         let parts = files
             .into_iter()
-            .map(|p| open_part(p, &mut conv))
+            .enumerate()
+            .map(|(i, p)| open_part(p, counted(i), &mut conv))
             .collect::<Result<Vec<_>, _>>()?;
         match (header, &info.pacs_header) {
             (Some(h), _) => conv.set_header(h, Location::File)?,
@@ -582,13 +665,17 @@ impl Db3Reader {
     fn next_row(&mut self) -> Result<Option<Row>, LogError> {
         loop {
             if let Some(rows) = self.rows.as_mut() {
-                if let Some(row) = rows.buf.next() {
-                    return Ok(Some(row));
+                if let Some(row) = rows.batch.rows.get(rows.next) {
+                    rows.next += 1;
+                    return Ok(Some(row.clone()));
                 }
                 let part = &self.parts[self.part];
                 let got = rows.rx.as_ref().map(Receiver::recv);
                 match got {
-                    Some(Ok(Batch::Rows(b))) => rows.buf = b.into_iter(),
+                    Some(Ok(Batch::Rows(b))) => {
+                        rows.batch = b;
+                        rows.next = 0;
+                    }
                     Some(Ok(Batch::End)) => {
                         self.rows = None;
                         self.part += 1;
@@ -616,16 +703,18 @@ impl Db3Reader {
             }
             let (tx, rx) = sync_channel(BATCHES_IN_FLIGHT);
             let path = part.path.clone();
+            let accounted = part.accounted_rows;
             let thread = std::thread::Builder::new()
                 .name("pacs-db3".into())
-                .spawn(move || read_rows(path, ids, tx))
+                .spawn(move || read_rows(path, ids, accounted, tx))
                 .map_err(|e| LogError::Io {
                     file: part.name.clone(),
                     source: e,
                 })?;
             self.rows = Some(RowStream {
                 rx: Some(rx),
-                buf: Vec::new().into_iter(),
+                batch: Rows::default(),
+                next: 0,
                 thread: Some(thread),
             });
         }
@@ -642,6 +731,12 @@ impl Db3Reader {
             .entry(row.topic_id)
             .or_default() += 1;
         let part = &self.parts[self.part];
+        // The row's payload, in the batch it came with (`next_row` moves to another batch only
+        // when the next row is asked for).
+        let data: &[u8] = match &self.rows {
+            Some(r) => &r.batch.bytes[row.data.clone()],
+            None => &[],
+        };
         let loc = Location::Message(row.id);
         let Some((topic, stream)) = part.topics.get(&row.topic_id) else {
             return Err(LogError::input(
@@ -663,13 +758,13 @@ impl Db3Reader {
             stream: *stream,
             topic,
             log_time,
-            data: &row.data,
+            data,
             loc,
         };
         let r = self
             .conv
             .message(m, &what)
-            .map_err(|e| hint_compressed(e, &row.data));
+            .map_err(|e| hint_compressed(e, data));
         self.conv.file.clone_from(&self.name);
         r
     }

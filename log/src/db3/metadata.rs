@@ -17,6 +17,10 @@ pub(super) struct BagInfo {
     pub(super) pacs_header: Option<String>,
     /// `topics_with_message_count`: messages per topic name, as the recorder counted them.
     pub(super) topic_counts: Vec<(String, u64)>,
+    /// Rows of `messages` per file, as the recorder counted them (every topic): `files[i]`'s
+    /// `message_count` by `path`, or the bag's `message_count` when it has one file. Only what is
+    /// well formed; a file without a count here is checked by SQLite's `quick_check` instead.
+    pub(super) file_counts: Vec<(String, u64)>,
 }
 
 /// Why a bag's metadata is refused (the caller names the file).
@@ -186,7 +190,27 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
             ));
         }
     }
+    // Per-file row counts (rosbag2 metadata version ≥ 5 and `rosbags` write `files`): read
+    // leniently, since they only decide how a file's completeness is checked, never whether the
+    // bag is accepted.
+    let mut file_counts = Vec::new();
+    if let Yaml::Array(a) = &info["files"] {
+        for f in a {
+            if let (Yaml::String(path), Yaml::Integer(c)) = (&f["path"], &f["message_count"])
+                && *c >= 0
+            {
+                file_counts.push((path.clone(), *c as u64));
+            }
+        }
+    }
+    if file_counts.is_empty()
+        && let ([only], Yaml::Integer(c)) = (files.as_slice(), &info["message_count"])
+        && *c >= 0
+    {
+        file_counts.push((only.clone(), *c as u64));
+    }
     Ok(BagInfo {
+        file_counts,
         topic_counts,
         storage,
         files,
