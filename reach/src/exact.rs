@@ -218,6 +218,38 @@ pub fn dd_sum(terms: &[f64]) -> (f64, f64) {
     (hi + lo, err + (hi + lo).abs() * TWO_M52)
 }
 
+/// The smallest float `≥ x + y` (exact upward rounding; finite `x`, `y` whose sum does not
+/// overflow): the rounded sum, moved up when [`cmp_sum`] finds the exact sum above it.
+pub fn ceil_sum(x: f64, y: f64) -> f64 {
+    let s = x + y;
+    if cmp_sum(x, y, s) == Ordering::Greater {
+        s.next_up()
+    } else {
+        s
+    }
+}
+
+/// The largest float `≤ x + y` (exact downward rounding; as [`ceil_sum`]).
+pub fn floor_sum(x: f64, y: f64) -> f64 {
+    let s = x + y;
+    if cmp_sum(x, y, s) == Ordering::Less {
+        s.next_down()
+    } else {
+        s
+    }
+}
+
+/// The smallest float `≥ x · y` (exact upward rounding; finite `x`, `y` whose product does not
+/// overflow): the rounded product, moved up when [`cmp_prod`] finds the exact product above it.
+pub fn ceil_prod(x: f64, y: f64) -> f64 {
+    let p = x * y;
+    if cmp_prod(x, y, p) == Ordering::Greater {
+        p.next_up()
+    } else {
+        p
+    }
+}
+
 /// True only if the exact `Σ terms ≤ 0` is proven by [`dd_sum`].
 pub fn sum_le_zero(terms: &[f64]) -> bool {
     let (v, e) = dd_sum(terms);
@@ -276,6 +308,70 @@ pub fn dist3_le(a: &[f64; 3], b: &[f64; 3], r: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The directed roundings against exact integer arithmetic: terms `N·2^(e − 60)` (`|N| <
+    /// 2⁴⁰`, `e ∈ [0, 60]`), whose exact sums and products are integers times `2⁻⁶⁰` and
+    /// `2⁻¹²⁰`; the result must be the float next to the exact value on its side (compared as
+    /// integers), and at the exact value where that is a float.
+    #[test]
+    fn the_directed_roundings_are_exact() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let two60 = f64::from_bits((1023 + 60) << 52);
+        let scaled = |v: f64, k: f64| -> i128 { (v * k) as i128 };
+        for case in 0..200_000 {
+            let mut term = || {
+                let big = (next() % (1 << 40)) as i128 - (1 << 39);
+                let e = (next() % 61) as i32;
+                ((big << e) as f64) * f64::from_bits((1023 - 60) << 52)
+            };
+            let (a, b) = (term(), term());
+            // Sums: exact value (a + b)·2⁶⁰ as an integer; the results bracket it tightly.
+            let exact = scaled(a, two60) + scaled(b, two60);
+            let (up, down) = (ceil_sum(a, b), floor_sum(a, b));
+            assert!(
+                scaled(up, two60) >= exact && scaled(up.next_down(), two60) < exact
+                    || scaled(up, two60) == exact,
+                "case {case}: ceil_sum({a}, {b}) = {up}"
+            );
+            assert!(
+                scaled(down, two60) <= exact && scaled(down.next_up(), two60) > exact
+                    || scaled(down, two60) == exact,
+                "case {case}: floor_sum({a}, {b}) = {down}"
+            );
+            // Products: `c = C·2^−i`, `d = D·2^−j` (`|C|, |D| < 2⁴⁰`): the exact product is the
+            // integer `C·D` (below 2⁸⁰, so it rounds) times `2^−(i+j)`; scaling the result by
+            // `2^(i+j)` is exact and gives an integer (53 bits of a value ≥ 2⁵³ or the exact one).
+            let (cc, dd) = (
+                (next() % (1 << 40)) as i128 - (1 << 39),
+                (next() % (1 << 40)) as i128 - (1 << 39),
+            );
+            let (i, j) = ((next() % 400) as i32, (next() % 400) as i32);
+            let pow2 = |k: i32| f64::from_bits(((1023 + k) as u64) << 52);
+            let (c, d) = (cc as f64 * pow2(-i), dd as f64 * pow2(-j));
+            let exact = cc * dd;
+            let up = ceil_prod(c, d);
+            let scale = |v: f64| (v * pow2(i) * pow2(j)) as i128;
+            assert!(
+                scale(up) >= exact && (scale(up) == exact || scale(up.next_down()) < exact),
+                "case {case}: ceil_prod({c}, {d}) = {up}"
+            );
+        }
+        let tiny = f64::from_bits(1);
+        assert_eq!(ceil_sum(1.0, tiny), 1.0f64.next_up());
+        assert_eq!(floor_sum(1.0, tiny), 1.0);
+        assert_eq!(floor_sum(1.0, -tiny), 1.0f64.next_down());
+        assert_eq!(ceil_prod(tiny, 0.5), tiny);
+        // fl(0.1·0.1) lies above the exact square of the float 0.1: it is the ceiling.
+        assert_eq!(ceil_prod(0.1, 0.1), 0.1f64 * 0.1);
+        assert_eq!(cmp_prod(0.1, 0.1, 0.1f64 * 0.1), Ordering::Less);
+        assert_eq!(ceil_prod(3.0, -2.0), -6.0);
+    }
 
     #[test]
     fn dyadic_comparisons_at_the_extremes() {

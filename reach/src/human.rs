@@ -200,15 +200,50 @@ impl Ball {
 /// per-keypoint arithmetic of [`HumanReach::occupancy_into`] is in free functions of floats
 /// (this one and the four below) so that the proofs beside this module (`human/proofs.rs`)
 /// check it without building a `HumanModel`.
+///
+/// # Soundness
+/// `T_a ≤ t_a − time + delay` and `t_b − time + delay ≤ T_b`, exactly: the contracts of its two
+/// ends, [`elapsed_lo`] and [`elapsed_hi`], each proven on its function (as one function with
+/// one contract, and as this pair composed by `stub_verified`, the proof timed out at 300 s);
+/// twin `c1_radius_contracts_hold` ([`elapsed_range_encloses`]).
 #[inline(always)]
 fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
-    let lo = add_down(sub_down(t_a, time), delay);
-    let hi = add_up(sub_up(t_b, time), delay);
-    (lo, hi)
+    (elapsed_lo(time, delay, t_a), elapsed_hi(time, delay, t_b))
+}
+
+/// `t_a − time + delay` rounded down (the start of [`elapsed_range`]).
+///
+/// # Soundness
+/// Kani contract ([`elapsed_lo_below`]): `≤ t_a − time + delay` exactly. Proven on this function
+/// by `c1_elapsed_lo_contract` (`proof_for_contract`, 8-bit significands).
+#[cfg_attr(kani, kani::requires(radius_inputs(&[time, delay, t_a])))]
+#[cfg_attr(kani, kani::ensures(|lo: &f64| elapsed_lo_below(time, delay, t_a, *lo)))]
+#[inline(always)]
+fn elapsed_lo(time: f64, delay: f64, t_a: f64) -> f64 {
+    add_down(sub_down(t_a, time), delay)
+}
+
+/// `t_b − time + delay` rounded up (the end of [`elapsed_range`]).
+///
+/// # Soundness
+/// Kani contract ([`elapsed_hi_above`]): `≥ t_b − time + delay` exactly. Proven on this function
+/// by `c1_elapsed_hi_contract` (`proof_for_contract`, 8-bit significands).
+#[cfg_attr(kani, kani::requires(radius_inputs(&[time, delay, t_b])))]
+#[cfg_attr(kani, kani::ensures(|hi: &f64| elapsed_hi_above(time, delay, t_b, *hi)))]
+#[inline(always)]
+fn elapsed_hi(time: f64, delay: f64, t_b: f64) -> f64 {
+    add_up(sub_up(t_b, time), delay)
 }
 
 /// `vel`: the radius `e_p + v_max·T_hi` (rounded up) of a keypoint's ball around its measured
 /// position; it contains the balls of every earlier elapsed time.
+///
+/// # Soundness
+/// Kani contract ([`covers_vel_reach`], for the inputs [`radius_inputs`] admits, non-negative):
+/// `≥ e_p + v_max·T_hi` exactly. Proven on this function by `c1_vel_radius_contract`
+/// (`proof_for_contract`, 8-bit significands); twin `c1_radius_contracts_hold`.
+#[cfg_attr(kani, kani::requires(radius_inputs(&[e_p, v_max, t_hi]) && e_p >= 0.0 && v_max >= 0.0 && t_hi >= 0.0))]
+#[cfg_attr(kani, kani::ensures(|r: &f64| covers_vel_reach(e_p, v_max, t_hi, *r)))]
 #[inline(always)]
 fn vel_radius(e_p: f64, v_max: f64, t_hi: f64) -> f64 {
     add_up(e_p, mul_up(v_max, t_hi))
@@ -233,6 +268,13 @@ fn acc_ball_at(e_p: f64, e_v: f64, a_max: f64, p: &Point3<f64>, v: &Vector3<f64>
 
 /// The radius of the capsule between two keypoints' balls of radii `r1`, `r2` for a body part
 /// of `thickness` (module doc).
+///
+/// # Soundness
+/// Kani contract ([`covers_part`], for the inputs [`radius_inputs`] admits, non-negative):
+/// `≥ max(r1, r2) + thickness/2` exactly. Proven on this function by `c1_part_radius_contract`
+/// (`proof_for_contract`, 8-bit significands); twin `c1_radius_contracts_hold`.
+#[cfg_attr(kani, kani::requires(radius_inputs(&[r1, r2, thickness]) && r1 >= 0.0 && r2 >= 0.0 && thickness >= 0.0))]
+#[cfg_attr(kani, kani::ensures(|r: &f64| covers_part(r1, r2, thickness, *r)))]
 #[inline(always)]
 fn part_radius(r1: f64, r2: f64, thickness: f64) -> f64 {
     add_up(r1.max(r2), thickness * 0.5)
@@ -240,10 +282,80 @@ fn part_radius(r1: f64, r2: f64, thickness: f64) -> f64 {
 
 /// `pos`: the radius of an extremity's ball (`length`, `thickness`) around its base keypoint's
 /// measured position, the base moving for up to `t` (the elapsed `T_hi` plus `back`).
+///
+/// # Soundness
+/// `≥ e_p + v_max·t + length + thickness/2` exactly ([`covers_extremity_reach`]; twin
+/// `c1_radius_contracts_hold`; Kani: `c1_pos_reach` on a grid, and `vel_radius`'s contract for
+/// the base's reach). As a Kani contract its proof timed out (300 s), also with `vel_radius`
+/// replaced by its verified contract.
 #[inline(always)]
 fn extremity_radius(e_p: f64, v_max: f64, length: f64, thickness: f64, t: f64) -> f64 {
-    let travel = mul_up(v_max, t);
-    add_up(add_up(e_p, travel), add_up(length, thickness * 0.5))
+    // The base's reach is `vel`'s radius (the same operations in the same order).
+    add_up(vel_radius(e_p, v_max, t), add_up(length, thickness * 0.5))
+}
+
+// The contracts of the per-keypoint arithmetic above: each a bound compared with the value
+// the same expression takes with exact directed rounding at every step (`exact::ceil_sum`,
+// `ceil_prod`, `floor_sum`: the float next to each exact intermediate on the safe side), so a
+// predicate that holds proves the real-number claim; public so that the proofs, their twins and
+// any caller state the same claim.
+
+/// The inputs the contracts above admit: finite, of magnitude at most 1e100 (no sum or product
+/// of them overflows).
+pub fn radius_inputs(xs: &[f64]) -> bool {
+    xs.iter().all(|x| x.abs() <= 1e100)
+}
+
+/// Contract of `vel_radius`: `r ≥ e_p + v·t` exactly (`r ≥ ⌈e_p + ⌈v·t⌉⌉`).
+pub fn covers_vel_reach(e_p: f64, v: f64, t: f64, r: f64) -> bool {
+    use crate::exact::{ceil_prod, ceil_sum};
+    r.is_finite() && r >= ceil_sum(e_p, ceil_prod(v, t))
+}
+
+/// Contract of `part_radius`: `r ≥ max(r1, r2) + thickness/2` exactly.
+pub fn covers_part(r1: f64, r2: f64, thickness: f64, r: f64) -> bool {
+    use crate::exact::{ceil_prod, ceil_sum};
+    r.is_finite() && r >= ceil_sum(r1.max(r2), ceil_prod(thickness, 0.5))
+}
+
+/// The claim of `extremity_radius`: `r ≥ e_p + v·t + length + thickness/2` exactly (`r ≥
+/// ⌈⌈e_p + ⌈v·t⌉⌉ + ⌈length + ⌈thickness/2⌉⌉⌉`), `r` finite.
+pub fn covers_extremity_reach(
+    e_p: f64,
+    v: f64,
+    length: f64,
+    thickness: f64,
+    t: f64,
+    r: f64,
+) -> bool {
+    use crate::exact::{ceil_prod, ceil_sum};
+    let travel = ceil_sum(e_p, ceil_prod(v, t));
+    let extent = ceil_sum(length, ceil_prod(thickness, 0.5));
+    r.is_finite() && r >= ceil_sum(travel, extent)
+}
+
+/// The claim of `elapsed_range`: `lo ≤ t_a − time + delay` and `hi ≥ t_b − time + delay`,
+/// exactly (its two ends' contracts).
+pub fn elapsed_range_encloses(time: f64, delay: f64, t_a: f64, t_b: f64, r: (f64, f64)) -> bool {
+    elapsed_lo_below(time, delay, t_a, r.0) && elapsed_hi_above(time, delay, t_b, r.1)
+}
+
+/// Contract of `elapsed_lo`: `lo ≤ t_a − time + delay` exactly, decided as a chain through a
+/// witness (`a ≤ t_a − time`, `lo ≤ a + delay`, each checked exactly); with the tightest
+/// rounding as the witness the proof of both ends at once timed out (300 s).
+pub fn elapsed_lo_below(time: f64, delay: f64, t_a: f64, lo: f64) -> bool {
+    use crate::exact::cmp_sum;
+    use std::cmp::Ordering::Less;
+    let a = sub_down(t_a, time);
+    lo.is_finite() && cmp_sum(t_a, -time, a) != Less && cmp_sum(a, delay, lo) != Less
+}
+
+/// Contract of `elapsed_hi`: `hi ≥ t_b − time + delay` exactly (as [`elapsed_lo_below`]).
+pub fn elapsed_hi_above(time: f64, delay: f64, t_b: f64, hi: f64) -> bool {
+    use crate::exact::cmp_sum;
+    use std::cmp::Ordering::Greater;
+    let b = sub_up(t_b, time);
+    hi.is_finite() && cmp_sum(t_b, -time, b) != Greater && cmp_sum(b, delay, hi) != Greater
 }
 
 /// Human occupancy computer: reusable buffers, no allocation per query.

@@ -279,3 +279,100 @@ harness!(
     cases = pacs_proof_kit::DEFAULT_CASES,
     acc_at
 );
+
+// ---------------------------------------------------------------------------------------------
+// The contracts of the per-keypoint arithmetic (`elapsed_range`, `vel_radius`, `part_radius`,
+// `extremity_radius`), each proven on the real function with `proof_for_contract` (Kani assumes
+// the precondition and checks the postcondition on every path), and their common twin.
+
+/// The inputs of the contract proofs: floats of at most 8 significant bits (any exponent in the
+/// range) under Kani — with 64-bit significands every one of them timed out (300 s, Bitwuzla):
+/// the exact oracle's integer product and two-sums over four unknown doubles.
+#[cfg(kani)]
+fn short_in(lo: f64, hi: f64) -> f64 {
+    use pacs_proof_kit::Source;
+    pacs_proof_kit::KaniSource { bits: 8 }.f64_in(lo, hi)
+}
+
+/// `vel_radius`'s contract: `≥ e_p + v·T` exactly, for position errors up to 1 m, speeds up to
+/// 10 m/s and elapsed times up to 100 s (8-bit significands, any exponent).
+#[cfg(kani)]
+#[kani::proof_for_contract(vel_radius)]
+#[kani::unwind(6)]
+fn c1_vel_radius_contract() {
+    let _ = vel_radius(
+        short_in(0.0, 1.0),
+        short_in(0.0, 10.0),
+        short_in(0.0, 100.0),
+    );
+}
+
+/// `part_radius`'s contract: `≥ max(r1, r2) + thickness/2` exactly, for radii up to 100 m and
+/// thicknesses up to 2 m (8-bit significands).
+#[cfg(kani)]
+#[kani::proof_for_contract(part_radius)]
+#[kani::unwind(6)]
+fn c1_part_radius_contract() {
+    let _ = part_radius(
+        short_in(0.0, 100.0),
+        short_in(0.0, 100.0),
+        short_in(0.0, 2.0),
+    );
+}
+
+/// `elapsed_lo`'s contract: `≤ t_a − time + delay` exactly, for clocks within ±10⁶ s and
+/// delays up to 1 s (8-bit significands).
+#[cfg(kani)]
+#[kani::proof_for_contract(elapsed_lo)]
+#[kani::unwind(5)]
+fn c1_elapsed_lo_contract() {
+    let _ = elapsed_lo(short_in(-1e6, 1e6), short_in(0.0, 1.0), short_in(-1e6, 1e6));
+}
+
+/// `elapsed_hi`'s contract: `≥ t_b − time + delay` exactly (as `c1_elapsed_lo_contract`).
+#[cfg(kani)]
+#[kani::proof_for_contract(elapsed_hi)]
+#[kani::unwind(5)]
+fn c1_elapsed_hi_contract() {
+    let _ = elapsed_hi(short_in(-1e6, 1e6), short_in(0.0, 1.0), short_in(-1e6, 1e6));
+}
+
+/// The twin of the contract proofs: random admitted floats (0, grid times, values in
+/// [0, 2] and magnitudes from 1e-300 to 1e100, subnormal results included), each function's
+/// postcondition checked.
+#[cfg(test)]
+#[test]
+fn c1_radius_contracts_hold() {
+    use pacs_proof_kit::Source;
+    pacs_proof_kit::run_cases("c1_radius_contracts_hold", 20_000, |s| {
+        let x = |s: &mut pacs_proof_kit::RandomSource, signed: bool| -> f64 {
+            let v = match s.index(4) {
+                0 => 0.0,
+                1 => s.f64_in(0.0, 2.0),
+                2 => 10f64.powi(s.index(401) as i32 - 300) * s.f64_in(1.0, 9.99),
+                _ => (s.index(512) as f64) / 256.0,
+            };
+            let v = if signed && s.bool() { -v } else { v };
+            if v.abs() <= 1e100 { v } else { 0.0 }
+        };
+        let (e_p, v, t) = (x(s, false), x(s, false), x(s, false));
+        assert!(
+            covers_vel_reach(e_p, v, t, vel_radius(e_p, v, t)),
+            "vel {e_p} {v} {t}"
+        );
+        let (len, th) = (x(s, false), x(s, false));
+        let r = extremity_radius(e_p, v, len, th, t);
+        assert!(covers_extremity_reach(e_p, v, len, th, t, r), "extremity");
+        let (r1, r2) = (x(s, false), x(s, false));
+        assert!(
+            covers_part(r1, r2, th, part_radius(r1, r2, th)),
+            "part {r1} {r2} {th}"
+        );
+        let (time, delay, ta, tb) = (x(s, true), x(s, false), x(s, true), x(s, true));
+        let r = elapsed_range(time, delay, ta, tb);
+        assert!(
+            elapsed_range_encloses(time, delay, ta, tb, r),
+            "elapsed {time} {delay} {ta} {tb}: {r:?}"
+        );
+    });
+}
