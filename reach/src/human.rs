@@ -198,8 +198,8 @@ impl Ball {
 /// Elapsed times `(T_a, T_b)` since the measured true state (`time − delay`) of the query
 /// `[t_a, t_b]`: `t_a − time + delay` rounded down and `t_b − time + delay` rounded up. The
 /// per-keypoint arithmetic of [`HumanReach::occupancy_into`] is in free functions of floats
-/// (this one and the four below) so that the proofs beside this module (`human/proofs.rs`)
-/// check it without building a `HumanModel`.
+/// (this one, its two ends and the radii below) so that the proofs beside this module
+/// (`human/proofs.rs`) check it without building a `HumanModel`.
 ///
 /// # Soundness
 /// `T_a ≤ t_a − time + delay` and `t_b − time + delay ≤ T_b`, exactly: the contracts of its two
