@@ -4,11 +4,12 @@
 //!
 //! The topics, message types and CDR payloads are those of the MCAP form, converted by the same
 //! code ([`crate::ros`]): `messages.timestamp` (the receive time, ns) plays the MCAP log time.
-//! Each file's `messages` are read in `ORDER BY timestamp, id` (only rows of configured topics),
-//! streamed by a thread that owns the read-only SQLite connection and hands rows over in small
-//! batches through a bounded channel (memory stays flat); the files of a bag are read one after
-//! the other, in the order of `relative_file_paths`, and their messages put in time order within
-//! `mcap.reorder_window` like any others.
+//! Each file's `messages` are read in `ORDER BY timestamp, id` (the payloads of configured topics
+//! only; every row's id where the rows are accounted, `db3/account.rs`), streamed by a thread
+//! that owns the read-only SQLite connection and hands rows over in small batches through a
+//! bounded channel (memory stays flat but for the accounting's bit per row, at most 16 MiB); the
+//! files of a bag are read one after the other, in the order of `relative_file_paths`, and their
+//! messages put in time order within `mcap.reorder_window` like any others.
 //!
 //! The pacs header: given by the caller (`pacs audit --header`), or the JSON text in key
 //! [`CUSTOM_DATA_KEY`] of the bag's `custom_data` (in `metadata.yaml`, or for a lone `.db3` file in
