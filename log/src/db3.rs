@@ -21,7 +21,6 @@ use crate::mcap::{McapConfig, RECORD_LIMIT, parse_header_json};
 use crate::ros::{Message, Messages, Pending, Stream};
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
@@ -40,7 +39,7 @@ pub const METADATA_FILE: &str = "metadata.yaml";
 const METADATA_LIMIT: u64 = 1 << 20;
 /// Rows per batch handed from the reading thread (fewer when their payloads reach
 /// [`BATCH_BYTES`]).
-const BATCH: usize = 256;
+const BATCH: usize = 1024;
 /// Payload bytes after which a batch is handed over.
 const BATCH_BYTES: usize = 1 << 20;
 /// Batches in flight between the reading thread and the reader.
@@ -103,25 +102,35 @@ impl Drop for RowStream {
 struct Part {
     path: PathBuf,
     name: String,
-    /// `topics.id` → (topic, stream) of every topic.
-    topics: HashMap<i64, (String, Stream)>,
-    /// `topics.id` → rows read of that topic.
-    counts: HashMap<i64, u64>,
+    /// Every topic of the file, in increasing `topics.id` (looked up by binary search, once
+    /// per row).
+    topics: Vec<PartTopic>,
     /// The rows the file holds (every topic) by the metadata's count, when its completeness is
     /// checked by accounting ([`account`]) rather than by `quick_check` before reading.
     accounted_rows: Option<u64>,
 }
 
+/// One row of a file's `topics` table, and the rows of it read so far.
+struct PartTopic {
+    id: i64,
+    name: String,
+    stream: Stream,
+    read: u64,
+}
+
 impl Part {
+    /// The ids of the configured topics, in increasing order.
     fn configured_ids(&self) -> Vec<i64> {
-        let mut ids: Vec<i64> = self
-            .topics
+        self.topics
             .iter()
-            .filter(|(_, (_, s))| *s != Stream::Ignored)
-            .map(|(id, _)| *id)
-            .collect();
-        ids.sort_unstable();
-        ids
+            .filter(|t| t.stream != Stream::Ignored)
+            .map(|t| t.id)
+            .collect()
+    }
+
+    /// The index in `topics` of `topics.id` `id`.
+    fn topic_index(&self, id: i64) -> Option<usize> {
+        self.topics.binary_search_by_key(&id, |t| t.id).ok()
     }
 }
 
@@ -308,7 +317,7 @@ fn open_part(
         .prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id")
         .map_err(|e| bad(format!("table `topics`: {}", sqlite_problem(&e))))?;
     let mut rows = stmt.query([]).map_err(sql)?;
-    let mut topics = HashMap::new();
+    let mut topics: Vec<PartTopic> = Vec::new();
     while let Some(r) = rows.next().map_err(sql)? {
         let cell = |i: usize| r.get_ref(i).map_err(|e| bad(sqlite_problem(&e)));
         let cell_bad = |e: Db3Problem| bad(e.to_string());
@@ -333,9 +342,16 @@ fn open_part(
                 )));
             }
         }
-        if topics.insert(id, (topic, stream)).is_some() {
-            return Err(bad(format!("table `topics`: id {id} appears twice")));
-        }
+        topics.push(PartTopic {
+            id,
+            name: topic,
+            stream,
+            read: 0,
+        });
+    }
+    topics.sort_by_key(|t| t.id);
+    if let Some(w) = topics.windows(2).find(|w| w[0].id == w[1].id) {
+        return Err(bad(format!("table `topics`: id {} appears twice", w[0].id)));
     }
     // Completeness: accounting for the rows `1..=N` while reading, where the metadata counts
     // them and the table's largest id (its own b-tree's last row, not the index) agrees;
@@ -361,7 +377,6 @@ fn open_part(
         path,
         name,
         topics,
-        counts: HashMap::new(),
         accounted_rows,
     })
 }
@@ -727,24 +742,23 @@ impl Db3Reader {
             self.done = true;
             return self.check_counts();
         };
-        *self.parts[self.part]
-            .counts
-            .entry(row.topic_id)
-            .or_default() += 1;
-        let part = &self.parts[self.part];
-        // The row's payload, in the batch it came with (`next_row` moves to another batch only
-        // when the next row is asked for).
-        let data: &[u8] = match &self.rows {
-            Some(r) => &r.batch.bytes[row.data.clone()],
-            None => &[],
-        };
+        let part = &mut self.parts[self.part];
         let loc = Location::Message(row.id);
-        let Some((topic, stream)) = part.topics.get(&row.topic_id) else {
+        let Some(i) = part.topic_index(row.topic_id) else {
             return Err(LogError::input(
                 &part.name,
                 loc,
                 format!("topic id {} is not in table `topics`", row.topic_id),
             ));
+        };
+        part.topics[i].read += 1;
+        let part = &self.parts[self.part];
+        let (topic, stream) = (&part.topics[i].name, &part.topics[i].stream);
+        // The row's payload, in the batch it came with (`next_row` moves to another batch only
+        // when the next row is asked for).
+        let data: &[u8] = match &self.rows {
+            Some(r) => &r.batch.bytes[row.data.clone()],
+            None => &[],
         };
         let what = || format!("message on `{topic}` (timestamp {} ns)", row.timestamp);
         let Ok(log_time) = u64::try_from(row.timestamp) else {
@@ -754,7 +768,6 @@ impl Db3Reader {
                 format!("{}: negative timestamp", what()),
             ));
         };
-        self.conv.file.clone_from(&part.name);
         let m = Message {
             stream: *stream,
             topic,
@@ -762,12 +775,10 @@ impl Db3Reader {
             data,
             loc,
         };
-        let r = self
-            .conv
+        // The conversion names the bag; its errors name the file of the bag they are in.
+        self.conv
             .message(m, &what)
-            .map_err(|e| hint_compressed(e, data));
-        self.conv.file.clone_from(&self.name);
-        r
+            .map_err(|e| hint_compressed(in_file(e, &part.name), data))
     }
 }
 
@@ -780,10 +791,10 @@ impl Db3Reader {
             let mut read = 0u64;
             let mut configured = false;
             for part in &self.parts {
-                for (id, (name, stream)) in &part.topics {
-                    if name == topic && *stream != Stream::Ignored {
+                for t in &part.topics {
+                    if t.name == *topic && t.stream != Stream::Ignored {
                         configured = true;
-                        read += part.counts.get(id).copied().unwrap_or(0);
+                        read += t.read;
                     }
                 }
             }
@@ -807,6 +818,23 @@ impl Db3Reader {
 }
 
 /// A payload that starts with the zstd magic is a message-compressed bag's: say so.
+/// `e` as an error of the file `name` (a part of the bag).
+fn in_file(e: LogError, name: &str) -> LogError {
+    match e {
+        LogError::Input {
+            location, problem, ..
+        } => LogError::Input {
+            file: name.to_string(),
+            location,
+            problem,
+        },
+        LogError::Io { source, .. } => LogError::Io {
+            file: name.to_string(),
+            source,
+        },
+    }
+}
+
 fn hint_compressed(e: LogError, data: &[u8]) -> LogError {
     const ZSTD: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
     match e {
