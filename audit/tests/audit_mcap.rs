@@ -665,6 +665,67 @@ fn wrong_joint_or_keypoint_counts_are_rejected() {
     );
 }
 
+/// Joints are read by name in every message: the order may change from one message to the
+/// next (the map is rebuilt), and joints the model does not have are not read, even when they
+/// are not finite.
+#[test]
+fn joint_order_may_change_between_messages_and_other_joints_are_not_read() {
+    let names = fr3_joints();
+    let moving = |ns: i128| {
+        let mut q = Q_READY;
+        q[0] += 0.5 * secs(ns);
+        let mut dq = [0.0; 7];
+        dq[0] = 0.5;
+        (q, dq)
+    };
+    let in_order = |ns: i128| {
+        let (q, dq) = moving(ns);
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        joint_state(ns, &names, &q, &dq)
+    };
+    let shuffled = |ns: i128| {
+        let (q, dq) = moving(ns);
+        if (ns / 1_000_000) % 2 == 0 {
+            return in_order(ns);
+        }
+        // Reversed, with a finger joint whose values are not finite.
+        let mut n: Vec<&str> = names.iter().rev().map(String::as_str).collect();
+        n.push("fr3_finger_joint1");
+        let mut mq: Vec<f64> = q.iter().rev().copied().collect();
+        mq.push(f64::NAN);
+        let mut mdq: Vec<f64> = dq.iter().rev().copied().collect();
+        mdq.push(f64::INFINITY);
+        joint_state(ns, &n, &mq, &mdq)
+    };
+    let cfg = AuditConfig::default();
+    let a = audit_bytes(
+        "a.mcap",
+        &write_mcap(
+            &Spec::new(),
+            &header("ssm"),
+            &short_run(in_order, good_human),
+        ),
+        &cfg,
+        None,
+    )
+    .unwrap();
+    let b = audit_bytes(
+        "b.mcap",
+        &write_mcap(
+            &Spec::new(),
+            &header("ssm"),
+            &short_run(shuffled, good_human),
+        ),
+        &cfg,
+        None,
+    )
+    .unwrap();
+    assert_eq!((a.metrics.samples, a.verdict), (5, Verdict::Pass));
+    let mut b = b;
+    b.log = a.log.clone();
+    assert_eq!(a, b);
+}
+
 #[test]
 fn nan_and_inf_are_rejected() {
     let names = fr3_joints();

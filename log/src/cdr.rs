@@ -257,6 +257,8 @@ pub struct JointStateMsg {
     names_raw: Vec<u8>,
     names_at: usize,
     names_little: bool,
+    /// Incremented whenever `names` is decoded anew ([`Self::names_version`]).
+    names_version: u64,
 }
 
 /// `text` as a `str`, or the error of a string `field` at byte `at` that is not UTF-8.
@@ -284,6 +286,7 @@ impl JointStateMsg {
             r.pos = end;
         } else {
             self.names_raw.clear();
+            self.names_version = self.names_version.wrapping_add(1);
             self.decode_names(&mut r)?;
             self.names_raw.extend_from_slice(&r.body[start..r.pos]);
             (self.names_at, self.names_little) = (start, r.little);
@@ -292,6 +295,13 @@ impl JointStateMsg {
         r.f64_seq("velocity", &mut self.velocity)?;
         r.f64_seq("effort", &mut self.effort)?;
         r.finish()
+    }
+
+    /// A number that changes whenever `names` may have changed (a decoding that read the `name`
+    /// sequence anew): a caller that derived something from `names` at one version may keep it
+    /// while the version stays the same.
+    pub fn names_version(&self) -> u64 {
+        self.names_version
     }
 
     /// The `name` sequence at the cursor into `names`.

@@ -177,8 +177,9 @@ pub(crate) struct Messages {
     last_released: f64,
     js: JointStateMsg,
     pa: PoseArray,
-    /// Cached name → model-order map of the last `JointState.name` list.
-    map_names: Vec<String>,
+    /// Cached name → model-order map of the `JointState.name` list of `js` at
+    /// [`JointStateMsg::names_version`] `map_version`.
+    map_version: Option<u64>,
     map: Vec<usize>,
     f64_pool: Vec<Vec<f64>>,
     pos_pool: Vec<Vec<[f64; 3]>>,
@@ -206,7 +207,7 @@ impl Messages {
             last_released: f64::NEG_INFINITY,
             js: JointStateMsg::default(),
             pa: PoseArray::default(),
-            map_names: Vec::new(),
+            map_version: None,
             map: Vec::new(),
             f64_pool: Vec::new(),
             pos_pool: Vec::new(),
@@ -388,7 +389,7 @@ impl Messages {
                 js.position.len()
             )));
         }
-        if k > 0 && self.map_names != js.names {
+        if k > 0 && self.map_version != Some(js.names_version()) {
             let mut map = vec![usize::MAX; n];
             for (i, name) in js.names.iter().enumerate() {
                 if let Some(j) = self.joints.iter().position(|x| x == name) {
@@ -409,7 +410,7 @@ impl Messages {
                 )));
             }
             self.map = map;
-            self.map_names.clone_from(&js.names);
+            self.map_version = Some(js.names_version());
         }
         let mut q = self.f64_pool.pop().unwrap_or_default();
         let mut dq = (vlen > 0).then(|| self.f64_pool.pop().unwrap_or_default());
@@ -417,21 +418,38 @@ impl Messages {
         if let Some(d) = dq.as_mut() {
             d.clear();
         }
-        for j in 0..n {
-            let i = if k == 0 { j } else { self.map[j] };
-            let (x, v) = (js.position[i], js.velocity.get(i).copied());
-            for (f, val) in [("position", Some(x)), ("velocity", v)] {
-                if let Some(val) = val.filter(|v| !v.is_finite()) {
-                    return Err(err(format!(
-                        "{}: JointState.{f}[{i}] (joint `{}`): value {val} is not finite",
-                        what(),
-                        self.joints[j]
-                    )));
+        // Every value finite (the usual case, one pass over the message); otherwise the first
+        // non-finite value of a model joint, in joint order, is the error (other joints'
+        // values are not read).
+        let all_finite = js
+            .position
+            .iter()
+            .chain(js.velocity.iter())
+            .all(|x| x.is_finite());
+        if !all_finite {
+            for j in 0..n {
+                let i = if k == 0 { j } else { self.map[j] };
+                let (x, v) = (js.position[i], js.velocity.get(i).copied());
+                for (f, val) in [("position", Some(x)), ("velocity", v)] {
+                    if let Some(val) = val.filter(|v| !v.is_finite()) {
+                        return Err(err(format!(
+                            "{}: JointState.{f}[{i}] (joint `{}`): value {val} is not finite",
+                            what(),
+                            self.joints[j]
+                        )));
+                    }
                 }
             }
-            q.push(x);
-            if let (Some(d), Some(v)) = (dq.as_mut(), v) {
-                d.push(v);
+        }
+        if k == 0 {
+            q.extend_from_slice(&js.position[..n]);
+            if let Some(d) = dq.as_mut() {
+                d.extend_from_slice(&js.velocity[..n]);
+            }
+        } else {
+            q.extend(self.map.iter().map(|&i| js.position[i]));
+            if let Some(d) = dq.as_mut() {
+                d.extend(self.map.iter().map(|&i| js.velocity[i]));
             }
         }
         Ok((self.secs(js.stamp.nanos()), Body::Robot { q, dq }))
