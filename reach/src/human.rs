@@ -216,10 +216,10 @@ fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
 /// # Soundness
 /// Kani contract ([`elapsed_lo_below`]): `≤ t_a − time + delay` exactly. Proven on this function
 /// by `c1_elapsed_lo_contract` (`proof_for_contract`, 8-bit significands).
-#[cfg_attr(kani, kani::requires(radius_inputs(&[time, delay, t_a])))]
+#[cfg_attr(kani, kani::requires(radius_input(time) && radius_input(delay) && radius_input(t_a)))]
 #[cfg_attr(kani, kani::ensures(|lo: &f64| elapsed_lo_below(time, delay, t_a, *lo)))]
 #[inline(always)]
-fn elapsed_lo(time: f64, delay: f64, t_a: f64) -> f64 {
+pub(crate) fn elapsed_lo(time: f64, delay: f64, t_a: f64) -> f64 {
     add_down(sub_down(t_a, time), delay)
 }
 
@@ -228,10 +228,10 @@ fn elapsed_lo(time: f64, delay: f64, t_a: f64) -> f64 {
 /// # Soundness
 /// Kani contract ([`elapsed_hi_above`]): `≥ t_b − time + delay` exactly. Proven on this function
 /// by `c1_elapsed_hi_contract` (`proof_for_contract`, 8-bit significands).
-#[cfg_attr(kani, kani::requires(radius_inputs(&[time, delay, t_b])))]
+#[cfg_attr(kani, kani::requires(radius_input(time) && radius_input(delay) && radius_input(t_b)))]
 #[cfg_attr(kani, kani::ensures(|hi: &f64| elapsed_hi_above(time, delay, t_b, *hi)))]
 #[inline(always)]
-fn elapsed_hi(time: f64, delay: f64, t_b: f64) -> f64 {
+pub(crate) fn elapsed_hi(time: f64, delay: f64, t_b: f64) -> f64 {
     add_up(sub_up(t_b, time), delay)
 }
 
@@ -239,13 +239,13 @@ fn elapsed_hi(time: f64, delay: f64, t_b: f64) -> f64 {
 /// position; it contains the balls of every earlier elapsed time.
 ///
 /// # Soundness
-/// Kani contract ([`covers_vel_reach`], for the inputs [`radius_inputs`] admits, non-negative):
+/// Kani contract ([`covers_vel_reach`], for the inputs [`radius_input`] admits, non-negative):
 /// `≥ e_p + v_max·T_hi` exactly. Proven on this function by `c1_vel_radius_contract`
 /// (`proof_for_contract`, 8-bit significands); twin `c1_radius_contracts_hold`.
-#[cfg_attr(kani, kani::requires(radius_inputs(&[e_p, v_max, t_hi]) && e_p >= 0.0 && v_max >= 0.0 && t_hi >= 0.0))]
+#[cfg_attr(kani, kani::requires(radius_input(e_p) && radius_input(v_max) && radius_input(t_hi) && e_p >= 0.0 && v_max >= 0.0 && t_hi >= 0.0))]
 #[cfg_attr(kani, kani::ensures(|r: &f64| covers_vel_reach(e_p, v_max, t_hi, *r)))]
 #[inline(always)]
-fn vel_radius(e_p: f64, v_max: f64, t_hi: f64) -> f64 {
+pub(crate) fn vel_radius(e_p: f64, v_max: f64, t_hi: f64) -> f64 {
     add_up(e_p, mul_up(v_max, t_hi))
 }
 
@@ -270,10 +270,10 @@ fn acc_ball_at(e_p: f64, e_v: f64, a_max: f64, p: &Point3<f64>, v: &Vector3<f64>
 /// of `thickness` (module doc).
 ///
 /// # Soundness
-/// Kani contract ([`covers_part`], for the inputs [`radius_inputs`] admits, non-negative):
+/// Kani contract ([`covers_part`], for the inputs [`radius_input`] admits, non-negative):
 /// `≥ max(r1, r2) + thickness/2` exactly. Proven on this function by `c1_part_radius_contract`
 /// (`proof_for_contract`, 8-bit significands); twin `c1_radius_contracts_hold`.
-#[cfg_attr(kani, kani::requires(radius_inputs(&[r1, r2, thickness]) && r1 >= 0.0 && r2 >= 0.0 && thickness >= 0.0))]
+#[cfg_attr(kani, kani::requires(radius_input(r1) && radius_input(r2) && radius_input(thickness) && r1 >= 0.0 && r2 >= 0.0 && thickness >= 0.0))]
 #[cfg_attr(kani, kani::ensures(|r: &f64| covers_part(r1, r2, thickness, *r)))]
 #[inline(always)]
 fn part_radius(r1: f64, r2: f64, thickness: f64) -> f64 {
@@ -300,10 +300,12 @@ fn extremity_radius(e_p: f64, v_max: f64, length: f64, thickness: f64, t: f64) -
 // predicate that holds proves the real-number claim; public so that the proofs, their twins and
 // any caller state the same claim.
 
-/// The inputs the contracts above admit: finite, of magnitude at most 1e100 (no sum or product
-/// of them overflows).
-pub fn radius_inputs(xs: &[f64]) -> bool {
-    xs.iter().all(|x| x.abs() <= 1e100)
+/// An input the contracts above admit: finite, of magnitude at most 1e100 (no sum or product
+/// of such inputs overflows). One value, no loop: a precondition is evaluated wherever its
+/// function is called under Kani, and a loop in it would need unwinding in every harness that
+/// reaches the function (an `.all()` over three values failed `c1_vel_reach`'s bound of 2).
+pub fn radius_input(x: f64) -> bool {
+    x.abs() <= 1e100
 }
 
 /// Contract of `vel_radius`: `r ≥ e_p + v·t` exactly (`r ≥ ⌈e_p + ⌈v·t⌉⌉`).

@@ -26,8 +26,9 @@
 //! represent a superset of the real set.
 
 use crate::error::ReachError;
+use crate::human::{elapsed_hi, elapsed_lo, vel_radius};
 use crate::interval::Interval;
-use crate::rounding::{add_down, add_up, mul_down, mul_up, norm3_up, sub_down, sub_up};
+use crate::rounding::{add_up, mul_down, mul_up, norm3_up, sub_up};
 use crate::zonotope::Zonotope3;
 use pacs_models::object::{MAX_ACC_GENERATORS, MAX_SHAPE_GENERATORS, ObjectModel};
 use pacs_models::shape::Capsule;
@@ -135,7 +136,10 @@ pub(crate) fn curve_enclosure(
 
 /// The elapsed times `(τ_a, τ_b)` since the measured state (`time − delay`) of the query
 /// `[t_a, t_b]`: `t_a − time + delay` rounded down and clamped at 0 (the measured state at the
-/// earliest), `t_b − time + delay` rounded up and at least `τ_a`. (`occupancy` evaluates its
+/// earliest), `t_b − time + delay` rounded up and at least `τ_a`. The two roundings are the
+/// human occupancy's (`human::elapsed_lo`, `human::elapsed_hi`: one implementation, whose Kani
+/// contracts — `≤ t_a − time + delay` and `≥ t_b − time + delay` exactly — are proven on them by
+/// `c1_elapsed_lo_contract` and `c1_elapsed_hi_contract`); the clamps only widen the range. (`occupancy` evaluates its
 /// precondition `t_a ≥ time − delay` in floating point: a query it accepts may lie, exactly,
 /// up to an ulp before the measured state; `τ_b` is then kept at least `τ_a = 0`, so the
 /// enclosure covers the measured state and not `τ_m < 0`: the case the twin of
@@ -144,25 +148,57 @@ pub(crate) fn curve_enclosure(
 /// them without an `ObjectModel`.
 #[inline(always)]
 pub(crate) fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
-    let tau_a = add_down(sub_down(t_a, time), delay).max(0.0);
-    let tau_b = add_up(sub_up(t_b, time), delay).max(tau_a);
+    let tau_a = elapsed_lo(time, delay, t_a).max(0.0);
+    let tau_b = elapsed_hi(time, delay, t_b).max(tau_a);
     (tau_a, tau_b)
 }
 
 /// The ball term `e_p + τ_b e_v + a τ_b²/2 + r` (module docs), rounded up: position error,
-/// velocity error, acceleration ball and shape radius at `τ_b` (each grows with `τ`).
+/// velocity error, acceleration ball and shape radius at `τ_b` (each grows with `τ`). The
+/// first two terms are the human occupancy's travel radius (`human::vel_radius`).
+///
+/// # Soundness
+/// Claim ([`covers_ball`]): finite and `≥ e_p + τ_b e_v + a τ_b²/2 + r` exactly, for
+/// non-negative inputs of magnitude ≤ 10¹⁰⁰ (property test `j1_radius_claims_hold`; Kani checks
+/// it at constant model numbers in `j1_object_time_and_balls`). Not a Kani contract: its proof
+/// over 8-bit symbolic floats timed out at 300 s (proofs/README.md).
 #[inline(always)]
 pub(crate) fn ball_radius(e_p: f64, e_v: f64, a: f64, r: f64, tau_b: f64) -> f64 {
     add_up(
-        add_up(e_p, mul_up(tau_b, e_v)),
+        vel_radius(e_p, e_v, tau_b),
         add_up(mul_up(mul_up(mul_up(tau_b, tau_b), 0.5), a), r),
     )
 }
 
-/// The speed bound's radius `e_p + v_max τ_b + r` around the measured position, rounded up.
+/// The speed bound's radius `e_p + v_max τ_b + r` around the measured position, rounded up:
+/// the human occupancy's travel radius (`human::vel_radius`) plus the shape radius.
+///
+/// # Soundness
+/// Claim ([`covers_speed`]): finite and `≥ e_p + v_max τ_b + r` exactly, for non-negative
+/// inputs of magnitude ≤ 10¹⁰⁰ (property test `j1_radius_claims_hold`; Kani checks it at
+/// constant model numbers in `j1_object_time_and_balls`). Its travel term is `vel_radius`,
+/// whose contract is proven (`c1_vel_radius_contract`); a contract of this function timed out
+/// at 300 s (8-bit symbolic floats, proofs/README.md).
 #[inline(always)]
 pub(crate) fn speed_radius(e_p: f64, v_max: f64, r: f64, tau_b: f64) -> f64 {
-    add_up(add_up(e_p, mul_up(v_max, tau_b)), r)
+    add_up(vel_radius(e_p, v_max, tau_b), r)
+}
+
+/// The claim of [`ball_radius`]: `out` finite and `≥ e_p + τ e_v + a τ²/2 + r` exactly
+/// (`out ≥ ⌈⌈e_p + ⌈τ·e_v⌉⌉ + ⌈⌈⌈⌈τ·τ⌉·½⌉·a⌉ + r⌉⌉`, each step the exact upward rounding of
+/// [`crate::exact`], so each bounds the real value of its terms).
+pub fn covers_ball(e_p: f64, e_v: f64, a: f64, r: f64, tau: f64, out: f64) -> bool {
+    use crate::exact::{ceil_prod, ceil_sum};
+    let travel = ceil_sum(e_p, ceil_prod(tau, e_v));
+    let acc = ceil_sum(ceil_prod(ceil_prod(ceil_prod(tau, tau), 0.5), a), r);
+    out.is_finite() && out >= ceil_sum(travel, acc)
+}
+
+/// The claim of [`speed_radius`]: `out` finite and `≥ e_p + v_max τ + r` exactly
+/// (`out ≥ ⌈⌈e_p + ⌈v_max·τ⌉⌉ + r⌉`).
+pub fn covers_speed(e_p: f64, v_max: f64, r: f64, tau: f64, out: f64) -> bool {
+    use crate::exact::{ceil_prod, ceil_sum};
+    out.is_finite() && out >= ceil_sum(ceil_sum(e_p, ceil_prod(v_max, tau)), r)
 }
 
 /// The occupancy of `model` over `[t_a, t_b]` (s) after `meas`.

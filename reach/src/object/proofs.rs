@@ -29,6 +29,7 @@
 #![cfg_attr(kani, allow(dead_code))]
 
 use super::*;
+use crate::rounding::{add_down, sub_down};
 use pacs_proof_kit::{Source, harness};
 
 /// `n / 2^shift` for an integer `n` in `[−max, max]` (`signed`) or `[0, max]`.
@@ -233,3 +234,40 @@ harness!(
     cases = pacs_proof_kit::DEFAULT_CASES,
     time_and_balls
 );
+
+// ---------------------------------------------------------------------------------------------
+// The claims of the radii (`ball_radius`, `speed_radius`): property tests. Their contracts'
+// proofs (`proof_for_contract` over 8-bit symbolic floats of any exponent, as the human
+// occupancy's radii) timed out at 300 s; the elapsed-time roundings are the human occupancy's,
+// proven there (`c1_elapsed_lo_contract`, `c1_elapsed_hi_contract`), and so is the travel term
+// `vel_radius` (`c1_vel_radius_contract`).
+
+/// The radii's claims over random admitted floats (0, values in [0, 2], grid times and
+/// magnitudes from 1e-300 to 1e100, subnormal results included), each radius' postcondition
+/// checked.
+#[cfg(test)]
+#[test]
+fn j1_radius_claims_hold() {
+    pacs_proof_kit::run_cases("j1_radius_claims_hold", 20_000, |s| {
+        let x = |s: &mut pacs_proof_kit::RandomSource| -> f64 {
+            let v = match s.index(4) {
+                0 => 0.0,
+                1 => s.f64_in(0.0, 2.0),
+                2 => 10f64.powi(s.index(401) as i32 - 300) * s.f64_in(1.0, 9.99),
+                _ => (s.index(512) as f64) / 256.0,
+            };
+            if v <= 1e100 { v } else { 0.0 }
+        };
+        let (e_p, e_v, a, r, tau) = (x(s), x(s), x(s), x(s), x(s));
+        let out = ball_radius(e_p, e_v, a, r, tau);
+        assert!(
+            covers_ball(e_p, e_v, a, r, tau, out),
+            "ball {e_p} {e_v} {a} {r} {tau}: {out}"
+        );
+        let out = speed_radius(e_p, e_v, r, tau);
+        assert!(
+            covers_speed(e_p, e_v, r, tau, out),
+            "speed {e_p} {e_v} {r} {tau}: {out}"
+        );
+    });
+}
