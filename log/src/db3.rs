@@ -82,6 +82,8 @@ enum Batch {
 /// The rows of one file, read by a thread (see the module docs).
 struct RowStream {
     rx: Option<Receiver<Batch>>,
+    /// Batches read, handed back to the thread for reuse (no allocation per batch).
+    back: SyncSender<Rows>,
     /// The batch being read, and its next row.
     batch: Rows,
     next: usize,
@@ -413,7 +415,13 @@ fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
 /// The thread body: stream the rows of the topics `ids` (sorted) in time order into `tx`. With
 /// `accounted_rows`, every row is read (the payloads of other topics are not) and accounted
 /// for ([`account`]); a file whose rows do not account is checked by `quick_check` at the end.
-fn read_rows(path: PathBuf, ids: Vec<i64>, accounted_rows: Option<u64>, tx: SyncSender<Batch>) {
+fn read_rows(
+    path: PathBuf,
+    ids: Vec<i64>,
+    accounted_rows: Option<u64>,
+    tx: SyncSender<Batch>,
+    back: Receiver<Rows>,
+) {
     let mut last = Location::File;
     let r = (|| -> Result<(), Db3Problem> {
         let conn = open_ro(&path)?;
@@ -439,9 +447,17 @@ fn read_rows(path: PathBuf, ids: Vec<i64>, accounted_rows: Option<u64>, tx: Sync
             table: Some("messages"),
             error,
         })?;
-        let fresh = || Rows {
-            rows: Vec::with_capacity(BATCH),
-            bytes: Vec::with_capacity(BATCH * 256),
+        // A batch the reader is done with, emptied, or a new one.
+        let fresh = || match back.try_recv() {
+            Ok(mut r) => {
+                r.rows.clear();
+                r.bytes.clear();
+                r
+            }
+            Err(_) => Rows {
+                rows: Vec::with_capacity(BATCH),
+                bytes: Vec::with_capacity(BATCH * 320),
+            },
         };
         let mut batch = fresh();
         while let Some(r) = rows.next().map_err(|error| {
@@ -690,7 +706,8 @@ impl Db3Reader {
                 let got = rows.rx.as_ref().map(Receiver::recv);
                 match got {
                     Some(Ok(Batch::Rows(b))) => {
-                        rows.batch = b;
+                        // The thread may refill the batch just read (its rows are all used).
+                        let _ = rows.back.try_send(std::mem::replace(&mut rows.batch, b));
                         rows.next = 0;
                     }
                     Some(Ok(Batch::End)) => {
@@ -719,17 +736,19 @@ impl Db3Reader {
                 continue;
             }
             let (tx, rx) = sync_channel(BATCHES_IN_FLIGHT);
+            let (back, back_rx) = sync_channel(BATCHES_IN_FLIGHT + 1);
             let path = part.path.clone();
             let accounted = part.accounted_rows;
             let thread = std::thread::Builder::new()
                 .name("pacs-db3".into())
-                .spawn(move || read_rows(path, ids, accounted, tx))
+                .spawn(move || read_rows(path, ids, accounted, tx, back_rx))
                 .map_err(|e| LogError::Io {
                     file: part.name.clone(),
                     source: e,
                 })?;
             self.rows = Some(RowStream {
                 rx: Some(rx),
+                back,
                 batch: Rows::default(),
                 next: 0,
                 thread: Some(thread),
