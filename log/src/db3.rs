@@ -64,8 +64,8 @@ struct Row {
     data: std::ops::Range<usize>,
 }
 
-/// Rows handed over at once, their payloads one after the other in `bytes` (one allocation per
-/// batch, not per row).
+/// Rows handed over at once, their payloads one after the other in `bytes` (one buffer per
+/// batch, not per row; batches read go back to the thread to be refilled).
 #[derive(Default)]
 struct Rows {
     rows: Vec<Row>,
