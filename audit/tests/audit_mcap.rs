@@ -918,6 +918,41 @@ fn fuzz_regression_huge_string_length_in_a_metadata_record() {
     assert!(e.to_string().starts_with("oom.mcap: "), "{e}");
 }
 
+#[test]
+fn fuzz_regression_an_uncompressed_chunk_cut_short_by_the_end_of_the_file() {
+    // Found by `cargo fuzz run mcap` (356 bytes): a chunk declaring 4,773 bytes in a file that
+    // ends first; `mcap` 0.26 streamed its records and underflowed its count of the chunk's
+    // remaining bytes (a panic with overflow checks, as in this debug build). The walk before
+    // the linear pass refuses a record running past the end of the file.
+    let bytes = include_bytes!("data/mcap_fuzz_chunk_past_end.mcap");
+    expect_bad(
+        bytes,
+        "truncated file: the record at offset 41 (opcode 0x06) declares 4773 bytes",
+    );
+    // A chunk whose records would run past the chunk itself.
+    let spec = Spec {
+        compression: None,
+        ..Spec::new()
+    };
+    let good = write_mcap(&spec, &header("ssm"), &short_run(good_robot, good_human));
+    let u64_at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+    let mut pos = 8;
+    while good[pos] != 0x06 {
+        pos += 9 + u64_at(&good, pos + 1) as usize;
+    }
+    let records_len_at = pos + 9 + 32;
+    let mut bad = good.clone();
+    let records = u64_at(&good, records_len_at);
+    bad[records_len_at..records_len_at + 8].copy_from_slice(&(records + 1).to_le_bytes());
+    expect_bad(
+        &bad,
+        &format!(
+            "the chunk at offset {pos} declares {} bytes of records",
+            records + 1
+        ),
+    );
+}
+
 /// Dynamic objects from MCAP: an object's positions on its configured topic
 /// (`mcap.object_topics`, `geometry_msgs/msg/PoseStamped` here) are audited like JSON Lines
 /// `object` records: a ball on the flange fails `no_contact`; read without the topic mapping the

@@ -1,11 +1,14 @@
-//! A check of uncompressed chunks before the linear pass: every record inside such a chunk ends
-//! within the chunk. The `mcap` crate (0.26.0, `sans_io/linear_reader.rs`) subtracts a record's
-//! length from the chunk's remaining bytes without checking it: a record running past the end of
-//! an uncompressed chunk underflows that count (a panic in debug builds; in release the bytes
-//! after the chunk are then parsed as records of the chunk). This walk refuses such a file first,
-//! naming the offset. It reads only the records' 9-byte headers and skips their bodies (through
-//! the buffered input), and stops at the footer or wherever the file stops making sense (the
-//! linear pass then reports that).
+//! A check of the top-level records and of uncompressed chunks before the linear pass: every
+//! record ends within the file, a chunk's records within the chunk, and every record inside an
+//! uncompressed chunk within the chunk. The `mcap` crate (0.26.0, `sans_io/linear_reader.rs`)
+//! streams a chunk's records and subtracts a record's length from the chunk's remaining bytes
+//! without checking it: a record running past the end of an uncompressed chunk underflows that
+//! count (a panic in debug builds; in release the bytes after the chunk are then parsed as
+//! records of the chunk), also when the chunk itself is cut short by the end of the file (a
+//! fuzzer's 356-byte input, `audit/tests/data/mcap_fuzz_chunk_past_end.mcap`). This walk refuses
+//! such a file first, naming the offset. It reads only the records' 9-byte headers and skips their
+//! bodies (through the buffered input), and stops at the footer or wherever the file stops making
+//! sense otherwise (the linear pass then reports that).
 
 use crate::error::{Location, LogError};
 use std::io::{Read, Seek, SeekFrom};
@@ -38,7 +41,12 @@ pub(super) fn check_chunk_records<R: Read + Seek>(
     r: &mut R,
     size: u64,
 ) -> Result<(), LogError> {
-    if r.seek(SeekFrom::Start(8)).is_err() {
+    // Not an MCAP file (the linear pass names the bad magic): nothing to walk.
+    let mut magic = [0u8; 8];
+    if r.seek(SeekFrom::Start(0)).is_err()
+        || r.read_exact(&mut magic).is_err()
+        || magic[..] != *super::MAGIC
+    {
         return Ok(());
     }
     let mut pos = 8u64;
@@ -51,8 +59,19 @@ pub(super) fn check_chunk_records<R: Read + Seek>(
             return Ok(());
         };
         let body = pos + 9;
-        if op[0] == FOOTER || len > size.saturating_sub(body) {
+        if op[0] == FOOTER {
             return Ok(());
+        }
+        let left = size.saturating_sub(body);
+        if len > left {
+            return Err(LogError::input(
+                file,
+                Location::Offset(pos),
+                format!(
+                    "truncated file: the record at offset {pos} (opcode 0x{:02x}) declares {len} bytes, the file holds {left} after its header",
+                    op[0]
+                ),
+            ));
         }
         if op[0] == CHUNK {
             // start time, end time, uncompressed size (u64 each), uncompressed crc (u32),
@@ -74,7 +93,14 @@ pub(super) fn check_chunk_records<R: Read + Seek>(
             };
             used += 8;
             if used > len || records > len - used {
-                return Ok(());
+                return Err(LogError::input(
+                    file,
+                    Location::Offset(pos),
+                    format!(
+                        "invalid MCAP: the chunk at offset {pos} declares {records} bytes of records, {} fit in its {len} bytes",
+                        len.saturating_sub(used)
+                    ),
+                ));
             }
             if compression.is_empty() {
                 let start = body + used;
