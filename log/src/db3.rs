@@ -42,6 +42,9 @@ const METADATA_LIMIT: u64 = 1 << 20;
 const BATCH: usize = 1024;
 /// Payload bytes after which a batch is handed over.
 const BATCH_BYTES: usize = 1 << 20;
+/// Payload bytes per row a new batch reserves (a 7-joint `JointState` with names and
+/// velocities is about 280 bytes).
+const BYTES_PER_ROW: usize = 320;
 /// Batches in flight between the reading thread and the reader.
 const BATCHES_IN_FLIGHT: usize = 4;
 
@@ -447,17 +450,20 @@ fn read_rows(
             table: Some("messages"),
             error,
         })?;
-        // A batch the reader is done with, emptied, or a new one.
+        // A batch the reader is done with, emptied (its payload buffer kept unless a message
+        // near `RECORD_LIMIT` grew it past twice `BATCH_BYTES`: memory stays that of the
+        // batches in flight), or a new one.
+        let new = || Rows {
+            rows: Vec::with_capacity(BATCH),
+            bytes: Vec::with_capacity(BATCH * BYTES_PER_ROW),
+        };
         let fresh = || match back.try_recv() {
-            Ok(mut r) => {
+            Ok(mut r) if r.bytes.capacity() <= 2 * BATCH_BYTES => {
                 r.rows.clear();
                 r.bytes.clear();
                 r
             }
-            Err(_) => Rows {
-                rows: Vec::with_capacity(BATCH),
-                bytes: Vec::with_capacity(BATCH * 320),
-            },
+            _ => new(),
         };
         let mut batch = fresh();
         while let Some(r) = rows.next().map_err(|error| {
@@ -736,7 +742,7 @@ impl Db3Reader {
                 continue;
             }
             let (tx, rx) = sync_channel(BATCHES_IN_FLIGHT);
-            let (back, back_rx) = sync_channel(BATCHES_IN_FLIGHT + 1);
+            let (back, back_rx) = sync_channel(BATCHES_IN_FLIGHT);
             let path = part.path.clone();
             let accounted = part.accounted_rows;
             let thread = std::thread::Builder::new()
@@ -837,7 +843,6 @@ impl Db3Reader {
     }
 }
 
-/// A payload that starts with the zstd magic is a message-compressed bag's: say so.
 /// `e` as an error of the file `name` (a part of the bag).
 fn in_file(e: LogError, name: &str) -> LogError {
     match e {
@@ -855,6 +860,7 @@ fn in_file(e: LogError, name: &str) -> LogError {
     }
 }
 
+/// A payload that starts with the zstd magic is a message-compressed bag's: say so.
 fn hint_compressed(e: LogError, data: &[u8]) -> LogError {
     const ZSTD: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
     match e {

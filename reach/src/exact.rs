@@ -315,13 +315,8 @@ mod tests {
     /// integers), and at the exact value where that is a float.
     #[test]
     fn the_directed_roundings_are_exact() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
+        let mut src = pacs_proof_kit::RandomSource::new("the_directed_roundings_are_exact", 0);
+        let mut next = || src.next_u64();
         let two60 = f64::from_bits((1023 + 60) << 52);
         let scaled = |v: f64, k: f64| -> i128 { (v * k) as i128 };
         for case in 0..200_000 {

@@ -301,11 +301,27 @@ fn extremity_radius(e_p: f64, v_max: f64, length: f64, thickness: f64, t: f64) -
 // any caller state the same claim.
 
 /// An input the contracts above admit: finite, of magnitude at most 1e100 (no sum or product
-/// of such inputs overflows). One value, no loop: a precondition is evaluated wherever its
-/// function is called under Kani, and a loop in it would need unwinding in every harness that
-/// reaches the function (an `.all()` over three values failed `c1_vel_reach`'s bound of 2).
+/// of such inputs overflows). One value, no loop: Kani evaluates a precondition wherever its
+/// function is called, so a loop in it would need an unwinding bound in every harness that
+/// reaches the function.
 pub fn radius_input(x: f64) -> bool {
     x.abs() <= 1e100
+}
+
+/// A random input [`radius_input`] admits, for the twins of the contracts (here and in the
+/// object occupancy): 0, a value in [0, 2], a magnitude from 1e-300 to 1e100 (subnormal
+/// results included) or a multiple of 1/256 below 2; negated at random when `signed`.
+#[cfg(test)]
+pub(crate) fn draw_radius_input(s: &mut pacs_proof_kit::RandomSource, signed: bool) -> f64 {
+    use pacs_proof_kit::Source;
+    let v = match s.index(4) {
+        0 => 0.0,
+        1 => s.f64_in(0.0, 2.0),
+        2 => 10f64.powi(s.index(401) as i32 - 300) * s.f64_in(1.0, 9.99),
+        _ => (s.index(512) as f64) / 256.0,
+    };
+    let v = if signed && s.bool() { -v } else { v };
+    if radius_input(v) { v } else { 0.0 }
 }
 
 /// Contract of `vel_radius`: `r ≥ e_p + v·t` exactly (`r ≥ ⌈e_p + ⌈v·t⌉⌉`).

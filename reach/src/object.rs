@@ -138,14 +138,14 @@ pub(crate) fn curve_enclosure(
 /// `[t_a, t_b]`: `t_a − time + delay` rounded down and clamped at 0 (the measured state at the
 /// earliest), `t_b − time + delay` rounded up and at least `τ_a`. The two roundings are the
 /// human occupancy's (`human::elapsed_lo`, `human::elapsed_hi`: one implementation, whose Kani
-/// contracts — `≤ t_a − time + delay` and `≥ t_b − time + delay` exactly — are proven on them by
-/// `c1_elapsed_lo_contract` and `c1_elapsed_hi_contract`); the clamps only widen the range. (`occupancy` evaluates its
-/// precondition `t_a ≥ time − delay` in floating point: a query it accepts may lie, exactly,
-/// up to an ulp before the measured state; `τ_b` is then kept at least `τ_a = 0`, so the
-/// enclosure covers the measured state and not `τ_m < 0`: the case the twin of
-/// `j1_object_time_and_balls` found.) The scalar steps of [`occupancy`] (this one and
-/// the two radii below) are free functions of floats so that the proofs beside this module check
-/// them without an `ObjectModel`.
+/// contracts — `≤ t_a − time + delay` and `≥ t_b − time + delay` exactly — are proven on them
+/// by `c1_elapsed_lo_contract` and `c1_elapsed_hi_contract`); the clamps only widen the range.
+/// (`occupancy` evaluates its precondition `t_a ≥ time − delay` in floating point: a query it
+/// accepts may lie, exactly, up to an ulp before the measured state; `τ_b` is then kept at
+/// least `τ_a = 0`, so the enclosure covers the measured state and not `τ_m < 0`, a case the
+/// twin of `j1_object_time_and_balls` draws.) The scalar steps of [`occupancy`] (this one and
+/// the two radii below) are free functions of floats so that the proofs beside this module
+/// check them without an `ObjectModel`.
 #[inline(always)]
 pub(crate) fn elapsed_range(time: f64, delay: f64, t_a: f64, t_b: f64) -> (f64, f64) {
     let tau_a = elapsed_lo(time, delay, t_a).max(0.0);

@@ -337,24 +337,13 @@ fn c1_elapsed_hi_contract() {
     let _ = elapsed_hi(short_in(-1e6, 1e6), short_in(0.0, 1.0), short_in(-1e6, 1e6));
 }
 
-/// The twin of the contract proofs: random admitted floats (0, grid times, values in
-/// [0, 2] and magnitudes from 1e-300 to 1e100, subnormal results included), each function's
-/// postcondition checked.
+/// The twin of the contract proofs: random admitted floats (`draw_radius_input`), each
+/// function's postcondition checked.
 #[cfg(test)]
 #[test]
 fn c1_radius_contracts_hold() {
-    use pacs_proof_kit::Source;
     pacs_proof_kit::run_cases("c1_radius_contracts_hold", 20_000, |s| {
-        let x = |s: &mut pacs_proof_kit::RandomSource, signed: bool| -> f64 {
-            let v = match s.index(4) {
-                0 => 0.0,
-                1 => s.f64_in(0.0, 2.0),
-                2 => 10f64.powi(s.index(401) as i32 - 300) * s.f64_in(1.0, 9.99),
-                _ => (s.index(512) as f64) / 256.0,
-            };
-            let v = if signed && s.bool() { -v } else { v };
-            if v.abs() <= 1e100 { v } else { 0.0 }
-        };
+        let x = super::draw_radius_input;
         let (e_p, v, t) = (x(s, false), x(s, false), x(s, false));
         assert!(
             covers_vel_reach(e_p, v, t, vel_radius(e_p, v, t)),
