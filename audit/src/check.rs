@@ -127,8 +127,9 @@ pub struct Auditor {
     hreach: HumanReach,
     n: usize,
     /// Per joint, the position band a sample must lie in (rad): the limits widened by the
-    /// relative `limit_slack` (at least `limit_slack` rad), computed once.
-    q_band: [(f64, f64); MAX_DOF],
+    /// relative `limit_slack` (at least `limit_slack` rad), computed once; lower and upper
+    /// ends, unbounded beyond the robot's joints (so that the test runs over every lane).
+    q_band: ([f64; MAX_DOF], [f64; MAX_DOF]),
     /// The joints' rate limits as the span enclosures read them, prepared once.
     span_limits: SpanLimits,
     parts: usize,
@@ -157,7 +158,6 @@ pub struct Auditor {
     nom_energy: Option<(f64, [f64; MAX_DOF])>,
     hits: Vec<SpanHit>,
     // State.
-    prev: Option<Sample>,
     /// Buffered samples whose spans all use the human measurement `block_human`.
     block: Vec<Sample>,
     /// The enclosures of the block's spans (a buffer of `flush_block`).
@@ -258,15 +258,13 @@ impl Auditor {
             ObjectRule::new(&models.robot, &rreach, cfg.rest_speed).map_err(AuditError::Rule)?;
         let objects = object_tracks(&models);
         let slots = parts + objects.len();
-        let mut q_band = [(0.0, 0.0); MAX_DOF];
+        let mut q_band = ([f64::NEG_INFINITY; MAX_DOF], [f64::INFINITY; MAX_DOF]);
         {
             let (lim, slack) = (models.robot.limits(), cfg.limit_slack);
-            for (j, band) in q_band.iter_mut().enumerate().take(n) {
+            for j in 0..n {
                 let (lo, hi) = (lim.q_min()[j], lim.q_max()[j]);
-                *band = (
-                    lo - slack * lo.abs().max(1.0),
-                    hi + slack * hi.abs().max(1.0),
-                );
+                q_band.0[j] = lo - slack * lo.abs().max(1.0);
+                q_band.1[j] = hi + slack * hi.abs().max(1.0);
             }
         }
         Ok(Self {
@@ -296,7 +294,6 @@ impl Auditor {
             nom_key_valid: false,
             nom_energy: None,
             hits: Vec::with_capacity(slots * links),
-            prev: None,
             block: Vec::with_capacity(BLOCK_SPANS + 1),
             block_encl: Vec::with_capacity(BLOCK_SPANS),
             dense_violations: false,
@@ -593,19 +590,7 @@ impl Auditor {
                 value: t,
             });
         }
-        let mut s = Sample {
-            t,
-            q: [0.0; MAX_DOF],
-            dq: [0.0; MAX_DOF],
-            ddq: [0.0; MAX_DOF],
-            has_dq: false,
-            has_ddq: false,
-        };
-        s.q[..n].copy_from_slice(q);
-        for (field, what, src, dst, flag) in [
-            ("dq", "velocities", dq, &mut s.dq, &mut s.has_dq),
-            ("ddq", "accelerations", ddq, &mut s.ddq, &mut s.has_ddq),
-        ] {
+        for (field, what, src) in [("dq", "velocities", dq), ("ddq", "accelerations", ddq)] {
             let Some(v) = src else { continue };
             if v.len() != n {
                 return Err(AuditError::JointCount {
@@ -622,16 +607,14 @@ impl Auditor {
                     value: *x,
                 });
             }
-            dst[..n].copy_from_slice(v);
-            *flag = true;
         }
-        if s.has_ddq && !s.has_dq {
+        if ddq.is_some() && dq.is_none() {
             return Err(AuditError::AccelerationWithoutVelocity);
         }
         // The human records before the previous sample are in use for the span that this sample
         // closes; those since the previous sample wait for the span this sample opens.
         self.awaiting_human_t_meas = self.unused_human_t_meas.take();
-        if self.prev.is_none() {
+        if self.samples == 0 {
             self.t_first = t;
             self.series.t0 = t;
         }
@@ -642,7 +625,25 @@ impl Auditor {
             self.flush_block();
             self.block_human = self.span_human;
         }
-        self.block.push(s);
+        // The sample is written in place at the block's end (≈ 0.4 kB; entries beyond the
+        // robot's joints are 0, as `Sample` promises).
+        self.block.push(Sample {
+            t,
+            q: [0.0; MAX_DOF],
+            dq: [0.0; MAX_DOF],
+            ddq: [0.0; MAX_DOF],
+            has_dq: dq.is_some(),
+            has_ddq: ddq.is_some(),
+        });
+        if let Some(s) = self.block.last_mut() {
+            s.q[..n].copy_from_slice(q);
+            if let Some(v) = dq {
+                s.dq[..n].copy_from_slice(v);
+            }
+            if let Some(v) = ddq {
+                s.ddq[..n].copy_from_slice(v);
+            }
+        }
         if self.block.len() > BLOCK_SPANS {
             self.flush_block();
             self.block_human = self.latest_human;
@@ -652,7 +653,6 @@ impl Auditor {
         if self.objects.iter().any(|o| o.span != o.latest) {
             self.flush_block();
         }
-        self.prev = Some(s);
         self.span_human = self.latest_human;
         for o in &mut self.objects {
             o.span = o.latest;

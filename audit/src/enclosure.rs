@@ -222,8 +222,8 @@ pub fn span_boxes_into(
         q: JointBox::empty(),
         dq: JointBox::empty(),
     });
-    let finite = sb.q.assign(&b.q_lo[..n], &b.q_hi[..n]).is_ok()
-        && sb.dq.assign(&b.dq_lo[..n], &b.dq_hi[..n]).is_ok();
+    let finite = sb.q.assign_lanes(&mut b.q_lo, &mut b.q_hi, n)
+        && sb.dq.assign_lanes(&mut b.dq_lo, &mut b.dq_hi, n);
     if !finite {
         out.boxes = None;
     }
@@ -312,11 +312,23 @@ fn span_bounds(lim: &SpanLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut
     };
     let both_dq = s0.has_dq && s1.has_dq;
     let both_ddq = both_dq && s0.has_ddq && s1.has_ddq;
-    match (both_dq, both_ddq) {
-        (false, _) => joint_bounds::<false, false>(lim, s0, s1, &span, out),
-        (true, false) => joint_bounds::<true, false>(lim, s0, s1, &span, out),
-        (true, true) => joint_bounds::<true, true>(lim, s0, s1, &span, out),
+    // The intersection boxes and the consistency tests first; the hull boxes (the same
+    // expressions, kept instead of intersected) only for a span that fails them.
+    // A duration without a finite bound: no joint's enclosure holds.
+    let ok = dt_hi.is_finite()
+        && match (both_dq, both_ddq) {
+            (false, _) => joint_bounds::<false, false, false>(lim, s0, s1, &span, out),
+            (true, false) => joint_bounds::<true, false, false>(lim, s0, s1, &span, out),
+            (true, true) => joint_bounds::<true, true, false>(lim, s0, s1, &span, out),
+        };
+    if !ok {
+        match (both_dq, both_ddq) {
+            (false, _) => joint_bounds::<false, false, true>(lim, s0, s1, &span, out),
+            (true, false) => joint_bounds::<true, false, true>(lim, s0, s1, &span, out),
+            (true, true) => joint_bounds::<true, true, true>(lim, s0, s1, &span, out),
+        };
     }
+    ok
 }
 
 /// The span's duration and the limit tests' tolerance, shared by every joint.
@@ -333,12 +345,15 @@ struct Span {
 }
 
 /// [`span_bounds`] for every joint, with velocities logged at both ends (`DQ`) and
-/// accelerations too (`DDQ`, only with `DQ`). Writes both the intersection boxes (consistent
-/// span) and, if any joint is inconsistent, the hull boxes; returns whether every joint is
-/// consistent. Lanes beyond the robot's joints (up to a multiple of [`LANES`]) are computed
-/// alike and ignored: their flags do not count, their bounds are never read.
+/// accelerations too (`DDQ`, only with `DQ`). Writes the intersection boxes (consistent span),
+/// or with `HULL` the hull boxes (every candidate enclosure kept, for a span that is not);
+/// returns whether every joint is consistent (the same tests either way). Lanes beyond the
+/// robot's joints (up to a multiple of [`LANES`]) are computed alike and ignored: their flags do
+/// not count, their bounds are never read. One body for both, so that the hull is the union of
+/// exactly the enclosures intersected; `HULL` is a constant, so the intersection's instance
+/// computes no hull.
 #[inline(always)]
-fn joint_bounds<const DQ: bool, const DDQ: bool>(
+fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
     lim: &SpanLimits,
     s0: &Sample,
     s1: &Sample,
@@ -360,8 +375,6 @@ fn joint_bounds<const DQ: bool, const DDQ: bool>(
     let (h_lo, h_hi) = (0.5 * dt_lo, 0.5 * dt_hi);
     // The mean velocity (b − a)/Δ is attained somewhere in the span (needs Δ > 0).
     let has_mean = dt_lo > 0.0;
-    // Per joint: the hull boxes (used only if some joint is inconsistent).
-    let mut hull = Bounds::zero();
     let mut bad_lane = [false; MAX_DOF];
     for j in 0..n {
         let (v, acc, jerk) = (v_max[j], a_max[j], j_max[j]);
@@ -438,27 +451,23 @@ fn joint_bounds<const DQ: bool, const DDQ: bool>(
         }
         // Comparisons with NaN are false: a NaN bound makes the joint inconsistent.
         bad_lane[j] = bad_j || !(v_lo <= v_hi && i_lo <= i_hi);
-        (out.q_lo[j], out.q_hi[j]) = (i_lo, i_hi);
-        (out.dq_lo[j], out.dq_hi[j]) = (v_lo, v_hi);
-        // Contradicted: the hull of every enclosure (it covers what Δq implies), no clipping
-        // to the limits; the velocity limits where no candidate applies.
-        (hull.q_lo[j], hull.q_hi[j]) = (hp_lo, hp_hi);
-        (hull.dq_lo[j], hull.dq_hi[j]) = if hv_lo <= hv_hi {
-            (hv_lo, hv_hi)
+        if HULL {
+            // Contradicted: the hull of every enclosure (it covers what Δq implies), no
+            // clipping to the limits; the velocity limits where no candidate applies.
+            (out.q_lo[j], out.q_hi[j]) = (hp_lo, hp_hi);
+            (out.dq_lo[j], out.dq_hi[j]) = if hv_lo <= hv_hi {
+                (hv_lo, hv_hi)
+            } else {
+                (-v, v)
+            };
         } else {
-            (-v, v)
-        };
+            (out.q_lo[j], out.q_hi[j]) = (i_lo, i_hi);
+            (out.dq_lo[j], out.dq_hi[j]) = (v_lo, v_hi);
+        }
     }
-    // A duration without a finite bound: no joint's enclosure holds.
-    let mut bad = !dt_hi.is_finite();
+    let mut bad = false;
     for &b in &bad_lane[..lim.n] {
         bad |= b;
-    }
-    if bad {
-        for j in 0..n {
-            (out.q_lo[j], out.q_hi[j]) = (hull.q_lo[j], hull.q_hi[j]);
-            (out.dq_lo[j], out.dq_hi[j]) = (hull.dq_lo[j], hull.dq_hi[j]);
-        }
     }
     !bad
 }

@@ -89,8 +89,12 @@ impl<'a> CdrReader<'a> {
         self.pos + 4
     }
 
+    /// `n` bytes after the padding to a multiple of `align` (1, 2, 4 or 8: a power of two, so
+    /// that the padding is `(−pos) mod align`, a mask rather than a division).
+    #[inline]
     fn take(&mut self, field: &'static str, n: usize, align: usize) -> Result<&'a [u8], CdrError> {
-        let pad = (align - self.pos % align) % align;
+        debug_assert!(align.is_power_of_two());
+        let pad = self.pos.wrapping_neg() & (align - 1);
         let need = pad as u64 + n as u64;
         if need > self.remaining() as u64 {
             return Err(CdrError::Truncated {
@@ -105,6 +109,7 @@ impl<'a> CdrReader<'a> {
         Ok(&self.body[start..start + n])
     }
 
+    #[inline]
     fn array<const N: usize>(&mut self, field: &'static str) -> Result<[u8; N], CdrError> {
         let s = self.take(field, N, N)?;
         let mut a = [0u8; N];
@@ -190,14 +195,16 @@ impl<'a> CdrReader<'a> {
         }
         // The 8-byte alignment padding may make the elements not fit even though `8n` bytes remain.
         let bytes = self.take(field, n * 8, 8)?;
-        out.reserve(n);
-        for c in bytes.chunks_exact(8) {
+        // One loop per byte order, each an exact-size extend (no capacity test per element).
+        let word = |c: &[u8]| {
             let mut a = [0u8; 8];
             a.copy_from_slice(c);
-            if !self.little {
-                a.reverse();
-            }
-            out.push(f64::from_le_bytes(a));
+            a
+        };
+        if self.little {
+            out.extend(bytes.chunks_exact(8).map(|c| f64::from_le_bytes(word(c))));
+        } else {
+            out.extend(bytes.chunks_exact(8).map(|c| f64::from_be_bytes(word(c))));
         }
         Ok(())
     }

@@ -35,7 +35,10 @@ impl Auditor {
     /// which starts no span): the last sample's instant is checked with it (a zero-length span),
     /// so a contact it shows at the end of the log is a violation.
     pub(super) fn check_final_instant(&mut self, inconclusive: &mut Option<InconclusiveSpan>) {
-        let Some(last) = self.prev else { return };
+        // The block always ends with the last sample pushed (`flush_block` keeps it).
+        let Some(&last) = self.block.last() else {
+            return;
+        };
         let delay = self.human.delay();
         if let Some(tm) = self.unused_human_t_meas
             && tm - delay <= last.t

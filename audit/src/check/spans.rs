@@ -79,11 +79,15 @@ impl Auditor {
         // one moving faster than its limits: the span is inconsistent (`exceeds_limits`; it is
         // still checked with its boxes, and can never pass). The same relative slack as for
         // the other limits.
+        // Over every lane, without early exit (the band is unbounded beyond the joints): four
+        // joints per vector comparison.
+        let (lo, hi) = &self.q_band;
         let within = |s: &Sample| {
-            (0..self.n).all(|j| {
-                let (lo, hi) = self.q_band[j];
-                s.q[j] >= lo && s.q[j] <= hi
-            })
+            let mut ok = true;
+            for j in 0..MAX_DOF {
+                ok &= s.q[j] >= lo[j] && s.q[j] <= hi[j];
+            }
+            ok
         };
         if !(within(s0) && within(s1)) {
             e.consistent = false;
@@ -110,9 +114,8 @@ impl Auditor {
             self.check_spans(&block, &encl, 0, m - 1, slot);
             self.block = block;
             self.block_encl = encl;
-            let last = self.block[m - 1];
-            self.block.clear();
-            self.block.push(last);
+            // The last sample starts the next block.
+            self.block.drain(..m - 1);
         }
     }
 

@@ -130,7 +130,7 @@ fn two_joint_box<S: Source>(s: &mut S) -> Option<JointBox> {
 /// violation possible on the hull" implies it for each span only if every joint state of either
 /// box lies in the hull. Any two boxes of two joints (the loop is per joint), any state of
 /// either. Catches mutant `x28_joint_box_hull_keeps_first` (the hull keeps the first box's lower
-/// ends).
+/// ends). The hull runs over all `MAX_DOF` lanes when the counts agree (unwind 17).
 fn block_hull<S: Source>(s: &mut S) {
     let (Some(a), Some(b)) = (two_joint_box(s), two_joint_box(s)) else {
         return;
@@ -148,7 +148,7 @@ fn block_hull<S: Source>(s: &mut S) {
 }
 harness!(
     h1_block_hull_contains,
-    unwind = 3,
+    unwind = 17,
     cases = crate::DEFAULT_CASES,
     block_hull
 );
