@@ -582,6 +582,77 @@ mod tests {
     /// Names repeated from the message before are taken without decoding them again; names
     /// that change, the same name bytes at another place (another frame id's length) or in the
     /// other byte order, and a message after one whose names failed, are decoded again.
+    /// A big-endian `JointState` (encapsulation `00 00`) decodes to the values of the same
+    /// message little-endian: the byte order of every field, and the padding before the
+    /// `float64` sequences (1 to 7 bytes, with frame ids of every length mod 8).
+    #[test]
+    fn a_big_endian_joint_state_reads_as_the_little_endian_one() {
+        fn be(frame: &str, names: &[&str], pos: &[f64], vel: &[f64]) -> Vec<u8> {
+            let mut body: Vec<u8> = Vec::new();
+            let align = |b: &mut Vec<u8>, k: usize| {
+                while b.len() % k != 0 {
+                    b.push(0);
+                }
+            };
+            let u32_ = |b: &mut Vec<u8>, v: u32| {
+                align(b, 4);
+                b.extend_from_slice(&v.to_be_bytes());
+            };
+            let string = |b: &mut Vec<u8>, t: &str| {
+                u32_(b, t.len() as u32 + 1);
+                b.extend_from_slice(t.as_bytes());
+                b.push(0);
+            };
+            u32_(&mut body, 7);
+            u32_(&mut body, 250_000_000);
+            string(&mut body, frame);
+            u32_(&mut body, names.len() as u32);
+            for n in names {
+                string(&mut body, n);
+            }
+            for seq in [pos, vel, &[][..]] {
+                u32_(&mut body, seq.len() as u32);
+                for x in seq {
+                    align(&mut body, 8);
+                    body.extend_from_slice(&x.to_be_bytes());
+                }
+            }
+            let mut out = vec![0, 0, 0, 0];
+            out.extend_from_slice(&body);
+            out
+        }
+        let names = ["j1", "joint_2", "j3"];
+        let (pos, vel) = ([0.5, -1.25, 3.0e-7], [1.0, -0.0, 2.5]);
+        for frame in ["", "a", "ab", "abc", "abcd", "abcde", "abcdef", "abcdefg"] {
+            let st = Stamp {
+                sec: 7,
+                nanosec: 250_000_000,
+            };
+            let mut w = CdrWriter::new();
+            w.header(st, frame).u32(3);
+            for n in names {
+                w.string(n);
+            }
+            w.f64_seq(&pos).f64_seq(&vel).f64_seq(&[]);
+            let (mut a, mut b) = (JointStateMsg::default(), JointStateMsg::default());
+            a.decode(&w.into_bytes()).unwrap();
+            b.decode(&be(frame, &names, &pos, &vel)).unwrap();
+            assert_eq!((a.stamp, &a.names), (st, &b.names), "{frame:?}");
+            assert_eq!(b.stamp, st);
+            assert_eq!(a.position, pos);
+            assert_eq!(a.velocity, vel);
+            for (x, y) in a
+                .position
+                .iter()
+                .chain(&a.velocity)
+                .zip(b.position.iter().chain(&b.velocity))
+            {
+                assert_eq!(x.to_bits(), y.to_bits(), "{frame:?}");
+            }
+            assert!(b.effort.is_empty());
+        }
+    }
+
     #[test]
     fn joint_names_are_reused_only_where_the_bytes_mean_the_same() {
         let st = Stamp { sec: 1, nanosec: 0 };
