@@ -590,7 +590,7 @@ mod tests {
         fn be(frame: &str, names: &[&str], pos: &[f64], vel: &[f64]) -> Vec<u8> {
             let mut body: Vec<u8> = Vec::new();
             let align = |b: &mut Vec<u8>, k: usize| {
-                while b.len() % k != 0 {
+                while !b.len().is_multiple_of(k) {
                     b.push(0);
                 }
             };
