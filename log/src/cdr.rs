@@ -579,9 +579,6 @@ mod tests {
         );
     }
 
-    /// Names repeated from the message before are taken without decoding them again; names
-    /// that change, the same name bytes at another place (another frame id's length) or in the
-    /// other byte order, and a message after one whose names failed, are decoded again.
     /// A big-endian `JointState` (encapsulation `00 00`) decodes to the values of the same
     /// message little-endian: the byte order of every field, and the padding before the
     /// `float64` sequences (1 to 7 bytes, with frame ids of every length mod 8).
@@ -653,6 +650,9 @@ mod tests {
         }
     }
 
+    /// Names repeated from the message before are taken without decoding them again; names
+    /// that change, the same name bytes at another place (another frame id's length) or in the
+    /// other byte order, and a message after one whose names failed, are decoded again.
     #[test]
     fn joint_names_are_reused_only_where_the_bytes_mean_the_same() {
         let st = Stamp { sec: 1, nanosec: 0 };

@@ -452,13 +452,14 @@ fn read_rows(
         })?;
         // A batch the reader is done with, emptied (its payload buffer kept unless a message
         // near `RECORD_LIMIT` grew it past twice `BATCH_BYTES`: memory stays that of the
-        // batches in flight), or a new one.
+        // batches in flight; the reader's empty placeholder, never allocated, is not kept), or
+        // a new one.
         let new = || Rows {
             rows: Vec::with_capacity(BATCH),
             bytes: Vec::with_capacity(BATCH * BYTES_PER_ROW),
         };
         let fresh = || match back.try_recv() {
-            Ok(mut r) if r.bytes.capacity() <= 2 * BATCH_BYTES => {
+            Ok(mut r) if r.rows.capacity() >= BATCH && r.bytes.capacity() <= 2 * BATCH_BYTES => {
                 r.rows.clear();
                 r.bytes.clear();
                 r
