@@ -125,6 +125,65 @@ fn every_number_literal_agrees_wherever_it_stands() {
     assert!(taken > 60, "{taken}");
 }
 
+/// The scanner reads digits a word of eight bytes at a time (converted or, in skipped fields,
+/// only checked) and skips whitespace with a one-byte test first: every run length (0–24
+/// digits, 0–20 string bytes) at every offset of the line (0–8 spaces in front) with every kind
+/// of byte after the run, so that each byte of the run and the byte after it fall on each
+/// position of a word and past the last whole word of the line.
+#[test]
+fn digit_runs_and_strings_agree_at_every_word_offset() {
+    let mut taken = 0;
+    let mut lines = 0;
+    for pad in 0..=8 {
+        let sp = " ".repeat(pad);
+        for len in 0..=24 {
+            let run: String = (0..len).map(|k| char::from(b'1' + (k % 9) as u8)).collect();
+            for (int, frac, tail) in [
+                (run.as_str(), "", ""),
+                ("0", run.as_str(), ""),
+                (run.as_str(), run.as_str(), ""),
+                (run.as_str(), "5", "e-3"),
+                ("7", run.as_str(), "E+12"),
+                ("-0", run.as_str(), ""),
+            ] {
+                let n = if frac.is_empty() {
+                    format!("{int}{tail}")
+                } else {
+                    format!("{int}.{frac}{tail}")
+                };
+                for after in ["", " ", "x", "é", "/"] {
+                    for line in [
+                        format!("{sp}{{\"type\":\"robot\",\"t\":{n}{after},\"q\":[{n},{n}{after}]}}\n"),
+                        format!("{{\"type\":\"shield\",\"t\":0,\"skip\":[{sp}{n}{after}]}}{sp}\n"),
+                        format!("{{\"t\":0,\"type\":\"robot\",\"q\":[{sp}{n}]{after}}}"),
+                    ] {
+                        assert!(fast_path_agrees(&line), "{line:?}");
+                        taken += fast_path_takes(&line) as usize;
+                        lines += 1;
+                    }
+                }
+            }
+        }
+        for len in 0..=20 {
+            let body: String = (0..len).map(|k| char::from(b'a' + (k % 26) as u8)).collect();
+            for stop in ["", "\\\"", "\\n", "\\u0041", "\u{1}", "\t", "\u{7f}", "é", "\u{1f}", " "] {
+                for line in [
+                    format!("{sp}{{\"type\":\"event\",\"t\":1,\"name\":\"{body}{stop}{body}\"}}\n"),
+                    format!("{{\"type\":\"shield\",\"{sp}{body}{stop}\":\"{body}{stop}\",\"t\":2}}"),
+                    format!("{{\"type\":\"human\",\"t\":0,\"id\":\"{body}{stop}\"}}"),
+                ] {
+                    assert!(fast_path_agrees(&line), "{line:?}");
+                    taken += fast_path_takes(&line) as usize;
+                    lines += 1;
+                }
+            }
+        }
+    }
+    // Most of the lines are JSON the scanner takes (numbers of at most 19 digits and plain
+    // strings): the word-at-a-time paths are exercised, not only serde_json's.
+    assert!(taken * 3 > lines, "{taken} of {lines}");
+}
+
 #[test]
 fn random_edits_of_records_agree() {
     let alphabet: &[u8] = b"{}[],:.-+eE0123456789 \t\r\n\\\"uxntf/\x01";
