@@ -58,11 +58,21 @@ pub(super) fn human_pair_breaks(
 ) -> bool {
     let (lo, hi) = order(a.time(), b.time());
     let e_pos = model.measurement_error_pos();
-    a.positions()
-        .iter()
-        .zip(b.positions())
-        .zip(model.v_max())
-        .any(|((p, q), &v)| keypoint_breaks([p.x, p.y, p.z], [q.x, q.y, q.z], v, lo, hi, e_pos))
+    let pairs = || {
+        a.positions()
+            .iter()
+            .zip(b.positions())
+            .zip(model.v_max())
+            .map(|((p, q), &v)| ([p.x, p.y, p.z], [q.x, q.y, q.z], v))
+    };
+    // Most pairs are accepted by every keypoint's plain-float test: all of them are evaluated
+    // without early exit (no branch per keypoint); only a pair one of them does not accept is
+    // decided keypoint by keypoint.
+    let mut all_within = true;
+    for (p, q, v) in pairs() {
+        all_within &= keypoint_within_plain(p, q, v, lo, hi, e_pos);
+    }
+    !all_within && pairs().any(|(p, q, v)| keypoint_breaks(p, q, v, lo, hi, e_pos))
 }
 
 /// Whether one keypoint, at `p` at one stamp and at `q` at the other (m; stamps `lo ≤ hi`, s),
@@ -91,21 +101,29 @@ pub(crate) fn keypoint_breaks(
     if p == q {
         return false;
     }
-    // Fast accept in plain floats: the squared distance and the squared allowance (three rounded
-    // operations from exact values) each carry a relative rounding error of a few ε, far inside
-    // the 1e-9 margin, so a pair accepted here is within the allowance exactly. Only where
-    // neither overflows (d² finite) nor underflows (allowance ≥ 1e-150, so its square is normal
-    // and an underflowed d² is far below it); everything else is decided by the outward-rounded
-    // distance and allowance.
-    let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
-    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
-    let d2 = dx * dx + dy * dy + dz * dz;
-    if plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9) {
+    if keypoint_within_plain(p, q, v, lo, hi, e_pos) {
         return false;
     }
     let dt = sub_down(hi, lo).max(0.0);
     let allowed = add_down(mul_down(v, dt), mul_down(2.0, e_pos));
     dist3_up(&p, &q) > allowed
+}
+
+/// The fast accept of [`keypoint_breaks`] in plain floats: true only if
+/// `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos` exactly (arguments as there). The squared distance and the
+/// squared allowance (three rounded operations from exact values) each carry a relative
+/// rounding error of a few ε, far inside the 1e-9 margin, so a pair accepted here is within the
+/// allowance exactly. Only where neither overflows (d² finite) nor underflows (allowance
+/// ≥ 1e-150, so its square is normal and an underflowed d² is far below it); false otherwise
+/// (the caller decides by the outward-rounded distance and allowance). No branch: evaluated for
+/// every keypoint of a pair at once by [`human_pair_breaks`]. Checked with `keypoint_breaks`
+/// by `h3_keypoint_pair_sound` and its twin.
+#[inline(always)]
+fn keypoint_within_plain(p: [f64; 3], q: [f64; 3], v: f64, lo: f64, hi: f64, e_pos: f64) -> bool {
+    let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
+    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    (plain >= 1e-150) & d2.is_finite() & (d2 <= plain * plain * (1.0 - 1e-9))
 }
 
 /// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
