@@ -153,7 +153,9 @@ fn digit_runs_and_strings_agree_at_every_word_offset() {
                 };
                 for after in ["", " ", "x", "é", "/"] {
                     for line in [
-                        format!("{sp}{{\"type\":\"robot\",\"t\":{n}{after},\"q\":[{n},{n}{after}]}}\n"),
+                        format!(
+                            "{sp}{{\"type\":\"robot\",\"t\":{n}{after},\"q\":[{n},{n}{after}]}}\n"
+                        ),
                         format!("{{\"type\":\"shield\",\"t\":0,\"skip\":[{sp}{n}{after}]}}{sp}\n"),
                         format!("{{\"t\":0,\"type\":\"robot\",\"q\":[{sp}{n}]{after}}}"),
                     ] {
@@ -165,11 +167,17 @@ fn digit_runs_and_strings_agree_at_every_word_offset() {
             }
         }
         for len in 0..=20 {
-            let body: String = (0..len).map(|k| char::from(b'a' + (k % 26) as u8)).collect();
-            for stop in ["", "\\\"", "\\n", "\\u0041", "\u{1}", "\t", "\u{7f}", "é", "\u{1f}", " "] {
+            let body: String = (0..len)
+                .map(|k| char::from(b'a' + (k % 26) as u8))
+                .collect();
+            for stop in [
+                "", "\\\"", "\\n", "\\u0041", "\u{1}", "\t", "\u{7f}", "é", "\u{1f}", " ",
+            ] {
                 for line in [
                     format!("{sp}{{\"type\":\"event\",\"t\":1,\"name\":\"{body}{stop}{body}\"}}\n"),
-                    format!("{{\"type\":\"shield\",\"{sp}{body}{stop}\":\"{body}{stop}\",\"t\":2}}"),
+                    format!(
+                        "{{\"type\":\"shield\",\"{sp}{body}{stop}\":\"{body}{stop}\",\"t\":2}}"
+                    ),
                     format!("{{\"type\":\"human\",\"t\":0,\"id\":\"{body}{stop}\"}}"),
                 ] {
                     assert!(fast_path_agrees(&line), "{line:?}");
