@@ -123,7 +123,7 @@ fn keypoint_within_plain(p: [f64; 3], q: [f64; 3], v: f64, lo: f64, hi: f64, e_p
     let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
     let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
     let d2 = dx * dx + dy * dy + dz * dz;
-    (plain >= 1e-150) & d2.is_finite() & (d2 <= plain * plain * (1.0 - 1e-9))
+    plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9)
 }
 
 /// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
