@@ -65,14 +65,32 @@ pub(super) fn human_pair_breaks(
             .zip(model.v_max())
             .map(|((p, q), &v)| ([p.x, p.y, p.z], [q.x, q.y, q.z], v))
     };
-    // Most pairs are accepted by every keypoint's plain-float test: all of them are evaluated
-    // without early exit (no branch per keypoint); only a pair one of them does not accept is
-    // decided keypoint by keypoint.
+    // Most pairs are accepted by every keypoint's plain-float test at once; only a pair one of
+    // them does not accept is decided keypoint by keypoint.
+    !keypoints_within_plain(pairs(), lo, hi, e_pos)
+        && pairs().any(|(p, q, v)| keypoint_breaks(p, q, v, lo, hi, e_pos))
+}
+
+/// Whether every keypoint `(p, q, v)` of a pair of records passes the plain-float accept of
+/// [`keypoint_breaks`] ([`keypoint_within_plain`]), all evaluated without early exit: true only
+/// if `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos` exactly for every one of them.
+///
+/// # Soundness
+/// Claim C9 (the consistency check's fast accept): harness `h3_keypoints_accept_sound` (Kani on
+/// grids of dyadic values with two keypoints; the twin nine keypoints at full width with the
+/// exact oracle); mutant `x86` (the pair accepted where any one keypoint is) fails it.
+#[inline]
+pub(crate) fn keypoints_within_plain(
+    pairs: impl Iterator<Item = ([f64; 3], [f64; 3], f64)>,
+    lo: f64,
+    hi: f64,
+    e_pos: f64,
+) -> bool {
     let mut all_within = true;
-    for (p, q, v) in pairs() {
+    for (p, q, v) in pairs {
         all_within &= keypoint_within_plain(p, q, v, lo, hi, e_pos);
     }
-    !all_within && pairs().any(|(p, q, v)| keypoint_breaks(p, q, v, lo, hi, e_pos))
+    all_within
 }
 
 /// Whether one keypoint, at `p` at one stamp and at `q` at the other (m; stamps `lo ≤ hi`, s),
@@ -115,9 +133,9 @@ pub(crate) fn keypoint_breaks(
 /// rounding error of a few ε, far inside the 1e-9 margin, so a pair accepted here is within the
 /// allowance exactly. Only where neither overflows (d² finite) nor underflows (allowance
 /// ≥ 1e-150, so its square is normal and an underflowed d² is far below it); false otherwise
-/// (the caller decides by the outward-rounded distance and allowance). No branch: evaluated for
-/// every keypoint of a pair at once by [`human_pair_breaks`]. Checked with `keypoint_breaks`
-/// by `h3_keypoint_pair_sound` and its twin.
+/// (the caller decides by the outward-rounded distance and allowance). Evaluated for every
+/// keypoint of a pair at once by [`keypoints_within_plain`]. Checked with `keypoint_breaks` by
+/// `h3_keypoint_pair_sound`, and for several keypoints by `h3_keypoints_accept_sound`.
 #[inline(always)]
 fn keypoint_within_plain(p: [f64; 3], q: [f64; 3], v: f64, lo: f64, hi: f64, e_pos: f64) -> bool {
     let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
