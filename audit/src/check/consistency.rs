@@ -80,7 +80,7 @@ pub(super) fn human_pair_breaks(
 /// grids of dyadic values with two keypoints; the twin nine keypoints at full width with the
 /// exact oracle); mutant `x86` (the pair accepted where any one keypoint is) fails it.
 #[inline]
-pub(crate) fn keypoints_within_plain(
+fn keypoints_within_plain(
     pairs: impl Iterator<Item = ([f64; 3], [f64; 3], f64)>,
     lo: f64,
     hi: f64,

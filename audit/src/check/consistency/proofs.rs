@@ -308,7 +308,7 @@ fn keypoints_accept<S: Source>(s: &mut S) {
             // keypoint's own accept holds. That accept (`keypoint_within_plain`, the start of
             // `keypoint_breaks`) is within the allowance exactly by `h3_keypoint_pair_sound`;
             // the whole claim on the real allowances (exact squares on the grid) timed out at
-            // 300 s with two keypoints (bitwuzla, 2026-11-30).
+            // 300 s with two keypoints (bitwuzla).
             assert!(
                 keypoint_within_plain(ps[k], qs[k], vs[k], lo, hi, e_pos),
                 "keypoint {k} not accepted on its own, yet the pair was"
