@@ -426,9 +426,24 @@ def main() -> int:
         text = repair_float_sorts(
             repair_float_array_concats(repair_array_elements(repair_overflow_results(f.read())))
         )
+    dump = os.environ.get("PACS_SMT_DUMP")
+    if dump:
+        with open(dump, "w") as f:
+            f.write(text)
     terms = bitwuzla.TermManager()
     options = bitwuzla.Options()
     options.set(bitwuzla.Option.PRODUCE_MODELS, True)
+    # Solver options for experiments: `PACS_BITWUZLA_OPTIONS="SAT_SOLVER=kissat REWRITE_LEVEL=2"`
+    # (names of `bitwuzla.Option`; values as Bitwuzla's command line takes them).
+    for item in os.environ.get("PACS_BITWUZLA_OPTIONS", "").split():
+        name, _, value = item.partition("=")
+        option = getattr(bitwuzla.Option, name.upper())
+        if options.is_mode(option):
+            options.set(option, value)
+        elif options.is_bool(option):
+            options.set(option, value.lower() in ("1", "true", "yes"))
+        else:
+            options.set(option, int(value))
     parser = bitwuzla.Parser(terms, options)
     try:
         parser.parse(text, False, False)

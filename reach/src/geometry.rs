@@ -146,7 +146,12 @@ pub fn separating_axis_lower_bound(
     let (_, b0h) = dot_bounds(n, b0);
     let (_, b1h) = dot_bounds(n, b1);
     let gap = sub_down(a0l.min(a1l), b0h.max(b1h));
-    if gap > 0.0 { div_down(gap, len) } else { 0.0 }
+    // `max`: a quotient that underflows to 0 steps down to −2⁻¹⁰⁷⁴; the bound stays ≥ 0.
+    if gap > 0.0 {
+        div_down(gap, len).max(0.0)
+    } else {
+        0.0
+    }
 }
 
 /// An upper bound (m) of the exact distance between the two segments (from explicit points,

@@ -85,9 +85,37 @@ harness!(
     segment_lb
 );
 
+/// An integer in `[−2, 2]` as a float.
+fn small_int<S: Source>(s: &mut S) -> f64 {
+    s.index(5) as f64 - 2.0
+}
+
+/// A point with integer coordinates in `[−2, 2]`.
+fn int_point<S: Source>(s: &mut S) -> Point3<f64> {
+    Point3::new(small_int(s), small_int(s), small_int(s))
+}
+
+/// An end of the segment `ab`, or its midpoint: exact for integer `a`, `b` (multiples of 1/2).
+fn half_point<S: Source>(s: &mut S, a: &Point3<f64>, b: &Point3<f64>) -> [f64; 3] {
+    let t = s.index(3) as f64 * 0.5;
+    std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
+}
+
+/// `lb ≤ |p − q|` exactly, for `p`, `q` multiples of 1/2 in `[−2, 2]³` (their squared distance
+/// `d2` is an exact float): `√d2` vs `lb` on integer significands
+/// ([`crate::exact::cmp_sqrt`]).
+fn below_distance(lb: f64, p: &[f64; 3], q: &[f64; 3]) -> bool {
+    let d2 = (0..3).map(|i| (p[i] - q[i]) * (p[i] - q[i])).sum::<f64>();
+    crate::exact::cmp_sqrt(d2, lb) != std::cmp::Ordering::Less
+}
+
 /// The separating-axis certificate is a lower bound along **any** direction (the closest-point
-/// direction only makes it tight): random directions, half of them near `p − q`.
+/// direction only makes it tight): random directions, half of them near `p − q`; in half the
+/// cases also the integer grid of [`separating_axis_grid`], decided exactly.
 fn separating_axis_any<S: Source>(s: &mut S) {
+    if s.bool() {
+        separating_axis_grid(s);
+    }
     let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
         return;
     };
@@ -102,6 +130,29 @@ fn separating_axis_any<S: Source>(s: &mut S) {
     let ub = dist_up(&p, &q);
     assert!(lb <= ub, "along {n:?}: lb {lb} > |p - q| ≤ {ub}");
 }
+
+/// [`separating_axis_lower_bound`] on a grid where the exact distance is decided in floating
+/// point: segment ends and the direction with integer coordinates in `[−2, 2]` (every product
+/// and the dot products' sums exact, while the bound's own error terms, `norm3_up` and
+/// `div_down` round), points of the segments at `t, u ∈ {0, ½, 1}`; the bound is in
+/// `[0, 8]` and at most their exact distance ([`below_distance`]).
+fn separating_axis_grid<S: Source>(s: &mut S) {
+    let (a0, a1, b0, b1) = (int_point(s), int_point(s), int_point(s), int_point(s));
+    let n = Vector3::new(small_int(s), small_int(s), small_int(s));
+    let lb = separating_axis_lower_bound(&n, &a0, &a1, &b0, &b1);
+    assert!((0.0..=8.0).contains(&lb), "bound {lb} out of range");
+    let (p, q) = (half_point(s, &a0, &a1), half_point(s, &b0, &b1));
+    assert!(
+        below_distance(lb, &p, &q),
+        "along {n:?}: lb {lb} > |{p:?} − {q:?}|"
+    );
+}
+// Property test only (proofs/README.md). The grid above under Kani, with `norm3_up` and
+// `div_down` replaced by one-multiplier over-approximations (a rounded square at least the
+// rounded sum of squares less 2⁻⁵⁰ relative; a rounded product at most the dividend), timed
+// out at 300 s with Bitwuzla (twice, also with the exact `cmp_sqrt` oracle and half-point
+// samples) and with the SAT back end (2026-11-30): the four `dot_bounds` of a symbolic
+// direction are twelve full multipliers.
 harness!(
     b1_separating_axis_any_direction,
     twin_only,
