@@ -72,8 +72,19 @@ pub(super) fn centre_trig(qc: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
 }
 
 /// [`centre_trig`] for the libm values `s` = ŝ, `c` = ĉ at the centre (the arithmetic after
-/// libm, separate so that the proof beside it, `d1_centre_trig_radii`, can take ŝ, ĉ as inputs):
-/// the same tuple, under the contract |sin q_c − ŝ| ≤ `TRIG_PAD`, |cos q_c − ĉ| ≤ `TRIG_PAD`.
+/// libm, separate so that the proofs beside it, `d1_centre_trig_radii` and
+/// `d1_trig_radii_contract`, can take ŝ, ĉ as inputs): the same tuple, under the contract
+/// |sin q_c − ŝ| ≤ `TRIG_PAD`, |cos q_c − ĉ| ≤ `TRIG_PAD`.
+///
+/// # Soundness
+/// Kani contract ([`trig_radii_cover`], for the inputs [`trig_input`] admits): the midpoints are
+/// ŝ, ĉ bit for bit, `e ≥ TRIG_PAD`, and `w_s ≥ min(|ŝ|·h + |ĉ|·s_δ + T·(h + s_δ + 1), 1 + |ŝ|)`
+/// with h = min(δ²/2, 2), s_δ = min(δ, 1), T = `TRIG_PAD` (and `w_c` likewise, ŝ and ĉ swapped),
+/// each bound evaluated with every operation rounded up, so the real-number bound of the module
+/// doc of [`super`] holds. Proven on this function by `d1_trig_radii_contract`
+/// (`proof_for_contract`; 4-bit ŝ, ĉ and δ a power of two); twin `d1_trig_radii_contract_holds`.
+#[cfg_attr(kani, kani::requires(trig_input(s, c, delta)))]
+#[cfg_attr(kani, kani::ensures(|r: &(f64, f64, f64, f64, f64)| trig_radii_cover(s, c, delta, *r)))]
 #[inline(always)]
 pub(super) fn trig_radii(s: f64, c: f64, delta: f64) -> (f64, f64, f64, f64, f64) {
     let (sa, ca) = (s.abs(), c.abs());
@@ -85,6 +96,46 @@ pub(super) fn trig_radii(s: f64, c: f64, delta: f64) -> (f64, f64, f64, f64, f64
     let ws = (sp * h + cp * sd).min(1.0 + sa) + 2.0 * TRIG_PAD;
     let wc = (cp * h + sp * sd).min(1.0 + ca) + 2.0 * TRIG_PAD;
     (s, c, TRIG_PAD, ws * RAD_UP + TINY, wc * RAD_UP + TINY)
+}
+
+/// The inputs [`trig_radii`]'s contract admits: libm's ŝ, ĉ in `[−1, 1]`, a half-width
+/// `0 ≤ δ ≤ 1e100`.
+#[cfg(any(test, kani))]
+#[cfg_attr(kani, allow(dead_code))]
+pub(super) fn trig_input(s: f64, c: f64, delta: f64) -> bool {
+    s.abs() <= 1.0 && c.abs() <= 1.0 && (0.0..=1e100).contains(&delta)
+}
+
+/// The contract of [`trig_radii`]: `r = (ŝ, ĉ, e, w_s, w_c)` with the midpoints `s`, `c` bit for
+/// bit, `e ≥ TRIG_PAD`, and each radius at least its bound ([`trig_radius_covers`]), all finite.
+#[cfg(any(test, kani))]
+#[cfg_attr(kani, allow(dead_code))]
+pub(super) fn trig_radii_cover(s: f64, c: f64, delta: f64, r: (f64, f64, f64, f64, f64)) -> bool {
+    let (s_out, c_out, e, ws, wc) = r;
+    s_out.to_bits() == s.to_bits()
+        && c_out.to_bits() == c.to_bits()
+        && e >= TRIG_PAD
+        && trig_radius_covers(s.abs(), c.abs(), delta, ws)
+        && trig_radius_covers(c.abs(), s.abs(), delta, wc)
+}
+
+/// `w ≥ min(a·h + b·s_δ + T·(h + s_δ + 1), 1 + a)` with h = min(δ²/2, 2), s_δ = min(δ, 1),
+/// T = `TRIG_PAD`, `w` finite: the right side evaluated with every product and sum rounded up
+/// (`mul_up`, `add_up`: at least the exact value, claim C1), so the inequality holds for the
+/// exact real numbers too.
+#[cfg(any(test, kani))]
+#[cfg_attr(kani, allow(dead_code))]
+pub(super) fn trig_radius_covers(a: f64, b: f64, delta: f64, w: f64) -> bool {
+    use crate::rounding::{add_up, mul_up};
+    let h = if delta >= 2.0 {
+        2.0
+    } else {
+        mul_up(mul_up(0.5, delta), delta)
+    };
+    let sd = delta.min(1.0);
+    let main = add_up(mul_up(a, h), mul_up(b, sd));
+    let pad = mul_up(add_up(add_up(h, sd), 1.0), TRIG_PAD);
+    w.is_finite() && (w >= add_up(main, pad) || w >= add_up(1.0, a))
 }
 
 /// Enclosed frames: rotation and origin for frames 0..=n, plus the joint origins and half-widths

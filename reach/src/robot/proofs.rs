@@ -154,6 +154,54 @@ harness!(
     centre_trig_radii
 );
 
+/// `trig_radii`'s contract (`trig_radii_cover`, the bounds with every operation rounded up),
+/// proven on the real function: ŝ, ĉ of 4 significand bits (0 or of magnitude ≥ 2⁻¹⁶) and δ a
+/// power of two (0 or in `[2⁻¹⁰, 8]`), the domain of `d1_centre_trig_radii`, whose claim on it
+/// is the exact bound.
+#[cfg(kani)]
+#[kani::proof_for_contract(trig_radii)]
+#[kani::unwind(2)]
+fn d1_trig_radii_contract() {
+    let mut src = pacs_proof_kit::KaniSource { bits: 4 };
+    let (Some(sh), Some(ch)) = (
+        short(&mut src, -1.0, 1.0, 1.0 / 65536.0),
+        short(&mut src, -1.0, 1.0, 1.0 / 65536.0),
+    ) else {
+        return;
+    };
+    let delta = src.f64_short(0.0, 8.0, 0);
+    kani::assume(delta == 0.0 || delta >= 1.0 / 1024.0);
+    let _ = trig_radii(sh, ch, delta);
+}
+
+/// The twin of `d1_trig_radii_contract`: full-width ŝ, ĉ in `[−1, 1]` (half of them libm's
+/// values at a random centre) and any admitted δ (0, up to 8, or any magnitude up to 1e100),
+/// the postcondition checked.
+#[cfg(test)]
+#[test]
+fn d1_trig_radii_contract_holds() {
+    pacs_proof_kit::run_cases("d1_trig_radii_contract_holds", 20_000, |s| {
+        let (sh, ch) = if s.bool() {
+            s.f64_in(-7.0, 7.0).sin_cos()
+        } else {
+            (s.f64_in(-1.0, 1.0), s.f64_in(-1.0, 1.0))
+        };
+        let delta = match s.index(3) {
+            0 => 0.0,
+            1 => s.f64_in(0.0, 8.0),
+            _ => 10f64.powi(s.index(401) as i32 - 300) * s.f64_in(1.0, 9.99),
+        };
+        if !trig_input(sh, ch, delta) {
+            return;
+        }
+        let r = trig_radii(sh, ch, delta);
+        assert!(
+            trig_radii_cover(sh, ch, delta, r),
+            "trig_radii({sh}, {ch}, {delta}) = {r:?} breaks its contract"
+        );
+    });
+}
+
 /// A 3×3 matrix from its rows (lane 3 unused).
 fn mat(rows: [[f64; 3]; 3]) -> Mat3Lanes {
     let c = |j: usize| Lanes3(simd::new([rows[0][j], rows[1][j], rows[2][j], 0.0]));
