@@ -437,13 +437,22 @@ def main() -> int:
     # (names of `bitwuzla.Option`; values as Bitwuzla's command line takes them).
     for item in os.environ.get("PACS_BITWUZLA_OPTIONS", "").split():
         name, _, value = item.partition("=")
-        option = getattr(bitwuzla.Option, name.upper())
-        if options.is_mode(option):
-            options.set(option, value)
-        elif options.is_bool(option):
-            options.set(option, value.lower() in ("1", "true", "yes"))
-        else:
-            options.set(option, int(value))
+        option = getattr(bitwuzla.Option, name.upper(), None)
+        flag = {"1": True, "true": True, "on": True, "0": False, "false": False, "off": False}
+        try:
+            if option is None:
+                raise ValueError("no Bitwuzla option %r" % name)
+            if options.is_mode(option):
+                options.set(option, value)
+            elif options.is_bool(option):
+                if value.lower() not in flag:
+                    raise ValueError("%s takes true or false, not %r" % (name, value))
+                options.set(option, flag[value.lower()])
+            else:
+                options.set(option, int(value))
+        except (ValueError, bitwuzla.BitwuzlaException) as e:
+            print("bitwuzla_cli.py: PACS_BITWUZLA_OPTIONS: %s" % e, file=sys.stderr)
+            return 2
     parser = bitwuzla.Parser(terms, options)
     try:
         parser.parse(text, False, False)

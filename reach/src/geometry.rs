@@ -125,7 +125,10 @@ pub fn segment_distance_lower_bound(
 /// by `a1_sub_enclose`, `div_down` by `a2_div_enclose`, `norm3_up` by `a3_norm_up_encloses`; the
 /// whole bound against sampled points for random directions by the twin
 /// `b1_separating_axis_any_direction` and, with the closest-point direction, by
-/// `b1_segment_distance_lower_bound` (`proofs/README.md`). Mutant `x7` caught.
+/// `b1_segment_distance_lower_bound` (`proofs/README.md`). Mutant `x7` caught. The quotient is
+/// clamped at 0 (a distance is never negative, so 0 is a lower bound too): a one-ulp gap over
+/// `|n| > 2` underflows to 0, which `div_down` steps to −2⁻¹⁰⁷⁴ (test
+/// `a_gap_that_underflows_gives_a_bound_of_zero_not_below`, beside this module).
 #[inline]
 pub fn separating_axis_lower_bound(
     n: &Vector3<f64>,

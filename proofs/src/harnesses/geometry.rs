@@ -150,9 +150,9 @@ fn separating_axis_grid<S: Source>(s: &mut S) {
 // Property test only (proofs/README.md). The grid above under Kani, with `norm3_up` and
 // `div_down` replaced by one-multiplier over-approximations (a rounded square at least the
 // rounded sum of squares less 2⁻⁵⁰ relative; a rounded product at most the dividend), timed
-// out at 300 s with Bitwuzla (twice, also with the exact `cmp_sqrt` oracle and half-point
-// samples) and with the SAT back end (2026-11-30): the four `dot_bounds` of a symbolic
-// direction are twelve full multipliers.
+// out at 300 s with Bitwuzla (twice, the second with the exact `cmp_sqrt` oracle and
+// half-point samples) and with the SAT back end: the four `dot_bounds` of a symbolic direction
+// are twelve full multipliers.
 harness!(
     b1_separating_axis_any_direction,
     twin_only,

@@ -220,3 +220,43 @@ harness!(
     cases = pacs_proof_kit::DEFAULT_CASES,
     capsule_margin
 );
+
+/// A separating gap of one subnormal ulp divided by a direction longer than 2 underflows to 0,
+/// and rounding that down gives −2⁻¹⁰⁷⁴: [`separating_axis_lower_bound`] clamps it at 0 (its
+/// documented range). Scans points `a = (t, 0, 0)`, `b = (u, 0, 0)` just past each other's error
+/// band along `n = (k, 0, 0)` for such gaps, the ends taken from [`dot_bounds`] itself; the test
+/// fails if none is met, so it keeps exercising the clamp.
+#[cfg(test)]
+#[test]
+fn a_gap_that_underflows_gives_a_bound_of_zero_not_below() {
+    use nalgebra::{Point3, Vector3};
+    let tiny = f64::from_bits(1);
+    let mut underflows = 0;
+    for k in [3.0, 4.0, 5.0, 2.5, 3.5] {
+        let n = Vector3::new(k, 0.0, 0.0);
+        let t0 = 2.0 * f64::MIN_POSITIVE / k;
+        for j in 0..4u64 {
+            let b = Point3::new(f64::from_bits(j), 0.0, 0.0);
+            let (_, bh) = dot_bounds(&n, &b);
+            for i in -400i64..400 {
+                let t = f64::from_bits((t0.to_bits() as i64 + i) as u64);
+                let a = Point3::new(t, 0.0, 0.0);
+                let lb = separating_axis_lower_bound(&n, &a, &a, &b, &b);
+                assert!(
+                    lb >= 0.0,
+                    "along {n:?} from {a:?} to {b:?}: bound {lb:e} < 0"
+                );
+                let (al, _) = dot_bounds(&n, &a);
+                if al - bh == 2.0 * tiny {
+                    // The gap is one ulp; its quotient by |n| > 2 rounds to 0.
+                    underflows += 1;
+                    assert_eq!(lb, 0.0);
+                }
+            }
+        }
+    }
+    assert!(
+        underflows > 0,
+        "no gap of one ulp met: the scan no longer reaches the clamp"
+    );
+}

@@ -114,6 +114,7 @@ pub(super) fn trig_radii_cover(s: f64, c: f64, delta: f64, r: (f64, f64, f64, f6
     let (s_out, c_out, e, ws, wc) = r;
     s_out.to_bits() == s.to_bits()
         && c_out.to_bits() == c.to_bits()
+        && e.is_finite()
         && e >= TRIG_PAD
         && trig_radius_covers(s.abs(), c.abs(), delta, ws)
         && trig_radius_covers(c.abs(), s.abs(), delta, wc)

@@ -175,8 +175,8 @@ fn d1_trig_radii_contract() {
 }
 
 /// The twin of `d1_trig_radii_contract`: full-width ŝ, ĉ in `[−1, 1]` (half of them libm's
-/// values at a random centre) and any admitted δ (0, up to 8, or any magnitude up to 1e100),
-/// the postcondition checked.
+/// values at a random centre) and any admitted δ (0, any value up to 8, or a magnitude from
+/// 1e-300 to 1e100), the postcondition checked.
 #[cfg(test)]
 #[test]
 fn d1_trig_radii_contract_holds() {
