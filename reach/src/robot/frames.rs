@@ -128,15 +128,33 @@ pub(super) fn trig_radii_cover(s: f64, c: f64, delta: f64, r: (f64, f64, f64, f6
 #[cfg_attr(kani, allow(dead_code))]
 pub(super) fn trig_radius_covers(a: f64, b: f64, delta: f64, w: f64) -> bool {
     use crate::rounding::{add_up, mul_up};
+    let (main, pad) = trig_radius_terms(a, b, delta, TRIG_PAD, mul_up, add_up);
+    w.is_finite() && (w >= add_up(main, pad) || w >= add_up(1.0, a))
+}
+
+/// The two terms `(a·h + b·s_δ, T·(h + s_δ + 1))` of the radius bound of [`trig_radius_covers`]
+/// (h = min(δ²/2, 2), s_δ = min(δ, 1); δ ≥ 2 ⟺ δ²/2 ≥ 2), each product and sum evaluated by
+/// `mul`, `add`: rounded up in the contract, exactly on the grid of the split
+/// `d1_centre_trig_radii` (whose oracle compares their exact sum).
+#[cfg(any(test, kani))]
+#[cfg_attr(kani, allow(dead_code))]
+pub(super) fn trig_radius_terms(
+    a: f64,
+    b: f64,
+    delta: f64,
+    t: f64,
+    mul: impl Fn(f64, f64) -> f64,
+    add: impl Fn(f64, f64) -> f64,
+) -> (f64, f64) {
     let h = if delta >= 2.0 {
         2.0
     } else {
-        mul_up(mul_up(0.5, delta), delta)
+        mul(mul(0.5, delta), delta)
     };
     let sd = delta.min(1.0);
-    let main = add_up(mul_up(a, h), mul_up(b, sd));
-    let pad = mul_up(add_up(add_up(h, sd), 1.0), TRIG_PAD);
-    w.is_finite() && (w >= add_up(main, pad) || w >= add_up(1.0, a))
+    let main = add(mul(a, h), mul(b, sd));
+    let pad = mul(add(add(h, sd), 1.0), t);
+    (main, pad)
 }
 
 /// Enclosed frames: rotation and origin for frames 0..=n, plus the joint origins and half-widths

@@ -83,23 +83,33 @@ fn add_or_exact(x: f64, y: f64) -> f64 {
 /// `w ≥ min(a·h + b·s_δ + T·(h + s_δ + 1), 1 + a)` exactly.
 fn assert_trig_radius(a: f64, b: f64, delta: f64, w: f64, what: &str) {
     let t = if cfg!(kani) { TRIG_PAD_8 } else { TRIG_PAD };
-    // h = min(δ²/2, 2) (δ ≥ 2 ⟺ δ²/2 ≥ 2) and s_δ = min(δ, 1), exact under Kani, above in the
-    // twin.
-    let h = if delta >= 2.0 {
-        2.0
-    } else {
-        mul_or_exact(mul_or_exact(0.5, delta), delta)
-    };
-    let sd = delta.min(1.0);
-    // Under Kani (4-bit a, b ≥ 2⁻¹⁶ and δ ≥ 2⁻¹⁰ or 0): a·h is a multiple of 2⁻⁴⁶ below 2, b·s_δ
-    // of 2⁻³² below 1, so their sum is a float; h + s_δ + 1 is a multiple of 2⁻²⁷ below 4 and its
-    // product with the 8-bit pad a float.
-    let main = add_or_exact(mul_or_exact(a, h), mul_or_exact(b, sd));
-    let pad = mul_or_exact(add_or_exact(add_or_exact(h, sd), 1.0), t);
+    // Exact under Kani (4-bit a, b ≥ 2⁻¹⁶ and δ ≥ 2⁻¹⁰ or 0: a·h is a multiple of 2⁻⁴⁶ below 2,
+    // b·s_δ of 2⁻³² below 1, so their sum is a float; h + s_δ + 1 is a multiple of 2⁻²⁷ below 4
+    // and its product with the 8-bit pad a float), above in the twin.
+    let (main, pad) = trig_radius_terms(a, b, delta, t, mul_or_exact, add_or_exact);
     assert!(
         cmp_sum(main, pad, w) != Greater || cmp_sum(1.0, a, w) != Greater,
         "{what}: radius {w} below min({main} + {pad}, 1 + {a}) for δ = {delta}"
     );
+}
+
+/// The grid inputs of the Kani proofs of `trig_radii` (`d1_centre_trig_radii`,
+/// `d1_trig_radii_contract`): ŝ, ĉ of 4 significand bits in `[−1, 1]`, 0 or of magnitude
+/// ≥ 2⁻¹⁶ (any tame values in the twin).
+fn grid_sin_cos<S: Source>(s: &mut S) -> Option<(f64, f64)> {
+    Some((
+        short(s, -1.0, 1.0, 1.0 / 65536.0)?,
+        short(s, -1.0, 1.0, 1.0 / 65536.0)?,
+    ))
+}
+
+/// A half-width δ in `[0, 8]`: under Kani a power of two (or 0), at least 2⁻¹⁰ — h and s_δ are
+/// then powers of two, and the code's products by them exact scalings (4-bit half-widths timed
+/// out at 300 s, Bitwuzla); any tame value in the twin.
+fn grid_half_width<S: Source>(s: &mut S) -> Option<f64> {
+    let delta = s.f64_short(0.0, 8.0, 0);
+    s.assume(tame(delta) && (!cfg!(kani) || delta == 0.0 || delta >= 1.0 / 1024.0))
+        .then_some(delta)
 }
 
 fn centre_trig_radii<S: Source>(s: &mut S) {
@@ -110,20 +120,14 @@ fn centre_trig_radii<S: Source>(s: &mut S) {
         let (sh, ch) = qc.sin_cos();
         (sh, ch, qc)
     } else {
-        let (Some(sh), Some(ch)) = (
-            short(s, -1.0, 1.0, 1.0 / 65536.0),
-            short(s, -1.0, 1.0, 1.0 / 65536.0),
-        ) else {
+        let Some((sh, ch)) = grid_sin_cos(s) else {
             return;
         };
         (sh, ch, 0.0)
     };
-    // Under Kani a power of two (or 0): h and s_δ are then powers of two, and the code's
-    // products by them exact scalings (4-bit half-widths timed out at 300 s, Bitwuzla).
-    let delta = s.f64_short(0.0, 8.0, 0);
-    if !s.assume(tame(delta) && (!cfg!(kani) || delta == 0.0 || delta >= 1.0 / 1024.0)) {
+    let Some(delta) = grid_half_width(s) else {
         return;
-    }
+    };
     let (s_out, c_out, e, ws, wc) = trig_radii(sh, ch, delta);
     assert!(
         s_out.to_bits() == sh.to_bits() && c_out.to_bits() == ch.to_bits(),
@@ -163,14 +167,9 @@ harness!(
 #[kani::unwind(2)]
 fn d1_trig_radii_contract() {
     let mut src = pacs_proof_kit::KaniSource { bits: 4 };
-    let (Some(sh), Some(ch)) = (
-        short(&mut src, -1.0, 1.0, 1.0 / 65536.0),
-        short(&mut src, -1.0, 1.0, 1.0 / 65536.0),
-    ) else {
+    let (Some((sh, ch)), Some(delta)) = (grid_sin_cos(&mut src), grid_half_width(&mut src)) else {
         return;
     };
-    let delta = src.f64_short(0.0, 8.0, 0);
-    kani::assume(delta == 0.0 || delta >= 1.0 / 1024.0);
     let _ = trig_radii(sh, ch, delta);
 }
 
