@@ -162,8 +162,8 @@ pub struct Auditor {
     block: Vec<Sample>,
     /// The enclosures of the block's spans (a buffer of `flush_block`).
     block_encl: Vec<SpanEnclosure>,
-    /// The last spans checked one by one were mostly violating: skip the halves of the next
-    /// block that fails (speed only).
+    /// The last spans checked one by one were mostly violating: check the next blocks span by
+    /// span, neither whole nor in halves (speed only).
     dense_violations: bool,
     /// Use the block fast path (off: every span on its own, the reference it is tested against).
     block_fast_path: bool,

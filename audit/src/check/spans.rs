@@ -125,8 +125,8 @@ impl Auditor {
     /// [`MIN_SUB_BLOCK`] spans), then span by span. Every path is sound on its own (a clean
     /// block proves each of its spans clean; the span check is the reference), so the split only
     /// changes the cost, and the separation figures recorded (each a lower bound). Where the
-    /// last spans checked one by one were mostly violating, the halves are skipped (they would
-    /// fail too).
+    /// last spans checked one by one were mostly violating, the block and its halves are not
+    /// tried (they would fail too).
     fn check_spans(
         &mut self,
         block: &[Sample],
@@ -142,8 +142,11 @@ impl Auditor {
             }
             return;
         }
-        if count >= 2 && self.check_block(block, encl, lo, hi, slot) {
-            self.dense_violations = false;
+        // Where the last spans checked one by one were mostly violating, neither this stretch
+        // nor its halves are tried as blocks (they would fail too, at the cost of a robot
+        // occupancy and a rule check each): it goes span by span, which also decides the flag
+        // anew.
+        if count >= 2 && !self.dense_violations && self.check_block(block, encl, lo, hi, slot) {
             return;
         }
         if count >= 2 * MIN_SUB_BLOCK && !self.dense_violations {

@@ -64,10 +64,18 @@ impl ContactRule {
             let hb = Aabb::of(hc);
             self.part_aabb[p] = hb;
             let mut mask = 0u128;
+            // The signed figure over the pairs that may touch (each ≤ 0, or NaN, which `min`
+            // passes over). One evaluation per pair decides both: a pair may touch exactly
+            // where its figure is not positive (`capsules_may_intersect` is that test).
+            let mut touching = f64::INFINITY;
             if all.overlaps(&hb) {
                 for (c, rc) in robot_caps.iter().enumerate() {
-                    if self.robot_aabb[c].overlaps(&hb) && capsules_may_intersect(rc, hc) {
-                        mask |= 1u128 << c;
+                    if self.robot_aabb[c].overlaps(&hb) {
+                        let figure = capsule_separation_lower_bound(rc, hc);
+                        if figure <= 0.0 || figure.is_nan() {
+                            mask |= 1u128 << c;
+                            touching = touching.min(figure);
+                        }
                     }
                 }
             }
@@ -75,13 +83,7 @@ impl ContactRule {
             if mask != 0 {
                 out.contact = true;
                 if separation {
-                    // The signed figure over the pairs that may touch (each ≤ 0).
-                    for (c, rc) in robot_caps.iter().enumerate() {
-                        if mask & (1u128 << c) != 0 {
-                            out.separation =
-                                out.separation.min(capsule_separation_lower_bound(rc, hc));
-                        }
-                    }
+                    out.separation = out.separation.min(touching);
                 }
                 out.separation = out.separation.min(0.0);
             }
