@@ -42,6 +42,20 @@ impl Piece {
     }
 
     /// Widen `r` (q, q̇, q̈ ranges) by the exact extrema of this piece over local `[d0, d1]`, padded outward.
+    ///
+    /// Guarantee (its Kani contract, claim C7: the chunk planner's output check
+    /// [`crate::trajectory::Trajectory::check`] and the joint boxes of the monitored trajectory
+    /// rest on it): for a piece and window [`piece_window_input`] admits and ranges without NaN
+    /// ends, `r` is only widened, and afterwards holds the piece's evaluated state
+    /// ([`Self::eval`]) at every instant of the window ([`ranges_cover_piece_at`]; under Kani
+    /// the postcondition takes any instant of `contract_instant`'s grid, so its proof covers
+    /// all of them). Proven on this function by `f5_extend_bounds_contract` (pacs-proofs; Kani
+    /// covers the quadratic piece of the f5 split and any prior ranges); the twin
+    /// `f5_extend_bounds_contract_holds` draws the whole input range and instants at full width. That the padding also covers the exact real values is the
+    /// module doc's argument and `motion/tests/range_inari.rs`.
+    #[cfg_attr(kani, kani::requires(piece_window_input(self, d0, d1) && ranges_input(r)))]
+    #[cfg_attr(kani, kani::modifies(r))]
+    #[cfg_attr(kani, kani::ensures(|_| ranges_cover_piece_at(self, d0, d1, &old(*r), &*r, contract_instant())))]
     #[inline]
     pub fn extend_bounds(&self, d0: f64, d1: f64, r: &mut [Range; 3]) {
         let [rq, rv, ra] = r;
@@ -116,6 +130,60 @@ impl Piece {
         rv.include_padded(v, PAD_REL * tv + PAD_ABS);
         ra.include_padded(a, PAD_REL * ta + PAD_ABS);
     }
+}
+
+/// The pieces and windows [`Piece::extend_bounds`]' contract covers (claim C7): every field
+/// finite with |q| ≤ 8 rad, |q̇| ≤ 8 rad/s, |q̈| ≤ 64 rad/s², |q⃛| ≤ 8192 rad/s³, and a local window
+/// `0 ≤ d0 ≤ d1 ≤ 64` s — beyond the FR3's limits (2.62 rad/s, 10 rad/s², 5000 rad/s³), where the
+/// module doc's error argument holds with a wide margin. The start time `t` is not read. NaN
+/// fails every comparison, so it is never admitted.
+pub fn piece_window_input(p: &Piece, d0: f64, d1: f64) -> bool {
+    p.q.abs() <= 8.0
+        && p.v.abs() <= 8.0
+        && p.a.abs() <= 64.0
+        && p.j.abs() <= 8192.0
+        && 0.0 <= d0
+        && d0 <= d1
+        && d1 <= 64.0
+}
+
+/// Ranges whose ends are not NaN (`EMPTY` included): the prior ranges [`Piece::extend_bounds`]'
+/// contract widens. Written without a loop (a contract's precondition is evaluated wherever a
+/// harness calls the function).
+pub fn ranges_input(r: &[Range; 3]) -> bool {
+    let ok = |x: &Range| !x.lo.is_nan() && !x.hi.is_nan();
+    ok(&r[0]) && ok(&r[1]) && ok(&r[2])
+}
+
+/// The instant at which Kani checks [`Piece::extend_bounds`]' postcondition: any multiple of
+/// 2⁻⁸ s from 0 to 256 s (a 16-bit integer scaled exactly). With any full-width float the
+/// proof timed out at 300 s (2026-12-01, Bitwuzla); the twin takes instants at full width.
+#[cfg(kani)]
+#[cfg_attr(kani_stub, allow(dead_code))] // the stand-in drops the contract that calls it
+fn contract_instant() -> f64 {
+    f64::from(kani::any::<u16>()) * (1.0 / 256.0)
+}
+
+/// The postcondition of [`Piece::extend_bounds`] at one local instant `d`: `after` widens
+/// `before` (no end moved inwards), and if `d` lies in `[d0, d1]`, the piece's evaluated state
+/// `(q, q̇, q̈)` at `d` ([`Piece::eval`]) lies in `after`'s three ranges. The contract takes one
+/// arbitrary `d` (`contract_instant`), so its proof covers every such instant; the twin checks
+/// many.
+pub fn ranges_cover_piece_at(
+    p: &Piece,
+    d0: f64,
+    d1: f64,
+    before: &[Range; 3],
+    after: &[Range; 3],
+    d: f64,
+) -> bool {
+    let widened = |k: usize| after[k].lo <= before[k].lo && after[k].hi >= before[k].hi;
+    let inside = |k: usize, x: f64| after[k].lo <= x && x <= after[k].hi;
+    let (q, v, a) = p.eval(d);
+    widened(0)
+        && widened(1)
+        && widened(2)
+        && (!(d0 <= d && d <= d1) || (inside(0, q) && inside(1, v) && inside(2, a)))
 }
 
 /// A closed interval [lo, hi] that accumulates the padded extrema of constant-jerk pieces;

@@ -545,3 +545,135 @@ harness!(
     cases = crate::DEFAULT_CASES,
     piece_position_cubic
 );
+
+/// Prior ranges for `extend_bounds`' contract: any floats without NaN (infinite ends included),
+/// or `EMPTY`.
+#[cfg(kani)]
+fn any_ranges() -> [Range; 3] {
+    let any_range = || {
+        if kani::any() {
+            return Range::EMPTY;
+        }
+        let (lo, hi): (f64, f64) = (kani::any(), kani::any());
+        kani::assume(!lo.is_nan() && !hi.is_nan());
+        Range { lo, hi }
+    };
+    [any_range(), any_range(), any_range()]
+}
+
+/// `Piece::extend_bounds`' contract (claim C7: the ranges only widen and hold the piece's
+/// evaluated state at every instant of the window, `ranges_cover_piece_at` at any instant of
+/// the postcondition's grid of 2⁻⁸ s) proven on the real function for the quadratic piece of
+/// `f5_piece_position_quadratic` (q = 0, q̇ = 2, q̈ = −4, no jerk; q's maximum inside the window
+/// [¼, 1] s) and any prior ranges without NaN. `f5_extend_bounds_contract_cubic` takes a cubic
+/// piece; the cubic pieces whose q̇ has real roots (the roots by `√`) and symbolic pieces are the
+/// twin's (`f5_extend_bounds_contract_holds`) and the f5 splits'.
+#[cfg(kani)]
+#[kani::proof_for_contract(Piece::extend_bounds)]
+#[kani::unwind(3)]
+fn f5_extend_bounds_contract() {
+    let piece = Piece {
+        t: 0.0,
+        q: 0.0,
+        v: 2.0,
+        a: -4.0,
+        j: 0.0,
+    };
+    let mut r = any_ranges();
+    piece.extend_bounds(0.25, 1.0, &mut r);
+}
+
+/// As `f5_extend_bounds_contract`, for the cubic piece of `f5_piece_velocity_acceleration`
+/// (q = 0, q̇ = 5, q̈ = −8, j = 8 over [½, 3/2] s: q̇ has its minimum 1 inside, where q̈ = 0, and
+/// no real root, so q is monotone and no `√` is taken).
+#[cfg(kani)]
+#[kani::proof_for_contract(Piece::extend_bounds)]
+#[kani::unwind(3)]
+fn f5_extend_bounds_contract_cubic() {
+    let piece = Piece {
+        t: 0.0,
+        q: 0.0,
+        v: 5.0,
+        a: -8.0,
+        j: 8.0,
+    };
+    let mut r = any_ranges();
+    piece.extend_bounds(0.5, 1.5, &mut r);
+}
+
+/// The twin of `f5_extend_bounds_contract`: pieces and windows over the contract's whole input
+/// range (`piece_window_input`: half of the pieces without jerk, windows from 0 to 64 s, some
+/// of zero length), prior ranges empty, finite or infinite, and the postcondition checked at
+/// both ends, 15 instants between, 8 full-width instants and each interior extremum of q (where
+/// q̇ = 0) and q̇ (where q̈ = 0) and the neighbouring floats of each.
+#[cfg(test)]
+#[test]
+fn f5_extend_bounds_contract_holds() {
+    use pacs_motion::profile::{piece_window_input, ranges_cover_piece_at, ranges_input};
+    crate::run_cases("f5_extend_bounds_contract_holds", 20_000, |s| {
+        let piece = Piece {
+            t: s.f64_in(0.0, 100.0),
+            q: s.f64_in(-8.0, 8.0),
+            v: s.f64_in(-8.0, 8.0),
+            a: s.f64_in(-64.0, 64.0),
+            j: if s.bool() {
+                0.0
+            } else {
+                s.f64_in(-8192.0, 8192.0)
+            },
+        };
+        let d1 = match s.index(3) {
+            0 => s.f64_in(0.0, 0.05),
+            1 => s.f64_in(0.0, 2.0),
+            _ => s.f64_in(0.0, 64.0),
+        };
+        let d0 = if s.bool() { 0.0 } else { s.f64_in(0.0, d1) };
+        let range = |s: &mut crate::RandomSource| match s.index(3) {
+            0 => Range::EMPTY,
+            1 => {
+                let (a, b) = (s.f64_in(-100.0, 100.0), s.f64_in(-100.0, 100.0));
+                Range {
+                    lo: a.min(b),
+                    hi: a.max(b),
+                }
+            }
+            _ => Range {
+                lo: f64::NEG_INFINITY,
+                hi: s.f64_in(-1.0, 1.0),
+            },
+        };
+        let before = [range(s), range(s), range(s)];
+        if !(piece_window_input(&piece, d0, d1) && ranges_input(&before)) {
+            return;
+        }
+        let mut after = before;
+        piece.extend_bounds(d0, d1, &mut after);
+        let mut instants: Vec<f64> = (0..=16).map(|k| d0 + (d1 - d0) * k as f64 / 16.0).collect();
+        instants.extend((0..8).map(|_| s.f64_full(d0, d1)));
+        // Interior extrema: q̇ = 0 (v + a d + j d²/2, in closed form) and q̈ = 0 (−a/j).
+        let (c2, c1, c0) = (0.5 * piece.j, piece.a, piece.v);
+        let mut extrema = Vec::new();
+        if c2 == 0.0 {
+            if c1 != 0.0 {
+                extrema.push(-c0 / c1);
+            }
+        } else {
+            let disc = c1 * c1 - 4.0 * c2 * c0;
+            if disc >= 0.0 {
+                extrema.push((-c1 + disc.sqrt()) / (2.0 * c2));
+                extrema.push((-c1 - disc.sqrt()) / (2.0 * c2));
+            }
+            extrema.push(-piece.a / piece.j);
+        }
+        for e in extrema {
+            instants.extend([e.next_down(), e, e.next_up()]);
+        }
+        for d in instants {
+            assert!(
+                ranges_cover_piece_at(&piece, d0, d1, &before, &after, d),
+                "{piece:?} over [{d0}, {d1}] at {d}: {before:?} → {after:?}, state {:?}",
+                piece.eval(d)
+            );
+        }
+    });
+}
