@@ -49,10 +49,11 @@ impl Piece {
     /// ends, `r` is only widened, and afterwards holds the piece's evaluated state
     /// ([`Self::eval`]) at every instant of the window ([`ranges_cover_piece_at`]; under Kani
     /// the postcondition takes any instant of `contract_instant`'s grid, so its proof covers
-    /// all of them). Proven on this function by `f5_extend_bounds_contract` (pacs-proofs; Kani
-    /// covers the quadratic piece of the f5 split and any prior ranges); the twin
-    /// `f5_extend_bounds_contract_holds` draws the whole input range and instants at full width. That the padding also covers the exact real values is the
-    /// module doc's argument and `motion/tests/range_inari.rs`.
+    /// all of them). Proven on this function by `f5_extend_bounds_contract` and
+    /// `f5_extend_bounds_contract_cubic` (pacs-proofs; Kani covers two constant pieces of the f5
+    /// splits and any prior ranges); the twin `f5_extend_bounds_contract_holds` draws the whole
+    /// input range and instants at full width. That the padding also covers the exact real
+    /// values is the module doc's argument and `motion/tests/range_inari.rs`.
     #[cfg_attr(kani, kani::requires(piece_window_input(self, d0, d1) && ranges_input(r)))]
     #[cfg_attr(kani, kani::modifies(r))]
     #[cfg_attr(kani, kani::ensures(|_| ranges_cover_piece_at(self, d0, d1, &old(*r), &*r, contract_instant())))]
