@@ -51,8 +51,10 @@ pub fn sub_down(x: f64, y: f64) -> f64 {
 /// `x * y` rounded up.
 ///
 /// # Soundness
-/// Claim C1: ≥ the exact product. Harness `a2_mul_up_enclose` (Kani, beside this module; the
-/// twin `a2_mul_enclose` draws any pair); mutant `x14` caught by both.
+/// Claim C1: ≥ the exact product. Harnesses `a2_mul_up_pp`, `_pn`, `_np`, `_nn` (Kani, beside
+/// this module: one per sign quadrant of the operands, together every pair; the whole end is
+/// `a2_mul_up_enclose`, heavy-tailed under Kani; the twin `a2_mul_enclose` draws any pair);
+/// mutant `x14` caught by all.
 #[inline(always)]
 pub fn mul_up(x: f64, y: f64) -> f64 {
     (x * y).next_up()
@@ -60,7 +62,9 @@ pub fn mul_up(x: f64, y: f64) -> f64 {
 /// `x * y` rounded down.
 ///
 /// # Soundness
-/// Claim C1: ≤ the exact product. Harness `a2_mul_down_enclose` (Kani; twin `a2_mul_enclose`).
+/// Claim C1: ≤ the exact product. Harnesses `a2_mul_down_pp`, `_pn`, `_np`, `_nn` (Kani, one
+/// per sign quadrant; the whole end `a2_mul_down_enclose`; twin `a2_mul_enclose`); mutant
+/// `x14b` caught.
 #[inline(always)]
 pub fn mul_down(x: f64, y: f64) -> f64 {
     (x * y).next_down()
