@@ -47,9 +47,11 @@ impl Piece {
     /// [`crate::trajectory::Trajectory::check`] and the joint boxes of the monitored trajectory
     /// rest on it): for a piece and window [`piece_window_input`] admits and ranges without NaN
     /// ends, `r` is only widened, and afterwards holds the piece's evaluated state
-    /// ([`Self::eval`]) at every instant of the window ([`ranges_cover_piece_at`]; under Kani
-    /// the postcondition takes any instant of `contract_instant`'s grid, so its proof covers
-    /// all of them). Proven on this function by `f5_extend_bounds_contract` and
+    /// ([`Self::eval`], up to its own error bound) at every instant of the window
+    /// ([`ranges_cover_piece_at`]; under Kani the postcondition takes any instant of
+    /// `contract_instant`'s grid of 2⁻⁸ s, so its proof covers those; full-width instants are
+    /// the twin's). Pieces beyond the precondition's ranges (faster than 8 rad/s, or windows
+    /// longer than 64 s) are outside the contract. Proven on this function by `f5_extend_bounds_contract` and
     /// `f5_extend_bounds_contract_cubic` (pacs-proofs; Kani covers two constant pieces of the f5
     /// splits and any prior ranges); the twin `f5_extend_bounds_contract_holds` draws the whole
     /// input range and instants at full width. That the padding also covers the exact real
@@ -62,9 +64,7 @@ impl Piece {
         let [rq, rv, ra] = r;
         let mut at = |d: f64| {
             let (q, v, a) = self.eval(d);
-            let ad = d.abs();
-            let tq = self.q.abs()
-                + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0));
+            let (tq, _, _) = self.term_magnitudes(d);
             rq.include_padded(q, PAD_REL * tq + PAD_ABS);
             self.include_derivs(d, v, a, rv, ra);
         };
@@ -121,13 +121,24 @@ impl Piece {
         }
     }
 
+    /// The sums of the magnitudes of the terms of q, q̇ and q̈ at local time `d` (s): the scale
+    /// of each evaluation's rounding error (`PAD_REL` times it bounds that error, module doc).
+    #[inline]
+    pub fn term_magnitudes(&self, d: f64) -> (f64, f64, f64) {
+        let ad = d.abs();
+        (
+            self.q.abs()
+                + ad * (self.v.abs() + ad * (0.5 * self.a.abs() + ad * self.j.abs() / 6.0)),
+            self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs()),
+            self.a.abs() + ad * self.j.abs(),
+        )
+    }
+
     /// Include q̇ = `v` and q̈ = `a` at local instant `d`, each padded by its evaluation's
     /// rounding bound.
     #[inline]
     fn include_derivs(&self, d: f64, v: f64, a: f64, rv: &mut Range, ra: &mut Range) {
-        let ad = d.abs();
-        let tv = self.v.abs() + ad * (self.a.abs() + ad * 0.5 * self.j.abs());
-        let ta = self.a.abs() + ad * self.j.abs();
+        let (_, tv, ta) = self.term_magnitudes(d);
         rv.include_padded(v, PAD_REL * tv + PAD_ABS);
         ra.include_padded(a, PAD_REL * ta + PAD_ABS);
     }
@@ -167,7 +178,9 @@ fn contract_instant() -> f64 {
 
 /// The postcondition of [`Piece::extend_bounds`] at one local instant `d`: `after` widens
 /// `before` (no end moved inwards), and if `d` lies in `[d0, d1]`, the piece's evaluated state
-/// `(q, q̇, q̈)` at `d` ([`Piece::eval`]) lies in `after`'s three ranges. The contract takes one
+/// `(q, q̇, q̈)` at `d` ([`Piece::eval`]) lies in `after`'s three ranges up to its own
+/// evaluation error bound (`PAD_REL` times [`Piece::term_magnitudes`]: the real state lies in
+/// the ranges by the module doc's argument, and the evaluated one is that close to it). The contract takes one
 /// arbitrary `d` (`contract_instant`), so its proof covers every such instant; the twin checks
 /// many.
 pub fn ranges_cover_piece_at(
@@ -179,12 +192,16 @@ pub fn ranges_cover_piece_at(
     d: f64,
 ) -> bool {
     let widened = |k: usize| after[k].lo <= before[k].lo && after[k].hi >= before[k].hi;
-    let inside = |k: usize, x: f64| after[k].lo <= x && x <= after[k].hi;
+    // Within the evaluation's own error bound of the range: the real state lies in it (module
+    // doc), and the evaluated one within `PAD_REL·t` of the real one.
+    let inside =
+        |k: usize, x: f64, t: f64| after[k].lo - PAD_REL * t <= x && x <= after[k].hi + PAD_REL * t;
     let (q, v, a) = p.eval(d);
+    let (tq, tv, ta) = p.term_magnitudes(d);
     widened(0)
         && widened(1)
         && widened(2)
-        && (!(d0 <= d && d <= d1) || (inside(0, q) && inside(1, v) && inside(2, a)))
+        && (!(d0 <= d && d <= d1) || (inside(0, q, tq) && inside(1, v, tv) && inside(2, a, ta)))
 }
 
 /// A closed interval [lo, hi] that accumulates the padded extrema of constant-jerk pieces;

@@ -69,7 +69,7 @@ fn mul<S: Source>(s: &mut S) {
     assert!(cmp_prod(x, y, mul_down(x, y)) != Less, "mul_down({x}, {y})");
 }
 // The whole claim verifies under Kani, but its solve time is heavy-tailed (5.6 s to 285.6 s, and
-// a 300 s timeout): not in CI, which checks each end on its own.
+// a 300 s timeout): not in CI, which checks each end in four sign quadrants (below).
 harness!(
     a2_mul_enclose,
     unwind = 2,
