@@ -168,8 +168,8 @@ pub fn ranges_input(r: &[Range; 3]) -> bool {
 }
 
 /// The instant at which Kani checks [`Piece::extend_bounds`]' postcondition: any multiple of
-/// 2⁻⁸ s from 0 to 256 s (a 16-bit integer scaled exactly). With any full-width float the
-/// proof timed out at 300 s (2026-12-01, Bitwuzla); the twin takes instants at full width.
+/// 2⁻⁸ s from 0 to 256 s (a 16-bit integer scaled exactly; with any full-width float the proof
+/// times out, proofs/README.md); the twin takes instants at full width.
 #[cfg(kani)]
 #[cfg_attr(kani_stub, allow(dead_code))] // the stand-in drops the contract that calls it
 fn contract_instant() -> f64 {

@@ -327,6 +327,24 @@ macro_rules! harness {
             }
         }
     };
+    // A body with arguments after the source: `body(args…)` is called as `body(source, args…)`
+    // (one body shared by harnesses that differ in constants).
+    ($name:ident, unwind = $n:literal, bits = $bits:literal, cases = $cases:expr, $body:ident($($arg:expr),+ $(,)?)) => {
+        #[cfg(kani)]
+        #[kani::proof]
+        #[kani::unwind($n)]
+        pub fn $name() {
+            $body(&mut $crate::KaniSource { bits: $bits }, $($arg),+);
+        }
+
+        #[cfg(test)]
+        mod $name {
+            #[test]
+            fn property_test() {
+                $crate::run_cases(stringify!($name), $cases, |s| super::$body(s, $($arg),+));
+            }
+        }
+    };
     ($name:ident, unwind = $n:literal, bits = $bits:literal, cases = $cases:expr, $body:ident) => {
         #[cfg(kani)]
         #[kani::proof]

@@ -546,6 +546,26 @@ harness!(
     piece_position_cubic
 );
 
+/// The piece at `t = 0`, `q = 0` with velocity `v`, acceleration `a` and jerk `j`.
+#[cfg(kani)]
+fn piece(v: f64, a: f64, j: f64) -> Piece {
+    Piece {
+        t: 0.0,
+        q: 0.0,
+        v,
+        a,
+        j,
+    }
+}
+
+/// `p.extend_bounds(d0, d1, r)` from any prior ranges `r` (the call whose contract a
+/// `proof_for_contract` harness checks).
+#[cfg(kani)]
+fn extend_bounds_from_any_ranges(p: &Piece, d0: f64, d1: f64) {
+    let mut r = any_ranges();
+    p.extend_bounds(d0, d1, &mut r);
+}
+
 /// Prior ranges for `extend_bounds`' contract: any floats without NaN (infinite ends included),
 /// or `EMPTY`.
 #[cfg(kani)]
@@ -572,15 +592,7 @@ fn any_ranges() -> [Range; 3] {
 #[kani::proof_for_contract(Piece::extend_bounds)]
 #[kani::unwind(3)]
 fn f5_extend_bounds_contract() {
-    let piece = Piece {
-        t: 0.0,
-        q: 0.0,
-        v: 2.0,
-        a: -4.0,
-        j: 0.0,
-    };
-    let mut r = any_ranges();
-    piece.extend_bounds(0.25, 1.0, &mut r);
+    extend_bounds_from_any_ranges(&piece(2.0, -4.0, 0.0), 0.25, 1.0);
 }
 
 /// As `f5_extend_bounds_contract`, for the cubic piece of `f5_piece_velocity_acceleration`
@@ -590,15 +602,7 @@ fn f5_extend_bounds_contract() {
 #[kani::proof_for_contract(Piece::extend_bounds)]
 #[kani::unwind(3)]
 fn f5_extend_bounds_contract_cubic() {
-    let piece = Piece {
-        t: 0.0,
-        q: 0.0,
-        v: 5.0,
-        a: -8.0,
-        j: 8.0,
-    };
-    let mut r = any_ranges();
-    piece.extend_bounds(0.5, 1.5, &mut r);
+    extend_bounds_from_any_ranges(&piece(5.0, -8.0, 8.0), 0.5, 1.5);
 }
 
 /// The twin of `f5_extend_bounds_contract`: pieces and windows over the contract's whole input
