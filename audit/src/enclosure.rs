@@ -222,8 +222,8 @@ pub fn span_boxes_into(
         q: JointBox::empty(),
         dq: JointBox::empty(),
     });
-    let finite = sb.q.assign_lanes(&mut b.q_lo, &mut b.q_hi, n)
-        && sb.dq.assign_lanes(&mut b.dq_lo, &mut b.dq_hi, n);
+    let finite =
+        sb.q.assign_lanes(&b.q_lo, &b.q_hi, n) && sb.dq.assign_lanes(&b.dq_lo, &b.dq_hi, n);
     if !finite {
         out.boxes = None;
     }

@@ -421,6 +421,7 @@ fn db_metadata(path: &Path, name: &str) -> Result<Option<String>, LogError> {
 fn read_rows(
     path: PathBuf,
     ids: Vec<i64>,
+    every_topic: bool,
     accounted_rows: Option<u64>,
     tx: SyncSender<Batch>,
     back: Receiver<Rows>,
@@ -428,19 +429,24 @@ fn read_rows(
     let mut last = Location::File;
     let r = (|| -> Result<(), Db3Problem> {
         let conn = open_ro(&path)?;
-        let list: Vec<String> = ids.iter().map(i64::to_string).collect();
         let mut account = accounted_rows.and_then(RowAccount::new);
-        // One scan of the time index either way (SQLite tests `topic_id` on the table's row).
-        let sql = if account.is_some() {
-            format!(
-                "SELECT id, topic_id, timestamp, CASE WHEN topic_id IN ({}) THEN data END FROM messages ORDER BY timestamp, id",
-                list.join(", ")
-            )
+        // One scan of the time index either way. Where the file has topics that are not
+        // configured, SQLite tests `topic_id` on the table's row: as a chain of equalities (an
+        // `IN` list of more than two builds an ephemeral index probed per row, ≈ 6 % more of
+        // SQLite's work); where every topic is configured, no test at all.
+        let wanted = ids
+            .iter()
+            .map(|id| format!("topic_id = {id}"))
+            .collect::<Vec<_>>()
+            .join(" OR ");
+        let select = "SELECT id, topic_id, timestamp,";
+        let order = "ORDER BY timestamp, id";
+        let sql = if every_topic {
+            format!("{select} data FROM messages {order}")
+        } else if account.is_some() {
+            format!("{select} CASE WHEN {wanted} THEN data END FROM messages {order}")
         } else {
-            format!(
-                "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
-                list.join(", ")
-            )
+            format!("{select} data FROM messages WHERE {wanted} {order}")
         };
         let mut stmt = conn.prepare(&sql).map_err(|error| Db3Problem::Sqlite {
             table: Some("messages"),
@@ -746,9 +752,10 @@ impl Db3Reader {
             let (back, back_rx) = sync_channel(BATCHES_IN_FLIGHT);
             let path = part.path.clone();
             let accounted = part.accounted_rows;
+            let every_topic = ids.len() == part.topics.len();
             let thread = std::thread::Builder::new()
                 .name("pacs-db3".into())
-                .spawn(move || read_rows(path, ids, accounted, tx, back_rx))
+                .spawn(move || read_rows(path, ids, every_topic, accounted, tx, back_rx))
                 .map_err(|e| LogError::Io {
                     file: part.name.clone(),
                     source: e,
