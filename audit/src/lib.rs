@@ -268,8 +268,18 @@ pub fn audit_file_with_header(
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<RunResult, LogError> {
-    let mut reader = open_log(path, cfg, header)?;
-    audit_reader(reader.as_mut(), cfg)
+    // A sqlite3 bag is read in storage order while that is time order (the same records,
+    // cheaper: `pacs_log::open_log_in_row_order`); one stored otherwise is audited again from
+    // the start through its time index, with a fresh auditor.
+    let mut reader = pacs_log::open_log_in_row_order(path, &cfg.mcap, &cfg.overrides(), header)?;
+    match audit_reader(reader.as_mut(), cfg) {
+        Err(LogError::RowsNotInTimeOrder { .. }) => {
+            drop(reader);
+            let mut reader = open_log(path, cfg, header)?;
+            audit_reader(reader.as_mut(), cfg)
+        }
+        r => r,
+    }
 }
 
 /// Open a log for reading by its form with the audit's reader settings: [`pacs_log::open_log`]

@@ -204,6 +204,100 @@ fn shuffled_insertion_is_read_in_timestamp_order() {
     same_result(&clean, &r);
 }
 
+/// `pacs_log::open_log` or `open_log_in_row_order`.
+type OpenLog = fn(
+    &Path,
+    &McapConfig,
+    &pacs_log::ModelOverrides,
+    Option<&Header>,
+) -> Result<Box<dyn pacs_log::RecordReader>, LogError>;
+
+/// Every record of `path` read by `open` (formatted: records borrow the reader's buffers), and
+/// how reading ended.
+fn records(path: &Path, open: OpenLog) -> (Vec<String>, Result<(), LogError>) {
+    let mut out = Vec::new();
+    let mut r = match open(path, &McapConfig::default(), &Default::default(), None) {
+        Ok(r) => r,
+        Err(e) => return (out, Err(e)),
+    };
+    loop {
+        match r.next_record() {
+            Ok(Some(rec)) => out.push(format!("{rec:?}")),
+            Ok(None) => return (out, Ok(())),
+            Err(e) => return (out, Err(e)),
+        }
+    }
+}
+
+/// Bags whose rows are stored in time order (as `ros2 bag record` writes them) read in storage
+/// order give exactly the records the time index gives, in the same order: one file, two
+/// people, a bag split into two files, with and without topics that are not configured.
+#[test]
+fn row_order_reads_the_records_of_the_time_index() {
+    for bag in ["clean", "violation", "people", "split"] {
+        let path = fixtures().join(bag);
+        let (by_index, end) = records(&path, pacs_log::open_log);
+        end.unwrap();
+        let (by_rows, end) = records(&path, pacs_log::open_log_in_row_order);
+        end.unwrap_or_else(|e| panic!("{bag}: {e}"));
+        assert!(by_index.len() > 100, "{bag}: {} records", by_index.len());
+        assert_eq!(by_rows, by_index, "{bag}");
+    }
+}
+
+/// Rows stored out of time order within what is held back at once (the shuffled bag: 113 rows
+/// inserted in random order) are read in storage order as through the time index; a bag whose
+/// rows are stored farther out of order (the clean bag's rows copied ten times, each copy two
+/// seconds later than the one inserted after it) stops reading in storage order with the error
+/// that asks for the time index (naming the file), and the audit then reads it through the time
+/// index: the same result as the time index gives.
+#[test]
+fn rows_out_of_time_order_are_read_again_through_the_time_index() {
+    let shuffled = fixtures().join("shuffled.db3");
+    let (by_rows, end) = records(&shuffled, pacs_log::open_log_in_row_order);
+    end.unwrap();
+    let (clean, _) = records(&fixtures().join("clean"), pacs_log::open_log);
+    assert_eq!(by_rows, clean);
+    let cfg = AuditConfig::default();
+    let r = pacs_audit::audit_file(&shuffled, &cfg).unwrap();
+    assert_eq!(r.verdict, Verdict::Pass);
+    same_result(
+        &pacs_audit::audit_file(&fixtures().join("clean"), &cfg).unwrap(),
+        &r,
+    );
+
+    let d = tempdir();
+    let path = copy_clean(&d);
+    // 1,000 copies of the first keypoints message at 0.9 s (1 µs apart), then one at 0.1 s:
+    // stored after more rows than are held back at once.
+    sql(
+        &path,
+        "WITH RECURSIVE n(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM n WHERE i < 999) \
+         INSERT INTO messages (topic_id, timestamp, data) \
+         SELECT m.topic_id, 1700000000900000000 + n.i * 1000, m.data FROM n, \
+         (SELECT topic_id, data FROM messages WHERE topic_id = \
+          (SELECT id FROM topics WHERE name = '/human/keypoints') ORDER BY id LIMIT 1) AS m; \
+         INSERT INTO messages (topic_id, timestamp, data) \
+         SELECT topic_id, 1700000000100000000, data FROM messages WHERE id = 114; \
+         UPDATE metadata SET metadata = replace(replace(metadata, 'message_count: 113', \
+         'message_count: 1114'), 'message_count: 11\n', 'message_count: 1012\n');",
+    );
+    let (_, end) = records(&path, pacs_log::open_log_in_row_order);
+    match end {
+        Err(LogError::RowsNotInTimeOrder { file }) => {
+            assert_eq!(file, path.display().to_string())
+        }
+        other => panic!("expected RowsNotInTimeOrder, got {other:?}"),
+    }
+    let (by_index, end) = records(&path, pacs_log::open_log);
+    end.unwrap();
+    assert_eq!(by_index.len(), clean.len() + 1_001);
+    same_result(
+        &audit(&path, None).unwrap(),
+        &pacs_audit::audit_file(&path, &cfg).unwrap(),
+    );
+}
+
 #[test]
 fn a_bag_split_into_two_files_reads_both_in_order() {
     let one = audit(&fixtures().join("violation"), None).unwrap();

@@ -153,6 +153,9 @@ pub struct Db3Reader {
     /// The metadata's messages per topic (`topics_with_message_count`), and the metadata's name.
     expected: Vec<(String, u64)>,
     info_name: String,
+    /// Whether each file's rows are read in storage order (`ORDER BY id`), checked to be time
+    /// order ([`Db3Reader::open_in_row_order`]), rather than through the time index.
+    row_order: bool,
 }
 
 fn open_ro(path: &Path) -> Result<Connection, Db3Problem> {
@@ -251,6 +254,9 @@ enum Db3Problem {
         "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count, and PRAGMA quick_check: {0})"
     )]
     Damaged(String),
+    /// Read in storage order, a row's timestamp is below the previous row's.
+    #[error("rows not stored in time order")]
+    NotInRowOrder,
 }
 
 impl Db3Problem {
@@ -422,6 +428,7 @@ fn read_rows(
     path: PathBuf,
     ids: Vec<i64>,
     every_topic: bool,
+    row_order: bool,
     accounted_rows: Option<u64>,
     tx: SyncSender<Batch>,
     back: Receiver<Rows>,
@@ -440,7 +447,12 @@ fn read_rows(
             .collect::<Vec<_>>()
             .join(" OR ");
         let select = "SELECT id, topic_id, timestamp,";
-        let order = "ORDER BY timestamp, id";
+        // In storage order, every row's timestamp is checked against the previous one's below.
+        let order = if row_order {
+            "ORDER BY id"
+        } else {
+            "ORDER BY timestamp, id"
+        };
         let sql = if every_topic {
             format!("{select} data FROM messages {order}")
         } else if account.is_some() {
@@ -473,6 +485,10 @@ fn read_rows(
             _ => new(),
         };
         let mut batch = fresh();
+        // In storage order: the `(timestamp, id)` of the last row handed over, and the latest
+        // timestamp read.
+        let mut handed = (i64::MIN, i64::MIN);
+        let mut latest = i64::MIN;
         while let Some(r) = rows.next().map_err(|error| {
             let after = match last {
                 Location::Message(id) => Some(id),
@@ -493,6 +509,13 @@ fn read_rows(
             }
             last = Location::Message(id);
             let timestamp = int(cell(2)?, "messages.timestamp")?;
+            if row_order {
+                // Below a row already handed over: the time index's order cannot be restored.
+                if timestamp < handed.0 {
+                    return Err(Db3Problem::NotInRowOrder);
+                }
+                latest = latest.max(timestamp);
+            }
             let data = match cell(3)? {
                 ValueRef::Blob(b) if b.len() > RECORD_LIMIT => {
                     return Err(Db3Problem::TooLarge(b.len()));
@@ -516,13 +539,22 @@ fn read_rows(
                 timestamp,
                 data,
             });
-            if (batch.rows.len() == BATCH || batch.bytes.len() >= BATCH_BYTES)
-                && tx
-                    .send(Batch::Rows(std::mem::replace(&mut batch, fresh())))
+            if batch.rows.len() == BATCH || batch.bytes.len() >= BATCH_BYTES {
+                let mut next = fresh();
+                if row_order {
+                    handed = hold_back(&mut batch, &mut next, latest.saturating_sub(HOLD_NS));
+                }
+                if tx
+                    .send(Batch::Rows(std::mem::replace(&mut batch, next)))
                     .is_err()
-            {
-                return Ok(());
+                {
+                    return Ok(());
+                }
             }
+        }
+        if row_order {
+            // The rest, in time order.
+            batch.rows.sort_unstable_by_key(|r| (r.timestamp, r.id));
         }
         // Rows that do not account for `1..=N` (gaps left by an editing tool, or damage): the
         // file must pass SQLite's structural check after all.
@@ -543,6 +575,41 @@ fn read_rows(
     }
 }
 
+/// How far back (ns) from the latest timestamp read in storage order the rows are held before
+/// they are handed over: rows stored up to this much out of time order (as the receive times of
+/// different topics may be) are put back into it ([`hold_back`]).
+const HOLD_NS: i64 = 10_000_000;
+
+/// Sort `batch` by `(timestamp, id)` and move the rows stamped at or after `horizon` (ns) into
+/// `next` (payloads copied), unless that would leave `batch` empty; returns the `(timestamp,
+/// id)` of the last row left in `batch` (the last one handed over).
+///
+/// Why the rows handed over are the time index's order (`ORDER BY timestamp, id`): each batch is
+/// sorted, a row held back joins the next batch, and a row read afterwards is only accepted if
+/// its timestamp is at least that of the last row handed over (`read_rows`; its id is larger,
+/// being read later), so every row handed over follows the previous one in `(timestamp, id)`;
+/// every row is handed over once. A sequence of all rows, increasing in a key unique per row, is
+/// the sorted one. Which rows are held back only decides how much disorder is put right before
+/// a row is refused (`Db3Problem::NotInRowOrder`), never the order handed over.
+fn hold_back(batch: &mut Rows, next: &mut Rows, horizon: i64) -> (i64, i64) {
+    let Rows { rows, bytes } = batch;
+    rows.sort_unstable_by_key(|r| (r.timestamp, r.id));
+    let cut = match rows.partition_point(|r| r.timestamp < horizon) {
+        0 => rows.len(),
+        k => k,
+    };
+    for r in rows.drain(cut..) {
+        let start = next.bytes.len();
+        next.bytes.extend_from_slice(&bytes[r.data.clone()]);
+        next.rows.push(Row {
+            data: start..next.bytes.len(),
+            ..r
+        });
+    }
+    rows.last()
+        .map_or((i64::MIN, i64::MIN), |r| (r.timestamp, r.id))
+}
+
 impl Db3Reader {
     /// Open a bag: a `.db3` file, or a directory with `metadata.yaml`. The header is `header` if
     /// given, else the bag's `custom_data` key [`CUSTOM_DATA_KEY`]. Every file's tables and topics
@@ -552,6 +619,35 @@ impl Db3Reader {
         cfg: &McapConfig,
         overrides: &ModelOverrides,
         header: Option<Header>,
+    ) -> Result<Self, LogError> {
+        Self::open_with(path, cfg, overrides, header, false)
+    }
+
+    /// [`Self::open`], reading each file's rows in storage order (`ORDER BY id`, one pass over
+    /// the table) instead of through the time index (`ORDER BY timestamp, id`: a seek into the
+    /// table per row), and putting them into time order on the way: rows are held back for
+    /// [`HOLD_NS`] and sorted ([`hold_back`]), so the rows handed over are exactly the time
+    /// index's sequence, and so is everything read. A row stamped before one already handed
+    /// over (stored more than [`HOLD_NS`] out of order) stops reading with
+    /// [`LogError::RowsNotInTimeOrder`] (records may have been returned before it): read the
+    /// bag again with [`Self::open`]. The audit does ([`crate::open_log_in_row_order`]); a bag
+    /// written by `ros2 bag record` stores its rows as they arrive, nearly in time order. (Where
+    /// several rows are bad, the error may name another one than the time index would.)
+    pub fn open_in_row_order(
+        path: &Path,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
+        header: Option<Header>,
+    ) -> Result<Self, LogError> {
+        Self::open_with(path, cfg, overrides, header, true)
+    }
+
+    fn open_with(
+        path: &Path,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
+        header: Option<Header>,
+        row_order: bool,
     ) -> Result<Self, LogError> {
         let name = path.display().to_string();
         cfg.validate()
@@ -696,6 +792,7 @@ impl Db3Reader {
             current: None,
             expected: info.topic_counts,
             info_name,
+            row_order,
         };
         while r.conv.is_empty() && !r.done {
             r.pump()?;
@@ -727,6 +824,11 @@ impl Db3Reader {
                         self.rows = None;
                         self.part += 1;
                     }
+                    Some(Ok(Batch::Err(_, Db3Problem::NotInRowOrder))) => {
+                        return Err(LogError::RowsNotInTimeOrder {
+                            file: part.name.clone(),
+                        });
+                    }
                     Some(Ok(Batch::Err(loc, p))) => {
                         return Err(LogError::input(&part.name, loc, p.to_string()));
                     }
@@ -753,9 +855,10 @@ impl Db3Reader {
             let path = part.path.clone();
             let accounted = part.accounted_rows;
             let every_topic = ids.len() == part.topics.len();
+            let row_order = self.row_order;
             let thread = std::thread::Builder::new()
                 .name("pacs-db3".into())
-                .spawn(move || read_rows(path, ids, every_topic, accounted, tx, back_rx))
+                .spawn(move || read_rows(path, ids, every_topic, row_order, accounted, tx, back_rx))
                 .map_err(|e| LogError::Io {
                     file: part.name.clone(),
                     source: e,
@@ -865,6 +968,9 @@ fn in_file(e: LogError, name: &str) -> LogError {
             file: name.to_string(),
             source,
         },
+        LogError::RowsNotInTimeOrder { .. } => LogError::RowsNotInTimeOrder {
+            file: name.to_string(),
+        },
     }
 }
 
@@ -925,5 +1031,78 @@ impl RecordReader for Db3Reader {
 
     fn file(&self) -> &str {
         &self.name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `hold_back` over 2,000 random batches (timestamps a few ms apart and jittered, some
+    /// equal; payloads naming their row): the rows left are sorted by `(timestamp, id)`, all
+    /// before the horizon unless none is (then all are left), each payload still its row's; the
+    /// rows moved are exactly the others, after them, with their payloads; the key returned is
+    /// the last row left's.
+    #[test]
+    fn hold_back_hands_over_sorted_rows_before_the_horizon() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next_u = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for case in 0..2_000 {
+            let n = 1 + (next_u() % 64) as usize;
+            let mut batch = Rows::default();
+            let mut next = Rows::default();
+            let mut latest = i64::MIN;
+            for id in 0..n as i64 {
+                let ts = id * 1_000_000 + (next_u() % 30_000_000) as i64 - 15_000_000;
+                let ts = if next_u() % 8 == 0 { 0 } else { ts };
+                latest = latest.max(ts);
+                let start = batch.bytes.len();
+                batch.bytes.extend_from_slice(&id.to_le_bytes());
+                batch.rows.push(Row {
+                    id,
+                    topic_id: 1,
+                    timestamp: ts,
+                    data: start..batch.bytes.len(),
+                });
+            }
+            let horizon = latest - (next_u() % 40_000_000) as i64;
+            let key = hold_back(&mut batch, &mut next, horizon);
+            let payload = |r: &Rows, row: &Row| {
+                i64::from_le_bytes(r.bytes[row.data.clone()].try_into().unwrap())
+            };
+            let keys = |r: &Rows| -> Vec<(i64, i64)> {
+                r.rows.iter().map(|x| (x.timestamp, x.id)).collect()
+            };
+            let (left, moved) = (keys(&batch), keys(&next));
+            assert!(!left.is_empty(), "case {case}");
+            assert_eq!(left.len() + moved.len(), n, "case {case}");
+            let mut all = [left.clone(), moved.clone()].concat();
+            all.sort_unstable();
+            all.dedup_by_key(|k| k.1);
+            assert_eq!(all.len(), n, "case {case}: a row lost or repeated");
+            assert!(
+                left.windows(2).all(|w| w[0] < w[1]),
+                "case {case}: {left:?}"
+            );
+            assert!(moved.windows(2).all(|w| w[0] < w[1]), "case {case}");
+            if let (Some(a), Some(b)) = (left.last(), moved.first()) {
+                assert!(a < b, "case {case}");
+            }
+            if !moved.is_empty() {
+                assert!(left.iter().all(|k| k.0 < horizon), "case {case}");
+                assert!(moved.iter().all(|k| k.0 >= horizon), "case {case}");
+            }
+            assert_eq!(Some(&key), left.last(), "case {case}");
+            for r in [&batch, &next] {
+                for row in &r.rows {
+                    assert_eq!(payload(r, row), row.id, "case {case}");
+                }
+            }
+        }
     }
 }

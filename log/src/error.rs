@@ -48,6 +48,13 @@ pub enum LogError {
         #[source]
         source: std::io::Error,
     },
+    /// A sqlite3 bag read in storage order ([`crate::open_log_in_row_order`]) whose rows are
+    /// not stored in time order: read it again with [`crate::open_log`], through its time index.
+    #[error("{file}: rows not stored in time order (read the bag through its time index)")]
+    RowsNotInTimeOrder {
+        /// File name as given.
+        file: String,
+    },
 }
 
 impl LogError {

@@ -61,6 +61,31 @@ pub fn open_log(
     overrides: &ModelOverrides,
     header: Option<&Header>,
 ) -> Result<Box<dyn RecordReader>, LogError> {
+    open_log_with(path, mcap, overrides, header, false)
+}
+
+/// [`open_log`], with a sqlite3 bag's rows read in storage order while that is time order
+/// ([`crate::db3::Db3Reader::open_in_row_order`]: one pass over each file's table instead of a
+/// seek per row through its time index; the same records). A bag whose rows are not stored in
+/// time order ends with [`LogError::RowsNotInTimeOrder`], possibly after some records: the
+/// caller then reads it again from the start with [`open_log`] (as `pacs_audit::audit_file`
+/// does). Every other log is read exactly as by [`open_log`].
+pub fn open_log_in_row_order(
+    path: &Path,
+    mcap: &McapConfig,
+    overrides: &ModelOverrides,
+    header: Option<&Header>,
+) -> Result<Box<dyn RecordReader>, LogError> {
+    open_log_with(path, mcap, overrides, header, true)
+}
+
+fn open_log_with(
+    path: &Path,
+    mcap: &McapConfig,
+    overrides: &ModelOverrides,
+    header: Option<&Header>,
+    row_order: bool,
+) -> Result<Box<dyn RecordReader>, LogError> {
     let name = path.display().to_string();
     if path.is_dir() && !crate::db3::is_bag_dir(path) {
         return Err(LogError::input(
@@ -73,12 +98,12 @@ pub fn open_log(
         ));
     }
     if is_db3(path)? {
-        return Ok(Box::new(crate::db3::Db3Reader::open(
-            path,
-            mcap,
-            overrides,
-            header.cloned(),
-        )?));
+        let header = header.cloned();
+        return Ok(Box::new(if row_order {
+            crate::db3::Db3Reader::open_in_row_order(path, mcap, overrides, header)?
+        } else {
+            crate::db3::Db3Reader::open(path, mcap, overrides, header)?
+        }));
     }
     let mcap_log = is_mcap(path)?;
     let f = std::fs::File::open(path).map_err(|e| LogError::Io {
