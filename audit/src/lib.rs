@@ -268,13 +268,14 @@ pub fn audit_file_with_header(
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<RunResult, LogError> {
-    // A sqlite3 bag is read in storage order while that is time order (the same records,
-    // cheaper: `pacs_log::open_log_in_row_order`); one stored otherwise is audited again from
-    // the start through its time index, with a fresh auditor.
-    let mut reader = pacs_log::open_log_in_row_order(path, &cfg.mcap, &cfg.overrides(), header)?;
-    match audit_reader(reader.as_mut(), cfg) {
+    // A sqlite3 bag is read in the table's own order, put back into time order on the way (the
+    // same records, cheaper: `pacs_log::open_log_in_row_order`); one stored too far out of time
+    // order for that is audited again from the start through its time index, with a fresh
+    // auditor (the first reader, and its thread, gone).
+    let first = pacs_log::open_log_in_row_order(path, &cfg.mcap, &cfg.overrides(), header)
+        .and_then(|mut reader| audit_reader(reader.as_mut(), cfg));
+    match first {
         Err(LogError::RowsNotInTimeOrder { .. }) => {
-            drop(reader);
             let mut reader = open_log(path, cfg, header)?;
             audit_reader(reader.as_mut(), cfg)
         }

@@ -4,8 +4,10 @@
 //!
 //! The topics, message types and CDR payloads are those of the MCAP form, converted by the same
 //! code ([`crate::ros`]): `messages.timestamp` (the receive time, ns) plays the MCAP log time.
-//! Each file's `messages` are read in `ORDER BY timestamp, id` (the payloads of configured topics
-//! only; every row's id where the rows are accounted, `db3/account.rs`), streamed by a thread
+//! Each file's `messages` are read in the order of `ORDER BY timestamp, id` (the payloads of
+//! configured topics only; every row's id where the rows are accounted, `db3/account.rs`):
+//! through the time index ([`Db3Reader::open`]), or for the audit in the table's own order, put
+//! back into time order on the way ([`Db3Reader::open_in_row_order`], [`hold_back`]), streamed by a thread
 //! that owns the read-only SQLite connection and hands rows over in small batches through a
 //! bounded channel (memory stays flat but for the accounting's bit per row, at most 16 MiB); the
 //! files of a bag are read one after the other, in the order of `relative_file_paths`, and their
@@ -254,7 +256,7 @@ enum Db3Problem {
         "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count, and PRAGMA quick_check: {0})"
     )]
     Damaged(String),
-    /// Read in storage order, a row's timestamp is below the previous row's.
+    /// Read in storage order, a row is stamped before the last row handed over.
     #[error("rows not stored in time order")]
     NotInRowOrder,
 }
@@ -437,8 +439,9 @@ fn read_rows(
     let r = (|| -> Result<(), Db3Problem> {
         let conn = open_ro(&path)?;
         let mut account = accounted_rows.and_then(RowAccount::new);
-        // One scan of the time index either way. Where the file has topics that are not
-        // configured, SQLite tests `topic_id` on the table's row: as a chain of equalities (an
+        // One scan of the time index, or of the table in its own order. Where the file has
+        // topics that are not configured, SQLite tests `topic_id` on the table's row: as a
+        // chain of equalities (an
         // `IN` list of more than two builds an ephemeral index probed per row, ≈ 6 % more of
         // SQLite's work); where every topic is configured, no test at all.
         let wanted = ids
@@ -447,7 +450,7 @@ fn read_rows(
             .collect::<Vec<_>>()
             .join(" OR ");
         let select = "SELECT id, topic_id, timestamp,";
-        // In storage order, every row's timestamp is checked against the previous one's below.
+        // In storage order, every row is checked against the last row handed over (below).
         let order = if row_order {
             "ORDER BY id"
         } else {
@@ -628,11 +631,14 @@ impl Db3Reader {
     /// table per row), and putting them into time order on the way: rows are held back for
     /// [`HOLD_NS`] and sorted ([`hold_back`]), so the rows handed over are exactly the time
     /// index's sequence, and so is everything read. A row stamped before one already handed
-    /// over (stored more than [`HOLD_NS`] out of order) stops reading with
+    /// over (as one stored more than [`HOLD_NS`] out of order is; so may be one within it where
+    /// a whole batch, 1,024 rows or 1 MiB, falls within [`HOLD_NS`]) stops reading with
     /// [`LogError::RowsNotInTimeOrder`] (records may have been returned before it): read the
     /// bag again with [`Self::open`]. The audit does ([`crate::open_log_in_row_order`]); a bag
     /// written by `ros2 bag record` stores its rows as they arrive, nearly in time order. (Where
-    /// several rows are bad, the error may name another one than the time index would.)
+    /// several rows are bad, the error may name another one than the time index would. The time
+    /// index itself is not read: where the rows account for the metadata's count, a damaged
+    /// index does not stop the reading, as other damage outside the rows does not.)
     pub fn open_in_row_order(
         path: &Path,
         cfg: &McapConfig,
@@ -1038,6 +1044,152 @@ impl RecordReader for Db3Reader {
 mod tests {
     use super::*;
 
+    /// The ids of the rows `read_rows` hands over for `path`, or its problem.
+    fn handed(
+        path: &Path,
+        ids: &[i64],
+        every_topic: bool,
+        row_order: bool,
+        accounted: Option<u64>,
+    ) -> Result<Vec<i64>, String> {
+        let (tx, rx) = sync_channel(BATCHES_IN_FLIGHT);
+        let (back, back_rx) = sync_channel(BATCHES_IN_FLIGHT);
+        let (path, ids) = (path.to_path_buf(), ids.to_vec());
+        let thread = std::thread::spawn(move || {
+            read_rows(path, ids, every_topic, row_order, accounted, tx, back_rx)
+        });
+        let mut out = Vec::new();
+        let result = loop {
+            match rx.recv() {
+                Ok(Batch::Rows(r)) => {
+                    for row in &r.rows {
+                        // The payload handed with the row is the row's (its first 8 bytes
+                        // are its id).
+                        let b = &r.bytes[row.data.clone()];
+                        assert_eq!(b.get(..8), Some(&row.id.to_le_bytes()[..]));
+                        out.push(row.id);
+                    }
+                    let _ = back.try_send(r);
+                }
+                Ok(Batch::End) => break Ok(out),
+                Ok(Batch::Err(_, p)) => break Err(p.to_string()),
+                Err(_) => break Err("the thread stopped".into()),
+            }
+        };
+        thread.join().unwrap();
+        result
+    }
+
+    /// Row order against the time index, on 60 random files read by the real reading thread:
+    /// 300 to 4,000 rows on three topics (one, two or all three configured; accounted or not,
+    /// so each of the three queries), receive times 0 to 2 ms apart with runs of equal ones,
+    /// stored in the order of each time moved by up to ±`jitter` (0 to 30 ms), payloads of 16
+    /// to 300 bytes and some of 200 kB (batches cut by their bytes). Through the time index the
+    /// rows handed over are `ORDER BY timestamp, id` of the configured topics; in row order they
+    /// are that sequence too, or reading stops with the row-order problem, which never happens
+    /// within ±4 ms (no run of equal times fills a batch here).
+    #[test]
+    fn read_rows_in_row_order_hands_over_the_time_index_sequence() {
+        let mut seed = 0x51f1_5e4d_2b3c_7a19_u64;
+        let mut next_u = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let dir = std::env::temp_dir().join(format!("pacs-db3-rows-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (mut refused, mut same) = (0, 0);
+        for case in 0..60 {
+            let n = 300 + (next_u() % 3_701) as usize;
+            let jitter = [0i64, 1, 4, 12, 30][case % 5] * 1_000_000;
+            let mut times = Vec::with_capacity(n);
+            let mut ts = 1_700_000_000_000_000_000i64;
+            for _ in 0..n {
+                if next_u() % 4 != 0 {
+                    ts += (next_u() % 2_000_001) as i64;
+                }
+                times.push(ts);
+            }
+            let mut stored: Vec<(i64, usize)> = times
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| {
+                    let moved = if jitter > 0 {
+                        (next_u() % (2 * jitter as u64 + 1)) as i64 - jitter
+                    } else {
+                        0
+                    };
+                    (t + moved, i)
+                })
+                .collect();
+            stored.sort_unstable();
+            let path = dir.join(format!("case{case}.db3"));
+            let _ = std::fs::remove_file(&path);
+            let c = Connection::open(&path).unwrap();
+            c.execute_batch(
+                "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, \
+                 timestamp INTEGER NOT NULL, data BLOB NOT NULL); \
+                 CREATE INDEX timestamp_idx ON messages (timestamp ASC); BEGIN;",
+            )
+            .unwrap();
+            for (k, &(_, i)) in stored.iter().enumerate() {
+                let id = k as i64 + 1;
+                let len = if next_u() % 400 == 0 {
+                    200_000
+                } else {
+                    16 + (next_u() % 285) as usize
+                };
+                let mut data = vec![0u8; len];
+                data[..8].copy_from_slice(&id.to_le_bytes());
+                let topic = 1 + (next_u() % 3) as i64;
+                c.execute(
+                    "INSERT INTO messages VALUES (?1, ?2, ?3, ?4)",
+                    rusqlite::params![id, topic, times[i], data],
+                )
+                .unwrap();
+            }
+            c.execute_batch("COMMIT;").unwrap();
+            let ids: Vec<i64> = match case % 3 {
+                0 => vec![1, 2, 3],
+                1 => vec![1, 3],
+                _ => vec![2],
+            };
+            let every = ids.len() == 3;
+            let list = ids
+                .iter()
+                .map(i64::to_string)
+                .collect::<Vec<_>>()
+                .join(", ");
+            let expected: Vec<i64> = c
+                .prepare(&format!(
+                    "SELECT id FROM messages WHERE topic_id IN ({list}) ORDER BY timestamp, id"
+                ))
+                .unwrap()
+                .query_map([], |r| r.get(0))
+                .unwrap()
+                .map(Result::unwrap)
+                .collect();
+            drop(c);
+            let accounted = (case % 2 == 0).then_some(n as u64);
+            let by_index = handed(&path, &ids, every, false, accounted).unwrap();
+            assert_eq!(by_index, expected, "case {case}: through the time index");
+            match handed(&path, &ids, every, true, accounted) {
+                Ok(by_rows) => {
+                    same += 1;
+                    assert_eq!(by_rows, expected, "case {case}: in row order");
+                }
+                Err(p) => {
+                    refused += 1;
+                    assert_eq!(p, Db3Problem::NotInRowOrder.to_string(), "case {case}");
+                    assert!(jitter > 4_000_000, "case {case}: refused at ±{jitter} ns");
+                }
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(same >= 30 && refused >= 1, "same {same}, refused {refused}");
+    }
+
     /// `hold_back` over 2,000 random batches (timestamps a few ms apart and jittered, some
     /// equal; payloads naming their row): the rows left are sorted by `(timestamp, id)`, all
     /// before the horizon unless none is (then all are left), each payload still its row's; the
@@ -1093,7 +1245,11 @@ mod tests {
             if let (Some(a), Some(b)) = (left.last(), moved.first()) {
                 assert!(a < b, "case {case}");
             }
-            if !moved.is_empty() {
+            if moved.is_empty() {
+                // Nothing held back: every row before the horizon, or none (then all go).
+                let before = left.iter().filter(|k| k.0 < horizon).count();
+                assert!(before == 0 || before == n, "case {case}: {before} of {n}");
+            } else {
                 assert!(left.iter().all(|k| k.0 < horizon), "case {case}");
                 assert!(moved.iter().all(|k| k.0 >= horizon), "case {case}");
             }

@@ -4,7 +4,8 @@
 //! rosbag2 (and `rosbags`) insert messages without an explicit id, so SQLite numbers a file's
 //! rows `1, 2, …, N` in insertion order, and the metadata records `N` per file (`files[i].
 //! message_count`). The reading thread walks the time index and fetches each row from the table
-//! (a row the index names but the table lacks is an SQLite error); a row the index lacks, a
+//! (a row the index names but the table lacks is an SQLite error), or for the audit walks the
+//! table itself in its own order (then the index is not read at all); a row the index lacks, a
 //! subtree read twice, or a table holding rows the metadata does not count shows here as an id
 //! missing, repeated or out of `1..=N`. When every id `1..=N` is read exactly once — and the
 //! table's own largest id, found through the table's b-tree rather than the index, is `N` — no
