@@ -140,18 +140,7 @@ fn scenes_of_bags_stored_in_and_out_of_time_order_are_written() {
     let bag = d.join("late.db3");
     std::fs::copy(fixtures().join("clean/clean.db3"), &bag).unwrap();
     let c = rusqlite::Connection::open(&bag).unwrap();
-    c.execute_batch(
-        "WITH RECURSIVE n(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM n WHERE i < 999) \
-         INSERT INTO messages (topic_id, timestamp, data) \
-         SELECT m.topic_id, 1700000000900000000 + n.i * 1000, m.data FROM n, \
-         (SELECT topic_id, data FROM messages WHERE topic_id = \
-          (SELECT id FROM topics WHERE name = '/human/keypoints') ORDER BY id LIMIT 1) AS m; \
-         INSERT INTO messages (topic_id, timestamp, data) \
-         SELECT topic_id, 1700000000100000000, data FROM messages WHERE id = 114; \
-         UPDATE metadata SET metadata = replace(replace(metadata, 'message_count: 113', \
-         'message_count: 1114'), 'message_count: 11\n', 'message_count: 1012\n');",
-    )
-    .unwrap();
+    c.execute_batch(pacs_testkit::DB3_ROW_STORED_LATE).unwrap();
     drop(c);
     for (log, name) in [(fixtures().join("clean"), "clean"), (bag, "late")] {
         let scene = d.join(format!("{name}.mcap"));

@@ -268,19 +268,16 @@ pub fn audit_file_with_header(
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<RunResult, LogError> {
-    // A sqlite3 bag is read in the table's own order, put back into time order on the way (the
-    // same records, cheaper: `pacs_log::open_log_in_row_order`); one stored too far out of time
-    // order for that is audited again from the start through its time index, with a fresh
-    // auditor (the first reader, and its thread, gone).
-    let first = pacs_log::open_log_in_row_order(path, &cfg.mcap, &cfg.overrides(), header)
-        .and_then(|mut reader| audit_reader(reader.as_mut(), cfg));
-    match first {
-        Err(LogError::RowsNotInTimeOrder { .. }) => {
-            let mut reader = open_log(path, cfg, header)?;
-            audit_reader(reader.as_mut(), cfg)
-        }
-        r => r,
-    }
+    // A sqlite3 bag in the table's own order, through its time index where it refuses that
+    // (`pacs_log::read_log`); a fresh auditor for each reading.
+    pacs_log::read_log(
+        path,
+        &cfg.mcap,
+        &cfg.overrides(),
+        header,
+        |reader| audit_reader(reader, cfg),
+        |e| matches!(e, LogError::RowsNotInTimeOrder { .. }),
+    )
 }
 
 /// Open a log for reading by its form with the audit's reader settings: [`pacs_log::open_log`]

@@ -268,20 +268,7 @@ fn rows_out_of_time_order_are_read_again_through_the_time_index() {
 
     let d = tempdir();
     let path = copy_clean(&d);
-    // 1,000 copies of the first keypoints message at 0.9 s (1 µs apart), then one at 0.1 s:
-    // stored after more rows than are held back at once.
-    sql(
-        &path,
-        "WITH RECURSIVE n(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM n WHERE i < 999) \
-         INSERT INTO messages (topic_id, timestamp, data) \
-         SELECT m.topic_id, 1700000000900000000 + n.i * 1000, m.data FROM n, \
-         (SELECT topic_id, data FROM messages WHERE topic_id = \
-          (SELECT id FROM topics WHERE name = '/human/keypoints') ORDER BY id LIMIT 1) AS m; \
-         INSERT INTO messages (topic_id, timestamp, data) \
-         SELECT topic_id, 1700000000100000000, data FROM messages WHERE id = 114; \
-         UPDATE metadata SET metadata = replace(replace(metadata, 'message_count: 113', \
-         'message_count: 1114'), 'message_count: 11\n', 'message_count: 1012\n');",
-    );
+    sql(&path, pacs_testkit::DB3_ROW_STORED_LATE);
     let (_, end) = records(&path, pacs_log::open_log_in_row_order);
     match end {
         Err(LogError::RowsNotInTimeOrder { file }) => {
@@ -307,13 +294,7 @@ fn rows_out_of_time_order_are_read_again_through_the_time_index() {
 /// it is never refused.
 #[test]
 fn random_storage_orders_read_as_the_time_index_or_are_refused() {
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
-    };
+    let mut next = pacs_testkit::xorshift(0x9e37_79b9_7f4a_7c15);
     let d = tempdir();
     let (mut refused, mut read) = (0, 0);
     for case in 0..24 {

@@ -1090,13 +1090,7 @@ mod tests {
     /// within ±4 ms (no run of equal times fills a batch here).
     #[test]
     fn read_rows_in_row_order_hands_over_the_time_index_sequence() {
-        let mut seed = 0x51f1_5e4d_2b3c_7a19_u64;
-        let mut next_u = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next_u = pacs_testkit::xorshift(0x51f1_5e4d_2b3c_7a19);
         let dir = std::env::temp_dir().join(format!("pacs-db3-rows-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (mut refused, mut same) = (0, 0);
@@ -1106,7 +1100,7 @@ mod tests {
             let mut times = Vec::with_capacity(n);
             let mut ts = 1_700_000_000_000_000_000i64;
             for _ in 0..n {
-                if next_u() % 4 != 0 {
+                if !next_u().is_multiple_of(4) {
                     ts += (next_u() % 2_000_001) as i64;
                 }
                 times.push(ts);
@@ -1135,7 +1129,7 @@ mod tests {
             .unwrap();
             for (k, &(_, i)) in stored.iter().enumerate() {
                 let id = k as i64 + 1;
-                let len = if next_u() % 400 == 0 {
+                let len = if next_u().is_multiple_of(400) {
                     200_000
                 } else {
                     16 + (next_u() % 285) as usize
@@ -1197,13 +1191,7 @@ mod tests {
     /// the last row left's.
     #[test]
     fn hold_back_hands_over_sorted_rows_before_the_horizon() {
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next_u = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next_u = pacs_testkit::xorshift(0x2545_f491_4f6c_dd1d);
         for case in 0..2_000 {
             let n = 1 + (next_u() % 64) as usize;
             let mut batch = Rows::default();
@@ -1211,7 +1199,7 @@ mod tests {
             let mut latest = i64::MIN;
             for id in 0..n as i64 {
                 let ts = id * 1_000_000 + (next_u() % 30_000_000) as i64 - 15_000_000;
-                let ts = if next_u() % 8 == 0 { 0 } else { ts };
+                let ts = if next_u().is_multiple_of(8) { 0 } else { ts };
                 latest = latest.max(ts);
                 let start = batch.bytes.len();
                 batch.bytes.extend_from_slice(&id.to_le_bytes());

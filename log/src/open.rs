@@ -79,6 +79,32 @@ pub fn open_log_in_row_order(
     open_log_with(path, mcap, overrides, header, true)
 }
 
+/// Read the log at `path` with `read`, as the audit does: first opened in the table's own order
+/// ([`open_log_in_row_order`]); where a sqlite3 bag refuses that order (`read` fails with an
+/// error `refused` recognizes: [`LogError::RowsNotInTimeOrder`] inside `E`), `read` runs again
+/// from the start on the log opened through its time index ([`open_log`]), so it must start
+/// afresh (a new auditor, a new output file). The one place that decides which order a log is
+/// read in for the audit and its scene.
+pub fn read_log<T, E: From<LogError>>(
+    path: &Path,
+    mcap: &McapConfig,
+    overrides: &ModelOverrides,
+    header: Option<&Header>,
+    mut read: impl FnMut(&mut dyn RecordReader) -> Result<T, E>,
+    refused: impl Fn(&E) -> bool,
+) -> Result<T, E> {
+    let in_row_order = open_log_in_row_order(path, mcap, overrides, header)
+        .map_err(E::from)
+        .and_then(|mut reader| read(reader.as_mut()));
+    match in_row_order {
+        Err(e) if refused(&e) => {
+            let mut reader = open_log(path, mcap, overrides, header)?;
+            read(reader.as_mut())
+        }
+        r => r,
+    }
+}
+
 fn open_log_with(
     path: &Path,
     mcap: &McapConfig,

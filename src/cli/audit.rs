@@ -280,49 +280,34 @@ fn write_scene(
         tracking_error: cfg.tracking_error,
         ..Default::default()
     };
-    // The log read as the audit read it: a sqlite3 bag in the table's own order, put back into
-    // time order (`pacs_log::open_log_in_row_order`), or through its time index where its rows
-    // are stored too far out of order for that (the scene is then written again from the start).
-    for row_order in [true, false] {
-        let reader = if row_order {
-            pacs_log::open_log_in_row_order(log, &cfg.mcap, &cfg.overrides(), header)
-        } else {
-            pacs_audit::open_log(log, cfg, header)
-        };
-        let mut reader = match reader {
-            Err(pacs_log::LogError::RowsNotInTimeOrder { .. }) if row_order => continue,
-            r => r.map_err(|e| invalid(e.to_string()))?,
-        };
-        let h = reader.header().with_overrides(&cfg.overrides());
-        let models = pacs_log::LogModels::from_header(&h).map_err(|e| invalid(e.to_string()))?;
-        let file = std::fs::File::create(path).map_err(|e| {
-            (
-                super::EXIT_CANNOT_WRITE as u8,
-                format!("cannot write the scene {}: {e}", path.display()),
+    // The log read as the audit read it (`pacs_log::read_log`): the scene is written afresh if
+    // a bag is read again through its time index.
+    pacs_log::read_log(
+        log,
+        &cfg.mcap,
+        &cfg.overrides(),
+        header,
+        |reader| {
+            let h = reader.header().with_overrides(&cfg.overrides());
+            let models = pacs_log::LogModels::from_header(&h)
+                .map_err(|e| pacs_replay::ReplayError::Model(e.to_string()))?;
+            let file = std::fs::File::create(path)
+                .map_err(|e| pacs_replay::ReplayError::Write(e.to_string()))?;
+            pacs_replay::write_scene(reader, &models, run, std::io::BufWriter::new(file), &opts)
+                .map(|_| ())
+        },
+        |e| {
+            matches!(
+                e,
+                pacs_replay::ReplayError::Log(LogError::RowsNotInTimeOrder { .. })
             )
-        })?;
-        match pacs_replay::write_scene(
-            reader.as_mut(),
-            &models,
-            run,
-            std::io::BufWriter::new(file),
-            &opts,
-        ) {
-            Ok(_) => return Ok(()),
-            Err(pacs_replay::ReplayError::Log(pacs_log::LogError::RowsNotInTimeOrder {
-                ..
-            })) if row_order => continue,
-            Err(pacs_replay::ReplayError::Write(m)) => {
-                return Err((
-                    super::EXIT_CANNOT_WRITE as u8,
-                    format!("cannot write the scene {}: {m}", path.display()),
-                ));
-            }
-            Err(other) => return Err(invalid(other.to_string())),
-        }
-    }
-    Err(invalid(format!(
-        "{}: not read in time order (internal)",
-        log.display()
-    )))
+        },
+    )
+    .map_err(|e| match e {
+        pacs_replay::ReplayError::Write(m) => (
+            super::EXIT_CANNOT_WRITE as u8,
+            format!("cannot write the scene {}: {m}", path.display()),
+        ),
+        other => invalid(other.to_string()),
+    })
 }

@@ -126,6 +126,32 @@ impl Drop for ScratchDir {
     }
 }
 
+/// A reproducible stream of pseudo-random `u64`s (xorshift64) from a non-zero `seed`, for tests
+/// that draw many random cases without a proptest strategy.
+pub fn xorshift(seed: u64) -> impl FnMut() -> u64 {
+    let mut s = seed.max(1);
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    }
+}
+
+/// SQL that turns a copy of the db3 fixture `clean.db3` (`python/tests/fixtures/db3`) into a
+/// bag whose rows are stored too far out of time order to be read in the table's own order:
+/// 1,000 copies of its first keypoints message at 0.9 s (1 µs apart), then one at 0.1 s, stored
+/// after them; the metadata's counts are raised to match (1,114 rows, 1,012 keypoints).
+pub const DB3_ROW_STORED_LATE: &str = "WITH RECURSIVE n(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM n WHERE i < 999) \
+     INSERT INTO messages (topic_id, timestamp, data) \
+     SELECT m.topic_id, 1700000000900000000 + n.i * 1000, m.data FROM n, \
+     (SELECT topic_id, data FROM messages WHERE topic_id = \
+      (SELECT id FROM topics WHERE name = '/human/keypoints') ORDER BY id LIMIT 1) AS m; \
+     INSERT INTO messages (topic_id, timestamp, data) \
+     SELECT topic_id, 1700000000100000000, data FROM messages WHERE id = 114; \
+     UPDATE metadata SET metadata = replace(replace(metadata, 'message_count: 113', \
+     'message_count: 1114'), 'message_count: 11\n', 'message_count: 1012\n');";
+
 #[cfg(test)]
 mod tests {
     use super::*;
