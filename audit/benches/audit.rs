@@ -186,23 +186,36 @@ fn bench(c: &mut Criterion) {
             black_box(pacs_audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
         })
     });
-    let bytes = mcap_log(&s, 0.6, "handover");
-    eprintln!("mcap: {} bytes for {N} robot samples", bytes.len());
-    dump("near_handover.mcap", &bytes);
+    // The MCAP reader with the person near (the checker's share as in `check_near_handover`)
+    // and far (the checker's share as in `check_far_ssm`: mostly the reader's own cost, as in
+    // the db3 figure of docs/performance-audit.md).
     let cfg = AuditConfig::default();
-    g.bench_function("mcap_read_and_check_near_handover", |b| {
-        b.iter(|| {
-            let mut r = pacs_log::mcap::McapReader::new(
-                "bench",
-                std::io::Cursor::new(&bytes[..]),
-                &cfg.mcap,
-                &cfg.overrides(),
-                None,
-            )
-            .unwrap();
-            black_box(pacs_audit::audit_reader(&mut r, &cfg).unwrap())
-        })
-    });
+    for (name, file, x, task) in [
+        (
+            "mcap_read_and_check_near_handover",
+            "near_handover.mcap",
+            0.6,
+            "handover",
+        ),
+        ("mcap_read_and_check_far_ssm", "far_ssm.mcap", 2.5, "ssm"),
+    ] {
+        let bytes = mcap_log(&s, x, task);
+        eprintln!("{name}: {} bytes for {N} robot samples", bytes.len());
+        dump(file, &bytes);
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut r = pacs_log::mcap::McapReader::new(
+                    "bench",
+                    std::io::Cursor::new(&bytes[..]),
+                    &cfg.mcap,
+                    &cfg.overrides(),
+                    None,
+                )
+                .unwrap();
+                black_box(pacs_audit::audit_reader(&mut r, &cfg).unwrap())
+            })
+        });
+    }
     g.finish();
 }
 

@@ -1024,3 +1024,103 @@ fn a_record_running_past_its_uncompressed_chunk_is_refused() {
     let e = audit_bytes("bad.mcap", &bad, &AuditConfig::default(), None).unwrap_err();
     assert!(e.to_string().contains(&format!("offset {first}")), "{e}");
 }
+
+/// Where the fields of the chunk record at `pos` are: (uncompressed size, uncompressed CRC,
+/// compression string, records length, records) as byte offsets into the file.
+struct ChunkAt {
+    size: usize,
+    crc: usize,
+    compression: usize,
+    records: usize,
+    records_len: usize,
+}
+
+fn chunk_at(b: &[u8], pos: usize) -> ChunkAt {
+    let body = pos + 9;
+    let clen = u32::from_le_bytes(b[body + 28..body + 32].try_into().unwrap()) as usize;
+    let records_len_at = body + 32 + clen;
+    ChunkAt {
+        size: body + 16,
+        crc: body + 24,
+        compression: body + 28,
+        records: records_len_at + 8,
+        records_len: u64_at(b, records_len_at) as usize,
+    }
+}
+
+/// Chunks are read whole: a damaged chunk is refused at the chunk's offset before any of its
+/// records is used, whatever the compression. A byte changed in an uncompressed chunk's
+/// records fails its CRC; a byte changed anywhere in a zstd chunk's data is refused (by the
+/// decoder, the declared size or the CRC) or, where the decoded bytes are the same, changes
+/// nothing; a wrong declared size and an unknown compression are named.
+#[test]
+fn damaged_chunks_are_refused_at_the_chunk() {
+    let (text, msgs) = scenario(0, 150, 0);
+    let want = run(&text, &AuditConfig::default()).unwrap();
+    let h = header("ssm");
+    // Uncompressed: the last byte of the first chunk's records belongs to a message's data.
+    let plain = write_mcap(
+        &Spec {
+            compression: None,
+            ..Spec::new()
+        },
+        &h,
+        &msgs,
+    );
+    let pos = first_chunk(&plain);
+    let c = chunk_at(&plain, pos);
+    assert_ne!(
+        u32::from_le_bytes(plain[c.crc..c.crc + 4].try_into().unwrap()),
+        0
+    );
+    let mut bad = plain.clone();
+    bad[c.records + c.records_len - 1] ^= 0x10;
+    // (That byte is the length of an empty `effort` sequence: decoded, it would be a
+    // truncated message; the CRC refuses the chunk first.)
+    expect_bad(&bad, "CRC of the records");
+    expect_bad(&bad, &format!("(the chunk at offset {pos})"));
+
+    // zstd: every byte of the first chunk's compressed data changed in turn.
+    let packed = write_mcap(&Spec::new(), &h, &msgs);
+    let pos = first_chunk(&packed);
+    let c = chunk_at(&packed, pos);
+    assert_eq!(&packed[c.compression + 4..c.compression + 8], b"zstd");
+    let (mut refused, mut same) = (0, 0);
+    for i in 0..c.records_len {
+        let mut bad = packed.clone();
+        bad[c.records + i] ^= 0x5a;
+        match audit_bytes("bad.mcap", &bad, &AuditConfig::default(), None) {
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(&format!("(the chunk at offset {pos})")),
+                    "byte {i}: {msg}"
+                );
+                refused += 1;
+            }
+            Ok(r) => {
+                same_result(&want, &r);
+                same += 1;
+            }
+        }
+    }
+    assert!(
+        refused > c.records_len * 9 / 10,
+        "{refused} refused, {same} read alike"
+    );
+    // The declared uncompressed size one byte more than the data holds.
+    let mut bad = packed.clone();
+    let size = u64_at(&packed, c.size);
+    bad[c.size..c.size + 8].copy_from_slice(&(size + 1).to_le_bytes());
+    expect_bad(
+        &bad,
+        &format!(
+            "the header declares {} bytes of records uncompressed",
+            size + 1
+        ),
+    );
+    // An unknown compression.
+    let mut bad = packed.clone();
+    bad[c.compression + 7] = b'x';
+    expect_bad(&bad, "unsupported MCAP chunk compression `zstx`");
+}

@@ -23,7 +23,7 @@ pub(super) struct Fields<'a> {
 }
 
 impl<'a> Fields<'a> {
-    fn take(&mut self, n: u64, what: &'static str) -> Result<&'a [u8], FieldError> {
+    pub(super) fn take(&mut self, n: u64, what: &'static str) -> Result<&'a [u8], FieldError> {
         if n > self.b.len() as u64 {
             return Err(FieldError::Truncated {
                 what,

@@ -1,6 +1,7 @@
 //! [`McapReader`]: the streaming reader over `mcap`'s sans-I/O linear reader, the reordering
 //! window of pending messages, and the `RecordReader` view of them.
 
+mod chunk;
 mod messages;
 
 use super::header::header_from_summary;
@@ -29,6 +30,8 @@ struct State {
     schemas: HashMap<u16, (String, String)>,
     channels: HashMap<u16, (String, Stream)>,
     done: bool,
+    /// Where the chunk being read starts in the file.
+    chunk_at: u64,
     /// The messages' conversion and time order (shared with the db3 reader).
     conv: Messages,
 }
@@ -37,6 +40,8 @@ struct State {
 pub struct McapReader<R: Read + Seek> {
     input: R,
     lin: LinearReader,
+    /// The chunk being read (whole chunks come from `lin`, see [`chunk`]).
+    chunk: chunk::Chunk,
     st: State,
     current: Option<Pending>,
 }
@@ -87,13 +92,14 @@ impl<R: Read + Seek> McapReader<R> {
         let lin = LinearReader::new_with_options(
             LinearReaderOptions::default()
                 .with_record_length_limit(RECORD_LIMIT)
-                .with_validate_chunk_crcs(true)
+                .with_emit_chunks(true)
                 .with_validate_data_section_crc(true)
                 .with_validate_summary_section_crc(true),
         );
         let mut r = Self {
             input,
             lin,
+            chunk: chunk::Chunk::default(),
             st: State {
                 size,
                 pos: 0,
@@ -101,6 +107,7 @@ impl<R: Read + Seek> McapReader<R> {
                 schemas: HashMap::new(),
                 channels: HashMap::new(),
                 done: false,
+                chunk_at: 0,
                 conv: Messages::new(file, mcfg, overrides.clone()),
             },
             current: None,
@@ -127,10 +134,16 @@ impl<R: Read + Seek> McapReader<R> {
         Ok(r)
     }
 
-    /// Process one MCAP event that yields a record (or the end of the file).
+    /// Process one MCAP record (one of the chunk being read, or the next in the file), or note
+    /// the end of the file.
     fn pump(&mut self) -> Result<(), LogError> {
         let st = &mut self.st;
         loop {
+            match self.chunk.next_record() {
+                Ok(Some((opcode, data))) => return st.record(opcode, data),
+                Ok(None) => {}
+                Err(e) => return Err(st.chunk_error(&e)),
+            }
             let ev = match self.lin.next_event() {
                 None => {
                     st.done = true;
@@ -168,6 +181,14 @@ impl<R: Read + Seek> McapReader<R> {
                     };
                     st.pos += k as u64;
                     self.lin.notify_read(k);
+                }
+                LinearReadEvent::Record {
+                    opcode: mcap::records::op::CHUNK,
+                    data,
+                } => {
+                    // The chunk starts where its 9-byte opcode and length do.
+                    st.chunk_at = st.pos.saturating_sub(9 + data.len() as u64);
+                    self.chunk.open(data).map_err(|e| st.chunk_error(&e))?;
                 }
                 LinearReadEvent::Record { opcode, data } => {
                     return st.record(opcode, data);

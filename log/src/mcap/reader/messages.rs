@@ -15,6 +15,15 @@ impl State {
         LogError::input(&self.conv.file, Location::Offset(self.pos), p)
     }
 
+    /// A chunk that cannot be read, at the chunk's offset.
+    pub(super) fn chunk_error(&self, e: &super::chunk::ChunkError) -> LogError {
+        LogError::input(
+            &self.conv.file,
+            Location::Offset(self.chunk_at),
+            format!("{e} (the chunk at offset {})", self.chunk_at),
+        )
+    }
+
     pub(super) fn set_header(&mut self, h: Header) -> Result<(), LogError> {
         let loc = match self.header_from {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
