@@ -1124,3 +1124,39 @@ fn damaged_chunks_are_refused_at_the_chunk() {
     bad[c.compression + 7] = b'x';
     expect_bad(&bad, "unsupported MCAP chunk compression `zstx`");
 }
+
+/// The MCAP reader hands equal times over already in the canonical order, so the audit applies
+/// its records without buffering them; the cap on records sharing one time stamp still holds:
+/// `MAX_EQUAL_TIME` robot samples at one stamp are read (and cover no time: inconclusive), one
+/// more is an input error naming the time, as for JSON Lines.
+#[test]
+fn equal_time_messages_are_capped_as_in_json_lines() {
+    let cap = pacs_log::MAX_EQUAL_TIME;
+    let mut msgs = vec![("/human/keypoints".to_string(), 0u64, good_human(0))];
+    let robot = good_robot(5_000_000);
+    msgs.extend((0..cap).map(|_| ("/joint_states".to_string(), 5_000_000u64, robot.clone())));
+    let h = header("ssm");
+    let r = audit_bytes(
+        "cap.mcap",
+        &write_mcap(&Spec::new(), &h, &msgs),
+        &AuditConfig::default(),
+        None,
+    )
+    .unwrap();
+    assert_ne!(r.verdict, Verdict::Pass);
+    msgs.push(("/joint_states".to_string(), 5_000_000u64, robot));
+    let e = audit_bytes(
+        "cap.mcap",
+        &write_mcap(&Spec::new(), &h, &msgs),
+        &AuditConfig::default(),
+        None,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains(&format!(
+            "more than {cap} records at one time stamp t = 0.005 s"
+        )),
+        "{e}"
+    );
+}

@@ -1035,6 +1035,11 @@ impl RecordReader for Db3Reader {
         Location::File
     }
 
+    fn in_canonical_order(&self) -> bool {
+        // Released from the reordering window in `(t, rank, arrival)` order (`ros::Pending`).
+        true
+    }
+
     fn file(&self) -> &str {
         &self.name
     }

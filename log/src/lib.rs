@@ -28,4 +28,4 @@ pub use format::{
     PersonEntry, Record, RecordReader, RobotRef, V1_PERSON, VERSION, VERSIONS, WriteError, dir_of,
 };
 pub use open::{is_db3, is_mcap, open_log, open_log_in_row_order, read_log};
-pub use order::{EqualTimeGroup, MAX_EQUAL_TIME};
+pub use order::{EqualTimeGroup, MAX_EQUAL_TIME, TooManyAtOneTime};

@@ -82,4 +82,12 @@ pub trait RecordReader {
     }
     /// The file name used in errors.
     fn file(&self) -> &str;
+    /// Whether records of equal time already come in the canonical order of
+    /// [`crate::order::EqualTimeGroup`] (measurements, robot samples, events, then arrival
+    /// order): then the audit applies them as they come, without buffering a copy. The ROS
+    /// readers (MCAP, db3) sort every message by `(t, rank, arrival)` on the way; JSON Lines and
+    /// CSV keep the file's order. Default: no.
+    fn in_canonical_order(&self) -> bool {
+        false
+    }
 }

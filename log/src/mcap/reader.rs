@@ -22,13 +22,32 @@ enum HeaderFrom {
     Record(u64),
 }
 
+/// The channels defined so far, by id (a table indexed by the 16-bit id: looked up once per
+/// message, without hashing).
+#[derive(Default)]
+struct Channels(Vec<Option<(String, Stream)>>);
+
+impl Channels {
+    fn get(&self, id: &u16) -> Option<&(String, Stream)> {
+        self.0.get(usize::from(*id))?.as_ref()
+    }
+
+    fn insert(&mut self, id: u16, c: (String, Stream)) {
+        let i = usize::from(id);
+        if self.0.len() <= i {
+            self.0.resize_with(i + 1, || None);
+        }
+        self.0[i] = Some(c);
+    }
+}
+
 /// Everything but the byte source and the MCAP state machine (split for the borrow checker).
 struct State {
     size: u64,
     pos: u64,
     header_from: Option<HeaderFrom>,
     schemas: HashMap<u16, (String, String)>,
-    channels: HashMap<u16, (String, Stream)>,
+    channels: Channels,
     done: bool,
     /// Where the chunk being read starts in the file.
     chunk_at: u64,
@@ -105,7 +124,7 @@ impl<R: Read + Seek> McapReader<R> {
                 pos: 0,
                 header_from,
                 schemas: HashMap::new(),
-                channels: HashMap::new(),
+                channels: Channels::default(),
                 done: false,
                 chunk_at: 0,
                 conv: Messages::new(file, mcfg, overrides.clone()),
@@ -249,6 +268,11 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
             _ => Location::File,
         }
+    }
+
+    fn in_canonical_order(&self) -> bool {
+        // Released from the reordering window in `(t, rank, arrival)` order (`ros::Pending`).
+        true
     }
 
     fn file(&self) -> &str {
