@@ -402,9 +402,14 @@ impl Auditor {
             // Not newer than the measurement in use: checked above, not used (as the shield).
             return Ok(());
         }
-        // Check the pending spans first: afterwards only `span_human`'s slot is still needed.
-        self.flush_block();
-        self.block_human = self.span_human;
+        // The new measurement goes into the slot `span_human` does not use. While the pending
+        // spans use `span_human`'s slot too (no record arrived since the last sample), they stay
+        // pending: the span the next sample closes still uses that measurement and joins their
+        // block. Otherwise the pending spans use the slot about to be written: checked first.
+        if self.block_human != self.span_human {
+            self.flush_block();
+            self.block_human = self.span_human;
+        }
         let slot = match self.span_human {
             Some(s) => 1 - s,
             None => 0,
