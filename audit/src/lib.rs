@@ -289,14 +289,17 @@ pub fn audit_file_with_header(
 ) -> Result<RunResult, LogError> {
     // A sqlite3 bag in the table's own order, through its time index where it refuses that
     // (`pacs_log::read_log`); a fresh auditor for each reading.
-    pacs_log::read_log(
+    let mut result = pacs_log::read_log(
         path,
         &cfg.mcap,
         &cfg.overrides(),
         header,
         |reader| audit_reader(reader, cfg),
         |e| matches!(e, LogError::RowsNotInTimeOrder { .. }),
-    )
+    )?;
+    // The run is the log as given (a bag directory, not the part read last).
+    result.log = path.display().to_string();
+    Ok(result)
 }
 
 /// Open a log for reading by its form with the audit's reader settings: [`pacs_log::open_log`]

@@ -894,3 +894,136 @@ fn rows_that_do_not_account_for_the_count_are_checked_after_reading() {
         &pacs_audit::audit_file(&d, &cfg).unwrap(),
     );
 }
+
+/// The bag directories of `python/tests/fixtures/mcap_bags` (the same runs, written by `rosbags`
+/// in the MCAP storage, `storage_identifier: mcap`).
+fn mcap_bags() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../python/tests/fixtures/mcap_bags")
+}
+
+/// Copy the bag directory `from` into `d` (as `name`).
+fn copy_bag(from: &Path, d: &Path, name: &str) -> PathBuf {
+    let to = d.join(name);
+    std::fs::create_dir_all(&to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+    to
+}
+
+/// A rosbag2 bag in the MCAP storage (ROS 2 Iron's and Jazzy's default) is audited as its
+/// directory: its `.mcap` parts in the metadata's order, one log, the header from the
+/// metadata's `custom_data`; the result is that of the same run's sqlite3 bag (one file, or
+/// two parts split at 0.5 s), named by the directory.
+#[test]
+fn mcap_bags_audit_as_their_db3_twins() {
+    let cfg = AuditConfig::default();
+    for (name, verdict) in [
+        ("clean", Verdict::Pass),
+        ("violation", Verdict::Fail),
+        ("split", Verdict::Fail),
+    ] {
+        let bag = mcap_bags().join(name);
+        let r = pacs_audit::audit_file(&bag, &cfg).unwrap();
+        assert_eq!(r.verdict, verdict, "{name}");
+        assert_eq!(r.log, bag.display().to_string());
+        same_result(
+            &pacs_audit::audit_file(&fixtures().join(name), &cfg).unwrap(),
+            &r,
+        );
+    }
+    // The split bag's parts read as one log equal the one-file bag of the same run.
+    same_result(
+        &audit(&mcap_bags().join("violation"), None).unwrap(),
+        &audit(&mcap_bags().join("split"), None).unwrap(),
+    );
+}
+
+/// What an MCAP bag directory must be: every listed part there and no unlisted `.mcap` part
+/// (either would leave part of the recording unread), parts listed in time order (the second
+/// part first is put back in order within the reordering window, refused beyond it, never
+/// reordered silently), each part complete (a part
+/// cut short is refused), no compression, and a header (custom_data or `--header`).
+#[test]
+fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
+    let d = tempdir();
+    let split = mcap_bags().join("split");
+    let meta = |bag: &Path| std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+    // A listed part missing.
+    let bag = copy_bag(&split, &d, "missing");
+    std::fs::remove_file(bag.join("split_1.mcap")).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["relative_file_paths[1]", "is not a file"],
+    );
+    // A part not listed.
+    let bag = copy_bag(&split, &d, "unlisted");
+    let text = meta(&bag).replace("  - split_1.mcap\n", "");
+    assert_ne!(text, meta(&bag));
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &[
+            &bag.join("split_1.mcap").display().to_string(),
+            "not in rosbag2_bagfile_information.relative_file_paths",
+        ],
+    );
+    // The parts listed in the wrong order.
+    let bag = copy_bag(&split, &d, "reversed");
+    let text = meta(&bag).replace(
+        "  - split_0.mcap\n  - split_1.mcap\n",
+        "  - split_1.mcap\n  - split_0.mcap\n",
+    );
+    assert_ne!(text, meta(&bag));
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    // Within the reordering window (the whole 1 s run) the messages are put back in order...
+    same_result(&audit(&split, None).unwrap(), &audit(&bag, None).unwrap());
+    // ... beyond it (a 0.1 s window), time going backwards is refused.
+    let mut cfg = AuditConfig::default();
+    cfg.mcap.reorder_window = 0.1;
+    let mut r = open_log(&bag, &cfg, None).unwrap();
+    expect_err(
+        pacs_audit::audit_reader(r.as_mut(), &cfg),
+        &bag.join("split_0.mcap").display().to_string(),
+        &["out of time order"],
+    );
+    // The second part cut short.
+    let bag = copy_bag(&split, &d, "cut");
+    let part = bag.join("split_1.mcap");
+    let bytes = std::fs::read(&part).unwrap();
+    std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("split_1.mcap").display().to_string(),
+        &["truncated file"],
+    );
+    // Compressed (rosbag2's file compression).
+    let bag = copy_bag(&split, &d, "compressed");
+    let text = meta(&bag).replace("compression_mode: ''", "compression_mode: FILE");
+    assert_ne!(text, meta(&bag));
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["compressed bags are not supported"],
+    );
+    // No header in the metadata: an error, unless one is given.
+    let bag = copy_bag(&mcap_bags().join("clean"), &d, "no_header");
+    let text: String = meta(&bag)
+        .lines()
+        .filter(|l| {
+            !l.contains("custom_data") && !l.contains("pacs_header") && !l.contains("\"fr3\"")
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("clean.mcap").display().to_string(),
+        &["missing header"],
+    );
+    assert_eq!(audit(&bag, Some(&header())).unwrap().verdict, Verdict::Pass);
+}

@@ -60,6 +60,122 @@ pub fn is_bag_dir(path: &Path) -> bool {
     path.is_dir() && path.join(METADATA_FILE).is_file()
 }
 
+/// The parsed `metadata.yaml` of the bag directory `path` (at most [`METADATA_LIMIT`] bytes) and
+/// the name errors about it use.
+fn read_bag_metadata(path: &Path) -> Result<(BagInfo, String), LogError> {
+    let meta = path.join(METADATA_FILE);
+    let meta_name = meta.display().to_string();
+    let bad = |p: String| LogError::input(&meta_name, Location::File, p);
+    let io = |e: std::io::Error| LogError::Io {
+        file: meta_name.clone(),
+        source: e,
+    };
+    let len = std::fs::metadata(&meta).map_err(io)?.len();
+    if len > METADATA_LIMIT {
+        return Err(bad(format!(
+            "{len} bytes: larger than the {METADATA_LIMIT} bytes read"
+        )));
+    }
+    let text = std::fs::read_to_string(&meta).map_err(io)?;
+    let info = bag_info(&text, false).map_err(|e| bad(e.to_string()))?;
+    Ok((info, meta_name))
+}
+
+/// The files of the bag directory `path` in the metadata's order: each listed one must be a file,
+/// and no file ending in `.{ext}` may be in the directory unlisted (a part the metadata does not
+/// list would go unread: the metadata would not describe the recording in the directory).
+fn bag_files(
+    path: &Path,
+    info: &BagInfo,
+    meta_name: &str,
+    ext: &str,
+) -> Result<Vec<PathBuf>, LogError> {
+    let bad = |p: String| LogError::input(meta_name, Location::File, p);
+    if info.files.is_empty() {
+        return Err(bad(
+            "rosbag2_bagfile_information.relative_file_paths: no files".into(),
+        ));
+    }
+    let mut files = Vec::new();
+    for (i, f) in info.files.iter().enumerate() {
+        let p = path.join(f);
+        if !p.is_file() {
+            return Err(bad(format!(
+                "rosbag2_bagfile_information.relative_file_paths[{i}]: `{}` is not a file",
+                p.display()
+            )));
+        }
+        files.push(p);
+    }
+    let listed: Vec<PathBuf> = files.iter().filter_map(|p| p.canonicalize().ok()).collect();
+    let entries = std::fs::read_dir(path).map_err(|e| LogError::Io {
+        file: path.display().to_string(),
+        source: e,
+    })?;
+    for e in entries.flatten() {
+        let p = e.path();
+        let part = p.extension().is_some_and(|x| x.eq_ignore_ascii_case(ext));
+        if part && p.is_file() && !p.canonicalize().is_ok_and(|c| listed.contains(&c)) {
+            return Err(bad(format!(
+                "`{}` is in the bag directory but not in rosbag2_bagfile_information.relative_file_paths ({}): the metadata does not describe the whole recording",
+                p.display(),
+                info.files.join(", ")
+            )));
+        }
+    }
+    Ok(files)
+}
+
+/// A rosbag2 bag directory in the MCAP storage (`storage_identifier: mcap`: the default of
+/// `ros2 bag record` from ROS 2 Iron on): its `.mcap` files in the metadata's order and the pacs
+/// header of its `custom_data` key [`CUSTOM_DATA_KEY`], if it has one.
+#[derive(Debug)]
+pub struct McapBag {
+    /// The bag's files, in the order `relative_file_paths` lists them.
+    pub files: Vec<PathBuf>,
+    /// The header of the metadata's `custom_data` (relative robot paths rebased to the bag).
+    pub header: Option<Header>,
+    /// `metadata.yaml`'s path, as errors about it name it.
+    pub metadata: String,
+}
+
+/// The MCAP bag at `path`, or `None` where `path` is not a bag directory in the MCAP storage.
+/// Errors (naming `metadata.yaml` and the field): metadata that cannot be read, a compressed
+/// bag, a listed file missing or a `.mcap` file the metadata does not list, a `custom_data`
+/// header that is not a valid pacs header.
+pub fn mcap_bag(path: &Path) -> Result<Option<McapBag>, LogError> {
+    if !is_bag_dir(path) {
+        return Ok(None);
+    }
+    let (info, meta_name) = read_bag_metadata(path)?;
+    if info.storage.as_deref() != Some("mcap") {
+        return Ok(None);
+    }
+    info.check_compression()
+        .map_err(|e| LogError::input(&meta_name, Location::File, e.to_string()))?;
+    let files = bag_files(path, &info, &meta_name, "mcap")?;
+    let header = match &info.pacs_header {
+        None => None,
+        Some(json) => {
+            let mut h = parse_header_json(json).map_err(|e| {
+                LogError::input(
+                    &meta_name,
+                    Location::File,
+                    format!("custom_data.{CUSTOM_DATA_KEY}: {e}"),
+                )
+            })?;
+            // A {urdf, side} robot's relative paths are relative to the bag.
+            h.robot.rebase(path);
+            Some(h)
+        }
+    };
+    Ok(Some(McapBag {
+        files,
+        header,
+        metadata: meta_name,
+    }))
+}
+
 /// One row of `messages`; its payload is `data` of its batch's bytes.
 #[derive(Clone)]
 struct Row {
@@ -660,56 +776,10 @@ impl Db3Reader {
             .map_err(|p| LogError::input(&name, Location::File, format!("invalid config: {p}")))?;
         // The metadata: the directory's metadata.yaml, or a lone file's `metadata` table.
         let (files, info, info_name, base_dir) = if path.is_dir() {
-            let meta = path.join(METADATA_FILE);
-            let meta_name = meta.display().to_string();
-            let bad = |p: String| LogError::input(&meta_name, Location::File, p);
-            let io = |e: std::io::Error| LogError::Io {
-                file: meta_name.clone(),
-                source: e,
-            };
-            let len = std::fs::metadata(&meta).map_err(io)?.len();
-            if len > METADATA_LIMIT {
-                return Err(bad(format!(
-                    "{len} bytes: larger than the {METADATA_LIMIT} bytes read"
-                )));
-            }
-            let text = std::fs::read_to_string(&meta).map_err(io)?;
-            let info = bag_info(&text, false).map_err(|e| bad(e.to_string()))?;
-            info.check().map_err(|e| bad(e.to_string()))?;
-            if info.files.is_empty() {
-                return Err(bad(
-                    "rosbag2_bagfile_information.relative_file_paths: no files".into(),
-                ));
-            }
-            let mut files = Vec::new();
-            for (i, f) in info.files.iter().enumerate() {
-                let p = path.join(f);
-                if !p.is_file() {
-                    return Err(bad(format!(
-                        "rosbag2_bagfile_information.relative_file_paths[{i}]: `{}` is not a file",
-                        p.display()
-                    )));
-                }
-                files.push(p);
-            }
-            // A part the metadata does not list would go unread: the metadata does not describe
-            // the recording in the directory.
-            let listed: Vec<PathBuf> = files.iter().filter_map(|p| p.canonicalize().ok()).collect();
-            let entries = std::fs::read_dir(path).map_err(|e| LogError::Io {
-                file: name.clone(),
-                source: e,
-            })?;
-            for e in entries.flatten() {
-                let p = e.path();
-                let is_db3 = p.extension().is_some_and(|x| x.eq_ignore_ascii_case("db3"));
-                if is_db3 && p.is_file() && !p.canonicalize().is_ok_and(|c| listed.contains(&c)) {
-                    return Err(bad(format!(
-                        "`{}` is in the bag directory but not in rosbag2_bagfile_information.relative_file_paths ({}): the metadata does not describe the whole recording",
-                        p.display(),
-                        info.files.join(", ")
-                    )));
-                }
-            }
+            let (info, meta_name) = read_bag_metadata(path)?;
+            info.check()
+                .map_err(|e| LogError::input(&meta_name, Location::File, e.to_string()))?;
+            let files = bag_files(path, &info, &meta_name, "db3")?;
             (files, info, meta_name, path.to_path_buf())
         } else {
             check_size(path, &name)?;

@@ -123,6 +123,9 @@ fn open_log_with(
             ),
         ));
     }
+    if let Some(bag) = crate::db3::mcap_bag(path)? {
+        return open_mcap_bag(bag, mcap, overrides, header);
+    }
     if is_db3(path)? {
         let header = header.cloned();
         return Ok(Box::new(if row_order {
@@ -161,4 +164,29 @@ fn open_log_with(
     } else {
         Ok(Box::new(crate::jsonl::JsonlReader::new(&name, input)?))
     }
+}
+
+/// A rosbag2 bag directory in the MCAP storage ([`crate::db3::mcap_bag`]): its files read one
+/// after the other as one log ([`crate::mcap::McapReader::new_parts`]), with the header given
+/// (`--header`), else the metadata's `custom_data` one, else the first file's `pacs` metadata
+/// record.
+fn open_mcap_bag(
+    bag: crate::db3::McapBag,
+    mcap: &McapConfig,
+    overrides: &ModelOverrides,
+    header: Option<&Header>,
+) -> Result<Box<dyn RecordReader>, LogError> {
+    let mut parts = Vec::with_capacity(bag.files.len());
+    for f in &bag.files {
+        let name = f.display().to_string();
+        let file = std::fs::File::open(f).map_err(|e| LogError::Io {
+            file: name.clone(),
+            source: e,
+        })?;
+        parts.push((name, std::io::BufReader::with_capacity(1 << 16, file)));
+    }
+    let header = header.cloned().or(bag.header);
+    Ok(Box::new(crate::mcap::McapReader::new_parts(
+        parts, mcap, overrides, header,
+    )?))
 }

@@ -56,3 +56,20 @@ def test_a_bag_without_a_header_needs_one_given(tmp_path):
     log.write_text(json.dumps(bags.HEADER) + "\n")
     with pytest.raises(pacs.InputError, match="applies to MCAP logs and ROS 2 bags only"):
         pacs.audit(log, header=bags.HEADER)
+
+
+def test_fresh_bags_in_the_mcap_storage_audit_as_the_sqlite3_ones(tmp_path):
+    # rosbags writes the same runs in the MCAP storage (ROS 2 Iron's and Jazzy's default): the
+    # bag directory is one log, named by the directory, with the sqlite3 bag's result.
+    from rosbags.rosbag2 import StoragePlugin
+
+    for violation in (False, True):
+        msgs = bags.messages(violation=violation, mapped=violation)
+        mcap_bag = bags.write_bag(tmp_path / f"mcap{violation}", msgs, storage=StoragePlugin.MCAP)
+        db3_bag = bags.write_bag(tmp_path / f"db3{violation}", msgs)
+        a = pacs.audit(mcap_bag)[0]
+        b = pacs.audit(db3_bag)[0]
+        assert a.verdict == ("fail" if violation else "pass")
+        assert a.log == str(mcap_bag)
+        assert a.metrics == b.metrics and a.violations == b.violations
+        assert a.meta["mcap_time_base_s"] == 1_700_000_000

@@ -15,8 +15,8 @@ use std::process::ExitCode;
 #[derive(clap::Args, Debug)]
 pub struct AuditArgs {
     /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
-    /// by its magic bytes or `*.mcap`; or a ROS 2 sqlite3 bag: `*.db3` or a bag directory with
-    /// metadata.yaml; see docs/log-format.md). Any other directory stands for its logs (*.jsonl,
+    /// by its magic bytes or `*.mcap`; or a ROS 2 bag: `*.db3`, or a bag directory with
+    /// metadata.yaml in the sqlite3 or the MCAP storage; see docs/log-format.md). Any other directory stands for its logs (*.jsonl,
     /// *.csv, *.mcap, *.db3 and bag directories, also in subdirectories), sorted by path
     /// (docs/fleet.md).
     #[arg(required = true, value_name = "LOG")]

@@ -43,7 +43,7 @@ pub(super) enum MetadataError {
         expected: &'static str,
         found: Option<String>,
     },
-    #[error("storage_identifier `{storage}` is not supported here (expected `sqlite3`){}", if storage == "mcap" { "; audit the bag's .mcap file itself" } else { "" })]
+    #[error("storage_identifier `{storage}` is not supported here (expected `sqlite3`){}", if storage == "mcap" { "; `pacs_log::open_log` reads MCAP bags" } else { "" })]
     Storage { storage: String },
     #[error(
         "compressed bags are not supported (compression_mode `{mode}`, compression_format `{format}`): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)"
@@ -228,6 +228,11 @@ impl BagInfo {
                 storage: s.to_string(),
             });
         }
+        self.check_compression()
+    }
+
+    /// Refuse a compressed bag (rosbag2's file or message compression).
+    pub(super) fn check_compression(&self) -> Result<(), MetadataError> {
         let mode = self.compression_mode.to_ascii_lowercase();
         if !(mode.is_empty() || mode == "none") || !self.compression_format.is_empty() {
             return Err(MetadataError::Compressed {

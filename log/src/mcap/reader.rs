@@ -63,6 +63,20 @@ pub struct McapReader<R: Read + Seek> {
     chunk: chunk::Chunk,
     st: State,
     current: Option<Pending>,
+    /// The files still to read after this one (the later parts of a split bag), with names.
+    rest: std::collections::VecDeque<(String, R)>,
+}
+
+/// The linear reader's settings: every length bounded, whole chunks handed over, the data and
+/// summary sections' CRCs checked.
+fn linear_reader() -> LinearReader {
+    LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_record_length_limit(RECORD_LIMIT)
+            .with_emit_chunks(true)
+            .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true),
+    )
 }
 
 fn mcap_problem(e: &mcap::McapError) -> String {
@@ -82,11 +96,34 @@ impl<R: Read + Seek> McapReader<R> {
     /// errors.
     pub fn new(
         file: &str,
-        mut input: R,
+        input: R,
         cfg: &McapConfig,
         overrides: &ModelOverrides,
         header: Option<Header>,
     ) -> Result<Self, LogError> {
+        Self::new_parts(vec![(file.to_string(), input)], cfg, overrides, header)
+    }
+
+    /// [`Self::new`] over the parts of one recording read one after the other (a rosbag2 bag
+    /// split into several MCAP files, in the metadata's order), as one log: one time base and one
+    /// reordering window across the files; each file's schemas and channels are its own; errors
+    /// name the file they are in. The header (`header`, else the first file's) holds for every
+    /// part; `pacs` metadata records of later parts are ignored. `parts` must not be empty.
+    pub fn new_parts(
+        parts: Vec<(String, R)>,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
+        header: Option<Header>,
+    ) -> Result<Self, LogError> {
+        let mut rest: std::collections::VecDeque<(String, R)> = parts.into();
+        let Some((file, mut input)) = rest.pop_front() else {
+            return Err(LogError::input(
+                "",
+                Location::File,
+                "an MCAP log of no files",
+            ));
+        };
+        let file = file.as_str();
         let io = |e: std::io::Error| LogError::Io {
             file: file.to_string(),
             source: e,
@@ -108,17 +145,12 @@ impl<R: Read + Seek> McapReader<R> {
         }
         super::guard::check_chunk_records(file, &mut input, size)?;
         input.seek(SeekFrom::Start(0)).map_err(io)?;
-        let lin = LinearReader::new_with_options(
-            LinearReaderOptions::default()
-                .with_record_length_limit(RECORD_LIMIT)
-                .with_emit_chunks(true)
-                .with_validate_data_section_crc(true)
-                .with_validate_summary_section_crc(true),
-        );
+        let lin = linear_reader();
         let mut r = Self {
             input,
             lin,
             chunk: chunk::Chunk::default(),
+            rest,
             st: State {
                 size,
                 pos: 0,
@@ -165,8 +197,14 @@ impl<R: Read + Seek> McapReader<R> {
             }
             let ev = match self.lin.next_event() {
                 None => {
-                    st.done = true;
-                    return Ok(());
+                    let Some((file, input)) = self.rest.pop_front() else {
+                        st.done = true;
+                        return Ok(());
+                    };
+                    self.input = input;
+                    st.next_part(file, &mut self.input)?;
+                    self.lin = linear_reader();
+                    continue;
                 }
                 Some(Err(e)) => {
                     return Err(LogError::input(

@@ -15,6 +15,35 @@ impl State {
         LogError::input(&self.conv.file, Location::Offset(self.pos), p)
     }
 
+    /// Start reading the next part `file` (its bytes `input`, checked by the walk of
+    /// [`crate::mcap::guard`] and left at its start): offsets, schemas and channels begin anew,
+    /// the time base, the reordering window and the header carry over (a later part's `pacs`
+    /// metadata record is ignored once the header is known).
+    pub(super) fn next_part<R: std::io::Read + std::io::Seek>(
+        &mut self,
+        file: String,
+        input: &mut R,
+    ) -> Result<(), LogError> {
+        use std::io::SeekFrom;
+        let io = |e: std::io::Error| LogError::Io {
+            file: file.clone(),
+            source: e,
+        };
+        let size = input.seek(SeekFrom::End(0)).map_err(io)?;
+        crate::mcap::guard::check_chunk_records(&file, input, size)?;
+        input.seek(SeekFrom::Start(0)).map_err(io)?;
+        self.size = size;
+        self.pos = 0;
+        self.chunk_at = 0;
+        self.schemas.clear();
+        self.channels = super::Channels::default();
+        if self.conv.header.is_some() {
+            self.header_from = Some(HeaderFrom::Given);
+        }
+        self.conv.file = file;
+        Ok(())
+    }
+
     /// A chunk that cannot be read, at the chunk's offset.
     pub(super) fn chunk_error(&self, e: &super::chunk::ChunkError) -> LogError {
         LogError::input(
