@@ -207,21 +207,25 @@ pub fn audit_reader(
         let t = rec.t();
         if !t.is_finite() {
             let p = format!("t: value {t} is not finite");
-            return Err(LogError::input(&file, reader.location(), p));
+            return Err(LogError::input(reader.file(), reader.location(), p));
         }
         if t < last_t {
             let p = format!("time goes backwards: t = {t} s after t = {last_t} s");
-            return Err(LogError::input(&file, reader.location(), p));
+            return Err(LogError::input(reader.file(), reader.location(), p));
         }
         if direct {
             at_this_time = if t == last_t { at_this_time + 1 } else { 1 };
             last_t = t;
             if at_this_time > MAX_EQUAL_TIME {
                 let p = TooManyAtOneTime { t }.to_string();
-                return Err(LogError::input(&file, reader.location(), p));
+                return Err(LogError::input(reader.file(), reader.location(), p));
             }
             if let Err(p) = apply(rec) {
-                return Err(LogError::input(&file, reader.location(), p.to_string()));
+                return Err(LogError::input(
+                    reader.file(),
+                    reader.location(),
+                    p.to_string(),
+                ));
             }
             continue;
         }
@@ -233,7 +237,7 @@ pub fn audit_reader(
         last_t = t;
         group
             .push(&rec, Location::File)
-            .map_err(|p| LogError::input(&file, reader.location(), p.to_string()))?;
+            .map_err(|p| LogError::input(reader.file(), reader.location(), p.to_string()))?;
         group.locate_last(reader.location());
     }
     group

@@ -635,7 +635,11 @@ fn bag_directory_errors_name_metadata_yaml() {
         ),
         (
             meta.replace("storage_identifier: sqlite3", "storage_identifier: mcap"),
-            &["storage_identifier `mcap` is not supported"],
+            &[
+                "relative_file_paths[0]",
+                "clean.db3` is not an MCAP file",
+                "storage_identifier is `mcap`",
+            ],
         ),
         (
             meta.replace("- clean.db3", "- missing.db3"),
@@ -999,6 +1003,20 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
         audit(&bag, None),
         &bag.join("split_1.mcap").display().to_string(),
         &["truncated file"],
+    );
+    // A part missing together with its listing: the recorder's counts tell.
+    let bag = copy_bag(&split, &d, "dropped");
+    std::fs::remove_file(bag.join("split_1.mcap")).unwrap();
+    let text = meta(&bag).replace("  - split_1.mcap\n", "");
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    let e = expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["topics_with_message_count", "a part is missing"],
+    );
+    assert!(
+        e.contains("/joint_states") || e.contains("/human/keypoints"),
+        "{e}"
     );
     // Compressed (rosbag2's file compression).
     let bag = copy_bag(&split, &d, "compressed");

@@ -1160,3 +1160,32 @@ fn equal_time_messages_are_capped_as_in_json_lines() {
         "{e}"
     );
 }
+
+/// Equal times go in the canonical order (measurements before robot samples) also when the
+/// file holds them the other way round: sorted within the reordering window; with no window
+/// (0 s) the robot sample is handed over at once, and a measurement of its time arriving after
+/// it is refused as out of order, never applied after it.
+#[test]
+fn equal_times_in_the_wrong_file_order_are_sorted_or_refused() {
+    let mut msgs = vec![("/human/keypoints".to_string(), 0u64, good_human(0))];
+    for i in 1..=20u64 {
+        let ns = i * 1_000_000;
+        msgs.push(("/joint_states".to_string(), ns, good_robot(ns as i128)));
+        if i == 10 {
+            // The person's record of 10 ms, after the robot sample of 10 ms in the file.
+            msgs.push(("/human/keypoints".to_string(), ns, good_human(ns as i128)));
+        }
+    }
+    let bytes = write_mcap(&Spec::new(), &header("ssm"), &msgs);
+    let r = audit_bytes("order.mcap", &bytes, &AuditConfig::default(), None).unwrap();
+    assert_eq!(r.metrics.human_records, 2);
+    let mut cfg = AuditConfig::default();
+    cfg.mcap.reorder_window = 0.0;
+    let e = audit_bytes("order.mcap", &bytes, &cfg, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("out of time order") && e.contains("/human/keypoints"),
+        "{e}"
+    );
+}

@@ -127,22 +127,46 @@ fn bag_files(
 }
 
 /// A rosbag2 bag directory in the MCAP storage (`storage_identifier: mcap`: the default of
-/// `ros2 bag record` from ROS 2 Iron on): its `.mcap` files in the metadata's order and the pacs
-/// header of its `custom_data` key [`CUSTOM_DATA_KEY`], if it has one.
+/// `ros2 bag record` from ROS 2 Iron on): its `.mcap` files in the metadata's order, the pacs
+/// header text of its `custom_data` key [`CUSTOM_DATA_KEY`] if it has one, and the recorder's
+/// message counts per topic.
 #[derive(Debug)]
 pub struct McapBag {
+    /// The bag directory.
+    pub dir: PathBuf,
     /// The bag's files, in the order `relative_file_paths` lists them.
     pub files: Vec<PathBuf>,
-    /// The header of the metadata's `custom_data` (relative robot paths rebased to the bag).
-    pub header: Option<Header>,
+    /// The JSON text of the metadata's `custom_data` header ([`McapBag::header`] parses it).
+    pub header_json: Option<String>,
+    /// `topics_with_message_count`: messages per topic, as the recorder counted them.
+    pub topic_counts: Vec<(String, u64)>,
     /// `metadata.yaml`'s path, as errors about it name it.
     pub metadata: String,
 }
 
+impl McapBag {
+    /// The metadata's `custom_data` header (relative robot paths rebased to the bag), if any;
+    /// errors name `metadata.yaml` and the key.
+    pub fn header(&self) -> Result<Option<Header>, LogError> {
+        let Some(json) = &self.header_json else {
+            return Ok(None);
+        };
+        let mut h = parse_header_json(json).map_err(|e| {
+            LogError::input(
+                &self.metadata,
+                Location::File,
+                format!("custom_data.{CUSTOM_DATA_KEY}: {e}"),
+            )
+        })?;
+        // A {urdf, side} robot's relative paths are relative to the bag.
+        h.robot.rebase(&self.dir);
+        Ok(Some(h))
+    }
+}
+
 /// The MCAP bag at `path`, or `None` where `path` is not a bag directory in the MCAP storage.
 /// Errors (naming `metadata.yaml` and the field): metadata that cannot be read, a compressed
-/// bag, a listed file missing or a `.mcap` file the metadata does not list, a `custom_data`
-/// header that is not a valid pacs header.
+/// bag, a listed file missing or not MCAP, a `.mcap` file the metadata does not list.
 pub fn mcap_bag(path: &Path) -> Result<Option<McapBag>, LogError> {
     if !is_bag_dir(path) {
         return Ok(None);
@@ -151,27 +175,26 @@ pub fn mcap_bag(path: &Path) -> Result<Option<McapBag>, LogError> {
     if info.storage.as_deref() != Some("mcap") {
         return Ok(None);
     }
-    info.check_compression()
-        .map_err(|e| LogError::input(&meta_name, Location::File, e.to_string()))?;
+    let bad = |p: String| LogError::input(&meta_name, Location::File, p);
+    info.check_compression().map_err(|e| bad(e.to_string()))?;
     let files = bag_files(path, &info, &meta_name, "mcap")?;
-    let header = match &info.pacs_header {
-        None => None,
-        Some(json) => {
-            let mut h = parse_header_json(json).map_err(|e| {
-                LogError::input(
-                    &meta_name,
-                    Location::File,
-                    format!("custom_data.{CUSTOM_DATA_KEY}: {e}"),
-                )
-            })?;
-            // A {urdf, side} robot's relative paths are relative to the bag.
-            h.robot.rebase(path);
-            Some(h)
+    for (i, f) in files.iter().enumerate() {
+        let mut magic = Vec::with_capacity(8);
+        let read = std::fs::File::open(f).and_then(|file| {
+            std::io::Read::read_to_end(&mut std::io::Read::take(file, 8), &mut magic)
+        });
+        if read.is_err() || !crate::mcap::has_magic(&magic) {
+            return Err(bad(format!(
+                "rosbag2_bagfile_information.relative_file_paths[{i}]: `{}` is not an MCAP file (no MCAP magic), yet storage_identifier is `mcap`",
+                f.display()
+            )));
         }
-    };
+    }
     Ok(Some(McapBag {
+        dir: path.to_path_buf(),
         files,
-        header,
+        header_json: info.pacs_header,
+        topic_counts: info.topic_counts,
         metadata: meta_name,
     }))
 }

@@ -185,8 +185,12 @@ fn open_mcap_bag(
         })?;
         parts.push((name, std::io::BufReader::with_capacity(1 << 16, file)));
     }
-    let header = header.cloned().or(bag.header);
-    Ok(Box::new(crate::mcap::McapReader::new_parts(
-        parts, mcap, overrides, header,
-    )?))
+    // The given header replaces the metadata's, which is then not read at all.
+    let header = match header {
+        Some(h) => Some(h.clone()),
+        None => bag.header()?,
+    };
+    let mut r = crate::mcap::McapReader::new_parts(parts, mcap, overrides, header)?;
+    r.expect_topic_counts(&bag.metadata, bag.topic_counts)?;
+    Ok(Box::new(r))
 }

@@ -67,6 +67,8 @@ pub(crate) struct Pending {
     seq: u64,
     /// Where the message is in its file.
     pub(crate) loc: Location,
+    /// Which file of the log it is in ([`Messages::part`] when it was read).
+    pub(crate) part: u16,
     body: Body,
 }
 
@@ -82,15 +84,20 @@ impl PartialOrd for Pending {
     }
 }
 
+/// At equal times: human and object measurements first (a measurement logged at `t` is in use
+/// from the robot sample at `t` on), then robot samples, then events.
+fn rank_of(body: &Body) -> u8 {
+    match body {
+        Body::Human { .. } | Body::Object { .. } => 0,
+        Body::Robot { .. } => 1,
+        Body::Event(_) => 2,
+    }
+}
+
 impl Pending {
-    /// At equal times: human and object measurements first (a measurement logged at `t` is in use
-    /// from the robot sample at `t` on), then robot samples, then events.
+    /// [`rank_of`] its body.
     fn rank(&self) -> u8 {
-        match self.body {
-            Body::Human { .. } | Body::Object { .. } => 0,
-            Body::Robot { .. } => 1,
-            Body::Event(_) => 2,
-        }
+        rank_of(&self.body)
     }
 
     /// The record view of this message; `person_ids` are [`Messages::person_ids`].
@@ -175,6 +182,11 @@ pub(crate) struct Messages {
     seq: u64,
     max_t: f64,
     last_released: f64,
+    /// The rank ([`Pending::rank`]) of the message released last: one of equal time and lower
+    /// rank would have to go before it.
+    last_released_rank: u8,
+    /// The part of the log being read (a split bag's file index), recorded with each message.
+    pub(crate) part: u16,
     js: JointStateMsg,
     pa: PoseArray,
     /// Cached name → model-order map of the `JointState.name` list of `js` at
@@ -205,6 +217,8 @@ impl Messages {
             seq: 0,
             max_t: f64::NEG_INFINITY,
             last_released: f64::NEG_INFINITY,
+            last_released_rank: 0,
+            part: 0,
             js: JointStateMsg::default(),
             pa: PoseArray::default(),
             map_version: None,
@@ -321,9 +335,14 @@ impl Messages {
         };
         let (t, body) = pending;
         let err = |p: String| LogError::input(&self.file, m.loc, p);
-        if t < self.last_released {
+        // Equal times go in rank order (measurements, robot samples, events): a message of the
+        // time released last but of a lower rank would have to go before it, as one of an
+        // earlier time would (the audit applies these records as they come).
+        if t < self.last_released
+            || (t == self.last_released && rank_of(&body) < self.last_released_rank)
+        {
             return Err(err(format!(
-                "{}: out of time order: t = {} s is more than mcap.reorder_window = {} s before t = {} s of a message already read (raise mcap.reorder_window)",
+                "{}: out of time order: t = {} s is at least mcap.reorder_window = {} s before t = {} s of a message already read, and after messages already handed over (raise mcap.reorder_window)",
                 what(),
                 t,
                 self.cfg.reorder_window,
@@ -342,6 +361,7 @@ impl Messages {
             t,
             seq: self.seq,
             loc: m.loc,
+            part: self.part,
             body,
         };
         // `Pending`'s order is reversed (for the max-heap): `a > b` means `a` goes first.
@@ -584,6 +604,7 @@ impl Messages {
             (true, false) => self.heap.pop(),
         }?;
         self.last_released = p.t;
+        self.last_released_rank = p.rank();
         Some(p)
     }
 

@@ -23,21 +23,46 @@ enum HeaderFrom {
 }
 
 /// The channels defined so far, by id (a table indexed by the 16-bit id: looked up once per
-/// message, without hashing).
+/// message, without hashing), and the messages read on each.
 #[derive(Default)]
-struct Channels(Vec<Option<(String, Stream)>>);
+struct Channels {
+    by_id: Vec<Option<(String, Stream)>>,
+    read: Vec<u64>,
+}
 
 impl Channels {
     fn get(&self, id: &u16) -> Option<&(String, Stream)> {
-        self.0.get(usize::from(*id))?.as_ref()
+        self.by_id.get(usize::from(*id))?.as_ref()
     }
 
     fn insert(&mut self, id: u16, c: (String, Stream)) {
         let i = usize::from(id);
-        if self.0.len() <= i {
-            self.0.resize_with(i + 1, || None);
+        if self.by_id.len() <= i {
+            self.by_id.resize_with(i + 1, || None);
+            self.read.resize(i + 1, 0);
         }
-        self.0[i] = Some(c);
+        self.by_id[i] = Some(c);
+    }
+
+    /// Count a message read on channel `id` (defined).
+    fn count(&mut self, id: u16) {
+        if let Some(n) = self.read.get_mut(usize::from(id)) {
+            *n += 1;
+        }
+    }
+
+    /// Add the messages read per configured topic to `into` (topic, count).
+    fn add_counts(&self, into: &mut Vec<(String, u64)>) {
+        for (c, n) in self.by_id.iter().zip(&self.read) {
+            let Some((topic, stream)) = c else { continue };
+            if *stream == Stream::Ignored {
+                continue;
+            }
+            match into.iter_mut().find(|(t, _)| t == topic) {
+                Some((_, k)) => *k += n,
+                None => into.push((topic.clone(), *n)),
+            }
+        }
     }
 }
 
@@ -53,6 +78,8 @@ struct State {
     chunk_at: u64,
     /// The messages' conversion and time order (shared with the db3 reader).
     conv: Messages,
+    /// Messages read per configured topic in the parts already read to their end.
+    counted: Vec<(String, u64)>,
 }
 
 /// Streaming reader of an MCAP log (a ROS 2 recording); see the module docs.
@@ -65,6 +92,11 @@ pub struct McapReader<R: Read + Seek> {
     current: Option<Pending>,
     /// The files still to read after this one (the later parts of a split bag), with names.
     rest: std::collections::VecDeque<(String, R)>,
+    /// Every part's name, by [`Pending::part`].
+    part_names: Vec<String>,
+    /// The recorder's message counts per topic to hold the files to, and the file that states
+    /// them (a bag's `metadata.yaml`), if any.
+    expected: Option<(String, Vec<(String, u64)>)>,
 }
 
 /// The linear reader's settings: every length bounded, whole chunks handed over, the data and
@@ -115,6 +147,14 @@ impl<R: Read + Seek> McapReader<R> {
         overrides: &ModelOverrides,
         header: Option<Header>,
     ) -> Result<Self, LogError> {
+        let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
+        if part_names.len() > usize::from(u16::MAX) {
+            return Err(LogError::input(
+                &part_names[0],
+                Location::File,
+                format!("an MCAP log of {} files (at most 65535)", part_names.len()),
+            ));
+        }
         let mut rest: std::collections::VecDeque<(String, R)> = parts.into();
         let Some((file, mut input)) = rest.pop_front() else {
             return Err(LogError::input(
@@ -151,6 +191,8 @@ impl<R: Read + Seek> McapReader<R> {
             lin,
             chunk: chunk::Chunk::default(),
             rest,
+            part_names,
+            expected: None,
             st: State {
                 size,
                 pos: 0,
@@ -159,6 +201,7 @@ impl<R: Read + Seek> McapReader<R> {
                 channels: Channels::default(),
                 done: false,
                 chunk_at: 0,
+                counted: Vec::new(),
                 conv: Messages::new(file, mcfg, overrides.clone()),
             },
             current: None,
@@ -197,9 +240,10 @@ impl<R: Read + Seek> McapReader<R> {
             }
             let ev = match self.lin.next_event() {
                 None => {
+                    st.channels.add_counts(&mut st.counted);
                     let Some((file, input)) = self.rest.pop_front() else {
                         st.done = true;
-                        return Ok(());
+                        return check_counts(&self.expected, &st.counted);
                     };
                     self.input = input;
                     st.next_part(file, &mut self.input)?;
@@ -253,6 +297,54 @@ impl<R: Read + Seek> McapReader<R> {
             }
         }
     }
+}
+
+impl<R: Read + Seek> McapReader<R> {
+    /// Hold the messages read per configured topic, at the end of the last part, to the
+    /// recorder's counts `counts` (a bag's `topics_with_message_count`, stated in `file`): fewer
+    /// means a part is missing or was cut short, more that the counts are not this recording's;
+    /// either is an error naming `file`. Topics not configured are not counted.
+    pub fn expect_topic_counts(
+        &mut self,
+        file: &str,
+        counts: Vec<(String, u64)>,
+    ) -> Result<(), LogError> {
+        self.expected = Some((file.to_string(), counts));
+        if self.st.done {
+            check_counts(&self.expected, &self.st.counted)?;
+        }
+        Ok(())
+    }
+}
+
+/// The counts read against the expected ones (see [`McapReader::expect_topic_counts`]).
+fn check_counts(
+    expected: &Option<(String, Vec<(String, u64)>)>,
+    counted: &[(String, u64)],
+) -> Result<(), LogError> {
+    let Some((file, expected)) = expected else {
+        return Ok(());
+    };
+    for (topic, want) in expected {
+        let Some((_, read)) = counted.iter().find(|(t, _)| t == topic) else {
+            continue;
+        };
+        if read != want {
+            return Err(LogError::input(
+                file,
+                Location::File,
+                format!(
+                    "topics_with_message_count: `{topic}` has message_count {want}, the bag's files hold {read} of its messages ({})",
+                    if read < want {
+                        "a file was cut short or a part is missing: the bag is not the whole recording"
+                    } else {
+                        "the metadata does not describe these files"
+                    }
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl<R: Read + Seek> McapReader<R> {
@@ -314,6 +406,14 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
     }
 
     fn file(&self) -> &str {
-        &self.st.conv.file
+        // The part of the record handed over last (a split bag's messages may be handed over
+        // after the next part is opened).
+        match &self.current {
+            Some(p) => self
+                .part_names
+                .get(usize::from(p.part))
+                .map_or(&self.st.conv.file, |n| n),
+            None => &self.st.conv.file,
+        }
     }
 }

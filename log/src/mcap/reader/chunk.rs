@@ -58,8 +58,17 @@ impl Chunk {
     /// it holds are then handed over by [`Chunk::next_record`]. On error no record of the chunk
     /// is handed over.
     pub(super) fn open(&mut self, body: &[u8]) -> Result<(), ChunkError> {
-        self.records.clear();
         self.at = 0;
+        let r = self.fill(body);
+        if r.is_err() {
+            self.records.clear();
+        }
+        r
+    }
+
+    /// [`Self::open`] but for emptying the records on error.
+    fn fill(&mut self, body: &[u8]) -> Result<(), ChunkError> {
+        self.records.clear();
         let mut f = Fields { b: body };
         f.u64("message start time")?;
         f.u64("message end time")?;
@@ -75,27 +84,7 @@ impl Chunk {
         let size_usize = size as usize;
         match compression {
             "" => self.records.extend_from_slice(data),
-            "zstd" => {
-                let z = match &mut self.zstd {
-                    Some(z) => z,
-                    None => self
-                        .zstd
-                        .insert(zstd::bulk::Decompressor::new().map_err(|e| {
-                            ChunkError::Decompress {
-                                compression: "zstd",
-                                source: e,
-                            }
-                        })?),
-                };
-                self.records.reserve(size_usize);
-                // Writes from the buffer's start up to its capacity: more than `size` bytes of
-                // output (a capacity left from a larger chunk) is caught below.
-                z.decompress_to_buffer(data, &mut self.records)
-                    .map_err(|e| ChunkError::Decompress {
-                        compression: "zstd",
-                        source: e,
-                    })?;
-            }
+            "zstd" => self.zstd_frames(data, size_usize)?,
             "lz4" => {
                 let dec = lz4::Decoder::new(data).map_err(|e| ChunkError::Decompress {
                     compression: "lz4",
@@ -113,7 +102,6 @@ impl Chunk {
         }
         let found = self.records.len() as u64;
         if found != size {
-            self.records.clear();
             return Err(ChunkError::Size {
                 declared: size,
                 found,
@@ -122,13 +110,43 @@ impl Chunk {
         if crc != 0 {
             let calculated = crc32fast::hash(&self.records);
             if calculated != crc {
-                self.records.clear();
                 return Err(ChunkError::Crc {
                     saved: crc,
                     calculated,
                 });
             }
         }
+        Ok(())
+    }
+
+    /// The zstd frames of `data` decompressed into the records, each in one call, until `size`
+    /// bytes are out; bytes after that are padding (as `mcap`'s streaming reader treats bytes a
+    /// compressor leaves after its last frame). Output beyond `size` or a frame that does not
+    /// decode is an error.
+    fn zstd_frames(&mut self, mut data: &[u8], size: usize) -> Result<(), ChunkError> {
+        let bad = |e: std::io::Error| ChunkError::Decompress {
+            compression: "zstd",
+            source: e,
+        };
+        let z = match &mut self.zstd {
+            Some(z) => z,
+            None => self
+                .zstd
+                .insert(zstd::bulk::Decompressor::new().map_err(bad)?),
+        };
+        // The output buffer: exactly `size` bytes (one more to see a frame that holds more).
+        self.records.resize(size + 1, 0);
+        let mut filled = 0;
+        while filled < size && !data.is_empty() {
+            let frame = zstd::zstd_safe::find_frame_compressed_size(data)
+                .map_err(|c| bad(std::io::Error::other(zstd::zstd_safe::get_error_name(c))))?;
+            let frame = frame.min(data.len());
+            filled += z
+                .decompress_to_buffer(&data[..frame], &mut self.records[filled..])
+                .map_err(bad)?;
+            data = &data[frame..];
+        }
+        self.records.truncate(filled);
         Ok(())
     }
 
@@ -294,6 +312,41 @@ mod tests {
         body.extend_from_slice(&[0; 5]);
         c.open(&body).unwrap();
         assert_eq!(read_all(&mut c).unwrap().len(), 2);
+    }
+
+    /// zstd data of several frames is read frame by frame; bytes after the declared size's worth
+    /// of frames are padding (as a compressor may leave them, and `mcap`'s streaming reader
+    /// skipped them); frames holding more than the declared size are refused.
+    #[test]
+    fn zstd_frames_and_padding() {
+        let records = framed(&[(5, vec![1, 2, 3]), (6, vec![4; 400]), (7, vec![9; 50])]);
+        let cut = 12 + 3 + 9 + 200;
+        let mut two = zstd::bulk::compress(&records[..cut], 1).unwrap();
+        two.extend(zstd::bulk::compress(&records[cut..], 1).unwrap());
+        let with_header = |data: &[u8], size: usize| {
+            let mut b = chunk_body(&[], "", Some(0));
+            b.truncate(28);
+            b[16..24].copy_from_slice(&(size as u64).to_le_bytes());
+            b.extend_from_slice(&4u32.to_le_bytes());
+            b.extend_from_slice(b"zstd");
+            b.extend_from_slice(&(data.len() as u64).to_le_bytes());
+            b.extend_from_slice(data);
+            b
+        };
+        let mut c = Chunk::default();
+        c.open(&with_header(&two, records.len())).unwrap();
+        assert_eq!(read_all(&mut c).unwrap().len(), 3);
+        let mut padded = two.clone();
+        padded.extend_from_slice(&[0xAB; 7]);
+        c.open(&with_header(&padded, records.len())).unwrap();
+        assert_eq!(read_all(&mut c).unwrap().len(), 3);
+        // Declared one frame's worth: the second frame would overflow it.
+        let e = c.open(&with_header(&two, cut - 1)).unwrap_err();
+        assert!(
+            matches!(e, ChunkError::Decompress { .. } | ChunkError::Size { .. }),
+            "{e}"
+        );
+        assert!(c.next_record().unwrap().is_none());
     }
 
     /// A record inside a chunk whose length runs past the chunk's records, or a record header

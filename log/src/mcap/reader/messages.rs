@@ -36,7 +36,9 @@ impl State {
         self.pos = 0;
         self.chunk_at = 0;
         self.schemas.clear();
+        // (The finished part's counts were added by the caller.)
         self.channels = super::Channels::default();
+        self.conv.part += 1;
         if self.conv.header.is_some() {
             self.header_from = Some(HeaderFrom::Given);
         }
@@ -197,7 +199,7 @@ impl State {
     }
 
     fn message(&mut self, h: &mcap::records::MessageHeader, data: &[u8]) -> Result<(), LogError> {
-        let Some((topic, stream)) = self.channels.get(&h.channel_id) else {
+        let Some((_, stream)) = self.channels.get(&h.channel_id) else {
             return Err(self.err(format!(
                 "message on channel id {} which is not defined before it",
                 h.channel_id
@@ -207,6 +209,10 @@ impl State {
         if stream == Stream::Ignored {
             return Ok(());
         }
+        self.channels.count(h.channel_id);
+        let Some((topic, _)) = self.channels.get(&h.channel_id) else {
+            return Ok(());
+        };
         let what = || {
             format!(
                 "message on `{topic}` (log time {} ns, sequence {})",
