@@ -161,10 +161,11 @@ pub fn audit_reader(
     let file = reader.file().to_string();
     let header = reader.header().with_overrides(&cfg.overrides());
     let header_loc = reader.header_location();
+    let header_file = reader.header_file().to_string();
     let models = LogModels::from_header(&header)
-        .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
+        .map_err(|p| LogError::input(&header_file, header_loc, p.to_string()))?;
     let mut checker = Checker::new(&header, models, cfg)
-        .map_err(|p| LogError::input(&file, header_loc, p.to_string()))?;
+        .map_err(|p| LogError::input(&header_file, header_loc, p.to_string()))?;
     let mut last_t = f64::NEG_INFINITY;
     // The `end` event's time, once seen; and the last robot sample's.
     let mut end: Option<f64> = None;

@@ -1018,6 +1018,16 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
         e.contains("/joint_states") || e.contains("/human/keypoints"),
         "{e}"
     );
+    // A custom_data header whose robot model does not exist: the error names the metadata.
+    let bag = copy_bag(&mcap_bags().join("clean"), &d, "bad_robot");
+    let text = meta(&bag).replace("\"fr3\"", "\"fr9\"");
+    assert_ne!(text, meta(&bag));
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["fr9"],
+    );
     // Compressed (rosbag2's file compression).
     let bag = copy_bag(&split, &d, "compressed");
     let text = meta(&bag).replace("compression_mode: ''", "compression_mode: FILE");

@@ -294,6 +294,8 @@ pub struct Db3Reader {
     /// The metadata's messages per topic (`topics_with_message_count`), and the metadata's name.
     expected: Vec<(String, u64)>,
     info_name: String,
+    /// Where the header was read from, when not given: the metadata (`info_name`).
+    header_file: Option<String>,
     /// Whether each file's rows are read in storage order (`ORDER BY id`), checked to be time
     /// order ([`Db3Reader::open_in_row_order`]), rather than through the time index.
     row_order: bool,
@@ -854,6 +856,7 @@ impl Db3Reader {
             .enumerate()
             .map(|(i, p)| open_part(p, counted(i), &mut conv))
             .collect::<Result<Vec<_>, _>>()?;
+        let from_metadata = header.is_none();
         match (header, &info.pacs_header) {
             (Some(h), _) => conv.set_header(h, Location::File)?,
             (None, Some(json)) => {
@@ -890,6 +893,7 @@ impl Db3Reader {
             done: false,
             current: None,
             expected: info.topic_counts,
+            header_file: from_metadata.then(|| info_name.clone()),
             info_name,
             row_order,
         };
@@ -1126,6 +1130,10 @@ impl RecordReader for Db3Reader {
 
     fn header_location(&self) -> Location {
         Location::File
+    }
+
+    fn header_file(&self) -> &str {
+        self.header_file.as_deref().unwrap_or(&self.name)
     }
 
     fn in_canonical_order(&self) -> bool {

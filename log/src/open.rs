@@ -186,11 +186,20 @@ fn open_mcap_bag(
         parts.push((name, std::io::BufReader::with_capacity(1 << 16, file)));
     }
     // The given header replaces the metadata's, which is then not read at all.
-    let header = match header {
-        Some(h) => Some(h.clone()),
-        None => bag.header()?,
+    let (header, header_file) = match header {
+        Some(h) => (Some(h.clone()), None),
+        None => match bag.header()? {
+            Some(h) => (Some(h), Some(bag.metadata.as_str())),
+            None => (None, None),
+        },
     };
-    let mut r = crate::mcap::McapReader::new_parts(parts, mcap, overrides, header)?;
+    let mut r = crate::mcap::McapReader::new_parts_with_header_file(
+        parts,
+        mcap,
+        overrides,
+        header,
+        header_file,
+    )?;
     r.expect_topic_counts(&bag.metadata, bag.topic_counts)?;
     Ok(Box::new(r))
 }

@@ -82,6 +82,12 @@ pub trait RecordReader {
     }
     /// The file name used in errors.
     fn file(&self) -> &str;
+    /// The file the header was read from, as errors in its models name it (with
+    /// [`RecordReader::header_location`]). Default: [`RecordReader::file`]; a ROS bag whose header
+    /// comes from its metadata's `custom_data` names the metadata.
+    fn header_file(&self) -> &str {
+        self.file()
+    }
     /// Whether records of equal time already come in the canonical order of
     /// [`crate::order::EqualTimeGroup`] (measurements, robot samples, events, then arrival
     /// order): then the audit applies them as they come, without buffering a copy. The ROS

@@ -97,6 +97,8 @@ pub struct McapReader<R: Read + Seek> {
     /// The recorder's message counts per topic to hold the files to, and the file that states
     /// them (a bag's `metadata.yaml`), if any.
     expected: Option<(String, Vec<(String, u64)>)>,
+    /// The file the header was read from, when that is not the log itself.
+    header_file: Option<String>,
 }
 
 /// The linear reader's settings: every length bounded, whole chunks handed over, the data and
@@ -147,6 +149,18 @@ impl<R: Read + Seek> McapReader<R> {
         overrides: &ModelOverrides,
         header: Option<Header>,
     ) -> Result<Self, LogError> {
+        Self::new_parts_with_header_file(parts, cfg, overrides, header, None)
+    }
+
+    /// [`Self::new_parts`] with the header read from the file `header_file` (a bag's
+    /// `metadata.yaml`), which errors in it name.
+    pub fn new_parts_with_header_file(
+        parts: Vec<(String, R)>,
+        cfg: &McapConfig,
+        overrides: &ModelOverrides,
+        header: Option<Header>,
+        header_file: Option<&str>,
+    ) -> Result<Self, LogError> {
         let part_names: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
         if part_names.len() > usize::from(u16::MAX) {
             return Err(LogError::input(
@@ -193,6 +207,7 @@ impl<R: Read + Seek> McapReader<R> {
             rest,
             part_names,
             expected: None,
+            header_file: None,
             st: State {
                 size,
                 pos: 0,
@@ -207,7 +222,16 @@ impl<R: Read + Seek> McapReader<R> {
             current: None,
         };
         if let Some(h) = header {
-            r.st.set_header(h)?;
+            match header_file {
+                Some(f) => {
+                    let file = std::mem::replace(&mut r.st.conv.file, f.to_string());
+                    let set = r.st.set_header(h);
+                    r.st.conv.file = file;
+                    set?;
+                    r.header_file = Some(f.to_string());
+                }
+                None => r.st.set_header(h)?,
+            }
         }
         // Read until the header is known and the first message is queued (fixing the time base).
         while r.st.conv.is_empty() && !r.st.done {
@@ -391,6 +415,10 @@ impl<R: Read + Seek> RecordReader for McapReader<R> {
         self.current
             .as_ref()
             .map_or(Location::Offset(self.st.pos), |p| p.loc)
+    }
+
+    fn header_file(&self) -> &str {
+        self.header_file.as_deref().unwrap_or(&self.st.conv.file)
     }
 
     fn header_location(&self) -> Location {
