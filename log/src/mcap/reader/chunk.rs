@@ -51,6 +51,8 @@ pub(super) struct Chunk {
     /// Where the next record starts in `records`.
     at: usize,
     zstd: Option<zstd::bulk::Decompressor<'static>>,
+    /// A later zstd frame's output, before it joins `records`.
+    spare: Vec<u8>,
 }
 
 impl Chunk {
@@ -122,7 +124,8 @@ impl Chunk {
     /// The zstd frames of `data` decompressed into the records, each in one call, until `size`
     /// bytes are out; bytes after that are padding (as `mcap`'s streaming reader treats bytes a
     /// compressor leaves after its last frame). Output beyond `size` or a frame that does not
-    /// decode is an error.
+    /// decode is an error. The buffers are reserved, not filled, before decoding (a chunk that
+    /// declares a large size but holds little data costs no writes).
     fn zstd_frames(&mut self, mut data: &[u8], size: usize) -> Result<(), ChunkError> {
         let bad = |e: std::io::Error| ChunkError::Decompress {
             compression: "zstd",
@@ -134,19 +137,27 @@ impl Chunk {
                 .zstd
                 .insert(zstd::bulk::Decompressor::new().map_err(bad)?),
         };
-        // The output buffer: exactly `size` bytes (one more to see a frame that holds more).
-        self.records.resize(size + 1, 0);
-        let mut filled = 0;
-        while filled < size && !data.is_empty() {
+        // Room for one byte more than declared, to see a frame that holds more.
+        self.records.reserve(size + 1);
+        let mut first = true;
+        while self.records.len() < size && !data.is_empty() {
             let frame = zstd::zstd_safe::find_frame_compressed_size(data)
                 .map_err(|c| bad(std::io::Error::other(zstd::zstd_safe::get_error_name(c))))?;
             let frame = frame.min(data.len());
-            filled += z
-                .decompress_to_buffer(&data[..frame], &mut self.records[filled..])
-                .map_err(bad)?;
+            if first {
+                // Written from the buffer's start into its capacity (≥ size + 1).
+                z.decompress_to_buffer(&data[..frame], &mut self.records)
+                    .map_err(bad)?;
+                first = false;
+            } else {
+                self.spare.clear();
+                self.spare.reserve(size + 1 - self.records.len());
+                z.decompress_to_buffer(&data[..frame], &mut self.spare)
+                    .map_err(bad)?;
+                self.records.extend_from_slice(&self.spare);
+            }
             data = &data[frame..];
         }
-        self.records.truncate(filled);
         Ok(())
     }
 
