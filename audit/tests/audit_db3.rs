@@ -1028,6 +1028,20 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
         &bag.join("metadata.yaml").display().to_string(),
         &["fr9"],
     );
+    // A watched topic the metadata counts but no file has a channel for (the part holding it
+    // dropped with its listing): its count (not 0) tells.
+    let bag = copy_bag(&mcap_bags().join("clean"), &d, "ghost");
+    let text = meta(&bag).replace(
+        "topics_with_message_count:\n",
+        "topics_with_message_count:\n  - message_count: 5\n    topic_metadata:\n      name: /humans/ghost/keypoints\n",
+    );
+    assert_ne!(text, meta(&bag));
+    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["`/humans/ghost/keypoints` has message_count 5", "hold 0"],
+    );
     // Compressed (rosbag2's file compression).
     let bag = copy_bag(&split, &d, "compressed");
     let text = meta(&bag).replace("compression_mode: ''", "compression_mode: FILE");

@@ -255,6 +255,18 @@ impl Messages {
     /// `PoseStamped` selects the stamped form (anything else is expected to be a `PoseArray`).
     /// A person's topic (`mcap.human_topics`, or `/humans/ID/keypoints` when that is empty)
     /// registers the person's id.
+    /// Whether messages on `topic` are read (not [`Stream::Ignored`]), by its name alone, as
+    /// [`Self::stream_of`] decides it.
+    pub(crate) fn watches(&self, topic: &str) -> bool {
+        let cfg = &self.cfg;
+        topic == cfg.robot_topic
+            || topic == cfg.human_topic
+            || topic == cfg.event_topic
+            || cfg.object_topics.values().any(|t| t == topic)
+            || cfg.human_topics.iter().any(|(_, t)| t == topic)
+            || (cfg.human_topics.is_empty() && crate::mcap::person_of_topic(topic).is_some())
+    }
+
     pub(crate) fn stream_of(
         &mut self,
         topic: &str,

@@ -1,6 +1,7 @@
-//! A chunk record read whole: its header checked, its records decompressed in one call into a
-//! buffer kept between chunks, the uncompressed CRC checked before any record is handed over,
-//! and the records inside it walked with every length checked against the chunk.
+//! A chunk record read whole: its header checked, its records decompressed in one call (per zstd
+//! frame; writers put one in a chunk) into a buffer kept between chunks, the uncompressed CRC
+//! checked before any record is handed over, and the records inside it walked with every length
+//! checked against the chunk.
 //!
 //! `mcap`'s linear reader can decompress a chunk as a stream, one record's bytes at a time; that
 //! costs a call into the decoder per record (about a fifth of the decoding of a ROS 2
