@@ -32,8 +32,10 @@ pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
 }
 
 /// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
-/// in `.db3`, or a file that starts with the SQLite magic (another directory is not). Errors: the
-/// file cannot be opened or read.
+/// in `.db3`, or a file that starts with the SQLite magic (another directory is not). A bag
+/// directory counts whatever its storage (the metadata is not read here): [`open_log`] reads one
+/// in the MCAP storage as MCAP ([`crate::db3::mcap_bag`]). Errors: the file cannot be opened or
+/// read.
 pub fn is_db3(path: &Path) -> Result<bool, LogError> {
     if crate::db3::is_bag_dir(path)
         || path
