@@ -527,12 +527,26 @@ fn a_configured_topic_must_be_cdr_of_the_expected_type() {
         &p.display().to_string(),
         &["unknown type `sensor_msgs/msg/Imu` (expected `sensor_msgs/msg/JointState`)"],
     );
+    // A configured topic the metadata counts but the file has no connection for: its count
+    // (not 0) tells, as for MCAP bags.
+    let scratch = tempdir();
+    let p = copy_clean(&scratch);
+    sql(
+        &p,
+        "UPDATE topics SET name = '/other' WHERE name = '/pacs/events'",
+    );
+    expect_err(
+        audit(&p, None),
+        &format!("{} (table `metadata`)", p.display()),
+        &["`/pacs/events` has message_count 1", "hold 0"],
+    );
     // A topic that is not configured may be anything.
     let scratch = tempdir();
     let p = copy_clean(&scratch);
     sql(
         &p,
-        "UPDATE topics SET serialization_format = 'json', type = 'x', name = '/other' WHERE name = '/pacs/events'",
+        "UPDATE topics SET serialization_format = 'json', type = 'x', name = '/other' WHERE name = '/pacs/events'; \
+         UPDATE metadata SET metadata = replace(metadata, 'name: /pacs/events', 'name: /other')",
     );
     let r = audit(&p, None).unwrap();
     assert_eq!(r.verdict, Verdict::Pass);

@@ -1025,7 +1025,8 @@ impl Db3Reader {
 impl Db3Reader {
     /// At the end of the bag: every topic read must hold as many messages as the metadata's
     /// `topics_with_message_count` says (fewer: a file was cut short or a part is missing; more:
-    /// the metadata is not this recording's). Topics not read (not configured) are not counted.
+    /// the metadata is not this recording's). Topics not read (not configured) are not counted;
+    /// a configured topic that no file has a connection for counts as 0 read.
     fn check_counts(&self) -> Result<(), LogError> {
         for (topic, expected) in &self.expected {
             let mut read = 0u64;
@@ -1038,6 +1039,8 @@ impl Db3Reader {
                     }
                 }
             }
+            // A watched topic on no connection of any file: none of its messages was read.
+            let configured = configured || self.conv.watches(topic);
             if configured && read != *expected {
                 return Err(LogError::input(
                     &self.info_name,
