@@ -1083,3 +1083,69 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     assert_eq!(audit(&bag, Some(&header())).unwrap().verdict, Verdict::Pass);
 }
+
+/// A bag with rosbag2's message compression (`compression_mode: message`, `compression_format:
+/// zstd`, written by `rosbags`: `violation_zstd`) reads each payload decompressed and gives the
+/// uncompressed bag's result. A payload that is not a zstd frame stating its size, or whose frame
+/// does not hold what it states, is an error naming the message; file compression is still
+/// refused.
+#[test]
+fn message_compressed_bags_read_as_their_uncompressed_twins() {
+    let zstd = fixtures().join("violation_zstd");
+    let meta = std::fs::read_to_string(zstd.join("metadata.yaml")).unwrap();
+    assert!(meta.contains("compression_mode: message"), "{meta}");
+    let r = audit(&zstd, None).unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    same_result(&audit(&fixtures().join("violation"), None).unwrap(), &r);
+    same_result(
+        &pacs_audit::audit_file(&zstd, &AuditConfig::default()).unwrap(),
+        &r,
+    );
+    let d = tempdir();
+    let bag = copy_bag(&zstd, &d, "damaged");
+    let db = bag.join("violation_zstd.db3");
+    let first_pose = "(SELECT min(m.id) FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name = '/human/keypoints')";
+    for (data, words) in [
+        // Not a zstd frame.
+        ("x'00010000'", &["is not a zstd frame"][..]),
+        // A frame header without its content size (single segment off, no size field).
+        ("x'28b52ffd0058'", &["does not state its size"][..]),
+    ] {
+        sql(
+            &db,
+            &format!("UPDATE messages SET data = {data} WHERE id = {first_pose}"),
+        );
+        let e = expect_err(audit(&bag, None), &db.display().to_string(), words);
+        assert!(
+            e.contains("message id ") && e.contains("/human/keypoints"),
+            "{e}"
+        );
+    }
+    // A frame stating more bytes than it holds: cut the first pose message's frame short.
+    let bag = copy_bag(&zstd, &d, "cut");
+    let db = bag.join("violation_zstd.db3");
+    sql(
+        &db,
+        &format!(
+            "UPDATE messages SET data = substr(data, 1, length(data) - 4) WHERE id = {first_pose}"
+        ),
+    );
+    let e = expect_err(
+        audit(&bag, None),
+        &db.display().to_string(),
+        &["zstd frame"],
+    );
+    assert!(e.contains("/human/keypoints"), "{e}");
+    // File compression: refused.
+    let bag = copy_bag(&zstd, &d, "file");
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        meta.replace("compression_mode: message", "compression_mode: file"),
+    )
+    .unwrap();
+    expect_err(
+        audit(&bag, None),
+        &bag.join("metadata.yaml").display().to_string(),
+        &["compressed bags are not supported", "`file`"],
+    );
+}

@@ -296,6 +296,8 @@ pub struct Db3Reader {
     info_name: String,
     /// Where the header was read from, when not given: the metadata (`info_name`).
     header_file: Option<String>,
+    /// The payloads' decompression, for a bag with zstd message compression.
+    payload_zstd: Option<PayloadZstd>,
     /// Whether each file's rows are read in storage order (`ORDER BY id`), checked to be time
     /// order ([`Db3Reader::open_in_row_order`]), rather than through the time index.
     row_order: bool,
@@ -857,6 +859,12 @@ impl Db3Reader {
             .map(|(i, p)| open_part(p, counted(i), &mut conv))
             .collect::<Result<Vec<_>, _>>()?;
         let from_metadata = header.is_none();
+        let payload_zstd = match info.messages_zstd() {
+            true => Some(
+                PayloadZstd::new().map_err(|p| LogError::input(&info_name, Location::File, p))?,
+            ),
+            false => None,
+        };
         match (header, &info.pacs_header) {
             (Some(h), _) => conv.set_header(h, Location::File)?,
             (None, Some(json)) => {
@@ -894,6 +902,7 @@ impl Db3Reader {
             current: None,
             expected: info.topic_counts,
             header_file: from_metadata.then(|| info_name.clone()),
+            payload_zstd,
             info_name,
             row_order,
         };
@@ -1001,6 +1010,13 @@ impl Db3Reader {
             None => &[],
         };
         let what = || format!("message on `{topic}` (timestamp {} ns)", row.timestamp);
+        let compressed = self.payload_zstd.is_some();
+        let data = match &mut self.payload_zstd {
+            Some(z) => z
+                .decompress(data)
+                .map_err(|p| LogError::input(&part.name, loc, format!("{}: {p}", what())))?,
+            None => data,
+        };
         let Ok(log_time) = u64::try_from(row.timestamp) else {
             return Err(LogError::input(
                 &part.name,
@@ -1016,9 +1032,14 @@ impl Db3Reader {
             loc,
         };
         // The conversion names the bag; its errors name the file of the bag they are in.
-        self.conv
-            .message(m, &what)
-            .map_err(|e| hint_compressed(in_file(e, &part.name), data))
+        self.conv.message(m, &what).map_err(|e| {
+            let e = in_file(e, &part.name);
+            if compressed {
+                e
+            } else {
+                hint_compressed(e, data)
+            }
+        })
     }
 }
 
@@ -1077,6 +1098,54 @@ fn in_file(e: LogError, name: &str) -> LogError {
         LogError::RowsNotInTimeOrder { .. } => LogError::RowsNotInTimeOrder {
             file: name.to_string(),
         },
+    }
+}
+
+/// The payloads of a bag with zstd message compression, each decompressed into one buffer.
+struct PayloadZstd {
+    dec: zstd::bulk::Decompressor<'static>,
+    buf: Vec<u8>,
+}
+
+impl PayloadZstd {
+    fn new() -> Result<Self, String> {
+        Ok(Self {
+            dec: zstd::bulk::Decompressor::new().map_err(|e| e.to_string())?,
+            buf: Vec::new(),
+        })
+    }
+
+    /// `data` (one zstd frame stating its size, at most [`RECORD_LIMIT`] bytes out) decompressed.
+    fn decompress(&mut self, data: &[u8]) -> Result<&[u8], String> {
+        let n = match zstd::zstd_safe::get_frame_content_size(data) {
+            Ok(Some(n)) if n <= RECORD_LIMIT as u64 => n as usize,
+            Ok(Some(n)) => {
+                return Err(format!(
+                    "the payload's zstd frame states {n} bytes, more than the limit of {RECORD_LIMIT}"
+                ));
+            }
+            Ok(None) => {
+                return Err("the payload's zstd frame does not state its size".into());
+            }
+            Err(_) => {
+                return Err(
+                    "the payload is not a zstd frame (the bag's compression_mode is `message`, compression_format `zstd`)"
+                        .into(),
+                );
+            }
+        };
+        self.buf.clear();
+        self.buf.reserve(n + 1);
+        self.dec
+            .decompress_to_buffer(data, &mut self.buf)
+            .map_err(|e| format!("the payload's zstd frame cannot be decompressed: {e}"))?;
+        if self.buf.len() != n {
+            return Err(format!(
+                "the payload's zstd frame states {n} bytes, it holds {}",
+                self.buf.len()
+            ));
+        }
+        Ok(&self.buf)
     }
 }
 

@@ -73,3 +73,12 @@ def test_fresh_bags_in_the_mcap_storage_audit_as_the_sqlite3_ones(tmp_path):
         assert a.log == str(mcap_bag)
         assert a.metrics == b.metrics and a.violations == b.violations
         assert a.meta["mcap_time_base_s"] == 1_700_000_000
+
+
+def test_a_fresh_bag_with_zstd_message_compression_reads_as_the_uncompressed_one(tmp_path):
+    # rosbag2's `--compression-mode message --compression-format zstd`, written by rosbags.
+    msgs = bags.messages(violation=True, mapped=True)
+    a = pacs.audit(bags.write_bag(tmp_path / "z", msgs, zstd_messages=True))[0]
+    b = pacs.audit(bags.write_bag(tmp_path / "plain", msgs))[0]
+    assert a.verdict == "fail"
+    assert a.metrics == b.metrics and a.violations == b.violations

@@ -46,7 +46,7 @@ pub(super) enum MetadataError {
     #[error("storage_identifier `{storage}` is not supported here (expected `sqlite3`){}", if storage == "mcap" { "; `pacs_log::open_log` reads MCAP bags" } else { "" })]
     Storage { storage: String },
     #[error(
-        "compressed bags are not supported (compression_mode `{mode}`, compression_format `{format}`): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)"
+        "compressed bags are not supported (compression_mode `{mode}`, compression_format `{format}`; of the compressed forms only `message` with `zstd` is read): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)"
     )]
     Compressed { mode: String, format: String },
 }
@@ -221,14 +221,25 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
 }
 
 impl BagInfo {
-    /// Refuse what this reader does not read: another storage, compression.
+    /// Refuse what this reader does not read: another storage, compression (but for zstd
+    /// message compression, [`BagInfo::messages_zstd`]).
     pub(super) fn check(&self) -> Result<(), MetadataError> {
         if let Some(s) = self.storage.as_deref().filter(|s| *s != "sqlite3") {
             return Err(MetadataError::Storage {
                 storage: s.to_string(),
             });
         }
+        if self.messages_zstd() {
+            return Ok(());
+        }
         self.check_compression()
+    }
+
+    /// Whether each message's payload is zstd-compressed on its own (rosbag2's
+    /// `compression_mode: message` with `compression_format: zstd`).
+    pub(super) fn messages_zstd(&self) -> bool {
+        self.compression_mode.eq_ignore_ascii_case("message")
+            && self.compression_format.eq_ignore_ascii_case("zstd")
     }
 
     /// Refuse a compressed bag (rosbag2's file or message compression).
