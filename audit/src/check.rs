@@ -35,7 +35,7 @@ pub use crate::config::AuditConfig;
 pub use pacs_verify::iso15066::MAX_CAPSULES;
 /// Spans checked together by the block fast path (see `Auditor::check_block`): at most this many
 /// share one check. 40 holds every span of one person record at 30 Hz (33–34 spans at 1 kHz) in
-/// one block; with 32 each such record cost a block and a lone span besides.
+/// one block, so no such record leaves a lone span to check besides.
 pub const BLOCK_SPANS: usize = 40;
 /// The smallest part of a block that [`Auditor::check_block`] is tried on after the whole block
 /// failed (halving from [`BLOCK_SPANS`]); smaller parts are checked span by span.

@@ -919,6 +919,14 @@ fn mcap_bags() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../python/tests/fixtures/mcap_bags")
 }
 
+/// Replace `from` by `to` in the bag's `metadata.yaml` (which must contain `from`).
+fn edit_metadata(bag: &Path, from: &str, to: &str) {
+    let p = bag.join("metadata.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.contains(from), "{} lacks {from:?}", p.display());
+    std::fs::write(&p, text.replace(from, to)).unwrap();
+}
+
 /// Copy the bag directory `from` into `d` (as `name`).
 fn copy_bag(from: &Path, d: &Path, name: &str) -> PathBuf {
     let to = d.join(name);
@@ -978,9 +986,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     // A part not listed.
     let bag = copy_bag(&split, &d, "unlisted");
-    let text = meta(&bag).replace("  - split_1.mcap\n", "");
-    assert_ne!(text, meta(&bag));
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    edit_metadata(&bag, "  - split_1.mcap\n", "");
     expect_err(
         audit(&bag, None),
         &bag.join("metadata.yaml").display().to_string(),
@@ -991,12 +997,11 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     // The parts listed in the wrong order.
     let bag = copy_bag(&split, &d, "reversed");
-    let text = meta(&bag).replace(
+    edit_metadata(
+        &bag,
         "  - split_0.mcap\n  - split_1.mcap\n",
         "  - split_1.mcap\n  - split_0.mcap\n",
     );
-    assert_ne!(text, meta(&bag));
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
     // Within the reordering window (the whole 1 s run) the messages are put back in order...
     same_result(&audit(&split, None).unwrap(), &audit(&bag, None).unwrap());
     // ... beyond it (a 0.1 s window), time going backwards is refused.
@@ -1021,8 +1026,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     // A part missing together with its listing: the recorder's counts tell.
     let bag = copy_bag(&split, &d, "dropped");
     std::fs::remove_file(bag.join("split_1.mcap")).unwrap();
-    let text = meta(&bag).replace("  - split_1.mcap\n", "");
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    edit_metadata(&bag, "  - split_1.mcap\n", "");
     let e = expect_err(
         audit(&bag, None),
         &bag.join("metadata.yaml").display().to_string(),
@@ -1034,9 +1038,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     // A custom_data header whose robot model does not exist: the error names the metadata.
     let bag = copy_bag(&mcap_bags().join("clean"), &d, "bad_robot");
-    let text = meta(&bag).replace("\"fr3\"", "\"fr9\"");
-    assert_ne!(text, meta(&bag));
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    edit_metadata(&bag, "\"fr3\"", "\"fr9\"");
     expect_err(
         audit(&bag, None),
         &bag.join("metadata.yaml").display().to_string(),
@@ -1045,12 +1047,11 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     // A watched topic the metadata counts but no file has a channel for (the part holding it
     // dropped with its listing): its count (not 0) tells.
     let bag = copy_bag(&mcap_bags().join("clean"), &d, "ghost");
-    let text = meta(&bag).replace(
+    edit_metadata(
+        &bag,
         "topics_with_message_count:\n",
         "topics_with_message_count:\n  - message_count: 5\n    topic_metadata:\n      name: /humans/ghost/keypoints\n",
     );
-    assert_ne!(text, meta(&bag));
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
     expect_err(
         audit(&bag, None),
         &bag.join("metadata.yaml").display().to_string(),
@@ -1058,9 +1059,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     // Compressed (rosbag2's file compression).
     let bag = copy_bag(&split, &d, "compressed");
-    let text = meta(&bag).replace("compression_mode: ''", "compression_mode: FILE");
-    assert_ne!(text, meta(&bag));
-    std::fs::write(bag.join("metadata.yaml"), text).unwrap();
+    edit_metadata(&bag, "compression_mode: ''", "compression_mode: FILE");
     expect_err(
         audit(&bag, None),
         &bag.join("metadata.yaml").display().to_string(),

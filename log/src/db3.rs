@@ -148,20 +148,59 @@ impl McapBag {
     /// The metadata's `custom_data` header (relative robot paths rebased to the bag), if any;
     /// errors name `metadata.yaml` and the key.
     pub fn header(&self) -> Result<Option<Header>, LogError> {
-        let Some(json) = &self.header_json else {
-            return Ok(None);
-        };
-        let mut h = parse_header_json(json).map_err(|e| {
-            LogError::input(
-                &self.metadata,
-                Location::File,
-                format!("custom_data.{CUSTOM_DATA_KEY}: {e}"),
-            )
-        })?;
-        // A {urdf, side} robot's relative paths are relative to the bag.
-        h.robot.rebase(&self.dir);
-        Ok(Some(h))
+        self.header_json
+            .as_deref()
+            .map(|json| custom_data_header(json, &self.metadata, &self.dir))
+            .transpose()
     }
+}
+
+/// The pacs header in a bag's `custom_data` key [`CUSTOM_DATA_KEY`] (`json`, read from
+/// `meta_name`, which errors name), relative `{urdf, side}` robot paths rebased to `dir`.
+fn custom_data_header(json: &str, meta_name: &str, dir: &Path) -> Result<Header, LogError> {
+    let mut h = parse_header_json(json).map_err(|e| {
+        LogError::input(
+            meta_name,
+            Location::File,
+            format!("custom_data.{CUSTOM_DATA_KEY}: {e}"),
+        )
+    })?;
+    h.robot.rebase(dir);
+    Ok(h)
+}
+
+/// A bag's `topics_with_message_count` (`expected`, stated in `file`) against the messages read
+/// per topic (`read`): every watched topic ([`Messages::watches`]; one on no channel or
+/// connection of any file counts as 0 read) must hold as many as the recorder counted; fewer
+/// means a file was cut short or a part is missing, more that the metadata is not these files'.
+/// Topics the audit does not read are not counted. The one check of both ROS bag readers.
+pub(crate) fn check_topic_counts(
+    file: &str,
+    expected: &[(String, u64)],
+    read: impl Fn(&str) -> u64,
+    conv: &Messages,
+) -> Result<(), LogError> {
+    for (topic, want) in expected {
+        if !conv.watches(topic) {
+            continue;
+        }
+        let read = read(topic);
+        if read != *want {
+            return Err(LogError::input(
+                file,
+                Location::File,
+                format!(
+                    "topics_with_message_count: `{topic}` has message_count {want}, the bag's files hold {read} of its messages ({})",
+                    if read < *want {
+                        "a file was cut short or a part is missing: the bag is not the whole recording"
+                    } else {
+                        "the metadata does not describe these files"
+                    }
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The MCAP bag at `path`, or `None` where `path` is not a bag directory in the MCAP storage.
@@ -868,16 +907,7 @@ impl Db3Reader {
         match (header, &info.pacs_header) {
             (Some(h), _) => conv.set_header(h, Location::File)?,
             (None, Some(json)) => {
-                let bad = |p: String| {
-                    LogError::input(
-                        &info_name,
-                        Location::File,
-                        format!("custom_data.{CUSTOM_DATA_KEY}: {p}"),
-                    )
-                };
-                let mut h = parse_header_json(json).map_err(|e| bad(e.to_string()))?;
-                // A {urdf, side} robot's relative paths are relative to the bag.
-                h.robot.rebase(&base_dir);
+                let h = custom_data_header(json, &info_name, &base_dir)?;
                 conv.file.clone_from(&info_name);
                 conv.set_header(h, Location::File)?;
                 conv.file.clone_from(&name);
@@ -1044,40 +1074,13 @@ impl Db3Reader {
 }
 
 impl Db3Reader {
-    /// At the end of the bag: every topic read must hold as many messages as the metadata's
-    /// `topics_with_message_count` says (fewer: a file was cut short or a part is missing; more:
-    /// the metadata is not this recording's). Topics not read (not configured) are not counted;
-    /// a configured topic that no file has a connection for counts as 0 read.
+    /// At the end of the bag: [`check_topic_counts`] over every file's connections.
     fn check_counts(&self) -> Result<(), LogError> {
-        for (topic, expected) in &self.expected {
-            let mut read = 0u64;
-            let mut configured = false;
-            for part in &self.parts {
-                for t in &part.topics {
-                    if t.name == *topic && t.stream != Stream::Ignored {
-                        configured = true;
-                        read += t.read;
-                    }
-                }
-            }
-            // A watched topic on no connection of any file: none of its messages was read.
-            let configured = configured || self.conv.watches(topic);
-            if configured && read != *expected {
-                return Err(LogError::input(
-                    &self.info_name,
-                    Location::File,
-                    format!(
-                        "topics_with_message_count: `{topic}` has message_count {expected}, the bag's files hold {read} of its messages ({})",
-                        if read < *expected {
-                            "a file was cut short or a part is missing: the bag is not the whole recording"
-                        } else {
-                            "the metadata does not describe these files"
-                        }
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        let read = |topic: &str| {
+            let files = self.parts.iter().flat_map(|p| &p.topics);
+            files.filter(|t| t.name == topic).map(|t| t.read).sum()
+        };
+        check_topic_counts(&self.info_name, &self.expected, read, &self.conv)
     }
 }
 

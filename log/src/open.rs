@@ -195,13 +195,7 @@ fn open_mcap_bag(
             None => (None, None),
         },
     };
-    let mut r = crate::mcap::McapReader::new_parts_with_header_file(
-        parts,
-        mcap,
-        overrides,
-        header,
-        header_file,
-    )?;
+    let mut r = crate::mcap::McapReader::new_parts(parts, mcap, overrides, header, header_file)?;
     r.expect_topic_counts(&bag.metadata, bag.topic_counts)?;
     Ok(Box::new(r))
 }

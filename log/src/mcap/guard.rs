@@ -10,10 +10,9 @@
 //! bodies (through the buffered input), and stops at the footer or wherever the file stops making
 //! sense otherwise (the linear pass then reports that).
 //!
-//! The reader now takes whole chunk records from the linear pass and walks their records itself
-//! (`reader/chunk.rs`, every length checked against the chunk), so the crate's streaming of a
-//! chunk's records is no longer used; this walk stays because it names a record cut short by
-//! the end of the file before any record is read.
+//! The reader takes whole chunk records from the linear pass and walks their records itself
+//! (`reader/chunk.rs`, every length checked against the chunk); this walk also names a record cut
+//! short by the end of the file before any record is read.
 
 use crate::error::{Location, LogError};
 use std::io::{Read, Seek, SeekFrom};

@@ -135,26 +135,23 @@ impl<R: Read + Seek> McapReader<R> {
         overrides: &ModelOverrides,
         header: Option<Header>,
     ) -> Result<Self, LogError> {
-        Self::new_parts(vec![(file.to_string(), input)], cfg, overrides, header)
+        Self::new_parts(
+            vec![(file.to_string(), input)],
+            cfg,
+            overrides,
+            header,
+            None,
+        )
     }
 
     /// [`Self::new`] over the parts of one recording read one after the other (a rosbag2 bag
     /// split into several MCAP files, in the metadata's order), as one log: one time base and one
     /// reordering window across the files; each file's schemas and channels are its own; errors
     /// name the file they are in. The header (`header`, else the first file's) holds for every
-    /// part; `pacs` metadata records of later parts are ignored. `parts` must not be empty.
+    /// part; `pacs` metadata records of later parts are ignored. `header_file` names the file a
+    /// given header was read from (a bag's `metadata.yaml`), for errors in it. `parts` must not be
+    /// empty.
     pub fn new_parts(
-        parts: Vec<(String, R)>,
-        cfg: &McapConfig,
-        overrides: &ModelOverrides,
-        header: Option<Header>,
-    ) -> Result<Self, LogError> {
-        Self::new_parts_with_header_file(parts, cfg, overrides, header, None)
-    }
-
-    /// [`Self::new_parts`] with the header read from the file `header_file` (a bag's
-    /// `metadata.yaml`), which errors in it name.
-    pub fn new_parts_with_header_file(
         parts: Vec<(String, R)>,
         cfg: &McapConfig,
         overrides: &ModelOverrides,
@@ -350,31 +347,11 @@ fn check_counts(
     let Some((file, expected)) = expected else {
         return Ok(());
     };
-    for (topic, want) in expected {
-        if !conv.watches(topic) {
-            continue;
-        }
-        // A watched topic on no channel of any part: none of its messages was read.
-        let read = counted
-            .iter()
-            .find(|(t, _)| t == topic)
-            .map_or(&0, |(_, n)| n);
-        if read != want {
-            return Err(LogError::input(
-                file,
-                Location::File,
-                format!(
-                    "topics_with_message_count: `{topic}` has message_count {want}, the bag's files hold {read} of its messages ({})",
-                    if read < want {
-                        "a file was cut short or a part is missing: the bag is not the whole recording"
-                    } else {
-                        "the metadata does not describe these files"
-                    }
-                ),
-            ));
-        }
-    }
-    Ok(())
+    let read = |topic: &str| {
+        let n = counted.iter().find(|(t, _)| t == topic);
+        n.map_or(0, |(_, n)| *n)
+    };
+    crate::db3::check_topic_counts(file, expected, read, conv)
 }
 
 impl<R: Read + Seek> McapReader<R> {

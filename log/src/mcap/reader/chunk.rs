@@ -14,6 +14,9 @@ use crate::mcap::RECORD_LIMIT;
 use crate::mcap::fields::{FieldError, Fields};
 use std::io::Read;
 
+/// The first bytes of a zstd frame (RFC 8878).
+const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
+
 /// Why a chunk cannot be read.
 #[derive(Debug, thiserror::Error)]
 pub(super) enum ChunkError {
@@ -42,6 +45,10 @@ pub(super) enum ChunkError {
         "invalid MCAP chunk: a record inside it at byte {at} of its records runs past the chunk's end ({left} bytes left, the record needs {need})"
     )]
     RecordPastEnd { at: usize, left: usize, need: u64 },
+    #[error(
+        "invalid MCAP chunk: zstd frames follow its declared {declared} bytes of records (the header does not describe the chunk)"
+    )]
+    FramesBeyondSize { declared: u64 },
 }
 
 /// The records of the chunk being read, and the decoders kept between chunks.
@@ -124,7 +131,8 @@ impl Chunk {
 
     /// The zstd frames of `data` decompressed into the records, each in one call, until `size`
     /// bytes are out; bytes after that are padding (as `mcap`'s streaming reader treats bytes a
-    /// compressor leaves after its last frame). Output beyond `size` or a frame that does not
+    /// compressor leaves after its last frame), unless they start another zstd frame (records the
+    /// declared size would leave unread: an error). Output beyond `size` or a frame that does not
     /// decode is an error. The buffers are reserved, not filled, before decoding (a chunk that
     /// declares a large size but holds little data costs no writes).
     fn zstd_frames(&mut self, mut data: &[u8], size: usize) -> Result<(), ChunkError> {
@@ -141,7 +149,7 @@ impl Chunk {
         // Room for one byte more than declared, to see a frame that holds more.
         self.records.reserve(size + 1);
         let mut first = true;
-        while self.records.len() < size && !data.is_empty() {
+        while !data.is_empty() && (first || self.records.len() < size) {
             let frame = zstd::zstd_safe::find_frame_compressed_size(data)
                 .map_err(|c| bad(std::io::Error::other(zstd::zstd_safe::get_error_name(c))))?;
             let frame = frame.min(data.len());
@@ -158,6 +166,11 @@ impl Chunk {
                 self.records.extend_from_slice(&self.spare);
             }
             data = &data[frame..];
+        }
+        if self.records.len() == size && data.starts_with(&ZSTD_MAGIC) {
+            return Err(ChunkError::FramesBeyondSize {
+                declared: size as u64,
+            });
         }
         Ok(())
     }
@@ -352,7 +365,10 @@ mod tests {
         padded.extend_from_slice(&[0xAB; 7]);
         c.open(&with_header(&padded, records.len())).unwrap();
         assert_eq!(read_all(&mut c).unwrap().len(), 3);
-        // Declared one frame's worth: the second frame would overflow it.
+        // Declared exactly the first frame's worth: the second frame would go unread.
+        let e = c.open(&with_header(&two, cut)).unwrap_err();
+        assert!(matches!(e, ChunkError::FramesBeyondSize { .. }), "{e}");
+        // Declared less than the first frame holds.
         let e = c.open(&with_header(&two, cut - 1)).unwrap_err();
         assert!(
             matches!(e, ChunkError::Decompress { .. } | ChunkError::Size { .. }),
