@@ -93,24 +93,37 @@ enum Field {
 impl Field {
     /// The field named `name`; the first unknown name of a line is kept in `unknown`.
     fn of(name: &str, unknown: &mut String) -> Field {
+        let field = Field::known(name.as_bytes());
+        if matches!(field, Field::Other) && unknown.is_empty() {
+            unknown.push_str(name);
+        }
+        field
+    }
+
+    /// [`Field::of`] for a name given as bytes (an unknown name that is not UTF-8 is kept
+    /// lossily; the fast scanner only passes ASCII).
+    fn of_bytes(name: &[u8], unknown: &mut String) -> Field {
+        let field = Field::known(name);
+        if matches!(field, Field::Other) && unknown.is_empty() {
+            unknown.push_str(&String::from_utf8_lossy(name));
+        }
+        field
+    }
+
+    fn known(name: &[u8]) -> Field {
         match name {
-            "type" => Field::Type,
-            "t" => Field::T,
-            "t_meas" => Field::TMeas,
-            "q" => Field::Q,
-            "dq" => Field::Dq,
-            "ddq" => Field::Ddq,
-            "positions" => Field::Positions,
-            "name" => Field::Name,
-            "id" => Field::Id,
-            "position" => Field::Position,
-            "velocity" => Field::Velocity,
-            other => {
-                if unknown.is_empty() {
-                    unknown.push_str(other);
-                }
-                Field::Other
-            }
+            b"type" => Field::Type,
+            b"t" => Field::T,
+            b"t_meas" => Field::TMeas,
+            b"q" => Field::Q,
+            b"dq" => Field::Dq,
+            b"ddq" => Field::Ddq,
+            b"positions" => Field::Positions,
+            b"name" => Field::Name,
+            b"id" => Field::Id,
+            b"position" => Field::Position,
+            b"velocity" => Field::Velocity,
+            _ => Field::Other,
         }
     }
 }
@@ -320,7 +333,7 @@ impl<'de> Visitor<'de> for LineSeed<'_> {
 #[doc(hidden)]
 pub fn fast_path_agrees(line: &str) -> bool {
     let mut fast = LineBuffers::default();
-    if !fast::parse_line(line, &mut fast) {
+    if !fast::parse_line(line.as_bytes(), &mut fast) {
         return true;
     }
     let mut slow = LineBuffers::default();
@@ -342,7 +355,7 @@ pub fn fast_path_value(text: &str) -> Option<f64> {
 /// Whether the fast scanner takes `line` (for tests: the cases must reach it).
 #[doc(hidden)]
 pub fn fast_path_takes(line: &str) -> bool {
-    fast::parse_line(line, &mut LineBuffers::default())
+    fast::parse_line(line.as_bytes(), &mut LineBuffers::default())
 }
 
 /// Streaming reader of a JSON Lines log (see `docs/log-format.md`).
@@ -477,27 +490,34 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record<'_>>, LogError> {
-        if !self.read_record_line()? {
-            return Ok(None);
+        if !self.scan_in_place()? {
+            if !self.read_record_line()? {
+                return Ok(None);
+            }
+            let b = &mut self.bufs;
+            b.reset();
+            if !fast::parse_line(self.line.as_bytes(), b) {
+                // Not a line the fast scanner takes (or not JSON): serde_json decides, with its
+                // error message.
+                b.reset();
+                let mut de = serde_json::Deserializer::from_str(&self.line);
+                LineSeed(b)
+                    .deserialize(&mut de)
+                    .and_then(|()| de.end())
+                    .map_err(|e| {
+                        let e = pacs_models::describe_json_error(&self.line, &e);
+                        LogError::input(
+                            &self.file,
+                            Location::Line(self.line_no),
+                            format!("invalid JSON record: {e}"),
+                        )
+                    })?;
+            }
         }
         let loc = Location::Line(self.line_no);
         let file = self.file.as_str();
         let err = |p: String| LogError::input(file, loc, p);
         let b = &mut self.bufs;
-        b.reset();
-        if !fast::parse_line(&self.line, b) {
-            // Not a line the fast scanner takes (or not JSON): serde_json decides, with its
-            // error message.
-            b.reset();
-            let mut de = serde_json::Deserializer::from_str(&self.line);
-            LineSeed(b)
-                .deserialize(&mut de)
-                .and_then(|()| de.end())
-                .map_err(|e| {
-                    let e = pacs_models::describe_json_error(&self.line, &e);
-                    err(format!("invalid JSON record: {e}"))
-                })?;
-        }
         if let Some(d) = b.duplicate {
             return Err(err(format!("field `{d}` appears twice")));
         }
@@ -515,6 +535,36 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
 }
 
 impl<R: BufRead> JsonlReader<R> {
+    /// The common case without copying: if the next line lies whole in the input's buffer and
+    /// the fast scanner takes it, it is read into the buffers in place and consumed (true).
+    /// Otherwise nothing is consumed (false) and [`Self::read_record_line`] reads the line as
+    /// before — a blank line, a line across the buffer's end, one with a byte outside ASCII or
+    /// one the scanner does not take. A line the scanner takes is ASCII, so it is UTF-8 as
+    /// [`read_line`] requires, and it ends with its newline (a last line without one is left
+    /// to be refused).
+    fn scan_in_place(&mut self) -> Result<bool, LogError> {
+        let buf = match self.input.fill_buf() {
+            Ok(buf) => buf,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => return Ok(false),
+            Err(e) => {
+                return Err(LogError::Io {
+                    file: self.file.clone(),
+                    source: e,
+                });
+            }
+        };
+        let Some(end) = memchr::memchr(b'\n', buf) else {
+            return Ok(false);
+        };
+        self.bufs.reset();
+        if !fast::parse_line(&buf[..=end], &mut self.bufs) {
+            return Ok(false);
+        }
+        self.input.consume(end + 1);
+        self.line_no += 1;
+        Ok(true)
+    }
+
     /// Read the next line that is not blank into `self.line`; false at the end of the file. The
     /// last line of a file must be complete: a writer killed mid-line leaves a prefix that may
     /// still parse (e.g. a shortened number), so an unterminated line is refused.

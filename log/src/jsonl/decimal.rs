@@ -82,43 +82,90 @@ pub(super) fn to_f64(mant: u64, q: i64) -> Option<f64> {
     let bottom = lo as u64;
     // The value is (w·T*)·2^E, E = q − s − lz (10^q = 5^q·2^q, w = w′·2^(−lz)).
     let e = q as i32 - s - lz as i32;
-    let lower = round(top, bottom, e)?;
+    let lower = Split::of(top, bottom);
+    let x = lower.round(e)?;
     if q >= 0 {
-        return Some(lower); // T exact: P is the exact value.
+        return Some(x); // T exact: P is the exact value.
     }
     // P + w′ (a carry out of `bottom` goes into `top`; P + w′ < 2^192).
     let (b2, carry) = bottom.overflowing_add(w);
-    let upper = round(top + u128::from(carry), b2, e)?;
-    (lower.to_bits() == upper.to_bits()).then_some(lower)
+    if lower.same_rounding_above(carry) {
+        return Some(x);
+    }
+    let upper = Split::of(top + u128::from(carry), b2).round(e)?;
+    (x.to_bits() == upper.to_bits()).then_some(x)
 }
 
-/// `(top·2^64 + bottom)·2^e` rounded to the nearest double (ties to even), for `top ≥ 2^126`;
-/// `None` outside the normal range (subnormal results and overflow are left to the caller).
-#[inline]
-fn round(top: u128, bottom: u64, e: i32) -> Option<f64> {
-    // Bit position of the leading one within the 192-bit integer: 190 or 191.
-    let hb = 64 + 127 - top.leading_zeros() as i32;
-    // 53 significant bits from `top`: the lowest kept bit is at shift = hb − 52 ≥ 138, i.e.
-    // `sh = shift − 64 ≥ 74` within `top`.
-    let sh = (hb - 52 - 64) as u32;
-    let mut m = (top >> sh) as u64; // in [2^52, 2^53)
-    let half = (top >> (sh - 1)) & 1 == 1;
-    let sticky = top & ((1u128 << (sh - 1)) - 1) != 0 || bottom != 0;
-    if half && (sticky || m & 1 == 1) {
-        m += 1;
+/// A 192-bit integer `top·2^64 + bottom` (`top ≥ 2^126`) cut where a double's 53 significant
+/// bits end: the kept bits `m`, the first bit below them (`half`), and what lies below that.
+struct Split {
+    /// The leading 53 bits, in [2^52, 2^53).
+    m: u64,
+    /// The bit just below `m`'s last.
+    half: bool,
+    /// Any bit below `half` set (in `top` or in `bottom`).
+    sticky: bool,
+    /// Every bit of `top` below `half` set (adding 1 to `top` carries into `half`).
+    top_rest_full: bool,
+    /// Bit position of the leading one within the 192-bit integer: 190 or 191.
+    hb: i32,
+}
+
+impl Split {
+    #[inline]
+    fn of(top: u128, bottom: u64) -> Split {
+        let hb = 64 + 127 - top.leading_zeros() as i32;
+        // The lowest kept bit is at shift = hb − 52 ≥ 138, i.e. `sh = shift − 64 ≥ 74` within
+        // `top`.
+        let sh = (hb - 52 - 64) as u32;
+        let rest_mask = (1u128 << (sh - 1)) - 1;
+        let rest = top & rest_mask;
+        Split {
+            m: (top >> sh) as u64,
+            half: (top >> (sh - 1)) & 1 == 1,
+            sticky: rest != 0 || bottom != 0,
+            top_rest_full: rest == rest_mask,
+            hb,
+        }
     }
-    // value = m·2^(hb − 52 + e); the unbiased exponent of a double m·2^k with m in [2^52, 2^53)
-    // is k + 52.
-    let mut exp = hb + e;
-    if m == 1 << 53 {
-        m >>= 1;
-        exp += 1;
+
+    /// Whether `P + w′` rounds as `P` (this split), where `0 < w′ < 2^64` was added to `P`'s
+    /// `bottom` with `carry` out of it, without splitting `P + w′`. Let `R` be the bits below
+    /// `half`. If `R ≠ 0` (`sticky`), adding `w′` changes neither `m` nor `half` unless it carries
+    /// through every bit of `top` below `half`, and both stay sticky: the same rounding. If
+    /// `R = 0`, there is no carry (`bottom = 0`), `m` and `half` stay, and `P + w′` is sticky:
+    /// it rounds up exactly where `half` is set, as `P` does unless `P` is a tie that rounds down
+    /// to an even `m`. (False is always safe: the caller then rounds `P + w′` itself.)
+    #[inline]
+    fn same_rounding_above(&self, carry: bool) -> bool {
+        if self.sticky {
+            !(carry && self.top_rest_full)
+        } else {
+            !self.half || self.m & 1 == 1
+        }
     }
-    if !(-1022..=1023).contains(&exp) {
-        return None;
+
+    /// The value `·2^e`, rounded to the nearest double (ties to even); `None` outside the
+    /// normal range (subnormal results and overflow are left to the caller).
+    #[inline]
+    fn round(&self, e: i32) -> Option<f64> {
+        let mut m = self.m;
+        if self.half && (self.sticky || m & 1 == 1) {
+            m += 1;
+        }
+        // value = m·2^(hb − 52 + e); the unbiased exponent of a double m·2^k with m in
+        // [2^52, 2^53) is k + 52.
+        let mut exp = self.hb + e;
+        if m == 1 << 53 {
+            m >>= 1;
+            exp += 1;
+        }
+        if !(-1022..=1023).contains(&exp) {
+            return None;
+        }
+        let bits = (((exp + 1023) as u64) << 52) | (m & ((1 << 52) - 1));
+        Some(f64::from_bits(bits))
     }
-    let bits = (((exp + 1023) as u64) << 52) | (m & ((1 << 52) - 1));
-    Some(f64::from_bits(bits))
 }
 
 #[cfg(test)]
@@ -235,5 +282,84 @@ mod tests {
             }
         }
         assert!(decided >= 99_800, "{decided}");
+    }
+}
+
+#[cfg(test)]
+mod bracket_tests {
+    use super::Split;
+
+    /// xorshift64*.
+    fn next(state: &mut u64) -> u64 {
+        *state ^= *state >> 12;
+        *state ^= *state << 25;
+        *state ^= *state >> 27;
+        state.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Where `same_rounding_above` says `P + w′` rounds as `P`, splitting and rounding `P + w′`
+    /// gives the same double: on random 192-bit `P` and `w′ ≥ 2^63` (a shifted mantissa), and
+    /// on the edges — `P` a tie (`R = 0`, `half` set, `m` even and odd), `P` exact, and the bits
+    /// of `top` below `half` all set so that the carry reaches `half`. The mutant that always
+    /// answers true fails here (the tie that rounds down).
+    #[test]
+    fn the_shortcut_agrees_with_rounding_the_upper_end() {
+        let mut state = 0x0DEC_1A55_5EED_0042u64;
+        let mut shortcut = 0;
+        let mut edge_disagreements = 0;
+        for case in 0..200_000u32 {
+            let r = |st: &mut u64| next(st);
+            // top in [2^126, 2^128).
+            let mut top = (u128::from(r(&mut state)) << 64 | u128::from(r(&mut state))) >> 1;
+            top |= 1 << 126;
+            if case % 2 == 0 {
+                top |= 1 << 127;
+            }
+            let hb = 64 + 127 - top.leading_zeros() as i32;
+            let sh = (hb - 52 - 64) as u32;
+            let rest_mask = (1u128 << (sh - 1)) - 1;
+            let mut bottom = r(&mut state);
+            match case % 8 {
+                // A tie: half set, nothing below.
+                1 => {
+                    top = (top & !rest_mask) | (1 << (sh - 1));
+                    bottom = 0;
+                }
+                // Exact: nothing from half down.
+                2 => {
+                    top &= !((1u128 << sh) - 1);
+                    bottom = 0;
+                }
+                // Every bit of top below half set.
+                3 => top |= rest_mask,
+                // Every bit of top from half down set.
+                4 => top |= (1u128 << sh) - 1,
+                _ => {}
+            }
+            let w = r(&mut state) | 1 << 63;
+            let (b2, carry) = bottom.overflowing_add(w);
+            let lower = Split::of(top, bottom);
+            let e = -1100 + (r(&mut state) % 2000) as i32;
+            let (Some(x), Some(y)) = (
+                lower.round(e),
+                Split::of(top + u128::from(carry), b2).round(e),
+            ) else {
+                continue;
+            };
+            if lower.same_rounding_above(carry) {
+                shortcut += 1;
+                assert_eq!(
+                    x.to_bits(),
+                    y.to_bits(),
+                    "top {top:#x} bottom {bottom:#x} w {w:#x}"
+                );
+            } else if x.to_bits() != y.to_bits() {
+                edge_disagreements += 1;
+            }
+        }
+        // The shortcut decides most cases, and the cases it leaves include real disagreements
+        // (the ties and the carries into half are reached).
+        assert!(shortcut > 100_000, "{shortcut}");
+        assert!(edge_disagreements > 1_000, "{edge_disagreements}");
     }
 }

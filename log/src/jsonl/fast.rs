@@ -3,8 +3,8 @@
 //! Most lines of a log are robot and shield records: one flat JSON object of numbers, arrays of
 //! numbers and plain strings. This scanner reads exactly such lines, straight into the reader's
 //! buffers, through the same field logic as the serde_json path ([`LineBuffers::take`]). It
-//! accepts a subset of JSON and gives up ([`Bail`]) on anything else — a string with an escape or
-//! a control character, a number out of range, nesting deeper than [`MAX_DEPTH`], any syntax
+//! accepts a subset of JSON and gives up ([`Bail`]) on anything else — a string with an escape, a
+//! control character or a byte outside ASCII, a number out of range, nesting deeper than [`MAX_DEPTH`], any syntax
 //! error — and the line is then parsed again by serde_json, which decides (with its error
 //! message). So a line the scanner takes is one serde_json also takes, with the same values:
 //!
@@ -97,10 +97,26 @@ fn eight_digits_value(v: u64) -> u64 {
 pub(super) struct Bail;
 
 struct Scanner<'a> {
-    /// The line's bytes (`text.as_bytes()`).
+    /// The line's bytes (any bytes: only ASCII is taken outside strings, and a string with a
+    /// byte ≥ 0x80 is left to serde_json, so every string the scanner takes is UTF-8).
     s: &'a [u8],
-    text: &'a str,
     i: usize,
+}
+
+/// Each byte of `v` (eight bytes, little endian) that is `"`, `\\`, a control character
+/// (< 0x20) or not ASCII (≥ 0x80) has its top bit set in the result, and the lowest set bit
+/// lies in the first such byte: the bytes a plain string stops at. (The classic zero-byte test
+/// `(x − 0x01…) & !x & 0x80…` flags every zero byte and, through borrows, only bytes above a
+/// flagged one; likewise for `x < 0x20`.)
+#[inline(always)]
+fn string_stops(v: u64) -> u64 {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGH: u64 = 0x8080_8080_8080_8080;
+    let zero = |x: u64| x.wrapping_sub(ONES) & !x & HIGH;
+    let quote = zero(v ^ (ONES * u64::from(b'"')));
+    let backslash = zero(v ^ (ONES * u64::from(b'\\')));
+    let control = v.wrapping_sub(ONES * 0x20) & !v & HIGH;
+    quote | backslash | control | (v & HIGH)
 }
 
 impl<'a> Scanner<'a> {
@@ -131,22 +147,36 @@ impl<'a> Scanner<'a> {
         }
     }
 
-    /// A string without escapes or control characters (its text between the quotes).
-    fn plain_str(&mut self) -> Result<&'a str, Bail> {
+    /// A string of ASCII without escapes or control characters (its bytes between the quotes),
+    /// scanned eight bytes at a time.
+    #[inline]
+    fn plain_str(&mut self) -> Result<&'a [u8], Bail> {
         if !self.eat(b'"') {
             return Err(Bail);
         }
+        let s = self.s;
         let start = self.i;
+        let mut i = start;
         loop {
-            match *self.s.get(self.i).ok_or(Bail)? {
+            if let Some(chunk) = s.get(i..i + 8) {
+                let mut word = [0u8; 8];
+                word.copy_from_slice(chunk);
+                let stops = string_stops(u64::from_le_bytes(word));
+                if stops == 0 {
+                    i += 8;
+                    continue;
+                }
+                i += (stops.trailing_zeros() / 8) as usize;
+            }
+            // The byte at `i` is the first one the word flagged, or one past the last whole word.
+            match *s.get(i).ok_or(Bail)? {
                 b'"' => break,
-                b'\\' | 0..=0x1f => return Err(Bail),
-                _ => self.i += 1,
+                b'\\' | 0..=0x1f | 0x80.. => return Err(Bail),
+                _ => i += 1,
             }
         }
-        let text = self.text.get(start..self.i).ok_or(Bail)?;
-        self.i += 1;
-        Ok(text)
+        self.i = i + 1;
+        Ok(&s[start..i])
     }
 
     /// A JSON number, finite as an f64, read in one pass: the grammar is checked while the
@@ -241,11 +271,9 @@ impl<'a> Scanner<'a> {
         {
             return Ok(if neg { -x } else { x });
         }
-        // ASCII only from `start` on: the slice is on character boundaries.
-        let x: f64 = self
-            .text
-            .get(start..i)
-            .ok_or(Bail)?
+        // The grammar was checked: ASCII digits, signs, `.` and `e`.
+        let x: f64 = std::str::from_utf8(&s[start..i])
+            .map_err(|_| Bail)?
             .parse()
             .map_err(|_| Bail)?;
         if !x.is_finite() {
@@ -366,7 +394,8 @@ impl Values for Scanner<'_> {
     type Error = Bail;
 
     fn string(&mut self, into: &mut String) -> Result<(), Bail> {
-        let s = self.plain_str()?;
+        // ASCII (`plain_str`): always UTF-8.
+        let s = std::str::from_utf8(self.plain_str()?).map_err(|_| Bail)?;
         into.clear();
         into.push_str(s);
         Ok(())
@@ -434,13 +463,9 @@ impl Values for Scanner<'_> {
 
 /// Read `line` (one record, with its line end) into `b`, which must be reset. False if the
 /// scanner does not take the line; `b` is then partly filled and must be reset before the
-/// serde_json path reads it.
-pub(super) fn parse_line(line: &str, b: &mut LineBuffers) -> bool {
-    let mut sc = Scanner {
-        s: line.as_bytes(),
-        text: line,
-        i: 0,
-    };
+/// serde_json path reads it. The line need not be UTF-8: a line the scanner takes is ASCII.
+pub(super) fn parse_line(line: &[u8], b: &mut LineBuffers) -> bool {
+    let mut sc = Scanner { s: line, i: 0 };
     scan(&mut sc, b).is_ok()
 }
 
@@ -454,7 +479,7 @@ fn scan(sc: &mut Scanner<'_>, b: &mut LineBuffers) -> Result<(), Bail> {
             if !sc.eat(b':') {
                 return Err(Bail);
             }
-            let field = Field::of(key, &mut b.unknown_field);
+            let field = Field::of_bytes(key, &mut b.unknown_field);
             b.take(field, sc)?;
             if sc.eat(b',') {
                 continue;
@@ -477,7 +502,6 @@ fn scan(sc: &mut Scanner<'_>, b: &mut LineBuffers) -> Result<(), Bail> {
 pub(super) fn number(text: &str) -> Option<f64> {
     let mut sc = Scanner {
         s: text.as_bytes(),
-        text,
         i: 0,
     };
     let x = sc.num().ok()?;
