@@ -197,6 +197,7 @@ impl<'a> Scanner<'a> {
     /// Both give what serde_json gives with `float_roundtrip` (tests
     /// `random_doubles_read_correctly_rounded` and
     /// `the_exact_fast_path_agrees_with_the_standard_parse`).
+    #[inline(always)]
     fn num(&mut self) -> Result<f64, Bail> {
         self.ws();
         let s = self.s;
