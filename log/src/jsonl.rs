@@ -25,7 +25,8 @@ enum Kind {
 #[derive(Default, Debug)]
 struct LineBuffers {
     kind: Option<Kind>,
-    kind_name: String,
+    /// The `type` field's text (bytes: the fast scanner's are ASCII, serde_json's UTF-8).
+    kind_name: Vec<u8>,
     t: Option<f64>,
     t_meas: Option<f64>,
     q: Vec<f64>,
@@ -44,11 +45,17 @@ struct LineBuffers {
     has_position: bool,
     velocity: Vec<f64>,
     has_velocity: bool,
-    unknown_field: String,
+    /// The first unknown field name of the line (bytes, as `kind_name`).
+    unknown_field: Vec<u8>,
     duplicate: Option<&'static str>,
 }
 
 impl LineBuffers {
+    /// The record type as text, for messages.
+    fn kind_text(&self) -> std::borrow::Cow<'_, str> {
+        String::from_utf8_lossy(&self.kind_name)
+    }
+
     fn reset(&mut self) {
         self.kind = None;
         self.kind_name.clear();
@@ -92,24 +99,11 @@ enum Field {
 
 impl Field {
     /// The field named `name`; the first unknown name of a line is kept in `unknown`.
-    fn of(name: &str, unknown: &mut String) -> Field {
-        let field = Field::known(name.as_bytes());
-        if matches!(field, Field::Other) && unknown.is_empty() {
-            unknown.push_str(name);
-        }
-        field
-    }
-
-    /// [`Field::of`] for a name given as bytes (an unknown name that is not UTF-8 is kept
-    /// lossily; the fast scanner only passes ASCII).
     #[inline]
-    fn of_bytes(name: &[u8], unknown: &mut String) -> Field {
+    fn of(name: &[u8], unknown: &mut Vec<u8>) -> Field {
         let field = Field::known(name);
         if matches!(field, Field::Other) && unknown.is_empty() {
-            match std::str::from_utf8(name) {
-                Ok(name) => unknown.push_str(name),
-                Err(_) => unknown.push_str(&String::from_utf8_lossy(name)),
-            }
+            unknown.extend_from_slice(name);
         }
         field
     }
@@ -140,6 +134,8 @@ impl Field {
 trait Values {
     type Error;
     fn string(&mut self, into: &mut String) -> Result<(), Self::Error>;
+    /// A string's bytes (the record type: compared, not kept as text).
+    fn word(&mut self, into: &mut Vec<u8>) -> Result<(), Self::Error>;
     fn number(&mut self) -> Result<f64, Self::Error>;
     fn numbers(&mut self, into: &mut Vec<f64>) -> Result<(), Self::Error>;
     fn points(&mut self, into: &mut Vec<[f64; 3]>) -> Result<(), Self::Error>;
@@ -159,14 +155,14 @@ impl LineBuffers {
         match field {
             Field::Type => {
                 dup(b.kind.is_some(), "type");
-                v.string(&mut b.kind_name)?;
-                b.kind = Some(match b.kind_name.as_str() {
-                    "robot" => Kind::Robot,
-                    "human" => Kind::Human,
-                    "object" => Kind::Object,
-                    "shield" => Kind::Shield,
-                    "event" => Kind::Event,
-                    "header" => Kind::Header,
+                v.word(&mut b.kind_name)?;
+                b.kind = Some(match b.kind_name.as_slice() {
+                    b"robot" => Kind::Robot,
+                    b"human" => Kind::Human,
+                    b"object" => Kind::Object,
+                    b"shield" => Kind::Shield,
+                    b"event" => Kind::Event,
+                    b"header" => Kind::Header,
                     _ => Kind::Unknown,
                 });
             }
@@ -232,6 +228,13 @@ impl<'de, A: MapAccess<'de>> Values for SerdeValues<'_, 'de, A> {
     fn string(&mut self, into: &mut String) -> Result<(), A::Error> {
         self.0.next_value_seed(StrInto(into))
     }
+    fn word(&mut self, into: &mut Vec<u8>) -> Result<(), A::Error> {
+        let mut text = String::new();
+        self.0.next_value_seed(StrInto(&mut text))?;
+        into.clear();
+        into.extend_from_slice(text.as_bytes());
+        Ok(())
+    }
     fn number(&mut self) -> Result<f64, A::Error> {
         self.0.next_value()
     }
@@ -246,7 +249,7 @@ impl<'de, A: MapAccess<'de>> Values for SerdeValues<'_, 'de, A> {
     }
 }
 
-struct FieldSeed<'b>(&'b mut String);
+struct FieldSeed<'b>(&'b mut Vec<u8>);
 
 impl<'de> DeserializeSeed<'de> for FieldSeed<'_> {
     type Value = Field;
@@ -261,7 +264,7 @@ impl<'de> Visitor<'de> for FieldSeed<'_> {
         f.write_str("a field name")
     }
     fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Field, E> {
-        Ok(Field::of(v, self.0))
+        Ok(Field::of(v.as_bytes(), self.0))
     }
 }
 
@@ -534,7 +537,7 @@ impl<R: BufRead> RecordReader for JsonlReader<R> {
             return Err(err("a second header record".into()));
         }
         let t =
-            b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_name)))?;
+            b.t.ok_or_else(|| err(format!("{} record has no `t` field", b.kind_text())))?;
         check_fields(b, kind, self.header.version, &err)?;
         record_of(b, kind, t, &err).map(Some)
     }
@@ -618,13 +621,14 @@ fn check_fields(
         Kind::Event => &["name"],
         Kind::Shield => return Ok(()),
         Kind::Unknown | Kind::Header => {
-            return Err(err(format!("unknown record type `{}`", b.kind_name)));
+            return Err(err(format!("unknown record type `{}`", b.kind_text())));
         }
     };
     if !b.unknown_field.is_empty() {
         return Err(err(format!(
             "unknown field `{}` in a {} record",
-            b.unknown_field, b.kind_name
+            String::from_utf8_lossy(&b.unknown_field),
+            b.kind_text()
         )));
     }
     let present = [
@@ -641,7 +645,7 @@ fn check_fields(
     if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed.contains(f)) {
         return Err(err(format!(
             "unknown field `{f}` in a {} record",
-            b.kind_name
+            b.kind_text()
         )));
     }
     Ok(())

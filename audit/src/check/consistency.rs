@@ -288,6 +288,15 @@ pub(crate) fn object_pair_breaks(
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
 ) -> bool {
+    !object_pair_within_plain(b, early, late) && object_pair_breaks_rounded(b, early, late)
+}
+
+/// [`object_pair_breaks`] without its fast accept: each test with outward rounding.
+fn object_pair_breaks_rounded(
+    b: &ObjectBounds,
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+) -> bool {
     let dt = sub_down(late.time, early.time).max(0.0);
     let (acc, ev) = (b.acc, b.vel_error);
     if let (Some(a), Some(v)) = (early.velocity, late.velocity)
@@ -318,6 +327,55 @@ pub(crate) fn object_pair_breaks(
     };
     let allowed = add_down(allowed, mul_down(2.0, b.pos_error));
     dist3_up(&early.position, &late.position) > allowed
+}
+
+/// The fast accept of [`object_pair_breaks`] in plain floats (arguments as there): true only
+/// if, exactly, the velocities (where both are measured) are within `a·Δt + 2·vel_error` of each
+/// other and the positions within the least allowance plus `2·pos_error`. Each squared distance
+/// and each allowance is a sum of non-negative terms computed from exact values in a few
+/// rounded operations (the norm of a velocity through `√`, correctly rounded), so each carries
+/// a relative error of a few ε, far inside the 1e-9 margin; with an allowance ≥ 1e-135 (its
+/// square normal) and a finite squared distance an underflow cannot matter either (as in
+/// [`keypoint_within_plain`]). The bound 1e-135 also keeps the outward-rounded distance's
+/// absolute slack (1e-150, `SQRT_TINY`) below 1e-15 of the allowance, so a pair accepted here
+/// is one the outward-rounded tests accept too: the accept changes no verdict. False
+/// otherwise: the caller then decides with outward rounding. Checked with [`object_pair_breaks`] by `h3_object_pair_sound`'s twin (the
+/// exact oracle, on pairs drawn near each allowance) and by
+/// `the_plain_accept_of_an_object_pair_is_sound`; mutant `x87` (the position allowance
+/// doubled) fails them.
+#[inline]
+fn object_pair_within_plain(
+    b: &ObjectBounds,
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+) -> bool {
+    let within = |p: &[f64; 3], q: &[f64; 3], allowed: f64| {
+        let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        allowed >= 1e-135 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
+    };
+    let dt = (late.time - early.time).max(0.0);
+    let (acc, ev) = (b.acc, b.vel_error);
+    if let (Some(a), Some(v)) = (early.velocity, late.velocity)
+        && !within(&a, &v, acc * dt + 2.0 * ev)
+    {
+        return false;
+    }
+    let by_speed = b.max_speed.map(|v| v * dt);
+    let by_velocity = [early.velocity, late.velocity]
+        .into_iter()
+        .flatten()
+        .map(|v| {
+            ((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() + ev) * dt + 0.5 * acc * (dt * dt)
+        })
+        .reduce(f64::min);
+    let allowed = match (by_speed, by_velocity) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(a), None) | (None, Some(a)) => a,
+        // Nothing bounds the positions: `object_pair_breaks` decides by the velocities alone.
+        (None, None) => return true,
+    };
+    within(&early.position, &late.position, allowed + 2.0 * b.pos_error)
 }
 
 /// Whether two measured velocities `a`, `v` (m/s) of one object, stamped `dt` (s, at most the
@@ -414,6 +472,95 @@ mod tests {
     /// negligible). 20 000 random pairs at scales from 1e-160 to 1e150 m, a third of them with
     /// a keypoint within a relative 1e-12 of the allowance, where rounding decides; where the
     /// fast path does not accept, the answer is the rounded test's.
+    /// The plain-float accept of an object pair never accepts a pair the outward-rounded tests
+    /// flag: 30,000 random pairs at scales from 1e-160 to 1e150, with or without a speed bound
+    /// and velocities, moved to within the allowances, to ±1e-12 of them, or up to twice them;
+    /// and it accepts most pairs well inside (what it is for).
+    #[test]
+    fn the_plain_accept_of_an_object_pair_is_sound() {
+        let mut next = uniform(0x6a09_e667_f3bc_c909u64);
+        let (mut accepted, mut inside, mut inside_accepted) = (0, 0, 0);
+        for i in 0..30_000 {
+            let scale = 10f64.powf(-160.0 + 310.0 * next());
+            let dt = scale * next();
+            let b = ObjectBounds {
+                acc: 16.0 * next(),
+                max_speed: (i % 4 != 0).then(|| 3.0 * next()),
+                vel_error: 0.05 * next() * next(),
+                pos_error: 0.05 * next() * next() * scale,
+            };
+            let dir = |next: &mut dyn FnMut() -> f64| [next() - 0.5, next() - 0.5, next() - 0.5];
+            let velocity = |next: &mut dyn FnMut() -> f64| {
+                (next() < 0.6).then(|| {
+                    let d = dir(next);
+                    moved_along(&[0.0; 3], d, 3.0 * next())
+                })
+            };
+            let ev = velocity(&mut next);
+            let vb = b.acc * dt + 2.0 * b.vel_error;
+            let lv = match ev {
+                Some(v) if next() < 0.7 => {
+                    let d = dir(&mut next);
+                    Some(moved_along(
+                        &v,
+                        d,
+                        vb * (1.0 + 1e-12 * (2.0 * next() - 1.0)) * next(),
+                    ))
+                }
+                _ => velocity(&mut next),
+            };
+            let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            let allowed = [b.max_speed.map(|v| v * dt)]
+                .into_iter()
+                .chain(
+                    [ev, lv]
+                        .into_iter()
+                        .map(|v| v.map(|v| (norm(v) + b.vel_error) * dt + 0.5 * b.acc * dt * dt)),
+                )
+                .flatten()
+                .reduce(f64::min)
+                .unwrap_or(scale)
+                + 2.0 * b.pos_error;
+            let p = [next() * scale, next() * scale, next() * scale];
+            let k = match i % 3 {
+                0 => next(),
+                1 => 1.0 + 1e-12 * (2.0 * next() - 1.0),
+                _ => 2.0 * next(),
+            };
+            let d = dir(&mut next);
+            let q = moved_along(&p, d, allowed * k);
+            let (early, late) = (
+                ObjectMeasurement {
+                    time: 0.0,
+                    position: p,
+                    velocity: ev,
+                },
+                ObjectMeasurement {
+                    time: dt,
+                    position: q,
+                    velocity: lv,
+                },
+            );
+            let accept = object_pair_within_plain(&b, &early, &late);
+            if accept {
+                accepted += 1;
+                assert!(
+                    !object_pair_breaks_rounded(&b, &early, &late),
+                    "case {i}, scale {scale}: accepted a pair the rounded tests flag: {b:?} {early:?} {late:?}"
+                );
+            }
+            if k < 0.9 && allowed >= 1e-130 && lv.is_none_or(|_| ev.is_none()) {
+                inside += 1;
+                inside_accepted += accept as usize;
+            }
+        }
+        assert!(accepted > 8_000, "{accepted}");
+        assert!(
+            inside_accepted * 10 > inside * 9,
+            "{inside_accepted} of {inside}"
+        );
+    }
+
     #[test]
     fn the_fast_accept_of_a_human_pair_is_sound() {
         let model = HumanModel::builtin("default").unwrap();

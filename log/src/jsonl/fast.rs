@@ -394,6 +394,13 @@ impl<'a> Scanner<'a> {
 impl Values for Scanner<'_> {
     type Error = Bail;
 
+    fn word(&mut self, into: &mut Vec<u8>) -> Result<(), Bail> {
+        let s = self.plain_str()?;
+        into.clear();
+        into.extend_from_slice(s);
+        Ok(())
+    }
+
     fn string(&mut self, into: &mut String) -> Result<(), Bail> {
         // ASCII (`plain_str`): always UTF-8.
         let s = std::str::from_utf8(self.plain_str()?).map_err(|_| Bail)?;
@@ -480,7 +487,7 @@ fn scan(sc: &mut Scanner<'_>, b: &mut LineBuffers) -> Result<(), Bail> {
             if !sc.eat(b':') {
                 return Err(Bail);
             }
-            let field = Field::of_bytes(key, &mut b.unknown_field);
+            let field = Field::of(key, &mut b.unknown_field);
             b.take(field, sc)?;
             if sc.eat(b',') {
                 continue;
