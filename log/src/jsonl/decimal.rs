@@ -112,20 +112,23 @@ struct Split {
 }
 
 impl Split {
+    /// The cut, in 64-bit words: `top ≥ 2^126` puts its leading one in bit 62 or 63 of its high
+    /// word `th`, so the 53 kept bits and `half` lie in `th` (a shift of 10 or 11) and the bits
+    /// below `half` are the rest of `th`, `top`'s low word and `bottom`.
     #[inline]
     fn of(top: u128, bottom: u64) -> Split {
-        let hb = 64 + 127 - top.leading_zeros() as i32;
-        // The lowest kept bit is at shift = hb − 52 ≥ 138, i.e. `sh = shift − 64 ≥ 74` within
-        // `top`.
-        let sh = (hb - 52 - 64) as u32;
-        let rest_mask = (1u128 << (sh - 1)) - 1;
-        let rest = top & rest_mask;
+        let th = (top >> 64) as u64;
+        let tl = top as u64;
+        let lz = th.leading_zeros(); // 0 or 1
+        let shift = 11 - lz;
+        let rest_mask = (1u64 << (shift - 1)) - 1;
+        let rest = th & rest_mask;
         Split {
-            m: (top >> sh) as u64,
-            half: (top >> (sh - 1)) & 1 == 1,
-            sticky: rest != 0 || bottom != 0,
-            top_rest_full: rest == rest_mask,
-            hb,
+            m: th >> shift,
+            half: (th >> (shift - 1)) & 1 == 1,
+            sticky: rest != 0 || tl != 0 || bottom != 0,
+            top_rest_full: rest == rest_mask && tl == u64::MAX,
+            hb: 191 - lz as i32,
         }
     }
 
