@@ -131,8 +131,9 @@ pub(crate) fn keypoint_breaks(
 /// `‖p − q‖ ≤ v·(hi − lo) + 2·e_pos` exactly (arguments as there). The squared distance and the
 /// squared allowance (three rounded operations from exact values) each carry a relative
 /// rounding error of a few ε, far inside the 1e-9 margin, so a pair accepted here is within the
-/// allowance exactly. Only where neither overflows (d² finite) nor underflows (allowance
-/// ≥ 1e-150, so its square is normal and an underflowed d² is far below it); false otherwise
+/// allowance exactly. Only where neither overflows (d² finite, allowance ≤ 1e150 so that its
+/// square is finite and keeps the margin) nor underflows (allowance ≥ 1e-150, so its square is
+/// normal and an underflowed d² is far below it); false otherwise
 /// (the caller decides by the outward-rounded distance and allowance). Evaluated for every
 /// keypoint of a pair at once by [`keypoints_within_plain`]. Checked with `keypoint_breaks` by
 /// `h3_keypoint_pair_sound`, and for several keypoints by `h3_keypoints_accept_sound`.
@@ -141,7 +142,7 @@ fn keypoint_within_plain(p: [f64; 3], q: [f64; 3], v: f64, lo: f64, hi: f64, e_p
     let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
     let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
     let d2 = dx * dx + dy * dy + dz * dz;
-    plain >= 1e-150 && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9)
+    (1e-150..=1e150).contains(&plain) && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9)
 }
 
 /// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
@@ -206,7 +207,7 @@ pub(crate) fn boxes_within(v_min: f64, e2: f64, dt: f64, ba: &[f64; 6], bb: &[f6
         let e = ba[k + 3].max(bb[k + 3]) - ba[k].min(bb[k]);
         d2 += e * e;
     }
-    allowed >= 1e-150 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
+    (1e-150..=1e150).contains(&allowed) && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
 }
 
 /// A Euclidean norm rounded down (`pacs_reach::rounding::norm3_down`, harness a3).
@@ -246,24 +247,42 @@ pub(crate) fn velocity_breaks(v: [f64; 3], vmax: f64, ev: f64) -> bool {
 }
 
 /// What [`object_pair_breaks`] needs of an object model: the bound of every acceleration
-/// ([`object_acc_bound`], m/s²), the speed bound (m/s) if any, and the velocity and position
-/// errors (m/s, m), all ≥ 0.
+/// ([`object_acc_bound`], m/s², rounded down: it may lie just below zero), the speed bound (m/s)
+/// if any, and the velocity and position errors (m/s, m), all ≥ 0; and whether the plain-float
+/// accept takes these bounds ([`object_pair_within_plain`]), decided once.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ObjectBounds {
     pub(crate) acc: f64,
     pub(crate) max_speed: Option<f64>,
     pub(crate) vel_error: f64,
     pub(crate) pos_error: f64,
+    /// The bounds are tame for the plain-float accept: the acceleration bound (taken as at
+    /// least 0), its half, the speed bound and the errors each zero or normal and ≤ 1e100.
+    plain: bool,
 }
 
 impl ObjectBounds {
-    pub(crate) fn of(model: &ObjectModel) -> Self {
+    pub(crate) fn new(acc: f64, max_speed: Option<f64>, vel_error: f64, pos_error: f64) -> Self {
+        let a = acc.max(0.0);
+        let plain = [a, 0.5 * a, max_speed.unwrap_or(0.0), vel_error, pos_error]
+            .into_iter()
+            .all(plain_scalar);
         Self {
-            acc: object_acc_bound(model),
-            max_speed: model.max_speed(),
-            vel_error: model.vel_error(),
-            pos_error: model.pos_error(),
+            acc,
+            max_speed,
+            vel_error,
+            pos_error,
+            plain,
         }
+    }
+
+    pub(crate) fn of(model: &ObjectModel) -> Self {
+        Self::new(
+            object_acc_bound(model),
+            model.max_speed(),
+            model.vel_error(),
+            model.pos_error(),
+        )
     }
 }
 
@@ -331,51 +350,100 @@ fn object_pair_breaks_rounded(
 
 /// The fast accept of [`object_pair_breaks`] in plain floats (arguments as there): true only
 /// if, exactly, the velocities (where both are measured) are within `a·Δt + 2·vel_error` of each
-/// other and the positions within the least allowance plus `2·pos_error`. Each squared distance
-/// and each allowance is a sum of non-negative terms computed from exact values in a few
-/// rounded operations (the norm of a velocity through `√`, correctly rounded), so each carries
-/// a relative error of a few ε, far inside the 1e-9 margin; with an allowance ≥ 1e-135 (its
-/// square normal) and a finite squared distance an underflow cannot matter either (as in
-/// [`keypoint_within_plain`]). The bound 1e-135 also keeps the outward-rounded distance's
-/// absolute slack (1e-150, `SQRT_TINY`) below 1e-15 of the allowance, so a pair accepted here
-/// is one the outward-rounded tests accept too: the accept changes no verdict. False
-/// otherwise: the caller then decides with outward rounding. Checked with [`object_pair_breaks`] by `h3_object_pair_sound`'s twin (the
-/// exact oracle, on pairs drawn near each allowance) and by
-/// `the_plain_accept_of_an_object_pair_is_sound`; mutant `x87` (the position allowance
-/// doubled) fails them.
+/// other and the positions within the least allowance plus `2·pos_error`.
+///
+/// Taken only where every quantity is tame ([`plain_scalar`], [`plain_vector`]): the model's
+/// bounds and `Δt` zero or normal and at most 1e100, velocities' components at most 1e100, and
+/// the two intermediates that are multiplied or square-rooted again — `Δt²` and each `‖v‖²` —
+/// zero or normal. Then nothing overflows, every factor carries a relative error of a few ε
+/// (an intermediate that underflowed and was then scaled up or square-rooted could carry any),
+/// and each allowance is a sum of non-negative terms with a relative error of a few ε, plus at
+/// most ≈ 1e-323 from a last product that underflowed: far inside the 1e-9 margin of
+/// [`within_plain`], whose allowance is at least 1e-135. That bound also keeps the
+/// outward-rounded tests' own slack (a relative 1e-14, `INFLATE`, and an absolute 1e-150,
+/// `SQRT_TINY`) far below the margin, so a pair accepted here is one those tests accept too:
+/// the accept changes no verdict. False otherwise: the caller then decides with outward
+/// rounding.
+///
+/// # Soundness
+/// Claim C9 (the fast accept of the consistency check): the twin of `h3_object_pair_sound` (the
+/// whole [`object_pair_breaks`] against the exact oracle, pairs drawn near each allowance);
+/// `h3_object_accept_sound` (Kani: [`within_plain`] on grids of dyadic values; its twin this
+/// accept at full width against the exact oracle); the property test
+/// `the_plain_accept_of_an_object_pair_is_sound` (against the outward-rounded tests, from
+/// 1e-320 to 1e300, overflows and underflows forced). Mutant `x87` (the allowance doubled in
+/// [`within_plain`]) fails all three.
 #[inline]
 fn object_pair_within_plain(
     b: &ObjectBounds,
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
 ) -> bool {
-    let within = |p: &[f64; 3], q: &[f64; 3], allowed: f64| {
-        let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
-        let d2 = dx * dx + dy * dy + dz * dz;
-        allowed >= 1e-135 && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
-    };
     let dt = (late.time - early.time).max(0.0);
-    let (acc, ev) = (b.acc, b.vel_error);
+    // `b.acc` is the acceleration bound rounded down, so it may lie just below zero (a model
+    // without acceleration: `next_down(0)`); the exact bound is ≥ 0, so 0 is below it too.
+    let (acc, ev, pe) = (b.acc.max(0.0), b.vel_error, b.pos_error);
+    let dt2 = dt * dt;
+    if !b.plain || !plain_scalar(dt) || !(dt2 == 0.0 || dt2 >= f64::MIN_POSITIVE) {
+        return false;
+    }
     if let (Some(a), Some(v)) = (early.velocity, late.velocity)
-        && !within(&a, &v, acc * dt + 2.0 * ev)
+        && !within_plain(&a, &v, acc * dt + 2.0 * ev)
     {
         return false;
     }
-    let by_speed = b.max_speed.map(|v| v * dt);
-    let by_velocity = [early.velocity, late.velocity]
-        .into_iter()
-        .flatten()
-        .map(|v| {
-            ((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() + ev) * dt + 0.5 * acc * (dt * dt)
-        })
-        .reduce(f64::min);
-    let allowed = match (by_speed, by_velocity) {
-        (Some(a), Some(b)) => a.min(b),
-        (Some(a), None) | (None, Some(a)) => a,
-        // Nothing bounds the positions: `object_pair_breaks` decides by the velocities alone.
-        (None, None) => return true,
+    let mut by_velocity = f64::INFINITY;
+    for v in [early.velocity, late.velocity].into_iter().flatten() {
+        let Some(n2) = plain_vector(&v) else {
+            return false;
+        };
+        // `√` through `ieee::sqrt`: under Kani its contract (correctly rounded here).
+        let allowed = (pacs_reach::ieee::sqrt(n2) + ev) * dt + 0.5 * acc * dt2;
+        by_velocity = by_velocity.min(allowed);
+    }
+    let allowed = match b.max_speed {
+        Some(vmax) => by_velocity.min(vmax * dt),
+        None => by_velocity,
     };
-    within(&early.position, &late.position, allowed + 2.0 * b.pos_error)
+    if allowed == f64::INFINITY {
+        // Nothing bounds the positions: `object_pair_breaks` decides by the velocities alone.
+        return true;
+    }
+    within_plain(&early.position, &late.position, allowed + 2.0 * pe)
+}
+
+/// Whether a non-negative bound (m, m/s, m/s², s) is one the plain-float accept takes: zero or
+/// normal, at most 1e100.
+#[inline(always)]
+fn plain_scalar(x: f64) -> bool {
+    x == 0.0 || (f64::MIN_POSITIVE..=1e100).contains(&x)
+}
+
+/// A velocity's squared norm (m²/s²) where the plain-float accept takes the velocity: every
+/// component at most 1e100 in magnitude and the squared norm zero or normal (so that its `√`
+/// carries a relative error of a few ε); `None` otherwise.
+#[inline(always)]
+fn plain_vector(v: &[f64; 3]) -> Option<f64> {
+    let n2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    (v.iter().all(|c| c.abs() <= 1e100) && (n2 == 0.0 || n2 >= f64::MIN_POSITIVE)).then_some(n2)
+}
+
+/// The test of [`object_pair_within_plain`]: true only if `‖p − q‖ ≤ allowed` certainly — the
+/// squared distance within the squared allowance less the 1e-9 margin, with the allowance in
+/// `[1e-135, 1e150]` (its square normal and finite: the margin holds) and a finite squared
+/// distance (arguments in m or m/s; `allowed` computed in plain floats with a relative error of
+/// a few ε, see there). An underflowed difference or square only lowers the squared distance by
+/// at most ≈ 1e-323, far below the margin of a squared allowance ≥ 1e-270.
+///
+/// # Soundness
+/// Claim C9 (the fast accept of the consistency check): harness `h3_object_accept_sound`
+/// (Kani: this test on grids of dyadic values, where the allowance is exact; the twin the
+/// whole accept at full width with the exact oracle).
+#[inline(always)]
+pub(crate) fn within_plain(p: &[f64; 3], q: &[f64; 3], allowed: f64) -> bool {
+    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    (1e-135..=1e150).contains(&allowed) && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
 }
 
 /// Whether two measured velocities `a`, `v` (m/s) of one object, stamped `dt` (s, at most the
@@ -483,12 +551,12 @@ mod tests {
         for i in 0..30_000 {
             let scale = 10f64.powf(-160.0 + 310.0 * next());
             let dt = scale * next();
-            let b = ObjectBounds {
-                acc: 16.0 * next(),
-                max_speed: (i % 4 != 0).then(|| 3.0 * next()),
-                vel_error: 0.05 * next() * next(),
-                pos_error: 0.05 * next() * next() * scale,
-            };
+            let b = ObjectBounds::new(
+                16.0 * next(),
+                (i % 4 != 0).then(|| 3.0 * next()),
+                0.05 * next() * next(),
+                0.05 * next() * next() * scale,
+            );
             let dir = |next: &mut dyn FnMut() -> f64| [next() - 0.5, next() - 0.5, next() - 0.5];
             let velocity = |next: &mut dyn FnMut() -> f64| {
                 (next() < 0.6).then(|| {
@@ -549,7 +617,11 @@ mod tests {
                     "case {i}, scale {scale}: accepted a pair the rounded tests flag: {b:?} {early:?} {late:?}"
                 );
             }
-            if k < 0.9 && allowed >= 1e-130 && lv.is_none_or(|_| ev.is_none()) {
+            // Inside, and where the accept's range conditions hold.
+            let tame = (1e-130..=1e140).contains(&allowed)
+                && dt <= 1e100
+                && (dt * dt == 0.0 || dt * dt >= f64::MIN_POSITIVE);
+            if k < 0.9 && tame && lv.is_none_or(|_| ev.is_none()) {
                 inside += 1;
                 inside_accepted += accept as usize;
             }
@@ -559,6 +631,74 @@ mod tests {
             inside_accepted * 10 > inside * 9,
             "{inside_accepted} of {inside}"
         );
+        let object = |t: f64, position: [f64; 3], velocity: Option<[f64; 3]>| ObjectMeasurement {
+            time: t,
+            position,
+            velocity,
+        };
+        let flagged_if_accepted =
+            |b: &ObjectBounds, e: &ObjectMeasurement, l: &ObjectMeasurement| {
+                if object_pair_within_plain(b, e, l) {
+                    assert!(
+                        !object_pair_breaks_rounded(b, e, l),
+                        "accepted a pair the rounded tests flag: {b:?} {e:?} {l:?}"
+                    );
+                    true
+                } else {
+                    false
+                }
+            };
+        // An infinite velocity norm (1e155² overflows) with no speed bound.
+        let b = ObjectBounds::new(3.0, None, 0.01, 0.01);
+        let v = Some([1e155, 0.0, 0.0]);
+        let (e, l) = (
+            object(0.0, [0.0; 3], v),
+            object(0.001, [1e153, 0.0, 0.0], v),
+        );
+        assert!(object_pair_breaks_rounded(&b, &e, &l));
+        assert!(!flagged_if_accepted(&b, &e, &l));
+        // A subnormal Δt² scaled by a huge acceleration.
+        let b = ObjectBounds::new(1e300, None, 0.0, 0.0);
+        let v = Some([0.0; 3]);
+        let (e, l) = (
+            object(0.0, [0.0; 3], v),
+            object(2e-162, [2.3e-24, 0.0, 0.0], v),
+        );
+        assert!(object_pair_breaks_rounded(&b, &e, &l));
+        assert!(!flagged_if_accepted(&b, &e, &l));
+        // Every quantity from 1e-320 to 1e300, or zero, or just below zero (an acceleration
+        // bound rounded down from zero).
+        let wild = |next: &mut dyn FnMut() -> f64| match (next() * 8.0) as u32 {
+            0 => 0.0,
+            1 => -f64::from_bits(1),
+            _ => 10f64.powf(-320.0 + 620.0 * next()),
+        };
+        let vec = |next: &mut dyn FnMut() -> f64| {
+            let d = [next() - 0.5, next() - 0.5, next() - 0.5];
+            let len = wild(next).abs();
+            moved_along(&[0.0; 3], d, len)
+        };
+        let mut wild_accepted = 0;
+        for _ in 0..30_000 {
+            let b = ObjectBounds::new(
+                wild(&mut next),
+                (next() < 0.5).then(|| wild(&mut next).abs()),
+                wild(&mut next).abs(),
+                wild(&mut next).abs(),
+            );
+            let dt = wild(&mut next).abs();
+            let (ev, lv) = (
+                (next() < 0.6).then(|| vec(&mut next)),
+                (next() < 0.6).then(|| vec(&mut next)),
+            );
+            let p = vec(&mut next);
+            let q = if next() < 0.5 { vec(&mut next) } else { p };
+            let (e, l) = (object(0.0, p, ev), object(dt, q, lv));
+            wild_accepted += flagged_if_accepted(&b, &e, &l) as usize;
+        }
+        // Some of these are accepted (the accept is reached), the rest decided by the rounded
+        // tests.
+        assert!(wild_accepted > 500, "{wild_accepted}");
     }
 
     #[test]
