@@ -333,10 +333,11 @@ fn object_pair_breaks_rounded(
         .flatten()
         .map(|v| {
             let speed = add_down(norm3_down(v), ev);
-            add_down(
-                mul_down(speed, dt),
-                mul_down(mul_down(0.5, acc), mul_down(dt, dt)),
-            )
+            // The acceleration term's lower bound, at least 0 (its exact value is): `acc` may lie
+            // just below zero (a model without acceleration), and times `Δt²` up to 1e200 that
+            // would lower the allowance by far more than an ulp.
+            let by_acc = mul_down(mul_down(0.5, acc), mul_down(dt, dt)).max(0.0);
+            add_down(mul_down(speed, dt), by_acc)
         })
         .reduce(f64::min);
     let allowed = match (by_speed, by_velocity) {
@@ -666,6 +667,15 @@ mod tests {
         );
         assert!(object_pair_breaks_rounded(&b, &e, &l));
         assert!(!flagged_if_accepted(&b, &e, &l));
+        // A model without acceleration (its bound rounded down to just below zero) over a
+        // long Δt: the rounded tests' acceleration term stays at least 0, as the exact one.
+        let b = ObjectBounds::new(-f64::from_bits(1), Some(1.0), 0.0, 1e-125);
+        let (e, l) = (
+            object(0.0, [0.0; 3], Some([0.0; 3])),
+            object(1e100, [1e-125, 0.0, 0.0], None),
+        );
+        assert!(!object_pair_breaks_rounded(&b, &e, &l));
+        assert!(flagged_if_accepted(&b, &e, &l));
         // Every quantity from 1e-320 to 1e300, or zero, or just below zero (an acceleration
         // bound rounded down from zero).
         let wild = |next: &mut dyn FnMut() -> f64| match (next() * 8.0) as u32 {
