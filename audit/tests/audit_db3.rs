@@ -981,7 +981,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     std::fs::remove_file(bag.join("split_1.mcap")).unwrap();
     expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &["relative_file_paths[1]", "is not a file"],
     );
     // A part not listed.
@@ -989,7 +989,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     edit_metadata(&bag, "  - split_1.mcap\n", "");
     expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &[
             &bag.join("split_1.mcap").display().to_string(),
             "not in rosbag2_bagfile_information.relative_file_paths",
@@ -1029,7 +1029,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     edit_metadata(&bag, "  - split_1.mcap\n", "");
     let e = expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &["topics_with_message_count", "a part is missing"],
     );
     assert!(
@@ -1039,11 +1039,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     // A custom_data header whose robot model does not exist: the error names the metadata.
     let bag = copy_bag(&mcap_bags().join("clean"), &d, "bad_robot");
     edit_metadata(&bag, "\"fr3\"", "\"fr9\"");
-    expect_err(
-        audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
-        &["fr9"],
-    );
+    expect_err(audit(&bag, None), &name_of(&bag), &["fr9"]);
     // A watched topic the metadata counts but no file has a channel for (the part holding it
     // dropped with its listing): its count (not 0) tells.
     let bag = copy_bag(&mcap_bags().join("clean"), &d, "ghost");
@@ -1054,7 +1050,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     );
     expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &["`/humans/ghost/keypoints` has message_count 5", "hold 0"],
     );
     // Compressed (rosbag2's file compression).
@@ -1062,7 +1058,7 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     edit_metadata(&bag, "compression_mode: ''", "compression_mode: FILE");
     expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &["compressed bags are not supported"],
     );
     // No header in the metadata: an error, unless one is given.
@@ -1144,7 +1140,7 @@ fn message_compressed_bags_read_as_their_uncompressed_twins() {
     .unwrap();
     expect_err(
         audit(&bag, None),
-        &bag.join("metadata.yaml").display().to_string(),
+        &name_of(&bag),
         &["compressed bags are not supported", "`file`"],
     );
 }

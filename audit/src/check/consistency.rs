@@ -132,17 +132,14 @@ pub(crate) fn keypoint_breaks(
 /// squared allowance (three rounded operations from exact values) each carry a relative
 /// rounding error of a few ε, far inside the 1e-9 margin, so a pair accepted here is within the
 /// allowance exactly. Only where neither overflows (d² finite, allowance ≤ 1e150 so that its
-/// square is finite and keeps the margin) nor underflows (allowance ≥ 1e-150, so its square is
-/// normal and an underflowed d² is far below it); false otherwise
+/// square is finite and keeps the margin) nor underflows (allowance ≥ 1e-135, so its square is
+/// normal and an underflowed d² is far below it): the test [`within_plain`]; false otherwise
 /// (the caller decides by the outward-rounded distance and allowance). Evaluated for every
 /// keypoint of a pair at once by [`keypoints_within_plain`]. Checked with `keypoint_breaks` by
 /// `h3_keypoint_pair_sound`, and for several keypoints by `h3_keypoints_accept_sound`.
 #[inline(always)]
 fn keypoint_within_plain(p: [f64; 3], q: [f64; 3], v: f64, lo: f64, hi: f64, e_pos: f64) -> bool {
-    let plain = v * (hi - lo).max(0.0) + 2.0 * e_pos;
-    let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
-    let d2 = dx * dx + dy * dy + dz * dz;
-    (1e-150..=1e150).contains(&plain) && d2.is_finite() && d2 <= plain * plain * (1.0 - 1e-9)
+    within_plain(&p, &q, v * (hi - lo).max(0.0) + 2.0 * e_pos)
 }
 
 /// The axis-aligned bounding box of a measurement's keypoints (m): `[min x, min y, min z, max
@@ -201,13 +198,12 @@ pub(super) fn pair_within_boxes(
 /// (against [`human_pair_breaks`]).
 #[inline]
 pub(crate) fn boxes_within(v_min: f64, e2: f64, dt: f64, ba: &[f64; 6], bb: &[f64; 6]) -> bool {
-    let allowed = v_min * dt + e2;
     let mut d2 = 0.0;
     for k in 0..3 {
         let e = ba[k + 3].max(bb[k + 3]) - ba[k].min(bb[k]);
         d2 += e * e;
     }
-    (1e-150..=1e150).contains(&allowed) && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
+    squared_within(d2, v_min * dt + e2)
 }
 
 /// A Euclidean norm rounded down (`pacs_reach::rounding::norm3_down`, harness a3).
@@ -252,10 +248,10 @@ pub(crate) fn velocity_breaks(v: [f64; 3], vmax: f64, ev: f64) -> bool {
 /// accept takes these bounds ([`object_pair_within_plain`]), decided once.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ObjectBounds {
-    pub(crate) acc: f64,
-    pub(crate) max_speed: Option<f64>,
-    pub(crate) vel_error: f64,
-    pub(crate) pos_error: f64,
+    acc: f64,
+    max_speed: Option<f64>,
+    vel_error: f64,
+    pos_error: f64,
     /// The bounds are tame for the plain-float accept: the acceleration bound (taken as at
     /// least 0), its half, the speed bound and the errors each zero or normal and ≤ 1e100.
     plain: bool,
@@ -429,21 +425,28 @@ fn plain_vector(v: &[f64; 3]) -> Option<f64> {
     (v.iter().all(|c| c.abs() <= 1e100) && (n2 == 0.0 || n2 >= f64::MIN_POSITIVE)).then_some(n2)
 }
 
-/// The test of [`object_pair_within_plain`]: true only if `‖p − q‖ ≤ allowed` certainly — the
-/// squared distance within the squared allowance less the 1e-9 margin, with the allowance in
-/// `[1e-135, 1e150]` (its square normal and finite: the margin holds) and a finite squared
-/// distance (arguments in m or m/s; `allowed` computed in plain floats with a relative error of
-/// a few ε, see there). An underflowed difference or square only lowers the squared distance by
-/// at most ≈ 1e-323, far below the margin of a squared allowance ≥ 1e-270.
+/// The test of every plain-float accept ([`keypoint_within_plain`], [`object_pair_within_plain`]):
+/// true only if `‖p − q‖ ≤ allowed` certainly ([`squared_within`] of the squared distance;
+/// arguments in m or m/s, `allowed` computed in plain floats with a relative error of a few ε).
 ///
 /// # Soundness
 /// Claim C9 (the fast accept of the consistency check): harness `h3_object_accept_sound`
 /// (Kani: this test on grids of dyadic values, where the allowance is exact; the twin the
-/// whole accept at full width with the exact oracle).
+/// whole object accept at full width with the exact oracle), and through the keypoint accept
+/// `h3_keypoint_pair_sound`.
 #[inline(always)]
 pub(crate) fn within_plain(p: &[f64; 3], q: &[f64; 3], allowed: f64) -> bool {
     let (dx, dy, dz) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
-    let d2 = dx * dx + dy * dy + dz * dz;
+    squared_within(dx * dx + dy * dy + dz * dz, allowed)
+}
+
+/// The one margin rule of the plain-float accepts: a squared distance `d2` (m² or m²/s²,
+/// computed with a relative error of a few ε; an underflowed difference or square lowers it by
+/// at most ≈ 1e-323) within the squared allowance less 1e-9, the allowance in `[1e-135, 1e150]`
+/// (its square normal and finite, so the margin, at least 1e-279, holds; and the outward-rounded
+/// tests' absolute slack of 1e-150 stays below 1e-15 of the allowance) and `d2` finite.
+#[inline(always)]
+fn squared_within(d2: f64, allowed: f64) -> bool {
     (1e-135..=1e150).contains(&allowed) && d2.is_finite() && d2 <= allowed * allowed * (1.0 - 1e-9)
 }
 
@@ -535,16 +538,14 @@ mod tests {
         assert!(far > 50 && far_accepted == far, "{far_accepted} of {far}");
     }
 
-    /// The fast accept in `human_pair_breaks` is sound: a pair it accepts is within the
-    /// allowance by the outward-rounded test applied to the same pair scaled by a power of two
-    /// into the unit range (exact scaling, where the rounded test's absolute error terms are
-    /// negligible). 20 000 random pairs at scales from 1e-160 to 1e150 m, a third of them with
-    /// a keypoint within a relative 1e-12 of the allowance, where rounding decides; where the
-    /// fast path does not accept, the answer is the rounded test's.
     /// The plain-float accept of an object pair never accepts a pair the outward-rounded tests
     /// flag: 30,000 random pairs at scales from 1e-160 to 1e150, with or without a speed bound
     /// and velocities, moved to within the allowances, to ±1e-12 of them, or up to twice them;
-    /// and it accepts most pairs well inside (what it is for).
+    /// 30,000 more with every quantity from 1e-320 to 1e300, zero or just below zero
+    /// (overflowing and underflowing intermediates: `Δt²`, `‖v‖²`, `a·Δt²`); and the cases the
+    /// range conditions exist for (an infinite velocity norm, a subnormal `Δt²` scaled by a huge
+    /// acceleration, a model without acceleration over a long `Δt`). And it accepts most pairs
+    /// well inside (what it is for).
     #[test]
     fn the_plain_accept_of_an_object_pair_is_sound() {
         let mut next = uniform(0x6a09_e667_f3bc_c909u64);
@@ -711,6 +712,12 @@ mod tests {
         assert!(wild_accepted > 500, "{wild_accepted}");
     }
 
+    /// The fast accept in `human_pair_breaks` is sound: a pair it accepts is within the
+    /// allowance by the outward-rounded test applied to the same pair scaled by a power of two
+    /// into the unit range (exact scaling, where the rounded test's absolute error terms are
+    /// negligible). 20 000 random pairs at scales from 1e-160 to 1e150 m, a third of them with
+    /// a keypoint within a relative 1e-12 of the allowance, where rounding decides; where the
+    /// fast path does not accept, the answer is the rounded test's.
     #[test]
     fn the_fast_accept_of_a_human_pair_is_sound() {
         let model = HumanModel::builtin("default").unwrap();

@@ -452,12 +452,18 @@ fn object_velocities<S: Source>(s: &mut S) {
     }
 }
 
-/// The whole [`object_pair_breaks`] (the twin; under Kani [`object_velocities`]).
-fn object_pair<S: Source>(s: &mut S) {
-    if cfg!(kani) {
-        object_velocities(s);
-        return;
-    }
+/// A pair of records of one object for the twins (any tame values): the bounds, Δt (rounded
+/// up), the velocities' allowance `a·Δt + 2·vel_error` (rounded up), and the records, the later
+/// one often near each allowance; `None` where an input is not tame.
+struct ObjectPairCase {
+    b: ObjectBounds,
+    dt: f64,
+    vb: f64,
+    early: ObjectMeasurement,
+    late: ObjectMeasurement,
+}
+
+fn object_pair_case<S: Source>(s: &mut S) -> Option<ObjectPairCase> {
     let b = ObjectBounds::new(
         s.f64_in(0.0, 16.0),
         if s.bool() { Some(speed(s)) } else { None },
@@ -493,32 +499,40 @@ fn object_pair<S: Source>(s: &mut S) {
     ];
     let vs = [early.velocity, late.velocity].map(|v| v.unwrap_or([0.0; 3]));
     let positions = early.position.iter().chain(&late.position);
-    if !tame_inputs(s, values.iter().chain(positions).chain(vs.iter().flatten())) {
-        return;
-    }
-    if object_pair_breaks(&b, &early, &late) {
-        return;
-    }
-    // The velocities, where both are measured, within a·Δt + 2·vel_error.
-    if let (Some(va), Some(vl)) = (early.velocity, late.velocity) {
+    tame_inputs(s, values.iter().chain(positions).chain(vs.iter().flatten())).then_some(
+        ObjectPairCase {
+            b,
+            dt,
+            vb,
+            early,
+            late,
+        },
+    )
+}
+
+/// Claim C9 for an object pair a check let through (`what`: "not flagged", "accepted"): the
+/// velocities, where both are measured, within `a·Δt + 2·vel_error`; the positions within the
+/// speed bound's allowance and within each measured velocity's `(|v| + ev)·Δt + a·Δt²/2`, each
+/// plus `2·pos_error`.
+fn assert_object_pair_within(c: &ObjectPairCase, what: &str) {
+    let (b, dt, vb) = (&c.b, c.dt, c.vb);
+    if let (Some(va), Some(vl)) = (c.early.velocity, c.late.velocity) {
         assert!(
             within_taken(&va, &vl, vb),
-            "velocities {va:?} → {vl:?} over {dt} s differ by more than {vb} m/s, not flagged"
+            "velocities {va:?} → {vl:?} over {dt} s differ by more than {vb} m/s, {what}"
         );
     }
-    let (p, q) = (&early.position, &late.position);
-    // Within the speed bound's allowance.
+    let (p, q) = (&c.early.position, &c.late.position);
     if let Some(vmax) = b.max_speed {
         let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error);
         assert!(
             within_taken(p, q, allowed),
-            "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, not flagged"
+            "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, {what}"
         );
     }
-    // Within each measured velocity's allowance (|v| + ev)·Δt + a·Δt²/2 + 2·pos_error, with
     // |v| from below (`norm3_down`, claim C1, harnesses a3): an allowance at most the real one,
     // so the claim against it implies the claim against the real one.
-    for v in [early.velocity, late.velocity].into_iter().flatten() {
+    for v in [c.early.velocity, c.late.velocity].into_iter().flatten() {
         let speed = norm3_down(v) + b.vel_error;
         let half_a = mul_up(0.5, b.acc);
         let allowed = mul_add_up(
@@ -528,8 +542,22 @@ fn object_pair<S: Source>(s: &mut S) {
         );
         assert!(
             within_taken(p, q, allowed),
-            "{p:?} → {q:?} over {dt} s beyond {allowed} m with velocity {v:?}, not flagged"
+            "{p:?} → {q:?} over {dt} s beyond {allowed} m with velocity {v:?}, {what}"
         );
+    }
+}
+
+/// The whole [`object_pair_breaks`] (the twin; under Kani [`object_velocities`]).
+fn object_pair<S: Source>(s: &mut S) {
+    if cfg!(kani) {
+        object_velocities(s);
+        return;
+    }
+    let Some(c) = object_pair_case(s) else {
+        return;
+    };
+    if !object_pair_breaks(&c.b, &c.early, &c.late) {
+        assert_object_pair_within(&c, "not flagged");
     }
 }
 
@@ -575,79 +603,11 @@ fn object_accept<S: Source>(s: &mut S) {
         }
         return;
     }
-    let b = ObjectBounds::new(
-        s.f64_in(0.0, 16.0),
-        if s.bool() { Some(speed(s)) } else { None },
-        error(s),
-        error(s),
-    );
-    let (t0, t1) = (stamp(s), stamp(s));
-    let (early_t, late_t) = order(t0, t1);
-    let dt = span_up(early_t, late_t);
-    let vb = mul_add_up(b.acc, dt, 2.0 * b.vel_error);
-    let early_v = velocity(s);
-    let late_v = match early_v {
-        Some(v) if s.bool() => Some(near(s, v, vb)),
-        _ => velocity(s),
-    };
-    let reach = mul_add_up(b.max_speed.unwrap_or(3.0), dt, 2.0 * b.pos_error);
-    let p = point(s);
-    let q = near(s, p, reach);
-    let early = ObjectMeasurement {
-        time: early_t,
-        position: p,
-        velocity: early_v,
-    };
-    let late = ObjectMeasurement {
-        time: late_t,
-        position: q,
-        velocity: late_v,
-    };
-    let values = [
-        b.acc,
-        b.max_speed.unwrap_or(0.0),
-        b.vel_error,
-        b.pos_error,
-        t0,
-        t1,
-    ];
-    let vs = [early_v, late_v].map(|v| v.unwrap_or([0.0; 3]));
-    if !tame_inputs(
-        s,
-        values.iter().chain(&p).chain(&q).chain(vs.iter().flatten()),
-    ) {
+    let Some(c) = object_pair_case(s) else {
         return;
-    }
-    if !object_pair_within_plain(&b, &early, &late) {
-        return;
-    }
-    if let (Some(va), Some(vl)) = (early_v, late_v) {
-        assert!(
-            dist_within(&va, &vl, vb),
-            "velocities {va:?} → {vl:?} over {dt} s differ by more than {vb} m/s, accepted"
-        );
-    }
-    if let Some(vmax) = b.max_speed {
-        let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error);
-        assert!(
-            dist_within(&p, &q, allowed),
-            "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, accepted"
-        );
-    }
-    // Each measured velocity's allowance, with |v| from below (`norm3_down`): at most the real
-    // one, so the claim against it implies the claim against the real one.
-    for v in [early_v, late_v].into_iter().flatten() {
-        let speed = norm3_down(v) + b.vel_error;
-        let half_a = mul_up(0.5, b.acc);
-        let allowed = mul_add_up(
-            speed,
-            dt,
-            mul_add_up(half_a, mul_add_up(dt, dt, 0.0), 2.0 * b.pos_error),
-        );
-        assert!(
-            dist_within(&p, &q, allowed),
-            "{p:?} → {q:?} over {dt} s beyond {allowed} m with velocity {v:?}, accepted"
-        );
+    };
+    if object_pair_within_plain(&c.b, &c.early, &c.late) {
+        assert_object_pair_within(&c, "accepted");
     }
 }
 harness!(
