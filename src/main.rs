@@ -133,6 +133,28 @@ enum BenchCommand {
         #[arg(long, default_value_t = 20_000)]
         steps: usize,
     },
+    /// Where the audit's time goes on your logs, on one thread: reading the records alone
+    /// (`read`), the whole audit (`audit`, as `pacs audit` per log), and for JSON Lines logs
+    /// serde_json's syntax check of the same lines (`json_syntax`: no number converted, no record
+    /// built), a reference for what a single JSON pass over the bytes costs on this machine.
+    /// Prints per stage the fastest, median and slowest run (ms), robot samples per second and
+    /// MB/s at the median, and `checker_ms_median` (audit minus read). The files are read
+    /// through the page cache: run once to warm it, and pin the thread to a core for steady
+    /// figures.
+    ///
+    /// Example: `taskset -c 0 pacs bench audit --runs 5 logs/*.jsonl`
+    Audit {
+        /// Log files or bag directories, as `pacs audit` takes them.
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+        /// MCAP logs and ROS 2 bags only: the pacs header (JSON, or TOML for `*.toml`), as
+        /// `pacs audit --header`.
+        #[arg(long)]
+        header: Option<PathBuf>,
+        /// How many times each stage runs (alternating: read, json_syntax, audit).
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+    },
 }
 
 #[derive(Subcommand)]
@@ -268,6 +290,11 @@ fn main() -> ExitCode {
             cli::bench::shield(steps, delivery, std::io::stderr().is_terminal())
         }
         Command::Bench(BenchCommand::Cbf { steps }) => cli::bench::cbf(steps),
+        Command::Bench(BenchCommand::Audit { logs, header, runs }) => {
+            use std::io::IsTerminal;
+            let progress = std::io::stderr().is_terminal();
+            cli::bench_audit::audit(&logs, header.as_deref(), runs, progress)
+        }
         Command::Shield { input, out } => cli::shield::run(input.as_deref(), &out),
         Command::Audit(args) => return cli::audit::main(args),
         Command::Simulate(args) => cli::simulate::run(&args),

@@ -172,3 +172,97 @@ fn bench_shield_refuses_zero_steps_and_lead() {
         assert!(err.contains("must be at least 1"), "{args:?}: {err}");
     }
 }
+
+/// `pacs bench audit`: the robot samples counted by reading are the logs' robot lines, every
+/// stage reports its fastest ≤ median ≤ slowest run with throughputs that match the counts, the
+/// JSON syntax stage appears for JSON Lines logs only, and the verdicts are those of `pacs audit`
+/// (the clean example passes, the close one fails).
+#[test]
+fn bench_audit_times_reading_syntax_and_the_whole_audit() {
+    let logs = [
+        "examples/logs/clean_sorting.jsonl",
+        "examples/logs/close_sorting.jsonl",
+    ];
+    let robot_lines: usize = logs
+        .iter()
+        .map(|p| {
+            std::fs::read_to_string(p)
+                .unwrap()
+                .lines()
+                .filter(|l| l.contains(r#""type": "robot""#))
+                .count()
+        })
+        .sum();
+    let bytes: u64 = logs
+        .iter()
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .sum();
+    let out = common::pacs_ok(["bench", "audit", "--runs", "3", logs[0], logs[1]]);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["robot_samples"].as_u64(), Some(robot_lines as u64), "{v}");
+    assert_eq!(v["bytes"].as_u64(), Some(bytes), "{v}");
+    assert_eq!(v["runs"].as_u64(), Some(3));
+    assert_eq!(v["verdicts"]["pass"].as_u64(), Some(1), "{v}");
+    assert_eq!(v["verdicts"]["fail"].as_u64(), Some(1), "{v}");
+    let stages = v["stages"].as_array().unwrap();
+    let names: Vec<&str> = stages
+        .iter()
+        .map(|s| s["stage"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["read", "json_syntax", "audit"]);
+    for s in stages {
+        let [lo, mid, hi] = ["ms_min", "ms_median", "ms_max"].map(|k| s[k].as_f64().unwrap());
+        assert!(0.0 < lo && lo <= mid && mid <= hi, "{s}");
+        let per_s = s["robot_samples_per_s_median"].as_f64().unwrap();
+        let mb_s = s["mb_per_s_median"].as_f64().unwrap();
+        let rel = |a: f64, b: f64| ((a - b) / b).abs() < 1e-9;
+        assert!(rel(per_s, robot_lines as f64 / (mid / 1e3)), "{s}");
+        assert!(rel(mb_s, bytes as f64 / (mid / 1e3) / 1e6), "{s}");
+    }
+    assert!(v["checker_ms_median"].as_f64().unwrap() >= 0.0);
+    // An MCAP log: no JSON syntax stage, and it says why.
+    let out = common::pacs_ok([
+        "bench",
+        "audit",
+        "--runs",
+        "1",
+        "--header",
+        "examples/logs/clean_sorting_header.json",
+        "examples/logs/clean_sorting.mcap",
+    ]);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names: Vec<&str> = v["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["stage"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["read", "audit"]);
+    assert!(
+        v["json_syntax"].as_str().unwrap().contains("not every log"),
+        "{v}"
+    );
+    assert_eq!(v["robot_samples"].as_u64(), Some(1001), "{v}");
+}
+
+#[test]
+fn bench_audit_refuses_zero_runs_and_names_a_missing_log() {
+    let out = common::pacs()
+        .args([
+            "bench",
+            "audit",
+            "--runs",
+            "0",
+            "examples/logs/clean_sorting.jsonl",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--runs must be at least 1"));
+    let out = common::pacs()
+        .args(["bench", "audit", "no/such/log.jsonl"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/log.jsonl"));
+}

@@ -228,6 +228,22 @@ fn bench(c: &mut Criterion) {
                 black_box(pacs_audit::audit_reader(&mut r, &AuditConfig::default()).unwrap())
             })
         });
+        if simulate_like {
+            // A reference, not pacs's work: serde_json checking the same lines' syntax only
+            // (`IgnoredAny`: numbers' grammar checked, nothing converted, no record built, no
+            // check). What one JSON pass costs on these bytes bounds what any JSON Lines audit
+            // of them can reach on this machine (docs/performance-audit.md, "A floor").
+            g.bench_function("jsonl_syntax_only_serde_simulate_like", |b| {
+                b.iter(|| {
+                    let mut lines = 0usize;
+                    for line in bytes.split(|&c| c == b'\n').filter(|l| !l.is_empty()) {
+                        let _: serde::de::IgnoredAny = serde_json::from_slice(line).unwrap();
+                        lines += 1;
+                    }
+                    black_box(lines)
+                })
+            });
+        }
     }
     // The MCAP reader with the person near (the checker's share as in `check_near_handover`)
     // and far (the checker's share as in `check_far_ssm`: mostly the reader's own cost, as in
