@@ -9,8 +9,8 @@
 # Exit status: 0 if every harness run verified, 1 if any failed or timed out, 0 with one line of
 # explanation if `cargo kani` is not installed (then nothing was model-checked; CI still runs the
 # property-test twins and the `kani_stub` type-check). KANI_HARNESS_TIMEOUT (s, default 600) bounds
-# each harness; the README's budget is 120 s on an idle 2-core machine, the default leaves room
-# for a loaded one.
+# each harness; the README's budget is 120 s on a 2-core machine, the default leaves room for a
+# loaded one. KANI_JOBS (default: the machine's cores) harnesses run at once, one core each.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
@@ -97,36 +97,102 @@ for h in "${selected[@]}"; do
 done
 mapfile -t packages < <(printf '%s\n' "${package_of_h[@]}" | sort -u)
 
-# One cargo kani run per package and solver (the compilation is shared); harnesses one after
-# the other.
+# KANI_JOBS harnesses at once (default: the machine's cores; each CBMC run is one process on one
+# core). The harnesses are run per package and solver, one such group after the other (the two
+# solvers build a package with different flags — `--no-assertion-reach-checks` — so two groups
+# of one package must never build or read the same target directory at once). Within a group
+# the harnesses are dealt into up to KANI_JOBS lanes that run side by side, each one `cargo kani`
+# with its own log: cargo builds the group's package once and the other lanes wait for that build
+# and find it fresh. `--harness NAME` selects every harness whose name contains NAME, so names
+# that contain one another (and, transitively, their relatives) share a lane: no harness runs
+# twice. The lanes' logs are joined in group and lane order for the table below.
 log="${PACS_KANI_LOG:-$log_dir/kani.log}"  # PACS_KANI_LOG: another file, for runs side by side
 : >"$log"
+if [ "${#selected[@]}" -eq 0 ]; then
+  echo "proofs: no harness selected (proofs/kani-ci.txt lists none)"
+  exit 1
+fi
+jobs_n="${KANI_JOBS:-$(nproc 2>/dev/null || echo 1)}"
+[[ "$jobs_n" =~ ^[1-9][0-9]{0,3}$ ]] || { echo "proofs: KANI_JOBS must be an integer from 1 to 9999, not '$jobs_n'"; exit 1; }
+echo "proofs: ${#selected[@]} harnesses, up to $jobs_n at a time (KANI_JOBS)"
+lane_pids=()
+lane_logs=()
+stop_lanes() {
+  for pid in "${lane_pids[@]}"; do kill -- "-$pid" 2>/dev/null || kill "$pid" 2>/dev/null; done
+  rm -f "${lane_logs[@]}"
+  exit 130
+}
+trap stop_lanes INT TERM
+set -m  # each lane in its own process group, so that stop_lanes ends its cargo and CBMC runs
 code=0
 for package in "${packages[@]}"; do
 for solver in sat bitwuzla; do
-  args=()
+  group=()
   for h in "${selected[@]}"; do
-    [ "${solver_of[$h]}" = "$solver" ] && [ "${package_of_h[$h]}" = "$package" ] && args+=(--harness "$h")
+    [ "${solver_of[$h]}" = "$solver" ] && [ "${package_of_h[$h]}" = "$package" ] && group+=("$h")
   done
-  [ "${#args[@]}" -eq 0 ] && continue
+  [ "${#group[@]}" -eq 0 ] && continue
+  # Lanes: each harness its own set, sets of names that contain one another merged (to a fixed
+  # point, so relatives of relatives share a set too), then the sets dealt round-robin.
+  declare -A set_of=()
+  for h in "${group[@]}"; do set_of[$h]=$h; done
+  changed=1
+  while [ "$changed" = 1 ]; do
+    changed=0
+    for h in "${group[@]}"; do
+      for g in "${group[@]}"; do
+        if [[ "${set_of[$h]}" != "${set_of[$g]}" && ( "$h" == *"$g"* || "$g" == *"$h"* ) ]]; then
+          old=${set_of[$g]}
+          for k in "${group[@]}"; do [ "${set_of[$k]}" = "$old" ] && set_of[$k]=${set_of[$h]}; done
+          changed=1
+        fi
+      done
+    done
+  done
+  declare -A lane_of_set=()
+  dealt=0
+  for h in "${group[@]}"; do
+    if [ -z "${lane_of_set[${set_of[$h]}]:-}" ]; then
+      lane_of_set[${set_of[$h]}]=$((dealt % jobs_n))
+      dealt=$((dealt + 1))
+    fi
+  done
+  lanes=$((dealt < jobs_n ? dealt : jobs_n))
   extra=()
   # Bitwuzla runs as a fresh process per query (no incremental solving): without the
   # reachability checks of every assertion, a proof is one `unsat` query instead of one query
   # per reachable assertion. Their role (no assertion vacuously unreachable) is played by the
   # mutants caught and by the property-test twins (proofs/README.md, "Solvers").
   [ "$solver" = bitwuzla ] && extra=(--no-assertion-reach-checks --cbmc-args --bitwuzla)
-  echo "=== solver $solver package $package" >>"$log"
-  timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
-    cargo kani -p "$package" --lib "${args[@]}" \
-    -Z unstable-options -Z stubbing -Z function-contracts --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1
-  c=$?
-  [ "$c" -ne 0 ] && code=$c
+  lane_pids=()
+  lane_logs=()
+  for ((lane = 0; lane < lanes; lane++)); do
+    args=()
+    for h in "${group[@]}"; do
+      [ "${lane_of_set[${set_of[$h]}]}" -eq "$lane" ] && args+=(--harness "$h")
+    done
+    lane_log="$log.lane$lane"
+    lane_logs+=("$lane_log")
+    echo "=== solver $solver package $package" >"$lane_log"
+    timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
+      cargo kani -p "$package" --lib "${args[@]}" \
+      -Z unstable-options -Z stubbing -Z function-contracts --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$lane_log" 2>&1 &
+    lane_pids+=($!)
+  done
+  for ((lane = 0; lane < lanes; lane++)); do
+    wait "${lane_pids[$lane]}" || code=$?
+    cat "${lane_logs[$lane]}" >>"$log"
+    rm -f "${lane_logs[$lane]}"
+  done
+  unset set_of lane_of_set
 done
 done
+set +m
+trap - INT TERM
 
 # Per harness: its result and CBMC time, from the log.
 awk '
-  /^=== solver / { solver = $3 }
+  /^=== solver / { solver = $3; name = "" }
   /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; res[name] = "ERROR"; sol[name] = solver; order[++k] = name }
   /VERIFICATION:- SUCCESSFUL/ { res[name] = "SUCCESSFUL" }
   /VERIFICATION:- FAILED/ { res[name] = "FAILED" }
@@ -136,10 +202,16 @@ awk '
     printf "%-46s %-9s %-12s %10s\n", "harness", "solver", "result", "CBMC s"
     for (i = 1; i <= k; i++) printf "%-46s %-9s %-12s %10s\n", order[i], sol[order[i]], res[order[i]], tm[order[i]]
   }' "$log"
-checked=$(grep -c '^Checking harness ' "$log")
-if [ "$code" -ne 0 ] || [ "$checked" -ne "${#selected[@]}" ] || grep -q 'VERIFICATION:- FAILED' "$log" ||
-  [ "$(grep -c 'VERIFICATION:- SUCCESSFUL' "$log")" -ne "${#selected[@]}" ]; then
+# Every selected harness checked exactly once and verified: the names, not only their count
+# (a `--harness` filter that matches nothing is ignored by Kani without an error).
+wanted=$(printf '%s\n' "${selected[@]}" | sort -u)
+checked=$(sed -n 's/^Checking harness \(.*::\)\{0,1\}\([a-z0-9_]*\)\.\.\.$/\2/p' "$log" | sort)
+verified=$(awk '/^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n] }
+  /VERIFICATION:- SUCCESSFUL/ { print name }' "$log" | sort)
+if [ "$code" -ne 0 ] || [ "$checked" != "$wanted" ] || [ "$verified" != "$wanted" ] ||
+  grep -q 'VERIFICATION:- FAILED' "$log"; then
   grep -E 'Failed Checks:|^error' "$log" | head -n 20 | sed 's/^/    /'
+  [ "$checked" != "$wanted" ] && diff <(echo "$wanted") <(echo "$checked") | sed -n 's/^[<>] /    harness checked not exactly once: /p'
   echo "proofs: not every harness verified (exit $code; full log: $log)"
   exit 1
 fi

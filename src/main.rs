@@ -133,14 +133,15 @@ enum BenchCommand {
         #[arg(long, default_value_t = 20_000)]
         steps: usize,
     },
-    /// Where the audit's time goes on your logs, on one thread: reading the records alone
-    /// (`read`), the whole audit (`audit`, as `pacs audit` per log), and for JSON Lines logs
-    /// serde_json's syntax check of the same lines (`json_syntax`: no number converted, no record
-    /// built), a reference for what a single JSON pass over the bytes costs on this machine.
-    /// Prints per stage the fastest, median and slowest run (ms), robot samples per second and
-    /// MB/s at the median, and `checker_ms_median` (audit minus read). The files are read
-    /// through the page cache: run once to warm it, and pin the thread to a core for steady
-    /// figures.
+    /// Where the audit's time goes on your logs, on one thread (a sqlite3 bag's reader steps
+    /// SQLite on a second one, as in `pacs audit`): reading the records alone (`read`), the
+    /// whole audit (`audit`, as `pacs audit` per log), and for JSON Lines logs serde_json's
+    /// syntax check of the same lines (`json_syntax`: no number converted, no record built), a
+    /// reference for what a single JSON pass over the bytes costs on this machine. Prints per
+    /// stage the fastest, median (for an even --runs the upper middle run) and slowest run (ms),
+    /// robot samples per second and MB/s at the median, and `checker_ms_median` (audit minus
+    /// read). The files are read through the page cache: run once to warm it, and pin the
+    /// thread to a core for steady figures.
     ///
     /// Example: `taskset -c 0 pacs bench audit --runs 5 logs/*.jsonl`
     Audit {

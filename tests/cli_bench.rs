@@ -175,8 +175,8 @@ fn bench_shield_refuses_zero_steps_and_lead() {
 
 /// `pacs bench audit`: the robot samples counted by reading are the logs' robot lines, every
 /// stage reports its fastest ≤ median ≤ slowest run with throughputs that match the counts, the
-/// JSON syntax stage appears for JSON Lines logs only, and the verdicts are those of `pacs audit`
-/// (the clean example passes, the close one fails).
+/// JSON syntax stage appears for JSON Lines logs only and checks every line that is not blank,
+/// and the verdicts are those of `pacs audit` (the clean example passes, the close one fails).
 #[test]
 fn bench_audit_times_reading_syntax_and_the_whole_audit() {
     let logs = [
@@ -220,6 +220,18 @@ fn bench_audit_times_reading_syntax_and_the_whole_audit() {
         assert!(rel(mb_s, bytes as f64 / (mid / 1e3) / 1e6), "{s}");
     }
     assert!(v["checker_ms_median"].as_f64().unwrap() >= 0.0);
+    // The syntax stage checked every line that is not blank, of both logs.
+    let lines: usize = logs
+        .iter()
+        .map(|p| {
+            std::fs::read_to_string(p)
+                .unwrap()
+                .lines()
+                .filter(|l| !l.trim().is_empty())
+                .count()
+        })
+        .sum();
+    assert_eq!(v["json_lines"].as_u64(), Some(lines as u64), "{v}");
     // An MCAP log: no JSON syntax stage, and it says why.
     let out = common::pacs_ok([
         "bench",

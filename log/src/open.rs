@@ -31,6 +31,18 @@ pub fn is_mcap(path: &Path) -> Result<bool, LogError> {
     Ok(crate::mcap::has_magic(&prefix(path, 8)?))
 }
 
+/// Whether `path` is read as JSON Lines by [`open_log`]: a file that is neither MCAP
+/// ([`is_mcap`]) nor a sqlite3 bag ([`is_db3`]) nor named `*.csv`. Errors: the file cannot be
+/// opened or read.
+pub fn is_jsonl(path: &Path) -> Result<bool, LogError> {
+    Ok(!path.is_dir()
+        && !path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+        && !is_mcap(path)?
+        && !is_db3(path)?)
+}
+
 /// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
 /// in `.db3`, or a file that starts with the SQLite magic (another directory is not). A bag
 /// directory counts whatever its storage (the metadata is not read here): [`open_log`] reads one

@@ -29,7 +29,9 @@
 //! step is executed); every verification saw the newest measurement delivered at or before `t`;
 //! otherwise the stored failsafe, its slot and the trajectory it lives on (its chunk serial) are
 //! kept. Mutants `x67_step_adopts_before_verify` and `x68_step_verifies_stale_measurement` make
-//! it fail.
+//! it fail. In CI it runs as three parts that together cover every step (each within the
+//! budget): `f3_step_kept` (the step keeps the stored failsafe), `f3_adopt_pacs` and
+//! `f3_adopt_other_modes` (it adopts its candidate, in PACS mode or in another).
 
 #![allow(dead_code)] // The harnesses are entry points of `cargo kani` only.
 
@@ -182,17 +184,26 @@ fn any_mode() -> FilterMode {
 #[kani::stub_verified(choose)]
 #[kani::stub_verified(SpeedProfile::eval)]
 fn f3_shield_step_induction() {
-    step_induction(None);
+    step_induction(None, None);
 }
 
-/// The induction step where the candidate is adopted (with `f3_step_kept`: the whole step,
-/// split by outcome to fit the budget).
+/// The induction step where the candidate is adopted in PACS mode (with `f3_adopt_other_modes`
+/// and `f3_step_kept`: the whole step, split by outcome and by mode, to fit the budget).
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
 #[kani::stub_verified(SpeedProfile::eval)]
-fn f3_step_adopted() {
-    step_induction(Some(true));
+fn f3_adopt_pacs() {
+    step_induction(Some(true), Some(true));
+}
+
+/// The induction step where the candidate is adopted in single-action or OFF mode.
+#[kani::proof]
+#[kani::unwind(6)]
+#[kani::stub_verified(choose)]
+#[kani::stub_verified(SpeedProfile::eval)]
+fn f3_adopt_other_modes() {
+    step_induction(Some(true), Some(false));
 }
 
 /// The induction step where the stored failsafe is kept.
@@ -201,15 +212,21 @@ fn f3_step_adopted() {
 #[kani::stub_verified(choose)]
 #[kani::stub_verified(SpeedProfile::eval)]
 fn f3_step_kept() {
-    step_induction(Some(false));
+    step_induction(Some(false), None);
 }
 
 /// The body of the f3 harnesses: one step of `run_step` from any state of the invariant (module
-/// docs); `outcome`, if given, restricts the proof to steps that adopt (`true`) or keep.
-fn step_induction(outcome: Option<bool>) {
+/// docs); `outcome`, if given, restricts the proof to steps that adopt (`true`) or keep;
+/// `pacs`, if given, to PACS mode (`true`) or the other modes.
+fn step_induction(outcome: Option<bool>, pacs: Option<bool>) {
     let t = any_in(0.0, 100.0);
     let alpha = any_in(1e-4, 0.01);
-    let mode = any_mode();
+    let mode = match pacs {
+        Some(true) => FilterMode::Pacs,
+        Some(false) if kani::any() => FilterMode::Off,
+        Some(false) => FilterMode::SingleAction,
+        None => any_mode(),
+    };
     // Any state of the invariant: a failsafe on either slot, the command on its slot, a fresh
     // chunk (if any) on the other.
     let f = VerifiedFailsafe {
