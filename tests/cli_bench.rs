@@ -173,65 +173,70 @@ fn bench_shield_refuses_zero_steps_and_lead() {
     }
 }
 
+/// Lines of the files at `logs` for which `keep` holds.
+fn count_lines(logs: &[&str], keep: impl Fn(&str) -> bool) -> u64 {
+    logs.iter()
+        .map(|p| {
+            std::fs::read_to_string(p)
+                .unwrap()
+                .lines()
+                .filter(|l| keep(l))
+                .count() as u64
+        })
+        .sum()
+}
+
+/// The stage names of a `pacs bench audit` report, in order.
+fn stage_names(v: &Value) -> Vec<&str> {
+    v["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["stage"].as_str().unwrap())
+        .collect()
+}
+
 /// `pacs bench audit`: the robot samples counted by reading are the logs' robot lines, every
 /// stage reports its fastest ≤ median ≤ slowest run with throughputs that match the counts, the
-/// JSON syntax stage appears for JSON Lines logs only and checks every line that is not blank,
-/// and the verdicts are those of `pacs audit` (the clean example passes, the close one fails).
+/// checks' share is the audit's median less the read's, the JSON syntax stage appears for JSON
+/// Lines logs only and checks every line that is not blank, and the verdicts are those of `pacs
+/// audit` (the clean example passes, the close one fails).
 #[test]
 fn bench_audit_times_reading_syntax_and_the_whole_audit() {
     let logs = [
         "examples/logs/clean_sorting.jsonl",
         "examples/logs/close_sorting.jsonl",
     ];
-    let robot_lines: usize = logs
-        .iter()
-        .map(|p| {
-            std::fs::read_to_string(p)
-                .unwrap()
-                .lines()
-                .filter(|l| l.contains(r#""type": "robot""#))
-                .count()
-        })
-        .sum();
+    let robot_lines = count_lines(&logs, |l| l.contains(r#""type": "robot""#));
     let bytes: u64 = logs
         .iter()
         .map(|p| std::fs::metadata(p).unwrap().len())
         .sum();
     let out = common::pacs_ok(["bench", "audit", "--runs", "3", logs[0], logs[1]]);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["robot_samples"].as_u64(), Some(robot_lines as u64), "{v}");
+    assert_eq!(v["robot_samples"].as_u64(), Some(robot_lines), "{v}");
     assert_eq!(v["bytes"].as_u64(), Some(bytes), "{v}");
     assert_eq!(v["runs"].as_u64(), Some(3));
     assert_eq!(v["verdicts"]["pass"].as_u64(), Some(1), "{v}");
     assert_eq!(v["verdicts"]["fail"].as_u64(), Some(1), "{v}");
-    let stages = v["stages"].as_array().unwrap();
-    let names: Vec<&str> = stages
-        .iter()
-        .map(|s| s["stage"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["read", "json_syntax", "audit"]);
-    for s in stages {
+    assert_eq!(stage_names(&v), ["read", "json_syntax", "audit"]);
+    let rel = |a: f64, b: f64| ((a - b) / b).abs() < 1e-9;
+    let mut medians = Vec::new();
+    for s in v["stages"].as_array().unwrap() {
         let [lo, mid, hi] = ["ms_min", "ms_median", "ms_max"].map(|k| s[k].as_f64().unwrap());
         assert!(0.0 < lo && lo <= mid && mid <= hi, "{s}");
         let per_s = s["robot_samples_per_s_median"].as_f64().unwrap();
         let mb_s = s["mb_per_s_median"].as_f64().unwrap();
-        let rel = |a: f64, b: f64| ((a - b) / b).abs() < 1e-9;
         assert!(rel(per_s, robot_lines as f64 / (mid / 1e3)), "{s}");
         assert!(rel(mb_s, bytes as f64 / (mid / 1e3) / 1e6), "{s}");
+        medians.push(mid);
     }
-    assert!(v["checker_ms_median"].as_f64().unwrap() >= 0.0);
+    let checks = (medians[2] - medians[0]).max(0.0);
+    let reported = v["checker_ms_median"].as_f64().unwrap();
+    assert!((reported - checks).abs() <= 1e-9 * medians[2], "{v}");
     // The syntax stage checked every line that is not blank, of both logs.
-    let lines: usize = logs
-        .iter()
-        .map(|p| {
-            std::fs::read_to_string(p)
-                .unwrap()
-                .lines()
-                .filter(|l| !l.trim().is_empty())
-                .count()
-        })
-        .sum();
-    assert_eq!(v["json_lines"].as_u64(), Some(lines as u64), "{v}");
+    let lines = count_lines(&logs, |l| !l.trim().is_empty());
+    assert_eq!(v["json_lines"].as_u64(), Some(lines), "{v}");
     // An MCAP log: no JSON syntax stage, and it says why.
     let out = common::pacs_ok([
         "bench",
@@ -243,13 +248,7 @@ fn bench_audit_times_reading_syntax_and_the_whole_audit() {
         "examples/logs/clean_sorting.mcap",
     ]);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    let names: Vec<&str> = v["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s["stage"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["read", "audit"]);
+    assert_eq!(stage_names(&v), ["read", "audit"]);
     assert!(
         v["json_syntax"].as_str().unwrap().contains("not every log"),
         "{v}"

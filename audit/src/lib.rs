@@ -292,19 +292,26 @@ pub fn audit_file_with_header(
     cfg: &AuditConfig,
     header: Option<&Header>,
 ) -> Result<RunResult, LogError> {
-    // A sqlite3 bag in the table's own order, through its time index where it refuses that
-    // (`pacs_log::read_log`); a fresh auditor for each reading.
-    let mut result = pacs_log::read_log(
-        path,
-        &cfg.mcap,
-        &cfg.overrides(),
-        header,
-        |reader| audit_reader(reader, cfg),
-        |e| matches!(e, LogError::RowsNotInTimeOrder { .. }),
-    )?;
+    // A fresh auditor for each reading (`read_file`).
+    let mut result = read_file(path, cfg, header, |reader| audit_reader(reader, cfg))?;
     // The run is the log as given (a bag directory, not the part read last).
     result.log = path.display().to_string();
     Ok(result)
+}
+
+/// Read the log at `path` with `read` as the audit reads it: with `cfg`'s reader settings, a
+/// sqlite3 bag in the table's own order, through its time index where it refuses that order
+/// (`read` then runs again from the start: [`pacs_log::read_log`]). What [`audit_file_with_header`]
+/// audits and `pacs bench audit` times.
+pub fn read_file<T>(
+    path: &Path,
+    cfg: &AuditConfig,
+    header: Option<&Header>,
+    read: impl FnMut(&mut dyn RecordReader) -> Result<T, LogError>,
+) -> Result<T, LogError> {
+    pacs_log::read_log(path, &cfg.mcap, &cfg.overrides(), header, read, |e| {
+        matches!(e, LogError::RowsNotInTimeOrder { .. })
+    })
 }
 
 /// Open a log for reading by its form with the audit's reader settings: [`pacs_log::open_log`]

@@ -158,28 +158,20 @@ fn log_bytes(p: &Path) -> Result<u64, CliError> {
 
 /// Read every record of the log as the audit's reader gives them; the number of robot samples.
 fn read_all(p: &Path, cfg: &AuditConfig, header: Option<&Header>) -> Result<u64, LogError> {
-    pacs_log::read_log(
-        p,
-        &cfg.mcap,
-        &cfg.overrides(),
-        header,
-        |reader| {
-            let mut n = 0;
-            while let Some(r) = reader.next_record()? {
-                n += u64::from(matches!(r, Record::Robot { .. }));
-            }
-            Ok(n)
-        },
-        |e| matches!(e, LogError::RowsNotInTimeOrder { .. }),
-    )
+    pacs_audit::read_file(p, cfg, header, |reader| {
+        let mut n = 0;
+        while let Some(r) = reader.next_record()? {
+            n += u64::from(matches!(r, Record::Robot { .. }));
+        }
+        Ok(n)
+    })
 }
 
 /// Check every line of a JSON Lines file with serde_json, converting nothing; the number of
 /// lines checked. Blank lines (only whitespace) are skipped, as the audit's reader skips them.
 /// The file is read through a 64 KiB buffer, as the reader reads it, each line copied into
-/// `line` (reused) and checked there while it is in the cache: this measured faster than
-/// reading a whole file into memory first and checking each line where it lies (227–284 ms
-/// against 185–209 ms on docs/performance-audit.md's 20 logs).
+/// `line` (reused) and checked there while it is in the cache (faster than reading a whole file
+/// into memory first: docs/performance-audit.md, "A floor").
 fn json_syntax(p: &Path, line: &mut Vec<u8>) -> Result<u64, CliError> {
     use std::io::BufRead;
     let fail = |what: String| CliError::Input(format!("{}: {what}", p.display()));
