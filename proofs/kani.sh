@@ -45,13 +45,15 @@ package_of() {
 }
 declare -A solver_of=()
 declare -A package_of_h=()
+declare -A secs_of=()  # the CBMC seconds a harness took in the latest full run (kani-ci.txt's third column)
 selected=()
 if [ "$#" -gt 0 ]; then
   for h in "$@"; do selected+=("$h"); solver_of[$h]="${KANI_SOLVER:-bitwuzla}"; done
 else
-  while read -r h solver _; do
+  while read -r h solver secs _; do
     selected+=("$h")
     solver_of[$h]="${solver:-sat}"
+    [[ "${secs:-}" =~ ^[0-9]{1,5}$ ]] && secs_of[$h]=$secs
   done < <(grep -vE '^\s*(#|$)' proofs/kani-ci.txt)
   mapfile -t all < <(grep -rh -A1 '^harness!(' "${harness_files[@]}" | grep -oE '^\s+[a-z][a-z0-9_]+,' | tr -d ' ,' | sort)
   for h in "${all[@]}"; do
@@ -133,7 +135,7 @@ for solver in sat bitwuzla; do
   done
   [ "${#group[@]}" -eq 0 ] && continue
   # Lanes: each harness its own set, sets of names that contain one another merged (to a fixed
-  # point, so relatives of relatives share a set too), then the sets dealt round-robin.
+  # point, so relatives of relatives share a set too).
   declare -A set_of=()
   for h in "${group[@]}"; do set_of[$h]=$h; done
   changed=1
@@ -149,15 +151,25 @@ for solver in sat bitwuzla; do
       done
     done
   done
-  declare -A lane_of_set=()
-  dealt=0
+  # The sets dealt longest first, each to the lane with the least expected time so far (by the
+  # seconds of kani-ci.txt's third column; 30 s for a harness without one, e.g. one named on the
+  # command line): the lanes of a group end close together.
+  declare -A set_secs=()
   for h in "${group[@]}"; do
-    if [ -z "${lane_of_set[${set_of[$h]}]:-}" ]; then
-      lane_of_set[${set_of[$h]}]=$((dealt % jobs_n))
-      dealt=$((dealt + 1))
-    fi
+    set_secs[${set_of[$h]}]=$(( ${set_secs[${set_of[$h]}]:-0} + ${secs_of[$h]:-30} ))
   done
-  lanes=$((dealt < jobs_n ? dealt : jobs_n))
+  declare -A lane_of_set=()
+  load=()
+  for ((lane = 0; lane < jobs_n && lane < ${#set_secs[@]}; lane++)); do load+=(0); done
+  lanes=${#load[@]}
+  while read -r secs set; do
+    best=0
+    for ((lane = 1; lane < lanes; lane++)); do
+      [ "${load[$lane]}" -lt "${load[$best]}" ] && best=$lane
+    done
+    lane_of_set[$set]=$best
+    load[$best]=$(( ${load[$best]} + secs ))
+  done < <(for set in "${!set_secs[@]}"; do echo "${set_secs[$set]} $set"; done | sort -k1,1nr -k2,2)
   extra=()
   # Bitwuzla runs as a fresh process per query (no incremental solving): without the
   # reachability checks of every assertion, a proof is one `unsat` query instead of one query
@@ -184,7 +196,7 @@ for solver in sat bitwuzla; do
     cat "${lane_logs[$lane]}" >>"$log"
     rm -f "${lane_logs[$lane]}"
   done
-  unset set_of lane_of_set
+  unset set_of lane_of_set set_secs
 done
 done
 set +m
