@@ -45,15 +45,13 @@ package_of() {
 }
 declare -A solver_of=()
 declare -A package_of_h=()
-declare -A secs_of=()  # the CBMC seconds a harness took in the latest full run (kani-ci.txt's third column)
 selected=()
 if [ "$#" -gt 0 ]; then
   for h in "$@"; do selected+=("$h"); solver_of[$h]="${KANI_SOLVER:-bitwuzla}"; done
 else
-  while read -r h solver secs _; do
+  while read -r h solver _; do
     selected+=("$h")
     solver_of[$h]="${solver:-sat}"
-    [[ "${secs:-}" =~ ^[0-9]{1,5}$ ]] && secs_of[$h]=$secs
   done < <(grep -vE '^\s*(#|$)' proofs/kani-ci.txt)
   mapfile -t all < <(grep -rh -A1 '^harness!(' "${harness_files[@]}" | grep -oE '^\s+[a-z][a-z0-9_]+,' | tr -d ' ,' | sort)
   for h in "${all[@]}"; do
@@ -102,12 +100,14 @@ mapfile -t packages < <(printf '%s\n' "${package_of_h[@]}" | sort -u)
 # KANI_JOBS harnesses at once (default: the machine's cores; each CBMC run is one process on one
 # core). The harnesses are run per package and solver, one such group after the other (the two
 # solvers build a package with different flags — `--no-assertion-reach-checks` — so two groups
-# of one package must never build or read the same target directory at once). Within a group
-# the harnesses are dealt into up to KANI_JOBS lanes that run side by side, each one `cargo kani`
-# with its own log: cargo builds the group's package once and the other lanes wait for that build
-# and find it fresh. `--harness NAME` selects every harness whose name contains NAME, so names
-# that contain one another (and, transitively, their relatives) share a lane: no harness runs
-# twice. The lanes' logs are joined in group and lane order for the table below.
+# of one package must never build or read the same target directory at once), each group by ONE
+# `cargo kani` that checks its harnesses KANI_JOBS at a time (Kani's `--jobs`, which needs the
+# terse output format). One invocation, not several side by side: every `cargo kani` links the
+# goto binary of every harness of the package into the shared target directory before it
+# checks any, and instruments a harness's binary in place before CBMC reads it, so a second
+# invocation would rewrite binaries the first is reading (seen: "irep not terminated") or has
+# just instrumented (a binary checked without its instrumentation). With `--jobs` each line of
+# the log a thread starts is prefixed `Thread N: `; the table below follows each thread's lines.
 log="${PACS_KANI_LOG:-$log_dir/kani.log}"  # PACS_KANI_LOG: another file, for runs side by side
 : >"$log"
 if [ "${#selected[@]}" -eq 0 ]; then
@@ -117,95 +117,37 @@ fi
 jobs_n="${KANI_JOBS:-$(nproc 2>/dev/null || echo 1)}"
 [[ "$jobs_n" =~ ^[1-9][0-9]{0,3}$ ]] || { echo "proofs: KANI_JOBS must be an integer from 1 to 9999, not '$jobs_n'"; exit 1; }
 echo "proofs: ${#selected[@]} harnesses, up to $jobs_n at a time (KANI_JOBS)"
-lane_pids=()
-lane_logs=()
-stop_lanes() {
-  for pid in "${lane_pids[@]}"; do kill -- "-$pid" 2>/dev/null || kill "$pid" 2>/dev/null; done
-  rm -f "${lane_logs[@]}"
-  exit 130
-}
-trap stop_lanes INT TERM
-set -m  # each lane in its own process group, so that stop_lanes ends its cargo and CBMC runs
 code=0
 for package in "${packages[@]}"; do
 for solver in sat bitwuzla; do
-  group=()
+  args=()
   for h in "${selected[@]}"; do
-    [ "${solver_of[$h]}" = "$solver" ] && [ "${package_of_h[$h]}" = "$package" ] && group+=("$h")
+    [ "${solver_of[$h]}" = "$solver" ] && [ "${package_of_h[$h]}" = "$package" ] && args+=(--harness "$h")
   done
-  [ "${#group[@]}" -eq 0 ] && continue
-  # Lanes: each harness its own set, sets of names that contain one another merged (to a fixed
-  # point, so relatives of relatives share a set too).
-  declare -A set_of=()
-  for h in "${group[@]}"; do set_of[$h]=$h; done
-  changed=1
-  while [ "$changed" = 1 ]; do
-    changed=0
-    for h in "${group[@]}"; do
-      for g in "${group[@]}"; do
-        if [[ "${set_of[$h]}" != "${set_of[$g]}" && ( "$h" == *"$g"* || "$g" == *"$h"* ) ]]; then
-          old=${set_of[$g]}
-          for k in "${group[@]}"; do [ "${set_of[$k]}" = "$old" ] && set_of[$k]=${set_of[$h]}; done
-          changed=1
-        fi
-      done
-    done
-  done
-  # The sets dealt longest first, each to the lane with the least expected time so far (by the
-  # seconds of kani-ci.txt's third column; 30 s for a harness without one, e.g. one named on the
-  # command line): the lanes of a group end close together.
-  declare -A set_secs=()
-  for h in "${group[@]}"; do
-    set_secs[${set_of[$h]}]=$(( ${set_secs[${set_of[$h]}]:-0} + ${secs_of[$h]:-30} ))
-  done
-  declare -A lane_of_set=()
-  load=()
-  for ((lane = 0; lane < jobs_n && lane < ${#set_secs[@]}; lane++)); do load+=(0); done
-  lanes=${#load[@]}
-  while read -r secs set; do
-    best=0
-    for ((lane = 1; lane < lanes; lane++)); do
-      [ "${load[$lane]}" -lt "${load[$best]}" ] && best=$lane
-    done
-    lane_of_set[$set]=$best
-    load[$best]=$(( ${load[$best]} + secs ))
-  done < <(for set in "${!set_secs[@]}"; do echo "${set_secs[$set]} $set"; done | sort -k1,1nr -k2,2)
+  [ "${#args[@]}" -eq 0 ] && continue
   extra=()
   # Bitwuzla runs as a fresh process per query (no incremental solving): without the
   # reachability checks of every assertion, a proof is one `unsat` query instead of one query
   # per reachable assertion. Their role (no assertion vacuously unreachable) is played by the
   # mutants caught and by the property-test twins (proofs/README.md, "Solvers").
   [ "$solver" = bitwuzla ] && extra=(--no-assertion-reach-checks --cbmc-args --bitwuzla)
-  lane_pids=()
-  lane_logs=()
-  for ((lane = 0; lane < lanes; lane++)); do
-    args=()
-    for h in "${group[@]}"; do
-      [ "${lane_of_set[${set_of[$h]}]}" -eq "$lane" ] && args+=(--harness "$h")
-    done
-    lane_log="$log.lane$lane"
-    lane_logs+=("$lane_log")
-    echo "=== solver $solver package $package" >"$lane_log"
-    timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
-      cargo kani -p "$package" --lib "${args[@]}" \
-      -Z unstable-options -Z stubbing -Z function-contracts --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$lane_log" 2>&1 &
-    lane_pids+=($!)
-  done
-  for ((lane = 0; lane < lanes; lane++)); do
-    wait "${lane_pids[$lane]}" || code=$?
-    cat "${lane_logs[$lane]}" >>"$log"
-    rm -f "${lane_logs[$lane]}"
-  done
-  unset set_of lane_of_set set_secs
+  parallel=()
+  [ "$jobs_n" -gt 1 ] && parallel=(--jobs "$jobs_n" --output-format terse)
+  echo "=== solver $solver package $package" >>"$log"
+  timeout --kill-after=10 "${KANI_TOTAL_TIMEOUT:-4800}" \
+    cargo kani -p "$package" --lib "${args[@]}" "${parallel[@]}" \
+    -Z unstable-options -Z stubbing -Z function-contracts --harness-timeout "${timeout_s}s" "${extra[@]}" >>"$log" 2>&1 || code=$?
 done
 done
-set +m
-trap - INT TERM
 
 # Per harness: its result and CBMC time, from the log.
+# With `--jobs`, a thread's lines start `Thread N: `: `Thread N: Checking harness X...` starts
+# X on thread N, and a later `Thread N: ...` line starts X's result block (printed at once), to
+# which the unprefixed lines after it belong.
 awk '
   /^=== solver / { solver = $3; name = "" }
-  /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; res[name] = "ERROR"; sol[name] = solver; order[++k] = name }
+  /^Thread [0-9]+: / { th = $2; sub(/:$/, "", th); sub(/^Thread [0-9]+: /, ""); if ($0 !~ /^Checking harness /) name = on[th] }
+  /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; on[th] = name; th = ""; res[name] = "ERROR"; sol[name] = solver; order[++k] = name }
   /VERIFICATION:- SUCCESSFUL/ { res[name] = "SUCCESSFUL" }
   /VERIFICATION:- FAILED/ { res[name] = "FAILED" }
   /[Tt]imed out|TIMEOUT/ { if (name != "") res[name] = "TIMEOUT" }
@@ -217,8 +159,10 @@ awk '
 # Every selected harness checked exactly once and verified: the names, not only their count
 # (a `--harness` filter that matches nothing is ignored by Kani without an error).
 wanted=$(printf '%s\n' "${selected[@]}" | sort -u)
-checked=$(sed -n 's/^Checking harness \(.*::\)\{0,1\}\([a-z0-9_]*\)\.\.\.$/\2/p' "$log" | sort)
-verified=$(awk '/^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n] }
+checked=$(sed -n 's/^\(Thread [0-9]*: \)\{0,1\}Checking harness \(.*::\)\{0,1\}\([a-z0-9_]*\)\.\.\.$/\3/p' "$log" | sort)
+verified=$(awk '
+  /^Thread [0-9]+: / { th = $2; sub(/:$/, "", th); sub(/^Thread [0-9]+: /, ""); if ($0 !~ /^Checking harness /) name = on[th] }
+  /^Checking harness / { h = $3; sub(/\.\.\.$/, "", h); n = split(h, p, "::"); name = p[n]; on[th] = name; th = "" }
   /VERIFICATION:- SUCCESSFUL/ { print name }' "$log" | sort)
 if [ "$code" -ne 0 ] || [ "$checked" != "$wanted" ] || [ "$verified" != "$wanted" ] ||
   grep -q 'VERIFICATION:- FAILED' "$log"; then

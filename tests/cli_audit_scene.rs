@@ -158,3 +158,69 @@ fn a_violating_log_replays_with_markers_and_metrics() {
     assert!(!topics.contains_key("/pacs/violations"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A log of two people replays both: `/pacs/human` draws every person's body parts (twice the
+/// capsules of one person) and `/pacs/human_occupancy` every person's occupancy.
+#[test]
+fn every_person_of_a_log_is_replayed() {
+    use pacs_log::{Header, LogWriter, ModelRef, PersonEntry};
+    let dir = std::env::temp_dir().join(format!("pacs-scene-people-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |ids: &[&str]| {
+        let people = ids
+            .iter()
+            .map(|id| PersonEntry {
+                id: id.to_string(),
+                human: ModelRef::Name("default".into()),
+            })
+            .collect();
+        let mut w = LogWriter::new(Vec::new());
+        w.write_header(&Header::with_people(
+            ModelRef::Name("fr3".into()),
+            people,
+            ModelRef::Name("ssm".into()),
+        ))
+        .unwrap();
+        let q = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+        for i in 0..=100 {
+            let t = i as f64 * 1e-3;
+            if i == 0 {
+                for (k, id) in ids.iter().enumerate() {
+                    let kp = pacs_testkit::keypoints_in_a_row(2.5 + k as f64);
+                    w.write_person(t, t, Some(id), &kp).unwrap();
+                }
+            }
+            w.write_robot(t, &q, Some(&[0.0; 7])).unwrap();
+        }
+        w.write_event(0.1, pacs_log::END_EVENT).unwrap();
+        let path = dir.join(format!("{}.jsonl", ids.join("-")));
+        std::fs::write(&path, w.finish().unwrap()).unwrap();
+        path
+    };
+    let capsules = |log: &Path| {
+        let scene = log.with_extension("mcap");
+        let o = pacs(&[
+            "audit",
+            log.to_str().unwrap(),
+            "--scene",
+            scene.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        let (topics, _) = read_scene(&scene);
+        let count = |t: &str| {
+            let u = SceneUpdate::decode(&topics[t].3[0][..]).unwrap();
+            u.entities[0].cylinders.len() + u.entities[0].spheres.len()
+        };
+        (count("/pacs/human"), count("/pacs/human_occupancy"))
+    };
+    let one = capsules(&write(&["operator"]));
+    let two = capsules(&write(&["operator", "visitor"]));
+    assert!(one.0 > 0 && one.1 > 0);
+    assert_eq!(two, (2 * one.0, 2 * one.1));
+    let _ = std::fs::remove_dir_all(&dir);
+}

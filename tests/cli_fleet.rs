@@ -210,3 +210,51 @@ fn an_empty_or_missing_directory_is_invalid_input_naming_it() {
     assert!(err.contains(&missing), "{err}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// An archive mixing a ROS recording without a pacs header (the shipped MCAP, as a Humble bag
+/// would be) and JSON Lines logs: `--header` is for the recording, the JSON Lines logs keep their
+/// own; one JSON Lines log alone with `--header` stays an input error. A log given twice, and an
+/// entry with a log's name that cannot be read (a dangling link), are input errors naming them.
+#[test]
+fn header_for_an_archives_recordings_and_bad_entries_named() {
+    let d = tmpdir("mixed");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let logs = root.join("examples/logs");
+    std::fs::copy(logs.join("clean_sorting.mcap"), d.join("a.mcap")).unwrap();
+    std::fs::copy(logs.join("close_sorting.jsonl"), d.join("b.jsonl")).unwrap();
+    let header = logs.join("clean_sorting_header.json").display().to_string();
+    let dir = d.display().to_string();
+    let o = pacs(&["audit", &dir, "--header", &header, "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap_or(Value::Null);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let verdicts: Vec<_> = v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["verdict"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(verdicts, ["pass", "fail"]);
+    let one = d.join("b.jsonl").display().to_string();
+    let o = pacs(&["audit", &one, "--header", &header]);
+    assert_eq!(o.status.code(), Some(3));
+    // Given twice: refused, both paths named.
+    let o = pacs(&["audit", &dir, &one, "--header", &header]);
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("given twice") && err.contains(&one), "{err}");
+    // A dangling `*.jsonl` link is named, not skipped.
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(d.join("gone.jsonl"), d.join("c.jsonl")).unwrap();
+        let o = pacs(&["audit", &dir, "--header", &header]);
+        assert_eq!(o.status.code(), Some(3));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("c.jsonl"), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

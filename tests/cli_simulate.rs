@@ -60,6 +60,11 @@ fn simulate_writes_tables_plots_and_auditable_logs() {
     let logs = dir.join("logs");
     let pacs_log = logs.join("crowded-pacs-0006.jsonl");
     let off_log = logs.join("crowded-off-0006.jsonl");
+    // The header names the task (not its constraint preset, `sorting` for every SSM task): the
+    // fleet report groups runs by it.
+    let first = std::fs::read_to_string(&pacs_log).unwrap();
+    let header: serde_json::Value = serde_json::from_str(first.lines().next().unwrap()).unwrap();
+    assert_eq!(header["meta"]["task"], "crowded");
     let a = pacs().arg("audit").arg(&pacs_log).output().unwrap();
     assert_eq!(
         a.status.code(),

@@ -356,6 +356,13 @@ impl Auditor {
         Ok(a)
     }
 
+    /// Whether other people share the cell: every PFL contact may then be a pinch against one of
+    /// them ([`ContactRule::set_other_people`]; `PeopleAuditor` sets it for a log with
+    /// several people).
+    pub(crate) fn set_other_people(&mut self, present: bool) {
+        self.rule.set_other_people(present);
+    }
+
     /// Check every span on its own, without the block fast path: the reference the fast path is
     /// tested against (`audit/tests/audit_blocks.rs`: same verdict, violations and inconclusive
     /// spans), several times slower.
@@ -703,6 +710,7 @@ fn model_names(models: &LogModels, constraints: &str) -> ModelNames {
         human_measurement_error_pos: models.human.measurement_error_pos(),
         human_delay: models.human.delay(),
         environment_shapes: models.environment.len(),
+        people: Vec::new(),
         specs: serde_json::json!({
             "robot": models.robot.spec(),
             "human": models.human.spec(),

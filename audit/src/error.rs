@@ -31,10 +31,10 @@ pub enum AuditError {
     },
     /// A record after the `end` event the header promised last.
     #[error(
-        "a {kind} record at t = {t} s after the `end` event at t = {end} s (the writer promised it last)"
+        "{kind} record at t = {t} s after the `end` event at t = {end} s (the writer promised it last)"
     )]
     AfterEnd {
-        /// Record type.
+        /// Record type, with its article (`an event`).
         kind: &'static str,
         /// Its time (s).
         t: f64,

@@ -25,8 +25,8 @@ pub use error::AuditError;
 /// Log-form detection, implemented in `pacs-log` (re-exported beside [`open_log`]).
 pub use pacs_log::{is_db3, is_mcap};
 pub use verdict::{
-    Completeness, ConstraintKind, Evidence, InconclusiveReason, Metrics, RunResult, Verdict,
-    Violation,
+    Completeness, ConstraintKind, Evidence, InconclusiveReason, Metrics, PersonModel, RunResult,
+    Verdict, Violation,
 };
 
 use pacs_log::{
@@ -180,10 +180,10 @@ pub fn audit_reader(
     let mut apply = |rec: Record<'_>| -> Result<(), AuditError> {
         if let Some(e) = end {
             let kind = match rec {
-                Record::Robot { .. } => "robot",
-                Record::Human { .. } => "human",
-                Record::Object { .. } => "object",
-                Record::Event { .. } => "event",
+                Record::Robot { .. } => "a robot",
+                Record::Human { .. } => "a human",
+                Record::Object { .. } => "an object",
+                Record::Event { .. } => "an event",
                 // Diagnostics may follow (at the end's time, they sort after events).
                 Record::Shield { .. } => return Ok(()),
             };

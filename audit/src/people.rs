@@ -1,10 +1,13 @@
 //! Several people in one log: one pass of the span checks per person, merged into one result.
 //!
 //! The rule judges each (body part, link) pair on its own, and each person's occupancy comes
-//! from that person's measurements only; so a log with people `P₁ … Pₖ` has a violation (or an
-//! unchecked span) exactly where the log restricted to the robot and `Pᵢ` has one, for some
-//! `i`. [`PeopleAuditor`] feeds every robot sample and event to one [`Auditor`] per person and
-//! each person's records to that person's auditor (objects to the first), then merges: the
+//! from that person's measurements only (a pinch against another person, which a pass cannot
+//! locate, is assumed possible for every PFL contact: `ContactRule::set_other_people`); so a log
+//! with people `P₁ … Pₖ` has a violation (or an unchecked span) exactly where the log restricted
+//! to the robot, the objects and `Pᵢ` has one, for some `i`. [`PeopleAuditor`] feeds every robot
+//! sample, object record and event to one [`Auditor`] per person and each person's records to
+//! that person's auditor (an object's violations, found by every pass that checks the span, are
+//! kept once), then merges: the
 //! verdict is `fail` if any pass failed, else `inconclusive` if any pass left something
 //! unchecked, else `pass` ([`crate::Verdict::of_findings`] on the union of the findings);
 //! violating samples are counted once across people (the union of their indices), the minimum
@@ -12,7 +15,9 @@
 
 use crate::check::Auditor;
 use crate::error::AuditError;
-use crate::verdict::{InconclusiveReason as Reason, InconclusiveSpan, RunResult, SeriesPoint};
+use crate::verdict::{
+    InconclusiveReason as Reason, InconclusiveSpan, PersonModel, RunResult, SeriesPoint,
+};
 use crate::{AuditConfig, series::min_opt};
 use pacs_log::LogModels;
 
@@ -68,18 +73,19 @@ pub struct PeopleAuditor {
 }
 
 impl PeopleAuditor {
-    /// One pass per person of `models.people` (the first also checks the objects).
+    /// One pass per person of `models.people` (each also checks the objects).
     pub fn new(models: &LogModels, cfg: &AuditConfig) -> Result<Self, AuditError> {
         let mut passes = Vec::with_capacity(models.people.len());
         let mut ids = Vec::with_capacity(models.people.len());
-        for (i, (id, human)) in models.people.iter().enumerate() {
+        for (id, human) in &models.people {
             let mut m = models.clone();
             m.human = human.clone();
             m.people = vec![(id.clone(), human.clone())];
-            if i > 0 {
-                m.objects.clear();
-            }
-            passes.push(Auditor::for_person(m, cfg.clone(), id, true)?);
+            let mut pass = Auditor::for_person(m, cfg.clone(), id, true)?;
+            // Each person may be pinched against another (`ContactRule::set_other_people`: this
+            // pass does not see the others' occupancies, so they may be anywhere).
+            pass.set_other_people(models.people.len() > 1);
+            passes.push(pass);
             ids.push(id.clone());
         }
         Ok(Self { ids, passes })
@@ -126,7 +132,9 @@ impl PeopleAuditor {
         Ok(())
     }
 
-    /// An object measurement (checked in the first pass).
+    /// An object measurement, for every pass: each checks the objects on the spans it checks,
+    /// so an object's contact is found wherever any person's measurement lets a span be
+    /// checked (the verdict does not depend on the order of the people).
     pub fn push_object(
         &mut self,
         t: f64,
@@ -135,7 +143,10 @@ impl PeopleAuditor {
         position: [f64; 3],
         velocity: Option<[f64; 3]>,
     ) -> Result<(), AuditError> {
-        self.passes[0].push_object(t, t_meas, id, position, velocity)
+        for p in &mut self.passes {
+            p.push_object(t, t_meas, id, position, velocity)?;
+        }
+        Ok(())
     }
 
     /// An event, for every person.
@@ -189,6 +200,24 @@ fn union_length(mut iv: Vec<(f64, f64)>) -> f64 {
 }
 
 fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> RunResult {
+    // Every person's human model (each pass was audited with its person's), for the results and
+    // the report: a report must not present one person's model as everyone's.
+    let people_models: Vec<PersonModel> = results
+        .iter()
+        .zip(&ids)
+        .map(|(r, id)| PersonModel {
+            id: id.clone(),
+            human: r.models.human.clone(),
+            human_v_max: r.models.human_v_max.clone(),
+            human_measurement_error_pos: r.models.human_measurement_error_pos,
+            human_delay: r.models.human_delay,
+        })
+        .collect();
+    let human_specs: serde_json::Map<String, serde_json::Value> = results
+        .iter()
+        .zip(&ids)
+        .map(|(r, id)| (id.clone(), r.models.specs["human"].clone()))
+        .collect();
     let rest = results.split_off(1);
     let mut out = results.pop().expect("at least one person");
     let mut inconclusive_iv: Vec<(f64, f64)> = out
@@ -198,7 +227,22 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         .map(|s| (s.t_start, s.t_end))
         .collect();
     for r in rest {
-        out.violations.extend(r.violations);
+        // A person's violations are this pass's own; an object's (no person) are found by every
+        // pass that checks the span: kept once.
+        for v in r.violations {
+            let again = v.person.is_none()
+                && out.violations.iter().any(|w| {
+                    w.person.is_none()
+                        && w.t_start == v.t_start
+                        && w.t_end == v.t_end
+                        && w.link == v.link
+                        && w.body_part == v.body_part
+                        && w.constraint == v.constraint
+                });
+            if !again {
+                out.violations.push(v);
+            }
+        }
         // Findings about the robot alone (gaps, limits, time) are the same in every pass: kept
         // once, from the first.
         let about_people: Vec<InconclusiveSpan> = r
@@ -235,6 +279,20 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         0.0
     };
     m.inconclusive_duration = union_length(inconclusive_iv);
+    if ids.len() > 1 {
+        let first = &people_models[0].human;
+        if people_models.iter().any(|p| &p.human != first) {
+            out.models.human = people_models
+                .iter()
+                .map(|p| format!("{}: {}", p.id, p.human))
+                .collect::<Vec<_>>()
+                .join("; ");
+        }
+        if let Some(specs) = out.models.specs.as_object_mut() {
+            specs.insert("humans".into(), serde_json::Value::Object(human_specs));
+        }
+        out.models.people = people_models;
+    }
     out.people = ids;
     out.refresh_verdict();
     out

@@ -284,12 +284,17 @@ pub struct Metrics {
     pub certain_violating_samples: u64,
     /// Total length of inconclusive spans (s).
     pub inconclusive_duration: f64,
-    /// Lower bound (m) of the robot–human separation over all checked spans (None if none).
+    /// Lower bound (m) of the robot–human separation over all checked spans (None if none, or
+    /// if the figure is beyond floating point; JSON leaves the key out, never `null`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_separation: Option<f64>,
-    /// Task outcome from the last `success` / `failure` event (None if none was logged).
+    /// Task outcome from the last `success` / `failure` event (None if none was logged; JSON
+    /// leaves the key out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub success: Option<bool>,
     /// [`safe_success`] with the audit as evidence: `success` and verdict `pass` (None if no
-    /// outcome was logged).
+    /// outcome was logged; JSON leaves the key out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub safe_success: Option<bool>,
 }
 
@@ -340,7 +345,8 @@ pub struct RunResult {
     /// The audited time span and whether the log is the whole run.
     #[serde(default)]
     pub evidence: Evidence,
-    /// The people of the log (ids in header order; a v1 log's one person is `human`).
+    /// The people of the log (ids in header order; empty for a v1 log, whose one person is
+    /// unnamed).
     #[serde(default)]
     pub people: Vec<String>,
     /// The header's `meta` object.
@@ -373,11 +379,31 @@ pub struct ModelNames {
     pub human_delay: f64,
     /// Number of static environment capsules.
     pub environment_shapes: usize,
+    /// With several people: each person's human model (in header order). `human`, `human_v_max`,
+    /// `human_measurement_error_pos` and `human_delay` above are then the first person's, and
+    /// `human` lists every person's model where they differ.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub people: Vec<PersonModel>,
     /// The full model parameters: `{"robot": spec, "human": spec, "constraints": spec,
     /// "environment": [capsules], "objects": [...]}` (reports hash and print them; not part of
     /// `pacs audit --json`).
     #[serde(skip_serializing, default)]
     pub specs: serde_json::Value,
+}
+
+/// The human model one person of a log was audited with ([`ModelNames::people`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PersonModel {
+    /// The person's id.
+    pub id: String,
+    /// Human model name (as [`ModelNames::human`]).
+    pub human: String,
+    /// Keypoint speed bounds (m/s).
+    pub human_v_max: Vec<f64>,
+    /// Position measurement error bound (m).
+    pub human_measurement_error_pos: f64,
+    /// Sensor delay (s).
+    pub human_delay: f64,
 }
 
 /// **Safe success**, the one definition (the paper's metric, used by the audit, the reports, `pacs

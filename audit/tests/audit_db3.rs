@@ -656,8 +656,21 @@ fn bag_directory_errors_name_metadata_yaml() {
             ],
         ),
         (
+            // The file listed is not the file the metadata's `files` describe.
             meta.replace("- clean.db3", "- missing.db3"),
+            &[
+                "contradicts itself",
+                "files[0].path `clean.db3` is not in relative_file_paths (missing.db3)",
+            ],
+        ),
+        (
+            meta.replace("- clean.db3", "- missing.db3")
+                .replace("path: clean.db3", "path: missing.db3"),
             &["relative_file_paths[0]", "missing.db3", "is not a file"],
+        ),
+        (
+            meta.replace("- clean.db3", "- clean.db3\n  - clean.db3"),
+            &["relative_file_paths[1] `clean.db3` is relative_file_paths[0] again"],
         ),
         (
             "a: &x [1, 2]\nb: *x\n".into(),
@@ -723,18 +736,21 @@ fn a_bag_directory_must_be_the_whole_recording() {
             "cut short",
         ],
     );
-    // Rows deleted from the file (the metadata unchanged): cut short.
+    // Rows deleted from the file (the metadata unchanged): the file's count contradicts it.
     let d = bag(&meta);
     sql(
         &d.join("clean.db3"),
         "DELETE FROM messages WHERE id IN (SELECT id FROM messages ORDER BY timestamp DESC LIMIT 30);",
     );
-    let e = expect_err(
+    expect_err(
         audit(&d, None),
-        &name_of(&d),
-        &["has message_count", "cut short"],
+        &d.join("clean.db3").display().to_string(),
+        &[
+            "counts 113 messages in this file",
+            "it holds 83",
+            "rows cut or added",
+        ],
     );
-    assert!(e.contains("hold"), "{e}");
     // More messages than counted: the metadata is not this recording's.
     let d = bag(&meta.replace("- message_count: 101", "- message_count: 100"));
     expect_err(
@@ -984,15 +1000,15 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
         &name_of(&bag),
         &["relative_file_paths[1]", "is not a file"],
     );
-    // A part not listed.
+    // A part not listed (its `files` entry left: the metadata contradicts itself).
     let bag = copy_bag(&split, &d, "unlisted");
     edit_metadata(&bag, "  - split_1.mcap\n", "");
     expect_err(
         audit(&bag, None),
         &name_of(&bag),
         &[
-            &bag.join("split_1.mcap").display().to_string(),
-            "not in rosbag2_bagfile_information.relative_file_paths",
+            "contradicts itself",
+            "files[1].path `split_1.mcap` is not in relative_file_paths (split_0.mcap)",
         ],
     );
     // The parts listed in the wrong order.
@@ -1027,13 +1043,32 @@ fn mcap_bags_that_do_not_describe_the_recording_are_refused() {
     let bag = copy_bag(&split, &d, "dropped");
     std::fs::remove_file(bag.join("split_1.mcap")).unwrap();
     edit_metadata(&bag, "  - split_1.mcap\n", "");
-    let e = expect_err(
+    // Its `files` entry left: the metadata contradicts itself.
+    expect_err(
         audit(&bag, None),
         &name_of(&bag),
-        &["topics_with_message_count", "a part is missing"],
+        &["contradicts itself", "files[1].path `split_1.mcap`"],
     );
+    // Its `files` entry removed too (the counts per file then add up to less than the bag's).
+    let text = meta(&bag);
+    let entry = text.find("  - duration:\n").and_then(|first| {
+        text[first + 1..]
+            .find("  - duration:\n")
+            .map(|second| first + 1 + second)
+    });
+    let start = entry.expect("the fixture lists two files");
+    // Up to the bag's own count (indented two spaces, the entries' four).
+    let end = text[start..]
+        .find("\n  message_count:")
+        .map_or(text.len(), |e| start + e + 1);
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        format!("{}{}", &text[..start], &text[end..]),
+    )
+    .unwrap();
+    let e = expect_err(audit(&bag, None), &name_of(&bag), &["message_count"]);
     assert!(
-        e.contains("/joint_states") || e.contains("/human/keypoints"),
+        e.contains("add up to") || e.contains("a part is missing"),
         "{e}"
     );
     // A custom_data header whose robot model does not exist: the error names the metadata.

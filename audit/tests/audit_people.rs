@@ -22,12 +22,17 @@ fn people(ids: &[&str]) -> Vec<PersonEntry> {
 /// A v2 log of 101 samples (0.1 s) of the FR3 turning joint 1 at `W`, with the people `ids`;
 /// `measure(i, t)` gives person i's keypoints at t (None: no record). Ends with the `end` event.
 fn two_person_log(ids: &[&str], measure: impl Fn(usize, f64) -> Option<Vec<[f64; 3]>>) -> String {
+    people_log(ids, ModelRef::Name("ssm".into()), measure)
+}
+
+/// [`two_person_log`] with the task's `constraints`.
+fn people_log(
+    ids: &[&str],
+    constraints: ModelRef<pacs_models::ConstraintSpec>,
+    measure: impl Fn(usize, f64) -> Option<Vec<[f64; 3]>>,
+) -> String {
     let mut w = LogWriter::new(Vec::new());
-    let h = Header::with_people(
-        ModelRef::Name("fr3".into()),
-        people(ids),
-        ModelRef::Name("ssm".into()),
-    );
+    let h = Header::with_people(ModelRef::Name("fr3".into()), people(ids), constraints);
     w.write_header(&h).unwrap();
     let dq = [W, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
     for i in 0..=100 {
@@ -86,6 +91,143 @@ fn every_person_is_checked_and_violations_name_the_person() {
     let r = audit(&text);
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
     assert_eq!((r.evidence.t_start, r.evidence.t_end), (0.0, 0.1));
+}
+
+/// PFL with a free-contact limit no robot reaches (1 MJ) and a clamping limit any moving robot
+/// exceeds (1 nJ): the operator's hand on the gripper alone is a free contact (pass); with a
+/// visitor anywhere in the cell the hand may be pressed against them, so the same contact is
+/// judged as a pinch and fails, naming the operator, clamped (the shield's rule likewise).
+#[test]
+fn a_second_person_makes_a_pfl_contact_a_possible_pinch() {
+    let pfl = || {
+        ModelRef::Spec(Box::new(pacs_models::ConstraintSpec {
+            name: "pinch".into(),
+            default: pacs_models::Constraint::Pfl {
+                unconstrained: 1e6,
+                constrained: 1e-9,
+            },
+            regions: vec![],
+        }))
+    };
+    let touching = reaching(hand_contact(&q_at(0.0), 0.02));
+    let far = standing(2.5, 3.0);
+    let alone = audit(&people_log(&["operator"], pfl(), |_, _| {
+        Some(touching.clone())
+    }));
+    assert_eq!(alone.verdict, Verdict::Pass, "{:?}", alone.violations);
+    let shared = audit(&people_log(&["operator", "visitor"], pfl(), |k, _| {
+        Some(if k == 0 {
+            touching.clone()
+        } else {
+            far.clone()
+        })
+    }));
+    assert_eq!(shared.verdict, Verdict::Fail);
+    assert!(!shared.violations.is_empty());
+    assert!(
+        shared.violations.iter().all(|v| v.constrained
+            && v.threshold == 1e-9
+            && v.person.as_deref() == Some("operator")),
+        "{:?}",
+        shared.violations
+    );
+}
+
+/// Each person's human model is in the result (and so in the report): the operator's built-in
+/// `default`, the visitor's inline `fast` (5 m/s keypoints); `models.human` names both, the
+/// specs carry both under `humans`.
+#[test]
+fn the_result_names_every_persons_model() {
+    let mut fast = pacs_models::HumanModel::builtin("default")
+        .unwrap()
+        .spec()
+        .clone();
+    fast.name = "fast".into();
+    fast.v_max = vec![5.0; fast.v_max.len()];
+    let people = vec![
+        PersonEntry {
+            id: "operator".into(),
+            human: ModelRef::Name("default".into()),
+        },
+        PersonEntry {
+            id: "visitor".into(),
+            human: ModelRef::Spec(Box::new(fast)),
+        },
+    ];
+    let mut w = LogWriter::new(Vec::new());
+    w.write_header(&Header::with_people(
+        ModelRef::Name("fr3".into()),
+        people,
+        ModelRef::Name("ssm".into()),
+    ))
+    .unwrap();
+    let far = standing(2.5, 0.0);
+    for i in 0..=10 {
+        let t = i as f64 * 1e-3;
+        if i == 0 {
+            w.write_person(t, t, Some("operator"), &far).unwrap();
+            w.write_person(t, t, Some("visitor"), &far).unwrap();
+        }
+        w.write_robot(t, &q_at(0.0), Some(&[0.0; 7])).unwrap();
+    }
+    w.write_event(0.01, pacs_log::END_EVENT).unwrap();
+    let r = audit(&String::from_utf8(w.finish().unwrap()).unwrap());
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    let m = &r.models;
+    // (An inline spec is labelled as such: never presented as a built-in.)
+    assert_eq!(m.human, "operator: default; visitor: fast (custom spec)");
+    let ids: Vec<_> = m
+        .people
+        .iter()
+        .map(|p| (p.id.as_str(), p.human.as_str()))
+        .collect();
+    assert_eq!(
+        ids,
+        [("operator", "default"), ("visitor", "fast (custom spec)")]
+    );
+    assert!(m.people[1].human_v_max.iter().all(|&v| v == 5.0));
+    assert!(m.people[0].human_v_max.iter().all(|&v| v < 5.0));
+    assert_eq!(m.specs["humans"]["visitor"]["name"], "fast");
+    assert_eq!(m.specs["humans"]["operator"]["name"], "default");
+}
+
+/// A ball inside the robot's hand from 1.5 s to 2 s, while person A's measurement is stale and B's
+/// fresh (and, in the second pair, B never measured): the object's contact fails the log whatever
+/// the order of the people in the header (every pass checks the objects; an object's violations
+/// are kept once). Logs written by hand (tests/data, `people_object_*`).
+#[test]
+fn an_objects_contact_fails_whatever_the_order_of_the_people() {
+    let logs = [
+        (
+            include_str!("data/people_object_a_stale.jsonl"),
+            include_str!("data/people_object_a_stale_b_first.jsonl"),
+        ),
+        (
+            include_str!("data/people_object_b_never.jsonl"),
+            include_str!("data/people_object_b_never_b_first.jsonl"),
+        ),
+    ];
+    for (a_first, b_first) in logs {
+        let (x, y) = (audit(a_first), audit(b_first));
+        assert_eq!(x.verdict, Verdict::Fail, "{:?}", x.inconclusive);
+        assert_eq!(y.verdict, Verdict::Fail, "{:?}", y.inconclusive);
+        let objects = |r: &pacs_audit::RunResult| {
+            let mut v: Vec<_> = r
+                .violations
+                .iter()
+                .filter(|v| v.person.is_none())
+                .map(|v| (v.t_start.to_bits(), v.t_end.to_bits(), v.link.clone()))
+                .collect();
+            v.sort();
+            v
+        };
+        assert!(!objects(&x).is_empty());
+        assert_eq!(objects(&x), objects(&y));
+        // Kept once: no two object violations alike.
+        let o = objects(&x);
+        assert!(o.windows(2).all(|w| w[0] != w[1]), "{o:?}");
+        assert_eq!(x.metrics.violating_samples, y.metrics.violating_samples);
+    }
 }
 
 /// Both people touching at t = 0: the violating samples are counted once (the union), not once
@@ -180,6 +322,38 @@ fn bad_person_ids_are_errors() {
     let v1 = text.replacen("\"version\":2", "\"version\":1", 1);
     let e = run(&v1, &AuditConfig::default()).unwrap_err().to_string();
     assert!(e.contains("header.human"), "{e}");
+    // A malformed person entry, `end_event` or `version`: the field is named, with the value.
+    let cases = [
+        (
+            text.replacen("{\"id\":\"visitor\",", "{", 1),
+            "header.humans[1]: missing field `id`",
+        ),
+        (
+            text.replacen("\"id\":\"visitor\"", "\"id\":5", 1),
+            "header.humans[1]: invalid type: integer `5`",
+        ),
+        (
+            text.replacen(
+                "{\"id\":\"visitor\",",
+                "{\"id\":\"visitor\",\"extra\":1,",
+                1,
+            ),
+            "header.humans[1]: unknown field `extra`",
+        ),
+        (
+            text.replacen("\"end_event\":true", "\"end_event\":\"yes\"", 1),
+            "header.end_event: expected true or false, found \"yes\"",
+        ),
+        (
+            text.replacen("\"version\":2", "\"version\":2.0", 1),
+            "header.version: expected 1 or 2 (an integer), found 2.0",
+        ),
+    ];
+    for (bad, want) in cases {
+        assert_ne!(bad, text, "{want}: the edit must apply");
+        let e = run(&bad, &AuditConfig::default()).unwrap_err().to_string();
+        assert!(e.contains("line 1") && e.contains(want), "{want}: {e}");
+    }
 }
 
 /// A log whose writer promised the end event: complete, it passes; cut at any line boundary

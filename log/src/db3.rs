@@ -60,6 +60,43 @@ pub fn is_bag_dir(path: &Path) -> bool {
     path.is_dir() && path.join(METADATA_FILE).is_file()
 }
 
+/// Refuse a file given alone that is one of several parts of a bag: the `metadata.yaml` beside
+/// it lists it in `relative_file_paths` with other files (a split recording, e.g. ROS 2 Humble's
+/// `--max-bag-size`, whose files carry no metadata of their own). One part is not the run: a
+/// violation in another part would go unseen. A `metadata.yaml` that cannot be read or does not
+/// list the file says nothing about it and is passed over.
+pub fn refuse_one_part(path: &Path) -> Result<(), LogError> {
+    if path.is_dir() {
+        return Ok(());
+    }
+    let dir = crate::format::dir_of(path);
+    if !dir.join(METADATA_FILE).is_file() {
+        return Ok(());
+    }
+    let Ok((info, meta_name)) = read_bag_metadata(&dir) else {
+        return Ok(());
+    };
+    let Some(own) = path.file_name().and_then(|n| n.to_str()) else {
+        return Ok(());
+    };
+    let real = path.canonicalize().ok();
+    let listed =
+        |f: &String| f == own || (real.is_some() && dir.join(f).canonicalize().ok() == real);
+    if info.files.len() > 1 && info.files.iter().any(listed) {
+        return Err(LogError::input(
+            &path.display().to_string(),
+            Location::File,
+            format!(
+                "this file is one of {} parts of the bag described by {meta_name} ({}): audit the bag directory {}, not one part",
+                info.files.len(),
+                info.files.join(", "),
+                dir.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The parsed `metadata.yaml` of the bag directory `path` (at most [`METADATA_LIMIT`] bytes) and
 /// the name errors about it use.
 fn read_bag_metadata(path: &Path) -> Result<(BagInfo, String), LogError> {
@@ -438,6 +475,9 @@ enum Db3Problem {
         "damaged SQLite file (its rows are not the ids 1 to the metadata's message_count, and PRAGMA quick_check: {0})"
     )]
     Damaged(String),
+    /// Rows not as many as the metadata counts.
+    #[error("{0}")]
+    Miscounted(String),
     /// Read in storage order, a row is stamped before the last row handed over.
     #[error("rows not stored in time order")]
     NotInRowOrder,
@@ -561,6 +601,17 @@ fn open_part(
         }
         _ => None,
     };
+    // Where the metadata counts the file's rows but they cannot be accounted for while reading,
+    // the count itself must hold: a file holding more or fewer rows than its metadata says (rows
+    // cut or added by an editing tool) is not the recording the metadata describes.
+    if let (Some(n), None) = (counted_rows, accounted_rows) {
+        let rows: i64 = conn
+            .query_row("SELECT count(*) FROM messages", [], |r| r.get(0))
+            .map_err(sql)?;
+        if u64::try_from(rows).ok() != Some(n) {
+            return Err(bad(miscounted(n, rows)));
+        }
+    }
     if accounted_rows.is_none()
         && let Some(complaint) = quick_check(&conn).map_err(sql)?
     {
@@ -574,6 +625,13 @@ fn open_part(
         topics,
         accounted_rows,
     })
+}
+
+/// The complaint about a file whose rows are not as many as its metadata counts.
+fn miscounted(counted: u64, rows: i64) -> String {
+    format!(
+        "the bag's metadata counts {counted} messages in this file (message_count), it holds {rows}: the metadata does not describe this file (rows cut or added?)"
+    )
 }
 
 /// The metadata YAML a `.db3` file keeps in its `metadata` table (newer rosbag2 releases, and
@@ -742,12 +800,20 @@ fn read_rows(
             batch.rows.sort_unstable_by_key(|r| (r.timestamp, r.id));
         }
         // Rows that do not account for `1..=N` (gaps left by an editing tool, or damage): the
-        // file must pass SQLite's structural check after all.
-        if account.as_ref().is_some_and(|a| !a.complete())
-            && let Some(complaint) = quick_check(&conn).map_err(Db3Problem::sqlite)?
-        {
-            last = Location::File;
-            return Err(Db3Problem::Damaged(complaint));
+        // file must pass SQLite's structural check after all (a damaged index reads fewer
+        // rows than the table holds), and then hold as many rows as the metadata counts.
+        if let Some(a) = account.as_ref().filter(|a| !a.complete()) {
+            if let Some(complaint) = quick_check(&conn).map_err(Db3Problem::sqlite)? {
+                last = Location::File;
+                return Err(Db3Problem::Damaged(complaint));
+            }
+            if a.read() != a.expected() {
+                last = Location::File;
+                return Err(Db3Problem::Miscounted(miscounted(
+                    a.expected(),
+                    i64::try_from(a.read()).unwrap_or(i64::MAX),
+                )));
+            }
         }
         if !batch.rows.is_empty() && tx.send(Batch::Rows(batch)).is_err() {
             return Ok(());

@@ -11,7 +11,7 @@ mod records;
 mod refs;
 mod writer;
 
-pub use header::{Header, ModelOverrides, ObjectEntry, PersonEntry};
+pub use header::{Header, MAX_PEOPLE, ModelOverrides, ObjectEntry, PersonEntry};
 pub use models::LogModels;
 pub use records::{Record, RecordReader};
 pub use refs::{ModelRef, RobotRef, dir_of};

@@ -402,7 +402,11 @@ impl<R: BufRead> JsonlReader<R> {
             return Err(LogError::input(
                 file,
                 loc,
-                "the file starts with a UTF-8 byte order mark (EF BB BF); JSON Lines logs are UTF-8 without BOM: remove it",
+                if line_no == 1 {
+                    "the file starts with a UTF-8 byte order mark (EF BB BF); JSON Lines logs are UTF-8 without BOM: remove it"
+                } else {
+                    "the line starts with a UTF-8 byte order mark (EF BB BF); JSON Lines logs are UTF-8 without BOM: remove it"
+                },
             ));
         }
         let value: serde_json::Value = serde_json::from_str(&line).map_err(|e| {
@@ -416,7 +420,7 @@ impl<R: BufRead> JsonlReader<R> {
                 "missing header: the first record must have \"type\": \"header\"",
             ));
         }
-        let header = Header::checked(file, loc, serde_json::from_value(value))?;
+        let header = Header::checked(file, loc, Ok(value))?;
         Ok(Self {
             file: file.to_string(),
             input,

@@ -140,6 +140,7 @@ fn open_log_with(
     if let Some(bag) = crate::db3::mcap_bag(path)? {
         return open_mcap_bag(bag, mcap, overrides, header);
     }
+    crate::db3::refuse_one_part(path)?;
     if is_db3(path)? {
         let header = header.cloned();
         return Ok(Box::new(if row_order {

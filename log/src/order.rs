@@ -129,7 +129,7 @@ pub struct EqualTimeGroup {
 /// More than [`MAX_EQUAL_TIME`] records share the time stamp `t` (s).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error(
-    "more than {MAX_EQUAL_TIME} records at one time stamp t = {t} s (a log whose records share one time covers no time; the audit holds at most {MAX_EQUAL_TIME} of them)"
+    "more than {MAX_EQUAL_TIME} records at one time stamp t = {t} s (the audit holds at most {MAX_EQUAL_TIME} records of one time stamp: no real log has that many at one instant)"
 )]
 pub struct TooManyAtOneTime {
     /// The shared time stamp (s).

@@ -104,6 +104,17 @@ impl PyRun {
     fn meta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.run.meta)
     }
+    /// The log's people (ids in header order; empty for a v1 log).
+    #[getter]
+    fn people<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.people)
+    }
+    /// The audited time span and whether the log is the whole run (dict: `t_start`, `t_end`
+    /// (s), `completeness`).
+    #[getter]
+    fn evidence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &self.run.evidence)
+    }
     /// Everything above as one dict (what `pacs audit --json` prints per run).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.run)
@@ -488,7 +499,10 @@ impl PyLogWriter {
         r.map_err(|e| self.werr(e))
     }
 
-    /// Flush and close the file (idempotent).
+    /// Write the promised `end` event (at the last record's time), flush and close the file
+    /// (idempotent). Log the run's last robot sample last: a measurement or event stamped after
+    /// it leaves the stretch up to `end` without robot samples, and the audit then reads the
+    /// log as `incomplete_log`.
     fn close(&mut self) -> PyResult<()> {
         if let Some(mut w) = self.w.take() {
             let path = self.path.display().to_string();
@@ -514,9 +528,30 @@ impl PyLogWriter {
         slf
     }
 
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&mut self, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.close()?;
+    /// Leaving a `with` block closes the log; leaving it by an exception does not write the
+    /// `end` event: the run was cut short, and the audit reads the log as `incomplete_log` (never
+    /// `pass`), as it would a writer that was never closed.
+    #[pyo3(signature = (*args))]
+    fn __exit__(&mut self, args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        let raised = args.get_item(0).is_ok_and(|e| !e.is_none());
+        if raised {
+            self.abandon()?;
+        } else {
+            self.close()?;
+        }
         Ok(false)
+    }
+}
+
+impl PyLogWriter {
+    /// Flush and close the file without the `end` event (a run cut short by an exception).
+    fn abandon(&mut self) -> PyResult<()> {
+        if let Some(w) = self.w.take() {
+            let path = self.path.display().to_string();
+            let mut out = w.finish().map_err(|e| self.werr(e))?;
+            out.flush()
+                .map_err(|e| err(Kind::Output, format!("{path}: {e}")))?;
+        }
+        Ok(())
     }
 }

@@ -166,46 +166,73 @@ pub fn scene(
     let mut ids: Vec<Option<String>> = Vec::new();
     if humans.is_none() {
         // No human in the scene: the header still names the default model (no measurements).
-    } else if humans.is_instance_of::<PyString>() || humans.cast::<PyDict>().is_ok() {
-        human_refs.push(human_ref(humans, "humans")?);
     } else {
-        let list: Vec<Bound<'_, PyAny>> = humans.extract().map_err(|_| {
-            type_err(format!(
-                "humans: expected a name, a spec dict, a list of them or None, got {}",
-                show(humans)
-            ))
-        })?;
+        // One name, spec or person alone stands for a list of one.
+        let one = humans.is_instance_of::<PyString>() || humans.cast::<PyDict>().is_ok();
+        let list: Vec<Bound<'_, PyAny>> = if one {
+            vec![humans.clone()]
+        } else {
+            humans.extract().map_err(|_| {
+                type_err(format!(
+                    "humans: expected a name, a spec dict, a person {{\"id\": str, \"human\": name or spec}}, a list of them or None, got {}",
+                    show(humans)
+                ))
+            })?
+        };
         for (i, h) in list.iter().enumerate() {
-            // A person with an id: {"id": ..., "human": name or spec}.
+            let at = if one {
+                "humans".to_string()
+            } else {
+                format!("humans[{i}]")
+            };
+            // A person with an id: {"id": ..., "human": name or spec} (a dict with `id` is one;
+            // a human model spec has no `id`).
             if let Ok(d) = h.cast::<PyDict>()
-                && d.len() == 2
                 && d.contains("id")?
-                && d.contains("human")?
             {
+                for key in d.keys() {
+                    let k: String = key.extract().unwrap_or_default();
+                    if k != "id" && k != "human" {
+                        return Err(input(format!(
+                            "{at}: unknown key `{k}` (a person is {{\"id\": str, \"human\": name or spec}})"
+                        )));
+                    }
+                }
                 let id: String = d
                     .get_item("id")?
                     .map(|v| v.extract())
                     .transpose()
-                    .map_err(|_| type_err(format!("humans[{i}].id: expected a string")))?
+                    .map_err(|_| {
+                        type_err(format!(
+                            "{at}.id: expected a string, got {}",
+                            d.get_item("id")
+                                .ok()
+                                .flatten()
+                                .map(|v| show(&v))
+                                .unwrap_or_default()
+                        ))
+                    })?
                     .unwrap_or_default();
-                let model = d
-                    .get_item("human")?
-                    .ok_or_else(|| input(format!("humans[{i}].human: missing")))?;
+                let model = d.get_item("human")?.ok_or_else(|| {
+                    input(format!(
+                        "{at}.human: missing (a person is {{\"id\": str, \"human\": name or spec}})"
+                    ))
+                })?;
                 ids.push(Some(id));
-                human_refs.push(human_ref(&model, &format!("humans[{i}].human"))?);
+                human_refs.push(human_ref(&model, &format!("{at}.human"))?);
                 continue;
             }
             ids.push(None);
-            human_refs.push(human_ref(h, &format!("humans[{i}]"))?);
+            human_refs.push(human_ref(h, &at)?);
         }
     }
     let first = human_refs
         .first()
         .cloned()
         .unwrap_or_else(|| ModelRef::Name("default".into()));
-    // One person: a v1-style header (writers make it v2 with person `human`); several: v2, each
-    // with its id (given, else `human0`, `human1`, ...).
-    let mut header = if human_refs.len() > 1 {
+    // One unnamed person: a v1-style header (writers make it v2 with person `human`); several,
+    // or one with an id: v2, each with its id (given, else `human0`, `human1`, ...).
+    let mut header = if human_refs.len() > 1 || ids.iter().any(Option::is_some) {
         let people = human_refs
             .iter()
             .zip(&ids)

@@ -82,3 +82,59 @@ def test_a_fresh_bag_with_zstd_message_compression_reads_as_the_uncompressed_one
     b = pacs.audit(bags.write_bag(tmp_path / "plain", msgs))[0]
     assert a.verdict == "fail"
     assert a.metrics == b.metrics and a.violations == b.violations
+
+
+FIXTURES = Path(__file__).parent / "fixtures" / "db3"
+
+
+def test_one_part_of_a_split_bag_is_not_the_run(tmp_path):
+    """split/ fails as a whole; its first part alone would pass: refused, naming the bag."""
+    assert pacs.audit(FIXTURES / "split")[0].verdict == "fail"
+    with pytest.raises(pacs.InputError, match=r"one of 2 parts of the bag .*audit the bag directory"):
+        pacs.audit(FIXTURES / "split" / "split_0.db3")
+
+
+def test_a_bag_whose_files_contradict_its_metadata_is_refused(tmp_path):
+    """Rows cut from a file (the metadata still counting them), and a part taken out of
+    relative_file_paths but still listed in `files`: refused, never audited as the run."""
+    import shutil
+    import sqlite3
+
+    bag = bags.write_bag(tmp_path / "cut", bags.messages(violation=True, mapped=True, near_from=60))
+    assert pacs.audit(bag)[0].verdict == "fail"
+    db = sqlite3.connect(bag / "cut.db3")
+    (n,) = db.execute("SELECT count(*) FROM messages").fetchone()
+    db.execute("DELETE FROM messages WHERE id > ?", (n // 2,))
+    db.commit()
+    db.close()
+    with pytest.raises(pacs.InputError, match=rf"metadata counts {n} messages in this file.*holds {n // 2}"):
+        pacs.audit(bag)
+    # The second part of a split bag dropped from relative_file_paths only.
+    split = tmp_path / "split"
+    shutil.copytree(FIXTURES / "split", split)
+    meta = (split / "metadata.yaml").read_text()
+    assert "- split_1.db3" in meta
+    (split / "metadata.yaml").write_text(meta.replace("  - split_1.db3\n", "", 1))
+    (split / "split_1.db3").unlink()
+    with pytest.raises(pacs.InputError, match=r"contradicts itself: files\[1\]\.path `split_1\.db3`"):
+        pacs.audit(split)
+
+
+def test_a_fleet_of_bags_without_a_header_takes_one(tmp_path):
+    """A bag without a pacs header (as ROS 2 Humble records) beside a JSON Lines log: the given
+    header is for the bag, the JSON Lines log keeps its own; a bag's day is its recording's."""
+    archive = tmp_path / "archive"
+    archive.mkdir()
+    bags.write_bag(archive / "bag", bags.messages(violation=False, mapped=False), header=None)
+    log = archive / "run.jsonl"
+    with pacs.LogWriter(log, meta={"date": "2026-11-28"}) as w:
+        w.human(0.0, 0.0, [[3.0, 0.0, 1.0]] * 9)
+        for k in range(11):
+            w.robot(k * 0.001, [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785], [0.0] * 7)
+    with pytest.raises(pacs.InputError, match="missing header"):
+        pacs.fleet.audit(archive)
+    runs, report = pacs.fleet.audit(archive, header=bags.HEADER)
+    assert [r.verdict for r in runs] == ["pass", "pass"], [r.to_dict()["inconclusive"] for r in runs]
+    days = {Path(r["log"]).name: (r["day"], r["day_source"]) for r in report["runs"]}
+    assert days["bag"] == ("2023-11-14", "meta.db3_time_base_s")
+    assert days["run.jsonl"] == ("2026-11-28", "meta.date")

@@ -209,6 +209,16 @@ def test_bad_input_is_named(archive, client, tmp_path):
     for c in (None, client):
         with pytest.raises(pacs.InputError, match=r"b\.jsonl.*fr4"):
             pacs.fleet.audit(bad, client=c)
+    # Several invalid logs in batches of one (tasks that may fail in any order): the first in path
+    # order is raised, on the cluster as locally.
+    for name in ("c.jsonl", "d.jsonl", "e.jsonl"):
+        (bad / name).write_text("not json\n")
+    for _ in range(3):
+        with pytest.raises(pacs.InputError, match=r"b\.jsonl.*fr4"):
+            pacs.fleet.audit(bad, client=client, batch=1)
+    # A log given twice would count twice: refused, naming both paths.
+    with pytest.raises(pacs.InputError, match=r"a\.jsonl: the same log as .*a\.jsonl"):
+        pacs.fleet.audit([bad, bad / "a.jsonl"])
 
 
 def test_simulate_on_dask_equals_the_local_run_of_the_same_seeds(client):

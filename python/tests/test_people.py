@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 import pacs
 from conftest import far_human
@@ -125,3 +126,54 @@ def test_the_log_records_the_filter_that_ran(demo, tmp_path):
         s.close()
         header = json.loads(log.read_text().splitlines()[0])
         assert header["meta"]["filter"] == mode
+
+
+def test_one_named_person_keeps_its_id_and_bad_people_are_named(demo, tmp_path):
+    log = tmp_path / "one.jsonl"
+    s = pacs.Shield(robot="fr3", humans=[{"id": "operator", "human": "default"}],
+                    constraints="sorting", log=log)
+    s.start(0.0, demo.start)
+    s.measure(0.0, far_human(demo))
+    s.step(0.0)
+    s.close()
+    header = json.loads(log.read_text().splitlines()[0])
+    assert [p["id"] for p in header["humans"]] == ["operator"]
+    (r,) = pacs.audit(log)
+    assert r.people == ["operator"]
+    assert r.evidence["completeness"] == "complete"
+    # A person alone (not in a list) is one person too.
+    s = pacs.Shield(robot="fr3", humans={"id": "solo", "human": "default"}, constraints="sorting")
+    assert s.humans == 1
+    # Bad people: what is wrong is named, not blamed on the id.
+    bad = [
+        ([{"id": "A", "human": "default", "x": 1}], r"humans\[0\]: unknown key `x`"),
+        ([{"id": "A"}], r"humans\[0\]\.human: missing"),
+        ([{"id": "A,B", "human": "default"}], r"A,B.* is not a valid person id"),
+        ([{"id": "a/b", "human": "default"}], r"a/b.* is not a valid person id"),
+    ]
+    for humans, message in bad:
+        with pytest.raises(pacs.InputError, match=message):
+            pacs.Shield(robot="fr3", humans=humans, constraints="sorting")
+
+
+def test_a_log_writer_left_by_an_exception_is_incomplete(demo, tmp_path):
+    """Leaving the `with` block by an exception writes no `end`: the run was cut short."""
+    log = tmp_path / "raised.jsonl"
+    person = np.tile([3.0, 0.0, 1.0], (9, 1))
+    with pytest.raises(RuntimeError, match="the policy crashed"):
+        with pacs.LogWriter(log) as w:
+            w.human(0.0, 0.0, person)
+            for k in range(11):
+                w.robot(k * 0.001, demo.start, np.zeros(7))
+            raise RuntimeError("the policy crashed")
+    assert '"name":"end"' not in log.read_text()
+    (r,) = pacs.audit(log)
+    assert r.verdict == "inconclusive"
+    assert r.evidence["completeness"] == "incomplete"
+    # The same loop left normally: complete, and it passes.
+    with pacs.LogWriter(tmp_path / "ok.jsonl") as w:
+        w.human(0.0, 0.0, person)
+        for k in range(11):
+            w.robot(k * 0.001, demo.start, np.zeros(7))
+    (r,) = pacs.audit(tmp_path / "ok.jsonl")
+    assert r.verdict == "pass", r.inconclusive

@@ -8,8 +8,8 @@
 //! | topic | content |
 //! |---|---|
 //! | `/pacs/robot` | the robot's link capsules at the frame's sample (blue; red while a violation interval is open) |
-//! | `/pacs/human` | the latest measured body parts (capsules of the body-part thickness; orange) |
-//! | `/pacs/human_occupancy` | the human's reachable occupancy from that measurement over the frame (what the audit checks the robot against; translucent) |
+//! | `/pacs/human` | every person's latest measured body parts (capsules of the body-part thickness; orange) |
+//! | `/pacs/human_occupancy` | every person's reachable occupancy from that measurement over the frame (what the audit checks the robot against; translucent) |
 //! | `/pacs/robot_occupancy` | the robot's occupancy for the joint box of the frame's logged samples (translucent blue; a picture: the audit's span enclosures also bound the motion between samples) |
 //! | `/pacs/violations` | a red sphere on the violating link and a text (constraint, body part) over each violation interval |
 //! | `/pacs/metrics` | JSON `{t, min_separation_m, energy_bound_j, threshold_j, energy_nominal_j, violation, inconclusive}` per plot bucket of the audit (plot it in Foxglove) |
@@ -222,13 +222,11 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
         ch,
         robot,
         reach,
-        human_reach: HumanReach::new(models.human.clone(), opts.human_model),
-        parts: models.human.body_parts().to_vec(),
+        people: people_of(models, opts.human_model),
         run,
         opts,
         counts: SceneCounts::default(),
         t0: None,
-        latest: None,
         next_frame: f64::NEG_INFINITY,
         lo: vec![f64::INFINITY; n],
         hi: vec![f64::NEG_INFINITY; n],
@@ -239,10 +237,19 @@ pub fn write_scene<W: Write + Seek + Send + 'static>(
     while let Some(rec) = reader.next_record()? {
         match rec {
             Record::Human {
-                t_meas, positions, ..
+                t_meas,
+                person,
+                positions,
+                ..
             } => {
-                let pts: Vec<[f64; 3]> = positions.to_vec();
-                replay.latest = HumanMeasurement::new(&models.human, t_meas, &pts, None).ok();
+                // The person's slot (a v1 log's, or a record without id: the first).
+                let k = person
+                    .and_then(|id| replay.people.iter().position(|p| p.id == id))
+                    .unwrap_or(0);
+                if let Some(p) = replay.people.get_mut(k) {
+                    let pts: Vec<[f64; 3]> = positions.to_vec();
+                    p.latest = HumanMeasurement::new(p.reach.model(), t_meas, &pts, None).ok();
+                }
             }
             Record::Robot { t, q, .. } => replay.robot_sample(t, q),
             _ => {}
@@ -285,20 +292,42 @@ impl Channels {
     }
 }
 
+/// One person of the log in the replay: the model's reach and body parts, and the latest
+/// measurement.
+struct Person {
+    id: String,
+    reach: HumanReach,
+    parts: Vec<BodyPart>,
+    latest: Option<HumanMeasurement>,
+}
+
+/// The log's people (a v1 log's one person, or every person of a v2 log with its own model).
+fn people_of(models: &LogModels, kind: HumanReachModel) -> Vec<Person> {
+    let person = |id: &str, h: &pacs_models::HumanModel| Person {
+        id: id.to_string(),
+        reach: HumanReach::new(h.clone(), kind),
+        parts: h.body_parts().to_vec(),
+        latest: None,
+    };
+    if models.people.is_empty() {
+        vec![person("", &models.human)]
+    } else {
+        models.people.iter().map(|(id, h)| person(id, h)).collect()
+    }
+}
+
 /// A replay being written: its channels and models, and what the log has shown so far.
 struct Replay<'a> {
     ch: Channels,
     robot: &'a RobotModel,
     reach: RobotReach,
-    human_reach: HumanReach,
-    parts: Vec<BodyPart>,
+    /// Every person (all drawn on `/pacs/human` and `/pacs/human_occupancy`).
+    people: Vec<Person>,
     run: &'a RunResult,
     opts: &'a SceneOptions,
     counts: SceneCounts,
     /// The log's time origin (s): the first robot sample's time, or 0 if that is later.
     t0: Option<f64>,
-    /// The latest human measurement.
-    latest: Option<HumanMeasurement>,
     /// Log time (s) of the next frame.
     next_frame: f64,
     /// Joint box (rad or m) of the samples since the last frame.
@@ -371,21 +400,37 @@ impl Replay<'_> {
         self.hi.copy_from_slice(q);
     }
 
-    /// The latest measured body parts and the human's occupancy from them over the frame,
-    /// `t` to `t + frame_period` (s); nothing before the first measurement.
+    /// Every person's latest measured body parts and occupancy from them over the frame, `t` to
+    /// `t + frame_period` (s), all people in one entity per topic; nothing before the first
+    /// measurement.
     fn human_frame(&mut self, t: f64, ns: u64) {
-        let Some(m) = &self.latest else {
+        let (mut body, mut occ) = (Vec::new(), Vec::new());
+        let mut any_occ = false;
+        for Person {
+            reach,
+            parts,
+            latest,
+            ..
+        } in &mut self.people
+        {
+            let Some(m) = latest.as_ref() else { continue };
+            let kp = m.positions();
+            body.extend(
+                parts
+                    .iter()
+                    .filter_map(|bp| Capsule::new(kp[bp.from], kp[bp.to], bp.thickness / 2.0).ok()),
+            );
+            if let Ok(o) = reach.occupancy(m, t, t + self.opts.frame_period) {
+                occ.extend(o);
+                any_occ = true;
+            }
+        }
+        if body.is_empty() {
             return;
-        };
-        let kp = m.positions();
-        let body: Vec<Capsule> = self
-            .parts
-            .iter()
-            .filter_map(|bp| Capsule::new(kp[bp.from], kp[bp.to], bp.thickness / 2.0).ok())
-            .collect();
+        }
         log_scene(&self.ch.human, entity("human", ns, &body, HUMAN), ns);
         self.counts.human += 1;
-        if let Ok(occ) = self.human_reach.occupancy(m, t, t + self.opts.frame_period) {
+        if any_occ {
             log_scene(
                 &self.ch.human_occ,
                 entity("human_occupancy", ns, &occ, HUMAN_OCC),

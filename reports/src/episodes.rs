@@ -31,14 +31,24 @@ pub struct Episode {
     /// Smallest signed separation (m) of the logged robot and the measured person or object
     /// over the episode (negative: overlap as logged; `NaN` if none was computed).
     pub worst_separation_m: f64,
-    /// Largest energy upper bound (J) (PFL; `NaN` otherwise).
+    /// Largest energy upper bound (J) (PFL; `NaN` otherwise, written as 0 in JSON, as an SSM
+    /// violation's `energy`: never `null`).
+    #[serde(serialize_with = "zero_unless_finite")]
     pub worst_energy_j: f64,
-    /// Smallest threshold (J) that applied (PFL; `NaN` otherwise).
+    /// Smallest threshold (J) that applied (PFL; `NaN` otherwise, written as 0 in JSON, as an SSM
+    /// violation's `threshold`).
+    #[serde(serialize_with = "zero_unless_finite")]
     pub threshold_j: f64,
     /// The constrained (clamping) threshold applied somewhere.
     pub clamped: bool,
     /// Some interval is certain (the logged robot and the measured person themselves violate).
     pub certain: bool,
+}
+
+/// An SSM episode's energy and threshold (not computed: `NaN`) as JSON writes them: 0, as the
+/// violation rows do, never `null`.
+fn zero_unless_finite<S: serde::Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(if x.is_finite() { *x } else { 0.0 })
 }
 
 /// Who a violation belongs to: objects are named `object `ID``; body parts belong to the person

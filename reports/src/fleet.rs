@@ -7,8 +7,9 @@
 //! - **robot**: the header's `meta.robot_id`, else `meta.robot`, else the robot model's name;
 //! - **scene**: `meta.task`, else `meta.scene`, else `-`;
 //! - **day** (UTC date, `YYYY-MM-DD`): `meta.date` (a date as written), else `meta.start_time`
-//!   (Unix seconds, or an RFC 3339 time with `Z` or an offset), else `meta.mcap_time_base_s`
-//!   when it is a wall clock (after 2000-01-01; a simulated clock starts near 0), else the log
+//!   (Unix seconds, or an RFC 3339 time with `Z` or an offset), else `meta.mcap_time_base_s` or
+//!   `meta.db3_time_base_s` (a ROS bag's first message time) when it is a wall clock (after
+//!   2000-01-01; a simulated clock starts near 0), else the log
 //!   file's modification time. A stated date that cannot be read is not replaced by a guess: its
 //!   day is `invalid` and `day_source` says why.
 //!
@@ -33,14 +34,16 @@ pub const WORST_PER_GROUP: usize = 3;
 /// Worst runs listed for the whole fleet.
 pub const WORST_OVERALL: usize = 10;
 
-/// `meta.mcap_time_base_s` is taken as a wall clock from this time on (2000-01-01T00:00:00Z).
+/// `meta.mcap_time_base_s` and `meta.db3_time_base_s` are taken as a wall clock from this time on
+/// (2000-01-01T00:00:00Z).
 const WALL_CLOCK_FROM: f64 = 946_684_800.0;
 
 /// The logs of `paths`: a file stays as given; a directory becomes its log files
 /// ([`LOG_EXTENSIONS`]) and ROS 2 bag directories (with `metadata.yaml`), in it and its
-/// subdirectories (symbolic links to directories are not followed), sorted by path; a bag
-/// directory given itself is one log. Errors name the path: one that cannot be read, or a directory
-/// without logs.
+/// subdirectories (symbolic links to directories are not followed; every entry with a log's
+/// name counts, also one that cannot be read), sorted by path; a bag directory given itself is
+/// one log. Errors name the path: one that cannot be read, a directory without logs, or a log
+/// given twice (paths that name the same file).
 pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
     let mut out = Vec::new();
     for p in paths {
@@ -59,6 +62,18 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
         }
         found.sort();
         out.extend(found);
+    }
+    // A log named twice (a directory and a file in it, or one path twice) would count twice in
+    // the fleet's runs, verdict counts and violation time: refused.
+    let mut seen: std::collections::HashMap<PathBuf, &PathBuf> = std::collections::HashMap::new();
+    for p in &out {
+        let key = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+        if let Some(first) = seen.insert(key, p) {
+            return Err(ExpandError::Twice {
+                first: first.clone(),
+                second: p.clone(),
+            });
+        }
     }
     Ok(out)
 }
@@ -85,6 +100,13 @@ pub enum ExpandError {
         LOG_EXTENSIONS.join(", *.")
     )]
     NoLogs(PathBuf),
+    /// One log given twice (by paths that name the same file).
+    #[error(
+        "{}: the same log as {} (given twice, it would count twice in the fleet report)",
+        second.display(),
+        first.display()
+    )]
+    Twice { first: PathBuf, second: PathBuf },
 }
 
 fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
@@ -104,7 +126,10 @@ fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
             out.push(path);
         } else if kind.is_dir() {
             collect_logs(&path, out)?;
-        } else if is_log_name(&path) && std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+        } else if is_log_name(&path) {
+            // Every entry with a log's name counts, also one that cannot be read (a dangling
+            // link, a FIFO, a link to a directory): its audit then fails with the path named,
+            // never leaves the archive without a word.
             out.push(path);
         }
     }
@@ -136,7 +161,7 @@ pub struct FleetRun {
     /// UTC date `YYYY-MM-DD` (or `invalid` / `unknown`).
     pub day: String,
     /// Where the day comes from: `meta.date`, `meta.start_time`, `meta.mcap_time_base_s`,
-    /// `file_mtime`, or why it could not be read.
+    /// `meta.db3_time_base_s`, `file_mtime`, or why it could not be read.
     pub day_source: String,
     /// The audit's verdict.
     pub verdict: Verdict,
@@ -366,14 +391,17 @@ pub fn day(run: &RunResult, mtime: Option<u64>) -> (String, String) {
             ),
         };
     }
-    if let Some(b) = run
-        .meta
-        .get("mcap_time_base_s")
-        .and_then(Value::as_f64)
-        .filter(|&b| b >= WALL_CLOCK_FROM)
-        && let Some(d) = day_of_unix(b)
-    {
-        return (d, "meta.mcap_time_base_s".into());
+    // A ROS recording's first message time: MCAP's, or a sqlite3 bag's (one reader sets one).
+    for key in ["mcap_time_base_s", "db3_time_base_s"] {
+        if let Some(b) = run
+            .meta
+            .get(key)
+            .and_then(Value::as_f64)
+            .filter(|&b| b >= WALL_CLOCK_FROM)
+            && let Some(d) = day_of_unix(b)
+        {
+            return (d, format!("meta.{key}"));
+        }
     }
     match mtime.and_then(|s| day_of_unix(s as f64)) {
         Some(d) => (d, "file_mtime".into()),

@@ -267,7 +267,10 @@ fn inconclusive_list(s: &mut String, r: &RunResult) {
             "<li>{:.4}–{:.4} s: {} ({} spans)</li>",
             i.t_start,
             i.t_end,
-            esc(i.reason.as_str()),
+            esc(&crate::inconclusive_what(
+                i.reason.as_str(),
+                i.person.as_deref()
+            )),
             i.spans
         );
     }

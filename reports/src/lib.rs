@@ -126,6 +126,15 @@ pub fn model_specs(r: &RunResult) -> Value {
     Value::Object(out)
 }
 
+/// What an inconclusive span is about, as the reports print it: its reason, and the person it
+/// names where there is one (`no_human, person `B``).
+pub(crate) fn inconclusive_what(reason: &str, person: Option<&str>) -> String {
+    match person {
+        Some(p) => format!("{reason}, person `{p}`"),
+        None => reason.to_string(),
+    }
+}
+
 /// The current time as ISO 8601 UTC (`2026-11-25T15:30:00Z`), from the system clock.
 pub fn utc_now() -> String {
     let secs = std::time::SystemTime::now()

@@ -117,7 +117,10 @@ pub fn report(input: &ReportInput) -> String {
                 let _ = writeln!(
                     s,
                     "- {:.4}–{:.4} s: {} ({} spans)",
-                    i.t_start, i.t_end, i.reason, i.spans
+                    i.t_start,
+                    i.t_end,
+                    crate::inconclusive_what(i.reason.as_str(), i.person.as_deref()),
+                    i.spans
                 );
             }
         }

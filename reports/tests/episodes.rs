@@ -64,6 +64,7 @@ fn run(name: &str, verdict: Verdict, violations: Vec<Violation>, min_sep: f64) -
             human_measurement_error_pos: 0.0,
             human_delay: 0.0,
             environment_shapes: 0,
+            people: Vec::new(),
             specs: serde_json::json!({"robot": {"name": "ur5e", "user_values": [
                 "a_max = 10 rad/s² for every joint", "j_max = 5000 rad/s³ for every joint"]}}),
         },
@@ -170,6 +171,12 @@ fn intervals_merge_into_episodes() {
     );
     assert!((first.worst_separation_m - (0.01 - 0.054)).abs() < 1e-12);
     assert!(first.certain && first.worst_energy_j.is_nan());
+    // In JSON an SSM episode's energy and threshold are 0 (as its violations'), never null.
+    let j = serde_json::to_value(first).unwrap();
+    assert_eq!(
+        (j["worst_energy_j"].as_f64(), j["threshold_j"].as_f64()),
+        (Some(0.0), Some(0.0))
+    );
     assert_eq!(
         episode_cells(first),
         [

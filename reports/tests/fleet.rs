@@ -57,6 +57,7 @@ fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> R
             human_measurement_error_pos: 0.0,
             human_delay: 0.0,
             environment_shapes: 0,
+            people: Vec::new(),
             specs: Value::Null,
         },
         series: vec![],
@@ -98,6 +99,15 @@ fn days_come_from_meta_date_start_time_time_base_then_mtime() {
     assert_eq!(
         day(json!({"mcap_time_base_s": 1_700_000_000})),
         d("2023-11-14", "meta.mcap_time_base_s")
+    );
+    // A sqlite3 bag's first message time, as MCAP's.
+    assert_eq!(
+        day(json!({"db3_time_base_s": 1_700_000_000})),
+        d("2023-11-14", "meta.db3_time_base_s")
+    );
+    assert_eq!(
+        day(json!({"db3_time_base_s": 12})),
+        d("2026-11-28", "file_mtime")
     );
     // A simulated clock's time base is not a date: the file's mtime is used.
     assert_eq!(
@@ -244,5 +254,35 @@ fn a_directory_expands_to_its_sorted_log_files() {
     );
     let e = expand_logs(&[d.join("missing")]).unwrap_err().to_string();
     assert!(e.contains("missing") && e.contains("cannot read"), "{e}");
+    // A log named twice (the directory and a file in it; one file by two spellings) is refused,
+    // naming both paths: it would count twice in the fleet report.
+    let e = expand_logs(&[d.clone(), d.join("b/x.jsonl")])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&d.join("b/x.jsonl").display().to_string())
+            && e.contains(&format!("same log as {}", d.join("b/x.jsonl").display()))
+            && e.contains("given twice"),
+        "{e}"
+    );
+    let e = expand_logs(&[d.join("z.jsonl"), d.join("b/../z.jsonl")])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("given twice"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// An entry with a log's name that cannot be read (a dangling link) is listed, so that its audit
+/// fails naming it, instead of leaving the archive unmentioned.
+#[cfg(unix)]
+#[test]
+fn an_unreadable_log_in_a_directory_is_listed_not_skipped() {
+    let d = std::env::temp_dir().join(format!("pacs-reports-dangling-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("a.jsonl"), "").unwrap();
+    std::os::unix::fs::symlink(d.join("gone.jsonl"), d.join("b.jsonl")).unwrap();
+    let got = expand_logs(std::slice::from_ref(&d)).unwrap();
+    assert_eq!(got, vec![d.join("a.jsonl"), d.join("b.jsonl")]);
     let _ = std::fs::remove_dir_all(&d);
 }

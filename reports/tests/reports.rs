@@ -43,6 +43,7 @@ fn run(name: &str, filter: &str, success: Option<bool>, viol: f64, verdict: Verd
             human_measurement_error_pos: 0.0,
             human_delay: 0.0,
             environment_shapes: 0,
+            people: Vec::new(),
             specs: serde_json::json!({"robot": {"name": "fr3", "dof": 7}, "human": {"name": "default"}}),
         },
         series: (0..10)
@@ -127,10 +128,20 @@ fn aggregate_groups_by_meta_with_mean_and_sample_std() {
 
 #[test]
 fn plots_and_documents() {
-    let runs = vec![
+    let mut runs = vec![
         run("a.jsonl", "pacs", Some(true), 0.0, Verdict::Pass),
         run("b.jsonl", "none", None, 0.1, Verdict::Fail),
     ];
+    // An inconclusive span about a person names the person in every document.
+    runs[1]
+        .inconclusive
+        .push(pacs_audit::verdict::InconclusiveSpan {
+            t_start: 0.01,
+            t_end: 0.02,
+            reason: pacs_audit::InconclusiveReason::NoHuman,
+            spans: 10,
+            person: Some("visitor".into()),
+        });
     let sep = svg::separation_plot(&runs[0].series);
     assert!(sep.starts_with("<svg") && sep.ends_with("</svg>"));
     assert_eq!(sep.matches("class=\"violation\"").count(), 1);
@@ -210,6 +221,14 @@ fn plots_and_documents() {
         "{md}"
     );
     assert!(md.contains("| `max_gap` | 0.1 |") && md.contains(&robot_hash));
+    assert!(
+        md.contains("- 0.0100–0.0200 s: no_human, person `visitor` (10 spans)"),
+        "{md}"
+    );
+    assert!(
+        h.contains("<li>0.0100–0.0200 s: no_human, person `visitor` (10 spans)</li>"),
+        "{h}"
+    );
     // The PDF: a well-formed file (header, objects, xref offsets that point at them, trailer).
     let pdf = pacs_reports::pdf::report(&input);
     assert!(pdf.starts_with(b"%PDF-1.4"));

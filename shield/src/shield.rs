@@ -517,6 +517,11 @@ impl Shield {
             &self.config,
         )?;
         self.humans.push(slot);
+        // Several people: each may be pinched against another (`ContactRule::with_other_people`,
+        // the same rule as the audit's passes of a log with several people).
+        for h in &mut self.humans {
+            h.rule.set_other_people(true);
+        }
         Ok(self.humans.len() - 1)
     }
 
@@ -704,4 +709,29 @@ pub struct ChunkProgress {
     pub executed: usize,
     /// Chunks accepted so far (a chunk newer than `chunk` waits for a verified step).
     pub accepted: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pacs_models::{ConstraintSpec, default_human, fr3};
+
+    /// With a second person every person's rule takes a PFL contact as a possible pinch against
+    /// the other (`ContactRule::set_other_people`, as the audit's passes of a log with several
+    /// people); alone, not.
+    #[test]
+    fn a_second_person_makes_every_rule_count_the_other_people() {
+        let spec = ConstraintSpec::builtin("handover").unwrap();
+        let human = default_human();
+        let mut sh = Shield::new(
+            fr3::fr3(),
+            Some((human.clone(), &spec)),
+            vec![],
+            ShieldConfig::default(),
+        )
+        .unwrap();
+        assert!(!sh.humans[0].rule.other_people());
+        assert_eq!(sh.add_human(human, &spec).unwrap(), 1);
+        assert!(sh.humans.iter().all(|h| h.rule.other_people()));
+    }
 }

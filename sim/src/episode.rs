@@ -253,7 +253,8 @@ pub struct Setup<'a> {
 /// Optional outputs of an episode.
 #[derive(Default)]
 pub struct Outputs<'a> {
-    /// Write the run as an audit log (format v1, the measurements the filter received).
+    /// Write the run as an audit log (format v1, or v2 with several people: the measurements the
+    /// filter received).
     pub log: Option<&'a mut dyn std::io::Write>,
     /// Keep every n-th step in [`Episode::samples`] (0: none).
     pub record_every: usize,
@@ -265,17 +266,18 @@ pub struct Outputs<'a> {
 /// `rest_speed` (a robot holding position under a controller is never exactly still).
 pub const REST_SPEED: f64 = 0.02;
 
-/// The audit-log header of an episode (models inline, objects with their contact, `meta` with
-/// task, policy, filter, human).
 /// The id of person `i` of a scene with several people (`human0`, `human1`, …: the filter's
 /// order; the Python `Shield` names unnamed people the same way).
 pub fn person_id(i: usize) -> String {
     format!("human{i}")
 }
 
+/// The audit-log header of an episode (models inline, objects with their contact, `meta` with
+/// task, policy, filter, human).
 #[allow(clippy::too_many_arguments)]
 pub fn log_header(
     label: &str,
+    task: &str,
     robot: &RobotModel,
     human: &HumanModel,
     spec: &ConstraintSpec,
@@ -307,7 +309,9 @@ pub fn log_header(
             contact: o.contact,
         })
         .collect();
-    h.meta.insert("task".into(), spec.name.clone().into());
+    // The task (`crowded`, `sphere`, ...), not its constraint preset's name (`sorting` for
+    // every SSM task): the fleet report groups runs by it.
+    h.meta.insert("task".into(), task.into());
     h.meta.insert("policy".into(), policy.into());
     h.meta.insert("filter".into(), label.into());
     h.meta.insert("human".into(), script.name().into());

@@ -14,7 +14,7 @@ use std::process::ExitCode;
 /// Arguments of `pacs audit`.
 #[derive(clap::Args, Debug)]
 pub struct AuditArgs {
-    /// Log files (format v1: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
+    /// Log files (format v1, or v2 with up to 32 people: JSON Lines, CSV for `*.csv`, or MCAP of a ROS 2 recording, detected
     /// by its magic bytes or `*.mcap`; or a ROS 2 bag: `*.db3`, or a bag directory with
     /// metadata.yaml in the sqlite3 or the MCAP storage; see docs/log-format.md). Any other directory stands for its logs (*.jsonl,
     /// *.csv, *.mcap, *.db3 and bag directories, also in subdirectories), sorted by path
@@ -37,7 +37,9 @@ pub struct AuditArgs {
     #[arg(long, value_name = "FILE.mcap")]
     pub scene: Option<PathBuf>,
     /// MCAP logs and ROS 2 bags only: the pacs header (JSON, or TOML for `*.toml`) instead of the
-    /// logs' `pacs` metadata records (bags: their custom_data `pacs_header`).
+    /// logs' `pacs` metadata records (bags: their custom_data `pacs_header`). Among several logs
+    /// (an archive mixing bags and JSON Lines), JSON Lines and CSV logs keep their own header;
+    /// given alone with --header they are an input error.
     #[arg(long, value_name = "FILE")]
     pub header: Option<PathBuf>,
     /// MCAP logs and ROS 2 bags only: topic of the robot's sensor_msgs/msg/JointState (overrides the config's
@@ -180,6 +182,16 @@ fn hash_logs(logs: &[PathBuf]) -> Result<Vec<InputFile>, Stop> {
         .map_err(invalid)
 }
 
+/// Whether `p` is a JSON Lines or CSV log (which carries its own header; MCAP files and ROS 2 bags
+/// may take a given one). A file that cannot be read is not: its audit names the problem.
+fn carries_own_header(p: &std::path::Path) -> bool {
+    if p.is_dir() || pacs_log::is_mcap(p).unwrap_or(false) || pacs_log::is_db3(p).unwrap_or(false) {
+        return false;
+    }
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+        || pacs_log::is_jsonl(p).unwrap_or(false)
+}
+
 /// Audit every log in parallel (a progress bar on a terminal); every log that cannot be read is
 /// reported, then the command stops (exit 3).
 fn audit_logs(
@@ -194,7 +206,10 @@ fn audit_logs(
     let results: Vec<Result<RunResult, LogError>> = logs
         .par_iter()
         .map(|p| {
-            let r = pacs_audit::audit_file_with_header(p, cfg, header);
+            // Among several logs a JSON Lines or CSV log keeps the header it carries (the given
+            // one is for the archive's bags and MCAP logs); alone, the reader refuses the pair.
+            let own = logs.len() > 1 && carries_own_header(p);
+            let r = pacs_audit::audit_file_with_header(p, cfg, header.filter(|_| !own));
             bar.inc(1);
             r
         })
@@ -242,7 +257,7 @@ fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
     runs.iter().try_for_each(|r| {
         writeln!(
             out,
-            "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s)",
+            "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s){}",
             r.log,
             r.verdict,
             r.metrics.samples,
@@ -250,7 +265,14 @@ fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
             r.metrics.violation_fraction,
             pacs_reports::episodes::episodes(&r.violations).len(),
             r.violations.len(),
-            r.inconclusive.len()
+            r.inconclusive.len(),
+            match r.evidence.completeness {
+                pacs_audit::Completeness::Incomplete => format!(
+                    "; INCOMPLETE log (incomplete_log): its samples end at {:.3} s, and the end record its writer promised is missing or later",
+                    r.evidence.t_end
+                ),
+                _ => String::new(),
+            }
         )
     })
 }

@@ -23,7 +23,8 @@ Tasks (FR3 on a table top, H = 16 actions per chunk, h = 8 executed, Δt = 33 ms
   handover  take a block from a person's (moving) hand, place it in the box (PFL hand)
   feeding   bring a fork to a seated person's mouth and withdraw it (PFL head, 1 mJ)
   sphere    pick and place while a 10 cm sphere rolls on the table (a dynamic object: SSM)
-  crowded   sorting while a person reaches across and two spheres roll on the table (SSM)
+  crowded   sorting while a person reaches across, a second person (a passer-by) walks up and
+            reaches across too, and two spheres roll on the table (SSM)
 
 Methods:
   off                  intended chunk trajectories, never brake (unsafe reference)
@@ -42,7 +43,7 @@ demonstrations (rad), fraction of rollouts in which the policy left its training
 
 Outputs in --out: summary.md, summary.json (rows), rollouts.json (every rollout), TASK-paths.svg
 (tool paths coloured by speed, demonstrations shaded), TASK-separation.svg, logs/*.jsonl (audit
-format v1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: a JSON object with the
+format v2, every person by id: human0, human1; check them with `pacs audit DIR/logs/*.jsonl`). Stdout: a JSON object with the
 policy, the rows, the summary path, the plot paths and the log directory.
 
 Policies (--policy): nearest (default; the hand-written nearest-neighbour stand-in), kernel

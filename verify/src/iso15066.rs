@@ -18,8 +18,10 @@
 //!   `[−rest_speed, rest_speed]`). Contact with the base link counts: SSM allows no contact while
 //!   the robot moves.
 //! - **PFL**: violated if `E` exceeds the part's threshold, the *constrained* (clamping) one if
-//!   the contact may be a pinch: the part may also touch an environment shape, a body part it can
-//!   be clamped against (`HumanModel::clampable`), or robot capsules on **two different frames**
+//!   the contact may be a pinch: another person shares the cell (they may be anywhere:
+//!   [`ContactRule::set_other_people`]), or the part may also touch an environment shape, a body
+//!   part it can be clamped against (`HumanModel::clampable`), or robot capsules on **two
+//!   different frames**
 //!   (adjacent links included: a joint between them can close the gap, e.g. an elbow pinch between
 //!   links 3 and 4; the base, frame 0, counts as a surface to be pinched against). Otherwise the
 //!   unconstrained threshold. The constrained threshold used is `min(constrained, unconstrained)`,
@@ -38,7 +40,9 @@
 //! violation, then at every instant of the interval: no SSM body part touches the robot while a
 //! joint moves faster than `rest_speed`, and every PFL body part touching the robot does so with
 //! kinetic energy at most its threshold for the true contact type (constrained whenever the part
-//! is truly pinched between two frames, the environment or a clampable part).
+//! is truly pinched between two frames, the environment, a clampable part or — with other
+//! people in the cell, [`ContactRule::set_other_people`], which then takes every PFL contact as
+//! a possible pinch — another person).
 //! The broad phase only skips pairs that are provably disjoint (outward-padded boxes, a ball
 //! containing the robot in every configuration), so it never hides a contact.
 //!
@@ -276,6 +280,9 @@ pub struct ContactRule {
     clampable: Vec<bool>,
     parts: usize,
     environment: Vec<EnvShape>,
+    /// Other people share the cell ([`Self::set_other_people`]): every PFL contact may be a
+    /// pinch against one of them.
+    other_people: bool,
     rest_speed: f64,
     workspace: Capsule,
     // Scratch.
@@ -374,6 +381,7 @@ impl ContactRule {
             clampable,
             parts,
             environment,
+            other_people: false,
             rest_speed,
             workspace,
             robot_aabb: vec![Aabb::default(); ncaps],
@@ -411,5 +419,23 @@ impl ContactRule {
     /// The rest speed (rad/s).
     pub fn rest_speed(&self) -> f64 {
         self.rest_speed
+    }
+
+    /// The rule for one of several people in the cell (`present`): a body part touched by the
+    /// robot may be pinched between the robot and another person (a hand pressed against a
+    /// colleague's arm), so every PFL contact is judged against the constrained (clamping)
+    /// threshold, `min(constrained, unconstrained)`. Each person's occupancy is checked on its
+    /// own (the shield per person, the audit in one pass per person), so where another person
+    /// is cannot be told here: the rule assumes they may be anywhere. Over-approximating the
+    /// clamping flag only lowers the threshold (module docs), so this keeps claim C8′ for
+    /// clamps against people. SSM is unaffected (no contact is allowed while the robot moves).
+    pub fn set_other_people(&mut self, present: bool) {
+        self.other_people = present;
+    }
+
+    /// Whether the rule counts other people as surfaces to be pinched against
+    /// ([`Self::set_other_people`]).
+    pub fn other_people(&self) -> bool {
+        self.other_people
     }
 }

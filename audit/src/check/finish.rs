@@ -147,7 +147,9 @@ impl Auditor {
             violating_samples: self.violating_samples,
             certain_violating_samples: self.certain_samples,
             inconclusive_duration: self.inconclusive_duration,
-            min_separation: self.min_separation,
+            // A figure beyond floating point (people ≳ 10¹⁵⁴ m away: the squared distances
+            // overflow) is no number to report: left out, as where no span was checked.
+            min_separation: self.min_separation.filter(|s| s.is_finite()),
             success: self.success,
             safe_success: self
                 .success

@@ -64,6 +64,16 @@ impl RowAccount {
         self.count += 1;
     }
 
+    /// Rows read.
+    pub(super) fn read(&self) -> u64 {
+        self.count
+    }
+
+    /// Rows the metadata counts (`n`).
+    pub(super) fn expected(&self) -> u64 {
+        self.n
+    }
+
     /// Whether exactly the ids `1..=n` were seen, each once.
     pub(super) fn complete(&self) -> bool {
         !self.broken && self.count == self.n

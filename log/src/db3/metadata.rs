@@ -49,6 +49,9 @@ pub(super) enum MetadataError {
         "compressed bags are not supported (compression_mode `{mode}`, compression_format `{format}`; of the compressed forms only `message` with `zstd` is read): decompress the bag first (e.g. `ros2 bag convert` to an uncompressed bag)"
     )]
     Compressed { mode: String, format: String },
+    /// Two statements of the metadata contradict each other.
+    #[error("the metadata contradicts itself: {0}")]
+    Contradiction(String),
 }
 
 /// A value of the wrong kind at `field`.
@@ -124,6 +127,11 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
                         Some(f),
                     ));
                 };
+                if let Some(j) = files.iter().position(|f| f == s) {
+                    return Err(MetadataError::Contradiction(format!(
+                        "relative_file_paths[{i}] `{s}` is relative_file_paths[{j}] again (a part read twice)"
+                    )));
+                }
                 files.push(s.clone());
             }
         }
@@ -190,9 +198,9 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
             ));
         }
     }
-    // Per-file row counts (rosbag2 metadata version ≥ 5 and `rosbags` write `files`): read
-    // leniently, since they only decide how a file's completeness is checked, never whether the
-    // bag is accepted.
+    // Per-file row counts (rosbag2 metadata version ≥ 5 and `rosbags` write `files`): a count
+    // that is not a count is passed over (then the file is checked by `quick_check`); a count
+    // is checked against the file's rows (`open_part`, `read_rows`).
     let mut file_counts = Vec::new();
     if let Yaml::Array(a) = &info["files"] {
         for f in a {
@@ -201,6 +209,32 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
             {
                 file_counts.push((path.clone(), *c as u64));
             }
+        }
+    }
+    // The per-file statements must describe the files the bag lists (a part taken out of
+    // relative_file_paths but still in `files` is a recording cut short), and add up to the
+    // bag's message count.
+    if let Yaml::Array(a) = &info["files"] {
+        for (i, f) in a.iter().enumerate() {
+            if let Yaml::String(path) = &f["path"]
+                && !files.contains(path)
+            {
+                return Err(MetadataError::Contradiction(format!(
+                    "files[{i}].path `{path}` is not in relative_file_paths ({})",
+                    files.join(", ")
+                )));
+            }
+        }
+    }
+    if let Yaml::Integer(total) = &info["message_count"]
+        && !file_counts.is_empty()
+        && file_counts.len() == files.len()
+    {
+        let sum: u64 = file_counts.iter().map(|(_, c)| c).sum();
+        if i64::try_from(sum).ok() != Some(*total) {
+            return Err(MetadataError::Contradiction(format!(
+                "message_count {total}, while its files' message_count add up to {sum}"
+            )));
         }
     }
     if file_counts.is_empty()

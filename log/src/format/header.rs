@@ -7,6 +7,10 @@ use pacs_models::shape::CapsuleSpec;
 use pacs_models::{ConstraintSpec, HumanSpec};
 use serde::{Deserialize, Serialize};
 
+/// Most people a log (format v2) may declare: the audit checks each in a pass of its own, whose
+/// memory (≈ 0.5 MB) and time add up per person.
+pub const MAX_PEOPLE: usize = 32;
+
 /// The first record of every log: models, constraints, static environment and free-form metadata.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -152,10 +156,20 @@ impl Header {
                         "header.humans: missing or empty (version 2 lists at least one person: [{\"id\": ..., \"human\": ...}])",
                     );
                 }
+                if self.humans.len() > MAX_PEOPLE {
+                    return Err(HeaderError::Fields(format!(
+                        "header.humans: {} people, more than the {MAX_PEOPLE} a log may declare (the audit checks each person in a pass of its own)",
+                        self.humans.len()
+                    )));
+                }
                 for (i, p) in self.humans.iter().enumerate() {
-                    if p.id.is_empty() || p.id.trim() != p.id || p.id.contains(',') {
+                    if p.id.is_empty()
+                        || p.id.trim() != p.id
+                        || p.id.contains(',')
+                        || p.id.contains('/')
+                    {
                         return Err(HeaderError::Fields(format!(
-                            "header.humans[{i}].id: {:?} is not a valid person id (non-empty, no surrounding spaces, no comma)",
+                            "header.humans[{i}].id: {:?} is not a valid person id (non-empty, no surrounding spaces, no comma, no `/`: MCAP names a person's topic /humans/ID/keypoints)",
                             p.id
                         )));
                     }
@@ -186,9 +200,14 @@ impl Header {
         if value.get("type").and_then(|t| t.as_str()) != Some("header") {
             return Err(HeaderError::MissingType);
         }
-        Self::validated(
-            serde_json::from_value(value).map_err(|e| HeaderError::Fields(e.to_string())),
-        )
+        Self::validated(Self::typed(value))
+    }
+
+    /// The header's fields from a JSON value; an error names the field where it can (a person,
+    /// an object, `end_event`, `version`: serde's own message names the value only).
+    fn typed(value: serde_json::Value) -> Result<Header, HeaderError> {
+        serde_json::from_value::<Header>(value.clone())
+            .map_err(|e| HeaderError::Fields(locate_error(&value).unwrap_or_else(|| e.to_string())))
     }
 
     /// A header parsed by a reader (`parsed`), [`Header::validated`]; errors name `file` and
@@ -196,13 +215,58 @@ impl Header {
     pub(crate) fn checked(
         file: &str,
         loc: crate::error::Location,
-        parsed: Result<Header, serde_json::Error>,
+        parsed: Result<serde_json::Value, serde_json::Error>,
     ) -> Result<Header, crate::error::LogError> {
         use crate::error::LogError;
-        let mut header = Self::validated(parsed.map_err(|e| HeaderError::Fields(e.to_string())))
-            .map_err(|p| LogError::input(file, loc, p.to_string()))?;
+        let typed = match parsed {
+            Ok(v) => Self::typed(v),
+            Err(e) => Err(HeaderError::Fields(e.to_string())),
+        };
+        let mut header =
+            Self::validated(typed).map_err(|p| LogError::input(file, loc, p.to_string()))?;
         header.robot.rebase(&dir_of(std::path::Path::new(file)));
         Ok(header)
+    }
+}
+
+/// Where a header that does not deserialize goes wrong, as `header.FIELD: serde's message`: the
+/// first person or object entry that does not read on its own, or `end_event` / `version` of the
+/// wrong type. `None` where none of these is the cause (serde's message then stands alone).
+fn locate_error(value: &serde_json::Value) -> Option<String> {
+    let entries = |key: &str, read: &dyn Fn(&serde_json::Value) -> Option<String>| {
+        value
+            .get(key)?
+            .as_array()?
+            .iter()
+            .enumerate()
+            .find_map(|(i, v)| read(v).map(|e| format!("header.{key}[{i}]: {e}")))
+    };
+    let person = |v: &serde_json::Value| {
+        serde_json::from_value::<PersonEntry>(v.clone())
+            .err()
+            .map(|e| e.to_string())
+    };
+    let object = |v: &serde_json::Value| {
+        serde_json::from_value::<ObjectEntry>(v.clone())
+            .err()
+            .map(|e| e.to_string())
+    };
+    if let Some(e) = entries("humans", &person).or_else(|| entries("objects", &object)) {
+        return Some(e);
+    }
+    match value.get("end_event") {
+        Some(v) if !v.is_boolean() => {
+            return Some(format!(
+                "header.end_event: expected true or false, found {v}"
+            ));
+        }
+        _ => {}
+    }
+    match value.get("version") {
+        Some(v) if v.as_u64().and_then(|n| u32::try_from(n).ok()).is_none() => Some(format!(
+            "header.version: expected 1 or 2 (an integer), found {v}"
+        )),
+        _ => None,
     }
 }
 

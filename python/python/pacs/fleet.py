@@ -80,15 +80,31 @@ def _list_logs(paths: Any) -> list:
     return _pacs._fleet_logs(paths)
 
 
-def _audit_one(path: str, config: Any) -> Any:
+def _keeps_own_header(path: str) -> bool:
+    """Whether a log of an archive keeps its own header when one is given: JSON Lines and CSV
+    (a given header is for the archive's ROS 2 bags and MCAP logs, as ``pacs audit --header``)."""
+    return str(path).lower().endswith((".jsonl", ".csv"))
+
+
+def _audit_one(path: str, config: Any, header: Any = None) -> Any:
     """The audit of one log."""
-    (run,) = _pacs.audit(path, config)
+    if header is not None and _keeps_own_header(path):
+        header = None
+    (run,) = _pacs.audit(path, config, header)
     return run
 
 
-def _audit_batch(paths: list, config: Any) -> list:
-    """The audits of several logs (what a worker runs: one Dask task)."""
-    return [_audit_one(p, config) for p in paths]
+def _audit_batch(paths: list, config: Any, header: Any = None) -> list:
+    """The audits of several logs (what a worker runs: one Dask task), each ``(True, run)`` or
+    ``(False, error)``: the client raises the first error in path order, whichever task failed
+    first."""
+    out = []
+    for p in paths:
+        try:
+            out.append((True, _audit_one(p, config, header)))
+        except Exception as e:  # noqa: BLE001 - handed to the client, raised there in path order
+            out.append((False, e))
+    return out
 
 
 def _batches(n: int, slots: int, batch: Any) -> list:
@@ -107,17 +123,26 @@ def _batches(n: int, slots: int, batch: Any) -> list:
 
 
 def audit(
-    paths: Any, client: Any = None, config: Any = None, threads: Any = None, batch: Any = None
+    paths: Any,
+    client: Any = None,
+    config: Any = None,
+    threads: Any = None,
+    batch: Any = None,
+    header: Any = None,
 ) -> FleetAudit:
     """Audit many logs and build the fleet report.
 
-    ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv`` and ``*.mcap`` files, also in
-    subdirectories, sorted by path) or a list of them — as ``pacs audit`` takes them.
+    ``paths``: a log, a directory (its ``*.jsonl``, ``*.csv``, ``*.mcap`` and ``*.db3`` files and
+    ROS 2 bag directories, also in subdirectories, sorted by path) or a list of them — as
+    ``pacs audit`` takes them (a log given twice is refused: it would count twice).
     ``client``: None (the logs are audited here on ``threads`` threads, default: the usable
     cores) or a ``dask.distributed.Client`` (one task per batch of at most ``batch`` logs, by
     default four tasks per worker thread, each batch every k-th log; directories are listed on
     a worker; the workers must be able to read the logs and use the same pacs version).
     ``config``: the audit settings, as for :func:`pacs.audit`.
+    ``header``: the pacs header (a dict or a JSON/TOML file the workers can read) for the
+    archive's ROS 2 bags and MCAP logs that carry none (a ROS 2 Humble bag); ``*.jsonl`` and
+    ``*.csv`` logs keep their own (as ``pacs audit DIR --header FILE``).
 
     Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
     sorted paths, and the fleet report. An invalid log raises :class:`pacs.InputError` naming
@@ -130,23 +155,31 @@ def audit(
         logs = _pacs._fleet_logs(paths)
         n = min(_threads(threads), len(logs))
         with ThreadPoolExecutor(max_workers=n) as pool:
-            runs = list(pool.map(lambda p: _audit_one(p, config), logs))
+            runs = list(pool.map(lambda p: _audit_one(p, config, header), logs))
     else:
         if threads is not None:
             raise InputError("threads: set the workers' threads on the Dask cluster, not here")
         logs = client.submit(_list_logs, paths, pure=False).result()
         batches = _batches(len(logs), sum(client.nthreads().values()), batch)
         futures = client.map(_audit_batch, [[logs[i] for i in b] for b in batches],
-                             config=config, pure=False)
+                             config=config, header=header, pure=False)
         try:
             parts = client.gather(futures)
         finally:
             for f in futures:
                 f.release()
         runs = [None] * len(logs)
+        errors = [None] * len(logs)
         for b, part in zip(batches, parts):
-            for i, r in zip(b, part):
-                runs[i] = r
+            for i, (ok, r) in zip(b, part):
+                if ok:
+                    runs[i] = r
+                else:
+                    errors[i] = r
+        # The first invalid log in path order, as locally (not the first task to fail).
+        for e in errors:
+            if e is not None:
+                raise e
     return FleetAudit(runs, _pacs._fleet_report(runs))
 
 

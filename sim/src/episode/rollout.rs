@@ -286,6 +286,7 @@ fn start_log<'w>(
 ) -> Result<ShieldLog<&'w mut dyn Write>, SimError> {
     let h = log_header(
         setup.label,
+        setup.task,
         setup.robot,
         setup.human,
         setup.spec,

@@ -250,11 +250,13 @@ impl ContactRule {
         false
     }
 
-    /// Whether body part `p` may be clamped by the geometry: it may touch an environment shape,
-    /// or a body part it can be clamped against.
+    /// Whether body part `p` may be clamped by the geometry: another person shares the cell
+    /// (`ContactRule::set_other_people`: they may be anywhere), or it may touch an environment
+    /// shape, or a body part it can be clamped against.
     fn may_be_clamped(&self, p: usize, human_caps: &[Capsule]) -> bool {
         let hc = &human_caps[p];
-        self.environment.iter().any(|e| e.may_touch(hc))
+        self.other_people
+            || self.environment.iter().any(|e| e.may_touch(hc))
             || (0..self.parts).any(|o| {
                 self.clampable[p * self.parts + o] && capsules_may_intersect(&human_caps[o], hc)
             })
