@@ -525,7 +525,7 @@ fn a_configured_topic_must_be_cdr_of_the_expected_type() {
     expect_err(
         audit(&p, None),
         &p.display().to_string(),
-        &["unknown type `sensor_msgs/msg/Imu` (expected `sensor_msgs/msg/JointState`)"],
+        &["type `sensor_msgs/msg/Imu`, expected `sensor_msgs/msg/JointState` for this topic"],
     );
     // A configured topic the metadata counts but the file has no connection for: its count
     // (not 0) tells, as for MCAP bags.

@@ -568,7 +568,7 @@ fn open_part(
             let what = format!("topic `{topic}` (topics id {id})");
             if typ != expected {
                 return Err(bad(format!(
-                    "{what}: unknown type `{typ}` (expected `{expected}`)"
+                    "{what}: type `{typ}`, expected `{expected}` for this topic"
                 )));
             }
             if ser != "cdr" {

@@ -89,10 +89,22 @@ pub fn json_path_at(text: &str, line: usize, column: usize) -> Option<String> {
 /// or a non-JSON literal (`NaN`, `Infinity`) gets a hint that values must be finite.
 pub fn describe_json_error(text: &str, e: &serde_json::Error) -> String {
     let msg = e.to_string();
+    // The character serde stopped at (its column counts from 1), for the hint.
+    let at = (e.line() > 0 && e.column() > 0)
+        .then(|| text.lines().nth(e.line() - 1))
+        .flatten()
+        .and_then(|l| l.chars().nth(e.column() - 1));
     let hint = if msg.starts_with("number out of range") {
         " (numbers must be finite: |x| ≤ 1.8e308)"
     } else if msg.starts_with("expected value") {
-        " (NaN and Infinity are not JSON: numbers must be finite)"
+        match at {
+            Some('+') => " (a JSON number has no leading `+`)",
+            Some('.') => " (a JSON number has a digit before its `.`)",
+            Some('N' | 'I' | 'n' | 'i' | '-') => {
+                " (NaN and Infinity are not JSON: numbers must be finite)"
+            }
+            _ => " (not a JSON value: a number, string, true, false, null, array or object)",
+        }
     } else {
         ""
     };
@@ -154,5 +166,18 @@ mod tests {
             describe_json_error(text, &e),
             "a[1]: missing field `c` at line 1 column 33"
         );
+    }
+
+    /// The hint names what is wrong with the value serde could not read.
+    #[test]
+    fn a_value_that_is_not_json_is_named() {
+        let hint = |text: &str| {
+            let e = serde_json::from_str::<serde_json::Value>(text).unwrap_err();
+            describe_json_error(text, &e)
+        };
+        assert!(hint("{\"t\": +1}").ends_with("(a JSON number has no leading `+`)"));
+        assert!(hint("{\"t\": .5}").ends_with("(a JSON number has a digit before its `.`)"));
+        assert!(hint("{\"t\": NaN}").contains("NaN and Infinity are not JSON"));
+        assert!(hint("{\"t\": yes}").contains("not a JSON value"));
     }
 }

@@ -418,9 +418,43 @@ impl PyLogWriter {
         positions: &Bound<'_, PyAny>,
         person: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
+        let ids = || {
+            self.people
+                .iter()
+                .map(|(p, _)| p.as_str())
+                .collect::<Vec<_>>()
+        };
         let k = match person {
+            // Several people: whose measurement this is must be said (a default would give
+            // one person's measurements to another).
+            None if self.people.len() > 1 => {
+                return Err(input(format!(
+                    "person: required with several people (give an id or index of {:?})",
+                    ids()
+                )));
+            }
             None => 0,
+            Some(p) if p.is_none() && self.people.len() > 1 => {
+                return Err(input(format!(
+                    "person: required with several people (give an id or index of {:?})",
+                    ids()
+                )));
+            }
             Some(p) if p.is_none() => 0,
+            Some(p) if p.is_instance_of::<pyo3::types::PyBool>() => {
+                return Err(type_err(format!(
+                    "person: expected an id (str) or an index (int ≥ 0), got {}",
+                    show(p)
+                )));
+            }
+            Some(p)
+                if p.is_instance_of::<pyo3::types::PyInt>() && p.extract::<usize>().is_err() =>
+            {
+                return Err(input(format!(
+                    "person: expected an id (str) or an index (int ≥ 0), got {}",
+                    show(p)
+                )));
+            }
             Some(p) => {
                 if let Ok(i) = p.extract::<usize>() {
                     if i >= self.people.len() {

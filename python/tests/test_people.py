@@ -65,6 +65,15 @@ def test_a_person_at_the_gripper_fails_and_is_named(demo, tmp_path):
     (r,) = pacs.audit(log)
     assert r.verdict == "fail"
     assert {v["person"] for v in r.violations} == {"visitor"}
+    # Whose measurement it is must be said with several people; bad `person` values are named.
+    with pacs.LogWriter(tmp_path / "bad.jsonl", human=people) as w:
+        with pytest.raises(pacs.InputError, match=r"person: required with several people"):
+            w.human(0.0, 0.0, far)
+        with pytest.raises(pacs.InputError, match=r"person: expected an id \(str\) or an index \(int ≥ 0\), got -1"):
+            w.human(0.0, 0.0, far, person=-1)
+        with pytest.raises(TypeError, match=r"person: expected an id .*got True"):
+            w.human(0.0, 0.0, far, person=True)
+        w.human(0.0, 0.0, far, person="operator")
 
 
 def test_a_log_cut_short_is_inconclusive_not_pass(demo, tmp_path):
