@@ -174,6 +174,40 @@ fn violating_bag_fails_at_the_step_and_equals_mcap() {
     same_result(&r, &mcap_twin(true));
 }
 
+/// `mcap.human_topics` naming someone the header does not declare is an input error naming
+/// the id and the people (its topic would otherwise go unread without a word); naming the
+/// header's people works.
+#[test]
+fn human_topics_must_name_the_headers_people() {
+    let bag = fixtures().join("people");
+    let with_topics = |topics: &[(&str, &str)]| {
+        let mut cfg = AuditConfig::default();
+        cfg.mcap.human_topics = topics
+            .iter()
+            .map(|(id, t)| (id.to_string(), t.to_string()))
+            .collect();
+        open_log(&bag, &cfg, None).and_then(|mut r| pacs_audit::audit_reader(r.as_mut(), &cfg))
+    };
+    let e = with_topics(&[("ghost", "/humans/ghost/keypoints")])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("mcap.human_topics: `ghost` is not a person of the header (people: op, walker)"),
+        "{e}"
+    );
+    let r = with_topics(&[
+        ("op", "/humans/op/keypoints"),
+        ("walker", "/humans/walker/keypoints"),
+    ])
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Fail);
+    assert!(
+        r.violations
+            .iter()
+            .all(|v| v.person.as_deref() == Some("walker"))
+    );
+}
+
 #[test]
 fn two_people_on_their_topics_are_read_as_from_mcap() {
     // A v2 header in custom_data; /humans/op/keypoints and /humans/walker/keypoints.

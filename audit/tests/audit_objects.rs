@@ -8,7 +8,7 @@
 mod audit_common;
 
 use audit_common::*;
-use pacs_audit::{AuditConfig, Verdict};
+use pacs_audit::{AuditConfig, InconclusiveReason, Verdict};
 use pacs_log::{Header, LogWriter, ModelRef, ObjectEntry};
 use pacs_models::object::ObjectContact;
 
@@ -80,6 +80,41 @@ fn a_far_ball_passes() {
     )
     .unwrap();
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.violations);
+}
+
+/// A ball measured farther than any robot reaches (10²⁰⁰ m: its distances' squares overflow) is
+/// no measurement of the cell: `object_reach_error`, never a contact reported against it (nor a
+/// pass over spans it leaves unchecked).
+#[test]
+fn a_ball_beyond_any_reach_is_an_object_reach_error() {
+    for far in [[1e200, 0.0, 0.5], [0.0, -2e6, 0.5]] {
+        let r = run(
+            &log(far, ObjectContact::NoContact, 0.2, 1.0, false),
+            &AuditConfig::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            r.verdict,
+            Verdict::Inconclusive,
+            "{far:?}: {:?}",
+            r.violations
+        );
+        assert!(r.violations.is_empty(), "{:?}", r.violations);
+        assert!(
+            r.inconclusive
+                .iter()
+                .any(|s| s.reason == InconclusiveReason::ObjectReachError),
+            "{:?}",
+            r.inconclusive
+        );
+    }
+    // Within 10⁶ m: a far ball, as before.
+    let r = run(
+        &log([9.0e5, 0.0, 0.5], ObjectContact::NoContact, 0.2, 1.0, false),
+        &AuditConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
 }
 
 #[test]

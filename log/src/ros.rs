@@ -246,6 +246,21 @@ impl Messages {
             .iter()
             .map(|(id, m)| (id.clone(), m.keypoint_count()))
             .collect();
+        // `mcap.human_topics` must name the header's people (one topic each: `McapConfig::
+        // validate`): an undeclared id would leave its topic unread without a word.
+        let declared: Vec<&str> = models.people.iter().map(|(id, _)| id.as_str()).collect();
+        for id in self.cfg.human_topics.keys() {
+            if !declared.is_empty() && !declared.contains(&id.as_str()) {
+                return Err(LogError::input(
+                    &self.file,
+                    loc,
+                    format!(
+                        "mcap.human_topics: `{id}` is not a person of the header (people: {})",
+                        declared.join(", ")
+                    ),
+                ));
+            }
+        }
         self.header = Some(h);
         Ok(())
     }

@@ -233,6 +233,20 @@ pub fn occupancy(
             reason: "time, position and velocity must be finite",
         });
     }
+    // An object farther than any robot reaches (`MAX_REACH`, 10⁶ m) is no measurement of the
+    // cell: its distances' squares would overflow, and the occupancy test would take the
+    // unresolved distance as a possible contact (a violation reported against a ball 10²⁰⁰ m
+    // away). Refused: the span is `object_reach_error`.
+    if meas
+        .position
+        .iter()
+        .any(|x| x.abs() > pacs_models::MAX_REACH)
+    {
+        return Err(ReachError::Invalid {
+            what: "object measurement",
+            reason: "position farther than 10^6 m from the world origin",
+        });
+    }
     if !(t_a.is_finite() && t_b.is_finite() && t_a <= t_b) {
         return Err(ReachError::Invalid {
             what: "time interval",
