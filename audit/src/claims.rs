@@ -84,7 +84,7 @@ pub const ASSUMPTIONS: &[&str] = &[
     "The human moves within the human model's speed bound since each measurement; positions are within measurement_error_pos of the truth; a measurement stamped t_meas describes the state at t_meas - delay.",
     "Robot link geometry is the model's capsules enlarged by tracking_error; human body parts are the model's capsules.",
     "SSM: any possible contact while the robot is not provably at rest (all joint speeds <= rest_speed) is a violation; contact with the fixed base link counts.",
-    "PFL: a possible contact is a violation if the sound upper bound of the whole robot's kinetic energy (which bounds the energy transferable at any contact point) exceeds the threshold; constrained (the lower threshold) if clamping is possible: the environment, robot links on two different frames (adjacent links included), or a clampable body part.",
+    "PFL: a possible contact is a violation if the sound upper bound of the whole robot's kinetic energy (which bounds the energy transferable at any contact point) exceeds the threshold; constrained (the lower threshold) if clamping is possible: the environment, robot links on two different frames (adjacent links included), a clampable body part, or another person (with several people every PFL contact counts as possible clamping).",
     "With human_model = pos: each extremity's keypoints stay within its length + thickness/2 of its base keypoint; a measurement contradicting this by more than 2 measurement_error_pos is not trusted (that extremity uses the speed-bounded occupancy).",
     "Spans longer than max_gap, before the first human record, or with a human measurement older than max_human_age are inconclusive.",
 ];

@@ -63,28 +63,55 @@ pub fn is_bag_dir(path: &Path) -> bool {
 /// Refuse a file given alone that is one of several parts of a bag: the `metadata.yaml` beside
 /// it lists it in `relative_file_paths` with other files (a split recording, e.g. ROS 2 Humble's
 /// `--max-bag-size`, whose files carry no metadata of their own). One part is not the run: a
-/// violation in another part would go unseen. A `metadata.yaml` that cannot be read or does not
-/// list the file says nothing about it and is passed over.
+/// violation in another part would go unseen. The `metadata.yaml` is looked for beside the path
+/// given and beside the file it names (through a symbolic link); one that cannot be read or
+/// contradicts itself is refused too (what it says about the file cannot be known); one that
+/// does not list the file says nothing about it.
 pub fn refuse_one_part(path: &Path) -> Result<(), LogError> {
     if path.is_dir() {
         return Ok(());
     }
-    let dir = crate::format::dir_of(path);
+    let real = path.canonicalize().ok();
+    let mut dirs = vec![crate::format::dir_of(path)];
+    if let Some(d) = real.as_deref().map(crate::format::dir_of)
+        && !dirs.contains(&d)
+    {
+        dirs.push(d);
+    }
+    for dir in dirs {
+        refuse_part_of(path, real.as_deref(), &dir)?;
+    }
+    Ok(())
+}
+
+/// [`refuse_one_part`] for the `metadata.yaml` of the directory `dir`.
+fn refuse_part_of(path: &Path, real: Option<&Path>, dir: &Path) -> Result<(), LogError> {
     if !dir.join(METADATA_FILE).is_file() {
         return Ok(());
     }
-    let Ok((info, meta_name)) = read_bag_metadata(&dir) else {
-        return Ok(());
+    let name = path.display().to_string();
+    let (info, meta_name) = read_bag_metadata(dir).map_err(|e| {
+        LogError::input(
+            &name,
+            Location::File,
+            format!(
+                "beside it, {} cannot be read as a bag's metadata ({e}): whether this file is the whole recording or one part of it cannot be told (audit the bag directory, or the file away from that metadata)",
+                dir.join(METADATA_FILE).display()
+            ),
+        )
+    })?;
+    let own: Vec<&str> = [path.file_name(), real.and_then(Path::file_name)]
+        .into_iter()
+        .flatten()
+        .filter_map(|n| n.to_str())
+        .collect();
+    let listed = |f: &String| {
+        let f = f.trim_start_matches("./");
+        own.contains(&f) || (real.is_some() && dir.join(f).canonicalize().ok().as_deref() == real)
     };
-    let Some(own) = path.file_name().and_then(|n| n.to_str()) else {
-        return Ok(());
-    };
-    let real = path.canonicalize().ok();
-    let listed =
-        |f: &String| f == own || (real.is_some() && dir.join(f).canonicalize().ok() == real);
     if info.files.len() > 1 && info.files.iter().any(listed) {
         return Err(LogError::input(
-            &path.display().to_string(),
+            &name,
             Location::File,
             format!(
                 "this file is one of {} parts of the bag described by {meta_name} ({}): audit the bag directory {}, not one part",
@@ -950,7 +977,7 @@ impl Db3Reader {
                 Some(f) if path.is_dir() => info
                     .file_counts
                     .iter()
-                    .find(|(p, _)| p == f)
+                    .find(|(p, _)| p.trim_start_matches("./") == f.trim_start_matches("./"))
                     .map(|(_, n)| *n),
                 _ => match info.file_counts.as_slice() {
                     [(_, n)] => Some(*n),
@@ -983,7 +1010,7 @@ impl Db3Reader {
                     &name,
                     Location::File,
                     format!(
-                        "missing header: a rosbag2 bag carries no pacs header unless its metadata has custom_data key `{CUSTOM_DATA_KEY}` (give one with --header)"
+                        "missing header: a rosbag2 bag carries no pacs header unless its metadata has custom_data key `{CUSTOM_DATA_KEY}` (give one: `--header FILE`, or `header=` in Python)"
                     ),
                 ));
             }

@@ -7,12 +7,30 @@ use crate::mcap::McapConfig;
 use std::io::Read;
 use std::path::Path;
 
+/// Refuse a path that is neither a regular file nor a directory (a FIFO, a socket, a device):
+/// opening a FIFO blocks until a writer comes, which would stall an audit for ever.
+pub(crate) fn regular_or_dir(path: &Path) -> Result<(), LogError> {
+    let meta = std::fs::metadata(path).map_err(|e| LogError::Io {
+        file: path.display().to_string(),
+        source: e,
+    })?;
+    if meta.is_file() || meta.is_dir() {
+        return Ok(());
+    }
+    Err(LogError::input(
+        &path.display().to_string(),
+        Location::File,
+        "not a regular file (a FIFO, socket or device): a log is a file or a bag directory",
+    ))
+}
+
 /// The first `n` bytes of `path` (fewer if the file is shorter); errors name the file.
 fn prefix(path: &Path, n: u64) -> Result<Vec<u8>, LogError> {
     let io = |e| LogError::Io {
         file: path.display().to_string(),
         source: e,
     };
+    regular_or_dir(path)?;
     let f = std::fs::File::open(path).map_err(io)?;
     let mut bytes = Vec::with_capacity(n as usize);
     f.take(n).read_to_end(&mut bytes).map_err(io)?;
@@ -127,6 +145,7 @@ fn open_log_with(
     row_order: bool,
 ) -> Result<Box<dyn RecordReader>, LogError> {
     let name = path.display().to_string();
+    regular_or_dir(path)?;
     if path.is_dir() && !crate::db3::is_bag_dir(path) {
         return Err(LogError::input(
             &name,
@@ -140,7 +159,10 @@ fn open_log_with(
     if let Some(bag) = crate::db3::mcap_bag(path)? {
         return open_mcap_bag(bag, mcap, overrides, header);
     }
-    crate::db3::refuse_one_part(path)?;
+    // A ROS recording's file may be one part of a split bag (JSON Lines and CSV logs never are).
+    if !path.is_dir() && (is_db3(path)? || is_mcap(path)?) {
+        crate::db3::refuse_one_part(path)?;
+    }
     if is_db3(path)? {
         let header = header.cloned();
         return Ok(Box::new(if row_order {

@@ -233,13 +233,29 @@ pub fn scene(
     // One unnamed person: a v1-style header (writers make it v2 with person `human`); several,
     // or one with an id: v2, each with its id (given, else `human0`, `human1`, ...).
     let mut header = if human_refs.len() > 1 || ids.iter().any(Option::is_some) {
+        // Unnamed people are `human{i}`, unless another person was given that id: then the next
+        // free number.
+        let given: Vec<&String> = ids.iter().flatten().collect();
+        let mut taken: Vec<String> = Vec::new();
         let people = human_refs
             .iter()
             .zip(&ids)
             .enumerate()
-            .map(|(i, (h, id))| pacs_log::PersonEntry {
-                id: id.clone().unwrap_or_else(|| format!("human{i}")),
-                human: h.clone(),
+            .map(|(i, (h, id))| {
+                let id = id.clone().unwrap_or_else(|| {
+                    let mut k = i;
+                    while given.iter().any(|g| **g == format!("human{k}"))
+                        || taken.contains(&format!("human{k}"))
+                    {
+                        k += 1;
+                    }
+                    format!("human{k}")
+                });
+                taken.push(id.clone());
+                pacs_log::PersonEntry {
+                    id,
+                    human: h.clone(),
+                }
             })
             .collect();
         let mut h = Header::with_people(robot, people, constraints);

@@ -150,6 +150,14 @@ def test_one_named_person_keeps_its_id_and_bad_people_are_named(demo, tmp_path):
     (r,) = pacs.audit(log)
     assert r.people == ["operator"]
     assert r.evidence["completeness"] == "complete"
+    # An unnamed person's id skips one given to another person.
+    log2 = tmp_path / "mixed.jsonl"
+    s = pacs.Shield(robot="fr3", humans=[{"id": "human1", "human": "default"}, "default"],
+                    constraints="sorting", log=log2)
+    s.start(0.0, demo.start)
+    s.close()
+    header = json.loads(log2.read_text().splitlines()[0])
+    assert [p["id"] for p in header["humans"]] == ["human1", "human2"]
     # A person alone (not in a list) is one person too.
     s = pacs.Shield(robot="fr3", humans={"id": "solo", "human": "default"}, constraints="sorting")
     assert s.humans == 1

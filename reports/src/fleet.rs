@@ -63,12 +63,21 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
         found.sort();
         out.extend(found);
     }
+    // A FIFO, socket or device with a log's name would block the reading of the archive for ever
+    // (opening a FIFO waits for a writer): refused here, before anything opens it.
+    for p in &out {
+        if let Ok(m) = std::fs::metadata(p)
+            && !m.is_file()
+            && !m.is_dir()
+        {
+            return Err(ExpandError::NotAFile(p.clone()));
+        }
+    }
     // A log named twice (a directory and a file in it, or one path twice) would count twice in
     // the fleet's runs, verdict counts and violation time: refused.
-    let mut seen: std::collections::HashMap<PathBuf, &PathBuf> = std::collections::HashMap::new();
+    let mut seen: std::collections::HashMap<FileKey, &PathBuf> = std::collections::HashMap::new();
     for p in &out {
-        let key = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
-        if let Some(first) = seen.insert(key, p) {
+        if let Some(first) = seen.insert(file_key(p), p) {
             return Err(ExpandError::Twice {
                 first: first.clone(),
                 second: p.clone(),
@@ -76,6 +85,25 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
         }
     }
     Ok(out)
+}
+
+/// What makes two paths one log: the file itself (device and inode on Unix: hard links too),
+/// else the canonical path, else the path as given.
+#[derive(Debug, PartialEq, Eq, Hash)]
+enum FileKey {
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+fn file_key(p: &Path) -> FileKey {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let Ok(m) = std::fs::metadata(p) {
+            return FileKey::Inode(m.dev(), m.ino());
+        }
+    }
+    FileKey::Path(std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()))
 }
 
 /// Why [`expand_logs`] could not list the logs; each names the path.
@@ -100,6 +128,12 @@ pub enum ExpandError {
         LOG_EXTENSIONS.join(", *.")
     )]
     NoLogs(PathBuf),
+    /// Not a regular file or directory (a FIFO, socket or device).
+    #[error(
+        "{}: not a regular file (a FIFO, socket or device): a log is a file or a bag directory",
+        .0.display()
+    )]
+    NotAFile(PathBuf),
     /// One log given twice (by paths that name the same file).
     #[error(
         "{}: the same log as {} (given twice, it would count twice in the fleet report)",

@@ -344,35 +344,48 @@ pub fn model_rows(r: &RunResult) -> Vec<[String; 4]> {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    vec![
-        [
-            "robot".into(),
-            m.robot.clone(),
-            format!(
-                "v_max (rad/s): {}; a_max (rad/s²): {}",
-                list(&m.robot_v_max),
-                list(&m.robot_a_max)
-            ),
-            hash("robot"),
-        ],
-        [
+    let human = |v: &[f64], e: f64, d: f64| {
+        format!(
+            "keypoint speeds (m/s): {}; position error {e} m; delay {d} s",
+            list(v)
+        )
+    };
+    let mut rows = vec![[
+        "robot".into(),
+        m.robot.clone(),
+        format!(
+            "v_max (rad/s): {}; a_max (rad/s²): {}",
+            list(&m.robot_v_max),
+            list(&m.robot_a_max)
+        ),
+        hash("robot"),
+    ]];
+    if m.people.is_empty() {
+        rows.push([
             "human".into(),
             m.human.clone(),
-            format!(
-                "keypoint speeds (m/s): {}; position error {} m; delay {} s",
-                list(&m.human_v_max),
-                m.human_measurement_error_pos,
-                m.human_delay
-            ),
+            human(&m.human_v_max, m.human_measurement_error_pos, m.human_delay),
             hash("human"),
-        ],
-        [
-            "constraints".into(),
-            m.constraints.clone(),
-            format!("{} environment capsule(s)", m.environment_shapes),
-            hash("constraints"),
-        ],
-    ]
+        ]);
+    } else {
+        // Several people: a row per person, each with its own model's parameters and hash.
+        let all = specs["humans"]["spec"].clone();
+        for p in &m.people {
+            rows.push([
+                format!("human `{}`", p.id),
+                p.human.clone(),
+                human(&p.human_v_max, p.human_measurement_error_pos, p.human_delay),
+                all.get(&p.id).map_or_else(|| "-".to_string(), model_sha256),
+            ]);
+        }
+    }
+    rows.push([
+        "constraints".into(),
+        m.constraints.clone(),
+        format!("{} environment capsule(s)", m.environment_shapes),
+        hash("constraints"),
+    ]);
+    rows
 }
 
 /// The column heads of [`violation_cells`].

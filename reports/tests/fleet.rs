@@ -269,6 +269,13 @@ fn a_directory_expands_to_its_sorted_log_files() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("given twice"), "{e}");
+    // A hard link is the same log under another name.
+    std::fs::hard_link(d.join("z.jsonl"), d.join("y.jsonl")).unwrap();
+    let e = expand_logs(&[d.join("z.jsonl"), d.join("y.jsonl")])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("given twice"), "{e}");
+    std::fs::remove_file(d.join("y.jsonl")).unwrap();
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -284,5 +291,22 @@ fn an_unreadable_log_in_a_directory_is_listed_not_skipped() {
     std::os::unix::fs::symlink(d.join("gone.jsonl"), d.join("b.jsonl")).unwrap();
     let got = expand_logs(std::slice::from_ref(&d)).unwrap();
     assert_eq!(got, vec![d.join("a.jsonl"), d.join("b.jsonl")]);
+    // A FIFO with a log's name is refused before anything opens it (opening would block).
+    let fifo = d.join("c.jsonl");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if made {
+        for given in [d.clone(), fifo.clone()] {
+            let e = expand_logs(std::slice::from_ref(&given))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("c.jsonl") && e.contains("not a regular file"),
+                "{e}"
+            );
+        }
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -278,3 +278,40 @@ fn utc_dates_are_gregorian() {
     assert_eq!(pacs_reports::utc(1_795_620_600), "2026-11-25T15:30:00Z");
     assert_eq!(pacs_reports::utc(4_107_542_399), "2100-02-28T23:59:59Z");
 }
+
+/// A run of several people: the report's model rows give each person's model, parameters and
+/// hash (not the first person's for everyone).
+#[test]
+fn model_rows_name_every_persons_model() {
+    let mut r = run("p.jsonl", "pacs", None, 0.0, Verdict::Pass);
+    let spec = |delay: f64| serde_json::json!({"name": "default", "delay": delay});
+    r.models.specs = serde_json::json!({
+        "robot": {"name": "fr3"},
+        "human": spec(0.0),
+        "humans": {"A": spec(0.0), "B": spec(0.3)},
+        "constraints": {"name": "ssm"},
+    });
+    r.models.people = ["A", "B"]
+        .iter()
+        .zip([0.0, 0.3])
+        .map(|(id, d)| pacs_audit::PersonModel {
+            id: id.to_string(),
+            human: if *id == "B" {
+                "delayed (custom spec)"
+            } else {
+                "default"
+            }
+            .into(),
+            human_v_max: vec![2.0],
+            human_measurement_error_pos: 0.01,
+            human_delay: d,
+        })
+        .collect();
+    let rows = pacs_reports::model_rows(&r);
+    let heads: Vec<_> = rows.iter().map(|row| row[0].as_str()).collect();
+    assert_eq!(heads, ["robot", "human `A`", "human `B`", "constraints"]);
+    assert!(rows[2][2].contains("delay 0.3 s"), "{:?}", rows[2]);
+    assert!(rows[1][2].contains("delay 0 s"), "{:?}", rows[1]);
+    assert_eq!(rows[2][3], pacs_reports::model_sha256(&spec(0.3)));
+    assert_ne!(rows[1][3], rows[2][3]);
+}

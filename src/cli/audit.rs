@@ -130,6 +130,12 @@ fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
         None => None,
         Some(p) => Some(pacs_log::mcap::load_header_file(p).map_err(invalid)?),
     };
+    if header.is_some() && args.logs.len() > 1 {
+        eprintln!(
+            "pacs: note: --header is the pacs header of every MCAP log and ROS 2 bag among these {} logs, replacing the header of one that carries its own; JSON Lines and CSV logs keep theirs",
+            args.logs.len()
+        );
+    }
     // With a report: the logs' hashes before the audit, compared with those after it, so that a
     // report never binds a verdict to bytes that were not the ones audited.
     let hashed_before = match args.out {

@@ -215,14 +215,22 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
     // relative_file_paths but still in `files` is a recording cut short), and add up to the
     // bag's message count.
     if let Yaml::Array(a) = &info["files"] {
+        let plain = |p: &str| p.trim_start_matches("./").to_string();
+        let mut described: Vec<String> = Vec::new();
         for (i, f) in a.iter().enumerate() {
-            if let Yaml::String(path) = &f["path"]
-                && !files.contains(path)
-            {
-                return Err(MetadataError::Contradiction(format!(
-                    "files[{i}].path `{path}` is not in relative_file_paths ({})",
-                    files.join(", ")
-                )));
+            if let Yaml::String(path) = &f["path"] {
+                if !files.iter().any(|f| plain(f) == plain(path)) {
+                    return Err(MetadataError::Contradiction(format!(
+                        "files[{i}].path `{path}` is not in relative_file_paths ({})",
+                        files.join(", ")
+                    )));
+                }
+                if let Some(j) = described.iter().position(|d| *d == plain(path)) {
+                    return Err(MetadataError::Contradiction(format!(
+                        "files[{i}].path `{path}` is files[{j}].path again (a part described twice)"
+                    )));
+                }
+                described.push(plain(path));
             }
         }
     }

@@ -165,11 +165,10 @@ impl Header {
                 for (i, p) in self.humans.iter().enumerate() {
                     if p.id.is_empty()
                         || p.id.trim() != p.id
-                        || p.id.contains(',')
-                        || p.id.contains('/')
+                        || p.id.chars().any(|c| c.is_control() || ",/|`".contains(c))
                     {
                         return Err(HeaderError::Fields(format!(
-                            "header.humans[{i}].id: {:?} is not a valid person id (non-empty, no surrounding spaces, no comma, no `/`: MCAP names a person's topic /humans/ID/keypoints)",
+                            "header.humans[{i}].id: {:?} is not a valid person id (non-empty, no surrounding spaces, no control characters, none of , / | ` — MCAP names a person's topic /humans/ID/keypoints, reports print it in tables)",
                             p.id
                         )));
                     }
@@ -241,16 +240,26 @@ fn locate_error(value: &serde_json::Value) -> Option<String> {
             .enumerate()
             .find_map(|(i, v)| read(v).map(|e| format!("header.{key}[{i}]: {e}")))
     };
+    // A person whose model does not read names `.human` (the entry's own fields read).
     let person = |v: &serde_json::Value| {
-        serde_json::from_value::<PersonEntry>(v.clone())
-            .err()
-            .map(|e| e.to_string())
+        let e = serde_json::from_value::<PersonEntry>(v.clone()).err()?;
+        let model = v.get("human").and_then(|h| {
+            serde_json::from_value::<ModelRef<HumanSpec>>(h.clone())
+                .err()
+                .map(|e| format!("human: {e}"))
+        });
+        Some(model.unwrap_or_else(|| e.to_string()))
     };
     let object = |v: &serde_json::Value| {
         serde_json::from_value::<ObjectEntry>(v.clone())
             .err()
             .map(|e| e.to_string())
     };
+    for key in ["humans", "objects"] {
+        if let Some(v) = value.get(key).filter(|v| !v.is_array() && !v.is_null()) {
+            return Some(format!("header.{key}: expected a list, found {v}"));
+        }
+    }
     if let Some(e) = entries("humans", &person).or_else(|| entries("objects", &object)) {
         return Some(e);
     }

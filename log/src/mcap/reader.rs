@@ -239,7 +239,7 @@ impl<R: Read + Seek> McapReader<R> {
                 file,
                 Location::File,
                 format!(
-                    "missing header: no metadata record named `{METADATA_NAME}` with key `{METADATA_KEY}` (give one with --header)"
+                    "missing header: no metadata record named `{METADATA_NAME}` with key `{METADATA_KEY}` (give one: `--header FILE`, or `header=` in Python)"
                 ),
             ));
         }

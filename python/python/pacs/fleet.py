@@ -140,9 +140,10 @@ def audit(
     default four tasks per worker thread, each batch every k-th log; directories are listed on
     a worker; the workers must be able to read the logs and use the same pacs version).
     ``config``: the audit settings, as for :func:`pacs.audit`.
-    ``header``: the pacs header (a dict or a JSON/TOML file the workers can read) for the
-    archive's ROS 2 bags and MCAP logs that carry none (a ROS 2 Humble bag); ``*.jsonl`` and
-    ``*.csv`` logs keep their own (as ``pacs audit DIR --header FILE``).
+    ``header``: the pacs header (a dict or a JSON/TOML file the workers can read) of every ROS 2
+    bag and MCAP log of the archive (it replaces the header of one that carries its own: give it
+    to recordings without one, such as ROS 2 Humble bags); ``*.jsonl`` and ``*.csv`` logs keep
+    their own (as ``pacs audit DIR --header FILE``).
 
     Returns ``FleetAudit(runs, report)``: one :class:`pacs.Run` per log in the order of the
     sorted paths, and the fleet report. An invalid log raises :class:`pacs.InputError` naming

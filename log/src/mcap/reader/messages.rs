@@ -221,7 +221,7 @@ impl State {
         };
         if self.conv.header.is_none() {
             return Err(self.err(format!(
-                "missing header: {} comes before any metadata record named `{METADATA_NAME}` and the summary has none (give one with --header)",
+                "missing header: {} comes before any metadata record named `{METADATA_NAME}` and the summary has none (give one: `--header FILE`, or `header=` in Python)",
                 what()
             )));
         }
