@@ -1213,3 +1213,34 @@ fn message_compressed_bags_read_as_their_uncompressed_twins() {
         &["compressed bags are not supported", "`file`"],
     );
 }
+
+/// A part of a split bag given alone beside a `metadata.yaml` that cannot be read — a
+/// directory, or a dangling link — is refused (whether it is the whole recording cannot be
+/// told), and so is the directory as a bag; never audited as a whole run.
+#[cfg(unix)]
+#[test]
+fn a_part_beside_unreadable_metadata_is_refused() {
+    let split = fixtures().join("split");
+    for (case, make) in [
+        (
+            "dir",
+            &(|m: &Path| std::fs::create_dir(m).unwrap()) as &dyn Fn(&Path),
+        ),
+        ("dangling", &|m: &Path| {
+            std::os::unix::fs::symlink("/nonexistent/metadata.yaml", m).unwrap()
+        }),
+    ] {
+        let d = tempdir();
+        for f in ["split_0.db3", "split_1.db3"] {
+            std::fs::copy(split.join(f), d.join(f)).unwrap();
+        }
+        make(&d.join("metadata.yaml"));
+        let part = d.join("split_0.db3");
+        let e = audit(&part, None).unwrap_err().to_string();
+        assert!(
+            e.contains("cannot be read as a bag's metadata"),
+            "{case}: {e}"
+        );
+        assert!(audit(&d, None).is_err(), "{case}: the directory as a bag");
+    }
+}

@@ -55,9 +55,11 @@ pub fn has_magic(prefix: &[u8]) -> bool {
     prefix.starts_with(SQLITE_MAGIC)
 }
 
-/// Whether `path` is a rosbag2 bag directory (a directory holding `metadata.yaml`).
+/// Whether `path` is a rosbag2 bag directory: a directory holding a `metadata.yaml` — in any form
+/// (also one that is no regular file, or a dangling link: reading it then fails and names it,
+/// rather than the directory's parts being taken for logs of their own).
 pub fn is_bag_dir(path: &Path) -> bool {
-    path.is_dir() && path.join(METADATA_FILE).is_file()
+    path.is_dir() && std::fs::symlink_metadata(path.join(METADATA_FILE)).is_ok()
 }
 
 /// Refuse a file given alone that is one of several parts of a bag: the `metadata.yaml` beside
@@ -84,9 +86,10 @@ pub fn refuse_one_part(path: &Path) -> Result<(), LogError> {
     Ok(())
 }
 
-/// [`refuse_one_part`] for the `metadata.yaml` of the directory `dir`.
+/// [`refuse_one_part`] for the `metadata.yaml` of the directory `dir` (one in any form counts:
+/// one that is no regular file, or a dangling link, cannot be read and is refused).
 fn refuse_part_of(path: &Path, real: Option<&Path>, dir: &Path) -> Result<(), LogError> {
-    if !dir.join(METADATA_FILE).is_file() {
+    if std::fs::symlink_metadata(dir.join(METADATA_FILE)).is_err() {
         return Ok(());
     }
     let name = path.display().to_string();
@@ -134,7 +137,14 @@ fn read_bag_metadata(path: &Path) -> Result<(BagInfo, String), LogError> {
         file: meta_name.clone(),
         source: e,
     };
-    let len = std::fs::metadata(&meta).map_err(io)?.len();
+    let m = std::fs::metadata(&meta).map_err(io)?;
+    if !m.is_file() {
+        // A FIFO would block the reading; a directory is no metadata.
+        return Err(bad(
+            "not a regular file (a directory, FIFO, socket or device)".into(),
+        ));
+    }
+    let len = m.len();
     if len > METADATA_LIMIT {
         return Err(bad(format!(
             "{len} bytes: larger than the {METADATA_LIMIT} bytes read"

@@ -24,9 +24,10 @@ use std::path::{Path, PathBuf};
 /// File name endings of the logs an archive directory expands to (`pacs audit DIR`).
 pub const LOG_EXTENSIONS: [&str; 4] = ["jsonl", "csv", "mcap", "db3"];
 
-/// Whether `dir` is a ROS 2 bag directory (it holds `metadata.yaml`): one log, not an archive.
+/// Whether `dir` is a ROS 2 bag directory (it holds `metadata.yaml`, in any form: as the reader
+/// decides, `pacs_log::db3::is_bag_dir`): one log, not an archive.
 fn is_bag_dir(dir: &Path) -> bool {
-    dir.join("metadata.yaml").is_file()
+    std::fs::symlink_metadata(dir.join("metadata.yaml")).is_ok()
 }
 
 /// Worst runs listed per group.

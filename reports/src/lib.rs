@@ -84,6 +84,13 @@ impl InputFile {
                 bytes,
             });
         }
+        // Never open a FIFO, socket or device: opening a FIFO waits for a writer.
+        if !std::fs::metadata(path).map_err(io)?.is_file() {
+            return Err(io(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a regular file (a FIFO, socket or device)",
+            )));
+        }
         let mut f = std::fs::File::open(path).map_err(io)?;
         let mut h = Sha256::new();
         let mut buf = vec![0u8; 1 << 16];

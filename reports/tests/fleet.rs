@@ -310,3 +310,23 @@ fn an_unreadable_log_in_a_directory_is_listed_not_skipped() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Hashing a log for the report never opens a FIFO (opening one waits for a writer).
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_not_hashed() {
+    let d = std::env::temp_dir().join(format!("pacs-reports-fifo-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let fifo = d.join("x.jsonl");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let e = pacs_reports::InputFile::hash(&fifo)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
