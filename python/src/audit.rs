@@ -195,6 +195,7 @@ pub fn audit(
     if list.is_empty() {
         return Err(input("paths: no log given"));
     }
+    pacs_reports::fleet::refuse_twice(&list).map_err(|e| input(format!("paths: {e}")))?;
     let (cfg, cfg_path) = audit_config(config)?;
     let header = audit_header(header)?;
     let mut out = Vec::with_capacity(list.len());

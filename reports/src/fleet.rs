@@ -76,8 +76,16 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
     }
     // A log named twice (a directory and a file in it, or one path twice) would count twice in
     // the fleet's runs, verdict counts and violation time: refused.
+    refuse_twice(&out)?;
+    Ok(out)
+}
+
+/// Refuse a log named twice among `logs` (one file by two paths, hard links included: the file
+/// decides, its device and inode on Unix): it would count twice in a report's runs, verdict
+/// counts and violation time. Used by [`expand_logs`] and by Python's `pacs.audit`.
+pub fn refuse_twice(logs: &[PathBuf]) -> Result<(), ExpandError> {
     let mut seen: std::collections::HashMap<FileKey, &PathBuf> = std::collections::HashMap::new();
-    for p in &out {
+    for p in logs {
         if let Some(first) = seen.insert(file_key(p), p) {
             return Err(ExpandError::Twice {
                 first: first.clone(),
@@ -85,7 +93,7 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
             });
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// What makes two paths one log: the file itself (device and inode on Unix: hard links too),
