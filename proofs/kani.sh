@@ -105,7 +105,7 @@ mapfile -t packages < <(printf '%s\n' "${package_of_h[@]}" | sort -u)
 # terse output format). One invocation, not several side by side: every `cargo kani` links the
 # goto binary of every harness of the package into the shared target directory before it
 # checks any, and instruments a harness's binary in place before CBMC reads it, so a second
-# invocation would rewrite binaries the first is reading (seen: "irep not terminated") or has
+# invocation would rewrite binaries the first is reading (a truncated goto binary) or has
 # just instrumented (a binary checked without its instrumentation). With `--jobs` each line of
 # the log a thread starts is prefixed `Thread N: `; the table below follows each thread's lines.
 log="${PACS_KANI_LOG:-$log_dir/kani.log}"  # PACS_KANI_LOG: another file, for runs side by side

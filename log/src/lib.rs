@@ -28,5 +28,7 @@ pub use format::{
     ObjectEntry, PersonEntry, Record, RecordReader, RobotRef, V1_PERSON, VERSION, VERSIONS,
     WriteError, dir_of,
 };
-pub use open::{is_db3, is_jsonl, is_mcap, open_log, open_log_in_row_order, read_log};
+pub use open::{
+    is_db3, is_jsonl, is_mcap, open_log, open_log_in_row_order, read_log, takes_header,
+};
 pub use order::{EqualTimeGroup, MAX_EQUAL_TIME, TooManyAtOneTime};

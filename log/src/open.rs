@@ -61,6 +61,14 @@ pub fn is_jsonl(path: &Path) -> Result<bool, LogError> {
         && !is_db3(path)?)
 }
 
+/// Whether `path` takes a header given apart from it (`pacs audit --header`): an MCAP log or a
+/// ROS 2 bag (a bag directory, a `.db3`), whose recording may carry no pacs header; JSON Lines
+/// and CSV logs carry their own. The one rule for the CLI and Python's `pacs.fleet.audit`.
+/// Errors: the file cannot be opened or read.
+pub fn takes_header(path: &Path) -> Result<bool, LogError> {
+    Ok(path.is_dir() || is_mcap(path)? || is_db3(path)?)
+}
+
 /// Whether `path` is a ROS 2 sqlite3 bag: a directory with `metadata.yaml`, a file whose name ends
 /// in `.db3`, or a file that starts with the SQLite magic (another directory is not). A bag
 /// directory counts whatever its storage (the metadata is not read here): [`open_log`] reads one

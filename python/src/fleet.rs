@@ -195,6 +195,14 @@ fn path_list(paths: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<PathBuf>> {
     paths.extract().map_err(|_| bad())
 }
 
+/// Whether a log of an archive takes the header given to `pacs.fleet.audit` (MCAP logs and ROS 2
+/// bags: [`pacs_log::takes_header`]); JSON Lines and CSV keep their own. A path that cannot be
+/// read takes it (its audit names the problem).
+#[pyfunction]
+pub fn _takes_header(path: PathBuf) -> bool {
+    pacs_log::takes_header(&path).unwrap_or(true)
+}
+
 /// The log files of `paths` (files as given, directories expanded to their sorted log files),
 /// as `pacs audit` takes them.
 #[pyfunction]

@@ -36,6 +36,7 @@ fn _pacs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(models::robot_spec, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_run_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_fleet_logs, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::_takes_header, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_fleet_report, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_simulate_check, m)?)?;
     m.add_function(wrap_pyfunction!(fleet::_simulate_rollouts, m)?)?;

@@ -188,14 +188,10 @@ fn hash_logs(logs: &[PathBuf]) -> Result<Vec<InputFile>, Stop> {
         .map_err(invalid)
 }
 
-/// Whether `p` is a JSON Lines or CSV log (which carries its own header; MCAP files and ROS 2 bags
-/// may take a given one). A file that cannot be read is not: its audit names the problem.
+/// Whether `p` carries its own header (not [`pacs_log::takes_header`]). A file that cannot be
+/// read is taken to need the given one: its audit names the problem.
 fn carries_own_header(p: &std::path::Path) -> bool {
-    if p.is_dir() || pacs_log::is_mcap(p).unwrap_or(false) || pacs_log::is_db3(p).unwrap_or(false) {
-        return false;
-    }
-    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
-        || pacs_log::is_jsonl(p).unwrap_or(false)
+    !pacs_log::takes_header(p).unwrap_or(true)
 }
 
 /// Audit every log in parallel (a progress bar on a terminal); every log that cannot be read is

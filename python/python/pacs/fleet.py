@@ -80,15 +80,10 @@ def _list_logs(paths: Any) -> list:
     return _pacs._fleet_logs(paths)
 
 
-def _keeps_own_header(path: str) -> bool:
-    """Whether a log of an archive keeps its own header when one is given: JSON Lines and CSV
-    (a given header is for the archive's ROS 2 bags and MCAP logs, as ``pacs audit --header``)."""
-    return str(path).lower().endswith((".jsonl", ".csv"))
-
-
 def _audit_one(path: str, config: Any, header: Any = None) -> Any:
-    """The audit of one log."""
-    if header is not None and _keeps_own_header(path):
+    """The audit of one log; a given header only for a log that takes one (MCAP logs and ROS 2
+    bags; JSON Lines and CSV keep their own: the CLI's rule, ``_pacs._takes_header``)."""
+    if header is not None and not _pacs._takes_header(path):
         header = None
     (run,) = _pacs.audit(path, config, header)
     return run
