@@ -280,6 +280,51 @@ fn reports_are_written_with_plots_hashes_and_aggregate() {
     }
 }
 
+/// Paths of `null` anywhere in `v` (report.json promises none).
+fn nulls(v: &Value, at: &str, out: &mut Vec<String>) {
+    match v {
+        Value::Null => out.push(at.to_string()),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| nulls(x, &format!("{at}[{i}]"), out)),
+        Value::Object(m) => m
+            .iter()
+            .for_each(|(k, x)| nulls(x, &format!("{at}.{k}"), out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn report_json_without_a_config_has_no_null() {
+    let l = logs("report-no-null");
+    let out = l.dir.join("report");
+    let o = pacs(&[
+        "audit",
+        &l.pass,
+        &l.fail,
+        &l.inconclusive,
+        "--out",
+        &s(&out),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rep: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let mut found = Vec::new();
+    nulls(&rep, "report", &mut found);
+    assert!(found.is_empty(), "null at {found:?}");
+    assert!(rep["inputs"].get("config").is_none(), "no config given");
+    assert!(rep["settings"].get("robot").is_none());
+    // The tables still say where the models come from.
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("| `robot` | from the log header |"), "{md}");
+}
+
 #[test]
 fn csv_logs_are_audited_by_extension() {
     let dir = tmpdir("csv");

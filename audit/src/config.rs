@@ -24,11 +24,14 @@ pub struct AuditConfig {
     /// Relative slack on `|q_{i+1} − q_i| ≤ v_max·Δt` before samples count as exceeding the
     /// velocity limits. Default 1e-9.
     pub limit_slack: f64,
-    /// Override the header's robot (name, `{urdf, side}` relative to the config file, or spec).
+    /// Override the header's robot (absent from the report's `settings`: the header's) (name, `{urdf, side}` relative to the config file, or spec).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub robot: Option<pacs_log::RobotRef>,
     /// Override the header's human model.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub human: Option<pacs_log::ModelRef<pacs_models::HumanSpec>>,
     /// Override the header's constraints.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub constraints: Option<pacs_log::ModelRef<pacs_models::ConstraintSpec>>,
     /// MCAP reading settings (topics, reorder window): the `[mcap]` table.
     pub mcap: pacs_log::mcap::McapConfig,

@@ -18,12 +18,44 @@ pub struct Row {
     /// Number of logs.
     pub runs: usize,
     /// Mean and sample std of success (0/1) over logs with an outcome (None if none; the std
-    /// None for one log).
+    /// None for one log). In JSON `{"mean": m, "std": s}`, `std` left out for one log and the
+    /// whole field for none (no `null`).
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "mean_std_json_opt"
+    )]
     pub success: Option<(f64, Option<f64>)>,
-    /// Mean and std of safe success (0/1) over logs with an outcome.
+    /// Mean and std of safe success (0/1) over logs with an outcome (JSON as `success`).
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "mean_std_json_opt"
+    )]
     pub safe_success: Option<(f64, Option<f64>)>,
-    /// Mean and std of the violation fraction over all logs.
+    /// Mean and std of the violation fraction over all logs (JSON as `success`).
+    #[serde(serialize_with = "mean_std_json")]
     pub safety_violation: (f64, Option<f64>),
+}
+
+/// `{"mean": m, "std": s}`, `std` left out when there is none (one log).
+fn mean_std_json<S: serde::Serializer>(v: &(f64, Option<f64>), s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut m = s.serialize_map(None)?;
+    m.serialize_entry("mean", &v.0)?;
+    if let Some(std) = v.1 {
+        m.serialize_entry("std", &std)?;
+    }
+    m.end()
+}
+
+/// [`mean_std_json`] of a present value (the field is skipped when absent).
+fn mean_std_json_opt<S: serde::Serializer>(
+    v: &Option<(f64, Option<f64>)>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(v) => mean_std_json(v, s),
+        None => s.serialize_none(),
+    }
 }
 
 fn meta_str(r: &RunResult, k: &str) -> String {

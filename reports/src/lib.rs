@@ -172,6 +172,16 @@ pub fn utc(secs: u64) -> String {
     )
 }
 
+/// The report's `inputs`: the logs, and the config file only when one was given (no `null`:
+/// an absent `config` means the documented defaults).
+fn inputs_json(logs: &[InputFile], config: Option<&InputFile>) -> Value {
+    let mut inputs = serde_json::json!({ "logs": logs });
+    if let Some(c) = config {
+        inputs["config"] = serde_json::json!(c);
+    }
+    inputs
+}
+
 /// Everything a report is built from.
 #[derive(Debug, Clone)]
 pub struct ReportInput<'a> {
@@ -325,6 +335,18 @@ pub fn settings_rows(settings: &Value) -> Vec<(String, String)> {
     }
     let mut out = Vec::new();
     rows("", settings, &mut out);
+    // The model overrides are left out of the settings when unset (no `null` in report.json).
+    for k in ["robot", "human", "constraints"] {
+        let set = out.iter().any(|(name, _)| {
+            name == k
+                || name
+                    .strip_prefix(k)
+                    .is_some_and(|rest| rest.starts_with('.'))
+        });
+        if settings.is_object() && !set {
+            out.push((k.into(), "from the log header".into()));
+        }
+    }
     out
 }
 
@@ -501,7 +523,7 @@ pub fn report_json(input: &ReportInput) -> Value {
         "tool": {"name": "pacs", "version": TOOL_VERSION, "git_revision": GIT_REVISION},
         "generated_utc": input.generated(),
         "definitions": definitions(),
-        "inputs": {"logs": input.logs, "config": input.config},
+        "inputs": inputs_json(&input.logs, input.config.as_ref()),
         "settings": input.settings,
         "assumptions": assumptions(),
         "user_values": user_values(input.runs),
