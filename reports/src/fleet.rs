@@ -27,8 +27,11 @@ pub const LOG_EXTENSIONS: [&str; 4] = ["jsonl", "csv", "mcap", "db3"];
 /// Whether `dir` is a ROS 2 bag directory (it holds `metadata.yaml`, in any form: as the reader
 /// decides, `pacs_log::db3::is_bag_dir`): one log, not an archive.
 fn is_bag_dir(dir: &Path) -> bool {
-    std::fs::symlink_metadata(dir.join("metadata.yaml")).is_ok()
+    std::fs::symlink_metadata(dir.join(BAG_METADATA)).is_ok()
 }
+
+/// The file that makes a directory a bag (`pacs_log::db3::METADATA_FILE`).
+const BAG_METADATA: &str = "metadata.yaml";
 
 /// Worst runs listed per group.
 pub const WORST_PER_GROUP: usize = 3;
@@ -81,19 +84,47 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
 }
 
 /// Refuse a log named twice among `logs` (one file by two paths, hard links included: the file
-/// decides, its device and inode on Unix): it would count twice in a report's runs, verdict
+/// decides, its device and inode on Unix; a bag directory is also each of its parts, so the
+/// directory and its own `.db3` are one log): it would count twice in a report's runs, verdict
 /// counts and violation time. Used by [`expand_logs`] and by Python's `pacs.audit`.
 pub fn refuse_twice(logs: &[PathBuf]) -> Result<(), ExpandError> {
-    let mut seen: std::collections::HashMap<FileKey, &PathBuf> = std::collections::HashMap::new();
-    for p in logs {
-        if let Some(first) = seen.insert(file_key(p), p) {
-            return Err(ExpandError::Twice {
-                first: first.clone(),
-                second: p.clone(),
-            });
+    let mut seen: std::collections::HashMap<FileKey, usize> = std::collections::HashMap::new();
+    for (i, p) in logs.iter().enumerate() {
+        for key in log_keys(p) {
+            match seen.get(&key) {
+                Some(&first) if first != i => {
+                    return Err(ExpandError::Twice {
+                        first: logs[first].clone(),
+                        second: p.clone(),
+                    });
+                }
+                Some(_) => {}
+                None => {
+                    seen.insert(key, i);
+                }
+            }
         }
     }
     Ok(())
+}
+
+/// The files a log is made of: the file itself, or for a bag directory the directory and every
+/// file in it but its `metadata.yaml` (its parts: the bag reader refuses a data file the metadata
+/// does not list). So a bag directory and its own `.db3` given together, or two bag directories
+/// whose parts are hard links of one file, are one log given twice.
+fn log_keys(p: &Path) -> Vec<FileKey> {
+    let mut keys = vec![file_key(p)];
+    if p.is_dir()
+        && let Ok(entries) = std::fs::read_dir(p)
+    {
+        for e in entries.flatten() {
+            let path = e.path();
+            if e.file_name() != BAG_METADATA && path.is_file() {
+                keys.push(file_key(&path));
+            }
+        }
+    }
+    keys
 }
 
 /// What makes two paths one log: the file itself (device and inode on Unix: hard links too),
@@ -143,7 +174,8 @@ pub enum ExpandError {
         .0.display()
     )]
     NotAFile(PathBuf),
-    /// One log given twice (by paths that name the same file).
+    /// One log given twice (by paths that name the same file, or a bag directory and one of its
+    /// parts).
     #[error(
         "{}: the same log as {} (given twice, it would count twice in the fleet report)",
         second.display(),

@@ -279,6 +279,46 @@ fn a_directory_expands_to_its_sorted_log_files() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// A bag directory is made of its parts: the directory and its own `.db3` given together, and
+/// two bag directories whose parts are hard links of one file, are one log given twice. Two
+/// different bags, and a bag beside a log of its own, are not.
+#[test]
+fn a_bag_and_its_own_part_are_one_log() {
+    let d = std::env::temp_dir().join(format!("pacs-fleet-bagparts-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    for bag in ["bag1", "bag2", "bag3"] {
+        std::fs::create_dir_all(d.join(bag)).unwrap();
+        std::fs::write(
+            d.join(bag).join("metadata.yaml"),
+            "rosbag2_bagfile_information: {}\n",
+        )
+        .unwrap();
+    }
+    std::fs::write(d.join("bag1/run.db3"), b"SQLite format 3\0").unwrap();
+    std::fs::write(d.join("bag2/run.db3"), b"SQLite format 3\0 other").unwrap();
+    std::fs::hard_link(d.join("bag1/run.db3"), d.join("bag3/run_0.db3")).unwrap();
+    std::fs::write(d.join("other.jsonl"), "{}\n").unwrap();
+    let twice =
+        |a: &str, b: &str| fleet::refuse_twice(&[d.join(a), d.join(b)]).map_err(|e| e.to_string());
+    let e = twice("bag1", "bag1/run.db3").unwrap_err();
+    assert!(
+        e.starts_with(&d.join("bag1/run.db3").display().to_string())
+            && e.contains(&format!("same log as {}", d.join("bag1").display()))
+            && e.contains("given twice"),
+        "{e}"
+    );
+    let e = twice("bag1/run.db3", "bag1").unwrap_err();
+    assert!(e.contains("given twice"), "{e}");
+    let e = twice("bag1", "bag3").unwrap_err();
+    assert!(e.contains("given twice"), "{e}");
+    let e = twice("bag1", "bag1").unwrap_err();
+    assert!(e.contains("given twice"), "{e}");
+    twice("bag1", "bag2").unwrap();
+    twice("bag2", "other.jsonl").unwrap();
+    twice("bag2/run.db3", "bag1/run.db3").unwrap();
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// An entry with a log's name that cannot be read (a dangling link) is listed, so that its audit
 /// fails naming it, instead of leaving the archive unmentioned.
 #[cfg(unix)]
