@@ -60,7 +60,8 @@ def code_harnesses():
 # ("### C1 Sound arithmetic (docs/...)"), read by `claim_statements`.
 STATEMENTS = {
     "theorem": "The robot is always on a verified monitored trajectory, and each such trajectory is "
-    "safe: C8 on C1–C8′ (the step harnesses on the real `Shield::step`)",
+    "safe: C8 on C1–C8′ (the step harnesses on the real `Shield::step`, for steps at t ≤ 100 s "
+    "with α ∈ [10⁻⁴, 0.01] s; beyond that the property test on the real shield)",
     "solver": "The solver path itself (integer semantics, nested arrays)",
 }
 CLAIM_ORDER = ["theorem", "C1", "C2", "C3", "C4", "C4′", "C5", "C6", "C7", "C8", "C8′", "C9", "solver"]

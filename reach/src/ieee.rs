@@ -55,6 +55,34 @@ pub fn any_root(x: f64) -> f64 {
     r
 }
 
+/// A `√` stub for claims that need only a root that is not too small (a norm bounded from above,
+/// a divisor that must not shrink a gap): for `x ≥ 2⁻⁹⁰⁰` finite any finite `r ≥ 0` with
+/// `fl(r·r) ≥ fl(x·(1 − 2⁻⁵⁰))` ([`root_not_below_holds`]), one multiplier instead of
+/// [`sqrt`]'s exact contract; [`any_root`] for every other `x`. Over-approximates IEEE `√`: its
+/// root `r₀ = fl(√x)` has `r₀ ≥ √x(1 − u)`, so `fl(r₀²) ≥ x(1 − 2u)(1 − u) ≥ x(1 − 3u)`, while
+/// `fl(x(1 − 2⁻⁵⁰)) ≤ x(1 − 8u)(1 + u) < x(1 − 3u)` (`u = 2⁻⁵³`; no underflow above 2⁻⁹⁰⁰);
+/// tested against the library by `contracts_hold_for_the_library`. Used with `#[kani::stub]`
+/// by `b4_distance_bound_shared_point`.
+#[cfg(kani)]
+pub fn root_not_below(x: f64) -> f64 {
+    if !(x >= ROOT_NOT_BELOW_FROM && x.is_finite()) {
+        return any_root(x);
+    }
+    let r: f64 = kani::any();
+    kani::assume(root_not_below_holds(x, r));
+    r
+}
+
+/// Where [`root_not_below`]'s one-multiplier constraint starts (`2⁻⁹⁰⁰`).
+pub const ROOT_NOT_BELOW_FROM: f64 = f64::from_bits((1023 - 900) << 52);
+
+/// [`root_not_below`]'s constraint on `r` for `x` in `[2⁻⁹⁰⁰, MAX]`: `r ≥ 0` finite and
+/// `fl(r·r) ≥ fl(x·(1 − 2⁻⁵⁰))`.
+pub fn root_not_below_holds(x: f64, r: f64) -> bool {
+    const SHRINK: f64 = 1.0 - 1.0 / (1u64 << 50) as f64;
+    r >= 0.0 && r.is_finite() && r * r >= x * SHRINK
+}
+
 /// The contract of [`sqrt`] for `x > 0` finite and `r` with finite neighbours:
 /// `prev(r)² ≤ x ≤ next(r)²` exactly.
 pub fn sqrt_contract(x: f64, r: f64) -> bool {
@@ -135,6 +163,13 @@ mod tests {
             if x > 0.0 && x.is_finite() && (1e-150..=1e150).contains(&x) {
                 assert!(sqrt_contract(x, x.sqrt()), "sqrt({x:e}) = {:e}", x.sqrt());
             }
+            if x >= ROOT_NOT_BELOW_FROM && x.is_finite() {
+                assert!(
+                    root_not_below_holds(x, x.sqrt()),
+                    "root_not_below({x:e}) misses {:e}",
+                    x.sqrt()
+                );
+            }
             let (s, c) = sin_cos(x);
             if x.is_finite() {
                 assert!(
@@ -142,6 +177,13 @@ mod tests {
                     "{x}"
                 );
             }
+        }
+        // The stub's constraint is not vacuous: a root 2⁻⁴⁹ too small fails it.
+        for x in [2.0, 3.0, 1e-200, ROOT_NOT_BELOW_FROM, f64::MAX] {
+            assert!(!root_not_below_holds(
+                x,
+                x.sqrt() * (1.0 - 1.0 / (1u64 << 49) as f64)
+            ));
         }
         // The contract is not vacuous: two ulps off fails it.
         assert!(!sqrt_contract(2.0, 2f64.sqrt().next_up().next_up()));

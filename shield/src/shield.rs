@@ -36,7 +36,10 @@ mod verification;
 
 pub use builder::ShieldBuilder;
 pub use command::{Binding, BindingNames, Command, Diagnostics};
-pub use decision::{Candidate, Choice, Decision, VerifiedFailsafe, choose, chosen_by_rule, decide};
+pub use decision::{
+    Candidate, Choice, Decision, VerifiedFailsafe, choose, choose_in_proven_range, chosen_by_rule,
+    decide,
+};
 pub use error::ShieldError;
 pub use handover::{ChunkPlanner, Handover, OfferState, PreparedChunk};
 pub use intervals::{
@@ -108,7 +111,8 @@ pub struct ShieldConfig {
     pub out_of_limits: OutOfLimits,
     /// Length of the first occupancy interval after the intended step (s); each next one doubles.
     pub first_interval: f64,
-    /// Maximum number of occupancy intervals (the last one extends to standstill).
+    /// Maximum number of occupancy intervals (the last one extends to standstill), 1 to
+    /// [`MAX_INTERVALS`].
     pub max_intervals: usize,
     /// SSM: the commanded robot is at rest on an interval if every commanded joint speed is
     /// provably at most this (rad/s). Default 0: only a stopped path counts as rest (the audit's
@@ -163,6 +167,10 @@ pub use pacs_verify::iso15066::EnvShape;
 /// what a clock and a log can tell apart; above, one step of intended motion is no longer a
 /// small part of a braking manoeuvre.
 pub const SAFETY_STEP_RANGE: std::ops::RangeInclusive<f64> = 1e-5..=1.0;
+
+/// The most occupancy intervals a monitored trajectory is split into
+/// ([`ShieldConfig::max_intervals`]): the interval proofs cover 1 to 12.
+pub const MAX_INTERVALS: usize = 12;
 
 /// Whether a clock reading `t` (s) resolves a thousandth of the safety step `alpha` (s): the
 /// spacing of floats at `|t|` is at most `alpha / 1000`. Beyond that, `t₀ + k·α_s` no longer
@@ -329,8 +337,13 @@ impl Shield {
         if !(c.intended_vel_scale > 0.0 && c.intended_vel_scale <= 1.0) {
             return Err(bad("intended_vel_scale", c.intended_vel_scale));
         }
-        if !(c.first_interval > 0.0 && c.first_interval.is_finite()) || c.max_intervals < 1 {
-            return Err(bad("first_interval/max_intervals", c.first_interval));
+        if !(c.first_interval > 0.0 && c.first_interval.is_finite()) {
+            return Err(bad("first_interval", c.first_interval));
+        }
+        // 1 to 12: the range the interval proofs cover (`f2_intervals_cover_by_contract`,
+        // `f2_fine_pieces_cover` and their twins draw `max_intervals` in 1..=12).
+        if !(1..=MAX_INTERVALS).contains(&c.max_intervals) {
+            return Err(bad("max_intervals", c.max_intervals as f64));
         }
         let dof = robot.dof();
         let hw = Limits::from_joint_limits(robot.limits());
@@ -733,5 +746,79 @@ mod tests {
         assert!(!sh.humans[0].rule.other_people());
         assert_eq!(sh.add_human(human, &spec).unwrap(), 1);
         assert!(sh.humans.iter().all(|h| h.rule.other_people()));
+    }
+
+    /// `max_intervals` outside 1 to 12 (the proofs' range) is refused, naming the field.
+    #[test]
+    fn max_intervals_outside_the_proven_range_is_refused() {
+        let spec = ConstraintSpec::builtin("ssm").unwrap();
+        let shield = |max_intervals| {
+            Shield::new(
+                fr3::fr3(),
+                Some((default_human(), &spec)),
+                vec![],
+                ShieldConfig {
+                    max_intervals,
+                    ..ShieldConfig::default()
+                },
+            )
+        };
+        for bad in [0, MAX_INTERVALS + 1, 1000] {
+            let Err(e) = shield(bad) else {
+                panic!("max_intervals {bad} accepted");
+            };
+            let e = e.to_string();
+            assert!(e.contains("max_intervals"), "{e}");
+        }
+        for good in [1, MAX_INTERVALS] {
+            assert!(shield(good).is_ok());
+        }
+    }
+
+    /// A brake whose settle time is not a finite time after the step (NaN here) is never
+    /// verified: the occupancy intervals cover `[0, stop]` only for a finite `stop ≥ α`
+    /// (`interval_end`'s precondition). The same brake, planned from a valid state, verifies
+    /// against a person 3 m away.
+    #[test]
+    fn a_brake_without_a_finite_settle_time_is_not_verified() {
+        let spec = ConstraintSpec::builtin("ssm").unwrap();
+        let human = default_human();
+        let mut sh = Shield::new(
+            fr3::fr3(),
+            Some((human.clone(), &spec)),
+            vec![],
+            ShieldConfig::default(),
+        )
+        .unwrap();
+        let q = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+        sh.start(0.0, &q).unwrap();
+        let far = pacs_testkit::keypoints_in_a_row(3.0);
+        let m = HumanMeasurement::new(&human, 0.0, &far, None).unwrap();
+        sh.measure_human(0, &m).unwrap();
+        let diag = || Diagnostics {
+            verified: false,
+            on_failsafe: false,
+            binding: Binding::None,
+            min_separation: f64::INFINITY,
+            contact_energy: 0.0,
+            contact_threshold: 0.0,
+            path_speed: 0.0,
+            stop_time: 0.0,
+        };
+        let rest = PathState::rest(0.0);
+        let go = SpeedProfile::plan(rest, 0.0, 1.0, 10.0);
+        let brake = SpeedProfile::plan(rest, 0.0, 1.0, 10.0);
+        let mut d = diag();
+        assert!(sh.verify(0, &go, &brake, 0.0, &mut d), "{d:?}");
+        let nan = PathState {
+            s: 0.0,
+            sd: f64::NAN,
+            sdd: 0.0,
+        };
+        let brake = SpeedProfile::plan(nan, 0.0, 1.0, 10.0);
+        assert!(!brake.settle_time().is_finite());
+        let mut d = diag();
+        assert!(!sh.verify(0, &go, &brake, 0.0, &mut d));
+        assert_eq!(d.binding, Binding::NoProfile);
     }
 }

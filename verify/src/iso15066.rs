@@ -56,7 +56,7 @@ mod check;
 mod environment;
 mod object;
 
-pub use broad_phase::{box_contains_capsule, broad_phase_box, workspace_ball};
+pub use broad_phase::{box_contains_capsule, broad_phase_box, capsule_is_finite, workspace_ball};
 pub use environment::EnvShape;
 pub use object::{
     ObjectOutcome, ObjectRule, ObjectViolation, contact_allowed_only_within_rule, contact_violates,

@@ -31,6 +31,14 @@ impl Shield {
     ) -> bool {
         let alpha = self.config.safety_step;
         let stop = alpha + brake.settle_time();
+        // The intervals below cover `[0, stop]` only under `interval_end`'s precondition (a
+        // finite `stop ≥ α`, harnesses `f2_interval_end_contract`, `f2_intervals_cover_by_contract`):
+        // a brake whose settle time is NaN, negative or infinite is not verified, whatever the
+        // planner's contract says of it.
+        if !(stop.is_finite() && stop >= alpha) {
+            diag.binding = Binding::NoProfile;
+            return false;
+        }
         let m = Monitored { slot, go, brake, t };
         let span = |k, ta, tb| Span { k, ta, tb };
         if self.humans.is_empty() && self.objects.is_empty() {

@@ -68,10 +68,18 @@ impl Aabb {
 /// significands at any exponent; the twin `i1_broad_phase_boxes_contain` checks it for every axis
 /// at full width). So two capsules that share a point have overlapping boxes,
 /// and the rule's broad phase only skips provably disjoint pairs.
+#[cfg_attr(kani, kani::requires(capsule_is_finite(c)))]
 #[cfg_attr(kani, kani::ensures(|b: &([f64; 3], [f64; 3])| box_contains_capsule(c, b)))]
 pub fn broad_phase_box(c: &Capsule) -> ([f64; 3], [f64; 3]) {
     let b = Aabb::of(c);
     (b.lo, b.hi)
+}
+
+/// The precondition of [`broad_phase_box`]'s contract: finite endpoints and radius (a capsule at
+/// infinity gets `∞ − ∞` box ends; capsules of a model and of an occupancy are finite).
+pub fn capsule_is_finite(c: &Capsule) -> bool {
+    let (p, q) = (c.p1(), c.p2());
+    (0..3).all(|k| p[k].is_finite() && q[k].is_finite()) && c.radius().is_finite()
 }
 
 /// The contract of [`broad_phase_box`]: on each axis the box `(lo, hi)` reaches at least to
