@@ -16,7 +16,7 @@
 use crate::check::Auditor;
 use crate::error::AuditError;
 use crate::verdict::{
-    InconclusiveReason as Reason, InconclusiveSpan, PersonModel, RunResult, SeriesPoint,
+    InconclusiveReason as Reason, InconclusiveSpan, PersonModel, RunResult, SeriesPoint, Violation,
 };
 use crate::{AuditConfig, series::min_opt};
 use pacs_log::LogModels;
@@ -199,6 +199,50 @@ fn union_length(mut iv: Vec<(f64, f64)>) -> f64 {
     total
 }
 
+/// An object's violation intervals of every pass, joined: each pass finds the object's violating
+/// spans where its own person's measurement lets it check the span (a pass skips, inconclusive,
+/// the spans its person is stale or unmeasured on), so one pass may see an interval whole and
+/// another only parts of it. Intervals of one (object, link, constraint) whose spans overlap or
+/// follow each other (by span index, the same in every pass) become one: the union of the
+/// spans, the smallest separation, the largest energy bound, the smallest threshold, constrained
+/// or certain if either was. Identical intervals are kept once. A person's violations are left
+/// as they are (one pass each).
+fn join_object_violations(violations: Vec<Violation>) -> Vec<Violation> {
+    let (mut objects, mut out): (Vec<Violation>, Vec<Violation>) =
+        violations.into_iter().partition(|v| v.person.is_none());
+    objects.sort_by(|a, b| {
+        (&a.body_part, &a.link, a.constraint as u8, a.first_span).cmp(&(
+            &b.body_part,
+            &b.link,
+            b.constraint as u8,
+            b.first_span,
+        ))
+    });
+    let mut joined: Vec<Violation> = Vec::with_capacity(objects.len());
+    for v in objects {
+        if let Some(w) = joined.last_mut()
+            && w.body_part == v.body_part
+            && w.link == v.link
+            && w.constraint == v.constraint
+            && v.first_span <= w.first_span + w.spans
+        {
+            let end = (w.first_span + w.spans).max(v.first_span + v.spans);
+            w.spans = end - w.first_span;
+            w.t_start = w.t_start.min(v.t_start);
+            w.t_end = w.t_end.max(v.t_end);
+            w.min_separation = w.min_separation.min(v.min_separation);
+            w.energy = w.energy.max(v.energy);
+            w.threshold = w.threshold.min(v.threshold);
+            w.constrained |= v.constrained;
+            w.certain |= v.certain;
+            continue;
+        }
+        joined.push(v);
+    }
+    out.extend(joined);
+    out
+}
+
 fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> RunResult {
     // Every person's human model (each pass was audited with its person's), for the results and
     // the report: a report must not present one person's model as everyone's.
@@ -228,21 +272,8 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         .collect();
     for r in rest {
         // A person's violations are this pass's own; an object's (no person) are found by every
-        // pass that checks the span: kept once.
-        for v in r.violations {
-            let again = v.person.is_none()
-                && out.violations.iter().any(|w| {
-                    w.person.is_none()
-                        && w.t_start == v.t_start
-                        && w.t_end == v.t_end
-                        && w.link == v.link
-                        && w.body_part == v.body_part
-                        && w.constraint == v.constraint
-                });
-            if !again {
-                out.violations.push(v);
-            }
-        }
+        // pass that checks the span (joined below).
+        out.violations.extend(r.violations);
         // Findings about the robot alone (gaps, limits, time) are the same in every pass: kept
         // once, from the first.
         let about_people: Vec<InconclusiveSpan> = r
@@ -262,6 +293,7 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         m.min_separation = min_opt(m.min_separation, r.metrics.min_separation);
         out.series = merge_series(std::mem::take(&mut out.series), &r.series);
     }
+    out.violations = join_object_violations(std::mem::take(&mut out.violations));
     out.violations.sort_by(|a, b| {
         a.t_start
             .total_cmp(&b.t_start)

@@ -89,6 +89,11 @@ pub struct Violation {
     pub certain: bool,
     /// Number of spans in the interval.
     pub spans: u64,
+    /// Index of the interval's first span in the log's run of spans (internal, not serialized:
+    /// the passes of a log with several people each find an object's violating spans where
+    /// their person lets them check, and their intervals are joined on these indices).
+    #[serde(skip)]
+    pub first_span: u64,
 }
 
 /// Why a span (or the log) could not be checked (serialized as its snake_case name, e.g.

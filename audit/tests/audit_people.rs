@@ -521,3 +521,75 @@ fn the_fuzz_seeds_reach_the_audit_and_pass() {
         assert!(n >= n_min, "{dir}: {n} seeds");
     }
 }
+
+/// A log of two people and an object resting on the gripper (no contact allowed) for 2 s at
+/// 100 Hz: `a` and `b` give the times (s) each person is measured (far away).
+fn object_on_gripper_log(a: &[f64], b: &[f64]) -> String {
+    let far = |x: f64| {
+        (0..9)
+            .map(|i| format!("[{x}, {}, 1.0]", 0.1 * i as f64 - 0.4))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut s = String::from(
+        r#"{"type": "header", "format": "pacs-log", "version": 2, "robot": "fr3", "constraints": "ssm", "humans": [{"id": "A", "human": "default"}, {"id": "B", "human": "default"}], "end_event": true, "objects": [{"id": "b1", "object": "ball", "contact": "no_contact"}]}"#,
+    );
+    s.push('\n');
+    for i in 0..=200 {
+        let t = f64::from(i) * 0.01;
+        if i % 10 == 0 {
+            for (id, times, x) in [("A", a, 3.0), ("B", b, -3.0)] {
+                if times.iter().any(|m| (m - t).abs() < 1e-9) {
+                    s.push_str(&format!(
+                        "{{\"type\": \"human\", \"t\": {t}, \"id\": \"{id}\", \"positions\": [{}]}}\n",
+                        far(x)
+                    ));
+                }
+            }
+            s.push_str(&format!(
+                "{{\"type\": \"object\", \"t\": {t}, \"id\": \"b1\", \"position\": [0.307, 0.0, 0.52], \"velocity\": [0, 0, 0]}}\n"
+            ));
+        }
+        s.push_str(&format!(
+            "{{\"type\": \"robot\", \"t\": {t}, \"q\": [0.0, -0.785, 0, -2.356, 0, 1.571, 0.785], \"dq\": [0, 0, 0, 0, 0, 0, 0]}}\n"
+        ));
+    }
+    s.push_str("{\"type\": \"event\", \"t\": 2.0, \"name\": \"end\"}\n");
+    s
+}
+
+/// Each pass checks an object only where its own person lets it check the span: person A is
+/// measured until 0.6 s (stale after 1.6 s), person B from 0.8 s on, so A's pass sees the
+/// object's contact on [0, 1.6] and B's on [0.8, 2.0]. The result lists the contact once per
+/// link, as the one interval [0, 2] that a person measured throughout gives — not
+/// as two overlapping intervals.
+#[test]
+fn an_objects_interval_seen_in_parts_by_the_passes_is_listed_once() {
+    let until = |a: f64, b: f64| -> Vec<f64> {
+        (0..=20)
+            .map(|i| f64::from(i) * 0.1)
+            .filter(|t| *t >= a - 1e-9 && *t <= b + 1e-9)
+            .collect()
+    };
+    let parts = audit(&object_on_gripper_log(&until(0.0, 0.6), &until(0.8, 2.0)));
+    let whole = audit(&object_on_gripper_log(&until(0.0, 2.0), &[]));
+    assert_eq!(parts.verdict, Verdict::Fail);
+    let objects = |r: &pacs_audit::RunResult| {
+        let mut v: Vec<_> = r
+            .violations
+            .iter()
+            .filter(|v| v.person.is_none())
+            .map(|v| (v.link.clone(), v.t_start, v.t_end, v.spans, v.certain))
+            .collect();
+        v.sort_by(|a, b| a.0.cmp(&b.0));
+        v
+    };
+    let (p, w) = (objects(&parts), objects(&whole));
+    assert!(!w.is_empty());
+    assert!(
+        // 200 spans and the last sample's instant (checked with the last object record).
+        w.iter().all(|v| v.1 == 0.0 && v.2 == 2.0 && v.3 == 201),
+        "{w:?}"
+    );
+    assert_eq!(p, w, "joined across the passes as one person sees it");
+}

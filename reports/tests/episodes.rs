@@ -30,6 +30,7 @@ fn viol(t0: f64, t1: f64, kind: ConstraintKind, part: &str, link: &str, sep: f64
         constrained: false,
         certain: sep < 0.0,
         spans: ((t1 - t0) / 0.001).round() as u64,
+        first_span: 0,
     }
 }
 

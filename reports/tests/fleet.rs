@@ -25,6 +25,7 @@ fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> R
                 constrained: false,
                 certain: true,
                 spans: 1,
+                first_span: 0,
             })
             .collect(),
         inconclusive: vec![],

@@ -206,6 +206,7 @@ impl Auditor {
             constrained: o.constrained,
             certain: o.certain,
             spans: o.spans,
+            first_span: o.last_span + 1 - o.spans,
         });
     }
 }
