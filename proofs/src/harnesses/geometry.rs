@@ -287,8 +287,9 @@ fn zonotope_capsule<S: Source>(s: &mut S) {
     assert_eq!(z.distance_lower_bound(inflate, &cap), 0.0);
 }
 // Property test only. Of the splits beside the code (`reach/src/zonotope/proofs.rs`), Kani
-// proves `b4_support_up_member` (the support function's outward rounding, on a grid);
-// `b4_distance_bound_shared_point` times out under Kani and is a twin (proofs/README.md).
+// proves `b4_support_up_member` (the support function's outward rounding, on a grid) and
+// `b4_distance_bound_shared_point` (this claim along any grid direction, on a restricted grid:
+// proofs/README.md).
 harness!(
     b4_zonotope_capsule_conservative,
     twin_only,

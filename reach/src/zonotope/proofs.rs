@@ -14,18 +14,23 @@
 //! - `b3_separates_member` (Kani and twin): no direction `d` separates a member of a zonotope
 //!   with one generator and an error box ([`separates_of`]: `d·x` rounded down against the
 //!   support function rounded up). Under Kani two dimensions, the constant zonotope of
-//!   [`grid_plane`] and `d = λu` with `λ = ±1`, `u_i ∈ {0, ±1, ±2⁻⁶⁰}`; the twins any
-//!   direction. Mutant `x79` (`support_up_of` without rounding) fails it under Kani only.
+//!   [`grid_plane`] and `d = λu` with `λ = 1` (`−1` adds no direction: each `u_i` takes both
+//!   signs), `u_i ∈ {0, ±1, ±2⁻⁶⁰}`; the twins any direction. Mutant `x79` (`support_up_of` without rounding) fails it under Kani only.
 //! - `b4_support_up_member` (Kani and twin): [`Zonotope3::support_up`]`(d) ≥ d·p` exactly for
 //!   every member `p` of a zonotope with one generator and an error box and every direction
 //!   `d = λu` with `u` a vector of `0, ±1, ±2^−SMALL_EXP` (components of very different
-//!   magnitudes, so the support function's sums round). Under Kani `λ = ±1`, `2⁻⁶⁰` and `d·p`
+//!   magnitudes, so the support function's sums round). Under Kani `λ = 1`, `2⁻⁶⁰` and `d·p`
 //!   an integer times `2⁻⁶⁶`; in the twin `λ` any float, `2⁻³⁰`, `u·p` exact on the grid and
 //!   `λ·(u·p)` compared with integer significands ([`crate::exact::cmp_prod`]). Mutant `x78`
 //!   (no outward rounding, no error term) fails both.
-//! - `b4_distance_bound_shared_point` (twin only): [`Zonotope3::distance_bound_along`] is 0 for
-//!   any such direction when `Z ⊕ B(inflate)` and the capsule share a point: `q = z + w` (`z` a
-//!   member, `|w| ≤ inflate`) with `|q − p₁| ≤ r` (`p₁` the capsule's first end). Mutant `x39b`
+//! - `b4_distance_bound_shared_point` (Kani and twin): [`Zonotope3::distance_bound_along`] is 0
+//!   for any such direction when `Z ⊕ B(inflate)` and the capsule share a point: `q = z + w`
+//!   (`z` a member, `|w| ≤ inflate`) with `|q − p₁| ≤ r` (`p₁` the capsule's first end). Under
+//!   Kani the constant zonotope, `w = 0` (the shared point a member), the capsule a ball
+//!   (`p₂ = p₁`) whose centre is `r` off the member along an axis (so the gap along `n` may be
+//!   positive and the norm and the division decide), `λ = 1`, and `√` by [`crate::ieee::root_not_below`] (any root whose
+//!   rounded square is not below the radicand by more than 2⁻⁵⁰ relative: an over-approximation
+//!   of IEEE `√`); in the twin any `w`, `v` in the balls, a second end, any `λ`. Mutant `x39b`
 //!   (the bound without `inflate`) fails its twin.
 //!
 //! The generic functions are the library's own arithmetic ([`super::hull_axis`],
@@ -224,7 +229,7 @@ harness!(
 fn separates_member<S: Source>(s: &mut S) {
     let n = if cfg!(kani) { 2 } else { 1 + s.index(2) };
     let (z, x) = grid_plane(s, n, 1, true);
-    // Kani: directions λu with λ = ±1 and u_i ∈ {0, ±1, ±2⁻⁶⁰} in two dimensions (the sums of
+    // Kani: directions λu with λ = 1 and u_i ∈ {0, ±1, ±2⁻⁶⁰} in two dimensions (the sums of
     // terms of such different magnitudes round); the twins: any direction of full width (its
     // products with the zonotope's numbers round) or λu with any λ.
     let d = if !cfg!(kani) && s.bool() {
@@ -295,7 +300,7 @@ fn grid_zonotope3<S: Source>(s: &mut S) -> (Zonotope3<1>, [f64; 3]) {
 }
 
 /// The small factor's exponent: `2⁻³⁰` in the twins (with any `λ`, the sums round), `2⁻⁶⁰`
-/// under Kani (`λ = ±1` there, so the spread of magnitudes is what makes the sums round: with
+/// under Kani (`λ = 1` there, so the spread of magnitudes is what makes the sums round: with
 /// `2⁻³⁰` every sum of the constant zonotope's terms was exact and mutant `x78` survived).
 const SMALL_EXP: u64 = if cfg!(kani) { 60 } else { 30 };
 
@@ -318,7 +323,8 @@ fn factor(k: usize, v: f64) -> f64 {
 /// Returns `(λ, indices of u)`.
 fn direction<S: Source>(s: &mut S) -> Option<(f64, [usize; 3])> {
     let lambda = if cfg!(kani) {
-        if s.bool() { 1.0 } else { -1.0 }
+        // λ = −1 adds no direction: each `u_i` takes both signs.
+        1.0
     } else {
         s.f64_in(-4.0, 4.0)
     };
@@ -340,7 +346,7 @@ fn support_member<S: Source>(s: &mut S) {
     ]);
     let h = z.support_up(d);
     if cfg!(kani) {
-        // λ = ±1 and u_i ∈ {0, ±1, ±2⁻⁶⁰}: d·p is an integer times 2⁻⁶⁶ (p a multiple of 2⁻⁶
+        // λ = 1 and u_i ∈ {0, ±1, ±2⁻⁶⁰}: d·p is an integer times 2⁻⁶⁶ (p a multiple of 2⁻⁶
         // below 2¹⁰), exact in i128; h·2⁶⁶ is exact (a power of two, no overflow) and
         // `d·p ≤ h ⟺ d·p·2⁶⁶ ≤ ⌈h·2⁶⁶⌉`. A float `u·p` would round here.
         let mut exact = 0i128;
@@ -390,19 +396,46 @@ fn in_ball<S: Source>(s: &mut S, r: f64) -> Option<[f64; 3]> {
         .then_some(v)
 }
 
+/// `±len` along one axis, or 0 (Kani's offsets in [`distance_shared_point`]: no ball constraint).
+fn along_an_axis<S: Source>(s: &mut S, len: f64) -> [f64; 3] {
+    let mut v = [0.0; 3];
+    let k = s.index(4);
+    if k < 3 {
+        v[k] = if s.bool() { len } else { -len };
+    }
+    v
+}
+
 fn distance_shared_point<S: Source>(s: &mut S) {
     let (z, p) = grid_zonotope3(s);
     let inflate = number(s, big(), false);
-    let Some(w) = in_ball(s, inflate) else {
-        return;
+    // Under Kani the shared point is the member itself (`w = 0`; with `w` along an axis too: a
+    // timeout at 300 s), the capsule a ball (`p₂ = p₁`) whose centre is `r` off the member along
+    // an axis: the gap along `n` may be positive, and the bound's division and norm decide.
+    let w = if cfg!(kani) {
+        [0.0; 3]
+    } else {
+        let Some(w) = in_ball(s, inflate) else {
+            return;
+        };
+        w
     };
     let r = number(s, big(), false);
-    let Some(v) = in_ball(s, r) else {
-        return;
+    let v = if cfg!(kani) {
+        along_an_axis(s, r)
+    } else {
+        let Some(v) = in_ball(s, r) else {
+            return;
+        };
+        v
     };
     // q = p + w ∈ Z ⊕ B(inflate), and |q − p1| = |v| ≤ r: q lies in the capsule.
     let p1 = [p[0] + w[0] + v[0], p[1] + w[1] + v[1], p[2] + w[2] + v[2]];
-    let p2 = if s.bool() { p1 } else { grid3(s, true) };
+    let p2 = if cfg!(kani) || s.bool() {
+        p1
+    } else {
+        grid3(s, true)
+    };
     let cap = Capsule::new_unchecked(Point3::from(pinned3(p1)), Point3::from(pinned3(p2)), r);
     let Some((lambda, u)) = direction(s) else {
         return;
@@ -419,11 +452,13 @@ fn distance_shared_point<S: Source>(s: &mut S) {
         [p[0] + w[0], p[1] + w[1], p[2] + w[2]]
     );
 }
-// Property test only: under Kani a timeout at 300 s, also with `λ = ±1` (its `norm3_up` and two
-// support functions). Its twin catches mutant `x39b` (the bound without `inflate`).
+// Kani on the restricted domain of the module doc (with the exact `√` contract and the whole
+// ball of `v`: timeouts at 300 s); its twin catches mutant `x39b` (the bound without `inflate`).
 harness!(
     b4_distance_bound_shared_point,
-    twin_only,
+    unwind = 4,
+    bits = 52,
+    stub = (crate::ieee::sqrt => crate::ieee::root_not_below),
     cases = pacs_proof_kit::DEFAULT_CASES,
     distance_shared_point
 );
