@@ -760,6 +760,32 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// The planner's profiles from finite states have finite parts (the precondition of the
+    /// `eval` and `choose` contracts); one planned from a NaN speed, or with a phase slot made
+    /// infinite, has not.
+    #[test]
+    fn planned_profiles_have_finite_parts() {
+        let rest = PathState::rest(0.0);
+        for (target, acc, jerk) in [(0.0, 1.0, 10.0), (1.0, 2.0, 50.0), (0.3, 0.05, 0.05)] {
+            assert!(SpeedProfile::plan(rest, target, acc, jerk).has_finite_parts());
+            assert!(
+                SpeedProfile::plan(PathState::intended(0.5), target, acc, jerk).has_finite_parts()
+            );
+        }
+        let nan = PathState {
+            s: 0.0,
+            sd: f64::NAN,
+            sdd: 0.0,
+        };
+        assert!(!SpeedProfile::plan(nan, 0.0, 1.0, 10.0).has_finite_parts());
+        let mut p = SpeedProfile::plan(rest, 1.0, 1.0, 10.0);
+        p.phases[3].jerk = f64::INFINITY;
+        assert!(!p.has_finite_parts());
+        let mut p = SpeedProfile::plan(rest, 1.0, 1.0, 10.0);
+        p.n = 0;
+        assert!(!p.has_finite_parts());
+    }
+
     /// A value in `[lo, hi]`, often at its ends.
     fn within(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
         prop_oneof![Just(lo), Just(hi), lo..=hi, lo..=hi, lo..=hi]
