@@ -374,16 +374,27 @@ impl SpeedProfile {
     /// proven for: 1 to 4 phases, every field of all four phase slots finite, and a finite settle
     /// time, target speed and limits (the planner's profiles from finite states and limits are:
     /// the twin of `f1` checks `profile_in_stub_range` on every profile it plans).
+    ///
+    /// Written without loops: Kani evaluates a precondition at every call in a harness, where a
+    /// loop would need an unwinding bound of its own.
     pub fn has_finite_parts(&self) -> bool {
+        let finite = |p: &Phase| {
+            p.t0.is_finite()
+                && p.s.is_finite()
+                && p.sd.is_finite()
+                && p.sdd.is_finite()
+                && p.jerk.is_finite()
+        };
+        let [p0, p1, p2, p3] = &self.phases;
         (1..=4).contains(&self.n)
-            && self.phases.iter().all(|p| {
-                [p.t0, p.s, p.sd, p.sdd, p.jerk]
-                    .iter()
-                    .all(|x| x.is_finite())
-            })
-            && [self.settle, self.target, self.acc, self.jerk]
-                .iter()
-                .all(|x| x.is_finite())
+            && finite(p0)
+            && finite(p1)
+            && finite(p2)
+            && finite(p3)
+            && self.settle.is_finite()
+            && self.target.is_finite()
+            && self.acc.is_finite()
+            && self.jerk.is_finite()
     }
 
     /// Bitwise equality of every field (phases, settle time, target, limits): a copy equals its
