@@ -72,7 +72,7 @@ pub struct Choice {
 /// `t ∈ [0, 100]` s, `α ∈ [1e-4, 0.01]` s, the failsafe started up to 1 s before); mutant `x2`
 /// caught. Its Kani contract is [`chosen_by_rule`] (proven by `f3_choose_contract_adopted` and
 /// `f3_choose_contract_kept`; used in place of `choose` by `f3_shield_step_induction`).
-#[cfg_attr(kani, kani::requires(choose_in_proven_range(&stored, &candidate, t, alpha)))]
+#[cfg_attr(kani, kani::requires(choose_in_proven_range(&stored, t, alpha)))]
 #[cfg_attr(kani, kani::ensures(|c: &Choice| chosen_by_rule(&stored, &candidate, mode, t, alpha, c)))]
 pub fn choose(
     stored: VerifiedFailsafe,
@@ -104,24 +104,15 @@ pub fn choose(
 }
 
 /// The inputs [`choose`]'s contract is proven for (its precondition; `f3_choose_contract_adopted`,
-/// `f3_choose_contract_kept`): `t ∈ [0, 100]` s, `α ∈ [10⁻⁴, 0.01]` s, the stored failsafe
-/// started at most 1 s before `t` (not after it), and every profile with finite parts
-/// ([`SpeedProfile::has_finite_parts`]). A harness that puts `choose`'s contract in its place
-/// (`stub_verified`) must call it within this range, which Kani checks at each call.
-pub fn choose_in_proven_range(
-    stored: &VerifiedFailsafe,
-    candidate: &Option<Candidate>,
-    t: f64,
-    alpha: f64,
-) -> bool {
+/// `f3_choose_contract_kept`, which draw profiles of any bits, NaN included): `t ∈ [0, 100]` s,
+/// `α ∈ [10⁻⁴, 0.01]` s and the stored failsafe started at most 1 s before `t` (not after it).
+/// A harness that puts `choose`'s contract in its place (`stub_verified`) must call it within
+/// this range, which Kani checks at each call.
+pub fn choose_in_proven_range(stored: &VerifiedFailsafe, t: f64, alpha: f64) -> bool {
     (0.0..=100.0).contains(&t)
         && (1e-4..=0.01).contains(&alpha)
         && stored.t0 >= t - 1.0
         && stored.t0 <= t
-        && stored.profile.has_finite_parts()
-        && candidate
-            .as_ref()
-            .is_none_or(|c| c.go.has_finite_parts() && c.brake.has_finite_parts())
 }
 
 /// The selection rule of [`choose`] as a predicate on its result (its Kani contract): a verified
