@@ -103,9 +103,10 @@ pub fn choose(
     }
 }
 
-/// The inputs [`choose`]'s contract is proven for (its precondition; `f3_choose_contract_adopted`,
-/// `f3_choose_contract_kept`, which draw profiles of any bits, NaN included): `t ∈ [0, 100]` s,
-/// `α ∈ [10⁻⁴, 0.01]` s and the stored failsafe started at most 1 s before `t` (not after it).
+/// The time range [`choose`]'s contract is proven for (its precondition;
+/// `f3_choose_contract_adopted`, `f3_choose_contract_kept`, which draw finite profiles):
+/// `t ∈ [0, 100]` s, `α ∈ [10⁻⁴, 0.01]` s and the stored failsafe started at most 1 s before `t`
+/// (not after it).
 /// A harness that puts `choose`'s contract in its place (`stub_verified`) must call it within
 /// this range, which Kani checks at each call.
 pub fn choose_in_proven_range(stored: &VerifiedFailsafe, t: f64, alpha: f64) -> bool {
