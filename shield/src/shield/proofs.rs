@@ -328,17 +328,16 @@ fn step_induction(outcome: Option<bool>, pacs: Option<bool>) {
     }
 }
 
-/// Inputs of `choose` in its precondition (`choose_in_proven_range`): `t ∈ [0, 100]` s,
-/// `α ∈ [10⁻⁴, 0.01]` s, any stored failsafe started up to 1 s before `t`, any candidate, any
-/// mode; finite profiles (with NaN fields Bitwuzla refutes the bit-for-bit copy: its
+/// Inputs of `choose` in its precondition (`choose_in_proven_range`): any finite `t`, `α` and
+/// failsafe start, any candidate, any mode; finite profiles (with NaN fields Bitwuzla refutes the bit-for-bit copy: its
 /// floating-point theory has one NaN, whose bit pattern the encoding leaves free).
 fn choose_inputs() -> (VerifiedFailsafe, Option<Candidate>, FilterMode, f64, f64) {
-    let t = any_in(0.0, 100.0);
-    let alpha = any_in(1e-4, 0.01);
+    let t = any_finite();
+    let alpha = any_finite();
     let stored = VerifiedFailsafe {
         slot: usize::from(kani::any::<bool>()),
         profile: any_profile(),
-        t0: t - any_in(0.0, 1.0),
+        t0: any_finite(),
     };
     let candidate = kani::any::<bool>().then(|| Candidate {
         slot: usize::from(kani::any::<bool>()),
