@@ -338,16 +338,15 @@ impl SpeedProfile {
     /// State at time `tau` (s) after the profile start (τ ≥ 0; constant target speed after settling).
     ///
     /// Guarantee (its Kani contract): the path speed is never negative, for any profile of
-    /// finite fields ([`Self::has_finite_parts`]: what its proof draws; not in its precondition,
-    /// whose evaluation at every call made the step harnesses 50 % slower, over their budget —
-    /// they call it only on such profiles) and any `tau` not above 10²⁸⁰ s (NaN and −∞ included: they are read as 0).
+    /// finite fields ([`Self::has_finite_parts`], its precondition) and any `tau` not above
+    /// 10²⁸⁰ s (NaN and −∞ included: they are read as 0).
     /// The bound keeps `tau − t₀` finite for every finite phase start, so no intermediate is NaN
     /// (Kani checks that too); the shield evaluates a profile at most as long after its start as
     /// the run has lasted, far below it.
     /// Proven on this function by `f3_eval_contract` (shield/src/shield/proofs.rs); the shield's
     /// step harnesses (`f3_*step*`) use the contract in its place, as they assert nothing of the
     /// executed state's values.
-    #[cfg_attr(kani, kani::requires(!(tau > 1e280)))]
+    #[cfg_attr(kani, kani::requires(self.has_finite_parts() && !(tau > 1e280)))]
     #[cfg_attr(kani, kani::ensures(|p: &PathState| p.sd >= 0.0))]
     #[inline]
     pub fn eval(&self, tau: f64) -> PathState {
@@ -372,7 +371,8 @@ impl SpeedProfile {
         p
     }
 
-    /// Whether the profile is one the contract of [`Self::eval`] is proven for: 1 to 4 phases,
+    /// Whether the profile is one the contract of [`Self::eval`] is proven for (its
+    /// precondition): 1 to 4 phases,
     /// every field of all four phase slots finite, and a finite settle time, target speed and
     /// limits (the planner's profiles from finite states and limits are:
     /// the twin of `f1` checks `profile_in_stub_range` on every profile it plans).

@@ -17,21 +17,13 @@
 //! different body part / link pairs overlap in time and count once).
 
 use pacs_audit::{RunResult, Verdict};
+use pacs_log::db3::{METADATA_FILE as BAG_METADATA, is_bag_dir};
 use serde::Serialize;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// File name endings of the logs an archive directory expands to (`pacs audit DIR`).
 pub const LOG_EXTENSIONS: [&str; 4] = ["jsonl", "csv", "mcap", "db3"];
-
-/// Whether `dir` is a ROS 2 bag directory (it holds `metadata.yaml`, in any form: as the reader
-/// decides, `pacs_log::db3::is_bag_dir`): one log, not an archive.
-fn is_bag_dir(dir: &Path) -> bool {
-    std::fs::symlink_metadata(dir.join(BAG_METADATA)).is_ok()
-}
-
-/// The file that makes a directory a bag (`pacs_log::db3::METADATA_FILE`).
-const BAG_METADATA: &str = "metadata.yaml";
 
 /// Worst runs listed per group.
 pub const WORST_PER_GROUP: usize = 3;

@@ -729,34 +729,30 @@ mod tests {
     use super::*;
     use pacs_models::{ConstraintSpec, default_human, fr3};
 
+    /// An FR3 shield with the default human under the built-in constraints `spec`.
+    fn fr3_shield(spec: &str, config: ShieldConfig) -> Result<Shield, ShieldError> {
+        let spec = ConstraintSpec::builtin(spec).unwrap();
+        Shield::new(fr3::fr3(), Some((default_human(), &spec)), vec![], config)
+    }
+
     /// With a second person every person's rule takes a PFL contact as a possible pinch against
     /// the other (`ContactRule::set_other_people`, as the audit's passes of a log with several
     /// people); alone, not.
     #[test]
     fn a_second_person_makes_every_rule_count_the_other_people() {
-        let spec = ConstraintSpec::builtin("handover").unwrap();
-        let human = default_human();
-        let mut sh = Shield::new(
-            fr3::fr3(),
-            Some((human.clone(), &spec)),
-            vec![],
-            ShieldConfig::default(),
-        )
-        .unwrap();
+        let mut sh = fr3_shield("handover", ShieldConfig::default()).unwrap();
         assert!(!sh.humans[0].rule.other_people());
-        assert_eq!(sh.add_human(human, &spec).unwrap(), 1);
+        let spec = ConstraintSpec::builtin("handover").unwrap();
+        assert_eq!(sh.add_human(default_human(), &spec).unwrap(), 1);
         assert!(sh.humans.iter().all(|h| h.rule.other_people()));
     }
 
     /// `max_intervals` outside 1 to 12 (the proofs' range) is refused, naming the field.
     #[test]
     fn max_intervals_outside_the_proven_range_is_refused() {
-        let spec = ConstraintSpec::builtin("ssm").unwrap();
         let shield = |max_intervals| {
-            Shield::new(
-                fr3::fr3(),
-                Some((default_human(), &spec)),
-                vec![],
+            fr3_shield(
+                "ssm",
                 ShieldConfig {
                     max_intervals,
                     ..ShieldConfig::default()
@@ -781,30 +777,14 @@ mod tests {
     /// against a person 3 m away.
     #[test]
     fn a_brake_without_a_finite_settle_time_is_not_verified() {
-        let spec = ConstraintSpec::builtin("ssm").unwrap();
         let human = default_human();
-        let mut sh = Shield::new(
-            fr3::fr3(),
-            Some((human.clone(), &spec)),
-            vec![],
-            ShieldConfig::default(),
-        )
-        .unwrap();
+        let mut sh = fr3_shield("ssm", ShieldConfig::default()).unwrap();
         let q = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
         sh.start(0.0, &q).unwrap();
         let far = pacs_testkit::keypoints_in_a_row(3.0);
         let m = HumanMeasurement::new(&human, 0.0, &far, None).unwrap();
         sh.measure_human(0, &m).unwrap();
-        let diag = || Diagnostics {
-            verified: false,
-            on_failsafe: false,
-            binding: Binding::None,
-            min_separation: f64::INFINITY,
-            contact_energy: 0.0,
-            contact_threshold: 0.0,
-            path_speed: 0.0,
-            stop_time: 0.0,
-        };
+        let diag = || Diagnostics::unbound(0.0);
         let rest = PathState::rest(0.0);
         let go = SpeedProfile::plan(rest, 0.0, 1.0, 10.0);
         let brake = SpeedProfile::plan(rest, 0.0, 1.0, 10.0);

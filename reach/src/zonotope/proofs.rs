@@ -409,8 +409,7 @@ fn along_an_axis<S: Source>(s: &mut S, len: f64) -> [f64; 3] {
 fn distance_shared_point<S: Source>(s: &mut S) {
     let (z, p) = grid_zonotope3(s);
     let inflate = number(s, big(), false);
-    // Under Kani the shared point is the member itself (`w = 0`; with `w` along an axis too: a
-    // timeout at 300 s), the capsule a ball (`p₂ = p₁`) whose centre is `r` off the member along
+    // Under Kani the shared point is the member itself (`w = 0`), the capsule a ball (`p₂ = p₁`) whose centre is `r` off the member along
     // an axis: the gap along `n` may be positive, and the bound's division and norm decide.
     let w = if cfg!(kani) {
         [0.0; 3]
@@ -452,8 +451,8 @@ fn distance_shared_point<S: Source>(s: &mut S) {
         [p[0] + w[0], p[1] + w[1], p[2] + w[2]]
     );
 }
-// Kani on the restricted domain of the module doc (with the exact `√` contract and the whole
-// ball of `v`: timeouts at 300 s); its twin catches mutant `x39b` (the bound without `inflate`).
+// Kani on the restricted domain of the module doc (why restricted: proofs/README.md); its twin
+// also catches mutant `x39b` (the bound without `inflate`).
 harness!(
     b4_distance_bound_shared_point,
     unwind = 4,

@@ -90,6 +90,23 @@ pub struct Diagnostics {
     pub stop_time: f64,
 }
 
+impl Diagnostics {
+    /// The diagnostics a step at time `t` starts from: nothing verified or bound yet, no
+    /// separation figure (+∞), no contact, standing at `t`.
+    pub fn unbound(t: f64) -> Self {
+        Self {
+            verified: false,
+            on_failsafe: false,
+            binding: Binding::None,
+            min_separation: f64::INFINITY,
+            contact_energy: 0.0,
+            contact_threshold: 0.0,
+            path_speed: 0.0,
+            stop_time: t,
+        }
+    }
+}
+
 /// The command for the low-level controller at time `t`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Command {

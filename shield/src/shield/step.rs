@@ -233,16 +233,7 @@ pub(super) fn run_step<E: StepEnv>(
         Some(s) => (s, PathState::intended(0.0), false),
         None => (env.st().slot, env.st().path, false),
     };
-    let mut diag = Diagnostics {
-        verified: false,
-        on_failsafe: false,
-        binding: Binding::None,
-        min_separation: f64::INFINITY,
-        contact_energy: 0.0,
-        contact_threshold: 0.0,
-        path_speed: 0.0,
-        stop_time: t,
-    };
+    let mut diag = Diagnostics::unbound(t);
     let mut outcome = env.candidate(cand_slot, cand_start).map(|(go, brake)| {
         let result = env.verify(cand_slot, &go, &brake, t, &mut diag);
         (go, brake, result)
