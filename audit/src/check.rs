@@ -187,6 +187,8 @@ pub struct Auditor {
     violations: Vec<Violation>,
     inconclusive: Vec<(InconclusiveSpan, Reason, u64)>,
     samples: u64,
+    /// Exact copies of the previous sample, skipped ([`Self::repeats_last_sample`]).
+    copies: u64,
     human_records: u64,
     /// Earliest measurement time of the human records pushed since the last robot sample.
     unused_human_t_meas: Option<f64>,
@@ -312,6 +314,7 @@ impl Auditor {
             violations: Vec::new(),
             inconclusive: Vec::new(),
             samples: 0,
+            copies: 0,
             human_records: 0,
             unused_human_t_meas: None,
             awaiting_human_t_meas: None,
@@ -625,6 +628,10 @@ impl Auditor {
         if ddq.is_some() && dq.is_none() {
             return Err(AuditError::AccelerationWithoutVelocity);
         }
+        if self.repeats_last_sample(t, q, dq, ddq) {
+            self.copies += 1;
+            return Ok(());
+        }
         // The human records before the previous sample are in use for the span that this sample
         // closes; those since the previous sample wait for the span this sample opens.
         self.awaiting_human_t_meas = self.unused_human_t_meas.take();
@@ -674,6 +681,39 @@ impl Auditor {
         self.samples += 1;
         self.t_last = t;
         Ok(())
+    }
+}
+
+impl Auditor {
+    /// The sample is an exact copy of the previous one (the same stamp, bit for bit the same
+    /// values, velocities and accelerations logged alike) and no human or object record came
+    /// between them: it adds no evidence and is skipped (not counted). Sound: the zero-length
+    /// span it would open checks the instant `t` against the same measurements as the span that
+    /// ended there, whose boxes and occupancies already contain every state at `t`. Checked,
+    /// without `dq` its span's velocity box is `[−v_max, v_max]`: a robot at rest whose
+    /// recorder wrote each message twice failed SSM (the review of 2026-12-01).
+    fn repeats_last_sample(
+        &self,
+        t: f64,
+        q: &[f64],
+        dq: Option<&[f64]>,
+        ddq: Option<&[f64]>,
+    ) -> bool {
+        let Some(last) = self.block.last() else {
+            return false;
+        };
+        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let n = self.n;
+        self.samples > 0
+            && last.t.to_bits() == t.to_bits()
+            && self.unused_human_t_meas.is_none()
+            && self.span_human == self.latest_human
+            && self.objects.iter().all(|o| o.span == o.latest)
+            && last.has_dq == dq.is_some()
+            && last.has_ddq == ddq.is_some()
+            && same(&last.q[..n], q)
+            && dq.is_none_or(|v| same(&last.dq[..n], v))
+            && ddq.is_none_or(|v| same(&last.ddq[..n], v))
     }
 }
 

@@ -4,6 +4,14 @@ use crate::error::AuditError;
 use pacs_reach::human::HumanReachModel;
 use serde::{Deserialize, Serialize};
 
+/// The largest `limit_slack` the audit accepts (relative). The limit and consistency tests let
+/// samples through that miss them by up to the slack, and the span boxes do not cover what such
+/// samples leave unexplained: a large slack would judge a logger's `dq = 0` beside moving
+/// positions consistent, and the robot at rest (at 1000, a joint at 0.5 rad/s next to a person
+/// passed). At 1e-6 the tests accept at most a millionth beyond the limits and the velocity
+/// reach band, far below any figure the rule compares with.
+pub const MAX_LIMIT_SLACK: f64 = 1e-6;
+
 /// Audit settings (`--config task.toml`); every field has a documented default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -22,7 +30,7 @@ pub struct AuditConfig {
     /// Extra radius (m) added to every robot capsule (tracking/calibration error). Default 0.
     pub tracking_error: f64,
     /// Relative slack on `|q_{i+1} − q_i| ≤ v_max·Δt` before samples count as exceeding the
-    /// velocity limits. Default 1e-9.
+    /// velocity limits. Default 1e-9, at most [`MAX_LIMIT_SLACK`].
     pub limit_slack: f64,
     /// Override the header's robot (absent from the report's `settings`: the header's) (name, `{urdf, side}` relative to the config file, or spec).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -76,6 +84,9 @@ impl AuditConfig {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(AuditError::Setting { field: f, value: v });
             }
+        }
+        if self.limit_slack > MAX_LIMIT_SLACK {
+            return Err(AuditError::LimitSlack(self.limit_slack));
         }
         // The one rule's bound: a larger rest speed would let SSM pass a moving robot.
         pacs_verify::iso15066::check_rest_speed(self.rest_speed).map_err(AuditError::Rule)?;

@@ -136,6 +136,12 @@ fn bad_csv_input_is_rejected_with_its_line() {
     );
     expect(&format!("{H}\nhuman,0,0,1,2\n"), 2, "multiple of 3");
     expect(&format!("{H}\nlidar,0\n"), 2, "unknown record type `lidar`");
+    // An event row is `event,t,name`: a cell after the name is an error, not an `end` event.
+    expect(
+        &format!("{H}\n{human}\n{ok}\nevent,0,end,x\n"),
+        4,
+        "cell after `name`: `x`",
+    );
     expect(&format!("{H}\n{human}\n{ok}"), 3, "truncated");
     let e = run_csv(&format!("{human}\n")).unwrap_err();
     assert!(e.to_string().contains("missing header"));

@@ -593,3 +593,118 @@ fn an_objects_interval_seen_in_parts_by_the_passes_is_listed_once() {
     );
     assert_eq!(p, w, "joined across the passes as one person sees it");
 }
+
+/// The reviewer's case (2026-12-01): joint 1 turns at `W` next to a person's hand while the
+/// logger writes `dq = 0`. With the default slack the positions contradict the logged velocities
+/// (never a pass); `limit_slack = 1000` used to judge them consistent and the robot at rest, and
+/// the run passed. A slack above `MAX_LIMIT_SLACK` is now refused, and at the cap the run still
+/// does not pass.
+#[test]
+fn a_limit_slack_that_would_hide_a_logger_zero_velocity_is_refused() {
+    let touching = reaching(hand_contact(&q_at(0.0), 0.02));
+    let mut w = LogWriter::new(Vec::new());
+    let h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
+    w.write_header(&h).unwrap();
+    for i in 0..=100 {
+        let t = i as f64 * 1e-3;
+        if i % 10 == 0 {
+            w.write_person(t, t, Some("op"), &touching).unwrap();
+        }
+        w.write_robot(t, &q_at(W * t), Some(&[0.0; 7])).unwrap();
+    }
+    w.write_event(0.1, pacs_log::END_EVENT).unwrap();
+    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    for slack in [
+        AuditConfig::default().limit_slack,
+        pacs_audit::config::MAX_LIMIT_SLACK,
+    ] {
+        let cfg = AuditConfig {
+            limit_slack: slack,
+            ..AuditConfig::default()
+        };
+        let r = run(&text, &cfg).unwrap();
+        assert_ne!(r.verdict, Verdict::Pass, "limit_slack {slack}");
+        assert!(
+            r.inconclusive
+                .iter()
+                .any(|s| s.reason == InconclusiveReason::ExceedsLimits),
+            "limit_slack {slack}: the zero velocities contradict the positions"
+        );
+    }
+    for slack in [2e-6, 1.0, 1000.0] {
+        let cfg = AuditConfig {
+            limit_slack: slack,
+            ..AuditConfig::default()
+        };
+        let e = run(&text, &cfg).unwrap_err().to_string();
+        assert!(e.contains("limit_slack") && e.contains("1e-6"), "{e}");
+    }
+}
+
+/// A person "measured" at a tracker's lost-track value (FLT_MAX, or 10⁷ m) is no measurement of
+/// anyone in the cell: the spans that use it are `human_reach_error` (never a pass), as for an
+/// object beyond 10⁶ m. Before, the person counted as far away and the run passed.
+#[test]
+fn a_person_measured_beyond_any_reach_is_not_evidence() {
+    for far in [f32::MAX as f64, 1e7, -2e6] {
+        let text = two_person_log(&["op"], |_, _| Some(vec![[far, 0.0, 1.0]; 9]));
+        let r = audit(&text);
+        assert_eq!(r.verdict, Verdict::Inconclusive, "at {far} m");
+        assert!(
+            r.inconclusive
+                .iter()
+                .all(|s| s.reason == InconclusiveReason::HumanReachError
+                    && s.person.as_deref() == Some("op")),
+            "at {far} m: {:?}",
+            r.inconclusive
+        );
+    }
+    // At 10⁶ m exactly (the bound), and standing 2.5 m away: measurements of a person, passed.
+    for kp in [vec![[1e6, 0.0, 1.0]; 9], standing(2.5, 0.0)] {
+        let text = two_person_log(&["op"], |_, _| Some(kp.clone()));
+        assert_eq!(audit(&text).verdict, Verdict::Pass);
+    }
+}
+
+/// A log of `W`-turning (or resting, `w = 0`) joint 1 next to a touching hand, 1 kHz, without
+/// `dq`; each robot sample written `copies` times (a recorder that wrote every message twice).
+fn touching_log(w_joint: f64, copies: usize) -> String {
+    let touching = reaching(hand_contact(&q_at(0.0), 0.02));
+    let mut w = LogWriter::new(Vec::new());
+    let h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
+    w.write_header(&h).unwrap();
+    for i in 0..=100 {
+        let t = i as f64 * 1e-3;
+        // (No record at the last sample: the final instant is checked as a zero-length span.)
+        if i % 10 == 0 && i < 100 {
+            w.write_person(t, t, Some("op"), &touching).unwrap();
+        }
+        for _ in 0..copies {
+            w.write_robot(t, &q_at(w_joint * t), None).unwrap();
+        }
+    }
+    w.write_event(0.1, pacs_log::END_EVENT).unwrap();
+    String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+/// An exact copy of a robot sample (same stamp, same values, no record between) adds no
+/// evidence: the run audits as if it were written once. Before, without `dq` each copy opened a
+/// zero-length span whose velocity box is `[−v_max, v_max]`, and a robot at rest touched by a
+/// hand (allowed under SSM) failed. A moving robot's run fails alike with or without copies.
+#[test]
+fn an_exact_copy_of_a_robot_sample_changes_nothing() {
+    for w_joint in [0.0, W] {
+        let once = audit(&touching_log(w_joint, 1));
+        let twice = audit(&touching_log(w_joint, 2));
+        let expect = if w_joint == 0.0 {
+            Verdict::Pass
+        } else {
+            Verdict::Fail
+        };
+        assert_eq!(once.verdict, expect, "w = {w_joint}");
+        assert_eq!(twice.verdict, once.verdict, "w = {w_joint}");
+        assert_eq!(twice.metrics.samples, once.metrics.samples);
+        assert_eq!(twice.violations, once.violations);
+        assert_eq!(twice.inconclusive, once.inconclusive);
+    }
+}

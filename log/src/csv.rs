@@ -168,6 +168,14 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                         .ok_or_else(|| row.err("missing column `name`".into()))?
                         .trim(),
                 );
+                // `event,t,name` and nothing after it (as the JSON record: a name with more
+                // after it is not the name; `event,1.0,end,x` is no `end` event).
+                if let Some(extra) = cells.next() {
+                    return Err(row.err(format!(
+                        "event row has a cell after `name`: `{}` (an event row is `event,t,name`)",
+                        extra.trim()
+                    )));
+                }
                 Ok(Some(Record::Event {
                     t,
                     name: &self.name,

@@ -71,6 +71,9 @@ pub struct HumanMeasurement {
     /// Velocity buffer (kept allocated); meaningful only when `has_velocities`.
     velocities: Vec<Vector3<f64>>,
     has_velocities: bool,
+    /// Some keypoint lies farther than `MAX_REACH` (10⁶ m) from the world origin on an axis:
+    /// no measurement of a person in the cell ([`HumanReach::occupancy_into`] refuses it).
+    beyond_reach: bool,
 }
 
 impl HumanMeasurement {
@@ -118,6 +121,9 @@ impl HumanMeasurement {
                 None => vec![Vector3::zeros(); n],
             },
             has_velocities: velocities.is_some(),
+            beyond_reach: positions
+                .iter()
+                .any(|p| p.iter().any(|x| x.abs() > pacs_models::MAX_REACH)),
         })
     }
 
@@ -128,6 +134,7 @@ impl HumanMeasurement {
         self.positions.clone_from(&other.positions);
         self.velocities.clone_from(&other.velocities);
         self.has_velocities = other.has_velocities;
+        self.beyond_reach = other.beyond_reach;
     }
 
     /// Time stamp (s).
@@ -503,6 +510,16 @@ impl HumanReach {
             return Err(ReachError::Input(
                 "model `acc` needs measured velocities (measurement.velocities)".into(),
             ));
+        }
+        // A keypoint farther than any robot reaches (`MAX_REACH`, 10⁶ m) is no measurement of a
+        // person in the cell: a tracker's lost-track value (FLT_MAX, 1e7) would otherwise put the
+        // person far away and certify the run as if someone had been measured. Refused, as for
+        // objects (the shield does not verify; the audit's span is `human_reach_error`).
+        if m.beyond_reach {
+            return Err(ReachError::Invalid {
+                what: "human measurement",
+                reason: "a keypoint farther than 10^6 m from the world origin",
+            });
         }
         let (t_lo, t_hi, back) = self.elapsed(m, t_a, t_b)?;
         for k in 0..self.model.keypoint_count() {

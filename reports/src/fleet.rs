@@ -662,7 +662,7 @@ pub fn markdown(f: &Fleet) -> String {
         "---|".repeat(COLUMNS.len())
     );
     for g in &f.groups {
-        let c = cells(g).map(|c| c.replace('|', "\\|"));
+        let c = cells(g).map(|c| crate::markdown::md_cell(&c));
         s.push_str(&format!("| {} |\n", c.join(" | ")));
     }
     s.push_str(&format!(

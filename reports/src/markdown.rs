@@ -5,6 +5,26 @@ use crate::{
 };
 use std::fmt::Write;
 
+/// Text from a log (file names, `meta` values, model names) as one Markdown table cell: `|`
+/// escaped and control characters (a newline would end the row) shown as spaces.
+pub fn md_cell(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '|' => out.push_str("\\|"),
+            c if c.is_control() => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// One table row of cells, each through [`md_cell`].
+fn md_row<S: AsRef<str>>(cells: &[S]) -> String {
+    let cells: Vec<String> = cells.iter().map(|c| md_cell(c.as_ref())).collect();
+    format!("| {} |", cells.join(" | "))
+}
+
 /// The Markdown report.
 pub fn report(input: &ReportInput) -> String {
     let mut s = String::new();
@@ -22,7 +42,7 @@ pub fn report(input: &ReportInput) -> String {
     }
     let _ = writeln!(s, "\n| setting | value |\n|---|---|");
     for (k, v) in crate::settings_rows(&input.settings) {
-        let _ = writeln!(s, "| `{k}` | {v} |");
+        let _ = writeln!(s, "{}", md_row(&[format!("`{k}`"), v]));
     }
     let _ = writeln!(s);
     let _ = writeln!(s, "## Summary\n");
@@ -36,14 +56,18 @@ pub fn report(input: &ReportInput) -> String {
         let mut cells = crate::summary_cells(r, f);
         cells[0] = format!("`{}` (`{}…`)", r.log, &f.sha256[..16.min(f.sha256.len())]);
         cells[2] = format!("**{}**", cells[2]);
-        let _ = writeln!(s, "| {} |", cells.join(" | "));
+        let _ = writeln!(s, "{}", md_row(&cells));
     }
     s.push_str(
         "\n### Evidence\n\n| log | people | audited span (s) | log complete |\n|---|---|---|---|\n",
     );
     for r in input.runs {
         let [log, people, span, complete] = crate::evidence_row(r);
-        let _ = writeln!(s, "| `{log}` | {people} | {span} | {complete} |");
+        let _ = writeln!(
+            s,
+            "{}",
+            md_row(&[format!("`{log}`"), people, span, complete])
+        );
     }
     let d = definitions();
     let _ = writeln!(
@@ -58,28 +82,31 @@ pub fn report(input: &ReportInput) -> String {
             "\n## Aggregate (impact of safeguarding)\n\n| task | policy | filter | n (logs) | success | safe success | violation fraction (mean ± std) |\n|---|---|---|---|---|---|---|"
         );
         for row in aggregate::aggregate(input.runs) {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} |",
+            let cells = [
                 row.task,
                 row.policy,
                 row.filter,
-                row.runs,
+                row.runs.to_string(),
                 aggregate::pct(row.success),
                 aggregate::pct(row.safe_success),
-                aggregate::pct(Some(row.safety_violation))
-            );
+                aggregate::pct(Some(row.safety_violation)),
+            ];
+            let _ = writeln!(s, "{}", md_row(&cells));
         }
         s.push_str(&crate::fleet::markdown(&crate::fleet::of_input(input)));
     }
     for r in input.runs {
-        let _ = writeln!(s, "\n## `{}` — {:?}\n", r.log, r.verdict);
+        let _ = writeln!(s, "\n## `{}` — {:?}\n", md_cell(&r.log), r.verdict);
         let _ = writeln!(
             s,
             "| model | name | parameters (all in report.json) | SHA-256 of the parameters |\n|---|---|---|---|"
         );
         for [model, name, params, hash] in crate::model_rows(r) {
-            let _ = writeln!(s, "| {model} | `{name}` | {params} | `{hash}` |");
+            let _ = writeln!(
+                s,
+                "{}",
+                md_row(&[model, format!("`{name}`"), params, format!("`{hash}`")])
+            );
         }
         let _ = writeln!(s);
         if let Some(note) = crate::contact_note(r) {
@@ -102,7 +129,7 @@ pub fn report(input: &ReportInput) -> String {
                 "---|".repeat(crate::episodes::EPISODE_COLUMNS.len())
             );
             for e in &eps {
-                let _ = writeln!(s, "| {} |", crate::episodes::episode_cells(e).join(" | "));
+                let _ = writeln!(s, "{}", md_row(&crate::episodes::episode_cells(e)));
             }
             let _ = writeln!(
                 s,

@@ -315,3 +315,64 @@ fn model_rows_name_every_persons_model() {
     assert_eq!(rows[2][3], pacs_reports::model_sha256(&spec(0.3)));
     assert_ne!(rows[1][3], rows[2][3]);
 }
+
+/// Text from the logs (file names, `meta` values) cannot break report.md's tables: a `|` is
+/// escaped and a newline shown as a space, so every table row keeps its cells and no line of a
+/// log's text becomes a heading (the reviewer's `meta.robot_id` with "\n## injected").
+#[test]
+fn log_text_cannot_break_the_markdown_tables() {
+    let mut runs = vec![
+        run("a|b.jsonl", "pa|cs", Some(true), 0.0, Verdict::Pass),
+        run(
+            "c\n## log.jsonl",
+            "none\n## filter",
+            None,
+            0.1,
+            Verdict::Fail,
+        ),
+    ];
+    runs[0]
+        .meta
+        .insert("robot_id".into(), "arm\n## injected | x".into());
+    runs[1].meta.insert("robot_id".into(), "arm|2".into());
+    let input = ReportInput {
+        runs: &runs,
+        logs: ["a|b.jsonl", "c\n## log.jsonl"]
+            .iter()
+            .map(|p| InputFile {
+                path: (*p).into(),
+                sha256: "00".repeat(32),
+                bytes: 1,
+            })
+            .collect(),
+        config: None,
+        settings: serde_json::json!({"max_gap": 0.1}),
+        generated: pacs_reports::utc_now(),
+    };
+    let md = markdown::report(&input);
+    let headings: Vec<&str> = md.lines().filter(|l| l.starts_with('#')).collect();
+    assert!(
+        headings
+            .iter()
+            .all(|h| !h.contains("injected") && !h.starts_with("## filter")),
+        "{headings:?}"
+    );
+    // Every row of a table has as many unescaped `|` as its header row.
+    let unescaped = |l: &str| l.matches('|').count() - l.matches("\\|").count();
+    let mut width = None;
+    for line in md.lines() {
+        if line.starts_with('|') {
+            let w = unescaped(line);
+            match width {
+                None => width = Some(w),
+                Some(h) => assert_eq!(w, h, "row {line:?}\n{md}"),
+            }
+        } else {
+            width = None;
+        }
+    }
+    assert!(
+        md.contains("pa\\|cs") && md.contains("arm ## injected \\| x"),
+        "{md}"
+    );
+}

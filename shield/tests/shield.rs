@@ -514,3 +514,17 @@ fn a_refused_start_names_the_joint_the_value_and_the_limit() {
     );
     sh.start(0.0, &Q0).unwrap();
 }
+
+/// A person "measured" beyond any robot's reach (a tracker's lost-track value, 10⁷ m or
+/// FLT_MAX) is no measurement of anyone in the cell: the shield verifies nothing against it and
+/// the robot stays on its failsafe (at rest), as with no measurement at all. The audit's rule
+/// for the same record is `human_reach_error` (one rule, `HumanReach::occupancy_into`).
+#[test]
+fn a_person_measured_beyond_any_reach_is_not_verified_against() {
+    for far in [1e7, f32::MAX as f64] {
+        let lost = move |_t: f64| vec![[far, 0.0, 1.0]; 9];
+        let r = run(FilterMode::Pacs, "sorting", 300, 100, DELTA, &lost);
+        assert_eq!(r.verified, 0, "at {far} m");
+        assert!(r.qs.iter().all(|q| *q == Q0), "at {far} m the robot moved");
+    }
+}

@@ -103,7 +103,8 @@ impl Auditor {
             self.inconclusive.into_iter().map(|(s, _, _)| s).collect();
         inconclusive.extend(final_inconclusive);
         inconclusive.append(&mut self.model_breaks);
-        if self.samples < 2 {
+        // Copies of a sample count here: several records of one stamp cover no time.
+        if self.samples + self.copies < 2 {
             inconclusive.push(InconclusiveSpan {
                 t_start: if self.samples == 1 { self.t_first } else { 0.0 },
                 t_end: if self.samples == 1 { self.t_last } else { 0.0 },

@@ -225,30 +225,50 @@ fn contradicting<S: Source>(s: &mut S, a_max: f64, s0: &Sample, s1: &Sample) -> 
     bad
 }
 
-/// The whole claim (property test only): random limits, random mode, both claims.
+/// The whole claim: random limits, random mode, both claims. Under Kani one corner of the
+/// limits (`v = 0.5`, `A = 1`, `J = 100`: the accessors stubbed, [`kani_limits`]), the span of
+/// [`span`], either mode and in each the splits' extreme motion from `q₀ = 1`, `q̇₀ = 0.3`
+/// (bang-bang `+A` then `−A` from `Δ/2`; jerk `+J` then `−J` from `Δ/2` with `q̈₀ = −A`), any
+/// instant, and the contradiction of the same samples to either side by any excess (4-bit); the
+/// twin draws the whole ranges.
 fn enclosure_sound<S: Source>(s: &mut S) {
-    let (v_max, a_max, j_max) = limits(s, (0.5, 1.0, 100.0));
+    let (v_max, a_max, j_max) = limits(s, (V_HALF[0], A_ONE[0], J_HUNDRED[0]));
     let lim = joint(v_max, a_max, j_max);
-    let dt = s.f64_in(1e-4, 0.05);
+    let (dt, t0) = span(s);
     let jerk_mode = s.bool();
-    let t0 = s.f64_in(0.0, 10.0);
-    let f1 = s.f64_in(0.0, 1.0);
-    let f2 = s.f64_in(0.0, 1.0 - f1);
-    let dur = [dt * f1, dt * f2, dt * (1.0 - f1 - f2).max(0.0)];
+    let dur = if cfg!(kani) {
+        [dt / 2.0, dt / 2.0, 0.0]
+    } else {
+        let f1 = s.f64_in(0.0, 1.0);
+        let f2 = s.f64_in(0.0, 1.0 - f1);
+        [dt * f1, dt * f2, dt * (1.0 - f1 - f2).max(0.0)]
+    };
+    let (q0, v0) = if cfg!(kani) {
+        (1.0, 0.3)
+    } else {
+        (s.f64_in(-2.0, 2.0), s.f64_in(-v_max, v_max))
+    };
     let mut m = Motion {
-        q0: s.f64_in(-2.0, 2.0),
-        v0: s.f64_in(-v_max, v_max),
+        q0,
+        v0,
         a0: 0.0,
         dur,
         u: [0.0; 3],
         jerk_mode,
     };
     if jerk_mode {
-        m.a0 = s.f64_in(-a_max, a_max);
         let j_eff = j_max.min(4.0 * a_max / dt);
-        for k in 0..3 {
-            m.u[k] = s.f64_in(-j_eff, j_eff);
+        if cfg!(kani) {
+            m.a0 = -a_max;
+            m.u = [j_eff, -j_eff, 0.0];
+        } else {
+            m.a0 = s.f64_in(-a_max, a_max);
+            for k in 0..3 {
+                m.u[k] = s.f64_in(-j_eff, j_eff);
+            }
         }
+    } else if cfg!(kani) {
+        m.u = [a_max, -a_max, -a_max];
     } else {
         m.u[0] = s.f64_in(-a_max, a_max);
         m.u[1] = s.f64_in(-a_max, a_max);
@@ -292,9 +312,18 @@ fn enclosure_sound<S: Source>(s: &mut S) {
     );
 }
 
+// The Kani proof (one corner, the splits' two motions and the contradiction of their samples;
+// [`enclosure_sound`]) and the twin (the whole ranges).
 harness!(
     h2_span_enclosure_sound,
-    twin_only,
+    unwind = 6,
+    bits = 4,
+    stubs = [
+        (pacs_models::JointLimits::dof => kani_limits::one_joint),
+        (pacs_models::JointLimits::v_max => kani_limits::v_half),
+        (pacs_models::JointLimits::a_max => kani_limits::a_one),
+        (pacs_models::JointLimits::j_max => kani_limits::j_hundred),
+    ],
     cases = crate::DEFAULT_CASES,
     enclosure_sound
 );

@@ -61,8 +61,8 @@ fn curve_acceleration<S: Source>(s: &mut S) {
 fn curve_terms<S: Source>(s: &mut S, terms: Terms) {
     // Under Kani 4-bit grids (every product a narrow multiplier); the twin 8 to 12 bits.
     let (big, small) = if cfg!(kani) { (16, 16) } else { (4096, 1024) };
-    let (tau_a, tau_b, tau) = if cfg!(kani) && terms != Terms::Both {
-        // The splits: one time interval, [48/256, 112/256] s (τ_m = 0.3125 s, h = 0.125 s),
+    let (tau_a, tau_b, tau) = if cfg!(kani) {
+        // Under Kani one time interval, [48/256, 112/256] s (τ_m = 0.3125 s, h = 0.125 s),
         // and any τ of it on the grid of 1/256 s.
         let (tau_a, tau_b) = (0.1875, 0.4375);
         (tau_a, tau_b, tau_a + grid(s, 64, 8, false))
@@ -75,8 +75,8 @@ fn curve_terms<S: Source>(s: &mut S, terms: Terms) {
     if !s.assume(tau <= tau_b) {
         return;
     }
-    // Under Kani the splits start at p = 0 (p only shifts the centre); the twins draw it.
-    let p = if cfg!(kani) && terms != Terms::Both {
+    // Under Kani p = 0 (p only shifts the centre); the twins draw it.
+    let p = if cfg!(kani) {
         0.0
     } else {
         grid(s, big, 8, true) // ±16 m
@@ -103,7 +103,9 @@ fn curve_terms<S: Source>(s: &mut S, terms: Terms) {
 }
 harness!(
     j2_object_curve_encloses,
-    twin_only,
+    unwind = 2,
+    bits = 52,
+    stub = (crate::interval::Interval::scale => scale_point_or_outward),
     cases = pacs_proof_kit::DEFAULT_CASES,
     curve
 );

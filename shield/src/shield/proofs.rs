@@ -30,8 +30,8 @@
 //! otherwise the stored failsafe, its slot and the trajectory it lives on (its chunk serial) are
 //! kept. Mutants `x67_step_adopts_before_verify` and `x68_step_verifies_stale_measurement` make
 //! it fail. In CI it runs as three parts that together cover every step (each within the
-//! budget): `f3_step_kept` (the step keeps the stored failsafe), `f3_adopt_pacs` and
-//! `f3_adopt_other_modes` (it adopts its candidate, in PACS mode or in another).
+//! budget): `f3_step_kept` (the step keeps the stored failsafe), `f3_adopt_pacs`,
+//! `f3_adopt_single_action` and `f3_adopt_off` (it adopts its candidate, in each mode).
 
 #![allow(dead_code)] // The harnesses are entry points of `cargo kani` only.
 
@@ -187,23 +187,34 @@ fn f3_shield_step_induction() {
     step_induction(None, None);
 }
 
-/// The induction step where the candidate is adopted in PACS mode (with `f3_adopt_other_modes`
-/// and `f3_step_kept`: the whole step, split by outcome and by mode, to fit the budget).
+/// The induction step where the candidate is adopted in PACS mode (with `f3_adopt_off`,
+/// `f3_adopt_single_action` and `f3_step_kept`: the whole step, split by outcome and by mode, to
+/// fit the budget).
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
 #[kani::stub_verified(SpeedProfile::eval)]
 fn f3_adopt_pacs() {
-    step_induction(Some(true), Some(true));
+    step_induction(Some(true), Some(FilterMode::Pacs));
 }
 
-/// The induction step where the candidate is adopted in single-action or OFF mode.
+/// The induction step where the candidate is adopted in OFF mode (the policy's step executed
+/// unfiltered; the step's bookkeeping must still hold).
 #[kani::proof]
 #[kani::unwind(6)]
 #[kani::stub_verified(choose)]
 #[kani::stub_verified(SpeedProfile::eval)]
-fn f3_adopt_other_modes() {
-    step_induction(Some(true), Some(false));
+fn f3_adopt_off() {
+    step_induction(Some(true), Some(FilterMode::Off));
+}
+
+/// The induction step where the candidate is adopted in single-action mode.
+#[kani::proof]
+#[kani::unwind(6)]
+#[kani::stub_verified(choose)]
+#[kani::stub_verified(SpeedProfile::eval)]
+fn f3_adopt_single_action() {
+    step_induction(Some(true), Some(FilterMode::SingleAction));
 }
 
 /// The induction step where the stored failsafe is kept.
@@ -217,16 +228,11 @@ fn f3_step_kept() {
 
 /// The body of the f3 harnesses: one step of `run_step` from any state of the invariant (module
 /// docs); `outcome`, if given, restricts the proof to steps that adopt (`true`) or keep;
-/// `pacs`, if given, to PACS mode (`true`) or the other modes.
-fn step_induction(outcome: Option<bool>, pacs: Option<bool>) {
+/// `mode`, if given, to that mode (else any).
+fn step_induction(outcome: Option<bool>, mode: Option<FilterMode>) {
     let t = any_in(0.0, 100.0);
     let alpha = any_in(1e-4, 0.01);
-    let mode = match pacs {
-        Some(true) => FilterMode::Pacs,
-        Some(false) if kani::any() => FilterMode::Off,
-        Some(false) => FilterMode::SingleAction,
-        None => any_mode(),
-    };
+    let mode = mode.unwrap_or_else(any_mode);
     // Any state of the invariant: a failsafe on either slot, the command on its slot, a fresh
     // chunk (if any) on the other.
     let f = VerifiedFailsafe {

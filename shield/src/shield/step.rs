@@ -204,7 +204,8 @@ impl StepEnv for Shield {
 /// the brake of a candidate whose last verification (against the newest measurement) returned
 /// true, and is kept otherwise. Kani: `f3_shield_step_induction` (this function, with `decide`'s
 /// `choose` and `SpeedProfile::eval` replaced by their verified contracts), in CI as its parts
-/// `f3_step_kept`, `f3_adopt_pacs` and `f3_adopt_other_modes`; mutants `x67`, `x68` caught.
+/// `f3_step_kept`, `f3_adopt_pacs`, `f3_adopt_single_action` and `f3_adopt_off`; mutants `x67`,
+/// `x68` caught.
 pub(super) fn run_step<E: StepEnv>(
     env: &mut E,
     t: f64,
