@@ -1,6 +1,6 @@
 //! (h2) The audit's span enclosures and consistency check (claim C9, `verify::audit::enclosure`).
 //!
-//! The whole claim (`h2_span_enclosure_sound`, property test only): one joint with random limits
+//! The whole claim (`h2_span_enclosure_sound`; Kani outside CI on one corner, [`enclosure_sound`]): one joint with random limits
 //! moves admissibly over a span of random length: either piecewise-constant acceleration in
 //! `[−A, A]` with one switch (bang-bang included; the samples carry `q` and `q̇`), or
 //! piecewise-constant jerk in `[−J, J]` over three pieces with `|q̈| ≤ A` (the samples also carry

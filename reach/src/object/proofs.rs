@@ -1,7 +1,8 @@
 //! Proofs of the object occupancy's scalar steps, beside them (claim C4′, the parts a model
 //! checker can decide):
 //!
-//! - `j2_object_curve_encloses` (property test; its Kani proofs are the two splits below): for
+//! - `j2_object_curve_encloses` (Kani outside CI, over the budget: both terms on the splits'
+//!   interval with `p = 0`; in CI the two splits below; the twin the grids below): for
 //!   every `τ` in `[τ_a, τ_b]`, the exact `p + τ v + (τ²/2) c_u` lies in
 //!   `centre ± (|g_s| + |g_t| + err)` of [`curve_enclosure`] after [`time_split`] (one axis; in
 //!   one dimension the zonotope is exactly that interval). Inputs on dyadic grids (`τ = i/2⁸` s,
