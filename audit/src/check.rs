@@ -686,12 +686,14 @@ impl Auditor {
 
 impl Auditor {
     /// The sample is an exact copy of the previous one (the same stamp, bit for bit the same
-    /// values, velocities and accelerations logged alike) and no human or object record came
-    /// between them: it adds no evidence and is skipped (not counted). Sound: the zero-length
-    /// span it would open checks the instant `t` against the same measurements as the span that
-    /// ended there, whose boxes and occupancies already contain every state at `t`. Checked,
-    /// without `dq` its span's velocity box is `[−v_max, v_max]`: a robot at rest whose
-    /// recorder wrote each message twice failed SSM (the review of 2026-12-01).
+    /// values, velocities and accelerations logged alike): it is skipped (counted in `copies`,
+    /// not in `samples`), so the audit is that of the log without the copy (records between the
+    /// two then count as arriving before the next sample, as they would in that log). Sound: that
+    /// log allows the same motions, and a measurement left for a later span is replaced there
+    /// by an older one, whose occupancy covers every admissible motion too. The decision depends
+    /// on the robot samples alone, so every person's pass makes it alike (their span indices
+    /// stay aligned). Checked, the copy's zero-length span has, without `dq`, the velocity box
+    /// `[−v_max, v_max]`: a robot at rest whose recorder wrote each message twice failed SSM.
     fn repeats_last_sample(
         &self,
         t: f64,
@@ -706,9 +708,6 @@ impl Auditor {
         let n = self.n;
         self.samples > 0
             && last.t.to_bits() == t.to_bits()
-            && self.unused_human_t_meas.is_none()
-            && self.span_human == self.latest_human
-            && self.objects.iter().all(|o| o.span == o.latest)
             && last.has_dq == dq.is_some()
             && last.has_ddq == ddq.is_some()
             && same(&last.q[..n], q)

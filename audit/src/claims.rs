@@ -35,7 +35,7 @@ pub const CHECKS: &[Check] = &[
     Check {
         check: "span enclosures and consistency of logged positions, velocities and accelerations",
         backed_by: &[
-            "proofs: h2_span_enclosure_sound (property test of the whole claim)",
+            "proofs: h2_span_enclosure_sound (property test of the whole claim; Kani on one corner of the limits, both modes' extreme motions and their contradiction)",
             "proofs: h2_contradiction_inconsistent (Kani: contradicting positions judged inconsistent, one corner of the limits and one span)",
             "proofs: h2_bang_bang_enclosed (Kani: one extreme bang-bang motion enclosed at any instant)",
             "proofs: h2_jerk_enclosed (Kani: one extreme jerk-limited motion enclosed at any instant)",

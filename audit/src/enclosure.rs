@@ -33,7 +33,7 @@
 //! - then clipped to `[−v_max, v_max]`.
 //!
 //! Soundness (claim C9; property test `proofs::harnesses::enclosure::h2_span_enclosure_sound`,
-//! Kani proofs `h2_contradiction_inconsistent`, `h2_bang_bang_enclosed`, `h2_jerk_enclosed` beside
+//! also a Kani proof on one corner of the limits (outside CI), Kani proofs `h2_contradiction_inconsistent`, `h2_bang_bang_enclosed`, `h2_jerk_enclosed` beside
 //! it, property tests in `audit/tests/audit_consistency.rs`): if the logged values are the true states at their
 //! times and the motion between them obeys the limits, the span is consistent and the true
 //! position and velocity at every instant of the span lie in the boxes.
@@ -179,7 +179,7 @@ fn ends_box(a: f64, b: f64, reach: f64) -> (f64, f64) {
 /// Claim C9: every motion between the two samples that obeys the joint limits and matches the
 /// samples is judged consistent and lies in the boxes at every instant of the span; samples no
 /// such motion matches are judged inconsistent. Property test `h2_span_enclosure_sound` (the whole
-/// claim); Kani: `h2_contradiction_inconsistent` (inconsistency, one corner of the limits, one
+/// claim; Kani on one corner of the limits, outside CI); Kani in CI: `h2_contradiction_inconsistent` (inconsistency, one corner of the limits, one
 /// span, any positions), `h2_bang_bang_enclosed` and `h2_jerk_enclosed` (one extreme motion each,
 /// any instant); mutant `x11` caught (also by Kani).
 pub fn span_boxes(lim: &JointLimits, s0: &Sample, s1: &Sample, slack: f64) -> SpanEnclosure {

@@ -109,7 +109,8 @@ pub enum AuditError {
     },
     /// `limit_slack` above [`crate::config::MAX_LIMIT_SLACK`].
     #[error(
-        "limit_slack: value {0} is above the largest the audit accepts, 1e-6 (a larger slack would judge samples consistent that the limits contradict, e.g. dq = 0 beside moving positions)"
+        "limit_slack: value {0} is above the largest the audit accepts, {max:e} (a larger slack would judge samples consistent that the limits contradict, e.g. dq = 0 beside moving positions)",
+        max = crate::config::MAX_LIMIT_SLACK
     )]
     LimitSlack(f64),
     /// The ISO/TS 15066 rule cannot be set up for these models.

@@ -19,6 +19,14 @@ pub fn md_cell(text: &str) -> String {
     out
 }
 
+/// Text from a log on a line of its own (a heading, a list item): control characters (a
+/// newline would start another line, perhaps a heading) shown as spaces.
+pub fn md_line(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
+}
+
 /// One table row of cells, each through [`md_cell`].
 fn md_row<S: AsRef<str>>(cells: &[S]) -> String {
     let cells: Vec<String> = cells.iter().map(|c| md_cell(c.as_ref())).collect();
@@ -36,7 +44,12 @@ pub fn report(input: &ReportInput) -> String {
         overall(input.runs)
     );
     if let Some(c) = &input.config {
-        let _ = writeln!(s, "- Config: `{}` (SHA-256 `{}`)", c.path, c.sha256);
+        let _ = writeln!(
+            s,
+            "- Config: `{}` (SHA-256 `{}`)",
+            md_line(&c.path),
+            c.sha256
+        );
     } else {
         let _ = writeln!(s, "- Config: defaults");
     }
@@ -96,7 +109,7 @@ pub fn report(input: &ReportInput) -> String {
         s.push_str(&crate::fleet::markdown(&crate::fleet::of_input(input)));
     }
     for r in input.runs {
-        let _ = writeln!(s, "\n## `{}` — {:?}\n", md_cell(&r.log), r.verdict);
+        let _ = writeln!(s, "\n## `{}` — {:?}\n", md_line(&r.log), r.verdict);
         let _ = writeln!(
             s,
             "| model | name | parameters (all in report.json) | SHA-256 of the parameters |\n|---|---|---|---|"
@@ -160,7 +173,7 @@ pub fn report(input: &ReportInput) -> String {
     if !user.is_empty() {
         let _ = writeln!(s, "\n{}:\n", crate::USER_VALUES_HEADING);
         for v in &user {
-            let _ = writeln!(s, "- {v}");
+            let _ = writeln!(s, "- {}", md_line(v));
         }
     }
     s

@@ -52,7 +52,8 @@ impl Auditor {
             });
             return;
         }
-        if self.awaiting_human_t_meas.is_some() && self.samples >= 2 {
+        // Copies count: two records of one sample still make a zero-length span to check.
+        if self.awaiting_human_t_meas.is_some() && self.samples + self.copies >= 2 {
             let (was_violated, was_certain) = (self.last_span_violated, self.last_span_certain);
             self.check_span(&last, &last, self.span_human);
             // The last sample counts once (finish adds it for a violated last span).

@@ -56,8 +56,18 @@ fn segments<S: Source>(s: &mut S) -> Option<([Point3<f64>; 4], [Interval; 3], [I
 }
 
 /// The separating-axis lower bound never exceeds the distance of any two points of the segments
-/// (so never the exact segment distance).
+/// (so never the exact segment distance): in half the cases the segments of
+/// [`plane_grid_segments`] and points of them at `t, u ∈ {0, ½, 1}`, against the exact distance
+/// ([`below_distance`]); in every case any segments in `[−2, 2]³` (ends often 10⁻⁶ apart) and
+/// any points of them.
 fn segment_lb<S: Source>(s: &mut S) {
+    if s.bool() {
+        let [a0, a1, b0, b1] = plane_grid_segments(s);
+        let lb = segment_distance_lower_bound(&a0, &a1, &b0, &b1);
+        assert!((0.0..=8.0).contains(&lb), "bound {lb} out of range");
+        let (p, q) = (half_point(s, &a0, &a1), half_point(s, &b0, &b1));
+        assert!(below_distance(lb, &p, &q), "lb {lb} > |{p:?} − {q:?}|");
+    }
     let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
         return;
     };
@@ -78,6 +88,8 @@ fn segment_lb<S: Source>(s: &mut S) {
 // Property test only: the Kani proofs are the floating-point steps beside the code
 // (`b1_dot_bounds_enclose`, with a1 `sub_down`, a2 `div_down`, a3 `norm3_up`) and the real-number
 // argument in the doc of `separating_axis_lower_bound` (proofs/README.md, "What the splits leave").
+// The plane grid alone under Kani (`√` by `root_not_below`) timed out at 300 s, with coordinates
+// in [−2, 2] and in [−1, 1], Bitwuzla and MiniSat (2026-12-01).
 harness!(
     b1_segment_distance_lower_bound,
     twin_only,
@@ -93,6 +105,14 @@ fn small_int<S: Source>(s: &mut S) -> f64 {
 /// A point with integer coordinates in `[−2, 2]`.
 fn int_point<S: Source>(s: &mut S) -> Point3<f64> {
     Point3::new(small_int(s), small_int(s), small_int(s))
+}
+
+/// Two segments (either possibly a point) with integer ends in `[−2, 2]` in the plane `z = 0`,
+/// where points at `t ∈ {0, ½, 1}` and their squared distances are exact (the divisions, the
+/// norm and the outward rounding of the bound still round).
+fn plane_grid_segments<S: Source>(s: &mut S) -> [Point3<f64>; 4] {
+    let mut plane = || Point3::new(small_int(s), small_int(s), 0.0);
+    [plane(), plane(), plane(), plane()]
 }
 
 /// An end of the segment `ab`, or its midpoint: exact for integer `a`, `b` (multiples of 1/2).
@@ -162,8 +182,12 @@ harness!(
 
 /// Capsules that share a point are never reported disjoint, and the capsule distance bound is
 /// at most the distance of any two axis points minus the radii. Radii are drawn so that the
-/// capsules often exactly touch.
+/// capsules often exactly touch. In half the cases also [`capsules_on_the_plane_grid`], decided
+/// exactly.
 fn capsules<S: Source>(s: &mut S) {
+    if s.bool() {
+        capsules_on_the_plane_grid(s);
+    }
     let Some(([a0, a1, b0, b1], p, q)) = segments(s) else {
         return;
     };
@@ -189,8 +213,41 @@ fn capsules<S: Source>(s: &mut S) {
     }
     assert!(lb <= (ub - ra - rb).max(0.0) * (1.0 + 1e-12) + 1e-300);
 }
+/// The capsules of [`plane_grid_segments`] with radii multiples of 1/4 in `[0, 2]` and points
+/// of their axes at `t, u ∈ {0, ½, 1}`, decided exactly (every square and sum below exact): if
+/// the points are within the sum of the radii, the capsules share a point and are never
+/// reported disjoint, and their distance bound is 0; the bound is 0 or at most the points'
+/// distance less the radii ([`crate::exact::cmp_sqrt`] against the sum rounded up).
+fn capsules_on_the_plane_grid<S: Source>(s: &mut S) {
+    let [a0, a1, b0, b1] = plane_grid_segments(s);
+    let (p, q) = (half_point(s, &a0, &a1), half_point(s, &b0, &b1));
+    let (ra, rb) = (s.index(9) as f64 * 0.25, s.index(9) as f64 * 0.25);
+    let (ca, cb) = (
+        Capsule::new_unchecked(a0, a1, ra),
+        Capsule::new_unchecked(b0, b1, rb),
+    );
+    let lb = capsule_distance_lower_bound(&ca, &cb);
+    assert!(lb >= 0.0);
+    let d2 = (0..3).map(|i| (p[i] - q[i]) * (p[i] - q[i])).sum::<f64>();
+    let r = ra + rb;
+    if d2 <= r * r {
+        assert!(
+            !capsules_disjoint(&ca, &cb),
+            "capsules sharing a point reported disjoint"
+        );
+        assert!(lb == 0.0, "bound {lb} for capsules sharing a point");
+    }
+    assert!(
+        lb == 0.0
+            || crate::exact::cmp_sqrt(d2, crate::exact::ceil_sum(lb, r))
+                != std::cmp::Ordering::Less,
+        "bound {lb} above |{p:?} − {q:?}| − {r}"
+    );
+}
 // Property test only: the Kani proofs are `b2_capsule_margin_sound` (the rounding of the margin,
-// beside the code) and the b1 split for the segment distance (proofs/README.md).
+// beside the code) and the b1 split for the segment distance (proofs/README.md). The plane grid
+// alone under Kani (`√` by `root_not_below`) timed out at 300 s, with coordinates in [−2, 2] and
+// in [−1, 1], Bitwuzla and MiniSat (2026-12-01).
 harness!(
     b2_capsule_intersection_conservative,
     twin_only,

@@ -15,8 +15,8 @@
 //!     above with any `c_u`).
 //!   Both with `Interval::scale` replaced by an over-approximation (`scale_point_or_outward`).
 //!   The curve is linear in `(p, v, c_u)` and so is the exact algebra of the enclosure (module
-//!   docs); other time intervals, `p` and both terms at once (the rounding of their sum) are the
-//!   twins'. Mutant `x17` (the chord generator `g_s` dropped) fails each split.
+//!   docs); both terms at once (the rounding of their sum) are the whole claim's (Kani on the
+//!   same interval with `p = 0`, outside CI), other time intervals and `p` the twins'. Mutant `x17` (the chord generator `g_s` dropped) fails each split.
 //! - `j1_object_time_and_balls` (split of `j1_object_occupancy_contains_motion`, whose twin in
 //!   `pacs-proofs` samples whole 3-D motions, shapes and the distance test): for any measured
 //!   time and any query `[t_a, t_b]` that `occupancy` accepts (`t_a ≥ t_m − δ` as it evaluates
@@ -68,7 +68,7 @@ fn curve_terms<S: Source>(s: &mut S, terms: Terms) {
         let (tau_a, tau_b) = (0.1875, 0.4375);
         (tau_a, tau_b, tau_a + grid(s, 64, 8, false))
     } else {
-        let tau_a = grid(s, small, 8, false); // [0, 4] s (Kani: [0, 1/16])
+        let tau_a = grid(s, small, 8, false); // [0, 4] s
         let width = grid(s, small / 4, 8, false); // [0, 1] s
         let tau = tau_a + grid(s, small / 4, 8, false);
         (tau_a, tau_a + width, tau)
