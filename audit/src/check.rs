@@ -480,8 +480,19 @@ impl Auditor {
     /// Record a contradiction of a model between the stamps `t0 ≤ t1` (merged with the previous
     /// one of the same reason where they chain).
     fn model_break(&mut self, t0: f64, t1: f64, reason: Reason) {
+        self.model_break_about(t0, t1, reason, None);
+    }
+
+    /// [`Self::model_break`] of object `object`'s model (index), which the span names.
+    fn model_break_about(&mut self, t0: f64, t1: f64, reason: Reason, object: Option<usize>) {
+        let name = object.map(|k| self.objects[k].id.as_str());
         match self.model_breaks.last_mut() {
-            Some(last) if last.reason == reason && last.t_end >= t0 && last.t_start <= t1 => {
+            Some(last)
+                if last.reason == reason
+                    && last.object.as_deref() == name
+                    && last.t_end >= t0
+                    && last.t_start <= t1 =>
+            {
                 last.t_start = last.t_start.min(t0);
                 last.t_end = last.t_end.max(t1);
                 last.spans += 1;
@@ -492,6 +503,7 @@ impl Auditor {
                 reason,
                 spans: 1,
                 person: None,
+                object: name.map(str::to_string),
             }),
         }
     }
@@ -532,7 +544,7 @@ impl Auditor {
         // newest by stamp is the one in use, as in the shield (`keep_newest`: the first of equal
         // stamps stays).
         if object_record_breaks(&self.objects[k].model, &m) {
-            self.model_break(m.time, m.time, Reason::ObjectExceedsModel);
+            self.model_break_about(m.time, m.time, Reason::ObjectExceedsModel, Some(k));
         }
         let mut nearest = Nearest::new(m.time);
         let o = &self.objects[k];
@@ -547,7 +559,7 @@ impl Auditor {
             }
         }
         for (t0, t1) in nearest.pairs() {
-            self.model_break(t0, t1, Reason::ObjectExceedsModel);
+            self.model_break_about(t0, t1, Reason::ObjectExceedsModel, Some(k));
         }
         let o = &mut self.objects[k];
         o.others_for = None;

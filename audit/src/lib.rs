@@ -271,6 +271,7 @@ fn complete_or_not(result: &mut RunResult, end: Option<f64>, last_robot: Option<
             reason: InconclusiveReason::IncompleteLog,
             spans: 0,
             person: None,
+            object: None,
         });
         result.refresh_verdict();
     }

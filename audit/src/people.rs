@@ -274,12 +274,19 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         // A person's violations are this pass's own; an object's (no person) are found by every
         // pass that checks the span (joined below).
         out.violations.extend(r.violations);
-        // Findings about the robot alone (gaps, limits, time) are the same in every pass: kept
-        // once, from the first.
+        // Findings about the robot alone (gaps, limits, time) and about the objects' records
+        // (`object_exceeds_model`) are the same in every pass: kept once, from the first. A
+        // pass checks the objects only on spans its own person's measurement lets it check, so
+        // an object's span of another pass is kept too unless the same span is already listed.
         let about_people: Vec<InconclusiveSpan> = r
             .inconclusive
             .into_iter()
-            .filter(|s| s.reason.about_a_person())
+            .filter(|s| {
+                s.reason.about_a_person()
+                    || (s.reason.about_an_object()
+                        && s.reason != Reason::ObjectExceedsModel
+                        && !out.inconclusive.contains(s))
+            })
             .collect();
         inconclusive_iv.extend(
             about_people

@@ -196,9 +196,22 @@ pub struct InconclusiveSpan {
     /// `human_record_after_last_robot_sample`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub person: Option<String>,
+    /// The object it concerns (its id in the header, for the reasons about an object's
+    /// measurements: `no_object`, `stale_object`, `object_reach_error`, `object_exceeds_model`);
+    /// absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object: Option<String>,
 }
 
 impl InconclusiveReason {
+    /// Whether the reason is about one object's measurements (and names the object).
+    pub fn about_an_object(self) -> bool {
+        matches!(
+            self,
+            Self::NoObject | Self::StaleObject | Self::ObjectReachError | Self::ObjectExceedsModel
+        )
+    }
+
     /// Whether the reason is about one person's measurements (and names the person).
     pub fn about_a_person(self) -> bool {
         matches!(

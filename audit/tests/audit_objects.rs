@@ -239,6 +239,15 @@ fn an_unmeasured_or_stale_object_is_inconclusive() {
         "{:?}",
         r.inconclusive
     );
+    // The spans about an object name it (and no person).
+    assert!(
+        r.inconclusive
+            .iter()
+            .filter(|s| s.reason.about_an_object())
+            .all(|s| s.object.as_deref() == Some("b1") && s.person.is_none()),
+        "{:?}",
+        r.inconclusive
+    );
     // Measured only until 0.05 s; max_human_age 0.1 s (it also bounds object measurements).
     let cfg = AuditConfig {
         max_human_age: 0.1,
@@ -251,7 +260,9 @@ fn an_unmeasured_or_stale_object_is_inconclusive() {
     .unwrap();
     assert_eq!(r.verdict, Verdict::Inconclusive);
     assert!(
-        r.inconclusive.iter().any(|s| s.reason == "stale_object"),
+        r.inconclusive
+            .iter()
+            .any(|s| s.reason == "stale_object" && s.object.as_deref() == Some("b1")),
         "{:?}",
         r.inconclusive
     );

@@ -708,3 +708,42 @@ fn an_exact_copy_of_a_robot_sample_changes_nothing() {
         assert_eq!(twice.inconclusive, once.inconclusive);
     }
 }
+
+/// An object never measured, person A never measured, person B throughout: A's pass stops at
+/// `no_human` before it reaches the objects, B's finds `no_object`. Both are reported, and the
+/// object's spans name the object (before, only the first pass's object findings were kept).
+#[test]
+fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
+    let all: Vec<f64> = (0..=20).map(|i| f64::from(i) * 0.1).collect();
+    let text: String = object_on_gripper_log(&[], &all)
+        .lines()
+        .filter(|l| !l.contains("\"type\": \"object\""))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let r = audit(&text);
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    let about = |reason: InconclusiveReason| {
+        r.inconclusive
+            .iter()
+            .filter(|s| s.reason == reason)
+            .collect::<Vec<_>>()
+    };
+    let (no_human, no_object) = (
+        about(InconclusiveReason::NoHuman),
+        about(InconclusiveReason::NoObject),
+    );
+    assert!(
+        !no_human.is_empty() && no_human.iter().all(|s| s.person.as_deref() == Some("A")),
+        "{:?}",
+        r.inconclusive
+    );
+    assert!(
+        no_object.len() == 1
+            && no_object[0].object.as_deref() == Some("b1")
+            && no_object[0].person.is_none()
+            // 200 spans and the last sample's instant (B's record at 2.0 s).
+            && no_object[0].spans == 201,
+        "{:?}",
+        r.inconclusive
+    );
+}

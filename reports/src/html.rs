@@ -269,7 +269,8 @@ fn inconclusive_list(s: &mut String, r: &RunResult) {
             i.t_end,
             esc(&crate::inconclusive_what(
                 i.reason.as_str(),
-                i.person.as_deref()
+                i.person.as_deref(),
+                i.object.as_deref()
             )),
             i.spans
         );

@@ -135,10 +135,15 @@ pub fn model_specs(r: &RunResult) -> Value {
 
 /// What an inconclusive span is about, as the reports print it: its reason, and the person it
 /// names where there is one (`no_human, person `B``).
-pub(crate) fn inconclusive_what(reason: &str, person: Option<&str>) -> String {
-    match person {
-        Some(p) => format!("{reason}, person `{p}`"),
-        None => reason.to_string(),
+pub(crate) fn inconclusive_what(
+    reason: &str,
+    person: Option<&str>,
+    object: Option<&str>,
+) -> String {
+    match (person, object) {
+        (Some(p), _) => format!("{reason}, person `{p}`"),
+        (None, Some(o)) => format!("{reason}, object `{o}`"),
+        (None, None) => reason.to_string(),
     }
 }
 

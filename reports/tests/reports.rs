@@ -141,6 +141,7 @@ fn plots_and_documents() {
             reason: pacs_audit::InconclusiveReason::NoHuman,
             spans: 10,
             person: Some("visitor".into()),
+            object: None,
         });
     let sep = svg::separation_plot(&runs[0].series);
     assert!(sep.starts_with("<svg") && sep.ends_with("</svg>"));

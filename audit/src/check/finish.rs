@@ -5,10 +5,24 @@ use super::*;
 
 impl Auditor {
     pub(super) fn mark_inconclusive(&mut self, t0: f64, t1: f64, reason: Reason) {
+        self.mark_inconclusive_about(t0, t1, reason, None);
+    }
+
+    /// [`Self::mark_inconclusive`] for a reason about object `object` (index into the log's
+    /// objects), which the span names; spans chain only for the same object.
+    pub(super) fn mark_inconclusive_about(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        reason: Reason,
+        object: Option<usize>,
+    ) {
         let idx = self.span_index;
+        let name = object.map(|k| self.objects[k].id.as_str());
         if let Some((last, r, last_idx)) = self.inconclusive.last_mut()
             && *r == reason
             && *last_idx + 1 == idx
+            && last.object.as_deref() == name
         {
             last.t_end = t1;
             last.spans += 1;
@@ -21,6 +35,7 @@ impl Auditor {
                     reason,
                     spans: 1,
                     person: None,
+                    object: name.map(str::to_string),
                 },
                 reason,
                 idx,
@@ -49,6 +64,7 @@ impl Auditor {
                 reason: Reason::HumanRecordAfterLastRobotSample,
                 spans: 0,
                 person: None,
+                object: None,
             });
             return;
         }
@@ -112,6 +128,7 @@ impl Auditor {
                 reason: Reason::FewerThanTwoRobotSamples,
                 spans: 0,
                 person: None,
+                object: None,
             });
         } else if self.t_last == self.t_first {
             inconclusive.push(InconclusiveSpan {
@@ -120,6 +137,7 @@ impl Auditor {
                 reason: Reason::NoTimeCovered,
                 spans: 0,
                 person: None,
+                object: None,
             });
         }
         // Reasons about a person's measurements name the person (v2 logs).

@@ -429,8 +429,8 @@ impl Auditor {
         }
         let objects_left = match self.object_occupancies(t0, t1) {
             Ok(left) => left,
-            Err(reason) => {
-                self.skip_span(t0, t1, bidx, reason);
+            Err((reason, k)) => {
+                self.skip_span_about(t0, t1, bidx, reason, Some(k));
                 return;
             }
         };
@@ -667,7 +667,19 @@ impl Auditor {
     /// bucket marked), neither violated nor certain.
     #[inline]
     fn skip_span(&mut self, t0: f64, t1: f64, bidx: usize, reason: Reason) {
-        self.mark_inconclusive(t0, t1, reason);
+        self.skip_span_about(t0, t1, bidx, reason, None);
+    }
+
+    /// [`Self::skip_span`] for a reason about object `object` (index), which the span names.
+    fn skip_span_about(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        bidx: usize,
+        reason: Reason,
+        object: Option<usize>,
+    ) {
+        self.mark_inconclusive_about(t0, t1, reason, object);
         self.inconclusive_duration += t1 - t0;
         self.series.buckets[bidx].inconclusive = true;
         self.finish_span(bidx, false, false);
@@ -698,10 +710,10 @@ impl Auditor {
 
     /// Each object's occupancy over the span `t0`–`t1`, from the measurement in use for it (into
     /// the object's `occ`; `None` where the workspace ball clears it): whether any object is
-    /// left for the object rule, or the reason the span cannot be checked (the objects after
-    /// the first such one are left as they were).
+    /// left for the object rule, or the reason the span cannot be checked and the object it
+    /// concerns (the objects after the first such one are left as they were).
     #[inline]
-    fn object_occupancies(&mut self, t0: f64, t1: f64) -> Result<bool, Reason> {
+    fn object_occupancies(&mut self, t0: f64, t1: f64) -> Result<bool, (Reason, usize)> {
         let mut objects_left = false;
         for k in 0..self.objects.len() {
             let o = &mut self.objects[k];
@@ -721,7 +733,7 @@ impl Auditor {
                 },
             };
             if let Some(r) = reason {
-                return Err(r);
+                return Err((r, k));
             }
         }
         Ok(objects_left)

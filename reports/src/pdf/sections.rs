@@ -248,7 +248,11 @@ fn inconclusive_list(d: &mut Doc, r: &RunResult) {
                 "- {:.4}-{:.4} s: {} ({} spans)",
                 i.t_start,
                 i.t_end,
-                crate::inconclusive_what(i.reason.as_str(), i.person.as_deref()),
+                crate::inconclusive_what(
+                    i.reason.as_str(),
+                    i.person.as_deref(),
+                    i.object.as_deref(),
+                ),
                 i.spans
             ),
             8.0,
