@@ -270,6 +270,21 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
         .filter(|s| spans_time(s.reason))
         .map(|s| (s.t_start, s.t_end))
         .collect();
+    // The objects' spans listed so far (a span found again by a later pass is not listed twice).
+    let key = |s: &InconclusiveSpan| {
+        (
+            s.t_start.to_bits(),
+            s.t_end.to_bits(),
+            s.reason.as_str(),
+            s.object.clone(),
+        )
+    };
+    let mut object_spans: std::collections::HashSet<_> = out
+        .inconclusive
+        .iter()
+        .filter(|s| s.reason.about_an_object())
+        .map(key)
+        .collect();
     for r in rest {
         // A person's violations are this pass's own; an object's (no person) are found by every
         // pass that checks the span (joined below).
@@ -285,7 +300,7 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
                 s.reason.about_a_person()
                     || (s.reason.about_an_object()
                         && s.reason != Reason::ObjectExceedsModel
-                        && !out.inconclusive.contains(s))
+                        && object_spans.insert(key(s)))
             })
             .collect();
         inconclusive_iv.extend(

@@ -594,26 +594,13 @@ fn an_objects_interval_seen_in_parts_by_the_passes_is_listed_once() {
     assert_eq!(p, w, "joined across the passes as one person sees it");
 }
 
-/// The reviewer's case (2026-12-01): joint 1 turns at `W` next to a person's hand while the
-/// logger writes `dq = 0`. With the default slack the positions contradict the logged velocities
-/// (never a pass); `limit_slack = 1000` used to judge them consistent and the robot at rest, and
-/// the run passed. A slack above `MAX_LIMIT_SLACK` is now refused, and at the cap the run still
-/// does not pass.
+/// Joint 1 turns at `W` next to a person's hand while the logger writes `dq = 0`. With the
+/// default slack and at `MAX_LIMIT_SLACK` the positions contradict the logged velocities (never a
+/// pass); a slack above the cap (at 1000 the samples would be judged consistent and the robot at
+/// rest) is refused.
 #[test]
 fn a_limit_slack_that_would_hide_a_logger_zero_velocity_is_refused() {
-    let touching = reaching(hand_contact(&q_at(0.0), 0.02));
-    let mut w = LogWriter::new(Vec::new());
-    let h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
-    w.write_header(&h).unwrap();
-    for i in 0..=100 {
-        let t = i as f64 * 1e-3;
-        if i % 10 == 0 {
-            w.write_person(t, t, Some("op"), &touching).unwrap();
-        }
-        w.write_robot(t, &q_at(W * t), Some(&[0.0; 7])).unwrap();
-    }
-    w.write_event(0.1, pacs_log::END_EVENT).unwrap();
-    let text = String::from_utf8(w.finish().unwrap()).unwrap();
+    let text = touching_log(W, Some([0.0; 7]), 1);
     for slack in [
         AuditConfig::default().limit_slack,
         pacs_audit::config::MAX_LIMIT_SLACK,
@@ -643,7 +630,7 @@ fn a_limit_slack_that_would_hide_a_logger_zero_velocity_is_refused() {
 
 /// A person "measured" at a tracker's lost-track value (FLT_MAX, or 10⁷ m) is no measurement of
 /// anyone in the cell: the spans that use it are `human_reach_error` (never a pass), as for an
-/// object beyond 10⁶ m. Before, the person counted as far away and the run passed.
+/// object beyond 10⁶ m (taken as a measurement, the person would count as far away).
 #[test]
 fn a_person_measured_beyond_any_reach_is_not_evidence() {
     for far in [f32::MAX as f64, 1e7, -2e6] {
@@ -666,36 +653,38 @@ fn a_person_measured_beyond_any_reach_is_not_evidence() {
     }
 }
 
-/// A log of `W`-turning (or resting, `w = 0`) joint 1 next to a touching hand, 1 kHz, without
-/// `dq`; each robot sample written `copies` times (a recorder that wrote every message twice).
-fn touching_log(w_joint: f64, copies: usize) -> String {
+/// A log of `W`-turning (or resting, `w = 0`) joint 1 next to a touching hand, 1 kHz, with the
+/// logged velocities `dq` (or none); each robot sample written `copies` times (a recorder that
+/// wrote every message twice). No person record at the last sample (the final instant would be
+/// checked as a zero-length span).
+fn touching_log(w_joint: f64, dq: Option<[f64; 7]>, copies: usize) -> String {
     let touching = reaching(hand_contact(&q_at(0.0), 0.02));
     let mut w = LogWriter::new(Vec::new());
     let h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
     w.write_header(&h).unwrap();
     for i in 0..=100 {
         let t = i as f64 * 1e-3;
-        // (No record at the last sample: the final instant is checked as a zero-length span.)
         if i % 10 == 0 && i < 100 {
             w.write_person(t, t, Some("op"), &touching).unwrap();
         }
         for _ in 0..copies {
-            w.write_robot(t, &q_at(w_joint * t), None).unwrap();
+            w.write_robot(t, &q_at(w_joint * t), dq.as_ref().map(|v| &v[..]))
+                .unwrap();
         }
     }
     w.write_event(0.1, pacs_log::END_EVENT).unwrap();
     String::from_utf8(w.finish().unwrap()).unwrap()
 }
 
-/// An exact copy of a robot sample (same stamp, same values, no record between) adds no
-/// evidence: the run audits as if it were written once. Before, without `dq` each copy opened a
-/// zero-length span whose velocity box is `[−v_max, v_max]`, and a robot at rest touched by a
-/// hand (allowed under SSM) failed. A moving robot's run fails alike with or without copies.
+/// An exact copy of a robot sample (same stamp, same values) adds no evidence: the run audits as
+/// if it were written once. Checked, without `dq` each copy would open a zero-length span whose
+/// velocity box is `[−v_max, v_max]`, and a robot at rest touched by a hand (allowed under SSM)
+/// would fail. A moving robot's run fails alike with or without copies.
 #[test]
 fn an_exact_copy_of_a_robot_sample_changes_nothing() {
     for w_joint in [0.0, W] {
-        let once = audit(&touching_log(w_joint, 1));
-        let twice = audit(&touching_log(w_joint, 2));
+        let once = audit(&touching_log(w_joint, None, 1));
+        let twice = audit(&touching_log(w_joint, None, 2));
         let expect = if w_joint == 0.0 {
             Verdict::Pass
         } else {
@@ -711,7 +700,8 @@ fn an_exact_copy_of_a_robot_sample_changes_nothing() {
 
 /// An object never measured, person A never measured, person B throughout: A's pass stops at
 /// `no_human` before it reaches the objects, B's finds `no_object`. Both are reported, and the
-/// object's spans name the object (before, only the first pass's object findings were kept).
+/// object's spans name the object, whichever pass found them; a span both passes find is listed
+/// once.
 #[test]
 fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
     let all: Vec<f64> = (0..=20).map(|i| f64::from(i) * 0.1).collect();
@@ -743,6 +733,21 @@ fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
             && no_object[0].person.is_none()
             // 200 spans and the last sample's instant (B's record at 2.0 s).
             && no_object[0].spans == 201,
+        "{:?}",
+        r.inconclusive
+    );
+    // Both people measured throughout: both passes find the same `no_object` span, listed once.
+    let text: String = object_on_gripper_log(&all, &all)
+        .lines()
+        .filter(|l| !l.contains("\"type\": \"object\""))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let r = audit(&text);
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    let reasons: Vec<_> = r.inconclusive.iter().map(|s| s.reason).collect();
+    assert_eq!(
+        reasons,
+        [InconclusiveReason::NoObject],
         "{:?}",
         r.inconclusive
     );

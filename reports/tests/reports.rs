@@ -319,7 +319,7 @@ fn model_rows_name_every_persons_model() {
 
 /// Text from the logs (file names, `meta` values) cannot break report.md's tables: a `|` is
 /// escaped and a newline shown as a space, so every table row keeps its cells and no line of a
-/// log's text becomes a heading (the reviewer's `meta.robot_id` with "\n## injected").
+/// log's text becomes a heading (a `meta.robot_id` with "\n## injected").
 #[test]
 fn log_text_cannot_break_the_markdown_tables() {
     let mut runs = vec![

@@ -88,8 +88,7 @@ fn segment_lb<S: Source>(s: &mut S) {
 // Property test only: the Kani proofs are the floating-point steps beside the code
 // (`b1_dot_bounds_enclose`, with a1 `sub_down`, a2 `div_down`, a3 `norm3_up`) and the real-number
 // argument in the doc of `separating_axis_lower_bound` (proofs/README.md, "What the splits leave").
-// The plane grid alone under Kani (`√` by `root_not_below`) timed out at 300 s, with coordinates
-// in [−2, 2] and in [−1, 1], Bitwuzla and MiniSat (2026-12-01).
+// Its Kani attempts (the plane grid below among them) and why they fail: proofs/README.md.
 harness!(
     b1_segment_distance_lower_bound,
     twin_only,
@@ -245,9 +244,8 @@ fn capsules_on_the_plane_grid<S: Source>(s: &mut S) {
     );
 }
 // Property test only: the Kani proofs are `b2_capsule_margin_sound` (the rounding of the margin,
-// beside the code) and the b1 split for the segment distance (proofs/README.md). The plane grid
-// alone under Kani (`√` by `root_not_below`) timed out at 300 s, with coordinates in [−2, 2] and
-// in [−1, 1], Bitwuzla and MiniSat (2026-12-01).
+// beside the code) and the b1 split for the segment distance; its Kani attempts (the plane grid
+// above among them): proofs/README.md.
 harness!(
     b2_capsule_intersection_conservative,
     twin_only,
