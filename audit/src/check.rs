@@ -164,6 +164,9 @@ pub struct Auditor {
     block: Vec<Sample>,
     /// The enclosures of the block's spans (a buffer of `flush_block`).
     block_encl: Vec<SpanEnclosure>,
+    /// The sample before the last one of the latest block checked (`flush_block`): at the end,
+    /// the sample before the log's last one, whose span bounds the final instant's velocities.
+    before_last: Option<Sample>,
     /// The last spans checked one by one were mostly violating: check the next blocks span by
     /// span, neither whole nor in halves (speed only).
     dense_violations: bool,
@@ -300,6 +303,7 @@ impl Auditor {
             hits: Vec::with_capacity(slots * links),
             block: Vec::with_capacity(BLOCK_SPANS + 1),
             block_encl: Vec::with_capacity(BLOCK_SPANS),
+            before_last: None,
             dense_violations: false,
             block_fast_path: true,
             block_human: None,

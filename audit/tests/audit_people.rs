@@ -655,16 +655,16 @@ fn a_person_measured_beyond_any_reach_is_not_evidence() {
 
 /// A log of `W`-turning (or resting, `w = 0`) joint 1 next to a touching hand, 1 kHz, with the
 /// logged velocities `dq` (or none); each robot sample written `copies` times (a recorder that
-/// wrote every message twice). No person record at the last sample (the final instant would be
-/// checked as a zero-length span).
-fn touching_log(w_joint: f64, dq: Option<[f64; 7]>, copies: usize) -> String {
+/// wrote every message twice). With `at_end`, a person record also just before the last sample
+/// (the final instant is then checked with it, as a zero-length span).
+fn touching_log_ending(w_joint: f64, dq: Option<[f64; 7]>, copies: usize, at_end: bool) -> String {
     let touching = reaching(hand_contact(&q_at(0.0), 0.02));
     let mut w = LogWriter::new(Vec::new());
     let h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
     w.write_header(&h).unwrap();
     for i in 0..=100 {
         let t = i as f64 * 1e-3;
-        if i % 10 == 0 && i < 100 {
+        if i % 10 == 0 && (i < 100 || at_end) {
             w.write_person(t, t, Some("op"), &touching).unwrap();
         }
         for _ in 0..copies {
@@ -674,6 +674,37 @@ fn touching_log(w_joint: f64, dq: Option<[f64; 7]>, copies: usize) -> String {
     }
     w.write_event(0.1, pacs_log::END_EVENT).unwrap();
     String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+/// [`touching_log_ending`] without a person record at the last sample.
+fn touching_log(w_joint: f64, dq: Option<[f64; 7]>, copies: usize) -> String {
+    touching_log_ending(w_joint, dq, copies, false)
+}
+
+/// The last sample's instant, checked with a person record that arrived just before it, in a log
+/// without velocities: its velocity box is the one of the span ending there. A robot at rest
+/// touched by a hand (allowed under SSM) passes as it does without that record (with the limits
+/// alone, `[−v_max, v_max]`, it failed at that instant); a turning joint fails at that instant
+/// too.
+#[test]
+fn the_final_instant_without_velocities_is_bounded_by_the_last_span() {
+    for w_joint in [0.0, W] {
+        let without = audit(&touching_log(w_joint, None, 1));
+        let with = audit(&touching_log_ending(w_joint, None, 1, true));
+        if w_joint == 0.0 {
+            assert_eq!(without.verdict, Verdict::Pass);
+            assert_eq!(with.verdict, Verdict::Pass, "{:?}", with.violations);
+        } else {
+            assert_eq!(without.verdict, Verdict::Fail);
+            assert_eq!(with.verdict, Verdict::Fail);
+            // The violation runs to the last sample, whose instant is checked with the record.
+            assert!(
+                with.violations.iter().any(|v| v.t_end == 0.1),
+                "{:?}",
+                with.violations
+            );
+        }
+    }
 }
 
 /// An exact copy of a robot sample (same stamp, same values) adds no evidence: the run audits as

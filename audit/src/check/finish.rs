@@ -48,7 +48,8 @@ impl Auditor {
     /// information was not checked: `human_record_after_last_robot_sample` (inconclusive). The
     /// latest record pushed between the last two robot samples (in use from the last sample on,
     /// which starts no span): the last sample's instant is checked with it (a zero-length span),
-    /// so a contact it shows at the end of the log is a violation.
+    /// so a contact it shows at the end of the log is a violation. Without logged velocities,
+    /// that instant's velocity box is the one of the span ending there.
     pub(super) fn check_final_instant(&mut self, inconclusive: &mut Option<InconclusiveSpan>) {
         // The block always ends with the last sample pushed (`flush_block` keeps it).
         let Some(&last) = self.block.last() else {
@@ -71,7 +72,23 @@ impl Auditor {
         // Copies count: two records of one sample still make a zero-length span to check.
         if self.awaiting_human_t_meas.is_some() && self.samples + self.copies >= 2 {
             let (was_violated, was_certain) = (self.last_span_violated, self.last_span_certain);
-            self.check_span(&last, &last, self.span_human);
+            let mut e = self.boxes(&last, &last);
+            // Without logged velocities a zero-length span bounds them by the limits alone; the
+            // span that ends at the last sample bounds them at its end (claim C9: every motion
+            // consistent with its samples stays in its boxes at every instant of it, its end
+            // included), so its velocity box is used where both enclosures are consistent.
+            if !last.has_dq
+                && let Some(prev) = self.before_last
+                && prev.t < last.t
+            {
+                let span = self.boxes(&prev, &last);
+                if let (true, true, Some(b), Some(s)) =
+                    (e.consistent, span.consistent, e.boxes.as_mut(), span.boxes)
+                {
+                    b.dq = s.dq;
+                }
+            }
+            self.check_span_with(&last, &last, &e, self.span_human);
             // The last sample counts once (finish adds it for a violated last span).
             let (v, c) = (self.last_span_violated, self.last_span_certain);
             self.last_span_violated = was_violated && !v;

@@ -112,6 +112,7 @@ impl Auditor {
                 self.boxes_into(&block[i], &block[i + 1], e);
             }
             self.check_spans(&block, &encl, 0, m - 1, slot);
+            self.before_last = Some(block[m - 2]);
             self.block = block;
             self.block_encl = encl;
             // The last sample starts the next block.
@@ -380,12 +381,6 @@ impl Auditor {
             };
             v <= self.cfg.rest_speed
         })
-    }
-
-    /// Check one span on its own (its enclosure computed here).
-    pub(super) fn check_span(&mut self, s0: &Sample, s1: &Sample, span_human: Option<usize>) {
-        let e = self.boxes(s0, s1);
-        self.check_span_with(s0, s1, &e, span_human);
     }
 
     /// Check the span `s0`–`s1` with its enclosure `encl` (`self.boxes(s0, s1)`): the reference
