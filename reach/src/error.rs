@@ -26,6 +26,21 @@ pub enum ReachError {
         /// Upper bound of `‖|A| r‖∞`.
         norm: f64,
     },
+    /// A human measurement puts keypoint `keypoint` farther than 10⁶ m from the world origin
+    /// (beyond any robot's reach: a tracker's lost-track value, no measurement of a person in
+    /// the cell). Typed, formatted only when shown: the shield meets it every step while a
+    /// tracker has lost the person.
+    #[error(
+        "human measurement: positions[{keypoint}][{axis}] = {value} m, farther than 10^6 m from the world origin (a tracker's lost-track value?): no measurement of a person in the cell"
+    )]
+    BeyondReach {
+        /// Keypoint index (the model's order).
+        keypoint: usize,
+        /// Axis (0 = x, 1 = y, 2 = z).
+        axis: usize,
+        /// The coordinate (m).
+        value: f64,
+    },
     /// A human occupancy was asked for an interval that starts before the measured state
     /// (`time − delay`) by more than a rounding: a typed error, formatted only when shown, since
     /// the audit asks every still-usable measurement and expects this for the newer ones.

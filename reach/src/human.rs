@@ -71,9 +71,10 @@ pub struct HumanMeasurement {
     /// Velocity buffer (kept allocated); meaningful only when `has_velocities`.
     velocities: Vec<Vector3<f64>>,
     has_velocities: bool,
-    /// Some keypoint lies farther than `MAX_REACH` (10⁶ m) from the world origin on an axis:
-    /// no measurement of a person in the cell ([`HumanReach::occupancy_into`] refuses it).
-    beyond_reach: bool,
+    /// The first keypoint (index, axis, coordinate in m) farther than `MAX_REACH` (10⁶ m) from
+    /// the world origin on an axis, if any: no measurement of a person in the cell
+    /// ([`HumanReach::occupancy_into`] refuses it, naming it).
+    beyond_reach: Option<(usize, usize, f64)>,
 }
 
 impl HumanMeasurement {
@@ -121,9 +122,11 @@ impl HumanMeasurement {
                 None => vec![Vector3::zeros(); n],
             },
             has_velocities: velocities.is_some(),
-            beyond_reach: positions
-                .iter()
-                .any(|p| p.iter().any(|x| x.abs() > pacs_models::MAX_REACH)),
+            beyond_reach: positions.iter().enumerate().find_map(|(k, p)| {
+                (0..3)
+                    .find(|&a| p[a].abs() > pacs_models::MAX_REACH)
+                    .map(|a| (k, a, p[a]))
+            }),
         })
     }
 
@@ -515,10 +518,11 @@ impl HumanReach {
         // person in the cell: a tracker's lost-track value (FLT_MAX, 1e7) would otherwise put the
         // person far away and certify the run as if someone had been measured. Refused, as for
         // objects (the shield does not verify; the audit's span is `human_reach_error`).
-        if m.beyond_reach {
-            return Err(ReachError::Invalid {
-                what: "human measurement",
-                reason: "a keypoint farther than 10^6 m from the world origin",
+        if let Some((keypoint, axis, value)) = m.beyond_reach {
+            return Err(ReachError::BeyondReach {
+                keypoint,
+                axis,
+                value,
             });
         }
         let (t_lo, t_hi, back) = self.elapsed(m, t_a, t_b)?;

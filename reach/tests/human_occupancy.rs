@@ -473,3 +473,48 @@ fn an_interval_before_the_measured_state_is_a_typed_error_naming_its_values() {
     );
     assert!(reach.occupancy(&m, 0.95 - 1e-10, 1.0).is_ok());
 }
+
+/// A keypoint beyond 10⁶ m (a tracker's lost-track value) is no measurement of a person: every
+/// model refuses it, and the error names the keypoint, the axis and the value.
+#[test]
+fn a_keypoint_beyond_any_reach_is_refused_by_name() {
+    let model = default_human();
+    let n = model.keypoint_count();
+    let mut pos = vec![[0.5, 0.0, 1.0]; n];
+    pos[3][1] = -2e6;
+    let vel = vec![[0.0; 3]; n];
+    let m = HumanMeasurement::new(&model, 0.0, &pos, Some(&vel)).unwrap();
+    let mut caps = vec![
+        Capsule::new_unchecked(Point3::origin(), Point3::origin(), 0.0);
+        model.body_parts().len()
+    ];
+    for kind in [
+        HumanReachModel::Vel,
+        HumanReachModel::Acc,
+        HumanReachModel::Combined,
+        HumanReachModel::Pos,
+    ] {
+        let e = HumanReach::new(model.clone(), kind)
+            .occupancy_into(&m, 0.0, 0.1, &mut caps)
+            .unwrap_err();
+        assert_eq!(
+            e,
+            pacs_reach::ReachError::BeyondReach {
+                keypoint: 3,
+                axis: 1,
+                value: -2e6
+            },
+            "{kind:?}"
+        );
+        let text = e.to_string();
+        assert!(text.contains("positions[3][1] = -2000000 m"), "{text}");
+    }
+    // At 10⁶ m exactly: a measurement (the bound is inclusive).
+    pos[3][1] = -1e6;
+    let m = HumanMeasurement::new(&model, 0.0, &pos, Some(&vel)).unwrap();
+    assert!(
+        HumanReach::new(model, HumanReachModel::Vel)
+            .occupancy_into(&m, 0.0, 0.1, &mut caps)
+            .is_ok()
+    );
+}
