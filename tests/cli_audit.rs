@@ -295,6 +295,44 @@ fn nulls(v: &Value, at: &str, out: &mut Vec<String>) {
     }
 }
 
+/// An object whose inline model has no speed bound: report.json's echo of its spec leaves the
+/// bound out (no `null`).
+#[test]
+fn an_object_without_a_speed_bound_leaves_no_null_in_the_report() {
+    let dir = tmpdir("report-object-no-speed");
+    let log = dir.join("ball.jsonl");
+    let mut text = String::from(
+        r#"{"type":"header","format":"pacs-log","version":2,"robot":"fr3","constraints":"sorting","humans":[{"id":"op","human":"default"}],"end_event":true,"objects":[{"id":"b1","object":{"shape":{"sphere":{"radius":0.04}},"max_acc":3.0,"name":"ns"},"contact":"no_contact"}]}"#,
+    );
+    text.push('\n');
+    let person = "[[1.8,0.2,1.4],[1.8,0.2,1.1],[1.8,0.2,0.9],[1.8,-0.2,1.4],[1.8,-0.2,1.1],[1.8,-0.2,0.9],[1.8,0,1.45],[1.8,0,0.9],[1.8,0,1.65]]";
+    for k in 0..=100 {
+        let t = f64::from(k) * 0.001;
+        text += &format!(
+            "{{\"type\":\"human\",\"t\":{t},\"id\":\"op\",\"positions\":{person}}}\n{{\"type\":\"object\",\"t\":{t},\"id\":\"b1\",\"position\":[1.5,1.5,0.5],\"velocity\":[0,0,0]}}\n{{\"type\":\"robot\",\"t\":{t},\"q\":[0,-0.785,0,-2.356,0,1.571,0.785],\"dq\":[0,0,0,0,0,0,0]}}\n"
+        );
+    }
+    text += "{\"type\":\"event\",\"t\":0.1,\"name\":\"end\"}\n";
+    std::fs::write(&log, text).unwrap();
+    let out = dir.join("report");
+    let o = pacs(&["audit", &s(&log), "--out", &s(&out)]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rep: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let mut found = Vec::new();
+    nulls(&rep, "report", &mut found);
+    assert!(found.is_empty(), "null at {found:?}");
+    let spec = &rep["runs"][0]["model_parameters"]["objects"]["spec"][0];
+    assert!(spec.get("max_speed").is_none(), "{spec}");
+    assert_eq!(spec["max_acc"], 3.0, "{spec}");
+}
+
 #[test]
 fn report_json_without_a_config_has_no_null() {
     let l = logs("report-no-null");

@@ -101,6 +101,9 @@ struct ObjectTrack {
     latest: Option<ObjectMeasurement>,
     /// The latest [`HUMAN_HISTORY`] measurements by stamp, for the model check of each record.
     history: std::collections::VecDeque<ObjectMeasurement>,
+    /// A record was let go from `history` (a later record older than every kept one cannot
+    /// be checked against its neighbours in time: `object_record_too_late`).
+    dropped: bool,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -182,6 +185,9 @@ pub struct Auditor {
     /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of
     /// each record against them (records may arrive out of order).
     human_history: std::collections::VecDeque<HumanMeasurement>,
+    /// A record was let go from `human_history` (or not kept): a later record older than every
+    /// kept one cannot be checked against its neighbours in time (`human_record_too_late`).
+    human_dropped: bool,
     /// The bounding box of each kept measurement's keypoints (same order as `human_history`).
     human_boxes: std::collections::VecDeque<KeypointBox>,
     span_human: Option<usize>,
@@ -311,6 +317,7 @@ impl Auditor {
             latest_human: None,
             model_breaks: Vec::new(),
             human_history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
+            human_dropped: false,
             human_boxes: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span_human: None,
             span_index: 0,
@@ -469,6 +476,18 @@ impl Auditor {
         // Keep `m` in stamp order; when full, the oldest's storage is reused (no allocation
         // after warm-up), and a record older than all kept ones is not kept.
         let at = self.human_history.partition_point(|h| h.time() <= m.time());
+        // Older than every kept record after some were let go: its neighbours in time may be
+        // gone, so it was not checked against them.
+        if at == 0
+            && self.human_dropped
+            && let Some(oldest) = self.human_history.front()
+        {
+            let t1 = oldest.time();
+            self.model_break(m.time(), t1, Reason::HumanRecordTooLate);
+        }
+        if self.human_history.len() >= HUMAN_HISTORY {
+            self.human_dropped = true;
+        }
         if self.human_history.len() < HUMAN_HISTORY {
             self.human_history.insert(at, m.clone());
             self.human_boxes.insert(at, mbox);
@@ -565,12 +584,22 @@ impl Auditor {
         for (t0, t1) in nearest.pairs() {
             self.model_break_about(t0, t1, Reason::ObjectExceedsModel, Some(k));
         }
+        let o = &self.objects[k];
+        let at = o.history.partition_point(|h| h.time <= m.time);
+        // As for human records: older than every kept one after some were let go.
+        if at == 0
+            && o.dropped
+            && let Some(oldest) = o.history.front()
+        {
+            let t1 = oldest.time;
+            self.model_break_about(m.time, t1, Reason::ObjectRecordTooLate, Some(k));
+        }
         let o = &mut self.objects[k];
         o.others_for = None;
-        let at = o.history.partition_point(|h| h.time <= m.time);
         o.history.insert(at, m);
         if o.history.len() > HUMAN_HISTORY {
             o.history.pop_front();
+            o.dropped = true;
         }
         m.keep_newest(&mut o.latest);
         Ok(())
@@ -766,7 +795,7 @@ fn model_names(models: &LogModels, constraints: &str) -> ModelNames {
         human_delay: models.human.delay(),
         environment_shapes: models.environment.len(),
         people: Vec::new(),
-        specs: serde_json::json!({
+        specs: without_nulls(serde_json::json!({
             "robot": models.robot.spec(),
             "human": models.human.spec(),
             "constraints": models.constraints,
@@ -780,8 +809,25 @@ fn model_names(models: &LogModels, constraints: &str) -> ModelNames {
                 "acc_generators": m.acc_generators(), "max_speed": m.max_speed(),
                 "pos_error": m.pos_error(), "vel_error": m.vel_error(), "delay": m.delay(),
             })).collect::<Vec<_>>(),
-        }),
+        })),
     }
+}
+
+/// `v` with every `null` member of an object removed, at any depth: a bound a model does not
+/// have (an object without `max_speed`) is absent from the report, which holds no `null`.
+fn without_nulls(mut v: serde_json::Value) -> serde_json::Value {
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                m.retain(|_, x| !x.is_null());
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    strip(&mut v);
+    v
 }
 
 /// The track of each of the log's dynamic objects (no measurement yet).
@@ -796,6 +842,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             contact: *contact,
             latest: None,
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
+            dropped: false,
             span: None,
             occ: None,
             others: Vec::with_capacity(8),
@@ -813,6 +860,17 @@ fn label(name: &str, same: Option<bool>) -> String {
         Some(false) => format!("{name} (custom spec, not the built-in {name})"),
         None => format!("{name} (custom spec)"),
     }
+}
+
+/// Whether the span `[t0, t1]` is longer than `max_gap` (s) beyond its stamps' rounding: each
+/// decimal stamp stands for the reals within one ulp of it, and their difference is rounded
+/// once, so a logger writing 0.1 s steps (`1.1 − 1.0 = 0.10000000000000009` in doubles) is not
+/// taken to leave gaps at `max_gap = 0.1`. The tolerance, four units of roundoff of the larger
+/// stamp, is below a microsecond for stamps up to 10⁹ s. A policy on evidence, not a bound: the
+/// enclosures hold over spans of any length.
+#[inline]
+pub(crate) fn longer_than_gap(t0: f64, t1: f64, max_gap: f64) -> bool {
+    t1 - t0 > max_gap + 4.0 * f64::EPSILON * t0.abs().max(t1.abs())
 }
 
 /// Whether the stamps of a span `[t0, t1]` resolve its length (`pacs_log::time::clock_resolves`

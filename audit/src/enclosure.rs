@@ -14,6 +14,10 @@
 //!   the two velocities under `|q̈| ≤ A` (extremes: bang-bang acceleration);
 //! - with accelerations, the same one derivative up: `|q̈₀|, |q̈₁| ≤ A`, `|q̈₁ − q̈₀| ≤ JΔ` and
 //!   `|q̇₁ − q̇₀ − Δ(q̈₀ + q̈₁)/2| ≤ (J²Δ² − (q̈₁ − q̈₀)²)/(4J)`.
+//! - derivatives logged at one end only (`q̇` at one sample, or `q̈` at one end of a span with `q̇`
+//!   at both): the enclosures below do not use them, but they must agree with them — a lone `q̇`
+//!   in the span's velocity box, a lone `q̈` within `[−A, A]` and within `JΔ` of the mean
+//!   acceleration `(q̇₁ − q̇₀)/Δ` where both velocities are logged.
 //!
 //! Every bound is rounded outward (each logged value standing for the reals within one ulp of it,
 //! for decimal parsing; see `PAD`) and every test is evaluated leniently (plus a relative
@@ -315,20 +319,87 @@ fn span_bounds(lim: &SpanLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut
     // The intersection boxes and the consistency tests first; the hull boxes (the same
     // expressions, kept instead of intersected) only for a span that fails them.
     // A duration without a finite bound: no joint's enclosure holds.
+    // Derivatives logged at one end only: not used by the enclosures, but checked against them.
+    let lone = s0.has_dq != s1.has_dq || s0.has_ddq != s1.has_ddq;
     let ok = dt_hi.is_finite()
         && match (both_dq, both_ddq) {
             (false, _) => joint_bounds::<false, false, false>(lim, s0, s1, &span, out),
             (true, false) => joint_bounds::<true, false, false>(lim, s0, s1, &span, out),
             (true, true) => joint_bounds::<true, true, false>(lim, s0, s1, &span, out),
-        };
+        }
+        && (!lone || lone_derivatives_agree(lim, s0, s1, &span, out));
     if !ok {
         match (both_dq, both_ddq) {
             (false, _) => joint_bounds::<false, false, true>(lim, s0, s1, &span, out),
             (true, false) => joint_bounds::<true, false, true>(lim, s0, s1, &span, out),
             (true, true) => joint_bounds::<true, true, true>(lim, s0, s1, &span, out),
         };
+        // The hull also covers a velocity logged at one end only (what that sample claims).
+        for s in [s0, s1] {
+            if s.has_dq && !both_dq {
+                for j in 0..lim.n {
+                    let c = s.dq[j];
+                    out.dq_lo[j] = out.dq_lo[j].min(down(c, c.abs()));
+                    out.dq_hi[j] = out.dq_hi[j].max(up(c, c.abs()));
+                }
+            }
+        }
     }
     ok
+}
+
+/// Derivatives logged at one end of the span only — `q̇` at one sample and not at the other, or
+/// `q̈` at one end of a span with `q̇` at both — take no part in the enclosures, which hold
+/// without them; but a log whose derivatives contradict its positions is no evidence (module
+/// docs), so each must agree with the span, evaluated leniently as the other tests:
+/// - a lone `q̇` lies in the span's velocity box `out` (the intersection box, which holds at every
+///   instant of the span, its ends included);
+/// - a lone `q̈` is within `[−A, A]`, and, with velocities at both ends and `Δ > 0`, within `JΔ` of
+///   the mean acceleration `(q̇₁ − q̇₀)/Δ`, which the motion attains somewhere in the span.
+///
+/// Returns whether every joint agrees.
+#[inline(never)]
+fn lone_derivatives_agree(
+    lim: &SpanLimits,
+    s0: &Sample,
+    s1: &Sample,
+    sp: &Span,
+    out: &Bounds,
+) -> bool {
+    let both_dq = s0.has_dq && s1.has_dq;
+    for j in 0..lim.n {
+        let (v, acc, jerk) = (lim.v[j], lim.a[j], lim.j[j]);
+        for s in [s0, s1] {
+            if s.has_dq && !both_dq {
+                let c = s.dq[j];
+                let tol = sp.slack * v + PAD * c.abs() + TINY;
+                // NaN bounds compare false: such a box agrees with nothing.
+                if !(c + tol >= out.dq_lo[j] && c - tol <= out.dq_hi[j]) {
+                    return false;
+                }
+            }
+            if s.has_ddq && !(s0.has_ddq && s1.has_ddq) {
+                let e = s.ddq[j];
+                if down(e.abs(), e.abs()) > acc * sp.rel {
+                    return false;
+                }
+                if both_dq && sp.dt_lo > 0.0 {
+                    let (c, d) = (s0.dq[j], s1.dq[j]);
+                    let mag = c.abs() + d.abs();
+                    let (n_lo, n_hi) = (down(d - c, mag), up(d - c, mag));
+                    let m_hi = (n_hi / sp.dt_lo).max(n_hi / sp.dt_hi);
+                    let m_lo = (n_lo / sp.dt_lo).min(n_lo / sp.dt_hi);
+                    let w = jerk * sp.dt_hi;
+                    let (lo, hi) = (down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w));
+                    let tol = sp.slack * (acc + w) + PAD * e.abs() + TINY;
+                    if !(e + tol >= lo && e - tol <= hi) {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    true
 }
 
 /// The span's duration and the limit tests' tolerance, shared by every joint.

@@ -143,6 +143,13 @@ pub enum InconclusiveReason {
     /// twice the position error): the object broke the model its occupancies assume
     /// (`t_start`, `t_end`: the two measurement stamps).
     ObjectExceedsModel,
+    /// A human record arrived after the audit had let go of records near its stamp (it keeps the
+    /// latest 64 by stamp; this one is older than all of them, and older ones were let go): it
+    /// could not be checked against its neighbours in time, so whether it contradicts the model
+    /// there is unknown (`t_start`: its stamp; `t_end`: the oldest kept record's stamp).
+    HumanRecordTooLate,
+    /// As `HumanRecordTooLate`, for an object's record (the latest 64 of that object kept).
+    ObjectRecordTooLate,
 }
 
 impl InconclusiveReason {
@@ -164,6 +171,8 @@ impl InconclusiveReason {
             Self::ObjectReachError => "object_reach_error",
             Self::HumanExceedsModel => "human_exceeds_model",
             Self::ObjectExceedsModel => "object_exceeds_model",
+            Self::HumanRecordTooLate => "human_record_too_late",
+            Self::ObjectRecordTooLate => "object_record_too_late",
         }
     }
 }
@@ -193,12 +202,12 @@ pub struct InconclusiveSpan {
     pub spans: u64,
     /// The person it concerns (a v2 log's person id, for the reasons about a person's
     /// measurements: `no_human`, `stale_human`, `human_reach_error`, `human_exceeds_model`,
-    /// `human_record_after_last_robot_sample`); absent otherwise.
+    /// `human_record_too_late`, `human_record_after_last_robot_sample`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub person: Option<String>,
     /// The object it concerns (its id in the header, for the reasons about an object's
-    /// measurements: `no_object`, `stale_object`, `object_reach_error`, `object_exceeds_model`);
-    /// absent otherwise.
+    /// measurements: `no_object`, `stale_object`, `object_reach_error`, `object_exceeds_model`,
+    /// `object_record_too_late`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub object: Option<String>,
 }
@@ -208,7 +217,11 @@ impl InconclusiveReason {
     pub fn about_an_object(self) -> bool {
         matches!(
             self,
-            Self::NoObject | Self::StaleObject | Self::ObjectReachError | Self::ObjectExceedsModel
+            Self::NoObject
+                | Self::StaleObject
+                | Self::ObjectReachError
+                | Self::ObjectExceedsModel
+                | Self::ObjectRecordTooLate
         )
     }
 
@@ -220,6 +233,7 @@ impl InconclusiveReason {
                 | Self::StaleHuman
                 | Self::HumanReachError
                 | Self::HumanExceedsModel
+                | Self::HumanRecordTooLate
                 | Self::HumanRecordAfterLastRobotSample
         )
     }

@@ -521,3 +521,130 @@ fn positions_outside_the_joint_limits_are_inconclusive_not_a_pass() {
     assert_eq!(reasons(&outside), ["exceeds_limits"]);
     assert_eq!(log(-2.0).verdict, Verdict::Pass);
 }
+
+/// The contact of [`HUMAN`] with the robot still at [`ROBOT`]'s first positions, 1 kHz, `dq`
+/// logged on one sample only (at 5 ms, joint 1: `dq1` rad/s) and `ddq` there too if given.
+fn lone_derivative_log(dq1: f64, ddq1: Option<f64>, all_dq: bool) -> RunResult {
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    let q = "0.3,-0.5,0.2,-2.0,0.1,1.8,0.6";
+    for k in 0..=10 {
+        let t = k as f64 * 0.001;
+        let derivs = if k == 5 {
+            let d = format!(",\"dq\":[{dq1},0,0,0,0,0,0]");
+            match ddq1 {
+                Some(a) => format!("{d},\"ddq\":[{a},0,0,0,0,0,0]"),
+                None => d,
+            }
+        } else if all_dq {
+            ",\"dq\":[0,0,0,0,0,0,0]".to_string()
+        } else {
+            String::new()
+        };
+        text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{q}]{derivs}}}\n");
+    }
+    run(&text)
+}
+
+/// A velocity or acceleration logged on one sample only, beside samples without it, is checked
+/// against the span it ends or starts: 1 rad/s (or 50) on a joint whose position does not move
+/// within 1 ms (A·Δ = 0.01 rad/s) contradicts the positions; an acceleration of 1000 rad/s²
+/// (100·A) contradicts the limits, and 5 rad/s² at a sample whose velocities (logged at both
+/// ends of its spans) stay 0 contradicts the jerk limit over 1 ms (J·Δ = 5 rad/s², with the mean
+/// acceleration 0 — exactly at the bound: passes; 6 does not). Without the check the hand's
+/// contact with the robot "at rest" passed SSM.
+#[test]
+fn a_derivative_logged_on_one_sample_only_must_agree_with_its_spans() {
+    for dq1 in [1.0, 50.0, -0.05] {
+        let r = lone_derivative_log(dq1, None, false);
+        assert_ne!(r.verdict, Verdict::Pass, "lone dq {dq1}");
+        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    }
+    // The contradicted spans' boxes cover what the lone velocity claims: the hand's contact with
+    // a robot that sample says is moving fails SSM.
+    let r = lone_derivative_log(1.0, None, false);
+    assert_eq!(r.verdict, Verdict::Fail, "{:?}", r.violations);
+    // Within the span's velocity box: nothing contradicted, the contact at rest passes.
+    for dq1 in [0.0, 0.005, -0.009] {
+        let r = lone_derivative_log(dq1, None, false);
+        assert_eq!(r.verdict, Verdict::Pass, "lone dq {dq1}: {:?}", reasons(&r));
+    }
+    // A lone acceleration far beyond the limit, with or without velocities elsewhere.
+    for all_dq in [false, true] {
+        let r = lone_derivative_log(0.0, Some(1000.0), all_dq);
+        assert_ne!(r.verdict, Verdict::Pass);
+        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    }
+    // Within A but beyond J·Δ of the mean acceleration (velocities logged at both ends).
+    let r = lone_derivative_log(0.0, Some(6.0), true);
+    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    for a in [0.0, 4.9] {
+        let r = lone_derivative_log(0.0, Some(a), true);
+        assert_eq!(r.verdict, Verdict::Pass, "lone ddq {a}: {:?}", reasons(&r));
+    }
+}
+
+/// A robot at rest 0.2 s at 1 kHz, the person measured far away every 1 ms; at 150 ms one more
+/// record stamped `stamp` with keypoints `late` (JSON).
+fn late_record_log(stamp: f64, late: &str) -> RunResult {
+    let far = person_at(0.0);
+    let mut text = format!("{}\n", header("ssm"));
+    for k in 0..=200 {
+        let t = k as f64 * 0.001;
+        text += &human_record(t, None, &far);
+        if k == 150 {
+            text += &human_record(t, Some(stamp), late);
+        }
+        text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{AT_REST}]}}\n");
+    }
+    run(&text)
+}
+
+/// The audit checks each human record against the latest 64 it keeps. A record arriving after
+/// those have moved past its stamp (logged at 150 ms, stamped 10 ms, 140 records later) cannot
+/// be checked against its neighbours in time: `human_record_too_late` (never a pass), whatever
+/// it shows — with the person touching the robot it would otherwise have passed, checked only
+/// against records 77 ms and more away. Stamped 140 ms (within the kept records) it is checked
+/// against its neighbours: far, it passes; touching, it contradicts them.
+#[test]
+fn a_record_too_late_to_check_against_its_neighbours_is_not_evidence() {
+    for late in [person_at(0.0), person_at(-2.0)] {
+        let r = late_record_log(0.01, &late);
+        assert_eq!(r.verdict, Verdict::Inconclusive, "{:?}", r.inconclusive);
+        let s = r
+            .inconclusive
+            .iter()
+            .find(|s| s.reason == "human_record_too_late")
+            .expect("human_record_too_late");
+        // From its stamp to the oldest kept record's (the 64 latest by stamp at 150 ms).
+        assert_eq!((s.t_start, s.t_end), (0.01, 87.0 * 0.001), "{s:?}");
+    }
+    assert_eq!(
+        late_record_log(0.14, &person_at(0.0)).verdict,
+        Verdict::Pass
+    );
+    let r = late_record_log(0.14, &person_at(-2.0));
+    assert_eq!(reasons(&r), ["human_exceeds_model"]);
+}
+
+/// A 10 Hz logger writes its stamps as `0.0`, `0.1`, …, `1.5`: in doubles some steps are longer
+/// than 0.1 s by a rounding (`1.1 − 1.0 = 0.10000000000000009`), which is no gap at the default
+/// `max_gap` (0.1 s). A step of 0.1 s + 1 µs is one.
+#[test]
+fn a_10_hz_logger_leaves_no_gap_at_the_default_max_gap() {
+    let log = |stamp: &dyn Fn(usize) -> f64| {
+        let mut text = format!("{}\n", header("ssm"));
+        for k in 0..=15 {
+            let t = stamp(k);
+            text += &human_record(t, None, &person_at(0.0));
+            text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{AT_REST}]}}\n");
+        }
+        run(&text)
+    };
+    let (a, b): (f64, f64) = ("1.0".parse().unwrap(), "1.1".parse().unwrap());
+    assert!(b - a > 0.1, "the stamps' difference exceeds the step by a rounding");
+    let r = log(&|k| format!("{}", k as f64 / 10.0).parse().unwrap());
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    let r = log(&|k| k as f64 * 0.100001);
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    assert!(reasons(&r).iter().all(|s| *s == "gap"), "{:?}", reasons(&r));
+}

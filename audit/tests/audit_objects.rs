@@ -417,3 +417,29 @@ fn an_earlier_measurement_clears_a_span_the_newest_cannot() {
     assert_eq!(verdict(clear, &|i| i >= 5), Verdict::Fail);
     assert_eq!(verdict(clear, &|_| true), Verdict::Fail);
 }
+
+/// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped
+/// 10 ms, after the latest 64 records kept have moved past its stamp, cannot be checked against
+/// its neighbours in time: `object_record_too_late`, naming the ball. Stamped 140 ms it is
+/// checked, and passes.
+#[test]
+fn an_object_record_too_late_to_check_is_not_evidence() {
+    let far = [3.0, 3.0, 0.5];
+    let log = |stamp: f64| {
+        ball_log(ObjectContact::Ssm, 0.2, |w, k, t| {
+            w.write_object(t, t, "b1", far, Some([0.0; 3])).unwrap();
+            if k == 150 {
+                w.write_object(t, stamp, "b1", far, Some([0.0; 3])).unwrap();
+            }
+        })
+    };
+    let r = run(&log(0.01), &AuditConfig::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Inconclusive, "{:?}", r.inconclusive);
+    assert_eq!(r.inconclusive.len(), 1, "{:?}", r.inconclusive);
+    let s = &r.inconclusive[0];
+    assert_eq!(s.reason, "object_record_too_late");
+    assert_eq!(s.object.as_deref(), Some("b1"));
+    assert_eq!((s.t_start, s.t_end), (0.01, 87.0 * 0.001), "{s:?}");
+    let r = run(&log(0.14), &AuditConfig::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+}

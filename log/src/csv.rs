@@ -31,11 +31,18 @@ pub struct CsvReader<R: BufRead> {
 enum CellError {
     #[error("{field}: `{text}` is not a number")]
     NotANumber { field: String, text: String },
+    #[error("{field}: empty cell (a trailing comma, or a value left out?)")]
+    Empty { field: String },
     #[error("{field}: value {value} is not finite")]
     NotFinite { field: String, value: f64 },
 }
 
 fn num(field: &str, s: &str) -> Result<f64, CellError> {
+    if s.trim().is_empty() {
+        return Err(CellError::Empty {
+            field: field.into(),
+        });
+    }
     let v: f64 = s.trim().parse().map_err(|_| CellError::NotANumber {
         field: field.into(),
         text: s.trim().into(),
@@ -152,7 +159,20 @@ impl<R: BufRead> RecordReader for CsvReader<R> {
                 } else {
                     false
                 };
-                human_positions(&mut cells, &row, &mut self.positions)?;
+                human_positions(&mut cells, &row, &mut self.positions).map_err(|e| {
+                    // A number where the id belongs: the id is likely missing.
+                    match e {
+                        LogError::Input { problem, .. }
+                            if person && self.name.parse::<f64>().is_ok() =>
+                        {
+                            row.err(format!(
+                                "{problem}: the person id `{}` is a number; a version 2 human row is `human,t,t_meas,id,x,y,z,…` (is the id missing?)",
+                                self.name
+                            ))
+                        }
+                        e => e,
+                    }
+                })?;
                 Ok(Some(Record::Human {
                     t,
                     t_meas,

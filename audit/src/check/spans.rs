@@ -234,7 +234,7 @@ impl Auditor {
         let mut union: Option<SpanBoxes> = None;
         for i in lo..hi {
             let (a, b) = (&block[i], &block[i + 1]);
-            if b.t - a.t > self.cfg.max_gap || !stamps_resolve(a.t, b.t) {
+            if longer_than_gap(a.t, b.t, self.cfg.max_gap) || !stamps_resolve(a.t, b.t) {
                 return false;
             }
             let SpanEnclosure {
@@ -399,7 +399,7 @@ impl Auditor {
         let rest = self.nominal_rest(s0, s1);
         self.series.buckets[bidx].at_rest &= rest;
         let mut certain = false;
-        if dt > self.cfg.max_gap {
+        if longer_than_gap(t0, t1, self.cfg.max_gap) {
             self.skip_span(t0, t1, bidx, Reason::Gap);
             return;
         }
