@@ -865,8 +865,7 @@ fn label(name: &str, same: Option<bool>) -> String {
 /// Whether the span `[t0, t1]` is longer than `max_gap` (s) beyond its stamps' rounding: each
 /// decimal stamp stands for the reals within one ulp of it, and their difference is rounded
 /// once, so a logger writing 0.1 s steps (`1.1 − 1.0 = 0.10000000000000009` in doubles) is not
-/// taken to leave gaps at `max_gap = 0.1`. The tolerance, four units of roundoff of the larger
-/// stamp, is below a microsecond for stamps up to 10⁹ s. A policy on evidence, not a bound: the
+/// taken to leave gaps at `max_gap = 0.1`. The tolerance, 4ε of the larger stamp (ε = 2⁻⁵²), is below a microsecond for stamps up to 10⁹ s. A policy on evidence, not a bound: the
 /// enclosures hold over spans of any length.
 #[inline]
 pub(crate) fn longer_than_gap(t0: f64, t1: f64, max_gap: f64) -> bool {

@@ -16,8 +16,8 @@ pub const MAX_LIMIT_SLACK: f64 = 1e-6;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AuditConfig {
-    /// A span between robot samples longer than this (s; beyond the stamps' rounding, four
-    /// units of roundoff of the larger stamp) is inconclusive. Default 0.1 s.
+    /// A span between robot samples longer than this (s; beyond the stamps' rounding, 4ε of the
+    /// larger stamp, ε = 2⁻⁵²) is inconclusive. Default 0.1 s.
     pub max_gap: f64,
     /// A span is inconclusive once the human measurement in use is older than this (s) at its
     /// end. Default 1.0 s.

@@ -15,9 +15,9 @@
 //! - with accelerations, the same one derivative up: `|q̈₀|, |q̈₁| ≤ A`, `|q̈₁ − q̈₀| ≤ JΔ` and
 //!   `|q̇₁ − q̇₀ − Δ(q̈₀ + q̈₁)/2| ≤ (J²Δ² − (q̈₁ − q̈₀)²)/(4J)`.
 //! - derivatives logged at one end only (`q̇` at one sample, or `q̈` at one end of a span with `q̇`
-//!   at both): the enclosures below do not use them, but they must agree with them — a lone `q̇`
-//!   in the span's velocity box, a lone `q̈` within `[−A, A]` and within `JΔ` of the mean
-//!   acceleration `(q̇₁ − q̇₀)/Δ` where both velocities are logged.
+//!   at both): the enclosures below do not use them, but they must agree with the span — a lone
+//!   `q̇ = c`: `|c| ≤ v_max` and `|q₁ − q₀ − cΔ| ≤ AΔ²/2`; a lone `q̈ = e`: `|e| ≤ A` and, where
+//!   both velocities are logged, `|q̇₁ − q̇₀ − eΔ| ≤ JΔ²/2`.
 //!
 //! Every bound is rounded outward (each logged value standing for the reals within one ulp of it,
 //! for decimal parsing; see `PAD`) and every test is evaluated leniently (plus a relative
@@ -327,7 +327,7 @@ fn span_bounds(lim: &SpanLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut
             (true, false) => joint_bounds::<true, false, false>(lim, s0, s1, &span, out),
             (true, true) => joint_bounds::<true, true, false>(lim, s0, s1, &span, out),
         }
-        && (!lone || lone_derivatives_agree(lim, s0, s1, &span, out));
+        && (!lone || lone_derivatives_agree(lim, s0, s1, &span));
     if !ok {
         match (both_dq, both_ddq) {
             (false, _) => joint_bounds::<false, false, true>(lim, s0, s1, &span, out),
@@ -351,50 +351,46 @@ fn span_bounds(lim: &SpanLimits, s0: &Sample, s1: &Sample, slack: f64, out: &mut
 /// Derivatives logged at one end of the span only — `q̇` at one sample and not at the other, or
 /// `q̈` at one end of a span with `q̇` at both — take no part in the enclosures, which hold
 /// without them; but a log whose derivatives contradict its positions is no evidence (module
-/// docs), so each must agree with the span, evaluated leniently as the other tests:
-/// - a lone `q̇` lies in the span's velocity box `out` (the intersection box, which holds at every
-///   instant of the span, its ends included);
-/// - a lone `q̈` is within `[−A, A]`, and, with velocities at both ends and `Δ > 0`, within `JΔ` of
-///   the mean acceleration `(q̇₁ − q̇₀)/Δ`, which the motion attains somewhere in the span.
+/// docs), and a sample's own `q̇` is what the zero-length final instant uses. So each must agree
+/// with the span, leniently as the other tests (outward rounded, relative `slack`):
+/// - a lone `q̇ = c` at either end: `|c| ≤ v_max` and `|q₁ − q₀ − cΔ| ≤ AΔ²/2` (from one end's
+///   velocity, `|q̈| ≤ A` lets the displacement differ from `cΔ` by at most that);
+/// - a lone `q̈ = e` at either end: `|e| ≤ A`, and with velocities at both ends
+///   `|q̇₁ − q̇₀ − eΔ| ≤ JΔ²/2` (the same one derivative up).
 ///
 /// Returns whether every joint agrees.
 #[inline(never)]
-fn lone_derivatives_agree(
-    lim: &SpanLimits,
-    s0: &Sample,
-    s1: &Sample,
-    sp: &Span,
-    out: &Bounds,
-) -> bool {
+fn lone_derivatives_agree(lim: &SpanLimits, s0: &Sample, s1: &Sample, sp: &Span) -> bool {
     let both_dq = s0.has_dq && s1.has_dq;
+    let both_ddq = s0.has_ddq && s1.has_ddq;
+    // `|x − rate·Δ|` beyond `k·Δ²/2` (rounded outward, lenient): `x` is a difference of two
+    // logged values of magnitudes summing to `mag`, `rate` one logged value.
+    let beyond = |x: f64, mag: f64, rate: f64, k: f64| {
+        let r = x - sp.dt * rate;
+        let r_min = r.abs()
+            - (PAD * (mag + sp.dt_hi * rate.abs()) + TINY)
+            - rate.abs() * (sp.dt_hi - sp.dt_lo);
+        let band = 0.5 * k * sp.dt_hi * sp.dt_hi;
+        r_min > up(band, band) + sp.slack * k * sp.dt_hi * sp.dt_hi
+    };
     for j in 0..lim.n {
         let (v, acc, jerk) = (lim.v[j], lim.a[j], lim.j[j]);
+        let (a, b) = (s0.q[j], s1.q[j]);
         for s in [s0, s1] {
             if s.has_dq && !both_dq {
                 let c = s.dq[j];
-                let tol = sp.slack * v + PAD * c.abs() + TINY;
-                // NaN bounds compare false: such a box agrees with nothing.
-                if !(c + tol >= out.dq_lo[j] && c - tol <= out.dq_hi[j]) {
+                if down(c.abs(), c.abs()) > v * sp.rel || beyond(b - a, a.abs() + b.abs(), c, acc) {
                     return false;
                 }
             }
-            if s.has_ddq && !(s0.has_ddq && s1.has_ddq) {
+            if s.has_ddq && !both_ddq {
                 let e = s.ddq[j];
                 if down(e.abs(), e.abs()) > acc * sp.rel {
                     return false;
                 }
-                if both_dq && sp.dt_lo > 0.0 {
-                    let (c, d) = (s0.dq[j], s1.dq[j]);
-                    let mag = c.abs() + d.abs();
-                    let (n_lo, n_hi) = (down(d - c, mag), up(d - c, mag));
-                    let m_hi = (n_hi / sp.dt_lo).max(n_hi / sp.dt_hi);
-                    let m_lo = (n_lo / sp.dt_lo).min(n_lo / sp.dt_hi);
-                    let w = jerk * sp.dt_hi;
-                    let (lo, hi) = (down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w));
-                    let tol = sp.slack * (acc + w) + PAD * e.abs() + TINY;
-                    if !(e + tol >= lo && e - tol <= hi) {
-                        return false;
-                    }
+                let (c, d) = (s0.dq[j], s1.dq[j]);
+                if both_dq && beyond(d - c, c.abs() + d.abs(), e, jerk) {
+                    return false;
                 }
             }
         }

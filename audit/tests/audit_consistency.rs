@@ -522,63 +522,93 @@ fn positions_outside_the_joint_limits_are_inconclusive_not_a_pass() {
     assert_eq!(log(-2.0).verdict, Verdict::Pass);
 }
 
-/// The contact of [`HUMAN`] with the robot still at [`ROBOT`]'s first positions, 1 kHz, `dq`
-/// logged on one sample only (at 5 ms, joint 1: `dq1` rad/s) and `ddq` there too if given.
-fn lone_derivative_log(dq1: f64, ddq1: Option<f64>, all_dq: bool) -> RunResult {
+/// The contact of [`HUMAN`] with joint 1 moving from [`ROBOT`]'s first positions at `w` rad/s
+/// (positions only), 1 kHz, `dq` logged on one sample only (joint 1: `dq1` rad/s; at 5 ms, or
+/// at the last sample with `at_end`, after a last person record) and `ddq` there too if given;
+/// with `all_dq` every other sample logs `dq` (joint 1 at `w`).
+fn lone_derivative_log(
+    w: f64,
+    dq1: f64,
+    ddq1: Option<f64>,
+    all_dq: bool,
+    at_end: bool,
+) -> RunResult {
     let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
-    let q = "0.3,-0.5,0.2,-2.0,0.1,1.8,0.6";
+    let lone = if at_end { 10 } else { 5 };
     for k in 0..=10 {
         let t = k as f64 * 0.001;
-        let derivs = if k == 5 {
+        let derivs = if k == lone {
             let d = format!(",\"dq\":[{dq1},0,0,0,0,0,0]");
             match ddq1 {
                 Some(a) => format!("{d},\"ddq\":[{a},0,0,0,0,0,0]"),
                 None => d,
             }
         } else if all_dq {
-            ",\"dq\":[0,0,0,0,0,0,0]".to_string()
+            format!(",\"dq\":[{w},0,0,0,0,0,0]")
         } else {
             String::new()
         };
-        text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{q}]{derivs}}}\n");
+        if at_end && k == 10 {
+            text += &HUMAN.replace("\"t\":0.0", "\"t\":0.01");
+            text.push('\n');
+        }
+        let q0 = 0.3 + w * t;
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{derivs}}}\n"
+        );
     }
     run(&text)
 }
 
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked
-/// against the span it ends or starts: 1 rad/s (or 50) on a joint whose position does not move
-/// within 1 ms (A·Δ = 0.01 rad/s) contradicts the positions; an acceleration of 1000 rad/s²
-/// (100·A) contradicts the limits, and 5 rad/s² at a sample whose velocities (logged at both
-/// ends of its spans) stay 0 contradicts the jerk limit over 1 ms (J·Δ = 5 rad/s², with the mean
-/// acceleration 0 — exactly at the bound: passes; 6 does not). Without the check the hand's
-/// contact with the robot "at rest" passed SSM.
+/// against the spans it ends or starts. At 1 kHz with A = 10 rad/s², a lone `q̇ = c` must keep
+/// `|Δq − cΔ| ≤ AΔ²/2 = 5 µrad`: on a joint that does not move, 1 rad/s (or 50, or −0.009)
+/// contradicts the positions, 0.004 does not; on a joint moving 28 µrad per step, a last sample
+/// claiming 0.019 rad/s (below the rest speed 0.02 rad/s, which the final instant would have
+/// used to pass the hand's contact) contradicts them too. A lone `q̈` beyond 100·A, or (with
+/// velocities at every sample, constant) beyond `JΔ/2 = 2.5 rad/s²` contradicts them. Without
+/// the check the hand's contact with a robot "at rest" passed SSM.
 #[test]
 fn a_derivative_logged_on_one_sample_only_must_agree_with_its_spans() {
-    for dq1 in [1.0, 50.0, -0.05] {
-        let r = lone_derivative_log(dq1, None, false);
+    let contradicted = |r: &RunResult| reasons(r).contains(&"exceeds_limits");
+    for dq1 in [1.0, 50.0, -0.009, 0.006] {
+        let r = lone_derivative_log(0.0, dq1, None, false, false);
         assert_ne!(r.verdict, Verdict::Pass, "lone dq {dq1}");
-        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+        assert!(contradicted(&r), "lone dq {dq1}: {:?}", reasons(&r));
     }
     // The contradicted spans' boxes cover what the lone velocity claims: the hand's contact with
     // a robot that sample says is moving fails SSM.
-    let r = lone_derivative_log(1.0, None, false);
+    let r = lone_derivative_log(0.0, 1.0, None, false, false);
     assert_eq!(r.verdict, Verdict::Fail, "{:?}", r.violations);
-    // Within the span's velocity box: nothing contradicted, the contact at rest passes.
-    for dq1 in [0.0, 0.005, -0.009] {
-        let r = lone_derivative_log(dq1, None, false);
+    // Within the band: nothing contradicted, the contact at rest passes.
+    for dq1 in [0.0, 0.004, -0.0045] {
+        let r = lone_derivative_log(0.0, dq1, None, false, false);
         assert_eq!(r.verdict, Verdict::Pass, "lone dq {dq1}: {:?}", reasons(&r));
     }
+    // At the last sample, checked with a touching person record: 0.019 contradicts 28 µrad/ms.
+    let r = lone_derivative_log(0.028, 0.019, None, false, true);
+    assert_ne!(r.verdict, Verdict::Pass);
+    assert!(contradicted(&r), "{:?}", reasons(&r));
+    let r = lone_derivative_log(0.028, 0.028, None, false, true);
+    assert!(!contradicted(&r), "{:?}", reasons(&r));
+    assert_eq!(
+        r.verdict,
+        Verdict::Fail,
+        "moving at the final instant, touching"
+    );
     // A lone acceleration far beyond the limit, with or without velocities elsewhere.
     for all_dq in [false, true] {
-        let r = lone_derivative_log(0.0, Some(1000.0), all_dq);
+        let r = lone_derivative_log(0.0, 0.0, Some(1000.0), all_dq, false);
         assert_ne!(r.verdict, Verdict::Pass);
-        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+        assert!(contradicted(&r), "{:?}", reasons(&r));
     }
-    // Within A but beyond J·Δ of the mean acceleration (velocities logged at both ends).
-    let r = lone_derivative_log(0.0, Some(6.0), true);
-    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
-    for a in [0.0, 4.9] {
-        let r = lone_derivative_log(0.0, Some(a), true);
+    // Within A but beyond JΔ/2 of the velocities' change (none).
+    for a in [2.6, -3.0] {
+        let r = lone_derivative_log(0.0, 0.0, Some(a), true, false);
+        assert!(contradicted(&r), "lone ddq {a}: {:?}", reasons(&r));
+    }
+    for a in [0.0, 2.4, -2.4] {
+        let r = lone_derivative_log(0.0, 0.0, Some(a), true, false);
         assert_eq!(r.verdict, Verdict::Pass, "lone ddq {a}: {:?}", reasons(&r));
     }
 }
@@ -641,7 +671,10 @@ fn a_10_hz_logger_leaves_no_gap_at_the_default_max_gap() {
         run(&text)
     };
     let (a, b): (f64, f64) = ("1.0".parse().unwrap(), "1.1".parse().unwrap());
-    assert!(b - a > 0.1, "the stamps' difference exceeds the step by a rounding");
+    assert!(
+        b - a > 0.1,
+        "the stamps' difference exceeds the step by a rounding"
+    );
     let r = log(&|k| format!("{}", k as f64 / 10.0).parse().unwrap());
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
     let r = log(&|k| k as f64 * 0.100001);
