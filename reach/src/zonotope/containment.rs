@@ -31,7 +31,8 @@ impl Zonotope {
     ///
     /// # Soundness
     /// Claim C2: never true for a point of `Z`. Harness `b3_zonotope_contains_conservative`
-    /// (twin); Kani: `b3_hull_excludes_member` (beside this module, `proofs.rs`).
+    /// (twin; Kani outside CI on a one-dimensional grid); Kani: `b3_hull_excludes_member`
+    /// (beside this module, `proofs.rs`).
     pub fn hull_excludes(&self, x: &DVector<f64>) -> bool {
         hull_excludes_of(self, x)
     }
@@ -42,7 +43,8 @@ impl Zonotope {
     ///
     /// # Soundness
     /// Claim C2: never true for a point of `Z`, whatever `d` (so the LP that proposes `d` need
-    /// not be trusted). Harness `b3_zonotope_contains_conservative`.
+    /// not be trusted). Harness `b3_zonotope_contains_conservative` (twin; Kani outside CI on a
+    /// one-dimensional grid); Kani: `b3_separates_member` (`proofs.rs`).
     pub fn separates(&self, x: &DVector<f64>, d: &DVector<f64>) -> Result<bool, ZonotopeError> {
         if d.iter().all(|v| *v == 0.0) {
             return Ok(false);

@@ -1,6 +1,7 @@
 //! Proofs of the zonotopes' outside certificates and distance bound, beside them (claim C2, the
-//! parts a model checker can decide; the whole claims are the property tests
-//! `b3_zonotope_contains_conservative` and `b4_zonotope_capsule_conservative` in `pacs-proofs`).
+//! parts a model checker can decide; the whole claims are `b3_zonotope_contains_conservative`
+//! — a property test, and a Kani proof outside CI on a one-dimensional grid — and the property
+//! test `b4_zonotope_capsule_conservative` in `pacs-proofs`).
 //! Inputs on dyadic grids, so that every member point is a float computed without rounding and
 //! the claims are checked against the exact set:
 //!
