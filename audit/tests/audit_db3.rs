@@ -1244,3 +1244,101 @@ fn a_part_beside_unreadable_metadata_is_refused() {
         assert!(audit(&d, None).is_err(), "{case}: the directory as a bag");
     }
 }
+
+/// A topic recorded on two connections (publishers with different QoS) is listed twice in
+/// `topics_with_message_count`, each entry with its connection's count: the topic's messages
+/// are compared with the sum. Entries of 60 and 41 describe the 101 `/joint_states` messages
+/// (a pass); 60 and 42 count one more than the files hold (cut short), and one entry of 60
+/// alone fewer (not these files).
+#[test]
+fn a_topic_listed_once_per_connection_is_compared_by_its_total() {
+    let meta = std::fs::read_to_string(fixtures().join("clean/metadata.yaml")).unwrap();
+    let db = fixtures().join("clean/clean.db3");
+    let entry = "  - message_count: 101\n    topic_metadata:\n      name: /joint_states\n";
+    assert!(meta.contains(entry));
+    let split = |a: u64, b: u64| {
+        let two = format!(
+            "  - message_count: {a}\n    topic_metadata:\n      name: /joint_states\n      type: sensor_msgs/msg/JointState\n  - message_count: {b}\n    topic_metadata:\n      name: /joint_states\n"
+        );
+        let d = tempdir();
+        std::fs::copy(&db, d.join("clean.db3")).unwrap();
+        std::fs::write(d.join("metadata.yaml"), meta.replace(entry, &two)).unwrap();
+        d
+    };
+    let d = split(60, 41);
+    assert_eq!(audit(&d, None).unwrap().verdict, Verdict::Pass);
+    let d = split(60, 42);
+    expect_err(
+        audit(&d, None),
+        &name_of(&d),
+        &[
+            "`/joint_states` has message_count 102",
+            "hold 101",
+            "cut short",
+        ],
+    );
+    let d = split(60, 0);
+    expect_err(
+        audit(&d, None),
+        &name_of(&d),
+        &["has message_count 60", "does not describe these files"],
+    );
+}
+
+/// A log inside a bag directory that is not one of the bag's files — another form (JSON Lines,
+/// MCAP in an sqlite3 bag) or one in a subdirectory — is refused, naming it: read as the bag, it
+/// would go unaudited (also in a fleet's archive, whose walk takes the bag directory as one log).
+#[test]
+fn a_log_inside_a_bag_directory_that_is_not_the_bag_is_refused() {
+    let src = fixtures().join("clean");
+    for (rel, body) in [
+        ("notes.jsonl", "{}\n"),
+        ("other.mcap", ""),
+        ("rerun/x.db3", ""),
+        ("a/b/c.csv", ""),
+    ] {
+        let d = tempdir();
+        for f in ["clean.db3", "metadata.yaml"] {
+            std::fs::copy(src.join(f), d.join(f)).unwrap();
+        }
+        let p = d.join(rel);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, body).unwrap();
+        expect_err(
+            audit(&d, None),
+            &name_of(&d),
+            &[&p.display().to_string(), "not one of the bag's files"],
+        );
+    }
+    // Other files (notes, scripts) are no logs: the bag passes.
+    let d = tempdir();
+    for f in ["clean.db3", "metadata.yaml"] {
+        std::fs::copy(src.join(f), d.join(f)).unwrap();
+    }
+    std::fs::write(d.join("README.txt"), "recorded on cell 3\n").unwrap();
+    assert_eq!(audit(&d, None).unwrap().verdict, Verdict::Pass);
+}
+
+/// A `.db3` given alone whose `metadata.yaml` beside it lists it as the bag's only part is read as
+/// that bag: its header comes from the metadata's `custom_data` (none given), and rows deleted
+/// from it are refused by the metadata's counts, as when the directory is given.
+#[test]
+fn a_lone_db3_described_by_the_metadata_beside_it_is_read_as_its_bag() {
+    let src = fixtures().join("clean");
+    let d = tempdir();
+    for f in ["clean.db3", "metadata.yaml"] {
+        std::fs::copy(src.join(f), d.join(f)).unwrap();
+    }
+    let file = d.join("clean.db3");
+    let whole = audit(&file, None).unwrap();
+    assert_eq!(whole.verdict, Verdict::Pass);
+    same_result(&whole, &audit(&d, None).unwrap());
+    sql(
+        &file,
+        "DELETE FROM messages WHERE id IN (SELECT id FROM messages ORDER BY timestamp DESC LIMIT 5);",
+    );
+    let by_dir = audit(&d, None).unwrap_err().to_string();
+    let by_file = audit(&file, None).unwrap_err().to_string();
+    assert_eq!(by_file, by_dir);
+    assert!(by_file.contains("it holds 108"), "{by_file}");
+}

@@ -68,10 +68,12 @@ pub fn is_bag_dir(path: &Path) -> bool {
 /// violation in another part would go unseen. The `metadata.yaml` is looked for beside the path
 /// given and beside the file it names (through a symbolic link); one that cannot be read or
 /// contradicts itself is refused too (what it says about the file cannot be known); one that
-/// does not list the file says nothing about it.
-pub fn refuse_one_part(path: &Path) -> Result<(), LogError> {
+/// does not list the file says nothing about it. A `metadata.yaml` that lists the file as the
+/// bag's only part describes it (its message counts, its header): the bag directory is returned,
+/// to be read instead of the file alone (the same bytes then get the same checks either way).
+pub fn refuse_one_part(path: &Path) -> Result<Option<PathBuf>, LogError> {
     if path.is_dir() {
-        return Ok(());
+        return Ok(None);
     }
     let real = path.canonicalize().ok();
     let mut dirs = vec![crate::format::dir_of(path)];
@@ -81,16 +83,19 @@ pub fn refuse_one_part(path: &Path) -> Result<(), LogError> {
         dirs.push(d);
     }
     for dir in dirs {
-        refuse_part_of(path, real.as_deref(), &dir)?;
+        if refuse_part_of(path, real.as_deref(), &dir)? {
+            return Ok(Some(dir));
+        }
     }
-    Ok(())
+    Ok(None)
 }
 
 /// [`refuse_one_part`] for the `metadata.yaml` of the directory `dir` (one in any form counts:
-/// one that is no regular file, or a dangling link, cannot be read and is refused).
-fn refuse_part_of(path: &Path, real: Option<&Path>, dir: &Path) -> Result<(), LogError> {
+/// one that is no regular file, or a dangling link, cannot be read and is refused). Returns
+/// whether that metadata lists the file as the bag's only part.
+fn refuse_part_of(path: &Path, real: Option<&Path>, dir: &Path) -> Result<bool, LogError> {
     if std::fs::symlink_metadata(dir.join(METADATA_FILE)).is_err() {
-        return Ok(());
+        return Ok(false);
     }
     let name = path.display().to_string();
     let (info, meta_name) = read_bag_metadata(dir).map_err(|e| {
@@ -124,7 +129,7 @@ fn refuse_part_of(path: &Path, real: Option<&Path>, dir: &Path) -> Result<(), Lo
             ),
         ));
     }
-    Ok(())
+    Ok(info.files.iter().any(listed))
 }
 
 /// The parsed `metadata.yaml` of the bag directory `path` (at most [`METADATA_LIMIT`] bytes) and
@@ -189,15 +194,61 @@ fn bag_files(
     for e in entries.flatten() {
         let p = e.path();
         let part = p.extension().is_some_and(|x| x.eq_ignore_ascii_case(ext));
-        if part && p.is_file() && !p.canonicalize().is_ok_and(|c| listed.contains(&c)) {
+        let is_listed = p.canonicalize().is_ok_and(|c| listed.contains(&c));
+        if part && p.is_file() && !is_listed {
             return Err(bad(format!(
                 "`{}` is in the bag directory but not in rosbag2_bagfile_information.relative_file_paths ({}): the metadata does not describe the whole recording",
                 p.display(),
                 info.files.join(", ")
             )));
         }
+        // Another log inside the bag directory (a file of another form, or one in a
+        // subdirectory) is no part of the bag: audited as the bag, it would go unseen, also in
+        // a fleet's archive (whose walk takes the bag directory as one log).
+        let other = if e.file_type().is_ok_and(|k| k.is_dir()) {
+            log_below(&p, 8)
+        } else if !part && !is_listed && has_log_name(&p) {
+            Some(p.clone())
+        } else {
+            None
+        };
+        if let Some(o) = other {
+            return Err(bad(format!(
+                "`{}` is a log inside the bag directory but not one of the bag's files ({}): it would go unaudited; move it out of the bag directory and audit it on its own",
+                o.display(),
+                info.files.join(", ")
+            )));
+        }
     }
     Ok(files)
+}
+
+/// The file extensions of logs (JSON Lines, CSV, MCAP, ROS 2 sqlite3 bags).
+pub const LOG_EXTENSIONS: [&str; 4] = ["jsonl", "csv", "mcap", "db3"];
+
+/// Whether `p` is named as a log ([`LOG_EXTENSIONS`], any case).
+pub fn has_log_name(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| LOG_EXTENSIONS.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// A log-named file in the directory `dir` or its subdirectories (up to `depth` levels; symbolic
+/// links to directories not followed), if any.
+fn log_below(dir: &Path, depth: usize) -> Option<PathBuf> {
+    for e in std::fs::read_dir(dir).ok()?.flatten() {
+        let p = e.path();
+        if e.file_type().is_ok_and(|k| k.is_dir()) {
+            if depth > 0
+                && let Some(f) = log_below(&p, depth - 1)
+            {
+                return Some(f);
+            }
+        } else if has_log_name(&p) {
+            return Some(p);
+        }
+    }
+    None
 }
 
 /// A rosbag2 bag directory in the MCAP storage (`storage_identifier: mcap`: the default of
@@ -247,25 +298,35 @@ fn custom_data_header(json: &str, meta_name: &str, dir: &Path) -> Result<Header,
 /// per topic (`read`): every watched topic ([`Messages::watches`]; one on no channel or
 /// connection of any file counts as 0 read) must hold as many as the recorder counted; fewer
 /// means a file was cut short or a part is missing, more that the metadata is not these files'.
-/// Topics the audit does not read are not counted. The one check of both ROS bag readers.
+/// Topics the audit does not read are not counted. A topic recorded on several connections
+/// (publishers with different QoS: rosbag2 lists it once per connection, each with its own count)
+/// is compared by its total. The one check of both ROS bag readers.
 pub(crate) fn check_topic_counts(
     file: &str,
     expected: &[(String, u64)],
     read: impl Fn(&str) -> u64,
     conv: &Messages,
 ) -> Result<(), LogError> {
-    for (topic, want) in expected {
+    // Per topic name, in the metadata's order: the sum over its entries.
+    let mut totals: Vec<(&str, u64)> = Vec::new();
+    for (topic, n) in expected {
+        match totals.iter_mut().find(|(t, _)| *t == topic.as_str()) {
+            Some((_, sum)) => *sum = sum.saturating_add(*n),
+            None => totals.push((topic.as_str(), *n)),
+        }
+    }
+    for (topic, want) in totals {
         if !conv.watches(topic) {
             continue;
         }
         let read = read(topic);
-        if read != *want {
+        if read != want {
             return Err(LogError::input(
                 file,
                 Location::File,
                 format!(
-                    "topics_with_message_count: `{topic}` has message_count {want}, the bag's files hold {read} of its messages ({})",
-                    if read < *want {
+                    "topics_with_message_count: `{topic}` has message_count {want} (over its entries), the bag's files hold {read} of its messages ({})",
+                    if read < want {
                         "a file was cut short or a part is missing: the bag is not the whole recording"
                     } else {
                         "the metadata does not describe these files"

@@ -168,8 +168,12 @@ fn open_log_with(
         return open_mcap_bag(bag, mcap, overrides, header);
     }
     // A ROS recording's file may be one part of a split bag (JSON Lines and CSV logs never are).
-    if !path.is_dir() && (is_db3(path)? || is_mcap(path)?) {
-        crate::db3::refuse_one_part(path)?;
+    if !path.is_dir()
+        && (is_db3(path)? || is_mcap(path)?)
+        && let Some(dir) = crate::db3::refuse_one_part(path)?
+    {
+        // The bag's only part, described by the metadata beside it: read as that bag.
+        return open_log_with(&dir, mcap, overrides, header, row_order);
     }
     if is_db3(path)? {
         let header = header.cloned();

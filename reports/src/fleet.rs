@@ -23,7 +23,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// File name endings of the logs an archive directory expands to (`pacs audit DIR`).
-pub const LOG_EXTENSIONS: [&str; 4] = ["jsonl", "csv", "mcap", "db3"];
+pub const LOG_EXTENSIONS: [&str; 4] = pacs_log::db3::LOG_EXTENSIONS;
 
 /// Worst runs listed per group.
 pub const WORST_PER_GROUP: usize = 3;
@@ -204,9 +204,7 @@ fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
 }
 
 fn is_log_name(p: &Path) -> bool {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| LOG_EXTENSIONS.iter().any(|x| e.eq_ignore_ascii_case(x)))
+    pacs_log::db3::has_log_name(p)
 }
 
 /// A file's modification time in whole Unix seconds (rounded down), None if unknown or before
