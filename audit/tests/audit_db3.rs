@@ -1344,3 +1344,23 @@ fn a_lone_db3_described_by_the_metadata_beside_it_is_read_as_its_bag() {
     assert_eq!(by_file, by_dir);
     assert!(by_file.contains("it holds 108"), "{by_file}");
 }
+
+/// An MCAP-storage bag with rosbag2's per-message zstd compression (read for sqlite3 bags) is
+/// refused with a message that says so, not one that calls that form supported.
+#[test]
+fn an_mcap_bag_with_message_compression_is_refused_saying_why() {
+    let d = tempdir();
+    let bag = copy_bag(&mcap_bags().join("clean"), &d, "zstd");
+    edit_metadata(&bag, "compression_mode: ''", "compression_mode: message");
+    edit_metadata(&bag, "compression_format: ''", "compression_format: zstd");
+    expect_err(
+        audit(&bag, None),
+        &name_of(&bag),
+        &[
+            "`message`",
+            "`zstd`",
+            "sqlite3 bags only",
+            "not in the MCAP storage",
+        ],
+    );
+}

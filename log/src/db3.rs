@@ -350,6 +350,13 @@ pub fn mcap_bag(path: &Path) -> Result<Option<McapBag>, LogError> {
         return Ok(None);
     }
     let bad = |p: String| LogError::input(&meta_name, Location::File, p);
+    if info.messages_zstd() {
+        // Read for sqlite3 bags only: say so rather than the general message.
+        return Err(bad(format!(
+            "compression_mode `{}` with compression_format `{}` is read for sqlite3 bags only, not in the MCAP storage (MCAP's own chunk compression is read): decompress the bag first (e.g. `ros2 bag convert`)",
+            info.compression_mode, info.compression_format
+        )));
+    }
     info.check_compression().map_err(|e| bad(e.to_string()))?;
     let files = bag_files(path, &info, &meta_name, "mcap")?;
     for (i, f) in files.iter().enumerate() {
