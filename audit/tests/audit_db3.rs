@@ -1364,3 +1364,57 @@ fn an_mcap_bag_with_message_compression_is_refused_saying_why() {
         ],
     );
 }
+
+/// An MCAP file whose own Statistics record counts more (or fewer) messages on a configured
+/// topic's channel than the file holds contradicts itself (messages cut out, or added): refused,
+/// naming the channel and topic. The file given alone (away from its bag's metadata), with the
+/// header given: untouched it passes.
+#[test]
+fn an_mcap_file_whose_statistics_disagree_with_its_messages_is_refused() {
+    let src = std::fs::read(mcap_bags().join("clean/clean.mcap")).unwrap();
+    let u64_at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+    // The footer: opcode, length, summary start, summary offset start, summary CRC (4 bytes).
+    let footer = src.len() - 8 - (1 + 8 + 20);
+    assert_eq!(src[footer], 0x02);
+    let summary = u64_at(&src, footer + 9) as usize;
+    // The Statistics record's channel_message_counts entries (u16 id, u64 count).
+    let mut at = summary;
+    let mut entries = None;
+    while at < footer {
+        let len = u64_at(&src, at + 1) as usize;
+        if src[at] == 0x0b {
+            entries = Some(at + 9 + 42 + 4);
+        }
+        at += 9 + len;
+    }
+    let first = entries.expect("a Statistics record");
+    // Entry 1 is `/joint_states` (channel 2, 101 messages).
+    let count_at = first + 10 + 2;
+    assert_eq!(u64_at(&src, count_at), 101);
+    let d = tempdir();
+    let write = |k: u64| {
+        let mut b = src.clone();
+        b[count_at..count_at + 8].copy_from_slice(&k.to_le_bytes());
+        // Summary CRC 0: not checked (MCAP spec), so the edited summary reads.
+        b[footer + 9 + 16..footer + 9 + 20].copy_from_slice(&0u32.to_le_bytes());
+        let p = d.join(format!("stats_{k}.mcap"));
+        std::fs::write(&p, b).unwrap();
+        p
+    };
+    assert_eq!(
+        audit(&write(101), Some(&header())).unwrap().verdict,
+        Verdict::Pass
+    );
+    for (k, why) in [(102, "messages were cut out"), (100, "messages were added")] {
+        let p = write(k);
+        expect_err(
+            audit(&p, Some(&header())),
+            &p.display().to_string(),
+            &[
+                &format!("Statistics record counts {k} messages on channel 2 (`/joint_states`)"),
+                "the file holds 101",
+                why,
+            ],
+        );
+    }
+}

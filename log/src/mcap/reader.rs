@@ -51,6 +51,16 @@ impl Channels {
         }
     }
 
+    /// The messages read on channel `id` (0 if none), and its topic if it is configured.
+    fn read_on(&self, id: u16) -> (u64, Option<&str>) {
+        let n = self.read.get(usize::from(id)).copied().unwrap_or(0);
+        let topic = self
+            .get(&id)
+            .filter(|(_, s)| *s != Stream::Ignored)
+            .map(|(t, _)| t.as_str());
+        (n, topic)
+    }
+
     /// Add the messages read per configured topic to `into` (topic, count).
     fn add_counts(&self, into: &mut Vec<(String, u64)>) {
         for (c, n) in self.by_id.iter().zip(&self.read) {
@@ -80,6 +90,8 @@ struct State {
     conv: Messages,
     /// Messages read per configured topic in the parts already read to their end.
     counted: Vec<(String, u64)>,
+    /// The part's Statistics record's messages per channel id, if it has one.
+    stats: Option<Vec<(u16, u64)>>,
 }
 
 /// Streaming reader of an MCAP log (a ROS 2 recording); see the module docs.
@@ -214,6 +226,7 @@ impl<R: Read + Seek> McapReader<R> {
                 done: false,
                 chunk_at: 0,
                 counted: Vec::new(),
+                stats: None,
                 conv: Messages::new(file, mcfg, overrides.clone()),
             },
             current: None,
@@ -261,6 +274,7 @@ impl<R: Read + Seek> McapReader<R> {
             }
             let ev = match self.lin.next_event() {
                 None => {
+                    st.check_statistics()?;
                     st.channels.add_counts(&mut st.counted);
                     let Some((file, input)) = self.rest.pop_front() else {
                         st.done = true;

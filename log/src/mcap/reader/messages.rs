@@ -38,11 +38,41 @@ impl State {
         self.schemas.clear();
         // (The finished part's counts were added by the caller.)
         self.channels = super::Channels::default();
+        self.stats = None;
         self.conv.part += 1;
         if self.conv.header.is_some() {
             self.header_from = Some(HeaderFrom::Given);
         }
         self.conv.file = file;
+        Ok(())
+    }
+
+    /// At the end of a part: the messages read on each configured topic's channel against the
+    /// part's own Statistics record (its `channel_message_counts`), if it has one. A file that
+    /// counts messages it does not hold was cut or spliced (or holds messages it does not count):
+    /// it contradicts itself, and is refused. Channels the audit does not read are not compared.
+    pub(super) fn check_statistics(&self) -> Result<(), LogError> {
+        let Some(stats) = &self.stats else {
+            return Ok(());
+        };
+        for &(id, want) in stats {
+            let (read, topic) = self.channels.read_on(id);
+            let Some(topic) = topic else { continue };
+            if read != want {
+                return Err(LogError::input(
+                    &self.conv.file,
+                    Location::File,
+                    format!(
+                        "the file's Statistics record counts {want} messages on channel {id} (`{topic}`), the file holds {read} ({}): it contradicts itself",
+                        if read < want {
+                            "messages were cut out"
+                        } else {
+                            "messages were added"
+                        }
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -67,7 +97,7 @@ impl State {
         // Top-level records end exactly at `pos` (the reader is fed only the bytes it asks for).
         let start = self.pos.saturating_sub(9 + data.len() as u64);
         match opcode {
-            op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => {}
+            op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA | op::STATISTICS => {}
             _ => return Ok(()),
         }
         let bad = |p: FieldError| {
@@ -102,6 +132,35 @@ impl State {
                 let enc = f.str("channel message encoding").map_err(bad)?;
                 f.map("channel metadata", |_, _| {}).map_err(bad)?;
                 self.channel(id, schema_id, topic, enc)?;
+            }
+            op::STATISTICS => {
+                f.u64("statistics message count").map_err(bad)?;
+                f.u16("statistics schema count").map_err(bad)?;
+                for what in [
+                    "statistics channel count",
+                    "statistics attachment count",
+                    "statistics metadata count",
+                    "statistics chunk count",
+                ] {
+                    f.u32(what).map_err(bad)?;
+                }
+                f.u64("statistics message start time").map_err(bad)?;
+                f.u64("statistics message end time").map_err(bad)?;
+                let n = f.u32("statistics channel message counts").map_err(bad)?;
+                let mut m = Fields {
+                    b: f.take(u64::from(n), "statistics channel message counts")
+                        .map_err(bad)?,
+                };
+                let mut counts = Vec::new();
+                while !m.b.is_empty() {
+                    let id = m.u16("statistics channel id").map_err(bad)?;
+                    let k = m.u64("statistics channel message count").map_err(bad)?;
+                    counts.push((id, k));
+                }
+                if self.stats.is_some() {
+                    return Err(self.err("a second Statistics record"));
+                }
+                self.stats = Some(counts);
             }
             op::METADATA => {
                 let (name, h) = parse_metadata(data).map_err(bad)?;
