@@ -707,6 +707,11 @@ fn bag_directory_errors_name_metadata_yaml() {
             &["relative_file_paths[1] `clean.db3` is relative_file_paths[0] again"],
         ),
         (
+            // One file under two spellings.
+            meta.replace("- clean.db3", "- clean.db3\n  - ./clean.db3"),
+            &["relative_file_paths[1] `./clean.db3` is relative_file_paths[0] again"],
+        ),
+        (
             "a: &x [1, 2]\nb: *x\n".into(),
             &["line 2: YAML aliases are not supported"],
         ),

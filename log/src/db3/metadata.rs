@@ -127,7 +127,9 @@ pub(super) fn bag_info(text: &str, bare: bool) -> Result<BagInfo, MetadataError>
                         Some(f),
                     ));
                 };
-                if let Some(j) = files.iter().position(|f| f == s) {
+                // `./a.db3` and `a.db3` name one file.
+                let same = |f: &String| f.trim_start_matches("./") == s.trim_start_matches("./");
+                if let Some(j) = files.iter().position(same) {
                     return Err(MetadataError::Contradiction(format!(
                         "relative_file_paths[{i}] `{s}` is relative_file_paths[{j}] again (a part read twice)"
                     )));
