@@ -289,7 +289,9 @@ impl ObjectBounds {
 /// - positions farther apart than the model allows over `Δt` plus twice the position error:
 ///   the smallest of `max_speed·Δt` (with a speed bound) and `(|v| + vel_error)·Δt + a·Δt²/2`
 ///   for each measured velocity `v` (forward from the early one, backward from the late one);
-///   with none of these the model bounds nothing and no pair contradicts it.
+///   with none of these the model bounds nothing and no pair contradicts it;
+/// - for each measured velocity `v`, the displacement farther than `vel_error·Δt + a·Δt²/2`
+///   plus twice the position error from `v·Δt` (its direction, not only its length).
 ///
 /// # Soundness
 /// Claim C9: false only if each of these holds exactly (allowances rounded down, distances and
@@ -342,7 +344,33 @@ fn object_pair_breaks_rounded(
         (None, None) => return false,
     };
     let allowed = add_down(allowed, mul_down(2.0, b.pos_error));
-    dist3_up(&early.position, &late.position) > allowed
+    if dist3_up(&early.position, &late.position) > allowed {
+        return true;
+    }
+    // Direction: from a measured velocity `v`, the displacement lies within
+    // `vel_error·Δt + a·Δt²/2` (plus twice the position error) of `v·Δt` — forward from the
+    // early record, backward from the late one (`|Δp − v·Δt|` either way). The distance test
+    // above bounds only its length: a velocity pointing away passed it.
+    let dt_hi = pacs_reach::rounding::sub_up(late.time, early.time).max(0.0);
+    let dts =
+        pacs_reach::Interval::new(dt, dt_hi.max(dt)).unwrap_or(pacs_reach::Interval::point(dt_hi));
+    let by_acc = mul_down(mul_down(0.5, acc), mul_down(dt, dt)).max(0.0);
+    let band = add_down(
+        add_down(mul_down(ev, dt), by_acc),
+        mul_down(2.0, b.pos_error),
+    );
+    [early.velocity, late.velocity]
+        .into_iter()
+        .flatten()
+        .any(|v| {
+            let r: [f64; 3] = std::array::from_fn(|i| {
+                let pt = pacs_reach::Interval::point;
+                (pt(late.position[i]) - pt(early.position[i]) - pt(v[i]) * dts).mag()
+            });
+            // NaN (an overflow) is no proof of consistency: a break.
+            let n = norm3_up(r[0], r[1], r[2]);
+            n.is_nan() || n > band
+        })
 }
 
 /// The fast accept of [`object_pair_breaks`] in plain floats (arguments as there): true only
@@ -397,6 +425,9 @@ fn object_pair_within_plain(
         // `√` through `ieee::sqrt`: under Kani its contract (correctly rounded here).
         let allowed = (pacs_reach::ieee::sqrt(n2) + ev) * dt + 0.5 * acc * dt2;
         by_velocity = by_velocity.min(allowed);
+        if !direction_within_plain(early, late, &v, dt, ev * dt + 0.5 * acc * dt2 + 2.0 * pe) {
+            return false;
+        }
     }
     let allowed = match b.max_speed {
         Some(vmax) => by_velocity.min(vmax * dt),
@@ -407,6 +438,34 @@ fn object_pair_within_plain(
         return true;
     }
     within_plain(&early.position, &late.position, allowed + 2.0 * pe)
+}
+
+/// The direction test of [`object_pair_breaks`] in plain floats: true only if, exactly,
+/// `|Δp − v·Δt| ≤ band` (`band` = `vel_error·Δt + a·Δt²/2 + 2·pos_error`). The float residual
+/// is off the exact one by a few ε of the magnitudes it is computed from (positions, `v·Δt`):
+/// eight ε of their sum come off the band, and the band is taken only in `[1e-135, 1e150]` and
+/// less a relative 1e-9 (its own rounding, and the outward-rounded test's slack, far below that).
+/// False otherwise (the caller then decides with outward rounding).
+#[inline]
+fn direction_within_plain(
+    early: &ObjectMeasurement,
+    late: &ObjectMeasurement,
+    v: &[f64; 3],
+    dt: f64,
+    band: f64,
+) -> bool {
+    if !(1e-135..=1e150).contains(&band) {
+        return false;
+    }
+    let (mut r2, mut mags) = (0.0, 0.0);
+    for i in 0..3 {
+        let step = v[i] * dt;
+        let r = (late.position[i] - early.position[i]) - step;
+        r2 += r * r;
+        mags += late.position[i].abs() + early.position[i].abs() + step.abs();
+    }
+    let room = band * (1.0 - 1e-9) - 8.0 * f64::EPSILON * mags;
+    mags.is_finite() && room > 0.0 && r2 <= room * room
 }
 
 /// Whether a non-negative bound (m, m/s, m/s², s) is one the plain-float accept takes: zero or
@@ -546,6 +605,52 @@ mod tests {
     /// range conditions exist for (an infinite velocity norm, a subnormal `Δt²` scaled by a huge
     /// acceleration, a model without acceleration over a long `Δt`). And it accepts most pairs
     /// well inside (what it is for).
+    /// A measured velocity bounds the direction of the displacement, not only its length: from
+    /// `v = (−0.6, 0, 0)` m/s, 0.5 s later the object lies within `vel_error·Δt + a·Δt²/2 +
+    /// 2·pos_error` of `p + v·Δt` — not 0.3 m the other way (a length within `|v|·Δt` passed
+    /// before). Forward from the early record and backward from the late one; the aligned
+    /// velocity, and one sideways within the band, pass.
+    #[test]
+    fn a_velocity_pointing_away_from_the_displacement_breaks_the_model() {
+        let b = ObjectBounds::new(0.5, None, 0.01, 0.005);
+        let rec = |time: f64, x: f64, v: Option<[f64; 3]>| ObjectMeasurement {
+            time,
+            position: [1.0 + x, 2.0, 0.5],
+            velocity: v,
+        };
+        let away = Some([-0.6, 0.0, 0.0]);
+        let along = Some([0.6, 0.0, 0.0]);
+        // Band: 0.01·0.5 + 0.5·0.5·0.25 + 0.01 = 0.0775 m.
+        assert!(object_pair_breaks(
+            &b,
+            &rec(0.0, 0.0, away),
+            &rec(0.5, 0.3, None)
+        ));
+        assert!(object_pair_breaks(
+            &b,
+            &rec(0.0, 0.0, None),
+            &rec(0.5, 0.3, away)
+        ));
+        assert!(!object_pair_breaks(
+            &b,
+            &rec(0.0, 0.0, along),
+            &rec(0.5, 0.3, None)
+        ));
+        assert!(!object_pair_breaks(
+            &b,
+            &rec(0.0, 0.0, None),
+            &rec(0.5, 0.3, along)
+        ));
+        // Within the band of `v·Δt` (0.07 m off it, sideways): consistent; 0.09 m: not.
+        let side = |y: f64| ObjectMeasurement {
+            time: 0.5,
+            position: [1.3, 2.0 + y, 0.5],
+            velocity: None,
+        };
+        assert!(!object_pair_breaks(&b, &rec(0.0, 0.0, along), &side(0.07)));
+        assert!(object_pair_breaks(&b, &rec(0.0, 0.0, along), &side(0.09)));
+    }
+
     #[test]
     fn the_plain_accept_of_an_object_pair_is_sound() {
         let mut next = uniform(0x6a09_e667_f3bc_c909u64);
@@ -598,7 +703,32 @@ mod tests {
                 _ => 2.0 * next(),
             };
             let d = dir(&mut next);
-            let q = moved_along(&p, d, allowed * k);
+            // The direction band of a measured velocity, and (in half the cases with exactly one
+            // velocity) the late position along it: `p + u·Δt` moved by `k` bands.
+            let band = b.vel_error * dt + 0.5 * b.acc * dt * dt + 2.0 * b.pos_error;
+            let one = match (ev, lv) {
+                (Some(u), None) | (None, Some(u)) => Some(u),
+                _ => None,
+            };
+            let q = match one {
+                Some(u) if i % 2 == 0 => {
+                    let ahead = [p[0] + u[0] * dt, p[1] + u[1] * dt, p[2] + u[2] * dt];
+                    moved_along(&ahead, d, band * k)
+                }
+                _ => moved_along(&p, d, allowed * k),
+            };
+            let residual = |u: [f64; 3]| {
+                norm([
+                    q[0] - p[0] - u[0] * dt,
+                    q[1] - p[1] - u[1] * dt,
+                    q[2] - p[2] - u[2] * dt,
+                ])
+            };
+            let well_inside = norm([q[0] - p[0], q[1] - p[1], q[2] - p[2]]) <= 0.9 * allowed
+                && [ev, lv]
+                    .into_iter()
+                    .flatten()
+                    .all(|u| residual(u) <= 0.9 * band);
             let (early, late) = (
                 ObjectMeasurement {
                     time: 0.0,
@@ -623,12 +753,17 @@ mod tests {
             let tame = (1e-130..=1e140).contains(&allowed)
                 && dt <= 1e100
                 && (dt * dt == 0.0 || dt * dt >= f64::MIN_POSITIVE);
-            if k < 0.9 && tame && lv.is_none_or(|_| ev.is_none()) {
+            if well_inside
+                && tame
+                && (1e-130..=1e140).contains(&band)
+                && lv.is_none_or(|_| ev.is_none())
+            {
                 inside += 1;
                 inside_accepted += accept as usize;
             }
         }
-        assert!(accepted > 8_000, "{accepted}");
+        assert!(accepted > 4_000, "{accepted}");
+        assert!(inside > 2_000, "{inside}");
         assert!(
             inside_accepted * 10 > inside * 9,
             "{inside_accepted} of {inside}"
