@@ -136,6 +136,9 @@ fn simulate_rejects_unknown_task_and_method() {
         ["--time-limit", "0"],
         ["--time-limit", "NaN"],
         ["--time-limit", "4000"],
+        // Named twice, a task's or method's rollouts would count twice.
+        ["--task", "sorting,sorting"],
+        ["--method", "pacs,off,pacs"],
     ] {
         let out = pacs().arg("simulate").args(args).output().unwrap();
         assert_eq!(out.status.code(), Some(3), "{args:?}");

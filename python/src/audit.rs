@@ -162,7 +162,7 @@ fn audit_header(h: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Header>> {
         .map_err(|e| input(format!("header: {e}")))
 }
 
-/// Audit logged runs (log format v1: JSON Lines, CSV for *.csv, ROS 2 MCAP, ROS 2 sqlite3 bags:
+/// Audit logged runs (log formats v1 and v2: JSON Lines, CSV for *.csv, ROS 2 MCAP, ROS 2 sqlite3 bags:
 /// *.db3 or a bag directory with metadata.yaml, the header in custom_data `pacs_header`) against
 /// the SSM and PFL constraints their headers name, with the one ISO/TS 15066 rule the shield uses.
 /// `header`: for MCAP logs and ROS 2 bags only, the pacs header (a dict, or a JSON/TOML file)
@@ -254,6 +254,20 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
             "runs: audited with different settings; report each audit call separately",
         ));
     }
+    // One log given twice would count twice in the fleet report (as `pacs.audit` refuses).
+    for (i, r) in runs.iter().enumerate() {
+        let key = std::fs::canonicalize(&r.path).unwrap_or_else(|_| r.path.clone());
+        if let Some(first) = runs[..i]
+            .iter()
+            .find(|o| std::fs::canonicalize(&o.path).unwrap_or_else(|_| o.path.clone()) == key)
+        {
+            return Err(input(format!(
+                "runs: {} is the same log as {} (given twice, it would count twice in the fleet report)",
+                r.path.display(),
+                first.path.display()
+            )));
+        }
+    }
     // The report binds each verdict to the bytes that were audited: a log changed since its
     // audit is refused (audit it again).
     let mut logs = Vec::with_capacity(runs.len());
@@ -286,7 +300,8 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
     Ok(verdict_str(pacs_reports::overall(&results)))
 }
 
-/// Write a run as a pacs log (format v1, JSON Lines) from a Python loop, for `pacs.audit`.
+/// Write a run as a pacs log (format v2, JSON Lines; several people, each with an id) from a
+/// Python loop, for `pacs.audit`.
 /// The models are named as for `Shield` (URDF robots are written as their converted spec).
 /// Records must come in time order: `robot(t, q, dq=None, ddq=None)` (rad, rad/s, rad/s²; the
 /// audit bounds motion between samples by the robot's limits, tighter with dq/ddq),
@@ -410,7 +425,8 @@ impl PyLogWriter {
     }
 
     /// A human measurement logged at `t`, taken at `t_meas` (s): keypoints (m, shape (K, 3)) of
-    /// person `person` (an index or id of the writer's humans; default: the first).
+    /// person `person` (an index or id of the writer's humans; may be left out only when the
+    /// writer has one person).
     #[pyo3(signature = (t, t_meas, positions, person=None))]
     fn human(
         &mut self,

@@ -109,8 +109,8 @@ pub fn raise(f: Fail) -> PyErr {
 ///     "human_model": "combined" | "pos" | "vel" | "acc", "out_of_limits": "reject" | "project",
 ///     "chunk_motion": "stop" | "continuous"}.
 ///   side: the side file of a URDF robot (masses, capsules, limits URDF lacks).
-///   log: a path: the run is written there as an audit log (format v1, JSON Lines) that
-///     `pacs.audit` / `pacs audit` check (one human at most: the log format carries one).
+///   log: a path: the run is written there as an audit log (format v2, JSON Lines, every
+///     person with an id) that `pacs.audit` / `pacs audit` check.
 ///
 /// Timing: `step(t)` is called every safety step, t_k = t_0 + k·α_s (other times are refused);
 /// a measurement (human or object) reaches the shield at the first step at or after its time

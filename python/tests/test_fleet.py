@@ -258,6 +258,11 @@ def test_simulate_names_bad_input(client):
         pacs.simulate(client=7)
     with pytest.raises(pacs.InputError, match="seeds: seed 3 is given twice"):
         pacs.simulate(seeds=[3, 4, 3])
+    # A task or method named twice would count its rollouts twice.
+    with pytest.raises(pacs.InputError, match="task: `sorting` is given twice"):
+        pacs.simulate(task="sorting,sorting")
+    with pytest.raises(pacs.InputError, match="method: `pacs` is given twice"):
+        pacs.simulate(method=["pacs", "off", "pacs"])
     with pytest.raises(pacs.InputError, match="seeds: give either seeds or rollouts"):
         pacs.simulate(seeds=[3], rollouts=2)
     with pytest.raises(pacs.ArgumentTypeError, match=r"seeds\[1\]: expected an int, got 'x'"):

@@ -68,6 +68,9 @@ def test_a_person_at_the_gripper_fails_and_is_named(demo, tmp_path):
     # One log given twice would count twice in a report: refused, naming both paths.
     with pytest.raises(pacs.InputError, match=r"named\.jsonl: the same log as .*named\.jsonl"):
         pacs.audit([log, log])
+    # Nor can a report count one run twice.
+    with pytest.raises(pacs.InputError, match=r"runs: .*named\.jsonl is the same log as .*named\.jsonl"):
+        pacs.report([r, r], tmp_path / "twice")
     # Whose measurement it is must be said with several people; bad `person` values are named.
     with pacs.LogWriter(tmp_path / "bad.jsonl", human=people) as w:
         with pytest.raises(pacs.InputError, match=r"person: required with several people"):

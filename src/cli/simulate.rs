@@ -123,6 +123,16 @@ fn parse_list<T: std::str::FromStr<Err = pacs_sim::UnknownName>>(
     if names.is_empty() {
         return Err(CliError::Input(format!("--{what}: empty list")));
     }
+    if let Some(n) = names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+        .map(|(_, n)| *n)
+    {
+        return Err(CliError::Input(format!(
+            "--{what}: `{n}` is given twice (its rollouts would count twice)"
+        )));
+    }
     names
         .into_iter()
         .map(|n| {

@@ -190,6 +190,9 @@ def _names(value: Any, name: str) -> list:
         )
     if not names:
         raise InputError(f"{name}: no name given")
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise InputError(f"{name}: `{n}` is given twice (its rollouts would count twice)")
     return names
 
 
