@@ -295,6 +295,16 @@ fn nulls(v: &Value, at: &str, out: &mut Vec<String>) {
     }
 }
 
+/// `dir/report.json`, asserted to hold no `null` anywhere.
+fn report_json_without_null(dir: &Path) -> Value {
+    let rep: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let mut found = Vec::new();
+    nulls(&rep, "report", &mut found);
+    assert!(found.is_empty(), "null at {found:?}");
+    rep
+}
+
 /// An object whose inline model has no speed bound: report.json's echo of its spec leaves the
 /// bound out (no `null`).
 #[test]
@@ -323,11 +333,7 @@ fn an_object_without_a_speed_bound_leaves_no_null_in_the_report() {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
-    let rep: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let mut found = Vec::new();
-    nulls(&rep, "report", &mut found);
-    assert!(found.is_empty(), "null at {found:?}");
+    let rep = report_json_without_null(&out);
     let spec = &rep["runs"][0]["model_parameters"]["objects"]["spec"][0];
     assert!(spec.get("max_speed").is_none(), "{spec}");
     assert_eq!(spec["max_acc"], 3.0, "{spec}");
@@ -351,11 +357,7 @@ fn report_json_without_a_config_has_no_null() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let rep: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let mut found = Vec::new();
-    nulls(&rep, "report", &mut found);
-    assert!(found.is_empty(), "null at {found:?}");
+    let rep = report_json_without_null(&out);
     assert!(rep["inputs"].get("config").is_none(), "no config given");
     assert!(rep["settings"].get("robot").is_none());
     // The tables still say where the models come from.

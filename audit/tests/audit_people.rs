@@ -729,6 +729,14 @@ fn an_exact_copy_of_a_robot_sample_changes_nothing() {
     }
 }
 
+/// `text` without its object records (the object declared, never measured).
+fn without_object_records(text: &str) -> String {
+    text.lines()
+        .filter(|l| !l.contains("\"type\": \"object\""))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
 /// An object never measured, person A never measured, person B throughout: A's pass stops at
 /// `no_human` before it reaches the objects, B's finds `no_object`. Both are reported, and the
 /// object's spans name the object, whichever pass found them; a span both passes find is listed
@@ -736,11 +744,7 @@ fn an_exact_copy_of_a_robot_sample_changes_nothing() {
 #[test]
 fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
     let all: Vec<f64> = (0..=20).map(|i| f64::from(i) * 0.1).collect();
-    let text: String = object_on_gripper_log(&[], &all)
-        .lines()
-        .filter(|l| !l.contains("\"type\": \"object\""))
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let text = without_object_records(&object_on_gripper_log(&[], &all));
     let r = audit(&text);
     assert_eq!(r.verdict, Verdict::Inconclusive);
     let about = |reason: InconclusiveReason| {
@@ -768,11 +772,7 @@ fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
         r.inconclusive
     );
     // Both people measured throughout: both passes find the same `no_object` span, listed once.
-    let text: String = object_on_gripper_log(&all, &all)
-        .lines()
-        .filter(|l| !l.contains("\"type\": \"object\""))
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let text = without_object_records(&object_on_gripper_log(&all, &all));
     let r = audit(&text);
     assert_eq!(r.verdict, Verdict::Inconclusive);
     let reasons: Vec<_> = r.inconclusive.iter().map(|s| s.reason).collect();
