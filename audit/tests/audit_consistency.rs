@@ -566,8 +566,8 @@ fn lone_derivative_log(
 /// contradicts the positions, 0.004 does not; on a joint moving 28 µrad per step, a last sample
 /// claiming 0.019 rad/s (below the rest speed 0.02 rad/s, which the final instant would have
 /// used to pass the hand's contact) contradicts them too. A lone `q̈` beyond 100·A, or (with
-/// velocities at every sample, constant) beyond `JΔ/2 = 2.5 rad/s²` contradicts them. Without
-/// the check the hand's contact with a robot "at rest" passed SSM.
+/// velocities at every sample, constant) beyond `JΔ/2 = 2.5 rad/s²` contradicts them. A log that
+/// contradicts itself so is never a pass.
 #[test]
 fn a_derivative_logged_on_one_sample_only_must_agree_with_its_spans() {
     let contradicted = |r: &RunResult| reasons(r).contains(&"exceeds_limits");
@@ -632,8 +632,8 @@ fn late_record_log(stamp: f64, late: &str) -> RunResult {
 /// The audit checks each human record against the latest 64 it keeps. A record arriving after
 /// those have moved past its stamp (logged at 150 ms, stamped 10 ms, 140 records later) cannot
 /// be checked against its neighbours in time: `human_record_too_late` (never a pass), whatever
-/// it shows — with the person touching the robot it would otherwise have passed, checked only
-/// against records 77 ms and more away. Stamped 140 ms (within the kept records) it is checked
+/// it shows (here also a person touching the robot, which the kept records, 77 ms and more
+/// away, would allow). Stamped 140 ms (within the kept records) it is checked
 /// against its neighbours: far, it passes; touching, it contradicts them.
 #[test]
 fn a_record_too_late_to_check_against_its_neighbours_is_not_evidence() {

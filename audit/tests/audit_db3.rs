@@ -1327,7 +1327,7 @@ fn a_log_inside_a_bag_directory_that_is_not_the_bag_is_refused() {
 /// A `.db3` given alone whose `metadata.yaml` beside it lists it as the bag's only part is read as
 /// that bag: in Humble's layout (no `metadata` table in the file) its header comes from the
 /// metadata's `custom_data` (none given), and rows deleted from it are refused by the metadata's
-/// counts, as when the directory is given (read alone, the cut file passed).
+/// counts, as when the directory is given.
 #[test]
 fn a_lone_db3_described_by_the_metadata_beside_it_is_read_as_its_bag() {
     let src = fixtures().join("clean");

@@ -683,8 +683,8 @@ fn touching_log(w_joint: f64, dq: Option<[f64; 7]>, copies: usize) -> String {
 
 /// The last sample's instant, checked with a person record that arrived just before it, in a log
 /// without velocities: its velocity box is the one of the span ending there. A robot at rest
-/// touched by a hand (allowed under SSM) passes as it does without that record (with the limits
-/// alone, `[−v_max, v_max]`, it failed at that instant); a turning joint fails at that instant
+/// touched by a hand (allowed under SSM) passes as it does without that record (the limits alone,
+/// `[−v_max, v_max]`, would make that instant a possible violation); a turning joint fails at that instant
 /// too.
 #[test]
 fn the_final_instant_without_velocities_is_bounded_by_the_last_span() {
