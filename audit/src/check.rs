@@ -101,9 +101,10 @@ struct ObjectTrack {
     latest: Option<ObjectMeasurement>,
     /// The latest [`HUMAN_HISTORY`] measurements by stamp, for the model check of each record.
     history: std::collections::VecDeque<ObjectMeasurement>,
-    /// A record was let go from `history` (a later record older than every kept one cannot
-    /// be checked against its neighbours in time: `object_record_too_late`).
-    dropped: bool,
+    /// The newest stamp of a record let go from `history` (or not kept), if any: a later
+    /// record as old as every kept one, with a let-go one older than it, cannot be checked
+    /// against its neighbours in time ([`too_late`], `object_record_too_late`).
+    dropped: Option<f64>,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -185,9 +186,10 @@ pub struct Auditor {
     /// The latest [`HUMAN_HISTORY`] human measurements in stamp order, for the model check of
     /// each record against them (records may arrive out of order).
     human_history: std::collections::VecDeque<HumanMeasurement>,
-    /// A record was let go from `human_history` (or not kept): a later record older than every
-    /// kept one cannot be checked against its neighbours in time (`human_record_too_late`).
-    human_dropped: bool,
+    /// The newest stamp of a record let go from `human_history` (or not kept), if any: a later
+    /// record as old as every kept one, with a let-go one older than it, cannot be checked
+    /// against its neighbours in time ([`too_late`], `human_record_too_late`).
+    human_dropped: Option<f64>,
     /// The bounding box of each kept measurement's keypoints (same order as `human_history`).
     human_boxes: std::collections::VecDeque<KeypointBox>,
     span_human: Option<usize>,
@@ -225,6 +227,21 @@ pub struct Auditor {
 /// `f64::MAX` J, still an upper bound of any physical robot's energy, never `null`.
 fn reportable(e: f64) -> f64 {
     if e.is_finite() { e } else { f64::MAX }
+}
+
+/// Whether a record stamped `t` cannot be checked against its neighbours in time, given the
+/// oldest kept record's stamp `oldest` and the newest stamp of a record let go, `dropped`: it is
+/// older than every kept record after some were let go, or as old as the oldest kept one while
+/// a let-go record is older than it (its older neighbour is gone) and it is not a copy of a kept
+/// record of its stamp (`copies_a_kept_one`: the same values, so the same checks; a tracker's
+/// stamp repeated more than [`HUMAN_HISTORY`] times).
+fn too_late(
+    t: f64,
+    oldest: f64,
+    dropped: Option<f64>,
+    copies_a_kept_one: impl FnOnce() -> bool,
+) -> bool {
+    dropped.is_some_and(|d| t < oldest || (t == oldest && d < t && !copies_a_kept_one()))
 }
 
 impl Auditor {
@@ -317,7 +334,7 @@ impl Auditor {
             latest_human: None,
             model_breaks: Vec::new(),
             human_history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
-            human_dropped: false,
+            human_dropped: None,
             human_boxes: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span_human: None,
             span_index: 0,
@@ -476,23 +493,28 @@ impl Auditor {
         // Keep `m` in stamp order; when full, the oldest's storage is reused (no allocation
         // after warm-up), and a record older than all kept ones is not kept.
         let at = self.human_history.partition_point(|h| h.time() <= m.time());
-        // Older than every kept record after some were let go: its neighbours in time may be
-        // gone, so it was not checked against them.
-        if at == 0
-            && self.human_dropped
-            && let Some(oldest) = self.human_history.front()
+        // Its older neighbours in time may be gone: not checked against them.
+        if let Some(oldest) = self.human_history.front()
+            && too_late(m.time(), oldest.time(), self.human_dropped, || {
+                self.human_history
+                    .iter()
+                    .take_while(|h| h.time() == m.time())
+                    .any(|h| h.positions() == m.positions() && h.velocities() == m.velocities())
+            })
         {
             let t1 = oldest.time();
             self.model_break(m.time(), t1, Reason::HumanRecordTooLate);
         }
-        if self.human_history.len() >= HUMAN_HISTORY {
-            self.human_dropped = true;
-        }
         if self.human_history.len() < HUMAN_HISTORY {
             self.human_history.insert(at, m.clone());
             self.human_boxes.insert(at, mbox);
-        } else if at > 0 {
+        } else if at == 0 {
+            // Not kept: older than (or as old as) every kept one.
+            self.human_dropped = Some(self.human_dropped.map_or(m.time(), |d| d.max(m.time())));
+        } else {
             let mut slot = self.human_history.pop_front().expect("the history is full");
+            let gone = slot.time();
+            self.human_dropped = Some(self.human_dropped.map_or(gone, |d| d.max(gone)));
             slot.assign_from(m);
             self.human_history.insert(at - 1, slot);
             self.human_boxes.pop_front();
@@ -586,10 +608,14 @@ impl Auditor {
         }
         let o = &self.objects[k];
         let at = o.history.partition_point(|h| h.time <= m.time);
-        // As for human records: older than every kept one after some were let go.
-        if at == 0
-            && o.dropped
-            && let Some(oldest) = o.history.front()
+        // As for human records ([`too_late`]).
+        if let Some(oldest) = o.history.front()
+            && too_late(m.time, oldest.time, o.dropped, || {
+                o.history
+                    .iter()
+                    .take_while(|h| h.time == m.time)
+                    .any(|h| *h == m)
+            })
         {
             let t1 = oldest.time;
             self.model_break_about(m.time, t1, Reason::ObjectRecordTooLate, Some(k));
@@ -597,9 +623,10 @@ impl Auditor {
         let o = &mut self.objects[k];
         o.others_for = None;
         o.history.insert(at, m);
-        if o.history.len() > HUMAN_HISTORY {
-            o.history.pop_front();
-            o.dropped = true;
+        if o.history.len() > HUMAN_HISTORY
+            && let Some(gone) = o.history.pop_front()
+        {
+            o.dropped = Some(o.dropped.map_or(gone.time, |d| d.max(gone.time)));
         }
         m.keep_newest(&mut o.latest);
         Ok(())
@@ -842,7 +869,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             contact: *contact,
             latest: None,
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
-            dropped: false,
+            dropped: None,
             span: None,
             occ: None,
             others: Vec::with_capacity(8),

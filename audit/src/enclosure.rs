@@ -13,7 +13,11 @@
 //!   `|q₁ − q₀ − Δ(q̇₀ + q̇₁)/2| ≤ (A²Δ² − (q̇₁ − q̇₀)²)/(4A)` — the displacement reachable between
 //!   the two velocities under `|q̈| ≤ A` (extremes: bang-bang acceleration);
 //! - with accelerations, the same one derivative up: `|q̈₀|, |q̈₁| ≤ A`, `|q̈₁ − q̈₀| ≤ JΔ` and
-//!   `|q̇₁ − q̇₀ − Δ(q̈₀ + q̈₁)/2| ≤ (J²Δ² − (q̈₁ − q̈₀)²)/(4J)`.
+//!   `|q̇₁ − q̇₀ − Δ(q̈₀ + q̈₁)/2| ≤ (J²Δ² − (q̈₁ − q̈₀)²)/(4J)`; and the displacement two
+//!   derivatives up, `|q₁ − q₀ − Δ(q̇₀ + q̇₁)/2 − Δ²(q̈₀ − q̈₁)/8| ≤ JΔ³/24` (on each half span the
+//!   velocity lies within its end's Taylor envelope `q̇ + q̈τ ± Jτ²/2`; integrated);
+//! - the mean velocity `(q₁ − q₀)/Δ`, attained at some instant, lies in the velocity box below
+//!   (implied by the tests above; checked on the box itself);
 //! - derivatives logged at one end only (`q̇` at one sample, or `q̈` at one end of a span with `q̇`
 //!   at both): the enclosures below do not use them, but they must agree with the span — a lone
 //!   `q̇ = c`: `|c| ≤ v_max` and `|q₁ − q₀ − cΔ| ≤ AΔ²/2`; a lone `q̈ = e`: `|e| ≤ A` and, where
@@ -452,13 +456,20 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
         let (p_lo, p_hi) = ends_box(a, b, reach);
         let dpos = b - a;
         let mut bad_j = down(dpos.abs(), mag_ab) > reach * rel;
-        // q̇ ∈ mean ± AΔ (where Δ > 0).
-        let (m_lo, m_hi) = {
+        // The mean velocity (b − a)/Δ, bounded outward (`mean_lo`, `mean_hi`), is attained at
+        // some instant of the span (where Δ > 0): q̇ ∈ mean ± AΔ.
+        let (mean_lo, mean_hi) = {
             let (n_lo, n_hi) = (down(dpos, mag_ab), up(dpos, mag_ab));
             let m_hi = (n_hi / dt_lo).max(n_hi / dt_hi);
             let m_lo = (n_lo / dt_lo).min(n_lo / dt_hi);
+            (down(m_lo, m_lo.abs()), up(m_hi, m_hi.abs()))
+        };
+        let (m_lo, m_hi) = {
             let w = acc * dt_hi;
-            (down(m_lo - w, m_lo.abs() + w), up(m_hi + w, m_hi.abs() + w))
+            (
+                down(mean_lo - w, mean_lo.abs() + w),
+                up(mean_hi + w, mean_hi.abs() + w),
+            )
         };
         // Velocity box: the intersection of the candidates, starting from the limits; their
         // hull (the mean's box included) for a contradicted span.
@@ -507,6 +518,18 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
                     - (PAD * (mag_cd + dt_hi * mag_e) + TINY)
                     - 0.5 * mag_e * (dt_hi - dt_lo);
                 bad_j |= r_min > reach_band(jerk, dt_hi, de_min) + slack * jerk * dt_hi * dt_hi;
+                // Displacement reachable from both ends' velocities and accelerations under
+                // |q⃛| ≤ J: on each half span the velocity lies within its end's Taylor envelope
+                // (q̇₀ + q̈₀τ ± Jτ²/2 from t₀, q̇₁ − q̈₁τ ± Jτ²/2 from t₁), so
+                // |b − a − Δ(c + d)/2 − Δ²(e₀ − e₁)/8| ≤ JΔ³/24.
+                let dt3 = dt_hi * dt_hi * dt_hi;
+                let r3 = dpos - dt * 0.5 * (c + d) - dt * dt * 0.125 * (e0 - e1);
+                let r3_min = r3.abs()
+                    - (PAD * (mag_ab + dt_hi * mag_cd + dt_hi * dt_hi * mag_e) + TINY)
+                    - 0.5 * mag_cd * (dt_hi - dt_lo)
+                    - 0.125 * mag_e * (dt_hi * dt_hi - dt_lo * dt_lo);
+                let band3 = jerk * dt3 / 24.0;
+                bad_j |= r3_min > up(band3, band3) + slack * jerk * dt3;
                 let (l0, h0) = envelope(c, e0, jerk, h_lo, h_hi);
                 let (l1, h1) = envelope(d, -e1, jerk, h_lo, h_hi);
                 let (l, h) = (l0.min(l1), h0.max(h1));
@@ -515,6 +538,13 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
             }
         } else if has_mean {
             (v_lo, v_hi) = (v_lo.max(m_lo), v_hi.min(m_hi));
+        }
+        // The velocity box holds every admissible motion's velocity at every instant, the mean
+        // velocity's instant included: a box that misses the mean leaves no admissible motion
+        // (what the displacement tests above imply, checked once more on the box itself).
+        if has_mean {
+            let tol = slack * (v + acc * dt_hi + jerk * dt_hi * dt_hi);
+            bad_j |= mean_lo > v_hi + tol || mean_hi < v_lo - tol;
         }
         // Comparisons with NaN are false: a NaN bound makes the joint inconsistent.
         bad_lane[j] = bad_j || !(v_lo <= v_hi && i_lo <= i_hi);

@@ -29,6 +29,16 @@ pub enum AuditError {
         /// The declared ids, comma-separated.
         declared: String,
     },
+    /// A second `start` event where the header promises one (two runs in one log).
+    #[error(
+        "a second `start` event at t = {t} s (the first at t = {first} s): the header promises one, at the run's start (two runs in one log?)"
+    )]
+    SecondStart {
+        /// Its time (s).
+        t: f64,
+        /// The first one's time (s).
+        first: f64,
+    },
     /// A record after the `end` event the header promised last.
     #[error(
         "{kind} record at t = {t} s after the `end` event at t = {end} s (the writer promised it last)"

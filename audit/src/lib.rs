@@ -167,9 +167,10 @@ pub fn audit_reader(
     let mut checker = Checker::new(&header, models, cfg)
         .map_err(|p| LogError::input(&header_file, header_loc, p.to_string()))?;
     let mut last_t = f64::NEG_INFINITY;
-    // The `end` event's time, once seen; and the last robot sample's.
+    // The `end` and `start` events' times, once seen; and the first and last robot samples'.
     let mut end: Option<f64> = None;
-    let mut last_robot: Option<f64> = None;
+    let mut start: Option<f64> = None;
+    let mut robot_span: Option<(f64, f64)> = None;
     // Records of one time stamp are applied in the canonical order (`order`): human
     // measurements, robot samples, events, then file order.
     let mut group = EqualTimeGroup::default();
@@ -194,9 +195,15 @@ pub fn audit_reader(
             });
         }
         match rec {
-            Record::Robot { t, .. } => last_robot = Some(t),
+            Record::Robot { t, .. } => robot_span = Some((robot_span.map_or(t, |s| s.0), t)),
             Record::Event { t, name } if header.end_event && name == pacs_log::END_EVENT => {
                 end = Some(t)
+            }
+            Record::Event { t, name } if header.start_event && name == pacs_log::START_EVENT => {
+                if let Some(first) = start {
+                    return Err(AuditError::SecondStart { t, first });
+                }
+                start = Some(t)
             }
             _ => {}
         }
@@ -246,35 +253,57 @@ pub fn audit_reader(
         .map_err(|(loc, p)| LogError::input(&file, loc, p.to_string()))?;
     let mut result = checker.finish(&file, header.meta.clone());
     if header.end_event {
-        complete_or_not(&mut result, end, last_robot);
+        let start = header.start_event.then_some(start);
+        complete_or_not(&mut result, start, end, robot_span);
     }
     Ok(result)
 }
 
-/// Whether a log whose writer promised an `end` event is complete: the event is there and the
-/// robot samples reach it (`last_robot ≥ end`); otherwise the result gains an
-/// `incomplete_log` span from the last sample to the end (or to the last sample, when the end
-/// is missing) and can no longer pass.
-fn complete_or_not(result: &mut RunResult, end: Option<f64>, last_robot: Option<f64>) {
+/// Whether a log whose writer promised an `end` event (and, `start` not `None`, a `start`
+/// event) is complete: the end event is there and the robot samples reach it (last sample ≥
+/// end), and where a start is promised, it is there and the samples begin at it (first sample
+/// ≤ start: a log cut at its beginning keeps its header but not the samples after the start).
+/// Otherwise the result gains an `incomplete_log` span for each missing stretch — from the
+/// start (or the first sample, when the start is missing) to the first sample, and from the
+/// last sample to the end (or to the last sample, when the end is missing) — and can no longer
+/// pass. Without a start promise a complete log is [`Completeness::EndOnly`]: a cut at its
+/// beginning cannot be told.
+///
+/// [`Completeness::EndOnly`]: verdict::Completeness::EndOnly
+fn complete_or_not(
+    result: &mut RunResult,
+    start: Option<Option<f64>>,
+    end: Option<f64>,
+    robot_span: Option<(f64, f64)>,
+) {
     use verdict::{Completeness, InconclusiveSpan};
-    let complete = matches!((end, last_robot), (Some(e), Some(r)) if r >= e);
-    result.evidence.completeness = if complete {
-        Completeness::Complete
-    } else {
-        Completeness::Incomplete
+    let (first, last) = robot_span.map_or((0.0, 0.0), |(a, b)| (a, b));
+    let mut missing: Vec<(f64, f64)> = Vec::new();
+    if let Some(start) = start
+        && !matches!((start, robot_span), (Some(s), Some(_)) if first <= s)
+    {
+        let s = start.unwrap_or(first);
+        missing.push((s.min(first), first));
+    }
+    if !matches!((end, robot_span), (Some(e), Some(_)) if last >= e) {
+        missing.push((last, end.unwrap_or(last).max(last)));
+    }
+    result.evidence.completeness = match (missing.is_empty(), start.is_some()) {
+        (false, _) => Completeness::Incomplete,
+        (true, true) => Completeness::Complete,
+        (true, false) => Completeness::EndOnly,
     };
-    if !complete {
-        let last = last_robot.unwrap_or(0.0);
+    for (t_start, t_end) in missing {
         result.inconclusive.push(InconclusiveSpan {
-            t_start: last,
-            t_end: end.unwrap_or(last).max(last),
+            t_start,
+            t_end,
             reason: InconclusiveReason::IncompleteLog,
             spans: 0,
             person: None,
             object: None,
         });
-        result.refresh_verdict();
     }
+    result.refresh_verdict();
 }
 
 /// Audit one log file: MCAP if it starts with the MCAP magic or its name ends in `.mcap`, a ROS 2

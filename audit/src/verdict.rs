@@ -122,7 +122,10 @@ pub enum InconclusiveReason {
     /// The writer promised an `end` event (`end_event: true` in the header) and the log lacks it,
     /// or its robot samples stop before it: the log was cut short, and what is missing was
     /// never checked (`t_start`: the last robot sample; `t_end`: the end event's time, or the
-    /// last sample's if there is none).
+    /// last sample's if there is none). Or the writer promised a `start` event (`start_event`)
+    /// and the log lacks it, or its robot samples begin after it: the log was cut at its
+    /// beginning (`t_start`: the start event's time, or the first sample's if there is none;
+    /// `t_end`: the first sample).
     IncompleteLog,
     /// The span's time stamps cannot resolve its length (doubles near the stamps are more than a
     /// thousandth of the span apart: `pacs_log::time::clock_resolves`, the shield's rule for its
@@ -244,10 +247,15 @@ impl InconclusiveReason {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Completeness {
-    /// The writer promised an `end` event; it is there and the robot samples reach it.
+    /// The writer promised a `start` and an `end` event; both are there and the robot samples
+    /// run from the one to the other.
     Complete,
-    /// The writer promised an `end` event; it is missing or the samples stop before it
-    /// (`incomplete_log`: never `pass`).
+    /// The writer promised an `end` event and no `start` (logs written by pacs before the
+    /// `start_event` promise, 2026-12); it is there and the robot samples reach it. A cut at the log's beginning
+    /// cannot be told: the audited span is what the log states.
+    EndOnly,
+    /// The writer promised a `start` or an `end` event; one is missing, or the samples begin
+    /// after the start or stop before the end (`incomplete_log`: never `pass`).
     Incomplete,
     /// The writer promised nothing (v1 logs, ROS bags): the audited time span is all the
     /// report can state.
@@ -281,6 +289,7 @@ impl Completeness {
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Complete => "complete",
+            Self::EndOnly => "end_only",
             Self::Incomplete => "incomplete",
             Self::NotPromised => "not_promised",
         }

@@ -560,6 +560,50 @@ fn lone_derivative_log(
     run(&text)
 }
 
+/// Samples at `dt` (s) apart, joint 1 at `0.3 + step·k` (rad) with `dq = dq` and the
+/// accelerations `ddq(k)` on every sample, the hand of [`HUMAN`] overlapping the gripper (SSM).
+fn ddq_log(samples: usize, dt: f64, step: f64, dq: f64, ddq: impl Fn(usize) -> f64) -> RunResult {
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    for k in 0..samples {
+        let t = k as f64 * dt;
+        let q0 = 0.3 + step * k as f64;
+        let a = ddq(k);
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6],\"dq\":[{dq},0,0,0,0,0,0],\"ddq\":[{a},0,0,0,0,0,0]}}\n"
+        );
+    }
+    run(&text)
+}
+
+/// With accelerations logged, the jerk limit tightens the velocity box to within `JΔ²/8` of
+/// the logged velocities; the positions must then be reachable under that limit too. An
+/// outside review's logs (the hand of [`HUMAN`] on the gripper, SSM's rest speed 0.02 rad/s):
+/// at 1 kHz joint 1 logs `dq = 0.019`, `ddq = 0` while its positions advance 21.475 µrad per
+/// step (a mean of 0.021475 rad/s, which the joint reaches at some instant of every span: moving,
+/// touching); two samples 5 ms apart log `dq = 0.0199` and `ddq = ∓8` while the joint covers
+/// 161.375 µrad (0.0323 rad/s on average). Each passed SSM before (the box [0.0184, 0.0196] was
+/// "at rest"); now `|Δq − Δ(q̇₀ + q̇₁)/2 − Δ²(q̈₀ − q̈₁)/8| ≤ JΔ³/24` (0.21 µrad at 1 kHz) fails:
+/// `exceeds_limits` and the hull boxes, which reach the mean velocity, fail the contact. Positions
+/// that agree (19 µrad per step at 0.019 rad/s) still pass: at rest, touching.
+#[test]
+fn accelerations_must_agree_with_the_positions_under_the_jerk_limit() {
+    for r in [
+        ddq_log(101, 0.001, 2.1475e-5, 0.019, |_| 0.0),
+        ddq_log(2, 0.005, 1.61375e-4, 0.0199, |k| {
+            if k == 0 { -8.0 } else { 8.0 }
+        }),
+    ] {
+        assert_eq!(r.verdict, Verdict::Fail, "{:?}", reasons(&r));
+        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    }
+    let r = ddq_log(101, 0.001, 1.9e-5, 0.019, |_| 0.0);
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+    // The same positions with their true velocity logged: consistent, and moving.
+    let r = ddq_log(101, 0.001, 2.1475e-5, 0.021475, |_| 0.0);
+    assert_eq!(r.verdict, Verdict::Fail);
+    assert!(reasons(&r).is_empty(), "{:?}", reasons(&r));
+}
+
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked
 /// against the spans it ends or starts. At 1 kHz with A = 10 rad/s², a lone `q̇ = c` must keep
 /// `|Δq − cΔ| ≤ AΔ²/2 = 5 µrad`: on a joint that does not move, 1 rad/s (or 50, or −0.009)
@@ -633,8 +677,9 @@ fn late_record_log(stamp: f64, late: &str) -> RunResult {
 /// those have moved past its stamp (logged at 150 ms, stamped 10 ms, 140 records later) cannot
 /// be checked against its neighbours in time: `human_record_too_late` (never a pass), whatever
 /// it shows (here also a person touching the robot, which the kept records, 77 ms and more
-/// away, would allow). Stamped 140 ms (within the kept records) it is checked
-/// against its neighbours: far, it passes; touching, it contradicts them.
+/// away, would allow); so does one stamped as the oldest kept record (87 ms: its older
+/// neighbour is gone) unless it copies that record. Stamped 140 ms (within the kept records) it is checked against its
+/// neighbours: far, it passes; touching, it contradicts them.
 #[test]
 fn a_record_too_late_to_check_against_its_neighbours_is_not_evidence() {
     for late in [person_at(0.0), person_at(-2.0)] {
@@ -648,12 +693,45 @@ fn a_record_too_late_to_check_against_its_neighbours_is_not_evidence() {
         // From its stamp to the oldest kept record's (the 64 latest by stamp at 150 ms).
         assert_eq!((s.t_start, s.t_end), (0.01, 87.0 * 0.001), "{s:?}");
     }
+    // Stamped as the oldest kept record (87 ms) and 1 mm off it, its older neighbour (86 ms) is
+    // gone too; an exact copy of the kept record is checked as that record was.
+    let oldest = 87.0 * 0.001;
+    assert_eq!(
+        late_record_log(oldest, &person_at(0.0)).verdict,
+        Verdict::Pass
+    );
+    let r = late_record_log(oldest, &person_at(0.001));
+    // (The default human's measurement error is 0: it contradicts the kept record too.)
+    assert_eq!(
+        reasons(&r),
+        ["human_exceeds_model", "human_record_too_late"]
+    );
+    assert_eq!(
+        (r.inconclusive[0].t_start, r.inconclusive[0].t_end),
+        (oldest, oldest)
+    );
     assert_eq!(
         late_record_log(0.14, &person_at(0.0)).verdict,
         Verdict::Pass
     );
     let r = late_record_log(0.14, &person_at(-2.0));
     assert_eq!(reasons(&r), ["human_exceeds_model"]);
+}
+
+/// A 10 Hz tracker logged at 1 kHz: each measurement's stamp is repeated 100 times, more than
+/// the 64 records the audit keeps. The repeats are checked against the kept ones of their
+/// stamp, not taken as too late: the log passes.
+#[test]
+fn a_stamp_repeated_more_often_than_the_records_kept_is_not_too_late() {
+    let far = person_at(0.0);
+    let mut text = format!("{}\n", header("ssm"));
+    for k in 0..=300 {
+        let t = k as f64 * 0.001;
+        text += &human_record(t, Some((k / 100) as f64 / 10.0), &far);
+        text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{AT_REST}]}}\n");
+    }
+    let r = run(&text);
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
 }
 
 /// A 10 Hz logger writes its stamps as `0.0`, `0.1`, …, `1.5`: in doubles some steps are longer

@@ -59,6 +59,7 @@ fn twin(violation: bool, people: bool) -> RunResult {
             ModelRef::Name("ssm".into()),
         );
         h.end_event = false;
+        h.start_event = false;
         h
     } else {
         header()

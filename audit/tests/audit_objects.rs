@@ -420,19 +420,22 @@ fn an_earlier_measurement_clears_a_span_the_newest_cannot() {
 
 /// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped
 /// 10 ms, after the latest 64 records kept have moved past its stamp, cannot be checked against
-/// its neighbours in time: `object_record_too_late`, naming the ball. Stamped 140 ms it is
-/// checked, and passes.
+/// its neighbours in time: `object_record_too_late`, naming the ball; so can one stamped as
+/// the oldest kept record (87 ms) that does not copy it. Stamped 140 ms it is checked, and
+/// passes.
 #[test]
 fn an_object_record_too_late_to_check_is_not_evidence() {
     let far = [3.0, 3.0, 0.5];
-    let log = |stamp: f64| {
+    let log_at = |stamp: f64, late: [f64; 3]| {
         ball_log(ObjectContact::Ssm, 0.2, |w, k, t| {
             w.write_object(t, t, "b1", far, Some([0.0; 3])).unwrap();
             if k == 150 {
-                w.write_object(t, stamp, "b1", far, Some([0.0; 3])).unwrap();
+                w.write_object(t, stamp, "b1", late, Some([0.0; 3]))
+                    .unwrap();
             }
         })
     };
+    let log = |stamp: f64| log_at(stamp, far);
     let r = run(&log(0.01), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Inconclusive, "{:?}", r.inconclusive);
     assert_eq!(r.inconclusive.len(), 1, "{:?}", r.inconclusive);
@@ -440,6 +443,16 @@ fn an_object_record_too_late_to_check_is_not_evidence() {
     assert_eq!(s.reason, "object_record_too_late");
     assert_eq!(s.object.as_deref(), Some("b1"));
     assert_eq!((s.t_start, s.t_end), (0.01, 87.0 * 0.001), "{s:?}");
+    // Stamped as the oldest kept record (87 ms) and 1 mm off it: its older neighbour is gone
+    // too. An exact copy of that record is checked as the record was.
+    let oldest = 87.0 * 0.001;
+    let r = run(&log(oldest), &AuditConfig::default()).unwrap();
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    let r = run(&log_at(oldest, [3.0, 3.001, 0.5]), &AuditConfig::default()).unwrap();
+    assert_eq!(r.inconclusive.len(), 1, "{:?}", r.inconclusive);
+    let s = &r.inconclusive[0];
+    assert_eq!(s.reason, "object_record_too_late");
+    assert_eq!((s.t_start, s.t_end), (oldest, oldest), "{s:?}");
     let r = run(&log(0.14), &AuditConfig::default()).unwrap();
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
 }

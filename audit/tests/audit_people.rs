@@ -356,8 +356,9 @@ fn bad_person_ids_are_errors() {
     }
 }
 
-/// A log whose writer promised the end event: complete, it passes; cut at any line boundary
-/// before its end (or with the end event removed), it is `incomplete_log`, never `pass`.
+/// A log whose writer promised the start and end events: complete, it passes; cut at any line
+/// boundary before its end (or with the end event removed), or cut at its beginning (the header
+/// kept), it is `incomplete_log`, never `pass`.
 #[test]
 fn a_log_cut_short_is_never_a_pass() {
     let far = standing(2.5, 0.0);
@@ -392,6 +393,71 @@ fn a_log_cut_short_is_never_a_pass() {
         .find(|s| s.reason == InconclusiveReason::IncompleteLog)
         .unwrap();
     assert_eq!((s.t_start, s.t_end), (0.1, 0.2));
+    // Cut at its beginning: the header kept, the lines after it up to a robot sample dropped
+    // (with the `start` event, or after it), the samples begin after the start.
+    // (The `start` event comes just before the first robot sample, after the first records of
+    // the people.)
+    let start = lines.iter().position(|l| l.contains("\"start\"")).unwrap();
+    assert!(
+        lines[start + 1].contains("\"robot\""),
+        "{}",
+        lines[start + 1]
+    );
+    for from in [start + 2, 30, lines.len() / 2] {
+        let from = from
+            + lines[from..]
+                .iter()
+                .position(|l| l.contains("robot"))
+                .unwrap();
+        for keep_start in [false, true] {
+            let head = if keep_start {
+                vec![lines[0], lines[start]]
+            } else {
+                vec![lines[0]]
+            };
+            let cut: String = head
+                .iter()
+                .chain(&lines[from..])
+                .map(|l| format!("{l}\n"))
+                .collect();
+            let r = audit(&cut);
+            assert_ne!(
+                r.verdict,
+                Verdict::Pass,
+                "cut {from} lines, start {keep_start}"
+            );
+            assert_eq!(r.evidence.completeness, Completeness::Incomplete);
+            let s = r
+                .inconclusive
+                .iter()
+                .find(|s| s.reason == InconclusiveReason::IncompleteLog)
+                .unwrap();
+            // From the start event (or, without it, the first sample) to the first sample.
+            assert_eq!(s.t_end, r.evidence.t_start);
+            assert_eq!(s.t_start, if keep_start { 0.0 } else { s.t_end });
+        }
+    }
+    // A second `start` event is an error (two runs in one log).
+    let twice = text.replacen(
+        "{\"type\":\"event\",\"t\":0.1,\"name\":\"end\"}",
+        "{\"type\":\"event\",\"t\":0.1,\"name\":\"start\"}\n{\"type\":\"event\",\"t\":0.1,\"name\":\"end\"}",
+        1,
+    );
+    let e = run(&twice, &AuditConfig::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("a second `start` event at t = 0.1 s"), "{e}");
+    // A writer that promised its end and not its start (logs of pacs before the start
+    // promise): complete at its end, a cut at its beginning cannot be told.
+    let end_only = text.replacen(",\"start_event\":true", "", 1).replacen(
+        "{\"type\":\"event\",\"t\":0.0,\"name\":\"start\"}\n",
+        "",
+        1,
+    );
+    assert_ne!(end_only, text);
+    let r = audit(&end_only);
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    assert_eq!(r.evidence.completeness, Completeness::EndOnly);
     // A record after the end event is an error.
     let after = format!("{text}{{\"type\":\"event\",\"t\":0.3,\"name\":\"late\"}}\n");
     let e = run(&after, &AuditConfig::default())

@@ -28,3 +28,6 @@ pub const V1_PERSON: &str = "human";
 /// The name of the event a writer that promises it (`end_event: true`) logs last, at the end
 /// time of the run.
 pub const END_EVENT: &str = "end";
+/// The name of the event a writer that promises it (`start_event: true`) logs at the time of
+/// its first robot sample, just before it.
+pub const START_EVENT: &str = "start";

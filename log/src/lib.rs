@@ -25,8 +25,8 @@ pub mod time;
 pub use error::{HeaderError, Location, LogError, McapConfigError};
 pub use format::{
     END_EVENT, FORMAT, Header, LogModels, LogWriter, MAX_PEOPLE, ModelOverrides, ModelRef,
-    ObjectEntry, PersonEntry, Record, RecordReader, RobotRef, V1_PERSON, VERSION, VERSIONS,
-    WriteError, dir_of,
+    ObjectEntry, PersonEntry, Record, RecordReader, RobotRef, START_EVENT, V1_PERSON, VERSION,
+    VERSIONS, WriteError, dir_of,
 };
 pub use open::{
     is_db3, is_jsonl, is_mcap, open_log, open_log_in_row_order, read_log, takes_header,

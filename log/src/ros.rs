@@ -181,6 +181,9 @@ pub(crate) struct Messages {
     heap: BinaryHeap<Pending>,
     seq: u64,
     max_t: f64,
+    /// Where the message of time `max_t` is (its location, part and log time in ns), for
+    /// errors: a message stamped far ahead of its neighbours makes the next ones look late.
+    max_at: (Location, u16, u64),
     last_released: f64,
     /// The rank ([`Pending::rank`]) of the message released last: one of equal time and lower
     /// rank would have to go before it.
@@ -216,6 +219,7 @@ impl Messages {
             heap: BinaryHeap::new(),
             seq: 0,
             max_t: f64::NEG_INFINITY,
+            max_at: (Location::File, 0, 0),
             last_released: f64::NEG_INFINITY,
             last_released_rank: 0,
             part: 0,
@@ -368,12 +372,21 @@ impl Messages {
         if t < self.last_released
             || (t == self.last_released && rank_of(&body) < self.last_released_rank)
         {
+            let (at, part, logged) = self.max_at;
+            let part = if part == self.part {
+                String::new()
+            } else {
+                format!(" in part {} of the log", part + 1)
+            };
             return Err(err(format!(
-                "{}: out of time order: t = {} s is at least mcap.reorder_window = {} s before t = {} s of a message already read, and after messages already handed over (raise mcap.reorder_window)",
+                "{}: out of time order: t = {} s is at least mcap.reorder_window = {} s before t = {} s of a message read before it (log time {} ns, {}{}), and after messages already handed over: either that message's time is wrong (far ahead of its neighbours) or the log needs a longer mcap.reorder_window",
                 what(),
                 t,
                 self.cfg.reorder_window,
-                self.max_t
+                self.max_t,
+                logged,
+                at.to_string().trim_end_matches(": "),
+                part
             )));
         }
         if self.heap.len() + self.run.len() >= MAX_PENDING {
@@ -382,7 +395,10 @@ impl Messages {
                 self.cfg.reorder_window
             )));
         }
-        self.max_t = self.max_t.max(t);
+        if t > self.max_t {
+            self.max_t = t;
+            self.max_at = (m.loc, self.part, m.log_time);
+        }
         self.seq += 1;
         let p = Pending {
             t,

@@ -115,9 +115,31 @@ impl PyRun {
     fn evidence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.run.evidence)
     }
-    /// Everything above as one dict (what `pacs audit --json` prints per run).
+    /// Violation episodes (list of dicts): the violation intervals of one person (or object),
+    /// link and constraint less than 0.1 s apart merged (`who`, `body_parts`, `link`,
+    /// `constraint`, `t_start`, `t_end`, `violating_s` (s), `intervals`, `worst_separation_m`
+    /// (m), `worst_energy_j`, `threshold_j` (J; 0 for SSM), `clamped`, `certain`), by start
+    /// time, as in report.json and `pacs audit --json`.
+    #[getter]
+    fn episodes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_py(py, &pacs_reports::episodes::episodes(&self.run.violations))
+    }
+    /// Everything above as one dict, `episodes` included: what `pacs audit --json` prints per
+    /// run.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &self.run)
+        #[derive(serde::Serialize)]
+        struct WithEpisodes<'a> {
+            #[serde(flatten)]
+            run: &'a RunResult,
+            episodes: Vec<pacs_reports::episodes::Episode>,
+        }
+        to_py(
+            py,
+            &WithEpisodes {
+                run: &self.run,
+                episodes: pacs_reports::episodes::episodes(&self.run.violations),
+            },
+        )
     }
     /// Pickling (Dask, multiprocessing): the whole run — results, plot series, model
     /// parameters, the audited bytes' SHA-256, the settings — rebuilt by

@@ -36,13 +36,34 @@ pub fn horizon(h: Option<&Bound<'_, PyAny>>, rows: usize) -> PyResult<usize> {
 /// Parse measure arguments: the human index (default 0) and the measurement.
 pub fn measurement(
     humans: &[HumanModel],
+    ids: &[&str],
     human: Option<&Bound<'_, PyAny>>,
     t_meas: &Bound<'_, PyAny>,
     positions: &Bound<'_, PyAny>,
     velocities: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<(usize, HumanMeasurement)> {
     let id = match human {
-        Some(h) if !h.is_none() => index(h, "human")?,
+        Some(h) if !h.is_none() => {
+            if let Ok(s) = h.extract::<String>() {
+                ids.iter().position(|i| *i == s).ok_or_else(|| {
+                    input(format!(
+                        "human: no person `{s}` in this shield (people: {ids:?})"
+                    ))
+                })?
+            } else if h.is_instance_of::<pyo3::types::PyInt>() {
+                index(h, "human")?
+            } else {
+                return Err(type_err(format!(
+                    "human: expected a person's id (str) or index, got {}",
+                    show(h)
+                )));
+            }
+        }
+        _ if humans.len() > 1 => {
+            return Err(input(format!(
+                "human: required with several people (an id or index; people: {ids:?})"
+            )));
+        }
         _ => 0,
     };
     let Some(model) = humans.get(id) else {

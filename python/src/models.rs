@@ -260,6 +260,7 @@ pub fn scene(
             .collect();
         let mut h = Header::with_people(robot, people, constraints);
         h.end_event = false;
+        h.start_event = false;
         h.check()
             .map_err(|e| input(e.to_string().replace("header.", "")))?;
         h

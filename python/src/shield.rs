@@ -192,7 +192,7 @@ impl Handle {
         })
     }
 
-    /// `measure` (see `Shield.measure`; `human` None: the first).
+    /// `measure` (see `Shield.measure`; `human` None: the only person).
     pub fn measure(
         &self,
         py: Python<'_>,
@@ -201,7 +201,8 @@ impl Handle {
         velocities: Option<&Bound<'_, PyAny>>,
         human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let (id, m) = measurement(&self.humans, human, t_meas, positions, velocities)?;
+        let ids: Vec<&str> = self.header.people().into_iter().map(|(id, _)| id).collect();
+        let (id, m) = measurement(&self.humans, &ids, human, t_meas, positions, velocities)?;
         with_inner(py, &self.inner, move |g| {
             g.measure_person(id, m).map_err(fail)
         })
@@ -357,8 +358,10 @@ impl PyShield {
         self.h.set_chunk(py, deltas, h, absolute)
     }
 
-    /// A measurement of human `human`'s keypoints taken at `t_meas` (s): `positions` (m, shape
-    /// (K, 3), the model's keypoint order), optional `velocities` (m/s). It reaches the shield
+    /// A measurement of person `human`'s keypoints (its id, as in `header["humans"]`, or its
+    /// index; required with several people, default the only one) taken at `t_meas` (s):
+    /// `positions` (m, shape (K, 3), the model's keypoint order), optional `velocities` (m/s).
+    /// It reaches the shield
     /// at the first step at or after `t_meas`; per step the newest is used, older ones than the
     /// shield's latest are ignored. Until every human has a measurement, no intended step
     /// verifies.
@@ -467,10 +470,13 @@ impl PyShield {
         self.h.object_ids.clone()
     }
 
-    /// The log header (dict) the run is logged with: robot, human, constraints, objects.
+    /// The log header (dict) the run is logged with, as the log's first line holds it: version
+    /// 2, the robot, the people (`humans`, each with its id), constraints, objects, and the
+    /// `start_event` / `end_event` promises (the log writes the `start` event before its first
+    /// robot sample and the `end` event on `close()`).
     #[getter]
     fn header<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &*self.h.header)
+        to_py(py, &(*self.h.header).clone().promising_end())
     }
 
     /// Flush and close the log (if any); raises `pacs.OutputError` if a log write failed

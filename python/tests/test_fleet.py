@@ -163,7 +163,12 @@ def test_the_cli_fleet_section_equals_pythons(archive, local, tmp_path):
     done = subprocess.run([cli(), "audit", str(archive), "--json", "--out", str(out)],
                           capture_output=True, text=True)
     assert done.returncode == 1, done.stderr
-    assert [r["log"] for r in json.loads(done.stdout)["runs"]] == [r.log for r in local.runs]
+    cli_runs = json.loads(done.stdout)["runs"]
+    assert [r["log"] for r in cli_runs] == [r.log for r in local.runs]
+    # Each run's dict is what the CLI prints for it, episodes included.
+    assert any(r["episodes"] for r in cli_runs)
+    assert cli_runs == [r.to_dict() for r in local.runs]
+    assert [r.episodes for r in local.runs] == [r["episodes"] for r in cli_runs]
     assert json.loads((out / "report.json").read_text())["fleet"] == local.report
     assert "## Fleet (per robot, scene and day)" in (out / "report.md").read_text()
 

@@ -153,6 +153,9 @@ def test_one_named_person_keeps_its_id_and_bad_people_are_named(demo, tmp_path):
     s.close()
     header = json.loads(log.read_text().splitlines()[0])
     assert [p["id"] for p in header["humans"]] == ["operator"]
+    # `Shield.header` is the header the log holds, its start and end promises included.
+    assert s.header == header
+    assert header["start_event"] is True and header["end_event"] is True
     (r,) = pacs.audit(log)
     assert r.people == ["operator"]
     assert r.evidence["completeness"] == "complete"

@@ -138,20 +138,28 @@ def test_every_human_must_be_measured_and_each_can_stop_the_robot(demo):
     deltas, h = demo.chunk(demo.start)
     s.set_chunk(deltas, t=0.0, h=h)
     far = far_human(demo)
-    s.measure(0.0, far)
+    # With several people, each measurement names its person (by id or index).
+    with pytest.raises(pacs.InputError, match=r"human: required with several people .*human0"):
+        s.measure(0.0, far)
+    with pytest.raises(pacs.InputError, match="human: no person `visitor`"):
+        s.measure(0.0, far, human="visitor")
+    with pytest.raises(pacs.ArgumentTypeError, match="human: expected a person's id"):
+        s.measure(0.0, far, human=1.5)
+    s.measure(0.0, far, human="human0")
     c = s.step(0.0)
     assert not c.verified and c.binding["kind"] == "no-measurement"
     s.set_chunk(deltas, t=0.001, h=h)
     s.measure(0.001, far, human=1)
-    cmds = run(s, 80, t0=0.001, measure=lambda t: (t, far) if round(t * 1000) % 10 == 0 else None)
+    cmds = run(s, 80, t0=0.001,
+               measure=lambda t: (t, far, None, 0) if round(t * 1000) % 10 == 0 else None)
     assert cmds[-1].verified and cmds[-1].chunk == 2
     at_gripper = np.tile(demo.tool_point(cmds[-1].q), (9, 1))
     t0 = 0.081
     for k in range(1500):
         t = t0 + k * 0.001
         if k % 10 == 0:
-            s.measure(t, far)
-            s.measure(t, at_gripper, human=1)
+            s.measure(t, far, human=0)
+            s.measure(t, at_gripper, human="human1")
         c = s.step(t)
     assert not c.verified and c.binding["kind"] == "ssm" and c.binding.get("human") == 1
     # Names beside the indices: the person's id, the link and the body part.

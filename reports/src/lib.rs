@@ -477,13 +477,17 @@ pub fn overall(runs: &[RunResult]) -> Verdict {
 pub const EVIDENCE_COLUMNS: [&str; 4] = ["log", "people", "audited span (s)", "log complete"];
 
 /// What a run's log covers, for the reports: the people, the audited time span (s) and whether
-/// the log is the whole run (`complete`: its writer promised an `end` event and the log reaches
-/// it; `incomplete`: cut short; `not promised`: the writer promised nothing, as ROS bags and v1
-/// logs, so only the span is stated).
+/// the log is the whole run (`complete`: its writer promised a `start` and an `end` event and
+/// the samples run from one to the other; `end only`: the end is reached, no start was
+/// promised; `incomplete`: cut short at either end; `not promised`: the writer promised nothing,
+/// as ROS bags and v1 logs, so only the span is stated).
 pub fn evidence_row(r: &RunResult) -> [String; 4] {
     let e = &r.evidence;
     let completeness = match e.completeness {
-        pacs_audit::Completeness::Complete => "complete (end event reached)",
+        pacs_audit::Completeness::Complete => "complete (start and end events reached)",
+        pacs_audit::Completeness::EndOnly => {
+            "end event reached; no start promised (a cut at the beginning cannot be told)"
+        }
         pacs_audit::Completeness::Incomplete => "INCOMPLETE (cut short: never a pass)",
         pacs_audit::Completeness::NotPromised => "not promised by the writer (span only)",
     };

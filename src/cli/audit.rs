@@ -270,8 +270,8 @@ fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
             r.inconclusive.len(),
             match r.evidence.completeness {
                 pacs_audit::Completeness::Incomplete => format!(
-                    "; INCOMPLETE log (incomplete_log): its samples end at {:.3} s, and the end record its writer promised is missing or later",
-                    r.evidence.t_end
+                    "; INCOMPLETE log (incomplete_log): its samples run {:.3}–{:.3} s, and the start or end record its writer promised is missing or beyond them",
+                    r.evidence.t_start, r.evidence.t_end
                 ),
                 _ => String::new(),
             }

@@ -35,6 +35,12 @@ pub struct Header {
     /// (`incomplete_log`).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub end_event: bool,
+    /// Version 2: the writer promises a `start` event ([`START_EVENT`](super::START_EVENT)) at
+    /// the time of its first robot sample (written just before it); a log whose first robot
+    /// sample is later than that event, or that lacks it, was cut at its beginning
+    /// (`incomplete_log`). Only with `end_event`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub start_event: bool,
     /// Task constraints (preset name or spec).
     pub constraints: ModelRef<ConstraintSpec>,
     /// Static environment shapes (capsules, m) a body part can be clamped against.
@@ -63,6 +69,7 @@ impl Header {
             human: Some(human),
             humans: vec![],
             end_event: false,
+            start_event: false,
             constraints,
             environment: vec![],
             objects: vec![],
@@ -70,8 +77,8 @@ impl Header {
         }
     }
 
-    /// A v2 header for the given people (`(id, model)`; ids unique), with the end-event
-    /// promise (what every pacs writer writes: [`Self::check`] validates it).
+    /// A v2 header for the given people (`(id, model)`; ids unique), with the start- and
+    /// end-event promises (what every pacs writer writes: [`Self::check`] validates it).
     pub fn with_people(
         robot: impl Into<RobotRef>,
         people: Vec<PersonEntry>,
@@ -85,6 +92,7 @@ impl Header {
             human: None,
             humans: people,
             end_event: true,
+            start_event: true,
             constraints,
             environment: vec![],
             objects: vec![],
@@ -92,8 +100,8 @@ impl Header {
         }
     }
 
-    /// This header as version 2 with the end-event promise: a v1 header's one person becomes
-    /// person [`V1_PERSON`]. What pacs writers do with a header they are given.
+    /// This header as version 2 with the start- and end-event promises: a v1 header's one
+    /// person becomes person [`V1_PERSON`]. What pacs writers do with a header they are given.
     pub fn promising_end(mut self) -> Self {
         if let Some(h) = self.human.take() {
             self.humans = vec![PersonEntry {
@@ -103,6 +111,7 @@ impl Header {
         }
         self.version = VERSION;
         self.end_event = true;
+        self.start_event = true;
         self
     }
 
@@ -144,6 +153,9 @@ impl Header {
                 if self.end_event {
                     return fields("header.end_event: a version 2 field (set \"version\": 2)");
                 }
+                if self.start_event {
+                    return fields("header.start_event: a version 2 field (set \"version\": 2)");
+                }
             }
             2 => {
                 if self.human.is_some() {
@@ -154,6 +166,11 @@ impl Header {
                 if self.humans.is_empty() {
                     return fields(
                         "header.humans: missing or empty (version 2 lists at least one person: [{\"id\": ..., \"human\": ...}])",
+                    );
+                }
+                if self.start_event && !self.end_event {
+                    return fields(
+                        "header.start_event: only with \"end_event\": true (a writer that promises its start promises its end)",
                     );
                 }
                 if self.humans.len() > MAX_PEOPLE {
@@ -263,13 +280,10 @@ fn locate_error(value: &serde_json::Value) -> Option<String> {
     if let Some(e) = entries("humans", &person).or_else(|| entries("objects", &object)) {
         return Some(e);
     }
-    match value.get("end_event") {
-        Some(v) if !v.is_boolean() => {
-            return Some(format!(
-                "header.end_event: expected true or false, found {v}"
-            ));
+    for key in ["end_event", "start_event"] {
+        if let Some(v) = value.get(key).filter(|v| !v.is_boolean()) {
+            return Some(format!("header.{key}: expected true or false, found {v}"));
         }
-        _ => {}
     }
     match value.get("version") {
         Some(v) if v.as_u64().and_then(|n| u32::try_from(n).ok()).is_none() => Some(format!(

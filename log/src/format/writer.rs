@@ -44,12 +44,17 @@ pub enum WriteError {
     Io(#[from] std::io::Error),
 }
 
-/// Writes a v1 JSON Lines log. Guarantees: header first, finite numbers only, non-decreasing `t`;
-/// floats are written in shortest round-trip form, so a reader gets back the exact values.
+/// Writes a JSON Lines log. Guarantees: header first, finite numbers only, non-decreasing `t`;
+/// floats are written in shortest round-trip form, so a reader gets back the exact values; where
+/// the header promises a `start` event, it is written just before the first robot sample.
 pub struct LogWriter<W: Write> {
     out: W,
     header_written: bool,
     last_t: f64,
+    /// The header promises a `start` event (`start_event`).
+    start_promised: bool,
+    /// That event is still to be written (before the first robot sample).
+    start_due: bool,
 }
 
 fn finite(field: &'static str, v: f64) -> Result<(), WriteError> {
@@ -80,6 +85,8 @@ impl<W: Write> LogWriter<W> {
             out,
             header_written: false,
             last_t: f64::NEG_INFINITY,
+            start_promised: false,
+            start_due: false,
         }
     }
 
@@ -91,6 +98,8 @@ impl<W: Write> LogWriter<W> {
         serde_json::to_writer(&mut self.out, h).map_err(std::io::Error::from)?;
         self.out.write_all(b"\n")?;
         self.header_written = true;
+        self.start_promised = h.start_event;
+        self.start_due = h.start_event;
         Ok(())
     }
 
@@ -127,6 +136,11 @@ impl<W: Write> LogWriter<W> {
             return Err(WriteError::AccelerationsWithoutVelocities);
         }
         self.begin(t)?;
+        if self.start_due {
+            // The promised `start`, at the first robot sample's time, just before it.
+            self.start_due = false;
+            self.event_line(t, super::START_EVENT)?;
+        }
         write!(self.out, "{{\"type\":\"robot\",\"t\":{t:?},\"q\":")?;
         write_list(&mut self.out, "q", q)?;
         if let Some(dq) = dq {
@@ -215,9 +229,19 @@ impl<W: Write> LogWriter<W> {
         Ok(())
     }
 
-    /// A named event at `t` (s).
+    /// A named event at `t` (s). Where the header promises the `start` event, that name is
+    /// the writer's own (written before the first robot sample) and refused here.
     pub fn write_event(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
+        if self.start_promised && name == super::START_EVENT {
+            return Err(WriteError::Order(
+                "the `start` event is written by the log writer itself, just before the first robot sample (the header promises it)",
+            ));
+        }
         self.begin(t)?;
+        self.event_line(t, name)
+    }
+
+    fn event_line(&mut self, t: f64, name: &str) -> Result<(), WriteError> {
         write!(self.out, "{{\"type\":\"event\",\"t\":{t:?},\"name\":")?;
         serde_json::to_writer(&mut self.out, name).map_err(std::io::Error::from)?;
         self.out.write_all(b"}\n")?;

@@ -76,7 +76,7 @@ class Shield:
         t_meas: float,
         positions: ArrayLike,
         velocities: ArrayLike | None = None,
-        human: int | None = 0,
+        human: str | int | None = None,
     ) -> None: ...
     def measure_object(
         self, id: str | int, t_meas: float, position: ArrayLike, velocity: ArrayLike | None = None
@@ -122,7 +122,7 @@ class ShieldLoop:
         t_meas: float,
         positions: ArrayLike,
         velocities: ArrayLike | None = None,
-        human: int | None = 0,
+        human: str | int | None = None,
     ) -> None: ...
     def measure_object(
         self, id: str | int, t_meas: float, position: ArrayLike, velocity: ArrayLike | None = None
@@ -159,6 +159,8 @@ class Run:
     def people(self) -> list[str]: ...
     @property
     def evidence(self) -> dict[str, Any]: ...
+    @property
+    def episodes(self) -> list[dict[str, Any]]: ...
     def to_dict(self) -> dict[str, Any]: ...
 
 def audit(

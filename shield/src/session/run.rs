@@ -617,6 +617,7 @@ mod tests {
                 "header",
                 "event:chunk",
                 "human",
+                "event:start",
                 "robot",
                 "robot",
                 "shield",
