@@ -56,8 +56,9 @@ impl PyCommand {
     fn binding<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.names.describe(&self.cmd.diag.binding))
     }
-    /// Lower bound of the robot–human separation over the first interval (m; inf without a
-    /// human; negative: the occupancies may overlap).
+    /// Lower bound of the robot–human separation over the first interval (m; negative: the
+    /// occupancies may overlap; inf where not computed: without a human, and on an unverified
+    /// step whose check stopped before the first interval, docs/shield.md "Diagnostics").
     #[getter]
     fn min_separation(&self) -> f64 {
         self.cmd.diag.min_separation

@@ -36,6 +36,7 @@ pub fn fail(e: SessionError) -> Fail {
         | E::NotFinite(_)
         | E::OffGrid { .. }
         | E::BeforeStart { .. }
+        | E::FirstOffGrid { .. }
         | E::InboxFull(_)
         | E::Queue { .. } => Kind::Input,
         E::ChunkRejected(_) | E::NotHandedOver { .. } => Kind::Chunk,

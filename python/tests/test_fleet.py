@@ -349,6 +349,8 @@ def test_a_policy_object_runs_as_the_built_in_policy_does(client):
     assert ticks == [(1, 4), (2, 4), (3, 4), (4, 4)]
     assert p.calls >= 8
     assert [r["policy"] for r in external["rollouts"]] == ["external"] * 4
+    assert [r["policy"] for r in external["rows"]] == ["external"] * 2
+    assert [r["policy"] for r in built_in["rows"]] == ["nearest"] * 2
     assert same_rollouts(external, built_in)
     on_dask = pacs.simulate(**args, policy=DemoSetPolicy(), client=client, partitions=2)
     assert json.dumps(on_dask) == json.dumps(external)

@@ -498,7 +498,11 @@ pub fn evidence_row(r: &RunResult) -> [String; 4] {
         } else {
             r.people.join(", ")
         },
-        format!("{:.3} – {:.3}", e.t_start, e.t_end),
+        if r.metrics.samples == 0 {
+            "no robot samples".into()
+        } else {
+            format!("{:.3} – {:.3}", e.t_start, e.t_end)
+        },
         completeness.into(),
     ]
 }

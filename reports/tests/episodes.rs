@@ -425,6 +425,18 @@ fn every_document_states_the_evidence() {
     let j = report_json(&inp);
     assert_eq!(j["runs"][0]["evidence"]["completeness"], "incomplete");
     assert_eq!(j["runs"][0]["people"][1], "visitor");
+    // A log without robot samples states none (not a span of 0 s at 0 s); one whose writer
+    // promised only its end says so.
+    let mut r = runs[0].clone();
+    r.metrics.samples = 0;
+    r.evidence.completeness = pacs_audit::Completeness::EndOnly;
+    let row = pacs_reports::evidence_row(&r);
+    assert_eq!(row[2], "no robot samples");
+    assert!(
+        row[3].starts_with("end event reached; no start promised"),
+        "{}",
+        row[3]
+    );
 }
 
 /// A PFL episode's figures merge over its intervals: the largest energy bound, the smallest

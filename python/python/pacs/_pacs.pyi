@@ -40,7 +40,7 @@ class Command:
     @property
     def binding(self) -> dict[str, Any]: ...  # {"kind": "none" | "no-measurement" | "ssm" | ...}
     @property
-    def min_separation(self) -> float: ...  # m (inf without a human)
+    def min_separation(self) -> float: ...  # m (inf where not computed: no human, some unverified steps)
     @property
     def contact_energy(self) -> float: ...  # J
     @property

@@ -49,6 +49,11 @@ pub enum SessionError {
     /// A first step (s) before the start (s).
     #[error("t: {t} s is before the start at {start} s")]
     BeforeStart { t: f64, start: f64 },
+    /// A first step (s) off the grid of safety steps from the start (s).
+    #[error(
+        "t: {t} s, but steps run on the grid of safety steps from the start at {start} s: the nearest step time is {expected} s"
+    )]
+    FirstOffGrid { t: f64, start: f64, expected: f64 },
     /// [`MAX_WAITING`] measurements of this kind already wait (the message names the default
     /// bound; [`Session::with_max_waiting`] sets another).
     #[error(
@@ -388,6 +393,20 @@ impl<W: Write> Session<W> {
                 t,
                 start: self.start_t,
             }),
+            None => {
+                // The grid t₀ + k·α_s, k ≥ 0 (the first step may come steps after the start).
+                let k = ((t - self.start_t) / alpha).round().max(0.0);
+                let expected = self.start_t + k * alpha;
+                if (t - expected).abs() > tol {
+                    Err(SessionError::FirstOffGrid {
+                        t,
+                        start: self.start_t,
+                        expected,
+                    })
+                } else {
+                    Ok(())
+                }
+            }
             _ => Ok(()),
         }
     }
@@ -571,6 +590,13 @@ mod tests {
             Err(SessionError::BeforeStart { .. })
         ));
         assert!(matches!(s.step(f64::NAN), Err(SessionError::NotFinite(_))));
+        // The first step keeps to the grid from the start too (it may come steps later).
+        for t in [1.0005, 1.0025] {
+            assert!(
+                matches!(s.step(t), Err(SessionError::FirstOffGrid { .. })),
+                "{t}"
+            );
+        }
         s.step(1.0).unwrap();
         // Refused steps change nothing: the next is still 1.001 s.
         for t in [1.0, 1.0005, 1.002] {

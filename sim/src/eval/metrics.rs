@@ -62,6 +62,9 @@ pub struct Row {
     pub task: TaskKind,
     /// Method label.
     pub method: String,
+    /// The policy that produced the chunks (the row's first rollout's; `external`: a policy
+    /// object from Python).
+    pub policy: crate::eval::PolicyKind,
     /// Constraints enforced and scored (`ssm` / `pfl`).
     pub constraints: ConstraintMode,
     /// Rollouts.
@@ -106,11 +109,13 @@ pub fn summarize(rollouts: &[Rollout]) -> Vec<Row> {
     }
     keys.into_iter()
         .map(|(task, method)| {
-            let rs: Vec<&Episode> = rollouts
-                .iter()
-                .filter(|r| r.task == task && r.method == method)
-                .map(|r| &r.episode)
-                .collect();
+            let of_row = || {
+                rollouts
+                    .iter()
+                    .filter(|r| r.task == task && r.method == method)
+            };
+            let policy = of_row().next().map(|r| r.policy).unwrap_or_default();
+            let rs: Vec<&Episode> = of_row().map(|r| &r.episode).collect();
             let n = rs.len().max(1) as f64;
             let frac = |f: &dyn Fn(&Episode) -> bool| rs.iter().filter(|e| f(e)).count() as f64 / n;
             let stat = |f: &dyn Fn(&Episode) -> Option<f64>| {
@@ -125,6 +130,7 @@ pub fn summarize(rollouts: &[Rollout]) -> Vec<Row> {
             });
             Row {
                 task,
+                policy,
                 constraints: variant_mode(task, &v),
                 method,
                 rollouts: rs.len(),
