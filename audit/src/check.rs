@@ -10,7 +10,9 @@
 // Per-joint loops index several parallel arrays; ranges read better than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::enclosure::{Sample, SpanBoxes, SpanEnclosure, SpanLimits, span_boxes_into};
+use crate::enclosure::{
+    Sample, SpanBoxes, SpanEnclosure, SpanLimits, adjacent_spans_agree, span_boxes_into,
+};
 use crate::verdict::{
     ConstraintKind, InconclusiveSpan, Metrics, ModelNames, RunResult, Verdict, Violation,
 };
@@ -230,18 +232,19 @@ fn reportable(e: f64) -> f64 {
 }
 
 /// Whether a record stamped `t` cannot be checked against its neighbours in time, given the
-/// oldest kept record's stamp `oldest` and the newest stamp of a record let go, `dropped`: it is
-/// older than every kept record after some were let go, or as old as the oldest kept one while
-/// a let-go record is older than it (its older neighbour is gone) and it is not a copy of a kept
-/// record of its stamp (`copies_a_kept_one`: the same values, so the same checks; a tracker's
-/// stamp repeated more than [`HUMAN_HISTORY`] times).
+/// oldest kept record's stamp `oldest` and whether a record was let go (`dropped`, the newest
+/// stamp of one): it is older than every kept record after some were let go, or as old as the
+/// oldest kept one (a let-go record may be its neighbour: older, or of its own stamp, where two
+/// records may differ by `2·e_pos` only) unless it copies a kept record of its stamp
+/// (`copies_a_kept_one`: the same values, so the same checks; a tracker's stamp repeated more
+/// than [`HUMAN_HISTORY`] times).
 fn too_late(
     t: f64,
     oldest: f64,
     dropped: Option<f64>,
     copies_a_kept_one: impl FnOnce() -> bool,
 ) -> bool {
-    dropped.is_some_and(|d| t < oldest || (t == oldest && d < t && !copies_a_kept_one()))
+    dropped.is_some() && (t < oldest || (t == oldest && !copies_a_kept_one()))
 }
 
 impl Auditor {

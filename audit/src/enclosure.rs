@@ -278,6 +278,109 @@ impl SpanLimits {
     }
 }
 
+/// Whether a motion with `|q⃛| ≤ jerk` joins two samples with positions `dpos` apart (rad),
+/// velocities `c`, `d` (rad/s) and accelerations `e0`, `e1` (rad/s²), `Δ = dt` (as computed;
+/// the true Δ within `[dt_lo, dt_hi]`): a sufficient test. The quintic that matches the six
+/// values (`q(s) = q₀ + cΔs + e₀Δ²s²/2 + c₃s³ + c₄s⁴ + c₅s⁵`, `s = t/Δ`) has the jerk
+/// `(6c₃ + 24c₄s + 60c₅s²)/Δ³`, a quadratic in `s`: its largest magnitude over `[0, 1]` is at an
+/// end or at the vertex. If that bound, padded for rounding, for the logged values' ulps and
+/// for the uncertainty of Δ, is within `jerk`, the quintic is such a motion. Otherwise (no such
+/// motion, or none this test finds) false: the caller does not narrow the velocity box by the
+/// jerk limit.
+///
+/// # Soundness
+/// True only where the padded bound holds, so only where a motion within the jerk limit joins
+/// the samples. Test `audit_consistency.rs::accelerations_must_agree_with_the_positions_under_the_jerk_limit`;
+/// mutant `x101`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn jerk_feasible(
+    dpos: f64,
+    c: f64,
+    d: f64,
+    e0: f64,
+    e1: f64,
+    dt: f64,
+    dt_lo: f64,
+    dt_hi: f64,
+    jerk: f64,
+) -> bool {
+    let h = dt;
+    let hh = h * h;
+    let h3 = hh * h;
+    let c3 = 10.0 * dpos - 6.0 * c * h - 4.0 * d * h - (3.0 * e0 - e1) * hh * 0.5;
+    let c4 = -15.0 * dpos + 8.0 * c * h + 7.0 * d * h + (3.0 * e0 - 2.0 * e1) * hh * 0.5;
+    let c5 = 6.0 * dpos - 3.0 * (c + d) * h - (e0 - e1) * hh * 0.5;
+    let at = |s: f64| (6.0 * c3 + 24.0 * c4 * s + 60.0 * c5 * s * s) / h3;
+    let vertex = -c4 / (5.0 * c5);
+    let vertex = if vertex.is_finite() {
+        vertex.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let largest = at(0.0).abs().max(at(1.0).abs()).max(at(vertex).abs());
+    // The terms' magnitudes (each coefficient's, times the largest factor it takes in the
+    // jerk): every rounding, and each logged value's ulp, is within PAD of them; the jerk scales
+    // as Δ⁻³ for fixed data, so Δ's relative uncertainty counts three times. The vertex's own
+    // rounding moves the quadratic's value by second order only, within the same pad.
+    let mag = (60.0 * 31.0 * dpos.abs()
+        + 60.0 * 17.0 * (c.abs() + d.abs()) * h
+        + 60.0 * 3.0 * (e0.abs() + e1.abs()) * hh)
+        / h3;
+    let pad = 16.0 * PAD * mag + 3.0 * mag * ((dt_hi - dt_lo) / dt_lo) + TINY;
+    dt_lo > 0.0 && largest + pad <= jerk
+}
+
+/// Whether two adjacent spans agree at their shared sample `s0` when it has no logged velocity
+/// (`sp`–`s0` and `s0`–`s1`): each span's mean velocity is the average of the joint's velocity
+/// over it, so it differs from the velocity at either end by at most `A·Δ/2`; the velocity at
+/// `s0` being one value, the two means differ by at most `A·(Δ₀ + Δ₁)/2`. Each span's own tests
+/// cannot see this (a joint logged moving in one span and still in the next, or a zig-zag of
+/// positions, each span alone within the limits). Outward rounded and lenient (relative
+/// `slack`), so it never flags a true motion; true where `s0` logs a velocity (each span's own
+/// tests hold that velocity against its positions) or a span has no length.
+///
+/// # Soundness
+/// Claim C9 (the consistency half): property test in `audit/tests/audit_consistency.rs`
+/// (`adjacent_spans_must_agree_at_their_shared_sample`); mutant `x102`.
+pub fn adjacent_spans_agree(
+    lim: &SpanLimits,
+    sp: &Sample,
+    s0: &Sample,
+    s1: &Sample,
+    slack: f64,
+) -> bool {
+    if s0.has_dq {
+        return true;
+    }
+    let bounds = |a: &Sample, b: &Sample| {
+        let dt = b.t - a.t;
+        let err = PAD * (a.t.abs() + b.t.abs()) + TINY;
+        ((dt - err).max(0.0), dt + err)
+    };
+    let ((d0_lo, d0_hi), (d1_lo, d1_hi)) = (bounds(sp, s0), bounds(s0, s1));
+    if !(d0_lo > 0.0 && d1_lo > 0.0 && d0_hi.is_finite() && d1_hi.is_finite()) {
+        return true;
+    }
+    // The mean velocity (b − a)/Δ over Δ ∈ [lo, hi], bounded outward.
+    let mean = |a: f64, b: f64, lo: f64, hi: f64| {
+        let (d, mag) = (b - a, a.abs() + b.abs());
+        let (n_lo, n_hi) = (down(d, mag), up(d, mag));
+        let m_lo = (n_lo / lo).min(n_lo / hi);
+        let m_hi = (n_hi / lo).max(n_hi / hi);
+        (down(m_lo, m_lo.abs()), up(m_hi, m_hi.abs()))
+    };
+    let mut ok = true;
+    for j in 0..lim.n {
+        let (l0, h0) = mean(sp.q[j], s0.q[j], d0_lo, d0_hi);
+        let (l1, h1) = mean(s0.q[j], s1.q[j], d1_lo, d1_hi);
+        let apart = (l1 - h0).max(l0 - h1);
+        let allowed = 0.5 * lim.a[j] * (d0_hi + d1_hi);
+        ok &= !(apart > up(allowed, allowed) * (1.0 + slack));
+    }
+    ok
+}
+
 /// The bounds of the span's boxes per joint (rad, rad/s), before they are checked finite.
 struct Bounds {
     q_lo: [f64; MAX_DOF],
@@ -533,7 +636,13 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
                 let (l0, h0) = envelope(c, e0, jerk, h_lo, h_hi);
                 let (l1, h1) = envelope(d, -e1, jerk, h_lo, h_hi);
                 let (l, h) = (l0.min(l1), h0.max(h1));
-                (v_lo, v_hi) = (v_lo.max(l), v_hi.min(h));
+                // The jerk limit narrows the velocity box only where a motion within it is known
+                // to join the samples (`jerk_feasible`): where none does, the log refutes the
+                // limit the narrowing rests on, and the box keeps what the acceleration limit
+                // gives (the tests above flag the spans they prove infeasible).
+                if jerk_feasible(dpos, c, d, e0, e1, dt, dt_lo, dt_hi, jerk * rel) {
+                    (v_lo, v_hi) = (v_lo.max(l), v_hi.min(h));
+                }
                 (hv_lo, hv_hi) = (hv_lo.min(l), hv_hi.max(h));
             }
         } else if has_mean {

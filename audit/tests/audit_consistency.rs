@@ -598,10 +598,60 @@ fn accelerations_must_agree_with_the_positions_under_the_jerk_limit() {
     }
     let r = ddq_log(101, 0.001, 1.9e-5, 0.019, |_| 0.0);
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+    // Within that bound, but beyond what a motion within J reaches: at rest at both ends of a
+    // 5 ms span (`dq = ddq = 0`), the joint moves at most JΔ³/32 = 19.5 µrad (bang-bang jerk);
+    // logged 22.3 µrad (JΔ³/28). No motion within the jerk limit joins the samples, so the
+    // limit does not narrow the velocity box (±JΔ²/8 = ±0.016 rad/s, "at rest"): the box the
+    // acceleration limit gives (±AΔ/2 = ±0.025 rad/s) fails the contact, as the same log
+    // without `ddq` does (before, it passed). The test of a motion within J is sufficient,
+    // not exact (the quintic through the samples: its jerk 60·Δq/Δ³ here, within J up to
+    // JΔ³/60), so between JΔ³/60 and JΔ³/32 the box is the wider one too.
+    let j_dt3 = 5000.0 * 0.005f64.powi(3);
+    let r = ddq_log(2, 0.005, j_dt3 / 28.0, 0.0, |_| 0.0);
+    assert_eq!(r.verdict, Verdict::Fail, "{:?}", reasons(&r));
+    // Samples the quintic joins within J (a tenth of the largest displacement) narrow the box:
+    // at rest, they pass.
+    let r = ddq_log(2, 0.005, j_dt3 / 600.0, 0.0, |_| 0.0);
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
     // The same positions with their true velocity logged: consistent, and moving.
     let r = ddq_log(101, 0.001, 2.1475e-5, 0.021475, |_| 0.0);
     assert_eq!(r.verdict, Verdict::Fail);
     assert!(reasons(&r).is_empty(), "{:?}", reasons(&r));
+}
+
+/// Robot samples 1 ms apart without velocities, joint 1 at `0.3 + q(k)` (rad), the hand of
+/// [`HUMAN`] overlapping the gripper (SSM).
+fn positions_log(samples: usize, q: impl Fn(usize) -> f64) -> RunResult {
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    for k in 0..samples {
+        let t = k as f64 * 0.001;
+        let q0 = 0.3 + q(k);
+        text +=
+            &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]}}\n");
+    }
+    run(&text)
+}
+
+/// Without logged velocities each span's box is its mean velocity ± AΔ, which holds for any
+/// motion within the acceleration limit A over that span; adjacent spans must then agree at
+/// their shared sample, where one velocity is within `AΔ/2` of both means: `|m₁ − m₀| ≤
+/// A(Δ₀ + Δ₁)/2` (0.01 rad/s at 1 kHz, A = 10 rad/s²). An outside review's logs, each span
+/// within the limits alone and "at rest" (box within the rest speed 0.02 rad/s), the hand on
+/// the gripper: joint 1 still, then one step of 50 µrad (0.05 rad/s), then still again (at the
+/// step's end the joint moves at ≥ 0.045 rad/s, which the next span's box ±0.01 excludes); a
+/// zig-zag of ±9 µrad per step (means ±0.009 rad/s, 0.018 apart). Each passed before; now
+/// `exceeds_limits`. A zig-zag of ±4 µrad (0.008 apart) agrees, and still passes.
+#[test]
+fn adjacent_spans_must_agree_at_their_shared_sample() {
+    for r in [
+        positions_log(12, |k| if k >= 6 { 5e-5 } else { 0.0 }),
+        positions_log(12, |k| if k % 2 == 1 { 9e-6 } else { 0.0 }),
+    ] {
+        assert_ne!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+        assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    }
+    let r = positions_log(12, |k| if k % 2 == 1 { 4e-6 } else { 0.0 });
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
 }
 
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked

@@ -604,11 +604,14 @@ impl HumanReach {
         Ok(())
     }
 
-    /// The `pos` model's assumption holds for this measurement: every measured keypoint of the
-    /// extremity's body parts is within `length + thickness/2 + 2·e_pos` of its measured base
-    /// (both measured within `e_pos`). A measurement that contradicts it (e.g. a hand 1.4 m from
-    /// the shoulder with a 1.0 m arm) must not be trusted: the extremity's parts then keep the
-    /// speed-bounded (`vel`) occupancy, which does not rest on the extremity length.
+    /// The `pos` model's assumption holds for this measurement: every point of the extremity's
+    /// body parts as measured — each keypoint of a part with the part's own radius
+    /// (`thickness/2` of the body part) around it — is within `length + thickness/2 + 2·e_pos`
+    /// (the extremity's) of its measured base (both measured within `e_pos`). A measurement that
+    /// contradicts it (e.g. a hand 1.4 m from the shoulder with a 1.0 m arm, or a hand keypoint
+    /// 0.99 m out whose 0.103 m radius reaches past the 1.0 m arm) must not be trusted: the
+    /// extremity's parts then keep the speed-bounded (`vel`) occupancy, which does not rest on
+    /// the extremity length.
     ///
     /// Decided soundly: consistent only if an upper bound of the exact distance is at most a
     /// lower bound of the exact limit, so a measurement that contradicts the assumption by any
@@ -624,9 +627,10 @@ impl HumanReach {
         );
         e.body_parts.iter().all(|&p| {
             let bp = &self.model.body_parts()[p];
+            let radius = mul_up(bp.thickness, 0.5);
             [bp.from, bp.to].iter().all(|&k| {
                 let q = m.positions[k];
-                dist3_up(&[q.x, q.y, q.z], &base) <= limit
+                add_up(dist3_up(&[q.x, q.y, q.z], &base), radius) <= limit
             })
         })
     }

@@ -388,20 +388,21 @@ fn arm_occupancy(
 }
 
 /// `pos` trusts an extremity's length only where the measurement agrees with it. Arm
-/// of length 1.0 m, thickness 0.1 m, e_p 0.01 m: a hand measured up to 1.0 + 0.05 + 2·0.01 =
-/// 1.07 m from the shoulder gets the extremity ball; farther, the arm falls back to the `vel`
-/// capsule (which the length assumption would otherwise override).
+/// of length 1.0 m, thickness 0.1 m (the extremity's and the arm part's), e_p 0.01 m: a hand
+/// keypoint measured up to 1.0 + 0.05 + 2·0.01 − 0.05 = 1.02 m from the shoulder (the part's
+/// own radius, 0.05 m, reaches the rest of the way) gets the extremity ball; farther, the arm
+/// falls back to the `vel` capsule (which the length assumption would otherwise override).
 #[test]
 fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
     let occupancy = |hand_x: f64, kind| arm_occupancy(1.0, 0.1, 0.01, hand_x, kind);
     let origin = Point3::new(0.0, 0.0, 0.0);
-    for x in [1.0, 1.069] {
+    for x in [1.0, 1.019] {
         // The extremity ball: e_p 0.01 + v 2·0.1 + length 1.0 + thickness/2 0.05 = 1.26.
         let c = occupancy(x, HumanReachModel::Pos);
         assert_eq!((c.p1(), c.p2()), (origin, origin), "{x}");
         assert!(close(c.radius(), 1.26), "{x}: {}", c.radius());
     }
-    for x in [1.071, 1.4] {
+    for x in [1.021, 1.069, 1.4] {
         // Contradicted: the `vel` capsule, e_p 0.01 + v 2·0.1 + thickness/2 0.05 = 0.26.
         let c = occupancy(x, HumanReachModel::Pos);
         let v = occupancy(x, HumanReachModel::Vel);
@@ -412,7 +413,8 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
 }
 
 /// The consistency test of `pos` is decided soundly at the boundary: with a limit
-/// that is a float exactly (length 0.75 + thickness/2 0.0625 + 2·e_p 0.0625 = 0.875 m), a hand
+/// that is a float exactly (length 0.75 + thickness/2 0.0625 + 2·e_p 0.0625 = 0.875 m, of
+/// which the part's own radius 0.0625 m lies beyond the keypoint: 0.8125 m), a hand
 /// measured one ulp beyond it contradicts the length and keeps the `vel` capsule (a lower bound
 /// of the distance against an upper bound of the limit would give it the extremity ball),
 /// and a hand clearly inside (1e-9 m) keeps the extremity ball.
@@ -420,11 +422,11 @@ fn pos_falls_back_to_vel_where_the_measurement_contradicts_the_length() {
 fn pos_consistency_is_decided_soundly_at_the_limit() {
     let occupancy = |hand_x: f64, kind| arm_occupancy(0.75, 0.125, 0.03125, hand_x, kind);
     let origin = Point3::new(0.0, 0.0, 0.0);
-    let beyond = 0.875f64.next_up();
+    let beyond = 0.8125f64.next_up();
     let c = occupancy(beyond, HumanReachModel::Pos);
     assert_eq!(c, occupancy(beyond, HumanReachModel::Vel), "one ulp beyond");
     assert_eq!(c.p2(), Point3::new(beyond, 0.0, 0.0));
-    let inside = 0.875 - 1e-9;
+    let inside = 0.8125 - 1e-9;
     let c = occupancy(inside, HumanReachModel::Pos);
     assert_eq!((c.p1(), c.p2()), (origin, origin), "inside");
 }

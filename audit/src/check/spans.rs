@@ -110,6 +110,24 @@ impl Auditor {
             encl.resize(m - 1, SpanEnclosure::empty());
             for (i, e) in encl.iter_mut().enumerate() {
                 self.boxes_into(&block[i], &block[i + 1], e);
+                // The span before it (in this block, or the last of the block before) must
+                // agree with it at their shared sample.
+                let prev = if i > 0 {
+                    Some(&block[i - 1])
+                } else {
+                    self.before_last.as_ref()
+                };
+                if let Some(p) = prev
+                    && !adjacent_spans_agree(
+                        &self.span_limits,
+                        p,
+                        &block[i],
+                        &block[i + 1],
+                        self.cfg.limit_slack,
+                    )
+                {
+                    e.consistent = false;
+                }
             }
             self.check_spans(&block, &encl, 0, m - 1, slot);
             self.before_last = Some(block[m - 2]);

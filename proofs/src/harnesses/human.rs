@@ -116,8 +116,9 @@ fn occupancy<S: Source>(s: &mut S) {
         ball(s, 0.5 * bp.thickness),
     );
     // The pos model's assumption holds only for measurements that do not contradict it (every
-    // measured keypoint of the extremity within length + thickness/2 + 2·e_p of the measured
-    // base); a contradicted measurement falls back to the speed bound (vel samples above).
+    // measured keypoint of the extremity, with its part's own radius, within length +
+    // thickness/2 + 2·e_p of the measured base); a contradicted measurement falls back to the
+    // speed bound (vel samples above).
     let extremity = model
         .extremities()
         .iter()
@@ -130,9 +131,11 @@ fn occupancy<S: Source>(s: &mut S) {
                 .iter()
                 .flat_map(|&q| {
                     let b = &model.body_parts()[q];
-                    [b.from, b.to]
+                    [(b.from, b.thickness), (b.to, b.thickness)]
                 })
-                .map(|k| pacs_reach::ieee::sqrt((Vector3::from(pos[k]) - base).norm_squared()))
+                .map(|(k, th)| {
+                    pacs_reach::ieee::sqrt((Vector3::from(pos[k]) - base).norm_squared()) + 0.5 * th
+                })
                 .fold(0.0, f64::max);
             worst <= limit
         });
