@@ -85,7 +85,7 @@ mod finish;
 mod spans;
 
 use consistency::{
-    KeypointBox, Nearest, ObjectBounds, human_pair_breaks, object_pair_breaks,
+    KeypointBox, LetGo, Nearest, ObjectBounds, human_pair_breaks, object_pair_breaks,
     object_record_breaks, pair_within_boxes,
 };
 
@@ -107,6 +107,8 @@ struct ObjectTrack {
     /// record as old as every kept one, with a let-go one older than it, cannot be checked
     /// against its neighbours in time ([`too_late`], `object_record_too_late`).
     dropped: Option<f64>,
+    /// What the records let go from `history` still require of later ones ([`LetGo`]).
+    let_go: LetGo,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -192,6 +194,8 @@ pub struct Auditor {
     /// record as old as every kept one, with a let-go one older than it, cannot be checked
     /// against its neighbours in time ([`too_late`], `human_record_too_late`).
     human_dropped: Option<f64>,
+    /// What the records let go from `human_history` still require of later ones ([`LetGo`]).
+    human_let_go: LetGo,
     /// The bounding box of each kept measurement's keypoints (same order as `human_history`).
     human_boxes: std::collections::VecDeque<KeypointBox>,
     span_human: Option<usize>,
@@ -338,6 +342,7 @@ impl Auditor {
             model_breaks: Vec::new(),
             human_history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             human_dropped: None,
+            human_let_go: LetGo::new(models.human.keypoint_count()),
             human_boxes: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             span_human: None,
             span_index: 0,
@@ -493,6 +498,18 @@ impl Auditor {
         for (t0, t1) in nearest.pairs() {
             self.model_break(t0, t1, Reason::HumanExceedsModel);
         }
+        // Against the records let go, in constant memory (a drift through the kept ones).
+        let points = m
+            .positions()
+            .iter()
+            .zip(self.human.v_max())
+            .map(|(p, &v)| ([p.x, p.y, p.z], v));
+        if let Some(d) = self.human_dropped
+            && m.time() >= d
+            && self.human_let_go.breaks(m.time(), e2, points)
+        {
+            self.model_break(d, m.time(), Reason::HumanExceedsModel);
+        }
         // Keep `m` in stamp order; when full, the oldest's storage is reused (no allocation
         // after warm-up), and a record older than all kept ones is not kept.
         let at = self.human_history.partition_point(|h| h.time() <= m.time());
@@ -514,10 +531,22 @@ impl Auditor {
         } else if at == 0 {
             // Not kept: older than (or as old as) every kept one.
             self.human_dropped = Some(self.human_dropped.map_or(m.time(), |d| d.max(m.time())));
+            let points = m
+                .positions()
+                .iter()
+                .zip(self.human.v_max())
+                .map(|(p, &v)| ([p.x, p.y, p.z], v));
+            self.human_let_go.add(m.time(), points);
         } else {
             let mut slot = self.human_history.pop_front().expect("the history is full");
             let gone = slot.time();
             self.human_dropped = Some(self.human_dropped.map_or(gone, |d| d.max(gone)));
+            let points = slot
+                .positions()
+                .iter()
+                .zip(self.human.v_max())
+                .map(|(p, &v)| ([p.x, p.y, p.z], v));
+            self.human_let_go.add(gone, points);
             slot.assign_from(m);
             self.human_history.insert(at - 1, slot);
             self.human_boxes.pop_front();
@@ -610,6 +639,16 @@ impl Auditor {
             self.model_break_about(t0, t1, Reason::ObjectExceedsModel, Some(k));
         }
         let o = &self.objects[k];
+        // Against the records let go, in constant memory (a drift through the kept ones).
+        let (speed, e2) = o.bounds.speed_and_2e();
+        if let (Some(d), Some(v)) = (o.dropped, speed)
+            && m.time >= d
+            && o.let_go
+                .breaks(m.time, e2, std::iter::once((m.position, v)))
+        {
+            self.model_break_about(d, m.time, Reason::ObjectExceedsModel, Some(k));
+        }
+        let o = &self.objects[k];
         let at = o.history.partition_point(|h| h.time <= m.time);
         // As for human records ([`too_late`]).
         if let Some(oldest) = o.history.front()
@@ -630,6 +669,9 @@ impl Auditor {
             && let Some(gone) = o.history.pop_front()
         {
             o.dropped = Some(o.dropped.map_or(gone.time, |d| d.max(gone.time)));
+            if let (Some(v), _) = o.bounds.speed_and_2e() {
+                o.let_go.add(gone.time, std::iter::once((gone.position, v)));
+            }
         }
         m.keep_newest(&mut o.latest);
         Ok(())
@@ -873,6 +915,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             latest: None,
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             dropped: None,
+            let_go: LetGo::new(1),
             span: None,
             occ: None,
             others: Vec::with_capacity(8),

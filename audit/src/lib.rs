@@ -262,7 +262,8 @@ pub fn audit_reader(
 /// Whether a log whose writer promised an `end` event (and, `start` not `None`, a `start`
 /// event) is complete: the end event is there and the robot samples reach it (last sample ≥
 /// end), and where a start is promised, it is there and the samples begin at it (first sample
-/// ≤ start: a log cut at its beginning keeps its header but not the samples after the start).
+/// = start: a log cut at its beginning keeps its header but not the samples after the start;
+/// samples before the start are not the run's).
 /// Otherwise the result gains an `incomplete_log` span for each missing stretch — from the
 /// start (or the first sample, when the start is missing) to the first sample, and from the
 /// last sample to the end (or to the last sample, when the end is missing) — and can no longer
@@ -279,11 +280,14 @@ fn complete_or_not(
     use verdict::{Completeness, InconclusiveSpan};
     let (first, last) = robot_span.map_or((0.0, 0.0), |(a, b)| (a, b));
     let mut missing: Vec<(f64, f64)> = Vec::new();
+    // The writer stamps its start as its first robot sample: a later first sample means the
+    // log's beginning was cut, an earlier one samples before the run's start (a log glued
+    // from two).
     if let Some(start) = start
-        && !matches!((start, robot_span), (Some(s), Some(_)) if first <= s)
+        && !matches!((start, robot_span), (Some(s), Some(_)) if first == s)
     {
         let s = start.unwrap_or(first);
-        missing.push((s.min(first), first));
+        missing.push((s.min(first), s.max(first)));
     }
     if !matches!((end, robot_span), (Some(e), Some(_)) if last >= e) {
         missing.push((last, end.unwrap_or(last).max(last)));

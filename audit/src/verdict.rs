@@ -125,7 +125,8 @@ pub enum InconclusiveReason {
     /// last sample's if there is none). Or the writer promised a `start` event (`start_event`)
     /// and the log lacks it, or its robot samples begin after it: the log was cut at its
     /// beginning (`t_start`: the start event's time, or the first sample's if there is none;
-    /// `t_end`: the first sample).
+    /// `t_end`: the first sample), or samples precede it (a log glued from two: from the first
+    /// sample to the start).
     IncompleteLog,
     /// The span's time stamps cannot resolve its length (doubles near the stamps are more than a
     /// thousandth of the span apart: `pacs_log::time::clock_resolves`, the shield's rule for its

@@ -466,6 +466,40 @@ fn a_chain_of_equal_stamp_records_cannot_drift_from_the_first() {
     assert_eq!(reasons(&chain), ["human_exceeds_model"]);
 }
 
+/// The audit keeps the latest 64 records of a person; the ones let go still bound later ones
+/// (per keypoint and axis). An outside review's log (e_pos 0.05 m, so two
+/// records may differ by 0.1 m beyond `v·Δt`, v = 2 m/s): a record at 0 m, then 64 records at
+/// `2t + 0.095` m, each within the allowance of every other, then one at `2t + 0.19` m
+/// (t = 0.065 s): within the allowance of the 64 kept ones, but 0.32 m from the first where
+/// 0.23 m is allowed. It passed; now `human_exceeds_model`. A person walking at 1.9 m/s for
+/// 0.3 s (300 records, most let go) agrees with its model and passes.
+#[test]
+fn records_drifting_from_one_let_go_break_the_model() {
+    let mut spec = serde_json::to_value(HumanModel::builtin("default").unwrap().spec()).unwrap();
+    spec["measurement_error_pos"] = serde_json::json!(0.05);
+    let head = format!(
+        r#"{{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":{spec},"constraints":"ssm"}}"#
+    );
+    let log = |n: usize, dx: &dyn Fn(usize, f64) -> f64| {
+        let mut text = format!("{head}\n");
+        for j in 0..n {
+            let t = j as f64 * 0.001;
+            text += &human_record(t, None, &person_at(dx(j, t)));
+            text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{AT_REST}]}}\n");
+        }
+        run(&text)
+    };
+    let r = log(66, &|j, t| match j {
+        0 => 0.0,
+        65 => 2.0 * t + 0.19,
+        _ => 2.0 * t + 0.095,
+    });
+    assert_ne!(r.verdict, Verdict::Pass);
+    assert_eq!(reasons(&r), ["human_exceeds_model"]);
+    let r = log(300, &|_, t| 1.9 * t);
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+}
+
 /// A report names a model by its name only where the spec is that built-in's: an inline robot
 /// spec called "fr3" with other capsule radii, or a human spec called "default" with another
 /// measurement error, is labelled as a custom spec, so that an assessor never reads a modified

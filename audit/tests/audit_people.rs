@@ -437,6 +437,22 @@ fn a_log_cut_short_is_never_a_pass() {
             assert_eq!(s.t_start, if keep_start { 0.0 } else { s.t_end });
         }
     }
+    // A `start` event after the first robot sample: samples before the run's start (a log
+    // glued from two) are not a complete run.
+    let mut moved: Vec<&str> = lines
+        .iter()
+        .copied()
+        .filter(|l| !l.contains("\"start\""))
+        .collect();
+    let at = moved
+        .iter()
+        .position(|l| l.contains("\"robot\"") && l.contains("\"t\":0.05,"))
+        .unwrap();
+    moved.insert(at + 1, "{\"type\":\"event\",\"t\":0.05,\"name\":\"start\"}");
+    let late_start: String = moved.iter().map(|l| format!("{l}\n")).collect();
+    let r = audit(&late_start);
+    assert_eq!(r.evidence.completeness, Completeness::Incomplete);
+    assert_ne!(r.verdict, Verdict::Pass);
     // A second `start` event is an error (two runs in one log).
     let twice = text.replacen(
         "{\"type\":\"event\",\"t\":0.1,\"name\":\"end\"}",

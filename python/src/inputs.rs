@@ -50,7 +50,8 @@ pub fn measurement(
                         "human: no person `{s}` in this shield (people: {ids:?})"
                     ))
                 })?
-            } else if h.is_instance_of::<pyo3::types::PyInt>() {
+            } else if !h.is_instance_of::<pyo3::types::PyBool>() && h.extract::<i64>().is_ok() {
+                // Any integer (numpy's too).
                 index(h, "human")?
             } else {
                 return Err(type_err(format!(

@@ -149,7 +149,7 @@ def test_every_human_must_be_measured_and_each_can_stop_the_robot(demo):
     c = s.step(0.0)
     assert not c.verified and c.binding["kind"] == "no-measurement"
     s.set_chunk(deltas, t=0.001, h=h)
-    s.measure(0.001, far, human=1)
+    s.measure(0.001, far, human=np.int64(1))
     cmds = run(s, 80, t0=0.001,
                measure=lambda t: (t, far, None, 0) if round(t * 1000) % 10 == 0 else None)
     assert cmds[-1].verified and cmds[-1].chunk == 2
