@@ -418,6 +418,36 @@ fn an_earlier_measurement_clears_a_span_the_newest_cannot() {
     assert_eq!(verdict(clear, &|_| true), Verdict::Fail);
 }
 
+/// As for a person's records (`audit_consistency.rs`): the ball's records let go from the 64
+/// kept still bound later ones. A chain drifting through the kept ones (1 m/s plus 9.5 mm,
+/// then plus 19 mm, each within `max_speed·Δt + 2·pos_error` of every kept record) ends
+/// 84 mm from the first record where 75 mm is allowed: `object_exceeds_model`, naming the
+/// ball. The same ball rolling at 0.9 m/s agrees with its model and passes.
+#[test]
+fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
+    let reasons = |x: &dyn Fn(usize, f64) -> f64| {
+        let text = ball_log(ObjectContact::Ssm, 0.0, |w, k, t| {
+            w.write_object(t, t, "b1", [3.0 + x(k, t), 3.0, 0.5], None)
+                .unwrap();
+        });
+        let r = run(&text, &AuditConfig::default()).unwrap();
+        r.inconclusive
+            .iter()
+            .map(|s| (s.reason.as_str().to_string(), s.object.clone()))
+            .collect::<Vec<_>>()
+    };
+    let found = reasons(&|k, t| match k {
+        0 => 0.0,
+        1..=64 => t + 0.0095,
+        _ => t + 0.019,
+    });
+    assert!(
+        found.contains(&("object_exceeds_model".to_string(), Some("b1".to_string()))),
+        "{found:?}"
+    );
+    assert_eq!(reasons(&|_, t| 0.9 * t), vec![]);
+}
+
 /// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped
 /// 10 ms, after the latest 64 records kept have moved past its stamp, cannot be checked against
 /// its neighbours in time: `object_record_too_late`, naming the ball; so can one stamped as
