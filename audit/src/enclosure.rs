@@ -20,7 +20,8 @@
 //!   (implied by the tests above; checked on the box itself);
 //! - derivatives logged at one end only (`q̇` at one sample, or `q̈` at one end of a span with `q̇`
 //!   at both): the enclosures below do not use them, but they must agree with the span — a lone
-//!   `q̇ = c`: `|c| ≤ v_max` and `|q₁ − q₀ − cΔ| ≤ AΔ²/2`; a lone `q̈ = e`: `|e| ≤ A` and, where
+//!   `q̇ = c`: `|c| ≤ v_max` and `|q₁ − q₀ − cΔ| ≤ AΔ²/2`; a lone `q̈ = e` (logged with its
+//!   sample's `q̇ = c`): `|e| ≤ A`, `|q₁ − q₀ − cΔ − eΔ²/2| ≤ JΔ³/6` (from its end), and, where
 //!   both velocities are logged, `|q̇₁ − q̇₀ − eΔ| ≤ JΔ²/2`.
 //!
 //! Every bound is rounded outward (each logged value standing for the reals within one ulp of it,
@@ -497,6 +498,23 @@ fn lone_derivatives_agree(lim: &SpanLimits, s0: &Sample, s1: &Sample, sp: &Span)
                 }
                 let (c, d) = (s0.dq[j], s1.dq[j]);
                 if both_dq && beyond(d - c, c.abs() + d.abs(), e, jerk) {
+                    return false;
+                }
+                // The positions from this end's velocity and acceleration under |q⃛| ≤ J:
+                // `|x − rate·Δ − eΔ²/2| ≤ JΔ³/6` (x the displacement away from this end).
+                let (x, rate) = if std::ptr::eq(s, s0) {
+                    (b - a, s.dq[j])
+                } else {
+                    (a - b, -s.dq[j])
+                };
+                let r = x - sp.dt * rate - 0.5 * e * sp.dt * sp.dt;
+                let (h, h2) = (sp.dt_hi, sp.dt_hi * sp.dt_hi);
+                let r_min = r.abs()
+                    - (PAD * (a.abs() + b.abs() + h * rate.abs() + h2 * e.abs()) + TINY)
+                    - rate.abs() * (sp.dt_hi - sp.dt_lo)
+                    - 0.5 * e.abs() * (h2 - sp.dt_lo * sp.dt_lo);
+                let band = jerk * h2 * h / 6.0;
+                if r_min > up(band, band) + sp.slack * jerk * h2 * h {
                     return false;
                 }
             }

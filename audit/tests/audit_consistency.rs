@@ -125,6 +125,35 @@ fn lagging_velocity_filter_is_inconclusive_or_fails() {
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 
+/// A lone acceleration (logged on one end of a span with velocities at both) must agree with
+/// the positions too: from its end, `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6`. A review's span (Δ = 1 ms,
+/// `q̇ = 0` then 0.0075 rad/s, `q̈₀ = 10` rad/s² alone, Δq = 3.75 µrad) meets every other test
+/// but misses this one by 1.25 µrad against 0.83 µrad allowed; with Δq = 4.5 µrad it agrees.
+#[test]
+fn a_lone_acceleration_must_agree_with_the_positions() {
+    let lim = RobotModel::builtin("fr3").unwrap().limits().clone();
+    let mut s0 = Sample {
+        t: 0.0,
+        q: [0.0; MAX_DOF],
+        dq: [0.0; MAX_DOF],
+        ddq: [0.0; MAX_DOF],
+        has_dq: true,
+        has_ddq: true,
+    };
+    s0.ddq[0] = 10.0;
+    let mut s1 = Sample {
+        t: 0.001,
+        has_ddq: false,
+        ddq: [0.0; MAX_DOF],
+        ..s0
+    };
+    s1.dq[0] = 0.0075;
+    s1.q[0] = 3.75e-6;
+    assert!(!span_boxes(&lim, &s0, &s1, 0.0).consistent);
+    s1.q[0] = 4.5e-6;
+    assert!(span_boxes(&lim, &s0, &s1, 0.0).consistent);
+}
+
 #[test]
 fn a_contradiction_within_limits_is_flagged_by_the_displacement_test_alone() {
     // |Δq| ≤ v_max·Δ, |Δq̇| ≤ A·Δ, |q̇| ≤ v_max: only the displacement-vs-velocities test sees it.
@@ -694,7 +723,8 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
 /// contradicts the positions, 0.004 does not; on a joint moving 28 µrad per step, a last sample
 /// claiming 0.019 rad/s (below the rest speed 0.02 rad/s, which the final instant would have
 /// used to pass the hand's contact) contradicts them too. A lone `q̈` beyond 100·A, or (with
-/// velocities at every sample, constant) beyond `JΔ/2 = 2.5 rad/s²` contradicts them. A log that
+/// velocities at every sample, constant) beyond `JΔ/3 ≈ 1.67 rad/s²` (the positions from its
+/// end, `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6`; the velocities' change allows `JΔ/2`) contradicts them. A log that
 /// contradicts itself so is never a pass.
 #[test]
 fn a_derivative_logged_on_one_sample_only_must_agree_with_its_spans() {
@@ -730,12 +760,13 @@ fn a_derivative_logged_on_one_sample_only_must_agree_with_its_spans() {
         assert_ne!(r.verdict, Verdict::Pass);
         assert!(contradicted(&r), "{:?}", reasons(&r));
     }
-    // Within A but beyond JΔ/2 of the velocities' change (none).
-    for a in [2.6, -3.0] {
+    // Within A but beyond JΔ/2 of the velocities' change (none); or within it but beyond the
+    // positions' `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6` from its end (q̈ up to JΔ/3 ≈ 1.67 rad/s²).
+    for a in [2.6, -3.0, 2.4, -2.4, 1.7] {
         let r = lone_derivative_log(0.0, 0.0, Some(a), true, false);
         assert!(contradicted(&r), "lone ddq {a}: {:?}", reasons(&r));
     }
-    for a in [0.0, 2.4, -2.4] {
+    for a in [0.0, 1.6, -1.6] {
         let r = lone_derivative_log(0.0, 0.0, Some(a), true, false);
         assert_eq!(r.verdict, Verdict::Pass, "lone ddq {a}: {:?}", reasons(&r));
     }

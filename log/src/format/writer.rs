@@ -135,6 +135,13 @@ impl<W: Write> LogWriter<W> {
         if dq.is_none() && ddq.is_some() {
             return Err(WriteError::AccelerationsWithoutVelocities);
         }
+        // Every value checked before anything is written: a refused sample leaves no partial
+        // line (and no `start` event before it).
+        for (field, v) in [("q", Some(q)), ("dq", dq), ("ddq", ddq)] {
+            for x in v.unwrap_or(&[]) {
+                finite(field, *x)?;
+            }
+        }
         self.begin(t)?;
         if self.start_due {
             // The promised `start`, at the first robot sample's time, just before it.

@@ -8,7 +8,11 @@ use crate::format::Header;
 use std::io::{Seek, Write};
 
 /// Writes a pacs log as an MCAP file of a ROS 2 recording (the form [`McapReader`] reads): the
-/// header as the `pacs` metadata record, then CDR messages on the configured topics.
+/// header as the `pacs` metadata record, then CDR messages on the configured topics. It writes
+/// what it is given, record by record (a JSON Lines log's records converted keep their events):
+/// where the header promises a `start` or an `end` event (`Header::promising_end`), the caller
+/// writes them ([`Self::write_event`]: `start` at the first robot sample's time before it, `end`
+/// last), or the audit reads the log as `incomplete_log`.
 ///
 /// [`McapReader`]: super::McapReader
 pub struct McapLogWriter<W: Write + Seek> {
