@@ -309,13 +309,16 @@ fn jerk_feasible(
     let h = dt;
     let hh = h * h;
     let h3 = hh * h;
+    // (No quotient below may be 0/0: Δ and its cube positive.)
+    if !(dt_lo > 0.0 && h3 > 0.0) {
+        return false;
+    }
     let c3 = 10.0 * dpos - 6.0 * c * h - 4.0 * d * h - (3.0 * e0 - e1) * hh * 0.5;
     let c4 = -15.0 * dpos + 8.0 * c * h + 7.0 * d * h + (3.0 * e0 - 2.0 * e1) * hh * 0.5;
     let c5 = 6.0 * dpos - 3.0 * (c + d) * h - (e0 - e1) * hh * 0.5;
     let at = |s: f64| (6.0 * c3 + 24.0 * c4 * s + 60.0 * c5 * s * s) / h3;
-    let vertex = -c4 / (5.0 * c5);
-    let vertex = if vertex.is_finite() {
-        vertex.clamp(0.0, 1.0)
+    let vertex = if c5 != 0.0 && c4.is_finite() && c5.is_finite() {
+        (-c4 / (5.0 * c5)).clamp(0.0, 1.0)
     } else {
         0.0
     };
@@ -329,7 +332,7 @@ fn jerk_feasible(
         + 60.0 * 3.0 * (e0.abs() + e1.abs()) * hh)
         / h3;
     let pad = 16.0 * PAD * mag + 3.0 * mag * ((dt_hi - dt_lo) / dt_lo) + TINY;
-    dt_lo > 0.0 && largest + pad <= jerk
+    largest + pad <= jerk
 }
 
 /// Whether two adjacent spans agree at their shared sample `s0` when it has no logged velocity
