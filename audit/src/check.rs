@@ -175,6 +175,9 @@ pub struct Auditor {
     /// The sample before the last one of the latest block checked (`flush_block`): at the end,
     /// the sample before the log's last one, whose span bounds the final instant's velocities.
     before_last: Option<Sample>,
+    /// The latest sample stamped before the last block's last sample (`flush_block`): the start
+    /// of the span the next block's first span must agree with ([`adjacent_spans_agree`]).
+    earlier: Option<Sample>,
     /// The last spans checked one by one were mostly violating: check the next blocks span by
     /// span, neither whole nor in halves (speed only).
     dense_violations: bool,
@@ -334,6 +337,7 @@ impl Auditor {
             block: Vec::with_capacity(BLOCK_SPANS + 1),
             block_encl: Vec::with_capacity(BLOCK_SPANS),
             before_last: None,
+            earlier: None,
             dense_violations: false,
             block_fast_path: true,
             block_human: None,

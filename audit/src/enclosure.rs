@@ -39,7 +39,9 @@
 //!   velocity `(q₁−q₀)/Δ` is attained somewhere, so `q̇ ∈ (q₁−q₀)/Δ ± AΔ`;
 //! - velocities from accelerations and `J`: the convexity argument one derivative up:
 //!   `q̇ ≤ max(q̇₀, q̇₁, q̇₀ + q̈₀Δ/2 + JΔ²/8, q̇₁ − q̈₁Δ/2 + JΔ²/8)`, lower bound alike;
-//! - then clipped to `[−v_max, v_max]`.
+//! - not clipped to `[−v_max, v_max]` (the speed limit is checked against the samples, but
+//!   whether it and the acceleration limit can be met together is not decided here, and a clip
+//!   would rest on that); `[−v_max, v_max]` only for a span of no length without velocities.
 //!
 //! Soundness (claim C9; property test `proofs::harnesses::enclosure::h2_span_enclosure_sound`,
 //! also a Kani proof on one corner of the limits (outside CI), Kani proofs `h2_contradiction_inconsistent`, `h2_bang_bang_enclosed`, `h2_jerk_enclosed` beside
@@ -279,15 +281,17 @@ impl SpanLimits {
     }
 }
 
-/// Whether a motion with `|q⃛| ≤ jerk` joins two samples with positions `dpos` apart (rad),
+/// Whether a motion within the limits (`|q̇| ≤ v_max`, `|q̈| ≤ acc`, `|q⃛| ≤ jerk`) joins two
+/// samples with positions `dpos` apart (rad),
 /// velocities `c`, `d` (rad/s) and accelerations `e0`, `e1` (rad/s²), `Δ = dt` (as computed;
 /// the true Δ within `[dt_lo, dt_hi]`): a sufficient test. The quintic that matches the six
 /// values (`q(s) = q₀ + cΔs + e₀Δ²s²/2 + c₃s³ + c₄s⁴ + c₅s⁵`, `s = t/Δ`) has the jerk
 /// `(6c₃ + 24c₄s + 60c₅s²)/Δ³`, a quadratic in `s`: its largest magnitude over `[0, 1]` is at an
-/// end or at the vertex. If that bound, padded for rounding, for the logged values' ulps and
-/// for the uncertainty of Δ, is within `jerk`, the quintic is such a motion. Otherwise (no such
-/// motion, or none this test finds) false: the caller does not narrow the velocity box by the
-/// jerk limit.
+/// end or at the vertex; its acceleration, a cubic, at an end or where the jerk vanishes; its
+/// speed at most `(|q̇₀| + |q̇₁| + a·Δ)/2` (`a` that acceleration bound). If these bounds,
+/// padded for rounding and for the uncertainty of Δ, are within
+/// the limits, the quintic is such a motion. Otherwise (no such motion, or none this test
+/// finds) false: the caller does not narrow the velocity box by the jerk limit.
 ///
 /// # Soundness
 /// True only where the padded bound holds, so only where a motion within the jerk limit joins
@@ -304,7 +308,7 @@ fn jerk_feasible(
     dt: f64,
     dt_lo: f64,
     dt_hi: f64,
-    jerk: f64,
+    (v_max, acc, jerk): (f64, f64, f64),
 ) -> bool {
     let h = dt;
     let hh = h * h;
@@ -331,21 +335,59 @@ fn jerk_feasible(
         + 60.0 * 17.0 * (c.abs() + d.abs()) * h
         + 60.0 * 3.0 * (e0.abs() + e1.abs()) * hh)
         / h3;
-    let pad = 16.0 * PAD * mag + 3.0 * mag * ((dt_hi - dt_lo) / dt_lo) + TINY;
-    largest + pad <= jerk
+    let rel_dt = (dt_hi - dt_lo) / dt_lo;
+    let pad = 16.0 * PAD * mag + 3.0 * mag * rel_dt + TINY;
+    if !(largest + pad <= jerk) {
+        return false;
+    }
+    // Within the acceleration limit too: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in
+    // `s`, largest at an end or where the jerk (the quadratic above) vanishes.
+    let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
+    let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
+    let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
+    if c5 != 0.0 && disc >= 0.0 {
+        let root = disc.sqrt();
+        for r in [
+            (-24.0 * c4 + root) / (120.0 * c5),
+            (-24.0 * c4 - root) / (120.0 * c5),
+        ] {
+            if r.is_finite() {
+                a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
+            }
+        }
+    } else if c5 == 0.0 && c4 != 0.0 {
+        let r = -c3 / (4.0 * c4);
+        if r.is_finite() {
+            a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
+        }
+    }
+    // (Its terms' magnitudes, as for the jerk, one power of Δ fewer; the roots' own rounding
+    // moves the cubic's value by second order only, bounded by the same generous pad.)
+    let mag_a = mag * h;
+    let pad_a = 64.0 * PAD * mag_a + 2.0 * mag_a * rel_dt + TINY;
+    if !(a_q + pad_a <= acc) {
+        return false;
+    }
+    // And within the speed limit: between the ends the velocity moves from `q̇₀` and towards
+    // `q̇₁` at most as fast as the acceleration bound allows, so `|q̇| ≤ (|q̇₀| + |q̇₁| + a·Δ)/2`.
+    let a_bound = a_q + pad_a;
+    let v_q = 0.5 * (c.abs() + d.abs() + a_bound * dt_hi);
+    up(v_q, v_q) <= v_max
 }
 
-/// Whether two adjacent spans agree at their shared sample `s0` when it has no logged velocity
-/// (`sp`–`s0` and `s0`–`s1`): each span's mean velocity is the average of the joint's velocity
-/// over it, so it differs from the velocity at either end by at most `A·Δ/2`; the velocity at
-/// `s0` being one value, the two means differ by at most `A·(Δ₀ + Δ₁)/2`. Each span's own tests
-/// cannot see this (a joint logged moving in one span and still in the next, or a zig-zag of
-/// positions, each span alone within the limits). Outward rounded and lenient (relative
-/// `slack`), so it never flags a true motion; true where `s0` logs a velocity (each span's own
-/// tests hold that velocity against its positions) or a span has no length.
+/// Whether the span `s0`–`s1` agrees with the span before it, `sp`–`s0` (`sp` the latest sample
+/// stamped before `s0`: spans of no length between them say nothing about the motion), at
+/// their shared sample `s0`. A span's mean velocity is the average of the joint's velocity over
+/// it, so it differs from the velocity at either end by at most `A·Δ/2`. Where `s0` logs no
+/// velocity, the velocity there being one value, the two means differ by at most
+/// `A·(Δ₀ + Δ₁)/2`; where `s0` logs `q̇ = c`, `|c − m₀| ≤ A·Δ₀/2` (what the earlier span's own
+/// tests check of `c` when it ends at `s0`, but not across samples of `s0`'s stamp). Each span's
+/// own tests cannot see this (a joint logged moving in one span and still in the next, or a
+/// zig-zag of positions, each span alone within the limits). Outward rounded and lenient
+/// (relative `slack`), so it never flags a true motion; true where a span has no length.
 ///
 /// # Soundness
-/// Claim C9 (the consistency half): property test in `audit/tests/audit_consistency.rs`
+/// Claim C9 (the consistency half): tests in `audit/tests/audit_consistency.rs`
 /// (`adjacent_spans_must_agree_at_their_shared_sample`); mutant `x102`.
 pub fn adjacent_spans_agree(
     lim: &SpanLimits,
@@ -354,16 +396,13 @@ pub fn adjacent_spans_agree(
     s1: &Sample,
     slack: f64,
 ) -> bool {
-    if s0.has_dq {
-        return true;
-    }
     let bounds = |a: &Sample, b: &Sample| {
         let dt = b.t - a.t;
         let err = PAD * (a.t.abs() + b.t.abs()) + TINY;
         ((dt - err).max(0.0), dt + err)
     };
     let ((d0_lo, d0_hi), (d1_lo, d1_hi)) = (bounds(sp, s0), bounds(s0, s1));
-    if !(d0_lo > 0.0 && d1_lo > 0.0 && d0_hi.is_finite() && d1_hi.is_finite()) {
+    if !(d0_lo > 0.0 && d0_hi.is_finite() && d1_hi.is_finite()) {
         return true;
     }
     // The mean velocity (b − a)/Δ over Δ ∈ [lo, hi], bounded outward.
@@ -377,9 +416,17 @@ pub fn adjacent_spans_agree(
     let mut ok = true;
     for j in 0..lim.n {
         let (l0, h0) = mean(sp.q[j], s0.q[j], d0_lo, d0_hi);
-        let (l1, h1) = mean(s0.q[j], s1.q[j], d1_lo, d1_hi);
+        // The other side: the logged velocity at `s0`, or the later span's mean.
+        let ((l1, h1), reach) = if s0.has_dq {
+            let c = s0.dq[j];
+            ((c, c), d0_hi)
+        } else if d1_lo > 0.0 {
+            (mean(s0.q[j], s1.q[j], d1_lo, d1_hi), d0_hi + d1_hi)
+        } else {
+            continue;
+        };
         let apart = (l1 - h0).max(l0 - h1);
-        let allowed = 0.5 * lim.a[j] * (d0_hi + d1_hi);
+        let allowed = 0.5 * lim.a[j] * reach;
         // (A NaN, from means beyond floating point, agrees with nothing.)
         ok &= apart <= up(allowed, allowed) * (1.0 + slack);
     }
@@ -596,9 +643,11 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
                 up(mean_hi + w, mean_hi.abs() + w),
             )
         };
-        // Velocity box: the intersection of the candidates, starting from the limits; their
-        // hull (the mean's box included) for a contradicted span.
-        let (mut v_lo, mut v_hi) = (-v, v);
+        // Velocity box: the intersection of the candidates (not clipped to ±v_max: the speed
+        // limit is checked against the samples, but no test here decides that it and the
+        // acceleration limit can be met together, so the box rests on the acceleration and
+        // jerk limits alone); their hull (the mean's box included) for a contradicted span.
+        let (mut v_lo, mut v_hi) = (f64::NEG_INFINITY, f64::INFINITY);
         let (mut hv_lo, mut hv_hi) = if has_mean {
             (m_lo, m_hi)
         } else {
@@ -662,13 +711,26 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
                 // to join the samples (`jerk_feasible`): where none does, the log refutes the
                 // limit the narrowing rests on, and the box keeps what the acceleration limit
                 // gives (the tests above flag the spans they prove infeasible).
-                if jerk_feasible(dpos, c, d, e0, e1, dt, dt_lo, dt_hi, jerk * rel) {
+                if jerk_feasible(
+                    dpos,
+                    c,
+                    d,
+                    e0,
+                    e1,
+                    dt,
+                    dt_lo,
+                    dt_hi,
+                    (v * rel, acc * rel, jerk * rel),
+                ) {
                     (v_lo, v_hi) = (v_lo.max(l), v_hi.min(h));
                 }
                 (hv_lo, hv_hi) = (hv_lo.min(l), hv_hi.max(h));
             }
         } else if has_mean {
             (v_lo, v_hi) = (v_lo.max(m_lo), v_hi.min(m_hi));
+        } else {
+            // No time and no velocities: the speed limit is all there is.
+            (v_lo, v_hi) = (-v, v);
         }
         // The velocity box holds every admissible motion's velocity at every instant, the mean
         // velocity's instant included: a box that misses the mean leaves no admissible motion

@@ -125,6 +125,46 @@ fn lagging_velocity_filter_is_inconclusive_or_fails() {
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 
+/// The jerk limit narrows the velocity box only where a motion within all the limits joins the
+/// samples. A review's span (Δ = 4 ms, `q̇` 0 then 0.038 rad/s, `q̈ = A` at both ends, the
+/// positions 0.2 µrad short of `AΔ²/2`) passes every consistency test, and the quintic through
+/// it stays within the jerk limit, but it exceeds `A` (its jerk is positive where `q̈₀ = A`):
+/// no motion within both joins the samples, while one within `A` alone reaches 0.0385 rad/s.
+/// The box keeps the acceleration limit's bound, above that (before, 0.038). A motion within
+/// all the limits (constant velocity) still gets the narrowed box.
+#[test]
+fn the_jerk_limit_narrows_a_box_only_where_all_the_limits_are_met() {
+    let lim = RobotModel::builtin("fr3").unwrap().limits().clone();
+    let (a, dt) = (10.0, 0.004);
+    let mut s0 = Sample {
+        t: 1.0,
+        q: [0.0; MAX_DOF],
+        dq: [0.0; MAX_DOF],
+        ddq: [0.0; MAX_DOF],
+        has_dq: true,
+        has_ddq: true,
+    };
+    s0.ddq[0] = a;
+    let mut s1 = Sample { t: 1.0 + dt, ..s0 };
+    s1.q[0] = a * dt * dt / 2.0 - 2e-7;
+    s1.dq[0] = a * dt - 2e-3;
+    let enc = span_boxes(&lim, &s0, &s1, 1e-9);
+    assert!(enc.consistent);
+    let hi = enc.boxes.unwrap().dq.bounds(0).1;
+    assert!(hi >= 0.0385, "{hi}");
+    // Constant velocity 0.5 rad/s: within every limit, the box within JΔ²/8 of it.
+    let (mut s0, mut s1) = (s0, s1);
+    s0.ddq[0] = 0.0;
+    s1.ddq[0] = 0.0;
+    s0.dq[0] = 0.5;
+    s1.dq[0] = 0.5;
+    s1.q[0] = 0.5 * dt;
+    let b = span_boxes(&lim, &s0, &s1, 1e-9).boxes.unwrap();
+    let (lo, hi) = b.dq.bounds(0);
+    let j = 5000.0 * dt * dt / 8.0;
+    assert!(hi <= 0.5 + j + 1e-9 && lo >= 0.5 - j - 1e-9, "{lo} {hi}");
+}
+
 /// A lone acceleration (logged on one end of a span with velocities at both) must agree with
 /// the positions too: from its end, `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6`. A review's span (Δ = 1 ms,
 /// `q̇ = 0` then 0.0075 rad/s, `q̈₀ = 10` rad/s² alone, Δq = 3.75 µrad) meets every other test
@@ -715,6 +755,25 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
     }
     let r = positions_log(12, |k| if k % 2 == 1 { 4e-6 } else { 0.0 });
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+    // Across a span of no length: a review's log moves joint 1 by 1 mrad in the first
+    // millisecond (≥ 0.995 rad/s at its end), then logs the same stamp again with `dq = 0`
+    // and keeps still, the next span "at rest" beside the hand. The velocity logged at the
+    // repeated stamp must agree with the span before it (|c − m₀| ≤ AΔ₀/2).
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    for (t, q0, dq) in [
+        (1.0, 0.3, None),
+        (1.001, 0.301, None),
+        (1.001, 0.301, Some(0.0)),
+        (1.002, 0.301, Some(0.0)),
+    ] {
+        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
+        );
+    }
+    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    assert_ne!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked

@@ -108,16 +108,12 @@ impl Auditor {
             let mut encl = std::mem::take(&mut self.block_encl);
             // Resized, not cleared: each entry is overwritten in place.
             encl.resize(m - 1, SpanEnclosure::empty());
+            // The latest sample stamped before the span's first (carried across blocks).
+            let mut earlier = self.earlier;
             for (i, e) in encl.iter_mut().enumerate() {
                 self.boxes_into(&block[i], &block[i + 1], e);
-                // The span before it (in this block, or the last of the block before) must
-                // agree with it at their shared sample.
-                let prev = if i > 0 {
-                    Some(&block[i - 1])
-                } else {
-                    self.before_last.as_ref()
-                };
-                if let Some(p) = prev
+                // The span before it must agree with it at their shared sample.
+                if let Some(p) = &earlier
                     && !adjacent_spans_agree(
                         &self.span_limits,
                         p,
@@ -128,7 +124,11 @@ impl Auditor {
                 {
                     e.consistent = false;
                 }
+                if block[i + 1].t > block[i].t {
+                    earlier = Some(block[i]);
+                }
             }
+            self.earlier = earlier;
             self.check_spans(&block, &encl, 0, m - 1, slot);
             self.before_last = Some(block[m - 2]);
             self.block = block;
