@@ -774,6 +774,24 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
     let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
     assert_ne!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    // Where only the logged velocity contradicts the span before: means 0.0135 then 0.0045
+    // rad/s (0.009 apart, within A(Δ₀ + Δ₁)/2 = 0.01), the repeated stamp logging `dq = 0`
+    // (within AΔ/2 of the later span's mean, but 0.0135 from the earlier one's, where 0.005 is
+    // allowed).
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    for (t, q0, dq) in [
+        (1.0, 0.3, None),
+        (1.001, 0.3000135, None),
+        (1.001, 0.3000135, Some(0.0)),
+        (1.002, 0.300018, None),
+    ] {
+        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
+        );
+    }
+    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked
