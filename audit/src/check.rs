@@ -107,8 +107,11 @@ struct ObjectTrack {
     /// record as old as every kept one, with a let-go one older than it, cannot be checked
     /// against its neighbours in time ([`too_late`], `object_record_too_late`).
     dropped: Option<f64>,
-    /// What the records let go from `history` still require of later ones ([`LetGo`]).
+    /// What the records let go from `history` still require of later ones ([`LetGo`]): their
+    /// positions (under the speed bound) and their measured velocities (under the acceleration
+    /// bound).
     let_go: LetGo,
+    let_go_vel: LetGo,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -645,11 +648,15 @@ impl Auditor {
         let o = &self.objects[k];
         // Against the records let go, in constant memory (a drift through the kept ones).
         let (speed, e2) = o.bounds.speed_and_2e();
-        if let (Some(d), Some(v)) = (o.dropped, speed)
-            && m.time >= d
-            && o.let_go
-                .breaks(m.time, e2, std::iter::once((m.position, v)))
-        {
+        let (acc, e2v) = o.bounds.acc_and_2ev();
+        let drifted = o.dropped.is_some_and(|d| m.time >= d)
+            && (speed.is_some_and(|v| {
+                o.let_go
+                    .breaks(m.time, e2, std::iter::once((m.position, v)))
+            }) || m
+                .velocity
+                .is_some_and(|u| o.let_go_vel.breaks(m.time, e2v, std::iter::once((u, acc)))));
+        if let (true, Some(d)) = (drifted, o.dropped) {
             self.model_break_about(d, m.time, Reason::ObjectExceedsModel, Some(k));
         }
         let o = &self.objects[k];
@@ -675,6 +682,10 @@ impl Auditor {
             o.dropped = Some(o.dropped.map_or(gone.time, |d| d.max(gone.time)));
             if let (Some(v), _) = o.bounds.speed_and_2e() {
                 o.let_go.add(gone.time, std::iter::once((gone.position, v)));
+            }
+            if let Some(u) = gone.velocity {
+                let (acc, _) = o.bounds.acc_and_2ev();
+                o.let_go_vel.add(gone.time, std::iter::once((u, acc)));
             }
         }
         m.keep_newest(&mut o.latest);
@@ -920,6 +931,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             history: std::collections::VecDeque::with_capacity(HUMAN_HISTORY + 1),
             dropped: None,
             let_go: LetGo::new(1),
+            let_go_vel: LetGo::new(1),
             span: None,
             occ: None,
             others: Vec::with_capacity(8),

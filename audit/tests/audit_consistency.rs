@@ -549,15 +549,17 @@ fn records_drifting_from_one_let_go_break_the_model() {
     let head = format!(
         r#"{{"type":"header","format":"pacs-log","version":1,"robot":"fr3","human":{spec},"constraints":"ssm"}}"#
     );
-    let log = |n: usize, dx: &dyn Fn(usize, f64) -> f64| {
+    let log_from = |t0: f64, n: usize, dx: &dyn Fn(usize, f64) -> f64| {
         let mut text = format!("{head}\n");
         for j in 0..n {
-            let t = j as f64 * 0.001;
-            text += &human_record(t, None, &person_at(dx(j, t)));
+            let s = j as f64 * 0.001;
+            let t = t0 + s;
+            text += &human_record(t, None, &person_at(dx(j, s)));
             text += &format!("{{\"type\":\"robot\",\"t\":{t},\"q\":[{AT_REST}]}}\n");
         }
         run(&text)
     };
+    let log = |n: usize, dx: &dyn Fn(usize, f64) -> f64| log_from(0.0, n, dx);
     let r = log(66, &|j, t| match j {
         0 => 0.0,
         65 => 2.0 * t + 0.19,
@@ -567,6 +569,18 @@ fn records_drifting_from_one_let_go_break_the_model() {
     assert_eq!(reasons(&r), ["human_exceeds_model"]);
     let r = log(300, &|_, t| 1.9 * t);
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
+    // 2 mm beyond the allowance, also at Unix-time stamps (1.7·10⁹ s, where `v·t` is 3.4·10⁹ m:
+    // the let-go bounds count time from the first record let go).
+    for t0 in [0.0, 1.7e9] {
+        let r = log_from(t0, 66, &|j, s| match j {
+            0 => 0.0,
+            65 => 2.0 * s + 0.102,
+            _ => 2.0 * s + 0.095,
+        });
+        assert_eq!(reasons(&r), ["human_exceeds_model"], "t0 {t0}");
+        let r = log_from(t0, 300, &|_, s| 1.9 * s);
+        assert_eq!(r.verdict, Verdict::Pass, "t0 {t0}: {:?}", reasons(&r));
+    }
 }
 
 /// A report names a model by its name only where the spec is that built-in's: an inline robot

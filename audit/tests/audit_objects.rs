@@ -422,7 +422,8 @@ fn an_earlier_measurement_clears_a_span_the_newest_cannot() {
 /// kept still bound later ones. A chain drifting through the kept ones (1 m/s plus 9.5 mm,
 /// then plus 19 mm, each within `max_speed·Δt + 2·pos_error` of every kept record) ends
 /// 84 mm from the first record where 75 mm is allowed: `object_exceeds_model`, naming the
-/// ball. The same ball rolling at 0.9 m/s agrees with its model and passes.
+/// ball. The same ball rolling at 0.9 m/s agrees with its model and passes. Likewise its
+/// measured velocities under the acceleration bound.
 #[test]
 fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
     let reasons = |x: &dyn Fn(usize, f64) -> f64| {
@@ -446,6 +447,33 @@ fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
         "{found:?}"
     );
     assert_eq!(reasons(&|_, t| 0.9 * t), vec![]);
+    // Its measured velocities too (under the acceleration bound 3 m/s², twice the velocity
+    // error 0.04 m/s): 0, then 64 records at `3t + 0.039` m/s, then `3t + 0.078` (0.273 m/s
+    // at 65 ms, 0.038 beyond what the first record allows, within what each kept one does).
+    // The positions follow the velocities. A ball accelerating at 2.9 m/s² passes.
+    let velocity_log = |v: &dyn Fn(usize, f64) -> f64| {
+        let text = ball_log(ObjectContact::Ssm, 0.0, |w, k, t| {
+            // The position: the velocities summed over the milliseconds before.
+            let x: f64 = (0..k).map(|i| v(i, i as f64 * 1e-3) * 1e-3).sum();
+            w.write_object(t, t, "b1", [3.0 + x, 3.0, 0.5], Some([v(k, t), 0.0, 0.0]))
+                .unwrap();
+        });
+        let r = run(&text, &AuditConfig::default()).unwrap();
+        r.inconclusive
+            .iter()
+            .map(|s| s.reason.as_str().to_string())
+            .collect::<Vec<_>>()
+    };
+    let found = velocity_log(&|k, t| match k {
+        0 => 0.0,
+        1..=64 => 3.0 * t + 0.039,
+        _ => 3.0 * t + 0.078,
+    });
+    assert!(
+        found.contains(&"object_exceeds_model".to_string()),
+        "{found:?}"
+    );
+    assert_eq!(velocity_log(&|_, t| 2.9 * t), Vec::<String>::new());
 }
 
 /// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped

@@ -260,6 +260,9 @@ pub(crate) fn velocity_breaks(v: [f64; 3], vmax: f64, ev: f64) -> bool {
 pub(crate) struct LetGo {
     lo: Vec<[f64; 3]>,
     hi: Vec<[f64; 3]>,
+    /// Times are taken from the first let-go stamp (s), so that `v·t` stays small at Unix-time
+    /// stamps and the margin with it.
+    base: Option<f64>,
 }
 
 impl LetGo {
@@ -268,11 +271,13 @@ impl LetGo {
         LetGo {
             lo: vec![[f64::INFINITY; 3]; points],
             hi: vec![[f64::NEG_INFINITY; 3]; points],
+            base: None,
         }
     }
 
     /// A record stamped `t` let go: its points `(position, speed bound)`.
     pub(crate) fn add(&mut self, t: f64, points: impl Iterator<Item = ([f64; 3], f64)>) {
+        let t = t - *self.base.get_or_insert(t);
         for ((p, v), (lo, hi)) in points.zip(self.lo.iter_mut().zip(self.hi.iter_mut())) {
             let vt = v * t;
             for i in 0..3 {
@@ -290,6 +295,13 @@ impl LetGo {
         e2: f64,
         points: impl Iterator<Item = ([f64; 3], f64)>,
     ) -> bool {
+        let Some(base) = self.base else {
+            return false;
+        };
+        // The stamps' own rounding from the base (each difference within an ulp of the larger
+        // stamp), times the speed bound, joins the relative margin.
+        let dt_err = 4.0 * f64::EPSILON * t.abs().max(base.abs());
+        let t = t - base;
         let mut broken = false;
         for ((q, v), (lo, hi)) in points.zip(self.lo.iter().zip(&self.hi)) {
             let vt = v * t;
@@ -297,8 +309,9 @@ impl LetGo {
                 if !(lo[i].is_finite() && hi[i].is_finite()) {
                     continue;
                 }
-                let margin =
-                    1e-12 * (q[i].abs() + vt.abs() + e2 + lo[i].abs().max(hi[i].abs())) + 1e-300;
+                let margin = 1e-12 * (q[i].abs() + vt.abs() + e2 + lo[i].abs().max(hi[i].abs()))
+                    + v * dt_err
+                    + 1e-300;
                 broken |= (q[i] - vt - e2) - lo[i] > margin || hi[i] - (q[i] + vt + e2) > margin;
             }
         }
@@ -326,6 +339,12 @@ impl ObjectBounds {
     /// [`LetGo`] holds an object's records to.
     pub(crate) fn speed_and_2e(&self) -> (Option<f64>, f64) {
         (self.max_speed, 2.0 * self.pos_error)
+    }
+
+    /// The acceleration bound (m/s², at least 0) and twice the velocity error (m/s): what
+    /// [`LetGo`] holds an object's measured velocities to (`velocities_break` per axis).
+    pub(crate) fn acc_and_2ev(&self) -> (f64, f64) {
+        (self.acc.max(0.0), 2.0 * self.vel_error)
     }
 
     pub(crate) fn new(acc: f64, max_speed: Option<f64>, vel_error: f64, pos_error: f64) -> Self {
