@@ -286,7 +286,9 @@ fn complete_or_not(
     if let Some(start) = start
         && !matches!((start, robot_span), (Some(s), Some(_)) if first == s)
     {
+        // (Without robot samples: at the start event, or at 0.)
         let s = start.unwrap_or(first);
+        let first = if robot_span.is_some() { first } else { s };
         missing.push((s.min(first), s.max(first)));
     }
     if !matches!((end, robot_span), (Some(e), Some(_)) if last >= e) {

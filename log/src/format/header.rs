@@ -36,9 +36,9 @@ pub struct Header {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub end_event: bool,
     /// Version 2: the writer promises a `start` event ([`START_EVENT`](super::START_EVENT)) at
-    /// the time of its first robot sample (written just before it); a log whose first robot
-    /// sample is later than that event, or that lacks it, was cut at its beginning
-    /// (`incomplete_log`). Only with `end_event`.
+    /// the time of its first robot sample (written just before it); a log that lacks it was cut
+    /// at its beginning, and one whose first robot sample is later or earlier than it is not
+    /// that run whole (`incomplete_log`). Only with `end_event`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub start_event: bool,
     /// Task constraints (preset name or spec).

@@ -11,8 +11,8 @@ use std::io::{Seek, Write};
 /// header as the `pacs` metadata record, then CDR messages on the configured topics. It writes
 /// what it is given, record by record (a JSON Lines log's records converted keep their events):
 /// where the header promises a `start` or an `end` event (`Header::promising_end`), the caller
-/// writes them ([`Self::write_event`]: `start` at the first robot sample's time before it, `end`
-/// last), or the audit reads the log as `incomplete_log`.
+/// writes them ([`Self::write_event`]: `start` logged at the first robot sample's header
+/// stamp, before it, `end` last), or the audit reads the log as `incomplete_log`.
 ///
 /// [`McapReader`]: super::McapReader
 pub struct McapLogWriter<W: Write + Seek> {
