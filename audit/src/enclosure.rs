@@ -337,7 +337,8 @@ fn jerk_feasible(
         / h3;
     let rel_dt = (dt_hi - dt_lo) / dt_lo;
     let pad = 16.0 * PAD * mag + 3.0 * mag * rel_dt + TINY;
-    if !(largest + pad <= jerk) {
+    let within_jerk = largest + pad <= jerk;
+    if !within_jerk {
         return false;
     }
     // Within the acceleration limit too: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in
@@ -365,7 +366,8 @@ fn jerk_feasible(
     // moves the cubic's value by second order only, bounded by the same generous pad.)
     let mag_a = mag * h;
     let pad_a = 64.0 * PAD * mag_a + 2.0 * mag_a * rel_dt + TINY;
-    if !(a_q + pad_a <= acc) {
+    let within_acc = a_q + pad_a <= acc;
+    if !within_acc {
         return false;
     }
     // And within the speed limit: between the ends the velocity moves from `q̇₀` and towards
