@@ -387,6 +387,7 @@ fn jerk_feasible(
 /// own tests cannot see this (a joint logged moving in one span and still in the next, or a
 /// zig-zag of positions, each span alone within the limits). Outward rounded and lenient
 /// (relative `slack`), so it never flags a true motion; true where a span has no length.
+/// `direct`: `sp` is the sample just before `s0` (no sample of `s0`'s stamp between them).
 ///
 /// # Soundness
 /// Claim C9 (the consistency half): tests in `audit/tests/audit_consistency.rs`
@@ -397,7 +398,14 @@ pub fn adjacent_spans_agree(
     s0: &Sample,
     s1: &Sample,
     slack: f64,
+    direct: bool,
 ) -> bool {
+    // Velocities at both ends of the earlier span, `sp` just before `s0` (`direct`): its own
+    // displacement test (`|m₀ − (q̇ₚ + c)/2| ≤ (A²Δ₀² − (c − q̇ₚ)²)/(4AΔ₀)`) implies
+    // `|c − m₀| ≤ AΔ₀/2`: nothing more to check.
+    if direct && sp.has_dq && s0.has_dq {
+        return true;
+    }
     let bounds = |a: &Sample, b: &Sample| {
         let dt = b.t - a.t;
         let err = PAD * (a.t.abs() + b.t.abs()) + TINY;

@@ -806,6 +806,23 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
     }
     let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
+    // With a velocity at both ends of the earlier span but a sample without one between (of the
+    // later stamp): 1 rad/s logged at the start and agreeing with the positions, then the
+    // repeated stamp's `dq = 0`, which nothing but this test holds against the earlier span.
+    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
+    for (t, q0, dq) in [
+        (1.0, 0.3, Some(1.0)),
+        (1.001, 0.301, None),
+        (1.001, 0.301, Some(0.0)),
+        (1.002, 0.301, Some(0.0)),
+    ] {
+        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
+        );
+    }
+    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 
 /// A velocity or acceleration logged on one sample only, beside samples without it, is checked

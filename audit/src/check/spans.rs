@@ -113,6 +113,12 @@ impl Auditor {
             for (i, e) in encl.iter_mut().enumerate() {
                 self.boxes_into(&block[i], &block[i + 1], e);
                 // The span before it must agree with it at their shared sample.
+                let before = if i > 0 {
+                    Some(block[i - 1].t)
+                } else {
+                    self.before_last.map(|s| s.t)
+                };
+                let direct = before.is_some_and(|t| t < block[i].t);
                 if let Some(p) = &earlier
                     && !adjacent_spans_agree(
                         &self.span_limits,
@@ -120,6 +126,7 @@ impl Auditor {
                         &block[i],
                         &block[i + 1],
                         self.cfg.limit_slack,
+                        direct,
                     )
                 {
                     e.consistent = false;
