@@ -341,8 +341,18 @@ fn jerk_feasible(
     if !within_jerk {
         return false;
     }
-    // Within the acceleration limit too: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in
-    // `s`, largest at an end or where the jerk (the quadratic above) vanishes.
+    // Within the acceleration limit too. First the cheap bound: from either end the
+    // acceleration moves at most as fast as the jerk bound allows, so
+    // `|q̈| ≤ (|q̈₀| + |q̈₁| + jerk·Δ)/2`; where that is within the limit, so is the quintic's.
+    let j_bound = largest + pad;
+    let cheap = 0.5 * (e0.abs() + e1.abs() + j_bound * dt_hi);
+    let cheap = up(cheap, cheap);
+    if cheap <= acc {
+        let v_q = 0.5 * (c.abs() + d.abs() + cheap * dt_hi);
+        return up(v_q, v_q) <= v_max;
+    }
+    // Else exactly: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in `s`, largest at an
+    // end or where the jerk (the quadratic above) vanishes.
     let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
     let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
     let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
