@@ -476,6 +476,34 @@ fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
     assert_eq!(velocity_log(&|_, t| 2.9 * t), Vec::<String>::new());
 }
 
+/// A frozen tracker: the same ball record (position, and a velocity of 1 m/s) repeated with a
+/// new stamp every 20 ms. Equal positions are within any distance allowance, but the measured
+/// velocity says the ball moved 20 mm per repeat: the direction test holds them to it
+/// (`object_exceeds_model`). An outside review's frozen ball beside the hand passed, its first
+/// record alone failed. A resting ball repeated (velocity 0) agrees.
+#[test]
+fn a_frozen_record_repeated_with_a_velocity_breaks_the_model() {
+    let reasons = |v: [f64; 3]| {
+        let text = ball_log(ObjectContact::Ssm, 0.0, |w, k, t| {
+            if k % 20 == 0 {
+                w.write_object(t, t, "b1", [3.0, 3.0, 0.5], Some(v))
+                    .unwrap();
+            }
+        });
+        let r = run(&text, &AuditConfig::default()).unwrap();
+        r.inconclusive
+            .iter()
+            .map(|s| s.reason.as_str().to_string())
+            .collect::<Vec<_>>()
+    };
+    let found = reasons([1.0, 0.0, 0.0]);
+    assert!(
+        found.contains(&"object_exceeds_model".to_string()),
+        "{found:?}"
+    );
+    assert_eq!(reasons([0.0; 3]), Vec::<String>::new());
+}
+
 /// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped
 /// 10 ms, after the latest 64 records kept have moved past its stamp, cannot be checked against
 /// its neighbours in time: `object_record_too_late`, naming the ball; so can one stamped as

@@ -410,10 +410,10 @@ fn object_pair_breaks_rounded(
     {
         return true;
     }
-    // Equal positions are within any allowance (exact duplicates are no contradiction).
-    if early.position == late.position {
-        return false;
-    }
+    // Equal positions are within any distance allowance (exact duplicates are no
+    // contradiction); the direction test below still holds them to a measured velocity (a
+    // frozen tracker repeating a moving ball's record is one).
+    let same_place = early.position == late.position;
     let by_speed = b.max_speed.map(|v| mul_down(v, dt));
     let by_velocity = [early.velocity, late.velocity]
         .into_iter()
@@ -433,7 +433,7 @@ fn object_pair_breaks_rounded(
         (None, None) => return false,
     };
     let allowed = add_down(allowed, mul_down(2.0, b.pos_error));
-    if dist3_up(&early.position, &late.position) > allowed {
+    if !same_place && dist3_up(&early.position, &late.position) > allowed {
         return true;
     }
     // Direction: from a measured velocity `v`, the displacement lies within
