@@ -112,6 +112,9 @@ struct ObjectTrack {
     /// bound).
     let_go: LetGo,
     let_go_vel: LetGo,
+    /// The newest record let go that carries a velocity: later records are held to it whole
+    /// (its direction included, which [`LetGo`] does not keep).
+    let_go_moving: Option<ObjectMeasurement>,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
     /// Its occupancy over the span being checked (`None`: outside the workspace ball).
@@ -656,8 +659,16 @@ impl Auditor {
             }) || m
                 .velocity
                 .is_some_and(|u| o.let_go_vel.breaks(m.time, e2v, std::iter::once((u, acc)))));
+        // The newest record let go with a velocity, whole (its direction included).
+        let moving_break = o
+            .let_go_moving
+            .filter(|g| m.time >= g.time && object_pair_breaks(&o.bounds, g, &m))
+            .map(|g| g.time);
         if let (true, Some(d)) = (drifted, o.dropped) {
             self.model_break_about(d, m.time, Reason::ObjectExceedsModel, Some(k));
+        }
+        if let Some(t0) = moving_break {
+            self.model_break_about(t0, m.time, Reason::ObjectExceedsModel, Some(k));
         }
         let o = &self.objects[k];
         let at = o.history.partition_point(|h| h.time <= m.time);
@@ -686,6 +697,7 @@ impl Auditor {
             if let Some(u) = gone.velocity {
                 let (acc, _) = o.bounds.acc_and_2ev();
                 o.let_go_vel.add(gone.time, std::iter::once((u, acc)));
+                o.let_go_moving = Some(gone);
             }
         }
         m.keep_newest(&mut o.latest);
@@ -932,6 +944,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             dropped: None,
             let_go: LetGo::new(1),
             let_go_vel: LetGo::new(1),
+            let_go_moving: None,
             span: None,
             occ: None,
             others: Vec::with_capacity(8),

@@ -502,6 +502,30 @@ fn a_frozen_record_repeated_with_a_velocity_breaks_the_model() {
         "{found:?}"
     );
     assert_eq!(reasons([0.0; 3]), Vec::<String>::new());
+    // A review's burst: the moving record, then 70 records without a velocity within 0.63 ms
+    // of its stamp (each agreeing with it), then one at 0.1 s 1 µm from where it was. The
+    // moving record is let go by then; its direction (0.1 m expected) still holds the last one.
+    let text = ball_log(ObjectContact::Ssm, 0.0, |w, k, t| {
+        let p = [3.0, 3.0, 0.5];
+        match k {
+            0 => w
+                .write_object(t, t, "b1", p, Some([1.0, 0.0, 0.0]))
+                .unwrap(),
+            1..=70 => w.write_object(t, k as f64 * 9e-6, "b1", p, None).unwrap(),
+            100 => w
+                .write_object(t, t, "b1", [3.0 + 1e-6, 3.0, 0.5], None)
+                .unwrap(),
+            _ => {}
+        }
+    });
+    let r = run(&text, &AuditConfig::default()).unwrap();
+    assert!(
+        r.inconclusive
+            .iter()
+            .any(|s| s.reason.as_str() == "object_exceeds_model"),
+        "{:?}",
+        r.inconclusive
+    );
 }
 
 /// As for human records (`audit_consistency.rs`): a ball record logged at 150 ms but stamped
