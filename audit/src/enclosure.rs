@@ -354,23 +354,22 @@ fn jerk_feasible(
     // Else exactly: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in `s`, largest at an
     // end or where the jerk (the quadratic above) vanishes.
     let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
-    let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
+    // The jerk's zeros (none, one or two; NaN where there are none), each within [0, 1].
     let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
-    if c5 != 0.0 && disc >= 0.0 {
+    let zeros = if c5 != 0.0 && disc >= 0.0 {
         let root = disc.sqrt();
-        for r in [
+        [
             (-24.0 * c4 + root) / (120.0 * c5),
             (-24.0 * c4 - root) / (120.0 * c5),
-        ] {
-            if r.is_finite() {
-                a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
-            }
-        }
+        ]
     } else if c5 == 0.0 && c4 != 0.0 {
-        let r = -c3 / (4.0 * c4);
-        if r.is_finite() {
-            a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
-        }
+        [-c3 / (4.0 * c4), f64::NAN]
+    } else {
+        [f64::NAN; 2]
+    };
+    let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
+    for r in zeros.into_iter().filter(|r| r.is_finite()) {
+        a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
     }
     // (Its terms' magnitudes, as for the jerk, one power of Δ fewer; the roots' own rounding
     // moves the cubic's value by second order only, bounded by the same generous pad.)

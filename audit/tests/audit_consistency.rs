@@ -749,6 +749,23 @@ fn positions_log(samples: usize, q: impl Fn(usize) -> f64) -> RunResult {
     run(&text)
 }
 
+/// Robot samples `(t (s), joint 1 (rad), dq of joint 1 (rad/s) if logged)` after the hand of
+/// [`HUMAN`] measured at 1 s, overlapping the gripper (SSM).
+fn stamped_log(samples: &[(f64, f64, Option<f64>)]) -> RunResult {
+    let mut text = format!(
+        "{}\n{}\n",
+        header("ssm"),
+        HUMAN.replace("\"t\":0.0", "\"t\":1.0")
+    );
+    for &(t, q0, dq) in samples {
+        let dq = dq.map_or(String::new(), |c| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
+        text += &format!(
+            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
+        );
+    }
+    run(&text)
+}
+
 /// Without logged velocities each span's box is its mean velocity ± AΔ, which holds for any
 /// motion within the acceleration limit A over that span; adjacent spans must then agree at
 /// their shared sample, where one velocity is within `AΔ/2` of both means: `|m₁ − m₀| ≤
@@ -773,55 +790,34 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
     // millisecond (≥ 0.995 rad/s at its end), then logs the same stamp again with `dq = 0`
     // and keeps still, the next span "at rest" beside the hand. The velocity logged at the
     // repeated stamp must agree with the span before it (|c − m₀| ≤ AΔ₀/2).
-    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
-    for (t, q0, dq) in [
+    let r = stamped_log(&[
         (1.0, 0.3, None),
         (1.001, 0.301, None),
         (1.001, 0.301, Some(0.0)),
         (1.002, 0.301, Some(0.0)),
-    ] {
-        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
-        text += &format!(
-            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
-        );
-    }
-    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    ]);
     assert_ne!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
     // Where only the logged velocity contradicts the span before: means 0.0135 then 0.0045
     // rad/s (0.009 apart, within A(Δ₀ + Δ₁)/2 = 0.01), the repeated stamp logging `dq = 0`
     // (within AΔ/2 of the later span's mean, but 0.0135 from the earlier one's, where 0.005 is
     // allowed).
-    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
-    for (t, q0, dq) in [
+    let r = stamped_log(&[
         (1.0, 0.3, None),
         (1.001, 0.3000135, None),
         (1.001, 0.3000135, Some(0.0)),
         (1.002, 0.300018, None),
-    ] {
-        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
-        text += &format!(
-            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
-        );
-    }
-    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    ]);
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
     // With a velocity at both ends of the earlier span but a sample without one between (of the
     // later stamp): 1 rad/s logged at the start and agreeing with the positions, then the
     // repeated stamp's `dq = 0`, which nothing but this test holds against the earlier span.
-    let mut text = format!("{}\n{HUMAN}\n", header("ssm"));
-    for (t, q0, dq) in [
+    let r = stamped_log(&[
         (1.0, 0.3, Some(1.0)),
         (1.001, 0.301, None),
         (1.001, 0.301, Some(0.0)),
         (1.002, 0.301, Some(0.0)),
-    ] {
-        let dq = dq.map_or(String::new(), |c: f64| format!(",\"dq\":[{c},0,0,0,0,0,0]"));
-        text += &format!(
-            "{{\"type\":\"robot\",\"t\":{t},\"q\":[{q0},-0.5,0.2,-2.0,0.1,1.8,0.6]{dq}}}\n"
-        );
-    }
-    let r = run(&text.replace("\"t\":0.0", "\"t\":1.0"));
+    ]);
     assert!(reasons(&r).contains(&"exceeds_limits"), "{:?}", reasons(&r));
 }
 

@@ -459,11 +459,7 @@ fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
             w.write_object(t, t, "b1", [3.0 + x, 3.0, 0.5], Some([v(k, t), 0.0, 0.0]))
                 .unwrap();
         });
-        let r = run(&text, &AuditConfig::default()).unwrap();
-        r.inconclusive
-            .iter()
-            .map(|s| s.reason.as_str().to_string())
-            .collect::<Vec<_>>()
+        inconclusive_reasons(&text)
     };
     let found = velocity_log(&|k, t| match k {
         0 => 0.0,
@@ -475,6 +471,15 @@ fn an_object_record_drifting_from_one_let_go_breaks_the_model() {
         "{found:?}"
     );
     assert_eq!(velocity_log(&|_, t| 2.9 * t), Vec::<String>::new());
+}
+
+/// The reasons of the inconclusive spans of the audit of `text`, in order.
+fn inconclusive_reasons(text: &str) -> Vec<String> {
+    let r = run(text, &AuditConfig::default()).unwrap();
+    r.inconclusive
+        .iter()
+        .map(|s| s.reason.as_str().to_string())
+        .collect()
 }
 
 /// A frozen tracker: the same ball record (position, and a velocity of 1 m/s) repeated with a
@@ -491,11 +496,7 @@ fn a_frozen_record_repeated_with_a_velocity_breaks_the_model() {
                     .unwrap();
             }
         });
-        let r = run(&text, &AuditConfig::default()).unwrap();
-        r.inconclusive
-            .iter()
-            .map(|s| s.reason.as_str().to_string())
-            .collect::<Vec<_>>()
+        inconclusive_reasons(&text)
     };
     let found = reasons([1.0, 0.0, 0.0]);
     assert!(
