@@ -126,11 +126,11 @@ fn lagging_velocity_filter_is_inconclusive_or_fails() {
 }
 
 /// The jerk limit narrows the velocity box only where a motion within all the limits joins the
-/// samples. A review's span (Δ = 4 ms, `q̇` 0 then 0.038 rad/s, `q̈ = A` at both ends, the
+/// samples. A span (Δ = 4 ms, `q̇` 0 then 0.038 rad/s, `q̈ = A` at both ends, the
 /// positions 0.2 µrad short of `AΔ²/2`) passes every consistency test, and the quintic through
 /// it stays within the jerk limit, but it exceeds `A` (its jerk is positive where `q̈₀ = A`):
 /// no motion within both joins the samples, while one within `A` alone reaches 0.0385 rad/s.
-/// The box keeps the acceleration limit's bound, above that (before, 0.038). A motion within
+/// The box keeps the acceleration limit's bound, above that. A motion within
 /// all the limits (constant velocity) still gets the narrowed box.
 #[test]
 fn the_jerk_limit_narrows_a_box_only_where_all_the_limits_are_met() {
@@ -166,7 +166,7 @@ fn the_jerk_limit_narrows_a_box_only_where_all_the_limits_are_met() {
 }
 
 /// A lone acceleration (logged on one end of a span with velocities at both) must agree with
-/// the positions too: from its end, `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6`. A review's span (Δ = 1 ms,
+/// the positions too: from its end, `|Δq − q̇Δ − q̈Δ²/2| ≤ JΔ³/6`. A span (Δ = 1 ms,
 /// `q̇ = 0` then 0.0075 rad/s, `q̈₀ = 10` rad/s² alone, Δq = 3.75 µrad) meets every other test
 /// but misses this one by 1.25 µrad against 0.83 µrad allowed; with Δq = 4.5 µrad it agrees.
 #[test]
@@ -536,11 +536,11 @@ fn a_chain_of_equal_stamp_records_cannot_drift_from_the_first() {
 }
 
 /// The audit keeps the latest 64 records of a person; the ones let go still bound later ones
-/// (per keypoint and axis). An outside review's log (e_pos 0.05 m, so two
+/// (per keypoint and axis). A log (e_pos 0.05 m, so two
 /// records may differ by 0.1 m beyond `v·Δt`, v = 2 m/s): a record at 0 m, then 64 records at
 /// `2t + 0.095` m, each within the allowance of every other, then one at `2t + 0.19` m
 /// (t = 0.065 s): within the allowance of the 64 kept ones, but 0.32 m from the first where
-/// 0.23 m is allowed. It passed; now `human_exceeds_model`. A person walking at 1.9 m/s for
+/// 0.23 m is allowed. It is `human_exceeds_model`. A person walking at 1.9 m/s for
 /// 0.3 s (300 records, most let go) agrees with its model and passes.
 #[test]
 fn records_drifting_from_one_let_go_break_the_model() {
@@ -693,13 +693,14 @@ fn ddq_log(samples: usize, dt: f64, step: f64, dq: f64, ddq: impl Fn(usize) -> f
 }
 
 /// With accelerations logged, the jerk limit tightens the velocity box to within `JΔ²/8` of
-/// the logged velocities; the positions must then be reachable under that limit too. An
-/// outside review's logs (the hand of [`HUMAN`] on the gripper, SSM's rest speed 0.02 rad/s):
+/// the logged velocities; the positions must then be reachable under that limit too. Logs
+/// with the hand of [`HUMAN`] on the gripper (SSM's rest speed 0.02 rad/s):
 /// at 1 kHz joint 1 logs `dq = 0.019`, `ddq = 0` while its positions advance 21.475 µrad per
 /// step (a mean of 0.021475 rad/s, which the joint reaches at some instant of every span: moving,
 /// touching); two samples 5 ms apart log `dq = 0.0199` and `ddq = ∓8` while the joint covers
-/// 161.375 µrad (0.0323 rad/s on average). Each passed SSM before (the box [0.0184, 0.0196] was
-/// "at rest"); now `|Δq − Δ(q̇₀ + q̇₁)/2 − Δ²(q̈₀ − q̈₁)/8| ≤ JΔ³/24` (0.21 µrad at 1 kHz) fails:
+/// 161.375 µrad (0.0323 rad/s on average). The jerk-narrowed box ([0.0184, 0.0196] at 1 kHz)
+/// would call them at rest, but `|Δq − Δ(q̇₀ + q̇₁)/2 − Δ²(q̈₀ − q̈₁)/8| ≤ JΔ³/24` (0.21 µrad at
+/// 1 kHz) fails:
 /// `exceeds_limits` and the hull boxes, which reach the mean velocity, fail the contact. Positions
 /// that agree (19 µrad per step at 0.019 rad/s) still pass: at rest, touching.
 #[test]
@@ -720,7 +721,7 @@ fn accelerations_must_agree_with_the_positions_under_the_jerk_limit() {
     // logged 22.3 µrad (JΔ³/28). No motion within the jerk limit joins the samples, so the
     // limit does not narrow the velocity box (±JΔ²/8 = ±0.016 rad/s, "at rest"): the box the
     // acceleration limit gives (±AΔ/2 = ±0.025 rad/s) fails the contact, as the same log
-    // without `ddq` does (before, it passed). The test of a motion within J is sufficient,
+    // without `ddq` does. The test of a motion within J is sufficient,
     // not exact (the quintic through the samples: its jerk 60·Δq/Δ³ here, within J up to
     // JΔ³/60), so between JΔ³/60 and JΔ³/32 the box is the wider one too.
     let j_dt3 = 5000.0 * 0.005f64.powi(3);
@@ -769,11 +770,11 @@ fn stamped_log(samples: &[(f64, f64, Option<f64>)]) -> RunResult {
 /// Without logged velocities each span's box is its mean velocity ± AΔ, which holds for any
 /// motion within the acceleration limit A over that span; adjacent spans must then agree at
 /// their shared sample, where one velocity is within `AΔ/2` of both means: `|m₁ − m₀| ≤
-/// A(Δ₀ + Δ₁)/2` (0.01 rad/s at 1 kHz, A = 10 rad/s²). An outside review's logs, each span
+/// A(Δ₀ + Δ₁)/2` (0.01 rad/s at 1 kHz, A = 10 rad/s²). Logs with each span
 /// within the limits alone and "at rest" (box within the rest speed 0.02 rad/s), the hand on
 /// the gripper: joint 1 still, then one step of 50 µrad (0.05 rad/s), then still again (at the
 /// step's end the joint moves at ≥ 0.045 rad/s, which the next span's box ±0.01 excludes); a
-/// zig-zag of ±9 µrad per step (means ±0.009 rad/s, 0.018 apart). Each passed before; now
+/// zig-zag of ±9 µrad per step (means ±0.009 rad/s, 0.018 apart). Each is
 /// `exceeds_limits`. A zig-zag of ±4 µrad (0.008 apart) agrees, and still passes.
 #[test]
 fn adjacent_spans_must_agree_at_their_shared_sample() {
@@ -786,7 +787,7 @@ fn adjacent_spans_must_agree_at_their_shared_sample() {
     }
     let r = positions_log(12, |k| if k % 2 == 1 { 4e-6 } else { 0.0 });
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", reasons(&r));
-    // Across a span of no length: a review's log moves joint 1 by 1 mrad in the first
+    // Across a span of no length: a log moves joint 1 by 1 mrad in the first
     // millisecond (≥ 0.995 rad/s at its end), then logs the same stamp again with `dq = 0`
     // and keeps still, the next span "at rest" beside the hand. The velocity logged at the
     // repeated stamp must agree with the span before it (|c − m₀| ≤ AΔ₀/2).

@@ -485,8 +485,7 @@ fn inconclusive_reasons(text: &str) -> Vec<String> {
 /// A frozen tracker: the same ball record (position, and a velocity of 1 m/s) repeated with a
 /// new stamp every 20 ms. Equal positions are within any distance allowance, but the measured
 /// velocity says the ball moved 20 mm per repeat: the direction test holds them to it
-/// (`object_exceeds_model`). An outside review's frozen ball beside the hand passed, its first
-/// record alone failed. A resting ball repeated (velocity 0) agrees.
+/// (`object_exceeds_model`). A resting ball repeated (velocity 0) agrees.
 #[test]
 fn a_frozen_record_repeated_with_a_velocity_breaks_the_model() {
     let reasons = |v: [f64; 3]| {
@@ -504,7 +503,7 @@ fn a_frozen_record_repeated_with_a_velocity_breaks_the_model() {
         "{found:?}"
     );
     assert_eq!(reasons([0.0; 3]), Vec::<String>::new());
-    // A review's burst: the moving record, then 70 records without a velocity within 0.63 ms
+    // A burst: the moving record, then 70 records without a velocity within 0.63 ms
     // of its stamp (each agreeing with it), then one at 0.1 s 1 µm from where it was. The
     // moving record is let go by then; its direction (0.1 m expected) still holds the last one.
     let text = ball_log(ObjectContact::Ssm, 0.0, |w, k, t| {

@@ -249,8 +249,8 @@ pub(crate) fn velocity_breaks(v: [f64; 3], vmax: f64, ev: f64) -> bool {
 /// let-go stamp agrees with each of them only if, per axis, `q − v·t − 2e ≤ min(p − v·t_r)` and
 /// `q + v·t + 2e ≥ max(p + v·t_r)` (`|q − p| ≤ v·(t − t_r) + 2e` per axis, implied by the pair
 /// test's distance bound). Without it, a chain of records each within the allowance of the 64
-/// kept ones drifts away from one let go (an outside review: 66 records, the last 0.145 m from
-/// the first where 0.1 m is allowed, passed). A necessary condition only (per axis, the speed
+/// kept ones could drift away from one let go (66 records, the last 0.145 m from the first
+/// where 0.1 m is allowed). A necessary condition only (per axis, the speed
 /// bound alone), lenient (a relative margin of 10⁻¹²): it never flags a log that agrees with its
 /// model.
 ///
