@@ -281,24 +281,131 @@ impl SpanLimits {
     }
 }
 
+/// The quintic that matches a span's six logged values (positions `dpos` apart (rad), velocities
+/// `c`, `d` (rad/s), accelerations `e0`, `e1` (rad/s²) at its ends, `Δ = dt` as computed):
+/// `q(s) = q₀ + cΔs + e₀Δ²s²/2 + c₃s³ + c₄s⁴ + c₅s⁵`, `s = t/Δ`, and a padded bound of its
+/// jerk's magnitude over the span. See [`jerk_feasible`].
+struct Quintic {
+    c3: f64,
+    c4: f64,
+    c5: f64,
+    /// The jerk's largest magnitude over `[0, 1]`, padded for rounding and for Δ's uncertainty
+    /// (rad/s³).
+    j_bound: f64,
+    /// The jerk terms' magnitudes (rad/s³): the scale of every padding below.
+    mag: f64,
+    /// Δ's relative uncertainty, `(dt_hi − dt_lo)/dt_lo`.
+    rel_dt: f64,
+}
+
+impl Quintic {
+    /// The quintic and its jerk bound, for `dt_lo > 0` and `dt³ > 0` (no quotient below is then
+    /// 0/0). Straight-line code: evaluated for four joints at once by [`jerk_feasible_lanes`].
+    #[inline(always)]
+    fn new(dpos: f64, c: f64, d: f64, e0: f64, e1: f64, dt: f64, dt_lo: f64, dt_hi: f64) -> Quintic {
+        let h = dt;
+        let hh = h * h;
+        let h3 = hh * h;
+        let c3 = 10.0 * dpos - 6.0 * c * h - 4.0 * d * h - (3.0 * e0 - e1) * hh * 0.5;
+        let c4 = -15.0 * dpos + 8.0 * c * h + 7.0 * d * h + (3.0 * e0 - 2.0 * e1) * hh * 0.5;
+        let c5 = 6.0 * dpos - 3.0 * (c + d) * h - (e0 - e1) * hh * 0.5;
+        // The jerk `(6c₃ + 24c₄s + 60c₅s²)/Δ³`, a quadratic in `s`: largest at an end or at the
+        // vertex.
+        let at = |s: f64| (6.0 * c3 + 24.0 * c4 * s + 60.0 * c5 * s * s) / h3;
+        let vertex_ok = c5 != 0.0 && c4.is_finite() && c5.is_finite();
+        let vertex = if vertex_ok {
+            (-c4 / (5.0 * c5)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let largest = at(0.0).abs().max(at(1.0).abs()).max(at(vertex).abs());
+        // The terms' magnitudes (each coefficient's, times the largest factor it takes in the
+        // jerk): every rounding, and each logged value's ulp, is within PAD of them; the jerk
+        // scales as Δ⁻³ for fixed data, so Δ's relative uncertainty counts three times. The
+        // vertex's own rounding moves the quadratic's value by second order only, within the
+        // same pad.
+        let mag = (60.0 * 31.0 * dpos.abs()
+            + 60.0 * 17.0 * (c.abs() + d.abs()) * h
+            + 60.0 * 3.0 * (e0.abs() + e1.abs()) * hh)
+            / h3;
+        let rel_dt = (dt_hi - dt_lo) / dt_lo;
+        let pad = 16.0 * PAD * mag + 3.0 * mag * rel_dt + TINY;
+        Quintic {
+            c3,
+            c4,
+            c5,
+            j_bound: largest + pad,
+            mag,
+            rel_dt,
+        }
+    }
+
+    /// The cheap bound of the quintic's acceleration (rad/s²), rounded up: from either end the
+    /// acceleration moves at most as fast as the jerk bound allows, so
+    /// `|q̈| ≤ (|q̈₀| + |q̈₁| + j_bound·Δ)/2`.
+    #[inline(always)]
+    fn cheap_acc(&self, e0: f64, e1: f64, dt_hi: f64) -> f64 {
+        let cheap = 0.5 * (e0.abs() + e1.abs() + self.j_bound * dt_hi);
+        up(cheap, cheap)
+    }
+
+    /// The bound of the quintic's acceleration (rad/s²), padded: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² +
+    /// 20c₅s³)/Δ²`, a cubic in `s`, largest at an end or where the jerk (a quadratic) vanishes.
+    fn exact_acc(&self, e0: f64, dt: f64) -> f64 {
+        let (c3, c4, c5) = (self.c3, self.c4, self.c5);
+        let hh = dt * dt;
+        let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
+        // The jerk's zeros (none, one or two; NaN where there are none), each within [0, 1].
+        let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
+        let zeros = if c5 != 0.0 && disc >= 0.0 {
+            let root = disc.sqrt();
+            [
+                (-24.0 * c4 + root) / (120.0 * c5),
+                (-24.0 * c4 - root) / (120.0 * c5),
+            ]
+        } else if c5 == 0.0 && c4 != 0.0 {
+            [-c3 / (4.0 * c4), f64::NAN]
+        } else {
+            [f64::NAN; 2]
+        };
+        let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
+        for r in zeros.into_iter().filter(|r| r.is_finite()) {
+            a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
+        }
+        // (Its terms' magnitudes, as for the jerk, one power of Δ fewer; the roots' own
+        // rounding moves the cubic's value by second order only, bounded by the same generous
+        // pad.)
+        let mag_a = self.mag * dt;
+        a_q + (64.0 * PAD * mag_a + 2.0 * mag_a * self.rel_dt + TINY)
+    }
+}
+
+/// The speed bound `(|q̇₀| + |q̇₁| + a·Δ)/2` (rad/s), rounded up, of a motion whose acceleration
+/// is bounded by `a`: between the ends the velocity moves from `q̇₀` and towards `q̇₁` at most
+/// as fast as `a` allows.
+#[inline(always)]
+fn speed_bound(c: f64, d: f64, a: f64, dt_hi: f64) -> f64 {
+    let v_q = 0.5 * (c.abs() + d.abs() + a * dt_hi);
+    up(v_q, v_q)
+}
+
 /// Whether a motion within the limits (`|q̇| ≤ v_max`, `|q̈| ≤ acc`, `|q⃛| ≤ jerk`) joins two
 /// samples with positions `dpos` apart (rad),
 /// velocities `c`, `d` (rad/s) and accelerations `e0`, `e1` (rad/s²), `Δ = dt` (as computed;
 /// the true Δ within `[dt_lo, dt_hi]`): a sufficient test. The quintic that matches the six
-/// values (`q(s) = q₀ + cΔs + e₀Δ²s²/2 + c₃s³ + c₄s⁴ + c₅s⁵`, `s = t/Δ`) has the jerk
-/// `(6c₃ + 24c₄s + 60c₅s²)/Δ³`, a quadratic in `s`: its largest magnitude over `[0, 1]` is at an
-/// end or at the vertex; its acceleration, a cubic, at an end or where the jerk vanishes; its
-/// speed at most `(|q̇₀| + |q̇₁| + a·Δ)/2` (`a` that acceleration bound). If these bounds,
-/// padded for rounding and for the uncertainty of Δ, are within
-/// the limits, the quintic is such a motion. Otherwise (no such motion, or none this test
-/// finds) false: the caller does not narrow the velocity box by the jerk limit.
+/// values ([`Quintic`]) has the jerk `(6c₃ + 24c₄s + 60c₅s²)/Δ³`, a quadratic in `s`: its
+/// largest magnitude over `[0, 1]` is at an end or at the vertex; its acceleration, a cubic, at
+/// an end or where the jerk vanishes (first a cheap bound, [`Quintic::cheap_acc`]); its speed
+/// at most `(|q̇₀| + |q̇₁| + a·Δ)/2` (`a` that acceleration bound). If these bounds, padded for
+/// rounding and for the uncertainty of Δ, are within the limits, the quintic is such a motion.
+/// Otherwise (no such motion, or none this test finds) false: the caller does not narrow the
+/// velocity box by the jerk limit. [`jerk_feasible_lanes`] computes the same for every joint.
 ///
 /// # Soundness
 /// True only where the padded bound holds, so only where a motion within the jerk limit joins
 /// the samples. Test `audit_consistency.rs::accelerations_must_agree_with_the_positions_under_the_jerk_limit`;
 /// mutant `x101`.
 #[allow(clippy::too_many_arguments)]
-#[inline(always)]
 fn jerk_feasible(
     dpos: f64,
     c: f64,
@@ -310,80 +417,58 @@ fn jerk_feasible(
     dt_hi: f64,
     (v_max, acc, jerk): (f64, f64, f64),
 ) -> bool {
-    let h = dt;
-    let hh = h * h;
-    let h3 = hh * h;
-    // (No quotient below may be 0/0: Δ and its cube positive.)
-    if !(dt_lo > 0.0 && h3 > 0.0) {
+    let valid = dt_lo > 0.0 && dt * dt * dt > 0.0;
+    if !valid {
         return false;
     }
-    let c3 = 10.0 * dpos - 6.0 * c * h - 4.0 * d * h - (3.0 * e0 - e1) * hh * 0.5;
-    let c4 = -15.0 * dpos + 8.0 * c * h + 7.0 * d * h + (3.0 * e0 - 2.0 * e1) * hh * 0.5;
-    let c5 = 6.0 * dpos - 3.0 * (c + d) * h - (e0 - e1) * hh * 0.5;
-    let at = |s: f64| (6.0 * c3 + 24.0 * c4 * s + 60.0 * c5 * s * s) / h3;
-    let vertex = if c5 != 0.0 && c4.is_finite() && c5.is_finite() {
-        (-c4 / (5.0 * c5)).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let largest = at(0.0).abs().max(at(1.0).abs()).max(at(vertex).abs());
-    // The terms' magnitudes (each coefficient's, times the largest factor it takes in the
-    // jerk): every rounding, and each logged value's ulp, is within PAD of them; the jerk scales
-    // as Δ⁻³ for fixed data, so Δ's relative uncertainty counts three times. The vertex's own
-    // rounding moves the quadratic's value by second order only, within the same pad.
-    let mag = (60.0 * 31.0 * dpos.abs()
-        + 60.0 * 17.0 * (c.abs() + d.abs()) * h
-        + 60.0 * 3.0 * (e0.abs() + e1.abs()) * hh)
-        / h3;
-    let rel_dt = (dt_hi - dt_lo) / dt_lo;
-    let pad = 16.0 * PAD * mag + 3.0 * mag * rel_dt + TINY;
-    let within_jerk = largest + pad <= jerk;
+    let q = Quintic::new(dpos, c, d, e0, e1, dt, dt_lo, dt_hi);
+    let within_jerk = q.j_bound <= jerk;
     if !within_jerk {
         return false;
     }
-    // Within the acceleration limit too. First the cheap bound: from either end the
-    // acceleration moves at most as fast as the jerk bound allows, so
-    // `|q̈| ≤ (|q̈₀| + |q̈₁| + jerk·Δ)/2`; where that is within the limit, so is the quintic's.
-    let j_bound = largest + pad;
-    let cheap = 0.5 * (e0.abs() + e1.abs() + j_bound * dt_hi);
-    let cheap = up(cheap, cheap);
+    let cheap = q.cheap_acc(e0, e1, dt_hi);
     if cheap <= acc {
-        let v_q = 0.5 * (c.abs() + d.abs() + cheap * dt_hi);
-        return up(v_q, v_q) <= v_max;
+        return speed_bound(c, d, cheap, dt_hi) <= v_max;
     }
-    // Else exactly: `q̈ = (e₀Δ² + 6c₃s + 12c₄s² + 20c₅s³)/Δ²`, a cubic in `s`, largest at an
-    // end or where the jerk (the quadratic above) vanishes.
-    let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
-    // The jerk's zeros (none, one or two; NaN where there are none), each within [0, 1].
-    let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
-    let zeros = if c5 != 0.0 && disc >= 0.0 {
-        let root = disc.sqrt();
-        [
-            (-24.0 * c4 + root) / (120.0 * c5),
-            (-24.0 * c4 - root) / (120.0 * c5),
-        ]
-    } else if c5 == 0.0 && c4 != 0.0 {
-        [-c3 / (4.0 * c4), f64::NAN]
-    } else {
-        [f64::NAN; 2]
-    };
-    let mut a_q = acc_at(0.0).abs().max(acc_at(1.0).abs());
-    for r in zeros.into_iter().filter(|r| r.is_finite()) {
-        a_q = a_q.max(acc_at(r.clamp(0.0, 1.0)).abs());
+    let a_bound = q.exact_acc(e0, dt);
+    let within_acc = a_bound <= acc;
+    within_acc && speed_bound(c, d, a_bound, dt_hi) <= v_max
+}
+
+/// [`jerk_feasible`] for every lane of a span with velocities and accelerations logged at both
+/// ends (the limits relative `sp.rel`): the jerk bound and the cheap acceleration bound in
+/// straight-line code, four joints at once; [`jerk_feasible`] itself (the cubic's critical
+/// points) only for the lanes where the cheap bound exceeds the acceleration limit. Each lane's
+/// result is [`jerk_feasible`]'s (test `the_lanes_agree_with_jerk_feasible`).
+#[inline(always)]
+fn jerk_feasible_lanes(lim: &SpanLimits, s0: &Sample, s1: &Sample, sp: &Span) -> [bool; MAX_DOF] {
+    let mut ok = [false; MAX_DOF];
+    let (dt, dt_lo, dt_hi) = (sp.dt, sp.dt_lo, sp.dt_hi);
+    let valid = dt_lo > 0.0 && dt * dt * dt > 0.0;
+    if !valid {
+        return ok;
     }
-    // (Its terms' magnitudes, as for the jerk, one power of Δ fewer; the roots' own rounding
-    // moves the cubic's value by second order only, bounded by the same generous pad.)
-    let mag_a = mag * h;
-    let pad_a = 64.0 * PAD * mag_a + 2.0 * mag_a * rel_dt + TINY;
-    let within_acc = a_q + pad_a <= acc;
-    if !within_acc {
-        return false;
+    let n = lim.lanes;
+    let mut exact = [false; MAX_DOF];
+    for j in 0..n {
+        let (v_max, acc, jerk) = (lim.v[j] * sp.rel, lim.a[j] * sp.rel, lim.j[j] * sp.rel);
+        let (c, d, e0, e1) = (s0.dq[j], s1.dq[j], s0.ddq[j], s1.ddq[j]);
+        let q = Quintic::new(s1.q[j] - s0.q[j], c, d, e0, e1, dt, dt_lo, dt_hi);
+        let within_jerk = q.j_bound <= jerk;
+        let cheap = q.cheap_acc(e0, e1, dt_hi);
+        let cheap_ok = cheap <= acc;
+        ok[j] = within_jerk & cheap_ok & (speed_bound(c, d, cheap, dt_hi) <= v_max);
+        exact[j] = within_jerk & !cheap_ok;
     }
-    // And within the speed limit: between the ends the velocity moves from `q̇₀` and towards
-    // `q̇₁` at most as fast as the acceleration bound allows, so `|q̇| ≤ (|q̇₀| + |q̇₁| + a·Δ)/2`.
-    let a_bound = a_q + pad_a;
-    let v_q = 0.5 * (c.abs() + d.abs() + a_bound * dt_hi);
-    up(v_q, v_q) <= v_max
+    for j in 0..lim.n {
+        if exact[j] {
+            let limits = (lim.v[j] * sp.rel, lim.a[j] * sp.rel, lim.j[j] * sp.rel);
+            let (c, d, e0, e1) = (s0.dq[j], s1.dq[j], s0.ddq[j], s1.ddq[j]);
+            let dpos = s1.q[j] - s0.q[j];
+            ok[j] = jerk_feasible(dpos, c, d, e0, e1, dt, dt_lo, dt_hi, limits);
+        }
+    }
+    ok
 }
 
 /// Whether the span `s0`–`s1` agrees with the span before it, `sp`–`s0` (`sp` the latest sample
@@ -638,6 +723,11 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
     // The mean velocity (b − a)/Δ is attained somewhere in the span (needs Δ > 0).
     let has_mean = dt_lo > 0.0;
     let mut bad_lane = [false; MAX_DOF];
+    let jerk_ok = if DDQ {
+        jerk_feasible_lanes(lim, s0, s1, sp)
+    } else {
+        [false; MAX_DOF]
+    };
     for j in 0..n {
         let (v, acc, jerk) = (v_max[j], a_max[j], j_max[j]);
         let (a, b) = (q0[j], q1[j]);
@@ -730,17 +820,7 @@ fn joint_bounds<const DQ: bool, const DDQ: bool, const HULL: bool>(
                 // to join the samples (`jerk_feasible`): where none does, the log refutes the
                 // limit the narrowing rests on, and the box keeps what the acceleration limit
                 // gives (the tests above flag the spans they prove infeasible).
-                if jerk_feasible(
-                    dpos,
-                    c,
-                    d,
-                    e0,
-                    e1,
-                    dt,
-                    dt_lo,
-                    dt_hi,
-                    (v * rel, acc * rel, jerk * rel),
-                ) {
+                if jerk_ok[j] {
                     (v_lo, v_hi) = (v_lo.max(l), v_hi.min(h));
                 }
                 (hv_lo, hv_hi) = (hv_lo.min(l), hv_hi.max(h));
@@ -810,6 +890,69 @@ mod tests {
             1 => prop::num::f64::ANY,
             1 => Just(f64::MAX),
         ]
+    }
+
+    /// Every lane of [`jerk_feasible_lanes`] is [`jerk_feasible`]'s verdict on that joint, on
+    /// spans of constant jerk near and beyond each limit (scaled by up to 1.3 and perturbed),
+    /// at 1 kHz and 100 Hz, from stamp 0 and from 1.7e9 s: each way to a verdict (the cheap
+    /// bound or the cubic's critical points; feasible or not) is taken many times.
+    #[test]
+    fn the_lanes_agree_with_jerk_feasible() {
+        let robot = RobotModel::builtin("fr3").unwrap();
+        let lim = SpanLimits::new(robot.limits());
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut feasible, mut infeasible, mut exact, mut exact_feasible) = (0, 0, 0, 0);
+        for case in 0..20_000 {
+            let dt = if case % 2 == 0 { 1e-3 } else { 1e-2 };
+            let t0 = if case % 4 < 2 { 0.5 } else { 1.7e9 };
+            let scale = 0.7 + 0.6 * uniform();
+            let mut s0 = sample(t0, &[0.0; 21], true, true);
+            let mut s1 = sample(t0 + dt, &[0.0; 21], true, true);
+            for j in 0..7 {
+                let (v, a, jm) = (lim.v[j], lim.a[j], lim.j[j]);
+                let q0 = 2.0 * uniform() - 1.0;
+                let c = v * scale * (2.0 * uniform() - 1.0);
+                // Accelerations near the limit half of the time: the cheap bound then exceeds it.
+                let e0 = a * scale * if uniform() < 0.5 { 2.0 * uniform() - 1.0 } else { 0.98 };
+                let jerk = jm * scale * (2.0 * uniform() - 1.0);
+                let wobble = 1.0 + 1e-3 * (uniform() - 0.5);
+                (s0.q[j], s0.dq[j], s0.ddq[j]) = (q0, c, e0);
+                s1.q[j] = q0 + (c * dt + e0 * dt * dt / 2.0 + jerk * dt * dt * dt / 6.0) * wobble;
+                s1.dq[j] = c + e0 * dt + jerk * dt * dt / 2.0;
+                s1.ddq[j] = e0 + jerk * dt;
+            }
+            let dt_c = s1.t - s0.t;
+            let err = PAD * (s0.t.abs() + s1.t.abs()) + TINY;
+            let sp = Span {
+                dt: dt_c,
+                dt_lo: (dt_c - err).max(0.0),
+                dt_hi: dt_c + err,
+                rel: 1.0 + 1e-9,
+                slack: 1e-9,
+            };
+            let lanes = jerk_feasible_lanes(&lim, &s0, &s1, &sp);
+            for j in 0..7 {
+                let limits = (lim.v[j] * sp.rel, lim.a[j] * sp.rel, lim.j[j] * sp.rel);
+                let (c, d, e0, e1) = (s0.dq[j], s1.dq[j], s0.ddq[j], s1.ddq[j]);
+                let dpos = s1.q[j] - s0.q[j];
+                let one = jerk_feasible(dpos, c, d, e0, e1, sp.dt, sp.dt_lo, sp.dt_hi, limits);
+                assert_eq!(lanes[j], one, "case {case}, joint {j}");
+                let q = Quintic::new(dpos, c, d, e0, e1, sp.dt, sp.dt_lo, sp.dt_hi);
+                let cheap_over = q.cheap_acc(e0, e1, sp.dt_hi) > limits.1;
+                let by_cubic = q.j_bound <= limits.2 && cheap_over;
+                exact += usize::from(by_cubic);
+                exact_feasible += usize::from(by_cubic && one);
+                (feasible, infeasible) = (feasible + usize::from(one), infeasible + usize::from(!one));
+            }
+        }
+        assert!(
+            feasible > 5_000 && infeasible > 5_000 && exact > 5_000 && exact_feasible > 500,
+            "{feasible} {infeasible} {exact} {exact_feasible}"
+        );
     }
 
     proptest! {
