@@ -279,37 +279,48 @@ fn merge(mut results: Vec<RunResult>, tracks: &[Tracks], ids: Vec<String>) -> Ru
             s.object.clone(),
         )
     };
-    let mut object_spans: std::collections::HashSet<_> = out
+    // Each listed object span's place in `out.inconclusive`.
+    let mut object_spans: std::collections::HashMap<_, usize> = out
         .inconclusive
         .iter()
-        .filter(|s| s.reason.about_an_object())
-        .map(key)
+        .enumerate()
+        .filter(|(_, s)| s.reason.about_an_object())
+        .map(|(i, s)| (key(s), i))
         .collect();
     for r in rest {
         // A person's violations are this pass's own; an object's (no person) are found by every
         // pass that checks the span (joined below).
         out.violations.extend(r.violations);
         // Findings about the robot alone (gaps, limits, time) and about the objects' records
-        // (`object_exceeds_model`) are the same in every pass: kept once, from the first. A
-        // pass checks the objects only on spans its own person's measurement lets it check, so
-        // an object's span of another pass is kept too unless the same span is already listed.
-        let about_people: Vec<InconclusiveSpan> = r
-            .inconclusive
-            .into_iter()
-            .filter(|s| {
-                s.reason.about_a_person()
-                    || (s.reason.about_an_object()
-                        && s.reason != Reason::ObjectExceedsModel
-                        && object_spans.insert(key(s)))
-            })
-            .collect();
-        inconclusive_iv.extend(
-            about_people
-                .iter()
-                .filter(|s| spans_time(s.reason))
-                .map(|s| (s.t_start, s.t_end)),
-        );
-        out.inconclusive.extend(about_people);
+        // (`object_exceeds_model`) are the same in every pass: kept once, from the first. Every
+        // pass checks the objects, but a pass whose person's record arrives between the last
+        // two samples also checks the last sample's instant: an object's span listed already
+        // keeps the larger span count of the two.
+        for s in r.inconclusive {
+            let keep = if s.reason.about_a_person() {
+                true
+            } else if s.reason.about_an_object() && s.reason != Reason::ObjectExceedsModel {
+                match object_spans.get(&key(&s)) {
+                    Some(&i) => {
+                        let listed = &mut out.inconclusive[i];
+                        listed.spans = listed.spans.max(s.spans);
+                        false
+                    }
+                    None => {
+                        object_spans.insert(key(&s), out.inconclusive.len());
+                        true
+                    }
+                }
+            } else {
+                false
+            };
+            if keep {
+                if spans_time(s.reason) {
+                    inconclusive_iv.push((s.t_start, s.t_end));
+                }
+                out.inconclusive.push(s);
+            }
+        }
         let m = &mut out.metrics;
         m.human_records += r.metrics.human_records;
         m.min_separation = min_opt(m.min_separation, r.metrics.min_separation);

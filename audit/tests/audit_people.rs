@@ -865,3 +865,100 @@ fn an_objects_finding_of_any_pass_is_reported_and_names_the_object() {
         r.inconclusive
     );
 }
+
+/// [`touching_log_ending`]'s run (joint 1 turning at `w_joint`, the operator's hand on the
+/// gripper from t = 0, measured every 10 ms) with a ball declared far away (2.5 m, no contact
+/// allowed): measured at `ball_times` (s) only, and with the operator measured until
+/// `op_until` (s) only. The ball is stale 1 s after its last record, the operator likewise.
+fn touching_with_ball(w_joint: f64, ball_times: &[f64], op_until: f64) -> String {
+    let touching = reaching(hand_contact(&q_at(0.0), 0.02));
+    let mut w = LogWriter::new(Vec::new());
+    let mut h = Header::with_people(ModelRef::Name("fr3".into()), people(&["op"]), ssm());
+    h.objects.push(pacs_log::ObjectEntry {
+        id: "b1".into(),
+        object: ModelRef::Name("ball".into()),
+        contact: pacs_models::object::ObjectContact::NoContact,
+    });
+    w.write_header(&h).unwrap();
+    for i in 0..=2000 {
+        let t = i as f64 * 1e-3;
+        if i % 10 == 0 && i < 2000 && t <= op_until + 1e-9 {
+            w.write_person(t, t, Some("op"), &touching).unwrap();
+        }
+        if ball_times.iter().any(|b| (b - t).abs() < 1e-9) {
+            w.write_object(t, t, "b1", [2.5, 0.0, 0.5], Some([0.0; 3]))
+                .unwrap();
+        }
+        w.write_robot(t, &q_at(w_joint * t), None).unwrap();
+    }
+    w.write_event(2.0, pacs_log::END_EVENT).unwrap();
+    String::from_utf8(w.finish().unwrap()).unwrap()
+}
+
+/// A person's certain contact is a violation whatever the objects' measurements: with the
+/// far ball measured once at t = 0 (stale from 1 s on) or never, the slowly turning joint's
+/// contact with the hand (0.15 rad/s: the hand stays on the gripper for the whole 2 s) still
+/// fails the log, with the same violations as with the ball measured throughout — certain up
+/// to the end of the run — and the spans the ball cannot be checked on are inconclusive as
+/// well (`stale_object`, `no_object`).
+#[test]
+fn an_object_that_cannot_be_checked_hides_no_persons_contact() {
+    const SLOW: f64 = 0.15;
+    let every: Vec<f64> = (0..200).map(|i| f64::from(i) * 0.01).collect();
+    let throughout = audit(&touching_with_ball(SLOW, &every, 2.0));
+    assert_eq!(throughout.verdict, Verdict::Fail);
+    assert!(
+        throughout
+            .violations
+            .iter()
+            .any(|v| v.t_end >= 1.99 && v.certain && v.person.as_deref() == Some("op")),
+        "{:?}",
+        throughout.violations
+    );
+    for (balls, reason) in [
+        (&[0.0][..], InconclusiveReason::StaleObject),
+        (&[][..], InconclusiveReason::NoObject),
+    ] {
+        let r = audit(&touching_with_ball(SLOW, balls, 2.0));
+        assert_eq!(r.verdict, Verdict::Fail, "{reason:?}: {:?}", r.inconclusive);
+        assert_eq!(r.violations, throughout.violations, "{reason:?}");
+        assert!(
+            r.inconclusive
+                .iter()
+                .any(|s| s.reason == reason && s.object.as_deref() == Some("b1")),
+            "{:?}",
+            r.inconclusive
+        );
+    }
+    // At rest the hand on the gripper is allowed (SSM): the log is inconclusive for the ball,
+    // never a pass, and reports no violation.
+    let r = audit(&touching_with_ball(0.0, &[0.0], 2.0));
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    assert!(r.violations.is_empty(), "{:?}", r.violations);
+}
+
+/// The object's certain contact is a violation whatever the people's measurements: the ball
+/// resting on the gripper (no contact allowed), measured throughout, while the only person is
+/// measured until 0.5 s (stale from 1.5 s on): the ball's contact is reported over the whole
+/// run, the person's stale stretch inconclusive as well.
+#[test]
+fn a_person_who_cannot_be_checked_hides_no_objects_contact() {
+    let every: Vec<f64> = (0..200).map(|i| f64::from(i) * 0.01).collect();
+    let on_gripper = |text: String| text.replace("[2.5,0.0,0.5]", "[0.307,0.0,0.52]");
+    let text = on_gripper(touching_with_ball(0.0, &every, 0.5));
+    assert!(text.contains("[0.307,0.0,0.52]"));
+    let r = audit(&text);
+    assert_eq!(r.verdict, Verdict::Fail, "{:?}", r.inconclusive);
+    let ball: Vec<_> = r.violations.iter().filter(|v| v.person.is_none()).collect();
+    assert!(
+        ball.iter().any(|v| v.t_start <= 1.5 && v.t_end >= 1.99),
+        "{ball:?}"
+    );
+    assert!(
+        r.inconclusive
+            .iter()
+            .any(|s| s.reason == InconclusiveReason::StaleHuman && s.t_end >= 1.99),
+        "{:?}",
+        r.inconclusive
+    );
+}

@@ -25,7 +25,13 @@ impl Auditor {
     /// the shape's zonotope, so a touch of that ball is a touch of the object), placed at its
     /// measured position taken at face value, and is decided by
     /// [`pacs_verify::iso15066::contact_violates`].
-    pub(super) fn certain_at(&mut self, s: &Sample, s0: &Sample, s1: &Sample, slot: usize) -> bool {
+    pub(super) fn certain_at(
+        &mut self,
+        s: &Sample,
+        s0: &Sample,
+        s1: &Sample,
+        slot: Option<usize>,
+    ) -> bool {
         let n = self.n;
         let dt = s1.t - s0.t;
         let mut dq = [0.0; MAX_DOF];
@@ -69,7 +75,9 @@ impl Auditor {
             }
         };
         let moving = known_dq && dq[..n].iter().any(|v| v.abs() > self.cfg.rest_speed);
-        let pos = self.humans[slot].as_ref().map(|m| m.positions());
+        let pos = slot
+            .and_then(|k| self.humans[k].as_ref())
+            .map(|m| m.positions());
         let part_cap = |p: usize| {
             let bp = &self.human.body_parts()[p];
             pos.map(|pos| Capsule::new_unchecked(pos[bp.from], pos[bp.to], bp.thickness * 0.5))

@@ -9,7 +9,8 @@ impl Auditor {
     }
 
     /// [`Self::mark_inconclusive`] for a reason about object `object` (index into the log's
-    /// objects), which the span names; spans chain only for the same object.
+    /// objects), which the span names; spans chain only for the same reason and object (a span
+    /// may give several reasons: each stretch chains on its own).
     pub(super) fn mark_inconclusive_about(
         &mut self,
         t0: f64,
@@ -19,11 +20,14 @@ impl Auditor {
     ) {
         let idx = self.span_index;
         let name = object.map(|k| self.objects[k].id.as_str());
-        if let Some((last, r, last_idx)) = self.inconclusive.last_mut()
-            && *r == reason
-            && *last_idx + 1 == idx
-            && last.object.as_deref() == name
-        {
+        // The stretches the previous span extended (or opened) are the last entries.
+        let chained = self
+            .inconclusive
+            .iter_mut()
+            .rev()
+            .take_while(|(_, _, i)| *i + 1 >= idx)
+            .find(|(last, r, i)| *r == reason && *i + 1 == idx && last.object.as_deref() == name);
+        if let Some((last, _, last_idx)) = chained {
             last.t_end = t1;
             last.spans += 1;
             *last_idx = idx;

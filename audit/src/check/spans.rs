@@ -428,51 +428,68 @@ impl Auditor {
             self.skip_span(t0, t1, bidx, Reason::Gap);
             return;
         }
-        let Some(slot) = span_human else {
-            self.skip_span(t0, t1, bidx, Reason::NoHuman);
-            return;
+        // The person's occupancy over the span, or why there is none. A person who cannot be
+        // checked (never measured, stale, a measurement the model cannot place) makes the span
+        // inconclusive, and so does an object; each is checked all the same where the other
+        // can be: a certain contact with the one still fails the log.
+        let human_unusable = match span_human.map(|slot| self.humans[slot].as_ref()) {
+            // (`Some(None)` is unreachable by construction; never let an unchecked span pass.)
+            None | Some(None) => Some(Reason::NoHuman),
+            Some(Some(m)) if t1 - m.time() > self.cfg.max_human_age => Some(Reason::StaleHuman),
+            Some(Some(m)) => self
+                .hreach
+                .occupancy_into(m, t0, t1, &mut self.hcaps)
+                .err()
+                .map(|_| Reason::HumanReachError),
         };
-        let Some(m) = self.humans[slot].as_ref() else {
-            // Unreachable by construction; never let an unchecked span pass.
-            self.mark_inconclusive(t0, t1, Reason::NoHuman);
+        let slot = span_human.filter(|_| human_unusable.is_none());
+        // Whether the span's time is already in `inconclusive_duration` (it counts once).
+        let mut counted = false;
+        if let Some(reason) = human_unusable {
+            self.mark_inconclusive(t0, t1, reason);
             self.inconclusive_duration += dt;
+            counted = true;
+            self.series.buckets[bidx].inconclusive = true;
+        }
+        let (objects_left, object_unusable) = self.object_occupancies(t0, t1);
+        if let Some((reason, k)) = object_unusable {
+            self.mark_inconclusive_about(t0, t1, reason, Some(k));
+            if !counted {
+                self.inconclusive_duration += dt;
+                counted = true;
+            }
+            self.series.buckets[bidx].inconclusive = true;
+        }
+        if slot.is_none() && !objects_left {
             self.finish_span(bidx, false, false);
             return;
-        };
-        if t1 - m.time() > self.cfg.max_human_age {
-            self.skip_span(t0, t1, bidx, Reason::StaleHuman);
-            return;
         }
-        if let Err(_e) = self.hreach.occupancy_into(m, t0, t1, &mut self.hcaps) {
-            self.skip_span(t0, t1, bidx, Reason::HumanReachError);
-            return;
-        }
-        let objects_left = match self.object_occupancies(t0, t1) {
-            Ok(left) => left,
-            Err((reason, k)) => {
-                self.skip_span_about(t0, t1, bidx, reason, Some(k));
-                return;
-            }
-        };
         let (boxes, consistent) = (&encl.boxes, encl.consistent);
         if !stamps_resolve(t0, t1) {
             // Checked below all the same (a violation found still fails the log), never passed.
             self.mark_inconclusive(t0, t1, Reason::UnresolvedTime);
             self.series.buckets[bidx].inconclusive = true;
-            if consistent {
+            if !counted {
                 self.inconclusive_duration += dt;
+                counted = true;
             }
         }
         if !consistent {
             self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
-            self.inconclusive_duration += dt;
+            if !counted {
+                self.inconclusive_duration += dt;
+                counted = true;
+            }
             self.series.buckets[bidx].inconclusive = true;
         }
         if new_bucket {
             self.series.nominal[bidx] = Some(self.nominal_state(s0, s1));
         }
         // Broad phase, stage 1: every body part (and object) outside the robot's workspace ball.
-        let human_clear = self.rule.workspace_clear(&self.hcaps);
+        let human_clear = match slot {
+            Some(_) => self.rule.workspace_clear(&self.hcaps),
+            None => None,
+        };
         if let Some(sep) = human_clear
             && !objects_left
         {
@@ -495,12 +512,24 @@ impl Auditor {
             // Only non-finite boxes (absurd samples) get here: never let the span pass.
             if consistent {
                 self.mark_inconclusive(t0, t1, Reason::ExceedsLimits);
-                self.inconclusive_duration += dt;
+                if !counted {
+                    self.inconclusive_duration += dt;
+                }
             }
             self.finish_span(bidx, false, false);
             return;
         }
         let out = match human_clear {
+            _ if slot.is_none() => {
+                // No person to check: the objects only (and no separation to report).
+                self.hits.clear();
+                Outcome {
+                    contact: false,
+                    violated: false,
+                    separation: f64::INFINITY,
+                    pfl: None,
+                }
+            }
             Some(sep) => {
                 self.hits.clear();
                 Outcome {
@@ -512,7 +541,9 @@ impl Auditor {
             }
             None => self.apply_rule(bx, true),
         };
-        self.record_separation(bidx, out.separation, false);
+        if slot.is_some() {
+            self.record_separation(bidx, out.separation, false);
+        }
         self.apply_object_rule(bx);
         if let Some((e, thr)) = out.pfl {
             let b = &mut self.series.buckets[bidx];
@@ -570,11 +601,20 @@ impl Auditor {
     /// `x73`, `x74`: a pair dropped when another measurement still reports it); a contradicting
     /// record clears nothing: `audit_checks::one_sample_human_spike_is_caught`,
     /// `audit_objects::a_ball_record_the_others_contradict_is_inconclusive_not_a_pass`.
-    fn clear_by_other_measurements(&mut self, t0: f64, t1: f64, b: &SpanBoxes, slot: usize) {
+    fn clear_by_other_measurements(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        b: &SpanBoxes,
+        slot: Option<usize>,
+    ) {
         let n = self.n;
         let parts = self.parts;
         let max_age = self.cfg.max_human_age;
-        if self.hits.iter().any(|h| h.part < parts) {
+        // (Hits on body parts come only with a person checked, `slot`.)
+        if let Some(slot) = slot
+            && self.hits.iter().any(|h| h.part < parts)
+        {
             if self.alt_humans_for != Some(slot) {
                 self.collect_other_human_records(slot);
             }
@@ -729,12 +769,14 @@ impl Auditor {
     }
 
     /// Each object's occupancy over the span `t0`–`t1`, from the measurement in use for it (into
-    /// the object's `occ`; `None` where the workspace ball clears it): whether any object is
-    /// left for the object rule, or the reason the span cannot be checked and the object it
-    /// concerns (the objects after the first such one are left as they were).
+    /// the object's `occ`; `None` where the workspace ball clears it or where the object cannot
+    /// be checked): whether any object is left for the object rule, and the reason the first
+    /// object that cannot be checked gives, with its index (the others are checked all the
+    /// same).
     #[inline]
-    fn object_occupancies(&mut self, t0: f64, t1: f64) -> Result<bool, (Reason, usize)> {
+    fn object_occupancies(&mut self, t0: f64, t1: f64) -> (bool, Option<(Reason, usize)>) {
         let mut objects_left = false;
+        let mut unusable = None;
         for k in 0..self.objects.len() {
             let o = &mut self.objects[k];
             o.occ = None;
@@ -753,10 +795,10 @@ impl Auditor {
                 },
             };
             if let Some(r) = reason {
-                return Err((r, k));
+                unusable = unusable.or(Some((r, k)));
             }
         }
-        Ok(objects_left)
+        (objects_left, unusable)
     }
 
     /// The violating pairs of the span `t0`–`t1` (`self.hits`) into the open violation
