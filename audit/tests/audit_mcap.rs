@@ -1195,3 +1195,50 @@ fn equal_times_in_the_wrong_file_order_are_sorted_or_refused() {
         "{e}"
     );
 }
+
+/// A header given in place of the file's own (`pacs audit --header`) keeps the `start` and
+/// `end` events the file's own header promises: a recording whose own header promises them and
+/// that lacks them (cut short) is `incomplete_log` whether its own header is read, or a header
+/// without promises is given — with the file's header before the messages (read on the way to
+/// the first one) or after them (found through the summary's index). The replaced header is
+/// noted (`meta.own_header_replaced`). Without the file's promise the given header decides.
+#[test]
+fn a_given_header_keeps_the_logs_own_promises() {
+    let (_, msgs) = scenario(0, 150, 0);
+    let own = header("ssm").promising_end();
+    let given = header("ssm");
+    let cfg = AuditConfig::default();
+    for before in [true, false] {
+        let spec = Spec {
+            header: Some(before),
+            ..Spec::new()
+        };
+        let bytes = write_mcap(&spec, &own, &msgs);
+        for h in [None, Some(given.clone())] {
+            let r = audit_bytes("cut.mcap", &bytes, &cfg, h.clone()).unwrap();
+            assert_eq!(
+                r.evidence.completeness,
+                pacs_audit::Completeness::Incomplete,
+                "header before the messages: {before}, given: {}",
+                h.is_some()
+            );
+            assert_ne!(r.verdict, Verdict::Pass);
+            assert!(
+                r.inconclusive
+                    .iter()
+                    .any(|s| s.reason == pacs_audit::InconclusiveReason::IncompleteLog)
+            );
+            assert_eq!(
+                r.meta.get("own_header_replaced"),
+                h.is_some().then_some(&serde_json::Value::Bool(true)),
+            );
+        }
+        // The same messages under a header without promises: nothing to keep.
+        let bytes = write_mcap(&spec, &given, &msgs);
+        let r = audit_bytes("plain.mcap", &bytes, &cfg, Some(given.clone())).unwrap();
+        assert_eq!(
+            r.evidence.completeness,
+            pacs_audit::Completeness::NotPromised
+        );
+    }
+}

@@ -1076,7 +1076,17 @@ impl Db3Reader {
             false => None,
         };
         match (header, &info.pacs_header) {
-            (Some(h), _) => conv.set_header(h, Location::File)?,
+            (Some(mut h), own) => {
+                // The bag's own header still promises what it promises (a bag cut short stays
+                // incomplete whatever header the audit is given); a malformed one is replaced.
+                if let Some(own) = own
+                    .as_deref()
+                    .and_then(|json| custom_data_header(json, &info_name, &base_dir).ok())
+                {
+                    h.keep_promises_of(&own);
+                }
+                conv.set_header(h, Location::File)?
+            }
             (None, Some(json)) => {
                 let h = custom_data_header(json, &info_name, &base_dir)?;
                 conv.file.clone_from(&info_name);

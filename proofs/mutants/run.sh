@@ -52,6 +52,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     cargo test -p pacs-audit --test audit_consistency --no-fail-fast >>"$log" 2>&1
     # Several people, logs cut short, stamps that cannot resolve the samples (x60–x64).
     cargo test -p pacs-audit --test audit_people --no-fail-fast >>"$log" 2>&1
+    # MCAP: a given header keeps the file's own promises (x114).
+    cargo test -p pacs-audit --test audit_mcap --no-fail-fast >>"$log" 2>&1
     # ROS 2 bags: the metadata's counts, other logs in a bag directory, a lone part (x93–x95).
     cargo test -p pacs-audit --test audit_db3 --no-fail-fast >>"$log" 2>&1
     # The human-record consistency check's box accept (x66).

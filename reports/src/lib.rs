@@ -491,6 +491,21 @@ pub fn evidence_row(r: &RunResult) -> [String; 4] {
         pacs_audit::Completeness::Incomplete => "INCOMPLETE (cut short: never a pass)",
         pacs_audit::Completeness::NotPromised => "not promised by the writer (span only)",
     };
+    // The header the verdict rests on, where it was given with `--header`, and whether it
+    // replaced the log's own (whose `start`/`end` promises it keeps).
+    let text = |k: &str| r.meta.get(k).and_then(|v| v.as_str());
+    let mut completeness = completeness.to_string();
+    if let Some(f) = text("header_file") {
+        let sha = text("header_file_sha256").unwrap_or("?");
+        completeness.push_str(&format!("; header from `--header {f}` (sha256 {sha})"));
+        if r.meta.get("own_header_replaced") == Some(&Value::Bool(true)) {
+            completeness.push_str(", in place of the log's own (its start/end promises kept)");
+        }
+    }
+    // A ROS recording's stamps count from its time base (s since the Unix epoch).
+    let base = ["mcap_time_base_s", "db3_time_base_s"]
+        .iter()
+        .find_map(|k| r.meta.get(*k).and_then(Value::as_f64));
     [
         r.log.clone(),
         if r.people.is_empty() {
@@ -501,9 +516,15 @@ pub fn evidence_row(r: &RunResult) -> [String; 4] {
         if r.metrics.samples == 0 {
             "no robot samples".into()
         } else {
-            format!("{:.3} – {:.3}", e.t_start, e.t_end)
+            match base {
+                Some(b) => format!(
+                    "{:.3} – {:.3} after the recording's time base {b} s",
+                    e.t_start, e.t_end
+                ),
+                None => format!("{:.3} – {:.3}", e.t_start, e.t_end),
+            }
         },
-        completeness.into(),
+        completeness,
     ]
 }
 

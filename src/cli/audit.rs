@@ -126,9 +126,19 @@ fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
             args.logs.len()
         )));
     }
+    // A given header names itself in every run it is used for (`meta.header_file`, with its
+    // SHA-256): the report says which header the verdict rests on.
     let header = match &args.header {
         None => None,
-        Some(p) => Some(pacs_log::mcap::load_header_file(p).map_err(invalid)?),
+        Some(p) => {
+            let mut h = pacs_log::mcap::load_header_file(p).map_err(invalid)?;
+            let file = InputFile::hash(p).map_err(invalid)?;
+            h.meta
+                .insert("header_file".into(), p.display().to_string().into());
+            h.meta
+                .insert("header_file_sha256".into(), file.sha256.into());
+            Some(h)
+        }
     };
     if header.is_some() && args.logs.len() > 1 {
         eprintln!(

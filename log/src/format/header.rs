@@ -55,6 +55,18 @@ pub struct Header {
 }
 
 impl Header {
+    /// This header in place of `own`, the log's own (given with `pacs audit --header`): it
+    /// keeps the `start` and `end` events `own` promises, so a log cut short stays incomplete
+    /// whatever header it is audited with, and notes in `meta.own_header_replaced` that it
+    /// replaced one. Test `audit_mcap.rs::a_given_header_keeps_the_logs_own_promises` (mutant
+    /// `x114`).
+    pub fn keep_promises_of(&mut self, own: &Header) {
+        self.end_event |= own.end_event || own.start_event;
+        self.start_event |= own.start_event;
+        self.meta
+            .insert("own_header_replaced".into(), serde_json::Value::Bool(true));
+    }
+
     /// A v1 header for the given models (one person, no end-event promise).
     pub fn new(
         robot: impl Into<RobotRef>,

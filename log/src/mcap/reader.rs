@@ -92,6 +92,8 @@ struct State {
     counted: Vec<(String, u64)>,
     /// The part's Statistics record's messages per channel id, if it has one.
     stats: Option<Vec<(u16, u64)>>,
+    /// The reader was handed over (its header is read): records found later change it no more.
+    opened: bool,
 }
 
 /// Streaming reader of an MCAP log (a ROS 2 recording); see the module docs.
@@ -206,6 +208,15 @@ impl<R: Read + Seek> McapReader<R> {
             header = Some(h);
             header_from = Some(HeaderFrom::Record(off));
         }
+        // A given header in place of the file's own, which the summary indexes: the own one's
+        // promises still hold (`keep_own_promises`; a file without summary has its own before
+        // the first message, read below). (A given header stands for a malformed own one.)
+        let own = match &header_from {
+            Some(HeaderFrom::Given) => header_from_summary(file, &mut input, size)
+                .ok()
+                .flatten(),
+            _ => None,
+        };
         super::guard::check_chunk_records(file, &mut input, size)?;
         input.seek(SeekFrom::Start(0)).map_err(io)?;
         let lin = linear_reader();
@@ -228,6 +239,7 @@ impl<R: Read + Seek> McapReader<R> {
                 counted: Vec::new(),
                 stats: None,
                 conv: Messages::new(file, mcfg, overrides.clone()),
+                opened: false,
             },
             current: None,
         };
@@ -243,10 +255,14 @@ impl<R: Read + Seek> McapReader<R> {
                 None => r.st.set_header(h)?,
             }
         }
+        if let Some((own, _)) = own {
+            r.st.keep_own_promises(&own);
+        }
         // Read until the header is known and the first message is queued (fixing the time base).
         while r.st.conv.is_empty() && !r.st.done {
             r.pump()?;
         }
+        r.st.opened = true;
         if r.st.conv.header.is_none() {
             return Err(LogError::input(
                 file,

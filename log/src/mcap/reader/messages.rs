@@ -85,6 +85,16 @@ impl State {
         )
     }
 
+    /// The file's own header `own`, found where a header was given in its place: the given
+    /// header keeps the `start` and `end` events `own` promises (a file cut short stays
+    /// incomplete whatever header the audit is given), and notes that it replaced one
+    /// (`meta.own_header_replaced`).
+    pub(super) fn keep_own_promises(&mut self, own: &Header) {
+        if let Some(h) = self.conv.header.as_mut() {
+            h.keep_promises_of(own);
+        }
+    }
+
     pub(super) fn set_header(&mut self, h: Header) -> Result<(), LogError> {
         let loc = match self.header_from {
             Some(HeaderFrom::Record(o)) => Location::Offset(o),
@@ -167,7 +177,15 @@ impl State {
                 if let Some(h) = h {
                     debug_assert_eq!(name, METADATA_NAME);
                     match self.header_from {
-                        Some(HeaderFrom::Given) => {}
+                        // A header given in its place: the file's own still promises what it
+                        // promises (read before the first message, where it must be).
+                        Some(HeaderFrom::Given) => {
+                            if !self.opened
+                                && let Ok(own) = h
+                            {
+                                self.keep_own_promises(&own);
+                            }
+                        }
                         Some(HeaderFrom::Record(o)) if o == start => {}
                         Some(HeaderFrom::Record(o)) => {
                             return Err(self.err(format!(
