@@ -17,6 +17,10 @@
 //! - `combined`: both bounds hold for the true motion, so the keypoint is in the `vel` set and in
 //!   the `acc` set: we report the smaller of the two (SaRA's combined closed form is tighter; we do
 //!   not use it until it has a proof here). Without measured velocities it equals `vel`;
+//! - a measured velocity faster than the model lets any keypoint move (`|v_k| > v_max[k] +
+//!   measurement_error_vel`, decided with outward rounding) contradicts the model: for that
+//!   keypoint `acc` and `combined` use the `vel` set, which rests on the position alone (as `pos`
+//!   falls back to `vel` where the measurement contradicts an extremity's length);
 //! - `pos`: body parts of an extremity: Ball(p_base, e_p + v_max,base·T + length + thickness/2);
 //!   parts not covered by an extremity use `vel`.
 //!
@@ -469,6 +473,21 @@ impl HumanReach {
         )
     }
 
+    /// Whether keypoint `k`'s measured velocity (if any) is one the model allows: not certainly
+    /// faster than `v_max[k] + measurement_error_vel` (the norm rounded down, the bound up). A
+    /// velocity beyond it contradicts the model, and the sets that trust it (`acc`, `combined`)
+    /// are not used for the keypoint. True without a measured velocity. Test
+    /// `human_occupancy.rs::a_velocity_beyond_the_model_is_not_trusted` (mutant `x115`).
+    fn velocity_consistent(&self, m: &HumanMeasurement, k: usize) -> bool {
+        let Some(v) = m.velocities().and_then(|v| v.get(k)) else {
+            return true;
+        };
+        let speed = crate::rounding::norm3_down(v.x, v.y, v.z);
+        let bound = add_up(self.model.v_max()[k], self.model.measurement_error_vel());
+        // (A NaN speed is refused when the measurement is made.)
+        speed <= bound
+    }
+
     fn acc_ball(&self, m: &HumanMeasurement, k: usize, t_lo: f64, t_hi: f64) -> Option<Ball> {
         let v = *m.velocities()?.get(k)?;
         let p = m.positions[k];
@@ -529,6 +548,11 @@ impl HumanReach {
         for k in 0..self.model.keypoint_count() {
             let mut ball = match self.kind {
                 HumanReachModel::Vel | HumanReachModel::Pos => self.vel_ball(m, k, t_hi),
+                HumanReachModel::Acc | HumanReachModel::Combined
+                    if !self.velocity_consistent(m, k) =>
+                {
+                    self.vel_ball(m, k, t_hi)
+                }
                 HumanReachModel::Acc => {
                     self.acc_ball(m, k, t_lo, t_hi).expect("velocities checked")
                 }
