@@ -171,6 +171,9 @@ pub fn audit_reader(
     let mut end: Option<f64> = None;
     let mut start: Option<f64> = None;
     let mut robot_span: Option<(f64, f64)> = None;
+    // The earliest shield diagnostics record's time: the writer logs one after each robot
+    // sample, so one before the promised start shows samples cut out before it.
+    let mut first_shield: Option<f64> = None;
     // Records of one time stamp are applied in the canonical order (`order`): human
     // measurements, robot samples, events, then file order.
     let mut group = EqualTimeGroup::default();
@@ -196,6 +199,7 @@ pub fn audit_reader(
         }
         match rec {
             Record::Robot { t, .. } => robot_span = Some((robot_span.map_or(t, |s| s.0), t)),
+            Record::Shield { t } => first_shield = Some(first_shield.map_or(t, |f| f.min(t))),
             Record::Event { t, name } if header.end_event && name == pacs_log::END_EVENT => {
                 end = Some(t)
             }
@@ -254,7 +258,7 @@ pub fn audit_reader(
     let mut result = checker.finish(&file, header.meta.clone());
     if header.end_event {
         let start = header.start_event.then_some(start);
-        complete_or_not(&mut result, start, end, robot_span);
+        complete_or_not(&mut result, start, end, robot_span, first_shield);
     }
     Ok(result)
 }
@@ -263,7 +267,9 @@ pub fn audit_reader(
 /// event) is complete: the end event is there and the robot samples reach it (last sample ≥
 /// end), and where a start is promised, it is there and the samples begin at it (first sample
 /// = start: a log cut at its beginning keeps its header but not the samples after the start;
-/// samples before the start are not the run's).
+/// samples before the start are not the run's), and no shield diagnostics record is stamped
+/// before the start (the shield logs one after each sample: one before the start belongs to
+/// samples cut out, the start moved later with them).
 /// Otherwise the result gains an `incomplete_log` span for each missing stretch — from the
 /// start (or the first sample, when the start is missing) to the first sample, and from the
 /// last sample to the end (or to the last sample, when the end is missing) — and can no longer
@@ -276,6 +282,7 @@ fn complete_or_not(
     start: Option<Option<f64>>,
     end: Option<f64>,
     robot_span: Option<(f64, f64)>,
+    first_shield: Option<f64>,
 ) {
     use verdict::{Completeness, InconclusiveSpan};
     let (first, last) = robot_span.map_or((0.0, 0.0), |(a, b)| (a, b));
@@ -290,6 +297,13 @@ fn complete_or_not(
         let s = start.unwrap_or(first);
         let first = if robot_span.is_some() { first } else { s };
         missing.push((s.min(first), s.max(first)));
+    }
+    // The shield logs its diagnostics after each robot sample: one stamped before the start
+    // belongs to samples cut out (the start moved later with them).
+    if let (Some(Some(s)), Some(f)) = (start, first_shield)
+        && f < s
+    {
+        missing.push((f, s));
     }
     if !matches!((end, robot_span), (Some(e), Some(_)) if last >= e) {
         missing.push((last, end.unwrap_or(last).max(last)));

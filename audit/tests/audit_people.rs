@@ -962,3 +962,65 @@ fn a_person_who_cannot_be_checked_hides_no_objects_contact() {
         r.inconclusive
     );
 }
+
+/// A log whose robot samples before some time were cut out and whose `start` event was moved to
+/// its new first sample still holds the shield's diagnostics of the samples cut (the shield
+/// logs one after each sample): one stamped before the start shows the cut, and the log is
+/// `incomplete_log` (an outside review's edit passed as complete). The same log with those
+/// diagnostics cut out too is indistinguishable from a run that began there (complete).
+#[test]
+fn shield_diagnostics_before_the_start_show_a_cut() {
+    let far = standing(2.5, 0.0);
+    let text = two_person_log(&["operator"], |_, _| Some(far.clone()));
+    // A diagnostics record after every robot sample, as the shield writes them.
+    let mut with_diag = String::new();
+    for l in text.lines() {
+        with_diag.push_str(l);
+        with_diag.push('\n');
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        if v["type"] == "robot" {
+            let t = v["t"].as_f64().unwrap();
+            with_diag.push_str(&format!(
+                "{{\"type\":\"shield\",\"t\":{t},\"verified\":true,\"on_failsafe\":false}}\n"
+            ));
+        }
+    }
+    let full = audit(&with_diag);
+    assert_eq!(full.verdict, Verdict::Pass, "{:?}", full.inconclusive);
+    assert_eq!(full.evidence.completeness, Completeness::Complete);
+    // Robot samples (and the start event) before 0.05 s dropped, the start put at 0.05 s.
+    let cut = |drop_diag: bool| -> String {
+        let mut out = String::new();
+        for l in with_diag.lines() {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let t = v["t"].as_f64().unwrap_or(0.0);
+            let early = t < 0.05 - 1e-12;
+            let drop = match v["type"].as_str() {
+                Some("robot") => early,
+                Some("shield") => early && drop_diag,
+                Some("event") => v["name"] == "start",
+                _ => false,
+            };
+            if v["type"] == "robot" && (t - 0.05).abs() < 1e-12 {
+                out.push_str("{\"type\":\"event\",\"t\":0.05,\"name\":\"start\"}\n");
+            }
+            if !drop {
+                out.push_str(l);
+                out.push('\n');
+            }
+        }
+        out
+    };
+    let r = audit(&cut(false));
+    assert_ne!(r.verdict, Verdict::Pass);
+    assert_eq!(r.evidence.completeness, Completeness::Incomplete);
+    let s = r
+        .inconclusive
+        .iter()
+        .find(|s| s.reason == InconclusiveReason::IncompleteLog)
+        .expect("incomplete_log");
+    assert_eq!((s.t_start, s.t_end), (0.0, 0.05));
+    let r = audit(&cut(true));
+    assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
+    assert_eq!(r.evidence.completeness, Completeness::Complete);
+}
