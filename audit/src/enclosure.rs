@@ -302,7 +302,16 @@ impl Quintic {
     /// The quintic and its jerk bound, for `dt_lo > 0` and `dt³ > 0` (no quotient below is then
     /// 0/0). Straight-line code: evaluated for four joints at once by [`jerk_feasible_lanes`].
     #[inline(always)]
-    fn new(dpos: f64, c: f64, d: f64, e0: f64, e1: f64, dt: f64, dt_lo: f64, dt_hi: f64) -> Quintic {
+    fn new(
+        dpos: f64,
+        c: f64,
+        d: f64,
+        e0: f64,
+        e1: f64,
+        dt: f64,
+        dt_lo: f64,
+        dt_hi: f64,
+    ) -> Quintic {
         let h = dt;
         let hh = h * h;
         let h3 = hh * h;
@@ -354,7 +363,8 @@ impl Quintic {
     fn exact_acc(&self, e0: f64, dt: f64) -> f64 {
         let (c3, c4, c5) = (self.c3, self.c4, self.c5);
         let hh = dt * dt;
-        let acc_at = |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
+        let acc_at =
+            |s: f64| (e0 * hh + 6.0 * c3 * s + 12.0 * c4 * s * s + 20.0 * c5 * s * s * s) / hh;
         // The jerk's zeros (none, one or two; NaN where there are none), each within [0, 1].
         let disc = 576.0 * c4 * c4 - 1440.0 * c3 * c5;
         let zeros = if c5 != 0.0 && disc >= 0.0 {
@@ -902,7 +912,9 @@ mod tests {
         let lim = SpanLimits::new(robot.limits());
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut uniform = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut feasible, mut infeasible, mut exact, mut exact_feasible) = (0, 0, 0, 0);
@@ -917,7 +929,13 @@ mod tests {
                 let q0 = 2.0 * uniform() - 1.0;
                 let c = v * scale * (2.0 * uniform() - 1.0);
                 // Accelerations near the limit half of the time: the cheap bound then exceeds it.
-                let e0 = a * scale * if uniform() < 0.5 { 2.0 * uniform() - 1.0 } else { 0.98 };
+                let e0 = a
+                    * scale
+                    * if uniform() < 0.5 {
+                        2.0 * uniform() - 1.0
+                    } else {
+                        0.98
+                    };
                 let jerk = jm * scale * (2.0 * uniform() - 1.0);
                 let wobble = 1.0 + 1e-3 * (uniform() - 0.5);
                 (s0.q[j], s0.dq[j], s0.ddq[j]) = (q0, c, e0);
@@ -946,7 +964,8 @@ mod tests {
                 let by_cubic = q.j_bound <= limits.2 && cheap_over;
                 exact += usize::from(by_cubic);
                 exact_feasible += usize::from(by_cubic && one);
-                (feasible, infeasible) = (feasible + usize::from(one), infeasible + usize::from(!one));
+                (feasible, infeasible) =
+                    (feasible + usize::from(one), infeasible + usize::from(!one));
             }
         }
         assert!(

@@ -4,7 +4,8 @@
 //! positions `p_k` (and optionally velocities `v_k`). For every true motion of the keypoints such
 //! that, at `time − delay`, each keypoint was within `measurement_error_pos` of `p_k` (and its
 //! velocity within `measurement_error_vel` of `v_k`, when velocities are used), and afterwards each
-//! keypoint's speed stays ≤ `v_max[k]` (models `vel`, `pos`, `combined`) and its acceleration ≤
+//! keypoint's speed stays ≤ `v_max[k]` (every model: the human model bounds it; `acc` uses it
+//! only to refuse a measured velocity that contradicts it, below) and its acceleration ≤
 //! `a_max[k]` (models `acc`, `combined`) — and, for `pos`, every point of an extremity's body parts
 //! stays within `length + thickness/2` of its base keypoint — every point of every body part
 //! (its segment swept by `thickness/2`) at every time `t ∈ [t_a, t_b]` lies in the reported capsule.

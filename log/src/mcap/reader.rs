@@ -212,9 +212,7 @@ impl<R: Read + Seek> McapReader<R> {
         // promises still hold (`keep_own_promises`; a file without summary has its own before
         // the first message, read below). (A given header stands for a malformed own one.)
         let own = match &header_from {
-            Some(HeaderFrom::Given) => header_from_summary(file, &mut input, size)
-                .ok()
-                .flatten(),
+            Some(HeaderFrom::Given) => header_from_summary(file, &mut input, size).ok().flatten(),
             _ => None,
         };
         super::guard::check_chunk_records(file, &mut input, size)?;
