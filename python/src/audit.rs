@@ -305,6 +305,12 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
         }
         logs.push(r.hashed.clone());
     }
+    if let Some((a, b)) = pacs_reports::same_bytes(&logs) {
+        return Err(input(format!(
+            "runs: {}",
+            pacs_reports::same_bytes_message(a, b)
+        )));
+    }
     let config = match &first.config_path {
         Some(p) => Some(InputFile::hash(p).map_err(|e| input(format!("config: {e}")))?),
         None => None,
@@ -316,6 +322,7 @@ pub fn report(runs: &Bound<'_, PyAny>, out_dir: &Bound<'_, PyAny>) -> PyResult<&
         config,
         settings: serde_json::to_value(&first.config).unwrap_or_default(),
         generated: pacs_reports::utc_now(),
+        skipped: Vec::new(),
     };
     pacs_reports::write_reports(&out_dir, &input_doc)
         .map_err(|e| err(Kind::Output, format!("out_dir: {e}")))?;

@@ -41,7 +41,25 @@ const WALL_CLOCK_FROM: f64 = 946_684_800.0;
 /// one log. Errors name the path: one that cannot be read, a directory without logs, or a log
 /// given twice (paths that name the same file).
 pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
+    list_logs(paths).map(|l| l.logs)
+}
+
+/// The logs [`list_logs`] found, and the entries under the given directories it passed over.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Listing {
+    /// The logs, as [`expand_logs`] gives them.
+    pub logs: Vec<PathBuf>,
+    /// Entries under a given directory that are not logs (another name, a symbolic link to a
+    /// directory, which is not followed), sorted: not audited, and said so (the CLI's note on
+    /// stderr, `skipped` in report.json), so that a report never leaves one out without a word.
+    pub skipped: Vec<PathBuf>,
+}
+
+/// [`expand_logs`], with the entries under the given directories that it passed over. Test
+/// `reports/tests/fleet.rs::a_directory_expands_to_its_sorted_log_files`.
+pub fn list_logs(paths: &[PathBuf]) -> Result<Listing, ExpandError> {
     let mut out = Vec::new();
+    let mut skipped = Vec::new();
     for p in paths {
         let meta = std::fs::metadata(p).map_err(|error| ExpandError::Read {
             path: p.clone(),
@@ -52,7 +70,7 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
             continue;
         }
         let mut found = Vec::new();
-        collect_logs(p, &mut found)?;
+        collect_logs(p, &mut found, &mut skipped)?;
         if found.is_empty() {
             return Err(ExpandError::NoLogs(p.clone()));
         }
@@ -72,7 +90,8 @@ pub fn expand_logs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, ExpandError> {
     // A log named twice (a directory and a file in it, or one path twice) would count twice in
     // the fleet's runs, verdict counts and violation time: refused.
     refuse_twice(&out)?;
-    Ok(out)
+    skipped.sort();
+    Ok(Listing { logs: out, skipped })
 }
 
 /// Refuse a log named twice among `logs` (one file by two paths, hard links included: the file
@@ -176,7 +195,11 @@ pub enum ExpandError {
     Twice { first: PathBuf, second: PathBuf },
 }
 
-fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
+fn collect_logs(
+    dir: &Path,
+    out: &mut Vec<PathBuf>,
+    skipped: &mut Vec<PathBuf>,
+) -> Result<(), ExpandError> {
     let list = |error| ExpandError::List {
         path: dir.to_path_buf(),
         error,
@@ -192,12 +215,14 @@ fn collect_logs(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ExpandError> {
             // A bag directory is one log (its .db3 files are its parts).
             out.push(path);
         } else if kind.is_dir() {
-            collect_logs(&path, out)?;
+            collect_logs(&path, out, skipped)?;
         } else if is_log_name(&path) {
             // Every entry with a log's name counts, also one that cannot be read (a dangling
             // link, a FIFO, a link to a directory): its audit then fails with the path named,
             // never leaves the archive without a word.
             out.push(path);
+        } else {
+            skipped.push(path);
         }
     }
     Ok(())

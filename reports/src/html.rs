@@ -70,6 +70,9 @@ pub fn report(input: &ReportInput) -> String {
     provenance(&mut s, input);
     summary_table(&mut s, input);
     evidence_table(&mut s, input.runs);
+    if let Some(note) = crate::skipped_note(&input.skipped) {
+        let _ = write!(s, "<p>{}</p>", esc(&note));
+    }
     if input.runs.len() > 1 {
         aggregate_section(&mut s, input);
     }

@@ -54,6 +54,29 @@ pub struct InputFile {
     pub bytes: u64,
 }
 
+/// The first two logs among `logs` that hold the same bytes (equal SHA-256), if any: one run
+/// given twice under two names (a copy, not a link: [`fleet::refuse_twice`] catches those) would
+/// count twice in a report's runs, verdict counts and audited time. The CLI and Python refuse
+/// such a report. Test `reports/tests/fleet.rs::a_copy_of_a_log_is_one_run_given_twice`.
+pub fn same_bytes(logs: &[InputFile]) -> Option<(&InputFile, &InputFile)> {
+    let mut seen: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for (i, f) in logs.iter().enumerate() {
+        if let Some(&first) = seen.get(f.sha256.as_str()) {
+            return Some((&logs[first], f));
+        }
+        seen.insert(&f.sha256, i);
+    }
+    None
+}
+
+/// The error text of [`same_bytes`]'s finding.
+pub fn same_bytes_message(a: &InputFile, b: &InputFile) -> String {
+    format!(
+        "{} holds the same bytes as {} (sha256 {}): one run given twice would count twice in the report; audit one copy",
+        b.path, a.path, a.sha256
+    )
+}
+
 impl InputFile {
     /// Hash a file by streaming it (memory stays flat); a directory (a ROS 2 bag) by its files
     /// (see [`InputFile::sha256`]; subdirectories are not part of a bag and are left out).
@@ -200,6 +223,9 @@ pub struct ReportInput<'a> {
     pub settings: Value,
     /// When the report is generated (ISO 8601 UTC, [`utc_now`]): one time for all its files.
     pub generated: String,
+    /// Entries under the given directories that are not logs, not audited
+    /// ([`fleet::Listing::skipped`]): listed in the report.
+    pub skipped: Vec<String>,
 }
 
 impl ReportInput<'_> {
@@ -528,6 +554,29 @@ pub fn evidence_row(r: &RunResult) -> [String; 4] {
     ]
 }
 
+/// The sentence on entries under the given directories that were not audited (not logs), for
+/// every form of the report; `None` when there are none. At most ten are named.
+pub fn skipped_note(skipped: &[String]) -> Option<String> {
+    if skipped.is_empty() {
+        return None;
+    }
+    let named: Vec<&str> = skipped.iter().take(10).map(String::as_str).collect();
+    let more = skipped.len().saturating_sub(named.len());
+    Some(format!(
+        "Not audited: {} entr{} under the given directories {} not a log (not *.{}, or a symbolic link to a directory, which is not followed): {}{}.",
+        skipped.len(),
+        if skipped.len() == 1 { "y" } else { "ies" },
+        if skipped.len() == 1 { "is" } else { "are" },
+        pacs_log::db3::LOG_EXTENSIONS.join(", *."),
+        named.join(", "),
+        if more > 0 {
+            format!(" and {more} more (report.json lists all)")
+        } else {
+            String::new()
+        }
+    ))
+}
+
 /// The `report.json` document.
 pub fn report_json(input: &ReportInput) -> Value {
     let runs: Vec<Value> = input
@@ -564,6 +613,7 @@ pub fn report_json(input: &ReportInput) -> Value {
         "checks": check_backing(),
         "verdict": overall(input.runs),
         "runs": runs,
+        "skipped": input.skipped,
         "aggregate": aggregate::aggregate(input.runs),
         "fleet": fleet::of_input(input),
     })

@@ -82,6 +82,9 @@ pub fn report(input: &ReportInput) -> String {
             md_row(&[format!("`{log}`"), people, span, complete])
         );
     }
+    if let Some(note) = crate::skipped_note(&input.skipped) {
+        let _ = writeln!(s, "\n{}", md_cell(&note));
+    }
     let d = definitions();
     let _ = writeln!(
         s,

@@ -513,6 +513,9 @@ pub fn report(input: &ReportInput) -> Vec<u8> {
     sections::front_matter(&mut d, input);
     sections::summary_table(&mut d, input, &defs);
     sections::evidence_table(&mut d, input.runs);
+    if let Some(note) = crate::skipped_note(&input.skipped) {
+        d.para(&note, 8.0, Font::Regular);
+    }
     if input.runs.len() > 1 {
         sections::aggregate_table(&mut d, input.runs);
     }

@@ -104,6 +104,7 @@ fn input(runs: &[RunResult]) -> ReportInput<'_> {
         config: None,
         settings: serde_json::json!({}),
         generated: "2026-11-28T19:00:00Z".into(),
+        skipped: Vec::new(),
     }
 }
 

@@ -247,6 +247,24 @@ fn a_directory_expands_to_its_sorted_log_files() {
     ]
     .into();
     assert_eq!(got, want);
+    // What is passed over is said: other names, and a symbolic link to a directory (not
+    // followed; it holds a log here).
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(d.join("b"), d.join("linked")).unwrap();
+    let listing = fleet::list_logs(&[d.join("notes.txt"), d.clone()]).unwrap();
+    assert_eq!(listing.logs, want);
+    let mut skipped = vec![d.join("h.json"), d.join("notes.txt")];
+    #[cfg(unix)]
+    skipped.insert(1, d.join("linked"));
+    assert_eq!(listing.skipped, skipped);
+    let names: Vec<String> = skipped.iter().map(|p| p.display().to_string()).collect();
+    let note = pacs_reports::skipped_note(&names).unwrap();
+    assert!(
+        note.starts_with(&format!("Not audited: {} entries", names.len()))
+            && names.iter().all(|n| note.contains(n.as_str())),
+        "{note}"
+    );
+    assert_eq!(pacs_reports::skipped_note(&[]), None);
     std::fs::create_dir_all(d.join("empty/sub")).unwrap();
     let e = expand_logs(&[d.join("empty")]).unwrap_err().to_string();
     assert!(
@@ -370,4 +388,31 @@ fn a_fifo_is_not_hashed() {
         .to_string();
     assert!(e.contains("not a regular file"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Two logs that hold the same bytes under two names (a copy, not a link) are one run given
+/// twice: `same_bytes` finds them (a report is then refused, naming both), and nothing else.
+#[test]
+fn a_copy_of_a_log_is_one_run_given_twice() {
+    let f = |path: &str, sha: &str| pacs_reports::InputFile {
+        path: path.into(),
+        sha256: sha.into(),
+        bytes: 1,
+    };
+    let logs = [
+        f("a/run.jsonl", "aa"),
+        f("c.jsonl", "cc"),
+        f("b/run.jsonl", "aa"),
+    ];
+    let (a, b) = pacs_reports::same_bytes(&logs).unwrap();
+    assert_eq!(
+        (a.path.as_str(), b.path.as_str()),
+        ("a/run.jsonl", "b/run.jsonl")
+    );
+    let msg = pacs_reports::same_bytes_message(a, b);
+    assert!(
+        msg.starts_with("b/run.jsonl holds the same bytes as a/run.jsonl (sha256 aa)"),
+        "{msg}"
+    );
+    assert!(pacs_reports::same_bytes(&logs[..2]).is_none());
 }

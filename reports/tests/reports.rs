@@ -176,6 +176,7 @@ fn plots_and_documents() {
         config: None,
         settings: serde_json::json!({"max_gap": 0.1}),
         generated: pacs_reports::utc_now(),
+        skipped: Vec::new(),
     };
     let j = report_json(&input);
     assert_eq!(j["verdict"], "fail");
@@ -349,6 +350,7 @@ fn log_text_cannot_break_the_markdown_tables() {
         config: None,
         settings: serde_json::json!({"max_gap": 0.1}),
         generated: pacs_reports::utc_now(),
+        skipped: Vec::new(),
     };
     let md = markdown::report(&input);
     let headings: Vec<&str> = md.lines().filter(|l| l.starts_with('#')).collect();

@@ -118,7 +118,16 @@ fn cannot_write(what: &str, e: impl std::fmt::Display) -> Stop {
 /// The audit: its inputs checked, every log audited, the verdicts printed, the report and the
 /// replay written; returns the exit code of the combined verdict.
 fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
-    args.logs = pacs_reports::fleet::expand_logs(&args.logs).map_err(invalid)?;
+    let listing = pacs_reports::fleet::list_logs(&args.logs).map_err(invalid)?;
+    args.logs = listing.logs;
+    let skipped: Vec<String> = listing
+        .skipped
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    if let Some(note) = pacs_reports::skipped_note(&skipped) {
+        eprintln!("pacs: note: {note}");
+    }
     let (cfg, cfg_file) = load_config(&args).map_err(|e| invalid(e.message()))?;
     if args.scene.is_some() && args.logs.len() != 1 {
         return Err(invalid(format!(
@@ -152,6 +161,9 @@ fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
         Some(_) => Some(hash_logs(&args.logs)?),
         None => None,
     };
+    if let Some((a, b)) = hashed_before.as_deref().and_then(pacs_reports::same_bytes) {
+        return Err(invalid(pacs_reports::same_bytes_message(a, b)));
+    }
     let runs = audit_logs(&args.logs, &cfg, header.as_ref())?;
     let verdict = Verdict::combine(runs.iter().map(|r| r.verdict));
     print_runs(&runs, args.json).map_err(|e| cannot_write("output", e))?;
@@ -171,6 +183,7 @@ fn run(mut args: AuditArgs) -> Result<ExitCode, Stop> {
             config: cfg_file,
             settings: serde_json::to_value(&cfg).unwrap_or_default(),
             generated: pacs_reports::utc_now(),
+            skipped,
         };
         pacs_reports::write_reports(dir, &input).map_err(|e| cannot_write("report", e))?;
         eprintln!("{}", report_written(dir, verdict));

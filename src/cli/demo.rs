@@ -94,6 +94,7 @@ pub fn run_demo(progress: bool, out: &Path) -> Result<Value, CliError> {
         config: None,
         settings: serde_json::to_value(&audit_cfg).unwrap_or_default(),
         generated: pacs_reports::utc_now(),
+        skipped: Vec::new(),
     };
     pacs_reports::write_reports(out, &input).map_err(|e| CliError::Internal(e.to_string()))?;
     eprint!("{}", screen_summary(&runs, out));
