@@ -31,9 +31,16 @@ pub struct Row {
         serialize_with = "mean_std_json_opt"
     )]
     pub safe_success: Option<(f64, Option<f64>)>,
-    /// Mean and std of the violation fraction over all logs (JSON as `success`).
-    #[serde(serialize_with = "mean_std_json")]
-    pub safety_violation: (f64, Option<f64>),
+    /// Mean and std of the violation fraction over the logs with a verdict (pass or fail; JSON
+    /// as `success`, left out when every log is inconclusive): an inconclusive log's fraction
+    /// counts only what was checked, and would pass unchecked time off as free of violations.
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "mean_std_json_opt"
+    )]
+    pub safety_violation: Option<(f64, Option<f64>)>,
+    /// Logs left out of `safety_violation`: inconclusive.
+    pub inconclusive: usize,
 }
 
 /// `{"mean": m, "std": s}`, `std` left out when there is none (one log).
@@ -117,7 +124,12 @@ pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
                 .iter()
                 .filter_map(|r| r.metrics.safe_success.map(b))
                 .collect();
-            let viol: Vec<f64> = group.iter().map(|r| r.metrics.violation_fraction).collect();
+            let conclusive = |r: &&&RunResult| r.verdict != pacs_audit::Verdict::Inconclusive;
+            let viol: Vec<f64> = group
+                .iter()
+                .filter(conclusive)
+                .map(|r| r.metrics.violation_fraction)
+                .collect();
             Row {
                 task: k.0,
                 policy: k.1,
@@ -125,10 +137,20 @@ pub fn aggregate(runs: &[RunResult]) -> Vec<Row> {
                 runs: group.len(),
                 success: mean_std(&succ),
                 safe_success: mean_std(&safe),
-                safety_violation: mean_std(&viol).unwrap_or((0.0, None)),
+                safety_violation: mean_std(&viol),
+                inconclusive: group.len() - viol.len(),
             }
         })
         .collect()
+}
+
+/// The safety-violation cell: [`pct`] of the logs with a verdict, and how many inconclusive
+/// logs were left out ("n/a" when every log is).
+pub fn violation_cell(row: &Row) -> String {
+    match row.inconclusive {
+        0 => pct(row.safety_violation),
+        k => format!("{} ({k} inconclusive left out)", pct(row.safety_violation)),
+    }
 }
 
 /// "m ± s %" with percentages; "m % ± n/a" for one log, "n/a" for none.

@@ -257,6 +257,9 @@ pub struct FleetRun {
     pub verdict: Verdict,
     /// Audited time: first to last robot sample (s).
     pub duration_s: f64,
+    /// Of it, the time not checked (s): the union of the inconclusive spans
+    /// (`metrics.inconclusive_duration`). No violation found there means nothing.
+    pub not_checked_s: f64,
     /// Length of the union of the violation intervals (s).
     pub violation_time_s: f64,
     /// Violating robot samples / robot samples.
@@ -295,6 +298,8 @@ pub struct Counts {
     pub inconclusive: usize,
     /// Audited time (s), summed in log order.
     pub duration_s: f64,
+    /// Of it, time not checked (s), summed in log order.
+    pub not_checked_s: f64,
     /// Violation time (s), summed in log order.
     pub violation_time_s: f64,
 }
@@ -308,6 +313,7 @@ impl Counts {
             Verdict::Inconclusive => self.inconclusive += 1,
         }
         self.duration_s += r.duration_s;
+        self.not_checked_s += r.not_checked_s;
         self.violation_time_s += r.violation_time_s;
     }
 }
@@ -540,6 +546,7 @@ pub fn place(run: &RunResult, mtime: Option<u64>) -> FleetRun {
         day_source,
         verdict: run.verdict,
         duration_s: run.metrics.duration,
+        not_checked_s: run.metrics.inconclusive_duration,
         violation_time_s: violation_time(run),
         violation_fraction: run.metrics.violation_fraction,
     }
@@ -624,7 +631,7 @@ pub fn of_input(input: &crate::ReportInput) -> Fleet {
 }
 
 /// The fleet table's column heads (HTML and Markdown).
-pub const COLUMNS: [&str; 10] = [
+pub const COLUMNS: [&str; 11] = [
     "robot",
     "scene",
     "day (UTC)",
@@ -633,12 +640,13 @@ pub const COLUMNS: [&str; 10] = [
     "fail",
     "inconclusive",
     "audited (s)",
+    "not checked (s)",
     "violation time (s)",
     "worst runs (violation time s)",
 ];
 
 /// A group as table cells ([`COLUMNS`]), text unescaped.
-pub fn cells(g: &Group) -> [String; 10] {
+pub fn cells(g: &Group) -> [String; 11] {
     let worst = if g.worst.is_empty() {
         "-".to_string()
     } else {
@@ -657,6 +665,7 @@ pub fn cells(g: &Group) -> [String; 10] {
         g.counts.fail.to_string(),
         g.counts.inconclusive.to_string(),
         format!("{:.3}", g.counts.duration_s),
+        format!("{:.3}", g.counts.not_checked_s),
         format!("{:.3}", g.counts.violation_time_s),
         worst,
     ]
@@ -689,12 +698,13 @@ pub fn markdown(f: &Fleet) -> String {
         s.push_str(&format!("| {} |\n", c.join(" | ")));
     }
     s.push_str(&format!(
-        "\nAll {} logs: {} pass, {} fail, {} inconclusive; {:.3} s audited, {:.3} s in violation. Days from {}. Violation time: the length of the union of a log's violation intervals.\n",
+        "\nAll {} logs: {} pass, {} fail, {} inconclusive; {:.3} s audited, of which {:.3} s not checked (inconclusive: no violation found there means nothing), {:.3} s in violation. Days from {}. Violation time: the length of the union of a log's violation intervals.\n",
         f.total.runs,
         f.total.pass,
         f.total.fail,
         f.total.inconclusive,
         f.total.duration_s,
+        f.total.not_checked_s,
         f.total.violation_time_s,
         day_sources(f)
     ));
@@ -705,7 +715,7 @@ pub fn markdown(f: &Fleet) -> String {
 pub fn html(f: &Fleet, esc: impl Fn(&str) -> String) -> String {
     let mut s = String::from("<h2>Fleet (per robot, scene and day)</h2><table><tr>");
     for (i, c) in COLUMNS.iter().enumerate() {
-        let class = if (3..9).contains(&i) {
+        let class = if (3..10).contains(&i) {
             " class=\"num\""
         } else {
             ""
@@ -716,7 +726,7 @@ pub fn html(f: &Fleet, esc: impl Fn(&str) -> String) -> String {
     for g in &f.groups {
         s.push_str("<tr>");
         for (i, c) in cells(g).iter().enumerate() {
-            let class = if (3..9).contains(&i) {
+            let class = if (3..10).contains(&i) {
                 " class=\"num\""
             } else {
                 ""
@@ -726,12 +736,13 @@ pub fn html(f: &Fleet, esc: impl Fn(&str) -> String) -> String {
         s.push_str("</tr>");
     }
     s.push_str(&format!(
-        "</table><p class=\"note\">All {} logs: {} pass, {} fail, {} inconclusive; {:.3} s audited, {:.3} s in violation. Days from {}. Violation time: the length of the union of a log's violation intervals.</p>",
+        "</table><p class=\"note\">All {} logs: {} pass, {} fail, {} inconclusive; {:.3} s audited, of which {:.3} s not checked (inconclusive: no violation found there means nothing), {:.3} s in violation. Days from {}. Violation time: the length of the union of a log's violation intervals.</p>",
         f.total.runs,
         f.total.pass,
         f.total.fail,
         f.total.inconclusive,
         f.total.duration_s,
+        f.total.not_checked_s,
         f.total.violation_time_s,
         esc(&day_sources(f))
     ));

@@ -188,7 +188,7 @@ fn aggregate_section(s: &mut String, input: &ReportInput) {
             row.runs,
             aggregate::pct(row.success),
             aggregate::pct(row.safe_success),
-            aggregate::pct(Some(row.safety_violation))
+            aggregate::violation_cell(&row)
         );
     }
     s.push_str("</table>");

@@ -98,6 +98,7 @@ pub fn report(input: &ReportInput) -> String {
             "\n## Aggregate (impact of safeguarding)\n\n| task | policy | filter | n (logs) | success | safe success | violation fraction (mean ± std) |\n|---|---|---|---|---|---|---|"
         );
         for row in aggregate::aggregate(input.runs) {
+            let violation = aggregate::violation_cell(&row);
             let cells = [
                 row.task,
                 row.policy,
@@ -105,7 +106,7 @@ pub fn report(input: &ReportInput) -> String {
                 row.runs.to_string(),
                 aggregate::pct(row.success),
                 aggregate::pct(row.safe_success),
-                aggregate::pct(Some(row.safety_violation)),
+                violation,
             ];
             let _ = writeln!(s, "{}", md_row(&cells));
         }

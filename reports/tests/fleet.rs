@@ -36,7 +36,12 @@ fn run(log: &str, meta: Value, verdict: Verdict, violations: &[(f64, f64)]) -> R
             violation_fraction: violations.len() as f64 * 0.1,
             violating_samples: 0,
             certain_violating_samples: 0,
-            inconclusive_duration: 0.0,
+            // An inconclusive log left a quarter of its time unchecked.
+            inconclusive_duration: if verdict == Verdict::Inconclusive {
+                0.25
+            } else {
+                0.0
+            },
             min_separation: None,
             success: None,
             safe_success: None,
@@ -217,7 +222,7 @@ fn groups_count_verdicts_and_list_the_worst_runs_whatever_the_input_order() {
         );
     }
     let md = fleet::markdown(&f);
-    assert!(md.contains("| arm-1 | sorting | 2026-11-27 | 5 | 1 | 3 | 1 | 5.000 | 1.250 | l4 (0.500); l2 (0.500); l1 (0.250) |"), "{md}");
+    assert!(md.contains("| arm-1 | sorting | 2026-11-27 | 5 | 1 | 3 | 1 | 5.000 | 0.250 | 1.250 | l4 (0.500); l2 (0.500); l1 (0.250) |"), "{md}");
     assert!(md.contains("Days from meta.date: 7"), "{md}");
 }
 

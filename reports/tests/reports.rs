@@ -91,7 +91,7 @@ fn aggregate_groups_by_meta_with_mean_and_sample_std() {
     let (m, s) = rows[0].success.unwrap();
     assert!((m - 0.5).abs() < 1e-15 && (s.unwrap() - 0.5f64.sqrt()).abs() < 1e-15);
     // Violation fraction {0.1, 0.3}: mean 0.2, sample std sqrt(0.02).
-    let (m, s) = rows[1].safety_violation;
+    let (m, s) = rows[1].safety_violation.unwrap();
     assert!((m - 0.2).abs() < 1e-15 && (s.unwrap() - 0.02f64.sqrt()).abs() < 1e-12);
     assert_eq!(rows[1].safe_success, Some((0.0, Some(0.0))));
     // One log: no spread to measure, n/a rather than ± 0.0.
@@ -378,4 +378,32 @@ fn log_text_cannot_break_the_markdown_tables() {
         md.contains("pa\\|cs") && md.contains("arm ## injected \\| x"),
         "{md}"
     );
+}
+
+/// An inconclusive log's violation fraction counts only what was checked: the aggregate's
+/// safety violation is over the logs with a verdict, and says how many it left out ("n/a" when
+/// every log is inconclusive) — never 0 % for time nobody checked.
+#[test]
+fn the_aggregate_violation_leaves_inconclusive_logs_out_and_says_so() {
+    let runs = vec![
+        run("a", "none", Some(true), 0.2, Verdict::Fail),
+        run("b", "none", Some(true), 0.0, Verdict::Inconclusive),
+    ];
+    let rows = aggregate::aggregate(&runs);
+    assert_eq!(
+        (rows[0].safety_violation, rows[0].inconclusive),
+        (Some((0.2, None)), 1)
+    );
+    assert_eq!(
+        aggregate::violation_cell(&rows[0]),
+        "20.0 % ± n/a (1 inconclusive left out)"
+    );
+    let rows = aggregate::aggregate(&runs[1..]);
+    assert_eq!((rows[0].safety_violation, rows[0].inconclusive), (None, 1));
+    assert_eq!(
+        aggregate::violation_cell(&rows[0]),
+        "n/a (1 inconclusive left out)"
+    );
+    let json = serde_json::to_value(&rows[0]).unwrap();
+    assert!(json.get("safety_violation").is_none(), "{json}");
 }

@@ -282,7 +282,7 @@ fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
     runs.iter().try_for_each(|r| {
         writeln!(
             out,
-            "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive span(s){}",
+            "{}: {:?} — {} samples, {:.3} s, violation fraction {:.4}, {} violation episode(s) ({} interval(s)), {} inconclusive stretch(es) ({:.3} s not checked){}",
             r.log,
             r.verdict,
             r.metrics.samples,
@@ -291,12 +291,20 @@ fn print_runs(runs: &[RunResult], json: bool) -> std::io::Result<()> {
             pacs_reports::episodes::episodes(&r.violations).len(),
             r.violations.len(),
             r.inconclusive.len(),
+            r.metrics.inconclusive_duration,
             match r.evidence.completeness {
                 pacs_audit::Completeness::Incomplete => format!(
                     "; INCOMPLETE log (incomplete_log): its samples run {:.3}–{:.3} s, and the start or end record its writer promised is missing or beyond them",
                     r.evidence.t_start, r.evidence.t_end
                 ),
-                _ => String::new(),
+                pacs_audit::Completeness::NotPromised => format!(
+                    "; completeness not promised by the log's writer: the samples run {:.3}–{:.3} s, whether that is the whole run cannot be told",
+                    r.evidence.t_start, r.evidence.t_end
+                ),
+                pacs_audit::Completeness::EndOnly => {
+                    "; end event reached, no start promised (a cut at the beginning cannot be told)".into()
+                }
+                pacs_audit::Completeness::Complete => String::new(),
             }
         )
     })

@@ -101,6 +101,7 @@ pub(super) fn aggregate_table(d: &mut Doc, runs: &[RunResult]) {
     let rows: Vec<Vec<(String, Font)>> = aggregate::aggregate(runs)
         .into_iter()
         .map(|a| {
+            let violation = aggregate::violation_cell(&a);
             vec![
                 reg(a.task),
                 reg(a.policy),
@@ -108,7 +109,7 @@ pub(super) fn aggregate_table(d: &mut Doc, runs: &[RunResult]) {
                 reg(a.runs.to_string()),
                 reg(aggregate::pct(a.success)),
                 reg(aggregate::pct(a.safe_success)),
-                reg(aggregate::pct(Some(a.safety_violation))),
+                reg(violation),
             ]
         })
         .collect();
