@@ -474,8 +474,35 @@ fn assert_undeclared_person_refused(scene: &Value) {
     let (out, d) = run_scene("undeclared-person", &bad);
     assert_eq!(out.status.code(), Some(3));
     let e = String::from_utf8_lossy(&out.stderr);
+    // Found after the scene was parsed, the error still names the file.
+    let file = d.join("scene.json").display().to_string();
     assert!(
-        e.contains("human_measurements[0].id") && e.contains("stranger"),
+        e.contains(&format!("{file}: human_measurements[0].id")) && e.contains("stranger"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// A scene file that starts with a UTF-8 byte-order mark is told so (exit 3), naming the file.
+#[test]
+fn a_scene_with_a_byte_order_mark_is_named() {
+    let d = dir("bom");
+    std::fs::create_dir_all(&d).unwrap();
+    let input = d.join("scene.json");
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scene.json");
+    let text = std::fs::read_to_string(p).unwrap();
+    std::fs::write(&input, format!("\u{feff}{text}")).unwrap();
+    let out = pacs()
+        .args(["shield", "--input"])
+        .arg(&input)
+        .arg("--out")
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains(&input.display().to_string()) && e.contains("byte order mark"),
         "{e}"
     );
     std::fs::remove_dir_all(&d).ok();

@@ -88,6 +88,10 @@ pub fn json_path_at(text: &str, line: usize, column: usize) -> Option<String> {
 /// `chunks[2].actions[5][0]: number out of range at line 12 column 40`; a number out of range
 /// or a non-JSON literal (`NaN`, `Infinity`) gets a hint that values must be finite.
 pub fn describe_json_error(text: &str, e: &serde_json::Error) -> String {
+    // Editors on some systems start a file with a byte-order mark: named, not "expected value".
+    if text.starts_with('\u{feff}') && e.line() == 1 && e.column() <= 1 {
+        return "the file starts with a UTF-8 byte order mark (EF BB BF); JSON input is UTF-8 without BOM: remove it".into();
+    }
     let msg = e.to_string();
     // The character serde stopped at (its column counts from 1), for the hint.
     let at = (e.line() > 0 && e.column() > 0)
@@ -179,5 +183,23 @@ mod tests {
         assert!(hint("{\"t\": .5}").ends_with("(a JSON number has a digit before its `.`)"));
         assert!(hint("{\"t\": NaN}").contains("NaN and Infinity are not JSON"));
         assert!(hint("{\"t\": yes}").contains("not a JSON value"));
+    }
+}
+
+#[cfg(test)]
+mod bom_tests {
+    use super::describe_json_error;
+
+    /// A file that starts with a UTF-8 byte-order mark is told so, not "expected value at line 1
+    /// column 1"; a BOM-less error keeps its own message.
+    #[test]
+    fn a_byte_order_mark_is_named() {
+        let text = "\u{feff}{\"a\": 1}";
+        let e = serde_json::from_str::<serde_json::Value>(text).unwrap_err();
+        let msg = describe_json_error(text, &e);
+        assert!(msg.contains("byte order mark (EF BB BF)"), "{msg}");
+        let text = "{\"a\": }";
+        let e = serde_json::from_str::<serde_json::Value>(text).unwrap_err();
+        assert!(!describe_json_error(text, &e).contains("byte order mark"));
     }
 }

@@ -193,6 +193,15 @@ fn load(path: Option<&Path>) -> Result<Loaded, CliError> {
     })
 }
 
+/// An input error found in the scene `name` after it was parsed, naming the file (unless the
+/// message already does).
+fn in_scene(name: &str, e: CliError) -> CliError {
+    match e {
+        CliError::Input(m) if !m.starts_with(name) => CliError::Input(format!("{name}: {m}")),
+        e => e,
+    }
+}
+
 /// Check the start and the run's time span and build the shield of the scene (not started).
 fn build_shield(l: &Loaded) -> Result<Shield, CliError> {
     let (scene, models, cfg, name) = (&l.scene, &l.models, l.cfg, &l.name);
@@ -375,7 +384,7 @@ type Out = BufWriter<File>;
 /// Run `pacs shield [--input F] [--out DIR]`: returns the summary printed on stdout.
 pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let l = load(path)?;
-    let shield = build_shield(&l)?;
+    let shield = build_shield(&l).map_err(|e| in_scene(&l.name, e))?;
     let object_ids: Vec<String> = l.models.objects.iter().map(|o| o.0.clone()).collect();
     // What each command's binding indices stand for (built once): link and body-part names,
     // the person's id in a scene of several people, the object's id.
@@ -383,7 +392,7 @@ pub fn run(path: Option<&Path>, out: &Path) -> Result<Value, CliError> {
     let names = shield.binding_names(&person_ids, &object_ids);
     // Every input of a scene file is known in advance: its size bounds the inbox.
     let mut session = Session::new(shield, object_ids).with_max_waiting(usize::MAX);
-    let chunks = inputs(&l, &mut session)?;
+    let chunks = inputs(&l, &mut session).map_err(|e| in_scene(&l.name, e))?;
     let t0 = l.scene.t0;
     std::fs::create_dir_all(out)
         .map_err(|e| CliError::Output(format!("cannot create {}: {e}", out.display())))?;
