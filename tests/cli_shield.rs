@@ -546,3 +546,20 @@ fn non_finite_numbers_in_a_scene_name_the_field() {
         std::fs::remove_dir_all(&d).ok();
     }
 }
+
+/// `config.human_model = "acc"` in a scene is refused (exit 3), naming the file and the field:
+/// a scene's person measurements carry positions only, so no step would ever be verified.
+#[test]
+fn a_scene_asking_for_the_acc_model_is_refused() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scene.json");
+    let mut scene: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+    scene["config"]["human_model"] = "acc".into();
+    let (out, d) = run_scene("acc-model", &scene);
+    assert_eq!(out.status.code(), Some(3));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("scene.json: config.human_model: `acc` needs measured velocities"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&d).ok();
+}

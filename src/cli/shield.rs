@@ -176,7 +176,16 @@ fn load(path: Option<&Path>) -> Result<Loaded, CliError> {
         .map_err(|e| input(format!("{name}: {}", e.to_string().replace("header.", ""))))?;
     header.environment = scene.environment.clone();
     header.objects = scene.objects.clone();
-    let cfg = scene.config.config().map_err(|e| input(e.to_string()))?;
+    let cfg = scene
+        .config
+        .config()
+        .map_err(|e| input(format!("{name}: {e}")))?;
+    // A scene's person measurements carry positions only: `acc` would never verify a step.
+    if cfg.human_model == pacs_reach::human::HumanReachModel::Acc {
+        return Err(input(format!(
+            "{name}: config.human_model: `acc` needs measured velocities, which a scene's human_measurements do not carry (every step would go unverified): use `combined` (the default), `vel` or `pos`"
+        )));
+    }
     // The filter that ran (the configured mode, as `pacs simulate` labels its runs): reports
     // group runs by it, so PACS and OFF runs of one scene are never averaged together.
     header.meta.insert("filter".into(), cfg.mode.label().into());
