@@ -262,6 +262,13 @@ fn object_records_are_read_and_checked_for_errors() {
         Some(1),
         "header.objects[0].object",
     );
+    // A person and an object with one id: violations and reports could not tell them apart.
+    let same_id = r#"{"type":"header","format":"pacs-log","version":2,"robot":"fr3","humans":[{"id":"b1","human":"default"}],"constraints":"ssm","objects":[{"id":"b1","object":"ball","contact":"ssm"}]}"#;
+    expect_error(
+        &lines(&[same_id, ROBOT0]),
+        Some(1),
+        "header.objects[0].id: \"b1\" is also the id of a person (header.humans[0])",
+    );
     // The writer's output reads back as the same record.
     let mut w = LogWriter::new(Vec::new());
     let mut h = pacs_log::Header::new(

@@ -179,6 +179,12 @@ pub fn scene(
                 ))
             })?
         };
+        if list.is_empty() {
+            return Err(input(
+                "humans: an empty list (give at least one person, or None for a scene without people)"
+                    .to_string(),
+            ));
+        }
         for (i, h) in list.iter().enumerate() {
             let at = if one {
                 "humans".to_string()

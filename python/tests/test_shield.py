@@ -179,6 +179,12 @@ def test_humans_none_means_no_human(demo):
     assert all(c.verified for c in run(s, 100))
 
 
+def test_an_empty_list_of_people_is_refused():
+    # `humans=[]` would silently mean "no person" (as `humans=None`): refused, pointing at None.
+    with pytest.raises(pacs.InputError, match="humans: an empty list"):
+        pacs.Shield(humans=[])
+
+
 def test_steps_keep_the_safety_step_grid_and_measurements_wait_for_their_time(demo):
     s = pacs.Shield()
     s.start(0.0, demo.start)

@@ -77,6 +77,13 @@ impl LogModels {
                     },
                 });
             }
+            // Violations, bindings and reports name a person or an object by its id alone.
+            if let Some(j) = h.humans.iter().position(|p| p.id == o.id) {
+                return Err(HeaderError::Fields(format!(
+                    "{field}.id: {:?} is also the id of a person (header.humans[{j}]): violations and reports name people and objects by id, so each needs its own",
+                    o.id
+                )));
+            }
             let spec = match &o.object {
                 ModelRef::Name(n) => pacs_models::object::builtin_object(n).ok_or_else(|| {
                     pacs_models::ModelError::UnknownName {
