@@ -301,6 +301,7 @@ struct Quintic {
 impl Quintic {
     /// The quintic and its jerk bound, for `dt_lo > 0` and `dt³ > 0` (no quotient below is then
     /// 0/0). Straight-line code: evaluated for four joints at once by [`jerk_feasible_lanes`].
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn new(
         dpos: f64,
@@ -953,12 +954,12 @@ mod tests {
                 slack: 1e-9,
             };
             let lanes = jerk_feasible_lanes(&lim, &s0, &s1, &sp);
-            for j in 0..7 {
+            for (j, &lane) in lanes.iter().enumerate().take(7) {
                 let limits = (lim.v[j] * sp.rel, lim.a[j] * sp.rel, lim.j[j] * sp.rel);
                 let (c, d, e0, e1) = (s0.dq[j], s1.dq[j], s0.ddq[j], s1.ddq[j]);
                 let dpos = s1.q[j] - s0.q[j];
                 let one = jerk_feasible(dpos, c, d, e0, e1, sp.dt, sp.dt_lo, sp.dt_hi, limits);
-                assert_eq!(lanes[j], one, "case {case}, joint {j}");
+                assert_eq!(lane, one, "case {case}, joint {j}");
                 let q = Quintic::new(dpos, c, d, e0, e1, sp.dt, sp.dt_lo, sp.dt_hi);
                 let cheap_over = q.cheap_acc(e0, e1, sp.dt_hi) > limits.1;
                 let by_cubic = q.j_bound <= limits.2 && cheap_over;
