@@ -676,6 +676,8 @@ impl HumanReach {
     }
 }
 
+pub mod consistency;
+
 /// The Kani proofs of the human occupancy's per-keypoint arithmetic (claim C3, split by reach
 /// model), each also a property test (`proofs/README.md`).
 #[cfg(any(test, kani))]
