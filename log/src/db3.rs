@@ -1084,6 +1084,7 @@ impl Db3Reader {
                     .and_then(|json| custom_data_header(json, &info_name, &base_dir).ok())
                 {
                     h.keep_promises_of(&own);
+                    h.mark_replacing();
                 }
                 conv.set_header(h, Location::File)?
             }

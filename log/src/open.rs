@@ -234,9 +234,17 @@ fn open_mcap_bag(
         })?;
         parts.push((name, std::io::BufReader::with_capacity(1 << 16, file)));
     }
-    // The given header replaces the metadata's, which is then not read at all.
+    // The given header replaces the metadata's, keeping the promises it makes (a bag cut short
+    // stays incomplete whatever header it is audited with; a malformed one is replaced).
     let (header, header_file) = match header {
-        Some(h) => (Some(h.clone()), None),
+        Some(h) => {
+            let mut h = h.clone();
+            if let Ok(Some(own)) = bag.header() {
+                h.keep_promises_of(&own);
+                h.mark_replacing();
+            }
+            (Some(h), None)
+        }
         None => match bag.header()? {
             Some(h) => (Some(h), Some(bag.metadata.as_str())),
             None => (None, None),

@@ -55,17 +55,33 @@ pub struct Header {
 }
 
 impl Header {
-    /// This header in place of `own`, the log's own (given with `pacs audit --header`): it
-    /// keeps the `start` and `end` events `own` promises, so a log cut short stays incomplete
-    /// whatever header it is audited with, and notes in `meta.own_header_replaced` that it
-    /// replaced one. Test `audit_mcap.rs::a_given_header_keeps_the_logs_own_promises` (mutant
+    /// This header in place of `own`, the log's own (given with `pacs audit --header`, or a
+    /// bag's `custom_data` header beside its parts' own records): it keeps the `start` and
+    /// `end` events `own` promises, so a log cut short stays incomplete whatever header it is
+    /// audited with. Test `audit_mcap.rs::a_given_header_keeps_the_logs_own_promises` (mutant
     /// `x114`).
     pub fn keep_promises_of(&mut self, own: &Header) {
         self.end_event |= own.end_event || own.start_event;
         self.start_event |= own.start_event;
+    }
+
+    /// Note in `meta.own_header_replaced` that this header, given by the caller, replaced the
+    /// log's own (whose promises [`Self::keep_promises_of`] kept).
+    pub fn mark_replacing(&mut self) {
         self.meta
             .insert("own_header_replaced".into(), serde_json::Value::Bool(true));
     }
+
+    /// `meta` keys only the tools set after reading a log (the header given with `--header` and
+    /// its hash, a replaced own header, a ROS recording's time base): a log's own values for them
+    /// are dropped when it is read, so that no log can claim them for itself in a report.
+    pub const TOOL_META: [&'static str; 5] = [
+        "header_file",
+        "header_file_sha256",
+        "own_header_replaced",
+        "mcap_time_base_s",
+        "db3_time_base_s",
+    ];
 
     /// A v1 header for the given models (one person, no end-event promise).
     pub fn new(
@@ -217,8 +233,11 @@ impl Header {
     /// The one header validation every reader goes through: a header as parsed (`parsed`; a
     /// parse error is [`HeaderError::Fields`]) is returned only if it passes [`Header::check`].
     pub fn validated(parsed: Result<Header, HeaderError>) -> Result<Header, HeaderError> {
-        let header = parsed?;
+        let mut header = parsed?;
         header.check()?;
+        for k in Self::TOOL_META {
+            header.meta.remove(k);
+        }
         Ok(header)
     }
 

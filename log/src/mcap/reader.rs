@@ -94,6 +94,8 @@ struct State {
     stats: Option<Vec<(u16, u64)>>,
     /// The reader was handed over (its header is read): records found later change it no more.
     opened: bool,
+    /// The header was given by the caller (`--header`), not read from the bag's metadata.
+    given_by_caller: bool,
 }
 
 /// Streaming reader of an MCAP log (a ROS 2 recording); see the module docs.
@@ -197,6 +199,7 @@ impl<R: Read + Seek> McapReader<R> {
         mcfg.validate()
             .map_err(|p| LogError::input(file, Location::File, format!("invalid config: {p}")))?;
         let size = input.seek(SeekFrom::End(0)).map_err(io)?;
+        let header_given = header.is_some();
         let mut header_from = header.as_ref().map(|_| HeaderFrom::Given);
         let mut header = header;
         if header.is_none()
@@ -238,6 +241,7 @@ impl<R: Read + Seek> McapReader<R> {
                 stats: None,
                 conv: Messages::new(file, mcfg, overrides.clone()),
                 opened: false,
+                given_by_caller: header_given && header_file.is_none(),
             },
             current: None,
         };

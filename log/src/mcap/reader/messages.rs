@@ -87,11 +87,14 @@ impl State {
 
     /// The file's own header `own`, found where a header was given in its place: the given
     /// header keeps the `start` and `end` events `own` promises (a file cut short stays
-    /// incomplete whatever header the audit is given), and notes that it replaced one
-    /// (`meta.own_header_replaced`).
+    /// incomplete whatever header the audit is given), and, given by the caller, notes that it
+    /// replaced one (`meta.own_header_replaced`).
     pub(super) fn keep_own_promises(&mut self, own: &Header) {
         if let Some(h) = self.conv.header.as_mut() {
             h.keep_promises_of(own);
+            if self.given_by_caller {
+                h.mark_replacing();
+            }
         }
     }
 
