@@ -4,8 +4,7 @@
 //! positions `p_k` (and optionally velocities `v_k`). For every true motion of the keypoints such
 //! that, at `time − delay`, each keypoint was within `measurement_error_pos` of `p_k` (and its
 //! velocity within `measurement_error_vel` of `v_k`, when velocities are used), and afterwards each
-//! keypoint's speed stays ≤ `v_max[k]` (every model: the human model bounds it; `acc` uses it
-//! only to refuse a measured velocity that contradicts it, below) and its acceleration ≤
+//! keypoint's speed stays ≤ `v_max[k]` (models `vel`, `pos`, `combined`) and its acceleration ≤
 //! `a_max[k]` (models `acc`, `combined`) — and, for `pos`, every point of an extremity's body parts
 //! stays within `length + thickness/2` of its base keypoint — every point of every body part
 //! (its segment swept by `thickness/2`) at every time `t ∈ [t_a, t_b]` lies in the reported capsule.
@@ -18,10 +17,11 @@
 //! - `combined`: both bounds hold for the true motion, so the keypoint is in the `vel` set and in
 //!   the `acc` set: we report the smaller of the two (SaRA's combined closed form is tighter; we do
 //!   not use it until it has a proof here). Without measured velocities it equals `vel`;
-//! - a measured velocity faster than the model lets any keypoint move (`|v_k| > v_max[k] +
-//!   measurement_error_vel`, decided with outward rounding) contradicts the model: for that
-//!   keypoint `acc` and `combined` use the `vel` set, which rests on the position alone (as `pos`
-//!   falls back to `vel` where the measurement contradicts an extremity's length);
+//! - a measured velocity faster than the speed bound allows (`|v_k| > v_max[k] +
+//!   measurement_error_vel`, decided with outward rounding) shows one assumption false — the
+//!   speed bound or the velocity's error bound — without telling which: for that keypoint `acc`
+//!   and `combined` use the smallest ball enclosing both the `vel` and the `acc` set, which holds
+//!   under either;
 //! - `pos`: body parts of an extremity: Ball(p_base, e_p + v_max,base·T + length + thickness/2);
 //!   parts not covered by an extremity use `vel`.
 //!
@@ -474,10 +474,10 @@ impl HumanReach {
         )
     }
 
-    /// Whether keypoint `k`'s measured velocity (if any) is one the model allows: not certainly
-    /// faster than `v_max[k] + measurement_error_vel` (the norm rounded down, the bound up). A
-    /// velocity beyond it contradicts the model, and the sets that trust it (`acc`, `combined`)
-    /// are not used for the keypoint. True without a measured velocity. Test
+    /// Whether keypoint `k`'s measured velocity (if any) agrees with the speed bound: not
+    /// certainly faster than `v_max[k] + measurement_error_vel` (the norm rounded down, the bound
+    /// up). Beyond it, the speed bound or the velocity is wrong, and `acc` and `combined` take
+    /// the ball enclosing both sets for the keypoint. True without a measured velocity. Test
     /// `human_occupancy.rs::a_velocity_beyond_the_model_is_not_trusted` (mutant `x115`).
     fn velocity_consistent(&self, m: &HumanMeasurement, k: usize) -> bool {
         let Some(v) = m.velocities().and_then(|v| v.get(k)) else {
@@ -552,7 +552,10 @@ impl HumanReach {
                 HumanReachModel::Acc | HumanReachModel::Combined
                     if !self.velocity_consistent(m, k) =>
                 {
-                    self.vel_ball(m, k, t_hi)
+                    // One assumption is false, the speed bound or the measured velocity: the
+                    // ball enclosing both sets holds under either.
+                    let acc = self.acc_ball(m, k, t_lo, t_hi).expect("velocities checked");
+                    Ball::enclose(&self.vel_ball(m, k, t_hi), &acc)
                 }
                 HumanReachModel::Acc => {
                     self.acc_ball(m, k, t_lo, t_hi).expect("velocities checked")

@@ -521,21 +521,35 @@ fn a_keypoint_beyond_any_reach_is_refused_by_name() {
     );
 }
 
-/// A measured velocity faster than the model lets the keypoint move (`|v| > v_max + e_v`)
-/// contradicts the model: `acc` and `combined` then use the `vel` set for the keypoint, which
-/// rests on the position alone. An outside review's case: a hand at rest in the arm's path,
-/// measured with 10 m/s against `v_max` 2 m/s — the `acc` set, centred 2 m down the claimed
-/// velocity after 0.2 s, left the hand out and the shield drove into it. Hand-computed: e_p 0.1,
-/// e_v 0.2, v_max 2, no delay, [0, 0.2] → `vel` radius 0.1 + 2·0.2 + th/2 0.05 = 0.55 about the
-/// measured point. At the bound itself (2.2 m/s) the velocity is trusted (the `acc` set).
+/// A measured velocity faster than the speed bound allows (`|v| > v_max + e_v`) shows the speed
+/// bound or the velocity wrong: `acc` and `combined` then take the ball enclosing the `vel` and
+/// the `acc` set for the keypoint, which holds under either. An outside review's case: a hand at
+/// rest in the arm's path, measured with 10 m/s against `v_max` 2 m/s — the `acc` set alone,
+/// centred 2 m down the claimed velocity after 0.2 s, left the hand out and the shield drove
+/// into it. Hand-computed: e_p 0.1, e_v 0.2, v_max 2, a 10, no delay, over [0, 0.2] from
+/// (0, 0, 0) with v = (10, 0, 0): the `vel` ball Ball(0, 0.1 + 0.4 = 0.5); the `acc` sets
+/// Ball(0, 0.1) at 0 and Ball((2, 0, 0), 0.1 + 0.04 + 0.2 = 0.34) at 0.2, enclosed by the ball
+/// spanning x ∈ [−0.1, 2.34]; both together x ∈ [−0.5, 2.34]: centre 0.92, radius 1.42, plus
+/// th/2 0.05 = 1.47. It contains the measured point and every point the motion at rest or at
+/// 10 m/s reaches. At the bound itself (2.2 m/s) the velocity is trusted (the `acc` set alone).
 #[test]
 fn a_velocity_beyond_the_model_is_not_trusted() {
     let h = single(0.1, 0.2, 0.0, 2.0, 10.0, 0.1);
     for kind in [HumanReachModel::Acc, HumanReachModel::Combined] {
-        for v in [[10.0, 0.0, 0.0], [0.0, 2.21, 0.0], [1.6, 1.6, 0.0]] {
-            let (p1, p2, r) = one(&h, kind, [1.0, 2.0, 3.0], Some(v), 0.0, 0.0, 0.2);
-            assert_eq!((p1, p2), (Point3::new(1.0, 2.0, 3.0), p1), "{kind:?} {v:?}");
-            assert!(close(r, 0.55), "{kind:?} {v:?}: {r}");
+        let (p1, p2, r) = one(&h, kind, [0.0; 3], Some([10.0, 0.0, 0.0]), 0.0, 0.0, 0.2);
+        assert_eq!(p1, p2, "{kind:?}");
+        assert!(
+            (p1.x - 0.92).abs() < 1e-12 && p1.y == 0.0,
+            "{kind:?} {p1:?}"
+        );
+        assert!(r >= 1.47 && r < 1.47 + 1e-9, "{kind:?}: {r}");
+        // Other directions beyond the bound: the measured point (at rest) is inside.
+        for v in [[0.0, 2.21, 0.0], [1.6, 1.6, 0.0]] {
+            let (c, _, r) = one(&h, kind, [1.0, 2.0, 3.0], Some(v), 0.0, 0.0, 0.2);
+            assert!(
+                (c - Point3::new(1.0, 2.0, 3.0)).norm() + 0.5 + 0.05 <= r,
+                "{kind:?} {v:?}: {c:?} {r}"
+            );
         }
         // Within the bound: the velocity is used. The acc sets Ball(0, 0.1) at 0 and
         // Ball((0.44, 0, 0), 0.1 + 0.04 + 0.2 = 0.34) at 0.2 span x ∈ [−0.1, 0.78]: centre 0.34,

@@ -98,10 +98,9 @@ fn occupancy<S: Source>(s: &mut S) {
         );
         truth[slot] = match kind {
             HumanReachModel::Vel | HumanReachModel::Pos => vel_pos,
-            // The human model bounds every keypoint's speed in every reach model (`acc` uses
-            // the speed bound only to refuse a measured velocity that contradicts it): keep acc
-            // samples that also respect the speed bound's set (with margin).
-            HumanReachModel::Acc | HumanReachModel::Combined => {
+            HumanReachModel::Acc => acc_pos,
+            HumanReachModel::Combined => {
+                // Keep acc samples that also respect the speed bound's set (with margin).
                 let d = Vector3::from(acc_pos) - Vector3::from(pos[k]);
                 let r = (e_p + model.v_max()[k] * elapsed) * (1.0 - 1e-9);
                 if !s.assume(d.norm_squared() <= r * r) {
