@@ -28,7 +28,7 @@
 use crate::error::ReachError;
 use crate::human::{elapsed_hi, elapsed_lo, vel_radius};
 use crate::interval::Interval;
-use crate::rounding::{add_up, mul_down, mul_up, norm3_up, sub_up};
+use crate::rounding::{add_up, mul_down, mul_up, norm3_down, norm3_up, sub_up};
 use crate::zonotope::Zonotope3;
 use pacs_models::object::{MAX_ACC_GENERATORS, MAX_SHAPE_GENERATORS, ObjectModel};
 use pacs_models::shape::Capsule;
@@ -204,7 +204,9 @@ pub fn covers_speed(e_p: f64, v_max: f64, r: f64, tau: f64, out: f64) -> bool {
 /// The occupancy of `model` over `[t_a, t_b]` (s) after `meas`.
 ///
 /// Errors: non-finite inputs, `t_a > t_b`, `t_a` before the measured state (`t_m − delay`), a
-/// missing velocity without a speed bound.
+/// missing velocity without a speed bound. A measured velocity faster than the speed bound
+/// allows (`|v| > v_max + vel_error`) contradicts the model and is ignored (as a missing one;
+/// test `reach/tests/object.rs::a_velocity_beyond_the_speed_bound_is_ignored`, mutant `x117`).
 ///
 /// # Soundness
 /// Claim C4′: for every motion the model admits (module docs: double integrator with the
@@ -264,6 +266,16 @@ pub fn occupancy(
     }
     let (tau_a, tau_b) = elapsed_range(meas.time, model.delay(), t_a, t_b);
     let (v_m, e_v) = match (meas.velocity, model.max_speed()) {
+        // A velocity certainly faster than the speed bound allows (`|v| > v_max + e_v`, the norm
+        // rounded down, the bound up) contradicts the model, whose every motion keeps the bound:
+        // the velocity is ignored (the speed ball and the set without a velocity hold). Trusted,
+        // the two sets could miss each other and leave the object nowhere (an outside review's
+        // ball at rest, measured at 10 m/s: the shield swept through it).
+        (Some(v), Some(v_max))
+            if norm3_down(v[0], v[1], v[2]) > add_up(v_max, model.vel_error()) =>
+        {
+            ([0.0; 3], v_max)
+        }
         (Some(v), _) => (v, model.vel_error()),
         (None, Some(v_max)) => ([0.0; 3], v_max),
         (None, None) => {

@@ -307,6 +307,34 @@ fn unknown_velocity_uses_the_speed_bound() {
     assert!(e.to_string().contains("no velocity"), "{e}");
 }
 
+/// A measured velocity faster than the speed bound allows (`|v| > v_max + e_v`) contradicts the
+/// model and is ignored: the occupancy is the one without a velocity (so the two sets always
+/// meet at the measured position). An outside review's ball at rest, measured at 10 m/s against
+/// a 1 m/s bound: trusted, the velocity set (x ≥ 0.25 m after 20 ms of delay plus the interval)
+/// and the speed ball (x ≤ 0.08 m) missed each other, no capsule was near the object, and the
+/// shield swept through it. At the bound itself (1.1 m/s here) the velocity is used.
+#[test]
+fn a_velocity_beyond_the_speed_bound_is_ignored() {
+    let m = ball(0.05, 2.0, Some(1.0), 0.02, 0.01, 0.1);
+    let at = |velocity| ObjectMeasurement {
+        time: 1.0,
+        position: [0.0; 3],
+        velocity,
+    };
+    let without = occupancy(&m, &at(None), 1.0, 1.1).unwrap();
+    // The capsule through the measured position: it touches the object at rest.
+    let here = Capsule::new(Point3::new(0.0, -1.0, 0.0), Point3::new(0.0, 1.0, 0.0), 0.01).unwrap();
+    for v in [[10.0, 0.0, 0.0], [0.0, -1.11, 0.0], [0.8, 0.8, 0.0]] {
+        let occ = occupancy(&m, &at(Some(v)), 1.0, 1.1).unwrap();
+        assert_eq!(occ.radius(), without.radius(), "{v:?}");
+        assert_eq!(occ.zonotope().center(), without.zonotope().center(), "{v:?}");
+        assert!(occ.distance_lower_bound(&here) <= 0.0, "{v:?}");
+    }
+    // Within the bound: the velocity moves the set.
+    let occ = occupancy(&m, &at(Some([1.1, 0.0, 0.0])), 1.0, 1.1).unwrap();
+    assert!(occ.zonotope().center()[0] > 0.05, "{:?}", occ.zonotope().center());
+}
+
 #[test]
 fn invalid_queries_are_errors() {
     let obj = ball(0.05, 2.0, None, 0.03, 0.0, 0.0);
