@@ -75,6 +75,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     # The user-scene runner's log (x55: only the newest measurement of a step logged).
     cargo test -p pacs --test cli_shield --no-fail-fast >>"$log" 2>&1
     cargo test -p pacs-shield --lib --no-fail-fast >>"$log" 2>&1
+    # An object's velocity beyond its speed bound (x117).
+    cargo test -p pacs-reach --test object --no-fail-fast >>"$log" 2>&1
     # The pos model's consistency test at the limit (x27).
     cargo test -p pacs-reach --test human_occupancy --no-fail-fast >>"$log" 2>&1
     caught=$(sed -n 's/^test \(.*\) \.\.\. FAILED$/\1/p' "$log" |
