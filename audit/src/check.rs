@@ -117,8 +117,10 @@ struct ObjectTrack {
     let_go_moving: Option<ObjectMeasurement>,
     /// The measurement in use for the span the last robot sample opened (like `span_human`).
     span: Option<ObjectMeasurement>,
-    /// Its occupancy over the span being checked (`None`: outside the workspace ball).
+    /// Its occupancy over the span being checked (`None`: outside the workspace ball, or none).
     occ: Option<ObjectOccupancy>,
+    /// Why the object cannot be checked on the span being checked, if it cannot.
+    unusable: Option<Reason>,
     /// The records that may clear what the one in `others_for` shows (`spans.rs`,
     /// `collect_other_object_records`); `others_for` is reset when a record arrives.
     others: Vec<ObjectMeasurement>,
@@ -947,6 +949,7 @@ fn object_tracks(models: &LogModels) -> Vec<ObjectTrack> {
             let_go_moving: None,
             span: None,
             occ: None,
+            unusable: None,
             others: Vec::with_capacity(8),
             others_for: None,
         })

@@ -1024,3 +1024,36 @@ fn shield_diagnostics_before_the_start_show_a_cut() {
     assert_eq!(r.verdict, Verdict::Pass, "{:?}", r.inconclusive);
     assert_eq!(r.evidence.completeness, Completeness::Complete);
 }
+
+/// A reason that lasts while another comes and goes is listed as one stretch: the ball never
+/// measured (`no_object` over the whole run) while the person goes stale between 1.0 and 1.3 s
+/// (no record from 0 to 1.3 s). The time counts once either way.
+#[test]
+fn a_lasting_reason_is_one_stretch_while_another_comes_and_goes() {
+    let text: String = touching_with_ball(0.0, &[], 2.0)
+        .lines()
+        .filter(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let t = v["t"].as_f64().unwrap_or(0.0);
+            !(v["type"] == "human" && t > 1e-9 && t < 1.3 - 1e-9)
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let r = audit(&text);
+    assert_eq!(r.verdict, Verdict::Inconclusive);
+    let no_object: Vec<_> = r
+        .inconclusive
+        .iter()
+        .filter(|s| s.reason == InconclusiveReason::NoObject)
+        .collect();
+    assert_eq!(no_object.len(), 1, "{:?}", r.inconclusive);
+    assert_eq!((no_object[0].t_start, no_object[0].t_end), (0.0, 2.0));
+    assert!(
+        r.inconclusive
+            .iter()
+            .any(|s| s.reason == InconclusiveReason::StaleHuman),
+        "{:?}",
+        r.inconclusive
+    );
+    assert!((r.metrics.inconclusive_duration - 2.0).abs() < 1e-9);
+}

@@ -323,16 +323,29 @@ fn a_velocity_beyond_the_speed_bound_is_ignored() {
     };
     let without = occupancy(&m, &at(None), 1.0, 1.1).unwrap();
     // The capsule through the measured position: it touches the object at rest.
-    let here = Capsule::new(Point3::new(0.0, -1.0, 0.0), Point3::new(0.0, 1.0, 0.0), 0.01).unwrap();
+    let here = Capsule::new(
+        Point3::new(0.0, -1.0, 0.0),
+        Point3::new(0.0, 1.0, 0.0),
+        0.01,
+    )
+    .unwrap();
     for v in [[10.0, 0.0, 0.0], [0.0, -1.11, 0.0], [0.8, 0.8, 0.0]] {
         let occ = occupancy(&m, &at(Some(v)), 1.0, 1.1).unwrap();
         assert_eq!(occ.radius(), without.radius(), "{v:?}");
-        assert_eq!(occ.zonotope().center(), without.zonotope().center(), "{v:?}");
+        assert_eq!(
+            occ.zonotope().center(),
+            without.zonotope().center(),
+            "{v:?}"
+        );
         assert!(occ.distance_lower_bound(&here) <= 0.0, "{v:?}");
     }
     // Within the bound: the velocity moves the set.
     let occ = occupancy(&m, &at(Some([1.1, 0.0, 0.0])), 1.0, 1.1).unwrap();
-    assert!(occ.zonotope().center()[0] > 0.05, "{:?}", occ.zonotope().center());
+    assert!(
+        occ.zonotope().center()[0] > 0.05,
+        "{:?}",
+        occ.zonotope().center()
+    );
 }
 
 #[test]

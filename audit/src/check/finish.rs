@@ -3,6 +3,11 @@
 
 use super::*;
 
+/// How many of the latest inconclusive entries a span's reason looks back through for the
+/// stretch to extend: stretches of up to this many other reasons and objects may lie between.
+/// Beyond it a stretch is listed in parts (the time counts alike).
+const CHAIN_LOOKBACK: usize = 64;
+
 impl Auditor {
     pub(super) fn mark_inconclusive(&mut self, t0: f64, t1: f64, reason: Reason) {
         self.mark_inconclusive_about(t0, t1, reason, None);
@@ -20,12 +25,14 @@ impl Auditor {
     ) {
         let idx = self.span_index;
         let name = object.map(|k| self.objects[k].id.as_str());
-        // The stretches the previous span extended (or opened) are the last entries.
+        // The stretch of this reason and object the previous span extended, among the latest
+        // entries (a span gives a few reasons, one per object at most: stretches of other
+        // reasons that ended in between sit after it).
         let chained = self
             .inconclusive
             .iter_mut()
             .rev()
-            .take_while(|(_, _, i)| *i + 1 >= idx)
+            .take(CHAIN_LOOKBACK)
             .find(|(last, r, i)| *r == reason && *i + 1 == idx && last.object.as_deref() == name);
         if let Some((last, _, last_idx)) = chained {
             last.t_end = t1;

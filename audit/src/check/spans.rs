@@ -451,9 +451,13 @@ impl Auditor {
             counted = true;
             self.series.buckets[bidx].inconclusive = true;
         }
-        let (objects_left, object_unusable) = self.object_occupancies(t0, t1);
-        if let Some((reason, k)) = object_unusable {
-            self.mark_inconclusive_about(t0, t1, reason, Some(k));
+        let (objects_left, any_unusable) = self.object_occupancies(t0, t1);
+        if any_unusable {
+            for k in 0..self.objects.len() {
+                if let Some(reason) = self.objects[k].unusable {
+                    self.mark_inconclusive_about(t0, t1, reason, Some(k));
+                }
+            }
             if !counted {
                 self.inconclusive_duration += dt;
                 counted = true;
@@ -770,17 +774,16 @@ impl Auditor {
 
     /// Each object's occupancy over the span `t0`–`t1`, from the measurement in use for it (into
     /// the object's `occ`; `None` where the workspace ball clears it or where the object cannot
-    /// be checked): whether any object is left for the object rule, and the reason the first
-    /// object that cannot be checked gives, with its index (the others are checked all the
-    /// same).
+    /// be checked, the reason then in its `unusable`): whether any object is left for the
+    /// object rule, and whether any cannot be checked (the others are checked all the same).
     #[inline]
-    fn object_occupancies(&mut self, t0: f64, t1: f64) -> (bool, Option<(Reason, usize)>) {
+    fn object_occupancies(&mut self, t0: f64, t1: f64) -> (bool, bool) {
         let mut objects_left = false;
-        let mut unusable = None;
+        let mut any_unusable = false;
         for k in 0..self.objects.len() {
             let o = &mut self.objects[k];
             o.occ = None;
-            let reason = match o.span {
+            o.unusable = match o.span {
                 None => Some(Reason::NoObject),
                 Some(m) if t1 - m.time > self.cfg.max_human_age => Some(Reason::StaleObject),
                 Some(m) => match pacs_reach::object::occupancy(&o.model, &m, t0, t1) {
@@ -794,11 +797,9 @@ impl Auditor {
                     }
                 },
             };
-            if let Some(r) = reason {
-                unusable = unusable.or(Some((r, k)));
-            }
+            any_unusable |= o.unusable.is_some();
         }
-        (objects_left, unusable)
+        (objects_left, any_unusable)
     }
 
     /// The violating pairs of the span `t0`–`t1` (`self.hits`) into the open violation
