@@ -1424,3 +1424,41 @@ fn an_mcap_file_whose_statistics_disagree_with_its_messages_is_refused() {
         );
     }
 }
+
+/// A header given in place of a bag's own (`--header`) keeps the `start` and `end` events the
+/// bag's `custom_data` header promises, in both storages: the bag, promising events it does not
+/// hold (as if cut short), is `incomplete_log` whether its own header or a given one without
+/// promises is used, and never passes. An outside review found an MCAP-storage bag passing with
+/// `--header`.
+#[test]
+fn a_given_header_keeps_a_bags_own_promises() {
+    let d = tempdir();
+    let given = Header::new(
+        ModelRef::Name("fr3".into()),
+        ModelRef::Name("default".into()),
+        ModelRef::Name("ssm".into()),
+    );
+    for (from, name) in [(fixtures().join("clean"), "db3"), (mcap_bags().join("clean"), "mcap")] {
+        let bag = copy_bag(&from, &d, name);
+        edit_metadata(
+            &bag,
+            "\"version\": 1, \"robot\":\n      \"fr3\", \"human\": \"default\", \"constraints\": \"ssm\"}'",
+            "\"version\": 2, \"robot\": \"fr3\", \"humans\": [{\"id\": \"human\", \"human\": \"default\"}], \"end_event\": true, \"start_event\": true, \"constraints\": \"ssm\"}'",
+        );
+        for h in [None, Some(&given)] {
+            let r = audit(&bag, h).unwrap();
+            assert_eq!(
+                r.evidence.completeness,
+                pacs_audit::Completeness::Incomplete,
+                "{name}, given: {}",
+                h.is_some()
+            );
+            assert_ne!(r.verdict, Verdict::Pass, "{name}");
+            assert_eq!(
+                r.meta.get("own_header_replaced"),
+                h.is_some().then_some(&serde_json::Value::Bool(true)),
+                "{name}"
+            );
+        }
+    }
+}
