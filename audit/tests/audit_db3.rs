@@ -1438,7 +1438,10 @@ fn a_given_header_keeps_a_bags_own_promises() {
         ModelRef::Name("default".into()),
         ModelRef::Name("ssm".into()),
     );
-    for (from, name) in [(fixtures().join("clean"), "db3"), (mcap_bags().join("clean"), "mcap")] {
+    for (from, name) in [
+        (fixtures().join("clean"), "db3"),
+        (mcap_bags().join("clean"), "mcap"),
+    ] {
         let bag = copy_bag(&from, &d, name);
         edit_metadata(
             &bag,

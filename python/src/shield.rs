@@ -142,6 +142,8 @@ pub struct Handle {
     pub header: Arc<Header>,
     /// Where the run is logged, if it is.
     pub log_path: Option<PathBuf>,
+    /// The human model `acc` needs every measurement's velocities.
+    pub needs_velocities: bool,
 }
 
 impl Handle {
@@ -202,6 +204,12 @@ impl Handle {
         velocities: Option<&Bound<'_, PyAny>>,
         human: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
+        if self.needs_velocities && velocities.is_none_or(|v| v.is_none()) {
+            return Err(input(
+                "velocities: required with human_model `acc` (a measurement without them would never let a step verify; use `combined`, the default, to measure positions alone)"
+                    .to_string(),
+            ));
+        }
         let ids: Vec<&str> = self.header.people().into_iter().map(|(id, _)| id).collect();
         let (id, m) = measurement(&self.humans, &ids, human, t_meas, positions, velocities)?;
         with_inner(py, &self.inner, move |g| {
@@ -323,6 +331,7 @@ impl PyShield {
                 humans: s.humans,
                 object_ids,
                 names,
+                needs_velocities: cfg.human_model == pacs_reach::human::HumanReachModel::Acc,
             },
         })
     }

@@ -179,6 +179,15 @@ def test_humans_none_means_no_human(demo):
     assert all(c.verified for c in run(s, 100))
 
 
+def test_the_acc_model_refuses_a_measurement_without_velocities(demo):
+    # Without velocities no step could ever verify under `acc`: refused, naming the argument.
+    s = pacs.Shield(config={"human_model": "acc"})
+    s.start(0.0, demo.start)
+    with pytest.raises(pacs.InputError, match="velocities: required with human_model `acc`"):
+        s.measure(0.0, far_human(demo))
+    s.measure(0.0, far_human(demo), velocities=np.zeros_like(far_human(demo)))
+
+
 def test_an_empty_list_of_people_is_refused():
     # `humans=[]` would silently mean "no person" (as `humans=None`): refused, pointing at None.
     with pytest.raises(pacs.InputError, match="humans: an empty list"):
