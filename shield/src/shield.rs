@@ -244,6 +244,9 @@ struct HumanSlot {
     /// Latest measurement (buffer allocated when the human is added; valid when `has_meas`).
     meas: HumanMeasurement,
     has_meas: bool,
+    /// A measurement arrived that contradicts `meas` under the human model: one of the two is
+    /// wrong, so no step verifies until a newer one agrees with `meas` (which is kept).
+    contradicted: bool,
     /// Body-part occupancies of the interval being checked.
     caps: Vec<Capsule>,
     /// On the interval being checked, outside the robot's workspace ball.
@@ -273,16 +276,34 @@ impl HumanSlot {
             rule,
             meas,
             has_meas: false,
+            contradicted: false,
             caps,
             clear: false,
         })
     }
 
-    /// Replace the latest measurement if `m` is newer (older or equal-time ones are ignored).
+    /// Replace the measurement in use if `m` is newer (older or equal-time ones are ignored) —
+    /// unless the two contradict the human model (some keypoint moved farther than
+    /// `v_max·|Δt| + 2·measurement_error_pos`, the audit's `human_exceeds_model` test,
+    /// [`pacs_reach::human::consistency::human_pair_breaks`]): then one of them is wrong, the
+    /// trusted one is kept and the person is `contradicted` — no step verifies (the robot
+    /// follows the failsafe verified before) until a newer measurement agrees with the trusted
+    /// one (whose allowance grows with the time since it: a person who truly moved is accepted
+    /// once the model allows the move). Test `shield/tests/measurements.rs::
+    /// a_measurement_that_contradicts_the_trusted_one_verifies_nothing` (mutant `x118`).
     fn take(&mut self, m: &HumanMeasurement) {
-        if m.supersedes(self.has_meas.then_some(&self.meas)) {
+        if !self.has_meas {
             self.meas.assign_from(m);
             self.has_meas = true;
+            return;
+        }
+        if pacs_reach::human::consistency::human_pair_breaks(self.reach.model(), &self.meas, m) {
+            self.contradicted = true;
+            return;
+        }
+        if m.supersedes(Some(&self.meas)) {
+            self.meas.assign_from(m);
+            self.contradicted = false;
         }
     }
 }

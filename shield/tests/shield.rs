@@ -528,3 +528,54 @@ fn a_person_measured_beyond_any_reach_is_not_verified_against() {
         assert!(r.qs.iter().all(|q| *q == Q0), "at {far} m the robot moved");
     }
 }
+
+/// A measurement that contradicts the one the shield trusts (a keypoint moved farther than
+/// `v_max·Δt + 2·e_pos` since it) verifies nothing: one of the two is wrong. An outside review's
+/// tracker glitch put the person 4 m away for 30 ms while the hand was in the arm's path; the
+/// shield verified steps against the glitch. Here the person stands 2.5 m from the base,
+/// measured every step; from 0.3 s to 0.33 s the tracker reports them 3.5 m farther: those steps
+/// are not verified (binding `contradicted-measurement`), and verification resumes with the next
+/// measurement that agrees with the trusted one. A person who truly moved 2 m is accepted once
+/// the model allows that move since the trusted measurement (v_max 2 m/s: after about 1 s).
+#[test]
+fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
+    use pacs_shield::shield::Binding;
+    let robot = fr3::fr3();
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let spec = ConstraintSpec::builtin("sorting").unwrap();
+    let cfg = ShieldConfig::default();
+    let run = |at: &dyn Fn(f64) -> f64| {
+        let mut sh =
+            Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+        sh.start(0.0, &Q0).unwrap();
+        let mut out = Vec::new();
+        for k in 0..2000 {
+            let t = k as f64 * cfg.safety_step;
+            if k % 100 == 0 {
+                let _ = sh.set_chunk(&chunk(DELTA, 8));
+            }
+            let kp = pacs_testkit::standing_arms_forward(at(t));
+            let m = HumanMeasurement::new(&human, t, &kp, None).unwrap();
+            let cmd = sh.step(t, Some(&m)).expect("started");
+            out.push((t, cmd.diag.verified, cmd.diag.binding));
+        }
+        out
+    };
+    let glitch = run(&|t| if (0.3..0.33).contains(&t) { 6.0 } else { 2.5 });
+    for &(t, verified, binding) in &glitch {
+        if (0.3..0.33).contains(&t) {
+            assert!(!verified, "t = {t}");
+            assert_eq!(binding, Binding::ContradictedMeasurement { human: 0 }, "t = {t}");
+        }
+    }
+    let verified_in = |r: &[(f64, bool, Binding)], a: f64, b: f64| {
+        r.iter().filter(|(t, v, _)| *v && (a..b).contains(t)).count()
+    };
+    assert!(verified_in(&glitch, 0.0, 0.3) > 200);
+    assert!(verified_in(&glitch, 0.34, 0.5) > 100);
+    // A true move of 2 m at 0.5 s: contradicted until the model allows it (2 m at 2 m/s within
+    // 2·e_pos: ≈ 0.99 s after the last trusted measurement), then trusted again.
+    let moved = run(&|t| if t < 0.5 { 2.5 } else { 4.5 });
+    assert_eq!(verified_in(&moved, 0.5, 1.45), 0);
+    assert!(verified_in(&moved, 1.55, 2.0) > 300);
+}

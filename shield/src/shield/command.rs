@@ -12,6 +12,14 @@ pub enum Binding {
     None,
     /// No valid human (or object) measurement yet.
     NoMeasurement,
+    /// A person's latest measurement contradicts the one the shield trusts (some keypoint moved
+    /// farther than the human model allows between their stamps): one of them is wrong, and no
+    /// step verifies until a newer one agrees with the trusted one.
+    ContradictedMeasurement {
+        /// Human index (0: the first human, not written to logs).
+        #[serde(skip_serializing_if = "is_first")]
+        human: usize,
+    },
     /// No admissible path-speed profile (limits leave no margin).
     NoProfile,
     /// SSM: contact possible while moving.
