@@ -545,8 +545,7 @@ fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
     let spec = ConstraintSpec::builtin("sorting").unwrap();
     let cfg = ShieldConfig::default();
     let run = |at: &dyn Fn(f64) -> f64| {
-        let mut sh =
-            Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
+        let mut sh = Shield::new(robot.clone(), Some((human.clone(), &spec)), vec![], cfg).unwrap();
         sh.start(0.0, &Q0).unwrap();
         let mut out = Vec::new();
         for k in 0..2000 {
@@ -565,11 +564,17 @@ fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
     for &(t, verified, binding) in &glitch {
         if (0.3..0.33).contains(&t) {
             assert!(!verified, "t = {t}");
-            assert_eq!(binding, Binding::ContradictedMeasurement { human: 0 }, "t = {t}");
+            assert_eq!(
+                binding,
+                Binding::ContradictedMeasurement { human: 0 },
+                "t = {t}"
+            );
         }
     }
     let verified_in = |r: &[(f64, bool, Binding)], a: f64, b: f64| {
-        r.iter().filter(|(t, v, _)| *v && (a..b).contains(t)).count()
+        r.iter()
+            .filter(|(t, v, _)| *v && (a..b).contains(t))
+            .count()
     };
     assert!(verified_in(&glitch, 0.0, 0.3) > 200);
     assert!(verified_in(&glitch, 0.34, 0.5) > 100);
