@@ -289,7 +289,7 @@ impl HumanSlot {
     /// trusted one is kept and the person is `contradicted` — no step verifies (the robot
     /// follows the failsafe verified before) until a newer measurement agrees with the trusted
     /// one (whose allowance grows with the time since it: a person who truly moved is accepted
-    /// once the model allows the move). Test `shield/tests/measurements.rs::
+    /// once the model allows the move). Test `shield/tests/shield.rs::
     /// a_measurement_that_contradicts_the_trusted_one_verifies_nothing` (mutant `x118`).
     fn take(&mut self, m: &HumanMeasurement) {
         if !self.has_meas {
