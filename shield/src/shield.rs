@@ -237,6 +237,14 @@ pub struct Shield {
 }
 
 /// A human in the shield's scene.
+/// Trusted person measurements a new one is also held against (besides the one in use).
+const RECENT: usize = 16;
+/// The least time (s) between two of them: with [`RECENT`], they reach back 0.32 s or more,
+/// so a chain of measurements drifting away, each within the model's allowance of the one
+/// before (`2·measurement_error_pos` even at equal stamps), is caught once it has moved
+/// `v_max·Δt + 2·measurement_error_pos` from one of them.
+const RECENT_SPACING: f64 = 0.02;
+
 #[derive(Debug, Clone)]
 struct HumanSlot {
     reach: HumanReach,
@@ -244,9 +252,18 @@ struct HumanSlot {
     /// Latest measurement (buffer allocated when the human is added; valid when `has_meas`).
     meas: HumanMeasurement,
     has_meas: bool,
-    /// A measurement arrived that contradicts `meas` under the human model: one of the two is
-    /// wrong, so no step verifies until a newer one agrees with `meas` (which is kept).
+    /// A measurement arrived that contradicts `meas` (or a recent trusted one) under the human
+    /// model: one of them is wrong, so no step verifies until a newer one agrees with them
+    /// (`meas` is kept).
     contradicted: bool,
+    /// Trusted measurements of the last [`RECENT`]·[`RECENT_SPACING`] s or more, at least
+    /// [`RECENT_SPACING`] apart (a ring, buffers allocated when the human is added): a new
+    /// measurement must agree with each, so that a chain of measurements each within the model's
+    /// allowance of the one before cannot drift away from where the person was.
+    recent: Vec<HumanMeasurement>,
+    /// Entries of `recent` in use, and the next one to write.
+    recent_len: usize,
+    recent_next: usize,
     /// Body-part occupancies of the interval being checked.
     caps: Vec<Capsule>,
     /// On the interval being checked, outside the robot's workspace ball.
@@ -274,9 +291,12 @@ impl HumanSlot {
         Ok(Self {
             reach: HumanReach::new(h, c.human_model),
             rule,
+            recent: vec![meas.clone(); RECENT],
             meas,
             has_meas: false,
             contradicted: false,
+            recent_len: 0,
+            recent_next: 0,
             caps,
             clear: false,
         })
@@ -295,16 +315,34 @@ impl HumanSlot {
         if !self.has_meas {
             self.meas.assign_from(m);
             self.has_meas = true;
+            self.remember(m);
             return;
         }
-        if pacs_reach::human::consistency::human_pair_breaks(self.reach.model(), &self.meas, m) {
+        let model = self.reach.model();
+        let breaks = |r: &HumanMeasurement| {
+            pacs_reach::human::consistency::human_pair_breaks(model, r, m)
+        };
+        if breaks(&self.meas) || self.recent[..self.recent_len].iter().any(breaks) {
             self.contradicted = true;
             return;
         }
         if m.supersedes(Some(&self.meas)) {
             self.meas.assign_from(m);
             self.contradicted = false;
+            self.remember(m);
         }
+    }
+
+    /// Keep the trusted measurement `m` among the recent ones if it is at least
+    /// [`RECENT_SPACING`] newer than the newest kept (the oldest is let go).
+    fn remember(&mut self, m: &HumanMeasurement) {
+        let newest = (self.recent_next + RECENT - 1) % RECENT;
+        if self.recent_len > 0 && m.time() - self.recent[newest].time() < RECENT_SPACING {
+            return;
+        }
+        self.recent[self.recent_next].assign_from(m);
+        self.recent_next = (self.recent_next + 1) % RECENT;
+        self.recent_len = (self.recent_len + 1).min(RECENT);
     }
 }
 

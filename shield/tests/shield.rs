@@ -578,6 +578,19 @@ fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
     };
     assert!(verified_in(&glitch, 0.0, 0.3) > 200);
     assert!(verified_in(&glitch, 0.34, 0.5) > 100);
+    // A drift: from 0.3 s each measurement 15 mm farther than the one before (each within the
+    // model's allowance of it, 2·e_pos = 20 mm plus v_max·1 ms, but 15 m/s in all): held
+    // against the recent trusted ones, it is contradicted within a few frames of the first
+    // one 20 ms back, and nothing verifies while it goes on (until 0.45 s).
+    let drift = run(&|t| {
+        if (0.3..0.45).contains(&t) {
+            2.5 + 15.0 * (t - 0.3)
+        } else {
+            2.5
+        }
+    });
+    assert_eq!(verified_in(&drift, 0.33, 0.45), 0);
+    assert!(verified_in(&drift, 0.47, 0.7) > 100);
     // A true move of 2 m at 0.5 s: contradicted until the model allows it (2 m at 2 m/s within
     // 2·e_pos: ≈ 0.99 s after the last trusted measurement), then trusted again.
     let moved = run(&|t| if t < 0.5 { 2.5 } else { 4.5 });

@@ -198,6 +198,11 @@ impl BindingNames {
         if let Some(id) = object.and_then(|o| self.objects.get(o)) {
             m.insert("object_id".into(), id.clone().into());
         }
+        if let Binding::ContradictedMeasurement { human } = *b
+            && let Some((Some(id), _)) = self.people.get(human)
+        {
+            m.insert("person".into(), id.clone().into());
+        }
         v
     }
 }
