@@ -25,7 +25,7 @@ use pacs_reach::geometry::segment_distance_upper_bound;
 use pacs_reach::human::{HumanMeasurement, HumanReach};
 use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
-use pacs_reach::rounding::{add_down, add_up, dist3_up, mul_down, norm3_up, sub_down};
+use pacs_reach::rounding::{add_down, add_up, norm3_up, sub_down};
 use pacs_verify::iso15066::{
     ContactRule, EnvShape, ObjectRule, Outcome, frames_can_pinch, threshold,
 };

@@ -33,6 +33,8 @@ use crate::zonotope::Zonotope3;
 use pacs_models::object::{MAX_ACC_GENERATORS, MAX_SHAPE_GENERATORS, ObjectModel};
 use pacs_models::shape::Capsule;
 
+pub mod consistency;
+
 /// Generators of an occupancy zonotope: the two of the time interval, the acceleration set's and
 /// the shape's.
 pub const MAX_OCCUPANCY_GENERATORS: usize = 2 + MAX_ACC_GENERATORS + MAX_SHAPE_GENERATORS;

@@ -319,9 +319,8 @@ impl HumanSlot {
             return;
         }
         let model = self.reach.model();
-        let breaks = |r: &HumanMeasurement| {
-            pacs_reach::human::consistency::human_pair_breaks(model, r, m)
-        };
+        let breaks =
+            |r: &HumanMeasurement| pacs_reach::human::consistency::human_pair_breaks(model, r, m);
         if breaks(&self.meas) || self.recent[..self.recent_len].iter().any(breaks) {
             self.contradicted = true;
             return;
