@@ -54,6 +54,7 @@ use pacs_motion::intended::{PlanMethod, Planner, PlannerConfig};
 use pacs_motion::scaling::{PathState, SpeedProfile};
 use pacs_motion::trajectory::{EndCondition, JointState, Limits, Trajectory};
 use pacs_reach::human::{HumanMeasurement, HumanReach, HumanReachModel};
+use pacs_reach::object::consistency::{ObjectBounds, object_pair_breaks};
 use pacs_reach::object::{ObjectMeasurement, ObjectOccupancy};
 use pacs_reach::robot::{ReachScratch, RobotReach};
 use pacs_verify::iso15066::{ContactRule, ObjectRule};
@@ -350,7 +351,60 @@ impl HumanSlot {
 struct ObjectSlot {
     model: ObjectModel,
     contact: ObjectContact,
+    /// The measurement in use (the trusted one).
     meas: Option<ObjectMeasurement>,
+    /// What the record-against-record test needs of the model.
+    bounds: ObjectBounds,
+    /// A measurement arrived that contradicts a trusted one: no step verifies until a newer one
+    /// agrees with them (as for people, [`HumanSlot::take`]).
+    contradicted: bool,
+    /// Recent trusted measurements, at least [`RECENT_SPACING`] apart (a ring).
+    recent: [ObjectMeasurement; RECENT],
+    recent_len: usize,
+    recent_next: usize,
+}
+
+impl ObjectSlot {
+    /// Use `m` if it is newer than the measurement in use — unless it contradicts that one or
+    /// a recent trusted one under the object's model (the audit's `object_exceeds_model` test:
+    /// positions, velocities and a measured velocity's direction,
+    /// [`pacs_reach::object::consistency::object_pair_breaks`]): then one of them is wrong, the
+    /// trusted one is kept and no step verifies until a newer measurement agrees with them. Test
+    /// `shield/tests/objects.rs::an_object_measurement_that_contradicts_the_trusted_ones_verifies_nothing`
+    /// (mutant `x120`).
+    fn take(&mut self, m: &ObjectMeasurement) {
+        let Some(trusted) = self.meas else {
+            self.meas = Some(*m);
+            self.remember(m);
+            return;
+        };
+        let b = &self.bounds;
+        let breaks = |r: &ObjectMeasurement| {
+            let (early, late) = if r.time <= m.time { (r, m) } else { (m, r) };
+            object_pair_breaks(b, early, late)
+        };
+        if breaks(&trusted) || self.recent[..self.recent_len].iter().any(breaks) {
+            self.contradicted = true;
+            return;
+        }
+        if m.time > trusted.time {
+            self.meas = Some(*m);
+            self.contradicted = false;
+            self.remember(m);
+        }
+    }
+
+    /// Keep the trusted measurement `m` among the recent ones if it is at least
+    /// [`RECENT_SPACING`] newer than the newest kept (the oldest is let go).
+    fn remember(&mut self, m: &ObjectMeasurement) {
+        let newest = (self.recent_next + RECENT - 1) % RECENT;
+        if self.recent_len > 0 && m.time - self.recent[newest].time < RECENT_SPACING {
+            return;
+        }
+        self.recent[self.recent_next] = *m;
+        self.recent_next = (self.recent_next + 1) % RECENT;
+        self.recent_len = (self.recent_len + 1).min(RECENT);
+    }
 }
 
 impl std::fmt::Debug for Shield {
@@ -489,10 +543,20 @@ impl Shield {
                 index: self.objects.len(),
                 error,
             })?;
+        let bounds = ObjectBounds::of(&model);
         self.objects.push(ObjectSlot {
             model,
             contact,
             meas: None,
+            bounds,
+            contradicted: false,
+            recent: [ObjectMeasurement {
+                time: 0.0,
+                position: [0.0; 3],
+                velocity: None,
+            }; RECENT],
+            recent_len: 0,
+            recent_next: 0,
         });
         self.object_occ.push(None);
         self.object_window.push(None);
@@ -515,7 +579,7 @@ impl Shield {
         let Some(slot) = self.objects.get_mut(id) else {
             return Err(ShieldError::UnknownObject { id, count: n });
         };
-        m.keep_newest(&mut slot.meas);
+        slot.take(m);
         Ok(())
     }
 

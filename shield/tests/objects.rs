@@ -275,3 +275,54 @@ fn the_arm_follows_a_ball_rolling_away_along_its_path() {
     assert!(r.verified >= 1050, "verified {} of 1500 steps", r.verified);
     assert!(r.moved > 0.49, "moved {} rad", r.moved);
 }
+
+/// A measurement of an object that contradicts the ones the shield trusts (positions farther
+/// apart than the model allows, or a velocity the positions refute) verifies nothing until a
+/// newer one agrees with them. Outside reviews: a tracker glitch reporting a resting ball 2 m
+/// higher for 0.5 s, and a frozen tracker reporting the resting ball with a velocity of
+/// 0.99 m/s (under the 1 m/s bound) pointing away — the shield took both and drove into it.
+/// Here the ball rests 2 m away, measured every step; from 0.3 s to 0.35 s the measurement is
+/// (a) 2 m higher or (b) the true position with 0.99 m/s along x: those steps verify nothing
+/// (binding `contradicted-object`), and verification resumes after.
+#[test]
+fn an_object_measurement_that_contradicts_the_trusted_ones_verifies_nothing() {
+    let cfg = ShieldConfig::default();
+    let c = [2.0, 0.0, 0.5];
+    let glitches: [(&str, [f64; 3], Option<[f64; 3]>); 2] = [
+        ("position", [2.0, 0.0, 2.5], Some([0.0; 3])),
+        ("velocity", c, Some([0.99, 0.0, 0.0])),
+    ];
+    for (what, pos, vel) in glitches {
+        let mut sh = Shield::new(fr3::fr3(), None, vec![], cfg).unwrap();
+        let id = sh.add_object(ball(), ObjectContact::NoContact).unwrap();
+        sh.start(0.0, &Q0).unwrap();
+        let (mut during, mut after) = (0, 0);
+        for k in 0..700 {
+            let t = k as f64 * cfg.safety_step;
+            if k % 200 == 0 {
+                let _ = sh.set_chunk(&chunk());
+            }
+            let glitch = (0.3..0.35).contains(&t);
+            let m = ObjectMeasurement {
+                time: t,
+                position: if glitch { pos } else { c },
+                velocity: if glitch { vel } else { Some([0.0; 3]) },
+            };
+            sh.measure_object(id, &m).unwrap();
+            let cmd = sh.step(t, None).unwrap();
+            // (A velocity's direction shows after a few frames: from 0.31 s on.)
+            if (0.31..0.35).contains(&t) {
+                assert!(!cmd.diag.verified, "{what}: t = {t}");
+                assert_eq!(
+                    cmd.diag.binding,
+                    Binding::ContradictedObject { object: 0 },
+                    "{what}: t = {t}"
+                );
+                during += 1;
+            }
+            after += usize::from(t >= 0.4 && cmd.diag.verified);
+        }
+        assert!(during > 30, "{what}");
+        assert!(after > 200, "{what}: {after}");
+    }
+}

@@ -20,6 +20,13 @@ pub enum Binding {
         #[serde(skip_serializing_if = "is_first")]
         human: usize,
     },
+    /// A dynamic object's latest measurement contradicts the ones the shield trusts (positions,
+    /// velocities or a velocity's direction beyond the object model): no step verifies until a
+    /// newer one agrees with them.
+    ContradictedObject {
+        /// Object index (order of [`Shield::add_object`](super::Shield::add_object)).
+        object: usize,
+    },
     /// No admissible path-speed profile (limits leave no margin).
     NoProfile,
     /// SSM: contact possible while moving.
@@ -180,6 +187,7 @@ impl BindingNames {
                 ..
             } => (Some(link), Some((human, body_part)), None),
             Binding::Object { link, object, .. } => (Some(link), None, Some(object)),
+            Binding::ContradictedObject { object } => (None, None, Some(object)),
             _ => (None, None, None),
         };
         if let Some(l) = link.and_then(|l| self.links.get(l)) {

@@ -53,6 +53,10 @@ impl Shield {
             diag.binding = Binding::ContradictedMeasurement { human };
             return false;
         }
+        if let Some(object) = self.objects.iter().position(|o| o.contradicted) {
+            diag.binding = Binding::ContradictedObject { object };
+            return false;
+        }
         // Each object's occupancy over the whole monitored trajectory `[t, t + stop]`, once per
         // verification: every interval below lies in it, so it contains theirs (claim C4′ holds
         // at every time of its window) and they compute their own only where it touches the
