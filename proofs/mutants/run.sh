@@ -75,7 +75,8 @@ for patch in "$root"/proofs/mutants/*.patch; do
     # The user-scene runner's log (x55: only the newest measurement of a step logged).
     cargo test -p pacs --test cli_shield --no-fail-fast >>"$log" 2>&1
     cargo test -p pacs-shield --lib --no-fail-fast >>"$log" 2>&1
-    # The shield's person measurements held against the trusted ones (x118, x119).
+    # The shield's person and object measurements held against the trusted ones (x118–x120;
+    # the objects' test runs with `pacs-shield --test objects` above).
     cargo test -p pacs-shield --test shield --no-fail-fast >>"$log" 2>&1
     # An object's velocity beyond its speed bound (x117).
     cargo test -p pacs-reach --test object --no-fail-fast >>"$log" 2>&1

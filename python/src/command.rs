@@ -50,7 +50,7 @@ impl PyCommand {
         self.cmd.diag.on_failsafe
     }
     /// What decided the step: {"kind": "none" | "no-measurement" | "contradicted-measurement" |
-    /// "no-profile" | "ssm" |
+    /// "contradicted-object" | "no-profile" | "ssm" |
     /// "pfl" | "object", ...indices, energies (J)}, with beside each index the name it stands
     /// for: `link_name`, `person` (the person's id), `body_part_name`, `object_id`.
     #[getter]
