@@ -288,7 +288,7 @@ fn the_arm_follows_a_ball_rolling_away_along_its_path() {
 fn an_object_measurement_that_contradicts_the_trusted_ones_verifies_nothing() {
     let cfg = ShieldConfig::default();
     let c = [2.0, 0.0, 0.5];
-    let glitches: [(&str, [f64; 3], Option<[f64; 3]>); 2] = [
+    let glitches = [
         ("position", [2.0, 0.0, 2.5], Some([0.0; 3])),
         ("velocity", c, Some([0.99, 0.0, 0.0])),
     ];

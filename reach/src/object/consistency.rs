@@ -248,6 +248,7 @@ pub fn object_pair_within_plain(
 /// less a relative 1e-9 (its own rounding, and the outward-rounded test's slack, far below that).
 /// False otherwise (the caller then decides with outward rounding).
 #[inline]
+#[allow(clippy::needless_range_loop)] // three coordinates of three arrays
 fn direction_within_plain(
     early: &ObjectMeasurement,
     late: &ObjectMeasurement,
