@@ -98,8 +98,10 @@ struct ObjectTrack {
     /// the bias and generators), computed once.
     bounds: ObjectBounds,
     contact: ObjectContact,
-    /// The measurement in use: the newest by stamp, the first of equal stamps (the shield's
-    /// [`ObjectMeasurement::keep_newest`]).
+    /// The measurement in use: the newest by stamp, the first of equal stamps
+    /// ([`ObjectMeasurement::keep_newest`]; the shield's rule for measurements that agree with
+    /// the ones it trusts — one that contradicts them it does not use, and the audit finds the
+    /// contradiction).
     latest: Option<ObjectMeasurement>,
     /// The latest [`HUMAN_HISTORY`] measurements by stamp, for the model check of each record.
     history: std::collections::VecDeque<ObjectMeasurement>,
@@ -630,8 +632,8 @@ impl Auditor {
             velocity,
         };
         // Every record is checked against every kept one (older or newer, as it arrives); the
-        // newest by stamp is the one in use, as in the shield (`keep_newest`: the first of equal
-        // stamps stays).
+        // newest by stamp is the one in use (`keep_newest`: the first of equal stamps stays), as
+        // in the shield where the records agree.
         if object_record_breaks(&self.objects[k].model, &m) {
             self.model_break_about(m.time, m.time, Reason::ObjectExceedsModel, Some(k));
         }

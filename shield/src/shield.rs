@@ -237,15 +237,17 @@ pub struct Shield {
     scratch: ReachScratch,
 }
 
-/// A human in the shield's scene.
-/// Trusted person measurements a new one is also held against (besides the one in use).
+/// Trusted measurements of a person or object a new one is also held against (besides the one
+/// in use).
 const RECENT: usize = 16;
-/// The least time (s) between two of them: with [`RECENT`], they reach back 0.32 s or more,
+/// The least time (s) between two of them: with [`RECENT`], they reach back 0.30 s or more,
 /// so a chain of measurements drifting away, each within the model's allowance of the one
 /// before (`2·measurement_error_pos` even at equal stamps), is caught once it has moved
-/// `v_max·Δt + 2·measurement_error_pos` from one of them.
+/// farther than the model allows since one of them (a drift slower than that is motion the
+/// model admits).
 const RECENT_SPACING: f64 = 0.02;
 
+/// A human in the shield's scene.
 #[derive(Debug, Clone)]
 struct HumanSlot {
     reach: HumanReach,
@@ -254,10 +256,12 @@ struct HumanSlot {
     meas: HumanMeasurement,
     has_meas: bool,
     /// A measurement arrived that contradicts `meas` (or a recent trusted one) under the human
-    /// model: one of them is wrong, so no step verifies until a newer one agrees with them
-    /// (`meas` is kept).
+    /// model: one of them is wrong, so no step verifies until one newer than every contradicting
+    /// one agrees with them (`meas` is kept).
     contradicted: bool,
-    /// Trusted measurements of the last [`RECENT`]·[`RECENT_SPACING`] s or more, at least
+    /// The newest stamp (s) of a measurement that contradicted the trusted ones.
+    rejected_at: f64,
+    /// Trusted measurements of the last (`RECENT` − 1)·[`RECENT_SPACING`] s or more, at least
     /// [`RECENT_SPACING`] apart (a ring, buffers allocated when the human is added): a new
     /// measurement must agree with each, so that a chain of measurements each within the model's
     /// allowance of the one before cannot drift away from where the person was.
@@ -296,6 +300,7 @@ impl HumanSlot {
             meas,
             has_meas: false,
             contradicted: false,
+            rejected_at: f64::NEG_INFINITY,
             recent_len: 0,
             recent_next: 0,
             caps,
@@ -303,8 +308,9 @@ impl HumanSlot {
         })
     }
 
-    /// Replace the measurement in use if `m` is newer (older or equal-time ones are ignored) —
-    /// unless the two contradict the human model (some keypoint moved farther than
+    /// Replace the measurement in use if `m` is newer and newer than every rejected one (older or
+    /// equal-time ones that agree are ignored) — unless `m` and a trusted one contradict the
+    /// human model (some keypoint moved farther than
     /// `v_max·|Δt| + 2·measurement_error_pos`, the audit's `human_exceeds_model` test,
     /// [`pacs_reach::human::consistency::human_pair_breaks`]): then one of them is wrong, the
     /// trusted one is kept and the person is `contradicted` — no step verifies (the robot
@@ -324,9 +330,12 @@ impl HumanSlot {
             |r: &HumanMeasurement| pacs_reach::human::consistency::human_pair_breaks(model, r, m);
         if breaks(&self.meas) || self.recent[..self.recent_len].iter().any(breaks) {
             self.contradicted = true;
+            self.rejected_at = self.rejected_at.max(m.time());
             return;
         }
-        if m.supersedes(Some(&self.meas)) {
+        // Only a measurement newer than every rejected one clears a contradiction (an older one
+        // would be verified against while a newer one said otherwise).
+        if m.supersedes(Some(&self.meas)) && m.time() > self.rejected_at {
             self.meas.assign_from(m);
             self.contradicted = false;
             self.remember(m);
@@ -355,9 +364,11 @@ struct ObjectSlot {
     meas: Option<ObjectMeasurement>,
     /// What the record-against-record test needs of the model.
     bounds: ObjectBounds,
-    /// A measurement arrived that contradicts a trusted one: no step verifies until a newer one
-    /// agrees with them (as for people, [`HumanSlot::take`]).
+    /// A measurement arrived that contradicts a trusted one: no step verifies until one newer
+    /// than every contradicting one agrees with them (as for people, [`HumanSlot::take`]).
     contradicted: bool,
+    /// The newest stamp (s) of a measurement that contradicted the trusted ones.
+    rejected_at: f64,
     /// Recent trusted measurements, at least [`RECENT_SPACING`] apart (a ring).
     recent: [ObjectMeasurement; RECENT],
     recent_len: usize,
@@ -385,9 +396,10 @@ impl ObjectSlot {
         };
         if breaks(&trusted) || self.recent[..self.recent_len].iter().any(breaks) {
             self.contradicted = true;
+            self.rejected_at = self.rejected_at.max(m.time);
             return;
         }
-        if m.time > trusted.time {
+        if m.time > trusted.time && m.time > self.rejected_at {
             self.meas = Some(*m);
             self.contradicted = false;
             self.remember(m);
@@ -550,6 +562,7 @@ impl Shield {
             meas: None,
             bounds,
             contradicted: false,
+            rejected_at: f64::NEG_INFINITY,
             recent: [ObjectMeasurement {
                 time: 0.0,
                 position: [0.0; 3],
@@ -569,8 +582,10 @@ impl Shield {
         self.objects.len()
     }
 
-    /// Record a measurement of object `id`: it replaces the latest one if it is newer (older or
-    /// equal-time ones are ignored). Errors: unknown `id`, non-finite values.
+    /// Record a measurement of object `id` (`ObjectSlot::take`): it replaces the one in use if it
+    /// is newer and agrees with the trusted ones; an older or equal-time one that agrees is
+    /// ignored; one that contradicts them, of any stamp, stops verification until one newer than
+    /// it agrees. Errors: unknown `id`, non-finite values.
     pub fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError> {
         if !m.is_finite() {
             return Err(ShieldError::ObjectNotFinite(id));

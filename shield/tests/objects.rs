@@ -326,3 +326,45 @@ fn an_object_measurement_that_contradicts_the_trusted_ones_verifies_nothing() {
         assert!(after > 200, "{what}: {after}");
     }
 }
+
+/// A contradiction is cleared only by a measurement newer than the one that caused it: a ball
+/// resting 2 m away, measured every 10 ms up to 0.3 s, then a glitch stamped 0.35 s (2 m
+/// higher), then a measurement stamped 0.33 s at the true place (older than the glitch): the
+/// shield keeps verifying nothing until one stamped after 0.35 s agrees (an outside review found
+/// the older one clearing it, the step then verified against it while the newest said otherwise).
+#[test]
+fn only_a_measurement_newer_than_the_contradicting_one_clears_it() {
+    let cfg = ShieldConfig::default();
+    let c = [2.0, 0.0, 0.5];
+    let mut sh = Shield::new(fr3::fr3(), None, vec![], cfg).unwrap();
+    let id = sh.add_object(ball(), ObjectContact::NoContact).unwrap();
+    // (Every measurement below is stamped before the steps: none is from the future.)
+    sh.start(0.4, &Q0).unwrap();
+    let at = |time, position| ObjectMeasurement {
+        time,
+        position,
+        velocity: Some([0.0; 3]),
+    };
+    let mut t = 0.4;
+    for k in 0..=30 {
+        sh.measure_object(id, &at(k as f64 * 0.01, c)).unwrap();
+    }
+    let _ = sh.set_chunk(&chunk());
+    let mut step = |sh: &mut Shield| {
+        let cmd = sh.step(t, None).unwrap();
+        t += cfg.safety_step;
+        cmd.diag
+    };
+    assert!(step(&mut sh).verified);
+    sh.measure_object(id, &at(0.35, [2.0, 0.0, 2.5])).unwrap();
+    assert_eq!(
+        step(&mut sh).binding,
+        Binding::ContradictedObject { object: 0 }
+    );
+    sh.measure_object(id, &at(0.33, c)).unwrap();
+    let d = step(&mut sh);
+    assert!(!d.verified);
+    assert_eq!(d.binding, Binding::ContradictedObject { object: 0 });
+    sh.measure_object(id, &at(0.36, c)).unwrap();
+    assert!(step(&mut sh).verified);
+}

@@ -383,7 +383,7 @@ mod tests {
                 })
             };
             let ev = velocity(&mut next);
-            let vb = b.acc * dt + 2.0 * b.vel_error;
+            let vb = b.acc() * dt + 2.0 * b.vel_error();
             let lv = match ev {
                 Some(v) if next() < 0.7 => {
                     let d = dir(&mut next);
@@ -396,17 +396,16 @@ mod tests {
                 _ => velocity(&mut next),
             };
             let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            let allowed = [b.max_speed.map(|v| v * dt)]
-                .into_iter()
-                .chain(
-                    [ev, lv]
-                        .into_iter()
-                        .map(|v| v.map(|v| (norm(v) + b.vel_error) * dt + 0.5 * b.acc * dt * dt)),
-                )
-                .flatten()
-                .reduce(f64::min)
-                .unwrap_or(scale)
-                + 2.0 * b.pos_error;
+            let allowed =
+                [b.max_speed().map(|v| v * dt)]
+                    .into_iter()
+                    .chain([ev, lv].into_iter().map(|v| {
+                        v.map(|v| (norm(v) + b.vel_error()) * dt + 0.5 * b.acc() * dt * dt)
+                    }))
+                    .flatten()
+                    .reduce(f64::min)
+                    .unwrap_or(scale)
+                    + 2.0 * b.pos_error();
             let p = [next() * scale, next() * scale, next() * scale];
             let k = match i % 3 {
                 0 => next(),
@@ -416,7 +415,7 @@ mod tests {
             let d = dir(&mut next);
             // The direction band of a measured velocity, and (in half the cases with exactly one
             // velocity) the late position along it: `p + u·Δt` moved by `k` bands.
-            let band = b.vel_error * dt + 0.5 * b.acc * dt * dt + 2.0 * b.pos_error;
+            let band = b.vel_error() * dt + 0.5 * b.acc() * dt * dt + 2.0 * b.pos_error();
             let one = match (ev, lv) {
                 (Some(u), None) | (None, Some(u)) => Some(u),
                 _ => None,

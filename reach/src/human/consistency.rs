@@ -1,7 +1,7 @@
 //! Two measurements of one person held against each other: whether they contradict the human
 //! model (some keypoint moved farther than `v_max·|Δt| + 2·measurement_error_pos` between their
 //! stamps). The audit checks every record against the others kept (`human_exceeds_model`); the
-//! shield does not trust a measurement that contradicts the last one it trusted. Every test is
+//! shield does not trust a measurement that contradicts the ones it trusts. Every test is
 //! conservative: distances rounded up, allowances rounded down, and the quick accepts in plain
 //! floats only where their rounding error is far inside a 1e-9 margin, so rounding never hides a
 //! contradiction. The Kani harnesses (`h3_keypoint_pair_sound`, `h3_keypoints_accept_sound`,

@@ -35,16 +35,16 @@ pub fn object_acc_bound(model: &ObjectModel) -> f64 {
 #[derive(Debug, Clone, Copy)]
 pub struct ObjectBounds {
     /// The bound of every acceleration (m/s², rounded down: it may lie just below zero).
-    pub acc: f64,
+    acc: f64,
     /// The speed bound (m/s), if any.
-    pub max_speed: Option<f64>,
+    max_speed: Option<f64>,
     /// The velocity error (m/s).
-    pub vel_error: f64,
+    vel_error: f64,
     /// The position error (m).
-    pub pos_error: f64,
+    pos_error: f64,
     /// The bounds are tame for the plain-float accept: the acceleration bound (taken as at
     /// least 0), its half, the speed bound and the errors each zero or normal and ≤ 1e100.
-    pub plain: bool,
+    plain: bool,
 }
 
 impl ObjectBounds {
@@ -60,6 +60,25 @@ impl ObjectBounds {
         (self.acc.max(0.0), 2.0 * self.vel_error)
     }
 
+    /// The bound of every acceleration (m/s², rounded down: it may lie just below zero).
+    pub fn acc(&self) -> f64 {
+        self.acc
+    }
+    /// The speed bound (m/s), if any.
+    pub fn max_speed(&self) -> Option<f64> {
+        self.max_speed
+    }
+    /// The velocity error (m/s).
+    pub fn vel_error(&self) -> f64 {
+        self.vel_error
+    }
+    /// The position error (m).
+    pub fn pos_error(&self) -> f64 {
+        self.pos_error
+    }
+
+    /// The bounds, and whether the plain-float accept takes them (decided here, once: the
+    /// fields cannot change afterwards).
     pub fn new(acc: f64, max_speed: Option<f64>, vel_error: f64, pos_error: f64) -> Self {
         let a = acc.max(0.0);
         let plain = [a, 0.5 * a, max_speed.unwrap_or(0.0), vel_error, pos_error]

@@ -12,9 +12,9 @@ pub enum Binding {
     None,
     /// No valid human (or object) measurement yet.
     NoMeasurement,
-    /// A person's latest measurement contradicts the one the shield trusts (some keypoint moved
+    /// A person's latest measurement contradicts the ones the shield trusts (some keypoint moved
     /// farther than the human model allows between their stamps): one of them is wrong, and no
-    /// step verifies until a newer one agrees with the trusted one.
+    /// step verifies until one newer than it agrees with the trusted ones.
     ContradictedMeasurement {
         /// Human index (0: the first human, not written to logs).
         #[serde(skip_serializing_if = "is_first")]

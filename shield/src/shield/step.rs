@@ -10,8 +10,9 @@ use pacs_motion::trajectory::JointState;
 use pacs_reach::human::HumanMeasurement;
 
 impl Shield {
-    /// Replace the first human's latest measurement if `m` is newer (older or equal-time ones are
-    /// ignored, as are ones from the future and ones for another model's keypoint count).
+    /// Take the first human's measurement `m` (`HumanSlot::take`: it replaces the one in use if it
+    /// is newer and agrees with the trusted ones; one that contradicts them stops verification;
+    /// ones from the future and ones for another model's keypoint count are ignored).
     fn take_measurement(&mut self, m: Option<&HumanMeasurement>, t: f64) {
         let Some(m) = m else { return };
         if m.time() > t {

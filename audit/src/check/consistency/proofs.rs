@@ -478,22 +478,22 @@ fn object_pair_case<S: Source>(s: &mut S) -> Option<ObjectPairCase> {
         position: point(s),
         velocity: velocity(s),
     };
-    let vb = mul_add_up(b.acc, dt, 2.0 * b.vel_error);
+    let vb = mul_add_up(b.acc(), dt, 2.0 * b.vel_error());
     let late_v = match early.velocity {
         Some(v) if s.bool() => Some(near(s, v, vb)),
         _ => velocity(s),
     };
-    let reach = mul_add_up(b.max_speed.unwrap_or(3.0), dt, 2.0 * b.pos_error);
+    let reach = mul_add_up(b.max_speed().unwrap_or(3.0), dt, 2.0 * b.pos_error());
     let late = ObjectMeasurement {
         time: late_t,
         position: near(s, early.position, reach),
         velocity: late_v,
     };
     let values = [
-        b.acc,
-        b.max_speed.unwrap_or(0.0),
-        b.vel_error,
-        b.pos_error,
+        b.acc(),
+        b.max_speed().unwrap_or(0.0),
+        b.vel_error(),
+        b.pos_error(),
         t0,
         t1,
     ];
@@ -523,8 +523,8 @@ fn assert_object_pair_within(c: &ObjectPairCase, what: &str) {
         );
     }
     let (p, q) = (&c.early.position, &c.late.position);
-    if let Some(vmax) = b.max_speed {
-        let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error);
+    if let Some(vmax) = b.max_speed() {
+        let allowed = mul_add_up(vmax, dt, 2.0 * b.pos_error());
         assert!(
             within_taken(p, q, allowed),
             "{p:?} → {q:?} over {dt} s beyond {allowed} m at {vmax} m/s, {what}"
@@ -533,12 +533,12 @@ fn assert_object_pair_within(c: &ObjectPairCase, what: &str) {
     // |v| from below (`norm3_down`, claim C1, harnesses a3): an allowance at most the real one,
     // so the claim against it implies the claim against the real one.
     for v in [c.early.velocity, c.late.velocity].into_iter().flatten() {
-        let speed = norm3_down(v) + b.vel_error;
-        let half_a = mul_up(0.5, b.acc);
+        let speed = norm3_down(v) + b.vel_error();
+        let half_a = mul_up(0.5, b.acc());
         let allowed = mul_add_up(
             speed,
             dt,
-            mul_add_up(half_a, mul_add_up(dt, dt, 0.0), 2.0 * b.pos_error),
+            mul_add_up(half_a, mul_add_up(dt, dt, 0.0), 2.0 * b.pos_error()),
         );
         assert!(
             within_taken(p, q, allowed),
