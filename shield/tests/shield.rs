@@ -597,3 +597,38 @@ fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
     assert_eq!(verified_in(&moved, 0.5, 1.45), 0);
     assert!(verified_in(&moved, 1.55, 2.0) > 300);
 }
+
+/// Through a session, every measurement of person 0 is held against the trusted ones, not only
+/// the newest of a step: a newer agreeing one and an older contradicting one (4 m away)
+/// delivered at the same step leave the person contradicted (a read-only review found the older
+/// one never checked, while people 1 and up and objects saw every one).
+#[test]
+fn every_measurement_of_the_first_person_is_checked_in_a_session() {
+    use pacs_shield::session::Session;
+    use pacs_shield::shield::Binding;
+    let human = default_human().with_uncertainty(0.01, 0.1, 0.02).unwrap();
+    let cs = ConstraintSpec::builtin("sorting").unwrap();
+    let sh = Shield::builder(fr3::fr3())
+        .person(human.clone(), &cs)
+        .build()
+        .unwrap();
+    let mut s: Session<std::io::Sink> = Session::new(sh, vec![]);
+    s.start(0.0, &Q0).unwrap();
+    let at = |t: f64, x: f64| {
+        HumanMeasurement::new(&human, t, &pacs_testkit::standing_arms_forward(x), None).unwrap()
+    };
+    for k in 0..10 {
+        let t = k as f64 * 0.001;
+        s.measure_person(0, at(t, 2.5)).unwrap();
+        s.step(t).unwrap();
+    }
+    // At 0.010 s: the newer (0.010) agrees, the older (0.0095) puts the person 4 m farther.
+    s.measure_person_at(0.01, 0, at(0.01, 2.5)).unwrap();
+    s.measure_person_at(0.01, 0, at(0.0095, 6.5)).unwrap();
+    let cmd = s.step(0.01).unwrap();
+    assert!(!cmd.diag.verified);
+    assert_eq!(
+        cmd.diag.binding,
+        Binding::ContradictedMeasurement { human: 0 }
+    );
+}

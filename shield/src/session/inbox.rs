@@ -16,9 +16,11 @@ use thiserror::Error;
 /// baselines). The receiver keeps the newest of each person and object
 /// ([`pacs_reach::stamped`]).
 pub trait MeasurementSink {
-    /// Record a measurement of person `id` (an older one than the latest is ignored).
+    /// Record a measurement of person `id` (held against the trusted ones: an older one than
+    /// the latest that agrees is ignored).
     fn measure_human(&mut self, id: usize, m: &HumanMeasurement) -> Result<(), ShieldError>;
-    /// Record a measurement of object `id` (an older one than the latest is ignored).
+    /// Record a measurement of object `id` (held against the trusted ones: an older one than
+    /// the latest that agrees is ignored).
     fn measure_object(&mut self, id: usize, m: &ObjectMeasurement) -> Result<(), ShieldError>;
 }
 
@@ -266,9 +268,10 @@ impl<C> MeasurementInbox<C> {
                 Item::Person(p, m) => {
                     self.waiting_people -= 1;
                     write(&mut log, &mut |l| l.person(t, p, &m));
-                    if p > 0 {
-                        shield.measure_human(p, &m).map_err(InboxError::from)?;
-                    } else if m.supersedes(self.current.as_ref()) {
+                    // Every measurement is held against the trusted ones (`HumanSlot::take`),
+                    // person 0's too, not only the newest of the step that `step` is handed.
+                    shield.measure_human(p, &m).map_err(InboxError::from)?;
+                    if p == 0 && m.supersedes(self.current.as_ref()) {
                         self.current = Some(m);
                     }
                 }
