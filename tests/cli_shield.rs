@@ -21,10 +21,16 @@ fn example() -> Value {
 }
 
 fn run_scene(name: &str, scene: &Value) -> (Output, PathBuf) {
+    run_scene_text(name, &scene.to_string())
+}
+
+/// `pacs shield --input D/scene.json --out D/out` on the scene file `text` (D: a fresh
+/// directory named after `name`).
+fn run_scene_text(name: &str, text: &str) -> (Output, PathBuf) {
     let d = dir(name);
     std::fs::create_dir_all(&d).unwrap();
     let input = d.join("scene.json");
-    std::fs::write(&input, scene.to_string()).unwrap();
+    std::fs::write(&input, text).unwrap();
     let out = pacs()
         .args(["shield", "--input"])
         .arg(&input)
@@ -486,19 +492,10 @@ fn assert_undeclared_person_refused(scene: &Value) {
 /// A scene file that starts with a UTF-8 byte-order mark is told so (exit 3), naming the file.
 #[test]
 fn a_scene_with_a_byte_order_mark_is_named() {
-    let d = dir("bom");
-    std::fs::create_dir_all(&d).unwrap();
-    let input = d.join("scene.json");
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scene.json");
     let text = std::fs::read_to_string(p).unwrap();
-    std::fs::write(&input, format!("\u{feff}{text}")).unwrap();
-    let out = pacs()
-        .args(["shield", "--input"])
-        .arg(&input)
-        .arg("--out")
-        .arg(d.join("out"))
-        .output()
-        .unwrap();
+    let (out, d) = run_scene_text("bom", &format!("\u{feff}{text}"));
+    let input = d.join("scene.json");
     assert_eq!(out.status.code(), Some(3));
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(

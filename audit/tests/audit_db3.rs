@@ -1428,8 +1428,7 @@ fn an_mcap_file_whose_statistics_disagree_with_its_messages_is_refused() {
 /// A header given in place of a bag's own (`--header`) keeps the `start` and `end` events the
 /// bag's `custom_data` header promises, in both storages: the bag, promising events it does not
 /// hold (as if cut short), is `incomplete_log` whether its own header or a given one without
-/// promises is used, and never passes. An outside review found an MCAP-storage bag passing with
-/// `--header`.
+/// promises is used, and never passes.
 #[test]
 fn a_given_header_keeps_a_bags_own_promises() {
     let d = tempdir();

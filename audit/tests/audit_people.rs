@@ -966,7 +966,7 @@ fn a_person_who_cannot_be_checked_hides_no_objects_contact() {
 /// A log whose robot samples before some time were cut out and whose `start` event was moved to
 /// its new first sample still holds the shield's diagnostics of the samples cut (the shield
 /// logs one after each sample): one stamped before the start shows the cut, and the log is
-/// `incomplete_log` (an outside review's edit passed as complete). The same log with those
+/// `incomplete_log`, never complete. The same log with those
 /// diagnostics cut out too is indistinguishable from a run that began there (complete).
 #[test]
 fn shield_diagnostics_before_the_start_show_a_cut() {

@@ -271,8 +271,8 @@ pub fn occupancy(
         // A velocity certainly faster than the speed bound allows (`|v| > v_max + e_v`, the norm
         // rounded down, the bound up) contradicts the model, whose every motion keeps the bound:
         // the velocity is ignored (the speed ball and the set without a velocity hold). Trusted,
-        // the two sets could miss each other and leave the object nowhere (an outside review's
-        // ball at rest, measured at 10 m/s: the shield swept through it).
+        // the two sets could miss each other and leave the object nowhere (a ball at rest
+        // measured at 10 m/s would clear every capsule).
         (Some(v), Some(v_max))
             if norm3_down(v[0], v[1], v[2]) > add_up(v_max, model.vel_error()) =>
         {

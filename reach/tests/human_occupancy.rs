@@ -523,10 +523,9 @@ fn a_keypoint_beyond_any_reach_is_refused_by_name() {
 
 /// A measured velocity faster than the speed bound allows (`|v| > v_max + e_v`) shows the speed
 /// bound or the velocity wrong: `acc` and `combined` then take the ball enclosing the `vel` and
-/// the `acc` set for the keypoint, which holds under either. An outside review's case: a hand at
-/// rest in the arm's path, measured with 10 m/s against `v_max` 2 m/s — the `acc` set alone,
-/// centred 2 m down the claimed velocity after 0.2 s, left the hand out and the shield drove
-/// into it. Hand-computed: e_p 0.1, e_v 0.2, v_max 2, a 10, no delay, over [0, 0.2] from
+/// the `acc` set for the keypoint, which holds under either. A hand at rest measured with
+/// 10 m/s against `v_max` 2 m/s: the `acc` set alone, centred 2 m down the claimed velocity
+/// after 0.2 s, would leave the hand out. Hand-computed: e_p 0.1, e_v 0.2, v_max 2, a 10, no delay, over [0, 0.2] from
 /// (0, 0, 0) with v = (10, 0, 0): the `vel` ball Ball(0, 0.1 + 0.4 = 0.5); the `acc` sets
 /// Ball(0, 0.1) at 0 and Ball((2, 0, 0), 0.1 + 0.04 + 0.2 = 0.34) at 0.2, enclosed by the ball
 /// spanning x ∈ [−0.1, 2.34]; both together x ∈ [−0.5, 2.34]: centre 0.92, radius 1.42, plus

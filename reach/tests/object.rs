@@ -309,10 +309,10 @@ fn unknown_velocity_uses_the_speed_bound() {
 
 /// A measured velocity faster than the speed bound allows (`|v| > v_max + e_v`) contradicts the
 /// model and is ignored: the occupancy is the one without a velocity (so the two sets always
-/// meet at the measured position). An outside review's ball at rest, measured at 10 m/s against
-/// a 1 m/s bound: trusted, the velocity set (x ≥ 0.25 m after 20 ms of delay plus the interval)
-/// and the speed ball (x ≤ 0.08 m) missed each other, no capsule was near the object, and the
-/// shield swept through it. At the bound itself (1.1 m/s here) the velocity is used.
+/// meet at the measured position). A ball at rest measured at 10 m/s against a 1 m/s bound:
+/// trusted, the velocity set (x ≥ 0.25 m after 20 ms of delay plus the interval) and the speed
+/// ball (x ≤ 0.08 m) would miss each other, and no capsule would be near the object. At the
+/// bound itself (1.1 m/s here) the velocity is used.
 #[test]
 fn a_velocity_beyond_the_speed_bound_is_ignored() {
     let m = ball(0.05, 2.0, Some(1.0), 0.02, 0.01, 0.1);

@@ -278,10 +278,9 @@ fn the_arm_follows_a_ball_rolling_away_along_its_path() {
 
 /// A measurement of an object that contradicts the ones the shield trusts (positions farther
 /// apart than the model allows, or a velocity the positions refute) verifies nothing until a
-/// newer one agrees with them. Outside reviews: a tracker glitch reporting a resting ball 2 m
-/// higher for 0.5 s, and a frozen tracker reporting the resting ball with a velocity of
-/// 0.99 m/s (under the 1 m/s bound) pointing away — the shield took both and drove into it.
-/// Here the ball rests 2 m away, measured every step; from 0.3 s to 0.35 s the measurement is
+/// newer one agrees with them: a tracker glitch reporting a resting ball 2 m higher, or a
+/// frozen tracker reporting it with a velocity of 0.99 m/s (under the 1 m/s bound) pointing
+/// away, is not taken. Here the ball rests 2 m away, measured every step; from 0.3 s to 0.35 s the measurement is
 /// (a) 2 m higher or (b) the true position with 0.99 m/s along x: those steps verify nothing
 /// (binding `contradicted-object`), and verification resumes after.
 #[test]
@@ -330,8 +329,8 @@ fn an_object_measurement_that_contradicts_the_trusted_ones_verifies_nothing() {
 /// A contradiction is cleared only by a measurement newer than the one that caused it: a ball
 /// resting 2 m away, measured every 10 ms up to 0.3 s, then a glitch stamped 0.35 s (2 m
 /// higher), then a measurement stamped 0.33 s at the true place (older than the glitch): the
-/// shield keeps verifying nothing until one stamped after 0.35 s agrees (an outside review found
-/// the older one clearing it, the step then verified against it while the newest said otherwise).
+/// shield keeps verifying nothing until one stamped after 0.35 s agrees (the older one never
+/// clears it: a step verified against it would ignore the newest measurement).
 #[test]
 fn only_a_measurement_newer_than_the_contradicting_one_clears_it() {
     let cfg = ShieldConfig::default();

@@ -530,9 +530,8 @@ fn a_person_measured_beyond_any_reach_is_not_verified_against() {
 }
 
 /// A measurement that contradicts the one the shield trusts (a keypoint moved farther than
-/// `v_max·Δt + 2·e_pos` since it) verifies nothing: one of the two is wrong. An outside review's
-/// tracker glitch put the person 4 m away for 30 ms while the hand was in the arm's path; the
-/// shield verified steps against the glitch. Here the person stands 2.5 m from the base,
+/// `v_max·Δt + 2·e_pos` since it) verifies nothing: one of the two is wrong (a tracker glitch
+/// putting the person metres away for a few frames must not let the arm move). Here the person stands 2.5 m from the base,
 /// measured every step; from 0.3 s to 0.33 s the tracker reports them 3.5 m farther: those steps
 /// are not verified (binding `contradicted-measurement`), and verification resumes with the next
 /// measurement that agrees with the trusted one. A person who truly moved 2 m is accepted once
@@ -600,8 +599,8 @@ fn a_measurement_that_contradicts_the_trusted_one_verifies_nothing() {
 
 /// Through a session, every measurement of person 0 is held against the trusted ones, not only
 /// the newest of a step: a newer agreeing one and an older contradicting one (4 m away)
-/// delivered at the same step leave the person contradicted (a read-only review found the older
-/// one never checked, while people 1 and up and objects saw every one).
+/// delivered at the same step leave the person contradicted, as for people 1 and up and
+/// objects.
 #[test]
 fn every_measurement_of_the_first_person_is_checked_in_a_session() {
     use pacs_shield::session::Session;
